@@ -1,0 +1,114 @@
+// femreg/fem.h - linear tetrahedral FEM: isotropic material, per-element rest data, the
+// corotational element (seed eqs. 1-6) and the small-strain linear element.
+#ifndef FEMREG_FEM_H_
+#define FEMREG_FEM_H_
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <string>
+#include <vector>
+
+#include "femreg/mesh.h"
+
+namespace femreg {
+
+struct Material {
+  double youngs_modulus = 1.0e5;  // E, Pa; > 0
+  double poisson_ratio = 0.3;     // nu; in (-1, 0.5)
+  double density = 1000.0;        // kg/m^3; > 0
+  bool IsValid(std::string* error) const;
+};
+
+enum class ElasticModelType {
+  kCorotational,  // R K (R^T x - X): rotation-invariant, for large rotations
+  kLinear,        // K (x - X): small-strain linear FEM, for comparison
+};
+const char* ToString(ElasticModelType type);
+bool FromString(const std::string& name, ElasticModelType* type);
+
+using Matrix6x12 = Eigen::Matrix<double, 6, 12>;
+using Matrix12 = Eigen::Matrix<double, 12, 12>;
+using Vector12 = Eigen::Matrix<double, 12, 1>;
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+
+// Isotropic Hooke matrix in Voigt order (xx, yy, zz, yz, xz, xy) acting on engineering
+// shear strains (gamma = 2 eps).
+Matrix6 IsotropicElasticity(double youngs_modulus, double poisson_ratio);
+
+// Rest data of one element, built once per topology.
+struct ElementRest {
+  Eigen::Matrix3d dm_inv;  // inverse of D_m = [X1-X0, X2-X0, X3-X0]
+  double volume = 0.0;     // rest volume V_e (> 0)
+  Matrix6x12 L;            // strain-displacement: eps = L u, u = [u0; u1; u2; u3]
+  Matrix6 C;               // Hooke matrix of the element's material
+  Matrix6x12 S;            // sqrt(V_e) C^(1/2) L, so that S^T S = K
+  Matrix12 K;              // V_e L^T C L
+  Vector12 X;              // rest positions [X0; X1; X2; X3]
+};
+
+// X: 3 by 4 rest positions (columns are the vertices).
+ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Material& material);
+
+// Rotation of the polar decomposition F = R S through an SVD, with the sign fix of
+// Irving et al. 2004 so that det R = +1 also for inverted and flat F (S then has a
+// negative or zero entry). Always finite for finite F.
+Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F);
+
+// Deformation gradient F = D_s D_m^-1 of an element at positions x (3 by 4).
+Eigen::Matrix3d DeformationGradient(const Eigen::Matrix<double, 3, 4>& x,
+                                    const Eigen::Matrix3d& dm_inv);
+
+// Per-element kernels. x: the element's current positions stacked as a 12-vector.
+// R is the element rotation (identity for the linear model).
+// u_r = R^T x - X (per vertex), residual r = S u_r (6), energy 0.5 |r|^2,
+// force on the vertices f = -R K u_r (12), warped stiffness R K R^T (12 by 12).
+Vector6 ElementResidual(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x);
+double ElementEnergy(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x);
+Vector12 ElementForce(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x);
+Matrix12 WarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R);
+// The residual's Jacobian with R held fixed: S blockdiag(R^T) (6 by 12).
+Matrix6x12 ElementResidualJacobian(const ElementRest& rest, const Eigen::Matrix3d& R);
+// Corotational stress in the element's unrotated frame, Voigt: C L u_r (seed eq. 7).
+Vector6 ElementStress(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x);
+
+// The elastic energy of a whole mesh: rest data per element, rotations, and assembly.
+class ElasticModel {
+ public:
+  // material_per_region: region id -> material; elements of unlisted regions use
+  // default_material.
+  void Build(const TetMesh& mesh, ElasticModelType type, const Material& default_material,
+             const std::vector<std::pair<int, Material>>& material_per_region = {});
+  // Rebuilds the rest data of the listed elements only (after a topology change).
+  void RebuildElements(const TetMesh& mesh, const std::vector<int>& elements);
+
+  // Recomputes R_e from positions (identity for the linear model).
+  void UpdateRotations(const Vertices& x);
+
+  // With the current rotations held fixed.
+  double Energy(const Vertices& x) const;
+  // Adds the energy gradient (= -force) to gradient (#V by 3).
+  void AddGradient(const Vertices& x, Vertices* gradient) const;
+  // Adds the warped stiffness R K R^T (the Gauss-Newton Hessian) as (row, col, value)
+  // triplets over 3 #V dofs.
+  void AddStiffnessTriplets(std::vector<Eigen::Triplet<double>>* triplets) const;
+
+  ElasticModelType type() const { return type_; }
+  int num_elements() const { return static_cast<int>(rest_.size()); }
+  const ElementRest& rest(int e) const { return rest_[e]; }
+  const Eigen::Matrix3d& rotation(int e) const { return rotations_[e]; }
+  const Tets& tets() const { return tets_; }
+  Vector12 Gather(const Vertices& x, int e) const;
+
+ private:
+  ElasticModelType type_ = ElasticModelType::kCorotational;
+  Material default_material_;
+  std::vector<std::pair<int, Material>> material_per_region_;
+  Tets tets_;
+  std::vector<ElementRest> rest_;
+  std::vector<Eigen::Matrix3d> rotations_;
+};
+
+}  // namespace femreg
+
+#endif  // FEMREG_FEM_H_

@@ -1,0 +1,241 @@
+#include "femreg/fem.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <cassert>
+#include <cmath>
+#include <sstream>
+
+namespace femreg {
+
+bool Material::IsValid(std::string* error) const {
+  std::ostringstream os;
+  if (!(std::isfinite(youngs_modulus) && youngs_modulus > 0)) {
+    os << "youngs_modulus must be > 0 (got " << youngs_modulus << ")";
+  } else if (!(std::isfinite(poisson_ratio) && poisson_ratio > -1.0 && poisson_ratio < 0.5)) {
+    os << "poisson_ratio must be in (-1, 0.5) (got " << poisson_ratio << ")";
+  } else if (!(std::isfinite(density) && density > 0)) {
+    os << "density must be > 0 (got " << density << ")";
+  } else {
+    return true;
+  }
+  if (error) *error = os.str();
+  return false;
+}
+
+const char* ToString(ElasticModelType type) {
+  switch (type) {
+    case ElasticModelType::kCorotational:
+      return "corotational";
+    case ElasticModelType::kLinear:
+      return "linear";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& name, ElasticModelType* type) {
+  if (name == "corotational") {
+    *type = ElasticModelType::kCorotational;
+  } else if (name == "linear") {
+    *type = ElasticModelType::kLinear;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+Matrix6 IsotropicElasticity(double E, double nu) {
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = E / (2.0 * (1.0 + nu));
+  Matrix6 C = Matrix6::Zero();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) C(i, j) = lambda;
+    C(i, i) = lambda + 2.0 * mu;
+    C(i + 3, i + 3) = mu;
+  }
+  return C;
+}
+
+ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Material& material) {
+  ElementRest r;
+  Eigen::Matrix3d Dm;
+  Dm << X.col(1) - X.col(0), X.col(2) - X.col(0), X.col(3) - X.col(0);
+  r.volume = std::abs(Dm.determinant()) / 6.0;
+  r.dm_inv = Dm.inverse();
+  // Gradients of the barycentric shape functions: grad N_i (i = 1..3) is row i-1 of
+  // D_m^-1; grad N_0 = -(sum of the others).
+  Eigen::Matrix<double, 3, 4> grad;
+  grad.col(1) = r.dm_inv.row(0).transpose();
+  grad.col(2) = r.dm_inv.row(1).transpose();
+  grad.col(3) = r.dm_inv.row(2).transpose();
+  grad.col(0) = -(grad.col(1) + grad.col(2) + grad.col(3));
+  r.L.setZero();
+  for (int i = 0; i < 4; ++i) {
+    const double gx = grad(0, i), gy = grad(1, i), gz = grad(2, i);
+    const int c = 3 * i;
+    r.L(0, c + 0) = gx;
+    r.L(1, c + 1) = gy;
+    r.L(2, c + 2) = gz;
+    r.L(3, c + 1) = gz;
+    r.L(3, c + 2) = gy;
+    r.L(4, c + 0) = gz;
+    r.L(4, c + 2) = gx;
+    r.L(5, c + 0) = gy;
+    r.L(5, c + 1) = gx;
+  }
+  r.C = IsotropicElasticity(material.youngs_modulus, material.poisson_ratio);
+  Eigen::SelfAdjointEigenSolver<Matrix6> eig(r.C);
+  const Matrix6 C_half = eig.eigenvectors() *
+                         eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
+                         eig.eigenvectors().transpose();
+  r.S = std::sqrt(r.volume) * C_half * r.L;
+  r.K = r.volume * r.L.transpose() * r.C * r.L;
+  for (int i = 0; i < 4; ++i) r.X.segment<3>(3 * i) = X.col(i);
+  return r;
+}
+
+Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d U = svd.matrixU();
+  Eigen::Matrix3d V = svd.matrixV();
+  // Irving et al. 2004: make U and V proper rotations; the sign goes to the smallest
+  // singular value, so an inverted element keeps the rotation nearest to F.
+  if (U.determinant() < 0) U.col(2) *= -1.0;
+  if (V.determinant() < 0) V.col(2) *= -1.0;
+  Eigen::Matrix3d R = U * V.transpose();
+  if (!R.allFinite()) R.setIdentity();
+  return R;
+}
+
+Eigen::Matrix3d DeformationGradient(const Eigen::Matrix<double, 3, 4>& x,
+                                    const Eigen::Matrix3d& dm_inv) {
+  Eigen::Matrix3d Ds;
+  Ds << x.col(1) - x.col(0), x.col(2) - x.col(0), x.col(3) - x.col(0);
+  return Ds * dm_inv;
+}
+
+namespace {
+Vector12 RotatedDisplacement(const ElementRest& rest, const Eigen::Matrix3d& R,
+                             const Vector12& x) {
+  Vector12 u;
+  for (int i = 0; i < 4; ++i) {
+    u.segment<3>(3 * i) = R.transpose() * x.segment<3>(3 * i) - rest.X.segment<3>(3 * i);
+  }
+  return u;
+}
+}  // namespace
+
+Vector6 ElementResidual(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
+  return rest.S * RotatedDisplacement(rest, R, x);
+}
+
+double ElementEnergy(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
+  return 0.5 * ElementResidual(rest, R, x).squaredNorm();
+}
+
+Vector12 ElementForce(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
+  const Vector12 ku = rest.K * RotatedDisplacement(rest, R, x);
+  Vector12 f;
+  for (int i = 0; i < 4; ++i) f.segment<3>(3 * i) = -R * ku.segment<3>(3 * i);
+  return f;
+}
+
+Matrix12 WarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R) {
+  Matrix12 out;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      out.block<3, 3>(3 * i, 3 * j) = R * rest.K.block<3, 3>(3 * i, 3 * j) * R.transpose();
+    }
+  }
+  return out;
+}
+
+Matrix6x12 ElementResidualJacobian(const ElementRest& rest, const Eigen::Matrix3d& R) {
+  Matrix6x12 J;
+  for (int i = 0; i < 4; ++i) J.block<6, 3>(0, 3 * i) = rest.S.block<6, 3>(0, 3 * i) * R.transpose();
+  return J;
+}
+
+Vector6 ElementStress(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
+  return rest.C * (rest.L * RotatedDisplacement(rest, R, x));
+}
+
+void ElasticModel::Build(const TetMesh& mesh, ElasticModelType type,
+                         const Material& default_material,
+                         const std::vector<std::pair<int, Material>>& material_per_region) {
+  type_ = type;
+  default_material_ = default_material;
+  material_per_region_ = material_per_region;
+  tets_ = mesh.tets;
+  rest_.assign(mesh.num_tets(), ElementRest());
+  rotations_.assign(mesh.num_tets(), Eigen::Matrix3d::Identity());
+  std::vector<int> all(mesh.num_tets());
+  for (int e = 0; e < mesh.num_tets(); ++e) all[e] = e;
+  RebuildElements(mesh, all);
+}
+
+void ElasticModel::RebuildElements(const TetMesh& mesh, const std::vector<int>& elements) {
+  if (tets_.rows() != mesh.tets.rows()) {
+    tets_ = mesh.tets;
+    rest_.resize(mesh.num_tets());
+    rotations_.resize(mesh.num_tets(), Eigen::Matrix3d::Identity());
+  }
+  for (int e : elements) {
+    tets_.row(e) = mesh.tets.row(e);
+    Material material = default_material_;
+    for (const auto& rm : material_per_region_) {
+      if (e < mesh.region.size() && rm.first == mesh.region(e)) material = rm.second;
+    }
+    Eigen::Matrix<double, 3, 4> X;
+    for (int k = 0; k < 4; ++k) X.col(k) = mesh.rest.row(mesh.tets(e, k)).transpose();
+    rest_[e] = BuildElementRest(X, material);
+    rotations_[e].setIdentity();
+  }
+}
+
+Vector12 ElasticModel::Gather(const Vertices& x, int e) const {
+  Vector12 xe;
+  for (int k = 0; k < 4; ++k) xe.segment<3>(3 * k) = x.row(tets_(e, k)).transpose();
+  return xe;
+}
+
+void ElasticModel::UpdateRotations(const Vertices& x) {
+  if (type_ == ElasticModelType::kLinear) return;
+  const int n = num_elements();
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < n; ++e) {
+    Eigen::Matrix<double, 3, 4> xe;
+    for (int k = 0; k < 4; ++k) xe.col(k) = x.row(tets_(e, k)).transpose();
+    rotations_[e] = PolarRotation(DeformationGradient(xe, rest_[e].dm_inv));
+  }
+}
+
+double ElasticModel::Energy(const Vertices& x) const {
+  double total = 0.0;
+  for (int e = 0; e < num_elements(); ++e) total += ElementEnergy(rest_[e], rotations_[e], Gather(x, e));
+  return total;
+}
+
+void ElasticModel::AddGradient(const Vertices& x, Vertices* gradient) const {
+  for (int e = 0; e < num_elements(); ++e) {
+    const Vector12 f = ElementForce(rest_[e], rotations_[e], Gather(x, e));
+    for (int k = 0; k < 4; ++k) gradient->row(tets_(e, k)) -= f.segment<3>(3 * k).transpose();
+  }
+}
+
+void ElasticModel::AddStiffnessTriplets(std::vector<Eigen::Triplet<double>>* triplets) const {
+  triplets->reserve(triplets->size() + 144 * static_cast<size_t>(num_elements()));
+  for (int e = 0; e < num_elements(); ++e) {
+    const Matrix12 K = WarpedStiffness(rest_[e], rotations_[e]);
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) {
+        const int ra = 3 * tets_(e, a), cb = 3 * tets_(e, b);
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) triplets->emplace_back(ra + i, cb + j, K(3 * a + i, 3 * b + j));
+      }
+    }
+  }
+}
+
+}  // namespace femreg

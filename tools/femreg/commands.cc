@@ -1,0 +1,19 @@
+#include "commands.h"
+
+namespace femreg {
+namespace cli {
+namespace {
+int g_exit_code = 0;
+}  // namespace
+
+int ExitCode() { return g_exit_code; }
+void SetExitCode(int code) { g_exit_code = code; }
+
+void RegisterCommands(CLI::App* app) {
+  AddInfoCommand(app);
+  AddSimulateCommand(app);
+  AddRegisterCommand(app);
+}
+
+}  // namespace cli
+}  // namespace femreg

@@ -1,0 +1,25 @@
+// Subcommands of the femreg command line.
+#ifndef FEMREG_TOOLS_COMMANDS_H_
+#define FEMREG_TOOLS_COMMANDS_H_
+
+#include <CLI/CLI.hpp>
+
+namespace femreg {
+namespace cli {
+
+// Each Add*Command adds one subcommand with its callback to `app`.
+void AddInfoCommand(CLI::App* app);
+void AddSimulateCommand(CLI::App* app);
+void AddRegisterCommand(CLI::App* app);
+
+// Adds all of the above.
+void RegisterCommands(CLI::App* app);
+
+// The exit code the callback that ran asked for (0 when none ran or all went well).
+int ExitCode();
+void SetExitCode(int code);
+
+}  // namespace cli
+}  // namespace femreg
+
+#endif  // FEMREG_TOOLS_COMMANDS_H_
