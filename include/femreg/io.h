@@ -1,0 +1,73 @@
+// femreg/io.h - reading and writing meshes: tetrahedral meshes in, VTU/PVD/PLY/OBJ out.
+#ifndef FEMREG_IO_H_
+#define FEMREG_IO_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "femreg/mesh.h"
+#include "femreg/status.h"
+
+namespace femreg {
+
+enum class MeshFormat {
+  kUnknown,
+  kGmsh,       // MSH 1, 2.2 or 4.1 ASCII
+  kTetGen,     // .node + .ele
+  kMedit,      // .mesh
+  kVtkLegacy,  // "# vtk DataFile" ASCII unstructured grid
+  kVtu,        // VTK XML UnstructuredGrid
+};
+const char* ToString(MeshFormat format);
+
+// Looks at the file's first bytes, not its extension (a .vtk may hold XML).
+MeshFormat DetectMeshFormat(const std::string& path);
+
+// Reads a tetrahedral mesh of any supported format (cells other than tetrahedra are
+// skipped; physical tags become region ids) and finalizes it (FinalizeMesh). Errors name
+// the file and, for text formats, the line.
+Status ReadTetMesh(const std::string& path, TetMesh* mesh);
+
+// A field written with a mesh: `values` has one row per vertex (point field) or per
+// element (cell field), and 1 (scalar) or 3 (vector) columns.
+struct MeshField {
+  std::string name;
+  Eigen::MatrixXd values;
+  bool per_cell = false;
+};
+
+// Writes the tetrahedra at `positions` with the given fields (and always the region id)
+// as a VTU file. Written to a temporary file and renamed, so a reader never sees half a
+// file.
+Status WriteVtu(const std::string& path, const TetMesh& mesh, const Vertices& positions,
+                const std::vector<MeshField>& fields = {});
+
+// A ParaView collection: one (time, relative file) entry per frame. Atomic like WriteVtu.
+struct PvdEntry {
+  double time = 0.0;
+  std::string file;
+};
+Status WritePvd(const std::string& path, const std::vector<PvdEntry>& entries);
+
+// The boundary surface at `positions`, as PLY (ASCII) or OBJ. Atomic.
+Status WritePlySurface(const std::string& path, const TetMesh& mesh, const Vertices& positions);
+Status WriteObjSurface(const std::string& path, const TetMesh& mesh, const Vertices& positions);
+
+// Writes `contents` to `path` through a temporary file in the same folder and a rename.
+Status WriteFileAtomically(const std::string& path, const std::string& contents);
+
+// Generators (for tests and data), finalized, with rest = x and zero masses.
+// A box [origin, origin + size] of nx * ny * nz cubes, each split into 6 tetrahedra
+// that conform across cubes.
+TetMesh MakeBox(const Eigen::Vector3d& size, int nx, int ny, int nz,
+                const Eigen::Vector3d& origin = Eigen::Vector3d::Zero());
+// A cylinder along +z from z = 0 to `length`, of `radius`, with about n_radial cells
+// across the radius and n_axial along the axis.
+TetMesh MakeCylinder(double radius, double length, int n_radial, int n_axial);
+// A ball of `radius` centred at the origin with about `n` cells across its radius.
+TetMesh MakeSphere(double radius, int n);
+
+}  // namespace femreg
+
+#endif  // FEMREG_IO_H_
