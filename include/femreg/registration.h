@@ -1,0 +1,165 @@
+// femreg/registration.h - options and results of registering meshes to point clouds.
+// No PCL or Ceres type appears here: a caller includes femreg/tracker.h and links
+// femreg::femreg.
+#ifndef FEMREG_REGISTRATION_H_
+#define FEMREG_REGISTRATION_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "femreg/fem.h"
+#include "femreg/mesh.h"
+
+namespace femreg {
+
+// A point cloud in metres, in the same frame as the scene.
+struct PointCloud {
+  Vertices points;   // #P by 3
+  Vertices normals;  // #P by 3, or empty when the source has none
+  bool has_normals() const { return normals.rows() == points.rows() && points.rows() > 0; }
+  int size() const { return static_cast<int>(points.rows()); }
+};
+
+enum class RobustLoss { kNone, kHuber, kCauchy, kTukey };
+enum class DataMetric { kPointToPoint, kPointToPlane };
+enum class Regularizer {
+  kCorotational,  // corotational linear FEM (the default)
+  kLinear,        // small-strain linear FEM
+  kNone,          // no elastic term: temporal (and anchors) only
+};
+enum class TrustRegion { kLevenbergMarquardt, kDogleg };
+enum class LinearSolver {
+  kSparseNormalCholesky,  // SuiteSparse CHOLMOD through Ceres
+  kConjugateGradients,    // Ceres' CGNR with a Jacobi preconditioner
+};
+
+const char* ToString(RobustLoss v);
+const char* ToString(DataMetric v);
+const char* ToString(Regularizer v);
+const char* ToString(TrustRegion v);
+const char* ToString(LinearSolver v);
+bool FromString(const std::string& s, RobustLoss* v);
+bool FromString(const std::string& s, DataMetric* v);
+bool FromString(const std::string& s, Regularizer* v);
+bool FromString(const std::string& s, TrustRegion* v);
+bool FromString(const std::string& s, LinearSolver* v);
+
+struct CameraOptions {
+  bool enabled = false;                                 // known camera: enables visibility
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();   // camera centre in the scene frame (m)
+  // Pinhole intrinsics (pixels), used by the virtual camera; not needed for registration.
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  int width = 640, height = 480;
+  bool IsValid(std::string* error) const;
+};
+
+struct PreprocessOptions {
+  bool crop = false;                                    // keep points inside [crop_min, crop_max]
+  Eigen::Vector3d crop_min = Eigen::Vector3d::Constant(-1e30);
+  Eigen::Vector3d crop_max = Eigen::Vector3d::Constant(1e30);
+  double voxel_size = 0.0;                              // m; 0 = no downsampling
+  int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
+  double outlier_stddev = 1.0;                          // ... threshold in standard deviations
+  int normal_neighbors = 0;                             // estimate normals from k neighbours; 0 = off
+  bool IsValid(std::string* error) const;
+};
+
+struct DataTermOptions {
+  bool model_to_cloud = true;     // each surface vertex to its nearest cloud point
+  bool cloud_to_model = true;     // each cloud point to its closest surface point
+  double max_distance = 0.03;     // m; pairs farther apart are rejected; <= 0 disables gating
+  RobustLoss loss = RobustLoss::kHuber;
+  double loss_scale = 0.005;      // m; where the robust loss bends
+  DataMetric metric = DataMetric::kPointToPoint;  // point-to-plane needs cloud normals
+  bool visibility = false;        // model->cloud only for vertices facing the camera
+  int cloud_stride = 1;           // use every k-th cloud point for cloud->model (>= 1)
+  bool IsValid(std::string* error) const;
+};
+
+struct WeightOptions {
+  double data = 1.0;       // w_data, per unit of m^2 of squared residual per point
+  double elastic = 1.0;    // w_elastic, multiplies the FEM energy (J)
+  double temporal = 1.0;   // w_temporal, multiplies 0.5 sum m_i |x_i - x_i^prev|^2 (kg m^2)
+  double anchor = 1.0e4;   // soft anchors: 0.5 w |x_i - target_i|^2 per vertex (N/m)
+  bool IsValid(std::string* error) const;
+};
+
+struct SolverOptions {
+  int max_outer_iterations = 5;          // correspondences and rotations refreshed per outer iteration
+  int max_inner_iterations = 10;         // Ceres iterations per outer iteration
+  double relative_energy_tolerance = 1e-4;  // stop when |dE| / E below this
+  double time_budget_s = 0.0;            // per frame; 0 = none
+  TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
+  LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
+  int num_threads = 1;
+  bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
+  int rigid_iterations = 20;
+  bool IsValid(std::string* error) const;
+};
+
+struct RegistrationOptions {
+  Regularizer regularizer = Regularizer::kCorotational;
+  CameraOptions camera;
+  PreprocessOptions preprocess;
+  DataTermOptions data;
+  WeightOptions weights;
+  SolverOptions solver;
+  bool IsValid(std::string* error) const;  // names the first bad field, e.g. "data.loss_scale"
+};
+
+enum class TerminationType {
+  kNotRun,
+  kConverged,          // relative energy change below tolerance
+  kMaxIterations,      // outer iteration limit reached
+  kTimeBudget,         // the frame's time budget ran out
+  kNoCorrespondences,  // no usable data: the shape was held by the temporal term
+  kSolverFailure,      // Ceres failed; the previous shape was kept
+  kInvalidInput,       // e.g. every cloud point was NaN
+};
+const char* ToString(TerminationType t);
+
+struct EnergyTerms {
+  double data = 0.0, elastic = 0.0, temporal = 0.0, anchor = 0.0, collision = 0.0;
+  double total() const { return data + elastic + temporal + anchor + collision; }
+};
+
+struct OuterIteration {
+  int iteration = 0;
+  EnergyTerms before, after;
+  int model_to_cloud = 0;       // pairs kept this iteration
+  int cloud_to_model = 0;
+  int rejected = 0;             // pairs gated out by distance
+  int inner_iterations = 0;
+  double rms_residual = 0.0;    // m, over kept pairs, after the solve
+  double time_s = 0.0;
+};
+
+// Wall time per stage of one frame (s).
+struct StageTimes {
+  double preprocess = 0.0, prealign = 0.0, rotations = 0.0, correspondences = 0.0,
+         build = 0.0, solve = 0.0, total = 0.0;
+};
+
+struct FrameSummary {
+  int frame = -1;
+  TerminationType termination = TerminationType::kNotRun;
+  std::string message = "Tracker::Track was not called.";
+  int cloud_points = 0;           // as given
+  int nonfinite_dropped = 0;      // NaN / inf points removed
+  int points_used = 0;            // after preprocessing
+  EnergyTerms initial, final;
+  int outer_iterations = 0, inner_iterations = 0;
+  int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
+  double rms_residual = 0.0;      // m
+  StageTimes time;
+  std::vector<OuterIteration> iterations;
+
+  std::string BriefReport() const;  // one line
+  std::string FullReport() const;   // a row per outer iteration and the stage times
+  bool IsSolutionUsable() const;
+};
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_H_

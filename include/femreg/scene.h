@@ -1,0 +1,114 @@
+// femreg/scene.h - a scene: objects, materials, boundary conditions, loads, the observation
+// and solver settings, anchors and the effects that are on. Read from YAML.
+#ifndef FEMREG_SCENE_H_
+#define FEMREG_SCENE_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femreg/fem.h"
+#include "femreg/forward.h"
+#include "femreg/mesh.h"
+#include "femreg/registration.h"
+#include "femreg/status.h"
+
+namespace femreg {
+
+// A set of vertices chosen by a box, by the side of a plane or by an index list.
+struct VertexSelection {
+  enum class Kind { kAll, kBox, kPlane, kIndices };
+  Kind kind = Kind::kAll;
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero(), box_max = Eigen::Vector3d::Zero();
+  // Plane: vertices with (p - plane_point) . plane_normal >= -tolerance.
+  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();
+  double tolerance = 1e-9;  // m, added around boxes and planes
+  std::vector<int> indices;
+  std::string where;        // "scene.yaml:12 (boundary[0].select)" for messages
+};
+
+// Evaluates a selection on `positions` (the object's rest positions in the scene frame).
+// An empty result is an error naming selection.where.
+Status SelectVertices(const VertexSelection& selection, const Vertices& positions,
+                      std::vector<int>* vertices);
+
+struct ObjectSpec {
+  std::string name;
+  std::string mesh_path;  // resolved against the scene file's folder
+  double scale = 1.0;     // applied to the mesh file's coordinates (e.g. 0.001 for mm)
+  // Initial pose: x = R(rotation) * scale * X_file + translation; the rest shape is the
+  // posed one.
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // axis * angle (rad)
+  Material material;
+  std::vector<std::pair<int, Material>> region_materials;  // region id -> material
+  double toughness = 0.0;  // fracture toughness (Pa), used when effects.fracture is on
+};
+
+struct BoundaryConditionSpec {
+  enum class Type { kClamp, kDisplacement };
+  std::string object;  // object name; may be empty when the scene has one object
+  VertexSelection selection;
+  Type type = Type::kClamp;
+  Eigen::Vector3d displacement = Eigen::Vector3d::Zero();  // m, for kDisplacement
+};
+
+struct LoadSpec {
+  std::string object;
+  VertexSelection selection;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N, the total, spread evenly
+};
+
+// Vertices held by a gripper or a support during registration.
+struct AnchorSpec {
+  std::string name;
+  std::string object;
+  VertexSelection selection;
+  bool hard = false;     // hard: vertices fixed at the targets; soft: a penalty
+  double weight = 0.0;   // soft anchors; 0 = weights.anchor
+  // Per-frame translation of the anchored set from its rest position; a frame beyond the
+  // list uses the last entry; an empty list holds the set at rest.
+  std::vector<Eigen::Vector3d> translations;
+};
+
+struct EffectsSpec {
+  bool fracture = false;
+  bool collision = false;
+};
+
+struct Scene {
+  std::string path;  // the file it was read from ("" when built in code)
+  std::vector<ObjectSpec> objects;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2
+  std::vector<BoundaryConditionSpec> boundary_conditions;
+  std::vector<LoadSpec> loads;
+  ForwardOptions forward;
+  ElasticModelType forward_model = ElasticModelType::kCorotational;
+  RegistrationOptions registration;
+  std::vector<AnchorSpec> anchors;
+  EffectsSpec effects;
+};
+
+// Reads and validates a scene. Errors name the file, line and key ("scene.yaml:14: objects[0].
+// material.poisson_ratio: must be < 0.5 (got 0.5)"): unknown keys, wrong types, out-of-range
+// values, missing mesh files, effects not built yet.
+Status LoadScene(const std::string& path, Scene* scene);
+// The same from text; `source` names it in messages and relative paths resolve against
+// `base_dir`.
+Status ParseScene(const std::string& yaml_text, const std::string& source,
+                  const std::string& base_dir, Scene* scene);
+
+// Loads object i's mesh, applies scale and pose, computes masses from its density, and
+// builds the elastic model of `type`. Errors name the scene and the mesh file.
+Status LoadObjectMesh(const Scene& scene, int object, TetMesh* mesh);
+
+// The forward problem of object i: boundary conditions, loads and gravity resolved to
+// vertex indices on `mesh` (from LoadObjectMesh).
+Status BuildForwardProblem(const Scene& scene, int object, const TetMesh& mesh,
+                           ForwardProblem* problem);
+
+}  // namespace femreg
+
+#endif  // FEMREG_SCENE_H_
