@@ -34,9 +34,29 @@ struct VertexSelection {
 Status SelectVertices(const VertexSelection& selection, const Vertices& positions,
                       std::vector<int>* vertices);
 
+// A mesh made by a generator of io.h instead of read from a file.
+struct MeshGeneratorSpec {
+  enum class Shape {
+    kNone,      // no generator: the object reads mesh_path
+    kBox,       // MakeBox(size, cells, origin)
+    kCylinder,  // MakeCylinder(radius, length, radial_cells, axial_cells), along +z
+    kSphere,    // MakeSphere(radius, radial_cells), centred at the origin
+  };
+  Shape shape = Shape::kNone;
+  Eigen::Vector3d size = Eigen::Vector3d::Ones();     // box edge lengths (m)
+  Eigen::Vector3i cells = Eigen::Vector3i::Ones();    // box cells per axis
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();   // box corner with the smallest coordinates
+  double radius = 0.5;                                // cylinder, sphere (m)
+  double length = 1.0;                                // cylinder (m)
+  int radial_cells = 4;                               // cylinder, sphere
+  int axial_cells = 8;                                // cylinder
+};
+const char* ToString(MeshGeneratorSpec::Shape shape);
+
 struct ObjectSpec {
   std::string name;
-  std::string mesh_path;  // resolved against the scene file's folder
+  std::string mesh_path;  // resolved against the scene file's folder; empty when generated
+  MeshGeneratorSpec generate;  // used when generate.shape != kNone
   double scale = 1.0;     // applied to the mesh file's coordinates (e.g. 0.001 for mm)
   // Initial pose: x = R(rotation) * scale * X_file + translation; the rest shape is the
   // posed one.
@@ -100,8 +120,9 @@ Status LoadScene(const std::string& path, Scene* scene);
 Status ParseScene(const std::string& yaml_text, const std::string& source,
                   const std::string& base_dir, Scene* scene);
 
-// Loads object i's mesh, applies scale and pose, computes masses from its density, and
-// builds the elastic model of `type`. Errors name the scene and the mesh file.
+// Loads (or generates) object i's mesh, applies scale and pose to rest and x, and computes
+// the lumped masses from its density and region densities. Errors name the scene and the
+// mesh file.
 Status LoadObjectMesh(const Scene& scene, int object, TetMesh* mesh);
 
 // The forward problem of object i: boundary conditions, loads and gravity resolved to

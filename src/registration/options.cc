@@ -1,0 +1,236 @@
+// Names of the registration enums and the validation of RegistrationOptions.
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "femreg/registration.h"
+
+namespace femreg {
+namespace {
+
+// Sets *error to "field message (got value)" and returns false.
+template <typename T>
+bool Fail(std::string* error, const char* field, const char* message, const T& value) {
+  if (error != nullptr) {
+    std::ostringstream os;
+    os << field << " " << message << " (got " << value << ")";
+    *error = os.str();
+  }
+  return false;
+}
+
+bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+std::string VectorString(const Eigen::Vector3d& v) {
+  std::ostringstream os;
+  os << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+  return os.str();
+}
+
+}  // namespace
+
+const char* ToString(RobustLoss v) {
+  switch (v) {
+    case RobustLoss::kNone:
+      return "none";
+    case RobustLoss::kHuber:
+      return "huber";
+    case RobustLoss::kCauchy:
+      return "cauchy";
+    case RobustLoss::kTukey:
+      return "tukey";
+  }
+  return "unknown";
+}
+
+const char* ToString(DataMetric v) {
+  switch (v) {
+    case DataMetric::kPointToPoint:
+      return "point_to_point";
+    case DataMetric::kPointToPlane:
+      return "point_to_plane";
+  }
+  return "unknown";
+}
+
+const char* ToString(Regularizer v) {
+  switch (v) {
+    case Regularizer::kCorotational:
+      return "corotational";
+    case Regularizer::kLinear:
+      return "linear";
+    case Regularizer::kNone:
+      return "none";
+  }
+  return "unknown";
+}
+
+const char* ToString(TrustRegion v) {
+  switch (v) {
+    case TrustRegion::kLevenbergMarquardt:
+      return "levenberg_marquardt";
+    case TrustRegion::kDogleg:
+      return "dogleg";
+  }
+  return "unknown";
+}
+
+const char* ToString(LinearSolver v) {
+  switch (v) {
+    case LinearSolver::kSparseNormalCholesky:
+      return "sparse_normal_cholesky";
+    case LinearSolver::kConjugateGradients:
+      return "conjugate_gradients";
+  }
+  return "unknown";
+}
+
+const char* ToString(TerminationType t) {
+  switch (t) {
+    case TerminationType::kNotRun:
+      return "not_run";
+    case TerminationType::kConverged:
+      return "converged";
+    case TerminationType::kMaxIterations:
+      return "max_iterations";
+    case TerminationType::kTimeBudget:
+      return "time_budget";
+    case TerminationType::kNoCorrespondences:
+      return "no_correspondences";
+    case TerminationType::kSolverFailure:
+      return "solver_failure";
+    case TerminationType::kInvalidInput:
+      return "invalid_input";
+  }
+  return "unknown";
+}
+
+// Each FromString accepts exactly the names ToString prints.
+#define FEMREG_FROM_STRING(Type, ...)                        \
+  bool FromString(const std::string& s, Type* v) {           \
+    for (Type candidate : {__VA_ARGS__}) {                   \
+      if (s == ToString(candidate)) {                        \
+        *v = candidate;                                      \
+        return true;                                         \
+      }                                                      \
+    }                                                        \
+    return false;                                            \
+  }
+
+FEMREG_FROM_STRING(RobustLoss, RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy,
+                   RobustLoss::kTukey)
+FEMREG_FROM_STRING(DataMetric, DataMetric::kPointToPoint, DataMetric::kPointToPlane)
+FEMREG_FROM_STRING(Regularizer, Regularizer::kCorotational, Regularizer::kLinear,
+                   Regularizer::kNone)
+FEMREG_FROM_STRING(TrustRegion, TrustRegion::kLevenbergMarquardt, TrustRegion::kDogleg)
+FEMREG_FROM_STRING(LinearSolver, LinearSolver::kSparseNormalCholesky,
+                   LinearSolver::kConjugateGradients)
+#undef FEMREG_FROM_STRING
+
+bool CameraOptions::IsValid(std::string* error) const {
+  if (!Finite(position)) return Fail(error, "camera.position", "must be finite", VectorString(position));
+  if (!(std::isfinite(fx) && fx > 0)) return Fail(error, "camera.fx", "must be > 0", fx);
+  if (!(std::isfinite(fy) && fy > 0)) return Fail(error, "camera.fy", "must be > 0", fy);
+  if (!std::isfinite(cx)) return Fail(error, "camera.cx", "must be finite", cx);
+  if (!std::isfinite(cy)) return Fail(error, "camera.cy", "must be finite", cy);
+  if (width <= 0) return Fail(error, "camera.width", "must be > 0", width);
+  if (height <= 0) return Fail(error, "camera.height", "must be > 0", height);
+  return true;
+}
+
+bool PreprocessOptions::IsValid(std::string* error) const {
+  if (crop) {
+    if (!Finite(crop_min)) {
+      return Fail(error, "preprocess.crop.min", "must be finite", VectorString(crop_min));
+    }
+    if (!Finite(crop_max)) {
+      return Fail(error, "preprocess.crop.max", "must be finite", VectorString(crop_max));
+    }
+    if ((crop_min.array() > crop_max.array()).any()) {
+      return Fail(error, "preprocess.crop.min", "must be <= crop.max in every coordinate",
+                  VectorString(crop_min) + " and " + VectorString(crop_max));
+    }
+  }
+  if (!(std::isfinite(voxel_size) && voxel_size >= 0)) {
+    return Fail(error, "preprocess.voxel_size", "must be >= 0", voxel_size);
+  }
+  if (outlier_neighbors < 0) {
+    return Fail(error, "preprocess.outliers.neighbors", "must be >= 0", outlier_neighbors);
+  }
+  if (!(std::isfinite(outlier_stddev) && outlier_stddev > 0)) {
+    return Fail(error, "preprocess.outliers.stddev", "must be > 0", outlier_stddev);
+  }
+  if (normal_neighbors < 0) {
+    return Fail(error, "preprocess.normals.neighbors", "must be >= 0", normal_neighbors);
+  }
+  if (normal_neighbors > 0 && normal_neighbors < 3) {
+    return Fail(error, "preprocess.normals.neighbors", "must be 0 (off) or >= 3",
+                normal_neighbors);
+  }
+  return true;
+}
+
+bool DataTermOptions::IsValid(std::string* error) const {
+  if (!model_to_cloud && !cloud_to_model) {
+    return Fail(error, "data.model_to_cloud", "or data.cloud_to_model must be true",
+                "both false");
+  }
+  if (!std::isfinite(max_distance)) {
+    return Fail(error, "data.max_distance", "must be finite", max_distance);
+  }
+  if (!(std::isfinite(loss_scale) && loss_scale > 0)) {
+    return Fail(error, "data.loss_scale", "must be > 0", loss_scale);
+  }
+  if (cloud_stride < 1) return Fail(error, "data.cloud_stride", "must be >= 1", cloud_stride);
+  return true;
+}
+
+bool WeightOptions::IsValid(std::string* error) const {
+  if (!(std::isfinite(data) && data >= 0)) return Fail(error, "weights.data", "must be >= 0", data);
+  if (!(std::isfinite(elastic) && elastic >= 0)) {
+    return Fail(error, "weights.elastic", "must be >= 0", elastic);
+  }
+  if (!(std::isfinite(temporal) && temporal >= 0)) {
+    return Fail(error, "weights.temporal", "must be >= 0", temporal);
+  }
+  if (!(std::isfinite(anchor) && anchor >= 0)) {
+    return Fail(error, "weights.anchor", "must be >= 0", anchor);
+  }
+  if (data == 0 && elastic == 0 && temporal == 0) {
+    return Fail(error, "weights", "data, elastic and temporal must not all be 0", "0, 0, 0");
+  }
+  return true;
+}
+
+bool SolverOptions::IsValid(std::string* error) const {
+  if (max_outer_iterations < 1) {
+    return Fail(error, "solver.max_outer_iterations", "must be >= 1", max_outer_iterations);
+  }
+  if (max_inner_iterations < 1) {
+    return Fail(error, "solver.max_inner_iterations", "must be >= 1", max_inner_iterations);
+  }
+  if (!(std::isfinite(relative_energy_tolerance) && relative_energy_tolerance >= 0)) {
+    return Fail(error, "solver.relative_energy_tolerance", "must be >= 0",
+                relative_energy_tolerance);
+  }
+  if (!(std::isfinite(time_budget_s) && time_budget_s >= 0)) {
+    return Fail(error, "solver.time_budget_s", "must be >= 0 (0 = none)", time_budget_s);
+  }
+  if (num_threads < 1) return Fail(error, "solver.threads", "must be >= 1", num_threads);
+  if (rigid_iterations < 0) {
+    return Fail(error, "solver.rigid_iterations", "must be >= 0", rigid_iterations);
+  }
+  if (rigid_prealign && rigid_iterations < 1) {
+    return Fail(error, "solver.rigid_iterations", "must be >= 1 when rigid_prealign is on",
+                rigid_iterations);
+  }
+  return true;
+}
+
+bool RegistrationOptions::IsValid(std::string* error) const {
+  // The sub-structs already name their fields with their own prefix (camera., data., ...).
+  return camera.IsValid(error) && preprocess.IsValid(error) && data.IsValid(error) &&
+         weights.IsValid(error) && solver.IsValid(error);
+}
+
+}  // namespace femreg

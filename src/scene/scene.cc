@@ -1,0 +1,599 @@
+// Reading scene files (YAML). The layout, with defaults; every key is optional unless
+// marked "required", and a key that is not listed here is an error:
+//
+//   description: "free text"
+//   objects:                                   # required, at least one
+//     - name: beam                             # unique; default object0, object1, ...
+//       mesh: beam.msh                         # relative to the scene file's folder, or:
+//       generate: {shape: box, size: [1, 0.1, 0.1], cells: [20, 2, 2], origin: [0, 0, 0]}
+//       #         {shape: cylinder, radius: 0.05, length: 1, cells: [2, 20]}  # radial, axial; +z
+//       #         {shape: sphere, radius: 0.1, cells: 4}                     # centred at 0
+//       scale: 1.0                             # > 0, applied to the file's coordinates
+//       pose: {translation: [0, 0, 0], rotation: [0, 0, 0]}  # rotation: axis * angle (rad)
+//       material: {youngs_modulus: 1e5, poisson_ratio: 0.3, density: 1000}  # Pa, -, kg/m^3
+//       regions: {2: {youngs_modulus: 5e5}}    # per region id; unset fields inherit
+//       toughness: 0                           # Pa, for fracture (later)
+//   gravity: [0, 0, 0]                         # m/s^2
+//   boundary:
+//     - {object: beam, select: SELECTION, clamp: true}
+//     - {object: beam, select: SELECTION, displacement: [0, 0, 0.1]}   # m, from rest
+//   loads:
+//     - {object: beam, select: SELECTION, force: [0, 0, -1]}  # N in total, spread evenly
+//   forward: {model: corotational|linear, max_iterations: 100, load_steps: 1,
+//             tolerance: 1e-8, absolute_tolerance: 1e-12}
+//   registration:
+//     regularizer: corotational|linear|none
+//     camera: {position: [0, 0, 1], fx: 525, fy: 525, cx: 319.5, cy: 239.5,
+//              width: 640, height: 480}       # present = a known camera
+//     preprocess: {crop: {min: [..], max: [..]}, voxel_size: 0,
+//                  outliers: {neighbors: 0, stddev: 1}, normals: {neighbors: 0}}
+//     data: {model_to_cloud: true, cloud_to_model: true, max_distance: 0.03,
+//            loss: huber|cauchy|tukey|none, loss_scale: 0.005,
+//            metric: point_to_point|point_to_plane, visibility: false, cloud_stride: 1}
+//     weights: {data: 1, elastic: 1, temporal: 1, anchor: 1e4}
+//     solver: {max_outer_iterations: 5, max_inner_iterations: 10,
+//              relative_energy_tolerance: 1e-4, time_budget_s: 0,
+//              trust_region: levenberg_marquardt|dogleg,
+//              linear_solver: sparse_normal_cholesky|conjugate_gradients, threads: 1,
+//              rigid_prealign: false, rigid_iterations: 20}
+//   anchors:
+//     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
+//        translations: [[0, 0, 0], [0, 0, 0.01]]}   # per frame; the last one repeats
+//   effects: {fracture: false, collision: false}   # true is an error until they are built
+//
+// SELECTION is exactly one of
+//   {box: {min: [x, y, z], max: [x, y, z]}}
+//   {plane: {point: [x, y, z], normal: [x, y, z]}}     # the side the normal points to
+//   {indices: [0, 1, 2]}
+//   {all: true}
+// plus an optional tolerance (m, default 1e-9) added around boxes and planes. Selections
+// are evaluated on the posed rest positions. `object` may be left out when the scene has
+// one object.
+#include "femreg/scene.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "scene/yaml_reader.h"
+
+namespace femreg {
+
+using scene_internal::ClosestMatch;
+using scene_internal::JoinNames;
+using scene_internal::SceneError;
+using scene_internal::YamlValue;
+
+const char* ToString(MeshGeneratorSpec::Shape shape) {
+  switch (shape) {
+    case MeshGeneratorSpec::Shape::kNone:
+      return "none";
+    case MeshGeneratorSpec::Shape::kBox:
+      return "box";
+    case MeshGeneratorSpec::Shape::kCylinder:
+      return "cylinder";
+    case MeshGeneratorSpec::Shape::kSphere:
+      return "sphere";
+  }
+  return "unknown";
+}
+
+namespace {
+
+std::string Number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+double PositiveDouble(const YamlValue& v) {
+  const double value = v.AsDouble();
+  if (!(value > 0)) v.Fail("must be > 0 (got " + Number(value) + ")");
+  return value;
+}
+
+double NonNegativeDouble(const YamlValue& v) {
+  const double value = v.AsDouble();
+  if (!(value >= 0)) v.Fail("must be >= 0 (got " + Number(value) + ")");
+  return value;
+}
+
+int IntAtLeast(const YamlValue& v, int min) {
+  const int value = v.AsInt();
+  if (value < min) v.Fail("must be >= " + std::to_string(min) + " (got " + std::to_string(value) + ")");
+  return value;
+}
+
+// Parses an enum through its FromString, listing the accepted names on failure.
+template <typename Enum>
+Enum ParseEnum(const YamlValue& v, const std::vector<Enum>& values) {
+  const std::string name = v.AsString();
+  Enum result = values.front();
+  if (FromString(name, &result)) return result;
+  std::vector<std::string> names;
+  for (Enum e : values) names.push_back(ToString(e));
+  const std::string suggestion = ClosestMatch(name, names);
+  v.Fail("unknown value '" + name + "' (" +
+         (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+         "one of: " + JoinNames(names) + ")");
+}
+
+class SceneParser {
+ public:
+  SceneParser(const std::string& source, const std::string& base_dir, Scene* scene)
+      : source_(source), base_dir_(base_dir), scene_(scene) {}
+
+  void Parse(const YAML::Node& root_node) {
+    YamlValue root(root_node, "", &source_, 1);
+    if (!root_node.IsDefined() || root_node.IsNull()) root.Fail("the scene is empty");
+    root.CheckKeys({"description", "objects", "gravity", "boundary", "loads", "forward",
+                    "registration", "anchors", "effects"});
+    if (root.Has("effects")) ParseEffects(root["effects"]);
+    ParseObjects(root["objects"]);
+    if (root.Has("gravity")) scene_->gravity = root["gravity"].AsVector3();
+    if (root.Has("boundary")) ParseBoundary(root["boundary"]);
+    if (root.Has("loads")) ParseLoads(root["loads"]);
+    if (root.Has("forward")) ParseForward(root["forward"]);
+    if (root.Has("registration")) ParseRegistration(root["registration"]);
+    if (root.Has("anchors")) ParseAnchors(root["anchors"]);
+  }
+
+ private:
+  void ParseEffects(const YamlValue& v) {
+    v.CheckKeys({"fracture", "collision"});
+    if (v.Has("fracture") && v["fracture"].AsBool()) {
+      v["fracture"].Fail(
+          "not built yet: fracture (issue 5); set it to false or remove it to run without "
+          "fracture");
+    }
+    if (v.Has("collision") && v["collision"].AsBool()) {
+      v["collision"].Fail(
+          "not built yet: collision (issue 6); set it to false or remove it to run without "
+          "collision");
+    }
+    scene_->effects = EffectsSpec();
+  }
+
+  void ParseObjects(const YamlValue& v) {
+    if (v.IsNull()) v.Fail("required: at least one object");
+    v.RequireSequence();
+    if (v.size() == 0) v.Fail("required: at least one object");
+    std::map<std::string, int> seen;
+    for (int i = 0; i < v.size(); ++i) {
+      ObjectSpec object = ParseObject(v[i], i);
+      auto inserted = seen.emplace(object.name, i);
+      if (!inserted.second) {
+        v[i]["name"].Fail("duplicate object name '" + object.name + "' (also objects[" +
+                          std::to_string(inserted.first->second) + "])");
+      }
+      scene_->objects.push_back(object);
+    }
+  }
+
+  ObjectSpec ParseObject(const YamlValue& v, int index) {
+    v.CheckKeys({"name", "mesh", "generate", "scale", "pose", "material", "regions",
+                 "toughness"});
+    ObjectSpec object;
+    object.name = v.Has("name") ? v["name"].AsString() : "object" + std::to_string(index);
+    if (object.name.empty()) v["name"].Fail("must not be empty");
+    if (v.Has("mesh") == v.Has("generate")) {
+      v.Fail("needs exactly one of 'mesh' (a file) or 'generate' (a box, cylinder or sphere)");
+    }
+    if (v.Has("mesh")) {
+      const YamlValue mesh = v["mesh"];
+      std::filesystem::path path(mesh.AsString());
+      if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+      object.mesh_path = path.lexically_normal().string();
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(path, ec)) {
+        mesh.Fail("mesh file not found: " + object.mesh_path);
+      }
+    } else {
+      object.generate = ParseGenerator(v["generate"]);
+    }
+    if (v.Has("scale")) object.scale = PositiveDouble(v["scale"]);
+    if (v.Has("pose")) {
+      const YamlValue pose = v["pose"];
+      pose.CheckKeys({"translation", "rotation"});
+      if (pose.Has("translation")) object.translation = pose["translation"].AsVector3();
+      if (pose.Has("rotation")) object.rotation = pose["rotation"].AsVector3();
+    }
+    if (v.Has("material")) object.material = ParseMaterial(v["material"], object.material);
+    if (v.Has("regions")) {
+      const YamlValue regions = v["regions"];
+      regions.RequireMap();
+      for (auto it = regions.node().begin(); it != regions.node().end(); ++it) {
+        YamlValue key(it->first, regions.path(), &source_, regions.line());
+        const int region = key.AsInt();
+        YamlValue entry(it->second, regions.path() + "." + std::to_string(region), &source_,
+                        key.line());
+        for (const auto& existing : object.region_materials) {
+          if (existing.first == region) key.Fail("region " + std::to_string(region) + " listed twice");
+        }
+        object.region_materials.emplace_back(region, ParseMaterial(entry, object.material));
+      }
+    }
+    if (v.Has("toughness")) object.toughness = NonNegativeDouble(v["toughness"]);
+    return object;
+  }
+
+  MeshGeneratorSpec ParseGenerator(const YamlValue& v) {
+    v.RequireMap();
+    MeshGeneratorSpec spec;
+    if (!v.Has("shape")) v.Fail("needs 'shape' (box, cylinder or sphere)");
+    const YamlValue shape = v["shape"];
+    const std::string name = shape.AsString();
+    if (name == "box") {
+      v.CheckKeys({"shape", "size", "cells", "origin"});
+      spec.shape = MeshGeneratorSpec::Shape::kBox;
+      if (v.Has("size")) {
+        spec.size = v["size"].AsVector3();
+        if ((spec.size.array() <= 0).any()) v["size"].Fail("every edge length must be > 0");
+      }
+      if (v.Has("cells")) {
+        spec.cells = v["cells"].AsVector3i();
+        if ((spec.cells.array() < 1).any()) v["cells"].Fail("every cell count must be >= 1");
+      }
+      if (v.Has("origin")) spec.origin = v["origin"].AsVector3();
+    } else if (name == "cylinder") {
+      v.CheckKeys({"shape", "radius", "length", "cells"});
+      spec.shape = MeshGeneratorSpec::Shape::kCylinder;
+      if (v.Has("radius")) spec.radius = PositiveDouble(v["radius"]);
+      if (v.Has("length")) spec.length = PositiveDouble(v["length"]);
+      if (v.Has("cells")) {
+        const YamlValue cells = v["cells"];
+        const std::vector<int> n = cells.AsIntList();
+        if (n.size() != 2 || n[0] < 1 || n[1] < 1) {
+          cells.Fail("must be [radial, axial] with both >= 1");
+        }
+        spec.radial_cells = n[0];
+        spec.axial_cells = n[1];
+      }
+    } else if (name == "sphere") {
+      v.CheckKeys({"shape", "radius", "cells"});
+      spec.shape = MeshGeneratorSpec::Shape::kSphere;
+      if (v.Has("radius")) spec.radius = PositiveDouble(v["radius"]);
+      if (v.Has("cells")) spec.radial_cells = IntAtLeast(v["cells"], 1);
+    } else {
+      const std::string suggestion = ClosestMatch(name, {"box", "cylinder", "sphere"});
+      shape.Fail("unknown shape '" + name + "' (" +
+                 (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+                 "one of: box, cylinder, sphere)");
+    }
+    return spec;
+  }
+
+  Material ParseMaterial(const YamlValue& v, const Material& defaults) {
+    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density"});
+    Material m = defaults;
+    if (v.Has("youngs_modulus")) {
+      m.youngs_modulus = v["youngs_modulus"].AsDouble();
+      if (!(m.youngs_modulus > 0)) {
+        v["youngs_modulus"].Fail("must be > 0 (got " + Number(m.youngs_modulus) + ")");
+      }
+    }
+    if (v.Has("poisson_ratio")) {
+      const YamlValue nu = v["poisson_ratio"];
+      m.poisson_ratio = nu.AsDouble();
+      if (!(m.poisson_ratio < 0.5)) {
+        nu.Fail("must be < 0.5 (got " + Number(m.poisson_ratio) + ")");
+      }
+      if (!(m.poisson_ratio > -1.0)) {
+        nu.Fail("must be > -1 (got " + Number(m.poisson_ratio) + ")");
+      }
+    }
+    if (v.Has("density")) {
+      m.density = v["density"].AsDouble();
+      if (!(m.density > 0)) v["density"].Fail("must be > 0 (got " + Number(m.density) + ")");
+    }
+    return m;
+  }
+
+  // The object a boundary condition, load or anchor applies to.
+  std::string ParseObjectName(const YamlValue& entry) {
+    if (!entry.Has("object")) {
+      if (scene_->objects.size() == 1) return scene_->objects[0].name;
+      std::vector<std::string> names;
+      for (const ObjectSpec& o : scene_->objects) names.push_back(o.name);
+      entry.Fail("needs 'object' when the scene has several objects (" + JoinNames(names) + ")");
+    }
+    const YamlValue v = entry["object"];
+    const std::string name = v.AsString();
+    std::vector<std::string> names;
+    for (const ObjectSpec& o : scene_->objects) {
+      if (o.name == name) return name;
+      names.push_back(o.name);
+    }
+    const std::string suggestion = ClosestMatch(name, names);
+    v.Fail("unknown object '" + name + "' (" +
+           (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+           "objects: " + JoinNames(names) + ")");
+  }
+
+  VertexSelection ParseSelection(const YamlValue& entry) {
+    if (!entry.Has("select")) {
+      entry.Fail("needs 'select' (box, plane, indices or all: true)");
+    }
+    const YamlValue v = entry["select"];
+    v.CheckKeys({"box", "plane", "indices", "all", "tolerance"});
+    VertexSelection s;
+    s.where = v.Location() + " (" + v.path() + ")";
+    const int count = v.Has("box") + v.Has("plane") + v.Has("indices") + v.Has("all");
+    if (count != 1) v.Fail("needs exactly one of box, plane, indices or all");
+    if (v.Has("box")) {
+      const YamlValue box = v["box"];
+      box.CheckKeys({"min", "max"});
+      if (!box.Has("min") || !box.Has("max")) box.Fail("needs 'min' and 'max'");
+      s.kind = VertexSelection::Kind::kBox;
+      s.box_min = box["min"].AsVector3();
+      s.box_max = box["max"].AsVector3();
+      if ((s.box_min.array() > s.box_max.array()).any()) {
+        box["max"].Fail("must be >= min in every coordinate");
+      }
+    } else if (v.Has("plane")) {
+      const YamlValue plane = v["plane"];
+      plane.CheckKeys({"point", "normal"});
+      if (!plane.Has("point") || !plane.Has("normal")) plane.Fail("needs 'point' and 'normal'");
+      s.kind = VertexSelection::Kind::kPlane;
+      s.plane_point = plane["point"].AsVector3();
+      s.plane_normal = plane["normal"].AsVector3();
+      if (s.plane_normal.norm() == 0) plane["normal"].Fail("must not be zero");
+      s.plane_normal.normalize();
+    } else if (v.Has("indices")) {
+      const YamlValue indices = v["indices"];
+      s.kind = VertexSelection::Kind::kIndices;
+      s.indices = indices.AsIntList();
+      if (s.indices.empty()) indices.Fail("must not be empty");
+      for (int i = 0; i < static_cast<int>(s.indices.size()); ++i) {
+        if (s.indices[i] < 0) indices[i].Fail("must be >= 0 (got " + std::to_string(s.indices[i]) + ")");
+      }
+    } else {
+      if (!v["all"].AsBool()) v["all"].Fail("must be true (or use another selection)");
+      s.kind = VertexSelection::Kind::kAll;
+    }
+    if (v.Has("tolerance")) s.tolerance = NonNegativeDouble(v["tolerance"]);
+    return s;
+  }
+
+  void ParseBoundary(const YamlValue& list) {
+    list.RequireSequence();
+    for (int i = 0; i < list.size(); ++i) {
+      const YamlValue v = list[i];
+      v.CheckKeys({"object", "select", "clamp", "displacement"});
+      BoundaryConditionSpec bc;
+      bc.object = ParseObjectName(v);
+      bc.selection = ParseSelection(v);
+      const bool clamp = v.Has("clamp") && v["clamp"].AsBool();
+      if (clamp && v.Has("displacement")) {
+        v.Fail("has both 'clamp: true' and 'displacement'; use one (a clamp is a zero displacement)");
+      }
+      if (clamp) {
+        bc.type = BoundaryConditionSpec::Type::kClamp;
+      } else if (v.Has("displacement")) {
+        bc.type = BoundaryConditionSpec::Type::kDisplacement;
+        bc.displacement = v["displacement"].AsVector3();
+      } else {
+        v.Fail("needs 'clamp: true' or 'displacement: [x, y, z]'");
+      }
+      scene_->boundary_conditions.push_back(bc);
+    }
+  }
+
+  void ParseLoads(const YamlValue& list) {
+    list.RequireSequence();
+    for (int i = 0; i < list.size(); ++i) {
+      const YamlValue v = list[i];
+      v.CheckKeys({"object", "select", "force"});
+      LoadSpec load;
+      load.object = ParseObjectName(v);
+      load.selection = ParseSelection(v);
+      if (!v.Has("force")) v.Fail("needs 'force: [x, y, z]' (N, the total over the selection)");
+      load.force = v["force"].AsVector3();
+      scene_->loads.push_back(load);
+    }
+  }
+
+  void ParseForward(const YamlValue& v) {
+    v.CheckKeys({"model", "max_iterations", "load_steps", "tolerance", "absolute_tolerance"});
+    if (v.Has("model")) {
+      scene_->forward_model =
+          ParseEnum(v["model"], std::vector<ElasticModelType>{ElasticModelType::kCorotational,
+                                                              ElasticModelType::kLinear});
+    }
+    ForwardOptions& f = scene_->forward;
+    if (v.Has("max_iterations")) f.max_iterations = IntAtLeast(v["max_iterations"], 1);
+    if (v.Has("load_steps")) f.load_steps = IntAtLeast(v["load_steps"], 1);
+    if (v.Has("tolerance")) f.relative_tolerance = PositiveDouble(v["tolerance"]);
+    if (v.Has("absolute_tolerance")) {
+      f.absolute_tolerance = NonNegativeDouble(v["absolute_tolerance"]);
+    }
+  }
+
+  void ParseRegistration(const YamlValue& v) {
+    v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver"});
+    RegistrationOptions& r = scene_->registration;
+    if (v.Has("regularizer")) {
+      r.regularizer = ParseEnum(v["regularizer"],
+                                std::vector<Regularizer>{Regularizer::kCorotational,
+                                                         Regularizer::kLinear, Regularizer::kNone});
+    }
+    if (v.Has("camera")) {
+      const YamlValue c = v["camera"];
+      c.CheckKeys({"position", "fx", "fy", "cx", "cy", "width", "height"});
+      r.camera.enabled = true;
+      if (c.Has("position")) r.camera.position = c["position"].AsVector3();
+      if (c.Has("fx")) r.camera.fx = c["fx"].AsDouble();
+      if (c.Has("fy")) r.camera.fy = c["fy"].AsDouble();
+      if (c.Has("cx")) r.camera.cx = c["cx"].AsDouble();
+      if (c.Has("cy")) r.camera.cy = c["cy"].AsDouble();
+      if (c.Has("width")) r.camera.width = c["width"].AsInt();
+      if (c.Has("height")) r.camera.height = c["height"].AsInt();
+    }
+    if (v.Has("preprocess")) {
+      const YamlValue p = v["preprocess"];
+      p.CheckKeys({"crop", "voxel_size", "outliers", "normals"});
+      if (p.Has("crop")) {
+        const YamlValue crop = p["crop"];
+        crop.CheckKeys({"min", "max"});
+        if (!crop.Has("min") || !crop.Has("max")) crop.Fail("needs 'min' and 'max'");
+        r.preprocess.crop = true;
+        r.preprocess.crop_min = crop["min"].AsVector3();
+        r.preprocess.crop_max = crop["max"].AsVector3();
+      }
+      if (p.Has("voxel_size")) r.preprocess.voxel_size = p["voxel_size"].AsDouble();
+      if (p.Has("outliers")) {
+        const YamlValue o = p["outliers"];
+        o.CheckKeys({"neighbors", "stddev"});
+        if (o.Has("neighbors")) r.preprocess.outlier_neighbors = o["neighbors"].AsInt();
+        if (o.Has("stddev")) r.preprocess.outlier_stddev = o["stddev"].AsDouble();
+      }
+      if (p.Has("normals")) {
+        const YamlValue n = p["normals"];
+        n.CheckKeys({"neighbors"});
+        if (n.Has("neighbors")) r.preprocess.normal_neighbors = n["neighbors"].AsInt();
+      }
+    }
+    if (v.Has("data")) {
+      const YamlValue d = v["data"];
+      d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
+                   "metric", "visibility", "cloud_stride"});
+      DataTermOptions& o = r.data;
+      if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
+      if (d.Has("cloud_to_model")) o.cloud_to_model = d["cloud_to_model"].AsBool();
+      if (d.Has("max_distance")) o.max_distance = d["max_distance"].AsDouble();
+      if (d.Has("loss")) {
+        o.loss = ParseEnum(d["loss"], std::vector<RobustLoss>{RobustLoss::kHuber,
+                                                              RobustLoss::kCauchy,
+                                                              RobustLoss::kTukey,
+                                                              RobustLoss::kNone});
+      }
+      if (d.Has("loss_scale")) o.loss_scale = d["loss_scale"].AsDouble();
+      if (d.Has("metric")) {
+        o.metric = ParseEnum(d["metric"], std::vector<DataMetric>{DataMetric::kPointToPoint,
+                                                                  DataMetric::kPointToPlane});
+      }
+      if (d.Has("visibility")) o.visibility = d["visibility"].AsBool();
+      if (d.Has("cloud_stride")) o.cloud_stride = d["cloud_stride"].AsInt();
+    }
+    if (v.Has("weights")) {
+      const YamlValue w = v["weights"];
+      w.CheckKeys({"data", "elastic", "temporal", "anchor"});
+      if (w.Has("data")) r.weights.data = w["data"].AsDouble();
+      if (w.Has("elastic")) r.weights.elastic = w["elastic"].AsDouble();
+      if (w.Has("temporal")) r.weights.temporal = w["temporal"].AsDouble();
+      if (w.Has("anchor")) r.weights.anchor = w["anchor"].AsDouble();
+    }
+    if (v.Has("solver")) {
+      const YamlValue s = v["solver"];
+      s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
+                   "time_budget_s", "trust_region", "linear_solver", "threads",
+                   "rigid_prealign", "rigid_iterations"});
+      SolverOptions& o = r.solver;
+      if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
+      if (s.Has("max_inner_iterations")) o.max_inner_iterations = s["max_inner_iterations"].AsInt();
+      if (s.Has("relative_energy_tolerance")) {
+        o.relative_energy_tolerance = s["relative_energy_tolerance"].AsDouble();
+      }
+      if (s.Has("time_budget_s")) o.time_budget_s = s["time_budget_s"].AsDouble();
+      if (s.Has("trust_region")) {
+        o.trust_region = ParseEnum(s["trust_region"],
+                                   std::vector<TrustRegion>{TrustRegion::kLevenbergMarquardt,
+                                                            TrustRegion::kDogleg});
+      }
+      if (s.Has("linear_solver")) {
+        o.linear_solver = ParseEnum(
+            s["linear_solver"], std::vector<LinearSolver>{LinearSolver::kSparseNormalCholesky,
+                                                          LinearSolver::kConjugateGradients});
+      }
+      if (s.Has("threads")) o.num_threads = s["threads"].AsInt();
+      if (s.Has("rigid_prealign")) o.rigid_prealign = s["rigid_prealign"].AsBool();
+      if (s.Has("rigid_iterations")) o.rigid_iterations = s["rigid_iterations"].AsInt();
+    }
+    // Range checks live in RegistrationOptions::IsValid; its message starts with the field
+    // ("data.loss_scale must be > 0 (got -1)"), which locates the offending node.
+    std::string error;
+    if (!r.IsValid(&error)) {
+      const size_t space = error.find(' ');
+      const std::string field = error.substr(0, space);
+      std::string rest = space == std::string::npos ? std::string() : error.substr(space + 1);
+      YamlValue node = v;
+      std::string remaining = field;
+      while (!remaining.empty()) {
+        const size_t dot = remaining.find('.');
+        const std::string key = remaining.substr(0, dot);
+        remaining = dot == std::string::npos ? std::string() : remaining.substr(dot + 1);
+        if (!node.Has(key)) break;
+        node = node[key];
+      }
+      // Report the full field path even when only a parent is present in the file.
+      YamlValue located(node.node(), v.path() + "." + field, &node.source(), node.line());
+      located.Fail(rest);
+    }
+  }
+
+  void ParseAnchors(const YamlValue& list) {
+    list.RequireSequence();
+    std::set<std::string> names;
+    for (int i = 0; i < list.size(); ++i) {
+      const YamlValue v = list[i];
+      v.CheckKeys({"name", "object", "select", "hard", "weight", "translations"});
+      AnchorSpec anchor;
+      anchor.name = v.Has("name") ? v["name"].AsString() : "anchor" + std::to_string(i);
+      if (!names.insert(anchor.name).second) {
+        v["name"].Fail("duplicate anchor name '" + anchor.name + "'");
+      }
+      anchor.object = ParseObjectName(v);
+      anchor.selection = ParseSelection(v);
+      if (v.Has("hard")) anchor.hard = v["hard"].AsBool();
+      if (v.Has("weight")) anchor.weight = NonNegativeDouble(v["weight"]);
+      if (v.Has("translations")) {
+        const YamlValue t = v["translations"];
+        if (!t.IsSequence()) t.Fail("must be a list of [x, y, z] per frame");
+        for (int k = 0; k < t.size(); ++k) anchor.translations.push_back(t[k].AsVector3());
+      }
+      scene_->anchors.push_back(anchor);
+    }
+  }
+
+  std::string source_;
+  std::string base_dir_;
+  Scene* scene_;
+};
+
+}  // namespace
+
+Status ParseScene(const std::string& yaml_text, const std::string& source,
+                  const std::string& base_dir, Scene* scene) {
+  Scene parsed;
+  parsed.path = source;
+  try {
+    const YAML::Node root = YAML::Load(yaml_text);
+    SceneParser parser(source, base_dir, &parsed);
+    parser.Parse(root);
+  } catch (const SceneError& e) {
+    return Status::Error(e.what());
+  } catch (const YAML::Exception& e) {
+    // Syntax errors: yaml-cpp's mark is 0-based.
+    std::ostringstream os;
+    os << source;
+    if (!e.mark.is_null()) os << ":" << e.mark.line + 1 << ":" << e.mark.column + 1;
+    os << ": " << e.msg;
+    return Status::Error(os.str());
+  }
+  *scene = std::move(parsed);
+  return Status::Ok();
+}
+
+Status LoadScene(const std::string& path, Scene* scene) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error(path + ": cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  return ParseScene(text.str(), path, parent.empty() ? "." : parent.string(), scene);
+}
+
+}  // namespace femreg
