@@ -1,0 +1,70 @@
+// femreg/tracker.h - the library entry point: build a Tracker from a scene, call Track once
+// per point cloud, read the deformed vertices and the frame summary.
+//
+//   femreg::Scene scene;
+//   femreg::Status s = femreg::LoadScene("scene.yaml", &scene);
+//   std::unique_ptr<femreg::Tracker> tracker;
+//   s = femreg::Tracker::Create(scene, &tracker);
+//   for (each cloud) {
+//     femreg::FrameSummary summary;
+//     tracker->Track(cloud, &summary);
+//     if (summary.IsSolutionUsable()) use(tracker->vertices(0));
+//   }
+#ifndef FEMREG_TRACKER_H_
+#define FEMREG_TRACKER_H_
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "femreg/mesh.h"
+#include "femreg/point_cloud.h"
+#include "femreg/registration.h"
+#include "femreg/scene.h"
+#include "femreg/status.h"
+
+namespace femreg {
+
+class Tracker {
+ public:
+  // Loads every object's mesh, builds the rest data once, and checks the options.
+  static Status Create(const Scene& scene, std::unique_ptr<Tracker>* tracker);
+  // The same with meshes built by the caller (positions in mesh.x are the initial shape).
+  // materials[i] and region_materials[i] belong to meshes[i].
+  static Status Create(const std::vector<TetMesh>& meshes, const std::vector<Material>& materials,
+                       const RegistrationOptions& options, std::unique_ptr<Tracker>* tracker);
+  ~Tracker();
+
+  // Registers the meshes to one cloud (metres, scene frame). Never throws: bad input is
+  // reported in the summary (termination kInvalidInput / kNoCorrespondences) and the shape
+  // is then held by the temporal term. Returns an error Status only for misuse.
+  Status Track(const PointCloud& cloud, FrameSummary* summary);
+
+  int num_objects() const;
+  const TetMesh& mesh(int object) const;          // rest data, topology and current x
+  const Vertices& vertices(int object) const;     // #V by 3 current positions
+  // Distance (m) from each vertex to its nearest cloud point in the last frame; NaN for
+  // interior vertices and when there was no data.
+  const Eigen::VectorXd& vertex_residuals(int object) const;
+  // Whether each vertex had a data correspondence in the last frame (seen by the camera).
+  const std::vector<char>& vertex_observed(int object) const;
+  int frame() const;  // frames tracked so far
+
+  // Anchors: vertex sets with a per-frame target. Hard anchors fix the vertices at the
+  // targets; soft ones pull with `weight` (N/m per vertex; <= 0 uses weights.anchor).
+  // Targets set once stay until changed.
+  Status AddAnchor(const std::string& name, int object, const std::vector<int>& vertices,
+                   bool hard, double weight = 0.0);
+  Status SetAnchorTargets(const std::string& name, const Vertices& targets);
+
+  const RegistrationOptions& options() const;
+
+ private:
+  Tracker();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace femreg
+
+#endif  // FEMREG_TRACKER_H_

@@ -1,0 +1,151 @@
+#include "registration/nearest.h"
+
+#include <nanoflann.hpp>
+
+#include <algorithm>
+#include <limits>
+
+namespace femreg {
+
+namespace {
+struct VerticesAdaptor {
+  const Vertices* points;
+  size_t kdtree_get_point_count() const { return static_cast<size_t>(points->rows()); }
+  double kdtree_get_pt(size_t i, size_t d) const {
+    return (*points)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(d));
+  }
+  template <class BoundingBox>
+  bool kdtree_get_bbox(BoundingBox&) const {
+    return false;
+  }
+};
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<double, VerticesAdaptor>, VerticesAdaptor, 3, uint32_t>;
+}  // namespace
+
+struct PointIndex::Tree {
+  VerticesAdaptor adaptor;
+  KdTree tree;
+  explicit Tree(const Vertices* points)
+      : adaptor{points}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}
+};
+
+PointIndex::PointIndex(const Vertices& points) : points_(points) {
+  if (points_.rows() > 0) tree_ = std::make_unique<Tree>(&points_);
+}
+
+PointIndex::~PointIndex() = default;
+
+int PointIndex::Nearest(const Eigen::Vector3d& query, double* squared_distance) const {
+  if (!tree_) return -1;
+  uint32_t index = 0;
+  double d2 = 0.0;
+  nanoflann::KNNResultSet<double, uint32_t> result(1);
+  result.init(&index, &d2);
+  tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  if (squared_distance) *squared_distance = d2;
+  return static_cast<int>(index);
+}
+
+int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,
+                         double* squared_distances) const {
+  if (!tree_ || k <= 0) return 0;
+  std::vector<uint32_t> idx(k);
+  nanoflann::KNNResultSet<double, uint32_t> result(k);
+  result.init(idx.data(), squared_distances);
+  tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  const int n = static_cast<int>(result.size());
+  for (int i = 0; i < n; ++i) indices[i] = static_cast<int>(idx[i]);
+  return n;
+}
+
+Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  // Voronoi-region walk over the vertices, edges and face of the triangle.
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {1.0, 0.0, 0.0};
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {0.0, 1.0, 0.0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    return {1.0 - v, v, 0.0};
+  }
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {0.0, 0.0, 1.0};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    return {1.0 - w, 0.0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0.0, 1.0 - w, w};
+  }
+  const double denom = va + vb + vc;
+  if (!(std::abs(denom) > 0.0)) return {1.0, 0.0, 0.0};  // degenerate triangle
+  const double v = vb / denom, w = vc / denom;
+  return {1.0 - v - w, v, w};
+}
+
+SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
+                           int candidate_vertices)
+    : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices) {
+  const int nv = static_cast<int>(positions.rows());
+  std::vector<char> used(nv, 0);
+  tri_offsets_.assign(nv + 1, 0);
+  for (int f = 0; f < triangles.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      used[triangles(f, k)] = 1;
+      ++tri_offsets_[triangles(f, k) + 1];
+    }
+  }
+  for (int v = 0; v < nv; ++v) tri_offsets_[v + 1] += tri_offsets_[v];
+  tri_list_.assign(tri_offsets_[nv], 0);
+  std::vector<int> fill(tri_offsets_.begin(), tri_offsets_.end() - 1);
+  for (int f = 0; f < triangles.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) tri_list_[fill[triangles(f, k)]++] = f;
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (used[v]) surface_vertex_ids_.push_back(v);
+  }
+  Vertices pts(static_cast<Eigen::Index>(surface_vertex_ids_.size()), 3);
+  for (size_t i = 0; i < surface_vertex_ids_.size(); ++i) {
+    pts.row(static_cast<Eigen::Index>(i)) = positions.row(surface_vertex_ids_[i]);
+  }
+  index_ = std::make_unique<PointIndex>(pts);
+}
+
+SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
+  Hit best;
+  best.squared_distance = std::numeric_limits<double>::infinity();
+  int idx[16];
+  double d2[16];
+  const int k = std::min(candidate_vertices_, 16);
+  const int n = index_->KNearest(query, k, idx, d2);
+  for (int i = 0; i < n; ++i) {
+    const int v = surface_vertex_ids_[idx[i]];
+    for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
+      const int f = tri_list_[j];
+      const Eigen::Vector3d a = positions_.row(triangles_(f, 0));
+      const Eigen::Vector3d b = positions_.row(triangles_(f, 1));
+      const Eigen::Vector3d c = positions_.row(triangles_(f, 2));
+      const Eigen::Vector3d bary = ClosestPointOnTriangle(query, a, b, c);
+      const Eigen::Vector3d point = bary[0] * a + bary[1] * b + bary[2] * c;
+      const double dist2 = (point - query).squaredNorm();
+      if (dist2 < best.squared_distance) {
+        best.triangle = f;
+        best.barycentric = bary;
+        best.point = point;
+        best.squared_distance = dist2;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace femreg

@@ -1,0 +1,66 @@
+// Nearest-neighbour queries: a nanoflann k-d tree over a point set, and closest points on
+// a triangle surface.
+#ifndef FEMREG_REGISTRATION_NEAREST_H_
+#define FEMREG_REGISTRATION_NEAREST_H_
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "femreg/mesh.h"
+
+namespace femreg {
+
+// A k-d tree over a copy of `points` (#P by 3).
+class PointIndex {
+ public:
+  explicit PointIndex(const Vertices& points);
+  ~PointIndex();
+  PointIndex(const PointIndex&) = delete;
+  PointIndex& operator=(const PointIndex&) = delete;
+
+  int size() const { return static_cast<int>(points_.rows()); }
+  const Vertices& points() const { return points_; }
+  // Index of the nearest point and its squared distance; -1 when empty.
+  int Nearest(const Eigen::Vector3d& query, double* squared_distance) const;
+  // Up to k nearest, closest first.
+  int KNearest(const Eigen::Vector3d& query, int k, int* indices, double* squared_distances) const;
+
+ private:
+  struct Tree;
+  Vertices points_;
+  std::unique_ptr<Tree> tree_;
+};
+
+// Closest point to p on triangle (a, b, c), as barycentric coordinates (sum 1, all >= 0).
+Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
+// Closest points on a triangle surface: candidates are the triangles around the k surface
+// vertices nearest to the query, which finds the true closest triangle whenever it has a
+// vertex among them (always for reasonably shaped surface triangles).
+class SurfaceIndex {
+ public:
+  // positions: #V by 3 (all vertices); triangles: #F by 3 indices into positions.
+  SurfaceIndex(const Vertices& positions, const Triangles& triangles, int candidate_vertices = 4);
+
+  struct Hit {
+    int triangle = -1;
+    Eigen::Vector3d barycentric = Eigen::Vector3d::Zero();
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();
+    double squared_distance = 0.0;
+  };
+  Hit Closest(const Eigen::Vector3d& query) const;
+
+ private:
+  const Vertices& positions_;
+  const Triangles& triangles_;
+  int candidate_vertices_;
+  std::vector<int> surface_vertex_ids_;  // index in the tree -> vertex id
+  std::vector<int> tri_offsets_, tri_list_;  // vertex id -> incident triangles (CSR)
+  std::unique_ptr<PointIndex> index_;
+};
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_NEAREST_H_

@@ -1,0 +1,73 @@
+#include <cstdio>
+#include <sstream>
+
+#include "femreg/registration.h"
+
+namespace femreg {
+
+const char* ToString(TerminationType t) {
+  switch (t) {
+    case TerminationType::kNotRun:
+      return "NOT_RUN";
+    case TerminationType::kConverged:
+      return "CONVERGED";
+    case TerminationType::kMaxIterations:
+      return "MAX_ITERATIONS";
+    case TerminationType::kTimeBudget:
+      return "TIME_BUDGET";
+    case TerminationType::kNoCorrespondences:
+      return "NO_CORRESPONDENCES";
+    case TerminationType::kSolverFailure:
+      return "SOLVER_FAILURE";
+    case TerminationType::kInvalidInput:
+      return "INVALID_INPUT";
+  }
+  return "UNKNOWN";
+}
+
+bool FrameSummary::IsSolutionUsable() const {
+  return termination == TerminationType::kConverged ||
+         termination == TerminationType::kMaxIterations ||
+         termination == TerminationType::kTimeBudget ||
+         termination == TerminationType::kNoCorrespondences;
+}
+
+std::string FrameSummary::BriefReport() const {
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "frame %d: %s, %d outer / %d inner iterations, energy %.4g -> %.4g, "
+                "rms %.3f mm, %d+%d pairs (%d rejected), %.1f ms",
+                frame, ToString(termination), outer_iterations, inner_iterations, initial.total(),
+                final.total(), rms_residual * 1e3, model_to_cloud, cloud_to_model, rejected,
+                time.total * 1e3);
+  return buf;
+}
+
+std::string FrameSummary::FullReport() const {
+  std::ostringstream os;
+  char buf[512];
+  os << "Frame " << frame << "\n";
+  os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
+     << points_used << " used\n";
+  os << "  iter   E_data      E_elastic   E_temporal  E_anchor    E_total     m2c    c2m    rej  "
+        "inner  rms(mm)  ms\n";
+  for (const OuterIteration& it : iterations) {
+    std::snprintf(buf, sizeof(buf),
+                  "  %4d   %-10.4g  %-10.4g  %-10.4g  %-10.4g  %-10.4g  %-6d %-6d %-4d %-6d %-8.3f "
+                  "%.1f\n",
+                  it.iteration, it.after.data, it.after.elastic, it.after.temporal, it.after.anchor,
+                  it.after.total(), it.model_to_cloud, it.cloud_to_model, it.rejected,
+                  it.inner_iterations, it.rms_residual * 1e3, it.time_s * 1e3);
+    os << buf;
+  }
+  std::snprintf(buf, sizeof(buf),
+                "  time (ms): preprocess %.2f, prealign %.2f, rotations %.2f, correspondences "
+                "%.2f, build %.2f, solve %.2f, total %.2f\n",
+                time.preprocess * 1e3, time.prealign * 1e3, time.rotations * 1e3,
+                time.correspondences * 1e3, time.build * 1e3, time.solve * 1e3, time.total * 1e3);
+  os << buf;
+  os << "  termination: " << ToString(termination) << " (" << message << ")\n";
+  return os.str();
+}
+
+}  // namespace femreg

@@ -1,0 +1,705 @@
+// The Tracker: one frame is a few outer iterations of (rotations, correspondences, Ceres
+// solve); see DESIGN.md "One frame, step by step".
+#include "femreg/tracker.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "femreg/point_cloud.h"
+#include "registration/nearest.h"
+#include "solvers/ceres/cost_functions.h"
+
+namespace femreg {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+struct Object {
+  TetMesh mesh;
+  ElasticModel model;
+  int offset = 0;  // first global vertex index
+};
+
+struct Anchor {
+  int object = 0;
+  std::vector<int> vertices;  // global indices
+  bool hard = false;
+  double weight = 0.0;
+  Vertices targets;           // one row per vertex
+};
+
+// One kept data pair. Model->cloud pairs have one vertex; cloud->model pairs three.
+struct DataPair {
+  int num_vertices = 1;
+  int vertices[3] = {0, 0, 0};
+  Eigen::Vector3d barycentric = Eigen::Vector3d(1, 0, 0);
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // zero: point-to-point
+};
+
+ceres::LossFunction* MakeLoss(const DataTermOptions& data, double weight) {
+  ceres::LossFunction* loss = nullptr;
+  const double a = data.loss_scale;
+  switch (data.loss) {
+    case RobustLoss::kNone:
+      loss = nullptr;
+      break;
+    case RobustLoss::kHuber:
+      loss = new ceres::HuberLoss(a);
+      break;
+    case RobustLoss::kCauchy:
+      loss = new ceres::CauchyLoss(a);
+      break;
+    case RobustLoss::kTukey:
+      loss = new ceres::TukeyLoss(a);
+      break;
+  }
+  if (loss == nullptr) return new ceres::ScaledLoss(nullptr, weight, ceres::TAKE_OWNERSHIP);
+  return new ceres::ScaledLoss(loss, weight, ceres::TAKE_OWNERSHIP);
+}
+
+// Best rigid transform (R, t) with R * a + t ~ b, by the SVD of the cross-covariance.
+void Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+            Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < a.size(); ++i) {
+    ca += a[i];
+    cb += b[i];
+  }
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < a.size(); ++i) H += (a[i] - ca) * (b[i] - cb).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0) D(2, 2) = -1.0;
+  *R = svd.matrixV() * D * svd.matrixU().transpose();
+  *t = cb - *R * ca;
+}
+
+}  // namespace
+
+struct Tracker::Impl {
+  RegistrationOptions options;
+  std::vector<Object> objects;
+  int num_vertices = 0;
+  Vertices x;          // #V by 3, all objects
+  Eigen::VectorXd mass;
+  Triangles surface;   // global indices
+  std::vector<int> surface_vertices;
+  std::vector<int> vertex_object;
+  std::map<std::string, Anchor> anchors;
+  int frame = 0;
+  std::vector<Eigen::VectorXd> residuals;
+  std::vector<std::vector<char>> observed;
+  // Elastic residual blocks: built once per topology, rotations read through pointers.
+  std::vector<std::unique_ptr<ceres_backend::ElasticCost>> elastic_costs;
+  std::vector<std::array<int, 4>> elastic_vertices;  // global indices per elastic cost
+
+  Status Init(std::vector<TetMesh> meshes, const std::vector<Material>& materials);
+  void BuildGlobalSurface();
+  void BuildElasticCosts();
+  Eigen::MatrixXd VertexNormals() const;
+  void FindPairs(const PointCloud& cloud, const PointIndex& cloud_index,
+                 std::vector<DataPair>* pairs, int* m2c, int* c2m, int* rejected) const;
+  void RigidPrealign(const PointCloud& cloud, const PointIndex& cloud_index);
+  void UpdateOutputs(const PointCloud& cloud, const PointIndex* cloud_index,
+                     const std::vector<DataPair>& pairs);
+  Status Track(const PointCloud& input, FrameSummary* summary);
+};
+
+Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Material>& materials) {
+  std::string error;
+  if (!options.IsValid(&error)) return Status::Error("registration options: " + error);
+  if (meshes.empty()) return Status::Error("the scene has no object");
+  if (materials.size() != meshes.size()) {
+    return Status::Error("one material per mesh is needed");
+  }
+  objects.resize(meshes.size());
+  num_vertices = 0;
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    if (!materials[i].IsValid(&error)) {
+      return Status::Error("object " + std::to_string(i) + " material: " + error);
+    }
+    Object& o = objects[i];
+    o.mesh = std::move(meshes[i]);
+    if (o.mesh.num_tets() == 0) return Status::Error("object " + std::to_string(i) + " has no tetrahedra");
+    if (o.mesh.x.rows() != o.mesh.rest.rows()) o.mesh.x = o.mesh.rest;
+    if (o.mesh.mass.size() != o.mesh.num_vertices() || o.mesh.mass.sum() <= 0) {
+      ComputeLumpedMasses(&o.mesh, materials[i].density);
+    }
+    const ElasticModelType type = options.regularizer == Regularizer::kLinear
+                                      ? ElasticModelType::kLinear
+                                      : ElasticModelType::kCorotational;
+    o.model.Build(o.mesh, type, materials[i]);
+    o.offset = num_vertices;
+    num_vertices += o.mesh.num_vertices();
+  }
+  x.resize(num_vertices, 3);
+  mass.resize(num_vertices);
+  vertex_object.resize(num_vertices);
+  residuals.resize(objects.size());
+  observed.resize(objects.size());
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const Object& o = objects[i];
+    x.middleRows(o.offset, o.mesh.num_vertices()) = o.mesh.x;
+    mass.segment(o.offset, o.mesh.num_vertices()) = o.mesh.mass;
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) vertex_object[o.offset + v] = static_cast<int>(i);
+    residuals[i] = Eigen::VectorXd::Constant(o.mesh.num_vertices(), std::numeric_limits<double>::quiet_NaN());
+    observed[i].assign(o.mesh.num_vertices(), 0);
+  }
+  BuildGlobalSurface();
+  BuildElasticCosts();
+  return Status::Ok();
+}
+
+void Tracker::Impl::BuildGlobalSurface() {
+  int nf = 0;
+  for (const Object& o : objects) nf += o.mesh.num_surface_triangles();
+  surface.resize(nf, 3);
+  surface_vertices.clear();
+  int row = 0;
+  for (const Object& o : objects) {
+    for (int f = 0; f < o.mesh.num_surface_triangles(); ++f, ++row) {
+      surface.row(row) = o.mesh.surface.row(f).array() + o.offset;
+    }
+    for (int v : o.mesh.surface_vertices) surface_vertices.push_back(v + o.offset);
+  }
+}
+
+void Tracker::Impl::BuildElasticCosts() {
+  elastic_costs.clear();
+  elastic_vertices.clear();
+  if (options.regularizer == Regularizer::kNone) return;
+  for (const Object& o : objects) {
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      elastic_costs.push_back(std::make_unique<ceres_backend::ElasticCost>(
+          &o.model.rest(e), &o.model.rotation(e), options.weights.elastic));
+      std::array<int, 4> v;
+      for (int k = 0; k < 4; ++k) v[k] = o.model.tets()(e, k) + o.offset;
+      elastic_vertices.push_back(v);
+    }
+  }
+}
+
+Eigen::MatrixXd Tracker::Impl::VertexNormals() const {
+  Eigen::MatrixXd n = Eigen::MatrixXd::Zero(num_vertices, 3);
+  for (int f = 0; f < surface.rows(); ++f) {
+    const Eigen::Vector3d a = x.row(surface(f, 0)), b = x.row(surface(f, 1)), c = x.row(surface(f, 2));
+    const Eigen::Vector3d fn = (b - a).cross(c - a);  // area weighted
+    for (int k = 0; k < 3; ++k) n.row(surface(f, k)) += fn.transpose();
+  }
+  for (int v = 0; v < num_vertices; ++v) {
+    const double len = n.row(v).norm();
+    if (len > 0) n.row(v) /= len;
+  }
+  return n;
+}
+
+void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_index,
+                              std::vector<DataPair>* pairs, int* m2c, int* c2m,
+                              int* rejected) const {
+  pairs->clear();
+  *m2c = *c2m = *rejected = 0;
+  const DataTermOptions& data = options.data;
+  const double gate2 = data.max_distance > 0 ? data.max_distance * data.max_distance
+                                             : std::numeric_limits<double>::infinity();
+  const bool plane = data.metric == DataMetric::kPointToPlane;
+  const Eigen::MatrixXd normals = (data.visibility || plane) ? VertexNormals() : Eigen::MatrixXd();
+  if (data.model_to_cloud) {
+    for (int v : surface_vertices) {
+      const Eigen::Vector3d p = x.row(v);
+      if (data.visibility && options.camera.enabled) {
+        const Eigen::Vector3d n = normals.row(v);
+        if (n.dot(options.camera.position - p) <= 0.0) continue;
+      }
+      double d2 = 0.0;
+      const int q = cloud_index.Nearest(p, &d2);
+      if (q < 0) break;
+      if (d2 > gate2) {
+        ++*rejected;
+        continue;
+      }
+      DataPair pair;
+      pair.num_vertices = 1;
+      pair.vertices[0] = v;
+      pair.target = cloud.points.row(q);
+      if (plane && cloud.has_normals()) pair.normal = cloud.normals.row(q).normalized();
+      pairs->push_back(pair);
+      ++*m2c;
+    }
+  }
+  if (data.cloud_to_model && surface.rows() > 0) {
+    SurfaceIndex surface_index(x, surface);
+    for (int i = 0; i < cloud.size(); i += data.cloud_stride) {
+      const Eigen::Vector3d q = cloud.points.row(i);
+      const SurfaceIndex::Hit hit = surface_index.Closest(q);
+      if (hit.triangle < 0) continue;
+      if (hit.squared_distance > gate2) {
+        ++*rejected;
+        continue;
+      }
+      DataPair pair;
+      pair.num_vertices = 3;
+      for (int k = 0; k < 3; ++k) pair.vertices[k] = surface(hit.triangle, k);
+      pair.barycentric = hit.barycentric;
+      pair.target = q;
+      if (plane) {
+        const Eigen::Vector3d a = x.row(pair.vertices[0]), b = x.row(pair.vertices[1]),
+                              c = x.row(pair.vertices[2]);
+        const Eigen::Vector3d fn = (b - a).cross(c - a);
+        if (fn.norm() > 0) pair.normal = fn.normalized();
+      }
+      pairs->push_back(pair);
+      ++*c2m;
+    }
+  }
+}
+
+void Tracker::Impl::RigidPrealign(const PointCloud& cloud, const PointIndex& cloud_index) {
+  // Rigid ICP of the (visible) surface onto the cloud, per object, started from the
+  // translation that matches the centroids so that a fast jump is within reach.
+  const Eigen::MatrixXd normals = VertexNormals();
+  for (const Object& o : objects) {
+    std::vector<int> verts;
+    for (int v : o.mesh.surface_vertices) {
+      const int g = v + o.offset;
+      if (options.camera.enabled) {
+        const Eigen::Vector3d n = normals.row(g);
+        if (n.dot(options.camera.position - Eigen::Vector3d(x.row(g))) <= 0.0) continue;
+      }
+      verts.push_back(g);
+    }
+    if (verts.size() < 3 || cloud.size() < 3) continue;
+    auto mean_distance = [&](const Vertices& pos) {
+      double sum = 0.0;
+      for (int g : verts) {
+        double d2 = 0.0;
+        cloud_index.Nearest(pos.row(g), &d2);
+        sum += std::sqrt(d2);
+      }
+      return sum / static_cast<double>(verts.size());
+    };
+    const double before = mean_distance(x);
+    Vertices y = x;
+    Eigen::Vector3d cm = Eigen::Vector3d::Zero(), cc = cloud.points.colwise().mean();
+    for (int g : verts) cm += y.row(g).transpose();
+    cm /= static_cast<double>(verts.size());
+    const Eigen::RowVector3d shift = (cc - cm).transpose();
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) y.row(o.offset + v) += shift;
+    for (int it = 0; it < options.solver.rigid_iterations; ++it) {
+      std::vector<std::pair<double, int>> dist;
+      std::vector<int> nearest(verts.size());
+      for (size_t i = 0; i < verts.size(); ++i) {
+        double d2 = 0.0;
+        nearest[i] = cloud_index.Nearest(y.row(verts[i]), &d2);
+        dist.emplace_back(d2, static_cast<int>(i));
+      }
+      // Trimmed: the closest 80% of the pairs.
+      std::sort(dist.begin(), dist.end());
+      const size_t keep = std::max<size_t>(3, dist.size() * 4 / 5);
+      std::vector<Eigen::Vector3d> a, b;
+      for (size_t j = 0; j < keep; ++j) {
+        const int i = dist[j].second;
+        a.push_back(y.row(verts[i]).transpose());
+        b.push_back(cloud.points.row(nearest[i]).transpose());
+      }
+      Eigen::Matrix3d R;
+      Eigen::Vector3d t;
+      Kabsch(a, b, &R, &t);
+      for (int v = 0; v < o.mesh.num_vertices(); ++v) {
+        const int g = o.offset + v;
+        y.row(g) = (R * y.row(g).transpose() + t).transpose();
+      }
+      if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-9 && t.norm() < 1e-9) break;
+    }
+    if (mean_distance(y) < before) {
+      x.middleRows(o.offset, o.mesh.num_vertices()) = y.middleRows(o.offset, o.mesh.num_vertices());
+    }
+  }
+}
+
+void Tracker::Impl::UpdateOutputs(const PointCloud& cloud, const PointIndex* cloud_index,
+                                  const std::vector<DataPair>& pairs) {
+  for (size_t i = 0; i < objects.size(); ++i) {
+    Object& o = objects[i];
+    o.mesh.x = x.middleRows(o.offset, o.mesh.num_vertices());
+    residuals[i].setConstant(std::numeric_limits<double>::quiet_NaN());
+    std::fill(observed[i].begin(), observed[i].end(), 0);
+    if (cloud_index != nullptr && cloud_index->size() > 0) {
+      for (int v : o.mesh.surface_vertices) {
+        double d2 = 0.0;
+        cloud_index->Nearest(o.mesh.x.row(v), &d2);
+        residuals[i](v) = std::sqrt(d2);
+      }
+    }
+  }
+  for (const DataPair& p : pairs) {
+    for (int k = 0; k < p.num_vertices; ++k) {
+      if (p.num_vertices == 3 && p.barycentric[k] < 0.2) continue;
+      const int g = p.vertices[k];
+      const Object& o = objects[vertex_object[g]];
+      observed[vertex_object[g]][g - o.offset] = 1;
+    }
+  }
+}
+
+Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
+  const auto t_frame = Clock::now();
+  FrameSummary& s = *summary;
+  s = FrameSummary();
+  s.frame = frame;
+  s.cloud_points = input.size();
+  if (input.points.cols() != 3 || (input.normals.rows() != 0 && input.normals.rows() != input.points.rows())) {
+    s.termination = TerminationType::kInvalidInput;
+    s.message = "the cloud's points must be #P by 3 and its normals empty or #P by 3";
+    ++frame;
+    return Status::Ok();
+  }
+
+  // Preprocess.
+  auto t0 = Clock::now();
+  PointCloud cloud = input;
+  PreprocessPointCloud(options.preprocess, &cloud, &s.nonfinite_dropped,
+                       options.camera.enabled ? options.camera.position : Eigen::Vector3d::Zero());
+  s.points_used = cloud.size();
+  s.time.preprocess = Seconds(t0);
+  const Vertices previous = x;
+
+  std::vector<DataPair> pairs;
+  if (cloud.size() == 0) {
+    s.termination = s.cloud_points > 0 ? TerminationType::kInvalidInput
+                                       : TerminationType::kNoCorrespondences;
+    s.message = s.cloud_points > 0
+                    ? "every point of the cloud was dropped (" + std::to_string(s.nonfinite_dropped) +
+                          " non-finite); the shape was held at the previous frame"
+                    : "empty cloud; the shape was held at the previous frame";
+    UpdateOutputs(cloud, nullptr, pairs);
+    s.time.total = Seconds(t_frame);
+    ++frame;
+    return Status::Ok();
+  }
+  const PointIndex cloud_index(cloud.points);
+
+  if (options.solver.rigid_prealign) {
+    t0 = Clock::now();
+    RigidPrealign(cloud, cloud_index);
+    s.time.prealign = Seconds(t0);
+  }
+
+  // Per-frame residuals: temporal springs to the previous frame (the rigid pre-alignment
+  // moves that target too, so inertia does not fight the rigid step) and anchors.
+  std::vector<std::unique_ptr<ceres::CostFunction>> frame_costs;
+  std::vector<std::pair<ceres::CostFunction*, int>> temporal;
+  const double wt = options.weights.temporal;
+  if (wt > 0) {
+    for (int v = 0; v < num_vertices; ++v) {
+      const double w = wt * mass(v);
+      if (!(w > 0)) continue;
+      frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(x.row(v).transpose(), w));
+      temporal.emplace_back(frame_costs.back().get(), v);
+    }
+  }
+  std::vector<char> fixed(num_vertices, 0);
+  std::vector<std::pair<ceres::CostFunction*, int>> anchor_costs;
+  for (const auto& kv : anchors) {
+    const Anchor& a = kv.second;
+    for (size_t i = 0; i < a.vertices.size(); ++i) {
+      const int g = a.vertices[i];
+      if (a.hard) {
+        x.row(g) = a.targets.row(static_cast<Eigen::Index>(i));
+        fixed[g] = 1;
+      } else {
+        const double w = a.weight > 0 ? a.weight : options.weights.anchor;
+        frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(
+            a.targets.row(static_cast<Eigen::Index>(i)).transpose(), w));
+        anchor_costs.emplace_back(frame_costs.back().get(), g);
+      }
+    }
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.max_num_iterations = options.solver.max_inner_iterations;
+  solver_options.num_threads = options.solver.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = false;
+  solver_options.trust_region_strategy_type =
+      options.solver.trust_region == TrustRegion::kDogleg ? ceres::DOGLEG : ceres::LEVENBERG_MARQUARDT;
+  if (options.solver.linear_solver == LinearSolver::kConjugateGradients) {
+    solver_options.linear_solver_type = ceres::CGNR;
+    solver_options.preconditioner_type = ceres::JACOBI;
+  } else {
+    solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  }
+
+  int m2c = 0, c2m = 0, rejected = 0;
+  bool have_initial = false;
+  for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
+    const auto t_outer = Clock::now();
+    OuterIteration row;
+    row.iteration = k + 1;
+    t0 = Clock::now();
+    for (Object& o : objects) {
+      o.model.UpdateRotations(x.middleRows(o.offset, o.mesh.num_vertices()));
+    }
+    s.time.rotations += Seconds(t0);
+
+    t0 = Clock::now();
+    FindPairs(cloud, cloud_index, &pairs, &m2c, &c2m, &rejected);
+    s.time.correspondences += Seconds(t0);
+    row.model_to_cloud = m2c;
+    row.cloud_to_model = c2m;
+    row.rejected = rejected;
+    if (pairs.empty()) {
+      if (k == 0) {
+        s.termination = TerminationType::kNoCorrespondences;
+        s.message = "no correspondence within data.max_distance (" +
+                    std::to_string(rejected) + " rejected); the shape was held at the previous frame";
+      }
+      break;
+    }
+
+    // Build the problem. Residual blocks reference vertex rows of x directly.
+    t0 = Clock::now();
+    ceres::Problem::Options problem_options;
+    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    problem_options.enable_fast_removal = false;
+    ceres::Problem problem(problem_options);
+    auto block = [&](int v) { return x.data() + 3 * v; };
+    std::vector<ceres::ResidualBlockId> ids_data, ids_elastic, ids_temporal, ids_anchor;
+    for (size_t e = 0; e < elastic_costs.size(); ++e) {
+      const auto& v = elastic_vertices[e];
+      ids_elastic.push_back(problem.AddResidualBlock(elastic_costs[e].get(), nullptr, block(v[0]),
+                                                     block(v[1]), block(v[2]), block(v[3])));
+    }
+    for (const auto& tv : temporal) {
+      ids_temporal.push_back(problem.AddResidualBlock(tv.first, nullptr, block(tv.second)));
+    }
+    for (const auto& av : anchor_costs) {
+      ids_anchor.push_back(problem.AddResidualBlock(av.first, nullptr, block(av.second)));
+    }
+    std::vector<std::unique_ptr<ceres::CostFunction>> data_costs;
+    data_costs.reserve(pairs.size());
+    const double wd = options.weights.data;
+    for (const DataPair& p : pairs) {
+      const bool plane = p.normal.squaredNorm() > 0;
+      ceres::CostFunction* cost;
+      if (p.num_vertices == 1) {
+        cost = plane ? static_cast<ceres::CostFunction*>(
+                           new ceres_backend::PointToPlaneCost1(p.target, p.normal, 1.0))
+                     : new ceres_backend::PointToPointCost1(p.target, 1.0);
+      } else {
+        cost = plane ? static_cast<ceres::CostFunction*>(new ceres_backend::PointToPlaneCost3(
+                           p.barycentric, p.target, p.normal, 1.0))
+                     : new ceres_backend::PointToPointCost3(p.barycentric, p.target, 1.0);
+      }
+      data_costs.emplace_back(cost);
+      std::vector<double*> blocks;
+      for (int j = 0; j < p.num_vertices; ++j) blocks.push_back(block(p.vertices[j]));
+      ids_data.push_back(problem.AddResidualBlock(cost, MakeLoss(options.data, wd), blocks));
+    }
+    for (int v = 0; v < num_vertices; ++v) {
+      if (fixed[v] && problem.HasParameterBlock(block(v))) problem.SetParameterBlockConstant(block(v));
+    }
+    s.time.build += Seconds(t0);
+
+    auto energy = [&](const std::vector<ceres::ResidualBlockId>& ids) {
+      if (ids.empty()) return 0.0;
+      ceres::Problem::EvaluateOptions eo;
+      eo.residual_blocks = ids;
+      eo.apply_loss_function = true;
+      double cost = 0.0;
+      problem.Evaluate(eo, &cost, nullptr, nullptr, nullptr);
+      return cost;
+    };
+    auto terms = [&]() {
+      EnergyTerms e;
+      e.data = energy(ids_data);
+      e.elastic = energy(ids_elastic);
+      e.temporal = energy(ids_temporal);
+      e.anchor = energy(ids_anchor);
+      return e;
+    };
+    row.before = terms();
+    if (!have_initial) {
+      s.initial = row.before;
+      have_initial = true;
+    }
+
+    t0 = Clock::now();
+    if (options.solver.time_budget_s > 0) {
+      solver_options.max_solver_time_in_seconds =
+          std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame));
+    }
+    const Vertices before_solve = x;
+    ceres::Solver::Summary ceres_summary;
+    ceres::Solve(solver_options, &problem, &ceres_summary);
+    s.time.solve += Seconds(t0);
+    row.inner_iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
+    if (!ceres_summary.IsSolutionUsable() || !x.allFinite()) {
+      x = before_solve;
+      s.termination = TerminationType::kSolverFailure;
+      s.message = "Ceres: " + ceres_summary.message + "; the shape before this iteration was kept";
+      s.iterations.push_back(row);
+      break;
+    }
+    row.after = terms();
+    double sum2 = 0.0;
+    int count = 0;
+    for (const DataPair& p : pairs) {
+      Eigen::Vector3d q = Eigen::Vector3d::Zero();
+      for (int j = 0; j < p.num_vertices; ++j) q += p.barycentric[j] * x.row(p.vertices[j]).transpose();
+      sum2 += (q - p.target).squaredNorm();
+      ++count;
+    }
+    row.rms_residual = count > 0 ? std::sqrt(sum2 / count) : 0.0;
+    row.time_s = Seconds(t_outer);
+    s.iterations.push_back(row);
+    s.inner_iterations += row.inner_iterations;
+    s.outer_iterations = k + 1;
+    s.final = row.after;
+    s.model_to_cloud = m2c;
+    s.cloud_to_model = c2m;
+    s.rejected = rejected;
+    s.rms_residual = row.rms_residual;
+
+    const double e0 = row.before.total(), e1 = row.after.total();
+    const double change = std::abs(e0 - e1) / std::max(e0, 1e-300);
+    if (change < options.solver.relative_energy_tolerance) {
+      s.termination = TerminationType::kConverged;
+      std::ostringstream os;
+      os << "relative energy change " << change << " < " << options.solver.relative_energy_tolerance;
+      s.message = os.str();
+      break;
+    }
+    if (options.solver.time_budget_s > 0 && Seconds(t_frame) >= options.solver.time_budget_s) {
+      s.termination = TerminationType::kTimeBudget;
+      s.message = "time budget of " + std::to_string(options.solver.time_budget_s) + " s used";
+      break;
+    }
+    if (k + 1 == options.solver.max_outer_iterations) {
+      s.termination = TerminationType::kMaxIterations;
+      s.message = "reached solver.max_outer_iterations = " +
+                  std::to_string(options.solver.max_outer_iterations);
+    }
+  }
+  if (s.termination == TerminationType::kNotRun) {
+    s.termination = TerminationType::kMaxIterations;
+    s.message = "no outer iteration ran";
+  }
+  if (s.termination == TerminationType::kNoCorrespondences) x = previous;
+  UpdateOutputs(cloud, &cloud_index, pairs);
+  s.time.total = Seconds(t_frame);
+  ++frame;
+  return Status::Ok();
+}
+
+Tracker::Tracker() : impl_(new Impl) {}
+Tracker::~Tracker() = default;
+
+Status Tracker::Create(const std::vector<TetMesh>& meshes, const std::vector<Material>& materials,
+                       const RegistrationOptions& options, std::unique_ptr<Tracker>* tracker) {
+  std::unique_ptr<Tracker> t(new Tracker);
+  t->impl_->options = options;
+  Status status = t->impl_->Init(meshes, materials);
+  if (!status.ok()) return status;
+  *tracker = std::move(t);
+  return Status::Ok();
+}
+
+Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
+  if (scene.effects.fracture) return Status::Error("effects.fracture is not built yet (issue 5)");
+  if (scene.effects.collision) return Status::Error("effects.collision is not built yet (issue 6)");
+  std::vector<TetMesh> meshes(scene.objects.size());
+  std::vector<Material> materials;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    Status status = LoadObjectMesh(scene, static_cast<int>(i), &meshes[i]);
+    if (!status.ok()) return status;
+    materials.push_back(scene.objects[i].material);
+  }
+  std::unique_ptr<Tracker> t;
+  Status status = Create(meshes, materials, scene.registration, &t);
+  if (!status.ok()) return status;
+  for (const AnchorSpec& a : scene.anchors) {
+    int object = 0;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+      if (scene.objects[i].name == a.object) object = static_cast<int>(i);
+    }
+    std::vector<int> verts;
+    status = SelectVertices(a.selection, t->mesh(object).rest, &verts);
+    if (!status.ok()) return status;
+    status = t->AddAnchor(a.name, object, verts, a.hard, a.weight);
+    if (!status.ok()) return status;
+  }
+  *tracker = std::move(t);
+  return Status::Ok();
+}
+
+Status Tracker::Track(const PointCloud& cloud, FrameSummary* summary) {
+  if (summary == nullptr) return Status::Error("Tracker::Track: summary must not be null");
+  return impl_->Track(cloud, summary);
+}
+
+int Tracker::num_objects() const { return static_cast<int>(impl_->objects.size()); }
+const TetMesh& Tracker::mesh(int object) const { return impl_->objects.at(object).mesh; }
+const Vertices& Tracker::vertices(int object) const { return impl_->objects.at(object).mesh.x; }
+const Eigen::VectorXd& Tracker::vertex_residuals(int object) const {
+  return impl_->residuals.at(object);
+}
+const std::vector<char>& Tracker::vertex_observed(int object) const {
+  return impl_->observed.at(object);
+}
+int Tracker::frame() const { return impl_->frame; }
+const RegistrationOptions& Tracker::options() const { return impl_->options; }
+
+Status Tracker::AddAnchor(const std::string& name, int object, const std::vector<int>& vertices,
+                          bool hard, double weight) {
+  if (object < 0 || object >= num_objects()) {
+    return Status::Error("anchor '" + name + "': no object " + std::to_string(object));
+  }
+  if (vertices.empty()) return Status::Error("anchor '" + name + "': no vertex");
+  if (impl_->anchors.count(name)) return Status::Error("anchor '" + name + "' exists already");
+  const Object& o = impl_->objects[object];
+  Anchor a;
+  a.object = object;
+  a.hard = hard;
+  a.weight = weight;
+  a.targets.resize(static_cast<Eigen::Index>(vertices.size()), 3);
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    if (vertices[i] < 0 || vertices[i] >= o.mesh.num_vertices()) {
+      return Status::Error("anchor '" + name + "': vertex " + std::to_string(vertices[i]) +
+                           " out of range");
+    }
+    a.vertices.push_back(vertices[i] + o.offset);
+    a.targets.row(static_cast<Eigen::Index>(i)) = o.mesh.x.row(vertices[i]);
+  }
+  impl_->anchors[name] = std::move(a);
+  return Status::Ok();
+}
+
+Status Tracker::SetAnchorTargets(const std::string& name, const Vertices& targets) {
+  auto it = impl_->anchors.find(name);
+  if (it == impl_->anchors.end()) return Status::Error("no anchor named '" + name + "'");
+  if (targets.rows() != it->second.targets.rows() || !targets.allFinite()) {
+    return Status::Error("anchor '" + name + "': expected " +
+                         std::to_string(it->second.targets.rows()) + " finite targets");
+  }
+  it->second.targets = targets;
+  return Status::Ok();
+}
+
+}  // namespace femreg
