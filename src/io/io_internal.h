@@ -1,0 +1,52 @@
+// Helpers shared by the mesh readers and writers (not part of the public API).
+#ifndef FEMREG_IO_IO_INTERNAL_H_
+#define FEMREG_IO_IO_INTERNAL_H_
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "femreg/mesh.h"
+#include "femreg/status.h"
+
+namespace femreg {
+namespace internal {
+
+// A mesh as a reader found it, before unused vertices are dropped and it is finalized.
+struct RawTetMesh {
+  std::vector<std::array<double, 3>> vertices;  // #V positions
+  std::vector<std::array<int, 4>> tets;         // #T 0-based indices into vertices
+  std::vector<int> regions;                     // #T region ids, or empty (all 0)
+  std::vector<int> tet_lines;                   // #T source line of each tet, or empty
+  std::string lines_file;  // the file tet_lines refer to, when not the one read (TetGen .ele)
+};
+
+// Builds `mesh` from `raw`: checks indices and coordinates, drops vertices that no tet
+// uses (renumbering the tets), rejects degenerate elements (naming the line when known)
+// and calls FinalizeMesh. Messages start with `path`.
+Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh);
+
+// "path:line: message" (or "path: message" when line <= 0).
+Status FileError(const std::string& path, int line, const std::string& message);
+
+// Reads a VTK XML unstructured grid (.vtu), or a legacy VTK file through VTK's own reader
+// (used for binary legacy files).
+Status ReadVtuFile(const std::string& path, RawTetMesh* raw);
+Status ReadLegacyVtkWithVtk(const std::string& path, RawTetMesh* raw);
+
+// Text readers (mesh_readers.cc).
+Status ReadGmshFile(const std::string& path, RawTetMesh* raw);
+Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw);
+Status ReadMeditFile(const std::string& path, RawTetMesh* raw);
+Status ReadVtkLegacyFile(const std::string& path, RawTetMesh* raw);
+
+// A fresh temporary file name in the folder of `path` (for write-and-rename).
+std::string TemporaryPathFor(const std::string& path);
+
+// True when a cell/field name looks like a region id ("region", "tag", "material", ...).
+bool LooksLikeRegionName(const std::string& name);
+
+}  // namespace internal
+}  // namespace femreg
+
+#endif  // FEMREG_IO_IO_INTERNAL_H_

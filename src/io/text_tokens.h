@@ -1,0 +1,63 @@
+// A whitespace tokenizer over a whole text file that remembers line numbers, for the
+// readers of text mesh formats.
+#ifndef FEMREG_IO_TEXT_TOKENS_H_
+#define FEMREG_IO_TEXT_TOKENS_H_
+
+#include <string>
+#include <vector>
+
+#include "femreg/status.h"
+
+namespace femreg {
+namespace internal {
+
+struct Token {
+  std::string text;
+  int line = 0;
+};
+
+class TokenStream {
+ public:
+  // Reads the whole file. `comment` starts a comment up to the end of the line ('\0' for
+  // none).
+  Status Open(const std::string& path, char comment);
+
+  // Skips the first `n` lines (headers read some other way) and returns them.
+  std::vector<std::string> TakeLines(int n);
+
+  // The next token, false at the end of the file.
+  bool Next(Token* token);
+  // Like Next but leaves the token in the stream.
+  bool Peek(Token* token);
+  // All remaining tokens on the line of the last token returned.
+  std::vector<Token> RestOfLine();
+
+  // Readers of one typed value; `what` names it in the error message.
+  Status NextInt(const char* what, long long* value);
+  Status NextDouble(const char* what, double* value);
+  Status NextWord(const char* what, std::string* value);
+
+  // "path:line: message" at the line of the last token (or the current line at the end).
+  Status Error(const std::string& message) const;
+  Status ErrorAt(int line, const std::string& message) const;
+
+  const std::string& path() const { return path_; }
+  int line() const { return last_line_; }
+
+ private:
+  void SkipSpace();
+  std::string path_;
+  std::string data_;
+  size_t pos_ = 0;
+  int current_line_ = 1;  // line of data_[pos_]
+  int last_line_ = 1;     // line of the last token returned
+  char comment_ = '\0';
+};
+
+bool ParseInt(const std::string& text, long long* value);
+bool ParseDouble(const std::string& text, double* value);
+
+}  // namespace internal
+}  // namespace femreg
+
+#endif  // FEMREG_IO_TEXT_TOKENS_H_

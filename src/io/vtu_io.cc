@@ -1,0 +1,278 @@
+// VTU (VTK XML unstructured grid) reading and writing through VTK. VTK's error messages
+// are captured and returned in a Status instead of being printed.
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkCommand.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdList.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkOutputWindow.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkSmartPointer.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <sstream>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "femreg/io.h"
+#include "io/io_internal.h"
+
+namespace femreg {
+namespace internal {
+namespace {
+
+// Collects everything VTK would print while it is installed as the output window.
+class CapturingOutputWindow : public vtkOutputWindow {
+ public:
+  static CapturingOutputWindow* New();
+  vtkTypeMacro(CapturingOutputWindow, vtkOutputWindow);
+  void DisplayText(const char* text) override { Append(text); }
+  void DisplayErrorText(const char* text) override { Append(text); }
+  void DisplayWarningText(const char* text) override {}
+  void DisplayGenericWarningText(const char* text) override {}
+  void DisplayDebugText(const char* text) override {}
+  std::string text;
+
+ private:
+  void Append(const char* t) {
+    if (t != nullptr && text.size() < 4000) text += t;
+  }
+};
+vtkStandardNewMacro(CapturingOutputWindow);
+
+// Observer for a VTK object's ErrorEvent.
+class ErrorObserver : public vtkCommand {
+ public:
+  static ErrorObserver* New() { return new ErrorObserver; }
+  void Execute(vtkObject*, unsigned long event, void* data) override {
+    if (event == vtkCommand::ErrorEvent && data != nullptr && text.size() < 4000) {
+      text += static_cast<const char*>(data);
+    }
+  }
+  std::string text;
+};
+
+std::mutex& VtkMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+// Installs a capturing output window for its lifetime (VTK's output window is global).
+class ScopedVtkCapture {
+ public:
+  ScopedVtkCapture() : lock_(VtkMutex()) {
+    previous_ = vtkOutputWindow::GetInstance();
+    window_ = vtkSmartPointer<CapturingOutputWindow>::New();
+    vtkOutputWindow::SetInstance(window_);
+  }
+  ~ScopedVtkCapture() { vtkOutputWindow::SetInstance(previous_); }
+  std::string text() const { return window_->text; }
+
+ private:
+  std::lock_guard<std::mutex> lock_;
+  vtkSmartPointer<vtkOutputWindow> previous_;
+  vtkSmartPointer<CapturingOutputWindow> window_;
+};
+
+// The last line of VTK's message that says something (VTK prefixes file/line/class).
+std::string Summarize(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, best;
+  while (std::getline(in, line)) {
+    const size_t start = line.find_first_not_of(" \t\r");
+    if (start == std::string::npos) continue;
+    line = line.substr(start);
+    if (line.rfind("ERROR: In ", 0) == 0 || line.rfind("Warning: In ", 0) == 0) continue;
+    const size_t paren = line.find("): ");
+    if (paren != std::string::npos && paren < 80) line = line.substr(paren + 3);
+    if (best.empty()) best = line;
+  }
+  return best.empty() ? "VTK could not read it" : best;
+}
+
+Status GridToRaw(const std::string& path, vtkUnstructuredGrid* grid, RawTetMesh* raw) {
+  if (grid == nullptr || grid->GetNumberOfPoints() == 0) {
+    return FileError(path, 0, "no points (empty or unreadable grid)");
+  }
+  const vtkIdType np = grid->GetNumberOfPoints();
+  raw->vertices.resize(static_cast<size_t>(np));
+  for (vtkIdType i = 0; i < np; ++i) {
+    double p[3];
+    grid->GetPoint(i, p);
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(p[k])) {
+        std::ostringstream os;
+        os << "point " << i << " has a non-finite coordinate";
+        return FileError(path, 0, os.str());
+      }
+      raw->vertices[i][k] = p[k];
+    }
+  }
+  vtkDataArray* region = nullptr;
+  vtkCellData* cell_data = grid->GetCellData();
+  for (int a = 0; cell_data != nullptr && a < cell_data->GetNumberOfArrays(); ++a) {
+    vtkDataArray* array = cell_data->GetArray(a);
+    if (array != nullptr && array->GetName() != nullptr && array->GetNumberOfComponents() == 1 &&
+        LooksLikeRegionName(array->GetName())) {
+      region = array;
+      break;
+    }
+  }
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    if (grid->GetCellType(c) != VTK_TETRA) continue;
+    grid->GetCellPoints(c, ids);
+    if (ids->GetNumberOfIds() != 4) {
+      std::ostringstream os;
+      os << "cell " << c << " is a tetrahedron with " << ids->GetNumberOfIds() << " points";
+      return FileError(path, 0, os.str());
+    }
+    std::array<int, 4> tet;
+    for (int k = 0; k < 4; ++k) {
+      const vtkIdType v = ids->GetId(k);
+      if (v < 0 || v >= np) {
+        std::ostringstream os;
+        os << "cell " << c << " refers to point " << v << ", outside 0.." << np - 1
+           << " (index out of range)";
+        return FileError(path, 0, os.str());
+      }
+      tet[k] = static_cast<int>(v);
+    }
+    raw->tets.push_back(tet);
+    const double r = region != nullptr ? region->GetTuple1(c) : 0.0;
+    raw->regions.push_back(std::isfinite(r) ? static_cast<int>(std::lround(r)) : 0);
+  }
+  if (raw->tets.empty()) return FileError(path, 0, "no tetrahedra (no cells of VTK type 10)");
+  return Status::Ok();
+}
+
+template <typename Reader>
+Status ReadWithVtk(const std::string& path, RawTetMesh* raw) {
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  std::string errors;
+  {
+    ScopedVtkCapture capture;
+    vtkNew<Reader> reader;
+    vtkNew<ErrorObserver> observer;
+    reader->AddObserver(vtkCommand::ErrorEvent, observer);
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    errors = observer->text + capture.text();
+    grid = reader->GetOutput();
+  }
+  if (!errors.empty()) return FileError(path, 0, "VTK reader failed: " + Summarize(errors));
+  return GridToRaw(path, grid, raw);
+}
+
+std::atomic<int> g_temp_counter{0};
+
+}  // namespace
+
+Status ReadVtuFile(const std::string& path, RawTetMesh* raw) {
+  return ReadWithVtk<vtkXMLUnstructuredGridReader>(path, raw);
+}
+
+Status ReadLegacyVtkWithVtk(const std::string& path, RawTetMesh* raw) {
+  return ReadWithVtk<vtkUnstructuredGridReader>(path, raw);
+}
+
+// A temporary name in the folder of `path`.
+std::string TemporaryPathFor(const std::string& path) {
+  std::ostringstream os;
+  os << path << ".tmp." << getpid() << "." << g_temp_counter++;
+  return os.str();
+}
+
+}  // namespace internal
+
+Status WriteVtu(const std::string& path, const TetMesh& mesh, const Vertices& positions,
+                const std::vector<MeshField>& fields) {
+  const int nv = mesh.num_vertices(), nt = mesh.num_tets();
+  if (positions.rows() != nv) {
+    std::ostringstream os;
+    os << path << ": positions have " << positions.rows() << " rows, the mesh " << nv
+       << " vertices";
+    return Status::Error(os.str());
+  }
+  vtkNew<vtkUnstructuredGrid> grid;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(nv);
+  for (int v = 0; v < nv; ++v) points->SetPoint(v, positions(v, 0), positions(v, 1), positions(v, 2));
+  grid->SetPoints(points);
+  grid->Allocate(nt);
+  for (int t = 0; t < nt; ++t) {
+    const vtkIdType ids[4] = {mesh.tets(t, 0), mesh.tets(t, 1), mesh.tets(t, 2), mesh.tets(t, 3)};
+    grid->InsertNextCell(VTK_TETRA, 4, ids);
+  }
+  vtkNew<vtkIntArray> region;
+  region->SetName("region");
+  region->SetNumberOfTuples(nt);
+  for (int t = 0; t < nt; ++t) region->SetValue(t, mesh.region.size() == nt ? mesh.region(t) : 0);
+  grid->GetCellData()->AddArray(region);
+  for (const MeshField& field : fields) {
+    const Eigen::Index rows = field.per_cell ? nt : nv;
+    if (field.name.empty() || field.name == "region" || field.values.rows() != rows ||
+        (field.values.cols() != 1 && field.values.cols() != 3)) {
+      std::ostringstream os;
+      os << path << ": field '" << field.name << "' must have a name other than 'region', "
+         << rows << " rows (one per " << (field.per_cell ? "element" : "vertex")
+         << ") and 1 or 3 columns, it has " << field.values.rows() << " by "
+         << field.values.cols();
+      return Status::Error(os.str());
+    }
+    vtkNew<vtkDoubleArray> array;
+    array->SetName(field.name.c_str());
+    array->SetNumberOfComponents(static_cast<int>(field.values.cols()));
+    array->SetNumberOfTuples(rows);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      for (Eigen::Index c = 0; c < field.values.cols(); ++c) {
+        array->SetComponent(r, static_cast<int>(c), field.values(r, c));
+      }
+    }
+    if (field.per_cell) {
+      grid->GetCellData()->AddArray(array);
+    } else {
+      grid->GetPointData()->AddArray(array);
+    }
+  }
+
+  const std::string temp = internal::TemporaryPathFor(path);
+  int ok = 0;
+  std::string errors;
+  {
+    internal::ScopedVtkCapture capture;
+    vtkNew<vtkXMLUnstructuredGridWriter> writer;
+    vtkNew<internal::ErrorObserver> observer;
+    writer->AddObserver(vtkCommand::ErrorEvent, observer);
+    writer->SetFileName(temp.c_str());
+    writer->SetInputData(grid);
+    writer->SetDataModeToAppended();
+    writer->EncodeAppendedDataOff();
+    ok = writer->Write();
+    errors = observer->text + capture.text();
+  }
+  if (ok != 1 || !errors.empty()) {
+    std::remove(temp.c_str());
+    return Status::Error(path + ": cannot write VTU: " +
+                         (errors.empty() ? std::string("write failed") : internal::Summarize(errors)));
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    std::remove(temp.c_str());
+    return Status::Error(path + ": cannot rename the temporary file into place");
+  }
+  return Status::Ok();
+}
+
+}  // namespace femreg
