@@ -244,8 +244,8 @@ Status ReadTetMesh(const std::string& path, TetMesh* mesh) {
       }
       const std::string surface = SurfaceFormatName(path, Head(path, 4096));
       if (!surface.empty()) {
-        return Status::Error(path + ": no tetrahedra: this is a " + surface +
-                             " surface mesh; femreg needs a tetrahedral mesh "
+        return Status::Error(path + ": no tetrahedra: this is a surface mesh (" + surface +
+                             "), not a volume mesh; femreg needs a tetrahedral mesh "
                              "(Gmsh, TetGen, MEDIT, VTK or VTU): tetrahedralize it first "
                              "(e.g. with TetGen, fTetWild or Gmsh)");
       }

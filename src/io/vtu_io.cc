@@ -7,6 +7,7 @@
 #include <vtkDoubleArray.h>
 #include <vtkIdList.h>
 #include <vtkIntArray.h>
+#include <vtkLogger.h>
 #include <vtkNew.h>
 #include <vtkOutputWindow.h>
 #include <vtkPointData.h>
@@ -75,20 +76,27 @@ class ScopedVtkCapture {
     previous_ = vtkOutputWindow::GetInstance();
     window_ = vtkSmartPointer<CapturingOutputWindow>::New();
     vtkOutputWindow::SetInstance(window_);
+    // VTK 9 also logs errors to stderr through vtkLogger before the output window.
+    previous_verbosity_ = vtkLogger::GetCurrentVerbosityCutoff();
+    vtkLogger::SetStderrVerbosity(vtkLogger::VERBOSITY_OFF);
   }
-  ~ScopedVtkCapture() { vtkOutputWindow::SetInstance(previous_); }
+  ~ScopedVtkCapture() {
+    vtkLogger::SetStderrVerbosity(previous_verbosity_);
+    vtkOutputWindow::SetInstance(previous_);
+  }
   std::string text() const { return window_->text; }
 
  private:
   std::lock_guard<std::mutex> lock_;
   vtkSmartPointer<vtkOutputWindow> previous_;
   vtkSmartPointer<CapturingOutputWindow> window_;
+  vtkLogger::Verbosity previous_verbosity_ = vtkLogger::VERBOSITY_WARNING;
 };
 
-// The last line of VTK's message that says something (VTK prefixes file/line/class).
+// VTK's distinct messages without the file/line/class prefixes, joined by "; ".
 std::string Summarize(const std::string& text) {
   std::istringstream in(text);
-  std::string line, best;
+  std::string line, joined;
   while (std::getline(in, line)) {
     const size_t start = line.find_first_not_of(" \t\r");
     if (start == std::string::npos) continue;
@@ -96,9 +104,12 @@ std::string Summarize(const std::string& text) {
     if (line.rfind("ERROR: In ", 0) == 0 || line.rfind("Warning: In ", 0) == 0) continue;
     const size_t paren = line.find("): ");
     if (paren != std::string::npos && paren < 80) line = line.substr(paren + 3);
-    if (best.empty()) best = line;
+    if (line.rfind("Algorithm ", 0) == 0) break;  // then a dump of the pipeline request
+    if (joined.find(line) != std::string::npos) continue;
+    if (joined.size() > 300) break;
+    joined += (joined.empty() ? "" : "; ") + line;
   }
-  return best.empty() ? "VTK could not read it" : best;
+  return joined.empty() ? "VTK could not read it" : joined;
 }
 
 Status GridToRaw(const std::string& path, vtkUnstructuredGrid* grid, RawTetMesh* raw) {
