@@ -1,0 +1,699 @@
+// The forward quasi-static solve: Newton-type iterations on the warped stiffness
+// K = sum_e R_e K_e R_e^T with the exact corotational gradient, a backtracking line search
+// on the total potential (rotations recomputed at every trial point), load stepping, and
+// clamped / prescribed DOFs eliminated. The reduced system is solved with CHOLMOD's
+// supernodal Cholesky; its sparsity pattern is fixed, so the symbolic analysis is done once
+// per solve and values are scattered into a preallocated matrix every iteration.
+#include "femreg/forward.h"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SVD>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+namespace femreg {
+
+bool ForwardOptions::IsValid(std::string* error) const {
+  std::ostringstream os;
+  if (max_iterations < 1) {
+    os << "max_iterations must be >= 1 (got " << max_iterations << ")";
+  } else if (load_steps < 1) {
+    os << "load_steps must be >= 1 (got " << load_steps << ")";
+  } else if (!(std::isfinite(relative_tolerance) && relative_tolerance >= 0)) {
+    os << "relative_tolerance must be finite and >= 0 (got " << relative_tolerance << ")";
+  } else if (!(std::isfinite(absolute_tolerance) && absolute_tolerance >= 0)) {
+    os << "absolute_tolerance must be finite and >= 0 (got " << absolute_tolerance << ")";
+  } else if (relative_tolerance == 0 && absolute_tolerance == 0) {
+    os << "relative_tolerance and absolute_tolerance cannot both be 0";
+  } else if (!(std::isfinite(min_step) && min_step > 0 && min_step < 1)) {
+    os << "min_step must be in (0, 1) (got " << min_step << ")";
+  } else {
+    return true;
+  }
+  if (error) *error = os.str();
+  return false;
+}
+
+const char* ToString(ForwardTermination termination) {
+  switch (termination) {
+    case ForwardTermination::kNotRun:
+      return "NOT_RUN";
+    case ForwardTermination::kConverged:
+      return "CONVERGED";
+    case ForwardTermination::kMaxIterations:
+      return "MAX_ITERATIONS";
+    case ForwardTermination::kLineSearchFailed:
+      return "LINE_SEARCH_FAILED";
+    case ForwardTermination::kFactorizationFailed:
+      return "FACTORIZATION_FAILED";
+    case ForwardTermination::kInvalidInput:
+      return "INVALID_INPUT";
+  }
+  return "UNKNOWN";
+}
+
+bool ForwardSummary::IsSolutionUsable() const {
+  return termination == ForwardTermination::kConverged ||
+         termination == ForwardTermination::kMaxIterations;
+}
+
+std::string ForwardSummary::BriefReport() const {
+  std::ostringstream os;
+  os << "Forward solve: " << ToString(termination) << ", " << iterations.size()
+     << " iterations, |residual| " << std::scientific << std::setprecision(3)
+     << initial_residual_norm << " -> " << final_residual_norm << " N, max displacement "
+     << max_displacement << " m, " << std::fixed << std::setprecision(3) << total_time_s << " s";
+  return os.str();
+}
+
+std::string ForwardSummary::FullReport() const {
+  std::ostringstream os;
+  os << "Forward quasi-static solve\n";
+  os << "  free dofs            " << num_free_dofs << "\n";
+  os << "  iter  step  it      potential (J)   |residual| (N)    step length\n";
+  for (const ForwardIteration& it : iterations) {
+    os << "  " << std::setw(4) << (&it - iterations.data()) << "  " << std::setw(4) << it.load_step
+       << "  " << std::setw(2) << it.iteration << "  " << std::scientific << std::setprecision(6)
+       << std::setw(16) << it.energy << "  " << std::setw(14) << std::setprecision(4)
+       << it.residual_norm << "  " << std::setw(13) << it.step_length << "\n";
+  }
+  os << std::scientific << std::setprecision(6);
+  os << "  initial |residual|   " << initial_residual_norm << " N\n";
+  os << "  final |residual|     " << final_residual_norm << " N\n";
+  os << "  final potential      " << final_energy << " J\n";
+  os << "  max displacement     " << max_displacement << " m\n";
+  os << std::fixed << std::setprecision(4);
+  os << "  factorization time   " << factorization_time_s << " s\n";
+  os << "  total time           " << total_time_s << " s\n";
+  os << "  termination          " << ToString(termination) << ": " << message << "\n";
+  return os.str();
+}
+
+namespace {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// CHOLMOD's supernodal LL^T with access to its rough reciprocal condition number
+// min(diag L) / max(diag L), to tell a singular stiffness from an ill-conditioned one.
+class Factorization : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> {
+ public:
+  Factorization() { cholmod().print = 0; }
+  double ReciprocalCondition() {
+    return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0;
+  }
+};
+
+// Below this min(diag L) / max(diag L) the reduced stiffness is treated as singular: a rigid
+// mode leaves a pivot at round-off level, about sqrt(eps) ~ 1e-8 of the largest.
+constexpr double kMinReciprocalCondition = 1e-7;
+
+// The state of one solve: DOF numbering, the element-to-matrix scatter map, buffers.
+class QuasiStaticSolver {
+ public:
+  QuasiStaticSolver(const ForwardProblem& problem, const ForwardOptions& options,
+                    ElasticModel* model, TetMesh* mesh, ForwardSummary* summary)
+      : problem_(problem), options_(options), model_(*model), mesh_(*mesh), summary_(*summary) {}
+
+  // Checks the inputs; on error fills the summary and returns false.
+  bool Validate();
+  // Numbers the free DOFs, checks that every connected piece is held, builds the pattern.
+  bool Setup();
+  void Run();
+
+ private:
+  bool Fail(ForwardTermination termination, const std::string& message) {
+    summary_.termination = termination;
+    summary_.message = message;
+    return false;
+  }
+  int nv() const { return mesh_.num_vertices(); }
+  int nt() const { return model_.num_elements(); }
+  bool linear() const { return model_.type() == ElasticModelType::kLinear; }
+
+  // Elastic energy at x with rotations recomputed from x (stored in `rotations`), and the
+  // per-element forces in element_force_ (f = -gradient).
+  double EvaluateElements(const Vertices& x, std::vector<Eigen::Matrix3d>* rotations,
+                          std::vector<Vector12>* element_force) const;
+  // Gathers the element forces into the elastic gradient (3 #V).
+  void GatherGradient(const std::vector<Vector12>& element_force, Eigen::VectorXd* gradient) const;
+  // Assembles the reduced warped stiffness at `rotations` into matrix_ and factorizes it.
+  bool AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations);
+  // Total potential: elastic energy minus the work of `load` over the displacement.
+  double Potential(double elastic, const Vertices& x, const Eigen::VectorXd& load) const;
+  double FreeNorm(const Eigen::VectorXd& v) const;
+  // The force imbalance that round-off alone leaves at positions x (N).
+  double RoundoffFloor(const Vertices& x) const;
+  void ScatterFree(const Eigen::VectorXd& reduced, double alpha, Vertices* x) const;
+
+  const ForwardProblem& problem_;
+  const ForwardOptions& options_;
+  const ElasticModel& model_;
+  TetMesh& mesh_;
+  ForwardSummary& summary_;
+
+  std::vector<int> free_index_;      // 3 #V: dof -> reduced index, or -1 when held
+  std::vector<int> free_dofs_;       // reduced index -> dof
+  std::vector<int> element_offsets_; // vertex -> element adjacency (compressed)
+  std::vector<int> element_slots_;   // 4 e + k of each adjacent element's local vertex
+  SparseMatrix matrix_;              // reduced stiffness, lower triangle
+  std::vector<int> scatter_;         // 144 per element: index into matrix_ values, or -1
+  std::vector<std::vector<int>> colors_;  // elements sharing no vertex, for parallel scatter
+  Factorization factorization_;
+  bool factorized_for_linear_ = false;
+  Eigen::VectorXd full_load_;        // 3 #V external load at full scale
+};
+
+bool QuasiStaticSolver::Validate() {
+  std::string error;
+  if (!options_.IsValid(&error)) return Fail(ForwardTermination::kInvalidInput, "options: " + error);
+  std::ostringstream os;
+  if (nv() == 0 || nt() == 0) {
+    return Fail(ForwardTermination::kInvalidInput, "the mesh has no vertices or no elements");
+  }
+  if (mesh_.rest.rows() != mesh_.x.rows()) {
+    os << "mesh.x has " << mesh_.x.rows() << " rows, mesh.rest has " << mesh_.rest.rows();
+    return Fail(ForwardTermination::kInvalidInput, os.str());
+  }
+  if (nt() != mesh_.num_tets()) {
+    os << "the elastic model has " << nt() << " elements but the mesh has " << mesh_.num_tets()
+       << " (was ElasticModel::Build called on this mesh?)";
+    return Fail(ForwardTermination::kInvalidInput, os.str());
+  }
+  if (model_.tets().size() > 0 &&
+      (model_.tets().minCoeff() < 0 || model_.tets().maxCoeff() >= nv())) {
+    return Fail(ForwardTermination::kInvalidInput,
+                "the elastic model refers to vertices outside the mesh");
+  }
+  if (!mesh_.x.allFinite() || !mesh_.rest.allFinite()) {
+    return Fail(ForwardTermination::kInvalidInput, "mesh.x or mesh.rest has a non-finite entry");
+  }
+  if (!problem_.gravity.allFinite()) {
+    return Fail(ForwardTermination::kInvalidInput, "problem.gravity is not finite");
+  }
+  std::vector<char> held(nv(), 0);
+  for (int v : problem_.clamped) {
+    if (v < 0 || v >= nv()) {
+      os << "problem.clamped: vertex " << v << " is outside 0.." << nv() - 1;
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    held[v] = 1;
+  }
+  for (const auto& p : problem_.prescribed) {
+    if (p.first < 0 || p.first >= nv()) {
+      os << "problem.prescribed: vertex " << p.first << " is outside 0.." << nv() - 1;
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    if (!p.second.allFinite()) {
+      os << "problem.prescribed: the displacement of vertex " << p.first << " is not finite";
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    if (held[p.first] == 1) {
+      os << "problem.prescribed: vertex " << p.first << " is also clamped";
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    if (held[p.first] == 2) {
+      os << "problem.prescribed: vertex " << p.first << " is listed twice";
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    held[p.first] = 2;
+  }
+  full_load_ = Eigen::VectorXd::Zero(3 * nv());
+  for (const auto& l : problem_.nodal_loads) {
+    if (l.first < 0 || l.first >= nv()) {
+      os << "problem.nodal_loads: vertex " << l.first << " is outside 0.." << nv() - 1;
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    if (!l.second.allFinite()) {
+      os << "problem.nodal_loads: the load on vertex " << l.first << " is not finite";
+      return Fail(ForwardTermination::kInvalidInput, os.str());
+    }
+    full_load_.segment<3>(3 * l.first) += l.second;
+  }
+  if (problem_.gravity.squaredNorm() > 0) {
+    if (mesh_.mass.size() != nv() || !mesh_.mass.allFinite() || mesh_.mass.minCoeff() < 0) {
+      return Fail(ForwardTermination::kInvalidInput,
+                  "gravity is set but mesh.mass is missing, negative or not finite (call "
+                  "ComputeLumpedMasses)");
+    }
+    for (int v = 0; v < nv(); ++v) full_load_.segment<3>(3 * v) += mesh_.mass(v) * problem_.gravity;
+  }
+  return true;
+}
+
+bool QuasiStaticSolver::Setup() {
+  const Tets& tets = model_.tets();
+  // Vertex -> element adjacency of the model's elements.
+  element_offsets_.assign(nv() + 1, 0);
+  for (int e = 0; e < nt(); ++e)
+    for (int k = 0; k < 4; ++k) ++element_offsets_[tets(e, k) + 1];
+  for (int v = 0; v < nv(); ++v) element_offsets_[v + 1] += element_offsets_[v];
+  element_slots_.assign(element_offsets_[nv()], 0);
+  {
+    std::vector<int> fill(element_offsets_.begin(), element_offsets_.end() - 1);
+    for (int e = 0; e < nt(); ++e)
+      for (int k = 0; k < 4; ++k) element_slots_[fill[tets(e, k)]++] = 4 * e + k;
+  }
+
+  // Held vertices: clamped, prescribed, and vertices no element uses (they cannot move).
+  std::vector<char> held(nv(), 0);
+  for (int v : problem_.clamped) held[v] = 1;
+  for (const auto& p : problem_.prescribed) held[p.first] = 1;
+  for (int v = 0; v < nv(); ++v) {
+    if (element_offsets_[v] == element_offsets_[v + 1]) held[v] = 1;
+  }
+
+  // Every vertex-connected piece must hold at least three non-collinear vertices, or it
+  // has a rigid motion and the stiffness is singular.
+  std::vector<int> component(nt(), -1);
+  std::vector<int> listed(nv(), 0);  // component + 1 that listed a held vertex
+  int num_components = 0;
+  for (int seed = 0; seed < nt(); ++seed) {
+    if (component[seed] >= 0) continue;
+    std::vector<int> stack = {seed};
+    component[seed] = num_components;
+    std::vector<int> held_vertices;
+    int size = 0;
+    while (!stack.empty()) {
+      const int e = stack.back();
+      stack.pop_back();
+      ++size;
+      for (int k = 0; k < 4; ++k) {
+        const int v = tets(e, k);
+        if (held[v] && listed[v] != num_components + 1) {
+          listed[v] = num_components + 1;
+          held_vertices.push_back(v);
+        }
+        for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
+          const int other = element_slots_[s] / 4;
+          if (component[other] < 0) {
+            component[other] = num_components;
+            stack.push_back(other);
+          }
+        }
+      }
+    }
+    // Rank of the held vertices' rest positions about their centroid (2 = not collinear).
+    int rank = 0;
+    if (!held_vertices.empty()) {
+      Eigen::MatrixXd P(held_vertices.size(), 3);
+      for (size_t i = 0; i < held_vertices.size(); ++i) P.row(i) = mesh_.rest.row(held_vertices[i]);
+      P.rowwise() -= P.colwise().mean();
+      const double scale = P.cwiseAbs().maxCoeff();
+      if (scale > 0) {
+        Eigen::JacobiSVD<Eigen::MatrixXd> svd(P / scale);
+        for (int i = 0; i < svd.singularValues().size(); ++i)
+          if (svd.singularValues()(i) > 1e-9 * std::sqrt(double(held_vertices.size()))) ++rank;
+      }
+    }
+    if (rank < 2) {
+      std::ostringstream os;
+      os << "the stiffness is singular: a connected piece of " << size << " elements (element "
+         << seed << ", vertex " << tets(seed, 0) << ") ";
+      if (held_vertices.empty()) {
+        os << "has no clamped or prescribed vertex, so it floats freely";
+      } else {
+        os << "is held only at " << held_vertices.size()
+           << " collinear vertices, so it can rotate; clamp at least 3 non-collinear vertices";
+      }
+      return Fail(ForwardTermination::kFactorizationFailed, os.str());
+    }
+    ++num_components;
+  }
+
+  free_index_.assign(3 * nv(), -1);
+  free_dofs_.clear();
+  for (int v = 0; v < nv(); ++v) {
+    if (held[v]) continue;
+    for (int i = 0; i < 3; ++i) {
+      free_index_[3 * v + i] = static_cast<int>(free_dofs_.size());
+      free_dofs_.push_back(3 * v + i);
+    }
+  }
+  summary_.num_free_dofs = static_cast<int>(free_dofs_.size());
+  if (free_dofs_.empty()) return true;
+
+  // The pattern of the reduced lower triangle, and where each element entry goes.
+  const int n = static_cast<int>(free_dofs_.size());
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(78 * static_cast<size_t>(nt()));
+  for (int e = 0; e < nt(); ++e) {
+    for (int a = 0; a < 12; ++a) {
+      const int r = free_index_[3 * tets(e, a / 3) + a % 3];
+      if (r < 0) continue;
+      for (int b = 0; b < 12; ++b) {
+        const int c = free_index_[3 * tets(e, b / 3) + b % 3];
+        if (c >= 0 && r >= c) triplets.emplace_back(r, c, 0.0);
+      }
+    }
+  }
+  matrix_.resize(n, n);
+  matrix_.setFromTriplets(triplets.begin(), triplets.end());
+  matrix_.makeCompressed();
+  triplets.clear();
+  triplets.shrink_to_fit();
+  scatter_.assign(144 * static_cast<size_t>(nt()), -1);
+  const int* outer = matrix_.outerIndexPtr();
+  const int* inner = matrix_.innerIndexPtr();
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < nt(); ++e) {
+    for (int a = 0; a < 12; ++a) {
+      const int r = free_index_[3 * tets(e, a / 3) + a % 3];
+      if (r < 0) continue;
+      for (int b = 0; b < 12; ++b) {
+        const int c = free_index_[3 * tets(e, b / 3) + b % 3];
+        if (c < 0 || r < c) continue;
+        const int* pos = std::lower_bound(inner + outer[c], inner + outer[c + 1], r);
+        scatter_[144 * static_cast<size_t>(e) + 12 * a + b] = static_cast<int>(pos - inner);
+      }
+    }
+  }
+
+  // Greedy colouring: elements of one colour share no vertex, so they scatter in parallel.
+  std::vector<int> color(nt(), -1);
+  std::vector<int> mark;
+  for (int e = 0; e < nt(); ++e) {
+    for (int k = 0; k < 4; ++k) {
+      const int v = tets(e, k);
+      for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
+        const int c = color[element_slots_[s] / 4];
+        if (c < 0) continue;
+        if (c >= static_cast<int>(mark.size())) mark.resize(c + 1, -1);
+        mark[c] = e;
+      }
+    }
+    int c = 0;
+    while (c < static_cast<int>(mark.size()) && mark[c] == e) ++c;
+    color[e] = c;
+    if (c >= static_cast<int>(colors_.size())) colors_.resize(c + 1);
+    colors_[c].push_back(e);
+  }
+
+  const auto start = Clock::now();
+  factorization_.analyzePattern(matrix_);
+  summary_.factorization_time_s += Seconds(start);
+  if (factorization_.info() != Eigen::Success) {
+    return Fail(ForwardTermination::kFactorizationFailed,
+                "CHOLMOD could not analyze the stiffness pattern (out of memory?)");
+  }
+  return true;
+}
+
+double QuasiStaticSolver::EvaluateElements(const Vertices& x,
+                                           std::vector<Eigen::Matrix3d>* rotations,
+                                           std::vector<Vector12>* element_force) const {
+  double energy = 0.0;
+  const bool corotational = !linear();
+#pragma omp parallel for schedule(static) reduction(+ : energy)
+  for (int e = 0; e < nt(); ++e) {
+    const ElementRest& rest = model_.rest(e);
+    const Vector12 xe = model_.Gather(x, e);
+    Eigen::Matrix3d& R = (*rotations)[e];
+    if (corotational) {
+      Eigen::Matrix<double, 3, 4> xm;
+      for (int k = 0; k < 4; ++k) xm.col(k) = xe.segment<3>(3 * k);
+      R = PolarRotation(DeformationGradient(xm, rest.dm_inv));
+    } else {
+      R.setIdentity();
+    }
+    Vector12 u;
+    for (int k = 0; k < 4; ++k) u.segment<3>(3 * k) = R.transpose() * xe.segment<3>(3 * k) - rest.X.segment<3>(3 * k);
+    const Vector12 ku = rest.K * u;
+    energy += 0.5 * u.dot(ku);
+    Vector12& f = (*element_force)[e];
+    for (int k = 0; k < 4; ++k) f.segment<3>(3 * k) = -R * ku.segment<3>(3 * k);
+  }
+  return energy;
+}
+
+void QuasiStaticSolver::GatherGradient(const std::vector<Vector12>& element_force,
+                                       Eigen::VectorXd* gradient) const {
+  gradient->resize(3 * nv());
+#pragma omp parallel for schedule(static)
+  for (int v = 0; v < nv(); ++v) {
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
+      const int slot = element_slots_[s];
+      g -= element_force[slot / 4].segment<3>(3 * (slot % 4));
+    }
+    gradient->segment<3>(3 * v) = g;
+  }
+}
+
+bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations) {
+  if (linear() && factorized_for_linear_) return true;  // K does not change
+  double* values = matrix_.valuePtr();
+  std::fill(values, values + matrix_.nonZeros(), 0.0);
+  for (const std::vector<int>& elements : colors_) {
+    const int count = static_cast<int>(elements.size());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < count; ++i) {
+      const int e = elements[i];
+      const Matrix12 K = WarpedStiffness(model_.rest(e), rotations[e]);
+      const int* map = scatter_.data() + 144 * static_cast<size_t>(e);
+      for (int b = 0; b < 12; ++b)
+        for (int a = 0; a < 12; ++a)
+          if (map[12 * a + b] >= 0) values[map[12 * a + b]] += K(a, b);
+    }
+  }
+  const auto start = Clock::now();
+  factorization_.factorize(matrix_);
+  summary_.factorization_time_s += Seconds(start);
+  if (factorization_.info() != Eigen::Success) {
+    return Fail(ForwardTermination::kFactorizationFailed,
+                "CHOLMOD: the reduced stiffness is not positive definite (too few clamps, or a "
+                "mechanism such as elements joined only at an edge or a vertex)");
+  }
+  const double rcond = factorization_.ReciprocalCondition();
+  if (!(rcond > kMinReciprocalCondition)) {
+    std::ostringstream os;
+    os << "the reduced stiffness is numerically singular (CHOLMOD min/max pivot " << rcond
+       << "): too few clamps, or a mechanism such as elements joined only at an edge or a vertex";
+    return Fail(ForwardTermination::kFactorizationFailed, os.str());
+  }
+  factorized_for_linear_ = linear();
+  return true;
+}
+
+double QuasiStaticSolver::Potential(double elastic, const Vertices& x,
+                                    const Eigen::VectorXd& load) const {
+  const Eigen::Map<const Eigen::VectorXd> xv(x.data(), 3 * nv());
+  const Eigen::Map<const Eigen::VectorXd> Xv(mesh_.rest.data(), 3 * nv());
+  return elastic - load.dot(xv - Xv);
+}
+
+double QuasiStaticSolver::RoundoffFloor(const Vertices& x) const {
+  // The forces are sums of K_e x_e terms: their round-off is about eps |K| |x| per DOF.
+  double max_diagonal = 0.0;
+  for (int e = 0; e < nt(); ++e) max_diagonal = std::max(max_diagonal, model_.rest(e).K.diagonal().maxCoeff());
+  const double max_coordinate = std::max(x.cwiseAbs().maxCoeff(), mesh_.rest.cwiseAbs().maxCoeff());
+  return 64.0 * std::numeric_limits<double>::epsilon() * max_diagonal * max_coordinate *
+         std::sqrt(static_cast<double>(free_dofs_.size()));
+}
+
+double QuasiStaticSolver::FreeNorm(const Eigen::VectorXd& v) const {
+  double sum = 0.0;
+  for (int d : free_dofs_) sum += v(d) * v(d);
+  return std::sqrt(sum);
+}
+
+void QuasiStaticSolver::ScatterFree(const Eigen::VectorXd& reduced, double alpha,
+                                    Vertices* x) const {
+  double* data = x->data();
+  for (size_t i = 0; i < free_dofs_.size(); ++i) data[free_dofs_[i]] += alpha * reduced(i);
+}
+
+void QuasiStaticSolver::Run() {
+  Vertices x = mesh_.x;
+  for (int v : problem_.clamped) x.row(v) = mesh_.rest.row(v);
+  std::vector<Eigen::Matrix3d> rotations(nt()), trial_rotations(nt());
+  std::vector<Vector12> forces(nt()), trial_forces(nt());
+  Eigen::VectorXd gradient, trial_gradient, residual(3 * nv()), load(3 * nv());
+  Eigen::VectorXd rhs(free_dofs_.size()), step(free_dofs_.size());
+  bool have_initial = false;
+  double reference = 0.0;  // force scale of the relative tolerance
+  double potential = 0.0, residual_norm = 0.0;
+
+  summary_.termination = ForwardTermination::kConverged;
+  summary_.message = "converged";
+  for (int load_step = 1; load_step <= options_.load_steps; ++load_step) {
+    const double scale = static_cast<double>(load_step) / options_.load_steps;
+    load = scale * full_load_;
+
+    // Move the prescribed vertices; predict the free ones with the current stiffness
+    // (K_ff dx_f = -K_fp dx_p), so that elements next to them are not crushed.
+    if (!problem_.prescribed.empty()) {
+      Vertices delta = Vertices::Zero(nv(), 3);
+      bool moved = false;
+      for (const auto& p : problem_.prescribed) {
+        delta.row(p.first) = (mesh_.rest.row(p.first) + scale * p.second.transpose()) - x.row(p.first);
+        moved = moved || delta.row(p.first).squaredNorm() > 0;
+      }
+      if (moved && !free_dofs_.empty()) {
+        EvaluateElements(x, &rotations, &forces);
+        if (!AssembleAndFactorize(rotations)) return;
+        Eigen::VectorXd coupling = Eigen::VectorXd::Zero(3 * nv());
+        for (int e = 0; e < nt(); ++e) {
+          const Vector12 de = model_.Gather(delta, e);
+          if (de.squaredNorm() == 0) continue;
+          const Vector12 fe = WarpedStiffness(model_.rest(e), rotations[e]) * de;
+          for (int k = 0; k < 4; ++k) coupling.segment<3>(3 * model_.tets()(e, k)) += fe.segment<3>(3 * k);
+        }
+        for (size_t i = 0; i < free_dofs_.size(); ++i) rhs(i) = -coupling(free_dofs_[i]);
+        step = factorization_.solve(rhs);
+        if (step.allFinite()) ScatterFree(step, 1.0, &x);
+      }
+      x += delta;
+    }
+
+    double elastic = EvaluateElements(x, &rotations, &forces);
+    GatherGradient(forces, &gradient);
+    residual = gradient - load;
+    potential = Potential(elastic, x, load);
+    residual_norm = FreeNorm(residual);
+    if (!have_initial) {
+      summary_.initial_residual_norm = residual_norm;
+      reference = residual_norm;
+      have_initial = true;
+    }
+
+    double step_length = 0.0;
+    ForwardTermination step_result = ForwardTermination::kMaxIterations;
+    for (int iteration = 0;; ++iteration) {
+      // Reference force: external loads, support reactions, and the first imbalance.
+      double reaction = 0.0;
+      for (int d = 0; d < 3 * nv(); ++d)
+        if (free_index_[d] < 0) reaction += residual(d) * residual(d);
+      reference = std::max({reference, load.norm(), std::sqrt(reaction)});
+      summary_.iterations.push_back({load_step, iteration, potential, residual_norm, step_length});
+      if (options_.verbose) {
+        std::printf("forward step %d iter %3d  potential %+.9e  |r| %.3e  alpha %.3g\n", load_step,
+                    iteration, potential, residual_norm, step_length);
+      }
+      if (free_dofs_.empty() ||
+          residual_norm <= std::max({options_.absolute_tolerance,
+                                     options_.relative_tolerance * reference,
+                                     RoundoffFloor(x)})) {
+        step_result = ForwardTermination::kConverged;
+        break;
+      }
+      if (iteration >= options_.max_iterations) break;
+
+      if (!AssembleAndFactorize(rotations)) return;
+      for (size_t i = 0; i < free_dofs_.size(); ++i) rhs(i) = -residual(free_dofs_[i]);
+      step = factorization_.solve(rhs);
+      if (!step.allFinite()) {
+        Fail(ForwardTermination::kFactorizationFailed,
+             "the Newton step is not finite: the reduced stiffness is singular");
+        return;
+      }
+      const double slope = -rhs.dot(step);  // directional derivative, < 0
+
+      // Backtracking (Armijo) on the total potential with rotations recomputed at x + a d.
+      double alpha = 1.0;
+      bool accepted = false;
+      Vertices trial;
+      double trial_potential = 0.0;
+      while (alpha >= options_.min_step) {
+        trial = x;
+        ScatterFree(step, alpha, &trial);
+        const double trial_elastic = EvaluateElements(trial, &trial_rotations, &trial_forces);
+        trial_potential = Potential(trial_elastic, trial, load);
+        if (std::isfinite(trial_potential)) {
+          if (trial_potential <= potential + 1e-4 * alpha * slope) {
+            accepted = true;
+          } else {
+            // Near the solution the decrease drowns in round-off of the energy: accept a
+            // step that does not raise the potential beyond that noise and reduces the
+            // force imbalance.
+            const double noise = 1e-12 * (std::abs(trial_elastic) + std::abs(trial_potential)) +
+                                 std::numeric_limits<double>::min();
+            if (trial_potential - potential <= noise) {
+              GatherGradient(trial_forces, &trial_gradient);
+              accepted = FreeNorm(trial_gradient - load) < residual_norm;
+            }
+          }
+        }
+        if (accepted) break;
+        // Safeguarded quadratic interpolation of the potential along the step.
+        double next = 0.5 * alpha;
+        if (std::isfinite(trial_potential)) {
+          const double denom = 2.0 * (trial_potential - potential - slope * alpha);
+          if (denom > 0) next = std::clamp(-slope * alpha * alpha / denom, 0.1 * alpha, 0.5 * alpha);
+        }
+        alpha = next;
+      }
+      if (!accepted) {
+        step_result = ForwardTermination::kLineSearchFailed;
+        break;
+      }
+      x.swap(trial);
+      rotations.swap(trial_rotations);
+      forces.swap(trial_forces);
+      GatherGradient(forces, &gradient);
+      residual = gradient - load;
+      potential = trial_potential;
+      residual_norm = FreeNorm(residual);
+      step_length = alpha;
+    }
+
+    if (load_step == options_.load_steps) {
+      summary_.termination = step_result;
+      std::ostringstream os;
+      const ForwardIteration& last = summary_.iterations.back();
+      switch (step_result) {
+        case ForwardTermination::kConverged:
+          os << "converged: |residual| " << residual_norm << " N <= tolerance at load step "
+             << load_step << " after " << last.iteration << " iterations";
+          break;
+        case ForwardTermination::kMaxIterations:
+          os << "max_iterations (" << options_.max_iterations << ") reached at load step "
+             << load_step << ", |residual| " << residual_norm << " N";
+          break;
+        default:
+          os << "the line search found no decrease of the potential above min_step ("
+             << options_.min_step << ") at load step " << load_step << ", |residual| "
+             << residual_norm << " N (try more load_steps)";
+          break;
+      }
+      summary_.message = os.str();
+    }
+  }
+
+  mesh_.x = x;
+  summary_.final_residual_norm = residual_norm;
+  summary_.final_energy = potential;
+  summary_.max_displacement = (x - mesh_.rest).rowwise().norm().maxCoeff();
+}
+
+}  // namespace
+
+Status SolveQuasiStatic(const ForwardProblem& problem, const ForwardOptions& options,
+                        ElasticModel* model, TetMesh* mesh, ForwardSummary* summary) {
+  const auto start = Clock::now();
+  *summary = ForwardSummary();
+  QuasiStaticSolver solver(problem, options, model, mesh, summary);
+  if (solver.Validate() && solver.Setup()) solver.Run();
+  // Leave the model's rotations consistent with the result.
+  if (summary->termination != ForwardTermination::kInvalidInput) model->UpdateRotations(mesh->x);
+  summary->total_time_s = Seconds(start);
+  if (summary->termination == ForwardTermination::kInvalidInput ||
+      summary->termination == ForwardTermination::kFactorizationFailed) {
+    return Status::Error(std::string("SolveQuasiStatic: ") + ToString(summary->termination) +
+                         ": " + summary->message);
+  }
+  return Status::Ok();
+}
+
+}  // namespace femreg
