@@ -59,7 +59,7 @@ Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh) {
         os << where(t) << "tetrahedron refers to vertex index " << v << ", outside 0.." << nv - 1;
         return FileError(element_file, line_of(t), os.str());
       }
-      if (new_index[v] < 0) new_index[v] = used++;
+      new_index[v] = 0;  // used; numbered below in the original order
     }
     for (int a = 0; a < 4; ++a) {
       for (int b = a + 1; b < 4; ++b) {
@@ -69,6 +69,9 @@ Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh) {
         }
       }
     }
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (new_index[v] >= 0) new_index[v] = used++;
   }
   TetMesh out;
   out.rest.resize(used, 3);

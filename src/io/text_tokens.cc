@@ -77,10 +77,7 @@ void TokenStream::SkipSpace() {
 
 bool TokenStream::Next(Token* token) {
   SkipSpace();
-  if (pos_ >= data_.size()) {
-    last_line_ = current_line_;
-    return false;
-  }
+  if (pos_ >= data_.size()) return false;  // errors then name the last line with a token
   const size_t start = pos_;
   while (pos_ < data_.size()) {
     const char c = data_[pos_];
