@@ -5,26 +5,6 @@
 
 namespace femreg {
 
-const char* ToString(TerminationType t) {
-  switch (t) {
-    case TerminationType::kNotRun:
-      return "NOT_RUN";
-    case TerminationType::kConverged:
-      return "CONVERGED";
-    case TerminationType::kMaxIterations:
-      return "MAX_ITERATIONS";
-    case TerminationType::kTimeBudget:
-      return "TIME_BUDGET";
-    case TerminationType::kNoCorrespondences:
-      return "NO_CORRESPONDENCES";
-    case TerminationType::kSolverFailure:
-      return "SOLVER_FAILURE";
-    case TerminationType::kInvalidInput:
-      return "INVALID_INPUT";
-  }
-  return "UNKNOWN";
-}
-
 bool FrameSummary::IsSolutionUsable() const {
   return termination == TerminationType::kConverged ||
          termination == TerminationType::kMaxIterations ||

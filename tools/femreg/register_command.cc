@@ -1,11 +1,388 @@
+// femreg register: registers the scene's meshes to a sequence of point clouds.
+//
+// Writes, into OUT:
+//   frames/<object>_NNNN.vtu   the deformed mesh per frame (displacement, residual, observed)
+//   <object>.pvd               the ParaView collection of the sequence
+//   stats.csv                  one row per frame: termination, iterations, pairs, energies,
+//                              time per stage, and vertex errors when ground truth is given
+//   summary.json               the run's settings and totals
+// Every file is written through a temporary file and a rename, after every frame, so an
+// interrupt (Ctrl-C) leaves whole files behind that cover the frames done so far.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_util.h"
 #include "commands.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
+#include "femreg/tracker.h"
+
+namespace fs = std::filesystem;
 
 namespace femreg {
 namespace cli {
+namespace {
+
+struct RegisterArgs {
+  std::string scene;
+  std::string frames;
+  std::string out;
+  std::string ground_truth;
+  bool force = false;
+  int max_frames = 0;
+  std::string report = "brief";
+  bool progress = true;
+  int threads = 0;
+};
+
+struct FrameRow {
+  std::string file;
+  FrameSummary summary;
+  bool have_errors = false;
+  VertexErrors errors;
+  std::string read_error;
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string StatsCsv(const std::vector<FrameRow>& rows) {
+  std::ostringstream os;
+  os << "frame,file,termination,outer_iterations,inner_iterations,cloud_points,nonfinite_dropped,"
+        "points_used,model_to_cloud,cloud_to_model,rejected,rms_residual_mm,e_data,e_elastic,"
+        "e_temporal,e_anchor,e_total,t_preprocess_ms,t_prealign_ms,t_rotations_ms,"
+        "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
+        "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
+        "err_hidden_max_mm,message\n";
+  char buf[1024];
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const FrameSummary& s = rows[i].summary;
+    std::snprintf(buf, sizeof(buf),
+                  "%zu,%s,%s,%d,%d,%d,%d,%d,%d,%d,%d,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.3f,%.3f,%.3f,"
+                  "%.3f,%.3f,%.3f,%.3f",
+                  i, fs::path(rows[i].file).filename().string().c_str(), ToString(s.termination),
+                  s.outer_iterations, s.inner_iterations, s.cloud_points, s.nonfinite_dropped,
+                  s.points_used, s.model_to_cloud, s.cloud_to_model, s.rejected,
+                  s.rms_residual * 1e3, s.final.data, s.final.elastic, s.final.temporal,
+                  s.final.anchor, s.final.total(), s.time.preprocess * 1e3, s.time.prealign * 1e3,
+                  s.time.rotations * 1e3, s.time.correspondences * 1e3, s.time.build * 1e3,
+                  s.time.solve * 1e3, s.time.total * 1e3);
+    os << buf;
+    if (rows[i].have_errors) {
+      const VertexErrors& e = rows[i].errors;
+      std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f", e.all.mean * 1e3,
+                    e.all.rms * 1e3, e.all.p95 * 1e3, e.all.max * 1e3, e.seen.mean * 1e3,
+                    e.seen.max * 1e3, e.hidden.mean * 1e3, e.hidden.max * 1e3);
+      os << buf;
+    } else {
+      os << ",,,,,,,,";
+    }
+    std::string msg = rows[i].read_error.empty() ? s.message : rows[i].read_error;
+    std::replace(msg.begin(), msg.end(), '"', '\'');
+    os << ",\"" << msg << "\"\n";
+  }
+  return os.str();
+}
+
+struct Totals {
+  int frames = 0, usable = 0;
+  double median_ms = 0, mean_ms = 0, fps = 0;
+  bool have_errors = false;
+  double err_mean = 0, err_max = 0, seen_mean = 0, seen_max = 0, hidden_mean = 0, hidden_max = 0;
+};
+
+Totals ComputeTotals(const std::vector<FrameRow>& rows) {
+  Totals t;
+  t.frames = static_cast<int>(rows.size());
+  std::vector<double> ms;
+  double sum_all = 0, sum_seen = 0, sum_hidden = 0;
+  int n_err = 0, n_seen = 0, n_hidden = 0;
+  for (const FrameRow& r : rows) {
+    if (r.summary.IsSolutionUsable()) ++t.usable;
+    ms.push_back(r.summary.time.total * 1e3);
+    if (r.have_errors) {
+      t.have_errors = true;
+      sum_all += r.errors.all.mean * r.errors.all.count;
+      n_err += r.errors.all.count;
+      t.err_max = std::max(t.err_max, r.errors.all.max);
+      sum_seen += r.errors.seen.mean * r.errors.seen.count;
+      n_seen += r.errors.seen.count;
+      t.seen_max = std::max(t.seen_max, r.errors.seen.max);
+      sum_hidden += r.errors.hidden.mean * r.errors.hidden.count;
+      n_hidden += r.errors.hidden.count;
+      t.hidden_max = std::max(t.hidden_max, r.errors.hidden.max);
+    }
+  }
+  t.median_ms = Median(ms);
+  double total_ms = 0;
+  for (double m : ms) total_ms += m;
+  t.mean_ms = ms.empty() ? 0 : total_ms / ms.size();
+  t.fps = total_ms > 0 ? 1e3 * ms.size() / total_ms : 0;
+  t.err_mean = n_err ? sum_all / n_err : 0;
+  t.seen_mean = n_seen ? sum_seen / n_seen : 0;
+  t.hidden_mean = n_hidden ? sum_hidden / n_hidden : 0;
+  return t;
+}
+
+std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Tracker& tracker,
+                        const std::vector<FrameRow>& rows, int total_frames, bool interrupted) {
+  const Totals t = ComputeTotals(rows);
+  const RegistrationOptions& o = tracker.options();
+  std::ostringstream os;
+  os << "{\n";
+  os << "  \"scene\": " << JsonString(args.scene) << ",\n";
+  os << "  \"frames_source\": " << JsonString(args.frames) << ",\n";
+  os << "  \"frames_total\": " << total_frames << ",\n";
+  os << "  \"frames_done\": " << t.frames << ",\n";
+  os << "  \"interrupted\": " << (interrupted ? "true" : "false") << ",\n";
+  os << "  \"frames_usable\": " << t.usable << ",\n";
+  os << "  \"regularizer\": " << JsonString(ToString(o.regularizer)) << ",\n";
+  os << "  \"objects\": [";
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const TetMesh& m = tracker.mesh(static_cast<int>(i));
+    os << (i ? ", " : "") << "{\"name\": " << JsonString(scene.objects[i].name)
+       << ", \"vertices\": " << m.num_vertices() << ", \"tetrahedra\": " << m.num_tets()
+       << ", \"youngs_modulus\": " << JsonNumber(scene.objects[i].material.youngs_modulus)
+       << ", \"poisson_ratio\": " << JsonNumber(scene.objects[i].material.poisson_ratio) << "}";
+  }
+  os << "],\n";
+  os << "  \"solver\": {\"max_outer_iterations\": " << o.solver.max_outer_iterations
+     << ", \"max_inner_iterations\": " << o.solver.max_inner_iterations
+     << ", \"linear_solver\": " << JsonString(ToString(o.solver.linear_solver))
+     << ", \"trust_region\": " << JsonString(ToString(o.solver.trust_region))
+     << ", \"threads\": " << o.solver.num_threads << "},\n";
+  os << "  \"ms_per_frame_median\": " << JsonNumber(t.median_ms) << ",\n";
+  os << "  \"ms_per_frame_mean\": " << JsonNumber(t.mean_ms) << ",\n";
+  os << "  \"frames_per_second\": " << JsonNumber(t.fps);
+  if (t.have_errors) {
+    os << ",\n  \"vertex_error_mm\": {\"mean\": " << JsonNumber(t.err_mean * 1e3)
+       << ", \"max\": " << JsonNumber(t.err_max * 1e3)
+       << ", \"seen_mean\": " << JsonNumber(t.seen_mean * 1e3)
+       << ", \"seen_max\": " << JsonNumber(t.seen_max * 1e3)
+       << ", \"hidden_mean\": " << JsonNumber(t.hidden_mean * 1e3)
+       << ", \"hidden_max\": " << JsonNumber(t.hidden_max * 1e3) << "}";
+  }
+  os << "\n}\n";
+  return os.str();
+}
+
+int RunRegister(const RegisterArgs& args) {
+  Scene scene;
+  Status status = LoadScene(args.scene, &scene);
+  if (!status.ok()) {
+    std::cerr << "femreg register: " << status.message() << "\n";
+    return 1;
+  }
+  if (args.threads > 0) scene.registration.solver.num_threads = args.threads;
+  std::vector<std::string> files;
+  status = ListFrames(args.frames, {".pcd", ".ply", ".xyz", ".txt"}, &files);
+  if (!status.ok()) {
+    std::cerr << "femreg register: " << status.message() << "\n";
+    return 1;
+  }
+  if (args.max_frames > 0 && static_cast<int>(files.size()) > args.max_frames) {
+    files.resize(static_cast<size_t>(args.max_frames));
+  }
+  std::vector<std::string> truth_files;
+  if (!args.ground_truth.empty()) {
+    status = ListFrames(args.ground_truth, {".csv"}, &truth_files);
+    if (!status.ok()) {
+      std::cerr << "femreg register: --ground-truth: " << status.message() << "\n";
+      return 1;
+    }
+    if (truth_files.size() < files.size()) {
+      std::cerr << "femreg register: --ground-truth has " << truth_files.size()
+                << " frames for " << files.size() << " clouds\n";
+      return 1;
+    }
+  }
+  std::unique_ptr<Tracker> tracker;
+  status = Tracker::Create(scene, &tracker);
+  if (!status.ok()) {
+    std::cerr << "femreg register: " << status.message() << "\n";
+    return 1;
+  }
+  status = PrepareOutputDir(args.out, args.force);
+  if (status.ok()) status = PrepareOutputDir((fs::path(args.out) / "frames").string(), true);
+  if (!status.ok()) {
+    std::cerr << "femreg register: " << status.message() << "\n";
+    return 1;
+  }
+
+  int total_vertices = 0;
+  for (int i = 0; i < tracker->num_objects(); ++i) total_vertices += tracker->mesh(i).num_vertices();
+  std::cout << "femreg register: " << files.size() << " frames, " << tracker->num_objects()
+            << " object(s), " << total_vertices << " vertices, regularizer "
+            << ToString(scene.registration.regularizer) << "\n";
+
+  InstallInterruptHandler();
+  std::vector<FrameRow> rows;
+  std::vector<std::vector<PvdEntry>> pvd(static_cast<size_t>(tracker->num_objects()));
+  ProgressBar bar("register", static_cast<int>(files.size()), args.progress);
+  bool interrupted = false;
+  for (size_t f = 0; f < files.size(); ++f) {
+    if (Interrupted()) {
+      interrupted = true;
+      break;
+    }
+    FrameRow row;
+    row.file = files[f];
+    PointCloud cloud;
+    int dropped = 0;
+    Status read = ReadPointCloud(files[f], &cloud, &dropped);
+    if (!read.ok()) {
+      row.read_error = read.message();
+      cloud = PointCloud();  // an unreadable frame is tracked as an empty one
+    }
+    tracker->Track(cloud, &row.summary);
+    row.summary.nonfinite_dropped += dropped;
+    row.summary.cloud_points += dropped;
+    if (!read.ok()) row.summary.message = read.message() + "; " + row.summary.message;
+
+    // Ground truth covers all objects' vertices in scene order.
+    if (!truth_files.empty()) {
+      GroundTruthFrame truth;
+      Status gt = ReadGroundTruthFrame(truth_files[f], &truth);
+      Vertices all(total_vertices, 3);
+      int offset = 0;
+      for (int i = 0; i < tracker->num_objects(); ++i) {
+        all.middleRows(offset, tracker->vertices(i).rows()) = tracker->vertices(i);
+        offset += static_cast<int>(tracker->vertices(i).rows());
+      }
+      if (!gt.ok() || truth.positions.rows() != total_vertices) {
+        std::cerr << "\nfemreg register: ground truth " << truth_files[f] << ": "
+                  << (gt.ok() ? "has " + std::to_string(truth.positions.rows()) +
+                                    " vertices, the scene " + std::to_string(total_vertices)
+                              : gt.message())
+                  << "\n";
+        return 1;
+      }
+      row.errors = ComputeVertexErrors(all, truth);
+      row.have_errors = true;
+    }
+
+    char name[64];
+    for (int i = 0; i < tracker->num_objects(); ++i) {
+      const TetMesh& m = tracker->mesh(i);
+      std::snprintf(name, sizeof(name), "%s_%04zu.vtu", scene.objects[static_cast<size_t>(i)].name.c_str(), f);
+      std::vector<MeshField> fields(3);
+      fields[0].name = "displacement";
+      fields[0].values = m.x - m.rest;
+      fields[1].name = "residual";
+      fields[1].values = tracker->vertex_residuals(i);
+      fields[2].name = "observed";
+      fields[2].values.resize(m.num_vertices(), 1);
+      for (int v = 0; v < m.num_vertices(); ++v) fields[2].values(v, 0) = tracker->vertex_observed(i)[v];
+      const std::string rel = std::string("frames/") + name;
+      status = WriteVtu((fs::path(args.out) / rel).string(), m, m.x, fields);
+      if (!status.ok()) {
+        std::cerr << "\nfemreg register: " << status.message() << "\n";
+        return 1;
+      }
+      pvd[static_cast<size_t>(i)].push_back({static_cast<double>(f), rel});
+      status = WritePvd((fs::path(args.out) / (scene.objects[static_cast<size_t>(i)].name + ".pvd")).string(),
+                        pvd[static_cast<size_t>(i)]);
+      if (!status.ok()) {
+        std::cerr << "\nfemreg register: " << status.message() << "\n";
+        return 1;
+      }
+    }
+    rows.push_back(row);
+    status = WriteFileAtomically((fs::path(args.out) / "stats.csv").string(), StatsCsv(rows));
+    if (status.ok()) {
+      status = WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
+                                   SummaryJson(args, scene, *tracker, rows,
+                                               static_cast<int>(files.size()), false));
+    }
+    if (!status.ok()) {
+      std::cerr << "\nfemreg register: " << status.message() << "\n";
+      return 1;
+    }
+    if (args.report == "full") {
+      bar.Finish();
+      std::cout << row.summary.FullReport();
+    } else if (args.report == "brief" && !args.progress) {
+      std::cout << row.summary.BriefReport() << "\n";
+    }
+    char note[128];
+    std::snprintf(note, sizeof(note), "%s %.0f ms", ToString(row.summary.termination),
+                  row.summary.time.total * 1e3);
+    bar.Update(static_cast<int>(f + 1), note);
+  }
+  bar.Finish();
+  if (interrupted || Interrupted()) {
+    interrupted = true;
+    WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
+                        SummaryJson(args, scene, *tracker, rows, static_cast<int>(files.size()), true));
+  }
+
+  const Totals t = ComputeTotals(rows);
+  std::printf("\nRegistered %d/%zu frames (%d usable): median %.1f ms/frame, %.1f frames/s\n",
+              t.frames, files.size(), t.usable, t.median_ms, t.fps);
+  int counts[7] = {0};
+  for (const FrameRow& r : rows) ++counts[static_cast<int>(r.summary.termination)];
+  std::printf("Terminations:");
+  for (int k = 0; k < 7; ++k) {
+    if (counts[k]) std::printf(" %s %d", ToString(static_cast<TerminationType>(k)), counts[k]);
+  }
+  std::printf("\n");
+  if (t.have_errors) {
+    std::printf("Vertex error vs ground truth (mm): mean %.2f, max %.2f | seen: mean %.2f, max %.2f "
+                "| hidden: mean %.2f, max %.2f\n",
+                t.err_mean * 1e3, t.err_max * 1e3, t.seen_mean * 1e3, t.seen_max * 1e3,
+                t.hidden_mean * 1e3, t.hidden_max * 1e3);
+  }
+  std::printf("Results in %s: %s.pvd (open in ParaView), stats.csv, summary.json\n", args.out.c_str(),
+              scene.objects.empty() ? "" : scene.objects[0].name.c_str());
+  if (interrupted) {
+    std::fprintf(stderr, "Interrupted: the files cover the %d frames done.\n", t.frames);
+    return 130;
+  }
+  return 0;
+}
+
+}  // namespace
 
 void AddRegisterCommand(CLI::App* app) {
-  CLI::App* cmd = app->add_subcommand("register", "(not built yet)");
-  cmd->callback([] { SetExitCode(1); });
+  auto args = std::make_shared<RegisterArgs>();
+  CLI::App* cmd = app->add_subcommand(
+      "register",
+      "Register the scene's tetrahedral meshes to a sequence of point clouds.\n"
+      "Each frame minimizes data + elastic (corotational FEM) + temporal + anchor energy with "
+      "Ceres.\nWrites OUT/frames/*.vtu, OUT/<object>.pvd (open in ParaView), OUT/stats.csv and "
+      "OUT/summary.json.");
+  cmd->add_option("--scene,-s", args->scene, "Scene file (YAML): objects, materials, registration settings")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--frames,-f", args->frames,
+                  "A folder of clouds (.pcd, .ply, .xyz, .txt; natural order) or a quoted glob "
+                  "pattern such as 'scans/*.pcd'")
+      ->required();
+  cmd->add_option("--out,-o", args->out, "Output folder (refused if not empty, unless --force)")
+      ->required();
+  cmd->add_option("--ground-truth", args->ground_truth,
+                  "Folder of per-frame ground truth CSVs (x,y,z,visible per vertex): adds vertex "
+                  "errors (mm) for seen and hidden vertices");
+  cmd->add_flag("--force", args->force, "Write into a non-empty output folder");
+  cmd->add_option("--max-frames", args->max_frames, "Register only the first N frames");
+  cmd->add_option("--report", args->report, "Per-frame report: brief, full or none")
+      ->check(CLI::IsMember({"brief", "full", "none"}));
+  cmd->add_option("--threads", args->threads, "Solver threads (overrides the scene)");
+  cmd->add_flag("!--no-progress", args->progress, "No progress bar (print a line per frame)");
+  cmd->callback([args] { SetExitCode(RunRegister(*args)); });
 }
 
 }  // namespace cli

@@ -1,0 +1,158 @@
+#include "cli_util.h"
+
+#include <glob.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+namespace cli {
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.10g", v);
+  return buf;
+}
+
+Status PrepareOutputDir(const std::string& dir, bool force) {
+  std::error_code ec;
+  if (fs::exists(dir, ec)) {
+    if (!fs::is_directory(dir, ec)) return Status::Error(dir + ": exists and is not a folder");
+    if (!fs::is_empty(dir, ec) && !force) {
+      return Status::Error(dir + ": folder is not empty; pass --force to write into it anyway");
+    }
+    return Status::Ok();
+  }
+  fs::create_directories(dir, ec);
+  if (ec) return Status::Error(dir + ": cannot create: " + ec.message());
+  return Status::Ok();
+}
+
+namespace {
+// Natural order: "frame_10" after "frame_9".
+bool NaturalLess(const std::string& a, const std::string& b) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
+      size_t i2 = i, j2 = j;
+      while (i2 < a.size() && std::isdigit(static_cast<unsigned char>(a[i2]))) ++i2;
+      while (j2 < b.size() && std::isdigit(static_cast<unsigned char>(b[j2]))) ++j2;
+      const std::string na = a.substr(i, i2 - i), nb = b.substr(j, j2 - j);
+      const unsigned long long va = std::strtoull(na.c_str(), nullptr, 10);
+      const unsigned long long vb = std::strtoull(nb.c_str(), nullptr, 10);
+      if (va != vb) return va < vb;
+      i = i2;
+      j = j2;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+}  // namespace
+
+Status ListFrames(const std::string& dir_or_glob, const std::vector<std::string>& extensions,
+                  std::vector<std::string>* files) {
+  files->clear();
+  std::error_code ec;
+  if (fs::is_directory(dir_or_glob, ec)) {
+    for (const auto& entry : fs::directory_iterator(dir_or_glob, ec)) {
+      if (!entry.is_regular_file()) continue;
+      std::string ext = entry.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+      if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) {
+        files->push_back(entry.path().string());
+      }
+    }
+    if (files->empty()) {
+      std::string list;
+      for (const auto& e : extensions) list += (list.empty() ? "" : ", ") + e;
+      return Status::Error(dir_or_glob + ": no frame files (" + list + ") in this folder");
+    }
+  } else {
+    glob_t g;
+    const int rc = glob(dir_or_glob.c_str(), 0, nullptr, &g);
+    if (rc == 0) {
+      for (size_t i = 0; i < g.gl_pathc; ++i) files->push_back(g.gl_pathv[i]);
+    }
+    globfree(&g);
+    if (files->empty()) {
+      return Status::Error(dir_or_glob + ": no such folder, and no file matches it as a pattern");
+    }
+  }
+  std::sort(files->begin(), files->end(), NaturalLess);
+  return Status::Ok();
+}
+
+ProgressBar::ProgressBar(const std::string& label, int total, bool enabled)
+    : label_(label), total_(std::max(1, total)), enabled_(enabled),
+      tty_(isatty(fileno(stderr)) != 0), start_(std::chrono::steady_clock::now()) {}
+
+void ProgressBar::Update(int done, const std::string& note) {
+  if (!enabled_) return;
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const double rate = elapsed > 0 ? done / elapsed : 0.0;
+  const double eta = rate > 0 ? (total_ - done) / rate : 0.0;
+  if (tty_) {
+    const int width = 30;
+    const int filled = width * done / total_;
+    std::fprintf(stderr, "\r%s [%s%s] %d/%d  %.1f frames/s  eta %.0fs  %s\033[K", label_.c_str(),
+                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
+                 total_, rate, eta, note.c_str());
+    std::fflush(stderr);
+  } else {
+    const int decile = 10 * done / total_;
+    if (decile != last_decile_) {
+      last_decile_ = decile;
+      std::fprintf(stderr, "%s %d/%d (%.1f frames/s) %s\n", label_.c_str(), done, total_, rate,
+                   note.c_str());
+    }
+  }
+}
+
+void ProgressBar::Finish() {
+  if (enabled_ && tty_) std::fprintf(stderr, "\n");
+}
+
+namespace {
+std::atomic<bool> g_interrupted{false};
+void OnSigint(int) {
+  if (g_interrupted.exchange(true)) std::_Exit(130);
+}
+}  // namespace
+
+void InstallInterruptHandler() { std::signal(SIGINT, OnSigint); }
+bool Interrupted() { return g_interrupted.load(); }
+
+}  // namespace cli
+}  // namespace femreg

@@ -1,0 +1,49 @@
+// Helpers shared by the subcommands: JSON strings, output folders, a progress bar, Ctrl-C.
+#ifndef FEMREG_TOOLS_CLI_UTIL_H_
+#define FEMREG_TOOLS_CLI_UTIL_H_
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "femreg/status.h"
+
+namespace femreg {
+namespace cli {
+
+// A JSON string literal with escapes.
+std::string JsonString(const std::string& s);
+// A JSON number (null for NaN or infinity).
+std::string JsonNumber(double v);
+
+// Makes `dir` (and parents). A non-empty existing folder is refused unless `force`.
+Status PrepareOutputDir(const std::string& dir, bool force);
+
+// Files of a folder with one of `extensions` (lower case, with dot), or the matches of a
+// glob pattern; sorted by name (natural order of embedded numbers).
+Status ListFrames(const std::string& dir_or_glob, const std::vector<std::string>& extensions,
+                  std::vector<std::string>* files);
+
+// A one-line progress bar on stderr when it is a terminal; a line every 10% otherwise.
+class ProgressBar {
+ public:
+  ProgressBar(const std::string& label, int total, bool enabled = true);
+  void Update(int done, const std::string& note = "");
+  void Finish();
+
+ private:
+  std::string label_;
+  int total_;
+  bool enabled_, tty_;
+  int last_decile_ = -1;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one exits at once.
+void InstallInterruptHandler();
+bool Interrupted();
+
+}  // namespace cli
+}  // namespace femreg
+
+#endif  // FEMREG_TOOLS_CLI_UTIL_H_
