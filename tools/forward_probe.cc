@@ -1,0 +1,175 @@
+// femreg_forward_probe: builds a clamped beam (box) or cylinder, solves it with femreg's
+// forward quasi-static solver, writes the displacements as CSV and, on request, the same
+// problem as a CalculiX input deck (C3D4), so that tools/compare_calculix.sh can compare.
+//
+//   femreg_forward_probe key=value ...
+//     shape=box|cylinder  length=1  height=0.1 (box section)  radius=0.05 (cylinder)
+//     n=4 (cells across; the box has 10 n along)  axial=0 (cells along; 0 = automatic)
+//     E=1e6 nu=0.3 density=1000  model=corotational|linear  load_steps=1
+//     tip_load=0 (N, total, on the free end, along -z for the box, -x for the cylinder)
+//     gravity=0 (m/s^2, same direction)  csv=out.csv  inp=out.inp  nlgeom=0|1
+//
+// The box lies along +x and is clamped at x = 0; the cylinder along +z, clamped at z = 0.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <string>
+
+#include "femreg/fem.h"
+#include "femreg/forward.h"
+#include "femreg/io.h"
+#include "femreg/mesh.h"
+
+namespace {
+
+std::map<std::string, std::string> ParseArgs(int argc, char** argv) {
+  std::map<std::string, std::string> args;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const size_t eq = a.find('=');
+    if (eq == std::string::npos) {
+      std::cerr << "femreg_forward_probe: expected key=value, got '" << a << "'\n";
+      std::exit(2);
+    }
+    args[a.substr(0, eq)] = a.substr(eq + 1);
+  }
+  return args;
+}
+
+double Number(const std::map<std::string, std::string>& args, const std::string& key,
+              double fallback) {
+  const auto it = args.find(key);
+  return it == args.end() ? fallback : std::stod(it->second);
+}
+
+std::string Text(const std::map<std::string, std::string>& args, const std::string& key,
+                 const std::string& fallback) {
+  const auto it = args.find(key);
+  return it == args.end() ? fallback : it->second;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace femreg;
+  const auto args = ParseArgs(argc, argv);
+  const std::string shape = Text(args, "shape", "box");
+  const double length = Number(args, "length", 1.0);
+  const int n = static_cast<int>(Number(args, "n", 4));
+  int axial = static_cast<int>(Number(args, "axial", 0));
+  Material material;
+  material.youngs_modulus = Number(args, "E", 1e6);
+  material.poisson_ratio = Number(args, "nu", 0.3);
+  material.density = Number(args, "density", 1000.0);
+  ElasticModelType type = ElasticModelType::kCorotational;
+  if (!FromString(Text(args, "model", "corotational"), &type)) {
+    std::cerr << "femreg_forward_probe: model must be corotational or linear\n";
+    return 2;
+  }
+  const double tip_load = Number(args, "tip_load", 0.0);
+  const double gravity = Number(args, "gravity", 0.0);
+
+  TetMesh mesh;
+  int axis = 0;                                   // beam axis
+  Eigen::Vector3d direction(0, 0, -1);            // load direction
+  if (shape == "box") {
+    const double h = Number(args, "height", 0.1);
+    if (axial <= 0) axial = static_cast<int>(std::lround(n * length / h));
+    mesh = MakeBox(Eigen::Vector3d(length, h, h), axial, n, n);
+  } else if (shape == "cylinder") {
+    const double radius = Number(args, "radius", 0.05);
+    if (axial <= 0) axial = static_cast<int>(std::lround(n * length / radius));
+    mesh = MakeCylinder(radius, length, n, axial);
+    axis = 2;
+    direction = Eigen::Vector3d(-1, 0, 0);
+  } else {
+    std::cerr << "femreg_forward_probe: shape must be box or cylinder\n";
+    return 2;
+  }
+  if (mesh.num_tets() == 0) {
+    std::cerr << "femreg_forward_probe: the generator returned an empty mesh\n";
+    return 1;
+  }
+  ComputeLumpedMasses(&mesh, material.density);
+
+  ForwardProblem problem;
+  std::vector<int> tip;
+  const double tol = 1e-9 * length;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (mesh.rest(v, axis) < tol) problem.clamped.push_back(v);
+    if (mesh.rest(v, axis) > length - tol) tip.push_back(v);
+  }
+  if (tip_load != 0.0) {
+    for (int v : tip) problem.nodal_loads.push_back({v, tip_load / tip.size() * direction});
+  }
+  problem.gravity = gravity * direction;
+
+  ElasticModel model;
+  model.Build(mesh, type, material);
+  ForwardOptions options;
+  options.load_steps = static_cast<int>(Number(args, "load_steps", 1));
+  options.max_iterations = static_cast<int>(Number(args, "max_iterations", 200));
+  ForwardSummary summary;
+  const Status status = SolveQuasiStatic(problem, options, &model, &mesh, &summary);
+  std::cerr << summary.BriefReport() << "\n";
+  if (!status.ok()) {
+    std::cerr << status.message() << "\n";
+    return 1;
+  }
+
+  const std::string csv = Text(args, "csv", "");
+  if (!csv.empty()) {
+    std::ofstream out(csv);
+    out.precision(12);
+    out << "id,X,Y,Z,ux,uy,uz,tip\n";
+    std::vector<char> is_tip(mesh.num_vertices(), 0);
+    for (int v : tip) is_tip[v] = 1;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      const Eigen::RowVector3d u = mesh.x.row(v) - mesh.rest.row(v);
+      out << v + 1 << "," << mesh.rest(v, 0) << "," << mesh.rest(v, 1) << "," << mesh.rest(v, 2)
+          << "," << u(0) << "," << u(1) << "," << u(2) << "," << int(is_tip[v]) << "\n";
+    }
+  }
+
+  const std::string inp = Text(args, "inp", "");
+  if (!inp.empty()) {
+    const bool nlgeom = Number(args, "nlgeom", 0) != 0;
+    std::ofstream out(inp);
+    out.precision(15);
+    out << "** femreg_forward_probe: " << shape << ", " << mesh.num_vertices() << " nodes, "
+        << mesh.num_tets() << " C3D4\n*NODE, NSET=Nall\n";
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      out << v + 1 << ", " << mesh.rest(v, 0) << ", " << mesh.rest(v, 1) << ", " << mesh.rest(v, 2) << "\n";
+    out << "*ELEMENT, TYPE=C3D4, ELSET=Eall\n";
+    for (int t = 0; t < mesh.num_tets(); ++t)
+      out << t + 1 << ", " << mesh.tets(t, 0) + 1 << ", " << mesh.tets(t, 1) + 1 << ", "
+          << mesh.tets(t, 2) + 1 << ", " << mesh.tets(t, 3) + 1 << "\n";
+    out << "*NSET, NSET=Nclamp\n";
+    for (size_t i = 0; i < problem.clamped.size(); ++i)
+      out << problem.clamped[i] + 1 << (i % 10 == 9 || i + 1 == problem.clamped.size() ? "\n" : ", ");
+    out << "*BOUNDARY\nNclamp, 1, 3\n";
+    out << "*MATERIAL, NAME=M\n*ELASTIC\n" << material.youngs_modulus << ", "
+        << material.poisson_ratio << "\n*DENSITY\n" << material.density << "\n";
+    out << "*SOLID SECTION, ELSET=Eall, MATERIAL=M\n";
+    if (nlgeom) {
+      out << "*STEP, NLGEOM, INC=1000\n*STATIC\n0.05, 1.0, 1e-6, 0.1\n";
+    } else {
+      out << "*STEP\n*STATIC\n";
+    }
+    if (tip_load != 0.0) {
+      out << "*CLOAD\n";
+      for (int v : tip)
+        for (int i = 0; i < 3; ++i)
+          if (direction(i) != 0) out << v + 1 << ", " << i + 1 << ", " << tip_load / tip.size() * direction(i) << "\n";
+    }
+    if (gravity != 0.0) {
+      out << "*DLOAD\nEall, GRAV, " << gravity << ", " << direction(0) << ", " << direction(1)
+          << ", " << direction(2) << "\n";
+    }
+    out << "*NODE PRINT, NSET=Nall\nU\n*END STEP\n";
+  }
+  return 0;
+}
