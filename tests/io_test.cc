@@ -3,8 +3,10 @@
 
 #include <Eigen/Geometry>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -89,6 +91,8 @@ struct FixtureCase {
   std::map<int, int> regions;
 };
 
+void PrintTo(const FixtureCase& c, std::ostream* os) { *os << c.file; }
+
 class FixtureTest : public ::testing::TestWithParam<FixtureCase> {};
 
 TEST_P(FixtureTest, ReadsTwoTetsWithRegions) {
@@ -120,7 +124,14 @@ INSTANTIATE_TEST_SUITE_P(
                       FixtureCase{"two_tets_0based.node", MeshFormat::kTetGen, {{0, 2}}},
                       FixtureCase{"two_tets.mesh", MeshFormat::kMedit, kRegions78},
                       FixtureCase{"two_tets_legacy.vtk", MeshFormat::kVtkLegacy, kRegions78},
-                      FixtureCase{"two_tets_ascii.vtu", MeshFormat::kVtu, kRegions78}));
+                      FixtureCase{"two_tets_ascii.vtu", MeshFormat::kVtu, kRegions78}),
+    [](const ::testing::TestParamInfo<FixtureCase>& info) {
+      std::string name = info.param.file;
+      for (char& ch : name) {
+        if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+      }
+      return name;
+    });
 
 TEST(ReadTetMesh, SurfaceOnlyFileSaysNoTetrahedra) {
   TetMesh mesh;
@@ -152,6 +163,8 @@ struct BadInput {
   int line;
   const char* expected;  // a phrase the message must contain
 };
+
+void PrintTo(const BadInput& b, std::ostream* os) { *os << b.name; }
 
 class BadInputTest : public ::testing::TestWithParam<BadInput> {};
 
@@ -425,6 +438,33 @@ TEST(SharedMeshes, LoadWithReadmeCounts) {
     EXPECT_NE(status.message().find("no tetrahedra"), std::string::npos) << status.message();
   }
 }
+
+#ifdef FEMREG_CLI_PATH
+std::string ReadAll(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(InfoCommand, PrintsCountsAndFailsWithExitCodeOne) {
+  TempDir dir;
+  const std::string out = dir.File("out.txt"), err = dir.File("err.txt");
+  const std::string cli = FEMREG_CLI_PATH;
+  int code = std::system((cli + " info --json '" + kFixtures + "two_tets_v22.msh' >" + out +
+                          " 2>" + err).c_str());
+  ASSERT_TRUE(WIFEXITED(code));
+  EXPECT_EQ(WEXITSTATUS(code), 0) << ReadAll(err);
+  const std::string json = ReadAll(out);
+  EXPECT_NE(json.find("\"format\": \"gmsh\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"vertices\": 5"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"elements\": 2"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"regions\": {\"7\": 1, \"8\": 1}"), std::string::npos) << json;
+
+  code = std::system((cli + " info '" + kFixtures + "surface_only.obj' >" + out + " 2>" + err).c_str());
+  ASSERT_TRUE(WIFEXITED(code));
+  EXPECT_EQ(WEXITSTATUS(code), 1);
+  EXPECT_NE(ReadAll(err).find("surface_only.obj: no tetrahedra"), std::string::npos) << ReadAll(err);
+}
+#endif  // FEMREG_CLI_PATH
 
 }  // namespace
 }  // namespace femreg
