@@ -287,6 +287,22 @@ TEST(WriteVtu, RoundTripKeepsPositionsTetsAndRegions) {
   EXPECT_FALSE(Exists(path + ".tmp"));
 }
 
+TEST(WriteVtu, TruncatedBinaryVtuGivesStatusNamingTheFile) {
+  const TetMesh mesh = MakeBox(Eigen::Vector3d::Ones(), 4, 4, 4);
+  TempDir dir;
+  ASSERT_TRUE(WriteVtu(dir.File("box.vtu"), mesh, mesh.rest).ok());
+  const std::string full = [&] {
+    std::ifstream in(dir.File("box.vtu"), std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }();
+  const std::string cut = dir.File("cut.vtu");
+  std::ofstream(cut, std::ios::binary) << full.substr(0, full.size() * 3 / 4);
+  TetMesh back;
+  const Status status = ReadTetMesh(cut, &back);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind(cut + ": ", 0), 0u) << status.message();
+}
+
 TEST(WriteVtu, BadFieldAndUnwritableFolderGiveStatus) {
   const TetMesh mesh = MakeBox(Eigen::Vector3d::Ones(), 1, 1, 1);
   TempDir dir;
