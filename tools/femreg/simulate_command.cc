@@ -1,11 +1,342 @@
+// femreg simulate SCENE --out DIR: the quasi-static equilibrium of every object of a scene
+// under its clamps, prescribed displacements, loads and gravity, written as VTU files and
+// a summary.json.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include "commands.h"
+#include "femreg/fem.h"
+#include "femreg/forward.h"
+#include "femreg/io.h"
+#include "femreg/scene.h"
 
 namespace femreg {
 namespace cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SimulateOptions {
+  std::string scene_path;
+  std::string out_dir;
+  std::string object;      // "" = every object
+  std::string model;       // "" = the scene's forward.model
+  int load_steps = 0;      // 0 = the scene's forward.load_steps
+  bool verbose = false;
+  bool force = false;
+};
+
+// What one object's run produced, for the report and summary.json.
+struct ObjectResult {
+  std::string name;
+  std::string vtu;  // file name inside the output folder, "" when not written
+  int num_vertices = 0, num_tets = 0;
+  int num_clamped = 0, num_prescribed = 0, num_loaded = 0;
+  ForwardSummary summary;
+  std::string error;  // set when the object could not be run
+  int max_vertex = -1;
+  double max_displacement = 0.0;
+  Eigen::Vector3d max_rest = Eigen::Vector3d::Zero();
+  int end_vertex = -1;  // the vertex farthest from the clamped ones
+  Eigen::Vector3d end_displacement = Eigen::Vector3d::Zero();
+  bool max_at_free_end = false;
+  double load_time_s = 0.0, solve_time_s = 0.0, write_time_s = 0.0;
+};
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream os;
+  os << std::setprecision(10) << v;
+  return os.str();
+}
+
+std::string JsonVector(const Eigen::Vector3d& v) {
+  return "[" + JsonNumber(v.x()) + ", " + JsonNumber(v.y()) + ", " + JsonNumber(v.z()) + "]";
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  std::ostringstream os;
+  os << std::setprecision(4) << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+  return os.str();
+}
+
+// Loads, solves and writes one object. Returns false (with result->error) on failure.
+bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
+               const ForwardOptions& forward, const fs::path& out_dir, ObjectResult* result) {
+  const ObjectSpec& spec = scene.objects[index];
+  result->name = spec.name;
+  auto start = std::chrono::steady_clock::now();
+  TetMesh mesh;
+  Status status = LoadObjectMesh(scene, index, &mesh);
+  ForwardProblem problem;
+  if (status.ok()) status = BuildForwardProblem(scene, index, mesh, &problem);
+  if (!status.ok()) {
+    result->error = status.message();
+    return false;
+  }
+  result->num_vertices = mesh.num_vertices();
+  result->num_tets = mesh.num_tets();
+  result->num_clamped = static_cast<int>(problem.clamped.size());
+  result->num_prescribed = static_cast<int>(problem.prescribed.size());
+  result->num_loaded = static_cast<int>(problem.nodal_loads.size());
+  ElasticModel model;
+  model.Build(mesh, model_type, spec.material, spec.region_materials);
+  result->load_time_s = Seconds(start);
+
+  start = std::chrono::steady_clock::now();
+  status = SolveQuasiStatic(problem, forward, &model, &mesh, &result->summary);
+  result->solve_time_s = Seconds(start);
+  if (!status.ok()) {
+    result->error = status.message();
+    return false;
+  }
+
+  const Vertices displacement = mesh.x - mesh.rest;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const double d = displacement.row(v).norm();
+    if (d > result->max_displacement || result->max_vertex < 0) {
+      result->max_displacement = d;
+      result->max_vertex = v;
+    }
+  }
+  if (result->max_vertex >= 0) result->max_rest = mesh.rest.row(result->max_vertex).transpose();
+  // The free end: the vertex farthest from the clamped set (from the centroid of the
+  // clamped vertices; from nothing when there are none).
+  if (!problem.clamped.empty()) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int v : problem.clamped) centroid += mesh.rest.row(v).transpose();
+    centroid /= static_cast<double>(problem.clamped.size());
+    double farthest = -1.0;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      const double d = (mesh.rest.row(v).transpose() - centroid).norm();
+      if (d > farthest) {
+        farthest = d;
+        result->end_vertex = v;
+      }
+    }
+    result->end_displacement = displacement.row(result->end_vertex).transpose();
+    // "At the free end": within 5% of the largest distance from the clamps.
+    result->max_at_free_end =
+        (result->max_rest - centroid).norm() >= 0.95 * farthest;
+  }
+
+  if (!result->summary.IsSolutionUsable()) {
+    result->error = "the solve did not reach a usable equilibrium (" +
+                    std::string(ToString(result->summary.termination)) + "): " +
+                    result->summary.message;
+    return false;
+  }
+
+  // Point fields: the displacement, and which boundary condition holds each vertex
+  // (0 free, 1 clamped, 2 prescribed displacement). WriteVtu adds the region per cell.
+  start = std::chrono::steady_clock::now();
+  Eigen::MatrixXd boundary = Eigen::MatrixXd::Zero(mesh.num_vertices(), 1);
+  for (int v : problem.clamped) boundary(v, 0) = 1;
+  for (const auto& [v, u] : problem.prescribed) boundary(v, 0) = 2;
+  Eigen::MatrixXd loads = Eigen::MatrixXd::Zero(mesh.num_vertices(), 3);
+  for (const auto& [v, f] : problem.nodal_loads) loads.row(v) = f.transpose();
+  std::vector<MeshField> fields = {{"displacement", Eigen::MatrixXd(displacement), false},
+                                   {"boundary", boundary, false},
+                                   {"nodal_load", loads, false}};
+  result->vtu = spec.name + ".vtu";
+  status = WriteVtu((out_dir / result->vtu).string(), mesh, mesh.x, fields);
+  result->write_time_s = Seconds(start);
+  if (!status.ok()) {
+    result->vtu.clear();
+    result->error = status.message();
+    return false;
+  }
+  return true;
+}
+
+std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
+                        ElasticModelType model_type, const ForwardOptions& forward,
+                        const std::vector<ObjectResult>& results, double total_time_s) {
+  std::ostringstream os;
+  os << "{\n  \"scene\": " << JsonString(options.scene_path) << ",\n"
+     << "  \"model\": " << JsonString(ToString(model_type)) << ",\n"
+     << "  \"load_steps\": " << forward.load_steps << ",\n"
+     << "  \"gravity\": " << JsonVector(scene.gravity) << ",\n"
+     << "  \"objects\": [";
+  for (size_t i = 0; i < results.size(); ++i) {
+    const ObjectResult& r = results[i];
+    const ForwardSummary& s = r.summary;
+    os << (i ? "," : "") << "\n    {\n"
+       << "      \"name\": " << JsonString(r.name) << ",\n"
+       << "      \"vtu\": " << (r.vtu.empty() ? "null" : JsonString(r.vtu)) << ",\n"
+       << "      \"ok\": " << (r.error.empty() ? "true" : "false") << ",\n"
+       << "      \"error\": " << (r.error.empty() ? "null" : JsonString(r.error)) << ",\n"
+       << "      \"vertices\": " << r.num_vertices << ",\n"
+       << "      \"elements\": " << r.num_tets << ",\n"
+       << "      \"clamped_vertices\": " << r.num_clamped << ",\n"
+       << "      \"prescribed_vertices\": " << r.num_prescribed << ",\n"
+       << "      \"loaded_vertices\": " << r.num_loaded << ",\n"
+       << "      \"termination\": " << JsonString(ToString(s.termination)) << ",\n"
+       << "      \"message\": " << JsonString(s.message) << ",\n"
+       << "      \"iterations\": " << s.iterations.size() << ",\n"
+       << "      \"free_dofs\": " << s.num_free_dofs << ",\n"
+       << "      \"initial_residual\": " << JsonNumber(s.initial_residual_norm) << ",\n"
+       << "      \"final_residual\": " << JsonNumber(s.final_residual_norm) << ",\n"
+       << "      \"final_energy\": " << JsonNumber(s.final_energy) << ",\n"
+       << "      \"max_displacement\": " << JsonNumber(r.max_displacement) << ",\n"
+       << "      \"max_displacement_vertex\": " << r.max_vertex << ",\n"
+       << "      \"max_displacement_rest_position\": " << JsonVector(r.max_rest) << ",\n"
+       << "      \"free_end_vertex\": " << r.end_vertex << ",\n"
+       << "      \"free_end_displacement\": " << JsonVector(r.end_displacement) << ",\n"
+       << "      \"max_at_free_end\": " << (r.max_at_free_end ? "true" : "false") << ",\n"
+       << "      \"time_s\": {\"load\": " << JsonNumber(r.load_time_s)
+       << ", \"solve\": " << JsonNumber(r.solve_time_s)
+       << ", \"factorization\": " << JsonNumber(s.factorization_time_s)
+       << ", \"write\": " << JsonNumber(r.write_time_s) << "}\n    }";
+  }
+  os << "\n  ],\n  \"total_time_s\": " << JsonNumber(total_time_s) << "\n}\n";
+  return os.str();
+}
+
+// Fails with a message on stderr and exit code 1.
+void Fail(const std::string& message) {
+  std::cerr << "femreg simulate: " << message << "\n";
+  SetExitCode(1);
+}
+
+void RunSimulate(const SimulateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Scene scene;
+  Status status = LoadScene(options.scene_path, &scene);
+  if (!status.ok()) return Fail(status.message());
+
+  std::vector<int> objects;
+  for (int i = 0; i < static_cast<int>(scene.objects.size()); ++i) {
+    if (options.object.empty() || scene.objects[i].name == options.object) objects.push_back(i);
+  }
+  if (objects.empty()) {
+    std::string names;
+    for (const ObjectSpec& o : scene.objects) names += (names.empty() ? "" : ", ") + o.name;
+    return Fail("--object " + options.object + ": the scene has no such object (objects: " +
+                names + ")");
+  }
+
+  ElasticModelType model_type = scene.forward_model;
+  if (!options.model.empty() && !FromString(options.model, &model_type)) {
+    return Fail("--model " + options.model + ": use corotational or linear");
+  }
+  ForwardOptions forward = scene.forward;
+  if (options.load_steps > 0) forward.load_steps = options.load_steps;
+  forward.verbose = options.verbose;
+
+  // The output folder: created when missing; an existing non-empty one only with --force.
+  const fs::path out_dir(options.out_dir);
+  std::error_code ec;
+  if (fs::exists(out_dir, ec)) {
+    if (!fs::is_directory(out_dir, ec)) {
+      return Fail("--out " + options.out_dir + ": exists and is not a folder");
+    }
+    if (!fs::is_empty(out_dir, ec) && !options.force) {
+      return Fail("--out " + options.out_dir +
+                  ": the folder is not empty; use --force to write into it anyway");
+    }
+  } else if (!fs::create_directories(out_dir, ec)) {
+    return Fail("--out " + options.out_dir + ": cannot create the folder: " + ec.message());
+  }
+
+  std::vector<ObjectResult> results;
+  bool all_ok = true;
+  for (int index : objects) {
+    ObjectResult result;
+    if (objects.size() > 1 || options.verbose) {
+      std::cout << "== " << scene.objects[index].name << "\n";
+    }
+    const bool ok = RunObject(scene, index, model_type, forward, out_dir, &result);
+    all_ok = all_ok && ok;
+    if (result.summary.termination != ForwardTermination::kNotRun) {
+      std::cout << (options.verbose ? result.summary.FullReport() : result.summary.BriefReport())
+                << "\n";
+    }
+    if (ok) {
+      std::cout << result.name << ": " << result.num_vertices << " vertices, "
+                << result.num_tets << " elements; max displacement " << std::setprecision(4)
+                << result.max_displacement << " m at vertex " << result.max_vertex << " (rest "
+                << Vec(result.max_rest) << ")";
+      if (result.end_vertex >= 0) {
+        std::cout << (result.max_at_free_end ? ", at the free end" : ", not at the free end")
+                  << "; free end (farthest from the clamps) moved by "
+                  << Vec(result.end_displacement) << " m";
+      }
+      std::cout << "\n  wrote " << (out_dir / result.vtu).string() << "\n";
+    } else {
+      std::cerr << "femreg simulate: " << result.name << ": " << result.error << "\n";
+    }
+    results.push_back(std::move(result));
+  }
+
+  const std::string json =
+      SummaryJson(options, scene, model_type, forward, results, Seconds(start));
+  status = WriteFileAtomically((out_dir / "summary.json").string(), json);
+  if (!status.ok()) return Fail(status.message());
+  std::cout << "wrote " << (out_dir / "summary.json").string() << "\n";
+  if (!all_ok) SetExitCode(1);
+}
+
+}  // namespace
 
 void AddSimulateCommand(CLI::App* app) {
-  CLI::App* cmd = app->add_subcommand("simulate", "(not built yet)");
-  cmd->callback([] { SetExitCode(1); });
+  auto options = std::make_shared<SimulateOptions>();
+  CLI::App* cmd = app->add_subcommand(
+      "simulate",
+      "Solve the quasi-static equilibrium of a scene's objects under its clamps, prescribed "
+      "displacements, loads and gravity.");
+  cmd->footer(
+      "Writes DIR/<object>.vtu (point fields: displacement, boundary [0 free, 1 clamped,\n"
+      "2 displaced], nodal_load; cell field: region) and DIR/summary.json (termination,\n"
+      "iterations, residuals, max displacement, times). Exit code 1 on any error.\n"
+      "The scene format is described in datasets/README.md.\n"
+      "Example: femreg simulate datasets/beam/beam.yaml --out /tmp/beam");
+  cmd->add_option("scene", options->scene_path, "Scene file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--out", options->out_dir, "Output folder (created when missing)")
+      ->required();
+  cmd->add_option("--object", options->object, "Simulate only the object of this name");
+  cmd->add_option("--model", options->model,
+                  "Elastic model, overrides the scene's forward.model")
+      ->check(CLI::IsMember({"corotational", "linear"}));
+  cmd->add_option("--load-steps", options->load_steps,
+                  "Apply loads and displacements in N steps, overrides forward.load_steps")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("-v,--verbose", options->verbose,
+                "One line per Newton iteration and the full report");
+  cmd->add_flag("-f,--force", options->force, "Write into a non-empty output folder");
+  cmd->callback([options] { RunSimulate(*options); });
 }
 
 }  // namespace cli
