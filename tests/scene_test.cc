@@ -471,6 +471,36 @@ TEST_F(SceneTest, LoadObjectMeshPosesAndWeighs) {
   EXPECT_NEAR(mesh.mass.sum(), 1000 * 0.08, 1e-9);
 }
 
+TEST_F(SceneTest, LoadObjectMeshReadsAFileWithRegionDensities) {
+  fs::create_directories(dir_ / "meshes");
+  std::ofstream((dir_ / "meshes" / "tet.msh").string())
+      << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
+         "4 0 0 1\n$EndNodes\n$Elements\n1\n1 4 2 7 7 1 2 3 4\n$EndElements\n";
+  const std::string text =
+      "objects:\n"
+      "  - {name: tet, mesh: meshes/tet.msh, scale: 0.5, material: {density: 1000},\n"
+      "     regions: {7: {density: 600}}}\n";
+  Scene scene;
+  Status status = Load(text, &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  TetMesh mesh;
+  status = LoadObjectMesh(scene, 0, &mesh);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(mesh.num_tets(), 1);
+  EXPECT_EQ(mesh.region(0), 7);
+  EXPECT_LT((mesh.rest.colwise().maxCoeff().transpose() - Eigen::Vector3d(0.5, 0.5, 0.5)).norm(),
+            1e-12);
+  // Region 7's density, on the scaled volume 0.5^3 / 6.
+  EXPECT_NEAR(mesh.mass.sum(), 600 * 0.125 / 6, 1e-12);
+
+  // A mesh file that exists but is broken: the error names the object and the file.
+  std::ofstream((dir_ / "meshes" / "tet.msh").string()) << "$MeshFormat\n2.2 0 8\n";
+  status = LoadObjectMesh(scene, 0, &mesh);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("objects[0] (tet)"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("tet.msh"), std::string::npos) << status.message();
+}
+
 #ifdef FEMREG_CLI_PATH
 // Runs a shell command and returns its exit status.
 int RunCommand(const std::string& command) {
