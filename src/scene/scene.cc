@@ -588,8 +588,12 @@ Status ParseScene(const std::string& yaml_text, const std::string& source,
 }
 
 Status LoadScene(const std::string& path, Scene* scene) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return Status::Error(path + ": is a folder, not a scene file");
+  }
   std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path + ": cannot open the scene file");
+  if (!in) return Status::Error(path + ": cannot open the scene file (missing or unreadable)");
   std::ostringstream text;
   text << in.rdbuf();
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();

@@ -321,9 +321,9 @@ void AddSimulateCommand(CLI::App* app) {
       "iterations, residuals, max displacement, times). Exit code 1 on any error.\n"
       "The scene format is described in datasets/README.md.\n"
       "Example: femreg simulate datasets/beam/beam.yaml --out /tmp/beam");
-  cmd->add_option("scene", options->scene_path, "Scene file (YAML)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  // No CLI::ExistingFile check: LoadScene reports a missing file with exit code 1 like any
+  // other scene error.
+  cmd->add_option("scene", options->scene_path, "Scene file (YAML)")->required();
   cmd->add_option("-o,--out", options->out_dir, "Output folder (created when missing)")
       ->required();
   cmd->add_option("--object", options->object, "Simulate only the object of this name");
