@@ -48,6 +48,8 @@ bool FromString(const std::string& s, LinearSolver* v);
 struct CameraOptions {
   bool enabled = false;                                 // known camera: enables visibility
   Eigen::Vector3d position = Eigen::Vector3d::Zero();   // camera centre in the scene frame (m)
+  Eigen::Vector3d target = Eigen::Vector3d::UnitZ();    // the point the optical axis goes through
+  Eigen::Vector3d up = -Eigen::Vector3d::UnitY();       // roughly "up" in the image (-y pixels)
   // Pinhole intrinsics (pixels), used by the virtual camera; not needed for registration.
   double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
   int width = 640, height = 480;
@@ -71,14 +73,16 @@ struct DataTermOptions {
   double max_distance = 0.03;     // m; pairs farther apart are rejected; <= 0 disables gating
   RobustLoss loss = RobustLoss::kHuber;
   double loss_scale = 0.005;      // m; where the robust loss bends
-  DataMetric metric = DataMetric::kPointToPoint;  // point-to-plane needs cloud normals
+  // Point-to-plane lets surfaces slide along each other, which converges in far fewer
+  // outer iterations; model->cloud pairs fall back to point-to-point without cloud normals.
+  DataMetric metric = DataMetric::kPointToPlane;
   bool visibility = false;        // model->cloud only for vertices facing the camera
   int cloud_stride = 1;           // use every k-th cloud point for cloud->model (>= 1)
   bool IsValid(std::string* error) const;
 };
 
 struct WeightOptions {
-  double data = 1.0;       // w_data, per unit of m^2 of squared residual per point
+  double data = 200.0;     // w_data (N/m): stiffness of one correspondence
   double elastic = 1.0;    // w_elastic, multiplies the FEM energy (J)
   double temporal = 1.0;   // w_temporal, multiplies 0.5 sum m_i |x_i - x_i^prev|^2 (kg m^2)
   double anchor = 1.0e4;   // soft anchors: 0.5 w |x_i - target_i|^2 per vertex (N/m)
@@ -88,11 +92,15 @@ struct WeightOptions {
 struct SolverOptions {
   int max_outer_iterations = 5;          // correspondences and rotations refreshed per outer iteration
   int max_inner_iterations = 10;         // Ceres iterations per outer iteration
-  double relative_energy_tolerance = 1e-4;  // stop when |dE| / E below this
+  // Stop when the energy after an outer iteration changed by less than this fraction
+  // from the previous outer iteration.
+  double relative_energy_tolerance = 1e-3;
   double time_budget_s = 0.0;            // per frame; 0 = none
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
   int num_threads = 1;
+  // Start each frame from a constant-velocity extrapolation of the last two frames.
+  bool predict_motion = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
   int rigid_iterations = 20;
   bool IsValid(std::string* error) const;

@@ -129,6 +129,14 @@ FEMREG_FROM_STRING(LinearSolver, LinearSolver::kSparseNormalCholesky,
 
 bool CameraOptions::IsValid(std::string* error) const {
   if (!Finite(position)) return Fail(error, "camera.position", "must be finite", VectorString(position));
+  if (!Finite(target)) return Fail(error, "camera.target", "must be finite", VectorString(target));
+  if (!Finite(up)) return Fail(error, "camera.up", "must be finite", VectorString(up));
+  if ((target - position).norm() <= 0) {
+    return Fail(error, "camera.target", "must differ from camera.position", VectorString(target));
+  }
+  if ((target - position).normalized().cross(up).norm() < 1e-6) {
+    return Fail(error, "camera.up", "must not be parallel to the viewing direction", VectorString(up));
+  }
   if (!(std::isfinite(fx) && fx > 0)) return Fail(error, "camera.fx", "must be > 0", fx);
   if (!(std::isfinite(fy) && fy > 0)) return Fail(error, "camera.fy", "must be > 0", fy);
   if (!std::isfinite(cx)) return Fail(error, "camera.cx", "must be finite", cx);

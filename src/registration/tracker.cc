@@ -96,6 +96,7 @@ struct Tracker::Impl {
   std::vector<Object> objects;
   int num_vertices = 0;
   Vertices x;          // #V by 3, all objects
+  Vertices x_before;   // the result of the frame before the last (for the prediction)
   Eigen::VectorXd mass;
   Triangles surface;   // global indices
   std::vector<int> surface_vertices;
@@ -386,12 +387,19 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
                     ? "every point of the cloud was dropped (" + std::to_string(s.nonfinite_dropped) +
                           " non-finite); the shape was held at the previous frame"
                     : "empty cloud; the shape was held at the previous frame";
+    x_before = x;  // held: no velocity to carry on
     UpdateOutputs(cloud, nullptr, pairs);
     s.time.total = Seconds(t_frame);
     ++frame;
     return Status::Ok();
   }
   const PointIndex cloud_index(cloud.points);
+
+  // Constant-velocity prediction from the last two results.
+  if (options.solver.predict_motion && frame >= 2 && x_before.rows() == x.rows()) {
+    const Vertices predicted = 2.0 * x - x_before;
+    if (predicted.allFinite()) x = predicted;
+  }
 
   if (options.solver.rigid_prealign) {
     t0 = Clock::now();
@@ -447,6 +455,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
 
   int m2c = 0, c2m = 0, rejected = 0;
   bool have_initial = false;
+  double previous_energy = std::numeric_limits<double>::infinity();
   for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
     const auto t_outer = Clock::now();
     OuterIteration row;
@@ -577,9 +586,12 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.rejected = rejected;
     s.rms_residual = row.rms_residual;
 
-    const double e0 = row.before.total(), e1 = row.after.total();
-    const double change = std::abs(e0 - e1) / std::max(e0, 1e-300);
-    if (change < options.solver.relative_energy_tolerance) {
+    // Compare with the previous outer iteration's result (its pairs were different, so
+    // the energy before this iteration's solve is not comparable).
+    const double e1 = row.after.total();
+    const double change = std::abs(previous_energy - e1) / std::max(e1, 1e-300);
+    previous_energy = e1;
+    if (k > 0 && change < options.solver.relative_energy_tolerance) {
       s.termination = TerminationType::kConverged;
       std::ostringstream os;
       os << "relative energy change " << change << " < " << options.solver.relative_energy_tolerance;
@@ -602,6 +614,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.message = "no outer iteration ran";
   }
   if (s.termination == TerminationType::kNoCorrespondences) x = previous;
+  x_before = previous;
   UpdateOutputs(cloud, &cloud_index, pairs);
   s.time.total = Seconds(t_frame);
   ++frame;

@@ -23,8 +23,8 @@
 //             tolerance: 1e-8, absolute_tolerance: 1e-12}
 //   registration:
 //     regularizer: corotational|linear|none
-//     camera: {position: [0, 0, 1], fx: 525, fy: 525, cx: 319.5, cy: 239.5,
-//              width: 640, height: 480}       # present = a known camera
+//     camera: {position: [0, 0, 1], target: [0, 0, 0], up: [0, -1, 0], fx: 525, fy: 525,
+//              cx: 319.5, cy: 239.5, width: 640, height: 480}  # present = a known camera
 //     preprocess: {crop: {min: [..], max: [..]}, voxel_size: 0,
 //                  outliers: {neighbors: 0, stddev: 1}, normals: {neighbors: 0}}
 //     data: {model_to_cloud: true, cloud_to_model: true, max_distance: 0.03,
@@ -35,7 +35,7 @@
 //              relative_energy_tolerance: 1e-4, time_budget_s: 0,
 //              trust_region: levenberg_marquardt|dogleg,
 //              linear_solver: sparse_normal_cholesky|conjugate_gradients, threads: 1,
-//              rigid_prealign: false, rigid_iterations: 20}
+//              rigid_prealign: false, rigid_iterations: 20, predict_motion: true}
 //   anchors:
 //     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
 //        translations: [[0, 0, 0], [0, 0, 0.01]]}   # per frame; the last one repeats
@@ -422,9 +422,11 @@ class SceneParser {
     }
     if (v.Has("camera")) {
       const YamlValue c = v["camera"];
-      c.CheckKeys({"position", "fx", "fy", "cx", "cy", "width", "height"});
+      c.CheckKeys({"position", "target", "up", "fx", "fy", "cx", "cy", "width", "height"});
       r.camera.enabled = true;
       if (c.Has("position")) r.camera.position = c["position"].AsVector3();
+      if (c.Has("target")) r.camera.target = c["target"].AsVector3();
+      if (c.Has("up")) r.camera.up = c["up"].AsVector3();
       if (c.Has("fx")) r.camera.fx = c["fx"].AsDouble();
       if (c.Has("fy")) r.camera.fy = c["fy"].AsDouble();
       if (c.Has("cx")) r.camera.cx = c["cx"].AsDouble();
@@ -490,7 +492,7 @@ class SceneParser {
       const YamlValue s = v["solver"];
       s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
                    "time_budget_s", "trust_region", "linear_solver", "threads",
-                   "rigid_prealign", "rigid_iterations"});
+                   "rigid_prealign", "rigid_iterations", "predict_motion"});
       SolverOptions& o = r.solver;
       if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
       if (s.Has("max_inner_iterations")) o.max_inner_iterations = s["max_inner_iterations"].AsInt();
@@ -509,6 +511,7 @@ class SceneParser {
                                                           LinearSolver::kConjugateGradients});
       }
       if (s.Has("threads")) o.num_threads = s["threads"].AsInt();
+      if (s.Has("predict_motion")) o.predict_motion = s["predict_motion"].AsBool();
       if (s.Has("rigid_prealign")) o.rigid_prealign = s["rigid_prealign"].AsBool();
       if (s.Has("rigid_iterations")) o.rigid_iterations = s["rigid_iterations"].AsInt();
     }

@@ -13,6 +13,7 @@ void RegisterCommands(CLI::App* app) {
   AddInfoCommand(app);
   AddSimulateCommand(app);
   AddRegisterCommand(app);
+  AddDemoDataCommand(app);
 }
 
 }  // namespace cli

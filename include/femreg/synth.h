@@ -1,0 +1,99 @@
+// femreg/synth.h - synthetic data: a virtual depth camera (pinhole, z-buffer, depth noise
+// growing with the square of the depth, dropped pixels at grazing angles, outliers) and
+// ground truth from a finer mesh interpolated at the tracked mesh's vertices.
+#ifndef FEMREG_SYNTH_H_
+#define FEMREG_SYNTH_H_
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "femreg/mesh.h"
+#include "femreg/registration.h"
+#include "femreg/status.h"
+
+namespace femreg {
+
+struct DepthSensorOptions {
+  CameraOptions camera;                 // position, target, up and intrinsics
+  double near = 0.05;                   // m; closer surfaces are not seen
+  double noise_coefficient = 2.85e-3;   // sigma_z = k z^2 (1/m); 0 = noiseless
+  double grazing_angle_deg = 80.0;      // pixels seeing a surface more obliquely are dropped
+  int pixel_stride = 1;                 // sample every k-th pixel in u and v
+  double outlier_fraction = 0.0;        // extra uniform outliers, as a fraction of the points
+  double outlier_margin = 0.05;         // m around the seen points' bounding box
+  bool IsValid(std::string* error) const;
+};
+
+// A triangle surface to render: positions (#V by 3) and triangles (#F by 3).
+struct RenderSurface {
+  const Vertices* positions = nullptr;
+  const Triangles* triangles = nullptr;
+};
+
+struct DepthImage {
+  int width = 0, height = 0;
+  std::vector<float> depth;      // row-major, 0 where nothing was hit (z along the axis, m)
+  std::vector<int> surface;      // index of the RenderSurface hit, -1 for none
+  std::vector<int> triangle;     // triangle hit, -1 for none
+};
+
+class DepthSensor {
+ public:
+  explicit DepthSensor(const DepthSensorOptions& options);
+
+  // Rasterizes the surfaces with a z-buffer (exact, perspective-correct depth).
+  DepthImage Render(const std::vector<RenderSurface>& surfaces) const;
+  // The cloud the sensor returns for that image: back-projected pixels with noise,
+  // grazing-angle drop-outs and outliers, deterministic from `seed`.
+  PointCloud Sample(const DepthImage& image, const std::vector<RenderSurface>& surfaces,
+                    uint64_t seed) const;
+  // Whether each point is seen: in front of the camera, inside the image, and no nearer
+  // than `tolerance` (m) behind the z-buffer's depth at its pixel.
+  std::vector<char> Visible(const DepthImage& image, const Vertices& points,
+                            double tolerance) const;
+
+  // Camera frame: x right, y down, z forward (OpenCV); p_camera = R (p - position).
+  const Eigen::Matrix3d& rotation() const { return R_; }
+  bool Project(const Eigen::Vector3d& p, double* u, double* v, double* z) const;
+  const DepthSensorOptions& options() const { return options_; }
+
+ private:
+  DepthSensorOptions options_;
+  Eigen::Matrix3d R_;
+};
+
+// Locates points (given in a fine mesh's rest frame) in the fine mesh: for each point,
+// the element and barycentric coordinates; points outside go to the nearest element
+// (clamped barycentrics). Used to carry a fine ground truth to a coarse tracked mesh.
+struct EmbeddedPoints {
+  std::vector<int> element;
+  std::vector<Eigen::Vector4d> barycentric;
+};
+EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points);
+Vertices InterpolateEmbedded(const TetMesh& fine, const Vertices& fine_positions,
+                             const EmbeddedPoints& embedded);
+
+// The bundled demo: a soft beam clamped at one end whose free end is bent, twisted and
+// swung by a prescribed motion, simulated with corotational FEM on a mesh twice as fine
+// as the tracked one, seen by a virtual depth camera.
+struct DemoOptions {
+  int frames = 30;
+  int coarse_cells_x = 30, coarse_cells_yz = 5;  // tracked mesh: (30+1)(5+1)^2 = 1116 vertices
+  int refinement = 2;                            // ground truth mesh: cells * refinement
+  double length = 0.3, width = 0.06;             // m
+  double youngs_modulus = 5.0e4, poisson_ratio = 0.35, density = 200.0;
+  uint64_t seed = 1;
+  DepthSensorOptions sensor;                     // defaults set in DefaultDemoOptions()
+};
+DemoOptions DefaultDemoOptions();
+
+// Writes DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd, DIR/ground_truth/frame_NNNN.csv and
+// DIR/README.md. `progress` (may be null) is called after each frame.
+Status GenerateDemoSequence(const DemoOptions& options, const std::string& dir,
+                            void (*progress)(int done, int total) = nullptr);
+
+}  // namespace femreg
+
+#endif  // FEMREG_SYNTH_H_

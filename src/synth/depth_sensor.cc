@@ -1,0 +1,175 @@
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include "femreg/synth.h"
+
+namespace femreg {
+
+bool DepthSensorOptions::IsValid(std::string* error) const {
+  std::ostringstream os;
+  if (!camera.IsValid(error)) return false;
+  if (!(near > 0)) {
+    os << "sensor.near must be > 0 (got " << near << ")";
+  } else if (!(noise_coefficient >= 0)) {
+    os << "sensor.noise_coefficient must be >= 0 (got " << noise_coefficient << ")";
+  } else if (!(grazing_angle_deg > 0 && grazing_angle_deg <= 90)) {
+    os << "sensor.grazing_angle_deg must be in (0, 90] (got " << grazing_angle_deg << ")";
+  } else if (pixel_stride < 1) {
+    os << "sensor.pixel_stride must be >= 1 (got " << pixel_stride << ")";
+  } else if (!(outlier_fraction >= 0 && outlier_fraction <= 10)) {
+    os << "sensor.outlier_fraction must be in [0, 10] (got " << outlier_fraction << ")";
+  } else {
+    return true;
+  }
+  if (error) *error = os.str();
+  return false;
+}
+
+DepthSensor::DepthSensor(const DepthSensorOptions& options) : options_(options) {
+  const CameraOptions& c = options.camera;
+  Eigen::Vector3d z = c.target - c.position;
+  if (z.norm() <= 0) z = Eigen::Vector3d::UnitZ();
+  z.normalize();
+  // Image y points down: against the projection of `up` orthogonal to the axis.
+  Eigen::Vector3d y = -(c.up - c.up.dot(z) * z);
+  if (y.norm() < 1e-9) y = z.unitOrthogonal();
+  y.normalize();
+  const Eigen::Vector3d x = y.cross(z);
+  R_.row(0) = x.transpose();
+  R_.row(1) = y.transpose();
+  R_.row(2) = z.transpose();
+}
+
+bool DepthSensor::Project(const Eigen::Vector3d& p, double* u, double* v, double* z) const {
+  const Eigen::Vector3d q = R_ * (p - options_.camera.position);
+  *z = q.z();
+  if (q.z() <= options_.near) return false;
+  *u = options_.camera.fx * q.x() / q.z() + options_.camera.cx;
+  *v = options_.camera.fy * q.y() / q.z() + options_.camera.cy;
+  return true;
+}
+
+DepthImage DepthSensor::Render(const std::vector<RenderSurface>& surfaces) const {
+  const CameraOptions& c = options_.camera;
+  DepthImage img;
+  img.width = c.width;
+  img.height = c.height;
+  const size_t n = static_cast<size_t>(c.width) * static_cast<size_t>(c.height);
+  img.depth.assign(n, 0.0f);
+  img.surface.assign(n, -1);
+  img.triangle.assign(n, -1);
+  std::vector<double> zbuf(n, std::numeric_limits<double>::infinity());
+  for (size_t s = 0; s < surfaces.size(); ++s) {
+    const Vertices& P = *surfaces[s].positions;
+    const Triangles& T = *surfaces[s].triangles;
+    for (int f = 0; f < T.rows(); ++f) {
+      double u[3], v[3], z[3];
+      bool ok = true;
+      for (int k = 0; k < 3; ++k) ok = ok && Project(P.row(T(f, k)), &u[k], &v[k], &z[k]);
+      if (!ok) continue;
+      // Pixel centres at integer coordinates.
+      const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({u[0], u[1], u[2]}))));
+      const int u1 = std::min(c.width - 1, static_cast<int>(std::floor(std::max({u[0], u[1], u[2]}))));
+      const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({v[0], v[1], v[2]}))));
+      const int v1 = std::min(c.height - 1, static_cast<int>(std::floor(std::max({v[0], v[1], v[2]}))));
+      if (u0 > u1 || v0 > v1) continue;
+      const double area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
+      if (std::abs(area) < 1e-12) continue;
+      for (int py = v0; py <= v1; ++py) {
+        for (int px = u0; px <= u1; ++px) {
+          // Screen-space barycentrics.
+          const double w0 = ((u[1] - px) * (v[2] - py) - (u[2] - px) * (v[1] - py)) / area;
+          const double w1 = ((u[2] - px) * (v[0] - py) - (u[0] - px) * (v[2] - py)) / area;
+          const double w2 = 1.0 - w0 - w1;
+          if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+          // Perspective-correct depth: 1/z is linear in screen space.
+          const double inv_z = w0 / z[0] + w1 / z[1] + w2 / z[2];
+          const double depth = 1.0 / inv_z;
+          const size_t idx = static_cast<size_t>(py) * c.width + px;
+          if (depth < zbuf[idx]) {
+            zbuf[idx] = depth;
+            img.depth[idx] = static_cast<float>(depth);
+            img.surface[idx] = static_cast<int>(s);
+            img.triangle[idx] = f;
+          }
+        }
+      }
+    }
+  }
+  return img;
+}
+
+PointCloud DepthSensor::Sample(const DepthImage& image, const std::vector<RenderSurface>& surfaces,
+                               uint64_t seed) const {
+  const CameraOptions& c = options_.camera;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const double cos_grazing = std::cos(options_.grazing_angle_deg * M_PI / 180.0);
+  std::vector<Eigen::Vector3d> pts;
+  for (int py = 0; py < image.height; py += options_.pixel_stride) {
+    for (int px = 0; px < image.width; px += options_.pixel_stride) {
+      const size_t idx = static_cast<size_t>(py) * image.width + px;
+      if (image.triangle[idx] < 0) continue;
+      const double z = image.depth[idx];
+      const Eigen::Vector3d ray_c((px - c.cx) / c.fx, (py - c.cy) / c.fy, 1.0);
+      const Eigen::Vector3d dir_w = (R_.transpose() * ray_c).normalized();
+      const Vertices& P = *surfaces[image.surface[idx]].positions;
+      const Triangles& T = *surfaces[image.surface[idx]].triangles;
+      const int f = image.triangle[idx];
+      const Eigen::Vector3d a = P.row(T(f, 0)), b = P.row(T(f, 1)), cc = P.row(T(f, 2));
+      const Eigen::Vector3d n = (b - a).cross(cc - a).normalized();
+      if (std::abs(n.dot(dir_w)) < cos_grazing) continue;
+      const double noisy = z + options_.noise_coefficient * z * z * gauss(rng);
+      pts.push_back(c.position + R_.transpose() * (noisy * ray_c));
+    }
+  }
+  const size_t num_outliers = static_cast<size_t>(options_.outlier_fraction * pts.size());
+  if (num_outliers > 0 && !pts.empty()) {
+    Eigen::Vector3d lo = pts[0], hi = pts[0];
+    for (const auto& p : pts) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    lo.array() -= options_.outlier_margin;
+    hi.array() += options_.outlier_margin;
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    for (size_t i = 0; i < num_outliers; ++i) {
+      pts.push_back(lo + (hi - lo).cwiseProduct(Eigen::Vector3d(uni(rng), uni(rng), uni(rng))));
+    }
+  }
+  PointCloud cloud;
+  cloud.points.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) cloud.points.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  cloud.normals.resize(0, 3);
+  return cloud;
+}
+
+std::vector<char> DepthSensor::Visible(const DepthImage& image, const Vertices& points,
+                                       double tolerance) const {
+  std::vector<char> out(static_cast<size_t>(points.rows()), 0);
+  for (int i = 0; i < points.rows(); ++i) {
+    double u, v, z;
+    if (!Project(points.row(i), &u, &v, &z)) continue;
+    const int px = static_cast<int>(std::lround(u)), py = static_cast<int>(std::lround(v));
+    if (px < 0 || py < 0 || px >= image.width || py >= image.height) continue;
+    // The nearest depth in a 3x3 neighbourhood, so that a vertex on a silhouette edge
+    // counts as seen when its own surface is.
+    double best = std::numeric_limits<double>::infinity();
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int qx = px + dx, qy = py + dy;
+        if (qx < 0 || qy < 0 || qx >= image.width || qy >= image.height) continue;
+        const float d = image.depth[static_cast<size_t>(qy) * image.width + qx];
+        if (d > 0) best = std::min(best, static_cast<double>(d));
+      }
+    }
+    if (std::isfinite(best) && z <= best + tolerance) out[static_cast<size_t>(i)] = 1;
+  }
+  return out;
+}
+
+}  // namespace femreg

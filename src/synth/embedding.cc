@@ -1,0 +1,76 @@
+#include <Eigen/LU>
+#include <algorithm>
+#include <limits>
+
+#include "femreg/synth.h"
+#include "registration/nearest.h"
+
+namespace femreg {
+
+namespace {
+// Barycentric coordinates of p in tet t of `mesh` at `positions`.
+Eigen::Vector4d Barycentric(const TetMesh& mesh, const Vertices& positions, int t,
+                            const Eigen::Vector3d& p) {
+  const Eigen::Vector3d a = positions.row(mesh.tets(t, 0));
+  Eigen::Matrix3d D;
+  for (int k = 0; k < 3; ++k) D.col(k) = positions.row(mesh.tets(t, k + 1)).transpose() - a;
+  const Eigen::Vector3d l = D.partialPivLu().solve(p - a);
+  return Eigen::Vector4d(1.0 - l.sum(), l.x(), l.y(), l.z());
+}
+}  // namespace
+
+EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points) {
+  EmbeddedPoints out;
+  out.element.assign(static_cast<size_t>(points.rows()), -1);
+  out.barycentric.assign(static_cast<size_t>(points.rows()), Eigen::Vector4d::Zero());
+  Vertices centroids(fine.num_tets(), 3);
+  for (int t = 0; t < fine.num_tets(); ++t) {
+    centroids.row(t).setZero();
+    for (int k = 0; k < 4; ++k) centroids.row(t) += 0.25 * fine.rest.row(fine.tets(t, k));
+  }
+  const PointIndex index(centroids);
+  constexpr int kCandidates = 32;
+  int ids[kCandidates];
+  double d2[kCandidates];
+  for (int i = 0; i < points.rows(); ++i) {
+    const Eigen::Vector3d p = points.row(i);
+    const int n = index.KNearest(p, kCandidates, ids, d2);
+    int best = -1;
+    double best_min = -std::numeric_limits<double>::infinity();
+    Eigen::Vector4d best_bary = Eigen::Vector4d::Zero();
+    auto consider = [&](int t) {
+      const Eigen::Vector4d b = Barycentric(fine, fine.rest, t, p);
+      if (b.minCoeff() > best_min) {
+        best_min = b.minCoeff();
+        best = t;
+        best_bary = b;
+      }
+    };
+    for (int j = 0; j < n; ++j) consider(ids[j]);
+    if (best_min < -1e-9) {
+      // Not inside any nearby element: search them all (rare; points outside the mesh).
+      for (int t = 0; t < fine.num_tets(); ++t) consider(t);
+    }
+    if (best_min < 0) {
+      best_bary = best_bary.cwiseMax(0.0);
+      best_bary /= best_bary.sum();
+    }
+    out.element[static_cast<size_t>(i)] = best;
+    out.barycentric[static_cast<size_t>(i)] = best_bary;
+  }
+  return out;
+}
+
+Vertices InterpolateEmbedded(const TetMesh& fine, const Vertices& fine_positions,
+                             const EmbeddedPoints& embedded) {
+  Vertices out(static_cast<Eigen::Index>(embedded.element.size()), 3);
+  for (size_t i = 0; i < embedded.element.size(); ++i) {
+    const int t = embedded.element[i];
+    Eigen::RowVector3d p = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 4; ++k) p += embedded.barycentric[i][k] * fine_positions.row(fine.tets(t, k));
+    out.row(static_cast<Eigen::Index>(i)) = p;
+  }
+  return out;
+}
+
+}  // namespace femreg
