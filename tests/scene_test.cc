@@ -112,7 +112,7 @@ loads:
 forward: {model: linear, max_iterations: 7, load_steps: 3, tolerance: 1e-6, absolute_tolerance: 1e-9}
 registration:
   regularizer: none
-  camera: {position: [0, 0, -1], fx: 500, fy: 501, cx: 320, cy: 240, width: 640, height: 480}
+  camera: {position: [0, 0, -1], target: [0, 0, 0], up: [0, 1, 0], fx: 500, fy: 501, cx: 320, cy: 240, width: 640, height: 480}
   preprocess:
     crop: {min: [-1, -1, -1], max: [1, 1, 1]}
     voxel_size: 0.005
@@ -123,7 +123,7 @@ registration:
   weights: {data: 2, elastic: 3, temporal: 4, anchor: 5}
   solver: {max_outer_iterations: 6, max_inner_iterations: 7, relative_energy_tolerance: 1e-5,
            time_budget_s: 0.1, trust_region: dogleg, linear_solver: conjugate_gradients,
-           threads: 2, rigid_prealign: true, rigid_iterations: 30}
+           threads: 2, rigid_prealign: true, rigid_iterations: 30, predict_motion: false}
 anchors:
   - {name: gripper, object: beam, select: {indices: [0]}, hard: true, weight: 1e3,
      translations: [[0, 0, 0], [0, 0, 0.01]]}
@@ -195,6 +195,9 @@ effects: {fracture: false, collision: false}
   EXPECT_EQ(r.solver.num_threads, 2);
   EXPECT_TRUE(r.solver.rigid_prealign);
   EXPECT_EQ(r.solver.rigid_iterations, 30);
+  EXPECT_FALSE(r.solver.predict_motion);
+  EXPECT_EQ(r.camera.target, Eigen::Vector3d(0, 0, 0));
+  EXPECT_EQ(r.camera.up, Eigen::Vector3d(0, 1, 0));
 
   ASSERT_EQ(scene.anchors.size(), 1u);
   EXPECT_EQ(scene.anchors[0].name, "gripper");
@@ -303,6 +306,8 @@ TEST_F(SceneTest, InvalidRegistrationOptions) {
                "'huber'?"});
   ExpectError(std::string(kBaseScene) + "registration:\n  data:\n    loss_scale: -1\n",
               {"beam.yaml:12: registration.data.loss_scale: must be > 0 (got -1)"});
+  ExpectError(std::string(kBaseScene) + "registration:\n  camera:\n    position: [0, 0, 1]\n",
+              {"beam.yaml:12: registration.camera.target: must differ from camera.position"});
   ExpectError(std::string(kBaseScene) + "registration:\n  solver:\n    threads: 0\n",
               {"beam.yaml:12: registration.solver.threads: must be >= 1 (got 0)"});
 }

@@ -29,10 +29,10 @@
 //                  outliers: {neighbors: 0, stddev: 1}, normals: {neighbors: 0}}
 //     data: {model_to_cloud: true, cloud_to_model: true, max_distance: 0.03,
 //            loss: huber|cauchy|tukey|none, loss_scale: 0.005,
-//            metric: point_to_point|point_to_plane, visibility: false, cloud_stride: 1}
-//     weights: {data: 1, elastic: 1, temporal: 1, anchor: 1e4}
+//            metric: point_to_plane|point_to_point, visibility: false, cloud_stride: 1}
+//     weights: {data: 200, elastic: 1, temporal: 1, anchor: 1e4}
 //     solver: {max_outer_iterations: 5, max_inner_iterations: 10,
-//              relative_energy_tolerance: 1e-4, time_budget_s: 0,
+//              relative_energy_tolerance: 1e-3, time_budget_s: 0,
 //              trust_region: levenberg_marquardt|dogleg,
 //              linear_solver: sparse_normal_cholesky|conjugate_gradients, threads: 1,
 //              rigid_prealign: false, rigid_iterations: 20, predict_motion: true}
