@@ -74,7 +74,7 @@ struct DataTermOptions {
   RobustLoss loss = RobustLoss::kHuber;
   double loss_scale = 0.005;      // m; where the robust loss bends
   // Point-to-plane lets surfaces slide along each other, which converges in far fewer
-  // outer iterations; model->cloud pairs fall back to point-to-point without cloud normals.
+  // outer iterations; model->cloud pairs use the cloud's normals, or the model's without.
   DataMetric metric = DataMetric::kPointToPlane;
   bool visibility = false;        // model->cloud only for vertices facing the camera
   int cloud_stride = 1;           // use every k-th cloud point for cloud->model (>= 1)
@@ -102,7 +102,7 @@ struct SolverOptions {
   // Start each frame from a constant-velocity extrapolation of the last two frames.
   bool predict_motion = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
-  int rigid_iterations = 20;
+  int rigid_iterations = 30;
   bool IsValid(std::string* error) const;
 };
 

@@ -237,8 +237,19 @@ bool SolverOptions::IsValid(std::string* error) const {
 
 bool RegistrationOptions::IsValid(std::string* error) const {
   // The sub-structs already name their fields with their own prefix (camera., data., ...).
-  return camera.IsValid(error) && preprocess.IsValid(error) && data.IsValid(error) &&
-         weights.IsValid(error) && solver.IsValid(error);
+  if (!(camera.IsValid(error) && preprocess.IsValid(error) && data.IsValid(error) &&
+        weights.IsValid(error) && solver.IsValid(error))) {
+    return false;
+  }
+  if (solver.trust_region == TrustRegion::kDogleg &&
+      solver.linear_solver == LinearSolver::kConjugateGradients) {
+    if (error) {
+      *error = "solver.trust_region: dogleg needs an exact factorization; use "
+               "linear_solver: sparse_normal_cholesky, or trust_region: levenberg_marquardt";
+    }
+    return false;
+  }
+  return true;
 }
 
 }  // namespace femreg

@@ -237,7 +237,13 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
       pair.num_vertices = 1;
       pair.vertices[0] = v;
       pair.target = cloud.points.row(q);
-      if (plane && cloud.has_normals()) pair.normal = cloud.normals.row(q).normalized();
+      // Point-to-plane on the cloud's normal when it has one, else on the model's: either
+      // way no tangential pull towards the discrete samples (which would shrink the seen
+      // surface towards the inside of its silhouette).
+      if (plane) {
+        pair.normal = cloud.has_normals() ? Eigen::Vector3d(cloud.normals.row(q).normalized())
+                                          : Eigen::Vector3d(normals.row(v));
+      }
       pairs->push_back(pair);
       ++*m2c;
     }
@@ -270,65 +276,65 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
 }
 
 void Tracker::Impl::RigidPrealign(const PointCloud& cloud, const PointIndex& cloud_index) {
-  // Rigid ICP of the (visible) surface onto the cloud, per object, started from the
-  // translation that matches the centroids so that a fast jump is within reach.
+  // Rigid ICP per object, from the translation that matches the centroid of the cloud with
+  // that of the surface facing the camera (so that a fast jump is within reach), then
+  // cloud->surface pairs (every seen point has a partner, hidden parts do not bias),
+  // trimmed to the closest 80%. Kept only if it brings the surface closer to the cloud.
   const Eigen::MatrixXd normals = VertexNormals();
+  const int stride = std::max(1, cloud.size() / 2000);
   for (const Object& o : objects) {
-    std::vector<int> verts;
+    std::vector<int> facing;
     for (int v : o.mesh.surface_vertices) {
       const int g = v + o.offset;
       if (options.camera.enabled) {
         const Eigen::Vector3d n = normals.row(g);
         if (n.dot(options.camera.position - Eigen::Vector3d(x.row(g))) <= 0.0) continue;
       }
-      verts.push_back(g);
+      facing.push_back(g);
     }
-    if (verts.size() < 3 || cloud.size() < 3) continue;
-    auto mean_distance = [&](const Vertices& pos) {
-      double sum = 0.0;
-      for (int g : verts) {
-        double d2 = 0.0;
-        cloud_index.Nearest(pos.row(g), &d2);
-        sum += std::sqrt(d2);
-      }
-      return sum / static_cast<double>(verts.size());
-    };
-    const double before = mean_distance(x);
-    Vertices y = x;
-    Eigen::Vector3d cm = Eigen::Vector3d::Zero(), cc = cloud.points.colwise().mean();
-    for (int g : verts) cm += y.row(g).transpose();
-    cm /= static_cast<double>(verts.size());
-    const Eigen::RowVector3d shift = (cc - cm).transpose();
-    for (int v = 0; v < o.mesh.num_vertices(); ++v) y.row(o.offset + v) += shift;
-    for (int it = 0; it < options.solver.rigid_iterations; ++it) {
+    if (facing.size() < 3 || cloud.size() < 3) continue;
+    const int nv = o.mesh.num_vertices();
+    Vertices y = x.middleRows(o.offset, nv);
+    Triangles tris = o.mesh.surface;
+    auto trimmed_mean = [&](const Vertices& pos, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+      SurfaceIndex surface_index(pos, tris);
       std::vector<std::pair<double, int>> dist;
-      std::vector<int> nearest(verts.size());
-      for (size_t i = 0; i < verts.size(); ++i) {
-        double d2 = 0.0;
-        nearest[i] = cloud_index.Nearest(y.row(verts[i]), &d2);
-        dist.emplace_back(d2, static_cast<int>(i));
+      std::vector<Eigen::Vector3d> model_points;
+      for (int i = 0; i < cloud.size(); i += stride) {
+        const SurfaceIndex::Hit hit = surface_index.Closest(cloud.points.row(i));
+        if (hit.triangle < 0) continue;
+        dist.emplace_back(hit.squared_distance, static_cast<int>(model_points.size()));
+        model_points.push_back(hit.point);
       }
-      // Trimmed: the closest 80% of the pairs.
       std::sort(dist.begin(), dist.end());
-      const size_t keep = std::max<size_t>(3, dist.size() * 4 / 5);
+      const size_t keep = std::max<size_t>(std::min<size_t>(3, dist.size()), dist.size() * 4 / 5);
       std::vector<Eigen::Vector3d> a, b;
+      double sum = 0.0;
       for (size_t j = 0; j < keep; ++j) {
-        const int i = dist[j].second;
-        a.push_back(y.row(verts[i]).transpose());
-        b.push_back(cloud.points.row(nearest[i]).transpose());
+        const int m = dist[j].second;
+        a.push_back(model_points[m]);
+        b.push_back(cloud.points.row(m * stride).transpose());
+        sum += std::sqrt(dist[j].first);
       }
-      Eigen::Matrix3d R;
-      Eigen::Vector3d t;
-      Kabsch(a, b, &R, &t);
-      for (int v = 0; v < o.mesh.num_vertices(); ++v) {
-        const int g = o.offset + v;
-        y.row(g) = (R * y.row(g).transpose() + t).transpose();
-      }
-      if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-9 && t.norm() < 1e-9) break;
+      if (R != nullptr && a.size() >= 3) Kabsch(a, b, R, t);
+      return keep > 0 ? sum / keep : std::numeric_limits<double>::infinity();
+    };
+    const double before = trimmed_mean(y, nullptr, nullptr);
+    Eigen::Vector3d cm = Eigen::Vector3d::Zero();
+    for (int g : facing) cm += x.row(g).transpose();
+    cm /= static_cast<double>(facing.size());
+    const Eigen::RowVector3d shift = (cloud.points.colwise().mean().transpose() - cm).transpose();
+    y.rowwise() += shift;
+    double mean = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < options.solver.rigid_iterations; ++it) {
+      Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+      Eigen::Vector3d t = Eigen::Vector3d::Zero();
+      mean = trimmed_mean(y, &R, &t);
+      for (int v = 0; v < nv; ++v) y.row(v) = (R * y.row(v).transpose() + t).transpose();
+      if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-7 && t.norm() < 1e-7) break;
     }
-    if (mean_distance(y) < before) {
-      x.middleRows(o.offset, o.mesh.num_vertices()) = y.middleRows(o.offset, o.mesh.num_vertices());
-    }
+    mean = trimmed_mean(y, nullptr, nullptr);
+    if (mean < before) x.middleRows(o.offset, nv) = y;
   }
 }
 
@@ -473,6 +479,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     row.cloud_to_model = c2m;
     row.rejected = rejected;
     if (pairs.empty()) {
+      s.rejected = rejected;
       if (k == 0) {
         s.termination = TerminationType::kNoCorrespondences;
         s.message = "no correspondence within data.max_distance (" +
