@@ -64,7 +64,8 @@ void ExpectGradientCheckerPasses(const ceres::CostFunction& cost,
   std::vector<double*> ptrs;
   for (auto& p : params) ptrs.push_back(p.data());
   ceres::NumericDiffOptions numeric_options;
-  ceres::GradientChecker checker(&cost, nullptr, numeric_options);
+  const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+  ceres::GradientChecker checker(&cost, no_manifolds, numeric_options);
   ceres::GradientChecker::ProbeResults results;
   EXPECT_TRUE(checker.Probe(ptrs.data(), 1e-7, &results)) << results.error_log;
   EXPECT_GT(results.maximum_relative_error, -1.0);
