@@ -335,6 +335,24 @@ TEST(Tracker, HardAnchorsFollowTheirTargetsExactly) {
   EXPECT_FALSE(tracker->AddAnchor("gripper", 0, end, true).ok());
 }
 
+TEST(Tracker, AnchorTrajectoryMovesTheSetPerFrame) {
+  auto tracker = MakeTracker(Options(), /*clamp=*/false);
+  const TetMesh& mesh = tracker->mesh(0);
+  std::vector<int> end;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (mesh.rest(v, 0) > kLength - 1e-9) end.push_back(v);
+  }
+  ASSERT_TRUE(tracker->AddAnchor("gripper", 0, end, /*hard=*/true).ok());
+  ASSERT_TRUE(tracker->SetAnchorTrajectory("gripper", {Eigen::Vector3d(0, 0, -0.002),
+                                                      Eigen::Vector3d(0, 0, -0.004)}).ok());
+  const Sequence seq = MakeBendingSequence(1, 0.0, 1);
+  for (double expected : {-0.002, -0.004, -0.004}) {
+    FrameSummary summary;
+    ASSERT_TRUE(tracker->Track(seq.clouds[0], &summary).ok());
+    for (int v : end) EXPECT_NEAR(tracker->vertices(0)(v, 2) - mesh.rest(v, 2), expected, 1e-12);
+  }
+}
+
 TEST(Tracker, EveryRegularizerAndSolverRunsAndStaysFinite) {
   const Sequence seq = MakeBendingSequence(3, 0.02, 11);
   for (Regularizer reg : {Regularizer::kCorotational, Regularizer::kLinear, Regularizer::kNone}) {

@@ -56,6 +56,11 @@ class Tracker {
   Status AddAnchor(const std::string& name, int object, const std::vector<int>& vertices,
                    bool hard, double weight = 0.0);
   Status SetAnchorTargets(const std::string& name, const Vertices& targets);
+  // Moves the anchored set rigidly by translations[frame] from where it was when added
+  // (frames past the end use the last entry), e.g. a gripper's path. SetAnchorTargets
+  // clears it.
+  Status SetAnchorTrajectory(const std::string& name,
+                             const std::vector<Eigen::Vector3d>& translations);
 
   const RegistrationOptions& options() const;
 

@@ -38,6 +38,10 @@ struct Anchor {
   bool hard = false;
   double weight = 0.0;
   Vertices targets;           // one row per vertex
+  Vertices origin;            // positions when the anchor was added
+  // Per-frame translations from origin (frame beyond the list: the last one); empty: the
+  // targets stay as set.
+  std::vector<Eigen::Vector3d> translations;
 };
 
 // One kept data pair. Model->cloud pairs have one vertex; cloud->model pairs three.
@@ -428,8 +432,12 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   std::vector<char> fixed(num_vertices, 0);
   std::vector<std::pair<ceres::CostFunction*, int>> anchor_costs;
-  for (const auto& kv : anchors) {
-    const Anchor& a = kv.second;
+  for (auto& kv : anchors) {
+    Anchor& a = kv.second;
+    if (!a.translations.empty()) {
+      const size_t i = std::min(static_cast<size_t>(frame), a.translations.size() - 1);
+      a.targets = a.origin.rowwise() + a.translations[i].transpose();
+    }
     for (size_t i = 0; i < a.vertices.size(); ++i) {
       const int g = a.vertices[i];
       if (a.hard) {
@@ -664,6 +672,10 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
     if (!status.ok()) return status;
     status = t->AddAnchor(a.name, object, verts, a.hard, a.weight);
     if (!status.ok()) return status;
+    if (!a.translations.empty()) {
+      status = t->SetAnchorTrajectory(a.name, a.translations);
+      if (!status.ok()) return status;
+    }
   }
   *tracker = std::move(t);
   return Status::Ok();
@@ -707,6 +719,7 @@ Status Tracker::AddAnchor(const std::string& name, int object, const std::vector
     a.vertices.push_back(vertices[i] + o.offset);
     a.targets.row(static_cast<Eigen::Index>(i)) = o.mesh.x.row(vertices[i]);
   }
+  a.origin = a.targets;
   impl_->anchors[name] = std::move(a);
   return Status::Ok();
 }
@@ -719,6 +732,18 @@ Status Tracker::SetAnchorTargets(const std::string& name, const Vertices& target
                          std::to_string(it->second.targets.rows()) + " finite targets");
   }
   it->second.targets = targets;
+  it->second.translations.clear();
+  return Status::Ok();
+}
+
+Status Tracker::SetAnchorTrajectory(const std::string& name,
+                                    const std::vector<Eigen::Vector3d>& translations) {
+  auto it = impl_->anchors.find(name);
+  if (it == impl_->anchors.end()) return Status::Error("no anchor named '" + name + "'");
+  for (const auto& t : translations) {
+    if (!t.allFinite()) return Status::Error("anchor '" + name + "': non-finite translation");
+  }
+  it->second.translations = translations;
   return Status::Ok();
 }
 
