@@ -122,7 +122,7 @@ registration:
          loss_scale: 0.01, metric: point_to_plane, visibility: true, cloud_stride: 2}
   weights: {data: 2, elastic: 3, temporal: 4, anchor: 5}
   solver: {max_outer_iterations: 6, max_inner_iterations: 7, relative_energy_tolerance: 1e-5,
-           time_budget_s: 0.1, trust_region: dogleg, linear_solver: conjugate_gradients,
+           time_budget_s: 0.1, trust_region: dogleg, linear_solver: sparse_normal_cholesky,
            threads: 2, rigid_prealign: true, rigid_iterations: 30, predict_motion: false}
 anchors:
   - {name: gripper, object: beam, select: {indices: [0]}, hard: true, weight: 1e3,
@@ -191,7 +191,7 @@ effects: {fracture: false, collision: false}
   EXPECT_DOUBLE_EQ(r.weights.anchor, 5);
   EXPECT_EQ(r.solver.max_outer_iterations, 6);
   EXPECT_EQ(r.solver.trust_region, TrustRegion::kDogleg);
-  EXPECT_EQ(r.solver.linear_solver, LinearSolver::kConjugateGradients);
+  EXPECT_EQ(r.solver.linear_solver, LinearSolver::kSparseNormalCholesky);
   EXPECT_EQ(r.solver.num_threads, 2);
   EXPECT_TRUE(r.solver.rigid_prealign);
   EXPECT_EQ(r.solver.rigid_iterations, 30);

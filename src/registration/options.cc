@@ -175,6 +175,12 @@ bool PreprocessOptions::IsValid(std::string* error) const {
     return Fail(error, "preprocess.normals.neighbors", "must be 0 (off) or >= 3",
                 normal_neighbors);
   }
+  if (!(std::isfinite(plane_distance) && plane_distance >= 0)) {
+    return Fail(error, "preprocess.plane.distance", "must be >= 0", plane_distance);
+  }
+  if (plane_iterations < 1) {
+    return Fail(error, "preprocess.plane.iterations", "must be >= 1", plane_iterations);
+  }
   return true;
 }
 
@@ -244,8 +250,9 @@ bool RegistrationOptions::IsValid(std::string* error) const {
   if (solver.trust_region == TrustRegion::kDogleg &&
       solver.linear_solver == LinearSolver::kConjugateGradients) {
     if (error) {
-      *error = "solver.trust_region: dogleg needs an exact factorization; use "
-               "linear_solver: sparse_normal_cholesky, or trust_region: levenberg_marquardt";
+      *error = "solver.trust_region must be levenberg_marquardt with linear_solver "
+               "conjugate_gradients (dogleg needs an exact factorization: "
+               "sparse_normal_cholesky)";
     }
     return false;
   }
