@@ -15,6 +15,7 @@
 namespace femreg {
 namespace {
 
+using ceres_backend::EdgeSpringCost;
 using ceres_backend::ElasticCost;
 using ceres_backend::PointToPlaneCost1;
 using ceres_backend::PointToPlaneCost3;
@@ -157,6 +158,23 @@ TEST(DataCosts, JacobiansMatchCentralDifferencesAndGradientChecker) {
       ExpectGradientCheckerPasses(*c, three);
     }
   }
+}
+
+TEST(EdgeSpringCost, JacobianMatchesCentralDifferencesAndGradientChecker) {
+  std::mt19937 rng(13);
+  for (int trial = 0; trial < 20; ++trial) {
+    const std::vector<std::vector<double>> two = {RandomVec3(&rng), RandomVec3(&rng)};
+    EdgeSpringCost cost(0.7, 3.0);
+    ExpectJacobianMatchesCentralDifferences(cost, two);
+    ExpectGradientCheckerPasses(cost, two);
+  }
+  // Zero at the rest length, under any rigid motion of the edge.
+  EdgeSpringCost cost(0.5, 2.0);
+  std::vector<double> a = {0.1, 0.2, 0.3}, b = {0.1, 0.2, 0.8};
+  double* p[] = {a.data(), b.data()};
+  double r = 1.0;
+  ASSERT_TRUE(cost.Evaluate(p, &r, nullptr));
+  EXPECT_NEAR(r, 0.0, 1e-15);
 }
 
 TEST(DataCosts, ZeroAtTarget) {

@@ -77,5 +77,25 @@ bool PointToPlaneCost3::Evaluate(double const* const* parameters, double* residu
   return true;
 }
 
+bool EdgeSpringCost::Evaluate(double const* const* parameters, double* residuals,
+                              double** jacobians) const {
+  const Eigen::Vector3d d = Eigen::Map<const Eigen::Vector3d>(parameters[0]) -
+                            Eigen::Map<const Eigen::Vector3d>(parameters[1]);
+  const double length = d.norm();
+  residuals[0] = sqrt_stiffness_ * (length - rest_length_);
+  if (jacobians != nullptr) {
+    const Eigen::Vector3d u = length > 0 ? Eigen::Vector3d(d / length) : Eigen::Vector3d::Zero();
+    if (jacobians[0] != nullptr) {
+      Eigen::Map<Eigen::Vector3d> J(jacobians[0]);
+      J = sqrt_stiffness_ * u;
+    }
+    if (jacobians[1] != nullptr) {
+      Eigen::Map<Eigen::Vector3d> J(jacobians[1]);
+      J = -sqrt_stiffness_ * u;
+    }
+  }
+  return true;
+}
+
 }  // namespace ceres_backend
 }  // namespace femreg

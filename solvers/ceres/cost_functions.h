@@ -83,6 +83,20 @@ class PointToPlaneCost3 : public ceres::SizedCostFunction<1, 3, 3, 3> {
   double sqrt_weight_;
 };
 
+// A spring on a mesh edge: r = sqrt(k) (|x_a - x_b| - L), two vertex blocks. At zero length
+// the direction is undefined; the Jacobian is then zero.
+class EdgeSpringCost : public ceres::SizedCostFunction<1, 3, 3> {
+ public:
+  EdgeSpringCost(double rest_length, double stiffness)
+      : rest_length_(rest_length), sqrt_stiffness_(std::sqrt(stiffness)) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  double rest_length_;
+  double sqrt_stiffness_;
+};
+
 // Temporal and anchor terms have the same form: r = sqrt(w) (x - target) with w = w_t m_i
 // (temporal, target = previous position) or the anchor stiffness.
 using SpringCost = PointToPointCost1;
