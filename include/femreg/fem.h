@@ -81,6 +81,11 @@ class ElasticModel {
              const std::vector<std::pair<int, Material>>& material_per_region = {});
   // Rebuilds the rest data of the listed elements only (after a topology change).
   void RebuildElements(const TetMesh& mesh, const std::vector<int>& elements);
+  // After elements were removed or renumbered (fracture): element i of `mesh` was element
+  // old_element[i]; its rest data and rotation move along, and only `touched` (new indices)
+  // are rebuilt.
+  void RemapElements(const TetMesh& mesh, const std::vector<int>& old_element,
+                     const std::vector<int>& touched);
 
   // Recomputes R_e from positions (identity for the linear model).
   void UpdateRotations(const Vertices& x);

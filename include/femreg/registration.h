@@ -147,6 +147,20 @@ struct OuterIteration {
 struct StageTimes {
   double preprocess = 0.0, prealign = 0.0, rotations = 0.0, correspondences = 0.0,
          build = 0.0, solve = 0.0, total = 0.0;
+  double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
+};
+
+// A node split by the fracture model (seed Section 4; femreg/fracture.h).
+struct FractureEvent {
+  int frame = -1;
+  int object = 0;
+  int iteration = 0;       // outer iteration after whose solve it was detected
+  int node = -1;           // vertex index in the object's mesh before the split
+  int original_node = -1;  // the same vertex in the mesh the tracker started with
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // fracture plane normal (world frame)
+  double measure = 0.0;    // largest eigenvalue of the separation tensor / node area (Pa)
+  double toughness = 0.0;  // the node's toughness (Pa)
+  int removed_elements = 0;  // elements crossed by the plane and removed
 };
 
 struct FrameSummary {
@@ -162,6 +176,7 @@ struct FrameSummary {
   double rms_residual = 0.0;      // m
   StageTimes time;
   std::vector<OuterIteration> iterations;
+  std::vector<FractureEvent> fractures;  // node splits this frame (effects.fracture)
 
   std::string BriefReport() const;  // one line
   std::string FullReport() const;   // a row per outer iteration and the stage times

@@ -194,6 +194,20 @@ void ElasticModel::RebuildElements(const TetMesh& mesh, const std::vector<int>& 
   }
 }
 
+void ElasticModel::RemapElements(const TetMesh& mesh, const std::vector<int>& old_element,
+                                 const std::vector<int>& touched) {
+  std::vector<ElementRest> rest(old_element.size());
+  std::vector<Eigen::Matrix3d> rotations(old_element.size());
+  for (size_t i = 0; i < old_element.size(); ++i) {
+    rest[i] = rest_[old_element[i]];
+    rotations[i] = rotations_[old_element[i]];
+  }
+  rest_ = std::move(rest);
+  rotations_ = std::move(rotations);
+  tets_ = mesh.tets;
+  RebuildElements(mesh, touched);
+}
+
 Vector12 ElasticModel::Gather(const Vertices& x, int e) const {
   Vector12 xe;
   for (int k = 0; k < 4; ++k) xe.segment<3>(3 * k) = x.row(tets_(e, k)).transpose();

@@ -1,0 +1,148 @@
+// femreg/fracture.h - fracture by the separation tensor (seed Section 4, after O'Brien and
+// Hodgins 1999): detection per node from the tensile and compressive parts of the
+// corotational element stresses, then node replication and re-assignment of the attached
+// elements by the side of the fracture plane.
+//
+// Reading of the seed's eq. 13 (its typeset form is garbled: a missing M() and a flipped
+// sign), the O'Brien and Hodgins form:
+//
+//   zeta_j = 1/2 ( -m(f+_j) + sum_e m(f+_{e,j}) + m(f-_j) - sum_e m(f-_{e,j}) ),
+//   m(a) = a a^T / |a| (0 for a = 0),  f+-_j = sum_e f+-_{e,j},
+//
+// with f+-_{e,j} = R_e (V_e L_e^T sigma+-_e)_j: the element's nodal force of the tensile
+// (compressive) part of sigma_e = C_e L_e (R_e^T x_e - X_e) (eqs. 7-12), rotated to the
+// world frame. zeta_j is in newtons; the fracture measure divides its largest eigenvalue
+// by the node's area A_j = (V_j)^(2/3), V_j = sum_e V_e / 4 (rest), so that it is a stress
+// (Pa, roughly independent of the mesh size) and compares with the scene's toughness.
+#ifndef FEMREG_FRACTURE_H_
+#define FEMREG_FRACTURE_H_
+
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femreg/fem.h"
+#include "femreg/forward.h"
+#include "femreg/ground_truth.h"
+#include "femreg/mesh.h"
+#include "femreg/registration.h"
+
+namespace femreg {
+
+struct FractureOptions {
+  // A node fractures when its measure (Pa) exceeds its toughness: the smallest positive
+  // toughness of its elements' regions. <= 0: unbreakable.
+  double toughness = 0.0;
+  std::vector<std::pair<int, double>> region_toughness;  // region id -> toughness (Pa)
+  // An element whose other vertices lie on both sides of the plane by more than this
+  // fraction of its mean edge length is crossed by the plane and removed.
+  double crossing_tolerance = 0.2;
+  int max_splits_per_iteration = 8;  // node splits per outer iteration (or forward round)
+  int max_splits_per_frame = 48;     // node splits per frame
+  bool IsValid(std::string* error) const;
+};
+
+// Per-vertex result of the detection.
+struct NodeSeparation {
+  Eigen::VectorXd measure;  // #V largest eigenvalue of zeta_j / A_j, clamped at 0 (Pa)
+  Vertices normal;          // #V by 3 unit eigenvector of that eigenvalue, sign-canonical
+                            // (largest |component| positive)
+  Eigen::VectorXd toughness;  // #V node toughness (Pa; <= 0 unbreakable)
+};
+
+// The separation tensor of every node (3 by 3, newtons) at positions x. model's rotations
+// must be current for x (ElasticModel::UpdateRotations(x)).
+std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const ElasticModel& model,
+                                               const Vertices& x);
+// The measure and plane normal per node (and the node toughness from options).
+void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
+                    const FractureOptions& options, NodeSeparation* out);
+
+// What a batch of splits did to the mesh. Per-vertex arrays of the old mesh are carried to
+// the new one by `source`.
+struct TopologyChange {
+  std::vector<int> source;             // #V_new: the old vertex each new vertex comes from
+  std::vector<FractureEvent> events;   // one per split node (node = old index)
+  int removed_elements = 0;            // elements crossed by a fracture plane
+  double removed_volume = 0.0;         // their rest volume (m^3)
+  int dropped_vertices = 0;            // vertices left without elements
+  bool changed() const { return !events.empty(); }
+};
+
+// Splits up to max_splits nodes whose measure exceeds their toughness, highest ratio first
+// (seed Section 4.2): the node is replicated; its elements whose vertices are all on the
+// positive side of the plane (within the tolerance; ties by the centroid) go to the
+// replica, the others stay; elements the plane crosses are removed. A vertex whose
+// remaining elements no longer connect through faces around it is split once more per
+// component (no pinched vertices); vertices without elements are dropped. The mesh's
+// rest, x, tets, region and topology are rebuilt, the model's rest data only for the
+// touched elements; masses are left to the caller (ComputeLumpedMasses). The plane goes
+// through the node's current position x (the deformed state the measure was taken in).
+void SplitNodes(const NodeSeparation& separation, const FractureOptions& options, int max_splits,
+                TetMesh* mesh, ElasticModel* model, TopologyChange* change);
+
+// The forward simulator with fracture, as used for ground truth: detection and splits run
+// between quasi-static solves (not inside SolveQuasiStatic): solve, detect, split up to
+// options.max_splits_per_iteration nodes, re-solve on the new topology, for at most
+// max_rounds rounds or options.max_splits_per_frame splits. `problem` is carried to the
+// new vertices (a clamped or prescribed vertex's copies are too), masses are recomputed
+// from `density`, and `original` (#V: the vertex of the first mesh each vertex comes from)
+// and `events` are updated.
+Status SolveQuasiStaticWithFracture(ForwardProblem* problem, const ForwardOptions& forward,
+                                    const FractureOptions& options, int max_rounds,
+                                    double density, ElasticModel* model, TetMesh* mesh,
+                                    std::vector<int>* original, std::vector<FractureEvent>* events,
+                                    ForwardSummary* summary);
+
+// Rows of `values` (old vertices) carried to the new vertices.
+Vertices RemapRows(const Vertices& values, const std::vector<int>& source);
+
+// Mesh checks after topology edits.
+struct MeshValidity {
+  int nonpositive_volumes = 0;   // rest volume <= 0
+  int orphan_vertices = 0;       // in no element
+  int open_edges = 0;            // surface edges with one triangle or unmatched orientation
+  int nonmanifold_edges = 0;     // surface edges with more than two triangles
+  int nonmanifold_vertices = 0;  // surface vertices whose triangle fan is not one cycle
+  int pieces = 0;                // connected components (elements sharing a vertex)
+  bool ok() const {
+    return nonpositive_volumes == 0 && orphan_vertices == 0 && open_edges == 0 &&
+           nonmanifold_edges == 0 && nonmanifold_vertices == 0;
+  }
+  std::string ToString() const;
+};
+MeshValidity CheckMesh(const TetMesh& mesh);
+
+// Connected component of each vertex (elements sharing a vertex are connected); components
+// numbered by their smallest vertex. Returns the number of components.
+int ConnectedPieces(const TetMesh& mesh, std::vector<int>* vertex_piece);
+
+// Ground truth for a mesh that may have split. The CSV of a frame keeps one row per
+// original tracked vertex; a side file frame_NNNN_pieces.csv ("vertex,piece,x,y,z") lists,
+// once the ground truth's own mesh has broken, the position of each original vertex on
+// every ground-truth piece it touches. Matching: every tracked vertex maps to its original
+// vertex; each tracked piece is matched to the ground-truth piece that most of its
+// unambiguous vertices lie on, and a vertex takes its original's position on that piece
+// (the CSV row when the side file has none).
+struct PieceTruthRow {
+  int vertex = 0;  // original vertex id
+  int piece = 0;   // ground-truth piece
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+};
+Status ReadPieceTruth(const std::string& path, std::vector<PieceTruthRow>* rows);
+Status WritePieceTruth(const std::string& path, const std::vector<PieceTruthRow>& rows);
+
+struct PieceErrors {
+  VertexErrors all;                 // over every tracked vertex
+  std::vector<ErrorStats> pieces;   // per tracked piece (ConnectedPieces order)
+  std::vector<int> piece_vertices;  // tracked vertices per piece
+};
+// positions: #V tracked; original: #V original ids (rows of truth).
+PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
+                               const std::vector<int>& original, const GroundTruthFrame& truth,
+                               const std::vector<PieceTruthRow>& piece_truth);
+
+}  // namespace femreg
+
+#endif  // FEMREG_FRACTURE_H_

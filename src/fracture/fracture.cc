@@ -1,0 +1,579 @@
+// Fracture detection (separation tensor) and node splitting; see femreg/fracture.h.
+#include "femreg/fracture.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+namespace femreg {
+
+bool FractureOptions::IsValid(std::string* error) const {
+  std::ostringstream os;
+  if (!std::isfinite(toughness)) {
+    os << "toughness must be finite (got " << toughness << ")";
+  } else if (!(crossing_tolerance >= 0 && crossing_tolerance < 1)) {
+    os << "crossing_tolerance must be in [0, 1) (got " << crossing_tolerance << ")";
+  } else if (max_splits_per_iteration < 1) {
+    os << "max_splits_per_iteration must be >= 1 (got " << max_splits_per_iteration << ")";
+  } else if (max_splits_per_frame < 1) {
+    os << "max_splits_per_frame must be >= 1 (got " << max_splits_per_frame << ")";
+  } else {
+    return true;
+  }
+  if (error) *error = os.str();
+  return false;
+}
+
+namespace {
+
+// m(a) = a a^T / |a|, 0 for a = 0.
+Eigen::Matrix3d OuterOverNorm(const Eigen::Vector3d& a) {
+  const double n = a.norm();
+  if (!(n > 0)) return Eigen::Matrix3d::Zero();
+  return a * a.transpose() / n;
+}
+
+Eigen::Matrix3d VoigtToTensor(const Vector6& s) {
+  Eigen::Matrix3d t;
+  t << s(0), s(5), s(4), s(5), s(1), s(3), s(4), s(3), s(2);
+  return t;
+}
+
+Vector6 TensorToVoigt(const Eigen::Matrix3d& t) {
+  Vector6 s;
+  s << t(0, 0), t(1, 1), t(2, 2), t(1, 2), t(0, 2), t(0, 1);
+  return s;
+}
+
+double ElementToughness(const FractureOptions& options, int region) {
+  for (const auto& rt : options.region_toughness) {
+    if (rt.first == region) return rt.second;
+  }
+  return options.toughness;
+}
+
+Eigen::Vector3d CanonicalSign(Eigen::Vector3d n) {
+  int k = 0;
+  n.cwiseAbs().maxCoeff(&k);
+  return n(k) < 0 ? Eigen::Vector3d(-n) : n;
+}
+
+}  // namespace
+
+std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const ElasticModel& model,
+                                               const Vertices& x) {
+  const int nv = mesh.num_vertices();
+  std::vector<Eigen::Vector3d> f_plus(nv, Eigen::Vector3d::Zero()),
+      f_minus(nv, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Matrix3d> m_plus(nv, Eigen::Matrix3d::Zero()),
+      m_minus(nv, Eigen::Matrix3d::Zero());
+  for (int e = 0; e < model.num_elements(); ++e) {
+    const ElementRest& rest = model.rest(e);
+    const Eigen::Matrix3d& R = model.rotation(e);
+    const Eigen::Matrix3d sigma = VoigtToTensor(ElementStress(rest, R, model.Gather(x, e)));
+    // Eqs. 8-9: the tensile and compressive parts by the eigen-decomposition.
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(sigma);
+    const Eigen::Vector3d nu = eig.eigenvalues();
+    const Eigen::Matrix3d& n = eig.eigenvectors();
+    const Eigen::Matrix3d sp = n * nu.cwiseMax(0.0).asDiagonal() * n.transpose();
+    const Eigen::Matrix3d sm = n * nu.cwiseMin(0.0).asDiagonal() * n.transpose();
+    // Eqs. 11-12: nodal forces V L^T sigma+-, rotated to the world frame.
+    const Vector12 fp = rest.volume * rest.L.transpose() * TensorToVoigt(sp);
+    const Vector12 fm = rest.volume * rest.L.transpose() * TensorToVoigt(sm);
+    for (int k = 0; k < 4; ++k) {
+      const int j = model.tets()(e, k);
+      const Eigen::Vector3d a = R * fp.segment<3>(3 * k), b = R * fm.segment<3>(3 * k);
+      f_plus[j] += a;
+      f_minus[j] += b;
+      m_plus[j] += OuterOverNorm(a);
+      m_minus[j] += OuterOverNorm(b);
+    }
+  }
+  std::vector<Eigen::Matrix3d> zeta(nv);
+  for (int j = 0; j < nv; ++j) {
+    // The compressive half only holds a node together: its positive part (which appears
+    // at surface nodes under triaxial compression, where the element forces are not
+    // parallel) is dropped, so that compression alone never separates.
+    const Eigen::Matrix3d compressive = 0.5 * (OuterOverNorm(f_minus[j]) - m_minus[j]);
+    Eigen::Matrix3d held = compressive;
+    if (compressive.squaredNorm() > 0) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(compressive);
+      held = eig.eigenvectors() * eig.eigenvalues().cwiseMin(0.0).asDiagonal() *
+             eig.eigenvectors().transpose();
+    }
+    zeta[j] = 0.5 * (m_plus[j] - OuterOverNorm(f_plus[j])) + held;
+  }
+  return zeta;
+}
+
+void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
+                    const FractureOptions& options, NodeSeparation* out) {
+  const int nv = mesh.num_vertices();
+  const std::vector<Eigen::Matrix3d> zeta = SeparationTensors(mesh, model, x);
+  Eigen::VectorXd node_volume = Eigen::VectorXd::Zero(nv);
+  out->toughness = Eigen::VectorXd::Zero(nv);
+  for (int e = 0; e < model.num_elements(); ++e) {
+    const double t = ElementToughness(options, e < mesh.region.size() ? mesh.region(e) : 0);
+    for (int k = 0; k < 4; ++k) {
+      const int j = model.tets()(e, k);
+      node_volume(j) += 0.25 * model.rest(e).volume;
+      if (t > 0 && (out->toughness(j) <= 0 || t < out->toughness(j))) out->toughness(j) = t;
+    }
+  }
+  out->measure.resize(nv);
+  out->normal.resize(nv, 3);
+  for (int j = 0; j < nv; ++j) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(zeta[j]);
+    const double area = std::pow(node_volume(j), 2.0 / 3.0);
+    const double top = eig.eigenvalues()(2);
+    out->measure(j) = area > 0 && top > 0 ? top / area : 0.0;
+    out->normal.row(j) = CanonicalSign(eig.eigenvectors().col(2)).transpose();
+  }
+}
+
+Vertices RemapRows(const Vertices& values, const std::vector<int>& source) {
+  Vertices out(static_cast<Eigen::Index>(source.size()), 3);
+  for (size_t i = 0; i < source.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = values.row(source[i]);
+  return out;
+}
+
+namespace {
+
+// Working state of one batch of splits: elements are flagged instead of erased and the
+// vertex stars kept up to date, so indices stay put until the final compaction.
+struct SplitState {
+  TetMesh* mesh;
+  std::vector<std::array<int, 4>> tets;
+  std::vector<char> removed;
+  std::vector<std::vector<int>> star;  // vertex -> live elements
+  std::vector<int> source;             // vertex -> old vertex
+  std::vector<Eigen::Vector3d> rest, x;
+  std::vector<char> touched;           // element
+
+  int AddReplica(int v) {
+    const int r = static_cast<int>(rest.size());
+    rest.push_back(rest[v]);
+    x.push_back(x[v]);
+    source.push_back(source[v]);
+    star.emplace_back();
+    return r;
+  }
+  void Reassign(int e, int from, int to) {
+    for (int& v : tets[e]) {
+      if (v == from) v = to;
+    }
+    touched[e] = 1;
+  }
+  void Remove(int e) {
+    removed[e] = 1;
+    for (int v : tets[e]) {
+      auto& s = star[v];
+      s.erase(std::remove(s.begin(), s.end(), e), s.end());
+    }
+  }
+  // Gives each face-connected component of v's star but the first its own copy of v.
+  // Whether the boundary triangles around u (faces of its elements seen once) form one
+  // closed fan: then every surface edge at u has two triangles and u is not pinched.
+  bool ManifoldAt(int u) const {
+    static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> faces;
+    for (int e : star[u]) {
+      for (const auto& f : kFaces) {
+        std::array<int, 3> t = {tets[e][f[0]], tets[e][f[1]], tets[e][f[2]]};
+        if (t[0] != u && t[1] != u && t[2] != u) continue;
+        std::array<int, 3> key = t;
+        std::sort(key.begin(), key.end());
+        auto it = faces.find(key);
+        if (it == faces.end()) {
+          faces.emplace(key, std::make_pair(1, t));
+        } else {
+          ++it->second.first;
+        }
+      }
+    }
+    std::map<int, int> next;  // link edge b -> c of the boundary triangles (u, b, c)
+    for (const auto& kv : faces) {
+      if (kv.second.first != 1) continue;
+      const auto& t = kv.second.second;
+      const int k = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      const int b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      if (!next.emplace(b, c).second) return false;  // two triangles leave b: non-manifold
+    }
+    if (next.empty()) return true;  // interior vertex
+    int b = next.begin()->first;
+    size_t steps = 0;
+    do {
+      auto it = next.find(b);
+      if (it == next.end()) return false;  // open fan
+      b = it->second;
+      ++steps;
+    } while (b != next.begin()->first && steps <= next.size());
+    return steps == next.size();
+  }
+
+  int SplitPinched(int v) {
+    auto& s = star[v];
+    const int n = static_cast<int>(s.size());
+    if (n < 2) return 0;
+    std::vector<int> parent(n);
+    std::iota(parent.begin(), parent.end(), 0);
+    std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+    for (int a = 0; a < n; ++a) {
+      for (int b = a + 1; b < n; ++b) {
+        int shared = 0;
+        for (int p : tets[s[a]])
+          for (int q : tets[s[b]]) shared += (p == q);
+        if (shared >= 3) parent[find(a)] = find(b);
+      }
+    }
+    std::map<int, std::vector<int>> groups;  // root -> elements, ordered by first element
+    for (int a = 0; a < n; ++a) groups[find(a)].push_back(s[a]);
+    if (groups.size() < 2) return 0;
+    // Keep the group with the smallest element on v, deterministic whatever the star order.
+    std::vector<std::vector<int>> list;
+    for (auto& g : groups) {
+      std::sort(g.second.begin(), g.second.end());
+      list.push_back(g.second);
+    }
+    std::sort(list.begin(), list.end());
+    for (size_t g = 1; g < list.size(); ++g) {
+      const int r = AddReplica(v);
+      for (int e : list[g]) {
+        Reassign(e, v, r);
+        star[r].push_back(e);
+      }
+    }
+    s = list[0];
+    return static_cast<int>(list.size()) - 1;
+  }
+};
+
+}  // namespace
+
+void SplitNodes(const NodeSeparation& sep, const FractureOptions& options, int max_splits,
+                TetMesh* mesh, ElasticModel* model, TopologyChange* change) {
+  *change = TopologyChange();
+  const int nv = mesh->num_vertices();
+  const int nt = mesh->num_tets();
+  change->source.resize(nv);
+  std::iota(change->source.begin(), change->source.end(), 0);
+  if (max_splits <= 0 || sep.measure.size() != nv) return;
+
+  // Candidates: measure above toughness, highest ratio first (ties: lower index).
+  std::vector<std::pair<double, int>> candidates;
+  for (int j = 0; j < nv; ++j) {
+    const double t = sep.toughness(j);
+    if (t > 0 && sep.measure(j) > t) candidates.emplace_back(-sep.measure(j) / t, j);
+  }
+  if (candidates.empty()) return;
+  std::sort(candidates.begin(), candidates.end());
+
+  SplitState st;
+  st.mesh = mesh;
+  st.tets.resize(nt);
+  st.removed.assign(nt, 0);
+  st.touched.assign(nt, 0);
+  st.star.assign(nv, {});
+  for (int e = 0; e < nt; ++e) {
+    for (int k = 0; k < 4; ++k) {
+      st.tets[e][k] = mesh->tets(e, k);
+      st.star[mesh->tets(e, k)].push_back(e);
+    }
+  }
+  st.source = change->source;
+  for (int v = 0; v < nv; ++v) {
+    st.rest.push_back(mesh->rest.row(v).transpose());
+    st.x.push_back(mesh->x.row(v).transpose());
+  }
+
+  int splits = 0;
+  for (const auto& c : candidates) {
+    if (splits >= max_splits) break;
+    const int j = c.second;
+    const Eigen::Vector3d n = sep.normal.row(j).transpose();
+    const Eigen::Vector3d p = st.x[j];
+    std::vector<int> positive, negative, crossed;
+    for (int e : st.star[j]) {
+      double lo = 0, hi = 0, h = 0;
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (int a = 0; a < 4; ++a) {
+        const Eigen::Vector3d xa = st.x[st.tets[e][a]];
+        centroid += 0.25 * xa;
+        for (int b = a + 1; b < 4; ++b) h += (xa - st.x[st.tets[e][b]]).norm() / 6.0;
+        if (st.tets[e][a] == j) continue;
+        const double d = n.dot(xa - p);
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+      }
+      const double tol = options.crossing_tolerance * h;
+      if (lo < -tol && hi > tol) {
+        crossed.push_back(e);
+      } else if (n.dot(centroid - p) > 0) {
+        positive.push_back(e);
+      } else {
+        negative.push_back(e);
+      }
+    }
+    // A plane that leaves every kept element on one side separates nothing.
+    if (positive.empty() || negative.empty()) continue;
+    SplitState saved = st;  // to undo a split that would leave a non-manifold surface
+    FractureEvent event;
+    event.node = j;
+    event.normal = n;
+    event.measure = sep.measure(j);
+    event.toughness = sep.toughness(j);
+    event.removed_elements = static_cast<int>(crossed.size());
+    std::vector<int> check = {j};
+    for (int e : crossed) {
+      for (int v : st.tets[e]) check.push_back(v);
+      st.Remove(e);
+    }
+    const int r = st.AddReplica(j);
+    for (int e : positive) {
+      st.Reassign(e, j, r);
+      st.star[r].push_back(e);
+    }
+    st.star[j] = negative;
+    check.push_back(r);
+    std::sort(check.begin(), check.end());
+    check.erase(std::unique(check.begin(), check.end()), check.end());
+    for (int v : check) st.SplitPinched(v);
+    // Every vertex whose elements changed, and their neighbours (the crack front).
+    std::vector<int> around;
+    for (int v = static_cast<int>(saved.rest.size()); v < static_cast<int>(st.rest.size()); ++v) check.push_back(v);
+    for (int v : check) {
+      for (int e : st.star[v])
+        for (int u : st.tets[e]) around.push_back(u);
+      around.push_back(v);
+    }
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    bool manifold = true;
+    for (int u : around) {
+      if (!st.ManifoldAt(u)) {
+        manifold = false;
+        break;
+      }
+    }
+    if (!manifold) {
+      st = std::move(saved);
+      continue;
+    }
+    ++splits;
+    change->removed_elements += static_cast<int>(crossed.size());
+    for (int e : crossed) change->removed_volume += model->rest(e).volume;
+    change->events.push_back(event);
+  }
+  if (splits == 0) return;
+
+  // Compaction: drop removed elements and vertices without elements.
+  const int nv_work = static_cast<int>(st.rest.size());
+  std::vector<int> new_index(nv_work, -1);
+  std::vector<int> source;
+  for (int v = 0; v < nv_work; ++v) {
+    if (st.star[v].empty()) {
+      ++change->dropped_vertices;
+      continue;
+    }
+    new_index[v] = static_cast<int>(source.size());
+    source.push_back(st.source[v]);
+  }
+  std::vector<int> old_element, touched;
+  for (int e = 0; e < nt; ++e) {
+    if (st.removed[e]) continue;
+    if (st.touched[e]) touched.push_back(static_cast<int>(old_element.size()));
+    old_element.push_back(e);
+  }
+  TetMesh& m = *mesh;
+  const int nt_new = static_cast<int>(old_element.size());
+  Tets tets(nt_new, 4);
+  Eigen::VectorXi region(nt_new);
+  for (int i = 0; i < nt_new; ++i) {
+    const int e = old_element[i];
+    for (int k = 0; k < 4; ++k) tets(i, k) = new_index[st.tets[e][k]];
+    region(i) = e < m.region.size() ? m.region(e) : 0;
+  }
+  const int nv_new = static_cast<int>(source.size());
+  Vertices rest(nv_new, 3), x(nv_new, 3);
+  for (int v = 0; v < nv_work; ++v) {
+    if (new_index[v] < 0) continue;
+    rest.row(new_index[v]) = st.rest[v].transpose();
+    x.row(new_index[v]) = st.x[v].transpose();
+  }
+  m.rest = std::move(rest);
+  m.x = std::move(x);
+  m.tets = std::move(tets);
+  m.region = std::move(region);
+  if (m.mass.size() > 0) m.mass = Eigen::VectorXd::Zero(nv_new);
+  BuildTopology(&m);
+  model->RemapElements(m, old_element, touched);
+  change->source = std::move(source);
+}
+
+MeshValidity CheckMesh(const TetMesh& mesh) {
+  MeshValidity v;
+  const int nv = mesh.num_vertices();
+  std::vector<int> count(nv, 0);
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    const double vol = SignedTetVolume(mesh.rest.row(mesh.tets(t, 0)), mesh.rest.row(mesh.tets(t, 1)),
+                                       mesh.rest.row(mesh.tets(t, 2)), mesh.rest.row(mesh.tets(t, 3)));
+    if (!(vol > 0)) ++v.nonpositive_volumes;
+    for (int k = 0; k < 4; ++k) ++count[mesh.tets(t, k)];
+  }
+  for (int c : count) v.orphan_vertices += (c == 0);
+  // Directed surface edges: a closed oriented manifold has each undirected edge exactly
+  // once in each direction.
+  std::map<std::pair<int, int>, std::pair<int, int>> edges;  // (min, max) -> (forward, backward)
+  for (int f = 0; f < mesh.num_surface_triangles(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.surface(f, k), b = mesh.surface(f, (k + 1) % 3);
+      auto& e = edges[{std::min(a, b), std::max(a, b)}];
+      (a < b ? e.first : e.second)++;
+    }
+  }
+  for (const auto& kv : edges) {
+    const int total = kv.second.first + kv.second.second;
+    if (total > 2) {
+      ++v.nonmanifold_edges;
+    } else if (total != 2 || kv.second.first != 1) {
+      ++v.open_edges;
+    }
+  }
+  // Vertex fans: the triangles around a surface vertex, linked through their edges at the
+  // vertex, must form one cycle.
+  std::vector<std::vector<int>> vertex_faces(nv);
+  for (int f = 0; f < mesh.num_surface_triangles(); ++f) {
+    for (int k = 0; k < 3; ++k) vertex_faces[mesh.surface(f, k)].push_back(f);
+  }
+  for (int u = 0; u < nv; ++u) {
+    const auto& faces = vertex_faces[u];
+    if (faces.empty()) continue;
+    // Map "next vertex" -> face: following the fan through the outgoing edge u->b.
+    std::map<int, int> out_edge;  // b -> face where u->b is a directed edge
+    std::map<int, int> in_edge;   // a -> face where a->u is a directed edge
+    for (int f : faces) {
+      for (int k = 0; k < 3; ++k) {
+        if (mesh.surface(f, k) != u) continue;
+        out_edge[mesh.surface(f, (k + 1) % 3)] = f;
+        in_edge[mesh.surface(f, (k + 2) % 3)] = f;
+      }
+    }
+    // Walk: from face f with u->b, the next face has b->u.
+    std::vector<char> seen(faces.size(), 0);
+    std::map<int, size_t> index;
+    for (size_t i = 0; i < faces.size(); ++i) index[faces[i]] = i;
+    int f = faces[0];
+    size_t steps = 0;
+    while (!seen[index[f]] && steps <= faces.size()) {
+      seen[index[f]] = 1;
+      ++steps;
+      int b = -1;
+      for (int k = 0; k < 3; ++k) {
+        if (mesh.surface(f, k) == u) b = mesh.surface(f, (k + 1) % 3);
+      }
+      auto it = in_edge.find(b);
+      if (it == in_edge.end()) break;
+      f = it->second;
+    }
+    if (steps != faces.size()) ++v.nonmanifold_vertices;
+  }
+  std::vector<int> piece;
+  v.pieces = ConnectedPieces(mesh, &piece);
+  return v;
+}
+
+std::string MeshValidity::ToString() const {
+  std::ostringstream os;
+  os << nonpositive_volumes << " non-positive volumes, " << orphan_vertices << " orphan vertices, "
+     << open_edges << " open edges, " << nonmanifold_edges << " non-manifold edges, "
+     << nonmanifold_vertices << " non-manifold vertices, " << pieces << " piece(s)";
+  return os.str();
+}
+
+int ConnectedPieces(const TetMesh& mesh, std::vector<int>* vertex_piece) {
+  const int nv = mesh.num_vertices();
+  std::vector<int> parent(nv);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    for (int k = 1; k < 4; ++k) {
+      const int a = find(mesh.tets(t, 0)), b = find(mesh.tets(t, k));
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  vertex_piece->assign(nv, -1);
+  std::map<int, int> ids;
+  int count = 0;
+  for (int v = 0; v < nv; ++v) {
+    const int root = find(v);
+    auto it = ids.find(root);
+    if (it == ids.end()) it = ids.emplace(root, count++).first;
+    (*vertex_piece)[v] = it->second;
+  }
+  return count;
+}
+
+}  // namespace femreg
+
+namespace femreg {
+
+Status SolveQuasiStaticWithFracture(ForwardProblem* problem, const ForwardOptions& forward,
+                                    const FractureOptions& options, int max_rounds,
+                                    double density, ElasticModel* model, TetMesh* mesh,
+                                    std::vector<int>* original, std::vector<FractureEvent>* events,
+                                    ForwardSummary* summary) {
+  if (static_cast<int>(original->size()) != mesh->num_vertices()) {
+    original->resize(mesh->num_vertices());
+    std::iota(original->begin(), original->end(), 0);
+  }
+  int splits = 0;
+  for (int round = 0;; ++round) {
+    Status status = SolveQuasiStatic(*problem, forward, model, mesh, summary);
+    if (!status.ok()) return status;
+    if (!summary->IsSolutionUsable()) {
+      return Status::Error("forward solve failed after " + std::to_string(splits) +
+                           " splits: " + summary->message);
+    }
+    if (round >= max_rounds || splits >= options.max_splits_per_frame) break;
+    model->UpdateRotations(mesh->x);
+    NodeSeparation separation;
+    DetectFracture(*mesh, *model, mesh->x, options, &separation);
+    TopologyChange change;
+    SplitNodes(separation, options,
+               std::min(options.max_splits_per_iteration, options.max_splits_per_frame - splits),
+               mesh, model, &change);
+    if (!change.changed()) break;
+    splits += static_cast<int>(change.events.size());
+    for (FractureEvent& e : change.events) {
+      e.original_node = (*original)[e.node];
+      events->push_back(e);
+    }
+    // Carry the problem: every copy of a clamped or prescribed vertex keeps its condition.
+    std::vector<std::vector<int>> copies(change.source.empty() ? 0 : original->size());
+    for (size_t v = 0; v < change.source.size(); ++v) copies[change.source[v]].push_back(static_cast<int>(v));
+    ForwardProblem carried;
+    carried.gravity = problem->gravity;
+    for (int v : problem->clamped)
+      for (int c : copies[v]) carried.clamped.push_back(c);
+    for (const auto& p : problem->prescribed)
+      for (int c : copies[p.first]) carried.prescribed.emplace_back(c, p.second);
+    for (const auto& p : problem->nodal_loads)
+      if (!copies[p.first].empty()) carried.nodal_loads.emplace_back(copies[p.first][0], p.second);
+    *problem = std::move(carried);
+    std::vector<int> carried_original(change.source.size());
+    for (size_t v = 0; v < change.source.size(); ++v) carried_original[v] = (*original)[change.source[v]];
+    *original = std::move(carried_original);
+    ComputeLumpedMasses(mesh, density);
+  }
+  return Status::Ok();
+}
+
+}  // namespace femreg

@@ -1,0 +1,98 @@
+// Ground truth for meshes that split: the per-piece side file and the piece matching.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "femreg/fracture.h"
+#include "femreg/io.h"
+
+namespace femreg {
+
+Status ReadPieceTruth(const std::string& path, std::vector<PieceTruthRow>* rows) {
+  rows->clear();
+  std::ifstream in(path);
+  if (!in) return Status::Error(path + ": cannot open");
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("vertex,piece,x,y,z", 0) != 0) {
+    return Status::Error(path + ":1: expected the header vertex,piece,x,y,z");
+  }
+  int number = 1;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    PieceTruthRow r;
+    if (std::sscanf(line.c_str(), "%d,%d,%lf,%lf,%lf", &r.vertex, &r.piece, &r.position.x(),
+                    &r.position.y(), &r.position.z()) != 5 ||
+        r.vertex < 0 || !r.position.allFinite()) {
+      return Status::Error(path + ":" + std::to_string(number) + ": expected vertex,piece,x,y,z");
+    }
+    rows->push_back(r);
+  }
+  return Status::Ok();
+}
+
+Status WritePieceTruth(const std::string& path, const std::vector<PieceTruthRow>& rows) {
+  std::ostringstream os;
+  os << "vertex,piece,x,y,z\n";
+  char buf[160];
+  for (const PieceTruthRow& r : rows) {
+    std::snprintf(buf, sizeof(buf), "%d,%d,%.9g,%.9g,%.9g\n", r.vertex, r.piece, r.position.x(),
+                  r.position.y(), r.position.z());
+    os << buf;
+  }
+  return WriteFileAtomically(path, os.str());
+}
+
+PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
+                               const std::vector<int>& original, const GroundTruthFrame& truth,
+                               const std::vector<PieceTruthRow>& piece_truth) {
+  PieceErrors out;
+  std::vector<int> piece;
+  const int num_pieces = ConnectedPieces(mesh, &piece);
+  // Original vertex -> (truth piece -> position).
+  std::map<int, std::map<int, Eigen::Vector3d>> sided;
+  for (const PieceTruthRow& r : piece_truth) sided[r.vertex][r.piece] = r.position;
+  // Match each tracked piece to the truth piece most of its unambiguous vertices are on.
+  std::vector<std::map<int, int>> votes(num_pieces);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    auto it = sided.find(original[v]);
+    if (it != sided.end() && it->second.size() == 1) ++votes[piece[v]][it->second.begin()->first];
+  }
+  std::vector<int> match(num_pieces, -1);
+  for (int p = 0; p < num_pieces; ++p) {
+    int best = 0;
+    for (const auto& kv : votes[p]) {
+      if (kv.second > best) {
+        best = kv.second;
+        match[p] = kv.first;
+      }
+    }
+  }
+  Vertices truth_positions(mesh.num_vertices(), 3);
+  GroundTruthFrame matched;
+  matched.visible.resize(mesh.num_vertices());
+  std::vector<std::vector<double>> per_piece(num_pieces);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const int o = original[v];
+    Eigen::Vector3d p = truth.positions.row(o).transpose();
+    auto it = sided.find(o);
+    if (it != sided.end()) {
+      auto jt = it->second.find(match[piece[v]]);
+      if (jt != it->second.end()) p = jt->second;
+    }
+    truth_positions.row(v) = p.transpose();
+    matched.visible[v] = o < static_cast<int>(truth.visible.size()) ? truth.visible[o] : 0;
+    per_piece[piece[v]].push_back((positions.row(v).transpose() - p).norm());
+  }
+  matched.positions = truth_positions;
+  out.all = ComputeVertexErrors(positions, matched);
+  for (int p = 0; p < num_pieces; ++p) {
+    out.piece_vertices.push_back(static_cast<int>(per_piece[p].size()));
+    out.pieces.push_back(ComputeErrorStats(per_piece[p]));
+  }
+  return out;
+}
+
+}  // namespace femreg
