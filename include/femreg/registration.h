@@ -64,6 +64,10 @@ struct PreprocessOptions {
   int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
   double outlier_stddev = 1.0;                          // ... threshold in standard deviations
   int normal_neighbors = 0;                             // estimate normals from k neighbours; 0 = off
+  // Removes the dominant plane (a table) found by RANSAC: points within plane_distance (m)
+  // of it are dropped, after cropping and before downsampling. 0 = off.
+  double plane_distance = 0.0;
+  int plane_iterations = 200;                           // RANSAC iterations (>= 1)
   bool IsValid(std::string* error) const;
 };
 

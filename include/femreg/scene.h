@@ -13,6 +13,7 @@
 #include "femreg/mesh.h"
 #include "femreg/registration.h"
 #include "femreg/status.h"
+#include "femreg/synth.h"
 
 namespace femreg {
 
@@ -98,6 +99,73 @@ struct EffectsSpec {
   bool collision = false;
 };
 
+// femreg synth: the ground truth simulation, the virtual sensor and the motion script
+// (the scene's `synth:` section; see datasets/README.md).
+// A keyframe of a rigid motion: at `frame` the set is rotated by `rotation` (axis * angle,
+// rad) about its centre and then moved by `translation` (m), both from rest. Between
+// keyframes both are interpolated linearly; before the first and after the last one they
+// are held.
+struct MotionKeyframe {
+  int frame = 0;
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();
+};
+// The interpolated translation and rotation vector at `frame`.
+void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,
+                          Eigen::Vector3d* translation, Eigen::Vector3d* rotation);
+
+// Vertices of the simulated mesh moved rigidly from rest (a gripper, a clamp that moves).
+struct MotionTrackSpec {
+  enum class Anchor { kNone, kHard, kSoft };
+  std::string name;
+  VertexSelection selection;        // on the simulated (ground truth) mesh's rest positions
+  bool has_centre = false;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // default: the selection's centroid
+  std::vector<MotionKeyframe> keyframes;
+  // The robot knows this gripper: the tracking scene gets an anchor that follows the
+  // translations (rotation-free tracks only).
+  Anchor anchor = Anchor::kNone;
+};
+
+// A rigid box rendered with the object (a tool, an occluder): never part of the ground
+// truth. Keyframes translate it (rotation is not supported for bodies).
+struct SynthBodySpec {
+  std::string name;
+  Eigen::Vector3d box_min = Eigen::Vector3d::Zero(), box_max = Eigen::Vector3d::Zero();
+  std::vector<MotionKeyframe> keyframes;
+  bool in_cloud = false;   // its pixels return points (false: masked, it only hides)
+  // Pressed along -z into the object: the object's top surface vertices under the box's
+  // footprint are moved down to its bottom face (prescribed displacement, not a contact
+  // solve).
+  bool press = false;
+  double contact_tolerance = 1e-3;  // m: how far below the highest vertex the patch reaches
+};
+
+struct SynthSpec {
+  bool enabled = false;      // the scene has a synth section
+  int frames = 30;
+  uint64_t seed = 1;
+  bool sanity_check = false; // ground truth made with the tracked mesh and material
+  // Ground truth mesh: the object's generator refined, or a mesh file or generator of its
+  // own (with the object's scale and pose); the material overrides the object's.
+  int refinement = 1;
+  std::string mesh_path;
+  MeshGeneratorSpec generate;
+  Material material;
+  std::string ground_truth_where;  // "synth.yaml:12 (synth.ground_truth)" for messages
+  DepthSensorOptions sensor;       // sensor.camera is registration.camera
+  bool background = false;         // a square table quad
+  Eigen::Vector3d background_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d background_normal = Eigen::Vector3d::UnitZ();
+  double background_size = 1.0;    // m, edge length
+  std::vector<MotionTrackSpec> motion;
+  std::vector<SynthBodySpec> bodies;
+  // The tracking scene written beside the data: the objects, registration and anchors of
+  // this file (simulation-only keys removed) plus the anchors of the tracks, as YAML.
+  std::string tracking_scene_yaml;
+  std::string source_name;         // the scene file's name, for the outputs
+};
+
 struct Scene {
   std::string path;  // the file it was read from ("" when built in code)
   std::vector<ObjectSpec> objects;
@@ -109,6 +177,7 @@ struct Scene {
   RegistrationOptions registration;
   std::vector<AnchorSpec> anchors;
   EffectsSpec effects;
+  SynthSpec synth;  // femreg synth; synth.enabled when the file has a synth section
 };
 
 // Reads and validates a scene. Errors name the file, line and key ("scene.yaml:14: objects[0].

@@ -30,6 +30,7 @@ struct DepthSensorOptions {
 struct RenderSurface {
   const Vertices* positions = nullptr;
   const Triangles* triangles = nullptr;
+  bool returns = true;  // false: hides what is behind it but returns no points (a masked tool)
 };
 
 struct DepthImage {
@@ -49,8 +50,9 @@ class DepthSensor {
   // grazing-angle drop-outs and outliers, deterministic from `seed`.
   PointCloud Sample(const DepthImage& image, const std::vector<RenderSurface>& surfaces,
                     uint64_t seed) const;
-  // Whether each point is seen: in front of the camera, inside the image, and no nearer
-  // than `tolerance` (m) behind the z-buffer's depth at its pixel.
+  // Whether each point is seen: in front of the camera, inside the image, and no more
+  // than `tolerance` (m) plus two pixel footprints behind the z-buffer's depth at its
+  // pixel (at a silhouette, where its pixel sees nothing: the nearest depth around it).
   std::vector<char> Visible(const DepthImage& image, const Vertices& points,
                             double tolerance) const;
 
@@ -75,24 +77,27 @@ EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points);
 Vertices InterpolateEmbedded(const TetMesh& fine, const Vertices& fine_positions,
                              const EmbeddedPoints& embedded);
 
-// The bundled demo: a soft beam clamped at one end whose free end is bent, twisted and
-// swung by a prescribed motion, simulated with corotational FEM on a mesh twice as fine
-// as the tracked one, seen by a virtual depth camera.
-struct DemoOptions {
-  int frames = 30;
-  int coarse_cells_x = 30, coarse_cells_yz = 5;  // tracked mesh: (30+1)(5+1)^2 = 1116 vertices
-  int refinement = 2;                            // ground truth mesh: cells * refinement
-  double length = 0.3, width = 0.06;             // m
-  double youngs_modulus = 5.0e4, poisson_ratio = 0.35, density = 200.0;
-  uint64_t seed = 1;
-  DepthSensorOptions sensor;                     // defaults set in DefaultDemoOptions()
-};
-DemoOptions DefaultDemoOptions();
+struct Scene;
 
-// Writes DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd, DIR/ground_truth/frame_NNNN.csv and
-// DIR/README.md. `progress` (may be null) is called after each frame.
-Status GenerateDemoSequence(const DemoOptions& options, const std::string& dir,
-                            void (*progress)(int done, int total) = nullptr);
+// What GenerateSynthSequence made.
+struct SynthReport {
+  int frames = 0;
+  int tracked_vertices = 0, tracked_tets = 0;
+  int truth_vertices = 0, truth_tets = 0;
+  int min_points = 0, max_points = 0;  // cloud sizes
+  double mean_seen_fraction = 0.0;     // tracked vertices the camera saw, mean over frames
+};
+
+// femreg synth: simulates the scene's synth section (scene.synth.enabled) frame by frame
+// with SolveQuasiStatic on the ground truth mesh, renders it with the virtual camera and
+// writes DIR/scene.yaml (the tracking scene), DIR/clouds/frame_NNNN.pcd,
+// DIR/ground_truth/frame_NNNN.csv, DIR/truth/frame_NNNN.vtu (the ground truth surface) and
+// DIR/README.md. `frames` <= 0 means synth.frames; the motion script's timeline does not
+// depend on it, so the first frames of a shorter run are bit-identical to a longer one's.
+// `progress` (may be null) is called after each frame.
+Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int frames,
+                             SynthReport* report,
+                             void (*progress)(int done, int total) = nullptr);
 
 }  // namespace femreg
 

@@ -8,6 +8,9 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
+#include <pcl/sample_consensus/method_types.h>
+#include <pcl/sample_consensus/model_types.h>
+#include <pcl/segmentation/sac_segmentation.h>
 
 #include <cmath>
 #include <cstdio>
@@ -211,8 +214,8 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
                           int* nonfinite_dropped, const Eigen::Vector3d& viewpoint) {
   const int dropped = DropNonFinite(cloud);
   if (nonfinite_dropped) *nonfinite_dropped = dropped;
-  const bool any = options.crop || options.voxel_size > 0 || options.outlier_neighbors > 0 ||
-                   options.normal_neighbors > 0;
+  const bool any = options.crop || options.plane_distance > 0 || options.voxel_size > 0 ||
+                   options.outlier_neighbors > 0 || options.normal_neighbors > 0;
   if (!any || cloud->size() == 0) return;
   bool normals = cloud->has_normals();
   PclCloud::Ptr pc = ToPcl(*cloud);
@@ -224,6 +227,28 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
     PclCloud::Ptr out(new PclCloud);
     crop.filter(*out);
     pc = out;
+  }
+  if (options.plane_distance > 0 && pc->size() >= 3) {
+    // RANSAC with PCL's fixed seed: the same cloud loses the same points every run.
+    pcl::SACSegmentation<pcl::PointNormal> seg;
+    seg.setModelType(pcl::SACMODEL_PLANE);
+    seg.setMethodType(pcl::SAC_RANSAC);
+    seg.setDistanceThreshold(options.plane_distance);
+    seg.setMaxIterations(options.plane_iterations);
+    seg.setOptimizeCoefficients(true);
+    seg.setInputCloud(pc);
+    pcl::PointIndices inliers;
+    pcl::ModelCoefficients coefficients;
+    seg.segment(inliers, coefficients);
+    if (!inliers.indices.empty()) {
+      std::vector<char> drop(pc->size(), 0);
+      for (int i : inliers.indices) drop[static_cast<size_t>(i)] = 1;
+      PclCloud::Ptr out(new PclCloud);
+      for (size_t i = 0; i < pc->size(); ++i) {
+        if (!drop[i]) out->push_back((*pc)[i]);
+      }
+      pc = out;
+    }
   }
   if (options.voxel_size > 0 && !pc->empty()) {
     pcl::VoxelGrid<pcl::PointNormal> grid;

@@ -114,6 +114,7 @@ PointCloud DepthSensor::Sample(const DepthImage& image, const std::vector<Render
     for (int px = 0; px < image.width; px += options_.pixel_stride) {
       const size_t idx = static_cast<size_t>(py) * image.width + px;
       if (image.triangle[idx] < 0) continue;
+      if (!surfaces[static_cast<size_t>(image.surface[idx])].returns) continue;
       const double z = image.depth[idx];
       const Eigen::Vector3d ray_c((px - c.cx) / c.fx, (py - c.cy) / c.fy, 1.0);
       const Eigen::Vector3d dir_w = (R_.transpose() * ray_c).normalized();
@@ -156,18 +157,25 @@ std::vector<char> DepthSensor::Visible(const DepthImage& image, const Vertices& 
     if (!Project(points.row(i), &u, &v, &z)) continue;
     const int px = static_cast<int>(std::lround(u)), py = static_cast<int>(std::lround(v));
     if (px < 0 || py < 0 || px >= image.width || py >= image.height) continue;
-    // The nearest depth in a 3x3 neighbourhood, so that a vertex on a silhouette edge
-    // counts as seen when its own surface is.
-    double best = std::numeric_limits<double>::infinity();
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int qx = px + dx, qy = py + dy;
-        if (qx < 0 || qy < 0 || qx >= image.width || qy >= image.height) continue;
-        const float d = image.depth[static_cast<size_t>(qy) * image.width + qx];
-        if (d > 0) best = std::min(best, static_cast<double>(d));
+    // The depth at the vertex's own pixel; on a silhouette, where that pixel sees nothing,
+    // the nearest depth around it. The pixel centre is up to 0.7 pixels away from the
+    // vertex, so an inclined surface differs in depth by a few pixel footprints there.
+    double depth = image.depth[static_cast<size_t>(py) * image.width + px];
+    if (!(depth > 0)) {
+      depth = std::numeric_limits<double>::infinity();
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = px + dx, qy = py + dy;
+          if (qx < 0 || qy < 0 || qx >= image.width || qy >= image.height) continue;
+          const float d = image.depth[static_cast<size_t>(qy) * image.width + qx];
+          if (d > 0) depth = std::min(depth, static_cast<double>(d));
+        }
       }
     }
-    if (std::isfinite(best) && z <= best + tolerance) out[static_cast<size_t>(i)] = 1;
+    const double footprint = z / std::min(options_.camera.fx, options_.camera.fy);
+    if (std::isfinite(depth) && z <= depth + tolerance + 2.0 * footprint) {
+      out[static_cast<size_t>(i)] = 1;
+    }
   }
   return out;
 }

@@ -13,7 +13,8 @@ void RegisterCommands(CLI::App* app) {
   AddInfoCommand(app);
   AddSimulateCommand(app);
   AddRegisterCommand(app);
-  AddDemoDataCommand(app);
+  AddSynthCommand(app);
+  AddEvalCommand(app);
 }
 
 }  // namespace cli

@@ -11,7 +11,8 @@ namespace cli {
 void AddInfoCommand(CLI::App* app);
 void AddSimulateCommand(CLI::App* app);
 void AddRegisterCommand(CLI::App* app);
-void AddDemoDataCommand(CLI::App* app);
+void AddSynthCommand(CLI::App* app);
+void AddEvalCommand(CLI::App* app);
 
 // Adds all of the above.
 void RegisterCommands(CLI::App* app);

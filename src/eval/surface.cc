@@ -1,0 +1,190 @@
+// VTU geometry in file order, triangle surfaces and surface-to-surface distances.
+#include <vtkCallbackCommand.h>
+#include <vtkCellArray.h>
+#include <vtkCellType.h>
+#include <vtkCommand.h>
+#include <vtkFloatArray.h>
+#include <vtkIdList.h>
+#include <vtkNew.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+
+#include "femreg/eval.h"
+#include "io/io_internal.h"
+#include "registration/nearest.h"
+
+namespace femreg {
+namespace {
+
+// Collects VTK error events of one reader or writer instead of printing them.
+void CollectError(vtkObject*, unsigned long, void* client_data, void* call_data) {
+  auto* text = static_cast<std::string*>(client_data);
+  if (call_data != nullptr && text->size() < 2000) *text += static_cast<const char*>(call_data);
+}
+
+std::vector<Eigen::Vector3d> Samples(const Vertices& points, const Triangles& triangles) {
+  std::vector<Eigen::Vector3d> out;
+  std::vector<char> used(static_cast<size_t>(points.rows()), 0);
+  for (int f = 0; f < triangles.rows(); ++f) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const int v = triangles(f, k);
+      c += points.row(v).transpose() / 3.0;
+      if (!used[static_cast<size_t>(v)]) {
+        used[static_cast<size_t>(v)] = 1;
+        out.push_back(points.row(v).transpose());
+      }
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace
+
+Triangles BoundaryFaces(const Tets& tets) {
+  // The faces of tet (a, b, c, d) seen from outside, counter-clockwise.
+  static const int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::map<std::array<int, 3>, std::pair<int, std::array<int, 3>>> count;
+  for (int t = 0; t < tets.rows(); ++t) {
+    for (const auto& face : kFaces) {
+      std::array<int, 3> f = {tets(t, face[0]), tets(t, face[1]), tets(t, face[2])};
+      std::array<int, 3> key = f;
+      std::sort(key.begin(), key.end());
+      auto it = count.emplace(key, std::make_pair(0, f)).first;
+      ++it->second.first;
+    }
+  }
+  std::vector<std::array<int, 3>> faces;
+  for (const auto& kv : count) {
+    if (kv.second.first == 1) faces.push_back(kv.second.second);
+  }
+  Triangles out(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t i = 0; i < faces.size(); ++i) {
+    for (int k = 0; k < 3; ++k) out(static_cast<Eigen::Index>(i), k) = faces[i][k];
+  }
+  return out;
+}
+
+Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return Status::Error(path + ": cannot open");
+  std::string errors;
+  vtkNew<vtkCallbackCommand> callback;
+  callback->SetCallback(&CollectError);
+  callback->SetClientData(&errors);
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->AddObserver(vtkCommand::ErrorEvent, callback);
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkUnstructuredGrid* grid = reader->GetOutput();
+  if (!errors.empty() || grid == nullptr || grid->GetNumberOfPoints() == 0) {
+    return Status::Error(path + ": not a readable VTU file with points" +
+                         (errors.empty() ? std::string() : " (" + errors.substr(0, 200) + ")"));
+  }
+  const vtkIdType n = grid->GetNumberOfPoints();
+  geometry->points.resize(n, 3);
+  for (vtkIdType i = 0; i < n; ++i) {
+    double p[3];
+    grid->GetPoint(i, p);
+    geometry->points.row(i) << p[0], p[1], p[2];
+  }
+  std::vector<std::array<int, 4>> tets;
+  std::vector<std::array<int, 3>> tris;
+  vtkNew<vtkIdList> ids;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    const int type = grid->GetCellType(c);
+    grid->GetCellPoints(c, ids);
+    if (type == VTK_TETRA && ids->GetNumberOfIds() == 4) {
+      tets.push_back({static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
+                      static_cast<int>(ids->GetId(2)), static_cast<int>(ids->GetId(3))});
+    } else if (type == VTK_TRIANGLE && ids->GetNumberOfIds() == 3) {
+      tris.push_back({static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
+                      static_cast<int>(ids->GetId(2))});
+    }
+  }
+  geometry->tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
+  for (size_t t = 0; t < tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) geometry->tets(static_cast<Eigen::Index>(t), k) = tets[t][k];
+  }
+  const Triangles boundary = BoundaryFaces(geometry->tets);
+  geometry->surface.resize(static_cast<Eigen::Index>(tris.size()) + boundary.rows(), 3);
+  for (size_t f = 0; f < tris.size(); ++f) {
+    for (int k = 0; k < 3; ++k) geometry->surface(static_cast<Eigen::Index>(f), k) = tris[f][k];
+  }
+  geometry->surface.bottomRows(boundary.rows()) = boundary;
+  if (geometry->surface.rows() == 0) {
+    return Status::Error(path + ": has neither tetrahedra nor triangles");
+  }
+  return Status::Ok();
+}
+
+Status WriteVtuSurface(const std::string& path, const Vertices& points, const Triangles& triangles) {
+  vtkNew<vtkUnstructuredGrid> grid;
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToFloat();
+  pts->SetNumberOfPoints(points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) pts->SetPoint(i, points(i, 0), points(i, 1), points(i, 2));
+  grid->SetPoints(pts);
+  grid->Allocate(triangles.rows());
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const vtkIdType ids[3] = {triangles(f, 0), triangles(f, 1), triangles(f, 2)};
+    grid->InsertNextCell(VTK_TRIANGLE, 3, ids);
+  }
+  const std::string temp = internal::TemporaryPathFor(path);
+  std::string errors;
+  vtkNew<vtkCallbackCommand> callback;
+  callback->SetCallback(&CollectError);
+  callback->SetClientData(&errors);
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->AddObserver(vtkCommand::ErrorEvent, callback);
+  writer->SetFileName(temp.c_str());
+  writer->SetInputData(grid);
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writer->SetCompressorTypeToZLib();
+  writer->SetCompressionLevel(9);
+  writer->SetIdTypeToInt32();
+  writer->SetHeaderTypeToUInt32();
+  const int ok = writer->Write();
+  if (ok != 1 || !errors.empty() || std::rename(temp.c_str(), path.c_str()) != 0) {
+    std::remove(temp.c_str());
+    return Status::Error(path + ": cannot write VTU" + (errors.empty() ? "" : ": " + errors.substr(0, 200)));
+  }
+  return Status::Ok();
+}
+
+SurfaceDistance ComputeSurfaceDistance(const Vertices& points_a, const Triangles& triangles_a,
+                                       const Vertices& points_b, const Triangles& triangles_b) {
+  SurfaceDistance d;
+  if (triangles_a.rows() == 0 || triangles_b.rows() == 0) return d;
+  const SurfaceIndex index_a(points_a, triangles_a, 8), index_b(points_b, triangles_b, 8);
+  auto one_way = [&d](const std::vector<Eigen::Vector3d>& samples, const SurfaceIndex& other,
+                      double* mean) {
+    double sum = 0.0;
+    for (const Eigen::Vector3d& p : samples) {
+      const double dist = std::sqrt(other.Closest(p).squared_distance);
+      sum += dist;
+      d.hausdorff = std::max(d.hausdorff, dist);
+    }
+    *mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
+  };
+  const std::vector<Eigen::Vector3d> sa = Samples(points_a, triangles_a);
+  const std::vector<Eigen::Vector3d> sb = Samples(points_b, triangles_b);
+  d.samples_a = static_cast<int>(sa.size());
+  d.samples_b = static_cast<int>(sb.size());
+  one_way(sa, index_b, &d.a_to_b_mean);
+  one_way(sb, index_a, &d.b_to_a_mean);
+  d.mean = 0.5 * (d.a_to_b_mean + d.b_to_a_mean);
+  return d;
+}
+
+}  // namespace femreg

@@ -1,0 +1,393 @@
+// femreg synth: a scene's motion script simulated on a ground truth mesh and seen by the
+// virtual depth camera. Deterministic from the seed: the forward solve runs on one thread
+// and every random draw comes from a per-frame generator.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "femreg/eval.h"
+#include "femreg/forward.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
+#include "femreg/synth.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+
+void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,
+                          Eigen::Vector3d* translation, Eigen::Vector3d* rotation) {
+  translation->setZero();
+  rotation->setZero();
+  if (keyframes.empty()) return;
+  if (frame <= keyframes.front().frame) {
+    *translation = keyframes.front().translation;
+    *rotation = keyframes.front().rotation;
+    return;
+  }
+  for (size_t k = 1; k < keyframes.size(); ++k) {
+    const MotionKeyframe& a = keyframes[k - 1];
+    const MotionKeyframe& b = keyframes[k];
+    if (frame <= b.frame) {
+      const double s = static_cast<double>(frame - a.frame) / (b.frame - a.frame);
+      *translation = (1 - s) * a.translation + s * b.translation;
+      *rotation = (1 - s) * a.rotation + s * b.rotation;
+      return;
+    }
+  }
+  *translation = keyframes.back().translation;
+  *rotation = keyframes.back().rotation;
+}
+
+namespace {
+
+Eigen::Matrix3d RotationMatrix(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  return angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix()
+                   : Eigen::Matrix3d::Identity();
+}
+
+// Runs OpenMP regions on one thread while alive, so that reductions sum in one order.
+class SingleThreaded {
+ public:
+  SingleThreaded() {
+#ifdef _OPENMP
+    previous_ = omp_get_max_threads();
+    omp_set_num_threads(1);
+#endif
+  }
+  ~SingleThreaded() {
+#ifdef _OPENMP
+    omp_set_num_threads(previous_);
+#endif
+  }
+
+ private:
+  int previous_ = 1;
+};
+
+// A box as a closed triangle surface (12 triangles).
+void BoxSurface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Vertices* points,
+                Triangles* triangles) {
+  points->resize(8, 3);
+  for (int i = 0; i < 8; ++i) {
+    points->row(i) << ((i & 1) ? hi.x() : lo.x()), ((i & 2) ? hi.y() : lo.y()),
+        ((i & 4) ? hi.z() : lo.z());
+  }
+  triangles->resize(12, 3);
+  *triangles << 0, 2, 1, 1, 2, 3,  // z = lo
+      4, 5, 6, 5, 7, 6,            // z = hi
+      0, 1, 4, 1, 5, 4,            // y = lo
+      2, 6, 3, 3, 6, 7,            // y = hi
+      0, 4, 2, 2, 4, 6,            // x = lo
+      1, 3, 5, 3, 7, 5;            // x = hi
+}
+
+// A square of edge `size` centred at `point`, perpendicular to `normal` (2 triangles).
+void Quad(const Eigen::Vector3d& point, const Eigen::Vector3d& normal, double size,
+          Vertices* points, Triangles* triangles) {
+  const Eigen::Vector3d n = normal.normalized();
+  const Eigen::Vector3d a = n.unitOrthogonal() * (0.5 * size);
+  const Eigen::Vector3d b = n.cross(a);
+  points->resize(4, 3);
+  points->row(0) = (point - a - b).transpose();
+  points->row(1) = (point + a - b).transpose();
+  points->row(2) = (point + a + b).transpose();
+  points->row(3) = (point - a + b).transpose();
+  triangles->resize(2, 3);
+  *triangles << 0, 1, 2, 0, 2, 3;
+}
+
+std::string FrameName(int f) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "frame_%04d", f);
+  return name;
+}
+
+std::string Fixed(double v, int digits = 3) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+struct Track {
+  const MotionTrackSpec* spec;
+  std::vector<int> vertices;
+  Eigen::Vector3d centre;
+};
+
+}  // namespace
+
+Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int frames,
+                             SynthReport* report, void (*progress)(int done, int total)) {
+  const SynthSpec& s = scene.synth;
+  if (!s.enabled) return Status::Error(scene.path + ": the scene has no synth section");
+  if (scene.objects.size() != 1) return Status::Error(scene.path + ": synth needs one object");
+  const int num_frames = frames > 0 ? frames : s.frames;
+  std::string error;
+  if (!s.sensor.IsValid(&error)) return Status::Error(scene.path + ": synth." + error);
+  SingleThreaded single_threaded;
+
+  // The tracked mesh and the ground truth mesh (the same object, refined or replaced).
+  TetMesh coarse, fine;
+  Status status = LoadObjectMesh(scene, 0, &coarse);
+  if (!status.ok()) return status;
+  Scene truth_scene = scene;
+  ObjectSpec& truth_object = truth_scene.objects[0];
+  truth_object.material = s.material;
+  if (s.refinement > 1) {
+    MeshGeneratorSpec& g = truth_object.generate;
+    g.cells *= s.refinement;
+    g.radial_cells *= s.refinement;
+    g.axial_cells *= s.refinement;
+  } else if (!s.mesh_path.empty()) {
+    truth_object.mesh_path = s.mesh_path;
+    truth_object.generate = MeshGeneratorSpec();
+  } else if (s.generate.shape != MeshGeneratorSpec::Shape::kNone) {
+    truth_object.generate = s.generate;
+  }
+  status = LoadObjectMesh(truth_scene, 0, &fine);
+  if (!status.ok()) return Status::Error(s.ground_truth_where + ": " + status.message());
+  ElasticModel model;
+  model.Build(fine, scene.forward_model, s.material, truth_object.region_materials);
+
+  // Static boundary conditions and loads of the scene, on the ground truth mesh.
+  ForwardProblem base;
+  status = BuildForwardProblem(truth_scene, 0, fine, &base);
+  if (!status.ok()) return status;
+  std::map<int, std::string> held;  // vertex -> what holds it
+  for (int v : base.clamped) held[v] = "a boundary clamp";
+  for (const auto& p : base.prescribed) held[p.first] = "a boundary displacement";
+
+  std::vector<Track> tracks;
+  for (const MotionTrackSpec& spec : s.motion) {
+    Track track{&spec, {}, spec.centre};
+    status = SelectVertices(spec.selection, fine.rest, &track.vertices);
+    if (!status.ok()) return status;
+    if (!spec.has_centre) {
+      track.centre.setZero();
+      for (int v : track.vertices) track.centre += fine.rest.row(v).transpose();
+      track.centre /= static_cast<double>(track.vertices.size());
+    }
+    for (int v : track.vertices) {
+      auto inserted = held.emplace(v, "motion track '" + spec.name + "'");
+      if (!inserted.second) {
+        return Status::Error(spec.selection.where + ": vertex " + std::to_string(v) +
+                             " of the ground truth mesh is held by " + inserted.first->second +
+                             " as well; a vertex takes one motion");
+      }
+    }
+    if (spec.anchor != MotionTrackSpec::Anchor::kNone) {
+      std::vector<int> tracked;
+      status = SelectVertices(spec.selection, coarse.rest, &tracked);
+      if (!status.ok()) {
+        return Status::Error(status.message() + " (on the tracked mesh, for the anchor of track '" +
+                             spec.name + "')");
+      }
+    }
+    tracks.push_back(track);
+  }
+
+  const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
+  const DepthSensor sensor(s.sensor);
+  Vertices table_points, surface_points;
+  Triangles table_triangles, surface_triangles;
+  if (s.background) {
+    Quad(s.background_point, s.background_normal, s.background_size, &table_points, &table_triangles);
+  }
+  // The ground truth surface, compacted to the surface vertices.
+  std::vector<int> compact(static_cast<size_t>(fine.num_vertices()), -1);
+  for (size_t i = 0; i < fine.surface_vertices.size(); ++i) {
+    compact[static_cast<size_t>(fine.surface_vertices[i])] = static_cast<int>(i);
+  }
+  surface_triangles.resize(fine.num_surface_triangles(), 3);
+  for (int f = 0; f < fine.num_surface_triangles(); ++f) {
+    for (int k = 0; k < 3; ++k) surface_triangles(f, k) = compact[static_cast<size_t>(fine.surface(f, k))];
+  }
+
+  std::error_code ec;
+  for (const char* sub : {"clouds", "ground_truth", "truth"}) {
+    fs::create_directories(fs::path(dir) / sub, ec);
+    if (ec) return Status::Error(dir + "/" + sub + ": cannot create: " + ec.message());
+  }
+  if (!scene.objects[0].mesh_path.empty()) {
+    const fs::path target = fs::path(dir) / fs::path(scene.objects[0].mesh_path).filename();
+    fs::copy_file(scene.objects[0].mesh_path, target, fs::copy_options::overwrite_existing, ec);
+    if (ec) return Status::Error(target.string() + ": cannot copy the mesh: " + ec.message());
+  }
+  std::string header =
+      "# Tracking scene written by `femreg synth " + s.source_name + "`: the tracked mesh, the\n"
+      "# camera, the registration settings and the anchors the robot knows about. Run\n"
+      "#   femreg register --scene scene.yaml --frames clouds --ground-truth ground_truth --out OUT\n";
+  if (s.sanity_check) {
+    header += "# SANITY CHECK: the data were made with this very mesh and material.\n";
+  }
+  status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), header + s.tracking_scene_yaml);
+  if (!status.ok()) return status;
+
+  SynthReport r;
+  r.frames = num_frames;
+  r.tracked_vertices = coarse.num_vertices();
+  r.tracked_tets = coarse.num_tets();
+  r.truth_vertices = fine.num_vertices();
+  r.truth_tets = fine.num_tets();
+  r.min_points = 1 << 30;
+  double seen_sum = 0.0;
+  for (int f = 0; f < num_frames; ++f) {
+    ForwardProblem problem = base;
+    for (const Track& track : tracks) {
+      Eigen::Vector3d t, rv;
+      InterpolateKeyframes(track.spec->keyframes, f, &t, &rv);
+      const Eigen::Matrix3d R = RotationMatrix(rv);
+      for (int v : track.vertices) {
+        const Eigen::Vector3d X = fine.rest.row(v).transpose();
+        problem.prescribed.emplace_back(v, track.centre + t + R * (X - track.centre) - X);
+      }
+    }
+    // Bodies at this frame; pressing ones move their contact patch.
+    std::vector<Vertices> body_points(s.bodies.size());
+    std::vector<Triangles> body_triangles(s.bodies.size());
+    for (size_t b = 0; b < s.bodies.size(); ++b) {
+      const SynthBodySpec& body = s.bodies[b];
+      Eigen::Vector3d t, rv;
+      InterpolateKeyframes(body.keyframes, f, &t, &rv);
+      const Eigen::Vector3d lo = body.box_min + t, hi = body.box_max + t;
+      BoxSurface(lo, hi, &body_points[b], &body_triangles[b]);
+      if (!body.press) continue;
+      std::vector<int> under;
+      double top = -1e300;
+      for (int v : fine.surface_vertices) {
+        const Eigen::Vector3d X = fine.rest.row(v).transpose();
+        if (X.x() < lo.x() || X.x() > hi.x() || X.y() < lo.y() || X.y() > hi.y()) continue;
+        under.push_back(v);
+        top = std::max(top, X.z());
+      }
+      for (int v : under) {
+        const double z = fine.rest(v, 2);
+        if (z < top - body.contact_tolerance || lo.z() >= z) continue;
+        if (held.count(v)) continue;  // the script holds it already
+        problem.prescribed.emplace_back(v, Eigen::Vector3d(0, 0, lo.z() - z));
+      }
+    }
+    ForwardSummary summary;
+    status = SolveQuasiStatic(problem, scene.forward, &model, &fine, &summary);
+    if (!status.ok()) return Status::Error(scene.path + ": frame " + std::to_string(f) + ": " + status.message());
+    if (!summary.IsSolutionUsable()) {
+      return Status::Error(scene.path + ": frame " + std::to_string(f) +
+                           ": the forward solve failed: " + summary.message);
+    }
+
+    std::vector<RenderSurface> surfaces = {{&fine.x, &fine.surface, true}};
+    if (s.background) surfaces.push_back({&table_points, &table_triangles, true});
+    for (size_t b = 0; b < s.bodies.size(); ++b) {
+      surfaces.push_back({&body_points[b], &body_triangles[b], s.bodies[b].in_cloud});
+    }
+    const DepthImage image = sensor.Render(surfaces);
+    const PointCloud cloud = sensor.Sample(image, surfaces, s.seed * 1000003ull + static_cast<uint64_t>(f));
+    GroundTruthFrame truth;
+    truth.positions = InterpolateEmbedded(fine, fine.x, embedded);
+    truth.visible = sensor.Visible(image, truth.positions, 2e-3);
+
+    const std::string name = FrameName(f);
+    status = WritePointCloud((fs::path(dir) / "clouds" / (name + ".pcd")).string(), cloud);
+    if (status.ok()) {
+      status = WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / (name + ".csv")).string(), truth);
+    }
+    if (status.ok()) {
+      surface_points.resize(static_cast<Eigen::Index>(fine.surface_vertices.size()), 3);
+      for (size_t i = 0; i < fine.surface_vertices.size(); ++i) {
+        surface_points.row(static_cast<Eigen::Index>(i)) = fine.x.row(fine.surface_vertices[i]);
+      }
+      status = WriteVtuSurface((fs::path(dir) / "truth" / (name + ".vtu")).string(), surface_points,
+                               surface_triangles);
+    }
+    if (!status.ok()) return status;
+    r.min_points = std::min(r.min_points, cloud.size());
+    r.max_points = std::max(r.max_points, cloud.size());
+    int seen = 0;
+    for (char c : truth.visible) seen += c ? 1 : 0;
+    seen_sum += static_cast<double>(seen) / std::max(1, coarse.num_vertices());
+    if (progress) progress(f + 1, num_frames);
+  }
+  r.mean_seen_fraction = seen_sum / num_frames;
+
+  const ObjectSpec& object = scene.objects[0];
+  const CameraOptions& c = s.sensor.camera;
+  std::ostringstream md;
+  md << "# " << s.source_name << ": synthetic sequence with ground truth\n\n";
+  if (s.sanity_check) {
+    md << "**SANITY CHECK**: the data were made with the very mesh and material that "
+       << "`scene.yaml` tracks with (an inverse crime). Errors on it show what the tracker "
+       << "does at best; they are not an accuracy estimate.\n\n";
+  }
+  md << "Made by `femreg synth " << s.source_name << " --out DIR` (seed " << s.seed << ", "
+     << num_frames << " frames; deterministic: the same command rewrites the same bytes).\n\n"
+     << "- `scene.yaml`: the tracking scene: object `" << object.name << "`, "
+     << coarse.num_vertices() << " vertices, " << coarse.num_tets() << " tetrahedra, E = "
+     << object.material.youngs_modulus << " Pa, nu = " << object.material.poisson_ratio
+     << "; the camera; the registration settings and the anchors the robot knows about.\n"
+     << "- `clouds/frame_NNNN.pcd`: " << r.min_points << " to " << r.max_points
+     << " points per frame from a virtual " << c.width << "x" << c.height
+     << " depth camera (z-buffer, every " << s.sensor.pixel_stride
+     << ". pixel, depth noise sigma = " << s.sensor.noise_coefficient
+     << " z^2, no returns beyond " << s.sensor.grazing_angle_deg << " deg incidence, "
+     << s.sensor.outlier_fraction * 100 << "% outliers)";
+  if (s.background) md << ", with a " << s.background_size << " m table quad in view";
+  md << ".\n"
+     << "- `ground_truth/frame_NNNN.csv`: per tracked vertex, its true position (x,y,z in m) "
+     << "and whether the camera saw it (on average " << Fixed(100 * r.mean_seen_fraction, 1)
+     << "% of the vertices).\n"
+     << "- `truth/frame_NNNN.vtu`: the ground truth mesh's surface per frame (for "
+     << "`femreg eval`).\n\n"
+     << "The ground truth is a quasi-static " << ToString(scene.forward_model) << " FEM "
+     << "simulation on ";
+  if (s.sanity_check) {
+    md << "the tracked mesh itself";
+  } else if (s.refinement > 1) {
+    md << "the tracked mesh refined " << s.refinement << " times";
+  } else {
+    md << "a mesh of its own";
+  }
+  md << " (" << fine.num_vertices() << " vertices, " << fine.num_tets() << " tetrahedra; E = "
+     << s.material.youngs_modulus << " Pa, nu = " << s.material.poisson_ratio
+     << "), interpolated at the tracked mesh's rest positions.\n";
+  if (!s.motion.empty()) {
+    md << "\nMotion script (vertex sets moved rigidly from rest, keyframes interpolated "
+       << "linearly):\n\n";
+    for (const Track& t : tracks) {
+      md << "- `" << t.spec->name << "`: " << t.vertices.size() << " vertices, "
+         << t.spec->keyframes.size() << " keyframes"
+         << (t.spec->anchor == MotionTrackSpec::Anchor::kNone
+                 ? ""
+                 : std::string("; the tracking scene holds it with a ") +
+                       (t.spec->anchor == MotionTrackSpec::Anchor::kHard ? "hard" : "soft") +
+                       " anchor")
+         << ".\n";
+    }
+  }
+  for (const SynthBodySpec& body : s.bodies) {
+    md << "- `" << body.name << "`: a rigid box, rendered"
+       << (body.in_cloud ? " into the clouds" : " as an occluder (its own points are masked out)")
+       << (body.press ? "; pressed into the object: the object's top surface vertices under its "
+                        "footprint are moved down to its bottom face (prescribed displacements "
+                        "of the contact patch, not a contact solve)"
+                      : "")
+       << "; it is not part of the ground truth.\n";
+  }
+  status = WriteFileAtomically((fs::path(dir) / "README.md").string(), md.str());
+  if (!status.ok()) return status;
+  if (report) *report = r;
+  return Status::Ok();
+}
+
+}  // namespace femreg

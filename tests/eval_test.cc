@@ -1,0 +1,141 @@
+// femreg eval: VTU geometry in file order, surface distances, and the command on results
+// equal to the ground truth and offset from it.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "femreg/eval.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg_test_config.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = (fs::temp_directory_path() / ("femreg_eval_test_" + std::to_string(::getpid()) + "_" +
+                                          std::to_string(counter_++)))
+                .string();
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  static int counter_;
+  std::string path_;
+};
+int TempDir::counter_ = 0;
+
+TEST(EvalTest, VtuGeometryKeepsTheFileOrder) {
+  TempDir dir;
+  TetMesh mesh = MakeBox(Eigen::Vector3d(0.1, 0.05, 0.05), 3, 2, 2);
+  Vertices moved = mesh.rest;
+  moved.col(2) += 0.3 * moved.col(0).cwiseProduct(moved.col(0));  // bent
+  const std::string path = dir.path() + "/m.vtu";
+  ASSERT_TRUE(WriteVtu(path, mesh, moved).ok());
+  VtuGeometry g;
+  ASSERT_TRUE(ReadVtuGeometry(path, &g).ok());
+  ASSERT_EQ(g.points.rows(), mesh.num_vertices());
+  EXPECT_EQ((g.points - moved).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(g.tets, mesh.tets);
+  EXPECT_EQ(g.surface.rows(), mesh.num_surface_triangles());
+  EXPECT_FALSE(ReadVtuGeometry(dir.path() + "/missing.vtu", &g).ok());
+}
+
+TEST(EvalTest, SurfaceDistanceOfAShiftedBox) {
+  TetMesh coarse = MakeBox(Eigen::Vector3d(0.1, 0.05, 0.05), 4, 2, 2);
+  TetMesh fine = MakeBox(Eigen::Vector3d(0.1, 0.05, 0.05), 8, 4, 4);
+  // The same box meshed differently: zero distance.
+  SurfaceDistance d = ComputeSurfaceDistance(coarse.rest, coarse.surface, fine.rest, fine.surface);
+  EXPECT_LT(d.hausdorff, 1e-12);
+  EXPECT_GT(d.samples_a, 0);
+  // Shifted along x by 3 mm: the x faces are 3 mm apart, the others slide.
+  Vertices shifted = coarse.rest;
+  shifted.col(0).array() += 0.003;
+  d = ComputeSurfaceDistance(shifted, coarse.surface, fine.rest, fine.surface);
+  EXPECT_NEAR(d.hausdorff, 0.003, 1e-12);
+  EXPECT_GT(d.mean, 0.0);
+  EXPECT_LT(d.mean, 0.003);
+}
+
+#ifdef FEMREG_CLI_PATH
+// A fake `femreg register` result and `femreg synth` ground truth for one frame.
+void WriteCase(const std::string& root, const Eigen::Vector3d& offset) {
+  fs::create_directories(root + "/result/frames");
+  fs::create_directories(root + "/truth/ground_truth");
+  fs::create_directories(root + "/truth/truth");
+  TetMesh mesh = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 5, 2, 2);
+  TetMesh fine = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 10, 4, 4);
+  GroundTruthFrame truth;
+  truth.positions = mesh.rest;
+  truth.visible.assign(static_cast<size_t>(mesh.num_vertices()), 0);
+  for (int v = 0; v < mesh.num_vertices(); v += 2) truth.visible[static_cast<size_t>(v)] = 1;
+  Vertices result = mesh.rest;
+  result.rowwise() += offset.transpose();
+  ASSERT_TRUE(WriteVtu(root + "/result/frames/box_0000.vtu", mesh, result).ok());
+  ASSERT_TRUE(WriteGroundTruthFrame(root + "/truth/ground_truth/frame_0000.csv", truth).ok());
+  ASSERT_TRUE(WriteVtuSurface(root + "/truth/truth/frame_0000.vtu", fine.rest, fine.surface).ok());
+}
+
+// The totals row of the CSV as numbers (after the label).
+std::vector<double> Totals(const std::string& csv) {
+  std::ifstream in(csv);
+  std::string line, last;
+  while (std::getline(in, line)) {
+    if (!line.empty()) last = line;
+  }
+  EXPECT_EQ(last.rfind("total,", 0), 0u) << last;
+  std::vector<double> values;
+  std::stringstream ss(last.substr(6));
+  std::string cell;
+  while (std::getline(ss, cell, ',')) values.push_back(std::atof(cell.c_str()));
+  return values;
+}
+
+TEST(EvalCliTest, ZeroErrorOnTheGroundTruthAndExactlyAnOffset) {
+  TempDir dir;
+  WriteCase(dir.path() + "/same", Eigen::Vector3d::Zero());
+  const std::string cli = FEMREG_CLI_PATH;
+  std::string csv = dir.path() + "/same.csv";
+  ASSERT_EQ(std::system((cli + " eval " + dir.path() + "/same/result " + dir.path() +
+                         "/same/truth --csv " + csv + " > /dev/null").c_str()),
+            0);
+  // seen: count, mean, rms, p95, max; hidden: the same; all: the same; surface mean, Hausdorff
+  std::vector<double> t = Totals(csv);
+  ASSERT_EQ(t.size(), 17u);
+  EXPECT_EQ(t[0], 27);   // 54 vertices, every other one seen
+  EXPECT_EQ(t[5], 27);
+  for (int i : {1, 2, 3, 4, 6, 7, 8, 9, 15, 16}) EXPECT_NEAR(t[i], 0.0, 1e-4) << "column " << i;
+
+  WriteCase(dir.path() + "/offset", Eigen::Vector3d(0.0, 0.0, 0.004));
+  csv = dir.path() + "/offset.csv";
+  ASSERT_EQ(std::system((cli + " eval " + dir.path() + "/offset/result " + dir.path() +
+                         "/offset/truth --csv " + csv + " > /dev/null").c_str()),
+            0);
+  t = Totals(csv);
+  ASSERT_EQ(t.size(), 17u);
+  for (int i : {1, 2, 3, 4, 6, 7, 8, 9}) EXPECT_NEAR(t[i], 4.0, 1e-4) << "column " << i;  // mm
+  EXPECT_NEAR(t[16], 4.0, 1e-3);  // Hausdorff: the z faces are 4 mm apart
+
+  // A ground truth folder with too few frames fails with a message.
+  fs::remove(dir.path() + "/offset/truth/ground_truth/frame_0000.csv");
+  EXPECT_NE(std::system((cli + " eval " + dir.path() + "/offset/result " + dir.path() +
+                         "/offset/truth > /dev/null 2>&1").c_str()),
+            0);
+}
+#endif  // FEMREG_CLI_PATH
+
+}  // namespace
+}  // namespace femreg

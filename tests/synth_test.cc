@@ -1,0 +1,359 @@
+// The virtual depth camera, the scene's synth section and femreg synth: noise model, z-buffer
+// occlusion, grazing drop-outs, validation messages, and the bundled datasets regenerating
+// bit-identically from their seeds.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/scene.h"
+#include "femreg/synth.h"
+#include "femreg_test_config.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = (fs::temp_directory_path() / ("femreg_synth_test_" + std::to_string(::getpid()) + "_" +
+                                          std::to_string(counter_++)))
+                .string();
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  static int counter_;
+  std::string path_;
+};
+int TempDir::counter_ = 0;
+
+// A camera at the origin looking along +z (image y down = world -y up).
+DepthSensorOptions AxisSensor() {
+  DepthSensorOptions s;
+  s.camera.enabled = true;
+  s.camera.position = Eigen::Vector3d::Zero();
+  s.camera.target = Eigen::Vector3d::UnitZ();
+  s.camera.up = -Eigen::Vector3d::UnitY();
+  s.camera.width = 120;
+  s.camera.height = 90;
+  s.camera.fx = s.camera.fy = 100.0;
+  s.camera.cx = 59.5;
+  s.camera.cy = 44.5;
+  return s;
+}
+
+// A square of edge `size` at depth z facing the camera, tilted by `tilt` about the y axis.
+void Square(double z, double size, double tilt, Vertices* points, Triangles* triangles) {
+  const double h = 0.5 * size;
+  points->resize(4, 3);
+  const Eigen::Vector3d a(std::cos(tilt) * h, 0, std::sin(tilt) * h);
+  *points << -a.x(), -h, z - a.z(), a.x(), -h, z + a.z(), a.x(), h, z + a.z(), -a.x(), h, z - a.z();
+  triangles->resize(2, 3);
+  *triangles << 0, 1, 2, 0, 2, 3;
+}
+
+void Box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Vertices* points, Triangles* triangles) {
+  TetMesh m = MakeBox(hi - lo, 1, 1, 1, lo);
+  *points = m.rest;
+  *triangles = m.surface;
+}
+
+TEST(DepthSensorTest, PlaneAtKnownDepthHasTheNoiseModelsSpread) {
+  DepthSensorOptions options = AxisSensor();
+  options.noise_coefficient = 2.85e-3;
+  const DepthSensor sensor(options);
+  Vertices points;
+  Triangles triangles;
+  const double z = 1.2;
+  Square(z, 10.0, 0.0, &points, &triangles);  // fills the view
+  const std::vector<RenderSurface> surfaces = {{&points, &triangles}};
+  const DepthImage image = sensor.Render(surfaces);
+  const PointCloud cloud = sensor.Sample(image, surfaces, 7);
+  ASSERT_EQ(cloud.size(), options.camera.width * options.camera.height);
+  const double mean = cloud.points.col(2).mean();
+  const double sd = std::sqrt((cloud.points.col(2).array() - mean).square().mean());
+  const double sigma = options.noise_coefficient * z * z;  // 4.1 mm
+  EXPECT_NEAR(mean, z, 4 * sigma / std::sqrt(cloud.size()));
+  EXPECT_NEAR(sd, sigma, 0.05 * sigma);
+
+  // Noiseless: exactly on the plane.
+  options.noise_coefficient = 0.0;
+  const DepthSensor exact(options);
+  const PointCloud flat = exact.Sample(exact.Render(surfaces), surfaces, 7);
+  EXPECT_NEAR((flat.points.col(2).array() - z).abs().maxCoeff(), 0.0, 1e-6);
+}
+
+TEST(DepthSensorTest, ABoxBehindAnotherIsHidden) {
+  DepthSensorOptions options = AxisSensor();
+  options.noise_coefficient = 0.0;
+  const DepthSensor sensor(options);
+  Vertices front_points, back_points;
+  Triangles front_triangles, back_triangles;
+  Box(Eigen::Vector3d(-0.2, -0.2, 0.8), Eigen::Vector3d(0.2, 0.2, 0.9), &front_points, &front_triangles);
+  Box(Eigen::Vector3d(-0.1, -0.1, 1.2), Eigen::Vector3d(0.1, 0.1, 1.3), &back_points, &back_triangles);
+  const std::vector<RenderSurface> surfaces = {{&back_points, &back_triangles},
+                                               {&front_points, &front_triangles}};
+  const DepthImage image = sensor.Render(surfaces);
+  const PointCloud cloud = sensor.Sample(image, surfaces, 1);
+  ASSERT_GT(cloud.size(), 100);
+  EXPECT_LT(cloud.points.col(2).maxCoeff(), 0.8 + 1e-6);  // only the front face
+  const std::vector<char> back_seen = sensor.Visible(image, back_points, 2e-3);
+  for (char seen : back_seen) EXPECT_FALSE(seen);
+  const std::vector<char> front_seen = sensor.Visible(image, front_points, 2e-3);
+  int seen = 0;
+  for (int v = 0; v < front_points.rows(); ++v) {
+    if (front_points(v, 2) < 0.85) {
+      EXPECT_TRUE(front_seen[v]) << "front-face vertex " << v;
+    } else {
+      seen += front_seen[v];
+    }
+  }
+  EXPECT_EQ(seen, 0);  // the back corners of the front box
+
+  // Without the back box in the image, it returns points; a masked occluder (returns = false)
+  // still hides it but adds none.
+  const std::vector<RenderSurface> alone = {{&back_points, &back_triangles}};
+  EXPECT_GT(sensor.Sample(sensor.Render(alone), alone, 1).size(), 100);
+  const std::vector<RenderSurface> masked = {{&back_points, &back_triangles},
+                                             {&front_points, &front_triangles, false}};
+  EXPECT_EQ(sensor.Sample(sensor.Render(masked), masked, 1).size(), 0);
+}
+
+TEST(DepthSensorTest, GrazingSurfacesDropOut) {
+  DepthSensorOptions options = AxisSensor();
+  options.noise_coefficient = 0.0;
+  options.grazing_angle_deg = 80.0;
+  Vertices points;
+  Triangles triangles;
+  const double kDeg = M_PI / 180.0;
+  // Tilted by 85 degrees: the rays near the axis meet it at about 85 degrees incidence.
+  Square(1.0, 0.5, 85 * kDeg, &points, &triangles);
+  const std::vector<RenderSurface> surfaces = {{&points, &triangles}};
+  const DepthSensor sensor(options);
+  const DepthImage image = sensor.Render(surfaces);
+  int hit = 0;
+  for (int t : image.triangle) hit += t >= 0;
+  ASSERT_GT(hit, 20);  // the z-buffer sees it...
+  EXPECT_EQ(sensor.Sample(image, surfaces, 1).size(), 0);  // ...the sensor returns nothing
+  options.grazing_angle_deg = 89.9;
+  const DepthSensor tolerant(options);
+  EXPECT_GT(tolerant.Sample(image, surfaces, 1).size(), 20);
+  // Tilted by 30 degrees: all returned.
+  Square(1.0, 0.5, 30 * kDeg, &points, &triangles);
+  const DepthImage facing = sensor.Render(surfaces);
+  int facing_hit = 0;
+  for (int t : facing.triangle) facing_hit += t >= 0;
+  EXPECT_EQ(sensor.Sample(facing, surfaces, 1).size(), facing_hit);
+}
+
+// A small synth scene (one object, a clamp, a moved end, a camera).
+std::string SynthScene(const std::string& synth) {
+  return "objects:\n"
+         "  - name: bar\n"
+         "    generate: {shape: box, size: [0.1, 0.02, 0.02], cells: [5, 1, 1]}\n"
+         "    material: {youngs_modulus: 1e5, poisson_ratio: 0.3}\n"
+         "boundary:\n"
+         "  - {select: {box: {min: [-1, -1, -1], max: [0.0001, 1, 1]}}, clamp: true}\n"
+         "registration:\n"
+         "  camera: {position: [0.05, -0.2, 0.1], target: [0.05, 0, 0], up: [0, 0, 1],\n"
+         "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
+         "synth:\n" +
+         synth;
+}
+
+std::string ParseError(const std::string& text) {
+  Scene scene;
+  const Status status = ParseScene(text, "synth.yaml", "", &scene);
+  return status.ok() ? std::string("(no error)") : status.message();
+}
+
+TEST(SynthSceneTest, ParsesTheSection) {
+  Scene scene;
+  const Status status = ParseScene(
+      SynthScene("  frames: 7\n"
+                 "  seed: 3\n"
+                 "  ground_truth: {refinement: 2, material: {poisson_ratio: 0.4}}\n"
+                 "  sensor: {pixel_stride: 2, noise_coefficient: 0.001}\n"
+                 "  background: {point: [0, 0, -0.01], normal: [0, 0, 1], size: 0.5}\n"
+                 "  motion:\n"
+                 "    - {name: end, select: {box: {min: [0.0999, -1, -1], max: [1, 1, 1]}},\n"
+                 "       anchor: hard, keyframes: [{frame: 0}, {frame: 6, translation: [0, 0, 0.01]}]}\n"
+                 "  bodies:\n"
+                 "    - {name: hand, box: {min: [0, -0.1, 0], max: [0.02, -0.05, 0.05]}, in_cloud: true}\n"),
+      "synth.yaml", "", &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const SynthSpec& s = scene.synth;
+  EXPECT_TRUE(s.enabled);
+  EXPECT_EQ(s.frames, 7);
+  EXPECT_EQ(s.seed, 3u);
+  EXPECT_EQ(s.refinement, 2);
+  EXPECT_EQ(s.material.poisson_ratio, 0.4);
+  EXPECT_EQ(s.material.youngs_modulus, 1e5);  // inherited
+  EXPECT_EQ(s.sensor.pixel_stride, 2);
+  EXPECT_TRUE(s.sensor.camera.enabled);
+  EXPECT_EQ(s.sensor.camera.width, 80);
+  EXPECT_TRUE(s.background);
+  ASSERT_EQ(s.motion.size(), 1u);
+  EXPECT_EQ(s.motion[0].anchor, MotionTrackSpec::Anchor::kHard);
+  ASSERT_EQ(s.bodies.size(), 1u);
+  EXPECT_TRUE(s.bodies[0].in_cloud);
+  // The tracking scene: no synth or boundary keys, an anchor per known gripper.
+  EXPECT_EQ(s.tracking_scene_yaml.find("synth:"), std::string::npos);
+  EXPECT_EQ(s.tracking_scene_yaml.find("boundary"), std::string::npos);
+  EXPECT_NE(s.tracking_scene_yaml.find("name: end"), std::string::npos);
+  Scene tracking;
+  const Status reparsed = ParseScene(s.tracking_scene_yaml, "scene.yaml", "", &tracking);
+  ASSERT_TRUE(reparsed.ok()) << reparsed.message() << "\n" << s.tracking_scene_yaml;
+  ASSERT_EQ(tracking.anchors.size(), 1u);
+  EXPECT_TRUE(tracking.anchors[0].hard);
+  ASSERT_EQ(tracking.anchors[0].translations.size(), 7u);
+  EXPECT_NEAR(tracking.anchors[0].translations[3].z(), 0.005, 1e-12);
+
+  Eigen::Vector3d t, r;
+  InterpolateKeyframes(s.motion[0].keyframes, 100, &t, &r);  // held after the last
+  EXPECT_NEAR(t.z(), 0.01, 1e-15);
+}
+
+TEST(SynthSceneTest, ErrorsNameTheFileLineAndKey) {
+  EXPECT_EQ(ParseError(SynthScene("  frames: 5\n  ground_truth: {refinement: 2}\n  sede: 3\n")),
+            "synth.yaml:13: synth.sede: unknown key (did you mean 'seed'?)");
+  EXPECT_EQ(ParseError(SynthScene("  frames: 0\n  ground_truth: {refinement: 2}\n")),
+            "synth.yaml:11: synth.frames: must be >= 1 (got 0)");
+  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n  sensor: {pixel_stride: 0}\n")),
+            "synth.yaml:12: synth.sensor.pixel_stride: must be >= 1 (got 0)");
+  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+                                  "  sensor: {grazing_angle_deg: 95}\n")),
+            "synth.yaml:12: synth.sensor.grazing_angle_deg: must be in (0, 90] (got 95)");
+  // The tracked mesh and material: an inverse crime unless labelled.
+  EXPECT_NE(ParseError(SynthScene("  frames: 3\n")).find("synth.yaml:11: synth: the ground truth "
+                                                        "would come from the tracked mesh"),
+            std::string::npos);
+  EXPECT_EQ(ParseError(SynthScene("  frames: 3\n  sanity_check: true\n")), "(no error)");
+  EXPECT_NE(ParseError(SynthScene("  sanity_check: true\n  ground_truth: {refinement: 2}\n"))
+                .find("synth.yaml:12: synth.ground_truth: a sanity check"),
+            std::string::npos);
+  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+                                  "  motion:\n"
+                                  "    - select: {all: true}\n"
+                                  "      anchor: hard\n"
+                                  "      keyframes: [{frame: 0}, {frame: 4, rotation: [0, 0, 1]}]\n")),
+            "synth.yaml:14: synth.motion[0].anchor: anchors follow translations only, and this "
+            "track rotates");
+  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+                                  "  motion:\n"
+                                  "    - select: {all: true}\n"
+                                  "      keyframes: [{frame: 3}, {frame: 3}]\n")),
+            "synth.yaml:14: synth.motion[0].keyframes[1].frame: must be greater than the "
+            "previous keyframe's (3)");
+  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+                                  "  bodies:\n"
+                                  "    - {box: {min: [0, 0, 0], max: [0, 1, 1]}}\n")),
+            "synth.yaml:13: synth.bodies[0].box.max: must be > min in every coordinate");
+  // No camera.
+  std::string no_camera = SynthScene("  ground_truth: {refinement: 2}\n");
+  no_camera.erase(no_camera.find("registration:"), no_camera.find("synth:") - no_camera.find("registration:"));
+  EXPECT_EQ(ParseError(no_camera),
+            "synth.yaml:8: synth: needs registration.camera: the virtual depth camera renders from it");
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+TEST(SynthSequenceTest, SanityCheckIsLabelledAndThePressMovesThePatch) {
+  Scene scene;
+  const std::string text =
+      "objects:\n"
+      "  - name: block\n"
+      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
+      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
+      "boundary:\n"
+      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
+      "registration:\n"
+      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
+      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
+      "synth:\n"
+      "  frames: 2\n"
+      "  sanity_check: true\n"
+      "  bodies:\n"
+      "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
+      "       keyframes: [{frame: 0}, {frame: 1, translation: [0, 0, -0.014]}]}\n";
+  ASSERT_TRUE(ParseScene(text, "press.yaml", "", &scene).ok());
+  TempDir dir;
+  SynthReport report;
+  const Status status = GenerateSynthSequence(scene, dir.path(), 0, &report);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(report.frames, 2);
+  EXPECT_EQ(report.truth_vertices, report.tracked_vertices);
+  EXPECT_NE(ReadFile(dir.path() + "/README.md").find("SANITY CHECK"), std::string::npos);
+  EXPECT_NE(ReadFile(dir.path() + "/scene.yaml").find("SANITY CHECK"), std::string::npos);
+  for (const char* f : {"/clouds/frame_0001.pcd", "/ground_truth/frame_0001.csv", "/truth/frame_0001.vtu"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir.path() + f)) << f;
+  }
+  // Frame 1: the tool's bottom is at z = 0.016, the block's top at 0.02; the top vertices
+  // under the footprint (x, y in [0.01, 0.03]) are moved down to it.
+  GroundTruthFrame truth;
+  ASSERT_TRUE(ReadGroundTruthFrame(dir.path() + "/ground_truth/frame_0001.csv", &truth).ok());
+  TetMesh mesh = MakeBox(Eigen::Vector3d(0.04, 0.04, 0.02), 4, 4, 2);
+  int pressed = 0;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const Eigen::Vector3d X = mesh.rest.row(v);
+    if (X.z() > 0.0199 && X.x() > 0.0099 && X.x() < 0.0301 && X.y() > 0.0099 && X.y() < 0.0301) {
+      EXPECT_NEAR(truth.positions(v, 2), 0.016, 1e-6);
+      ++pressed;
+    }
+  }
+  EXPECT_EQ(pressed, 9);
+  EXPECT_LT(truth.positions(0, 2), 1e-9);  // clamped bottom stays
+}
+
+// Each bundled dataset regenerates bit-identically from its seed: its first two frames and
+// its scene.yaml.
+TEST(SynthSequenceTest, BundledDatasetsRegenerateBitIdentically) {
+  int checked = 0;
+  for (const auto& entry : fs::directory_iterator(FEMREG_DATASETS_DIR)) {
+    const fs::path synth = entry.path() / "synth.yaml";
+    if (!fs::is_regular_file(synth)) continue;
+    SCOPED_TRACE(synth.string());
+    Scene scene;
+    Status status = LoadScene(synth.string(), &scene);
+    ASSERT_TRUE(status.ok()) << status.message();
+    TempDir dir;
+    SynthReport report;
+    status = GenerateSynthSequence(scene, dir.path(), 2, &report);
+    ASSERT_TRUE(status.ok()) << status.message();
+    std::vector<std::string> files = {"scene.yaml"};
+    for (const char* f : {"clouds/frame_0000.pcd", "clouds/frame_0001.pcd",
+                          "ground_truth/frame_0000.csv", "ground_truth/frame_0001.csv",
+                          "truth/frame_0000.vtu", "truth/frame_0001.vtu"}) {
+      files.push_back(f);
+    }
+    for (const std::string& f : files) {
+      const std::string bundled = ReadFile((entry.path() / f).string());
+      ASSERT_FALSE(bundled.empty()) << f << " is not bundled";
+      EXPECT_TRUE(bundled == ReadFile(dir.path() + "/" + f)) << f << " differs";
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 6);
+}
+
+}  // namespace
+}  // namespace femreg

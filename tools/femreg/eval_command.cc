@@ -1,0 +1,230 @@
+// femreg eval: a `femreg register` result against a `femreg synth` ground truth.
+//
+// Per frame: the vertex error (mean, RMS, 95th percentile, max; mm) for the vertices the
+// camera saw in that frame and for the hidden ones, and the distance between the tracked
+// surface and the ground truth mesh's surface (symmetric mean and Hausdorff, sampled at the
+// vertices and triangle centroids of both). A CSV and a printed table, with a totals row.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <regex>
+#include <sstream>
+
+#include "cli_util.h"
+#include "commands.h"
+#include "femreg/eval.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+namespace cli {
+namespace {
+
+struct EvalRow {
+  std::string label;
+  ErrorStats seen, hidden, all;
+  bool have_surface = false;
+  SurfaceDistance surface;
+};
+
+// Object names of a register result, in scene order (from summary.json when present).
+Status ResultObjects(const std::string& result, const std::vector<std::string>& files,
+                     std::vector<std::string>* names,
+                     std::map<std::string, std::vector<std::string>>* frames) {
+  const std::regex frame_name(R"((.+)_(\d+)\.vtu)");
+  for (const std::string& file : files) {
+    std::smatch m;
+    const std::string base = fs::path(file).filename().string();
+    if (!std::regex_match(base, m, frame_name)) continue;
+    (*frames)[m[1].str()].push_back(file);
+  }
+  if (frames->empty()) return Status::Error(result + "/frames: no <object>_NNNN.vtu files");
+  std::ifstream in((fs::path(result) / "summary.json").string());
+  if (in) {
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string json = text.str();
+    const size_t objects = json.find("\"objects\"");
+    const std::regex name(R"re("name": "([^"]*)")re");
+    for (auto it = std::sregex_iterator(json.begin() + (objects == std::string::npos ? 0 : objects),
+                                        json.end(), name);
+         it != std::sregex_iterator(); ++it) {
+      if (frames->count((*it)[1].str())) names->push_back((*it)[1].str());
+    }
+  }
+  for (const auto& kv : *frames) {
+    if (std::find(names->begin(), names->end(), kv.first) == names->end()) names->push_back(kv.first);
+  }
+  return Status::Ok();
+}
+
+std::string StatsCells(const ErrorStats& s) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), "%d,%.4f,%.4f,%.4f,%.4f", s.count, s.mean * 1e3, s.rms * 1e3,
+                s.p95 * 1e3, s.max * 1e3);
+  return buf;
+}
+
+int RunEval(const std::string& result, const std::string& truth_dir, std::string csv) {
+  auto fail = [](const std::string& message) {
+    std::cerr << "femreg eval: " << message << "\n";
+    return 1;
+  };
+  std::vector<std::string> result_files, truth_csvs, truth_vtus;
+  Status status = ListFrames((fs::path(result) / "frames").string(), {".vtu"}, &result_files);
+  if (!status.ok()) return fail(status.message() + " (RESULT must be a `femreg register` output folder)");
+  status = ListFrames((fs::path(truth_dir) / "ground_truth").string(), {".csv"}, &truth_csvs);
+  if (!status.ok()) return fail(status.message() + " (GROUND_TRUTH must be a `femreg synth` output folder)");
+  const bool have_truth_surface = fs::is_directory(fs::path(truth_dir) / "truth");
+  if (have_truth_surface) {
+    status = ListFrames((fs::path(truth_dir) / "truth").string(), {".vtu"}, &truth_vtus);
+    if (!status.ok()) return fail(status.message());
+  }
+  std::vector<std::string> objects;
+  std::map<std::string, std::vector<std::string>> frames;
+  status = ResultObjects(result, result_files, &objects, &frames);
+  if (!status.ok()) return fail(status.message());
+  size_t num_frames = frames[objects[0]].size();
+  for (const std::string& o : objects) num_frames = std::min(num_frames, frames[o].size());
+  if (truth_csvs.size() < num_frames) {
+    return fail(truth_dir + "/ground_truth has " + std::to_string(truth_csvs.size()) +
+                " frames for " + std::to_string(num_frames) + " result frames");
+  }
+  if (have_truth_surface && truth_vtus.size() < num_frames) {
+    return fail(truth_dir + "/truth has " + std::to_string(truth_vtus.size()) + " frames for " +
+                std::to_string(num_frames) + " result frames");
+  }
+
+  std::vector<EvalRow> rows;
+  std::vector<double> pooled_seen, pooled_hidden, pooled_all;
+  double surface_sum = 0.0, hausdorff = 0.0;
+  for (size_t f = 0; f < num_frames; ++f) {
+    Vertices positions(0, 3);
+    Vertices surface_points(0, 3);
+    Triangles surface(0, 3);
+    for (const std::string& o : objects) {
+      VtuGeometry g;
+      status = ReadVtuGeometry(frames[o][f], &g);
+      if (!status.ok()) return fail(status.message());
+      const Eigen::Index offset = positions.rows();
+      positions.conservativeResize(offset + g.points.rows(), 3);
+      positions.bottomRows(g.points.rows()) = g.points;
+      const Eigen::Index tri_offset = surface.rows();
+      surface.conservativeResize(tri_offset + g.surface.rows(), 3);
+      surface.bottomRows(g.surface.rows()) = g.surface.array() + static_cast<int>(offset);
+    }
+    GroundTruthFrame truth;
+    status = ReadGroundTruthFrame(truth_csvs[f], &truth);
+    if (!status.ok()) return fail(status.message());
+    if (truth.positions.rows() != positions.rows()) {
+      return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) +
+                  " vertices, the result " + std::to_string(positions.rows()) + " (" + frames[objects[0]][f] + ")");
+    }
+    EvalRow row;
+    row.label = std::to_string(f);
+    std::vector<double> seen, hidden, all;
+    for (Eigen::Index i = 0; i < positions.rows(); ++i) {
+      const double e = (positions.row(i) - truth.positions.row(i)).norm();
+      all.push_back(e);
+      (truth.visible[static_cast<size_t>(i)] ? seen : hidden).push_back(e);
+    }
+    pooled_seen.insert(pooled_seen.end(), seen.begin(), seen.end());
+    pooled_hidden.insert(pooled_hidden.end(), hidden.begin(), hidden.end());
+    pooled_all.insert(pooled_all.end(), all.begin(), all.end());
+    row.seen = ComputeErrorStats(seen);
+    row.hidden = ComputeErrorStats(hidden);
+    row.all = ComputeErrorStats(all);
+    if (have_truth_surface) {
+      VtuGeometry t;
+      status = ReadVtuGeometry(truth_vtus[f], &t);
+      if (!status.ok()) return fail(status.message());
+      row.surface = ComputeSurfaceDistance(positions, surface, t.points, t.surface);
+      row.have_surface = true;
+      surface_sum += row.surface.mean;
+      hausdorff = std::max(hausdorff, row.surface.hausdorff);
+    }
+    rows.push_back(row);
+  }
+  EvalRow total;
+  total.label = "total";
+  total.seen = ComputeErrorStats(pooled_seen);
+  total.hidden = ComputeErrorStats(pooled_hidden);
+  total.all = ComputeErrorStats(pooled_all);
+  total.have_surface = have_truth_surface;
+  total.surface.mean = num_frames ? surface_sum / num_frames : 0.0;
+  total.surface.hausdorff = hausdorff;
+
+  std::ostringstream out;
+  out << "frame,seen_count,seen_mean_mm,seen_rms_mm,seen_p95_mm,seen_max_mm,hidden_count,"
+         "hidden_mean_mm,hidden_rms_mm,hidden_p95_mm,hidden_max_mm,all_count,all_mean_mm,"
+         "all_rms_mm,all_p95_mm,all_max_mm,surface_mean_mm,surface_hausdorff_mm\n";
+  std::vector<const EvalRow*> all_rows;
+  for (const EvalRow& r : rows) all_rows.push_back(&r);
+  all_rows.push_back(&total);
+  for (const EvalRow* r : all_rows) {
+    out << r->label << "," << StatsCells(r->seen) << "," << StatsCells(r->hidden) << ","
+        << StatsCells(r->all) << ",";
+    if (r->have_surface) {
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), "%.4f,%.4f", r->surface.mean * 1e3, r->surface.hausdorff * 1e3);
+      out << buf << "\n";
+    } else {
+      out << ",\n";
+    }
+  }
+  if (csv.empty()) csv = (fs::path(result) / "eval.csv").string();
+  status = WriteFileAtomically(csv, out.str());
+  if (!status.ok()) return fail(status.message());
+
+  std::printf("femreg eval: %zu frames of %s against %s (errors in mm)\n", num_frames,
+              result.c_str(), truth_dir.c_str());
+  std::printf("%6s | %5s %7s %7s %7s %7s | %5s %7s %7s %7s %7s | %7s %7s\n", "frame", "seen",
+              "mean", "rms", "p95", "max", "hidden", "mean", "rms", "p95", "max", "surf", "hausd");
+  for (const EvalRow* r : all_rows) {
+    if (r == &total) std::printf("%s\n", std::string(100, '-').c_str());
+    std::printf("%6s | %5d %7.2f %7.2f %7.2f %7.2f | %5d %7.2f %7.2f %7.2f %7.2f | ", r->label.c_str(),
+                r->seen.count, r->seen.mean * 1e3, r->seen.rms * 1e3, r->seen.p95 * 1e3,
+                r->seen.max * 1e3, r->hidden.count, r->hidden.mean * 1e3, r->hidden.rms * 1e3,
+                r->hidden.p95 * 1e3, r->hidden.max * 1e3);
+    if (r->have_surface) {
+      std::printf("%7.2f %7.2f\n", r->surface.mean * 1e3, r->surface.hausdorff * 1e3);
+    } else {
+      std::printf("%7s %7s\n", "-", "-");
+    }
+  }
+  std::printf("Totals pool every vertex of every frame; surf is the mean over frames of the "
+              "symmetric mean surface distance, hausd the largest Hausdorff distance.\nCSV: %s\n",
+              csv.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void AddEvalCommand(CLI::App* app) {
+  auto result = std::make_shared<std::string>();
+  auto truth = std::make_shared<std::string>();
+  auto csv = std::make_shared<std::string>();
+  CLI::App* cmd = app->add_subcommand(
+      "eval",
+      "Evaluate a `femreg register` result against a `femreg synth` ground truth: per frame the "
+      "vertex error of seen and hidden vertices (mean, RMS, p95, max; mm) and the tracked-to-true "
+      "surface distance (symmetric mean, Hausdorff). Prints a table and writes a CSV.");
+  cmd->add_option("result", *result, "A `femreg register` output folder (frames/<object>_NNNN.vtu)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("ground_truth", *truth,
+                  "A `femreg synth` output folder (ground_truth/*.csv, truth/*.vtu)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  cmd->add_option("--csv", *csv, "CSV file to write (default RESULT/eval.csv)");
+  cmd->callback([=] { SetExitCode(RunEval(*result, *truth, *csv)); });
+}
+
+}  // namespace cli
+}  // namespace femreg

@@ -1,0 +1,79 @@
+// femreg synth: ground truth sequences from a scene's synth section (a motion script
+// simulated with FEM on a finer mesh, seen by a virtual depth camera).
+#include <iostream>
+#include <memory>
+
+#include "cli_util.h"
+#include "commands.h"
+#include "femreg/scene.h"
+#include "femreg/synth.h"
+
+namespace femreg {
+namespace cli {
+namespace {
+
+std::unique_ptr<ProgressBar> g_bar;
+
+void Progress(int done, int total) {
+  if (g_bar) g_bar->Update(done);
+}
+
+int RunSynth(const std::string& scene_path, const std::string& out, int frames, bool force,
+             bool progress) {
+  Scene scene;
+  Status status = LoadScene(scene_path, &scene);
+  if (status.ok() && !scene.synth.enabled) {
+    status = Status::Error(scene_path + ": has no 'synth:' section (see datasets/README.md)");
+  }
+  if (status.ok()) status = PrepareOutputDir(out, force);
+  if (!status.ok()) {
+    std::cerr << "femreg synth: " << status.message() << "\n";
+    return 1;
+  }
+  const int total = frames > 0 ? frames : scene.synth.frames;
+  g_bar = std::make_unique<ProgressBar>("synth", total, progress);
+  SynthReport report;
+  status = GenerateSynthSequence(scene, out, frames, &report, &Progress);
+  g_bar->Finish();
+  g_bar.reset();
+  if (!status.ok()) {
+    std::cerr << "femreg synth: " << status.message() << "\n";
+    return 1;
+  }
+  std::cout << "Wrote " << report.frames << " frames to " << out << ": tracked mesh "
+            << report.tracked_vertices << " vertices, ground truth mesh " << report.truth_vertices
+            << " vertices" << (scene.synth.sanity_check ? " (SANITY CHECK: the same mesh and material)" : "")
+            << ", " << report.min_points << "-" << report.max_points << " points per cloud, "
+            << static_cast<int>(100 * report.mean_seen_fraction + 0.5) << "% of the vertices seen.\n"
+            << "Track it with: femreg register --scene " << out << "/scene.yaml --frames " << out
+            << "/clouds --ground-truth " << out << "/ground_truth --out OUT\n";
+  return 0;
+}
+
+}  // namespace
+
+void AddSynthCommand(CLI::App* app) {
+  auto scene = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  auto frames = std::make_shared<int>(0);
+  auto force = std::make_shared<bool>(false);
+  auto progress = std::make_shared<bool>(true);
+  CLI::App* cmd = app->add_subcommand(
+      "synth",
+      "Make a synthetic sequence with ground truth from a scene's 'synth:' section: the motion "
+      "script is simulated with quasi-static FEM on a ground truth mesh and rendered by a virtual "
+      "depth camera. Writes OUT/scene.yaml (the tracking scene), OUT/clouds/*.pcd, "
+      "OUT/ground_truth/*.csv, OUT/truth/*.vtu and OUT/README.md.");
+  cmd->add_option("scene", *scene, "Scene file with a synth section (YAML)")->required();
+  cmd->add_option("--out,-o", *out, "Output folder (refused if not empty, unless --force)")->required();
+  cmd->add_option("--frames", *frames,
+                  "Make only the first N frames (default: synth.frames); the motion script's "
+                  "timeline stays the same")
+      ->check(CLI::Range(1, 100000));
+  cmd->add_flag("--force", *force, "Write into a non-empty folder");
+  cmd->add_flag("!--no-progress", *progress, "No progress bar");
+  cmd->callback([=] { SetExitCode(RunSynth(*scene, *out, *frames, *force, *progress)); });
+}
+
+}  // namespace cli
+}  // namespace femreg

@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Regenerates the bundled datasets: `femreg synth datasets/<name>/synth.yaml` into
+# datasets/<name> for every dataset that has a synth.yaml (or only those named). The output
+# is deterministic: rerunning rewrites the same bytes.
+#   tools/make_datasets.sh                 # all
+#   tools/make_datasets.sh demo beam_bend  # some
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FEMREG=${FEMREG:-build/femreg}
+if [[ ! -x "$FEMREG" ]]; then
+  echo "make_datasets: $FEMREG not found; build first (tools/build.sh) or set FEMREG" >&2
+  exit 1
+fi
+names=("$@")
+if [[ ${#names[@]} -eq 0 ]]; then
+  for f in datasets/*/synth.yaml; do names+=("$(basename "$(dirname "$f")")"); done
+fi
+for name in "${names[@]}"; do
+  dir=datasets/$name
+  [[ -f $dir/synth.yaml ]] || { echo "make_datasets: $dir/synth.yaml not found" >&2; exit 1; }
+  # Only the generated parts are replaced; synth.yaml stays.
+  rm -rf "$dir/clouds" "$dir/ground_truth" "$dir/truth" "$dir/scene.yaml" "$dir/README.md"
+  echo "== $name"
+  "$FEMREG" synth "$dir/synth.yaml" --out "$dir" --force --no-progress
+done
+du -sh datasets
