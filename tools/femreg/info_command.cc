@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "femreg/io.h"
 #include "femreg/mesh.h"
@@ -20,22 +21,6 @@ struct InfoOptions {
   bool json = false;
 };
 
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
 std::string JsonIntList(const std::vector<int>& values) {
   std::ostringstream os;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_util.h"
 #include "commands.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
@@ -56,29 +57,7 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream os;
-  os << std::setprecision(10) << v;
-  return os.str();
-}
 
 std::string JsonVector(const Eigen::Vector3d& v) {
   return "[" + JsonNumber(v.x()) + ", " + JsonNumber(v.y()) + ", " + JsonNumber(v.z()) + "]";
@@ -256,18 +235,8 @@ void RunSimulate(const SimulateOptions& options) {
 
   // The output folder: created when missing; an existing non-empty one only with --force.
   const fs::path out_dir(options.out_dir);
-  std::error_code ec;
-  if (fs::exists(out_dir, ec)) {
-    if (!fs::is_directory(out_dir, ec)) {
-      return Fail("--out " + options.out_dir + ": exists and is not a folder");
-    }
-    if (!fs::is_empty(out_dir, ec) && !options.force) {
-      return Fail("--out " + options.out_dir +
-                  ": the folder is not empty; use --force to write into it anyway");
-    }
-  } else if (!fs::create_directories(out_dir, ec)) {
-    return Fail("--out " + options.out_dir + ": cannot create the folder: " + ec.message());
-  }
+  const Status prepared = PrepareOutputDir(options.out_dir, options.force);
+  if (!prepared.ok()) return Fail("--out " + prepared.message());
 
   std::vector<ObjectResult> results;
   bool all_ok = true;
