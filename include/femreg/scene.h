@@ -10,6 +10,7 @@
 
 #include "femreg/fem.h"
 #include "femreg/forward.h"
+#include "femreg/fracture.h"
 #include "femreg/mesh.h"
 #include "femreg/registration.h"
 #include "femreg/status.h"
@@ -65,7 +66,10 @@ struct ObjectSpec {
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // axis * angle (rad)
   Material material;
   std::vector<std::pair<int, Material>> region_materials;  // region id -> material
-  double toughness = 0.0;  // fracture toughness (Pa), used when effects.fracture is on
+  // Fracture toughness (Pa): a node breaks when its fracture measure exceeds it; used when
+  // effects.fracture is on; 0 = unbreakable.
+  double toughness = 0.0;
+  std::vector<std::pair<int, double>> region_toughness;  // region id -> toughness (Pa)
 };
 
 struct BoundaryConditionSpec {
@@ -97,6 +101,8 @@ struct AnchorSpec {
 struct EffectsSpec {
   bool fracture = false;
   bool collision = false;
+  // effects.fracture as a map: the limits and crossing tolerance (toughness is per object).
+  FractureOptions fracture_options;
 };
 
 // femreg synth: the ground truth simulation, the virtual sensor and the motion script

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/fracture.h"
 #include "femreg/mesh.h"
 #include "femreg/point_cloud.h"
 #include "femreg/registration.h"
@@ -61,6 +62,18 @@ class Tracker {
   // clears it.
   Status SetAnchorTrajectory(const std::string& name,
                              const std::vector<Eigen::Vector3d>& translations);
+
+  // Fracture (seed Section 4; femreg/fracture.h): detection between outer iterations and
+  // node splits, one FractureOptions per object. Off unless enabled (Create(scene) enables
+  // it for effects.fracture); when off nothing is computed. After a split the meshes,
+  // vertices() and the per-vertex outputs have the new vertex count.
+  Status EnableFracture(const std::vector<FractureOptions>& options);
+  // #V: the largest eigenvalue of the separation tensor over the node area (Pa) at the
+  // last detection; empty when fracture is off.
+  const Eigen::VectorXd& fracture_measure(int object) const;
+  // #V: the vertex of the initial mesh each vertex comes from (replicas map to their
+  // source); empty when fracture is off (then the identity).
+  const std::vector<int>& original_vertices(int object) const;
 
   const RegistrationOptions& options() const;
 

@@ -13,6 +13,8 @@ void RegisterCommands(CLI::App* app) {
   AddInfoCommand(app);
   AddSimulateCommand(app);
   AddRegisterCommand(app);
+  AddBenchCommand(app);
+  AddCompareCommand(app);
   AddSynthCommand(app);
   AddEvalCommand(app);
 }

@@ -11,6 +11,8 @@ namespace cli {
 void AddInfoCommand(CLI::App* app);
 void AddSimulateCommand(CLI::App* app);
 void AddRegisterCommand(CLI::App* app);
+void AddBenchCommand(CLI::App* app);
+void AddCompareCommand(CLI::App* app);
 void AddSynthCommand(CLI::App* app);
 void AddEvalCommand(CLI::App* app);
 
