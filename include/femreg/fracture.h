@@ -38,6 +38,9 @@ struct FractureOptions {
   // An element whose other vertices lie on both sides of the plane by more than this
   // fraction of its mean edge length is crossed by the plane and removed.
   double crossing_tolerance = 0.2;
+  // A split that would leave a piece with fewer elements than this fraction of the mesh's
+  // is not made (no shattering into crumbs that the data cannot hold).
+  double min_piece_fraction = 0.05;
   int max_splits_per_iteration = 8;  // node splits per outer iteration (or forward round)
   int max_splits_per_frame = 48;     // node splits per frame
   bool IsValid(std::string* error) const;
@@ -142,6 +145,14 @@ struct PieceErrors {
 PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
                                const std::vector<int>& original, const GroundTruthFrame& truth,
                                const std::vector<PieceTruthRow>& piece_truth);
+
+// The bundled fracture sequences: "beam_break" (a beam bent until it breaks) and
+// "slab_tear" (a slab torn by two grippers). Writes DIR/scene.yaml, DIR/clouds/*.pcd,
+// DIR/ground_truth/frame_NNNN.csv (+ _pieces.csv after the break, events.csv) and
+// DIR/README.md; `progress` (may be null) is called after each frame.
+std::vector<std::string> FractureScenarios();
+Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
+                                void (*progress)(int done, int total) = nullptr);
 
 }  // namespace femreg
 

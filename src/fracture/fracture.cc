@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -18,6 +19,8 @@ bool FractureOptions::IsValid(std::string* error) const {
     os << "toughness must be finite (got " << toughness << ")";
   } else if (!(crossing_tolerance >= 0 && crossing_tolerance < 1)) {
     os << "crossing_tolerance must be in [0, 1) (got " << crossing_tolerance << ")";
+  } else if (!(min_piece_fraction >= 0 && min_piece_fraction < 0.5)) {
+    os << "min_piece_fraction must be in [0, 0.5) (got " << min_piece_fraction << ")";
   } else if (max_splits_per_iteration < 1) {
     os << "max_splits_per_iteration must be >= 1 (got " << max_splits_per_iteration << ")";
   } else if (max_splits_per_frame < 1) {
@@ -216,6 +219,31 @@ struct SplitState {
     return steps == next.size();
   }
 
+  // Elements in the smallest connected piece (elements sharing a vertex).
+  int SmallestPiece() const {
+    const int nv = static_cast<int>(rest.size());
+    std::vector<int> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&](int i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    for (size_t e = 0; e < tets.size(); ++e) {
+      if (removed[e]) continue;
+      for (int k = 1; k < 4; ++k) {
+        const int a = find(tets[e][0]), b = find(tets[e][k]);
+        if (a != b) parent[a] = b;
+      }
+    }
+    std::map<int, int> size;
+    for (size_t e = 0; e < tets.size(); ++e) {
+      if (!removed[e]) ++size[find(tets[e][0])];
+    }
+    int smallest = std::numeric_limits<int>::max();
+    for (const auto& kv : size) smallest = std::min(smallest, kv.second);
+    return smallest;
+  }
+
   int SplitPinched(int v) {
     auto& s = star[v];
     const int n = static_cast<int>(s.size());
@@ -359,6 +387,10 @@ void SplitNodes(const NodeSeparation& sep, const FractureOptions& options, int m
         manifold = false;
         break;
       }
+    }
+    if (manifold && options.min_piece_fraction > 0) {
+      const int smallest = st.SmallestPiece();
+      manifold = smallest >= options.min_piece_fraction * nt;
     }
     if (!manifold) {
       st = std::move(saved);

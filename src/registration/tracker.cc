@@ -13,6 +13,7 @@
 #include <map>
 #include <sstream>
 
+#include "femreg/fracture.h"
 #include "femreg/point_cloud.h"
 #include "registration/nearest.h"
 #include "solvers/ceres/cost_functions.h"
@@ -106,6 +107,15 @@ struct Tracker::Impl {
   std::vector<int> surface_vertices;
   std::vector<int> vertex_object;
   std::map<std::string, Anchor> anchors;
+  // Fracture (effects.fracture): null when off, so nothing is computed or allocated.
+  struct FractureData {
+    std::vector<FractureOptions> options;       // per object
+    std::vector<std::vector<int>> original;     // per object: vertex -> vertex at creation
+    std::vector<NodeSeparation> separation;     // per object: the last detection
+    int frame_splits = 0;
+  };
+  std::unique_ptr<FractureData> fracture;
+  Vertices frame_start;  // x when the frame's temporal springs were made (fracture only)
   int frame = 0;
   std::vector<Eigen::VectorXd> residuals;
   std::vector<std::vector<char>> observed;
@@ -123,6 +133,9 @@ struct Tracker::Impl {
   void UpdateOutputs(const PointCloud& cloud, const PointIndex* cloud_index,
                      const std::vector<DataPair>& pairs);
   Status Track(const PointCloud& input, FrameSummary* summary);
+  // Detection and splits after outer iteration k's solve; on a topology change rebuilds
+  // every global array and returns, per new global vertex, its old global index.
+  std::vector<int> ApplyFracture(int k, FrameSummary* summary);
 };
 
 Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Material>& materials) {
@@ -387,7 +400,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
                        options.camera.enabled ? options.camera.position : Eigen::Vector3d::Zero());
   s.points_used = cloud.size();
   s.time.preprocess = Seconds(t0);
-  const Vertices previous = x;
+  Vertices previous = x;
 
   std::vector<DataPair> pairs;
   if (cloud.size() == 0) {
@@ -421,17 +434,25 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // moves that target too, so inertia does not fight the rigid step) and anchors.
   std::vector<std::unique_ptr<ceres::CostFunction>> frame_costs;
   std::vector<std::pair<ceres::CostFunction*, int>> temporal;
+  std::vector<char> fixed;
+  std::vector<std::pair<ceres::CostFunction*, int>> anchor_costs;
+  if (fracture) frame_start = x;
+  // Made again after a fracture changed the topology (springs to frame_start's copies).
+  auto build_frame_costs = [&]() {
+  frame_costs.clear();
+  temporal.clear();
+  anchor_costs.clear();
   const double wt = options.weights.temporal;
   if (wt > 0) {
     for (int v = 0; v < num_vertices; ++v) {
       const double w = wt * mass(v);
       if (!(w > 0)) continue;
-      frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(x.row(v).transpose(), w));
+      frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(
+          fracture ? frame_start.row(v).transpose() : x.row(v).transpose(), w));
       temporal.emplace_back(frame_costs.back().get(), v);
     }
   }
-  std::vector<char> fixed(num_vertices, 0);
-  std::vector<std::pair<ceres::CostFunction*, int>> anchor_costs;
+  fixed.assign(num_vertices, 0);
   for (auto& kv : anchors) {
     Anchor& a = kv.second;
     if (!a.translations.empty()) {
@@ -451,6 +472,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       }
     }
   }
+  };
+  build_frame_costs();
 
   ceres::Solver::Options solver_options;
   solver_options.max_num_iterations = options.solver.max_inner_iterations;
@@ -601,6 +624,16 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.rejected = rejected;
     s.rms_residual = row.rms_residual;
 
+    if (fracture) {  // seed Section 4: between outer iterations
+      const std::vector<int> source = ApplyFracture(k, &s);
+      if (!source.empty()) {
+        previous = RemapRows(previous, source);
+        build_frame_costs();
+        FindPairs(cloud, cloud_index, &pairs, &m2c, &c2m, &rejected);  // for the outputs
+        previous_energy = std::numeric_limits<double>::infinity();
+      }
+    }
+
     // Compare with the previous outer iteration's result (its pairs were different, so
     // the energy before this iteration's solve is not comparable).
     const double e1 = row.after.total();
@@ -636,6 +669,94 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   return Status::Ok();
 }
 
+std::vector<int> Tracker::Impl::ApplyFracture(int k, FrameSummary* summary) {
+  const auto t0 = Clock::now();
+  FractureData& f = *fracture;
+  if (k == 0) f.frame_splits = 0;
+  std::vector<std::vector<int>> sources(objects.size());
+  bool changed = false;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    Object& o = objects[i];
+    o.mesh.x = x.middleRows(o.offset, o.mesh.num_vertices());
+    o.model.UpdateRotations(o.mesh.x);
+    DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &f.separation[i]);
+    const int budget = std::min(f.options[i].max_splits_per_iteration,
+                                f.options[i].max_splits_per_frame - f.frame_splits);
+    if (budget <= 0) continue;
+    const double density = o.mesh.mass.sum() / std::max(RestVolume(o.mesh), 1e-300);
+    TopologyChange change;
+    SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
+    if (!change.changed()) continue;
+    changed = true;
+    f.frame_splits += static_cast<int>(change.events.size());
+    for (FractureEvent e : change.events) {
+      e.frame = frame;
+      e.object = static_cast<int>(i);
+      e.iteration = k + 1;
+      e.original_node = f.original[i][e.node];
+      summary->fractures.push_back(e);
+    }
+    std::vector<int> original(change.source.size());
+    Eigen::VectorXd measure(static_cast<Eigen::Index>(change.source.size()));
+    for (size_t v = 0; v < change.source.size(); ++v) {
+      original[v] = f.original[i][change.source[v]];
+      measure(static_cast<Eigen::Index>(v)) = f.separation[i].measure(change.source[v]);
+    }
+    f.original[i] = std::move(original);
+    f.separation[i].measure = std::move(measure);
+    ComputeLumpedMasses(&o.mesh, density);
+    sources[i] = std::move(change.source);
+  }
+  summary->time.fracture += Seconds(t0);
+  if (!changed) return {};
+
+  // The new global numbering: objects in order, each from its new mesh.
+  std::vector<int> source;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const int old_offset = objects[i].offset;
+    const int nv = objects[i].mesh.num_vertices();
+    for (int v = 0; v < nv; ++v) source.push_back(old_offset + (sources[i].empty() ? v : sources[i][v]));
+  }
+  const int old_count = num_vertices;
+  num_vertices = 0;
+  for (Object& o : objects) {
+    o.offset = num_vertices;
+    num_vertices += o.mesh.num_vertices();
+  }
+  x = RemapRows(x, source);
+  if (x_before.rows() == old_count) x_before = RemapRows(x_before, source);
+  if (frame_start.rows() == old_count) frame_start = RemapRows(frame_start, source);
+  mass.resize(num_vertices);
+  vertex_object.resize(num_vertices);
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const Object& o = objects[i];
+    mass.segment(o.offset, o.mesh.num_vertices()) = o.mesh.mass;
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) vertex_object[o.offset + v] = static_cast<int>(i);
+    residuals[i] = Eigen::VectorXd::Constant(o.mesh.num_vertices(), std::numeric_limits<double>::quiet_NaN());
+    observed[i].assign(o.mesh.num_vertices(), 0);
+  }
+  // Anchors hold every copy of their vertices.
+  std::vector<std::vector<int>> copies(old_count);
+  for (size_t v = 0; v < source.size(); ++v) copies[source[v]].push_back(static_cast<int>(v));
+  for (auto& kv : anchors) {
+    Anchor& a = kv.second;
+    std::vector<int> vertices;
+    std::vector<int> rows;
+    for (size_t r = 0; r < a.vertices.size(); ++r) {
+      for (int c : copies[a.vertices[r]]) {
+        vertices.push_back(c);
+        rows.push_back(static_cast<int>(r));
+      }
+    }
+    a.vertices = vertices;
+    a.targets = RemapRows(a.targets, rows);
+    a.origin = RemapRows(a.origin, rows);
+  }
+  BuildGlobalSurface();
+  BuildElasticCosts();
+  return source;
+}
+
 Tracker::Tracker() : impl_(new Impl) {}
 Tracker::~Tracker() = default;
 
@@ -650,7 +771,6 @@ Status Tracker::Create(const std::vector<TetMesh>& meshes, const std::vector<Mat
 }
 
 Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
-  if (scene.effects.fracture) return Status::Error("effects.fracture is not built yet (issue 5)");
   if (scene.effects.collision) return Status::Error("effects.collision is not built yet (issue 6)");
   std::vector<TetMesh> meshes(scene.objects.size());
   std::vector<Material> materials;
@@ -662,6 +782,17 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
   std::unique_ptr<Tracker> t;
   Status status = Create(meshes, materials, scene.registration, &t);
   if (!status.ok()) return status;
+  if (scene.effects.fracture) {
+    std::vector<FractureOptions> fracture;
+    for (const ObjectSpec& o : scene.objects) {
+      FractureOptions f = scene.effects.fracture_options;
+      f.toughness = o.toughness;
+      f.region_toughness = o.region_toughness;
+      fracture.push_back(f);
+    }
+    status = t->EnableFracture(fracture);
+    if (!status.ok()) return Status::Error(scene.path + ": effects.fracture: " + status.message());
+  }
   for (const AnchorSpec& a : scene.anchors) {
     int object = 0;
     for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -696,6 +827,37 @@ const std::vector<char>& Tracker::vertex_observed(int object) const {
   return impl_->observed.at(object);
 }
 int Tracker::frame() const { return impl_->frame; }
+Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
+  if (options.size() != impl_->objects.size()) {
+    return Status::Error("one FractureOptions per object is needed");
+  }
+  std::string error;
+  for (size_t i = 0; i < options.size(); ++i) {
+    if (!options[i].IsValid(&error)) return Status::Error("object " + std::to_string(i) + ": " + error);
+  }
+  auto f = std::make_unique<Impl::FractureData>();
+  f->options = options;
+  for (const Object& o : impl_->objects) {
+    std::vector<int> ids(o.mesh.num_vertices());
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) ids[v] = v;
+    f->original.push_back(std::move(ids));
+    NodeSeparation sep;
+    sep.measure = Eigen::VectorXd::Zero(o.mesh.num_vertices());
+    f->separation.push_back(std::move(sep));
+  }
+  impl_->fracture = std::move(f);
+  return Status::Ok();
+}
+
+const Eigen::VectorXd& Tracker::fracture_measure(int object) const {
+  static const Eigen::VectorXd kEmpty;
+  return impl_->fracture ? impl_->fracture->separation.at(object).measure : kEmpty;
+}
+
+const std::vector<int>& Tracker::original_vertices(int object) const {
+  static const std::vector<int> kEmpty;
+  return impl_->fracture ? impl_->fracture->original.at(object) : kEmpty;
+}
 const RegistrationOptions& Tracker::options() const { return impl_->options; }
 
 Status Tracker::AddAnchor(const std::string& name, int object, const std::vector<int>& vertices,

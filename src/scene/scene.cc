@@ -173,17 +173,32 @@ class SceneParser {
  private:
   void ParseEffects(const YamlValue& v) {
     v.CheckKeys({"fracture", "collision"});
-    if (v.Has("fracture") && v["fracture"].AsBool()) {
-      v["fracture"].Fail(
-          "not built yet: fracture (issue 5); set it to false or remove it to run without "
-          "fracture");
-    }
     if (v.Has("collision") && v["collision"].AsBool()) {
       v["collision"].Fail(
           "not built yet: collision (issue 6); set it to false or remove it to run without "
           "collision");
     }
     scene_->effects = EffectsSpec();
+    if (v.Has("fracture")) ParseFracture(v["fracture"]);
+  }
+
+  // effects.fracture: true/false, or a map of limits (which turns it on).
+  void ParseFracture(const YamlValue& v) {
+    EffectsSpec& e = scene_->effects;
+    if (!v.node().IsMap()) {
+      e.fracture = v.AsBool();
+      return;
+    }
+    v.CheckKeys({"enabled", "max_splits_per_iteration", "max_splits_per_frame",
+                 "crossing_tolerance"});
+    e.fracture = v.Has("enabled") ? v["enabled"].AsBool() : true;
+    FractureOptions& f = e.fracture_options;
+    if (v.Has("max_splits_per_iteration")) f.max_splits_per_iteration = IntAtLeast(v["max_splits_per_iteration"], 1);
+    if (v.Has("max_splits_per_frame")) f.max_splits_per_frame = IntAtLeast(v["max_splits_per_frame"], 1);
+    if (v.Has("crossing_tolerance")) {
+      f.crossing_tolerance = NonNegativeDouble(v["crossing_tolerance"]);
+      if (f.crossing_tolerance >= 1) v["crossing_tolerance"].Fail("must be < 1");
+    }
   }
 
   void ParseObjects(const YamlValue& v) {
@@ -242,7 +257,10 @@ class SceneParser {
         for (const auto& existing : object.region_materials) {
           if (existing.first == region) key.Fail("region " + std::to_string(region) + " listed twice");
         }
-        object.region_materials.emplace_back(region, ParseMaterial(entry, object.material));
+        object.region_materials.emplace_back(region, ParseMaterial(entry, object.material, true));
+        if (entry.Has("toughness")) {
+          object.region_toughness.emplace_back(region, NonNegativeDouble(entry["toughness"]));
+        }
       }
     }
     if (v.Has("toughness")) object.toughness = NonNegativeDouble(v["toughness"]);
@@ -295,8 +313,12 @@ class SceneParser {
     return spec;
   }
 
-  Material ParseMaterial(const YamlValue& v, const Material& defaults) {
-    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density"});
+  Material ParseMaterial(const YamlValue& v, const Material& defaults, bool region = false) {
+    if (region) {
+      v.CheckKeys({"youngs_modulus", "poisson_ratio", "density", "toughness"});
+    } else {
+      v.CheckKeys({"youngs_modulus", "poisson_ratio", "density"});
+    }
     Material m = defaults;
     if (v.Has("youngs_modulus")) {
       m.youngs_modulus = v["youngs_modulus"].AsDouble();

@@ -17,6 +17,7 @@ void RegisterCommands(CLI::App* app) {
   AddCompareCommand(app);
   AddSynthCommand(app);
   AddEvalCommand(app);
+  AddFractureDataCommand(app);
 }
 
 }  // namespace cli

@@ -15,6 +15,7 @@ void AddBenchCommand(CLI::App* app);
 void AddCompareCommand(CLI::App* app);
 void AddSynthCommand(CLI::App* app);
 void AddEvalCommand(CLI::App* app);
+void AddFractureDataCommand(CLI::App* app);
 
 // Adds all of the above.
 void RegisterCommands(CLI::App* app);

@@ -20,6 +20,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "femreg/fracture.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
@@ -50,6 +51,8 @@ struct FrameRow {
   bool have_errors = false;
   VertexErrors errors;
   std::string read_error;
+  int pieces = 1;                  // connected pieces of all objects (fracture)
+  std::vector<ErrorStats> piece_errors;  // per piece, with ground truth and fracture on
 };
 
 double Median(std::vector<double> v) {
@@ -66,7 +69,7 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
         "e_temporal,e_anchor,e_total,t_preprocess_ms,t_prealign_ms,t_rotations_ms,"
         "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
         "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
-        "err_hidden_max_mm,message\n";
+        "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,message\n";
   char buf[1024];
   for (size_t i = 0; i < rows.size(); ++i) {
     const FrameSummary& s = rows[i].summary;
@@ -89,6 +92,11 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
       os << buf;
     } else {
       os << ",,,,,,,,";
+    }
+    os << "," << s.fractures.size() << "," << rows[i].pieces << ",";
+    for (size_t p = 0; p < rows[i].piece_errors.size(); ++p) {
+      std::snprintf(buf, sizeof(buf), "%s%.4f", p ? ";" : "", rows[i].piece_errors[p].mean * 1e3);
+      os << buf;
     }
     std::string msg = rows[i].read_error.empty() ? s.message : rows[i].read_error;
     std::replace(msg.begin(), msg.end(), '"', '\'');
@@ -179,6 +187,57 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   return os.str();
 }
 
+// When the tracker split and broke, against the ground truth's events.csv when there is
+// one, and the error of each piece after the break.
+void PrintFractureReport(const std::vector<FrameRow>& rows, const std::string& truth_dir) {
+  int splits = 0, first_split = -1, first_break = -1;
+  for (size_t f = 0; f < rows.size(); ++f) {
+    splits += static_cast<int>(rows[f].summary.fractures.size());
+    if (first_split < 0 && !rows[f].summary.fractures.empty()) first_split = static_cast<int>(f);
+    if (first_break < 0 && rows[f].pieces >= 2) first_break = static_cast<int>(f);
+  }
+  std::printf("Fracture: %d node splits; first split at frame %d, in pieces from frame %d", splits,
+              first_split, first_break);
+  const fs::path events = fs::path(truth_dir) / "events.csv";
+  if (!truth_dir.empty() && fs::exists(events)) {
+    std::FILE* in = std::fopen(events.string().c_str(), "r");
+    int gt_split = -1, gt_break = -1;
+    char line[256];
+    if (in != nullptr && std::fgets(line, sizeof(line), in)) {
+      while (std::fgets(line, sizeof(line), in)) {
+        int frame = 0, node = 0, pieces = 0;
+        double nx, ny, nz, measure;
+        if (std::sscanf(line, "%d,%d,%lf,%lf,%lf,%lf,%d", &frame, &node, &nx, &ny, &nz, &measure, &pieces) != 7) continue;
+        if (gt_split < 0) gt_split = frame;
+        if (gt_break < 0 && pieces >= 2) gt_break = frame;
+      }
+    }
+    if (in != nullptr) std::fclose(in);
+    std::printf(" (ground truth: first split at frame %d, in pieces from frame %d)", gt_split, gt_break);
+  }
+  std::printf("\n");
+  if (first_break < 0) return;
+  std::vector<double> sum, max;
+  std::vector<int> count;
+  for (size_t f = static_cast<size_t>(first_break); f < rows.size(); ++f) {
+    const auto& pe = rows[f].piece_errors;
+    for (size_t p = 0; p < pe.size(); ++p) {
+      if (sum.size() <= p) {
+        sum.resize(p + 1, 0.0);
+        max.resize(p + 1, 0.0);
+        count.resize(p + 1, 0);
+      }
+      sum[p] += pe[p].mean;
+      max[p] = std::max(max[p], pe[p].max);
+      ++count[p];
+    }
+  }
+  for (size_t p = 0; p < sum.size(); ++p) {
+    std::printf("  piece %zu after the break (%d frames): vertex error mean %.2f mm, max %.2f mm\n", p,
+                count[p], 1e3 * sum[p] / std::max(count[p], 1), 1e3 * max[p]);
+  }
+}
+
 int RunRegister(const RegisterArgs& args) {
   Scene scene;
   Status status = LoadScene(args.scene, &scene);
@@ -203,6 +262,14 @@ int RunRegister(const RegisterArgs& args) {
       std::cerr << "femreg register: --ground-truth: " << status.message() << "\n";
       return 1;
     }
+    // Fracture sequences keep per-piece positions and events beside the frames.
+    truth_files.erase(std::remove_if(truth_files.begin(), truth_files.end(),
+                                     [](const std::string& f) {
+                                       const std::string n = fs::path(f).filename().string();
+                                       return n == "events.csv" ||
+                                              (n.size() > 11 && n.compare(n.size() - 11, 11, "_pieces.csv") == 0);
+                                     }),
+                      truth_files.end());
     if (truth_files.size() < files.size()) {
       std::cerr << "femreg register: --ground-truth has " << truth_files.size()
                 << " frames for " << files.size() << " clouds\n";
@@ -251,18 +318,60 @@ int RunRegister(const RegisterArgs& args) {
     row.summary.nonfinite_dropped += dropped;
     row.summary.cloud_points += dropped;
     if (!read.ok()) row.summary.message = read.message() + "; " + row.summary.message;
+    if (!tracker->original_vertices(0).empty()) {
+      row.pieces = 0;
+      std::vector<int> piece;
+      for (int i = 0; i < tracker->num_objects(); ++i) row.pieces += ConnectedPieces(tracker->mesh(i), &piece);
+    }
 
     // Ground truth covers all objects' vertices in scene order.
     if (!truth_files.empty()) {
       GroundTruthFrame truth;
       Status gt = ReadGroundTruthFrame(truth_files[f], &truth);
-      Vertices all(total_vertices, 3);
+      int current_vertices = 0;  // fracture changes the count
+      for (int i = 0; i < tracker->num_objects(); ++i) current_vertices += tracker->mesh(i).num_vertices();
+      Vertices all(current_vertices, 3);
       int offset = 0;
       for (int i = 0; i < tracker->num_objects(); ++i) {
         all.middleRows(offset, tracker->vertices(i).rows()) = tracker->vertices(i);
         offset += static_cast<int>(tracker->vertices(i).rows());
       }
-      if (!gt.ok() || truth.positions.rows() != total_vertices) {
+      const bool fracture = !tracker->original_vertices(0).empty();
+      if (fracture && gt.ok()) {  // match through the original vertices, piece by piece
+        std::vector<PieceTruthRow> piece_truth;
+        const std::string side = (fs::path(truth_files[f]).parent_path() /
+                                  (fs::path(truth_files[f]).stem().string() + "_pieces.csv")).string();
+        if (fs::exists(side)) gt = ReadPieceTruth(side, &piece_truth);
+        int first = 0;  // the object's first row in the ground truth
+        for (int i = 0; i < tracker->num_objects() && gt.ok(); ++i) {
+          const std::vector<int>& ids = tracker->original_vertices(i);
+          const int initial = *std::max_element(ids.begin(), ids.end()) + 1;
+          if (first + initial > truth.positions.rows()) {
+            gt = Status::Error("has " + std::to_string(truth.positions.rows()) + " vertices, fewer than the scene's");
+            break;
+          }
+          GroundTruthFrame object_truth;
+          object_truth.positions = truth.positions.middleRows(first, initial);
+          object_truth.visible.assign(truth.visible.begin() + first, truth.visible.begin() + first + initial);
+          std::vector<PieceTruthRow> object_pieces;
+          for (PieceTruthRow r : piece_truth) {
+            if (r.vertex >= first && r.vertex < first + initial) {
+              r.vertex -= first;
+              object_pieces.push_back(r);
+            }
+          }
+          const PieceErrors pe = ComputePieceErrors(tracker->mesh(i), tracker->vertices(i), ids,
+                                                    object_truth, object_pieces);
+          row.piece_errors.insert(row.piece_errors.end(), pe.pieces.begin(), pe.pieces.end());
+          if (i == 0) row.errors = pe.all;  // (the first object's when there are several)
+          first += initial;
+        }
+        if (!gt.ok()) {
+          std::cerr << "\nfemreg register: ground truth " << truth_files[f] << ": " << gt.message() << "\n";
+          return 1;
+        }
+        row.have_errors = true;
+      } else if (!gt.ok() || truth.positions.rows() != total_vertices) {
         std::cerr << "\nfemreg register: ground truth " << truth_files[f] << ": "
                   << (gt.ok() ? "has " + std::to_string(truth.positions.rows()) +
                                     " vertices, the scene " + std::to_string(total_vertices)
@@ -270,8 +379,10 @@ int RunRegister(const RegisterArgs& args) {
                   << "\n";
         return 1;
       }
-      row.errors = ComputeVertexErrors(all, truth);
-      row.have_errors = true;
+      if (!row.have_errors) {
+        row.errors = ComputeVertexErrors(all, truth);
+        row.have_errors = true;
+      }
     }
 
     char name[64];
@@ -279,6 +390,11 @@ int RunRegister(const RegisterArgs& args) {
       const TetMesh& m = tracker->mesh(i);
       std::snprintf(name, sizeof(name), "%s_%04zu.vtu", scene.objects[static_cast<size_t>(i)].name.c_str(), f);
       std::vector<MeshField> fields(3);
+      if (tracker->fracture_measure(i).size() == m.num_vertices()) {
+        fields.emplace_back();
+        fields.back().name = "fracture_measure";  // largest eigenvalue of zeta / area (Pa)
+        fields.back().values = tracker->fracture_measure(i);
+      }
       fields[0].name = "displacement";
       fields[0].values = m.x - m.rest;
       fields[1].name = "residual";
@@ -345,6 +461,7 @@ int RunRegister(const RegisterArgs& args) {
                 t.err_mean * 1e3, t.err_max * 1e3, t.seen_mean * 1e3, t.seen_max * 1e3,
                 t.hidden_mean * 1e3, t.hidden_max * 1e3);
   }
+  if (!tracker->original_vertices(0).empty()) PrintFractureReport(rows, args.ground_truth);
   std::printf("Results in %s: %s.pvd (open in ParaView), stats.csv, summary.json\n", args.out.c_str(),
               scene.objects.empty() ? "" : scene.objects[0].name.c_str());
   if (interrupted) {

@@ -1,0 +1,411 @@
+// The bundled fracture sequences (datasets/beam_break, datasets/slab_tear): ground truth
+// from the forward simulator with fracture on a mesh twice as fine as the tracked one
+// (detection and splits between quasi-static solves, SolveQuasiStaticWithFracture), seen
+// by the virtual depth camera. Deterministic.
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "femreg/forward.h"
+#include "femreg/fracture.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/synth.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+
+namespace {
+
+struct Scenario {
+  std::string name, title, description;
+  Eigen::Vector3d size;
+  Eigen::Vector3i cells;  // tracked mesh
+  Material material;
+  double toughness = 0.0;       // tracked scene and the ground truth's strong part (Pa)
+  double weak_toughness = 0.0;  // the ground truth's weak band (Pa)
+  double tracked_toughness = 0.0;
+  double weak_half_width = 0.0;  // |x - x_mid| below this (centroid) is weak
+  int frames = 0;
+  CameraOptions camera;
+  int pixel_stride = 2;
+  // Rigid motions of the grippers: the set of vertices with rest x <= left_x follows
+  // left(f); x >= right_x follows right(f). Rotation about the set's centre, then shift.
+  double left_x = 0.0, right_x = 0.0;
+  std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)> left, right;
+  bool left_anchor_tracked = true, right_anchor_tracked = false;  // tracker knows them
+};
+
+constexpr double kPi = 3.14159265358979323846;
+
+Scenario BeamBreak() {
+  Scenario s;
+  s.name = "beam_break";
+  s.title = "a foam beam bent until it breaks";
+  s.size = Eigen::Vector3d(0.3, 0.045, 0.045);
+  s.cells = Eigen::Vector3i(20, 3, 3);
+  s.material.youngs_modulus = 5e4;
+  s.material.poisson_ratio = 0.35;
+  s.material.density = 200;
+  s.toughness = 1e9;  // the ground truth breaks only in its weak band
+  s.weak_toughness = 2500;
+  s.tracked_toughness = 6000;
+  s.weak_half_width = 0.008;
+  s.frames = 24;
+  s.camera.enabled = true;
+  s.camera.position = Eigen::Vector3d(0.15, -0.36, 0.30);
+  s.camera.target = Eigen::Vector3d(0.15, 0.02, -0.02);
+  s.camera.up = Eigen::Vector3d::UnitZ();
+  s.camera.width = 320;
+  s.camera.height = 240;
+  s.camera.fx = s.camera.fy = 262.5;
+  s.camera.cx = 159.5;
+  s.camera.cy = 119.5;
+  s.left_x = 1e-9;
+  s.right_x = 0.3 - 0.0225 - 1e-9;
+  s.description =
+      "clamped at x = 0; the free end, held by a gripper, is bent down along a circular "
+      "arc (pure bending) until the beam breaks in its weaker middle, then lifted and "
+      "pulled away";
+  s.left = [](int, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    R->setIdentity();
+    t->setZero();
+  };
+  const Eigen::Vector3d size = s.size;
+  s.right = [size](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    // Curvature ramps up over the first 16 frames (pure bending: the end follows the arc
+    // of the centre line, rotated by kappa L), then the gripper rises and pulls away.
+    const double L = size.x() - 0.01125;  // the gripper's centre
+    const double kappa = 3.2 * std::min(f, 16) / 16.0 + 1e-9;
+    const double theta = kappa * L;
+    *R = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Vector3d end(std::sin(theta) / kappa, 0, -(1 - std::cos(theta)) / kappa);
+    *t = end - Eigen::Vector3d(L, 0, 0);
+    if (f > 16) *t += Eigen::Vector3d(0.004, 0, 0.004) * (f - 16);
+  };
+  s.left_anchor_tracked = true;
+  s.right_anchor_tracked = false;
+  return s;
+}
+
+Scenario SlabTear() {
+  Scenario s;
+  s.name = "slab_tear";
+  s.title = "a soft slab torn by two grippers";
+  s.size = Eigen::Vector3d(0.2, 0.1, 0.012);
+  s.cells = Eigen::Vector3i(20, 10, 1);
+  s.material.youngs_modulus = 3e4;
+  s.material.poisson_ratio = 0.3;
+  s.material.density = 300;
+  s.toughness = 1e9;
+  s.weak_toughness = 1500;
+  s.tracked_toughness = 4000;
+  s.weak_half_width = 0.004;
+  s.frames = 24;
+  s.camera.enabled = true;
+  s.camera.position = Eigen::Vector3d(0.1, -0.12, 0.3);
+  s.camera.target = Eigen::Vector3d(0.1, 0.05, 0.0);
+  s.camera.up = Eigen::Vector3d::UnitY();
+  s.camera.width = 320;
+  s.camera.height = 240;
+  s.camera.fx = s.camera.fy = 300;
+  s.camera.cx = 159.5;
+  s.camera.cy = 119.5;
+  s.left_x = 0.02 + 1e-9;
+  s.right_x = 0.18 - 1e-9;
+  s.description =
+      "the left and right strips (2 cm) are held by grippers that pull apart along x, the "
+      "right one also sliding along +y, so the slab tears along its weaker middle";
+  s.left = [](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    R->setIdentity();
+    *t = Eigen::Vector3d(-0.0015 * f, 0, 0);
+  };
+  s.right = [](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    R->setIdentity();
+    *t = Eigen::Vector3d(0.0015 * f, 0.001 * f, 0.0);
+  };
+  s.left_anchor_tracked = true;
+  s.right_anchor_tracked = true;
+  return s;
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  std::ostringstream os;
+  os.precision(10);
+  os << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
+  return os.str();
+}
+
+std::string SceneYaml(const Scenario& s) {
+  const CameraOptions& c = s.camera;
+  std::ostringstream os;
+  os.precision(10);
+  os << "# " << s.title << ": " << s.description << ".\n"
+     << "# Made by `femreg fracture-data --scenario " << s.name << "` (see README.md).\n"
+     << "description: \"" << s.name << ", " << s.frames << " frames\"\n"
+     << "objects:\n"
+     << "  - name: " << (s.name == "beam_break" ? "beam" : "slab") << "\n"
+     << "    generate: {shape: box, size: " << Vec(s.size) << ", cells: [" << s.cells.x() << ", "
+     << s.cells.y() << ", " << s.cells.z() << "]}\n"
+     << "    material: {youngs_modulus: " << s.material.youngs_modulus
+     << ", poisson_ratio: " << s.material.poisson_ratio << ", density: " << s.material.density << "}\n"
+     << "    toughness: " << s.tracked_toughness << "\n"
+     << "registration:\n"
+     << "  regularizer: corotational\n"
+     << "  camera: {position: " << Vec(c.position) << ", target: " << Vec(c.target)
+     << ", up: " << Vec(c.up) << ", fx: " << c.fx << ", fy: " << c.fy << ", cx: " << c.cx
+     << ", cy: " << c.cy << ", width: " << c.width << ", height: " << c.height << "}\n"
+     << "  data: {max_distance: 0.03, loss: huber, loss_scale: 0.005, metric: point_to_plane, visibility: true}\n"
+     << "  weights: {data: 200, elastic: 1, temporal: 1}\n"
+     << "  solver: {max_outer_iterations: 6, max_inner_iterations: 10}\n"
+     << "effects:\n"
+     << "  fracture: {max_splits_per_iteration: 8, max_splits_per_frame: 48, crossing_tolerance: 0.2}\n"
+     << "anchors:\n";
+  auto anchor = [&](const std::string& name, bool left, const std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)>& motion) {
+    os << "  - name: " << name << "\n";
+    if (left) {
+      os << "    select: {box: {min: [-1, -1, -1], max: [" << s.left_x << ", 1, 1]}}\n";
+    } else {
+      os << "    select: {box: {min: [" << s.right_x << ", -1, -1], max: [1, 1, 1]}}\n";
+    }
+    os << "    hard: true\n    translations:\n";
+    for (int f = 0; f < s.frames; ++f) {
+      Eigen::Matrix3d R;
+      Eigen::Vector3d t;
+      motion(f, &R, &t);
+      os << "      - " << Vec(t) << "\n";
+    }
+  };
+  if (s.left_anchor_tracked) anchor("left_gripper", true, s.left);
+  if (s.right_anchor_tracked) anchor("right_gripper", false, s.right);
+  return os.str();
+}
+
+}  // namespace
+
+std::vector<std::string> FractureScenarios() { return {"beam_break", "slab_tear"}; }
+
+Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
+                                void (*progress)(int done, int total)) {
+  Scenario s;
+  if (scenario == "beam_break") {
+    s = BeamBreak();
+  } else if (scenario == "slab_tear") {
+    s = SlabTear();
+  } else {
+    return Status::Error("unknown scenario '" + scenario + "' (beam_break or slab_tear)");
+  }
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "clouds", ec);
+  fs::create_directories(fs::path(dir) / "ground_truth", ec);
+  if (ec) return Status::Error(dir + ": cannot create: " + ec.message());
+
+  const int refinement = 2;
+  TetMesh coarse = MakeBox(s.size, s.cells.x(), s.cells.y(), s.cells.z());
+  TetMesh fine = MakeBox(s.size, s.cells.x() * refinement, s.cells.y() * refinement,
+                         s.cells.z() * refinement);
+  const double mid = 0.5 * s.size.x();
+  for (int e = 0; e < fine.num_tets(); ++e) {
+    double cx = 0;
+    for (int k = 0; k < 4; ++k) cx += 0.25 * fine.rest(fine.tets(e, k), 0);
+    if (std::abs(cx - mid) < s.weak_half_width) fine.region(e) = 1;
+  }
+  ComputeLumpedMasses(&fine, s.material.density);
+  ElasticModel model;
+  model.Build(fine, ElasticModelType::kCorotational, s.material);
+  const TetMesh fine0 = fine;  // the unbroken mesh, for the embedding
+  const EmbeddedPoints embedded = EmbedPoints(fine0, coarse.rest);
+  // Every initial fine element that contains each tracked vertex (for the pieces file).
+  std::vector<std::vector<std::pair<int, Eigen::Vector4d>>> containing(coarse.num_vertices());
+  for (int e = 0; e < fine0.num_tets(); ++e) {
+    Eigen::Matrix3d D;
+    const Eigen::Vector3d a = fine0.rest.row(fine0.tets(e, 0));
+    for (int k = 0; k < 3; ++k) D.col(k) = fine0.rest.row(fine0.tets(e, k + 1)).transpose() - a;
+    const Eigen::Matrix3d Dinv = D.inverse();
+    Eigen::Vector3d lo = a, hi = a;
+    for (int k = 1; k < 4; ++k) {
+      lo = lo.cwiseMin(fine0.rest.row(fine0.tets(e, k)).transpose());
+      hi = hi.cwiseMax(fine0.rest.row(fine0.tets(e, k)).transpose());
+    }
+    for (int v = 0; v < coarse.num_vertices(); ++v) {
+      const Eigen::Vector3d p = coarse.rest.row(v);
+      if ((p.array() < lo.array() - 1e-9).any() || (p.array() > hi.array() + 1e-9).any()) continue;
+      const Eigen::Vector3d l = Dinv * (p - a);
+      const Eigen::Vector4d b(1 - l.sum(), l.x(), l.y(), l.z());
+      if (b.minCoeff() >= -1e-9) containing[v].emplace_back(e, b);
+    }
+  }
+
+  FractureOptions fracture;
+  fracture.toughness = s.toughness;
+  fracture.region_toughness = {{1, s.weak_toughness}};
+  fracture.max_splits_per_iteration = 16;
+  fracture.max_splits_per_frame = 400;
+  ForwardOptions forward;
+  forward.max_iterations = 60;
+  DepthSensorOptions sensor_options;
+  sensor_options.camera = s.camera;
+  sensor_options.pixel_stride = s.pixel_stride;
+  const DepthSensor sensor(sensor_options);
+
+  Status status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), SceneYaml(s));
+  if (!status.ok()) return status;
+  std::vector<int> original;  // fine vertex -> initial fine vertex
+  std::vector<FractureEvent> events;
+  std::ostringstream events_csv;
+  events_csv << "frame,node,nx,ny,nz,measure,pieces\n";
+  int first_break = -1, first_event = -1;
+  for (int f = 0; f < s.frames; ++f) {
+    // Boundary conditions on the current (possibly split) mesh, by rest position.
+    Eigen::Matrix3d Rl, Rr;
+    Eigen::Vector3d tl, tr;
+    s.left(f, &Rl, &tl);
+    s.right(f, &Rr, &tr);
+    Eigen::Vector3d cl = Eigen::Vector3d::Zero(), cr = Eigen::Vector3d::Zero();
+    int nl = 0, nr = 0;
+    for (int v = 0; v < fine.num_vertices(); ++v) {
+      if (fine.rest(v, 0) <= s.left_x) { cl += fine.rest.row(v).transpose(); ++nl; }
+      if (fine.rest(v, 0) >= s.right_x) { cr += fine.rest.row(v).transpose(); ++nr; }
+    }
+    cl /= std::max(nl, 1);
+    cr /= std::max(nr, 1);
+    ForwardProblem problem;
+    for (int v = 0; v < fine.num_vertices(); ++v) {
+      const Eigen::Vector3d X = fine.rest.row(v);
+      if (X.x() <= s.left_x) problem.prescribed.emplace_back(v, cl + Rl * (X - cl) + tl - X);
+      if (X.x() >= s.right_x) problem.prescribed.emplace_back(v, cr + Rr * (X - cr) + tr - X);
+    }
+    ForwardSummary summary;
+    const size_t before = events.size();
+    status = SolveQuasiStaticWithFracture(&problem, forward, fracture, 12, s.material.density,
+                                          &model, &fine, &original, &events, &summary);
+    if (!status.ok()) return Status::Error(s.name + " frame " + std::to_string(f) + ": " + status.message());
+    std::vector<int> fine_piece;
+    const int pieces = ConnectedPieces(fine, &fine_piece);
+    for (size_t i = before; i < events.size(); ++i) {
+      const FractureEvent& e = events[i];
+      char buf[200];
+      std::snprintf(buf, sizeof(buf), "%d,%d,%.6f,%.6f,%.6f,%.6g,%d\n", f, e.original_node,
+                    e.normal.x(), e.normal.y(), e.normal.z(), e.measure, pieces);
+      events_csv << buf;
+      if (first_event < 0) first_event = f;
+    }
+    if (pieces >= 2 && first_break < 0) first_break = f;
+
+    // Ground truth at the tracked vertices: initial element -> its current copy.
+    std::map<std::array<int, 4>, int> element_of;
+    for (int e = 0; e < fine.num_tets(); ++e) {
+      std::array<int, 4> key;
+      for (int k = 0; k < 4; ++k) key[k] = original[fine.tets(e, k)];
+      std::sort(key.begin(), key.end());
+      element_of[key] = e;
+    }
+    auto current = [&](int e0) {
+      std::array<int, 4> key;
+      for (int k = 0; k < 4; ++k) key[k] = fine0.tets(e0, k);
+      std::sort(key.begin(), key.end());
+      auto it = element_of.find(key);
+      return it == element_of.end() ? -1 : it->second;
+    };
+    // The current element with the same vertices, in the initial element's vertex order.
+    auto interpolate = [&](int e0, int e, const Eigen::Vector4d& b) {
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k) {
+        int vertex = -1;
+        for (int m = 0; m < 4; ++m) {
+          if (original[fine.tets(e, m)] == fine0.tets(e0, k)) vertex = fine.tets(e, m);
+        }
+        p += b[k] * fine.x.row(vertex).transpose();
+      }
+      return p;
+    };
+    GroundTruthFrame truth;
+    truth.positions.resize(coarse.num_vertices(), 3);
+    std::vector<PieceTruthRow> piece_rows;
+    for (int v = 0; v < coarse.num_vertices(); ++v) {
+      int e0 = embedded.element[v];
+      Eigen::Vector4d b = embedded.barycentric[v];
+      int e = current(e0);
+      if (e < 0) {  // removed by the fracture: any other element containing the vertex
+        for (const auto& c : containing[v]) {
+          if ((e = current(c.first)) >= 0) {
+            e0 = c.first;
+            b = c.second;
+            break;
+          }
+        }
+      }
+      truth.positions.row(v) = e >= 0 ? Eigen::RowVector3d(interpolate(e0, e, b).transpose())
+                                      : Eigen::RowVector3d(coarse.rest.row(v));
+      if (pieces >= 2) {
+        std::map<int, Eigen::Vector3d> on_piece;
+        for (const auto& c : containing[v]) {
+          const int ce = current(c.first);
+          if (ce < 0) continue;
+          const int p = fine_piece[fine.tets(ce, 0)];
+          if (!on_piece.count(p)) on_piece[p] = interpolate(c.first, ce, c.second);
+        }
+        for (const auto& kv : on_piece) piece_rows.push_back({v, kv.first, kv.second});
+      }
+    }
+    const std::vector<RenderSurface> surfaces = {{&fine.x, &fine.surface}};
+    const DepthImage image = sensor.Render(surfaces);
+    const PointCloud cloud = sensor.Sample(image, surfaces, 1000003ull + static_cast<uint64_t>(f));
+    truth.visible = sensor.Visible(image, truth.positions, 2e-3);
+    char name[64];
+    std::snprintf(name, sizeof(name), "frame_%04d", f);
+    status = WritePointCloud((fs::path(dir) / "clouds" / (std::string(name) + ".pcd")).string(), cloud);
+    if (status.ok()) {
+      status = WriteGroundTruthFrame(
+          (fs::path(dir) / "ground_truth" / (std::string(name) + ".csv")).string(), truth);
+    }
+    if (status.ok() && pieces >= 2) {
+      status = WritePieceTruth(
+          (fs::path(dir) / "ground_truth" / (std::string(name) + "_pieces.csv")).string(), piece_rows);
+    }
+    if (!status.ok()) return status;
+    if (progress) progress(f + 1, s.frames);
+  }
+  status = WriteFileAtomically((fs::path(dir) / "ground_truth" / "events.csv").string(), events_csv.str());
+  if (!status.ok()) return status;
+
+  std::ostringstream readme;
+  readme << "# " << s.name << ": " << s.title << "\n\n"
+         << "Made by `femreg fracture-data --scenario " << s.name << " --out DIR` (deterministic).\n\n"
+         << "The object is " << s.description << ".\n\n"
+         << "- `scene.yaml`: the tracking scene: a " << s.size.x() << " x " << s.size.y() << " x "
+         << s.size.z() << " m box (E = " << s.material.youngs_modulus << " Pa, nu = "
+         << s.material.poisson_ratio << "), " << coarse.num_vertices() << " vertices, "
+         << coarse.num_tets() << " tetrahedra, toughness " << s.tracked_toughness
+         << " Pa, `effects.fracture` on; the grippers the robot knows as hard anchors.\n"
+         << "- `clouds/frame_NNNN.pcd`: " << s.frames << " clouds from a virtual "
+         << s.camera.width << "x" << s.camera.height << " depth camera (every " << s.pixel_stride
+         << "nd pixel, depth noise sigma = 0.00285 z^2).\n"
+         << "- `ground_truth/frame_NNNN.csv`: per tracked vertex of the initial mesh (x,y,z,visible).\n"
+         << "- `ground_truth/frame_NNNN_pieces.csv` (frames after the break): the position of "
+         << "each tracked vertex on every ground-truth piece it touches (vertex,piece,x,y,z); "
+         << "`femreg register --ground-truth` matches each tracked piece to a ground-truth "
+         << "piece with it (femreg/fracture.h, ComputePieceErrors).\n"
+         << "- `ground_truth/events.csv`: the ground truth's node splits (frame, node, plane "
+         << "normal, measure, pieces).\n\n"
+         << "The ground truth is a corotational FEM simulation on a mesh " << refinement
+         << " times finer (" << fine0.num_vertices() << " vertices) with the fracture model: "
+         << "per frame a quasi-static solve, then detection and up to "
+         << fracture.max_splits_per_iteration << " splits, repeated (at most 12 rounds) until "
+         << "no node breaks. Its middle band (|x - " << mid << "| < " << s.weak_half_width
+         << " m) has toughness " << s.weak_toughness << " Pa, the rest does not break. "
+         << "First split at frame " << first_event << ", in two pieces from frame "
+         << first_break << " (" << events.size() << " splits in all).\n";
+  return WriteFileAtomically((fs::path(dir) / "README.md").string(), readme.str());
+}
+
+}  // namespace femreg
