@@ -1,0 +1,81 @@
+// What fracture costs (Google Benchmark): Track per frame on the first 12 frames of
+// datasets/beam_break (before the break) with effects.fracture off, and on with a
+// toughness nothing reaches (detection every outer iteration, no split), plus the
+// detection alone. Off is the baseline: with fracture off the tracker computes no tensor
+// and allocates nothing for it. Run from a build with -DFEMREG_BUILD_BENCHMARKS=ON:
+//   bench/femreg_fracture_bench --benchmark_repetitions=3
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "femreg/fracture.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/tracker.h"
+
+namespace {
+
+constexpr int kFrames = 12;
+
+const std::vector<femreg::PointCloud>& Clouds() {
+  static std::vector<femreg::PointCloud>* clouds = [] {
+    auto* c = new std::vector<femreg::PointCloud>;
+    for (int f = 0; f < kFrames; ++f) {
+      char path[512];
+      std::snprintf(path, sizeof(path), "%s/datasets/beam_break/clouds/frame_%04d.pcd", FEMREG_SOURCE_DIR, f);
+      femreg::PointCloud cloud;
+      femreg::ReadPointCloud(path, &cloud);
+      c->push_back(cloud);
+    }
+    return c;
+  }();
+  return *clouds;
+}
+
+// state.range(0): 0 = fracture off, 1 = on with an unreachable toughness.
+void TrackBeam(benchmark::State& state) {
+  femreg::Scene scene;
+  femreg::LoadScene(std::string(FEMREG_SOURCE_DIR) + "/datasets/beam_break/scene.yaml", &scene);
+  scene.effects.fracture = state.range(0) == 1;
+  for (femreg::ObjectSpec& o : scene.objects) o.toughness = 1e30;
+  double fracture_s = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::unique_ptr<femreg::Tracker> tracker;
+    femreg::Tracker::Create(scene, &tracker);
+    state.ResumeTiming();
+    for (const femreg::PointCloud& cloud : Clouds()) {
+      femreg::FrameSummary summary;
+      tracker->Track(cloud, &summary);
+      fracture_s += summary.time.fracture;
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * kFrames);
+  state.counters["fracture_ms_per_frame"] =
+      1e3 * fracture_s / std::max<double>(1.0, static_cast<double>(state.iterations() * kFrames));
+}
+BENCHMARK(TrackBeam)->Arg(0)->Arg(1)->ArgNames({"fracture"})->Unit(benchmark::kMillisecond);
+
+// Detection alone (rotations, stresses, tensors, eigenvalues) on a bent beam.
+void DetectFracture(benchmark::State& state) {
+  femreg::TetMesh mesh = femreg::MakeBox(Eigen::Vector3d(0.3, 0.045, 0.045), 20 * state.range(0),
+                                         3 * state.range(0), 3 * state.range(0));
+  femreg::Material material;
+  femreg::ElasticModel model;
+  model.Build(mesh, femreg::ElasticModelType::kCorotational, material);
+  femreg::Vertices x = mesh.rest;
+  for (int v = 0; v < x.rows(); ++v) x(v, 2) -= 0.2 * x(v, 0) * x(v, 0);
+  model.UpdateRotations(x);
+  femreg::FractureOptions options;
+  femreg::NodeSeparation separation;
+  for (auto _ : state) femreg::DetectFracture(mesh, model, x, options, &separation);
+  state.counters["vertices"] = mesh.num_vertices();
+}
+BENCHMARK(DetectFracture)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
