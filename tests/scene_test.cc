@@ -293,8 +293,8 @@ TEST_F(SceneTest, UnknownOrMissingObjectName) {
 TEST_F(SceneTest, FractureAndCollisionAreNotBuiltYet) {
   ExpectError(std::string(kBaseScene) + "effects: {fracture: {max_splits_per_frame: 0}}\n",
               {"beam.yaml:10: effects.fracture.max_splits_per_frame: must be >= 1"});
-  ExpectError(std::string(kBaseScene) + "effects:\n  collision: true\n",
-              {"beam.yaml:11: effects.collision: not built yet: collision (issue 6)"});
+  ExpectError(std::string(kBaseScene) + "collision: {distance: 0}\n",
+              {"beam.yaml:10: collision.distance: must be > 0 (got 0)"});
 }
 
 TEST_F(SceneTest, InvalidRegistrationOptions) {

@@ -4,6 +4,7 @@
 #define FEMREG_FORWARD_H_
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +15,20 @@
 
 namespace femreg {
 
+// An energy added to the elastic one in a forward solve, e.g. contact penalties
+// (collision.h's ContactPotential). The solver calls Refresh at the start of every Newton
+// iteration (the active set may change there) and keeps it fixed within the line search.
+class ForwardPotential {
+ public:
+  virtual ~ForwardPotential() = default;
+  virtual void Refresh(const Vertices& x) = 0;
+  // Energy at x (J); adds dE/dx to *gradient (3 #V, may be null).
+  virtual double Evaluate(const Vertices& x, Eigen::VectorXd* gradient) const = 0;
+  // Adds a symmetric positive semi-definite approximation of d2E/dx2 as (dof, dof, value)
+  // triplets over the 3 #V DOFs (both triangles).
+  virtual void AddHessian(const Vertices& x, std::vector<Eigen::Triplet<double>>* triplets) const = 0;
+};
+
 struct ForwardProblem {
   std::vector<int> clamped;  // vertices held at their rest position
   // Vertices moved by a prescribed displacement from rest (m). A vertex listed here and
@@ -21,6 +36,7 @@ struct ForwardProblem {
   std::vector<std::pair<int, Eigen::Vector3d>> prescribed;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2, acts on the lumped masses
   std::vector<std::pair<int, Eigen::Vector3d>> nodal_loads;  // vertex, force (N)
+  ForwardPotential* potential = nullptr;  // extra energy (not owned), e.g. contacts
 };
 
 struct ForwardOptions {

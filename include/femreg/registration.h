@@ -17,7 +17,10 @@ namespace femreg {
 struct PointCloud {
   Vertices points;   // #P by 3
   Vertices normals;  // #P by 3, or empty when the source has none
+  // #P per-point labels (a PCD "label" field: which object a point belongs to), or empty.
+  Eigen::VectorXi labels;
   bool has_normals() const { return normals.rows() == points.rows() && points.rows() > 0; }
+  bool has_labels() const { return labels.size() == points.rows() && points.rows() > 0; }
   int size() const { return static_cast<int>(points.rows()); }
 };
 
@@ -143,6 +146,7 @@ struct OuterIteration {
   int cloud_to_model = 0;
   int rejected = 0;             // pairs gated out by distance
   int inner_iterations = 0;
+  int contacts = 0;             // contact residuals added (collision on)
   double rms_residual = 0.0;    // m, over kept pairs, after the solve
   double time_s = 0.0;
 };
@@ -151,6 +155,7 @@ struct OuterIteration {
 struct StageTimes {
   double preprocess = 0.0, prealign = 0.0, rotations = 0.0, correspondences = 0.0,
          build = 0.0, solve = 0.0, total = 0.0;
+  double collision = 0.0;  // contact detection (refit, broad and narrow phase)
   double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
 };
 
@@ -178,6 +183,11 @@ struct FrameSummary {
   int outer_iterations = 0, inner_iterations = 0;
   int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
   double rms_residual = 0.0;      // m
+  // Collision (effects.collision): active contacts (penetration delta = D - gap > 0) at the
+  // result, split into object-object and object-obstacle, and the deepest delta (m; < D
+  // means no surfaces crossed). See femreg/collision.h.
+  int contacts = 0, object_contacts = 0, obstacle_contacts = 0;
+  double max_penetration = 0.0;
   StageTimes time;
   std::vector<OuterIteration> iterations;
   std::vector<FractureEvent> fractures;  // node splits this frame (effects.fracture)

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "femreg/collision.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/fracture.h"
@@ -70,6 +71,7 @@ struct ObjectSpec {
   // effects.fracture is on; 0 = unbreakable.
   double toughness = 0.0;
   std::vector<std::pair<int, double>> region_toughness;  // region id -> toughness (Pa)
+  int label = -1;  // cloud points with this label belong to it; -1 = none
 };
 
 struct BoundaryConditionSpec {
@@ -183,6 +185,9 @@ struct Scene {
   RegistrationOptions registration;
   std::vector<AnchorSpec> anchors;
   EffectsSpec effects;
+  // Pairs, penalty and obstacles; used when effects.collision is on (an empty pair list
+  // then means every pair of objects).
+  CollisionSpec collision;
   SynthSpec synth;  // femreg synth; synth.enabled when the file has a synth section
 };
 

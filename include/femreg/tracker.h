@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "femreg/fracture.h"
+#include "femreg/collision.h"
 #include "femreg/mesh.h"
 #include "femreg/point_cloud.h"
 #include "femreg/registration.h"
@@ -76,6 +77,9 @@ class Tracker {
   const std::vector<int>& original_vertices(int object) const;
 
   const RegistrationOptions& options() const;
+  // The contact detector, or null when collision is off or nothing can collide (then no
+  // hierarchy is built and no contact residual is added).
+  const CollisionWorld* collision() const;
 
  private:
   Tracker();

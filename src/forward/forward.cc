@@ -149,7 +149,12 @@ class QuasiStaticSolver {
   // Gathers the element forces into the elastic gradient (3 #V).
   void GatherGradient(const std::vector<Vector12>& element_force, Eigen::VectorXd* gradient) const;
   // Assembles the reduced warped stiffness at `rotations` into matrix_ and factorizes it.
-  bool AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations);
+  // With problem.potential, its Hessian at x is added (the pattern is then re-analyzed).
+  bool AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations, const Vertices& x);
+  // problem.potential's energy at x (0 without one); adds its gradient when not null.
+  double Extra(const Vertices& x, Eigen::VectorXd* gradient) const {
+    return problem_.potential != nullptr ? problem_.potential->Evaluate(x, gradient) : 0.0;
+  }
   // Total potential: elastic energy minus the work of `load` over the displacement.
   double Potential(double elastic, const Vertices& x, const Eigen::VectorXd& load) const;
   double FreeNorm(const Eigen::VectorXd& v) const;
@@ -172,6 +177,7 @@ class QuasiStaticSolver {
   std::vector<std::vector<int>> colors_;  // elements sharing no vertex, for parallel scatter
   Factorization factorization_;
   bool factorized_for_linear_ = false;
+  bool analyzed_elastic_pattern_ = true;  // false after a potential's entries widened it
   Eigen::VectorXd full_load_;        // 3 #V external load at full scale
 };
 
@@ -451,8 +457,9 @@ void QuasiStaticSolver::GatherGradient(const std::vector<Vector12>& element_forc
   }
 }
 
-bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations) {
-  if (linear() && factorized_for_linear_) return true;  // K does not change
+bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations,
+                                             const Vertices& x) {
+  if (linear() && factorized_for_linear_ && problem_.potential == nullptr) return true;  // K does not change
   double* values = matrix_.valuePtr();
   std::fill(values, values + matrix_.nonZeros(), 0.0);
   for (const std::vector<int>& elements : colors_) {
@@ -468,7 +475,24 @@ bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>&
     }
   }
   const auto start = Clock::now();
-  factorization_.factorize(matrix_);
+  std::vector<Eigen::Triplet<double>> extra, reduced;
+  if (problem_.potential != nullptr) problem_.potential->AddHessian(x, &extra);
+  for (const auto& t : extra) {
+    const int r = free_index_[t.row()], c = free_index_[t.col()];
+    if (r >= 0 && c >= 0 && r >= c) reduced.emplace_back(r, c, t.value());
+  }
+  if (!reduced.empty()) {
+    SparseMatrix contact(matrix_.rows(), matrix_.cols());
+    contact.setFromTriplets(reduced.begin(), reduced.end());
+    const SparseMatrix sum = matrix_ + contact;
+    factorization_.analyzePattern(sum);
+    factorization_.factorize(sum);
+    analyzed_elastic_pattern_ = false;
+  } else {
+    if (!analyzed_elastic_pattern_) factorization_.analyzePattern(matrix_);
+    analyzed_elastic_pattern_ = true;
+    factorization_.factorize(matrix_);
+  }
   summary_.factorization_time_s += Seconds(start);
   if (factorization_.info() != Eigen::Success) {
     return Fail(ForwardTermination::kFactorizationFailed,
@@ -542,7 +566,7 @@ void QuasiStaticSolver::Run() {
       }
       if (moved && !free_dofs_.empty()) {
         EvaluateElements(x, &rotations, &forces);
-        if (!AssembleAndFactorize(rotations)) return;
+        if (!AssembleAndFactorize(rotations, x)) return;
         Eigen::VectorXd coupling = Eigen::VectorXd::Zero(3 * nv());
         for (int e = 0; e < nt(); ++e) {
           const Vector12 de = model_.Gather(delta, e);
@@ -571,6 +595,13 @@ void QuasiStaticSolver::Run() {
     double step_length = 0.0;
     ForwardTermination step_result = ForwardTermination::kMaxIterations;
     for (int iteration = 0;; ++iteration) {
+      if (problem_.potential != nullptr) {  // e.g. contacts: refreshed per Newton iteration
+        problem_.potential->Refresh(x);
+        GatherGradient(forces, &gradient);
+        potential = Potential(elastic, x, load) + Extra(x, &gradient);
+        residual = gradient - load;
+        residual_norm = FreeNorm(residual);
+      }
       // Reference force: external loads, support reactions, and the first imbalance.
       double reaction = 0.0;
       for (int d = 0; d < 3 * nv(); ++d)
@@ -590,7 +621,7 @@ void QuasiStaticSolver::Run() {
       }
       if (iteration >= options_.max_iterations) break;
 
-      if (!AssembleAndFactorize(rotations)) return;
+      if (!AssembleAndFactorize(rotations, x)) return;
       for (size_t i = 0; i < free_dofs_.size(); ++i) rhs(i) = -residual(free_dofs_[i]);
       step = factorization_.solve(rhs);
       if (!step.allFinite()) {
@@ -604,12 +635,12 @@ void QuasiStaticSolver::Run() {
       double alpha = 1.0;
       bool accepted = false;
       Vertices trial;
-      double trial_potential = 0.0;
+      double trial_potential = 0.0, trial_elastic = 0.0;
       while (alpha >= options_.min_step) {
         trial = x;
         ScatterFree(step, alpha, &trial);
-        const double trial_elastic = EvaluateElements(trial, &trial_rotations, &trial_forces);
-        trial_potential = Potential(trial_elastic, trial, load);
+        trial_elastic = EvaluateElements(trial, &trial_rotations, &trial_forces);
+        trial_potential = Potential(trial_elastic, trial, load) + Extra(trial, nullptr);
         if (std::isfinite(trial_potential)) {
           if (trial_potential <= potential + 1e-4 * alpha * slope) {
             accepted = true;
@@ -621,6 +652,7 @@ void QuasiStaticSolver::Run() {
                                  std::numeric_limits<double>::min();
             if (trial_potential - potential <= noise) {
               GatherGradient(trial_forces, &trial_gradient);
+              Extra(trial, &trial_gradient);
               accepted = FreeNorm(trial_gradient - load) < residual_norm;
             }
           }
@@ -642,8 +674,10 @@ void QuasiStaticSolver::Run() {
       rotations.swap(trial_rotations);
       forces.swap(trial_forces);
       GatherGradient(forces, &gradient);
+      Extra(x, &gradient);
       residual = gradient - load;
       potential = trial_potential;
+      elastic = trial_elastic;
       residual_norm = FreeNorm(residual);
       step_length = alpha;
     }

@@ -32,14 +32,17 @@ bool HasField(const pcl::PCLPointCloud2& blob, const std::string& name) {
   return false;
 }
 
-void FromPcl(const PclCloud& in, bool with_normals, PointCloud* out) {
+// Labels ride through the PCL filters in the (otherwise unused) curvature field.
+void FromPcl(const PclCloud& in, bool with_normals, PointCloud* out, bool with_labels = false) {
   out->points.resize(static_cast<Eigen::Index>(in.size()), 3);
   out->normals.resize(with_normals ? static_cast<Eigen::Index>(in.size()) : 0, 3);
+  out->labels.resize(with_labels ? static_cast<Eigen::Index>(in.size()) : 0);
   for (size_t i = 0; i < in.size(); ++i) {
     const auto& p = in[i];
     const auto r = static_cast<Eigen::Index>(i);
     out->points.row(r) << p.x, p.y, p.z;
     if (with_normals) out->normals.row(r) << p.normal_x, p.normal_y, p.normal_z;
+    if (with_labels) out->labels(r) = static_cast<int>(std::lround(p.curvature));
   }
 }
 
@@ -58,6 +61,7 @@ PclCloud::Ptr ToPcl(const PointCloud& in) {
     } else {
       p.normal_x = p.normal_y = p.normal_z = 0.0f;
     }
+    p.curvature = in.has_labels() ? static_cast<float>(in.labels(i)) : 0.0f;
   }
   out->width = static_cast<uint32_t>(out->size());
   out->height = 1;
@@ -91,6 +95,14 @@ Status ReadBlob(const std::string& path, bool ply, PointCloud* cloud) {
   PclCloud pcl_cloud;
   pcl::fromPCLPointCloud2(blob, pcl_cloud);
   FromPcl(pcl_cloud, normals, cloud);
+  if (HasField(blob, "label")) {
+    pcl::PointCloud<pcl::PointXYZL> labelled;
+    pcl::fromPCLPointCloud2(blob, labelled);
+    cloud->labels.resize(static_cast<Eigen::Index>(labelled.size()));
+    for (size_t i = 0; i < labelled.size(); ++i) {
+      cloud->labels(static_cast<Eigen::Index>(i)) = static_cast<int>(labelled[i].label);
+    }
+  }
   return Status::Ok();
 }
 
@@ -151,6 +163,7 @@ Status ReadText(const std::string& path, PointCloud* cloud) {
 
 int DropNonFinite(PointCloud* cloud) {
   const bool normals = cloud->has_normals();
+  const bool labels = cloud->has_labels();
   int kept = 0;
   for (int i = 0; i < cloud->size(); ++i) {
     bool ok = cloud->points.row(i).allFinite();
@@ -159,12 +172,14 @@ int DropNonFinite(PointCloud* cloud) {
     if (kept != i) {
       cloud->points.row(kept) = cloud->points.row(i);
       if (normals) cloud->normals.row(kept) = cloud->normals.row(i);
+      if (labels) cloud->labels(kept) = cloud->labels(i);
     }
     ++kept;
   }
   const int dropped = cloud->size() - kept;
   cloud->points.conservativeResize(kept, 3);
   if (normals) cloud->normals.conservativeResize(kept, 3);
+  if (labels) cloud->labels.conservativeResize(kept);
   return dropped;
 }
 
@@ -196,7 +211,14 @@ Status WritePointCloud(const std::string& path, const PointCloud& cloud) {
   const std::string tmp = path + ".tmp";
   PclCloud::Ptr pc = ToPcl(cloud);
   int rc;
-  if (cloud.has_normals()) {
+  if (cloud.has_labels()) {
+    pcl::PointCloud<pcl::PointXYZLNormal> labelled;
+    pcl::copyPointCloud(*pc, labelled);
+    for (size_t i = 0; i < labelled.size(); ++i) {
+      labelled[i].label = static_cast<uint32_t>(cloud.labels(static_cast<Eigen::Index>(i)));
+    }
+    rc = pcl::io::savePCDFileBinary(tmp, labelled);
+  } else if (cloud.has_normals()) {
     rc = pcl::io::savePCDFileBinary(tmp, *pc);
   } else {
     pcl::PointCloud<pcl::PointXYZ> xyz;
@@ -218,6 +240,7 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
                    options.outlier_neighbors > 0 || options.normal_neighbors > 0;
   if (!any || cloud->size() == 0) return;
   bool normals = cloud->has_normals();
+  const bool labels = cloud->has_labels();
   PclCloud::Ptr pc = ToPcl(*cloud);
   if (options.crop) {
     pcl::CropBox<pcl::PointNormal> crop;
@@ -285,7 +308,7 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
     }
     normals = true;
   }
-  FromPcl(*pc, normals, cloud);
+  FromPcl(*pc, normals, cloud, labels);
   // Normal estimation leaves NaN normals where a neighbourhood is degenerate.
   DropNonFinite(cloud);
 }

@@ -20,7 +20,13 @@ std::string FrameSummary::BriefReport() const {
                 frame, ToString(termination), outer_iterations, inner_iterations, initial.total(),
                 final.total(), rms_residual * 1e3, model_to_cloud, cloud_to_model, rejected,
                 time.total * 1e3);
-  return buf;
+  std::string brief = buf;
+  if (contacts > 0 || time.collision > 0) {
+    std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm", contacts,
+                  max_penetration * 1e3);
+    brief += buf;
+  }
+  return brief;
 }
 
 std::string FrameSummary::FullReport() const {
@@ -46,6 +52,14 @@ std::string FrameSummary::FullReport() const {
                 time.preprocess * 1e3, time.prealign * 1e3, time.rotations * 1e3,
                 time.correspondences * 1e3, time.build * 1e3, time.solve * 1e3, time.total * 1e3);
   os << buf;
+  if (contacts > 0 || time.collision > 0) {
+    std::snprintf(buf, sizeof(buf),
+                  "  collision: E %.4g, %d contacts (%d object, %d obstacle), deepest penetration "
+                  "%.3f mm, detection %.2f ms\n",
+                  final.collision, contacts, object_contacts, obstacle_contacts,
+                  max_penetration * 1e3, time.collision * 1e3);
+    os << buf;
+  }
   os << "  termination: " << ToString(termination) << " (" << message << ")\n";
   return os.str();
 }

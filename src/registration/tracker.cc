@@ -14,8 +14,10 @@
 #include <sstream>
 
 #include "femreg/fracture.h"
+#include "femreg/collision.h"
 #include "femreg/point_cloud.h"
 #include "registration/nearest.h"
+#include "solvers/ceres/contact_cost.h"
 #include "solvers/ceres/cost_functions.h"
 
 namespace femreg {
@@ -107,6 +109,12 @@ struct Tracker::Impl {
   std::vector<int> surface_vertices;
   std::vector<int> vertex_object;
   std::map<std::string, Anchor> anchors;
+  // Contacts (effects.collision): null when off or when nothing can collide, so an effect
+  // that is off builds no hierarchy and adds no residual. After a topology change of object
+  // i call collision->Rebuild(i, its surface in global numbering, x).
+  std::unique_ptr<CollisionWorld> collision;
+  std::vector<Contact> contacts;
+  std::vector<int> object_label;  // per object: its cloud label, -1 = none
   // Fracture (effects.fracture): null when off, so nothing is computed or allocated.
   struct FractureData {
     std::vector<FractureOptions> options;       // per object
@@ -236,6 +244,32 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
                                              : std::numeric_limits<double>::infinity();
   const bool plane = data.metric == DataMetric::kPointToPlane;
   const Eigen::MatrixXd normals = (data.visibility || plane) ? VertexNormals() : Eigen::MatrixXd();
+  // Labelled clouds: a point whose label names an object pairs with that object only
+  // (per-object k-d trees and surfaces); other points go to the nearest surface.
+  const int num_objects = static_cast<int>(objects.size());
+  std::vector<std::vector<int>> label_points(num_objects);  // object -> its cloud points
+  std::vector<std::unique_ptr<PointIndex>> label_index(num_objects);
+  std::vector<Triangles> object_surface(num_objects);
+  std::vector<std::unique_ptr<SurfaceIndex>> object_surface_index(num_objects);
+  std::vector<int> point_object;  // cloud point -> object, -1 = unassigned
+  if (cloud.has_labels() &&
+      std::any_of(object_label.begin(), object_label.end(), [](int l) { return l >= 0; })) {
+    point_object.assign(cloud.size(), -1);
+    for (int i = 0; i < cloud.size(); ++i)
+      for (int o = 0; o < num_objects; ++o)
+        if (object_label[o] >= 0 && cloud.labels(i) == object_label[o]) point_object[i] = o;
+    for (int o = 0; o < num_objects; ++o) {
+      if (object_label[o] < 0) continue;
+      for (int i = 0; i < cloud.size(); ++i)
+        if (point_object[i] == o) label_points[o].push_back(i);
+      Vertices pts(static_cast<Eigen::Index>(label_points[o].size()), 3);
+      for (size_t j = 0; j < label_points[o].size(); ++j) pts.row(j) = cloud.points.row(label_points[o][j]);
+      label_index[o] = std::make_unique<PointIndex>(pts);
+      const Object& ob = objects[o];
+      object_surface[o] = ob.mesh.surface.array() + ob.offset;
+      object_surface_index[o] = std::make_unique<SurfaceIndex>(x, object_surface[o]);
+    }
+  }
   if (data.model_to_cloud) {
     for (int v : surface_vertices) {
       const Eigen::Vector3d p = x.row(v);
@@ -244,8 +278,16 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
         if (n.dot(options.camera.position - p) <= 0.0) continue;
       }
       double d2 = 0.0;
-      const int q = cloud_index.Nearest(p, &d2);
-      if (q < 0) break;
+      int q = -1;
+      if (label_index.empty() || !label_index[vertex_object[v]]) {
+        q = cloud_index.Nearest(p, &d2);
+        if (q < 0) break;
+      } else {
+        const int o = vertex_object[v];
+        q = label_index[o]->Nearest(p, &d2);
+        if (q < 0) continue;
+        q = label_points[o][q];
+      }
       if (d2 > gate2) {
         ++*rejected;
         continue;
@@ -269,7 +311,10 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
     SurfaceIndex surface_index(x, surface);
     for (int i = 0; i < cloud.size(); i += data.cloud_stride) {
       const Eigen::Vector3d q = cloud.points.row(i);
-      const SurfaceIndex::Hit hit = surface_index.Closest(q);
+      const int labelled = point_object.empty() ? -1 : point_object[i];
+      const Triangles& tris = labelled >= 0 ? object_surface[labelled] : surface;
+      const SurfaceIndex::Hit hit = labelled >= 0 ? object_surface_index[labelled]->Closest(q)
+                                                  : surface_index.Closest(q);
       if (hit.triangle < 0) continue;
       if (hit.squared_distance > gate2) {
         ++*rejected;
@@ -277,7 +322,7 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
       }
       DataPair pair;
       pair.num_vertices = 3;
-      for (int k = 0; k < 3; ++k) pair.vertices[k] = surface(hit.triangle, k);
+      for (int k = 0; k < 3; ++k) pair.vertices[k] = tris(hit.triangle, k);
       pair.barycentric = hit.barycentric;
       pair.target = q;
       if (plane) {
@@ -559,6 +604,30 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       for (int j = 0; j < p.num_vertices; ++j) blocks.push_back(block(p.vertices[j]));
       ids_data.push_back(problem.AddResidualBlock(cost, MakeLoss(options.data, wd), blocks));
     }
+    // Contacts at the current x (refit, broad and narrow phase), normals held for the solve;
+    // margin D keeps pairs that the solve may bring within D.
+    std::vector<ceres::ResidualBlockId> ids_collision;
+    if (collision) {
+      const auto t_collision = Clock::now();
+      collision->SetFrame(frame);
+      collision->Detect(x, collision->distance(), &contacts);
+      const double D = collision->distance(), kc = collision->stiffness();
+      for (const Contact& c : contacts) {
+        ceres::CostFunction* cost;
+        std::vector<double*> blocks;
+        for (int j = 0; j < 3; ++j) blocks.push_back(block(c.vertices_a[j]));
+        if (c.obstacle()) {
+          cost = new ceres_backend::ContactObstacleCost(c.bary_a, c.point_b, c.normal, D, kc);
+        } else {
+          cost = new ceres_backend::ContactPairCost(c.bary_a, c.bary_b, c.normal, D, kc);
+          for (int j = 0; j < 3; ++j) blocks.push_back(block(c.vertices_b[j]));
+        }
+        data_costs.emplace_back(cost);
+        ids_collision.push_back(problem.AddResidualBlock(cost, nullptr, blocks));
+      }
+      row.contacts = static_cast<int>(contacts.size());
+      s.time.collision += Seconds(t_collision);
+    }
     for (int v = 0; v < num_vertices; ++v) {
       if (fixed[v] && problem.HasParameterBlock(block(v))) problem.SetParameterBlockConstant(block(v));
     }
@@ -579,6 +648,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       e.elastic = energy(ids_elastic);
       e.temporal = energy(ids_temporal);
       e.anchor = energy(ids_anchor);
+      e.collision = energy(ids_collision);
       return e;
     };
     row.before = terms();
@@ -662,6 +732,17 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.message = "no outer iteration ran";
   }
   if (s.termination == TerminationType::kNoCorrespondences) x = previous;
+  if (collision) {  // the contacts the result keeps, and the deepest penetration
+    const auto t_collision = Clock::now();
+    collision->SetFrame(frame);
+    collision->Detect(x, 0.0, &contacts);
+    const ContactStats cs = collision->Evaluate(contacts, x);
+    s.contacts = cs.contacts;
+    s.object_contacts = cs.object_contacts;
+    s.obstacle_contacts = cs.obstacle_contacts;
+    s.max_penetration = cs.max_penetration;
+    s.time.collision += Seconds(t_collision);
+  }
   x_before = previous;
   UpdateOutputs(cloud, &cloud_index, pairs);
   s.time.total = Seconds(t_frame);
@@ -771,7 +852,6 @@ Status Tracker::Create(const std::vector<TetMesh>& meshes, const std::vector<Mat
 }
 
 Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
-  if (scene.effects.collision) return Status::Error("effects.collision is not built yet (issue 6)");
   std::vector<TetMesh> meshes(scene.objects.size());
   std::vector<Material> materials;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
@@ -782,6 +862,25 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
   std::unique_ptr<Tracker> t;
   Status status = Create(meshes, materials, scene.registration, &t);
   if (!status.ok()) return status;
+  for (const ObjectSpec& o : scene.objects) t->impl_->object_label.push_back(o.label);
+  if (scene.effects.collision) {
+    Tracker::Impl& impl = *t->impl_;
+    std::vector<std::string> names;
+    std::vector<Triangles> surfaces;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+      names.push_back(scene.objects[i].name);
+      surfaces.push_back(impl.objects[i].mesh.surface.array() + impl.objects[i].offset);
+    }
+    CollisionSpec spec = scene.collision;
+    if (spec.pairs.empty()) {  // every pair
+      for (size_t i = 0; i < names.size(); ++i)
+        for (size_t j = i + 1; j < names.size(); ++j) spec.pairs.emplace_back(names[i], names[j]);
+    }
+    auto world = std::make_unique<CollisionWorld>();
+    status = world->Init(spec, names, surfaces, impl.x);
+    if (!status.ok()) return Status::Error(scene.path + ": " + status.message());
+    if (world->enabled()) impl.collision = std::move(world);
+  }
   if (scene.effects.fracture) {
     std::vector<FractureOptions> fracture;
     for (const ObjectSpec& o : scene.objects) {
@@ -859,6 +958,7 @@ const std::vector<int>& Tracker::original_vertices(int object) const {
   return impl_->fracture ? impl_->fracture->original.at(object) : kEmpty;
 }
 const RegistrationOptions& Tracker::options() const { return impl_->options; }
+const CollisionWorld* Tracker::collision() const { return impl_->collision.get(); }
 
 Status Tracker::AddAnchor(const std::string& name, int object, const std::vector<int>& vertices,
                           bool hard, double weight) {

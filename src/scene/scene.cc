@@ -13,6 +13,7 @@
 //       material: {youngs_modulus: 1e5, poisson_ratio: 0.3, density: 1000}  # Pa, -, kg/m^3
 //       regions: {2: {youngs_modulus: 5e5}}    # per region id; unset fields inherit
 //       toughness: 0                           # Pa, for fracture (later)
+//       label: -1                              # cloud points with this PCD label are its own
 //   gravity: [0, 0, 0]                         # m/s^2
 //   boundary:
 //     - {object: beam, select: SELECTION, clamp: true}
@@ -40,7 +41,16 @@
 //   anchors:
 //     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
 //        translations: [[0, 0, 0], [0, 0, 0.01]]}   # per frame; the last one repeats
-//   effects: {fracture: false, collision: false}   # true is an error until they are built
+//   effects: {fracture: false, collision: false}   # fracture: true is an error until built
+//   collision:                                 # used when effects.collision is true
+//     pairs: [[a, b]]                          # object pairs; default: every pair
+//     stiffness: 1e4                           # k (N/m) per contact
+//     distance: 0.002                          # D (m), proximity threshold
+//     obstacles:                               # rigid; objects: [..] (default: all)
+//       - {name: table, plane: {point: [0, 0, 0], normal: [0, 0, 1]}}
+//       - {name: block, box: {size: [x, y, z]}, pose: {translation: [..], rotation: [..]}}
+//       - {name: tool, mesh: tool.stl, scale: 1,        # OBJ or STL (ASCII or binary)
+//          keyframes: [{frame: 0, translation: [..], rotation: [..]}, {frame: 9, ...}]}
 //   synth:                                     # femreg synth (ground truth sequences); one object
 //     frames: 30                               # >= 1
 //     seed: 1                                  # noise seed (>= 0); the output is deterministic
@@ -158,9 +168,10 @@ class SceneParser {
     YamlValue root(root_node, "", &source_, 1);
     if (!root_node.IsDefined() || root_node.IsNull()) root.Fail("the scene is empty");
     root.CheckKeys({"description", "objects", "gravity", "boundary", "loads", "forward",
-                    "registration", "anchors", "effects", "synth"});
+                    "registration", "anchors", "effects", "synth", "collision"});
     if (root.Has("effects")) ParseEffects(root["effects"]);
     ParseObjects(root["objects"]);
+    if (root.Has("collision")) ParseCollision(root["collision"]);
     if (root.Has("gravity")) scene_->gravity = root["gravity"].AsVector3();
     if (root.Has("boundary")) ParseBoundary(root["boundary"]);
     if (root.Has("loads")) ParseLoads(root["loads"]);
@@ -173,13 +184,113 @@ class SceneParser {
  private:
   void ParseEffects(const YamlValue& v) {
     v.CheckKeys({"fracture", "collision"});
-    if (v.Has("collision") && v["collision"].AsBool()) {
-      v["collision"].Fail(
-          "not built yet: collision (issue 6); set it to false or remove it to run without "
-          "collision");
-    }
     scene_->effects = EffectsSpec();
     if (v.Has("fracture")) ParseFracture(v["fracture"]);
+    if (v.Has("collision")) scene_->effects.collision = v["collision"].AsBool();
+  }
+
+
+  // The collision section (pairs of object names, penalty, rigid obstacles).
+  void ParseCollision(const YamlValue& v) {
+    v.CheckKeys({"pairs", "stiffness", "distance", "obstacles"});
+    CollisionSpec& c = scene_->collision;
+    auto object_name = [&](const YamlValue& n) {
+      const std::string name = n.AsString();
+      std::vector<std::string> names;
+      for (const ObjectSpec& o : scene_->objects) {
+        if (o.name == name) return name;
+        names.push_back(o.name);
+      }
+      const std::string suggestion = ClosestMatch(name, names);
+      n.Fail("unknown object '" + name + "' (" +
+             (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+             "objects: " + JoinNames(names) + ")");
+    };
+    if (v.Has("pairs")) {
+      const YamlValue pairs = v["pairs"];
+      pairs.RequireSequence();
+      for (int i = 0; i < pairs.size(); ++i) {
+        const YamlValue p = pairs[i];
+        if (!p.IsSequence() || p.size() != 2) p.Fail("must be a pair of object names [a, b]");
+        const std::string a = object_name(p[0]), b = object_name(p[1]);
+        if (a == b) p.Fail("an object cannot be paired with itself ('" + a + "')");
+        c.pairs.emplace_back(a, b);
+      }
+    }
+    if (v.Has("stiffness")) c.stiffness = PositiveDouble(v["stiffness"]);
+    if (v.Has("distance")) c.distance = PositiveDouble(v["distance"]);
+    if (v.Has("obstacles")) {
+      const YamlValue list = v["obstacles"];
+      list.RequireSequence();
+      std::set<std::string> names;
+      for (int i = 0; i < list.size(); ++i) {
+        const YamlValue o = list[i];
+        o.CheckKeys({"name", "plane", "box", "mesh", "scale", "objects", "pose", "keyframes"});
+        ObstacleSpec spec;
+        spec.name = o.Has("name") ? o["name"].AsString() : "obstacle" + std::to_string(i);
+        if (!names.insert(spec.name).second) o["name"].Fail("duplicate obstacle name '" + spec.name + "'");
+        const int kinds = o.Has("plane") + o.Has("box") + o.Has("mesh");
+        if (kinds != 1) o.Fail("needs exactly one of 'plane', 'box' or 'mesh'");
+        if (o.Has("plane")) {
+          const YamlValue p = o["plane"];
+          p.CheckKeys({"point", "normal"});
+          spec.kind = ObstacleSpec::Kind::kPlane;
+          if (p.Has("point")) spec.plane_point = p["point"].AsVector3();
+          if (p.Has("normal")) spec.plane_normal = p["normal"].AsVector3();
+          if (!(spec.plane_normal.norm() > 0)) p["normal"].Fail("must not be zero");
+        } else if (o.Has("box")) {
+          const YamlValue b = o["box"];
+          b.CheckKeys({"size"});
+          spec.kind = ObstacleSpec::Kind::kBox;
+          if (!b.Has("size")) b.Fail("needs 'size' (m)");
+          spec.box_size = b["size"].AsVector3();
+          if ((spec.box_size.array() <= 0).any()) b["size"].Fail("every edge length must be > 0");
+        } else {
+          spec.kind = ObstacleSpec::Kind::kMesh;
+          const YamlValue mesh = o["mesh"];
+          std::filesystem::path path(mesh.AsString());
+          if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+          spec.mesh_path = path.lexically_normal().string();
+          std::error_code ec;
+          if (!std::filesystem::is_regular_file(path, ec)) mesh.Fail("mesh file not found: " + spec.mesh_path);
+          Vertices vertices;
+          Triangles triangles;
+          const Status status = ReadTriangleSurface(spec.mesh_path, &vertices, &triangles);
+          if (!status.ok()) mesh.Fail(status.message());
+        }
+        if (o.Has("scale")) spec.scale = PositiveDouble(o["scale"]);
+        if (o.Has("objects")) {
+          const YamlValue objects = o["objects"];
+          objects.RequireSequence();
+          for (int k = 0; k < objects.size(); ++k) spec.objects.push_back(object_name(objects[k]));
+        }
+        if (o.Has("pose") && o.Has("keyframes")) o.Fail("has both 'pose' and 'keyframes'; use one");
+        auto keyframe = [&](const YamlValue& k, bool with_frame) {
+          k.CheckKeys(with_frame ? std::vector<std::string>{"frame", "translation", "rotation"}
+                                 : std::vector<std::string>{"translation", "rotation"});
+          ObstacleKeyframe key;
+          if (with_frame) {
+            if (!k.Has("frame")) k.Fail("needs 'frame'");
+            key.frame = IntAtLeast(k["frame"], 0);
+          }
+          if (k.Has("translation")) key.translation = k["translation"].AsVector3();
+          if (k.Has("rotation")) key.rotation = k["rotation"].AsVector3();
+          return key;
+        };
+        if (o.Has("pose")) spec.keyframes.push_back(keyframe(o["pose"], false));
+        if (o.Has("keyframes")) {
+          const YamlValue keys = o["keyframes"];
+          keys.RequireSequence();
+          for (int k = 0; k < keys.size(); ++k) {
+            spec.keyframes.push_back(keyframe(keys[k], true));
+            if (k > 0 && spec.keyframes[k].frame <= spec.keyframes[k - 1].frame) {
+              keys[k]["frame"].Fail("keyframes must be in increasing frame order");
+            }
+          }
+        }
+        c.obstacles.push_back(spec);
+      }
+    }
   }
 
   // effects.fracture: true/false, or a map of limits (which turns it on).
@@ -219,7 +330,7 @@ class SceneParser {
 
   ObjectSpec ParseObject(const YamlValue& v, int index) {
     v.CheckKeys({"name", "mesh", "generate", "scale", "pose", "material", "regions",
-                 "toughness"});
+                 "toughness", "label"});
     ObjectSpec object;
     object.name = v.Has("name") ? v["name"].AsString() : "object" + std::to_string(index);
     if (object.name.empty()) v["name"].Fail("must not be empty");
@@ -264,6 +375,7 @@ class SceneParser {
       }
     }
     if (v.Has("toughness")) object.toughness = NonNegativeDouble(v["toughness"]);
+    if (v.Has("label")) object.label = IntAtLeast(v["label"], -1);
     return object;
   }
 

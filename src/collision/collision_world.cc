@@ -1,0 +1,315 @@
+// Contacts between objects (pairs of surface triangles found by two AABB trees) and with
+// rigid obstacles (planes by vertex, boxes and meshes by triangle pairs). See collision.h
+// for the sign conventions.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "femreg/collision.h"
+
+namespace femreg {
+
+Eigen::Isometry3d ObstaclePose(const std::vector<ObstacleKeyframe>& keyframes, double frame) {
+  auto pose = [](const ObstacleKeyframe& k) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    const double angle = k.rotation.norm();
+    if (angle > 0) T.linear() = Eigen::AngleAxisd(angle, k.rotation / angle).toRotationMatrix();
+    T.translation() = k.translation;
+    return T;
+  };
+  if (keyframes.empty()) return Eigen::Isometry3d::Identity();
+  if (frame <= keyframes.front().frame) return pose(keyframes.front());
+  if (frame >= keyframes.back().frame) return pose(keyframes.back());
+  size_t i = 0;
+  while (i + 1 < keyframes.size() && keyframes[i + 1].frame <= frame) ++i;
+  const ObstacleKeyframe& a = keyframes[i];
+  const ObstacleKeyframe& b = keyframes[i + 1];
+  const double s = (frame - a.frame) / static_cast<double>(b.frame - a.frame);
+  const Eigen::Quaterniond qa(pose(a).linear()), qb(pose(b).linear());
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = qa.slerp(s, qb).toRotationMatrix();
+  T.translation() = (1 - s) * a.translation + s * b.translation;
+  return T;
+}
+
+namespace {
+
+Eigen::Vector3d Row(const Vertices& x, int v) { return x.row(v).transpose(); }
+
+Eigen::Vector3d UnitNormal(const Vertices& x, const Triangles& t, int f) {
+  const Eigen::Vector3d a = Row(x, t(f, 0)), b = Row(x, t(f, 1)), c = Row(x, t(f, 2));
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double len = n.norm();
+  return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+}
+
+// The normal (from b towards a) and signed gap of two closest points, the surfaces' outward
+// normals na, nb telling whether they have crossed. False when no direction is defined.
+bool Orient(const TrianglePairDistance& d, const Eigen::Vector3d& na, const Eigen::Vector3d& nb,
+            double scale, Eigen::Vector3d* normal, double* gap) {
+  Eigen::Vector3d ref = nb - na;
+  if (ref.norm() < 1e-6) ref = nb.norm() > 0 ? nb : -na;
+  if (!(ref.norm() > 0)) return false;
+  ref.normalize();
+  if (!d.intersecting && d.distance > 1e-9 * scale) {
+    *normal = (d.p - d.q) / d.distance;
+    *gap = d.distance;
+    if (normal->dot(ref) < 0) {
+      *normal = -*normal;
+      *gap = -d.distance;
+    }
+  } else {
+    *normal = ref;
+    *gap = 0.0;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::string>& names,
+                            const std::vector<Triangles>& surfaces, const Vertices& x) {
+  spec_ = spec;
+  if (!(spec.stiffness > 0) || !std::isfinite(spec.stiffness)) {
+    return Status::Error("collision.stiffness must be > 0");
+  }
+  if (!(spec.distance > 0) || !std::isfinite(spec.distance)) {
+    return Status::Error("collision.distance must be > 0");
+  }
+  const int n = static_cast<int>(surfaces.size());
+  surfaces_ = surfaces;
+  auto find = [&](const std::string& name, int* index) {
+    for (int i = 0; i < n; ++i)
+      if (i < static_cast<int>(names.size()) && names[i] == name) {
+        *index = i;
+        return true;
+      }
+    return false;
+  };
+  pairs_.clear();
+  for (const auto& p : spec.pairs) {
+    int a = -1, b = -1;
+    if (!find(p.first, &a)) return Status::Error("collision.pairs: no object named '" + p.first + "'");
+    if (!find(p.second, &b)) return Status::Error("collision.pairs: no object named '" + p.second + "'");
+    if (a == b) return Status::Error("collision.pairs: '" + p.first + "' paired with itself");
+    pairs_.emplace_back(std::min(a, b), std::max(a, b));
+  }
+  std::sort(pairs_.begin(), pairs_.end());
+  pairs_.erase(std::unique(pairs_.begin(), pairs_.end()), pairs_.end());
+
+  needs_tree_.assign(n, 0);
+  for (const auto& p : pairs_) needs_tree_[p.first] = needs_tree_[p.second] = 1;
+  obstacles_.clear();
+  for (const ObstacleSpec& os : spec.obstacles) {
+    Obstacle o;
+    o.spec = os;
+    o.hits.assign(n, os.objects.empty() ? 1 : 0);
+    for (const std::string& name : os.objects) {
+      int i = -1;
+      if (!find(name, &i)) {
+        return Status::Error("collision.obstacles '" + os.name + "': no object named '" + name + "'");
+      }
+      o.hits[i] = 1;
+    }
+    if (os.kind == ObstacleSpec::Kind::kBox) {
+      const Eigen::Vector3d h = 0.5 * os.box_size;
+      o.local.resize(8, 3);
+      for (int c = 0; c < 8; ++c) {
+        o.local.row(c) << ((c & 1) ? h.x() : -h.x()), ((c & 2) ? h.y() : -h.y()), ((c & 4) ? h.z() : -h.z());
+      }
+      o.triangles.resize(12, 3);
+      o.triangles << 0, 2, 3, 0, 3, 1,  // -z
+          4, 5, 7, 4, 7, 6,             // +z
+          0, 1, 5, 0, 5, 4,             // -y
+          2, 6, 7, 2, 7, 3,             // +y
+          0, 4, 6, 0, 6, 2,             // -x
+          1, 3, 7, 1, 7, 5;             // +x
+    } else if (os.kind == ObstacleSpec::Kind::kMesh) {
+      Status status = ReadTriangleSurface(os.mesh_path, &o.local, &o.triangles);
+      if (!status.ok()) return Status::Error("collision.obstacles '" + os.name + "': " + status.message());
+      o.local *= os.scale;
+    } else if (!(os.plane_normal.norm() > 0)) {
+      return Status::Error("collision.obstacles '" + os.name + "': the plane normal is zero");
+    }
+    for (int i = 0; i < n; ++i)
+      if (o.hits[i] && os.kind != ObstacleSpec::Kind::kPlane) needs_tree_[i] = 1;
+    obstacles_.push_back(std::move(o));
+  }
+  enabled_ = !pairs_.empty() || !obstacles_.empty();
+  trees_.assign(n, AabbTree());
+  surface_vertices_.assign(n, {});
+  vertex_triangle_.assign(n, {});
+  trees_built_ = 0;
+  for (int i = 0; i < n; ++i) Rebuild(i, surfaces[i], x);
+  SetFrame(0);
+  return Status::Ok();
+}
+
+void CollisionWorld::Rebuild(int object, const Triangles& surface, const Vertices& x) {
+  surfaces_.at(object) = surface;
+  std::map<int, std::array<int, 2>> first;
+  for (int f = 0; f < surface.rows(); ++f)
+    for (int k = 0; k < 3; ++k) first.emplace(surface(f, k), std::array<int, 2>{f, k});
+  surface_vertices_[object].clear();
+  vertex_triangle_[object].clear();
+  for (const auto& kv : first) {
+    surface_vertices_[object].push_back(kv.first);
+    vertex_triangle_[object].push_back(kv.second);
+  }
+  trees_[object] = AabbTree();
+  if (needs_tree_[object]) {
+    trees_[object].Build(x, surface);
+    ++trees_built_;
+  }
+}
+
+void CollisionWorld::SetFrame(double frame) {
+  for (Obstacle& o : obstacles_) {
+    o.pose = ObstaclePose(o.spec.keyframes, frame);
+    if (o.triangles.rows() == 0) continue;
+    o.world = (o.local * o.pose.linear().transpose()).rowwise() + o.pose.translation().transpose();
+    o.world_normals.resize(o.triangles.rows(), 3);
+    for (int f = 0; f < o.triangles.rows(); ++f) o.world_normals.row(f) = UnitNormal(o.world, o.triangles, f).transpose();
+    if (o.tree.empty()) {
+      o.tree.Build(o.world, o.triangles);
+    } else {
+      o.tree.Refit(o.world);
+    }
+  }
+}
+
+void CollisionWorld::Detect(const Vertices& x, double margin, std::vector<Contact>* contacts) {
+  contacts->clear();
+  if (!enabled_) return;
+  for (size_t i = 0; i < trees_.size(); ++i)
+    if (!trees_[i].empty()) trees_[i].Refit(x);
+  const double limit = spec_.distance + std::max(0.0, margin);
+  for (const auto& p : pairs_) {
+    // Broad phase: the roots' boxes.
+    const AabbTree& a = trees_[p.first];
+    const AabbTree& b = trees_[p.second];
+    if (a.empty() || b.empty()) continue;
+    const Eigen::AlignedBox3d& ba = a.bounds();
+    const Eigen::AlignedBox3d& bb = b.bounds();
+    if (((ba.min().array() > bb.max().array() + limit).any()) ||
+        ((bb.min().array() > ba.max().array() + limit).any())) {
+      continue;
+    }
+    DetectPair(p.first, p.second, x, limit, contacts);
+  }
+  for (size_t o = 0; o < obstacles_.size(); ++o)
+    for (size_t i = 0; i < trees_.size(); ++i)
+      if (obstacles_[o].hits[i]) DetectObstacle(static_cast<int>(o), static_cast<int>(i), x, limit, contacts);
+}
+
+void CollisionWorld::DetectPair(int a, int b, const Vertices& x, double limit,
+                                std::vector<Contact>* out) const {
+  std::vector<std::pair<int, int>> candidates;
+  trees_[a].Overlapping(trees_[b], limit, &candidates);
+  const Triangles& ta = surfaces_[a];
+  const Triangles& tb = surfaces_[b];
+  const double scale = std::max(1.0, x.cwiseAbs().maxCoeff());
+  std::vector<Contact> found;
+  for (const auto& c : candidates) {
+    Eigen::Vector3d t1[3], t2[3];
+    for (int k = 0; k < 3; ++k) {
+      t1[k] = Row(x, ta(c.first, k));
+      t2[k] = Row(x, tb(c.second, k));
+    }
+    const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
+    if (d.distance >= limit) continue;
+    Contact contact;
+    if (!Orient(d, UnitNormal(x, ta, c.first), UnitNormal(x, tb, c.second), scale, &contact.normal,
+                &contact.gap)) {
+      continue;
+    }
+    contact.object_a = a;
+    contact.object_b = b;
+    for (int k = 0; k < 3; ++k) {
+      contact.vertices_a[k] = ta(c.first, k);
+      contact.vertices_b[k] = tb(c.second, k);
+    }
+    contact.bary_a = d.bary_p;
+    contact.bary_b = d.bary_q;
+    found.push_back(contact);
+  }
+  out->insert(out->end(), found.begin(), found.end());
+}
+
+void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double limit,
+                                    std::vector<Contact>* out) const {
+  const Obstacle& o = obstacles_[oi];
+  const Triangles& ta = surfaces_[i];
+  if (o.spec.kind == ObstacleSpec::Kind::kPlane) {
+    const Eigen::Vector3d n = (o.pose.linear() * o.spec.plane_normal).normalized();
+    const Eigen::Vector3d p0 = o.pose * o.spec.plane_point;
+    for (size_t s = 0; s < surface_vertices_[i].size(); ++s) {
+      const int v = surface_vertices_[i][s];
+      const double gap = n.dot(Row(x, v) - p0);
+      if (gap >= limit) continue;
+      Contact c;
+      c.object_a = i;
+      c.object_b = -1 - oi;
+      const auto& ft = vertex_triangle_[i][s];
+      for (int k = 0; k < 3; ++k) c.vertices_a[k] = ta(ft[0], k);
+      c.bary_a = Eigen::Vector3d::Unit(ft[1]);
+      c.point_b = Row(x, v) - gap * n;
+      c.normal = n;
+      c.gap = gap;
+      out->push_back(c);
+    }
+    return;
+  }
+  if (trees_[i].empty() || o.tree.empty()) return;
+  std::vector<std::pair<int, int>> candidates;
+  trees_[i].Overlapping(o.tree, limit, &candidates);
+  const double scale = std::max(1.0, x.cwiseAbs().maxCoeff());
+  std::vector<Contact> found;
+  for (const auto& c : candidates) {
+    Eigen::Vector3d t1[3], t2[3];
+    for (int k = 0; k < 3; ++k) {
+      t1[k] = Row(x, ta(c.first, k));
+      t2[k] = Row(o.world, o.triangles(c.second, k));
+    }
+    const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
+    if (d.distance >= limit) continue;
+    Contact contact;
+    if (!Orient(d, UnitNormal(x, ta, c.first), o.world_normals.row(c.second).transpose(), scale,
+                &contact.normal, &contact.gap)) {
+      continue;
+    }
+    contact.object_a = i;
+    contact.object_b = -1 - oi;
+    for (int k = 0; k < 3; ++k) contact.vertices_a[k] = ta(c.first, k);
+    contact.bary_a = d.bary_p;
+    contact.point_b = d.q;
+    found.push_back(contact);
+  }
+  out->insert(out->end(), found.begin(), found.end());
+}
+
+double CollisionWorld::Penetration(const Contact& c, const Vertices& x) const {
+  Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = c.point_b;
+  for (int k = 0; k < 3; ++k) pa += c.bary_a[k] * Row(x, c.vertices_a[k]);
+  if (!c.obstacle()) {
+    pb.setZero();
+    for (int k = 0; k < 3; ++k) pb += c.bary_b[k] * Row(x, c.vertices_b[k]);
+  }
+  return spec_.distance - c.normal.dot(pa - pb);
+}
+
+ContactStats CollisionWorld::Evaluate(const std::vector<Contact>& contacts, const Vertices& x) const {
+  ContactStats s;
+  for (const Contact& c : contacts) {
+    const double delta = Penetration(c, x);
+    if (!(delta > 0)) continue;
+    ++s.contacts;
+    ++(c.obstacle() ? s.obstacle_contacts : s.object_contacts);
+    s.energy += 0.5 * spec_.stiffness * delta * delta;
+    s.max_penetration = std::max(s.max_penetration, delta);
+  }
+  return s;
+}
+
+}  // namespace femreg

@@ -1,0 +1,632 @@
+// Collision: exact triangle-triangle closest points against a brute-force convex QP, the
+// AABB hierarchy against brute force, the contact cost functions' Jacobians, the forward
+// solve resolving a penetration, scenes (one object: nothing built, nothing added), surface
+// readers, and registered contact sequences keeping the penetration below D.
+#include <ceres/ceres.h>
+#include <ceres/gradient_checker.h>
+#include <dlfcn.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <set>
+
+#include "femreg/collision.h"
+#include "femreg/forward.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
+#include "femreg/tracker.h"
+#include "femreg_test_config.h"
+#include "solvers/ceres/contact_cost.h"
+
+namespace femreg {
+namespace {
+
+using V3 = Eigen::Vector3d;
+
+// The forward solver's OpenMP loops spin-wait on a loaded machine; these small problems run
+// faster on one thread (libgomp comes in through libfemreg, hence the look-up).
+const bool kOneThread = [] {
+  using SetThreads = void (*)(int);
+  if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) f(1);
+  return true;
+}();
+
+// Euclidean projection onto the probability simplex.
+Eigen::Vector3d ProjectSimplex(const Eigen::Vector3d& y) {
+  std::array<double, 3> u = {y[0], y[1], y[2]};
+  std::sort(u.begin(), u.end(), std::greater<double>());
+  double css = 0, theta = 0;
+  for (int i = 0; i < 3; ++i) {
+    css += u[i];
+    const double t = (css - 1) / (i + 1);
+    if (u[i] - t > 0) theta = t;
+  }
+  return (y.array() - theta).max(0.0);
+}
+
+// Reference: min |A u - B v| over u, v in the simplex, a convex QP solved by accelerated
+// projected gradient (FISTA) to convergence. Independent of the feature enumeration.
+double BruteForceDistance(const V3* t1, const V3* t2) {
+  Eigen::Matrix<double, 3, 6> M;
+  for (int k = 0; k < 3; ++k) {
+    M.col(k) = t1[k];
+    M.col(3 + k) = -t2[k];
+  }
+  const double L = 2.0 * (M.transpose() * M).eigenvalues().real().maxCoeff() + 1e-12;
+  Eigen::Matrix<double, 6, 1> z, y, z_prev;
+  z << 1, 1, 1, 1, 1, 1;
+  z /= 3.0;
+  y = z;
+  double t = 1.0;
+  double best = (M * z).norm();
+  for (int it = 0; it < 30000; ++it) {
+    const Eigen::Matrix<double, 6, 1> g = 2.0 * M.transpose() * (M * y);
+    Eigen::Matrix<double, 6, 1> w = y - g / L;
+    z_prev = z;
+    z.head<3>() = ProjectSimplex(w.head<3>());
+    z.tail<3>() = ProjectSimplex(w.tail<3>());
+    const double t_next = 0.5 * (1 + std::sqrt(1 + 4 * t * t));
+    y = z + ((t - 1) / t_next) * (z - z_prev);
+    t = t_next;
+    best = std::min(best, (M * z).norm());
+  }
+  return best;
+}
+
+void ExpectConsistent(const TrianglePairDistance& d, const V3* t1, const V3* t2) {
+  EXPECT_NEAR(d.bary_p.sum(), 1.0, 1e-12);
+  EXPECT_NEAR(d.bary_q.sum(), 1.0, 1e-12);
+  EXPECT_GE(d.bary_p.minCoeff(), -1e-12);
+  EXPECT_GE(d.bary_q.minCoeff(), -1e-12);
+  const V3 p = d.bary_p[0] * t1[0] + d.bary_p[1] * t1[1] + d.bary_p[2] * t1[2];
+  const V3 q = d.bary_q[0] * t2[0] + d.bary_q[1] * t2[1] + d.bary_q[2] * t2[2];
+  EXPECT_LT((p - d.p).norm(), 1e-9);
+  EXPECT_LT((q - d.q).norm(), 1e-9);
+  EXPECT_NEAR((d.p - d.q).norm(), d.distance, 1e-9);
+}
+
+TEST(TriangleDistance, MatchesBruteForceOnRandomPairs) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int intersecting = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    V3 t1[3], t2[3];
+    const V3 shift(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 3; ++k) {
+      t1[k] = V3(u(rng), u(rng), u(rng));
+      t2[k] = V3(u(rng), u(rng), u(rng)) + 0.8 * shift;
+    }
+    const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
+    const double ref = BruteForceDistance(t1, t2);
+    intersecting += d.intersecting;
+    ASSERT_NEAR(d.distance, ref, 2e-6) << "trial " << trial;
+    ExpectConsistent(d, t1, t2);
+  }
+  EXPECT_GT(intersecting, 10);  // the random set exercises the intersection branch
+  EXPECT_LT(intersecting, 590);
+}
+
+TEST(TriangleDistance, ParallelCoplanarAndTouchingCases) {
+  const V3 a[3] = {V3(0, 0, 0), V3(1, 0, 0), V3(0, 1, 0)};
+  // Parallel planes, overlapping in projection: distance is the offset.
+  const V3 b[3] = {V3(0.1, 0.1, 0.3), V3(0.9, 0.05, 0.3), V3(0.1, 0.7, 0.3)};
+  TrianglePairDistance d = TriangleTriangleDistance(a, b);
+  EXPECT_NEAR(d.distance, 0.3, 1e-12);
+  EXPECT_FALSE(d.intersecting);
+  ExpectConsistent(d, a, b);
+  // Parallel edges (edge-edge with a 1-D family of closest pairs).
+  const V3 c[3] = {V3(0.2, -0.5, 0), V3(0.8, -0.5, 0), V3(0.5, -1.5, 0)};
+  d = TriangleTriangleDistance(a, c);
+  EXPECT_NEAR(d.distance, 0.5, 1e-12);
+  ExpectConsistent(d, a, c);
+  // Coplanar, disjoint: nearest vertex to edge.
+  const V3 e[3] = {V3(1, 1, 0), V3(2, 1, 0), V3(1, 2, 0)};
+  d = TriangleTriangleDistance(a, e);
+  EXPECT_NEAR(d.distance, std::sqrt(0.5), 1e-12);
+  ExpectConsistent(d, a, e);
+  // Coplanar, overlapping: distance 0.
+  const V3 f[3] = {V3(0.2, 0.2, 0), V3(1.2, 0.2, 0), V3(0.2, 1.2, 0)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, f).distance, 0.0, 1e-12);
+  // Touching at a shared vertex, at a vertex on a face, along an edge.
+  const V3 g[3] = {V3(0, 0, 0), V3(-1, 0, 1), V3(0, -1, 1)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, g).distance, 0.0, 1e-12);
+  const V3 h[3] = {V3(0.2, 0.2, 0), V3(0.2, 0.2, 1), V3(0.5, 0.1, 1)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, h).distance, 0.0, 1e-12);
+  const V3 i[3] = {V3(0, 0, 0), V3(1, 0, 0), V3(0.5, 0, 1)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, i).distance, 0.0, 1e-12);
+  // Piercing: an edge of b through the face of a.
+  const V3 j[3] = {V3(0.2, 0.2, -1), V3(0.2, 0.2, 1), V3(3, 3, 0)};
+  d = TriangleTriangleDistance(a, j);
+  EXPECT_TRUE(d.intersecting);
+  EXPECT_EQ(d.distance, 0.0);
+  // Degenerate triangle (a segment).
+  const V3 k[3] = {V3(0.3, 0.3, 0.5), V3(0.6, 0.3, 0.5), V3(0.9, 0.3, 0.5)};
+  d = TriangleTriangleDistance(a, k);
+  EXPECT_NEAR(d.distance, BruteForceDistance(a, k), 2e-6);
+}
+
+TEST(TriangleDistance, SegmentsParallelAndDegenerate) {
+  double s, t;
+  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(1, 0, 0), V3(2, 1, 0), V3(3, 1, 0), &s, &t),
+              std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(1, 0, 0), V3(0.5, 1, 0), V3(1.5, 1, 0), &s, &t),
+              1.0, 1e-12);
+  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(0, 0, 0), V3(1, 1, 0), V3(1, -1, 0), &s, &t),
+              1.0, 1e-12);
+}
+
+// A random closed surface: a sphere's surface, jittered.
+void RandomSurface(std::mt19937* rng, const V3& centre, Vertices* x, Triangles* tris) {
+  TetMesh m = MakeSphere(0.1, 3);
+  std::normal_distribution<double> n(0, 0.01);
+  *x = m.rest;
+  for (int v = 0; v < x->rows(); ++v) x->row(v) += (centre + V3(n(*rng), n(*rng), n(*rng))).transpose();
+  *tris = m.surface;
+}
+
+std::set<std::pair<int, int>> BruteForcePairs(const Vertices& xa, const Triangles& ta,
+                                              const Vertices& xb, const Triangles& tb,
+                                              double margin) {
+  std::set<std::pair<int, int>> out;
+  auto box = [](const Vertices& x, const Triangles& t, int f) {
+    Eigen::AlignedBox3d b(V3(x.row(t(f, 0))));
+    b.extend(V3(x.row(t(f, 1))));
+    b.extend(V3(x.row(t(f, 2))));
+    return b;
+  };
+  for (int i = 0; i < ta.rows(); ++i)
+    for (int j = 0; j < tb.rows(); ++j) {
+      const auto a = box(xa, ta, i), b = box(xb, tb, j);
+      if ((a.min().array() <= b.max().array() + margin).all() &&
+          (b.min().array() <= a.max().array() + margin).all())
+        out.emplace(i, j);
+    }
+  return out;
+}
+
+TEST(AabbTree, QueriesEqualBruteForceBeforeAndAfterRefit) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 4; ++trial) {
+    Vertices xa, xb;
+    Triangles ta, tb;
+    RandomSurface(&rng, V3(0, 0, 0), &xa, &ta);
+    RandomSurface(&rng, V3(0.15 + 0.02 * trial, 0.03, 0), &xb, &tb);
+    AabbTree a, b;
+    a.Build(xa, ta);
+    b.Build(xb, tb);
+    EXPECT_EQ(a.num_nodes(), 2 * ta.rows() - 1);
+    for (int pass = 0; pass < 2; ++pass) {
+      const double margin = 0.004;
+      std::vector<std::pair<int, int>> found;
+      a.Overlapping(b, margin, &found);
+      const std::set<std::pair<int, int>> got(found.begin(), found.end());
+      EXPECT_EQ(got.size(), found.size()) << "no duplicates";
+      const auto ref = BruteForcePairs(xa, ta, xb, tb, margin);
+      EXPECT_EQ(got, ref);
+      EXPECT_GT(ref.size(), 0u);
+      // Move b towards a and refit.
+      std::normal_distribution<double> n(0, 0.003);
+      for (int v = 0; v < xb.rows(); ++v) xb.row(v) += V3(-0.02 + n(rng), n(rng), n(rng)).transpose();
+      b.Refit(xb);
+    }
+  }
+}
+
+// --- cost functions ------------------------------------------------------------------
+
+void ExpectJacobianMatchesCentralDifferences(const ceres::CostFunction& cost,
+                                             std::vector<std::vector<double>> params) {
+  const auto& sizes = cost.parameter_block_sizes();
+  std::vector<double*> ptrs;
+  for (auto& p : params) ptrs.push_back(p.data());
+  std::vector<std::vector<double>> jac(sizes.size(), std::vector<double>(3));
+  std::vector<double*> jptrs;
+  for (auto& j : jac) jptrs.push_back(j.data());
+  double r = 0;
+  ASSERT_TRUE(cost.Evaluate(ptrs.data(), &r, jptrs.data()));
+  double norm = 0;
+  const double h = 1e-7;
+  for (size_t b = 0; b < sizes.size(); ++b)
+    for (int j = 0; j < 3; ++j) {
+      const double saved = params[b][j];
+      double rp, rm;
+      params[b][j] = saved + h;
+      cost.Evaluate(ptrs.data(), &rp, nullptr);
+      params[b][j] = saved - h;
+      cost.Evaluate(ptrs.data(), &rm, nullptr);
+      params[b][j] = saved;
+      EXPECT_NEAR(jac[b][j], (rp - rm) / (2 * h), 1e-6 * (1 + std::abs(jac[b][j])));
+      norm += jac[b][j] * jac[b][j];
+    }
+  EXPECT_GT(norm, 1e-12) << "the Jacobian is trivially zero";
+  std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+  // The checker differentiates with Ridders' method, whose first step (1e-2 |x|) would
+  // cross the penalty's hinge at delta = 0: start it smaller.
+  ceres::NumericDiffOptions numeric;
+  numeric.ridders_relative_initial_step_size = 1e-5;
+  ceres::GradientChecker checker(&cost, no_manifolds, numeric);
+  ceres::GradientChecker::ProbeResults results;
+  EXPECT_TRUE(checker.Probe(ptrs.data(), 1e-7, &results)) << results.error_log;
+}
+
+TEST(ContactCost, PairAndObstacleJacobiansMatchNumericDifferences) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.01, 0.01), w(0.05, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    V3 ba(w(rng), w(rng), w(rng)), bb(w(rng), w(rng), w(rng));
+    ba /= ba.sum();
+    bb /= bb.sum();
+    const V3 n = V3(u(rng), u(rng), 1).normalized();
+    const double D = 0.004, k = 5e3;
+    // a sits a little above b along n, closer than D: active. Coordinates away from 0 (the
+    // checker's numeric step is relative to |x|, too small near 0).
+    std::vector<std::vector<double>> params;
+    for (int i = 0; i < 3; ++i) params.push_back({0.3 + u(rng), 0.2 + u(rng), 0.501 + u(rng) * 0.05});
+    for (int i = 0; i < 3; ++i) params.push_back({0.3 + u(rng), 0.2 + u(rng), 0.5 + u(rng) * 0.05});
+    ceres_backend::ContactPairCost pair(ba, bb, n, D, k);
+    double r = 0;
+    std::vector<double*> ptrs;
+    for (auto& p : params) ptrs.push_back(p.data());
+    pair.Evaluate(ptrs.data(), &r, nullptr);
+    if (!(r > 1e-4)) continue;  // near the hinge; numeric differences would straddle it
+    ExpectJacobianMatchesCentralDifferences(pair, params);
+    params.resize(3);
+    ceres_backend::ContactObstacleCost obstacle(ba, V3(0.3, 0.2, 0.5), n, D, k);
+    ExpectJacobianMatchesCentralDifferences(obstacle, params);
+  }
+  // Inactive (far apart): residual and Jacobian are zero.
+  std::vector<std::vector<double>> far = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  ceres_backend::ContactObstacleCost obstacle(V3(1, 0, 0), V3(0, 0, 0), V3(0, 0, 1), 0.002, 1e3);
+  std::vector<double*> ptrs = {far[0].data(), far[1].data(), far[2].data()};
+  double r = 1, j0[3] = {1, 1, 1}, j1[3], j2[3];
+  double* jac[3] = {j0, j1, j2};
+  obstacle.Evaluate(ptrs.data(), &r, jac);
+  EXPECT_EQ(r, 0.0);
+  EXPECT_EQ(V3(j0[0], j0[1], j0[2]).norm(), 0.0);
+}
+
+// --- detection and the forward solve ---------------------------------------------------
+
+// Two boxes: `lower` at the origin, `upper` above it with a gap.
+std::vector<TetMesh> TwoBoxes(double gap) {
+  TetMesh lower = MakeBox(V3(0.04, 0.04, 0.02), 4, 4, 2);
+  TetMesh upper = MakeBox(V3(0.03, 0.03, 0.02), 3, 3, 2);
+  upper.rest.rowwise() += V3(0.005, 0.005, 0.02 + gap).transpose();
+  upper.x = upper.rest;
+  return {lower, upper};
+}
+
+struct Merged {
+  TetMesh mesh;
+  std::vector<int> offsets;
+  std::vector<Triangles> surfaces;
+};
+
+Merged Merge(const std::vector<TetMesh>& meshes) {
+  Merged m;
+  m.mesh = MergeMeshes(meshes, &m.offsets);
+  for (size_t i = 0; i < meshes.size(); ++i) m.surfaces.push_back(meshes[i].surface.array() + m.offsets[i]);
+  return m;
+}
+
+TEST(CollisionWorld, DetectsPairContactsWithSignedGaps) {
+  Merged m = Merge(TwoBoxes(0.001));
+  CollisionSpec spec;
+  spec.pairs = {{"lower", "upper"}};
+  spec.distance = 0.002;
+  CollisionWorld world;
+  ASSERT_TRUE(world.Init(spec, {"lower", "upper"}, m.surfaces, m.mesh.x).ok());
+  EXPECT_EQ(world.num_trees_built(), 2);
+  std::vector<Contact> contacts;
+  world.Detect(m.mesh.x, 0.0, &contacts);
+  ASSERT_GT(contacts.size(), 0u);
+  for (const Contact& c : contacts) {
+    EXPECT_NEAR(std::abs(c.normal.z()), 1.0, 1e-9);
+    EXPECT_NEAR(world.Penetration(c, m.mesh.x), 0.001, 1e-9);  // D - gap = 2 mm - 1 mm
+  }
+  // Push the upper box 1.5 mm into the lower one: gaps become negative, delta > D.
+  Vertices x = m.mesh.x;
+  for (int v = m.offsets[1]; v < x.rows(); ++v) x(v, 2) -= 0.0025;
+  world.Detect(x, 0.0, &contacts);
+  const ContactStats s = world.Evaluate(contacts, x);
+  EXPECT_GT(s.contacts, 0);
+  EXPECT_NEAR(s.max_penetration, 0.002 + 0.0015, 1e-6);
+}
+
+TEST(ContactPotential, GradientMatchesFiniteDifferences) {
+  Merged m = Merge(TwoBoxes(0.0005));
+  CollisionSpec spec;
+  spec.pairs = {{"a", "b"}};
+  spec.distance = 0.002;
+  spec.stiffness = 1e3;
+  CollisionWorld world;
+  ASSERT_TRUE(world.Init(spec, {"a", "b"}, m.surfaces, m.mesh.x).ok());
+  ContactPotential potential(&world, 0.002);
+  Vertices x = m.mesh.x;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 1e-4);
+  for (int v = 0; v < x.rows(); ++v) x.row(v) += V3(n(rng), n(rng), n(rng)).transpose();
+  potential.Refresh(x);
+  ASSERT_GT(potential.contacts().size(), 0u);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * x.rows());
+  potential.Evaluate(x, &g);
+  ASSERT_GT(g.norm(), 0.0);
+  const double h = 1e-8;
+  for (int d = 0; d < 3 * x.rows(); d += 7) {
+    Vertices xp = x, xm = x;
+    xp.data()[d] += h;
+    xm.data()[d] -= h;
+    const double num = (potential.Evaluate(xp, nullptr) - potential.Evaluate(xm, nullptr)) / (2 * h);
+    EXPECT_NEAR(g(d), num, 1e-5 * (1 + std::abs(num)));
+  }
+}
+
+TEST(ForwardContact, PressingOneBoxOntoAnotherResolvesThePenetration) {
+  const double D = 0.002;
+  Merged m = Merge(TwoBoxes(0.003));
+  Material soft;
+  soft.youngs_modulus = 2e4;
+  soft.poisson_ratio = 0.3;
+  ElasticModel model;
+  model.Build(m.mesh, ElasticModelType::kCorotational, soft);
+  ForwardProblem problem;
+  // Lower box clamped at its bottom; upper box's top pushed down 8 mm (through the 3 mm
+  // gap and 5 mm further).
+  for (int v = 0; v < m.offsets[1]; ++v)
+    if (m.mesh.rest(v, 2) < 1e-9) problem.clamped.push_back(v);
+  const double top = m.mesh.rest.col(2).maxCoeff();
+  for (int v = m.offsets[1]; v < m.mesh.num_vertices(); ++v)
+    if (m.mesh.rest(v, 2) > top - 1e-9) problem.prescribed.emplace_back(v, V3(0, 0, -0.008));
+  ForwardOptions options;
+  options.load_steps = 8;
+  options.max_iterations = 60;
+  options.verbose = getenv("FV") != nullptr;
+
+  // Without contacts the boxes pass through each other.
+  TetMesh free_mesh = m.mesh;
+  ForwardSummary summary;
+  ASSERT_TRUE(SolveQuasiStatic(problem, options, &model, &free_mesh, &summary).ok());
+  CollisionSpec spec;
+  spec.pairs = {{"lower", "upper"}};
+  spec.distance = D;
+  spec.stiffness = 2e3;
+  CollisionWorld world;
+  ASSERT_TRUE(world.Init(spec, {"lower", "upper"}, m.surfaces, m.mesh.x).ok());
+  std::vector<Contact> contacts;
+  world.Detect(free_mesh.x, 0.0, &contacts);
+  EXPECT_GT(world.Evaluate(contacts, free_mesh.x).max_penetration, D);
+
+  // With the penalty the surfaces stay apart (delta < D) and the lower box is compressed.
+  ContactPotential potential(&world, D);
+  problem.potential = &potential;
+  model.Build(m.mesh, ElasticModelType::kCorotational, soft);
+  TetMesh mesh = m.mesh;
+  ASSERT_TRUE(SolveQuasiStatic(problem, options, &model, &mesh, &summary).ok()) << summary.message;
+  EXPECT_TRUE(summary.IsSolutionUsable()) << summary.FullReport();
+  world.Detect(mesh.x, 0.0, &contacts);
+  const ContactStats s = world.Evaluate(contacts, mesh.x);
+  EXPECT_GT(s.contacts, 0);
+  EXPECT_LT(s.max_penetration, D);
+  const double lower_top = mesh.x.topRows(m.offsets[1]).col(2).maxCoeff();
+  EXPECT_LT(lower_top, 0.02 - 1e-4);  // pressed down
+}
+
+TEST(ForwardContact, PlaneObstacleHoldsABentCantilever) {
+  TetMesh beam = MakeBox(V3(0.1, 0.02, 0.01), 10, 2, 1);
+  beam.rest.rowwise() += V3(0, 0, 0.005).transpose();
+  beam.x = beam.rest;
+  Material soft;
+  soft.youngs_modulus = 5e4;
+  ElasticModel model;
+  model.Build(beam, ElasticModelType::kCorotational, soft);
+  ForwardProblem problem;
+  for (int v = 0; v < beam.num_vertices(); ++v) {
+    if (beam.rest(v, 0) < 1e-9) problem.clamped.push_back(v);
+    if (beam.rest(v, 0) > 0.1 - 1e-9) problem.prescribed.emplace_back(v, V3(0, 0, -0.015));
+  }
+  CollisionSpec spec;
+  spec.distance = 0.001;
+  spec.stiffness = 5e3;
+  ObstacleSpec table;
+  table.name = "table";
+  spec.obstacles.push_back(table);
+  CollisionWorld world;
+  ASSERT_TRUE(world.Init(spec, {"beam"}, {beam.surface}, beam.x).ok());
+  EXPECT_EQ(world.num_trees_built(), 0);  // a plane needs no hierarchy
+  ContactPotential potential(&world, 0.001);
+  problem.potential = &potential;
+  ForwardOptions options;
+  options.load_steps = 6;
+  ForwardSummary summary;
+  ASSERT_TRUE(SolveQuasiStatic(problem, options, &model, &beam, &summary).ok());
+  // The free end is pushed 15 mm down, the table is 5 mm below: only the clamped / pushed
+  // vertices may go below the plane; every other vertex stays above -D.
+  std::vector<char> held(beam.num_vertices(), 0);
+  for (const auto& p : problem.prescribed) held[p.first] = 1;
+  for (int v = 0; v < beam.num_vertices(); ++v)
+    if (!held[v]) {
+      EXPECT_GT(beam.x(v, 2), -0.001) << v;
+    }
+}
+
+// --- surfaces, scenes and the tracker -----------------------------------------------------
+
+TEST(TriangleSurface, ReadsObjAndAsciiAndBinaryStl) {
+  const std::string dir = testing::TempDir();
+  {
+    std::ofstream o(dir + "/quad.obj");
+    o << "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1 2/2 3/3 4/4\n";
+  }
+  Vertices v;
+  Triangles t;
+  ASSERT_TRUE(ReadTriangleSurface(dir + "/quad.obj", &v, &t).ok());
+  EXPECT_EQ(v.rows(), 4);
+  EXPECT_EQ(t.rows(), 2);
+  {
+    std::ofstream o(dir + "/tri.stl");
+    o << "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+         "endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 1 0 0\nvertex 1 1 0\n"
+         "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
+  }
+  ASSERT_TRUE(ReadTriangleSurface(dir + "/tri.stl", &v, &t).ok());
+  EXPECT_EQ(v.rows(), 4);  // welded
+  EXPECT_EQ(t.rows(), 2);
+  {
+    std::ofstream o(dir + "/bin.stl", std::ios::binary);
+    char header[80] = {0};
+    o.write(header, 80);
+    uint32_t n = 1;
+    o.write(reinterpret_cast<const char*>(&n), 4);
+    float rec[12] = {0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 2, 0};
+    o.write(reinterpret_cast<const char*>(rec), 48);
+    uint16_t attr = 0;
+    o.write(reinterpret_cast<const char*>(&attr), 2);
+  }
+  ASSERT_TRUE(ReadTriangleSurface(dir + "/bin.stl", &v, &t).ok());
+  EXPECT_EQ(t.rows(), 1);
+  EXPECT_EQ(v(1, 0), 2.0);
+  {
+    std::ofstream o(dir + "/bad.obj");
+    o << "v 0 0 0\nf 1 2 3\n";
+  }
+  const Status s = ReadTriangleSurface(dir + "/bad.obj", &v, &t);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("bad.obj:2"), std::string::npos) << s.message();
+}
+
+TEST(ObstaclePose, InterpolatesKeyframes) {
+  std::vector<ObstacleKeyframe> k(2);
+  k[0].frame = 0;
+  k[1].frame = 10;
+  k[1].translation = V3(1, 0, 0);
+  k[1].rotation = V3(0, 0, 1);
+  const Eigen::Isometry3d T = ObstaclePose(k, 5);
+  EXPECT_NEAR(T.translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(T.linear()).angle(), 0.5, 1e-12);
+  EXPECT_NEAR(ObstaclePose(k, 20).translation().x(), 1.0, 1e-12);
+}
+
+const char* kTwoObjectScene = R"(
+objects:
+  - {name: lower, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}, label: 1}
+  - {name: upper, generate: {shape: box, size: [0.03, 0.03, 0.02], cells: [3, 3, 2], origin: [0.005, 0.005, 0.021]}, label: 2}
+effects: {collision: true}
+collision:
+  pairs: [[lower, upper]]
+  stiffness: 2000
+  distance: 0.002
+  obstacles:
+    - {name: table, plane: {point: [0, 0, -0.001], normal: [0, 0, 1]}, objects: [lower]}
+    - name: block
+      box: {size: [0.01, 0.01, 0.01]}
+      keyframes: [{frame: 0, translation: [0.2, 0, 0]}, {frame: 4, translation: [0.3, 0, 0]}]
+registration:
+  solver: {max_outer_iterations: 3}
+)";
+
+TEST(CollisionScene, ParsesAndRejectsWithLocations) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene(kTwoObjectScene, "two.yaml", "", &scene).ok());
+  EXPECT_TRUE(scene.effects.collision);
+  ASSERT_EQ(scene.collision.pairs.size(), 1u);
+  EXPECT_EQ(scene.collision.obstacles.size(), 2u);
+  EXPECT_EQ(scene.collision.obstacles[1].keyframes.size(), 2u);
+  EXPECT_EQ(scene.objects[1].label, 2);
+  std::string bad = kTwoObjectScene;
+  bad.replace(bad.find("[[lower, upper]]"), 16, "[[lower, uper]]");
+  Status s = ParseScene(bad, "two.yaml", "", &scene);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("two.yaml:7: collision.pairs[0][1]: unknown object 'uper'"), std::string::npos)
+      << s.message();
+  bad = kTwoObjectScene;
+  bad.replace(bad.find("distance: 0.002"), 15, "distance: -1");
+  s = ParseScene(bad, "two.yaml", "", &scene);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("collision.distance: must be > 0"), std::string::npos) << s.message();
+}
+
+PointCloud SurfaceCloud(const Tracker& t) {
+  PointCloud cloud;
+  int n = 0;
+  for (int i = 0; i < t.num_objects(); ++i) n += static_cast<int>(t.mesh(i).surface_vertices.size());
+  cloud.points.resize(n, 3);
+  cloud.labels.resize(n);
+  int row = 0;
+  for (int i = 0; i < t.num_objects(); ++i)
+    for (int v : t.mesh(i).surface_vertices) {
+      cloud.points.row(row) = t.vertices(i).row(v);
+      cloud.labels(row++) = i + 1;
+    }
+  return cloud;
+}
+
+TEST(CollisionTracker, OneObjectSceneBuildsNothingAndAddsNoResidual) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene(R"(
+objects: [{name: only, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}}]
+effects: {collision: true}
+)", "one.yaml", "", &scene).ok());
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  EXPECT_EQ(tracker->collision(), nullptr);
+  FrameSummary summary;
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(*tracker), &summary).ok());
+  EXPECT_EQ(summary.final.collision, 0.0);
+  EXPECT_EQ(summary.contacts, 0);
+  EXPECT_EQ(summary.time.collision, 0.0);
+  for (const OuterIteration& it : summary.iterations) EXPECT_EQ(it.contacts, 0);
+}
+
+TEST(CollisionTracker, TwoObjectsWithLabelsAreRegisteredJointlyWithContacts) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene(kTwoObjectScene, "two.yaml", "", &scene).ok());
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  ASSERT_NE(tracker->collision(), nullptr);
+  EXPECT_EQ(tracker->collision()->num_trees_built(), 2);  // the box obstacle needs both
+  // A cloud that pulls the upper box 2 mm into the lower one: the penalty keeps them apart.
+  PointCloud cloud = SurfaceCloud(*tracker);
+  const int n_lower = static_cast<int>(tracker->mesh(0).surface_vertices.size());
+  for (int i = n_lower; i < cloud.size(); ++i) cloud.points(i, 2) -= 0.003;
+  FrameSummary summary;
+  ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
+  EXPECT_TRUE(summary.IsSolutionUsable()) << summary.FullReport();
+  EXPECT_GT(summary.iterations.front().contacts, 0);
+  EXPECT_GT(summary.final.collision, 0.0);
+  EXPECT_LT(summary.max_penetration, 0.002) << summary.FullReport();
+  EXPECT_NE(summary.FullReport().find("collision:"), std::string::npos);
+}
+
+// The bundled contact sequences, registered with collision on, keep the surfaces apart.
+void ExpectSequenceStaysApart(const std::string& name, int frames) {
+  const std::string dir = std::string(FEMREG_DATASETS_DIR) + "/" + name;
+  if (!std::filesystem::exists(dir + "/scene.yaml")) GTEST_SKIP() << dir << " not generated";
+  Scene scene;
+  ASSERT_TRUE(LoadScene(dir + "/scene.yaml", &scene).ok());
+  ASSERT_TRUE(scene.effects.collision);
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  const double D = scene.collision.distance;
+  for (int f = 0; f < frames; ++f) {
+    char file[64];
+    std::snprintf(file, sizeof(file), "/clouds/frame_%04d.pcd", f);
+    PointCloud cloud;
+    ASSERT_TRUE(ReadPointCloud(dir + file, &cloud).ok());
+    FrameSummary summary;
+    ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
+    ASSERT_TRUE(summary.IsSolutionUsable()) << summary.message;
+    EXPECT_LT(summary.max_penetration, D) << name << " frame " << f;
+  }
+}
+
+TEST(CollisionSequences, ContactPairKeepsPenetrationBelowD) { ExpectSequenceStaysApart("contact_pair", 8); }
+TEST(CollisionSequences, ToolTableKeepsPenetrationBelowD) { ExpectSequenceStaysApart("tool_table", 8); }
+
+}  // namespace
+}  // namespace femreg
