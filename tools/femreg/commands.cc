@@ -18,6 +18,7 @@ void RegisterCommands(CLI::App* app) {
   AddSynthCommand(app);
   AddEvalCommand(app);
   AddFractureDataCommand(app);
+  AddContactDataCommand(app);
 }
 
 }  // namespace cli

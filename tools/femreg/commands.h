@@ -16,6 +16,7 @@ void AddCompareCommand(CLI::App* app);
 void AddSynthCommand(CLI::App* app);
 void AddEvalCommand(CLI::App* app);
 void AddFractureDataCommand(CLI::App* app);
+void AddContactDataCommand(CLI::App* app);
 
 // Adds all of the above.
 void RegisterCommands(CLI::App* app);

@@ -69,7 +69,8 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
         "e_temporal,e_anchor,e_total,t_preprocess_ms,t_prealign_ms,t_rotations_ms,"
         "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
         "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
-        "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,message\n";
+        "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
+        "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,message\n";
   char buf[1024];
   for (size_t i = 0; i < rows.size(); ++i) {
     const FrameSummary& s = rows[i].summary;
@@ -98,6 +99,10 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
       std::snprintf(buf, sizeof(buf), "%s%.4f", p ? ";" : "", rows[i].piece_errors[p].mean * 1e3);
       os << buf;
     }
+    std::snprintf(buf, sizeof(buf), ",%.6g,%d,%d,%d,%.4f,%.3f", s.final.collision, s.contacts,
+                  s.object_contacts, s.obstacle_contacts, s.max_penetration * 1e3,
+                  s.time.collision * 1e3);
+    os << buf;
     std::string msg = rows[i].read_error.empty() ? s.message : rows[i].read_error;
     std::replace(msg.begin(), msg.end(), '"', '\'');
     os << ",\"" << msg << "\"\n";
