@@ -162,7 +162,7 @@ TEST_P(FastBackendTest, ReachesTheSameMinimumAsCeres) {
   fast_backend::Solver solver;
   solver.SetPattern(s->mesh.num_vertices(), s->tets);
   Vertices x_fast = start;
-  const fast_backend::SolveSummary summary = solver.Solve(s->problem, 100, &x_fast);
+  const fast_backend::SolveSummary summary = solver.Solve(s->problem, 100, &x_fast, 1e-15);
   EXPECT_TRUE(summary.success) << summary.message;
   const double e_ceres = fast_backend::Evaluate(s->problem, x_ceres).total();
   const double e_fast = fast_backend::Evaluate(s->problem, x_fast).total();

@@ -29,9 +29,14 @@ enum class DataMetric { kPointToPoint, kPointToPlane };
 enum class Regularizer {
   kCorotational,  // corotational linear FEM (the default)
   kLinear,        // small-strain linear FEM
+  kMassSpring,    // springs on the mesh edges, k = E V_edge / L^2 (for comparison)
   kNone,          // no elastic term: temporal (and anchors) only
 };
 enum class TrustRegion { kLevenbergMarquardt, kDogleg };
+enum class SolverBackend {
+  kCeres,  // the reference: Ceres with the options below
+  kFast,   // Gauss-Newton on a directly assembled system, CHOLMOD pattern reused
+};
 enum class LinearSolver {
   kSparseNormalCholesky,  // SuiteSparse CHOLMOD through Ceres
   kConjugateGradients,    // Ceres' CGNR with a Jacobi preconditioner
@@ -41,11 +46,13 @@ const char* ToString(RobustLoss v);
 const char* ToString(DataMetric v);
 const char* ToString(Regularizer v);
 const char* ToString(TrustRegion v);
+const char* ToString(SolverBackend v);
 const char* ToString(LinearSolver v);
 bool FromString(const std::string& s, RobustLoss* v);
 bool FromString(const std::string& s, DataMetric* v);
 bool FromString(const std::string& s, Regularizer* v);
 bool FromString(const std::string& s, TrustRegion* v);
+bool FromString(const std::string& s, SolverBackend* v);
 bool FromString(const std::string& s, LinearSolver* v);
 
 struct CameraOptions {
@@ -103,6 +110,9 @@ struct SolverOptions {
   // from the previous outer iteration.
   double relative_energy_tolerance = 1e-3;
   double time_budget_s = 0.0;            // per frame; 0 = none
+  // Which back end minimizes each outer iteration. The fast one does not take contacts
+  // (effects.collision): such scenes use Ceres whatever this says.
+  SolverBackend backend = SolverBackend::kCeres;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
   int num_threads = 1;

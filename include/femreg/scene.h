@@ -71,7 +71,7 @@ struct ObjectSpec {
   // effects.fracture is on; 0 = unbreakable.
   double toughness = 0.0;
   std::vector<std::pair<int, double>> region_toughness;  // region id -> toughness (Pa)
-  int label = -1;  // cloud points with this label belong to it; -1 = none
+  int label = -1;          // cloud points with this label belong to it; -1 = none
 };
 
 struct BoundaryConditionSpec {

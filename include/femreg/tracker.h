@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "femreg/fracture.h"
 #include "femreg/collision.h"
+#include "femreg/fracture.h"
 #include "femreg/mesh.h"
 #include "femreg/point_cloud.h"
 #include "femreg/registration.h"

@@ -100,19 +100,31 @@ struct Solver::Impl {
   std::unordered_map<uint64_t, std::array<int, 3>> block_offsets;  // (a, b) -> column starts
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> cholesky;
   bool analysed = false;
+  // Per elastic term (in the problem's order), the value offsets of its 16 blocks: found
+  // once per pattern instead of hashed per assembly.
+  std::vector<std::array<std::array<int, 3>, 16>> elastic_offsets;
+  const std::array<int, 3>* Offsets(int a, int b) const {
+    const auto it = block_offsets.find(Key(a, b));
+    return it == block_offsets.end() ? nullptr : &it->second;
+  }
+  void AddAt(const std::array<int, 3>& offsets, const Eigen::Matrix3d& M) {
+    double* v = H.valuePtr();
+    for (int j = 0; j < 3; ++j) {
+      for (int i = 0; i < 3; ++i) v[offsets[j] + i] += M(i, j);
+    }
+  }
 
   static uint64_t Key(int a, int b) {
     return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
   }
   // Adds the 3x3 block M to H at (a, b).
   void AddBlock(int a, int b, const Eigen::Matrix3d& M) {
-    const auto it = block_offsets.find(Key(a, b));
-    if (it == block_offsets.end()) return;  // outside the pattern: programmer error, ignored
-    double* v = H.valuePtr();
-    for (int j = 0; j < 3; ++j) {
-      for (int i = 0; i < 3; ++i) v[it->second[j] + i] += M(i, j);
-    }
+    const std::array<int, 3>* offsets = Offsets(a, b);
+    if (offsets != nullptr) AddAt(*offsets, M);  // outside the pattern: ignored
   }
+  // H's elastic part: constant within one Solve (rotations fixed), assembled once.
+  std::vector<double> elastic_values;
+  bool elastic_valid = false;
   void Assemble(const Problem& problem, const Vertices& x, Eigen::VectorXd* g);
 };
 
@@ -154,12 +166,29 @@ void Solver::SetPattern(int num_vertices, const std::vector<std::array<int, 4>>&
     }
   }
   m.analysed = false;
+  m.elastic_offsets.clear();
 }
 
 void Solver::Impl::Assemble(const Problem& problem, const Vertices& x, Eigen::VectorXd* g) {
-  std::fill(H.valuePtr(), H.valuePtr() + H.nonZeros(), 0.0);
+  if (elastic_valid) {
+    std::copy(elastic_values.begin(), elastic_values.end(), H.valuePtr());
+  } else {
+    std::fill(H.valuePtr(), H.valuePtr() + H.nonZeros(), 0.0);
+  }
   g->setZero(3 * num_vertices);
-  for (const ElasticTerm& e : problem.elastic) {
+  if (elastic_offsets.size() != problem.elastic.size()) {
+    elastic_offsets.resize(problem.elastic.size());
+    for (size_t t = 0; t < problem.elastic.size(); ++t) {
+      for (int a = 0; a < 4; ++a) {
+        for (int b = 0; b < 4; ++b) {
+          const std::array<int, 3>* o = Offsets(problem.elastic[t].vertices[a], problem.elastic[t].vertices[b]);
+          elastic_offsets[t][4 * a + b] = o ? *o : std::array<int, 3>{-1, -1, -1};
+        }
+      }
+    }
+  }
+  for (size_t t = 0; t < problem.elastic.size(); ++t) {
+    const ElasticTerm& e = problem.elastic[t];
     const Eigen::Matrix3d& R = *e.rotation;
     const Vector12 xe = Gather(e, x);
     Vector12 u;
@@ -167,11 +196,16 @@ void Solver::Impl::Assemble(const Problem& problem, const Vertices& x, Eigen::Ve
     const Vector12 ku = e.rest->K * u;
     for (int a = 0; a < 4; ++a) {
       g->segment<3>(3 * e.vertices[a]) += e.weight * R * ku.segment<3>(3 * a);
+      if (elastic_valid) continue;
       for (int b = 0; b < 4; ++b) {
-        AddBlock(e.vertices[a], e.vertices[b],
-                 e.weight * R * e.rest->K.block<3, 3>(3 * a, 3 * b) * R.transpose());
+        const std::array<int, 3>& o = elastic_offsets[t][4 * a + b];
+        if (o[0] >= 0) AddAt(o, e.weight * R * e.rest->K.block<3, 3>(3 * a, 3 * b) * R.transpose());
       }
     }
+  }
+  if (!elastic_valid) {
+    elastic_values.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
+    elastic_valid = true;
   }
   for (const EdgeSpringTerm& s : problem.edges) {
     const Eigen::Vector3d d = x.row(s.a) - x.row(s.b);
@@ -214,7 +248,8 @@ void Solver::Impl::Assemble(const Problem& problem, const Vertices& x, Eigen::Ve
   }
 }
 
-SolveSummary Solver::Solve(const Problem& problem, int max_iterations, Vertices* x) {
+SolveSummary Solver::Solve(const Problem& problem, int max_iterations, Vertices* x,
+                          double relative_tolerance) {
   Impl& m = *impl_;
   SolveSummary summary;
   if (x->rows() != m.num_vertices) {
@@ -223,45 +258,56 @@ SolveSummary Solver::Solve(const Problem& problem, int max_iterations, Vertices*
     return summary;
   }
   const bool any_fixed = !problem.fixed.empty();
+  const int n = static_cast<int>(m.H.cols());
+  const int* outer = m.H.outerIndexPtr();
+  const int* inner = m.H.innerIndexPtr();
+  // Where each column's diagonal entry sits.
+  std::vector<int> diagonal_at(static_cast<size_t>(n), -1);
+  for (int c = 0; c < n; ++c) {
+    for (int p = outer[c]; p < outer[c + 1]; ++p) {
+      if (inner[p] == c) diagonal_at[static_cast<size_t>(c)] = p;
+    }
+  }
+  m.elastic_valid = false;  // rotations may have changed since the last Solve
   double energy = Evaluate(problem, *x).total();
   double lambda = 1e-8;
+  double first_gradient = -1.0;
   Eigen::VectorXd g;
-  for (int it = 0; it < max_iterations; ++it) {
+  std::vector<double> diagonal(static_cast<size_t>(n));
+  int steps = 0;
+  while (steps < max_iterations) {
     m.Assemble(problem, *x, &g);
-    // Marquardt damping on the diagonal; hard-fixed vertices get identity rows and no step.
     double* values = m.H.valuePtr();
-    const int* outer = m.H.outerIndexPtr();
-    const int* inner = m.H.innerIndexPtr();
-    std::vector<double> diagonal(static_cast<size_t>(m.H.cols()));
-    double max_diagonal = 0.0;
-    for (int c = 0; c < m.H.cols(); ++c) {
-      for (int p = outer[c]; p < outer[c + 1]; ++p) {
-        if (inner[p] == c) diagonal[static_cast<size_t>(c)] = values[p];
-      }
-      max_diagonal = std::max(max_diagonal, diagonal[static_cast<size_t>(c)]);
-    }
-    if (any_fixed) {
-      for (int c = 0; c < m.H.cols(); ++c) {
+    if (any_fixed) {  // identity rows and columns, no step
+      for (int c = 0; c < n; ++c) {
         const bool col_fixed = problem.fixed[static_cast<size_t>(c / 3)];
         for (int p = outer[c]; p < outer[c + 1]; ++p) {
-          const bool row_fixed = problem.fixed[static_cast<size_t>(inner[p] / 3)];
-          if (col_fixed || row_fixed) values[p] = (inner[p] == c) ? 1.0 : 0.0;
+          if (col_fixed || problem.fixed[static_cast<size_t>(inner[p] / 3)]) {
+            values[p] = (inner[p] == c) ? 1.0 : 0.0;
+          }
         }
-        if (col_fixed) {
-          g[c] = 0.0;
-          diagonal[static_cast<size_t>(c)] = 1.0;
-        }
+        if (col_fixed) g[c] = 0.0;
       }
     }
-    const Eigen::SparseMatrix<double> H0 = m.H;
+    // Converged when the gradient has fallen far below where it started: with rotations and
+    // pairs fixed the problem is quadratic but for the robust weights, so this usually
+    // holds right after the first step, without another factorization.
+    const double gradient = g.lpNorm<Eigen::Infinity>();
+    if (first_gradient < 0) first_gradient = gradient;
+    if (gradient <= 1e-9 * first_gradient || gradient == 0.0) {
+      summary.iterations = steps;
+      return summary;
+    }
+    double max_diagonal = 0.0;
+    for (int c = 0; c < n; ++c) {
+      diagonal[static_cast<size_t>(c)] = values[diagonal_at[static_cast<size_t>(c)]];
+      max_diagonal = std::max(max_diagonal, diagonal[static_cast<size_t>(c)]);
+    }
     bool accepted = false;
-    while (!accepted && it < max_iterations) {
-      m.H = H0;
-      values = m.H.valuePtr();
-      for (int c = 0; c < m.H.cols(); ++c) {
-        for (int p = outer[c]; p < outer[c + 1]; ++p) {
-          if (inner[p] == c) values[p] += lambda * diagonal[static_cast<size_t>(c)] + 1e-12 * max_diagonal;
-        }
+    while (!accepted && steps < max_iterations) {
+      // Marquardt damping on the diagonal (and a whisper of Tikhonov for unreferenced dofs).
+      for (int c = 0; c < n; ++c) {
+        values[diagonal_at[static_cast<size_t>(c)]] = diagonal[static_cast<size_t>(c)] * (1.0 + lambda) + 1e-12 * max_diagonal;
       }
       if (!m.analysed) {
         m.cholesky.analyzePattern(m.H);
@@ -269,33 +315,32 @@ SolveSummary Solver::Solve(const Problem& problem, int max_iterations, Vertices*
       }
       m.cholesky.factorize(m.H);
       ++summary.factorizations;
+      ++steps;
       if (m.cholesky.info() != Eigen::Success) {
         lambda = std::max(lambda * 100.0, 1e-6);
-        ++it;
-        if (lambda > 1e8) break;
         continue;
       }
       const Eigen::VectorXd dx = m.cholesky.solve(-g);
       Vertices trial = *x;
       for (int v = 0; v < m.num_vertices; ++v) trial.row(v) += dx.segment<3>(3 * v).transpose();
       const double trial_energy = Evaluate(problem, trial).total();
-      ++summary.iterations;
       if (std::isfinite(trial_energy) && trial_energy <= energy) {
         const double change = (energy - trial_energy) / std::max(energy, 1e-300);
         *x = trial;
         energy = trial_energy;
         lambda = std::max(lambda * 0.1, 1e-12);
         accepted = true;
-        if (change < 1e-10 || dx.lpNorm<Eigen::Infinity>() < 1e-12) return summary;
+        if (change < relative_tolerance || dx.lpNorm<Eigen::Infinity>() < 1e-14) {
+          summary.iterations = steps;
+          return summary;
+        }
       } else {
         lambda = std::max(lambda * 10.0, 1e-6);
-        ++it;
-        if (lambda > 1e8) break;
       }
     }
     if (!accepted) break;
   }
-  m.H.makeCompressed();
+  summary.iterations = steps;
   return summary;
 }
 

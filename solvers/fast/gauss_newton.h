@@ -79,8 +79,11 @@ class Solver {
   // The pattern: every pair of vertices sharing a tetrahedron (global numbering). Call once
   // per topology; the symbolic factorization is computed at the first Solve after it.
   void SetPattern(int num_vertices, const std::vector<std::array<int, 4>>& tets);
-  // Minimizes the problem from x (updated in place) with at most max_iterations steps.
-  SolveSummary Solve(const Problem& problem, int max_iterations, Vertices* x);
+  // Minimizes the problem from x (updated in place) with at most max_iterations
+  // factorizations; stops when a step changes the energy by less than
+  // relative_tolerance (Ceres' default function tolerance is 1e-6).
+  SolveSummary Solve(const Problem& problem, int max_iterations, Vertices* x,
+                     double relative_tolerance = 1e-6);
 
  private:
   struct Impl;

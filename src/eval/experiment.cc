@@ -196,14 +196,28 @@ std::vector<Setting> DefaultBenchSweep(const Scene& base) {
     s.push_back({"cloud stride " + std::to_string(stride), {{"cloud_stride", std::to_string(stride)}},
                  [stride](Scene* sc) { sc->registration.data.cloud_stride = stride; }, 1.0});
   }
+  if (r.solver.backend != SolverBackend::kFast) {
+    s.push_back({"fast back end", {{"backend", "fast"}},
+                 [](Scene* sc) { sc->registration.solver.backend = SolverBackend::kFast; }, 1.0});
+    s.push_back({"fast, outer 3", {{"backend", "fast"}, {"max_outer_iterations", "3"}},
+                 [](Scene* sc) {
+                   sc->registration.solver.backend = SolverBackend::kFast;
+                   sc->registration.solver.max_outer_iterations = 3;
+                 },
+                 1.0});
+    s.push_back({"fast, resolution x0.5", {{"backend", "fast"}, {"resolution", "0.5"}},
+                 [](Scene* sc) { sc->registration.solver.backend = SolverBackend::kFast; }, 0.5});
+  }
   s.push_back({"conjugate gradients", {{"linear_solver", "conjugate_gradients"}},
                [](Scene* sc) {
+                 sc->registration.solver.backend = SolverBackend::kCeres;
                  sc->registration.solver.linear_solver = LinearSolver::kConjugateGradients;
                  sc->registration.solver.trust_region = TrustRegion::kLevenbergMarquardt;
                },
                1.0});
   s.push_back({"dogleg", {{"trust_region", "dogleg"}},
                [](Scene* sc) {
+                 sc->registration.solver.backend = SolverBackend::kCeres;
                  sc->registration.solver.trust_region = TrustRegion::kDogleg;
                  sc->registration.solver.linear_solver = LinearSolver::kSparseNormalCholesky;
                },

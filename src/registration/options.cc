@@ -59,8 +59,20 @@ const char* ToString(Regularizer v) {
       return "corotational";
     case Regularizer::kLinear:
       return "linear";
+    case Regularizer::kMassSpring:
+      return "mass_spring";
     case Regularizer::kNone:
       return "none";
+  }
+  return "unknown";
+}
+
+const char* ToString(SolverBackend v) {
+  switch (v) {
+    case SolverBackend::kCeres:
+      return "ceres";
+    case SolverBackend::kFast:
+      return "fast";
   }
   return "unknown";
 }
@@ -121,7 +133,8 @@ FEMREG_FROM_STRING(RobustLoss, RobustLoss::kNone, RobustLoss::kHuber, RobustLoss
                    RobustLoss::kTukey)
 FEMREG_FROM_STRING(DataMetric, DataMetric::kPointToPoint, DataMetric::kPointToPlane)
 FEMREG_FROM_STRING(Regularizer, Regularizer::kCorotational, Regularizer::kLinear,
-                   Regularizer::kNone)
+                   Regularizer::kMassSpring, Regularizer::kNone)
+FEMREG_FROM_STRING(SolverBackend, SolverBackend::kCeres, SolverBackend::kFast)
 FEMREG_FROM_STRING(TrustRegion, TrustRegion::kLevenbergMarquardt, TrustRegion::kDogleg)
 FEMREG_FROM_STRING(LinearSolver, LinearSolver::kSparseNormalCholesky,
                    LinearSolver::kConjugateGradients)

@@ -73,15 +73,19 @@ Status ReadBlob(const std::string& path, bool ply, PointCloud* cloud) {
   pcl::PCLPointCloud2 blob;
   Eigen::Vector4f origin;
   Eigen::Quaternionf orientation;
-  int rc;
-  if (ply) {
-    pcl::PLYReader reader;
-    int version = 0;
-    rc = reader.read(path, blob, origin, orientation, version);
-  } else {
-    pcl::PCDReader reader;
-    int version = 0;
-    rc = reader.read(path, blob, origin, orientation, version);
+  int rc = -1;
+  try {  // PCL throws when it cannot open or parse the file
+    if (ply) {
+      pcl::PLYReader reader;
+      int version = 0;
+      rc = reader.read(path, blob, origin, orientation, version);
+    } else {
+      pcl::PCDReader reader;
+      int version = 0;
+      rc = reader.read(path, blob, origin, orientation, version);
+    }
+  } catch (const std::exception&) {
+    rc = -1;
   }
   if (rc < 0) {
     return Status::Error(path + ": could not read as " + (ply ? "PLY" : "PCD") +
@@ -210,20 +214,24 @@ Status WritePointCloud(const std::string& path, const PointCloud& cloud) {
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   const std::string tmp = path + ".tmp";
   PclCloud::Ptr pc = ToPcl(cloud);
-  int rc;
-  if (cloud.has_labels()) {
-    pcl::PointCloud<pcl::PointXYZLNormal> labelled;
-    pcl::copyPointCloud(*pc, labelled);
-    for (size_t i = 0; i < labelled.size(); ++i) {
-      labelled[i].label = static_cast<uint32_t>(cloud.labels(static_cast<Eigen::Index>(i)));
+  int rc = -1;
+  try {  // PCL throws when it cannot open or parse the file
+    if (cloud.has_labels()) {
+      pcl::PointCloud<pcl::PointXYZLNormal> labelled;
+      pcl::copyPointCloud(*pc, labelled);
+      for (size_t i = 0; i < labelled.size(); ++i) {
+        labelled[i].label = static_cast<uint32_t>(cloud.labels(static_cast<Eigen::Index>(i)));
+      }
+      rc = pcl::io::savePCDFileBinary(tmp, labelled);
+    } else if (cloud.has_normals()) {
+      rc = pcl::io::savePCDFileBinary(tmp, *pc);
+    } else {
+      pcl::PointCloud<pcl::PointXYZ> xyz;
+      pcl::copyPointCloud(*pc, xyz);
+      rc = pcl::io::savePCDFileBinary(tmp, xyz);
     }
-    rc = pcl::io::savePCDFileBinary(tmp, labelled);
-  } else if (cloud.has_normals()) {
-    rc = pcl::io::savePCDFileBinary(tmp, *pc);
-  } else {
-    pcl::PointCloud<pcl::PointXYZ> xyz;
-    pcl::copyPointCloud(*pc, xyz);
-    rc = pcl::io::savePCDFileBinary(tmp, xyz);
+  } catch (const std::exception&) {
+    rc = -1;
   }
   if (rc < 0 || std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::remove(tmp.c_str());

@@ -60,6 +60,19 @@ std::string FrameSummary::FullReport() const {
                   max_penetration * 1e3, time.collision * 1e3);
     os << buf;
   }
+  if (!fractures.empty() || time.fracture > 0) {
+    std::snprintf(buf, sizeof(buf), "  fracture: %zu node splits, detection and splits %.2f ms\n",
+                  fractures.size(), time.fracture * 1e3);
+    os << buf;
+    for (const FractureEvent& e : fractures) {
+      std::snprintf(buf, sizeof(buf),
+                    "    object %d node %d (initial %d) after iteration %d: measure %.4g Pa > %.4g, "
+                    "plane normal (%.3f, %.3f, %.3f), %d elements removed\n",
+                    e.object, e.node, e.original_node, e.iteration, e.measure, e.toughness,
+                    e.normal.x(), e.normal.y(), e.normal.z(), e.removed_elements);
+      os << buf;
+    }
+  }
   os << "  termination: " << ToString(termination) << " (" << message << ")\n";
   return os.str();
 }

@@ -13,11 +13,12 @@
 #include <map>
 #include <sstream>
 
-#include "femreg/fracture.h"
 #include "femreg/collision.h"
+#include "femreg/fracture.h"
 #include "femreg/point_cloud.h"
 #include "registration/nearest.h"
 #include "solvers/ceres/contact_cost.h"
+#include "solvers/fast/gauss_newton.h"
 #include "solvers/ceres/cost_functions.h"
 
 namespace femreg {
@@ -109,6 +110,7 @@ struct Tracker::Impl {
   std::vector<int> surface_vertices;
   std::vector<int> vertex_object;
   std::map<std::string, Anchor> anchors;
+  std::vector<Material> material_of;  // per object
   // Contacts (effects.collision): null when off or when nothing can collide, so an effect
   // that is off builds no hierarchy and adds no residual. After a topology change of object
   // i call collision->Rebuild(i, its surface in global numbering, x).
@@ -128,8 +130,14 @@ struct Tracker::Impl {
   std::vector<Eigen::VectorXd> residuals;
   std::vector<std::vector<char>> observed;
   // Elastic residual blocks: built once per topology, rotations read through pointers.
-  std::vector<std::unique_ptr<ceres_backend::ElasticCost>> elastic_costs;
-  std::vector<std::array<int, 4>> elastic_vertices;  // global indices per elastic cost
+  // (Or edge springs for the mass-spring regularizer.)
+  std::vector<std::unique_ptr<ceres::CostFunction>> elastic_costs;
+  std::vector<std::vector<int>> elastic_vertices;  // global indices per elastic cost
+  // The same terms for the fast back end, and its solver (pattern set per topology).
+  std::vector<fast_backend::ElasticTerm> fast_elastic;
+  std::vector<fast_backend::EdgeSpringTerm> fast_edges;
+  std::unique_ptr<fast_backend::Solver> fast_solver;
+  bool fast_pattern_dirty = true;
 
   Status Init(std::vector<TetMesh> meshes, const std::vector<Material>& materials);
   void BuildGlobalSurface();
@@ -154,6 +162,7 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Materi
     return Status::Error("one material per mesh is needed");
   }
   objects.resize(meshes.size());
+  material_of = materials;
   num_vertices = 0;
   for (size_t i = 0; i < meshes.size(); ++i) {
     if (!materials[i].IsValid(&error)) {
@@ -208,14 +217,49 @@ void Tracker::Impl::BuildGlobalSurface() {
 void Tracker::Impl::BuildElasticCosts() {
   elastic_costs.clear();
   elastic_vertices.clear();
+  fast_elastic.clear();
+  fast_edges.clear();
+  fast_pattern_dirty = true;
   if (options.regularizer == Regularizer::kNone) return;
   for (const Object& o : objects) {
+    if (options.regularizer == Regularizer::kMassSpring) {
+      // One spring per tet edge: k = E V_edge / L^2, with V_edge the volume share of the
+      // edge (a sixth of each element around it), so that a uniform stretch of the mesh
+      // costs about as much as in the FEM model.
+      std::map<std::pair<int, int>, double> edges;
+      for (int e = 0; e < o.model.num_elements(); ++e) {
+        const double share = o.model.rest(e).volume / 6.0;
+        for (int i = 0; i < 4; ++i) {
+          for (int j = i + 1; j < 4; ++j) {
+            int a = o.model.tets()(e, i), b = o.model.tets()(e, j);
+            if (a > b) std::swap(a, b);
+            edges[{a, b}] += share;
+          }
+        }
+      }
+      for (const auto& edge : edges) {
+        const int a = edge.first.first, b = edge.first.second;
+        const double length = (o.mesh.rest.row(a) - o.mesh.rest.row(b)).norm();
+        const double k = material_of[&o - &objects[0]].youngs_modulus * edge.second / (length * length);
+        elastic_costs.push_back(std::make_unique<ceres_backend::EdgeSpringCost>(
+            length, options.weights.elastic * k));
+        elastic_vertices.push_back({a + o.offset, b + o.offset});
+        fast_edges.push_back({a + o.offset, b + o.offset, length, options.weights.elastic * k});
+      }
+      continue;
+    }
     for (int e = 0; e < o.model.num_elements(); ++e) {
       elastic_costs.push_back(std::make_unique<ceres_backend::ElasticCost>(
           &o.model.rest(e), &o.model.rotation(e), options.weights.elastic));
-      std::array<int, 4> v;
+      std::vector<int> v(4);
       for (int k = 0; k < 4; ++k) v[k] = o.model.tets()(e, k) + o.offset;
       elastic_vertices.push_back(v);
+      fast_backend::ElasticTerm term;
+      for (int k = 0; k < 4; ++k) term.vertices[k] = v[k];
+      term.rest = &o.model.rest(e);
+      term.rotation = &o.model.rotation(e);
+      term.weight = options.weights.elastic;
+      fast_elastic.push_back(term);
     }
   }
 }
@@ -481,20 +525,25 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   std::vector<std::pair<ceres::CostFunction*, int>> temporal;
   std::vector<char> fixed;
   std::vector<std::pair<ceres::CostFunction*, int>> anchor_costs;
+  std::vector<fast_backend::SpringTerm> fast_temporal, fast_anchors;
   if (fracture) frame_start = x;
   // Made again after a fracture changed the topology (springs to frame_start's copies).
   auto build_frame_costs = [&]() {
   frame_costs.clear();
   temporal.clear();
   anchor_costs.clear();
+  fast_temporal.clear();
+  fast_anchors.clear();
   const double wt = options.weights.temporal;
   if (wt > 0) {
     for (int v = 0; v < num_vertices; ++v) {
       const double w = wt * mass(v);
       if (!(w > 0)) continue;
-      frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(
-          fracture ? frame_start.row(v).transpose() : x.row(v).transpose(), w));
+      const Eigen::Vector3d target =
+          fracture ? frame_start.row(v).transpose() : x.row(v).transpose();
+      frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(target, w));
       temporal.emplace_back(frame_costs.back().get(), v);
+      fast_temporal.push_back({v, target, w});
     }
   }
   fixed.assign(num_vertices, 0);
@@ -514,6 +563,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         frame_costs.push_back(std::make_unique<ceres_backend::SpringCost>(
             a.targets.row(static_cast<Eigen::Index>(i)).transpose(), w));
         anchor_costs.emplace_back(frame_costs.back().get(), g);
+        fast_anchors.push_back({g, a.targets.row(static_cast<Eigen::Index>(i)).transpose(), w});
       }
     }
   }
@@ -544,7 +594,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     row.iteration = k + 1;
     t0 = Clock::now();
     for (Object& o : objects) {
-      o.model.UpdateRotations(x.middleRows(o.offset, o.mesh.num_vertices()));
+      // Only the corotational regularizer reads rotations: what is off costs nothing.
+      if (options.regularizer == Regularizer::kCorotational) {
+        o.model.UpdateRotations(x.middleRows(o.offset, o.mesh.num_vertices()));
+      }
     }
     s.time.rotations += Seconds(t0);
 
@@ -564,117 +617,174 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       break;
     }
 
-    // Build the problem. Residual blocks reference vertex rows of x directly.
-    t0 = Clock::now();
-    ceres::Problem::Options problem_options;
-    problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-    problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
-    problem_options.enable_fast_removal = false;
-    ceres::Problem problem(problem_options);
-    auto block = [&](int v) { return x.data() + 3 * v; };
-    std::vector<ceres::ResidualBlockId> ids_data, ids_elastic, ids_temporal, ids_anchor;
-    for (size_t e = 0; e < elastic_costs.size(); ++e) {
-      const auto& v = elastic_vertices[e];
-      ids_elastic.push_back(problem.AddResidualBlock(elastic_costs[e].get(), nullptr, block(v[0]),
-                                                     block(v[1]), block(v[2]), block(v[3])));
-    }
-    for (const auto& tv : temporal) {
-      ids_temporal.push_back(problem.AddResidualBlock(tv.first, nullptr, block(tv.second)));
-    }
-    for (const auto& av : anchor_costs) {
-      ids_anchor.push_back(problem.AddResidualBlock(av.first, nullptr, block(av.second)));
-    }
-    std::vector<std::unique_ptr<ceres::CostFunction>> data_costs;
-    data_costs.reserve(pairs.size());
-    const double wd = options.weights.data;
-    for (const DataPair& p : pairs) {
-      const bool plane = p.normal.squaredNorm() > 0;
-      ceres::CostFunction* cost;
-      if (p.num_vertices == 1) {
-        cost = plane ? static_cast<ceres::CostFunction*>(
-                           new ceres_backend::PointToPlaneCost1(p.target, p.normal, 1.0))
-                     : new ceres_backend::PointToPointCost1(p.target, 1.0);
-      } else {
-        cost = plane ? static_cast<ceres::CostFunction*>(new ceres_backend::PointToPlaneCost3(
-                           p.barycentric, p.target, p.normal, 1.0))
-                     : new ceres_backend::PointToPointCost3(p.barycentric, p.target, 1.0);
+    // The fast back end, unless contacts are on (it has no contact term).
+    if (options.solver.backend == SolverBackend::kFast && !collision) {
+      t0 = Clock::now();
+      if (!fast_solver) fast_solver = std::make_unique<fast_backend::Solver>();
+      if (fast_pattern_dirty) {
+        std::vector<std::array<int, 4>> all_tets;
+        for (const Object& o : objects) {
+          for (int e = 0; e < o.mesh.num_tets(); ++e) {
+            std::array<int, 4> t;
+            for (int k = 0; k < 4; ++k) t[k] = o.mesh.tets(e, k) + o.offset;
+            all_tets.push_back(t);
+          }
+        }
+        fast_solver->SetPattern(num_vertices, all_tets);
+        fast_pattern_dirty = false;
       }
-      data_costs.emplace_back(cost);
-      std::vector<double*> blocks;
-      for (int j = 0; j < p.num_vertices; ++j) blocks.push_back(block(p.vertices[j]));
-      ids_data.push_back(problem.AddResidualBlock(cost, MakeLoss(options.data, wd), blocks));
-    }
-    // Contacts at the current x (refit, broad and narrow phase), normals held for the solve;
-    // margin D keeps pairs that the solve may bring within D.
-    std::vector<ceres::ResidualBlockId> ids_collision;
-    if (collision) {
-      const auto t_collision = Clock::now();
-      collision->SetFrame(frame);
-      collision->Detect(x, collision->distance(), &contacts);
-      const double D = collision->distance(), kc = collision->stiffness();
-      for (const Contact& c : contacts) {
-        ceres::CostFunction* cost;
+      fast_backend::Problem fp;
+      fp.elastic = fast_elastic;
+      fp.edges = fast_edges;
+      fp.data.reserve(pairs.size());
+      for (const DataPair& p : pairs) {
+        fast_backend::PointTerm t;
+        t.num_vertices = p.num_vertices;
+        for (int j = 0; j < 3; ++j) t.vertices[j] = p.vertices[j];
+        t.barycentric = p.barycentric;
+        t.target = p.target;
+        t.normal = p.normal;
+        fp.data.push_back(t);
+      }
+      fp.data_weight = options.weights.data;
+      fp.loss = options.data.loss;
+      fp.loss_scale = options.data.loss_scale;
+      fp.temporal = fast_temporal;
+      fp.anchors = fast_anchors;
+      fp.fixed = fixed;
+      s.time.build += Seconds(t0);
+      row.before = fast_backend::Evaluate(fp, x);
+      if (!have_initial) {
+        s.initial = row.before;
+        have_initial = true;
+      }
+      t0 = Clock::now();
+      const Vertices before_solve = x;
+      const fast_backend::SolveSummary fs =
+          fast_solver->Solve(fp, options.solver.max_inner_iterations, &x);
+      s.time.solve += Seconds(t0);
+      row.inner_iterations = fs.iterations;
+      if (!fs.success || !x.allFinite()) {
+        x = before_solve;
+        s.termination = TerminationType::kSolverFailure;
+        s.message = "fast back end: " + fs.message + "; the shape before this iteration was kept";
+        s.iterations.push_back(row);
+        break;
+      }
+      row.after = fast_backend::Evaluate(fp, x);
+    } else {
+      // Build the problem. Residual blocks reference vertex rows of x directly.
+      t0 = Clock::now();
+      ceres::Problem::Options problem_options;
+      problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+      problem_options.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+      problem_options.enable_fast_removal = false;
+      ceres::Problem problem(problem_options);
+      auto block = [&](int v) { return x.data() + 3 * v; };
+      std::vector<ceres::ResidualBlockId> ids_data, ids_elastic, ids_temporal, ids_anchor;
+      for (size_t e = 0; e < elastic_costs.size(); ++e) {
         std::vector<double*> blocks;
-        for (int j = 0; j < 3; ++j) blocks.push_back(block(c.vertices_a[j]));
-        if (c.obstacle()) {
-          cost = new ceres_backend::ContactObstacleCost(c.bary_a, c.point_b, c.normal, D, kc);
+        for (int v : elastic_vertices[e]) blocks.push_back(block(v));
+        ids_elastic.push_back(problem.AddResidualBlock(elastic_costs[e].get(), nullptr, blocks));
+      }
+      for (const auto& tv : temporal) {
+        ids_temporal.push_back(problem.AddResidualBlock(tv.first, nullptr, block(tv.second)));
+      }
+      for (const auto& av : anchor_costs) {
+        ids_anchor.push_back(problem.AddResidualBlock(av.first, nullptr, block(av.second)));
+      }
+      std::vector<std::unique_ptr<ceres::CostFunction>> data_costs;
+      data_costs.reserve(pairs.size());
+      const double wd = options.weights.data;
+      for (const DataPair& p : pairs) {
+        const bool plane = p.normal.squaredNorm() > 0;
+        ceres::CostFunction* cost;
+        if (p.num_vertices == 1) {
+          cost = plane ? static_cast<ceres::CostFunction*>(
+                             new ceres_backend::PointToPlaneCost1(p.target, p.normal, 1.0))
+                       : new ceres_backend::PointToPointCost1(p.target, 1.0);
         } else {
-          cost = new ceres_backend::ContactPairCost(c.bary_a, c.bary_b, c.normal, D, kc);
-          for (int j = 0; j < 3; ++j) blocks.push_back(block(c.vertices_b[j]));
+          cost = plane ? static_cast<ceres::CostFunction*>(new ceres_backend::PointToPlaneCost3(
+                             p.barycentric, p.target, p.normal, 1.0))
+                       : new ceres_backend::PointToPointCost3(p.barycentric, p.target, 1.0);
         }
         data_costs.emplace_back(cost);
-        ids_collision.push_back(problem.AddResidualBlock(cost, nullptr, blocks));
+        std::vector<double*> blocks;
+        for (int j = 0; j < p.num_vertices; ++j) blocks.push_back(block(p.vertices[j]));
+        ids_data.push_back(problem.AddResidualBlock(cost, MakeLoss(options.data, wd), blocks));
       }
-      row.contacts = static_cast<int>(contacts.size());
-      s.time.collision += Seconds(t_collision);
-    }
-    for (int v = 0; v < num_vertices; ++v) {
-      if (fixed[v] && problem.HasParameterBlock(block(v))) problem.SetParameterBlockConstant(block(v));
-    }
-    s.time.build += Seconds(t0);
+      // Contacts at the current x (refit, broad and narrow phase), normals held for the solve;
+      // margin D keeps pairs that the solve may bring within D.
+      std::vector<ceres::ResidualBlockId> ids_collision;
+      if (collision) {
+        const auto t_collision = Clock::now();
+        collision->SetFrame(frame);
+        collision->Detect(x, collision->distance(), &contacts);
+        const double D = collision->distance(), kc = collision->stiffness();
+        for (const Contact& c : contacts) {
+          ceres::CostFunction* cost;
+          std::vector<double*> blocks;
+          for (int j = 0; j < 3; ++j) blocks.push_back(block(c.vertices_a[j]));
+          if (c.obstacle()) {
+            cost = new ceres_backend::ContactObstacleCost(c.bary_a, c.point_b, c.normal, D, kc);
+          } else {
+            cost = new ceres_backend::ContactPairCost(c.bary_a, c.bary_b, c.normal, D, kc);
+            for (int j = 0; j < 3; ++j) blocks.push_back(block(c.vertices_b[j]));
+          }
+          data_costs.emplace_back(cost);
+          ids_collision.push_back(problem.AddResidualBlock(cost, nullptr, blocks));
+        }
+        row.contacts = static_cast<int>(contacts.size());
+        s.time.collision += Seconds(t_collision);
+      }
+      for (int v = 0; v < num_vertices; ++v) {
+        if (fixed[v] && problem.HasParameterBlock(block(v))) problem.SetParameterBlockConstant(block(v));
+      }
+      s.time.build += Seconds(t0);
 
-    auto energy = [&](const std::vector<ceres::ResidualBlockId>& ids) {
-      if (ids.empty()) return 0.0;
-      ceres::Problem::EvaluateOptions eo;
-      eo.residual_blocks = ids;
-      eo.apply_loss_function = true;
-      double cost = 0.0;
-      problem.Evaluate(eo, &cost, nullptr, nullptr, nullptr);
-      return cost;
-    };
-    auto terms = [&]() {
-      EnergyTerms e;
-      e.data = energy(ids_data);
-      e.elastic = energy(ids_elastic);
-      e.temporal = energy(ids_temporal);
-      e.anchor = energy(ids_anchor);
-      e.collision = energy(ids_collision);
-      return e;
-    };
-    row.before = terms();
-    if (!have_initial) {
-      s.initial = row.before;
-      have_initial = true;
-    }
+      auto energy = [&](const std::vector<ceres::ResidualBlockId>& ids) {
+        if (ids.empty()) return 0.0;
+        ceres::Problem::EvaluateOptions eo;
+        eo.residual_blocks = ids;
+        eo.apply_loss_function = true;
+        double cost = 0.0;
+        problem.Evaluate(eo, &cost, nullptr, nullptr, nullptr);
+        return cost;
+      };
+      auto terms = [&]() {
+        EnergyTerms e;
+        e.data = energy(ids_data);
+        e.elastic = energy(ids_elastic);
+        e.temporal = energy(ids_temporal);
+        e.anchor = energy(ids_anchor);
+        e.collision = energy(ids_collision);
+        return e;
+      };
+      row.before = terms();
+      if (!have_initial) {
+        s.initial = row.before;
+        have_initial = true;
+      }
 
-    t0 = Clock::now();
-    if (options.solver.time_budget_s > 0) {
-      solver_options.max_solver_time_in_seconds =
-          std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame));
+      t0 = Clock::now();
+      if (options.solver.time_budget_s > 0) {
+        solver_options.max_solver_time_in_seconds =
+            std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame));
+      }
+      const Vertices before_solve = x;
+      ceres::Solver::Summary ceres_summary;
+      ceres::Solve(solver_options, &problem, &ceres_summary);
+      s.time.solve += Seconds(t0);
+      row.inner_iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
+      if (!ceres_summary.IsSolutionUsable() || !x.allFinite()) {
+        x = before_solve;
+        s.termination = TerminationType::kSolverFailure;
+        s.message = "Ceres: " + ceres_summary.message + "; the shape before this iteration was kept";
+        s.iterations.push_back(row);
+        break;
+      }
+      row.after = terms();
     }
-    const Vertices before_solve = x;
-    ceres::Solver::Summary ceres_summary;
-    ceres::Solve(solver_options, &problem, &ceres_summary);
-    s.time.solve += Seconds(t0);
-    row.inner_iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
-    if (!ceres_summary.IsSolutionUsable() || !x.allFinite()) {
-      x = before_solve;
-      s.termination = TerminationType::kSolverFailure;
-      s.message = "Ceres: " + ceres_summary.message + "; the shape before this iteration was kept";
-      s.iterations.push_back(row);
-      break;
-    }
-    row.after = terms();
     double sum2 = 0.0;
     int count = 0;
     for (const DataPair& p : pairs) {
@@ -835,6 +945,11 @@ std::vector<int> Tracker::Impl::ApplyFracture(int k, FrameSummary* summary) {
   }
   BuildGlobalSurface();
   BuildElasticCosts();
+  if (collision) {
+    for (size_t i = 0; i < objects.size(); ++i) {
+      collision->Rebuild(static_cast<int>(i), objects[i].mesh.surface.array() + objects[i].offset, x);
+    }
+  }
   return source;
 }
 
@@ -863,6 +978,17 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
   Status status = Create(meshes, materials, scene.registration, &t);
   if (!status.ok()) return status;
   for (const ObjectSpec& o : scene.objects) t->impl_->object_label.push_back(o.label);
+  if (scene.effects.fracture) {
+    std::vector<FractureOptions> fracture;
+    for (const ObjectSpec& o : scene.objects) {
+      FractureOptions f = scene.effects.fracture_options;
+      f.toughness = o.toughness;
+      f.region_toughness = o.region_toughness;
+      fracture.push_back(f);
+    }
+    status = t->EnableFracture(fracture);
+    if (!status.ok()) return Status::Error(scene.path + ": effects.fracture: " + status.message());
+  }
   if (scene.effects.collision) {
     Tracker::Impl& impl = *t->impl_;
     std::vector<std::string> names;
@@ -880,17 +1006,6 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
     status = world->Init(spec, names, surfaces, impl.x);
     if (!status.ok()) return Status::Error(scene.path + ": " + status.message());
     if (world->enabled()) impl.collision = std::move(world);
-  }
-  if (scene.effects.fracture) {
-    std::vector<FractureOptions> fracture;
-    for (const ObjectSpec& o : scene.objects) {
-      FractureOptions f = scene.effects.fracture_options;
-      f.toughness = o.toughness;
-      f.region_toughness = o.region_toughness;
-      fracture.push_back(f);
-    }
-    status = t->EnableFracture(fracture);
-    if (!status.ok()) return Status::Error(scene.path + ": effects.fracture: " + status.message());
   }
   for (const AnchorSpec& a : scene.anchors) {
     int object = 0;
@@ -926,6 +1041,7 @@ const std::vector<char>& Tracker::vertex_observed(int object) const {
   return impl_->observed.at(object);
 }
 int Tracker::frame() const { return impl_->frame; }
+
 Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
   if (options.size() != impl_->objects.size()) {
     return Status::Error("one FractureOptions per object is needed");

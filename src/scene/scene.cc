@@ -23,7 +23,7 @@
 //   forward: {model: corotational|linear, max_iterations: 100, load_steps: 1,
 //             tolerance: 1e-8, absolute_tolerance: 1e-12}
 //   registration:
-//     regularizer: corotational|linear|none
+//     regularizer: corotational|linear|mass_spring|none
 //     camera: {position: [0, 0, 1], target: [0, 0, 0], up: [0, -1, 0], fx: 525, fy: 525,
 //              cx: 319.5, cy: 239.5, width: 640, height: 480}  # present = a known camera
 //     preprocess: {crop: {min: [..], max: [..]}, plane: {distance: 0.005, iterations: 200},
@@ -37,7 +37,8 @@
 //              relative_energy_tolerance: 1e-3, time_budget_s: 0,
 //              trust_region: levenberg_marquardt|dogleg,
 //              linear_solver: sparse_normal_cholesky|conjugate_gradients, threads: 1,
-//              rigid_prealign: false, rigid_iterations: 20, predict_motion: true}
+//              rigid_prealign: false, rigid_iterations: 20, predict_motion: true,
+//              backend: ceres|fast}
 //   anchors:
 //     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
 //        translations: [[0, 0, 0], [0, 0, 0.01]]}   # per frame; the last one repeats
@@ -189,6 +190,24 @@ class SceneParser {
     if (v.Has("collision")) scene_->effects.collision = v["collision"].AsBool();
   }
 
+  // effects.fracture: true/false, or a map of limits (which turns it on).
+  void ParseFracture(const YamlValue& v) {
+    EffectsSpec& e = scene_->effects;
+    if (!v.node().IsMap()) {
+      e.fracture = v.AsBool();
+      return;
+    }
+    v.CheckKeys({"enabled", "max_splits_per_iteration", "max_splits_per_frame",
+                 "crossing_tolerance"});
+    e.fracture = v.Has("enabled") ? v["enabled"].AsBool() : true;
+    FractureOptions& f = e.fracture_options;
+    if (v.Has("max_splits_per_iteration")) f.max_splits_per_iteration = IntAtLeast(v["max_splits_per_iteration"], 1);
+    if (v.Has("max_splits_per_frame")) f.max_splits_per_frame = IntAtLeast(v["max_splits_per_frame"], 1);
+    if (v.Has("crossing_tolerance")) {
+      f.crossing_tolerance = NonNegativeDouble(v["crossing_tolerance"]);
+      if (f.crossing_tolerance >= 1) v["crossing_tolerance"].Fail("must be < 1");
+    }
+  }
 
   // The collision section (pairs of object names, penalty, rigid obstacles).
   void ParseCollision(const YamlValue& v) {
@@ -290,25 +309,6 @@ class SceneParser {
         }
         c.obstacles.push_back(spec);
       }
-    }
-  }
-
-  // effects.fracture: true/false, or a map of limits (which turns it on).
-  void ParseFracture(const YamlValue& v) {
-    EffectsSpec& e = scene_->effects;
-    if (!v.node().IsMap()) {
-      e.fracture = v.AsBool();
-      return;
-    }
-    v.CheckKeys({"enabled", "max_splits_per_iteration", "max_splits_per_frame",
-                 "crossing_tolerance"});
-    e.fracture = v.Has("enabled") ? v["enabled"].AsBool() : true;
-    FractureOptions& f = e.fracture_options;
-    if (v.Has("max_splits_per_iteration")) f.max_splits_per_iteration = IntAtLeast(v["max_splits_per_iteration"], 1);
-    if (v.Has("max_splits_per_frame")) f.max_splits_per_frame = IntAtLeast(v["max_splits_per_frame"], 1);
-    if (v.Has("crossing_tolerance")) {
-      f.crossing_tolerance = NonNegativeDouble(v["crossing_tolerance"]);
-      if (f.crossing_tolerance >= 1) v["crossing_tolerance"].Fail("must be < 1");
     }
   }
 
@@ -581,7 +581,9 @@ class SceneParser {
     if (v.Has("regularizer")) {
       r.regularizer = ParseEnum(v["regularizer"],
                                 std::vector<Regularizer>{Regularizer::kCorotational,
-                                                         Regularizer::kLinear, Regularizer::kNone});
+                                                         Regularizer::kLinear,
+                                                         Regularizer::kMassSpring,
+                                                         Regularizer::kNone});
     }
     if (v.Has("camera")) {
       const YamlValue c = v["camera"];
@@ -662,7 +664,7 @@ class SceneParser {
       const YamlValue s = v["solver"];
       s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
                    "time_budget_s", "trust_region", "linear_solver", "threads",
-                   "rigid_prealign", "rigid_iterations", "predict_motion"});
+                   "rigid_prealign", "rigid_iterations", "predict_motion", "backend"});
       SolverOptions& o = r.solver;
       if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
       if (s.Has("max_inner_iterations")) o.max_inner_iterations = s["max_inner_iterations"].AsInt();
@@ -682,6 +684,10 @@ class SceneParser {
       }
       if (s.Has("threads")) o.num_threads = s["threads"].AsInt();
       if (s.Has("predict_motion")) o.predict_motion = s["predict_motion"].AsBool();
+      if (s.Has("backend")) {
+        o.backend = ParseEnum(s["backend"],
+                              std::vector<SolverBackend>{SolverBackend::kCeres, SolverBackend::kFast});
+      }
       if (s.Has("rigid_prealign")) o.rigid_prealign = s["rigid_prealign"].AsBool();
       if (s.Has("rigid_iterations")) o.rigid_iterations = s["rigid_iterations"].AsInt();
     }

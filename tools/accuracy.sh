@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Regenerates "What accuracy costs in time" (README): femreg bench and femreg compare on the
+# bundled datasets, their CSVs and plots in docs/accuracy/, and the markdown tables printed
+# for the README. Takes a while (tens of minutes on 2 cores); run on a quiet machine.
+#   tools/accuracy.sh [BUILD_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FEMREG=${1:-build}/femreg
+OUT=docs/accuracy
+mkdir -p "$OUT"
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
+"$FEMREG" bench --force --out "$OUT/bench" \
+  --dataset datasets/demo --dataset datasets/beam_bend --dataset datasets/block_press
+"$FEMREG" compare --force --out "$OUT/compare" \
+  --dataset datasets/demo --dataset datasets/beam_bend --dataset datasets/block_press \
+  --dataset datasets/slab_stretch --dataset datasets/fast_motion --dataset datasets/occlusion
+/usr/bin/python3 tools/accuracy_tables.py "$OUT"/bench/*_bench.csv "$OUT"/compare/*_compare.csv \
+  > "$OUT/tables.md"
+echo "Tables: $OUT/tables.md; plots: $OUT/bench/bench.png, $OUT/compare/compare.png"
