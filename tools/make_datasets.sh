@@ -7,6 +7,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FEMREG=${FEMREG:-build/femreg}
+# One thread everywhere (OpenMP loops, OpenBLAS under CHOLMOD): summation order then does not
+# depend on the machine's load, and the bytes come out the same.
+export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 if [[ ! -x "$FEMREG" ]]; then
   echo "make_datasets: $FEMREG not found; build first (tools/build.sh) or set FEMREG" >&2
   exit 1

@@ -42,7 +42,7 @@
 //   anchors:
 //     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
 //        translations: [[0, 0, 0], [0, 0, 0.01]]}   # per frame; the last one repeats
-//   effects: {fracture: false, collision: false}   # fracture: true is an error until built
+//   effects: {fracture: false, collision: false}   # fracture: true or a map of limits
 //   collision:                                 # used when effects.collision is true
 //     pairs: [[a, b]]                          # object pairs; default: every pair
 //     stiffness: 1e4                           # k (N/m) per contact

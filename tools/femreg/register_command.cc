@@ -298,7 +298,8 @@ int RunRegister(const RegisterArgs& args) {
   for (int i = 0; i < tracker->num_objects(); ++i) total_vertices += tracker->mesh(i).num_vertices();
   std::cout << "femreg register: " << files.size() << " frames, " << tracker->num_objects()
             << " object(s), " << total_vertices << " vertices, regularizer "
-            << ToString(scene.registration.regularizer) << "\n";
+            << ToString(scene.registration.regularizer) << ", "
+            << ToString(scene.registration.solver.backend) << " back end" << std::endl;
 
   InstallInterruptHandler();
   std::vector<FrameRow> rows;
@@ -483,8 +484,8 @@ void AddRegisterCommand(CLI::App* app) {
   CLI::App* cmd = app->add_subcommand(
       "register",
       "Register the scene's tetrahedral meshes to a sequence of point clouds.\n"
-      "Each frame minimizes data + elastic (corotational FEM) + temporal + anchor energy with "
-      "Ceres.\nWrites OUT/frames/*.vtu, OUT/<object>.pvd (open in ParaView), OUT/stats.csv and "
+      "Each frame minimizes data + elastic (corotational FEM) + temporal + anchor (+ contact) "
+      "energy with Ceres or the fast back end (solver.backend).\nWrites OUT/frames/*.vtu, OUT/<object>.pvd (open in ParaView), OUT/stats.csv and "
       "OUT/summary.json.");
   cmd->add_option("--scene,-s", args->scene, "Scene file (YAML): objects, materials, registration settings")
       ->required()
