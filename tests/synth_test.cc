@@ -15,31 +15,17 @@
 #include "femreg/scene.h"
 #include "femreg/synth.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 
 namespace fs = std::filesystem;
 
 namespace femreg {
 namespace {
 
-class TempDir {
+class TempDir : public testing_util::TempDir {
  public:
-  TempDir() {
-    path_ = (fs::temp_directory_path() / ("femreg_synth_test_" + std::to_string(::getpid()) + "_" +
-                                          std::to_string(counter_++)))
-                .string();
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  static int counter_;
-  std::string path_;
+  TempDir() : testing_util::TempDir("femreg_synth_test") {}
 };
-int TempDir::counter_ = 0;
 
 // A camera at the origin looking along +z (image y down = world -y up).
 DepthSensorOptions AxisSensor() {
