@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the bundled datasets: `femreg synth datasets/<name>/synth.yaml` into
-# datasets/<name> for every dataset that has a synth.yaml (or only those named). The output
-# is deterministic: rerunning rewrites the same bytes.
+# datasets/<name> for every dataset that has a synth.yaml, and `femreg contact-data` for the
+# contact sequences (or only those named). The output is deterministic: rerunning rewrites
+# the same bytes.
 #   tools/make_datasets.sh                 # all
 #   tools/make_datasets.sh demo beam_bend  # some
 set -euo pipefail
@@ -17,9 +18,17 @@ fi
 names=("$@")
 if [[ ${#names[@]} -eq 0 ]]; then
   for f in datasets/*/synth.yaml; do names+=("$(basename "$(dirname "$f")")"); done
+  names+=(contact_pair tool_table)
 fi
 for name in "${names[@]}"; do
   dir=datasets/$name
+  case $name in
+    contact_pair|tool_table)  # contact sequences, from their own generator
+      echo "== $name"
+      rm -rf "$dir"
+      "$FEMREG" contact-data --scenario "$name" --out "$dir"
+      continue ;;
+  esac
   [[ -f $dir/synth.yaml ]] || { echo "make_datasets: $dir/synth.yaml not found" >&2; exit 1; }
   # Only the generated parts are replaced; synth.yaml stays.
   rm -rf "$dir/clouds" "$dir/ground_truth" "$dir/truth" "$dir/scene.yaml" "$dir/README.md"

@@ -159,7 +159,16 @@ class CollisionWorld {
   // Poses the obstacles for a frame (fractional frames interpolate).
   void SetFrame(double frame);
   // Refits the trees to x and finds the contacts with gap < D + margin (margin >= 0 keeps
-  // contacts that are about to become active). Cleared first.
+  // contacts that are about to become active). Cleared first. Coarse to fine: the roots'
+  // boxes (broad phase), the two trees descended together to triangle pairs whose boxes
+  // come within the limit, the exact triangle-triangle distance (pairs nearer than the limit
+  // or cutting each other). Every vertex of a kept pair then gives one contact against the
+  // other surface, at its closest point there (searched within the limit, or within its
+  // triangle's size when the pair cuts, so that a vertex deeper than D is still pushed out);
+  // its normal is that of the true closest point (the face normal inside a face, the
+  // direction to an edge or corner) and inside / outside comes from the pseudo-normal. A
+  // vertex of an obstacle mesh likewise gets one contact against the object's surface.
+  // Planes are tested vertex by vertex without a tree.
   void Detect(const Vertices& x, double margin, std::vector<Contact>* contacts);
 
   // Penetration delta = D - n . (p_a - p_b) of a contact at x.
@@ -189,6 +198,21 @@ class CollisionWorld {
   void DetectPair(int a, int b, const Vertices& x, double limit, std::vector<Contact>* out) const;
   void DetectObstacle(int o, int i, const Vertices& x, double limit,
                       std::vector<Contact>* out) const;
+  // A vertex's contact with a surface: its closest point there (triangle, barycentrics,
+  // position), the normal from the surface towards the vertex's side and the signed gap.
+  struct ClosestPointContact {
+    int triangle = -1;
+    Eigen::Vector3d bary = Eigen::Vector3d(1, 0, 0), point = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    double gap = 0.0;
+  };
+  // For each (vertex of xv, search radius): the closest point on the surface (xs, tris,
+  // tree) within the radius; kept when the signed gap is below `limit`.
+  void VertexContacts(const Vertices& xv, const std::vector<std::pair<int, double>>& candidates,
+                      const Vertices& xs, const Triangles& tris, const AabbTree& tree, double limit,
+                      std::vector<std::pair<int, ClosestPointContact>>* out) const;
+  // A surface triangle of `object` with global vertex v, and v's corner in it.
+  bool Corner(int object, int v, std::array<int, 2>* corner) const;
 
   CollisionSpec spec_;
   bool enabled_ = false;
@@ -231,9 +255,8 @@ TetMesh MergeMeshes(const std::vector<TetMesh>& meshes, std::vector<int>* offset
 // the table occlude but return no points). Writes DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd,
 // DIR/ground_truth/frame_NNNN.csv (one row per tracked vertex of all objects in scene order)
 // and DIR/README.md; deterministic.
-// KNOWN PROBLEM (issue 6, open): at these mesh sizes the forward solve with contacts goes
-// unstable (the free parts swing away after the first active contacts), so the sequences are
-// not bundled yet; the unit-scale forward tests in collision_test pass.
+// Also writes DIR/truth_contacts.csv: per frame, the ground-truth solve's Newton
+// iterations, active contacts and deepest penetration.
 std::vector<std::string> ContactScenarios();
 Status GenerateContactSequence(const std::string& scenario, const std::string& dir,
                                void (*progress)(int done, int total) = nullptr);

@@ -44,28 +44,6 @@ Eigen::Vector3d UnitNormal(const Vertices& x, const Triangles& t, int f) {
   return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
 }
 
-// The normal (from b towards a) and signed gap of two closest points, the surfaces' outward
-// normals na, nb telling whether they have crossed. False when no direction is defined.
-bool Orient(const TrianglePairDistance& d, const Eigen::Vector3d& na, const Eigen::Vector3d& nb,
-            double scale, Eigen::Vector3d* normal, double* gap) {
-  Eigen::Vector3d ref = nb - na;
-  if (ref.norm() < 1e-6) ref = nb.norm() > 0 ? nb : -na;
-  if (!(ref.norm() > 0)) return false;
-  ref.normalize();
-  if (!d.intersecting && d.distance > 1e-9 * scale) {
-    *normal = (d.p - d.q) / d.distance;
-    *gap = d.distance;
-    if (normal->dot(ref) < 0) {
-      *normal = -*normal;
-      *gap = -d.distance;
-    }
-  } else {
-    *normal = ref;
-    *gap = 0.0;
-  }
-  return true;
-}
-
 }  // namespace
 
 Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::string>& names,
@@ -203,14 +181,125 @@ void CollisionWorld::Detect(const Vertices& x, double margin, std::vector<Contac
       if (obstacles_[o].hits[i]) DetectObstacle(static_cast<int>(o), static_cast<int>(i), x, limit, contacts);
 }
 
+namespace {
+
+// The closest point to p over candidate triangles (rows of `tris` over positions xs), with
+// the pseudo-normal there: the sum of the outward normals of every candidate triangle that
+// attains the minimum (one face inside a face, the faces around an edge or a corner), which
+// tells inside from outside also at edges and corners.
+struct ClosestOnSurface {
+  double distance = std::numeric_limits<double>::infinity();
+  int triangle = -1;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(), bary = Eigen::Vector3d(1, 0, 0);
+  Eigen::Vector3d pseudo_normal = Eigen::Vector3d::Zero();
+};
+
+ClosestOnSurface ClosestPoint(const Eigen::Vector3d& p, const Vertices& xs, const Triangles& tris,
+                              const int* candidates, int count) {
+  ClosestOnSurface best;
+  for (int i = 0; i < count; ++i) {
+    const int f = candidates[i];
+    Eigen::Vector3d w;
+    const Eigen::Vector3d q =
+        TriangleClosestPoint(p, Row(xs, tris(f, 0)), Row(xs, tris(f, 1)), Row(xs, tris(f, 2)), &w);
+    const double d = (p - q).norm();
+    if (d < best.distance) {
+      best.distance = d;
+      best.triangle = f;
+      best.point = q;
+      best.bary = w;
+    }
+  }
+  const double tie = 1e-9 + 1e-6 * best.distance;
+  for (int i = 0; i < count; ++i) {
+    const int f = candidates[i];
+    const Eigen::Vector3d q =
+        TriangleClosestPoint(p, Row(xs, tris(f, 0)), Row(xs, tris(f, 1)), Row(xs, tris(f, 2)));
+    if ((q - best.point).norm() <= tie) best.pseudo_normal += UnitNormal(xs, tris, f);
+  }
+  return best;
+}
+
+// Normal (pointing from the triangle's surface towards the vertex's side) and signed gap of
+// a vertex p against its closest surface point: positive outside the surface, negative
+// inside. False when no direction is defined.
+bool OrientVertex(const Eigen::Vector3d& p, const ClosestOnSurface& c, double scale,
+                  Eigen::Vector3d* normal, double* gap) {
+  const Eigen::Vector3d d = p - c.point;
+  const double pn = c.pseudo_normal.norm();
+  if (c.distance > 1e-9 * scale) {
+    const double side = pn > 0 && d.dot(c.pseudo_normal) < 0 ? -1.0 : 1.0;
+    *normal = side * d / c.distance;
+    *gap = side * c.distance;
+    return true;
+  }
+  if (!(pn > 0)) return false;
+  *normal = c.pseudo_normal / pn;
+  *gap = 0.0;
+  return true;
+}
+
+// Longest edge of triangle f.
+double Diameter(const Vertices& xs, const Triangles& tris, int f) {
+  const Eigen::Vector3d a = Row(xs, tris(f, 0)), b = Row(xs, tris(f, 1)), c = Row(xs, tris(f, 2));
+  return std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+}
+
+// Candidate vertices with the radius to search the other surface in, the largest kept per
+// vertex: the limit for a vertex of a near triangle pair, the triangle's size for a vertex
+// of a triangle that cuts the other surface (it may be deeper inside than the limit).
+void MergeCandidates(std::vector<std::pair<int, double>>* list) {
+  std::sort(list->begin(), list->end());
+  size_t out = 0;
+  for (size_t i = 0; i < list->size();) {
+    const int v = (*list)[i].first;
+    double radius = 0.0;
+    for (; i < list->size() && (*list)[i].first == v; ++i) radius = std::max(radius, (*list)[i].second);
+    (*list)[out++] = {v, radius};
+  }
+  list->resize(out);
+}
+
+}  // namespace
+
+// Candidates from the coarse-to-fine phases: the two trees are descended together to the
+// triangle pairs whose boxes come within the limit, and the exact triangle-triangle distance
+// keeps the pairs that are nearer than the limit or cut each other. Each vertex of a kept
+// pair is then one contact against the other surface: its closest point there, searched in
+// the other tree within the limit, or within its triangle's size when the pair cuts (a
+// vertex that went deeper than D is still pushed out, towards its nearest way out). One
+// contact per surface vertex and surface (not one per triangle pair, which repeats a vertex
+// up to a dozen times and adds oblique normals where a pair's closest point falls on an
+// edge of a triangle that is not the nearest), with the normal of the true closest point:
+// the face normal inside a face, the direction to it at an edge or corner.
+void CollisionWorld::VertexContacts(const Vertices& xv, const std::vector<std::pair<int, double>>& candidates,
+                                    const Vertices& xs, const Triangles& tris, const AabbTree& tree,
+                                    double limit,
+                                    std::vector<std::pair<int, ClosestPointContact>>* out) const {
+  const double scale = std::max({1.0, xv.cwiseAbs().maxCoeff(), xs.cwiseAbs().maxCoeff()});
+  std::vector<int> near;
+  for (const auto& cand : candidates) {
+    const Eigen::Vector3d p = Row(xv, cand.first);
+    tree.Overlapping(Eigen::AlignedBox3d(p, p), cand.second, &near);
+    if (near.empty()) continue;
+    const ClosestOnSurface cs = ClosestPoint(p, xs, tris, near.data(), static_cast<int>(near.size()));
+    ClosestPointContact c;
+    if (!OrientVertex(p, cs, scale, &c.normal, &c.gap)) continue;
+    if (!(c.gap < limit)) continue;
+    c.triangle = cs.triangle;
+    c.bary = cs.bary;
+    c.point = cs.point;
+    out->emplace_back(cand.first, c);
+  }
+}
+
 void CollisionWorld::DetectPair(int a, int b, const Vertices& x, double limit,
                                 std::vector<Contact>* out) const {
   std::vector<std::pair<int, int>> candidates;
   trees_[a].Overlapping(trees_[b], limit, &candidates);
   const Triangles& ta = surfaces_[a];
   const Triangles& tb = surfaces_[b];
-  const double scale = std::max(1.0, x.cwiseAbs().maxCoeff());
-  std::vector<Contact> found;
+  std::vector<std::pair<int, double>> a_side, b_side;  // (vertex, search radius)
   for (const auto& c : candidates) {
     Eigen::Vector3d t1[3], t2[3];
     for (int k = 0; k < 3; ++k) {
@@ -219,24 +308,43 @@ void CollisionWorld::DetectPair(int a, int b, const Vertices& x, double limit,
     }
     const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
     if (d.distance >= limit) continue;
-    Contact contact;
-    if (!Orient(d, UnitNormal(x, ta, c.first), UnitNormal(x, tb, c.second), scale, &contact.normal,
-                &contact.gap)) {
-      continue;
-    }
-    contact.object_a = a;
-    contact.object_b = b;
+    const double ra = d.intersecting ? std::max(limit, Diameter(x, ta, c.first)) : limit;
+    const double rb = d.intersecting ? std::max(limit, Diameter(x, tb, c.second)) : limit;
     for (int k = 0; k < 3; ++k) {
-      contact.vertices_a[k] = ta(c.first, k);
-      contact.vertices_b[k] = tb(c.second, k);
+      a_side.emplace_back(ta(c.first, k), ra);
+      b_side.emplace_back(tb(c.second, k), rb);
     }
-    contact.bary_a = d.bary_p;
-    contact.bary_b = d.bary_q;
-    found.push_back(contact);
   }
-  out->insert(out->end(), found.begin(), found.end());
+  MergeCandidates(&a_side);
+  MergeCandidates(&b_side);
+  // Vertices of a against b, then vertices of b against a.
+  for (int side = 0; side < 2; ++side) {
+    const int own = side == 0 ? a : b, other = side == 0 ? b : a;
+    std::vector<std::pair<int, ClosestPointContact>> found;
+    VertexContacts(x, side == 0 ? a_side : b_side, x, surfaces_[other], trees_[other], limit, &found);
+    for (const auto& f : found) {
+      std::array<int, 2> corner;
+      if (!Corner(own, f.first, &corner)) continue;
+      Contact contact;
+      contact.object_a = own;
+      contact.object_b = other;
+      for (int k = 0; k < 3; ++k) {
+        contact.vertices_a[k] = surfaces_[own](corner[0], k);
+        contact.vertices_b[k] = surfaces_[other](f.second.triangle, k);
+      }
+      contact.bary_a = Eigen::Vector3d::Unit(corner[1]);
+      contact.bary_b = f.second.bary;
+      contact.normal = f.second.normal;
+      contact.gap = f.second.gap;
+      out->push_back(contact);
+    }
+  }
 }
 
+// Contacts of an object with a rigid obstacle: a plane against every surface vertex; a box or
+// a mesh like two objects (every vertex against its closest point on the other side), the
+// obstacle's vertices against the object's triangles too, so a tool's corner pressing into
+// a face is held.
 void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double limit,
                                     std::vector<Contact>* out) const {
   const Obstacle& o = obstacles_[oi];
@@ -264,8 +372,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
   if (trees_[i].empty() || o.tree.empty()) return;
   std::vector<std::pair<int, int>> candidates;
   trees_[i].Overlapping(o.tree, limit, &candidates);
-  const double scale = std::max(1.0, x.cwiseAbs().maxCoeff());
-  std::vector<Contact> found;
+  std::vector<std::pair<int, double>> object_side, obstacle_side;
   for (const auto& c : candidates) {
     Eigen::Vector3d t1[3], t2[3];
     for (int k = 0; k < 3; ++k) {
@@ -274,19 +381,51 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
     }
     const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
     if (d.distance >= limit) continue;
-    Contact contact;
-    if (!Orient(d, UnitNormal(x, ta, c.first), o.world_normals.row(c.second).transpose(), scale,
-                &contact.normal, &contact.gap)) {
-      continue;
+    const double ra = d.intersecting ? std::max(limit, Diameter(x, ta, c.first)) : limit;
+    const double rb = d.intersecting ? std::max(limit, Diameter(o.world, o.triangles, c.second)) : limit;
+    for (int k = 0; k < 3; ++k) {
+      object_side.emplace_back(ta(c.first, k), ra);
+      obstacle_side.emplace_back(o.triangles(c.second, k), rb);
     }
+  }
+  MergeCandidates(&object_side);
+  MergeCandidates(&obstacle_side);
+  std::vector<std::pair<int, ClosestPointContact>> found;
+  VertexContacts(x, object_side, o.world, o.triangles, o.tree, limit, &found);
+  for (const auto& f : found) {  // object vertices against the obstacle
+    std::array<int, 2> corner;
+    if (!Corner(i, f.first, &corner)) continue;
+    Contact contact;
     contact.object_a = i;
     contact.object_b = -1 - oi;
-    for (int k = 0; k < 3; ++k) contact.vertices_a[k] = ta(c.first, k);
-    contact.bary_a = d.bary_p;
-    contact.point_b = d.q;
-    found.push_back(contact);
+    for (int k = 0; k < 3; ++k) contact.vertices_a[k] = ta(corner[0], k);
+    contact.bary_a = Eigen::Vector3d::Unit(corner[1]);
+    contact.point_b = f.second.point;
+    contact.normal = f.second.normal;
+    contact.gap = f.second.gap;
+    out->push_back(contact);
   }
-  out->insert(out->end(), found.begin(), found.end());
+  found.clear();
+  VertexContacts(o.world, obstacle_side, x, ta, trees_[i], limit, &found);
+  for (const auto& f : found) {  // obstacle vertices against the object
+    Contact contact;
+    contact.object_a = i;
+    contact.object_b = -1 - oi;
+    for (int k = 0; k < 3; ++k) contact.vertices_a[k] = ta(f.second.triangle, k);
+    contact.bary_a = f.second.bary;
+    contact.point_b = Row(o.world, f.first);
+    contact.normal = -f.second.normal;  // from the obstacle towards the object
+    contact.gap = f.second.gap;
+    out->push_back(contact);
+  }
+}
+
+bool CollisionWorld::Corner(int object, int v, std::array<int, 2>* corner) const {
+  const std::vector<int>& list = surface_vertices_[object];
+  const auto it = std::lower_bound(list.begin(), list.end(), v);
+  if (it == list.end() || *it != v) return false;
+  *corner = vertex_triangle_[object][it - list.begin()];
+  return true;
 }
 
 double CollisionWorld::Penetration(const Contact& c, const Vertices& x) const {

@@ -30,6 +30,7 @@ class ProgressBar {
   ProgressBar(const std::string& label, int total, bool enabled = true);
   void Update(int done, const std::string& note = "");
   void Finish();
+  void set_total(int total) { total_ = total > 0 ? total : 1; }
 
  private:
   std::string label_;

@@ -1,4 +1,5 @@
 // femreg contact-data: writes a bundled contact sequence (ground truth and clouds).
+#include <chrono>
 #include <iostream>
 #include <memory>
 
@@ -9,9 +10,11 @@
 namespace femreg {
 namespace cli {
 namespace {
+// Started before the generator runs, so that its rate counts the first frame's time.
+std::unique_ptr<ProgressBar> bar;
 void Progress(int done, int total) {
-  static std::unique_ptr<ProgressBar> bar;
-  if (done == 1 || bar == nullptr) bar = std::make_unique<ProgressBar>("contact-data", total);
+  if (bar == nullptr) bar = std::make_unique<ProgressBar>("contact-data", total);
+  bar->set_total(total);
   bar->Update(done);
   if (done == total) bar->Finish();
 }
@@ -35,7 +38,11 @@ void AddContactDataCommand(CLI::App* app) {
   cmd->add_flag("--force", *force, "Write into a non-empty folder");
   cmd->callback([out, scenario, force] {
     Status status = PrepareOutputDir(*out, *force);
-    if (status.ok()) status = GenerateContactSequence(*scenario, *out, &Progress);
+    bar.reset();
+    if (status.ok()) {
+      bar = std::make_unique<ProgressBar>("contact-data", 1);  // the generator gives the total
+      status = GenerateContactSequence(*scenario, *out, &Progress);
+    }
     if (!status.ok()) {
       std::cerr << "femreg contact-data: " << status.message() << "\n";
       SetExitCode(1);
