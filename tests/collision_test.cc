@@ -13,6 +13,8 @@
 #include <fstream>
 #include <random>
 #include <set>
+#include <sstream>
+#include <string>
 
 #include "femreg/collision.h"
 #include "femreg/forward.h"
@@ -22,6 +24,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 #include "solvers/ceres/contact_cost.h"
 
 namespace femreg {
@@ -777,6 +780,45 @@ TEST(CollisionSequences, ToolTableStaysOutOfTheToolAndTheTable) {
   EXPECT_LT(on.Mean(on.hidden), 0.5e-3);
   EXPECT_LT(on.Mean(on.hidden), off.Mean(off.hidden));
 }
+
+#ifdef FEMREG_CLI_PATH
+// The last value of a stats.csv column.
+double LastColumn(const std::string& csv, const std::string& column) {
+  std::ifstream in(csv);
+  std::string header, line, last;
+  std::getline(in, header);
+  while (std::getline(in, line)) last = line;
+  std::vector<std::string> names, cells;
+  std::stringstream hs(header), ls(last);
+  for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
+  for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+  for (size_t i = 0; i < names.size() && i < cells.size(); ++i)
+    if (names[i] == column) return std::atof(cells[i].c_str());
+  ADD_FAILURE() << column << " not in " << csv;
+  return 0.0;
+}
+
+// `femreg register --no-collision` registers without the contact term but still measures the
+// penetration with the scene's collision section, so on and off compare in stats.csv.
+TEST(CollisionCli, RegisterWithAndWithoutCollisionReportsThePenetration) {
+  testing_util::TempDir dir("femreg_collision_test");
+  const std::string data = std::string(FEMREG_DATASETS_DIR) + "/contact_pair";
+  const std::string base = std::string(FEMREG_CLI_PATH) + " register --scene " + data +
+                           "/scene.yaml --frames " + data + "/clouds --ground-truth " + data +
+                           "/ground_truth --no-progress --report none --out " + dir.path();
+  ASSERT_EQ(std::system((base + "/on > " + dir.path() + "/on.txt").c_str()), 0);
+  ASSERT_EQ(std::system((base + "/off --no-collision > " + dir.path() + "/off.txt").c_str()), 0);
+  const double D_mm = 1.5;
+  EXPECT_LT(LastColumn(dir.path() + "/on/stats.csv", "max_penetration_mm"), D_mm);
+  EXPECT_GT(LastColumn(dir.path() + "/on/stats.csv", "contacts"), 0);
+  EXPECT_GT(LastColumn(dir.path() + "/off/stats.csv", "max_penetration_mm"), 2 * D_mm);
+  EXPECT_EQ(LastColumn(dir.path() + "/off/stats.csv", "t_collision_ms"), 0.0);  // not in the tracker
+  std::ifstream off(dir.path() + "/off.txt");
+  const std::string text((std::istreambuf_iterator<char>(off)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("collision off, measured only"), std::string::npos) << text;
+  EXPECT_NE(text.find("the surfaces crossed"), std::string::npos) << text;
+}
+#endif  // FEMREG_CLI_PATH
 
 }  // namespace
 }  // namespace femreg

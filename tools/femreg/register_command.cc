@@ -20,6 +20,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "femreg/collision.h"
 #include "femreg/fracture.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
@@ -43,6 +44,7 @@ struct RegisterArgs {
   std::string report = "brief";
   bool progress = true;
   int threads = 0;
+  bool no_collision = false;
 };
 
 struct FrameRow {
@@ -188,6 +190,17 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
        << ", \"hidden_mean\": " << JsonNumber(t.hidden_mean * 1e3)
        << ", \"hidden_max\": " << JsonNumber(t.hidden_max * 1e3) << "}";
   }
+  double deepest = 0.0;
+  int contacts = 0;
+  for (const FrameRow& r : rows) {
+    deepest = std::max(deepest, r.summary.max_penetration);
+    contacts = std::max(contacts, r.summary.contacts);
+  }
+  if (contacts > 0 || deepest > 0) {
+    os << ",\n  \"contacts\": {\"max_per_frame\": " << contacts
+       << ", \"max_penetration_mm\": " << JsonNumber(deepest * 1e3)
+       << ", \"collision\": " << (tracker.collision() != nullptr ? "true" : "false") << "}";
+  }
   os << "\n}\n";
   return os.str();
 }
@@ -243,6 +256,62 @@ void PrintFractureReport(const std::vector<FrameRow>& rows, const std::string& t
   }
 }
 
+// With --no-collision: the scene's collision section used only to measure, after each frame,
+// the contacts and the deepest penetration of the result (the tracker adds no contact term).
+class ContactMeter {
+ public:
+  Status Init(const Scene& scene, const Tracker& tracker) {
+    names_.clear();
+    for (const ObjectSpec& o : scene.objects) names_.push_back(o.name);
+    spec_ = scene.collision;
+    if (spec_.pairs.empty()) {  // every pair, as the tracker does
+      for (size_t i = 0; i < names_.size(); ++i)
+        for (size_t j = i + 1; j < names_.size(); ++j) spec_.pairs.emplace_back(names_[i], names_[j]);
+    }
+    Vertices x;
+    std::vector<Triangles> surfaces;
+    Gather(tracker, &x, &surfaces);
+    return world_.Init(spec_, names_, surfaces, x);
+  }
+  void Measure(const Tracker& tracker, int frame, FrameSummary* s) {
+    Vertices x;
+    std::vector<Triangles> surfaces;
+    Gather(tracker, &x, &surfaces);
+    if (x.rows() != vertices_) {  // fracture changed the topology
+      for (size_t i = 0; i < surfaces.size(); ++i) world_.Rebuild(static_cast<int>(i), surfaces[i], x);
+      vertices_ = x.rows();
+    }
+    world_.SetFrame(frame);
+    std::vector<Contact> contacts;
+    world_.Detect(x, 0.0, &contacts);
+    const ContactStats cs = world_.Evaluate(contacts, x);
+    s->contacts = cs.contacts;
+    s->object_contacts = cs.object_contacts;
+    s->obstacle_contacts = cs.obstacle_contacts;
+    s->max_penetration = cs.max_penetration;
+  }
+  double distance() const { return world_.distance(); }
+
+ private:
+  void Gather(const Tracker& tracker, Vertices* x, std::vector<Triangles>* surfaces) {
+    int n = 0;
+    for (int i = 0; i < tracker.num_objects(); ++i) n += tracker.mesh(i).num_vertices();
+    x->resize(n, 3);
+    int offset = 0;
+    for (int i = 0; i < tracker.num_objects(); ++i) {
+      const TetMesh& m = tracker.mesh(i);
+      x->middleRows(offset, m.num_vertices()) = tracker.vertices(i);
+      surfaces->push_back(m.surface.array() + offset);
+      offset += m.num_vertices();
+    }
+    if (vertices_ < 0) vertices_ = n;
+  }
+  std::vector<std::string> names_;
+  CollisionSpec spec_;
+  CollisionWorld world_;
+  Eigen::Index vertices_ = -1;
+};
+
 int RunRegister(const RegisterArgs& args) {
   Scene scene;
   Status status = LoadScene(args.scene, &scene);
@@ -251,6 +320,8 @@ int RunRegister(const RegisterArgs& args) {
     return 1;
   }
   if (args.threads > 0) scene.registration.solver.num_threads = args.threads;
+  const bool measure_contacts = args.no_collision && scene.effects.collision;
+  if (args.no_collision) scene.effects.collision = false;
   std::vector<std::string> files;
   status = ListFrames(args.frames, {".pcd", ".ply", ".xyz", ".txt"}, &files);
   if (!status.ok()) {
@@ -294,6 +365,14 @@ int RunRegister(const RegisterArgs& args) {
     return 1;
   }
 
+  ContactMeter meter;
+  if (measure_contacts) {
+    status = meter.Init(scene, *tracker);
+    if (!status.ok()) {
+      std::cerr << "femreg register: " << scene.path << ": " << status.message() << "\n";
+      return 1;
+    }
+  }
   int total_vertices = 0;
   for (int i = 0; i < tracker->num_objects(); ++i) total_vertices += tracker->mesh(i).num_vertices();
   std::cout << "femreg register: " << files.size() << " frames, " << tracker->num_objects()
@@ -321,6 +400,7 @@ int RunRegister(const RegisterArgs& args) {
       cloud = PointCloud();  // an unreadable frame is tracked as an empty one
     }
     tracker->Track(cloud, &row.summary);
+    if (measure_contacts) meter.Measure(*tracker, static_cast<int>(f), &row.summary);
     row.summary.nonfinite_dropped += dropped;
     row.summary.cloud_points += dropped;
     if (!read.ok()) row.summary.message = read.message() + "; " + row.summary.message;
@@ -467,6 +547,22 @@ int RunRegister(const RegisterArgs& args) {
                 t.err_mean * 1e3, t.err_max * 1e3, t.seen_mean * 1e3, t.seen_max * 1e3,
                 t.hidden_mean * 1e3, t.hidden_max * 1e3);
   }
+  if (tracker->collision() != nullptr || measure_contacts) {
+    double deepest = 0.0, sum = 0.0;
+    int deepest_frame = 0;
+    for (size_t f = 0; f < rows.size(); ++f) {
+      sum += rows[f].summary.max_penetration;
+      if (rows[f].summary.max_penetration > deepest) {
+        deepest = rows[f].summary.max_penetration;
+        deepest_frame = static_cast<int>(f);
+      }
+    }
+    const double D = measure_contacts ? meter.distance() : tracker->collision()->distance();
+    std::printf("Contacts%s: deepest penetration %.3f mm (frame %d), mean over frames %.3f mm; D = %.3g mm%s\n",
+                measure_contacts ? " (collision off, measured only)" : "", deepest * 1e3, deepest_frame,
+                rows.empty() ? 0.0 : 1e3 * sum / rows.size(), D * 1e3,
+                deepest > D ? ": the surfaces crossed" : "");
+  }
   if (!tracker->original_vertices(0).empty()) PrintFractureReport(rows, args.ground_truth);
   std::printf("Results in %s: %s.pvd (open in ParaView), stats.csv, summary.json\n", args.out.c_str(),
               scene.objects.empty() ? "" : scene.objects[0].name.c_str());
@@ -505,6 +601,10 @@ void AddRegisterCommand(CLI::App* app) {
       ->check(CLI::IsMember({"brief", "full", "none"}));
   cmd->add_option("--threads", args->threads, "Solver threads (overrides the scene)");
   cmd->add_flag("!--no-progress", args->progress, "No progress bar (print a line per frame)");
+  cmd->add_flag("--no-collision", args->no_collision,
+                "Switch effects.collision off for this run, to compare with it on: the tracker adds "
+                "no contact term, and the scene's collision section only measures the contacts and "
+                "the deepest penetration of each frame's result (stats.csv)");
   cmd->callback([args] { SetExitCode(RunRegister(*args)); });
 }
 
