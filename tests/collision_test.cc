@@ -684,6 +684,40 @@ TEST(CollisionTracker, TwoObjectsWithLabelsAreRegisteredJointlyWithContacts) {
   EXPECT_NE(summary.FullReport().find("collision:"), std::string::npos);
 }
 
+// Labels: points labelled with no object's label (a hand, clutter) pair with no object when
+// every object has a label; an object without a label takes only the unlabelled points.
+TEST(CollisionTracker, PointsWithUnknownLabelsAreIgnoredAndLabelsAreNotCrossed) {
+  Scene scene;
+  std::string text = kTwoObjectScene;
+  text.replace(text.find("effects: {collision: true}"), 26, "effects: {collision: false}");
+  ASSERT_TRUE(ParseScene(text, "two.yaml", "", &scene).ok());
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  // The objects' own surfaces, plus a slab of clutter (label 7) 4 mm beside the lower box.
+  PointCloud cloud = SurfaceCloud(*tracker);
+  const int n = cloud.size(), clutter = 200;
+  cloud.points.conservativeResize(n + clutter, 3);
+  cloud.labels.conservativeResize(n + clutter);
+  for (int i = 0; i < clutter; ++i) {
+    cloud.points.row(n + i) << 0.044, 0.002 * (i % 20), 0.002 * (i / 20);
+    cloud.labels(n + i) = 7;
+  }
+  FrameSummary summary;
+  ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
+  for (int o = 0; o < 2; ++o) {
+    EXPECT_LT((tracker->vertices(o) - tracker->mesh(o).rest).cwiseAbs().maxCoeff(), 1e-6) << o;
+  }
+  // The lower box without a label: it takes the clutter (the nearest unlabelled points) but
+  // never the upper box's points.
+  text.replace(text.find(", label: 1}"), 11, "}");
+  ASSERT_TRUE(ParseScene(text, "two.yaml", "", &scene).ok());
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  for (int i = 0; i < n; ++i) cloud.labels(i) = cloud.labels(i) == 1 ? 0 : cloud.labels(i);
+  ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
+  EXPECT_GT(tracker->vertices(0).col(0).maxCoeff(), 0.0401);  // pulled towards the clutter
+  EXPECT_LT((tracker->vertices(1) - tracker->mesh(1).rest).cwiseAbs().maxCoeff(), 1e-6);
+}
+
 // The bundled contact sequences registered end to end, with collision on and off: per frame
 // the deepest penetration (measured with the scene's collision section also when the tracker
 // has collision off) and the mean vertex error against the ground truth, seen and hidden.

@@ -289,13 +289,19 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
   const bool plane = data.metric == DataMetric::kPointToPlane;
   const Eigen::MatrixXd normals = (data.visibility || plane) ? VertexNormals() : Eigen::MatrixXd();
   // Labelled clouds: a point whose label names an object pairs with that object only
-  // (per-object k-d trees and surfaces); other points go to the nearest surface.
+  // (per-object k-d trees and surfaces). The other points (labels that name no object: a
+  // hand, the table) pair only with the objects that have no label, and are ignored when
+  // every object has one; an object without a label never takes another object's points.
   const int num_objects = static_cast<int>(objects.size());
   std::vector<std::vector<int>> label_points(num_objects);  // object -> its cloud points
   std::vector<std::unique_ptr<PointIndex>> label_index(num_objects);
   std::vector<Triangles> object_surface(num_objects);
   std::vector<std::unique_ptr<SurfaceIndex>> object_surface_index(num_objects);
   std::vector<int> point_object;  // cloud point -> object, -1 = unassigned
+  std::vector<int> free_points;   // with labels: the unassigned points
+  std::unique_ptr<PointIndex> free_index;
+  Triangles free_surface;         // with labels: the surfaces of the objects without one
+  std::unique_ptr<SurfaceIndex> free_surface_index;
   if (cloud.has_labels() &&
       std::any_of(object_label.begin(), object_label.end(), [](int l) { return l >= 0; })) {
     point_object.assign(cloud.size(), -1);
@@ -313,6 +319,23 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
       object_surface[o] = ob.mesh.surface.array() + ob.offset;
       object_surface_index[o] = std::make_unique<SurfaceIndex>(x, object_surface[o]);
     }
+    for (int i = 0; i < cloud.size(); ++i)
+      if (point_object[i] < 0) free_points.push_back(i);
+    Vertices pts(static_cast<Eigen::Index>(free_points.size()), 3);
+    for (size_t j = 0; j < free_points.size(); ++j) pts.row(j) = cloud.points.row(free_points[j]);
+    free_index = std::make_unique<PointIndex>(pts);
+    int rows = 0;
+    for (int o = 0; o < num_objects; ++o)
+      if (object_label[o] < 0) rows += static_cast<int>(objects[o].mesh.surface.rows());
+    free_surface.resize(rows, 3);
+    rows = 0;
+    for (int o = 0; o < num_objects; ++o) {
+      if (object_label[o] >= 0) continue;
+      const Object& ob = objects[o];
+      free_surface.middleRows(rows, ob.mesh.surface.rows()) = ob.mesh.surface.array() + ob.offset;
+      rows += static_cast<int>(ob.mesh.surface.rows());
+    }
+    if (rows > 0) free_surface_index = std::make_unique<SurfaceIndex>(x, free_surface);
   }
   if (data.model_to_cloud) {
     for (int v : surface_vertices) {
@@ -323,9 +346,13 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
       }
       double d2 = 0.0;
       int q = -1;
-      if (label_index.empty() || !label_index[vertex_object[v]]) {
+      if (point_object.empty()) {
         q = cloud_index.Nearest(p, &d2);
         if (q < 0) break;
+      } else if (!label_index[vertex_object[v]]) {  // an object without a label
+        q = free_index->Nearest(p, &d2);
+        if (q < 0) continue;
+        q = free_points[q];
       } else {
         const int o = vertex_object[v];
         q = label_index[o]->Nearest(p, &d2);
@@ -356,9 +383,12 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
     for (int i = 0; i < cloud.size(); i += data.cloud_stride) {
       const Eigen::Vector3d q = cloud.points.row(i);
       const int labelled = point_object.empty() ? -1 : point_object[i];
-      const Triangles& tris = labelled >= 0 ? object_surface[labelled] : surface;
-      const SurfaceIndex::Hit hit = labelled >= 0 ? object_surface_index[labelled]->Closest(q)
-                                                  : surface_index.Closest(q);
+      if (!point_object.empty() && labelled < 0 && !free_surface_index) continue;  // no one's
+      const Triangles& tris = labelled >= 0 ? object_surface[labelled]
+                              : point_object.empty() ? surface : free_surface;
+      const SurfaceIndex::Hit hit = labelled >= 0          ? object_surface_index[labelled]->Closest(q)
+                                    : point_object.empty() ? surface_index.Closest(q)
+                                                           : free_surface_index->Closest(q);
       if (hit.triangle < 0) continue;
       if (hit.squared_distance > gate2) {
         ++*rejected;
