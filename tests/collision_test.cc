@@ -684,6 +684,39 @@ TEST(CollisionTracker, TwoObjectsWithLabelsAreRegisteredJointlyWithContacts) {
   EXPECT_NE(summary.FullReport().find("collision:"), std::string::npos);
 }
 
+// The fast back end takes the contact term too (pairs couple vertices of two objects, so it
+// widens its sparsity pattern) and reaches the Ceres back end's minimum.
+TEST(CollisionTracker, FastBackEndMatchesCeresWithContacts) {
+  Vertices result[2];
+  FrameSummary summary[2];
+  for (int b = 0; b < 2; ++b) {
+    std::string text = kTwoObjectScene;
+    text.replace(text.find("solver: {max_outer_iterations: 3}"), 33,
+                 b == 0 ? "solver: {max_outer_iterations: 3, backend: ceres}"
+                        : "solver: {max_outer_iterations: 3, backend: fast}");
+    Scene scene;
+    ASSERT_TRUE(ParseScene(text, "two.yaml", "", &scene).ok());
+    std::unique_ptr<Tracker> tracker;
+    ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+    PointCloud cloud = SurfaceCloud(*tracker);
+    const int n_lower = static_cast<int>(tracker->mesh(0).surface_vertices.size());
+    for (int i = n_lower; i < cloud.size(); ++i) cloud.points(i, 2) -= 0.003;
+    ASSERT_TRUE(tracker->Track(cloud, &summary[b]).ok());
+    EXPECT_TRUE(summary[b].IsSolutionUsable()) << summary[b].FullReport();
+    result[b].resize(tracker->mesh(0).num_vertices() + tracker->mesh(1).num_vertices(), 3);
+    result[b] << tracker->vertices(0), tracker->vertices(1);
+  }
+  EXPECT_EQ(summary[0].backend, SolverBackend::kCeres);
+  EXPECT_EQ(summary[1].backend, SolverBackend::kFast);
+  EXPECT_GT(summary[1].final.collision, 0.0);
+  EXPECT_GT(summary[1].contacts, 0);
+  EXPECT_LT(summary[1].max_penetration, 0.002);
+  EXPECT_NEAR(summary[1].final.collision, summary[0].final.collision,
+              1e-3 * summary[0].final.collision);
+  EXPECT_NEAR(summary[1].final.total(), summary[0].final.total(), 1e-4 * summary[0].final.total());
+  EXPECT_LT((result[1] - result[0]).cwiseAbs().maxCoeff(), 2e-5);
+}
+
 // Labels: points labelled with no object's label (a hand, clutter) pair with no object when
 // every object has a label; an object without a label takes only the unlabelled points.
 TEST(CollisionTracker, PointsWithUnknownLabelsAreIgnoredAndLabelsAreNotCrossed) {

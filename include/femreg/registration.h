@@ -184,6 +184,7 @@ struct FractureEvent {
 
 struct FrameSummary {
   int frame = -1;
+  SolverBackend backend = SolverBackend::kCeres;  // the back end that solved the frame
   TerminationType termination = TerminationType::kNotRun;
   std::string message = "Tracker::Track was not called.";
   int cloud_points = 0;           // as given

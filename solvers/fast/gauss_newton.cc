@@ -91,11 +91,18 @@ EnergyTerms Evaluate(const Problem& problem, const Vertices& x) {
   for (const SpringTerm& s : problem.anchors) {
     t.anchor += 0.5 * s.weight * (x.row(s.vertex).transpose() - s.target).squaredNorm();
   }
+  for (const ContactTerm& c : problem.contacts) {
+    const double delta = c.Penetration(x);
+    if (delta > 0) t.collision += 0.5 * problem.contact_stiffness * delta * delta;
+  }
   return t;
 }
 
 struct Solver::Impl {
   int num_vertices = 0;
+  std::vector<std::array<int, 4>> tets;          // the pattern's tetrahedra
+  std::vector<std::pair<int, int>> extra_pairs;  // and contact couplings (a < b)
+  void BuildPattern();
   Eigen::SparseMatrix<double> H;  // 3n by 3n, full 3x3 blocks for every vertex pair of a tet
   std::unordered_map<uint64_t, std::array<int, 3>> block_offsets;  // (a, b) -> column starts
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> cholesky;
@@ -134,8 +141,14 @@ Solver::~Solver() = default;
 void Solver::SetPattern(int num_vertices, const std::vector<std::array<int, 4>>& tets) {
   Impl& m = *impl_;
   m.num_vertices = num_vertices;
+  m.tets = tets;
+  m.extra_pairs.clear();
+  m.BuildPattern();
+}
+
+void Solver::Impl::BuildPattern() {
   std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(tets.size() * 144 + 9 * static_cast<size_t>(num_vertices));
+  triplets.reserve(tets.size() * 144 + 9 * static_cast<size_t>(num_vertices) + 18 * extra_pairs.size());
   auto add = [&](int a, int b) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) triplets.emplace_back(3 * a + i, 3 * b + j, 0.0);
@@ -145,13 +158,17 @@ void Solver::SetPattern(int num_vertices, const std::vector<std::array<int, 4>>&
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) add(t[a], t[b]);
   }
-  m.H.resize(3 * num_vertices, 3 * num_vertices);
-  m.H.setFromTriplets(triplets.begin(), triplets.end());
-  m.H.makeCompressed();
-  m.block_offsets.clear();
-  const int* outer = m.H.outerIndexPtr();
-  const int* inner = m.H.innerIndexPtr();
-  for (int col = 0; col < m.H.cols(); col += 3) {
+  for (const auto& p : extra_pairs) {
+    add(p.first, p.second);
+    add(p.second, p.first);
+  }
+  H.resize(3 * num_vertices, 3 * num_vertices);
+  H.setFromTriplets(triplets.begin(), triplets.end());
+  H.makeCompressed();
+  block_offsets.clear();
+  const int* outer = H.outerIndexPtr();
+  const int* inner = H.innerIndexPtr();
+  for (int col = 0; col < H.cols(); col += 3) {
     const int b = col / 3;
     for (int p = outer[col]; p < outer[col + 1]; p += 3) {
       const int a = inner[p] / 3;
@@ -162,11 +179,12 @@ void Solver::SetPattern(int num_vertices, const std::vector<std::array<int, 4>>&
         const int* end = inner + outer[col + j + 1];
         offsets[j] = static_cast<int>(std::lower_bound(begin, end, 3 * a) - inner);
       }
-      m.block_offsets[Impl::Key(a, b)] = offsets;
+      block_offsets[Key(a, b)] = offsets;
     }
   }
-  m.analysed = false;
-  m.elastic_offsets.clear();
+  analysed = false;
+  elastic_offsets.clear();
+  elastic_valid = false;
 }
 
 void Solver::Impl::Assemble(const Problem& problem, const Vertices& x, Eigen::VectorXd* g) {
@@ -246,6 +264,21 @@ void Solver::Impl::Assemble(const Problem& problem, const Vertices& x, Eigen::Ve
       AddBlock(s.vertex, s.vertex, s.weight * Eigen::Matrix3d::Identity());
     }
   }
+  // Contacts active at x: gradient -k delta w_i n, Hessian k w_i w_j n n^T (exact while the
+  // active set holds; the energy check of the step sees the ones a step activates).
+  const double k = problem.contact_stiffness;
+  for (const ContactTerm& c : problem.contacts) {
+    const double delta = c.Penetration(x);
+    if (!(delta > 0)) continue;
+    const Eigen::Matrix3d nn = k * c.normal * c.normal.transpose();
+    for (int i = 0; i < c.num_vertices; ++i) {
+      if (c.weights[i] == 0.0) continue;
+      g->segment<3>(3 * c.vertices[i]) -= k * delta * c.weights[i] * c.normal;
+      for (int j = 0; j < c.num_vertices; ++j) {
+        if (c.weights[j] != 0.0) AddBlock(c.vertices[i], c.vertices[j], c.weights[i] * c.weights[j] * nn);
+      }
+    }
+  }
 }
 
 SolveSummary Solver::Solve(const Problem& problem, int max_iterations, Vertices* x,
@@ -256,6 +289,25 @@ SolveSummary Solver::Solve(const Problem& problem, int max_iterations, Vertices*
     summary.success = false;
     summary.message = "fast back end: the pattern was set for another vertex count";
     return summary;
+  }
+  // Contacts coupling vertices outside the pattern widen it (and redo the analysis).
+  {
+    std::vector<std::pair<int, int>> missing;
+    for (const ContactTerm& c : problem.contacts)
+      for (int i = 0; i < c.num_vertices; ++i)
+        for (int j = i + 1; j < c.num_vertices; ++j) {
+          const int a = std::min(c.vertices[i], c.vertices[j]), b = std::max(c.vertices[i], c.vertices[j]);
+          if (a != b && c.weights[i] != 0.0 && c.weights[j] != 0.0 && m.Offsets(a, b) == nullptr) {
+            missing.emplace_back(a, b);
+          }
+        }
+    if (!missing.empty()) {
+      std::sort(missing.begin(), missing.end());
+      missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+      m.extra_pairs.insert(m.extra_pairs.end(), missing.begin(), missing.end());
+      m.BuildPattern();
+      ++summary.pattern_rebuilds;
+    }
   }
   const bool any_fixed = !problem.fixed.empty();
   const int n = static_cast<int>(m.H.cols());

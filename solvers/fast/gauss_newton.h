@@ -14,6 +14,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "femreg/fem.h"
@@ -51,6 +52,22 @@ struct SpringTerm {
   double weight = 0.0;
 };
 
+// The contact penalty (femreg/collision.h): 0.5 k max(0, delta)^2 with delta linear in x
+// while the normal is held: delta = offset - sum_i w_i n . x_i (w_i: the barycentrics of
+// side a, minus those of side b; offset: D, plus n . p_b for an obstacle point).
+struct ContactTerm {
+  int num_vertices = 3;  // 3 (against an obstacle) or 6 (between objects)
+  std::array<int, 6> vertices = {0, 0, 0, 0, 0, 0};
+  std::array<double, 6> weights = {0, 0, 0, 0, 0, 0};
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0.0;
+  double Penetration(const Vertices& x) const {
+    double d = offset;
+    for (int i = 0; i < num_vertices; ++i) d -= weights[i] * normal.dot(x.row(vertices[i]).transpose());
+    return d;
+  }
+};
+
 struct Problem {
   std::vector<ElasticTerm> elastic;
   std::vector<EdgeSpringTerm> edges;
@@ -60,6 +77,8 @@ struct Problem {
   double loss_scale = 1.0;
   std::vector<SpringTerm> temporal, anchors;
   std::vector<char> fixed;  // per vertex: held where it is (hard anchors); may be empty
+  std::vector<ContactTerm> contacts;
+  double contact_stiffness = 0.0;  // k (N/m)
 };
 
 // Per term energies, robust losses applied: the same numbers the Ceres back end reports.
@@ -68,6 +87,7 @@ EnergyTerms Evaluate(const Problem& problem, const Vertices& x);
 struct SolveSummary {
   int iterations = 0;        // accepted and rejected steps
   int factorizations = 0;
+  int pattern_rebuilds = 0;  // contacts widened the pattern (a new symbolic analysis)
   bool success = true;
   std::string message;
 };
@@ -78,6 +98,9 @@ class Solver {
   ~Solver();
   // The pattern: every pair of vertices sharing a tetrahedron (global numbering). Call once
   // per topology; the symbolic factorization is computed at the first Solve after it.
+  // Contacts between objects couple vertices that share no tetrahedron: Solve then widens
+  // the pattern by those pairs (kept until the next SetPattern, so a contact that comes back
+  // costs no new analysis).
   void SetPattern(int num_vertices, const std::vector<std::array<int, 4>>& tets);
   // Minimizes the problem from x (updated in place) with at most max_iterations
   // factorizations; stops when a step changes the energy by less than

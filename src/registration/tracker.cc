@@ -504,6 +504,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   FrameSummary& s = *summary;
   s = FrameSummary();
   s.frame = frame;
+  s.backend = options.solver.backend;
   s.cloud_points = input.size();
   if (input.points.cols() != 3 || (input.normals.rows() != 0 && input.normals.rows() != input.points.rows())) {
     s.termination = TerminationType::kInvalidInput;
@@ -647,8 +648,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       break;
     }
 
-    // The fast back end, unless contacts are on (it has no contact term).
-    if (options.solver.backend == SolverBackend::kFast && !collision) {
+    // The fast back end.
+    if (options.solver.backend == SolverBackend::kFast) {
       t0 = Clock::now();
       if (!fast_solver) fast_solver = std::make_unique<fast_backend::Solver>();
       if (fast_pattern_dirty) {
@@ -683,6 +684,35 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       fp.anchors = fast_anchors;
       fp.fixed = fixed;
       s.time.build += Seconds(t0);
+      if (collision) {  // contacts at the current x, normals held for the solve (as for Ceres)
+        const auto t_collision = Clock::now();
+        collision->SetFrame(frame);
+        collision->Detect(x, collision->distance(), &contacts);
+        fp.contact_stiffness = collision->stiffness();
+        fp.contacts.reserve(contacts.size());
+        for (const Contact& c : contacts) {
+          fast_backend::ContactTerm t;
+          t.normal = c.normal;
+          t.offset = collision->distance();
+          for (int j = 0; j < 3; ++j) {
+            t.vertices[j] = c.vertices_a[j];
+            t.weights[j] = c.bary_a[j];
+          }
+          if (c.obstacle()) {
+            t.num_vertices = 3;
+            t.offset += c.normal.dot(c.point_b);
+          } else {
+            t.num_vertices = 6;
+            for (int j = 0; j < 3; ++j) {
+              t.vertices[3 + j] = c.vertices_b[j];
+              t.weights[3 + j] = -c.bary_b[j];
+            }
+          }
+          fp.contacts.push_back(t);
+        }
+        row.contacts = static_cast<int>(contacts.size());
+        s.time.collision += Seconds(t_collision);
+      }
       row.before = fast_backend::Evaluate(fp, x);
       if (!have_initial) {
         s.initial = row.before;
