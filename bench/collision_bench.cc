@@ -1,6 +1,6 @@
 // What contacts cost (Google Benchmark): Track per frame over datasets/contact_pair and
-// datasets/tool_table with effects.collision off and on, and the detection alone (refit,
-// broad and narrow phase) on the contact_pair meshes. Run from a build with
+// datasets/tool_table with effects.collision off and on, on either back end, and the
+// detection alone (refit, broad and narrow phase) on the contact_pair meshes. Run from a build with
 // -DFEMREG_BUILD_BENCHMARKS=ON:
 //   bench/femreg_collision_bench --benchmark_repetitions=3
 #include <benchmark/benchmark.h>
@@ -35,7 +35,8 @@ const std::vector<femreg::PointCloud>& Clouds(int sequence) {
   return clouds[sequence];
 }
 
-// range(0): sequence (0 contact_pair, 1 tool_table); range(1): collision off / on.
+// range(0): sequence (0 contact_pair, 1 tool_table); range(1): collision off / on;
+// range(2): back end (0 Ceres, 1 fast).
 void Track(benchmark::State& state) {
   const int sequence = static_cast<int>(state.range(0));
   femreg::Scene scene;
@@ -45,6 +46,8 @@ void Track(benchmark::State& state) {
     return;
   }
   scene.effects.collision = state.range(1) == 1;
+  scene.registration.solver.backend =
+      state.range(2) == 1 ? femreg::SolverBackend::kFast : femreg::SolverBackend::kCeres;
   double collision_s = 0.0;
   int contacts = 0;
   for (auto _ : state) {
@@ -65,8 +68,8 @@ void Track(benchmark::State& state) {
   state.counters["contacts_per_frame"] = contacts / frames;
 }
 BENCHMARK(Track)
-    ->Args({0, 0})->Args({0, 1})->Args({1, 0})->Args({1, 1})
-    ->ArgNames({"sequence", "collision"})
+    ->ArgsProduct({{0, 1}, {0, 1}, {0, 1}})
+    ->ArgNames({"sequence", "collision", "fast"})
     ->Unit(benchmark::kMillisecond);
 
 // Detection alone on the two contact_pair blocks pressed together (the last frame's pose).
