@@ -43,6 +43,19 @@ struct FractureOptions {
   double min_piece_fraction = 0.05;
   int max_splits_per_iteration = 8;  // node splits per outer iteration (or forward round)
   int max_splits_per_frame = 48;     // node splits per frame
+  // Cracks that may start (0 = any number: every node above its toughness may split, as
+  // in O'Brien and Hodgins). Once the mesh has this many cracks (connected sets of split
+  // nodes), only nodes on a crack's front may split: nodes that share an element with a
+  // split node and whose fracture plane passes near it (within 30 degrees), so that the
+  // crack grows along its own surface instead of nucleating wherever the measure is high.
+  int max_cracks = 0;
+  // Tracker only: where the body opened, the camera sees no surface, and the seen surface
+  // vertices there are far from every cloud point (a point-to-plane data term does not
+  // pull them across the hole, so in a body pulled evenly the stress alone cannot tell
+  // where it opened). With data_gap, a node's measure counts min(3, 1 + g /
+  // data.loss_scale) times, g: by how much the distance from the seen surface vertices at
+  // the node to their nearest cloud point exceeds twice its median over the seen surface.
+  bool data_gap = false;
   bool IsValid(std::string* error) const;
 };
 
@@ -52,6 +65,9 @@ struct NodeSeparation {
   Vertices normal;          // #V by 3 unit eigenvector of that eigenvalue, sign-canonical
                             // (largest |component| positive)
   Eigen::VectorXd toughness;  // #V node toughness (Pa; <= 0 unbreakable)
+  // Optional, #V, >= 1: a factor on the measure in SplitNodes' test and order (the
+  // tracker's evidence from the data, FractureOptions::data_gap); empty: 1.
+  Eigen::VectorXd weight;
 };
 
 // The separation tensor of every node (3 by 3, newtons) at positions x. model's rotations
@@ -73,8 +89,10 @@ struct TopologyChange {
   bool changed() const { return !events.empty(); }
 };
 
-// Splits up to max_splits nodes whose measure exceeds their toughness, highest ratio first
-// (seed Section 4.2): the node is replicated; its elements whose vertices are all on the
+// Splits up to max_splits nodes whose measure (times separation.weight) exceeds their
+// toughness, highest ratio first (with options.max_cracks > 0: the highest one that is allowed, see there; the nodes
+// already split are recognised by their shared rest positions) (seed Section 4.2): the
+// node is replicated; its elements whose vertices are all on the
 // positive side of the plane (within the tolerance; ties by the centroid) go to the
 // replica, the others stay; elements the plane crosses are removed. A vertex whose
 // remaining elements no longer connect through faces around it is split once more per

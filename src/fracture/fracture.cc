@@ -25,6 +25,8 @@ bool FractureOptions::IsValid(std::string* error) const {
     os << "max_splits_per_iteration must be >= 1 (got " << max_splits_per_iteration << ")";
   } else if (max_splits_per_frame < 1) {
     os << "max_splits_per_frame must be >= 1 (got " << max_splits_per_frame << ")";
+  } else if (max_cracks < 0) {
+    os << "max_cracks must be >= 0 (got " << max_cracks << ")";
   } else {
     return true;
   }
@@ -157,6 +159,7 @@ struct SplitState {
   std::vector<int> source;             // vertex -> old vertex
   std::vector<Eigen::Vector3d> rest, x;
   std::vector<char> touched;           // element
+  std::vector<char> crack;             // vertex: a copy of a split node (on a crack)
 
   int AddReplica(int v) {
     const int r = static_cast<int>(rest.size());
@@ -164,7 +167,107 @@ struct SplitState {
     x.push_back(x[v]);
     source.push_back(source[v]);
     star.emplace_back();
+    crack[v] = 1;
+    crack.push_back(1);
     return r;
+  }
+
+  // Marks the vertices of earlier splits: a split leaves copies with the same rest position.
+  void FindCracks() {
+    crack.assign(rest.size(), 0);
+    std::map<std::array<double, 3>, int> first;
+    for (size_t v = 0; v < rest.size(); ++v) {
+      const std::array<double, 3> key = {rest[v].x(), rest[v].y(), rest[v].z()};
+      auto it = first.emplace(key, static_cast<int>(v)).first;
+      if (it->second != static_cast<int>(v)) crack[v] = crack[it->second] = 1;
+    }
+  }
+
+  // Cracks: the crack vertices connected through their elements and through their copies.
+  int CountCracks() const {
+    const int nv = static_cast<int>(rest.size());
+    std::vector<int> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&](int i) {
+      while (parent[i] != i) i = parent[i] = parent[parent[i]];
+      return i;
+    };
+    auto unite = [&](int a, int b) {
+      a = find(a);
+      b = find(b);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    };
+    std::map<std::array<double, 3>, int> first;
+    for (int v = 0; v < nv; ++v) {
+      if (!crack[v]) continue;
+      const std::array<double, 3> key = {rest[v].x(), rest[v].y(), rest[v].z()};
+      auto it = first.emplace(key, v).first;
+      unite(it->second, v);
+    }
+    for (size_t e = 0; e < tets.size(); ++e) {
+      if (removed[e]) continue;
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          if (crack[tets[e][a]] && crack[tets[e][b]]) unite(tets[e][a], tets[e][b]);
+    }
+    int count = 0;
+    for (int v = 0; v < nv; ++v) count += crack[v] && find(v) == v;
+    return count;
+  }
+
+  // Whether j is on a crack's front, and the plane to split it by (world normal). j must
+  // not be split yet and must share an element with a crack vertex. The crack's surface
+  // near j (rest coordinates) is fitted to the crack vertices within 2.5 mean edge lengths
+  // h of j: their plane, or where they lie on a line the plane through it closest to j's
+  // own (j's normal taken to the rest frame by an element's rotation), or j's own plane
+  // through a single vertex. j must lie within h/2 of that plane and its own normal within
+  // 45 degrees of the plane's; it then splits by that plane, so that the crack grows along
+  // its own surface.
+  bool OnFront(int j, const Eigen::Vector3d& n, const ElasticModel& model,
+               Eigen::Vector3d* split_normal) const {
+    if (crack[j] || star[j].empty()) return false;
+    bool adjacent = false;
+    double h = 0.0;
+    int edges = 0;
+    for (int e : star[j]) {
+      for (int a = 0; a < 4; ++a) {
+        const int u = tets[e][a];
+        for (int b = a + 1; b < 4; ++b, ++edges) h += (rest[u] - rest[tets[e][b]]).norm();
+        if (u != j && crack[u]) adjacent = true;
+      }
+    }
+    if (!adjacent) return false;
+    h /= std::max(edges, 1);
+    // The crack's rest positions near j (copies counted once).
+    std::map<std::array<double, 3>, Eigen::Vector3d> near;
+    for (size_t u = 0; u < rest.size(); ++u) {
+      if (!crack[u] || (rest[u] - rest[j]).norm() > 2.5 * h) continue;
+      near.emplace(std::array<double, 3>{rest[u].x(), rest[u].y(), rest[u].z()}, rest[u]);
+    }
+    // The crack's surface near j: a plane through them, a line (the plane through it
+    // closest to j's), or a point (j's plane through it).
+    const Eigen::Matrix3d& R = model.rotation(star[j][0]);
+    const Eigen::Vector3d own = R.transpose() * n;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& kv : near) centroid += kv.second / static_cast<double>(near.size());
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const auto& kv : near) cov += (kv.second - centroid) * (kv.second - centroid).transpose();
+    cov /= static_cast<double>(near.size());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+    const double spread = 0.0625 * h * h;  // (h/4)^2
+    Eigen::Vector3d plane = own;
+    if (eig.eigenvalues()(1) > spread) {
+      plane = eig.eigenvectors().col(0);
+    } else if (eig.eigenvalues()(2) > spread) {
+      const Eigen::Vector3d line = eig.eigenvectors().col(2);
+      plane = own - own.dot(line) * line;
+      if (plane.norm() < 0.5) return false;
+      plane.normalize();
+    }
+    if (std::abs(plane.dot(rest[j] - centroid)) > 0.5 * h) return false;
+    if (std::abs(plane.dot(own)) < 0.707) return false;
+    *split_normal = CanonicalSign(R * plane);
+    return true;
   }
   void Reassign(int e, int from, int to) {
     for (int& v : tets[e]) {
@@ -292,11 +395,14 @@ void SplitNodes(const NodeSeparation& sep, const FractureOptions& options, int m
   std::iota(change->source.begin(), change->source.end(), 0);
   if (max_splits <= 0 || sep.measure.size() != nv) return;
 
-  // Candidates: measure above toughness, highest ratio first (ties: lower index).
+  // Candidates: measure (times weight) above toughness, highest ratio first (ties: lower
+  // index).
+  const bool weighted = sep.weight.size() == nv;
   std::vector<std::pair<double, int>> candidates;
   for (int j = 0; j < nv; ++j) {
     const double t = sep.toughness(j);
-    if (t > 0 && sep.measure(j) > t) candidates.emplace_back(-sep.measure(j) / t, j);
+    const double m = weighted ? sep.weight(j) * sep.measure(j) : sep.measure(j);
+    if (t > 0 && m > t) candidates.emplace_back(-m / t, j);
   }
   if (candidates.empty()) return;
   std::sort(candidates.begin(), candidates.end());
@@ -314,16 +420,31 @@ void SplitNodes(const NodeSeparation& sep, const FractureOptions& options, int m
     }
   }
   st.source = change->source;
+  st.crack.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {
     st.rest.push_back(mesh->rest.row(v).transpose());
     st.x.push_back(mesh->x.row(v).transpose());
   }
 
+  // With max_cracks: the candidates allowed change with every split, so each split takes
+  // the first allowed candidate not tried yet (without: simply the candidates in order).
+  const bool limit_cracks = options.max_cracks > 0;
+  if (limit_cracks) st.FindCracks();
+  std::vector<char> tried(candidates.size(), 0);
   int splits = 0;
-  for (const auto& c : candidates) {
-    if (splits >= max_splits) break;
-    const int j = c.second;
-    const Eigen::Vector3d n = sep.normal.row(j).transpose();
+  while (splits < max_splits) {
+    const bool nucleate = !limit_cracks || st.CountCracks() < options.max_cracks;
+    size_t next = candidates.size();
+    Eigen::Vector3d n;
+    for (size_t i = 0; i < candidates.size() && next == candidates.size(); ++i) {
+      if (tried[i]) continue;
+      const int j = candidates[i].second;
+      n = sep.normal.row(j).transpose();
+      if (nucleate || st.OnFront(j, sep.normal.row(j).transpose(), *model, &n)) next = i;
+    }
+    if (next == candidates.size()) break;
+    tried[next] = 1;
+    const int j = candidates[next].second;
     const Eigen::Vector3d p = st.x[j];
     std::vector<int> positive, negative, crossed;
     for (int e : st.star[j]) {

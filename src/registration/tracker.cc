@@ -151,7 +151,11 @@ struct Tracker::Impl {
   Status Track(const PointCloud& input, FrameSummary* summary);
   // Detection and splits after outer iteration k's solve; on a topology change rebuilds
   // every global array and returns, per new global vertex, its old global index.
-  std::vector<int> ApplyFracture(int k, FrameSummary* summary);
+  std::vector<int> ApplyFracture(int k, const PointIndex& cloud_index, FrameSummary* summary);
+  // Per vertex of object i: by how much a camera-facing surface vertex's distance to its
+  // nearest cloud point exceeds twice the median of that distance (other vertices: the
+  // mean distance over the camera-facing vertices of their elements; 0 without such).
+  Eigen::VectorXd DataGap(int i, const PointIndex& cloud_index) const;
 };
 
 Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Material>& materials) {
@@ -865,7 +869,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.rms_residual = row.rms_residual;
 
     if (fracture) {  // seed Section 4: between outer iterations
-      const std::vector<int> source = ApplyFracture(k, &s);
+      const std::vector<int> source = ApplyFracture(k, cloud_index, &s);
       if (!source.empty()) {
         previous = RemapRows(previous, source);
         build_frame_costs();
@@ -920,7 +924,55 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   return Status::Ok();
 }
 
-std::vector<int> Tracker::Impl::ApplyFracture(int k, FrameSummary* summary) {
+Eigen::VectorXd Tracker::Impl::DataGap(int i, const PointIndex& cloud_index) const {
+  const Object& o = objects[i];
+  const int nv = o.mesh.num_vertices();
+  Eigen::VectorXd distance = Eigen::VectorXd::Zero(nv);
+  std::vector<char> seen(nv, 0);
+  std::vector<double> seen_distances;
+  const Eigen::MatrixXd normals = VertexNormals();
+  for (int v : o.mesh.surface_vertices) {
+    const Eigen::Vector3d p = x.row(o.offset + v);
+    if (normals.row(o.offset + v).dot(options.camera.position - p) <= 0.0) continue;
+    double d2 = 0.0;
+    if (cloud_index.Nearest(p, &d2) >= 0) {
+      distance(v) = std::sqrt(d2);
+      seen[v] = 1;
+      seen_distances.push_back(distance(v));
+    }
+  }
+  Eigen::VectorXd gap = Eigen::VectorXd::Zero(nv);
+  if (seen_distances.empty()) return gap;
+  // The sampling and noise level: twice the median distance.
+  std::nth_element(seen_distances.begin(), seen_distances.begin() + seen_distances.size() / 2,
+                   seen_distances.end());
+  const double noise = 2.0 * seen_distances[seen_distances.size() / 2];
+  // Vertices the camera does not see: the mean over the seen vertices of their elements.
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(nv), count = Eigen::VectorXd::Zero(nv);
+  for (int e = 0; e < o.mesh.num_tets(); ++e) {
+    for (int a = 0; a < 4; ++a) {
+      const int u = o.mesh.tets(e, a);
+      if (seen[u]) continue;
+      for (int b = 0; b < 4; ++b) {
+        const int w = o.mesh.tets(e, b);
+        if (!seen[w]) continue;
+        sum(u) += distance(w);
+        count(u) += 1;
+      }
+    }
+  }
+  for (int v = 0; v < nv; ++v) {
+    const double d = seen[v] ? distance(v) : count(v) > 0 ? sum(v) / count(v) : 0.0;
+    gap(v) = std::max(0.0, d - noise);
+  }
+  return gap;
+}
+
+// FractureOptions::data_gap: the data's evidence at most triples the measure.
+constexpr double kMaxDataGapWeight = 3.0;
+
+std::vector<int> Tracker::Impl::ApplyFracture(int k, const PointIndex& cloud_index,
+                                              FrameSummary* summary) {
   const auto t0 = Clock::now();
   FractureData& f = *fracture;
   if (k == 0) f.frame_splits = 0;
@@ -930,10 +982,24 @@ std::vector<int> Tracker::Impl::ApplyFracture(int k, FrameSummary* summary) {
     Object& o = objects[i];
     o.mesh.x = x.middleRows(o.offset, o.mesh.num_vertices());
     o.model.UpdateRotations(o.mesh.x);
-    DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &f.separation[i]);
+    NodeSeparation& sep = f.separation[i];
+    DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &sep);
     const int budget = std::min(f.options[i].max_splits_per_iteration,
                                 f.options[i].max_splits_per_frame - f.frame_splits);
     if (budget <= 0) continue;
+    // Evidence from the data (FractureOptions::data_gap), only when a node could break.
+    sep.weight.resize(0);
+    if (f.options[i].data_gap && options.camera.enabled && cloud_index.size() > 0) {
+      double top = 0.0;
+      for (int v = 0; v < sep.measure.size(); ++v) {
+        if (sep.toughness(v) > 0) top = std::max(top, sep.measure(v) / sep.toughness(v));
+      }
+      if (top * kMaxDataGapWeight > 1.0) {
+        const Eigen::VectorXd gap = DataGap(static_cast<int>(i), cloud_index);
+        const double scale = options.data.loss_scale > 0 ? options.data.loss_scale : 0.005;
+        sep.weight = (Eigen::VectorXd::Ones(gap.size()) + gap / scale).cwiseMin(kMaxDataGapWeight);
+      }
+    }
     const double density = o.mesh.mass.sum() / std::max(RestVolume(o.mesh), 1e-300);
     TopologyChange change;
     SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
@@ -955,6 +1021,7 @@ std::vector<int> Tracker::Impl::ApplyFracture(int k, FrameSummary* summary) {
     }
     f.original[i] = std::move(original);
     f.separation[i].measure = std::move(measure);
+    f.separation[i].weight.resize(0);
     ComputeLumpedMasses(&o.mesh, density);
     sources[i] = std::move(change.source);
   }
