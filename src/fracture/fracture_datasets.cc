@@ -34,6 +34,9 @@ struct Scenario {
   double toughness = 0.0;       // tracked scene and the ground truth's strong part (Pa)
   double weak_toughness = 0.0;  // the ground truth's weak band (Pa)
   double tracked_toughness = 0.0;
+  // The tracking scene's effects.fracture.max_cracks and data_gap (FractureOptions).
+  int tracked_max_cracks = 0;
+  bool tracked_data_gap = false;
   double weak_half_width = 0.0;  // |x - x_mid| below this (centroid) is weak
   int frames = 0;
   CameraOptions camera;
@@ -109,6 +112,10 @@ Scenario SlabTear() {
   s.toughness = 1e9;
   s.weak_toughness = 1500;
   s.tracked_toughness = 4000;
+  // Pulled evenly, the tracked slab's measure is nearly uniform and exceeds the toughness
+  // everywhere at once: one crack, placed where the camera sees the slab open.
+  s.tracked_max_cracks = 1;
+  s.tracked_data_gap = true;
   s.weak_half_width = 0.004;
   s.frames = 24;
   s.camera.enabled = true;
@@ -168,7 +175,9 @@ std::string SceneYaml(const Scenario& s) {
      << "  weights: {data: 200, elastic: 1, temporal: 1}\n"
      << "  solver: {max_outer_iterations: 6, max_inner_iterations: 10}\n"
      << "effects:\n"
-     << "  fracture: {max_splits_per_iteration: 8, max_splits_per_frame: 48, crossing_tolerance: 0.2}\n"
+     << "  fracture: {max_splits_per_iteration: 8, max_splits_per_frame: 48, crossing_tolerance: 0.2"
+     << (s.tracked_max_cracks > 0 ? ", max_cracks: " + std::to_string(s.tracked_max_cracks) : std::string())
+     << (s.tracked_data_gap ? ", data_gap: true" : "") << "}\n"
      << "anchors:\n";
   auto anchor = [&](const std::string& name, bool left, const std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)>& motion) {
     os << "  - name: " << name << "\n";
@@ -386,7 +395,12 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
          << s.size.z() << " m box (E = " << s.material.youngs_modulus << " Pa, nu = "
          << s.material.poisson_ratio << "), " << coarse.num_vertices() << " vertices, "
          << coarse.num_tets() << " tetrahedra, toughness " << s.tracked_toughness
-         << " Pa, `effects.fracture` on; the grippers the robot knows as hard anchors.\n"
+         << " Pa, `effects.fracture` on"
+         << (s.tracked_max_cracks > 0 ? " (one crack, placed where the data shows the slab open: "
+                                        "`max_cracks: " + std::to_string(s.tracked_max_cracks) +
+                                            ", data_gap: true`)"
+                                      : std::string())
+         << "; the grippers the robot knows as hard anchors.\n"
          << "- `clouds/frame_NNNN.pcd`: " << s.frames << " clouds from a virtual "
          << s.camera.width << "x" << s.camera.height << " depth camera (every " << s.pixel_stride
          << "nd pixel, depth noise sigma = 0.00285 z^2).\n"
