@@ -143,6 +143,7 @@ void CollisionWorld::Rebuild(int object, const Triangles& surface, const Vertice
 }
 
 void CollisionWorld::SetFrame(double frame) {
+  frame_ = frame;
   for (Obstacle& o : obstacles_) {
     o.pose = ObstaclePose(o.spec.keyframes, frame);
     if (o.triangles.rows() == 0) continue;

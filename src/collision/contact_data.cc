@@ -180,7 +180,7 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   // Per frame: the solve's iterations, the active contacts and the deepest penetration of the
   // ground truth itself (the penalty lets it reach into the band D, never through).
   std::ostringstream log;
-  log << "frame,newton_iterations,contacts,max_penetration_mm\n";
+  log << "frame,newton_iterations,termination,final_residual_N,contacts,max_penetration_mm\n";
   for (int f = 0; f < frames; ++f) {
     const double s = static_cast<double>(f) / (frames - 1);
     world.SetFrame(f);
@@ -199,8 +199,9 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
       std::vector<Contact> contacts;
       world.Detect(merged.x, 0.0, &contacts);
       const ContactStats cs = world.Evaluate(contacts, merged.x);
-      char line[128];
-      std::snprintf(line, sizeof(line), "%d,%zu,%d,%.4f\n", f, summary.iterations.size(), cs.contacts,
+      char line[160];
+      std::snprintf(line, sizeof(line), "%d,%zu,%s,%.3e,%d,%.4f\n", f, summary.iterations.size(),
+                    ToString(summary.termination), summary.final_residual_norm, cs.contacts,
                     cs.max_penetration * 1e3);
       log << line;
     }
@@ -308,7 +309,8 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
          << "- `ground_truth/frame_NNNN.csv`: one row per tracked vertex of all objects in scene "
          << "order: true position and whether the camera saw it.\n"
          << "- `truth_contacts.csv`: per frame, the ground-truth solve's Newton iterations, its "
-         << "active contacts and its deepest penetration (mm; below D: the surfaces never cross).\n\n"
+         << "termination and final force imbalance, its active contacts and its deepest penetration "
+         << "(mm; below D: the surfaces never cross).\n\n"
          << "Ground truth: corotational FEM with the same penalty contacts (refreshed per Newton "
          << "iteration) on meshes " << refinement << " times finer, interpolated at the tracked "
          << "vertices. Register with collision on, and with `femreg register --no-collision` to "

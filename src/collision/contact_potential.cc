@@ -23,6 +23,17 @@ int Stencil(const Contact& c, int* vertex, double* weight) {
 
 }  // namespace
 
+void ContactPotential::Refresh(const Vertices& x) {
+  const bool stale = detections_ == 0 || detected_at_.rows() != x.rows() ||
+                     world_->frame() != detected_frame_ ||
+                     (x - detected_at_).rowwise().norm().maxCoeff() > 0.5 * margin_;
+  if (!stale) return;
+  world_->Detect(x, margin_, &contacts_);
+  detected_at_ = x;
+  detected_frame_ = world_->frame();
+  ++detections_;
+}
+
 double ContactPotential::Evaluate(const Vertices& x, Eigen::VectorXd* gradient) const {
   double energy = 0.0;
   const double k = world_->stiffness();
