@@ -290,7 +290,7 @@ TEST_F(SceneTest, UnknownOrMissingObjectName) {
                "(beam, ball)"});
 }
 
-TEST_F(SceneTest, FractureAndCollisionAreNotBuiltYet) {
+TEST_F(SceneTest, InvalidFractureAndCollisionSettings) {
   ExpectError(std::string(kBaseScene) + "effects: {fracture: {max_splits_per_frame: 0}}\n",
               {"beam.yaml:10: effects.fracture.max_splits_per_frame: must be >= 1"});
   ExpectError(std::string(kBaseScene) + "collision: {distance: 0}\n",
