@@ -389,7 +389,9 @@ TEST(CollisionWorld, ToolOverSlabGivesOneVerticalContactPerVertex) {
     EXPECT_NEAR((c.normal - (pa - c.point_b).normalized()).norm(), 0.0, 1e-9);
     int k = 0;
     c.bary_a.maxCoeff(&k);
-    if (c.bary_a[k] == 1.0) EXPECT_TRUE(points.emplace(c.vertices_a[k], c.object_b).second);
+    if (c.bary_a[k] == 1.0) {
+      EXPECT_TRUE(points.emplace(c.vertices_a[k], c.object_b).second);
+    }
   }
 }
 
@@ -805,12 +807,16 @@ SequenceRun RegisterSequence(const std::string& name, bool collision) {
       x.middleRows(row, tracker->vertices(i).rows()) = tracker->vertices(i);
       row += static_cast<int>(tracker->vertices(i).rows());
     }
-    if (f == 0) EXPECT_TRUE(meter.Init(scene.collision, names, surfaces, x).ok());
+    if (f == 0) {
+      EXPECT_TRUE(meter.Init(scene.collision, names, surfaces, x).ok());
+    }
     meter.SetFrame(f);
     std::vector<Contact> contacts;
     meter.Detect(x, 0.0, &contacts);
     run.penetration.push_back(meter.Evaluate(contacts, x).max_penetration);
-    if (collision) EXPECT_NEAR(summary.max_penetration, run.penetration.back(), 1e-12);
+    if (collision) {
+      EXPECT_NEAR(summary.max_penetration, run.penetration.back(), 1e-12);
+    }
     GroundTruthFrame truth;
     EXPECT_TRUE(ReadGroundTruthFrame(dir + "/ground_truth/" + file + ".csv", &truth).ok());
     const VertexErrors e = ComputeVertexErrors(x, truth);

@@ -413,7 +413,9 @@ TEST(Tracker, EveryRegularizerAndSolverRunsAndStaysFinite) {
           for (const OuterIteration& it : summary.iterations) {
             EXPECT_LE(it.after.total(), it.before.total() * (1 + 1e-9)) << "a solve raised the energy";
           }
-          if (reg == Regularizer::kNone) EXPECT_EQ(summary.final.elastic, 0.0);
+          if (reg == Regularizer::kNone) {
+            EXPECT_EQ(summary.final.elastic, 0.0);
+          }
         }
         EXPECT_TRUE(tracker->vertices(0).allFinite());
       }
