@@ -261,7 +261,9 @@ std::vector<FractureEvent> PullStrip(int max_cracks, TetMesh* initial) {
                                             &mesh, &original, &events, &summary);
     // Without a limit the strip may shatter into a crumb that nothing holds (a singular
     // solve): that ends the pull.
-    if (max_cracks > 0) EXPECT_TRUE(s.ok()) << s.message();
+    if (max_cracks > 0) {
+      EXPECT_TRUE(s.ok()) << s.message();
+    }
     if (!s.ok()) break;
     const MeshValidity validity = CheckMesh(mesh);
     EXPECT_TRUE(validity.ok()) << "step " << f << ": " << validity.ToString();
@@ -340,7 +342,9 @@ SequenceResult TrackSequence(const std::string& name, int frames = -1) {
     EXPECT_TRUE(ReadGroundTruthFrame((dir / "ground_truth" / (std::string(file) + ".csv")).string(), &truth).ok());
     std::vector<PieceTruthRow> sides;
     const fs::path side = dir / "ground_truth" / (std::string(file) + "_pieces.csv");
-    if (fs::exists(side)) EXPECT_TRUE(ReadPieceTruth(side.string(), &sides).ok());
+    if (fs::exists(side)) {
+      EXPECT_TRUE(ReadPieceTruth(side.string(), &sides).ok());
+    }
     const PieceErrors pe = ComputePieceErrors(mesh, r.tracker->vertices(0),
                                               r.tracker->original_vertices(0), truth, sides);
     if (r.first_break >= 0) {
@@ -376,12 +380,16 @@ TEST(FractureTracking, BeamBreakSequence) {
   EXPECT_TRUE(r.usable);
   EXPECT_GE(r.truth_break, 0);
   EXPECT_LE(std::abs(r.first_split - r.truth_split), 1);
-  EXPECT_LE(std::abs(r.first_break - r.truth_break), 2);
+  EXPECT_LE(std::abs(r.first_break - r.truth_break), 1);
+  EXPECT_EQ(r.final_pieces, 2);
   ASSERT_GE(r.piece_mean.size(), 2u);
-  // Stated bounds: the clamped piece within 8 mm, the free piece within 25 mm (mean over
-  // its vertices and the frames after the break).
-  EXPECT_LT(r.piece_mean[0], 0.008);
-  EXPECT_LT(r.piece_mean[1], 0.025);
+  // Stated bounds: the clamped piece within 6 mm, the free piece within 10 mm (mean over
+  // its vertices and the frames after the break; measured 2.7 and 5.6 mm). The scene has
+  // visibility off: with it on, the free piece (seen on its side and top only) slid along
+  // its axis and was off by 14-19 mm.
+  EXPECT_FALSE(r.tracker->options().data.visibility);
+  EXPECT_LT(r.piece_mean[0], 0.006);
+  EXPECT_LT(r.piece_mean[1], 0.010);
   for (size_t p = 0; p < r.piece_mean.size(); ++p) {
     std::printf("beam_break piece %zu: mean error %.2f mm\n", p, 1e3 * r.piece_mean[p]);
   }

@@ -37,6 +37,10 @@ struct Scenario {
   // The tracking scene's effects.fracture.max_cracks and data_gap (FractureOptions).
   int tracked_max_cracks = 0;
   bool tracked_data_gap = false;
+  // The tracking scene's registration.data.visibility. Off, every surface vertex is pulled
+  // to its nearest point, so the silhouette's end edges pin the sliding along a box's axis
+  // that point-to-plane pairs on the faces the camera sees leave free.
+  bool tracked_visibility = true;
   double weak_half_width = 0.0;  // |x - x_mid| below this (centroid) is weak
   int frames = 0;
   CameraOptions camera;
@@ -97,6 +101,9 @@ Scenario BeamBreak() {
   };
   s.left_anchor_tracked = true;
   s.right_anchor_tracked = false;
+  // The free piece, seen only on its side and top, slid along its axis by up to 12 mm with
+  // visibility on (its mean error 14.2 mm, 6.6 mm with it off).
+  s.tracked_visibility = false;
   return s;
 }
 
@@ -171,7 +178,8 @@ std::string SceneYaml(const Scenario& s) {
      << "  camera: {position: " << Vec(c.position) << ", target: " << Vec(c.target)
      << ", up: " << Vec(c.up) << ", fx: " << c.fx << ", fy: " << c.fy << ", cx: " << c.cx
      << ", cy: " << c.cy << ", width: " << c.width << ", height: " << c.height << "}\n"
-     << "  data: {max_distance: 0.03, loss: huber, loss_scale: 0.005, metric: point_to_plane, visibility: true}\n"
+     << "  data: {max_distance: 0.03, loss: huber, loss_scale: 0.005, metric: point_to_plane, visibility: "
+     << (s.tracked_visibility ? "true" : "false") << "}\n"
      << "  weights: {data: 200, elastic: 1, temporal: 1}\n"
      << "  solver: {max_outer_iterations: 6, max_inner_iterations: 10}\n"
      << "effects:\n"
@@ -400,6 +408,10 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
                                         "`max_cracks: " + std::to_string(s.tracked_max_cracks) +
                                             ", data_gap: true`)"
                                       : std::string())
+         << (s.tracked_visibility ? std::string()
+                                  : std::string(", `registration.data.visibility: false` (every surface vertex "
+                                                "pulled to its nearest point: the silhouette's ends pin the "
+                                                "sliding along the beam that point-to-plane leaves free)"))
          << "; the grippers the robot knows as hard anchors.\n"
          << "- `clouds/frame_NNNN.pcd`: " << s.frames << " clouds from a virtual "
          << s.camera.width << "x" << s.camera.height << " depth camera (every " << s.pixel_stride
