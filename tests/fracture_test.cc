@@ -310,13 +310,15 @@ struct SequenceResult {
   std::unique_ptr<Tracker> tracker;
 };
 
-SequenceResult TrackSequence(const std::string& name, int frames = -1) {
+SequenceResult TrackSequence(const std::string& name, int frames = -1,
+                             SolverBackend backend = SolverBackend::kCeres) {
   namespace fs = std::filesystem;
   SequenceResult r;
   const fs::path dir = fs::path(FEMREG_DATASETS_DIR) / name;
   Scene scene;
   Status status = LoadScene((dir / "scene.yaml").string(), &scene);
   EXPECT_TRUE(status.ok()) << status.message();
+  scene.registration.solver.backend = backend;
   status = Tracker::Create(scene, &r.tracker);
   EXPECT_TRUE(status.ok()) << status.message();
   if (!status.ok()) return r;
@@ -428,31 +430,43 @@ TEST(FractureTracking, BeamBreakSequence) {
 
 // The slab tears into two pieces, as the ground truth does. Pulled evenly, the tracked
 // slab's measure is nearly uniform, so the scene allows one crack (max_cracks: 1) placed
-// where the camera sees the slab open (data_gap: true). Stated bounds: the first split
-// within 2 frames of the ground truth's, two pieces within 4 frames of it and to the end,
-// each piece within 5 mm on average over the frames after the tracker's break.
-TEST(FractureTracking, SlabTearSequence) {
+// where the camera sees the slab open (data_gap: true); the crack front through the slab's
+// thickness splits together. On both back ends (their rounding differs, and a crack that
+// grows only by luck would show it). Stated bounds: the first split within 2 frames of the
+// ground truth's, two pieces within 1 frame of it and to the end, each piece within 4 mm
+// on average over the frames after the tracker's break (measured: Ceres 3.1 / 2.4 mm, in
+// pieces at frame 5; fast 3.2 / 1.9 mm, at frame 6; truth 5).
+class SlabTearSequence : public ::testing::TestWithParam<SolverBackend> {};
+
+TEST_P(SlabTearSequence, TearsIntoTheTwoPiecesOfTheGroundTruth) {
   Scene scene;
   ASSERT_TRUE(LoadScene(std::string(FEMREG_DATASETS_DIR) + "/slab_tear/scene.yaml", &scene).ok());
   EXPECT_EQ(scene.effects.fracture_options.max_cracks, 1);
   EXPECT_TRUE(scene.effects.fracture_options.data_gap);
-  SequenceResult r = TrackSequence("slab_tear");
+  SequenceResult r = TrackSequence("slab_tear", -1, GetParam());
   EXPECT_TRUE(r.finite);
   EXPECT_TRUE(r.usable);
   ASSERT_GE(r.truth_split, 0);
   ASSERT_GE(r.truth_break, 0);
   EXPECT_LE(std::abs(r.first_split - r.truth_split), 2);
   ASSERT_GE(r.first_break, 0);
-  EXPECT_LE(std::abs(r.first_break - r.truth_break), 4);
+  EXPECT_LE(std::abs(r.first_break - r.truth_break), 1);
   EXPECT_EQ(r.final_pieces, 2);
   ASSERT_EQ(r.piece_mean.size(), 2u);
   for (size_t p = 0; p < r.piece_mean.size(); ++p) {
-    EXPECT_LT(r.piece_mean[p], 0.005) << "piece " << p;
-    std::printf("slab_tear piece %zu: mean error %.2f mm\n", p, 1e3 * r.piece_mean[p]);
+    EXPECT_LT(r.piece_mean[p], 0.004) << "piece " << p;
+    std::printf("slab_tear (%s) piece %zu: mean error %.2f mm\n", ToString(GetParam()), p,
+                1e3 * r.piece_mean[p]);
   }
-  std::printf("slab_tear: split at %d (truth %d), pieces from %d (truth %d)\n", r.first_split,
-              r.truth_split, r.first_break, r.truth_break);
+  std::printf("slab_tear (%s): split at %d (truth %d), pieces from %d (truth %d)\n",
+              ToString(GetParam()), r.first_split, r.truth_split, r.first_break, r.truth_break);
 }
+
+INSTANTIATE_TEST_SUITE_P(FractureTracking, SlabTearSequence,
+                         ::testing::Values(SolverBackend::kCeres, SolverBackend::kFast),
+                         [](const ::testing::TestParamInfo<SolverBackend>& info) {
+                           return std::string(ToString(info.param));
+                         });
 
 // Fracture off: nothing is computed or exposed.
 TEST(FractureTracking, OffComputesNothing) {

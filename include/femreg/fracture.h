@@ -48,6 +48,9 @@ struct FractureOptions {
   // nodes), only nodes on a crack's front may split: nodes that share an element with a
   // split node and whose fracture plane passes near it (within 30 degrees), so that the
   // crack grows along its own surface instead of nucleating wherever the measure is high.
+  // A front node whose split alone would pinch the surface (its neighbour on the same
+  // plane through the body's thickness still joined) splits together with those
+  // neighbours, in one step.
   int max_cracks = 0;
   // Tracker only: where the body opened, the camera sees no surface, and the seen surface
   // vertices there are far from every cloud point (a point-to-plane data term does not

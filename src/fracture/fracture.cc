@@ -445,82 +445,120 @@ void SplitNodes(const NodeSeparation& sep, const FractureOptions& options, int m
     if (next == candidates.size()) break;
     tried[next] = 1;
     const int j = candidates[next].second;
-    const Eigen::Vector3d p = st.x[j];
-    std::vector<int> positive, negative, crossed;
-    for (int e : st.star[j]) {
-      double lo = 0, hi = 0, h = 0;
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      for (int a = 0; a < 4; ++a) {
-        const Eigen::Vector3d xa = st.x[st.tets[e][a]];
-        centroid += 0.25 * xa;
-        for (int b = a + 1; b < 4; ++b) h += (xa - st.x[st.tets[e][b]]).norm() / 6.0;
-        if (st.tets[e][a] == j) continue;
-        const double d = n.dot(xa - p);
-        lo = std::min(lo, d);
-        hi = std::max(hi, d);
+    // Splits node u by the plane (normal n through q): its elements on the positive side go
+    // to a replica, those the plane crosses are removed; pinched vertices around get their
+    // own copies. The vertices touched are added to *check. False (nothing done) when the
+    // plane leaves every kept element on one side, which separates nothing.
+    auto split_node = [&](int u, const Eigen::Vector3d& q, std::vector<int>* check,
+                          std::vector<int>* crossed_all) {
+      std::vector<int> positive, negative, crossed;
+      for (int e : st.star[u]) {
+        double lo = 0, hi = 0, h = 0;
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        for (int a = 0; a < 4; ++a) {
+          const Eigen::Vector3d xa = st.x[st.tets[e][a]];
+          centroid += 0.25 * xa;
+          for (int b = a + 1; b < 4; ++b) h += (xa - st.x[st.tets[e][b]]).norm() / 6.0;
+          if (st.tets[e][a] == u) continue;
+          const double d = n.dot(xa - q);
+          lo = std::min(lo, d);
+          hi = std::max(hi, d);
+        }
+        const double tol = options.crossing_tolerance * h;
+        if (lo < -tol && hi > tol) {
+          crossed.push_back(e);
+        } else if (n.dot(centroid - q) > 0) {
+          positive.push_back(e);
+        } else {
+          negative.push_back(e);
+        }
       }
-      const double tol = options.crossing_tolerance * h;
-      if (lo < -tol && hi > tol) {
-        crossed.push_back(e);
-      } else if (n.dot(centroid - p) > 0) {
-        positive.push_back(e);
-      } else {
-        negative.push_back(e);
+      if (positive.empty() || negative.empty()) return false;
+      std::vector<int> local = {u};
+      for (int e : crossed) {
+        for (int v : st.tets[e]) local.push_back(v);
+        st.Remove(e);
       }
-    }
-    // A plane that leaves every kept element on one side separates nothing.
-    if (positive.empty() || negative.empty()) continue;
+      const int r = st.AddReplica(u);
+      for (int e : positive) {
+        st.Reassign(e, u, r);
+        st.star[r].push_back(e);
+      }
+      st.star[u] = negative;
+      local.push_back(r);
+      std::sort(local.begin(), local.end());
+      local.erase(std::unique(local.begin(), local.end()), local.end());
+      for (int v : local) st.SplitPinched(v);
+      check->insert(check->end(), local.begin(), local.end());
+      crossed_all->insert(crossed_all->end(), crossed.begin(), crossed.end());
+      return true;
+    };
+    // Whether the surface stays manifold around everything the splits since `saved` touched
+    // (and no piece became a sliver).
+    auto still_valid = [&](const SplitState& saved, std::vector<int> check) {
+      std::vector<int> around;
+      for (int v = static_cast<int>(saved.rest.size()); v < static_cast<int>(st.rest.size()); ++v) check.push_back(v);
+      for (int v : check) {
+        for (int e : st.star[v])
+          for (int u : st.tets[e]) around.push_back(u);
+        around.push_back(v);
+      }
+      std::sort(around.begin(), around.end());
+      around.erase(std::unique(around.begin(), around.end()), around.end());
+      for (int u : around) {
+        if (!st.ManifoldAt(u)) return false;
+      }
+      return options.min_piece_fraction <= 0 || st.SmallestPiece() >= options.min_piece_fraction * nt;
+    };
     SplitState saved = st;  // to undo a split that would leave a non-manifold surface
-    FractureEvent event;
-    event.node = j;
-    event.normal = n;
-    event.measure = sep.measure(j);
-    event.toughness = sep.toughness(j);
-    event.removed_elements = static_cast<int>(crossed.size());
-    std::vector<int> check = {j};
-    for (int e : crossed) {
-      for (int v : st.tets[e]) check.push_back(v);
-      st.Remove(e);
-    }
-    const int r = st.AddReplica(j);
-    for (int e : positive) {
-      st.Reassign(e, j, r);
-      st.star[r].push_back(e);
-    }
-    st.star[j] = negative;
-    check.push_back(r);
-    std::sort(check.begin(), check.end());
-    check.erase(std::unique(check.begin(), check.end()), check.end());
-    for (int v : check) st.SplitPinched(v);
-    // Every vertex whose elements changed, and their neighbours (the crack front).
-    std::vector<int> around;
-    for (int v = static_cast<int>(saved.rest.size()); v < static_cast<int>(st.rest.size()); ++v) check.push_back(v);
-    for (int v : check) {
-      for (int e : st.star[v])
-        for (int u : st.tets[e]) around.push_back(u);
-      around.push_back(v);
-    }
-    std::sort(around.begin(), around.end());
-    around.erase(std::unique(around.begin(), around.end()), around.end());
-    bool manifold = true;
-    for (int u : around) {
-      if (!st.ManifoldAt(u)) {
-        manifold = false;
-        break;
+    std::vector<int> check, crossed;
+    std::vector<int> group = {j};
+    if (!split_node(j, st.x[j], &check, &crossed)) continue;
+    bool valid = still_valid(saved, check);
+    if (!valid && limit_cracks) {
+      // A crack front through a body one or more elements thick: splitting one front node
+      // alone pinches the surface at its neighbours on the same plane (the node above or
+      // below it), so the front's nodes on the plane next to j split with it, in one step.
+      const Eigen::Vector3d p = saved.x[j];
+      double h = 0.0;
+      int edges = 0;
+      std::vector<int> partners;
+      for (int e : saved.star[j]) {
+        for (int a = 0; a < 4; ++a) {
+          for (int b = a + 1; b < 4; ++b, ++edges) h += (saved.x[saved.tets[e][a]] - saved.x[saved.tets[e][b]]).norm();
+          const int u = saved.tets[e][a];
+          if (u != j && !saved.crack[u]) partners.push_back(u);
+        }
       }
+      h /= std::max(edges, 1);
+      std::sort(partners.begin(), partners.end());
+      partners.erase(std::unique(partners.begin(), partners.end()), partners.end());
+      bool any = false;
+      for (int u : partners) {
+        if (std::abs(n.dot(saved.x[u] - p)) > 0.25 * h) continue;
+        if (split_node(u, saved.x[u], &check, &crossed)) {
+          group.push_back(u);
+          any = true;
+        }
+      }
+      valid = any && still_valid(saved, check);
     }
-    if (manifold && options.min_piece_fraction > 0) {
-      const int smallest = st.SmallestPiece();
-      manifold = smallest >= options.min_piece_fraction * nt;
-    }
-    if (!manifold) {
+    if (!valid) {
       st = std::move(saved);
       continue;
     }
-    ++splits;
+    splits += static_cast<int>(group.size());
     change->removed_elements += static_cast<int>(crossed.size());
     for (int e : crossed) change->removed_volume += model->rest(e).volume;
-    change->events.push_back(event);
+    for (int u : group) {
+      FractureEvent event;
+      event.node = u;
+      event.normal = n;
+      event.measure = sep.measure(u);
+      event.toughness = sep.toughness(u);
+      event.removed_elements = u == j ? static_cast<int>(crossed.size()) : 0;
+      change->events.push_back(event);
+    }
   }
   if (splits == 0) return;
 
