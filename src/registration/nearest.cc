@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "femreg/collision.h"
+
 namespace femreg {
 
 namespace {
@@ -61,35 +63,9 @@ int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,
 
 Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                        const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  // Voronoi-region walk over the vertices, edges and face of the triangle.
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return {1.0, 0.0, 0.0};
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return {0.0, 1.0, 0.0};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    const double v = d1 / (d1 - d3);
-    return {1.0 - v, v, 0.0};
-  }
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return {0.0, 0.0, 1.0};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    const double w = d2 / (d2 - d6);
-    return {1.0 - w, 0.0, w};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {0.0, 1.0 - w, w};
-  }
-  const double denom = va + vb + vc;
-  if (!(std::abs(denom) > 0.0)) return {1.0, 0.0, 0.0};  // degenerate triangle
-  const double v = vb / denom, w = vc / denom;
-  return {1.0 - v - w, v, w};
+  Eigen::Vector3d barycentric;
+  TriangleClosestPoint(p, a, b, c, &barycentric);  // femreg/collision.h, degenerate-safe
+  return barycentric;
 }
 
 SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
