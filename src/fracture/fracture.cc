@@ -151,6 +151,24 @@ namespace {
 
 // Working state of one batch of splits: elements are flagged instead of erased and the
 // vertex stars kept up to date, so indices stay put until the final compaction.
+// Disjoint sets over 0..n-1 with path halving; a union keeps the smaller root.
+class DisjointSets {
+ public:
+  explicit DisjointSets(int n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
+  int Find(int i) {
+    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+    return i;
+  }
+  void Unite(int a, int b) {
+    a = Find(a);
+    b = Find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<int> parent_;
+};
+
 struct SplitState {
   TetMesh* mesh;
   std::vector<std::array<int, 4>> tets;
@@ -186,32 +204,22 @@ struct SplitState {
   // Cracks: the crack vertices connected through their elements and through their copies.
   int CountCracks() const {
     const int nv = static_cast<int>(rest.size());
-    std::vector<int> parent(nv);
-    std::iota(parent.begin(), parent.end(), 0);
-    auto find = [&](int i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
-    auto unite = [&](int a, int b) {
-      a = find(a);
-      b = find(b);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    };
+    DisjointSets sets(nv);
     std::map<std::array<double, 3>, int> first;
     for (int v = 0; v < nv; ++v) {
       if (!crack[v]) continue;
       const std::array<double, 3> key = {rest[v].x(), rest[v].y(), rest[v].z()};
       auto it = first.emplace(key, v).first;
-      unite(it->second, v);
+      sets.Unite(it->second, v);
     }
     for (size_t e = 0; e < tets.size(); ++e) {
       if (removed[e]) continue;
       for (int a = 0; a < 4; ++a)
         for (int b = a + 1; b < 4; ++b)
-          if (crack[tets[e][a]] && crack[tets[e][b]]) unite(tets[e][a], tets[e][b]);
+          if (crack[tets[e][a]] && crack[tets[e][b]]) sets.Unite(tets[e][a], tets[e][b]);
     }
     int count = 0;
-    for (int v = 0; v < nv; ++v) count += crack[v] && find(v) == v;
+    for (int v = 0; v < nv; ++v) count += crack[v] && sets.Find(v) == v;
     return count;
   }
 
@@ -324,23 +332,14 @@ struct SplitState {
 
   // Elements in the smallest connected piece (elements sharing a vertex).
   int SmallestPiece() const {
-    const int nv = static_cast<int>(rest.size());
-    std::vector<int> parent(nv);
-    std::iota(parent.begin(), parent.end(), 0);
-    auto find = [&](int i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
+    DisjointSets sets(static_cast<int>(rest.size()));
     for (size_t e = 0; e < tets.size(); ++e) {
       if (removed[e]) continue;
-      for (int k = 1; k < 4; ++k) {
-        const int a = find(tets[e][0]), b = find(tets[e][k]);
-        if (a != b) parent[a] = b;
-      }
+      for (int k = 1; k < 4; ++k) sets.Unite(tets[e][0], tets[e][k]);
     }
     std::map<int, int> size;
     for (size_t e = 0; e < tets.size(); ++e) {
-      if (!removed[e]) ++size[find(tets[e][0])];
+      if (!removed[e]) ++size[sets.Find(tets[e][0])];
     }
     int smallest = std::numeric_limits<int>::max();
     for (const auto& kv : size) smallest = std::min(smallest, kv.second);
