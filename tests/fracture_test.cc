@@ -14,6 +14,8 @@
 #include <memory>
 #include <numeric>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "femreg/forward.h"
 #include "femreg/io.h"
@@ -21,6 +23,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -484,6 +487,41 @@ TEST(FractureTracking, OffComputesNothing) {
   EXPECT_EQ(tracker->fracture_measure(0).size(), 0);
   EXPECT_TRUE(tracker->original_vertices(0).empty());
 }
+
+#ifdef FEMREG_CLI_PATH
+// `femreg eval` on a fracture result matches vertices through the VTU's original_vertex
+// field, piece by piece, and gives the same errors as `femreg register --ground-truth`.
+TEST(FractureCli, EvalMatchesRegisterOnTheBrokenBeam) {
+  testing_util::TempDir dir("femreg_fracture_cli");
+  const std::string data = std::string(FEMREG_DATASETS_DIR) + "/beam_break";
+  const std::string cli = FEMREG_CLI_PATH;
+  ASSERT_EQ(std::system((cli + " register --scene " + data + "/scene.yaml --frames " + data +
+                         "/clouds --ground-truth " + data + "/ground_truth --max-frames 16 "
+                         "--no-progress --report none --out " + dir.path() + "/run > " +
+                         dir.path() + "/register.txt").c_str()),
+            0);
+  ASSERT_EQ(std::system((cli + " eval " + dir.path() + "/run " + data + " > " + dir.path() +
+                         "/eval.txt").c_str()),
+            0);
+  auto read = [&](const std::string& name) {
+    std::ifstream in(dir.path() + "/" + name);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string reg = read("register.txt"), eval = read("eval.txt");
+  // The per-piece lines ("  piece 0 after the break ...") are the same in both.
+  auto pieces = [](const std::string& text) {
+    std::string out;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("  piece ", 0) == 0) out += line + "\n";
+    return out;
+  };
+  EXPECT_NE(pieces(reg), "") << reg;
+  EXPECT_EQ(pieces(eval), pieces(reg)) << eval;
+  EXPECT_NE(eval.find("(ground truth: first split at frame 12, in pieces from frame 13)"), std::string::npos)
+      << eval;
+}
+#endif  // FEMREG_CLI_PATH
 
 }  // namespace
 }  // namespace femreg

@@ -4,6 +4,7 @@
 #define FEMREG_EVAL_H_
 
 #include <string>
+#include <vector>
 
 #include "femreg/mesh.h"
 #include "femreg/status.h"
@@ -17,6 +18,9 @@ struct VtuGeometry {
   Vertices points;     // #P by 3, in file order
   Tets tets;           // #T by 4 tetrahedra of the file
   Triangles surface;   // #F by 3
+  // The point field "original_vertex" (`femreg register` with fracture: the vertex of the
+  // first mesh each vertex comes from); empty when the file has none.
+  std::vector<int> original;
 };
 Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry);
 

@@ -161,6 +161,7 @@ struct PieceErrors {
   VertexErrors all;                 // over every tracked vertex
   std::vector<ErrorStats> pieces;   // per tracked piece (ConnectedPieces order)
   std::vector<int> piece_vertices;  // tracked vertices per piece
+  GroundTruthFrame matched;         // per tracked vertex: the truth it was compared with
 };
 // positions: #V tracked; original: #V original ids (rows of truth).
 PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,

@@ -3,9 +3,11 @@
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
 #include <vtkCommand.h>
+#include <vtkDataArray.h>
 #include <vtkFloatArray.h>
 #include <vtkIdList.h>
 #include <vtkNew.h>
+#include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
@@ -13,6 +15,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -96,6 +99,15 @@ Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry) {
     double p[3];
     grid->GetPoint(i, p);
     geometry->points.row(i) << p[0], p[1], p[2];
+  }
+  geometry->original.clear();
+  if (vtkDataArray* original = grid->GetPointData()->GetArray("original_vertex")) {
+    if (original->GetNumberOfTuples() == n && original->GetNumberOfComponents() == 1) {
+      geometry->original.resize(static_cast<size_t>(n));
+      for (vtkIdType i = 0; i < n; ++i) {
+        geometry->original[static_cast<size_t>(i)] = static_cast<int>(std::lround(original->GetTuple1(i)));
+      }
+    }
   }
   std::vector<std::array<int, 4>> tets;
   std::vector<std::array<int, 3>> tris;

@@ -88,6 +88,7 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
   }
   matched.positions = truth_positions;
   out.all = ComputeVertexErrors(positions, matched);
+  out.matched = std::move(matched);
   for (int p = 0; p < num_pieces; ++p) {
     out.piece_vertices.push_back(static_cast<int>(per_piece[p].size()));
     out.pieces.push_back(ComputeErrorStats(per_piece[p]));

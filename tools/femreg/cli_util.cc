@@ -156,3 +156,59 @@ bool Interrupted() { return g_interrupted.load(); }
 
 }  // namespace cli
 }  // namespace femreg
+
+namespace femreg {
+namespace cli {
+
+void PrintFractureReport(const std::vector<FractureFrame>& frames, const std::string& truth_dir,
+                         bool counts_vertices) {
+  int splits = 0, first_split = -1, first_break = -1;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    splits += frames[f].splits;
+    if (first_split < 0 && frames[f].splits > 0) first_split = static_cast<int>(f);
+    if (first_break < 0 && frames[f].pieces >= 2) first_break = static_cast<int>(f);
+  }
+  std::printf("Fracture: %d %s; first split at frame %d, in pieces from frame %d", splits,
+              counts_vertices ? "vertices added by splits" : "node splits", first_split, first_break);
+  const std::filesystem::path events = std::filesystem::path(truth_dir) / "events.csv";
+  if (!truth_dir.empty() && std::filesystem::exists(events)) {
+    std::FILE* in = std::fopen(events.string().c_str(), "r");
+    int gt_split = -1, gt_break = -1;
+    char line[256];
+    if (in != nullptr && std::fgets(line, sizeof(line), in)) {
+      while (std::fgets(line, sizeof(line), in)) {
+        int frame = 0, node = 0, pieces = 0;
+        double nx, ny, nz, measure;
+        if (std::sscanf(line, "%d,%d,%lf,%lf,%lf,%lf,%d", &frame, &node, &nx, &ny, &nz, &measure, &pieces) != 7) continue;
+        if (gt_split < 0) gt_split = frame;
+        if (gt_break < 0 && pieces >= 2) gt_break = frame;
+      }
+    }
+    if (in != nullptr) std::fclose(in);
+    std::printf(" (ground truth: first split at frame %d, in pieces from frame %d)", gt_split, gt_break);
+  }
+  std::printf("\n");
+  if (first_break < 0) return;
+  std::vector<double> sum, max;
+  std::vector<int> count;
+  for (size_t f = static_cast<size_t>(first_break); f < frames.size(); ++f) {
+    const auto& pe = frames[f].piece_errors;
+    for (size_t p = 0; p < pe.size(); ++p) {
+      if (sum.size() <= p) {
+        sum.resize(p + 1, 0.0);
+        max.resize(p + 1, 0.0);
+        count.resize(p + 1, 0);
+      }
+      sum[p] += pe[p].mean;
+      max[p] = std::max(max[p], pe[p].max);
+      ++count[p];
+    }
+  }
+  for (size_t p = 0; p < sum.size(); ++p) {
+    std::printf("  piece %zu after the break (%d frames): vertex error mean %.2f mm, max %.2f mm\n", p,
+                count[p], 1e3 * sum[p] / std::max(count[p], 1), 1e3 * max[p]);
+  }
+}
+
+}  // namespace cli
+}  // namespace femreg

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/ground_truth.h"
 #include "femreg/status.h"
 
 namespace femreg {
@@ -39,6 +40,21 @@ class ProgressBar {
   int last_decile_ = -1;
   std::chrono::steady_clock::time_point start_;
 };
+
+// Per frame of a tracked fracture sequence: node splits, connected pieces and the error of
+// each piece against the ground truth (empty without one).
+struct FractureFrame {
+  int splits = 0;
+  int pieces = 1;
+  std::vector<ErrorStats> piece_errors;
+};
+// Prints when the tracker first split and when it was first in pieces, against the
+// ground truth's events.csv in truth_dir when there is one, and each piece's mean and max
+// error over the frames after the break.
+// With counts_vertices, `splits` counts the vertices the splits added (all a result file
+// tells), not the node splits.
+void PrintFractureReport(const std::vector<FractureFrame>& frames, const std::string& truth_dir,
+                         bool counts_vertices = false);
 
 // Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one exits at once.
 void InstallInterruptHandler();

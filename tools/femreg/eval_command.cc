@@ -17,6 +17,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "femreg/eval.h"
+#include "femreg/fracture.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 
@@ -81,6 +82,14 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   if (!status.ok()) return fail(status.message() + " (RESULT must be a `femreg register` output folder)");
   status = ListFrames((fs::path(truth_dir) / "ground_truth").string(), {".csv"}, &truth_csvs);
   if (!status.ok()) return fail(status.message() + " (GROUND_TRUTH must be a `femreg synth` output folder)");
+  // Fracture sequences keep the events and per-piece positions beside the frames.
+  truth_csvs.erase(std::remove_if(truth_csvs.begin(), truth_csvs.end(),
+                                  [](const std::string& f) {
+                                    const std::string n = fs::path(f).filename().string();
+                                    return n == "events.csv" ||
+                                           (n.size() > 11 && n.compare(n.size() - 11, 11, "_pieces.csv") == 0);
+                                  }),
+                   truth_csvs.end());
   const bool have_truth_surface = fs::is_directory(fs::path(truth_dir) / "truth");
   if (have_truth_surface) {
     status = ListFrames((fs::path(truth_dir) / "truth").string(), {".vtu"}, &truth_vtus);
@@ -104,12 +113,19 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   std::vector<EvalRow> rows;
   std::vector<double> pooled_seen, pooled_hidden, pooled_all;
   double surface_sum = 0.0, hausdorff = 0.0;
+  // Fracture results (an original_vertex field): vertices are matched through their
+  // original vertex, piece by piece, as `femreg register --ground-truth` does.
+  std::vector<FractureFrame> fracture;
+  std::vector<int> initial_vertices(objects.size(), -1);  // per object: rows in the truth
+  int fracture_vertices_so_far = 0;  // vertices added by splits up to the previous frame
   for (size_t f = 0; f < num_frames; ++f) {
     Vertices positions(0, 3);
     Vertices surface_points(0, 3);
     Triangles surface(0, 3);
+    std::vector<VtuGeometry> geometries;
     for (const std::string& o : objects) {
-      VtuGeometry g;
+      geometries.emplace_back();
+      VtuGeometry& g = geometries.back();
       status = ReadVtuGeometry(frames[o][f], &g);
       if (!status.ok()) return fail(status.message());
       const Eigen::Index offset = positions.rows();
@@ -122,6 +138,65 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
     GroundTruthFrame truth;
     status = ReadGroundTruthFrame(truth_csvs[f], &truth);
     if (!status.ok()) return fail(status.message());
+    if (!geometries.empty() && !geometries[0].original.empty()) {
+      // Each object against its rows of the truth, piece by piece; `truth` then becomes the
+      // truth each tracked vertex was compared with.
+      std::vector<PieceTruthRow> piece_truth;
+      const fs::path side = fs::path(truth_csvs[f]).parent_path() /
+                            (fs::path(truth_csvs[f]).stem().string() + "_pieces.csv");
+      if (fs::exists(side)) {
+        status = ReadPieceTruth(side.string(), &piece_truth);
+        if (!status.ok()) return fail(status.message());
+      }
+      FractureFrame frame;
+      frame.pieces = 0;
+      GroundTruthFrame matched;
+      matched.positions.resize(positions.rows(), 3);
+      int first = 0;
+      Eigen::Index row = 0;
+      for (size_t i = 0; i < geometries.size(); ++i) {
+        const VtuGeometry& g = geometries[i];
+        if (g.original.size() != static_cast<size_t>(g.points.rows())) {
+          return fail(frames[objects[i]][f] + ": no original_vertex field, unlike " + frames[objects[0]][f]);
+        }
+        if (initial_vertices[i] < 0) {
+          initial_vertices[i] = *std::max_element(g.original.begin(), g.original.end()) + 1;
+        }
+        const int initial = initial_vertices[i];
+        if (first + initial > truth.positions.rows()) {
+          return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) +
+                      " vertices, fewer than the result's objects had at the start");
+        }
+        frame.splits += static_cast<int>(g.points.rows()) - initial;  // net new vertices
+        TetMesh mesh;
+        mesh.rest = g.points;
+        mesh.x = g.points;
+        mesh.tets = g.tets;
+        GroundTruthFrame object_truth;
+        object_truth.positions = truth.positions.middleRows(first, initial);
+        object_truth.visible.assign(truth.visible.begin() + first, truth.visible.begin() + first + initial);
+        std::vector<PieceTruthRow> object_pieces;
+        for (PieceTruthRow r : piece_truth) {
+          if (r.vertex >= first && r.vertex < first + initial) {
+            r.vertex -= first;
+            object_pieces.push_back(r);
+          }
+        }
+        const PieceErrors pe = ComputePieceErrors(mesh, g.points, g.original, object_truth, object_pieces);
+        frame.pieces += static_cast<int>(pe.pieces.size());
+        frame.piece_errors.insert(frame.piece_errors.end(), pe.pieces.begin(), pe.pieces.end());
+        matched.positions.middleRows(row, g.points.rows()) = pe.matched.positions;
+        matched.visible.insert(matched.visible.end(), pe.matched.visible.begin(), pe.matched.visible.end());
+        row += g.points.rows();
+        first += initial;
+      }
+      // Splits this frame: the growth of the vertex count since the last frame.
+      const int total_new = frame.splits;
+      frame.splits = std::max(0, total_new - (fracture.empty() ? 0 : fracture_vertices_so_far));
+      fracture_vertices_so_far = std::max(fracture_vertices_so_far, total_new);
+      fracture.push_back(frame);
+      truth = std::move(matched);
+    }
     if (truth.positions.rows() != positions.rows()) {
       return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) +
                   " vertices, the result " + std::to_string(positions.rows()) + " (" + frames[objects[0]][f] + ")");
@@ -198,6 +273,7 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
       std::printf("%7s %7s\n", "-", "-");
     }
   }
+  if (!fracture.empty()) PrintFractureReport(fracture, (fs::path(truth_dir) / "ground_truth").string(), true);
   std::printf("Totals pool every vertex of every frame; surf is the mean over frames of the "
               "symmetric mean surface distance, hausd the largest Hausdorff distance.\nCSV: %s\n",
               csv.c_str());

@@ -205,57 +205,6 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   return os.str();
 }
 
-// When the tracker split and broke, against the ground truth's events.csv when there is
-// one, and the error of each piece after the break.
-void PrintFractureReport(const std::vector<FrameRow>& rows, const std::string& truth_dir) {
-  int splits = 0, first_split = -1, first_break = -1;
-  for (size_t f = 0; f < rows.size(); ++f) {
-    splits += static_cast<int>(rows[f].summary.fractures.size());
-    if (first_split < 0 && !rows[f].summary.fractures.empty()) first_split = static_cast<int>(f);
-    if (first_break < 0 && rows[f].pieces >= 2) first_break = static_cast<int>(f);
-  }
-  std::printf("Fracture: %d node splits; first split at frame %d, in pieces from frame %d", splits,
-              first_split, first_break);
-  const fs::path events = fs::path(truth_dir) / "events.csv";
-  if (!truth_dir.empty() && fs::exists(events)) {
-    std::FILE* in = std::fopen(events.string().c_str(), "r");
-    int gt_split = -1, gt_break = -1;
-    char line[256];
-    if (in != nullptr && std::fgets(line, sizeof(line), in)) {
-      while (std::fgets(line, sizeof(line), in)) {
-        int frame = 0, node = 0, pieces = 0;
-        double nx, ny, nz, measure;
-        if (std::sscanf(line, "%d,%d,%lf,%lf,%lf,%lf,%d", &frame, &node, &nx, &ny, &nz, &measure, &pieces) != 7) continue;
-        if (gt_split < 0) gt_split = frame;
-        if (gt_break < 0 && pieces >= 2) gt_break = frame;
-      }
-    }
-    if (in != nullptr) std::fclose(in);
-    std::printf(" (ground truth: first split at frame %d, in pieces from frame %d)", gt_split, gt_break);
-  }
-  std::printf("\n");
-  if (first_break < 0) return;
-  std::vector<double> sum, max;
-  std::vector<int> count;
-  for (size_t f = static_cast<size_t>(first_break); f < rows.size(); ++f) {
-    const auto& pe = rows[f].piece_errors;
-    for (size_t p = 0; p < pe.size(); ++p) {
-      if (sum.size() <= p) {
-        sum.resize(p + 1, 0.0);
-        max.resize(p + 1, 0.0);
-        count.resize(p + 1, 0);
-      }
-      sum[p] += pe[p].mean;
-      max[p] = std::max(max[p], pe[p].max);
-      ++count[p];
-    }
-  }
-  for (size_t p = 0; p < sum.size(); ++p) {
-    std::printf("  piece %zu after the break (%d frames): vertex error mean %.2f mm, max %.2f mm\n", p,
-                count[p], 1e3 * sum[p] / std::max(count[p], 1), 1e3 * max[p]);
-  }
-}
-
 // With --no-collision: the scene's collision section used only to measure, after each frame,
 // the contacts and the deepest penetration of the result (the tracker adds no contact term).
 class ContactMeter {
@@ -481,6 +430,13 @@ int RunRegister(const RegisterArgs& args) {
         fields.back().name = "fracture_measure";  // largest eigenvalue of zeta / area (Pa)
         fields.back().values = tracker->fracture_measure(i);
       }
+      const std::vector<int>& original = tracker->original_vertices(i);
+      if (static_cast<int>(original.size()) == m.num_vertices()) {
+        fields.emplace_back();  // the vertex of the first mesh each vertex comes from
+        fields.back().name = "original_vertex";
+        fields.back().values.resize(m.num_vertices(), 1);
+        for (int v = 0; v < m.num_vertices(); ++v) fields.back().values(v, 0) = original[v];
+      }
       fields[0].name = "displacement";
       fields[0].values = m.x - m.rest;
       fields[1].name = "residual";
@@ -563,7 +519,15 @@ int RunRegister(const RegisterArgs& args) {
                 rows.empty() ? 0.0 : 1e3 * sum / rows.size(), D * 1e3,
                 deepest > D ? ": the surfaces crossed" : "");
   }
-  if (!tracker->original_vertices(0).empty()) PrintFractureReport(rows, args.ground_truth);
+  if (!tracker->original_vertices(0).empty()) {
+    std::vector<FractureFrame> fracture(rows.size());
+    for (size_t f = 0; f < rows.size(); ++f) {
+      fracture[f].splits = static_cast<int>(rows[f].summary.fractures.size());
+      fracture[f].pieces = rows[f].pieces;
+      fracture[f].piece_errors = rows[f].piece_errors;
+    }
+    PrintFractureReport(fracture, args.ground_truth);
+  }
   std::printf("Results in %s: %s.pvd (open in ParaView), stats.csv, summary.json\n", args.out.c_str(),
               scene.objects.empty() ? "" : scene.objects[0].name.c_str());
   if (interrupted) {
