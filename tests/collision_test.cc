@@ -854,6 +854,29 @@ TEST(CollisionSequences, ToolTableStaysOutOfTheToolAndTheTable) {
   EXPECT_LT(on.Mean(on.hidden), off.Mean(off.hidden));
 }
 
+// The bundled contact sequences are what `femreg contact-data` writes today, byte for byte
+// (one thread, as tools/make_datasets.sh runs it).
+TEST(CollisionSequences, BundledSequencesRegenerateBitIdentically) {
+  namespace fs = std::filesystem;
+  for (const std::string name : {"tool_table", "contact_pair"}) {
+    testing_util::TempDir dir("femreg_contact_regen");
+    ASSERT_TRUE(GenerateContactSequence(name, dir.path()).ok()) << name;
+    const fs::path bundled = fs::path(FEMREG_DATASETS_DIR) / name;
+    int files = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(dir.path())) {
+      if (!entry.is_regular_file()) continue;
+      const fs::path rel = fs::relative(entry.path(), dir.path());
+      std::ifstream a(entry.path(), std::ios::binary), b(bundled / rel, std::ios::binary);
+      ASSERT_TRUE(b.good()) << name << ": " << rel << " is not bundled";
+      const std::string x((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
+      const std::string y((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+      EXPECT_TRUE(x == y) << name << ": " << rel << " differs (regenerate with tools/make_datasets.sh)";
+      ++files;
+    }
+    EXPECT_GT(files, 24) << name;
+  }
+}
+
 #ifdef FEMREG_CLI_PATH
 // The last value of a stats.csv column.
 double LastColumn(const std::string& csv, const std::string& column) {
