@@ -168,6 +168,19 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
                                const std::vector<int>& original, const GroundTruthFrame& truth,
                                const std::vector<PieceTruthRow>& piece_truth);
 
+// Several objects against one ground truth frame that holds every object's initial
+// vertices in scene order (and side-file rows in that numbering): object i takes the
+// `initial` rows after those of the objects before it. Pieces are numbered object by
+// object; `all` and `matched` cover every tracked vertex in object order.
+struct TrackedObject {
+  const TetMesh* mesh = nullptr;              // its elements (for the pieces)
+  const Vertices* positions = nullptr;        // #V tracked positions
+  const std::vector<int>* original = nullptr; // #V original ids
+  int initial = 0;                            // its vertices before any split
+};
+Status ComputePieceErrors(const std::vector<TrackedObject>& objects, const GroundTruthFrame& truth,
+                          const std::vector<PieceTruthRow>& piece_truth, PieceErrors* out);
+
 // The bundled fracture sequences: "beam_break" (a beam bent until it breaks) and
 // "slab_tear" (a slab torn by two grippers). Writes DIR/scene.yaml, DIR/clouds/*.pcd,
 // DIR/ground_truth/frame_NNNN.csv (+ _pieces.csv after the break, events.csv) and

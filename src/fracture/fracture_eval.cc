@@ -96,4 +96,44 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
   return out;
 }
 
+Status ComputePieceErrors(const std::vector<TrackedObject>& objects, const GroundTruthFrame& truth,
+                          const std::vector<PieceTruthRow>& piece_truth, PieceErrors* out) {
+  *out = PieceErrors();
+  Eigen::Index total = 0;
+  for (const TrackedObject& o : objects) total += o.positions->rows();
+  Vertices positions(total, 3);
+  out->matched.positions.resize(total, 3);
+  int first = 0;
+  Eigen::Index row = 0;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const TrackedObject& o = objects[i];
+    if (first + o.initial > truth.positions.rows() ||
+        static_cast<size_t>(first + o.initial) > truth.visible.size()) {
+      return Status::Error("has " + std::to_string(truth.positions.rows()) +
+                           " vertices, fewer than the objects had at the start");
+    }
+    GroundTruthFrame object_truth;
+    object_truth.positions = truth.positions.middleRows(first, o.initial);
+    object_truth.visible.assign(truth.visible.begin() + first, truth.visible.begin() + first + o.initial);
+    std::vector<PieceTruthRow> object_pieces;
+    for (PieceTruthRow r : piece_truth) {
+      if (r.vertex >= first && r.vertex < first + o.initial) {
+        r.vertex -= first;
+        object_pieces.push_back(r);
+      }
+    }
+    const PieceErrors pe = ComputePieceErrors(*o.mesh, *o.positions, *o.original, object_truth, object_pieces);
+    out->pieces.insert(out->pieces.end(), pe.pieces.begin(), pe.pieces.end());
+    out->piece_vertices.insert(out->piece_vertices.end(), pe.piece_vertices.begin(), pe.piece_vertices.end());
+    const Eigen::Index n = o.positions->rows();
+    positions.middleRows(row, n) = *o.positions;
+    out->matched.positions.middleRows(row, n) = pe.matched.positions;
+    out->matched.visible.insert(out->matched.visible.end(), pe.matched.visible.begin(), pe.matched.visible.end());
+    row += n;
+    first += o.initial;
+  }
+  out->all = ComputeVertexErrors(positions, out->matched);
+  return Status::Ok();
+}
+
 }  // namespace femreg

@@ -149,11 +149,8 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
         if (!status.ok()) return fail(status.message());
       }
       FractureFrame frame;
-      frame.pieces = 0;
-      GroundTruthFrame matched;
-      matched.positions.resize(positions.rows(), 3);
-      int first = 0;
-      Eigen::Index row = 0;
+      std::vector<TetMesh> meshes(geometries.size());
+      std::vector<TrackedObject> tracked(geometries.size());
       for (size_t i = 0; i < geometries.size(); ++i) {
         const VtuGeometry& g = geometries[i];
         if (g.original.size() != static_cast<size_t>(g.points.rows())) {
@@ -162,34 +159,18 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
         if (initial_vertices[i] < 0) {
           initial_vertices[i] = *std::max_element(g.original.begin(), g.original.end()) + 1;
         }
-        const int initial = initial_vertices[i];
-        if (first + initial > truth.positions.rows()) {
-          return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) +
-                      " vertices, fewer than the result's objects had at the start");
-        }
-        frame.splits += static_cast<int>(g.points.rows()) - initial;  // net new vertices
-        TetMesh mesh;
-        mesh.rest = g.points;
-        mesh.x = g.points;
-        mesh.tets = g.tets;
-        GroundTruthFrame object_truth;
-        object_truth.positions = truth.positions.middleRows(first, initial);
-        object_truth.visible.assign(truth.visible.begin() + first, truth.visible.begin() + first + initial);
-        std::vector<PieceTruthRow> object_pieces;
-        for (PieceTruthRow r : piece_truth) {
-          if (r.vertex >= first && r.vertex < first + initial) {
-            r.vertex -= first;
-            object_pieces.push_back(r);
-          }
-        }
-        const PieceErrors pe = ComputePieceErrors(mesh, g.points, g.original, object_truth, object_pieces);
-        frame.pieces += static_cast<int>(pe.pieces.size());
-        frame.piece_errors.insert(frame.piece_errors.end(), pe.pieces.begin(), pe.pieces.end());
-        matched.positions.middleRows(row, g.points.rows()) = pe.matched.positions;
-        matched.visible.insert(matched.visible.end(), pe.matched.visible.begin(), pe.matched.visible.end());
-        row += g.points.rows();
-        first += initial;
+        frame.splits += static_cast<int>(g.points.rows()) - initial_vertices[i];  // net new vertices
+        meshes[i].rest = g.points;
+        meshes[i].x = g.points;
+        meshes[i].tets = g.tets;
+        tracked[i] = {&meshes[i], &g.points, &g.original, initial_vertices[i]};
       }
+      PieceErrors pe;
+      status = ComputePieceErrors(tracked, truth, piece_truth, &pe);
+      if (!status.ok()) return fail(truth_csvs[f] + ": " + status.message());
+      frame.pieces = static_cast<int>(pe.pieces.size());
+      frame.piece_errors = pe.pieces;
+      GroundTruthFrame matched = std::move(pe.matched);
       // Splits this frame: the growth of the vertex count since the last frame.
       const int total_new = frame.splits;
       frame.splits = std::max(0, total_new - (fracture.empty() ? 0 : fracture_vertices_so_far));

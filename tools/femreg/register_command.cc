@@ -377,30 +377,16 @@ int RunRegister(const RegisterArgs& args) {
         const std::string side = (fs::path(truth_files[f]).parent_path() /
                                   (fs::path(truth_files[f]).stem().string() + "_pieces.csv")).string();
         if (fs::exists(side)) gt = ReadPieceTruth(side, &piece_truth);
-        int first = 0;  // the object's first row in the ground truth
-        for (int i = 0; i < tracker->num_objects() && gt.ok(); ++i) {
+        std::vector<TrackedObject> tracked;
+        for (int i = 0; i < tracker->num_objects(); ++i) {
           const std::vector<int>& ids = tracker->original_vertices(i);
-          const int initial = *std::max_element(ids.begin(), ids.end()) + 1;
-          if (first + initial > truth.positions.rows()) {
-            gt = Status::Error("has " + std::to_string(truth.positions.rows()) + " vertices, fewer than the scene's");
-            break;
-          }
-          GroundTruthFrame object_truth;
-          object_truth.positions = truth.positions.middleRows(first, initial);
-          object_truth.visible.assign(truth.visible.begin() + first, truth.visible.begin() + first + initial);
-          std::vector<PieceTruthRow> object_pieces;
-          for (PieceTruthRow r : piece_truth) {
-            if (r.vertex >= first && r.vertex < first + initial) {
-              r.vertex -= first;
-              object_pieces.push_back(r);
-            }
-          }
-          const PieceErrors pe = ComputePieceErrors(tracker->mesh(i), tracker->vertices(i), ids,
-                                                    object_truth, object_pieces);
-          row.piece_errors.insert(row.piece_errors.end(), pe.pieces.begin(), pe.pieces.end());
-          if (i == 0) row.errors = pe.all;  // (the first object's when there are several)
-          first += initial;
+          tracked.push_back({&tracker->mesh(i), &tracker->vertices(i), &ids,
+                             *std::max_element(ids.begin(), ids.end()) + 1});
         }
+        PieceErrors pe;
+        if (gt.ok()) gt = ComputePieceErrors(tracked, truth, piece_truth, &pe);
+        row.piece_errors = pe.pieces;
+        row.errors = pe.all;  // every object's vertices
         if (!gt.ok()) {
           std::cerr << "\nfemreg register: ground truth " << truth_files[f] << ": " << gt.message() << "\n";
           return 1;
