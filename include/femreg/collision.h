@@ -114,7 +114,7 @@ struct ObstacleSpec {
 };
 
 struct CollisionSpec {
-  std::vector<std::pair<std::string, std::string>> pairs;  // object pairs; see effects
+  std::vector<std::pair<std::string, std::string>> pairs;  // object pairs; empty: every pair
   double stiffness = 1.0e4;  // k (N/m) per contact
   double distance = 0.002;   // D (m), proximity threshold
   std::vector<ObstacleSpec> obstacles;

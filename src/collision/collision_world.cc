@@ -66,7 +66,12 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
     return false;
   };
   pairs_.clear();
-  for (const auto& p : spec.pairs) {
+  std::vector<std::pair<std::string, std::string>> named = spec.pairs;
+  if (named.empty()) {  // every pair
+    for (size_t i = 0; i < names.size(); ++i)
+      for (size_t j = i + 1; j < names.size(); ++j) named.emplace_back(names[i], names[j]);
+  }
+  for (const auto& p : named) {
     int a = -1, b = -1;
     if (!find(p.first, &a)) return Status::Error("collision.pairs: no object named '" + p.first + "'");
     if (!find(p.second, &b)) return Status::Error("collision.pairs: no object named '" + p.second + "'");
@@ -211,6 +216,8 @@ ClosestOnSurface ClosestPoint(const Eigen::Vector3d& p, const Vertices& xs, cons
       best.bary = w;
     }
   }
+  // The faces that reach the same point (a second pass: which they are is known only once
+  // the nearest point is; a vertex has a handful of candidates).
   const double tie = 1e-9 + 1e-6 * best.distance;
   for (int i = 0; i < count; ++i) {
     const int f = candidates[i];

@@ -383,16 +383,19 @@ void Tracker::Impl::FindPairs(const PointCloud& cloud, const PointIndex& cloud_i
     }
   }
   if (data.cloud_to_model && surface.rows() > 0) {
-    SurfaceIndex surface_index(x, surface);
+    // Points without an object's label: every surface, or with labels the unlabelled
+    // objects' surfaces (none: the point is no one's).
+    std::unique_ptr<SurfaceIndex> whole_index;
+    if (point_object.empty()) whole_index = std::make_unique<SurfaceIndex>(x, surface);
+    const Triangles& other_surface = point_object.empty() ? surface : free_surface;
+    const SurfaceIndex* other_index = point_object.empty() ? whole_index.get() : free_surface_index.get();
     for (int i = 0; i < cloud.size(); i += data.cloud_stride) {
       const Eigen::Vector3d q = cloud.points.row(i);
       const int labelled = point_object.empty() ? -1 : point_object[i];
-      if (!point_object.empty() && labelled < 0 && !free_surface_index) continue;  // no one's
-      const Triangles& tris = labelled >= 0 ? object_surface[labelled]
-                              : point_object.empty() ? surface : free_surface;
-      const SurfaceIndex::Hit hit = labelled >= 0          ? object_surface_index[labelled]->Closest(q)
-                                    : point_object.empty() ? surface_index.Closest(q)
-                                                           : free_surface_index->Closest(q);
+      if (labelled < 0 && other_index == nullptr) continue;
+      const Triangles& tris = labelled >= 0 ? object_surface[labelled] : other_surface;
+      const SurfaceIndex::Hit hit =
+          labelled >= 0 ? object_surface_index[labelled]->Closest(q) : other_index->Closest(q);
       if (hit.triangle < 0) continue;
       if (hit.squared_distance > gate2) {
         ++*rejected;
@@ -652,6 +655,16 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       break;
     }
 
+    // Contacts at the current x (refit, broad and narrow phase), normals held for the solve
+    // of either back end; margin D keeps pairs that the solve may bring within D.
+    if (collision) {
+      const auto t_collision = Clock::now();
+      collision->SetFrame(frame);
+      collision->Detect(x, collision->distance(), &contacts);
+      row.contacts = static_cast<int>(contacts.size());
+      s.time.collision += Seconds(t_collision);
+    }
+
     // The fast back end.
     if (options.solver.backend == SolverBackend::kFast) {
       t0 = Clock::now();
@@ -688,10 +701,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       fp.anchors = fast_anchors;
       fp.fixed = fixed;
       s.time.build += Seconds(t0);
-      if (collision) {  // contacts at the current x, normals held for the solve (as for Ceres)
-        const auto t_collision = Clock::now();
-        collision->SetFrame(frame);
-        collision->Detect(x, collision->distance(), &contacts);
+      if (collision) {
         fp.contact_stiffness = collision->stiffness();
         fp.contacts.reserve(contacts.size());
         for (const Contact& c : contacts) {
@@ -714,8 +724,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
           }
           fp.contacts.push_back(t);
         }
-        row.contacts = static_cast<int>(contacts.size());
-        s.time.collision += Seconds(t_collision);
       }
       row.before = fast_backend::Evaluate(fp, x);
       if (!have_initial) {
@@ -777,13 +785,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         for (int j = 0; j < p.num_vertices; ++j) blocks.push_back(block(p.vertices[j]));
         ids_data.push_back(problem.AddResidualBlock(cost, MakeLoss(options.data, wd), blocks));
       }
-      // Contacts at the current x (refit, broad and narrow phase), normals held for the solve;
-      // margin D keeps pairs that the solve may bring within D.
       std::vector<ceres::ResidualBlockId> ids_collision;
       if (collision) {
-        const auto t_collision = Clock::now();
-        collision->SetFrame(frame);
-        collision->Detect(x, collision->distance(), &contacts);
         const double D = collision->distance(), kc = collision->stiffness();
         for (const Contact& c : contacts) {
           ceres::CostFunction* cost;
@@ -798,8 +801,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
           data_costs.emplace_back(cost);
           ids_collision.push_back(problem.AddResidualBlock(cost, nullptr, blocks));
         }
-        row.contacts = static_cast<int>(contacts.size());
-        s.time.collision += Seconds(t_collision);
       }
       for (int v = 0; v < num_vertices; ++v) {
         if (fixed[v] && problem.HasParameterBlock(block(v))) problem.SetParameterBlockConstant(block(v));
@@ -1124,13 +1125,8 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
       names.push_back(scene.objects[i].name);
       surfaces.push_back(impl.objects[i].mesh.surface.array() + impl.objects[i].offset);
     }
-    CollisionSpec spec = scene.collision;
-    if (spec.pairs.empty()) {  // every pair
-      for (size_t i = 0; i < names.size(); ++i)
-        for (size_t j = i + 1; j < names.size(); ++j) spec.pairs.emplace_back(names[i], names[j]);
-    }
     auto world = std::make_unique<CollisionWorld>();
-    status = world->Init(spec, names, surfaces, impl.x);
+    status = world->Init(scene.collision, names, surfaces, impl.x);  // no pairs: every pair
     if (!status.ok()) return Status::Error(scene.path + ": " + status.message());
     if (world->enabled()) impl.collision = std::move(world);
   }

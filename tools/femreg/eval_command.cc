@@ -117,7 +117,7 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   // original vertex, piece by piece, as `femreg register --ground-truth` does.
   std::vector<FractureFrame> fracture;
   std::vector<int> initial_vertices(objects.size(), -1);  // per object: rows in the truth
-  int fracture_vertices_so_far = 0;  // vertices added by splits up to the previous frame
+  int added_before = 0;  // vertices the splits had added up to the previous frame
   for (size_t f = 0; f < num_frames; ++f) {
     Vertices positions(0, 3);
     Vertices surface_points(0, 3);
@@ -170,13 +170,12 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
       if (!status.ok()) return fail(truth_csvs[f] + ": " + status.message());
       frame.pieces = static_cast<int>(pe.pieces.size());
       frame.piece_errors = pe.pieces;
-      GroundTruthFrame matched = std::move(pe.matched);
       // Splits this frame: the growth of the vertex count since the last frame.
-      const int total_new = frame.splits;
-      frame.splits = std::max(0, total_new - (fracture.empty() ? 0 : fracture_vertices_so_far));
-      fracture_vertices_so_far = std::max(fracture_vertices_so_far, total_new);
+      const int added = frame.splits;
+      frame.splits = std::max(0, added - added_before);
+      added_before = std::max(added_before, added);
       fracture.push_back(frame);
-      truth = std::move(matched);
+      truth = std::move(pe.matched);  // the truth each tracked vertex was compared with
     }
     if (truth.positions.rows() != positions.rows()) {
       return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) +

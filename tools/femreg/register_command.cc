@@ -210,30 +210,21 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
 class ContactMeter {
  public:
   Status Init(const Scene& scene, const Tracker& tracker) {
-    names_.clear();
-    for (const ObjectSpec& o : scene.objects) names_.push_back(o.name);
-    spec_ = scene.collision;
-    if (spec_.pairs.empty()) {  // every pair, as the tracker does
-      for (size_t i = 0; i < names_.size(); ++i)
-        for (size_t j = i + 1; j < names_.size(); ++j) spec_.pairs.emplace_back(names_[i], names_[j]);
-    }
-    Vertices x;
-    std::vector<Triangles> surfaces;
-    Gather(tracker, &x, &surfaces);
-    return world_.Init(spec_, names_, surfaces, x);
+    std::vector<std::string> names;
+    for (const ObjectSpec& o : scene.objects) names.push_back(o.name);
+    Gather(tracker);
+    return world_.Init(scene.collision, names, surfaces_, x_);  // no pairs: every pair
   }
   void Measure(const Tracker& tracker, int frame, FrameSummary* s) {
-    Vertices x;
-    std::vector<Triangles> surfaces;
-    Gather(tracker, &x, &surfaces);
-    if (x.rows() != vertices_) {  // fracture changed the topology
-      for (size_t i = 0; i < surfaces.size(); ++i) world_.Rebuild(static_cast<int>(i), surfaces[i], x);
-      vertices_ = x.rows();
+    const Eigen::Index before = x_.rows();
+    Gather(tracker);
+    if (x_.rows() != before) {  // fracture changed the topology
+      for (size_t i = 0; i < surfaces_.size(); ++i) world_.Rebuild(static_cast<int>(i), surfaces_[i], x_);
     }
     world_.SetFrame(frame);
     std::vector<Contact> contacts;
-    world_.Detect(x, 0.0, &contacts);
-    const ContactStats cs = world_.Evaluate(contacts, x);
+    world_.Detect(x_, 0.0, &contacts);
+    const ContactStats cs = world_.Evaluate(contacts, x_);
     s->contacts = cs.contacts;
     s->object_contacts = cs.object_contacts;
     s->obstacle_contacts = cs.obstacle_contacts;
@@ -242,23 +233,23 @@ class ContactMeter {
   double distance() const { return world_.distance(); }
 
  private:
-  void Gather(const Tracker& tracker, Vertices* x, std::vector<Triangles>* surfaces) {
+  // All objects' vertices and surfaces in one numbering, as the tracker's world has them.
+  void Gather(const Tracker& tracker) {
     int n = 0;
     for (int i = 0; i < tracker.num_objects(); ++i) n += tracker.mesh(i).num_vertices();
-    x->resize(n, 3);
+    x_.resize(n, 3);
+    surfaces_.clear();
     int offset = 0;
     for (int i = 0; i < tracker.num_objects(); ++i) {
       const TetMesh& m = tracker.mesh(i);
-      x->middleRows(offset, m.num_vertices()) = tracker.vertices(i);
-      surfaces->push_back(m.surface.array() + offset);
+      x_.middleRows(offset, m.num_vertices()) = tracker.vertices(i);
+      surfaces_.push_back(m.surface.array() + offset);
       offset += m.num_vertices();
     }
-    if (vertices_ < 0) vertices_ = n;
   }
-  std::vector<std::string> names_;
-  CollisionSpec spec_;
   CollisionWorld world_;
-  Eigen::Index vertices_ = -1;
+  Vertices x_;
+  std::vector<Triangles> surfaces_;
 };
 
 int RunRegister(const RegisterArgs& args) {
