@@ -364,7 +364,8 @@ TEST(Tracker, FastAndCeresBackEndsReachTheSameMinimumOnAFrame) {
       options.regularizer = reg;
       options.solver.backend = backend;
       options.solver.max_outer_iterations = 1;  // same pairs: one minimization to compare
-      options.solver.max_inner_iterations = 100;
+      options.solver.max_inner_iterations = 200;
+      options.solver.inner_tolerance = 1e-14;  // both to the minimum, not to a tolerance
       options.solver.predict_motion = false;
       auto tracker = MakeTracker(options);
       FrameSummary summary;

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "femreg/mesh.h"
@@ -16,6 +17,20 @@ struct Material {
   double youngs_modulus = 1.0e5;  // E, Pa; > 0
   double poisson_ratio = 0.3;     // nu; in (-1, 0.5)
   double density = 1000.0;        // kg/m^3; > 0
+  bool IsValid(std::string* error) const;
+};
+
+// The materials of one object: one for every element, or per region (the mesh's element
+// tags) with a default for the regions not listed.
+struct ObjectMaterial {
+  Material material;                              // elements of regions not listed
+  std::vector<std::pair<int, Material>> regions;  // region id -> material
+  ObjectMaterial() = default;
+  ObjectMaterial(const Material& m) : material(m) {}  // NOLINT: one material everywhere
+  // The material of an element of `region`.
+  const Material& ForRegion(int region) const;
+  // Every material valid (Material::IsValid); the error names it ("regions[2] (region 5):
+  // poisson_ratio ...").
   bool IsValid(std::string* error) const;
 };
 
@@ -69,6 +84,9 @@ Vector12 ElementForce(const ElementRest& rest, const Eigen::Matrix3d& R, const V
 Matrix12 WarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R);
 // The residual's Jacobian with R held fixed: S blockdiag(R^T) (6 by 12).
 Matrix6x12 ElementResidualJacobian(const ElementRest& rest, const Eigen::Matrix3d& R);
+// Its block of vertex i (0..3): S_i R^T (6 by 3), S_i the columns 3i..3i+2 of S.
+Eigen::Matrix<double, 6, 3> ElementResidualJacobianBlock(const ElementRest& rest,
+                                                         const Eigen::Matrix3d& R, int i);
 // Corotational stress in the element's unrotated frame, Voigt: C L u_r (seed eq. 7).
 Vector6 ElementStress(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x);
 
@@ -79,6 +97,9 @@ class ElasticModel {
   // default_material.
   void Build(const TetMesh& mesh, ElasticModelType type, const Material& default_material,
              const std::vector<std::pair<int, Material>>& material_per_region = {});
+  void Build(const TetMesh& mesh, ElasticModelType type, const ObjectMaterial& material) {
+    Build(mesh, type, material.material, material.regions);
+  }
   // Rebuilds the rest data of the listed elements only (after a topology change).
   void RebuildElements(const TetMesh& mesh, const std::vector<int>& elements);
   // After elements were removed or renumbered (fracture): element i of `mesh` was element

@@ -8,8 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "femreg/energy.h"
 #include "femreg/fem.h"
 #include "femreg/mesh.h"
+#include "femreg/solver.h"
 
 namespace femreg {
 
@@ -24,7 +26,6 @@ struct PointCloud {
   int size() const { return static_cast<int>(points.rows()); }
 };
 
-enum class RobustLoss { kNone, kHuber, kCauchy, kTukey };
 enum class DataMetric { kPointToPoint, kPointToPlane };
 enum class Regularizer {
   kCorotational,  // corotational linear FEM (the default)
@@ -32,16 +33,6 @@ enum class Regularizer {
   kMassSpring,    // springs on the mesh edges, k = E V_edge / L^2 (for comparison)
   kNone,          // no elastic term: temporal (and anchors) only
 };
-enum class TrustRegion { kLevenbergMarquardt, kDogleg };
-enum class SolverBackend {
-  kCeres,  // the reference: Ceres with the options below
-  kFast,   // Gauss-Newton on a directly assembled system, CHOLMOD pattern reused
-};
-enum class LinearSolver {
-  kSparseNormalCholesky,  // SuiteSparse CHOLMOD through Ceres
-  kConjugateGradients,    // Ceres' CGNR with a Jacobi preconditioner
-};
-
 const char* ToString(RobustLoss v);
 const char* ToString(DataMetric v);
 const char* ToString(Regularizer v);
@@ -106,6 +97,9 @@ struct WeightOptions {
 struct SolverOptions {
   int max_outer_iterations = 5;          // correspondences and rotations refreshed per outer iteration
   int max_inner_iterations = 10;         // Ceres iterations per outer iteration
+  // An inner solve stops when a step changes the energy by less than this fraction (Ceres'
+  // function tolerance).
+  double inner_tolerance = 1e-6;
   // Stop when the energy after an outer iteration changed by less than this fraction
   // from the previous outer iteration.
   double relative_energy_tolerance = 1e-3;
@@ -143,11 +137,6 @@ enum class TerminationType {
   kInvalidInput,       // e.g. every cloud point was NaN
 };
 const char* ToString(TerminationType t);
-
-struct EnergyTerms {
-  double data = 0.0, elastic = 0.0, temporal = 0.0, anchor = 0.0, collision = 0.0;
-  double total() const { return data + elastic + temporal + anchor + collision; }
-};
 
 struct OuterIteration {
   int iteration = 0;

@@ -18,22 +18,28 @@
 #include <vector>
 
 #include "femreg/collision.h"
+#include "femreg/fem.h"
 #include "femreg/fracture.h"
 #include "femreg/mesh.h"
 #include "femreg/point_cloud.h"
 #include "femreg/registration.h"
-#include "femreg/scene.h"
 #include "femreg/status.h"
 
 namespace femreg {
 
+struct Scene;  // femreg/scene.h
+
 class Tracker {
  public:
-  // Loads every object's mesh, builds the rest data once, and checks the options.
+  // Loads every object's mesh, builds the rest data once, and checks the options; the
+  // scene's labels, anchors and effects (fracture, collision) are set up. Defined with the
+  // scene module (link femreg::femreg; include femreg/scene.h to call it).
   static Status Create(const Scene& scene, std::unique_ptr<Tracker>* tracker);
-  // The same with meshes built by the caller (positions in mesh.x are the initial shape).
-  // materials[i] and region_materials[i] belong to meshes[i].
-  static Status Create(const std::vector<TetMesh>& meshes, const std::vector<Material>& materials,
+  // The same with meshes built by the caller (positions in mesh.x are the initial shape):
+  // materials[i] (one Material, or per region) belongs to meshes[i]; lumped masses come from
+  // its densities unless mesh.mass is set.
+  static Status Create(const std::vector<TetMesh>& meshes,
+                       const std::vector<ObjectMaterial>& materials,
                        const RegistrationOptions& options, std::unique_ptr<Tracker>* tracker);
   ~Tracker();
 
@@ -51,6 +57,9 @@ class Tracker {
   // Whether each vertex had a data correspondence in the last frame (seen by the camera).
   const std::vector<char>& vertex_observed(int object) const;
   int frame() const;  // frames tracked so far
+  // Puts object i's vertices at x (#V by 3, finite), e.g. a pose from a detector, and forgets
+  // the motion so far (the next frame predicts no velocity).
+  Status SetVertices(int object, const Vertices& x);
 
   // Anchors: vertex sets with a per-frame target. Hard anchors fix the vertices at the
   // targets; soft ones pull with `weight` (N/m per vertex; <= 0 uses weights.anchor).
@@ -63,6 +72,14 @@ class Tracker {
   // clears it.
   Status SetAnchorTrajectory(const std::string& name,
                              const std::vector<Eigen::Vector3d>& translations);
+
+  // Cloud points with this label (PointCloud::labels) belong to the object; -1: none.
+  Status SetObjectLabel(int object, int label);
+
+  // Contacts (seed Section 5; femreg/collision.h): the penalty between the spec's object
+  // pairs (named by `names`, one per object; no pairs: every pair) and with its obstacles.
+  // Nothing is built when nothing can collide.
+  Status EnableCollision(const CollisionSpec& spec, const std::vector<std::string>& names);
 
   // Fracture (seed Section 4; femreg/fracture.h): detection between outer iterations and
   // node splits, one FractureOptions per object. Off unless enabled (Create(scene) enables

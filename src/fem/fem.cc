@@ -24,6 +24,31 @@ bool Material::IsValid(std::string* error) const {
   return false;
 }
 
+const Material& ObjectMaterial::ForRegion(int region) const {
+  for (const auto& r : regions) {
+    if (r.first == region) return r.second;
+  }
+  return material;
+}
+
+bool ObjectMaterial::IsValid(std::string* error) const {
+  std::string e;
+  if (!material.IsValid(&e)) {
+    if (error) *error = e;
+    return false;
+  }
+  for (size_t i = 0; i < regions.size(); ++i) {
+    if (!regions[i].second.IsValid(&e)) {
+      if (error) {
+        *error = "regions[" + std::to_string(i) + "] (region " + std::to_string(regions[i].first) +
+                 "): " + e;
+      }
+      return false;
+    }
+  }
+  return true;
+}
+
 const char* ToString(ElasticModelType type) {
   switch (type) {
     case ElasticModelType::kCorotational:
@@ -151,9 +176,14 @@ Matrix12 WarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R) {
   return out;
 }
 
+Eigen::Matrix<double, 6, 3> ElementResidualJacobianBlock(const ElementRest& rest,
+                                                         const Eigen::Matrix3d& R, int i) {
+  return rest.S.block<6, 3>(0, 3 * i) * R.transpose();
+}
+
 Matrix6x12 ElementResidualJacobian(const ElementRest& rest, const Eigen::Matrix3d& R) {
   Matrix6x12 J;
-  for (int i = 0; i < 4; ++i) J.block<6, 3>(0, 3 * i) = rest.S.block<6, 3>(0, 3 * i) * R.transpose();
+  for (int i = 0; i < 4; ++i) J.block<6, 3>(0, 3 * i) = ElementResidualJacobianBlock(rest, R, i);
   return J;
 }
 

@@ -236,6 +236,9 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (max_inner_iterations < 1) {
     return Fail(error, "solver.max_inner_iterations", "must be >= 1", max_inner_iterations);
   }
+  if (!(std::isfinite(inner_tolerance) && inner_tolerance >= 0)) {
+    return Fail(error, "solver.inner_tolerance", "must be >= 0", inner_tolerance);
+  }
   if (!(std::isfinite(relative_energy_tolerance) && relative_energy_tolerance >= 0)) {
     return Fail(error, "solver.relative_energy_tolerance", "must be >= 0",
                 relative_energy_tolerance);

@@ -1,0 +1,92 @@
+#include "solvers/ceres/ceres_backend.h"
+
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace femreg {
+namespace ceres_backend {
+
+SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = false;
+  ceres::Problem ceres_problem(problem_options);
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  std::vector<std::unique_ptr<ceres::LossFunction>> losses;
+  costs.reserve(static_cast<size_t>(problem.num_blocks()));
+  double* const data = x->data();
+  problem.ForEachSet([&](const auto& set) {
+    using T = typename std::decay_t<decltype(set.blocks())>::value_type;
+    const energy::Loss& loss = set.loss();
+    std::map<double, ceres::LossFunction*> loss_of_weight;  // one adapter per distinct w
+    std::vector<double*> blocks(T::kVertices);
+    for (const T& block : set.blocks()) {
+      ceres::LossFunction* loss_function = nullptr;
+      if (loss.robust()) {
+        auto it = loss_of_weight.find(block.weight);
+        if (it == loss_of_weight.end()) {
+          losses.push_back(std::make_unique<LossAdapter>(loss, block.weight));
+          it = loss_of_weight.emplace(block.weight, losses.back().get()).first;
+        }
+        loss_function = it->second;
+        costs.push_back(std::make_unique<TermCost<T>>(&block, 1.0));
+      } else {
+        costs.push_back(std::make_unique<TermCost<T>>(&block, std::sqrt(block.weight)));
+      }
+      for (int i = 0; i < T::kVertices; ++i) blocks[i] = data + 3 * block.vertices[i];
+      ceres_problem.AddResidualBlock(costs.back().get(), loss_function, blocks);
+    }
+  });
+  for (int v = 0; v < problem.num_vertices(); ++v) {
+    double* block = data + 3 * v;
+    if (problem.is_fixed(v) && ceres_problem.HasParameterBlock(block)) {
+      ceres_problem.SetParameterBlockConstant(block);
+    }
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.max_num_iterations = options_.max_iterations;
+  solver_options.function_tolerance = options_.relative_tolerance;
+  solver_options.num_threads = options_.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = false;
+  solver_options.trust_region_strategy_type = options_.trust_region == TrustRegion::kDogleg
+                                                  ? ceres::DOGLEG
+                                                  : ceres::LEVENBERG_MARQUARDT;
+  if (options_.linear_solver == LinearSolver::kConjugateGradients) {
+    solver_options.linear_solver_type = ceres::CGNR;
+    solver_options.preconditioner_type = ceres::JACOBI;
+  } else {
+    solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    solver_options.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  }
+  if (time_limit_s > 0) solver_options.max_solver_time_in_seconds = time_limit_s;
+  // Start with Gauss-Newton steps (damping 1e-8 of the scaled diagonal, as the fast back
+  // end): with rotations and pairs held the energy is quadratic but for the robust losses,
+  // and Ceres' default start (1e-4) truncates the steps along soft modes so much that a
+  // soft material stops on the parameter tolerance far from the minimum.
+  solver_options.initial_trust_region_radius = 1e8;
+
+  SolveReport report;
+  if (ceres_problem.NumResidualBlocks() == 0) {
+    report.success = true;
+    report.message = "nothing to solve";
+    return report;
+  }
+  const Vertices start = *x;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &ceres_problem, &summary);
+  report.success = summary.IsSolutionUsable() && x->allFinite();
+  report.message = "Ceres: " + summary.message;
+  report.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  report.linear_solves = summary.num_linear_solves;
+  report.factorizations =
+      options_.linear_solver == LinearSolver::kSparseNormalCholesky ? summary.num_linear_solves : 0;
+  if (!report.success) *x = start;
+  return report;
+}
+
+}  // namespace ceres_backend
+}  // namespace femreg

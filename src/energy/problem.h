@@ -1,0 +1,92 @@
+// The energy of one frame (or one outer iteration) as the sum of its term sets, which both
+// back ends minimize (solvers/backend.h).
+//
+// Registering a new block type: write it (one header, see energy/term.h for what it provides)
+// and add it to `Problem::Sets` below. Both back ends then take it: the Ceres back end through
+// its generic cost adapter, the fast back end through its generic assembler, the tests
+// through the generic derivative checks (tests/energy_test.cc).
+#ifndef FEMREG_ENERGY_PROBLEM_H_
+#define FEMREG_ENERGY_PROBLEM_H_
+
+#include <array>
+#include <tuple>
+#include <vector>
+
+#include "energy/contact.h"
+#include "energy/data.h"
+#include "energy/elastic.h"
+#include "energy/term.h"
+#include "femreg/energy.h"
+#include "femreg/mesh.h"
+
+namespace femreg {
+namespace energy {
+
+class Problem {
+ public:
+  // The registry: one vector of sets per block type.
+  using Sets = std::tuple<std::vector<TermSet<ElasticElement>>, std::vector<TermSet<EdgeSpring>>,
+                          std::vector<TermSet<PointToPoint<1>>>, std::vector<TermSet<PointToPoint<3>>>,
+                          std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
+                          std::vector<TermSet<ContactPenalty<3>>>,
+                          std::vector<TermSet<ContactPenalty<6>>>>;
+
+  // Sets the number of vertices and empties the problem.
+  void Reset(int num_vertices);
+  int num_vertices() const { return num_vertices_; }
+
+  // A new, empty set of blocks of type T; the reference holds until the next AddSet of the
+  // same type or Clear.
+  template <class T>
+  TermSet<T>& AddSet(TermGroup group, const Loss& loss = Loss()) {
+    auto& sets = std::get<std::vector<TermSet<T>>>(sets_);
+    sets.emplace_back(group, loss);
+    return sets.back();
+  }
+  // Removes every set of the group (the blocks that change per frame or per iteration).
+  void Clear(TermGroup group);
+
+  // Calls f(set) for every set, elastic group first, then temporal, anchor, data, collision
+  // (the order a Ceres problem adds its residual blocks in), each group in registry order.
+  template <class F>
+  void ForEachSet(F&& f) const {
+    for (int g = 0; g < kNumTermGroups; ++g) {
+      std::apply([&](const auto&... vectors) { (VisitGroup(vectors, static_cast<TermGroup>(g), f), ...); },
+                 sets_);
+    }
+  }
+
+  // Vertices held where they are (hard anchors): #V flags, or empty.
+  std::vector<char>& fixed() { return fixed_; }
+  const std::vector<char>& fixed() const { return fixed_; }
+  bool is_fixed(int v) const { return !fixed_.empty() && fixed_[v]; }
+
+  // The vertex groups that blocks may couple, e.g. the meshes' tetrahedra: a back end that
+  // assembles a sparse system starts its pattern from them. `coupling_revision` changes with
+  // them (a topology change).
+  void SetCoupling(std::vector<std::array<int, 4>> cells);
+  const std::vector<std::array<int, 4>>& coupling() const { return coupling_; }
+  uint64_t coupling_revision() const { return coupling_revision_; }
+
+  // The energy at x by group, robust losses applied.
+  EnergyTerms Evaluate(const Vertices& x) const;
+  int num_blocks() const;
+
+ private:
+  template <class V, class F>
+  static void VisitGroup(const V& sets, TermGroup group, F& f) {
+    for (const auto& set : sets) {
+      if (set.group() == group) f(set);
+    }
+  }
+  int num_vertices_ = 0;
+  Sets sets_;
+  std::vector<char> fixed_;
+  std::vector<std::array<int, 4>> coupling_;
+  uint64_t coupling_revision_ = 0;
+};
+
+}  // namespace energy
+}  // namespace femreg
+
+#endif  // FEMREG_ENERGY_PROBLEM_H_

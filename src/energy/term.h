@@ -1,0 +1,152 @@
+// An energy term of one frame is a set of residual blocks of one type. A block type writes,
+// once, its residual and Jacobian on its stencil (a few vertices); everything else — the
+// value, the gradient, the Gauss-Newton blocks, the robust loss, the scatter into a global
+// system, the Ceres cost — is generic over block types and written once (below, and in the
+// back ends, solvers/).
+//
+// A block type T provides
+//   static constexpr int kResiduals;        // m, its residual's size
+//   static constexpr int kVertices;         // n, its stencil's size
+//   static constexpr bool kConstantJacobian;// J does not depend on x (while the block's
+//                                           // parameters, e.g. a rotation, are held)
+//   std::array<int, kVertices> vertices;    // the stencil: global vertex indices
+//   double weight;                          // w >= 0
+//   // r (m) and, where J[i] is not null, J[i] = dr/dx_i (m by 3, row-major), at the stencil's
+//   // positions x[i] (3 each). Returns false if the block cannot be evaluated.
+//   bool Evaluate(const double* const* x, double* r, double** J) const;
+// and its energy is 1/2 w rho(|r|^2) with the set's robust loss rho (none: rho(s) = s).
+#ifndef FEMREG_ENERGY_TERM_H_
+#define FEMREG_ENERGY_TERM_H_
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "energy/loss.h"
+#include "femreg/energy.h"
+#include "femreg/mesh.h"
+
+namespace femreg {
+namespace energy {
+
+// Which line of EnergyTerms a set adds to.
+enum class TermGroup { kElastic, kTemporal, kAnchor, kData, kCollision };
+constexpr int kNumTermGroups = 5;
+double& GroupEnergy(TermGroup group, EnergyTerms* terms);
+
+// A number not handed out before in this process (revisions of sets and couplings).
+uint64_t NextRevision();
+
+// Blocks of one type with a common group and loss. `revision` changes whenever the blocks'
+// stencils change (a back end may cache per-block data, e.g. where each block scatters,
+// for as long as it holds).
+template <class T>
+class TermSet {
+ public:
+  using Block = T;
+  TermSet(TermGroup group, const Loss& loss) : group_(group), loss_(loss) { Touch(); }
+
+  TermGroup group() const { return group_; }
+  const Loss& loss() const { return loss_; }
+  const std::vector<T>& blocks() const { return blocks_; }
+  int size() const { return static_cast<int>(blocks_.size()); }
+  uint64_t revision() const { return revision_; }
+
+  // For changing the blocks' stencils (or adding, removing blocks): a new revision.
+  std::vector<T>* mutable_blocks() {
+    Touch();
+    return &blocks_;
+  }
+  void Add(const T& block) { mutable_blocks()->push_back(block); }
+
+ private:
+  void Touch() { revision_ = NextRevision(); }
+  TermGroup group_;
+  Loss loss_;
+  std::vector<T> blocks_;
+  uint64_t revision_ = 0;
+};
+
+// Pointers to the stencil's positions in x (#V by 3, row-major: vertex v is x.data() + 3 v).
+template <class T>
+std::array<const double*, T::kVertices> StencilPositions(const T& block, const Vertices& x) {
+  std::array<const double*, T::kVertices> p;
+  for (int i = 0; i < T::kVertices; ++i) p[i] = x.data() + 3 * block.vertices[i];
+  return p;
+}
+
+// 1/2 w rho(|r|^2) of one block at x; 0 if it cannot be evaluated (see Evaluate).
+template <class T>
+double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
+  double r[T::kResiduals];
+  const auto p = StencilPositions(block, x);
+  if (!block.Evaluate(p.data(), r, nullptr)) return 0.0;
+  double s = 0.0;
+  for (int i = 0; i < T::kResiduals; ++i) s += r[i] * r[i];
+  double rho[3];
+  loss.Evaluate(s, rho);
+  return 0.5 * block.weight * rho[0];
+}
+
+// The energy of a set at x.
+template <class T>
+double SetValue(const TermSet<T>& set, const Vertices& x) {
+  double value = 0.0;
+  for (const T& block : set.blocks()) value += BlockValue(block, set.loss(), x);
+  return value;
+}
+
+// A block's share of the gradient and of the Gauss-Newton Hessian at x: with the loss
+// reweighting the residual (iteratively reweighted least squares, as Ceres does for losses
+// that bend down), g_i = w rho' J_i^T r and H_ij = w rho' J_i^T J_j, i, j over the stencil. `scale` = w rho' (0: the block adds nothing,
+// and gradient and hessian are zero).
+template <class T>
+struct Linearization {
+  static constexpr int kN = T::kVertices;
+  std::array<Eigen::Vector3d, kN> gradient;
+  std::array<Eigen::Matrix3d, kN * kN> hessian;  // (i, j) at i * kN + j; symmetric
+  double value = 0.0;
+  double scale = 0.0;
+};
+
+// Returns false (and a zero scale) if the block cannot be evaluated.
+template <class T>
+bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearization<T>* out,
+               bool with_hessian = true) {
+  constexpr int m = T::kResiduals, n = T::kVertices;
+  using Jacobian = Eigen::Matrix<double, m, 3, Eigen::RowMajor>;
+  Eigen::Matrix<double, m, 1> r;
+  std::array<Jacobian, n> J;
+  std::array<double*, n> Jp;
+  for (int i = 0; i < n; ++i) Jp[i] = J[i].data();
+  const auto p = StencilPositions(block, x);
+  out->scale = 0.0;
+  out->value = 0.0;
+  if (!block.Evaluate(p.data(), r.data(), Jp.data())) return false;
+  double rho[3];
+  loss.Evaluate(r.squaredNorm(), rho);
+  out->value = 0.5 * block.weight * rho[0];
+  out->scale = block.weight * rho[1];
+  if (out->scale == 0.0) {  // an outlier past Tukey's scale, an open contact
+    for (auto& g : out->gradient) g.setZero();
+    if (with_hessian) {
+      for (auto& h : out->hessian) h.setZero();
+    }
+    return true;
+  }
+  for (int i = 0; i < n; ++i) out->gradient[i].noalias() = out->scale * J[i].transpose() * r;
+  if (!with_hessian) return true;
+  for (int i = 0; i < n; ++i) {
+    for (int j = i; j < n; ++j) {
+      out->hessian[i * n + j].noalias() = out->scale * J[i].transpose() * J[j];
+      if (j != i) out->hessian[j * n + i] = out->hessian[i * n + j].transpose();
+    }
+  }
+  return true;
+}
+
+}  // namespace energy
+}  // namespace femreg
+
+#endif  // FEMREG_ENERGY_TERM_H_

@@ -1,0 +1,128 @@
+#include "registration/fracture_step.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "registration/correspondences.h"
+
+namespace femreg {
+
+namespace {
+
+// FractureOptions::data_gap: the data's evidence at most triples the measure.
+constexpr double kMaxDataGapWeight = 3.0;
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+// Object i's detection, and the weights of the data's evidence where a node could break.
+void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
+  FractureState& f = *state->fracture;
+  ObjectState& o = state->objects[i];
+  o.mesh.x = state->x.middleRows(o.offset, o.mesh.num_vertices());
+  o.model.UpdateRotations(o.mesh.x);
+  NodeSeparation& sep = f.separation[i];
+  DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &sep);
+  sep.weight.resize(0);
+  if (!f.options[i].data_gap || !state->options.camera.enabled || cloud_index.size() == 0) return;
+  double top = 0.0;
+  for (int v = 0; v < sep.measure.size(); ++v) {
+    if (sep.toughness(v) > 0) top = std::max(top, sep.measure(v) / sep.toughness(v));
+  }
+  if (top * kMaxDataGapWeight <= 1.0) return;
+  const Eigen::VectorXd gap = DataGap(*state, i, cloud_index);
+  const double scale = state->options.data.loss_scale > 0 ? state->options.data.loss_scale : 0.005;
+  sep.weight = (Eigen::VectorXd::Ones(gap.size()) + gap / scale).cwiseMin(kMaxDataGapWeight);
+}
+
+// Carries the state's global arrays to the new numbering: new global vertex v comes from
+// old global vertex source[v].
+void Renumber(const std::vector<int>& source, TrackerState* state) {
+  const int old_count = state->num_vertices;
+  state->x = RemapRows(state->x, source);
+  if (state->x_before.rows() == old_count) state->x_before = RemapRows(state->x_before, source);
+  if (state->frame_start.rows() == old_count) state->frame_start = RemapRows(state->frame_start, source);
+  state->RebuildGlobalArrays();
+  // Anchors hold every copy of their vertices.
+  std::vector<std::vector<int>> copies(old_count);
+  for (size_t v = 0; v < source.size(); ++v) copies[source[v]].push_back(static_cast<int>(v));
+  for (auto& kv : state->anchors) {
+    Anchor& a = kv.second;
+    std::vector<int> vertices, rows;
+    for (size_t r = 0; r < a.vertices.size(); ++r) {
+      for (int c : copies[a.vertices[r]]) {
+        vertices.push_back(c);
+        rows.push_back(static_cast<int>(r));
+      }
+    }
+    a.vertices = vertices;
+    a.targets = RemapRows(a.targets, rows);
+    a.origin = RemapRows(a.origin, rows);
+  }
+  if (state->collision) {
+    for (size_t i = 0; i < state->objects.size(); ++i) {
+      state->collision->Rebuild(static_cast<int>(i), state->ObjectSurface(static_cast<int>(i)), state->x);
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState* state,
+                              FrameSummary* summary) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FractureState& f = *state->fracture;
+  if (k == 0) f.frame_splits = 0;
+  std::vector<std::vector<int>> sources(state->objects.size());
+  bool changed = false;
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    ObjectState& o = state->objects[i];
+    const int budget = std::min(f.options[i].max_splits_per_iteration,
+                                f.options[i].max_splits_per_frame - f.frame_splits);
+    if (budget <= 0) {  // still detect: the measure is an output
+      o.mesh.x = state->x.middleRows(o.offset, o.mesh.num_vertices());
+      o.model.UpdateRotations(o.mesh.x);
+      DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &f.separation[i]);
+      continue;
+    }
+    Detect(static_cast<int>(i), cloud_index, state);
+    TopologyChange change;
+    SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
+    if (!change.changed()) continue;
+    changed = true;
+    f.frame_splits += static_cast<int>(change.events.size());
+    for (FractureEvent e : change.events) {
+      e.frame = state->frame;
+      e.object = static_cast<int>(i);
+      e.iteration = k + 1;
+      e.original_node = f.original[i][e.node];
+      summary->fractures.push_back(e);
+    }
+    std::vector<int> original(change.source.size());
+    Eigen::VectorXd measure(static_cast<Eigen::Index>(change.source.size()));
+    for (size_t v = 0; v < change.source.size(); ++v) {
+      original[v] = f.original[i][change.source[v]];
+      measure(static_cast<Eigen::Index>(v)) = f.separation[i].measure(change.source[v]);
+    }
+    f.original[i] = std::move(original);
+    f.separation[i].measure = std::move(measure);
+    f.separation[i].weight.resize(0);
+    ComputeLumpedMasses(&o.mesh, o.material.material.density, RegionDensities(o.material));
+    sources[i] = std::move(change.source);
+  }
+  summary->time.fracture += Seconds(t0);
+  if (!changed) return {};
+
+  // The new global numbering: objects in order, each from its new mesh.
+  std::vector<int> source;
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    const int old_offset = state->objects[i].offset;
+    const int nv = state->objects[i].mesh.num_vertices();
+    for (int v = 0; v < nv; ++v) source.push_back(old_offset + (sources[i].empty() ? v : sources[i][v]));
+  }
+  Renumber(source, state);
+  return source;
+}
+
+}  // namespace femreg

@@ -1,0 +1,39 @@
+// The energy a frame minimizes, built in one place from the tracker's state: the elastic
+// blocks (once per topology), the temporal springs and anchors (once per frame), the data
+// pairs and contacts (every outer iteration). Both back ends solve the result.
+#ifndef FEMREG_REGISTRATION_FRAME_PROBLEM_H_
+#define FEMREG_REGISTRATION_FRAME_PROBLEM_H_
+
+#include <vector>
+
+#include "energy/problem.h"
+#include "femreg/collision.h"
+#include "femreg/registration.h"
+#include "registration/correspondences.h"
+#include "registration/tracker_state.h"
+
+namespace femreg {
+
+class FrameProblem {
+ public:
+  // The elastic blocks of every object (its model's rest data and rotations, read through
+  // pointers, so refreshing the rotations needs no rebuild) and the coupling the fast back
+  // end's pattern starts from. After the tracker is made and after a topology change.
+  void BuildElastic(const TrackerState& state);
+  // The temporal springs (w_t m_i towards state.frame_start) and the anchors at this frame's
+  // targets: hard anchors move state->x onto their targets and hold them.
+  void BuildFrameTerms(TrackerState* state);
+  // The data blocks of this outer iteration's pairs: w_data, the data loss.
+  void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
+  // The contact penalty of the detected contacts (k and D from the world).
+  void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world);
+
+  const energy::Problem& problem() const { return problem_; }
+
+ private:
+  energy::Problem problem_;
+};
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_FRAME_PROBLEM_H_

@@ -1,0 +1,93 @@
+#include "registration/prealign.h"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "registration/nearest.h"
+
+namespace femreg {
+
+void Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+            Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < a.size(); ++i) {
+    ca += a[i];
+    cb += b[i];
+  }
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < a.size(); ++i) H += (a[i] - ca) * (b[i] - cb).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0) D(2, 2) = -1.0;
+  *R = svd.matrixV() * D * svd.matrixU().transpose();
+  *t = cb - *R * ca;
+}
+
+void RigidPrealign(const PointCloud& cloud, TrackerState* state) {
+  // Cloud->surface pairs: every seen point has a partner, hidden parts do not bias.
+  const CameraOptions& camera = state->options.camera;
+  Vertices& x = state->x;
+  const Eigen::MatrixXd normals = state->VertexNormals();
+  const int stride = std::max(1, cloud.size() / 2000);
+  for (const ObjectState& o : state->objects) {
+    std::vector<int> facing;
+    for (int v : o.mesh.surface_vertices) {
+      const int g = v + o.offset;
+      if (camera.enabled) {
+        const Eigen::Vector3d n = normals.row(g);
+        if (n.dot(camera.position - Eigen::Vector3d(x.row(g))) <= 0.0) continue;
+      }
+      facing.push_back(g);
+    }
+    if (facing.size() < 3 || cloud.size() < 3) continue;
+    const int nv = o.mesh.num_vertices();
+    Vertices y = x.middleRows(o.offset, nv);
+    const Triangles& tris = o.mesh.surface;
+    // The trimmed mean distance of the cloud to the surface at pos, and optionally the
+    // rigid transform that best moves the surface points onto their cloud points.
+    auto trimmed_mean = [&](const Vertices& pos, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+      SurfaceIndex surface_index(pos, tris);
+      std::vector<std::pair<double, int>> dist;
+      std::vector<Eigen::Vector3d> model_points;
+      for (int i = 0; i < cloud.size(); i += stride) {
+        const SurfaceIndex::Hit hit = surface_index.Closest(cloud.points.row(i));
+        if (hit.triangle < 0) continue;
+        dist.emplace_back(hit.squared_distance, static_cast<int>(model_points.size()));
+        model_points.push_back(hit.point);
+      }
+      std::sort(dist.begin(), dist.end());
+      const size_t keep = std::max<size_t>(std::min<size_t>(3, dist.size()), dist.size() * 4 / 5);
+      std::vector<Eigen::Vector3d> a, b;
+      double sum = 0.0;
+      for (size_t j = 0; j < keep; ++j) {
+        const int m = dist[j].second;
+        a.push_back(model_points[m]);
+        b.push_back(cloud.points.row(m * stride).transpose());
+        sum += std::sqrt(dist[j].first);
+      }
+      if (R != nullptr && a.size() >= 3) Kabsch(a, b, R, t);
+      return keep > 0 ? sum / keep : std::numeric_limits<double>::infinity();
+    };
+    const double before = trimmed_mean(y, nullptr, nullptr);
+    Eigen::Vector3d cm = Eigen::Vector3d::Zero();
+    for (int g : facing) cm += x.row(g).transpose();
+    cm /= static_cast<double>(facing.size());
+    const Eigen::RowVector3d shift = (cloud.points.colwise().mean().transpose() - cm).transpose();
+    y.rowwise() += shift;
+    for (int it = 0; it < state->options.solver.rigid_iterations; ++it) {
+      Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+      Eigen::Vector3d t = Eigen::Vector3d::Zero();
+      trimmed_mean(y, &R, &t);
+      for (int v = 0; v < nv; ++v) y.row(v) = (R * y.row(v).transpose() + t).transpose();
+      if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-7 && t.norm() < 1e-7) break;
+    }
+    if (trimmed_mean(y, nullptr, nullptr) < before) x.middleRows(o.offset, nv) = y;
+  }
+}
+
+}  // namespace femreg

@@ -1,0 +1,60 @@
+#include "registration/tracker_state.h"
+
+#include <limits>
+
+namespace femreg {
+
+std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material) {
+  std::vector<std::pair<int, double>> densities;
+  for (const auto& r : material.regions) densities.emplace_back(r.first, r.second.density);
+  return densities;
+}
+
+void TrackerState::RebuildGlobalArrays() {
+  num_vertices = 0;
+  int num_triangles = 0;
+  for (ObjectState& o : objects) {
+    o.offset = num_vertices;
+    num_vertices += o.mesh.num_vertices();
+    num_triangles += o.mesh.num_surface_triangles();
+  }
+  mass.resize(num_vertices);
+  vertex_object.resize(num_vertices);
+  residuals.resize(objects.size());
+  observed.resize(objects.size());
+  surface.resize(num_triangles, 3);
+  surface_vertices.clear();
+  int row = 0;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const ObjectState& o = objects[i];
+    const int nv = o.mesh.num_vertices();
+    mass.segment(o.offset, nv) = o.mesh.mass;
+    for (int v = 0; v < nv; ++v) vertex_object[o.offset + v] = static_cast<int>(i);
+    residuals[i] = Eigen::VectorXd::Constant(nv, std::numeric_limits<double>::quiet_NaN());
+    observed[i].assign(nv, 0);
+    surface.middleRows(row, o.mesh.num_surface_triangles()) = o.mesh.surface.array() + o.offset;
+    row += o.mesh.num_surface_triangles();
+    for (int v : o.mesh.surface_vertices) surface_vertices.push_back(v + o.offset);
+  }
+}
+
+Eigen::MatrixXd TrackerState::VertexNormals() const {
+  Eigen::MatrixXd n = Eigen::MatrixXd::Zero(num_vertices, 3);
+  for (int f = 0; f < surface.rows(); ++f) {
+    const Eigen::Vector3d a = x.row(surface(f, 0)), b = x.row(surface(f, 1)), c = x.row(surface(f, 2));
+    const Eigen::Vector3d fn = (b - a).cross(c - a);  // area weighted
+    for (int k = 0; k < 3; ++k) n.row(surface(f, k)) += fn.transpose();
+  }
+  for (int v = 0; v < num_vertices; ++v) {
+    const double len = n.row(v).norm();
+    if (len > 0) n.row(v) /= len;
+  }
+  return n;
+}
+
+Triangles TrackerState::ObjectSurface(int i) const {
+  const ObjectState& o = objects[i];
+  return o.mesh.surface.array() + o.offset;
+}
+
+}  // namespace femreg

@@ -1,0 +1,93 @@
+// What a Tracker holds between frames, shared by its parts: the objects in one global
+// vertex numbering, the anchors, and the effects that are on (contacts, fracture).
+//
+// The parts of a frame (DESIGN.md "One frame, step by step"):
+//   registration/correspondences  data pairs (model->cloud, cloud->model), normals, data gap
+//   registration/prealign         the rigid pre-alignment
+//   registration/frame_problem    the frame's energy from pairs, springs, anchors, contacts
+//   registration/fracture_step    detection and splits between outer iterations
+//   registration/tracker          the outer loop, the public API
+#ifndef FEMREG_REGISTRATION_TRACKER_STATE_H_
+#define FEMREG_REGISTRATION_TRACKER_STATE_H_
+
+#include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femreg/collision.h"
+#include "femreg/fem.h"
+#include "femreg/fracture.h"
+#include "femreg/mesh.h"
+#include "femreg/registration.h"
+
+namespace femreg {
+
+struct ObjectState {
+  TetMesh mesh;
+  ElasticModel model;
+  ObjectMaterial material;
+  int offset = 0;  // its first vertex in the global numbering
+  int label = -1;  // the cloud label of its points; -1 = none
+};
+
+struct Anchor {
+  int object = 0;
+  std::vector<int> vertices;  // global indices
+  bool hard = false;
+  double weight = 0.0;        // soft: N/m per vertex; <= 0: weights.anchor
+  Vertices targets;           // one row per vertex
+  Vertices origin;            // positions when the anchor was added
+  // Per-frame translations from origin (frame beyond the list: the last one); empty: the
+  // targets stay as set.
+  std::vector<Eigen::Vector3d> translations;
+};
+
+// Fracture (effects.fracture): allocated only when on.
+struct FractureState {
+  std::vector<FractureOptions> options;      // per object
+  std::vector<std::vector<int>> original;    // per object: vertex -> vertex at creation
+  std::vector<NodeSeparation> separation;    // per object: the last detection
+  int frame_splits = 0;
+};
+
+struct TrackerState {
+  RegistrationOptions options;
+  std::vector<ObjectState> objects;
+  int num_vertices = 0;
+  Vertices x;         // #V by 3, all objects
+  Vertices x_before;  // the result of the frame before the last (for the prediction)
+  Eigen::VectorXd mass;             // #V lumped masses
+  Triangles surface;                // #F by 3, global indices
+  std::vector<int> surface_vertices;
+  std::vector<int> vertex_object;   // #V
+  std::map<std::string, Anchor> anchors;
+  // Contacts: null when collision is off or nothing can collide (then no hierarchy is built
+  // and no contact term added).
+  std::unique_ptr<CollisionWorld> collision;
+  std::vector<Contact> contacts;
+  std::unique_ptr<FractureState> fracture;
+  Vertices frame_start;  // x when the frame's temporal springs were made (fracture only)
+  int frame = 0;
+  // Per object, for the outputs: distance of each surface vertex to the cloud and whether
+  // it had a data pair in the last frame.
+  std::vector<Eigen::VectorXd> residuals;
+  std::vector<std::vector<char>> observed;
+
+  // The per-vertex arrays and the global surface from the objects (after Init and after a
+  // topology change).
+  void RebuildGlobalArrays();
+  // Area-weighted unit normals of the surface vertices at x (#V by 3; zero elsewhere).
+  Eigen::MatrixXd VertexNormals() const;
+  // Object i's surface in the global numbering.
+  Triangles ObjectSurface(int i) const;
+};
+
+// Region id -> density of an object's materials (for ComputeLumpedMasses).
+std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material);
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_TRACKER_STATE_H_

@@ -1,0 +1,63 @@
+// Tracker::Create(const Scene&): a scene's objects (meshes, materials per region, labels),
+// anchors and effects handed to the tracker. It lives with the scene module, above
+// registration, so that the tracker needs no scene.
+#include "femreg/scene.h"
+#include "femreg/tracker.h"
+
+namespace femreg {
+
+Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
+  std::vector<TetMesh> meshes(scene.objects.size());
+  std::vector<ObjectMaterial> materials;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    Status status = LoadObjectMesh(scene, static_cast<int>(i), &meshes[i]);
+    if (!status.ok()) return status;
+    ObjectMaterial m;
+    m.material = scene.objects[i].material;
+    m.regions = scene.objects[i].region_materials;
+    materials.push_back(m);
+  }
+  std::unique_ptr<Tracker> t;
+  Status status = Create(meshes, materials, scene.registration, &t);
+  if (!status.ok()) return status;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    status = t->SetObjectLabel(static_cast<int>(i), scene.objects[i].label);
+    if (!status.ok()) return status;
+  }
+  if (scene.effects.fracture) {
+    std::vector<FractureOptions> fracture;
+    for (const ObjectSpec& o : scene.objects) {
+      FractureOptions f = scene.effects.fracture_options;
+      f.toughness = o.toughness;
+      f.region_toughness = o.region_toughness;
+      fracture.push_back(f);
+    }
+    status = t->EnableFracture(fracture);
+    if (!status.ok()) return Status::Error(scene.path + ": effects.fracture: " + status.message());
+  }
+  if (scene.effects.collision) {
+    std::vector<std::string> names;
+    for (const ObjectSpec& o : scene.objects) names.push_back(o.name);
+    status = t->EnableCollision(scene.collision, names);
+    if (!status.ok()) return Status::Error(scene.path + ": " + status.message());
+  }
+  for (const AnchorSpec& a : scene.anchors) {
+    int object = 0;
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+      if (scene.objects[i].name == a.object) object = static_cast<int>(i);
+    }
+    std::vector<int> vertices;
+    status = SelectVertices(a.selection, t->mesh(object).rest, &vertices);
+    if (!status.ok()) return status;
+    status = t->AddAnchor(a.name, object, vertices, a.hard, a.weight);
+    if (!status.ok()) return status;
+    if (!a.translations.empty()) {
+      status = t->SetAnchorTrajectory(a.name, a.translations);
+      if (!status.ok()) return status;
+    }
+  }
+  *tracker = std::move(t);
+  return Status::Ok();
+}
+
+}  // namespace femreg

@@ -1,0 +1,358 @@
+// Every block type of the energy layer, checked by one generic test over the registry
+// (energy::Problem::Sets): its Jacobian against central differences and, through the Ceres
+// back end's cost adapter, ceres::GradientChecker; the generic linearization (gradient
+// and Gauss-Newton blocks, with each robust loss) against central differences of the value;
+// symmetric positive semi-definite Gauss-Newton blocks. A block type added to the registry
+// without a Sample<> below does not compile. Then the robust losses, and the elastic
+// invariants (zero energy and force at rest and under rigid motion).
+#include <ceres/ceres.h>
+#include <ceres/gradient_checker.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <memory>
+#include <random>
+#include <tuple>
+#include <vector>
+
+#include "energy/problem.h"
+#include "femreg/fem.h"
+#include "solvers/ceres/ceres_backend.h"
+
+namespace femreg {
+namespace {
+
+using energy::Loss;
+
+// A block at a random state: the block, what it points to, and its stencil's positions.
+template <class T>
+struct Sample;
+
+Eigen::Vector3d RandomPoint(std::mt19937* rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  return Eigen::Vector3d(u(*rng), u(*rng), u(*rng));
+}
+
+template <int N>
+std::array<double, N> RandomBarycentric(std::mt19937* rng) {
+  std::uniform_real_distribution<double> u(0.05, 1.0);
+  std::array<double, N> b;
+  double sum = 0.0;
+  for (double& v : b) sum += (v = u(*rng));
+  for (double& v : b) v /= sum;
+  return b;
+}
+
+template <>
+struct Sample<energy::ElasticElement> {
+  static constexpr const char* kName = "ElasticElement";
+  ElementRest rest;
+  Eigen::Matrix3d rotation;
+  energy::ElasticElement block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    Eigen::Matrix<double, 3, 4> X;
+    X << 0, 0.1, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 0.1;
+    for (int c = 0; c < 4; ++c) X.col(c) += RandomPoint(rng, 0.02);
+    Material material;
+    material.youngs_modulus = 1e5;
+    material.poisson_ratio = 0.35;
+    rest = BuildElementRest(X, material);
+    // A rotated and strained state; its rotation held as in one inner solve.
+    const Eigen::Matrix3d Q =
+        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0, 6)(*rng), RandomPoint(rng, 1).normalized())
+            .toRotationMatrix();
+    x.resize(4, 3);
+    Eigen::Matrix<double, 3, 4> xm;
+    for (int c = 0; c < 4; ++c) {
+      xm.col(c) = Q * X.col(c) + RandomPoint(rng, 0.02);
+      x.row(c) = xm.col(c).transpose();
+    }
+    rotation = PolarRotation(DeformationGradient(xm, rest.dm_inv));
+    block.vertices = {{0, 1, 2, 3}};
+    block.weight = 2.5;
+    block.rest = &rest;
+    block.rotation = &rotation;
+  }
+  Sample(const Sample&) = delete;
+};
+
+template <>
+struct Sample<energy::EdgeSpring> {
+  static constexpr const char* kName = "EdgeSpring";
+  energy::EdgeSpring block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    x.resize(2, 3);
+    x.row(0) = RandomPoint(rng, 1).transpose();
+    x.row(1) = x.row(0) + RandomPoint(rng, 1).transpose();
+    block.vertices = {{0, 1}};
+    block.weight = 3.0;
+    block.length = 0.7;
+  }
+};
+
+template <int N>
+struct Sample<energy::PointToPoint<N>> {
+  static constexpr const char* kName = N == 1 ? "PointToPoint<1>" : "PointToPoint<3>";
+  energy::PointToPoint<N> block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    x.resize(N, 3);
+    for (int i = 0; i < N; ++i) {
+      x.row(i) = RandomPoint(rng, 0.01).transpose();
+      block.vertices[i] = i;
+    }
+    block.barycentric = N == 1 ? std::array<double, N>{} : RandomBarycentric<N>(rng);
+    if (N == 1) block.barycentric[0] = 1.0;
+    block.target = RandomPoint(rng, 0.01);
+    block.weight = 1.5;
+  }
+};
+
+template <int N>
+struct Sample<energy::PointToPlane<N>> {
+  static constexpr const char* kName = N == 1 ? "PointToPlane<1>" : "PointToPlane<3>";
+  energy::PointToPlane<N> block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    x.resize(N, 3);
+    for (int i = 0; i < N; ++i) {
+      x.row(i) = RandomPoint(rng, 0.01).transpose();
+      block.vertices[i] = i;
+    }
+    block.barycentric = N == 1 ? std::array<double, N>{} : RandomBarycentric<N>(rng);
+    if (N == 1) block.barycentric[0] = 1.0;
+    block.target = RandomPoint(rng, 0.01);
+    block.normal = RandomPoint(rng, 1).normalized();
+    block.weight = 1.5;
+  }
+};
+
+template <int N>
+struct Sample<energy::ContactPenalty<N>> {
+  static constexpr const char* kName = N == 3 ? "ContactPenalty<3>" : "ContactPenalty<6>";
+  energy::ContactPenalty<N> block;
+  Vertices x;
+  // Active: side a a little above side b along n, closer than D; away from the hinge at
+  // delta = 0, where numeric differences would straddle it.
+  explicit Sample(std::mt19937* rng) {
+    const double D = 0.004;
+    block.normal = Eigen::Vector3d(RandomPoint(rng, 0.01).x(), RandomPoint(rng, 0.01).y(), 1).normalized();
+    const auto a = RandomBarycentric<3>(rng);
+    x.resize(N, 3);
+    Eigen::Vector3d pa = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 3; ++i) {
+      x.row(i) = (Eigen::Vector3d(0.3, 0.2, 0.5) + RandomPoint(rng, 0.01)).transpose();
+      block.vertices[i] = i;
+      block.coefficients[i] = a[i];
+      pa += a[i] * x.row(i).transpose();
+    }
+    Eigen::Vector3d pb = pa - 0.5 * D * block.normal;  // gap D/2: delta = D/2 > 0
+    block.offset = D;
+    if (N == 6) {
+      const auto b = RandomBarycentric<3>(rng);
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (int i = 0; i < 3; ++i) {
+        x.row(3 + i) = (pb + RandomPoint(rng, 0.01)).transpose();
+        sum += b[i] * x.row(3 + i).transpose();
+      }
+      for (int i = 0; i < 3; ++i) {  // move side b so that its point is pb
+        x.row(3 + i) += (pb - sum).transpose();
+        block.vertices[3 + i] = 3 + i;
+        block.coefficients[3 + i] = -b[i];
+      }
+    } else {
+      block.offset = D + block.normal.dot(pb);
+    }
+    block.weight = 5e3;
+  }
+};
+
+// The registry's block types, as a gtest type list.
+template <class Tuple>
+struct BlockTypesOf;
+template <class... Sets>
+struct BlockTypesOf<std::tuple<Sets...>> {
+  using type = ::testing::Types<typename Sets::value_type::Block...>;
+};
+
+template <class T>
+class EnergyBlockTest : public ::testing::Test {};
+TYPED_TEST_SUITE(EnergyBlockTest, typename BlockTypesOf<energy::Problem::Sets>::type);
+
+constexpr int kTrials = 20;
+
+template <class T>
+Eigen::VectorXd Residual(const T& block, const Vertices& x) {
+  Eigen::VectorXd r(T::kResiduals);
+  const auto p = energy::StencilPositions(block, x);
+  EXPECT_TRUE(block.Evaluate(p.data(), r.data(), nullptr));
+  return r;
+}
+
+TYPED_TEST(EnergyBlockTest, JacobianMatchesCentralDifferences) {
+  using T = TypeParam;
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < kTrials; ++trial) {
+    Sample<T> s(&rng);
+    constexpr int m = T::kResiduals, n = T::kVertices;
+    std::array<Eigen::Matrix<double, m, 3, Eigen::RowMajor>, n> J;
+    std::array<double*, n> Jp;
+    for (int i = 0; i < n; ++i) Jp[i] = J[i].data();
+    Eigen::VectorXd r(m);
+    const auto p = energy::StencilPositions(s.block, s.x);
+    ASSERT_TRUE(s.block.Evaluate(p.data(), r.data(), Jp.data()));
+    double norm = 0.0;
+    const double h = 1e-7;
+    for (int i = 0; i < n; ++i) {
+      for (int c = 0; c < 3; ++c) {
+        Vertices xp = s.x, xm = s.x;
+        xp(i, c) += h;
+        xm(i, c) -= h;
+        const Eigen::VectorXd numeric = (Residual(s.block, xp) - Residual(s.block, xm)) / (2 * h);
+        for (int k = 0; k < m; ++k) {
+          norm += J[i](k, c) * J[i](k, c);
+          EXPECT_NEAR(J[i](k, c), numeric[k], 1e-6 * (1.0 + std::abs(numeric[k])))
+              << Sample<T>::kName << " vertex " << i << " coordinate " << c << " residual " << k;
+        }
+      }
+    }
+    EXPECT_GT(norm, 1e-12) << Sample<T>::kName << ": the Jacobian is trivially zero";
+  }
+}
+
+TYPED_TEST(EnergyBlockTest, CeresCostPassesGradientChecker) {
+  using T = TypeParam;
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < kTrials; ++trial) {
+    Sample<T> s(&rng);
+    ceres_backend::TermCost<T> cost(&s.block, std::sqrt(s.block.weight));
+    // The checker's relative step is too small near coordinates at 0: shift the state off
+    // the origin (every block is translation-covariant in its inputs).
+    std::vector<std::vector<double>> params;
+    for (int i = 0; i < T::kVertices; ++i) params.push_back({s.x(i, 0), s.x(i, 1), s.x(i, 2)});
+    std::vector<double*> ptrs;
+    for (auto& q : params) ptrs.push_back(q.data());
+    // Ridders' first step (1e-2 |x|) would cross the contact penalty's hinge: start smaller.
+    ceres::NumericDiffOptions numeric;
+    numeric.ridders_relative_initial_step_size = 1e-5;
+    const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+    ceres::GradientChecker checker(&cost, no_manifolds, numeric);
+    ceres::GradientChecker::ProbeResults results;
+    EXPECT_TRUE(checker.Probe(ptrs.data(), 1e-6, &results)) << Sample<T>::kName << "\n" << results.error_log;
+  }
+}
+
+// The value 1/2 w rho(|r|^2) and its generic gradient, for every loss.
+TYPED_TEST(EnergyBlockTest, LinearizationIsTheValuesGradientAndItsBlocksArePsd) {
+  using T = TypeParam;
+  constexpr int n = T::kVertices;
+  std::mt19937 rng(13);
+  for (RobustLoss kind : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {
+    for (int trial = 0; trial < kTrials; ++trial) {
+      Sample<T> s(&rng);
+      // The loss bends near the residual's size, so both branches are exercised.
+      const double size = Residual(s.block, s.x).norm();
+      const Loss loss{kind, kind == RobustLoss::kNone ? 1.0 : (0.4 + 0.1 * (trial % 12)) * std::max(size, 1e-9)};
+      energy::Linearization<T> lin;
+      ASSERT_TRUE(energy::Linearize(s.block, loss, s.x, &lin));
+      EXPECT_NEAR(lin.value, energy::BlockValue(s.block, loss, s.x), 1e-15 * (1 + lin.value));
+      const double h = 1e-7;
+      double norm = 0.0;
+      for (int i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) {
+          Vertices xp = s.x, xm = s.x;
+          xp(i, c) += h;
+          xm(i, c) -= h;
+          const double numeric =
+              (energy::BlockValue(s.block, loss, xp) - energy::BlockValue(s.block, loss, xm)) / (2 * h);
+          norm += numeric * numeric;
+          EXPECT_NEAR(lin.gradient[i][c], numeric, 1e-6 * (1.0 + std::abs(numeric)) * std::max(1.0, lin.scale))
+              << Sample<T>::kName << " loss " << static_cast<int>(kind) << " vertex " << i << " coordinate " << c;
+        }
+      }
+      if (lin.scale > 0) EXPECT_GT(norm, 0.0) << Sample<T>::kName << ": trivially zero gradient";
+      Eigen::MatrixXd H(3 * n, 3 * n);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) H.block<3, 3>(3 * i, 3 * j) = lin.hessian[i * n + j];
+      EXPECT_LT((H - H.transpose()).norm(), 1e-12 * (1 + H.norm()));
+      const double smallest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues().minCoeff();
+      EXPECT_GT(smallest, -1e-10 * (1 + H.norm())) << Sample<T>::kName;
+    }
+  }
+}
+
+// The value and gradient of a whole problem: the sum of its blocks'.
+TEST(EnergyProblem, EvaluateSumsTheSetsByGroup) {
+  std::mt19937 rng(3);
+  Sample<energy::ElasticElement> e(&rng);
+  energy::Problem problem;
+  problem.Reset(4);
+  problem.AddSet<energy::ElasticElement>(energy::TermGroup::kElastic).Add(e.block);
+  auto& springs = problem.AddSet<energy::VertexSpring>(energy::TermGroup::kTemporal);
+  springs.Add(energy::MakeVertexSpring(2, Eigen::Vector3d(0.1, 0.2, 0.3), 4.0));
+  const EnergyTerms t = problem.Evaluate(e.x);
+  EXPECT_NEAR(t.elastic, 2.5 * ElementEnergy(e.rest, e.rotation, Eigen::Map<const Vector12>(
+                                                                         Vertices(e.x).data())),
+              1e-12 * t.elastic);
+  EXPECT_NEAR(t.temporal, 0.5 * 4.0 * (e.x.row(2) - Eigen::RowVector3d(0.1, 0.2, 0.3)).squaredNorm(), 1e-15);
+  EXPECT_EQ(t.data, 0.0);
+  EXPECT_EQ(problem.num_blocks(), 2);
+  problem.Clear(energy::TermGroup::kTemporal);
+  EXPECT_EQ(problem.Evaluate(e.x).temporal, 0.0);
+}
+
+// rho', rho'' against central differences, on both sides of the bend; the same numbers as
+// Ceres' own losses.
+TEST(RobustLoss, DerivativesMatchCentralDifferencesAndCeres) {
+  const double a = 0.005;
+  for (RobustLoss kind : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {
+    const Loss loss{kind, a};
+    std::unique_ptr<ceres::LossFunction> reference;
+    if (kind == RobustLoss::kHuber) reference = std::make_unique<ceres::HuberLoss>(a);
+    if (kind == RobustLoss::kCauchy) reference = std::make_unique<ceres::CauchyLoss>(a);
+    if (kind == RobustLoss::kTukey) reference = std::make_unique<ceres::TukeyLoss>(a);
+    for (double s : {1e-7, 4e-6, 2.4e-5, 2.6e-5, 1e-4, 3e-3}) {
+      double rho[3], rp[3], rm[3];
+      loss.Evaluate(s, rho);
+      const double h = 1e-4 * s;
+      loss.Evaluate(s + h, rp);
+      loss.Evaluate(s - h, rm);
+      EXPECT_NEAR(rho[1], (rp[0] - rm[0]) / (2 * h), 1e-6 * (1 + std::abs(rho[1]))) << static_cast<int>(kind) << " s " << s;
+      EXPECT_NEAR(rho[2], (rp[1] - rm[1]) / (2 * h), 1e-5 * (1 + std::abs(rho[2]) * s) / s)
+          << static_cast<int>(kind) << " s " << s;
+      if (reference) {
+        double c[3];
+        reference->Evaluate(s, c);
+        for (int i = 0; i < 3; ++i) EXPECT_NEAR(rho[i], c[i], 1e-12 * std::abs(c[i]) + 1e-300);
+      }
+    }
+  }
+}
+
+// Zero energy and force at rest and under any rigid motion, with R recomputed.
+TEST(ElasticElement, ZeroAtRestAndUnderRigidMotion) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 100; ++trial) {
+    Sample<energy::ElasticElement> s(&rng);
+    const Eigen::Matrix3d Q =
+        Eigen::AngleAxisd(0.7 * trial, RandomPoint(&rng, 1).normalized()).toRotationMatrix();
+    const Eigen::Vector3d t = RandomPoint(&rng, 1);
+    Eigen::Matrix<double, 3, 4> xm;
+    Vertices x(4, 3);
+    for (int c = 0; c < 4; ++c) {
+      xm.col(c) = Q * s.rest.X.segment<3>(3 * c) + t;
+      x.row(c) = xm.col(c).transpose();
+    }
+    s.rotation = PolarRotation(DeformationGradient(xm, s.rest.dm_inv));
+    energy::Linearization<energy::ElasticElement> lin;
+    ASSERT_TRUE(energy::Linearize(s.block, Loss(), x, &lin));
+    EXPECT_NEAR(lin.value, 0.0, 1e-20);
+    for (int i = 0; i < 4; ++i) EXPECT_LT(lin.gradient[i].norm(), 1e-9);
+  }
+}
+
+}  // namespace
+}  // namespace femreg
