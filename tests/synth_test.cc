@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "femreg/datasets.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/scene.h"

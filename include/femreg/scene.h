@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "femreg/collision.h"
+#include "femreg/collision_spec.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/fracture.h"

@@ -16,7 +16,7 @@
 #include "femreg/collision.h"
 #include "femreg/fracture.h"
 #include "femreg/point_cloud.h"
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 #include "solvers/ceres/contact_cost.h"
 #include "solvers/fast/gauss_newton.h"
 #include "solvers/ceres/cost_functions.h"

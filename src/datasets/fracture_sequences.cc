@@ -13,6 +13,8 @@
 #include <map>
 #include <sstream>
 
+#include "femreg/datasets.h"
+#include "femreg/eval.h"
 #include "femreg/forward.h"
 #include "femreg/fracture.h"
 #include "femreg/ground_truth.h"
@@ -420,7 +422,7 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
          << "- `ground_truth/frame_NNNN_pieces.csv` (frames after the break): the position of "
          << "each tracked vertex on every ground-truth piece it touches (vertex,piece,x,y,z); "
          << "`femreg register --ground-truth` matches each tracked piece to a ground-truth "
-         << "piece with it (femreg/fracture.h, ComputePieceErrors).\n"
+         << "piece with it (femreg/eval.h, ComputePieceErrors).\n"
          << "- `ground_truth/events.csv`: the ground truth's node splits (frame, node, plane "
          << "normal, measure, pieces).\n\n"
          << "The ground truth is a corotational FEM simulation on a mesh " << refinement

@@ -13,6 +13,7 @@
 #include <omp.h>
 #endif
 
+#include "femreg/datasets.h"
 #include "femreg/eval.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
@@ -24,30 +25,6 @@
 namespace fs = std::filesystem;
 
 namespace femreg {
-
-void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,
-                          Eigen::Vector3d* translation, Eigen::Vector3d* rotation) {
-  translation->setZero();
-  rotation->setZero();
-  if (keyframes.empty()) return;
-  if (frame <= keyframes.front().frame) {
-    *translation = keyframes.front().translation;
-    *rotation = keyframes.front().rotation;
-    return;
-  }
-  for (size_t k = 1; k < keyframes.size(); ++k) {
-    const MotionKeyframe& a = keyframes[k - 1];
-    const MotionKeyframe& b = keyframes[k];
-    if (frame <= b.frame) {
-      const double s = static_cast<double>(frame - a.frame) / (b.frame - a.frame);
-      *translation = (1 - s) * a.translation + s * b.translation;
-      *rotation = (1 - s) * a.rotation + s * b.rotation;
-      return;
-    }
-  }
-  *translation = keyframes.back().translation;
-  *rotation = keyframes.back().rotation;
-}
 
 namespace {
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "femreg/collision.h"
+#include "femreg/datasets.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
