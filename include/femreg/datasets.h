@@ -1,7 +1,7 @@
 // femreg/datasets.h - the sequence generators: sequences with ground truth made by the
 // forward simulator (with contacts or fracture where the scenario calls for them), seen by
-// the virtual depth camera of femreg/synth.h, each written with its tracking scene beside
-// it. `femreg synth`, `femreg contact-data` and
+// the virtual depth camera of femreg/synth.h, each written with its tracking scene
+// (WriteScene, femreg/scene.h) beside it. `femreg synth`, `femreg contact-data` and
 // `femreg fracture-data` run them; tools/make_datasets.sh makes the bundled datasets.
 //
 // Every generator is deterministic: the forward solves run on one thread and every random
@@ -31,7 +31,7 @@ struct SynthReport {
 
 // femreg synth: simulates the scene's synth section (scene.synth.enabled) frame by frame
 // with SolveQuasiStatic on the ground truth mesh, renders it with the virtual camera and
-// writes DIR/scene.yaml (the tracking scene), DIR/clouds/frame_NNNN.pcd,
+// writes DIR/scene.yaml (the tracking scene, SynthTrackingScene), DIR/clouds/frame_NNNN.pcd,
 // DIR/ground_truth/frame_NNNN.csv, DIR/truth/frame_NNNN.vtu (the ground truth surface) and
 // DIR/README.md. `frames` <= 0 means synth.frames; the motion script's timeline does not
 // depend on it, so the first frames of a shorter run are bit-identical to a longer one's.
@@ -39,6 +39,14 @@ struct SynthReport {
 Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int frames,
                              SynthReport* report,
                              void (*progress)(int done, int total) = nullptr);
+
+// The tracking scene GenerateSynthSequence writes into `dir`: the scene's objects,
+// registration, anchors, effects and collision (the simulation-only gravity, boundary,
+// loads, forward and synth left out), the object's mesh file by its name in `dir` (where
+// the generator copies it), and an anchor per motion track the robot knows (`anchor: hard`
+// or `soft`) following the track's translations frame by frame (9 significant digits,
+// repeated last frames dropped: a frame past the list holds the last entry).
+Scene SynthTrackingScene(const Scene& scene, const std::string& dir);
 
 // ---------------------------------------------------------------------------------------
 // femreg contact-data: the bundled contact sequences.

@@ -1,6 +1,5 @@
 // Scene section: synth (femreg synth: the ground truth simulation, the virtual sensor, the
 // motion script and rigid bodies).
-#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -10,7 +9,7 @@
 namespace femreg {
 namespace scene_internal {
 
-void SceneParser::ParseSynth(const YamlValue& v, const YAML::Node& root) {
+void SceneParser::ParseSynth(const YamlValue& v) {
   v.CheckKeys({"frames", "seed", "sanity_check", "ground_truth", "sensor", "background",
                "motion", "bodies"});
   SynthSpec& s = scene_->synth;
@@ -141,7 +140,6 @@ void SceneParser::ParseSynth(const YamlValue& v, const YAML::Node& root) {
       s.bodies.push_back(body);
     }
   }
-  s.tracking_scene_yaml = TrackingSceneYaml(v, root);
 }
 
 void SceneParser::ParseSensor(const YamlValue& v, DepthSensorOptions* sensor) {
@@ -189,60 +187,6 @@ std::vector<MotionKeyframe> SceneParser::ParseKeyframes(const YamlValue& entry, 
     keyframes.push_back(key);
   }
   return keyframes;
-}
-
-std::string SceneParser::TrackingSceneYaml(const YamlValue& synth, const YAML::Node& root) {
-  const SynthSpec& s = scene_->synth;
-  YAML::Node out(YAML::NodeType::Map);
-  std::string description = "Tracking scene written by femreg synth from " + s.source_name +
-                            " (seed " + std::to_string(s.seed) + ")";
-  description += s.sanity_check
-                     ? ". SANITY CHECK: the data were made with this very mesh and material"
-                     : "; the ground truth comes from another mesh or material";
-  out["description"] = description;
-  for (auto it = root.begin(); it != root.end(); ++it) {
-    const std::string key = it->first.Scalar();
-    if (key == "description" || key == "synth" || key == "boundary" || key == "loads" ||
-        key == "forward" || key == "gravity") {
-      continue;
-    }
-    out[key] = YAML::Clone(it->second);
-  }
-  YAML::Node objects = out["objects"];
-  for (size_t i = 0; i < objects.size(); ++i) {
-    if (objects[i]["mesh"]) {
-      objects[i]["mesh"] = std::filesystem::path(objects[i]["mesh"].Scalar()).filename().string();
-    }
-  }
-  auto number = [](double x) {
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%.9g", x == 0 ? 0.0 : x);
-    return std::string(buf);
-  };
-  for (size_t i = 0; i < s.motion.size(); ++i) {
-    const MotionTrackSpec& track = s.motion[i];
-    if (track.anchor == MotionTrackSpec::Anchor::kNone) continue;
-    YAML::Node anchor(YAML::NodeType::Map);
-    anchor.SetStyle(YAML::EmitterStyle::Flow);
-    anchor["name"] = track.name;
-    anchor["select"] = YAML::Clone(root["synth"]["motion"][i]["select"]);
-    anchor["hard"] = track.anchor == MotionTrackSpec::Anchor::kHard ? "true" : "false";
-    std::vector<std::string> rows;
-    for (int f = 0; f < s.frames; ++f) {
-      Eigen::Vector3d t, r;
-      InterpolateKeyframes(track.keyframes, f, &t, &r);
-      rows.push_back("[" + number(t.x()) + ", " + number(t.y()) + ", " + number(t.z()) + "]");
-    }
-    while (rows.size() > 1 && rows[rows.size() - 1] == rows[rows.size() - 2]) rows.pop_back();
-    YAML::Node translations(YAML::NodeType::Sequence);
-    for (const std::string& row : rows) translations.push_back(YAML::Load(row));
-    anchor["translations"] = translations;
-    out["anchors"].push_back(anchor);
-  }
-  YAML::Emitter emitter;
-  emitter << out;
-  if (!emitter.good()) synth.Fail("cannot write the tracking scene: " + emitter.GetLastError());
-  return std::string(emitter.c_str()) + "\n";
 }
 
 }  // namespace scene_internal

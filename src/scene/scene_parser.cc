@@ -145,6 +145,7 @@ void SceneParser::Parse(const YAML::Node& root_node) {
   if (!root_node.IsDefined() || root_node.IsNull()) root.Fail("the scene is empty");
   root.CheckKeys({"description", "objects", "gravity", "boundary", "loads", "forward",
                   "registration", "anchors", "effects", "synth", "collision"});
+  if (root.Has("description")) scene_->description = root["description"].AsString();
   if (root.Has("effects")) ParseEffects(root["effects"]);
   ParseObjects(root["objects"]);
   if (root.Has("collision")) ParseCollision(root["collision"]);
@@ -154,7 +155,7 @@ void SceneParser::Parse(const YAML::Node& root_node) {
   if (root.Has("forward")) ParseForward(root["forward"]);
   if (root.Has("registration")) ParseRegistration(root["registration"]);
   if (root.Has("anchors")) ParseAnchors(root["anchors"]);
-  if (root.Has("synth")) ParseSynth(root["synth"], root_node);
+  if (root.Has("synth")) ParseSynth(root["synth"]);
 }
 
 // The object a boundary condition, load or anchor applies to.

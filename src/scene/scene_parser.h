@@ -79,12 +79,9 @@ class SceneParser {
   void ParseCollision(const YamlValue& v);
 
   // parse_synth.cc
-  void ParseSynth(const YamlValue& v, const YAML::Node& root);
+  void ParseSynth(const YamlValue& v);
   void ParseSensor(const YamlValue& v, DepthSensorOptions* sensor);
   std::vector<MotionKeyframe> ParseKeyframes(const YamlValue& entry, bool rotations);
-  // The tracking scene femreg synth writes: this file without its simulation-only keys,
-  // with mesh files by name (synth copies them) and an anchor per known gripper.
-  std::string TrackingSceneYaml(const YamlValue& synth, const YAML::Node& root);
 
   std::string source_;
   std::string base_dir_;
