@@ -1,7 +1,7 @@
-// Collision: exact triangle-triangle closest points against a brute-force convex QP, the
-// AABB hierarchy against brute force, the contact cost functions' Jacobians, the forward
-// solve resolving a penetration, scenes (one object: nothing built, nothing added), surface
-// readers, and registered contact sequences keeping the penetration below D.
+// Collision: the contact cost functions' Jacobians, the forward solve resolving a
+// penetration, scenes (one object: nothing built, nothing added), surface readers, and
+// registered contact sequences keeping the penetration below D. (The exact closest points
+// and the AABB hierarchy it builds on are tested in geometry_test.cc.)
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
 #include <dlfcn.h>
@@ -17,6 +17,7 @@
 #include <string>
 
 #include "femreg/collision.h"
+#include "femreg/datasets.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
@@ -38,187 +39,6 @@ const bool kOneThread = [] {
   if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) f(1);
   return true;
 }();
-
-// Euclidean projection onto the probability simplex.
-Eigen::Vector3d ProjectSimplex(const Eigen::Vector3d& y) {
-  std::array<double, 3> u = {y[0], y[1], y[2]};
-  std::sort(u.begin(), u.end(), std::greater<double>());
-  double css = 0, theta = 0;
-  for (int i = 0; i < 3; ++i) {
-    css += u[i];
-    const double t = (css - 1) / (i + 1);
-    if (u[i] - t > 0) theta = t;
-  }
-  return (y.array() - theta).max(0.0);
-}
-
-// Reference: min |A u - B v| over u, v in the simplex, a convex QP solved by accelerated
-// projected gradient (FISTA) to convergence. Independent of the feature enumeration.
-double BruteForceDistance(const V3* t1, const V3* t2) {
-  Eigen::Matrix<double, 3, 6> M;
-  for (int k = 0; k < 3; ++k) {
-    M.col(k) = t1[k];
-    M.col(3 + k) = -t2[k];
-  }
-  const double L = 2.0 * (M.transpose() * M).eigenvalues().real().maxCoeff() + 1e-12;
-  Eigen::Matrix<double, 6, 1> z, y, z_prev;
-  z << 1, 1, 1, 1, 1, 1;
-  z /= 3.0;
-  y = z;
-  double t = 1.0;
-  double best = (M * z).norm();
-  for (int it = 0; it < 30000; ++it) {
-    const Eigen::Matrix<double, 6, 1> g = 2.0 * M.transpose() * (M * y);
-    Eigen::Matrix<double, 6, 1> w = y - g / L;
-    z_prev = z;
-    z.head<3>() = ProjectSimplex(w.head<3>());
-    z.tail<3>() = ProjectSimplex(w.tail<3>());
-    const double t_next = 0.5 * (1 + std::sqrt(1 + 4 * t * t));
-    y = z + ((t - 1) / t_next) * (z - z_prev);
-    t = t_next;
-    best = std::min(best, (M * z).norm());
-  }
-  return best;
-}
-
-void ExpectConsistent(const TrianglePairDistance& d, const V3* t1, const V3* t2) {
-  EXPECT_NEAR(d.bary_p.sum(), 1.0, 1e-12);
-  EXPECT_NEAR(d.bary_q.sum(), 1.0, 1e-12);
-  EXPECT_GE(d.bary_p.minCoeff(), -1e-12);
-  EXPECT_GE(d.bary_q.minCoeff(), -1e-12);
-  const V3 p = d.bary_p[0] * t1[0] + d.bary_p[1] * t1[1] + d.bary_p[2] * t1[2];
-  const V3 q = d.bary_q[0] * t2[0] + d.bary_q[1] * t2[1] + d.bary_q[2] * t2[2];
-  EXPECT_LT((p - d.p).norm(), 1e-9);
-  EXPECT_LT((q - d.q).norm(), 1e-9);
-  EXPECT_NEAR((d.p - d.q).norm(), d.distance, 1e-9);
-}
-
-TEST(TriangleDistance, MatchesBruteForceOnRandomPairs) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1, 1);
-  int intersecting = 0;
-  for (int trial = 0; trial < 600; ++trial) {
-    V3 t1[3], t2[3];
-    const V3 shift(u(rng), u(rng), u(rng));
-    for (int k = 0; k < 3; ++k) {
-      t1[k] = V3(u(rng), u(rng), u(rng));
-      t2[k] = V3(u(rng), u(rng), u(rng)) + 0.8 * shift;
-    }
-    const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
-    const double ref = BruteForceDistance(t1, t2);
-    intersecting += d.intersecting;
-    ASSERT_NEAR(d.distance, ref, 2e-6) << "trial " << trial;
-    ExpectConsistent(d, t1, t2);
-  }
-  EXPECT_GT(intersecting, 10);  // the random set exercises the intersection branch
-  EXPECT_LT(intersecting, 590);
-}
-
-TEST(TriangleDistance, ParallelCoplanarAndTouchingCases) {
-  const V3 a[3] = {V3(0, 0, 0), V3(1, 0, 0), V3(0, 1, 0)};
-  // Parallel planes, overlapping in projection: distance is the offset.
-  const V3 b[3] = {V3(0.1, 0.1, 0.3), V3(0.9, 0.05, 0.3), V3(0.1, 0.7, 0.3)};
-  TrianglePairDistance d = TriangleTriangleDistance(a, b);
-  EXPECT_NEAR(d.distance, 0.3, 1e-12);
-  EXPECT_FALSE(d.intersecting);
-  ExpectConsistent(d, a, b);
-  // Parallel edges (edge-edge with a 1-D family of closest pairs).
-  const V3 c[3] = {V3(0.2, -0.5, 0), V3(0.8, -0.5, 0), V3(0.5, -1.5, 0)};
-  d = TriangleTriangleDistance(a, c);
-  EXPECT_NEAR(d.distance, 0.5, 1e-12);
-  ExpectConsistent(d, a, c);
-  // Coplanar, disjoint: nearest vertex to edge.
-  const V3 e[3] = {V3(1, 1, 0), V3(2, 1, 0), V3(1, 2, 0)};
-  d = TriangleTriangleDistance(a, e);
-  EXPECT_NEAR(d.distance, std::sqrt(0.5), 1e-12);
-  ExpectConsistent(d, a, e);
-  // Coplanar, overlapping: distance 0.
-  const V3 f[3] = {V3(0.2, 0.2, 0), V3(1.2, 0.2, 0), V3(0.2, 1.2, 0)};
-  EXPECT_NEAR(TriangleTriangleDistance(a, f).distance, 0.0, 1e-12);
-  // Touching at a shared vertex, at a vertex on a face, along an edge.
-  const V3 g[3] = {V3(0, 0, 0), V3(-1, 0, 1), V3(0, -1, 1)};
-  EXPECT_NEAR(TriangleTriangleDistance(a, g).distance, 0.0, 1e-12);
-  const V3 h[3] = {V3(0.2, 0.2, 0), V3(0.2, 0.2, 1), V3(0.5, 0.1, 1)};
-  EXPECT_NEAR(TriangleTriangleDistance(a, h).distance, 0.0, 1e-12);
-  const V3 i[3] = {V3(0, 0, 0), V3(1, 0, 0), V3(0.5, 0, 1)};
-  EXPECT_NEAR(TriangleTriangleDistance(a, i).distance, 0.0, 1e-12);
-  // Piercing: an edge of b through the face of a.
-  const V3 j[3] = {V3(0.2, 0.2, -1), V3(0.2, 0.2, 1), V3(3, 3, 0)};
-  d = TriangleTriangleDistance(a, j);
-  EXPECT_TRUE(d.intersecting);
-  EXPECT_EQ(d.distance, 0.0);
-  // Degenerate triangle (a segment).
-  const V3 k[3] = {V3(0.3, 0.3, 0.5), V3(0.6, 0.3, 0.5), V3(0.9, 0.3, 0.5)};
-  d = TriangleTriangleDistance(a, k);
-  EXPECT_NEAR(d.distance, BruteForceDistance(a, k), 2e-6);
-}
-
-TEST(TriangleDistance, SegmentsParallelAndDegenerate) {
-  double s, t;
-  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(1, 0, 0), V3(2, 1, 0), V3(3, 1, 0), &s, &t),
-              std::sqrt(2.0), 1e-12);
-  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(1, 0, 0), V3(0.5, 1, 0), V3(1.5, 1, 0), &s, &t),
-              1.0, 1e-12);
-  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(0, 0, 0), V3(1, 1, 0), V3(1, -1, 0), &s, &t),
-              1.0, 1e-12);
-}
-
-// A random closed surface: a sphere's surface, jittered.
-void RandomSurface(std::mt19937* rng, const V3& centre, Vertices* x, Triangles* tris) {
-  TetMesh m = MakeSphere(0.1, 3);
-  std::normal_distribution<double> n(0, 0.01);
-  *x = m.rest;
-  for (int v = 0; v < x->rows(); ++v) x->row(v) += (centre + V3(n(*rng), n(*rng), n(*rng))).transpose();
-  *tris = m.surface;
-}
-
-std::set<std::pair<int, int>> BruteForcePairs(const Vertices& xa, const Triangles& ta,
-                                              const Vertices& xb, const Triangles& tb,
-                                              double margin) {
-  std::set<std::pair<int, int>> out;
-  auto box = [](const Vertices& x, const Triangles& t, int f) {
-    Eigen::AlignedBox3d b(V3(x.row(t(f, 0))));
-    b.extend(V3(x.row(t(f, 1))));
-    b.extend(V3(x.row(t(f, 2))));
-    return b;
-  };
-  for (int i = 0; i < ta.rows(); ++i)
-    for (int j = 0; j < tb.rows(); ++j) {
-      const auto a = box(xa, ta, i), b = box(xb, tb, j);
-      if ((a.min().array() <= b.max().array() + margin).all() &&
-          (b.min().array() <= a.max().array() + margin).all())
-        out.emplace(i, j);
-    }
-  return out;
-}
-
-TEST(AabbTree, QueriesEqualBruteForceBeforeAndAfterRefit) {
-  std::mt19937 rng(3);
-  for (int trial = 0; trial < 4; ++trial) {
-    Vertices xa, xb;
-    Triangles ta, tb;
-    RandomSurface(&rng, V3(0, 0, 0), &xa, &ta);
-    RandomSurface(&rng, V3(0.15 + 0.02 * trial, 0.03, 0), &xb, &tb);
-    AabbTree a, b;
-    a.Build(xa, ta);
-    b.Build(xb, tb);
-    EXPECT_EQ(a.num_nodes(), 2 * ta.rows() - 1);
-    for (int pass = 0; pass < 2; ++pass) {
-      const double margin = 0.004;
-      std::vector<std::pair<int, int>> found;
-      a.Overlapping(b, margin, &found);
-      const std::set<std::pair<int, int>> got(found.begin(), found.end());
-      EXPECT_EQ(got.size(), found.size()) << "no duplicates";
-      const auto ref = BruteForcePairs(xa, ta, xb, tb, margin);
-      EXPECT_EQ(got, ref);
-      EXPECT_GT(ref.size(), 0u);
-      // Move b towards a and refit.
-      std::normal_distribution<double> n(0, 0.003);
-      for (int v = 0; v < xb.rows(); ++v) xb.row(v) += V3(-0.02 + n(rng), n(rng), n(rng)).transpose();
-      b.Refit(xb);
-    }
-  }
-}
 
 // --- detection and the forward solve ---------------------------------------------------
 

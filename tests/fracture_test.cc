@@ -17,6 +17,7 @@
 #include <sstream>
 #include <string>
 
+#include "femreg/eval.h"
 #include "femreg/forward.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "femreg/datasets.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/scene.h"
@@ -198,12 +199,13 @@ TEST(SynthSceneTest, ParsesTheSection) {
   ASSERT_EQ(s.bodies.size(), 1u);
   EXPECT_TRUE(s.bodies[0].in_cloud);
   // The tracking scene: no synth or boundary keys, an anchor per known gripper.
-  EXPECT_EQ(s.tracking_scene_yaml.find("synth:"), std::string::npos);
-  EXPECT_EQ(s.tracking_scene_yaml.find("boundary"), std::string::npos);
-  EXPECT_NE(s.tracking_scene_yaml.find("name: end"), std::string::npos);
+  const std::string tracking_yaml = SceneToYaml(SynthTrackingScene(scene, ""));
+  EXPECT_EQ(tracking_yaml.find("synth:"), std::string::npos);
+  EXPECT_EQ(tracking_yaml.find("boundary"), std::string::npos);
+  EXPECT_NE(tracking_yaml.find("name: end"), std::string::npos);
   Scene tracking;
-  const Status reparsed = ParseScene(s.tracking_scene_yaml, "scene.yaml", "", &tracking);
-  ASSERT_TRUE(reparsed.ok()) << reparsed.message() << "\n" << s.tracking_scene_yaml;
+  const Status reparsed = ParseScene(tracking_yaml, "scene.yaml", "", &tracking);
+  ASSERT_TRUE(reparsed.ok()) << reparsed.message() << "\n" << tracking_yaml;
   ASSERT_EQ(tracking.anchors.size(), 1u);
   EXPECT_TRUE(tracking.anchors[0].hard);
   ASSERT_EQ(tracking.anchors[0].translations.size(), 7u);

@@ -1,6 +1,7 @@
 // femreg/collision.h - contacts between objects and with rigid obstacles (seed Section 5):
-// exact triangle-triangle closest points, an AABB hierarchy over each surface, a broad and a
-// coarse-to-fine narrow phase, and the penalty E = 1/2 k delta^2 of seed eq. 15.
+// a broad and a coarse-to-fine narrow phase over the AABB hierarchies and exact closest
+// points of femreg/geometry.h, for the pairs and obstacles of a CollisionSpec
+// (femreg/collision_spec.h), and the penalty E = 1/2 k delta^2 of seed eq. 15.
 //
 // Sign conventions. A contact ties a point p_a on a surface triangle of object a (a
 // barycentric combination of its 3 vertices) to a point p_b on object b or on an obstacle.
@@ -21,110 +22,13 @@
 #include <utility>
 #include <vector>
 
+#include "femreg/collision_spec.h"
 #include "femreg/forward.h"
+#include "femreg/geometry.h"
 #include "femreg/mesh.h"
 #include "femreg/status.h"
 
 namespace femreg {
-
-// ---------------------------------------------------------------------------------------
-// Exact closest-point queries.
-
-// Closest point of triangle (a, b, c) to p; *barycentric (may be null) gets its weights.
-Eigen::Vector3d TriangleClosestPoint(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                       Eigen::Vector3d* barycentric = nullptr);
-
-// Closest points p0 + s (p1 - p0) and q0 + t (q1 - q0) of two segments, s, t in [0, 1];
-// parallel and degenerate (point-like) segments included. Returns the distance.
-double ClosestSegmentSegment(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
-                             const Eigen::Vector3d& q0, const Eigen::Vector3d& q1, double* s,
-                             double* t);
-
-struct TrianglePairDistance {
-  double distance = 0.0;
-  Eigen::Vector3d p = Eigen::Vector3d::Zero(), q = Eigen::Vector3d::Zero();  // on T1, on T2
-  Eigen::Vector3d bary_p = Eigen::Vector3d(1, 0, 0), bary_q = Eigen::Vector3d(1, 0, 0);
-  bool intersecting = false;  // the triangles cut each other (distance 0, p = q on the cut)
-};
-
-// Closest points of two triangles t1[0..2], t2[0..2]: an edge of one through the other's
-// face (intersection), else the best of the 6 vertex-face and 9 edge-edge pairs; coplanar,
-// parallel and touching triangles included.
-TrianglePairDistance TriangleTriangleDistance(const Eigen::Vector3d* t1, const Eigen::Vector3d* t2);
-
-// ---------------------------------------------------------------------------------------
-// AABB hierarchy over the triangles of a surface.
-
-class AabbTree {
- public:
-  struct Node {
-    Eigen::AlignedBox3d box;
-    int left = -1, right = -1;  // children (both -1 at a leaf)
-    int triangle = -1;          // leaf: the triangle (row of the triangle list)
-  };
-
-  // Top-down build (median split on the longest axis of the centroids). x: #V by 3,
-  // triangles: #F by 3 rows of x. Call again after a topology change.
-  void Build(const Vertices& x, const Triangles& triangles);
-  // Recomputes the boxes bottom-up for moved vertices (same topology).
-  void Refit(const Vertices& x);
-  // Triangle pairs (this, other) whose boxes come within `margin` of each other, found by
-  // descending both trees from the roots (coarse to fine).
-  void Overlapping(const AabbTree& other, double margin,
-                   std::vector<std::pair<int, int>>* pairs) const;
-  // Triangles whose box comes within `margin` of `box`.
-  void Overlapping(const Eigen::AlignedBox3d& box, double margin, std::vector<int>* triangles) const;
-
-  bool empty() const { return nodes_.empty(); }
-  int num_nodes() const { return static_cast<int>(nodes_.size()); }
-  const Eigen::AlignedBox3d& bounds() const { return nodes_.front().box; }
-  const std::vector<Node>& nodes() const { return nodes_; }
-  const Triangles& triangles() const { return triangles_; }
-
- private:
-  int BuildRange(const Vertices& x, std::vector<int>* order, int begin, int end);
-  std::vector<Node> nodes_;  // children after their parent, so a reverse sweep refits
-  Triangles triangles_;
-};
-
-// ---------------------------------------------------------------------------------------
-// Scene description.
-
-// A rigid pose at a frame; frames between keyframes interpolate (translation linearly,
-// rotation by slerp), before the first / after the last hold it.
-struct ObstacleKeyframe {
-  int frame = 0;
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
-  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // axis * angle (rad)
-};
-
-struct ObstacleSpec {
-  enum class Kind { kPlane, kBox, kMesh };
-  std::string name;
-  Kind kind = Kind::kPlane;
-  // Plane (in the obstacle frame): the solid side is behind `normal`.
-  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();
-  Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d box_size = Eigen::Vector3d::Ones();  // box centred at the obstacle origin
-  std::string mesh_path;  // triangle surface (OBJ, ASCII or binary STL), outward normals
-  double scale = 1.0;     // applied to the mesh file's coordinates
-  std::vector<std::string> objects;  // objects it collides with; empty = all
-  std::vector<ObstacleKeyframe> keyframes;  // empty = identity pose
-};
-
-struct CollisionSpec {
-  std::vector<std::pair<std::string, std::string>> pairs;  // object pairs; empty: every pair
-  double stiffness = 1.0e4;  // k (N/m) per contact
-  double distance = 0.002;   // D (m), proximity threshold
-  std::vector<ObstacleSpec> obstacles;
-};
-
-// Reads a triangle surface: OBJ (v / f lines, polygons fanned) or STL (ASCII or binary).
-Status ReadTriangleSurface(const std::string& path, Vertices* vertices, Triangles* triangles);
-
-// The pose of a keyframed obstacle at `frame`.
-Eigen::Isometry3d ObstaclePose(const std::vector<ObstacleKeyframe>& keyframes, double frame);
 
 // ---------------------------------------------------------------------------------------
 // Detection over several objects (vertices in one global array) and obstacles.
@@ -260,19 +164,6 @@ class ContactPotential : public ForwardPotential {
 // Concatenates meshes into one (for a forward solve of several objects): mesh i's vertices
 // start at (*offsets)[i] and its elements get region id i; masses are carried over.
 TetMesh MergeMeshes(const std::vector<TetMesh>& meshes, std::vector<int>* offsets);
-
-// Bundled contact sequences with ground truth: "contact_pair" (a soft block pressed and
-// sheared onto another one, clamped at its base) and "tool_table" (a soft cantilever pushed
-// onto a table by a rigid tool, an STL written beside the scene). Corotational FEM with the
-// penalty on meshes twice as fine as the tracked ones, a virtual depth camera (the tool and
-// the table occlude but return no points). Writes DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd,
-// DIR/ground_truth/frame_NNNN.csv (one row per tracked vertex of all objects in scene order)
-// and DIR/README.md; deterministic.
-// Also writes DIR/truth_contacts.csv: per frame, the ground-truth solve's Newton
-// iterations, active contacts and deepest penetration.
-std::vector<std::string> ContactScenarios();
-Status GenerateContactSequence(const std::string& scenario, const std::string& dir,
-                               void (*progress)(int done, int total) = nullptr);
 
 }  // namespace femreg
 

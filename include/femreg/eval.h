@@ -1,11 +1,15 @@
 // femreg/eval.h - evaluation against ground truth: VTU geometry in file order, triangle
-// surfaces, and the distance between two surfaces.
+// surfaces, the distance between two surfaces, and the errors of a mesh that broke into
+// pieces (the per-piece ground truth of the fracture sequences). The per-frame ground truth
+// and the vertex errors are in femreg/ground_truth.h.
 #ifndef FEMREG_EVAL_H_
 #define FEMREG_EVAL_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
+#include "femreg/ground_truth.h"
 #include "femreg/mesh.h"
 #include "femreg/status.h"
 
@@ -42,6 +46,45 @@ struct SurfaceDistance {
 };
 SurfaceDistance ComputeSurfaceDistance(const Vertices& points_a, const Triangles& triangles_a,
                                        const Vertices& points_b, const Triangles& triangles_b);
+
+// Ground truth for a mesh that may have split. The CSV of a frame keeps one row per
+// original tracked vertex; a side file frame_NNNN_pieces.csv ("vertex,piece,x,y,z") lists,
+// once the ground truth's own mesh has broken, the position of each original vertex on
+// every ground-truth piece it touches. Matching: every tracked vertex maps to its original
+// vertex; each tracked piece is matched to the ground-truth piece that most of its
+// unambiguous vertices lie on, and a vertex takes its original's position on that piece
+// (the CSV row when the side file has none).
+struct PieceTruthRow {
+  int vertex = 0;  // original vertex id
+  int piece = 0;   // ground-truth piece
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+};
+Status ReadPieceTruth(const std::string& path, std::vector<PieceTruthRow>* rows);
+Status WritePieceTruth(const std::string& path, const std::vector<PieceTruthRow>& rows);
+
+struct PieceErrors {
+  VertexErrors all;                 // over every tracked vertex
+  std::vector<ErrorStats> pieces;   // per tracked piece (ConnectedPieces order)
+  std::vector<int> piece_vertices;  // tracked vertices per piece
+  GroundTruthFrame matched;         // per tracked vertex: the truth it was compared with
+};
+// positions: #V tracked; original: #V original ids (rows of truth).
+PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
+                               const std::vector<int>& original, const GroundTruthFrame& truth,
+                               const std::vector<PieceTruthRow>& piece_truth);
+
+// Several objects against one ground truth frame that holds every object's initial
+// vertices in scene order (and side-file rows in that numbering): object i takes the
+// `initial` rows after those of the objects before it. Pieces are numbered object by
+// object; `all` and `matched` cover every tracked vertex in object order.
+struct TrackedObject {
+  const TetMesh* mesh = nullptr;              // its elements (for the pieces)
+  const Vertices* positions = nullptr;        // #V tracked positions
+  const std::vector<int>* original = nullptr; // #V original ids
+  int initial = 0;                            // its vertices before any split
+};
+Status ComputePieceErrors(const std::vector<TrackedObject>& objects, const GroundTruthFrame& truth,
+                          const std::vector<PieceTruthRow>& piece_truth, PieceErrors* out);
 
 }  // namespace femreg
 

@@ -24,9 +24,7 @@
 
 #include "femreg/fem.h"
 #include "femreg/forward.h"
-#include "femreg/ground_truth.h"
 #include "femreg/mesh.h"
-#include "femreg/registration.h"
 
 namespace femreg {
 
@@ -80,6 +78,19 @@ std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const Elasti
 // The measure and plane normal per node (and the node toughness from options).
 void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
                     const FractureOptions& options, NodeSeparation* out);
+
+// A node split by the fracture model (seed Section 4.2): where, when and by which plane.
+struct FractureEvent {
+  int frame = -1;
+  int object = 0;
+  int iteration = 0;       // outer iteration after whose solve it was detected
+  int node = -1;           // vertex index in the object's mesh before the split
+  int original_node = -1;  // the same vertex in the mesh the tracker started with
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // fracture plane normal (world frame)
+  double measure = 0.0;    // largest eigenvalue of the separation tensor / node area (Pa)
+  double toughness = 0.0;  // the node's toughness (Pa)
+  int removed_elements = 0;  // elements crossed by the plane and removed
+};
 
 // What a batch of splits did to the mesh. Per-vertex arrays of the old mesh are carried to
 // the new one by `source`.
@@ -137,57 +148,6 @@ struct MeshValidity {
   std::string ToString() const;
 };
 MeshValidity CheckMesh(const TetMesh& mesh);
-
-// Connected component of each vertex (elements sharing a vertex are connected); components
-// numbered by their smallest vertex. Returns the number of components.
-int ConnectedPieces(const TetMesh& mesh, std::vector<int>* vertex_piece);
-
-// Ground truth for a mesh that may have split. The CSV of a frame keeps one row per
-// original tracked vertex; a side file frame_NNNN_pieces.csv ("vertex,piece,x,y,z") lists,
-// once the ground truth's own mesh has broken, the position of each original vertex on
-// every ground-truth piece it touches. Matching: every tracked vertex maps to its original
-// vertex; each tracked piece is matched to the ground-truth piece that most of its
-// unambiguous vertices lie on, and a vertex takes its original's position on that piece
-// (the CSV row when the side file has none).
-struct PieceTruthRow {
-  int vertex = 0;  // original vertex id
-  int piece = 0;   // ground-truth piece
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-};
-Status ReadPieceTruth(const std::string& path, std::vector<PieceTruthRow>* rows);
-Status WritePieceTruth(const std::string& path, const std::vector<PieceTruthRow>& rows);
-
-struct PieceErrors {
-  VertexErrors all;                 // over every tracked vertex
-  std::vector<ErrorStats> pieces;   // per tracked piece (ConnectedPieces order)
-  std::vector<int> piece_vertices;  // tracked vertices per piece
-  GroundTruthFrame matched;         // per tracked vertex: the truth it was compared with
-};
-// positions: #V tracked; original: #V original ids (rows of truth).
-PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
-                               const std::vector<int>& original, const GroundTruthFrame& truth,
-                               const std::vector<PieceTruthRow>& piece_truth);
-
-// Several objects against one ground truth frame that holds every object's initial
-// vertices in scene order (and side-file rows in that numbering): object i takes the
-// `initial` rows after those of the objects before it. Pieces are numbered object by
-// object; `all` and `matched` cover every tracked vertex in object order.
-struct TrackedObject {
-  const TetMesh* mesh = nullptr;              // its elements (for the pieces)
-  const Vertices* positions = nullptr;        // #V tracked positions
-  const std::vector<int>* original = nullptr; // #V original ids
-  int initial = 0;                            // its vertices before any split
-};
-Status ComputePieceErrors(const std::vector<TrackedObject>& objects, const GroundTruthFrame& truth,
-                          const std::vector<PieceTruthRow>& piece_truth, PieceErrors* out);
-
-// The bundled fracture sequences: "beam_break" (a beam bent until it breaks) and
-// "slab_tear" (a slab torn by two grippers). Writes DIR/scene.yaml, DIR/clouds/*.pcd,
-// DIR/ground_truth/frame_NNNN.csv (+ _pieces.csv after the break, events.csv) and
-// DIR/README.md; `progress` (may be null) is called after each frame.
-std::vector<std::string> FractureScenarios();
-Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
-                                void (*progress)(int done, int total) = nullptr);
 
 }  // namespace femreg
 

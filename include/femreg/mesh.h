@@ -51,6 +51,11 @@ Status FinalizeMesh(TetMesh* mesh, const std::string& source = "mesh",
 // by FinalizeMesh and after topology changes). Does not touch positions.
 void BuildTopology(TetMesh* mesh);
 
+// Connected component of each vertex (elements sharing a vertex are connected); components
+// numbered by their smallest vertex. Returns the number of components. (A mesh breaks into
+// pieces under fracture; the pieces are compared with the ground truth's.)
+int ConnectedPieces(const TetMesh& mesh, std::vector<int>* vertex_piece);
+
 // Lumped masses: each element gives a quarter of density * volume to each of its vertices.
 // density_per_region maps region id -> density; regions not listed use default_density.
 void ComputeLumpedMasses(TetMesh* mesh, double default_density,

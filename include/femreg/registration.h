@@ -10,6 +10,7 @@
 
 #include "femreg/energy.h"
 #include "femreg/fem.h"
+#include "femreg/fracture.h"  // FractureEvent, for FrameSummary::fractures
 #include "femreg/mesh.h"
 #include "femreg/solver.h"
 
@@ -156,19 +157,6 @@ struct StageTimes {
          build = 0.0, solve = 0.0, total = 0.0;
   double collision = 0.0;  // contact detection (refit, broad and narrow phase)
   double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
-};
-
-// A node split by the fracture model (seed Section 4; femreg/fracture.h).
-struct FractureEvent {
-  int frame = -1;
-  int object = 0;
-  int iteration = 0;       // outer iteration after whose solve it was detected
-  int node = -1;           // vertex index in the object's mesh before the split
-  int original_node = -1;  // the same vertex in the mesh the tracker started with
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // fracture plane normal (world frame)
-  double measure = 0.0;    // largest eigenvalue of the separation tensor / node area (Pa)
-  double toughness = 0.0;  // the node's toughness (Pa)
-  int removed_elements = 0;  // elements crossed by the plane and removed
 };
 
 struct FrameSummary {

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "femreg/collision.h"
+#include "femreg/collision_spec.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/fracture.h"
@@ -168,14 +168,12 @@ struct SynthSpec {
   double background_size = 1.0;    // m, edge length
   std::vector<MotionTrackSpec> motion;
   std::vector<SynthBodySpec> bodies;
-  // The tracking scene written beside the data: the objects, registration and anchors of
-  // this file (simulation-only keys removed) plus the anchors of the tracks, as YAML.
-  std::string tracking_scene_yaml;
   std::string source_name;         // the scene file's name, for the outputs
 };
 
 struct Scene {
   std::string path;  // the file it was read from ("" when built in code)
+  std::string description;  // free text (the file's `description:`)
   std::vector<ObjectSpec> objects;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2
   std::vector<BoundaryConditionSpec> boundary_conditions;
@@ -199,6 +197,22 @@ Status LoadScene(const std::string& path, Scene* scene);
 // `base_dir`.
 Status ParseScene(const std::string& yaml_text, const std::string& source,
                   const std::string& base_dir, Scene* scene);
+
+// Writes a scene as YAML that LoadScene reads back into the same Scene: every field but
+// the derived ones (path, selections' `where`, synth.source_name, synth.ground_truth_where),
+// and a selection's plane normal, which the reader normalizes again, to within an ulp. Only
+// what differs from the defaults is written, so that written scenes stay short: an option
+// at its default value is left out, and so are an effect that is off and a section at its
+// defaults; what defines a thing is written in full (an object's generator, a camera, a
+// plane, a selection). Numbers are written in the shortest form that reads back to the same
+// double. File paths (meshes) are written relative to the scene file's folder. `comment`
+// (may be empty) goes first, each of its lines as a '#' comment. The file is replaced
+// atomically; errors name it.
+Status WriteScene(const Scene& scene, const std::string& path, const std::string& comment = "");
+// The same as text; file paths relative to `base_dir` (the folder ParseScene will resolve
+// them against; "" writes them as they are).
+std::string SceneToYaml(const Scene& scene, const std::string& base_dir = "",
+                        const std::string& comment = "");
 
 // Loads (or generates) object i's mesh, applies scale and pose to rest and x, and computes
 // the lumped masses from its density and region densities. Errors name the scene and the

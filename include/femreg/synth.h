@@ -1,6 +1,7 @@
-// femreg/synth.h - synthetic data: a virtual depth camera (pinhole, z-buffer, depth noise
-// growing with the square of the depth, dropped pixels at grazing angles, outliers) and
-// ground truth from a finer mesh interpolated at the tracked mesh's vertices.
+// femreg/synth.h - the parts synthetic data is made of: a virtual depth camera (pinhole,
+// z-buffer, depth noise growing with the square of the depth, dropped pixels at grazing
+// angles, outliers) and the embedding that carries a finer mesh's ground truth to the
+// tracked mesh's vertices. The sequence generators that use them are in femreg/datasets.h.
 #ifndef FEMREG_SYNTH_H_
 #define FEMREG_SYNTH_H_
 
@@ -76,28 +77,6 @@ struct EmbeddedPoints {
 EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points);
 Vertices InterpolateEmbedded(const TetMesh& fine, const Vertices& fine_positions,
                              const EmbeddedPoints& embedded);
-
-struct Scene;
-
-// What GenerateSynthSequence made.
-struct SynthReport {
-  int frames = 0;
-  int tracked_vertices = 0, tracked_tets = 0;
-  int truth_vertices = 0, truth_tets = 0;
-  int min_points = 0, max_points = 0;  // cloud sizes
-  double mean_seen_fraction = 0.0;     // tracked vertices the camera saw, mean over frames
-};
-
-// femreg synth: simulates the scene's synth section (scene.synth.enabled) frame by frame
-// with SolveQuasiStatic on the ground truth mesh, renders it with the virtual camera and
-// writes DIR/scene.yaml (the tracking scene), DIR/clouds/frame_NNNN.pcd,
-// DIR/ground_truth/frame_NNNN.csv, DIR/truth/frame_NNNN.vtu (the ground truth surface) and
-// DIR/README.md. `frames` <= 0 means synth.frames; the motion script's timeline does not
-// depend on it, so the first frames of a shorter run are bit-identical to a longer one's.
-// `progress` (may be null) is called after each frame.
-Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int frames,
-                             SynthReport* report,
-                             void (*progress)(int done, int total) = nullptr);
 
 }  // namespace femreg
 

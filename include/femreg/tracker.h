@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "femreg/collision.h"
+#include "femreg/collision_spec.h"
 #include "femreg/fem.h"
 #include "femreg/fracture.h"
 #include "femreg/mesh.h"

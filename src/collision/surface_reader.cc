@@ -6,7 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "femreg/collision.h"
+#include "femreg/collision_spec.h"
 
 namespace femreg {
 

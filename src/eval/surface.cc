@@ -22,7 +22,7 @@
 
 #include "femreg/eval.h"
 #include "io/io_internal.h"
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 
 namespace femreg {
 namespace {

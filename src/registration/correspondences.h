@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "femreg/registration.h"
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {

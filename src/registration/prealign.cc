@@ -6,7 +6,7 @@
 #include <limits>
 #include <utility>
 
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 
 namespace femreg {
 

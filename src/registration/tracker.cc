@@ -13,7 +13,7 @@
 #include "registration/correspondences.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 #include "registration/prealign.h"
 #include "registration/tracker_state.h"
 #include "solvers/backend.h"

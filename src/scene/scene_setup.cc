@@ -1,4 +1,5 @@
-// From a parsed scene to meshes and forward problems: selections, posed meshes, loads.
+// From a parsed scene to meshes and forward problems: selections, posed meshes, loads, and
+// the motion script's keyframes.
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <map>
@@ -201,6 +202,30 @@ Status BuildForwardProblem(const Scene& scene, int object, const TetMesh& mesh,
   }
   for (const auto& [v, f] : loads) problem->nodal_loads.emplace_back(v, f);
   return Status::Ok();
+}
+
+void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,
+                          Eigen::Vector3d* translation, Eigen::Vector3d* rotation) {
+  translation->setZero();
+  rotation->setZero();
+  if (keyframes.empty()) return;
+  if (frame <= keyframes.front().frame) {
+    *translation = keyframes.front().translation;
+    *rotation = keyframes.front().rotation;
+    return;
+  }
+  for (size_t k = 1; k < keyframes.size(); ++k) {
+    const MotionKeyframe& a = keyframes[k - 1];
+    const MotionKeyframe& b = keyframes[k];
+    if (frame <= b.frame) {
+      const double s = static_cast<double>(frame - a.frame) / (b.frame - a.frame);
+      *translation = (1 - s) * a.translation + s * b.translation;
+      *rotation = (1 - s) * a.rotation + s * b.rotation;
+      return;
+    }
+  }
+  *translation = keyframes.back().translation;
+  *rotation = keyframes.back().rotation;
 }
 
 }  // namespace femreg

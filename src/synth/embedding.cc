@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "femreg/synth.h"
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 
 namespace femreg {
 

@@ -5,7 +5,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
-#include "femreg/collision.h"
+#include "femreg/datasets.h"
 
 namespace femreg {
 namespace cli {

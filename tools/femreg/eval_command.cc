@@ -17,7 +17,6 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "femreg/eval.h"
-#include "femreg/fracture.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 

@@ -4,7 +4,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
-#include "femreg/fracture.h"
+#include "femreg/datasets.h"
 
 namespace femreg {
 namespace cli {

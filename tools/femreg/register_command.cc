@@ -21,7 +21,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "femreg/collision.h"
-#include "femreg/fracture.h"
+#include "femreg/eval.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"

@@ -5,8 +5,8 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "femreg/datasets.h"
 #include "femreg/scene.h"
-#include "femreg/synth.h"
 
 namespace femreg {
 namespace cli {

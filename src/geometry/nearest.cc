@@ -1,11 +1,11 @@
-#include "registration/nearest.h"
+#include "geometry/nearest.h"
 
 #include <nanoflann.hpp>
 
 #include <algorithm>
 #include <limits>
 
-#include "femreg/collision.h"
+#include "femreg/geometry.h"
 
 namespace femreg {
 
@@ -61,13 +61,6 @@ int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,
   return n;
 }
 
-Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  Eigen::Vector3d barycentric;
-  TriangleClosestPoint(p, a, b, c, &barycentric);  // femreg/collision.h, degenerate-safe
-  return barycentric;
-}
-
 SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
                            int candidate_vertices)
     : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices) {
@@ -110,8 +103,8 @@ SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
       const Eigen::Vector3d a = positions_.row(triangles_(f, 0));
       const Eigen::Vector3d b = positions_.row(triangles_(f, 1));
       const Eigen::Vector3d c = positions_.row(triangles_(f, 2));
-      const Eigen::Vector3d bary = ClosestPointOnTriangle(query, a, b, c);
-      const Eigen::Vector3d point = bary[0] * a + bary[1] * b + bary[2] * c;
+      Eigen::Vector3d bary;
+      const Eigen::Vector3d point = TriangleClosestPoint(query, a, b, c, &bary);
       const double dist2 = (point - query).squaredNorm();
       if (dist2 < best.squared_distance) {
         best.triangle = f;

@@ -1,7 +1,9 @@
 // Nearest-neighbour queries: a nanoflann k-d tree over a point set, and closest points on
-// a triangle surface.
-#ifndef FEMREG_REGISTRATION_NEAREST_H_
-#define FEMREG_REGISTRATION_NEAREST_H_
+// a triangle surface (through TriangleClosestPoint, femreg/geometry.h). Private to the
+// library (nanoflann stays out of the public headers); used by registration, evaluation
+// and the ground truth embedding.
+#ifndef FEMREG_GEOMETRY_NEAREST_H_
+#define FEMREG_GEOMETRY_NEAREST_H_
 
 #include <Eigen/Core>
 #include <memory>
@@ -32,10 +34,6 @@ class PointIndex {
   std::unique_ptr<Tree> tree_;
 };
 
-// Closest point to p on triangle (a, b, c), as barycentric coordinates (sum 1, all >= 0).
-Eigen::Vector3d ClosestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
-
 // Closest points on a triangle surface: candidates are the triangles around the k surface
 // vertices nearest to the query, which finds the true closest triangle whenever it has a
 // vertex among them (always for reasonably shaped surface triangles).
@@ -63,4 +61,4 @@ class SurfaceIndex {
 
 }  // namespace femreg
 
-#endif  // FEMREG_REGISTRATION_NEAREST_H_
+#endif  // FEMREG_GEOMETRY_NEAREST_H_

@@ -13,6 +13,8 @@
 #include <omp.h>
 #endif
 
+#include "datasets/scene_numbers.h"
+#include "femreg/datasets.h"
 #include "femreg/eval.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
@@ -24,30 +26,6 @@
 namespace fs = std::filesystem;
 
 namespace femreg {
-
-void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,
-                          Eigen::Vector3d* translation, Eigen::Vector3d* rotation) {
-  translation->setZero();
-  rotation->setZero();
-  if (keyframes.empty()) return;
-  if (frame <= keyframes.front().frame) {
-    *translation = keyframes.front().translation;
-    *rotation = keyframes.front().rotation;
-    return;
-  }
-  for (size_t k = 1; k < keyframes.size(); ++k) {
-    const MotionKeyframe& a = keyframes[k - 1];
-    const MotionKeyframe& b = keyframes[k];
-    if (frame <= b.frame) {
-      const double s = static_cast<double>(frame - a.frame) / (b.frame - a.frame);
-      *translation = (1 - s) * a.translation + s * b.translation;
-      *rotation = (1 - s) * a.rotation + s * b.rotation;
-      return;
-    }
-  }
-  *translation = keyframes.back().translation;
-  *rotation = keyframes.back().rotation;
-}
 
 namespace {
 
@@ -127,6 +105,48 @@ struct Track {
 };
 
 }  // namespace
+
+Scene SynthTrackingScene(const Scene& scene, const std::string& dir) {
+  const SynthSpec& s = scene.synth;
+  Scene tracking;
+  tracking.description = "Tracking scene written by femreg synth from " + s.source_name + " (seed " +
+                         std::to_string(s.seed) + ")";
+  tracking.description += s.sanity_check
+                              ? ". SANITY CHECK: the data were made with this very mesh and material"
+                              : "; the ground truth comes from another mesh or material";
+  tracking.objects = scene.objects;
+  for (ObjectSpec& object : tracking.objects) {
+    if (!object.mesh_path.empty()) {
+      object.mesh_path = (fs::path(dir) / fs::path(object.mesh_path).filename()).string();
+    }
+  }
+  tracking.registration = scene.registration;
+  tracking.anchors = scene.anchors;
+  tracking.effects = scene.effects;
+  tracking.collision = scene.collision;
+  for (const MotionTrackSpec& track : s.motion) {
+    if (track.anchor == MotionTrackSpec::Anchor::kNone) continue;
+    AnchorSpec anchor;
+    anchor.name = track.name;
+    anchor.object = scene.objects.empty() ? std::string() : scene.objects[0].name;
+    anchor.selection = track.selection;
+    anchor.selection.where.clear();
+    anchor.hard = track.anchor == MotionTrackSpec::Anchor::kHard;
+    for (int f = 0; f < s.frames; ++f) {
+      Eigen::Vector3d t, r;
+      InterpolateKeyframes(track.keyframes, f, &t, &r);
+      t = datasets_internal::RoundSignificant(t, 9);
+      for (int k = 0; k < 3; ++k) t[k] = t[k] == 0 ? 0.0 : t[k];  // no "-0"
+      anchor.translations.push_back(t);
+    }
+    while (anchor.translations.size() > 1 &&
+           anchor.translations.back() == anchor.translations[anchor.translations.size() - 2]) {
+      anchor.translations.pop_back();
+    }
+    tracking.anchors.push_back(anchor);
+  }
+  return tracking;
+}
 
 Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int frames,
                              SynthReport* report, void (*progress)(int done, int total)) {
@@ -225,14 +245,12 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     fs::copy_file(scene.objects[0].mesh_path, target, fs::copy_options::overwrite_existing, ec);
     if (ec) return Status::Error(target.string() + ": cannot copy the mesh: " + ec.message());
   }
-  std::string header =
-      "# Tracking scene written by `femreg synth " + s.source_name + "`: the tracked mesh, the\n"
-      "# camera, the registration settings and the anchors the robot knows about. Run\n"
-      "#   femreg register --scene scene.yaml --frames clouds --ground-truth ground_truth --out OUT\n";
-  if (s.sanity_check) {
-    header += "# SANITY CHECK: the data were made with this very mesh and material.\n";
-  }
-  status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), header + s.tracking_scene_yaml);
+  std::string comment =
+      "Tracking scene written by `femreg synth " + s.source_name + "`: the tracked mesh, the\n"
+      "camera, the registration settings and the anchors the robot knows about. Run\n"
+      "  femreg register --scene scene.yaml --frames clouds --ground-truth ground_truth --out OUT";
+  if (s.sanity_check) comment += "\nSANITY CHECK: the data were made with this very mesh and material.";
+  status = WriteScene(SynthTrackingScene(scene, dir), (fs::path(dir) / "scene.yaml").string(), comment);
   if (!status.ok()) return status;
 
   SynthReport r;

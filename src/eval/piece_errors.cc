@@ -5,7 +5,7 @@
 #include <map>
 #include <sstream>
 
-#include "femreg/fracture.h"
+#include "femreg/eval.h"
 #include "femreg/io.h"
 
 namespace femreg {

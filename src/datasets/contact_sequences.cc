@@ -5,11 +5,14 @@
 #include <filesystem>
 #include <sstream>
 
+#include "datasets/scene_numbers.h"
 #include "femreg/collision.h"
+#include "femreg/datasets.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
+#include "femreg/scene.h"
 #include "femreg/synth.h"
 
 namespace fs = std::filesystem;
@@ -25,13 +28,6 @@ struct Block {
   Eigen::Vector3d size, origin;
   Eigen::Vector3i cells;
 };
-
-std::string Vec(const Eigen::Vector3d& v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
-  return os.str();
-}
 
 DepthSensorOptions Sensor(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
   DepthSensorOptions s;
@@ -49,12 +45,11 @@ DepthSensorOptions Sensor(const Eigen::Vector3d& position, const Eigen::Vector3d
   return s;
 }
 
-std::string CameraYaml(const CameraOptions& c) {
-  std::ostringstream os;
-  os << "  camera: {position: " << Vec(c.position) << ", target: " << Vec(c.target)
-     << ", up: " << Vec(c.up) << ", fx: " << c.fx << ", fy: " << c.fy << ", cx: " << c.cx
-     << ", cy: " << c.cy << ", width: " << c.width << ", height: " << c.height << "}\n";
-  return os.str();
+// contact_pair's gripper at frame f of `frames`: down 7 mm (through the 2.5 mm gap), then
+// 6 mm along +x while pressing.
+Eigen::Vector3d GripperPath(int f, int frames) {
+  const double s = static_cast<double>(f) / (frames - 1);
+  return Eigen::Vector3d(0.006 * std::max(0.0, 2 * s - 1), 0.0, -0.007 * std::min(1.0, 2 * s));
 }
 
 }  // namespace
@@ -182,12 +177,10 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   std::ostringstream log;
   log << "frame,newton_iterations,termination,final_residual_N,contacts,max_penetration_mm\n";
   for (int f = 0; f < frames; ++f) {
-    const double s = static_cast<double>(f) / (frames - 1);
     world.SetFrame(f);
     ForwardProblem step = problem;
-    if (pair) {  // press down 7 mm (through the 2.5 mm gap), then shear 6 mm along +x
-      const Eigen::Vector3d d(0.006 * std::max(0.0, 2 * s - 1), 0.0, -0.007 * std::min(1.0, 2 * s));
-      for (int v : moved) step.prescribed.emplace_back(v, d);
+    if (pair) {
+      for (int v : moved) step.prescribed.emplace_back(v, GripperPath(f, frames));
     }
     ForwardSummary summary;
     status = SolveQuasiStatic(step, forward, &model, &merged, &summary);
@@ -237,57 +230,54 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   status = WriteFileAtomically((fs::path(dir) / "truth_contacts.csv").string(), log.str());
   if (!status.ok()) return status;
 
-  // The tracking scene.
-  std::ostringstream y;
-  y.precision(10);
-  y << "# " << scenario << ": made by `femreg contact-data --scenario " << scenario
-    << "` (see README.md beside this file).\n"
-    << "description: \"" << scenario << ", " << frames << " frames\"\n"
-    << "objects:\n";
+  // The tracking scene: the coarse blocks, the camera, the known support and gripper, and
+  // the contacts (the tool's mesh beside it). The gripper's path keeps the 10 significant
+  // digits the scene has always been written with.
+  Scene tracking;
+  tracking.description = scenario + ", " + std::to_string(frames) + " frames";
   for (const Block& b : blocks) {
-    y << "  - name: " << b.name << "\n"
-      << "    generate: {shape: box, size: " << Vec(b.size) << ", cells: [" << b.cells.x() << ", "
-      << b.cells.y() << ", " << b.cells.z() << "], origin: " << Vec(b.origin) << "}\n"
-      << "    material: {youngs_modulus: " << material.youngs_modulus << ", poisson_ratio: "
-      << material.poisson_ratio << ", density: " << material.density << "}\n";
+    ObjectSpec object;
+    object.name = b.name;
+    object.generate.shape = MeshGeneratorSpec::Shape::kBox;
+    object.generate.size = b.size;
+    object.generate.cells = b.cells;
+    object.generate.origin = b.origin;
+    object.material = material;
+    tracking.objects.push_back(object);
   }
-  y << "registration:\n"
-    << "  regularizer: corotational\n"
-    << CameraYaml(sensor_options.camera)
-    << "  data: {max_distance: 0.02, loss: huber, loss_scale: 0.005, metric: point_to_plane, visibility: true}\n"
-    << "  weights: {data: 200, elastic: 1, temporal: 1}\n"
-    << "  solver: {max_outer_iterations: 5, max_inner_iterations: 10}\n"
-    << "anchors:\n";
+  tracking.registration.camera = sensor_options.camera;
+  tracking.registration.data.max_distance = 0.02;
+  tracking.registration.data.visibility = true;
+  auto box = [](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+    VertexSelection selection;
+    selection.kind = VertexSelection::Kind::kBox;
+    selection.box_min = lo;
+    selection.box_max = hi;
+    return selection;
+  };
+  AnchorSpec support;
+  support.name = "support";
+  support.object = blocks[0].name;
+  support.hard = true;
+  support.selection = pair ? box(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 0.0001))
+                           : box(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(0.0001, 1, 1));
+  tracking.anchors.push_back(support);
   if (pair) {
-    y << "  - {name: support, object: base, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, hard: true}\n"
-      << "  - name: gripper\n    object: top\n    select: {box: {min: [-1, -1, 0.0624], max: [1, 1, 1]}}\n"
-      << "    hard: true\n    translations: [";
+    AnchorSpec gripper;
+    gripper.name = "gripper";
+    gripper.object = "top";
+    gripper.hard = true;
+    gripper.selection = box(Eigen::Vector3d(-1, -1, 0.0624), Eigen::Vector3d(1, 1, 1));
     for (int f = 0; f < frames; ++f) {
-      const double s = static_cast<double>(f) / (frames - 1);
-      const Eigen::Vector3d d(0.006 * std::max(0.0, 2 * s - 1), 0.0, -0.007 * std::min(1.0, 2 * s));
-      y << (f ? ", " : "") << Vec(d);
+      gripper.translations.push_back(datasets_internal::RoundSignificant(GripperPath(f, frames), 10));
     }
-    y << "]\n";
-  } else {
-    y << "  - {name: support, object: slab, select: {box: {min: [-1, -1, -1], max: [0.0001, 1, 1]}}, hard: true}\n";
+    tracking.anchors.push_back(gripper);
   }
-  y << "effects: {collision: true}\n"
-    << "collision:\n"
-    << "  stiffness: " << k << "\n"
-    << "  distance: " << D << "\n";
-  if (pair) {
-    y << "  pairs: [[base, top]]\n";
-  } else {
-    y << "  obstacles:\n"
-      << "    - {name: table, plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"
-      << "    - name: tool\n      mesh: " << tool_file << "\n      keyframes: [";
-    for (size_t i = 0; i < tool_keys.size(); ++i) {
-      y << (i ? ", " : "") << "{frame: " << tool_keys[i].frame
-        << ", translation: " << Vec(tool_keys[i].translation) << "}";
-    }
-    y << "]\n";
-  }
-  status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), y.str());
+  tracking.effects.collision = true;
+  tracking.collision = spec;
+  status = WriteScene(tracking, (fs::path(dir) / "scene.yaml").string(),
+                      scenario + ": made by `femreg contact-data --scenario " + scenario +
+                          "` (see README.md beside this file).");
   if (!status.ok()) return status;
 
   std::ostringstream readme;

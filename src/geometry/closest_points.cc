@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "femreg/collision.h"
+#include "femreg/geometry.h"
 
 namespace femreg {
 

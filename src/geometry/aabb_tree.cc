@@ -2,7 +2,7 @@
 // simultaneous descent of two trees (the narrow phase's coarse-to-fine part).
 #include <algorithm>
 
-#include "femreg/collision.h"
+#include "femreg/geometry.h"
 
 namespace femreg {
 

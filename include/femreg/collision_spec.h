@@ -1,0 +1,56 @@
+// femreg/collision_spec.h - what a scene says about collision (seed Section 5): the object
+// pairs, the penalty and the rigid obstacles with their keyframed poses, and the triangle
+// surfaces obstacle meshes are read from. femreg/collision.h detects and penalizes the
+// contacts a spec describes.
+#ifndef FEMREG_COLLISION_SPEC_H_
+#define FEMREG_COLLISION_SPEC_H_
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "femreg/mesh.h"
+#include "femreg/status.h"
+
+namespace femreg {
+
+// A rigid pose at a frame; frames between keyframes interpolate (translation linearly,
+// rotation by slerp), before the first / after the last hold it.
+struct ObstacleKeyframe {
+  int frame = 0;
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // axis * angle (rad)
+};
+
+struct ObstacleSpec {
+  enum class Kind { kPlane, kBox, kMesh };
+  std::string name;
+  Kind kind = Kind::kPlane;
+  // Plane (in the obstacle frame): the solid side is behind `normal`.
+  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d box_size = Eigen::Vector3d::Ones();  // box centred at the obstacle origin
+  std::string mesh_path;  // triangle surface (OBJ, ASCII or binary STL), outward normals
+  double scale = 1.0;     // applied to the mesh file's coordinates
+  std::vector<std::string> objects;  // objects it collides with; empty = all
+  std::vector<ObstacleKeyframe> keyframes;  // empty = identity pose
+};
+
+struct CollisionSpec {
+  std::vector<std::pair<std::string, std::string>> pairs;  // object pairs; empty: every pair
+  double stiffness = 1.0e4;  // k (N/m) per contact
+  double distance = 0.002;   // D (m), proximity threshold
+  std::vector<ObstacleSpec> obstacles;
+};
+
+// Reads a triangle surface: OBJ (v / f lines, polygons fanned) or STL (ASCII or binary).
+Status ReadTriangleSurface(const std::string& path, Vertices* vertices, Triangles* triangles);
+
+// The pose of a keyframed obstacle at `frame`.
+Eigen::Isometry3d ObstaclePose(const std::vector<ObstacleKeyframe>& keyframes, double frame);
+
+}  // namespace femreg
+
+#endif  // FEMREG_COLLISION_SPEC_H_

@@ -1,0 +1,80 @@
+// femreg/datasets.h - the sequence generators: sequences with ground truth made by the
+// forward simulator (with contacts or fracture where the scenario calls for them), seen by
+// the virtual depth camera of femreg/synth.h, each written with its tracking scene
+// (WriteScene, femreg/scene.h) beside it. `femreg synth`, `femreg contact-data` and
+// `femreg fracture-data` run them; tools/make_datasets.sh makes the bundled datasets.
+//
+// Every generator is deterministic: the forward solves run on one thread and every random
+// draw comes from a per-frame seed, so a rerun writes the same bytes.
+#ifndef FEMREG_DATASETS_H_
+#define FEMREG_DATASETS_H_
+
+#include <string>
+#include <vector>
+
+#include "femreg/scene.h"
+#include "femreg/status.h"
+
+namespace femreg {
+
+// ---------------------------------------------------------------------------------------
+// femreg synth: a scene's synth section.
+
+// What GenerateSynthSequence made.
+struct SynthReport {
+  int frames = 0;
+  int tracked_vertices = 0, tracked_tets = 0;
+  int truth_vertices = 0, truth_tets = 0;
+  int min_points = 0, max_points = 0;  // cloud sizes
+  double mean_seen_fraction = 0.0;     // tracked vertices the camera saw, mean over frames
+};
+
+// femreg synth: simulates the scene's synth section (scene.synth.enabled) frame by frame
+// with SolveQuasiStatic on the ground truth mesh, renders it with the virtual camera and
+// writes DIR/scene.yaml (the tracking scene, SynthTrackingScene), DIR/clouds/frame_NNNN.pcd,
+// DIR/ground_truth/frame_NNNN.csv, DIR/truth/frame_NNNN.vtu (the ground truth surface) and
+// DIR/README.md. `frames` <= 0 means synth.frames; the motion script's timeline does not
+// depend on it, so the first frames of a shorter run are bit-identical to a longer one's.
+// `progress` (may be null) is called after each frame.
+Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int frames,
+                             SynthReport* report,
+                             void (*progress)(int done, int total) = nullptr);
+
+// The tracking scene GenerateSynthSequence writes into `dir`: the scene's objects,
+// registration, anchors, effects and collision (the simulation-only gravity, boundary,
+// loads, forward and synth left out), the object's mesh file by its name in `dir` (where
+// the generator copies it), and an anchor per motion track the robot knows (`anchor: hard`
+// or `soft`) following the track's translations frame by frame (9 significant digits,
+// repeated last frames dropped: a frame past the list holds the last entry).
+Scene SynthTrackingScene(const Scene& scene, const std::string& dir);
+
+// ---------------------------------------------------------------------------------------
+// femreg contact-data: the bundled contact sequences.
+
+// Bundled contact sequences with ground truth: "contact_pair" (a soft block pressed and
+// sheared onto another one, clamped at its base) and "tool_table" (a soft cantilever pushed
+// onto a table by a rigid tool, an STL written beside the scene). Corotational FEM with the
+// penalty on meshes twice as fine as the tracked ones, a virtual depth camera (the tool and
+// the table occlude but return no points). Writes DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd,
+// DIR/ground_truth/frame_NNNN.csv (one row per tracked vertex of all objects in scene order)
+// and DIR/README.md; deterministic.
+// Also writes DIR/truth_contacts.csv: per frame, the ground-truth solve's Newton
+// iterations, active contacts and deepest penetration.
+std::vector<std::string> ContactScenarios();
+Status GenerateContactSequence(const std::string& scenario, const std::string& dir,
+                               void (*progress)(int done, int total) = nullptr);
+
+// ---------------------------------------------------------------------------------------
+// femreg fracture-data: the bundled fracture sequences.
+
+// The bundled fracture sequences: "beam_break" (a beam bent until it breaks) and
+// "slab_tear" (a slab torn by two grippers). Writes DIR/scene.yaml, DIR/clouds/*.pcd,
+// DIR/ground_truth/frame_NNNN.csv (+ _pieces.csv after the break, events.csv) and
+// DIR/README.md; `progress` (may be null) is called after each frame.
+std::vector<std::string> FractureScenarios();
+Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
+                                void (*progress)(int done, int total) = nullptr);
+
+}  // namespace femreg
+
+#endif  // FEMREG_DATASETS_H_

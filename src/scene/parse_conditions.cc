@@ -1,0 +1,90 @@
+// Scene sections: boundary conditions, loads and the forward solve (the simulation), and the
+// anchors of registration.
+#include <set>
+#include <string>
+
+#include "scene/scene_parser.h"
+
+namespace femreg {
+namespace scene_internal {
+
+void SceneParser::ParseBoundary(const YamlValue& list) {
+  list.RequireSequence();
+  for (int i = 0; i < list.size(); ++i) {
+    const YamlValue v = list[i];
+    v.CheckKeys({"object", "select", "clamp", "displacement"});
+    BoundaryConditionSpec bc;
+    bc.object = ParseObjectName(v);
+    bc.selection = ParseSelection(v);
+    const bool clamp = v.Has("clamp") && v["clamp"].AsBool();
+    if (clamp && v.Has("displacement")) {
+      v.Fail("has both 'clamp: true' and 'displacement'; use one (a clamp is a zero displacement)");
+    }
+    if (clamp) {
+      bc.type = BoundaryConditionSpec::Type::kClamp;
+    } else if (v.Has("displacement")) {
+      bc.type = BoundaryConditionSpec::Type::kDisplacement;
+      bc.displacement = v["displacement"].AsVector3();
+    } else {
+      v.Fail("needs 'clamp: true' or 'displacement: [x, y, z]'");
+    }
+    scene_->boundary_conditions.push_back(bc);
+  }
+}
+
+void SceneParser::ParseLoads(const YamlValue& list) {
+  list.RequireSequence();
+  for (int i = 0; i < list.size(); ++i) {
+    const YamlValue v = list[i];
+    v.CheckKeys({"object", "select", "force"});
+    LoadSpec load;
+    load.object = ParseObjectName(v);
+    load.selection = ParseSelection(v);
+    if (!v.Has("force")) v.Fail("needs 'force: [x, y, z]' (N, the total over the selection)");
+    load.force = v["force"].AsVector3();
+    scene_->loads.push_back(load);
+  }
+}
+
+void SceneParser::ParseForward(const YamlValue& v) {
+  v.CheckKeys({"model", "max_iterations", "load_steps", "tolerance", "absolute_tolerance"});
+  if (v.Has("model")) {
+    scene_->forward_model =
+        ParseEnum(v["model"], std::vector<ElasticModelType>{ElasticModelType::kCorotational,
+                                                            ElasticModelType::kLinear});
+  }
+  ForwardOptions& f = scene_->forward;
+  if (v.Has("max_iterations")) f.max_iterations = IntAtLeast(v["max_iterations"], 1);
+  if (v.Has("load_steps")) f.load_steps = IntAtLeast(v["load_steps"], 1);
+  if (v.Has("tolerance")) f.relative_tolerance = PositiveDouble(v["tolerance"]);
+  if (v.Has("absolute_tolerance")) {
+    f.absolute_tolerance = NonNegativeDouble(v["absolute_tolerance"]);
+  }
+}
+
+void SceneParser::ParseAnchors(const YamlValue& list) {
+  list.RequireSequence();
+  std::set<std::string> names;
+  for (int i = 0; i < list.size(); ++i) {
+    const YamlValue v = list[i];
+    v.CheckKeys({"name", "object", "select", "hard", "weight", "translations"});
+    AnchorSpec anchor;
+    anchor.name = v.Has("name") ? v["name"].AsString() : "anchor" + std::to_string(i);
+    if (!names.insert(anchor.name).second) {
+      v["name"].Fail("duplicate anchor name '" + anchor.name + "'");
+    }
+    anchor.object = ParseObjectName(v);
+    anchor.selection = ParseSelection(v);
+    if (v.Has("hard")) anchor.hard = v["hard"].AsBool();
+    if (v.Has("weight")) anchor.weight = NonNegativeDouble(v["weight"]);
+    if (v.Has("translations")) {
+      const YamlValue t = v["translations"];
+      if (!t.IsSequence()) t.Fail("must be a list of [x, y, z] per frame");
+      for (int k = 0; k < t.size(); ++k) anchor.translations.push_back(t[k].AsVector3());
+    }
+    scene_->anchors.push_back(anchor);
+  }
+}
+
+}  // namespace scene_internal
+}  // namespace femreg

@@ -1,0 +1,144 @@
+// Scene sections: effects (fracture, collision) and the collision section (object pairs,
+// penalty, rigid obstacles).
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include "scene/scene_parser.h"
+
+namespace femreg {
+namespace scene_internal {
+
+void SceneParser::ParseEffects(const YamlValue& v) {
+  v.CheckKeys({"fracture", "collision"});
+  scene_->effects = EffectsSpec();
+  if (v.Has("fracture")) ParseFracture(v["fracture"]);
+  if (v.Has("collision")) scene_->effects.collision = v["collision"].AsBool();
+}
+
+// effects.fracture: true/false, or a map of limits (which turns it on).
+void SceneParser::ParseFracture(const YamlValue& v) {
+  EffectsSpec& e = scene_->effects;
+  if (!v.node().IsMap()) {
+    e.fracture = v.AsBool();
+    return;
+  }
+  v.CheckKeys({"enabled", "max_splits_per_iteration", "max_splits_per_frame",
+               "crossing_tolerance", "max_cracks", "data_gap"});
+  e.fracture = v.Has("enabled") ? v["enabled"].AsBool() : true;
+  FractureOptions& f = e.fracture_options;
+  if (v.Has("max_splits_per_iteration")) f.max_splits_per_iteration = IntAtLeast(v["max_splits_per_iteration"], 1);
+  if (v.Has("max_splits_per_frame")) f.max_splits_per_frame = IntAtLeast(v["max_splits_per_frame"], 1);
+  if (v.Has("max_cracks")) f.max_cracks = IntAtLeast(v["max_cracks"], 0);
+  if (v.Has("data_gap")) f.data_gap = v["data_gap"].AsBool();
+  if (v.Has("crossing_tolerance")) {
+    f.crossing_tolerance = NonNegativeDouble(v["crossing_tolerance"]);
+    if (f.crossing_tolerance >= 1) v["crossing_tolerance"].Fail("must be < 1");
+  }
+}
+
+// The collision section (pairs of object names, penalty, rigid obstacles).
+void SceneParser::ParseCollision(const YamlValue& v) {
+  v.CheckKeys({"pairs", "stiffness", "distance", "obstacles"});
+  CollisionSpec& c = scene_->collision;
+  auto object_name = [&](const YamlValue& n) {
+    const std::string name = n.AsString();
+    std::vector<std::string> names;
+    for (const ObjectSpec& o : scene_->objects) {
+      if (o.name == name) return name;
+      names.push_back(o.name);
+    }
+    const std::string suggestion = ClosestMatch(name, names);
+    n.Fail("unknown object '" + name + "' (" +
+           (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+           "objects: " + JoinNames(names) + ")");
+  };
+  if (v.Has("pairs")) {
+    const YamlValue pairs = v["pairs"];
+    pairs.RequireSequence();
+    for (int i = 0; i < pairs.size(); ++i) {
+      const YamlValue p = pairs[i];
+      if (!p.IsSequence() || p.size() != 2) p.Fail("must be a pair of object names [a, b]");
+      const std::string a = object_name(p[0]), b = object_name(p[1]);
+      if (a == b) p.Fail("an object cannot be paired with itself ('" + a + "')");
+      c.pairs.emplace_back(a, b);
+    }
+  }
+  if (v.Has("stiffness")) c.stiffness = PositiveDouble(v["stiffness"]);
+  if (v.Has("distance")) c.distance = PositiveDouble(v["distance"]);
+  if (v.Has("obstacles")) {
+    const YamlValue list = v["obstacles"];
+    list.RequireSequence();
+    std::set<std::string> names;
+    for (int i = 0; i < list.size(); ++i) {
+      const YamlValue o = list[i];
+      o.CheckKeys({"name", "plane", "box", "mesh", "scale", "objects", "pose", "keyframes"});
+      ObstacleSpec spec;
+      spec.name = o.Has("name") ? o["name"].AsString() : "obstacle" + std::to_string(i);
+      if (!names.insert(spec.name).second) o["name"].Fail("duplicate obstacle name '" + spec.name + "'");
+      const int kinds = o.Has("plane") + o.Has("box") + o.Has("mesh");
+      if (kinds != 1) o.Fail("needs exactly one of 'plane', 'box' or 'mesh'");
+      if (o.Has("plane")) {
+        const YamlValue p = o["plane"];
+        p.CheckKeys({"point", "normal"});
+        spec.kind = ObstacleSpec::Kind::kPlane;
+        if (p.Has("point")) spec.plane_point = p["point"].AsVector3();
+        if (p.Has("normal")) spec.plane_normal = p["normal"].AsVector3();
+        if (!(spec.plane_normal.norm() > 0)) p["normal"].Fail("must not be zero");
+      } else if (o.Has("box")) {
+        const YamlValue b = o["box"];
+        b.CheckKeys({"size"});
+        spec.kind = ObstacleSpec::Kind::kBox;
+        if (!b.Has("size")) b.Fail("needs 'size' (m)");
+        spec.box_size = b["size"].AsVector3();
+        if ((spec.box_size.array() <= 0).any()) b["size"].Fail("every edge length must be > 0");
+      } else {
+        spec.kind = ObstacleSpec::Kind::kMesh;
+        const YamlValue mesh = o["mesh"];
+        std::filesystem::path path(mesh.AsString());
+        if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+        spec.mesh_path = path.lexically_normal().string();
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(path, ec)) mesh.Fail("mesh file not found: " + spec.mesh_path);
+        Vertices vertices;
+        Triangles triangles;
+        const Status status = ReadTriangleSurface(spec.mesh_path, &vertices, &triangles);
+        if (!status.ok()) mesh.Fail(status.message());
+      }
+      if (o.Has("scale")) spec.scale = PositiveDouble(o["scale"]);
+      if (o.Has("objects")) {
+        const YamlValue objects = o["objects"];
+        objects.RequireSequence();
+        for (int k = 0; k < objects.size(); ++k) spec.objects.push_back(object_name(objects[k]));
+      }
+      if (o.Has("pose") && o.Has("keyframes")) o.Fail("has both 'pose' and 'keyframes'; use one");
+      auto keyframe = [&](const YamlValue& k, bool with_frame) {
+        k.CheckKeys(with_frame ? std::vector<std::string>{"frame", "translation", "rotation"}
+                               : std::vector<std::string>{"translation", "rotation"});
+        ObstacleKeyframe key;
+        if (with_frame) {
+          if (!k.Has("frame")) k.Fail("needs 'frame'");
+          key.frame = IntAtLeast(k["frame"], 0);
+        }
+        if (k.Has("translation")) key.translation = k["translation"].AsVector3();
+        if (k.Has("rotation")) key.rotation = k["rotation"].AsVector3();
+        return key;
+      };
+      if (o.Has("pose")) spec.keyframes.push_back(keyframe(o["pose"], false));
+      if (o.Has("keyframes")) {
+        const YamlValue keys = o["keyframes"];
+        keys.RequireSequence();
+        for (int k = 0; k < keys.size(); ++k) {
+          spec.keyframes.push_back(keyframe(keys[k], true));
+          if (k > 0 && spec.keyframes[k].frame <= spec.keyframes[k - 1].frame) {
+            keys[k]["frame"].Fail("keyframes must be in increasing frame order");
+          }
+        }
+      }
+      c.obstacles.push_back(spec);
+    }
+  }
+}
+
+}  // namespace scene_internal
+}  // namespace femreg

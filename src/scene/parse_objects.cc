@@ -1,0 +1,155 @@
+// Scene sections: objects (mesh file or generator, scale, pose), materials and regions.
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "scene/scene_parser.h"
+
+namespace femreg {
+namespace scene_internal {
+
+void SceneParser::ParseObjects(const YamlValue& v) {
+  if (v.IsNull()) v.Fail("required: at least one object");
+  v.RequireSequence();
+  if (v.size() == 0) v.Fail("required: at least one object");
+  std::map<std::string, int> seen;
+  for (int i = 0; i < v.size(); ++i) {
+    ObjectSpec object = ParseObject(v[i], i);
+    auto inserted = seen.emplace(object.name, i);
+    if (!inserted.second) {
+      v[i]["name"].Fail("duplicate object name '" + object.name + "' (also objects[" +
+                        std::to_string(inserted.first->second) + "])");
+    }
+    scene_->objects.push_back(object);
+  }
+}
+
+ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
+  v.CheckKeys({"name", "mesh", "generate", "scale", "pose", "material", "regions",
+               "toughness", "label"});
+  ObjectSpec object;
+  object.name = v.Has("name") ? v["name"].AsString() : "object" + std::to_string(index);
+  if (object.name.empty()) v["name"].Fail("must not be empty");
+  if (v.Has("mesh") == v.Has("generate")) {
+    v.Fail("needs exactly one of 'mesh' (a file) or 'generate' (a box, cylinder or sphere)");
+  }
+  if (v.Has("mesh")) {
+    const YamlValue mesh = v["mesh"];
+    std::filesystem::path path(mesh.AsString());
+    if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+    object.mesh_path = path.lexically_normal().string();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+      mesh.Fail("mesh file not found: " + object.mesh_path);
+    }
+  } else {
+    object.generate = ParseGenerator(v["generate"]);
+  }
+  if (v.Has("scale")) object.scale = PositiveDouble(v["scale"]);
+  if (v.Has("pose")) {
+    const YamlValue pose = v["pose"];
+    pose.CheckKeys({"translation", "rotation"});
+    if (pose.Has("translation")) object.translation = pose["translation"].AsVector3();
+    if (pose.Has("rotation")) object.rotation = pose["rotation"].AsVector3();
+  }
+  if (v.Has("material")) object.material = ParseMaterial(v["material"], object.material);
+  if (v.Has("regions")) {
+    const YamlValue regions = v["regions"];
+    regions.RequireMap();
+    for (auto it = regions.node().begin(); it != regions.node().end(); ++it) {
+      YamlValue key(it->first, regions.path(), &source_, regions.line());
+      const int region = key.AsInt();
+      YamlValue entry(it->second, regions.path() + "." + std::to_string(region), &source_,
+                      key.line());
+      for (const auto& existing : object.region_materials) {
+        if (existing.first == region) key.Fail("region " + std::to_string(region) + " listed twice");
+      }
+      object.region_materials.emplace_back(region, ParseMaterial(entry, object.material, true));
+      if (entry.Has("toughness")) {
+        object.region_toughness.emplace_back(region, NonNegativeDouble(entry["toughness"]));
+      }
+    }
+  }
+  if (v.Has("toughness")) object.toughness = NonNegativeDouble(v["toughness"]);
+  if (v.Has("label")) object.label = IntAtLeast(v["label"], -1);
+  return object;
+}
+
+MeshGeneratorSpec SceneParser::ParseGenerator(const YamlValue& v) {
+  v.RequireMap();
+  MeshGeneratorSpec spec;
+  if (!v.Has("shape")) v.Fail("needs 'shape' (box, cylinder or sphere)");
+  const YamlValue shape = v["shape"];
+  const std::string name = shape.AsString();
+  if (name == "box") {
+    v.CheckKeys({"shape", "size", "cells", "origin"});
+    spec.shape = MeshGeneratorSpec::Shape::kBox;
+    if (v.Has("size")) {
+      spec.size = v["size"].AsVector3();
+      if ((spec.size.array() <= 0).any()) v["size"].Fail("every edge length must be > 0");
+    }
+    if (v.Has("cells")) {
+      spec.cells = v["cells"].AsVector3i();
+      if ((spec.cells.array() < 1).any()) v["cells"].Fail("every cell count must be >= 1");
+    }
+    if (v.Has("origin")) spec.origin = v["origin"].AsVector3();
+  } else if (name == "cylinder") {
+    v.CheckKeys({"shape", "radius", "length", "cells"});
+    spec.shape = MeshGeneratorSpec::Shape::kCylinder;
+    if (v.Has("radius")) spec.radius = PositiveDouble(v["radius"]);
+    if (v.Has("length")) spec.length = PositiveDouble(v["length"]);
+    if (v.Has("cells")) {
+      const YamlValue cells = v["cells"];
+      const std::vector<int> n = cells.AsIntList();
+      if (n.size() != 2 || n[0] < 1 || n[1] < 1) {
+        cells.Fail("must be [radial, axial] with both >= 1");
+      }
+      spec.radial_cells = n[0];
+      spec.axial_cells = n[1];
+    }
+  } else if (name == "sphere") {
+    v.CheckKeys({"shape", "radius", "cells"});
+    spec.shape = MeshGeneratorSpec::Shape::kSphere;
+    if (v.Has("radius")) spec.radius = PositiveDouble(v["radius"]);
+    if (v.Has("cells")) spec.radial_cells = IntAtLeast(v["cells"], 1);
+  } else {
+    const std::string suggestion = ClosestMatch(name, {"box", "cylinder", "sphere"});
+    shape.Fail("unknown shape '" + name + "' (" +
+               (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+               "one of: box, cylinder, sphere)");
+  }
+  return spec;
+}
+
+Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults, bool region) {
+  if (region) {
+    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density", "toughness"});
+  } else {
+    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density"});
+  }
+  Material m = defaults;
+  if (v.Has("youngs_modulus")) {
+    m.youngs_modulus = v["youngs_modulus"].AsDouble();
+    if (!(m.youngs_modulus > 0)) {
+      v["youngs_modulus"].Fail("must be > 0 (got " + Number(m.youngs_modulus) + ")");
+    }
+  }
+  if (v.Has("poisson_ratio")) {
+    const YamlValue nu = v["poisson_ratio"];
+    m.poisson_ratio = nu.AsDouble();
+    if (!(m.poisson_ratio < 0.5)) {
+      nu.Fail("must be < 0.5 (got " + Number(m.poisson_ratio) + ")");
+    }
+    if (!(m.poisson_ratio > -1.0)) {
+      nu.Fail("must be > -1 (got " + Number(m.poisson_ratio) + ")");
+    }
+  }
+  if (v.Has("density")) {
+    m.density = v["density"].AsDouble();
+    if (!(m.density > 0)) v["density"].Fail("must be > 0 (got " + Number(m.density) + ")");
+  }
+  return m;
+}
+
+}  // namespace scene_internal
+}  // namespace femreg

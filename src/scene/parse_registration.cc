@@ -1,0 +1,149 @@
+// Scene section: registration (regularizer, camera, preprocessing, data term, weights,
+// solver); range checks through RegistrationOptions::IsValid.
+#include <string>
+
+#include "scene/scene_parser.h"
+
+namespace femreg {
+namespace scene_internal {
+
+void SceneParser::ParseRegistration(const YamlValue& v) {
+  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver"});
+  RegistrationOptions& r = scene_->registration;
+  if (v.Has("regularizer")) {
+    r.regularizer = ParseEnum(v["regularizer"],
+                              std::vector<Regularizer>{Regularizer::kCorotational,
+                                                       Regularizer::kLinear,
+                                                       Regularizer::kMassSpring,
+                                                       Regularizer::kNone});
+  }
+  if (v.Has("camera")) {
+    const YamlValue c = v["camera"];
+    c.CheckKeys({"position", "target", "up", "fx", "fy", "cx", "cy", "width", "height"});
+    r.camera.enabled = true;
+    if (c.Has("position")) r.camera.position = c["position"].AsVector3();
+    if (c.Has("target")) r.camera.target = c["target"].AsVector3();
+    if (c.Has("up")) r.camera.up = c["up"].AsVector3();
+    if (c.Has("fx")) r.camera.fx = c["fx"].AsDouble();
+    if (c.Has("fy")) r.camera.fy = c["fy"].AsDouble();
+    if (c.Has("cx")) r.camera.cx = c["cx"].AsDouble();
+    if (c.Has("cy")) r.camera.cy = c["cy"].AsDouble();
+    if (c.Has("width")) r.camera.width = c["width"].AsInt();
+    if (c.Has("height")) r.camera.height = c["height"].AsInt();
+  }
+  if (v.Has("preprocess")) {
+    const YamlValue p = v["preprocess"];
+    p.CheckKeys({"crop", "plane", "voxel_size", "outliers", "normals"});
+    if (p.Has("crop")) {
+      const YamlValue crop = p["crop"];
+      crop.CheckKeys({"min", "max"});
+      if (!crop.Has("min") || !crop.Has("max")) crop.Fail("needs 'min' and 'max'");
+      r.preprocess.crop = true;
+      r.preprocess.crop_min = crop["min"].AsVector3();
+      r.preprocess.crop_max = crop["max"].AsVector3();
+    }
+    if (p.Has("plane")) {
+      const YamlValue plane = p["plane"];
+      plane.CheckKeys({"distance", "iterations"});
+      if (!plane.Has("distance")) plane.Fail("needs 'distance' (m)");
+      r.preprocess.plane_distance = plane["distance"].AsDouble();
+      if (plane.Has("iterations")) r.preprocess.plane_iterations = plane["iterations"].AsInt();
+    }
+    if (p.Has("voxel_size")) r.preprocess.voxel_size = p["voxel_size"].AsDouble();
+    if (p.Has("outliers")) {
+      const YamlValue o = p["outliers"];
+      o.CheckKeys({"neighbors", "stddev"});
+      if (o.Has("neighbors")) r.preprocess.outlier_neighbors = o["neighbors"].AsInt();
+      if (o.Has("stddev")) r.preprocess.outlier_stddev = o["stddev"].AsDouble();
+    }
+    if (p.Has("normals")) {
+      const YamlValue n = p["normals"];
+      n.CheckKeys({"neighbors"});
+      if (n.Has("neighbors")) r.preprocess.normal_neighbors = n["neighbors"].AsInt();
+    }
+  }
+  if (v.Has("data")) {
+    const YamlValue d = v["data"];
+    d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
+                 "metric", "visibility", "cloud_stride"});
+    DataTermOptions& o = r.data;
+    if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
+    if (d.Has("cloud_to_model")) o.cloud_to_model = d["cloud_to_model"].AsBool();
+    if (d.Has("max_distance")) o.max_distance = d["max_distance"].AsDouble();
+    if (d.Has("loss")) {
+      o.loss = ParseEnum(d["loss"], std::vector<RobustLoss>{RobustLoss::kHuber,
+                                                            RobustLoss::kCauchy,
+                                                            RobustLoss::kTukey,
+                                                            RobustLoss::kNone});
+    }
+    if (d.Has("loss_scale")) o.loss_scale = d["loss_scale"].AsDouble();
+    if (d.Has("metric")) {
+      o.metric = ParseEnum(d["metric"], std::vector<DataMetric>{DataMetric::kPointToPoint,
+                                                                DataMetric::kPointToPlane});
+    }
+    if (d.Has("visibility")) o.visibility = d["visibility"].AsBool();
+    if (d.Has("cloud_stride")) o.cloud_stride = d["cloud_stride"].AsInt();
+  }
+  if (v.Has("weights")) {
+    const YamlValue w = v["weights"];
+    w.CheckKeys({"data", "elastic", "temporal", "anchor"});
+    if (w.Has("data")) r.weights.data = w["data"].AsDouble();
+    if (w.Has("elastic")) r.weights.elastic = w["elastic"].AsDouble();
+    if (w.Has("temporal")) r.weights.temporal = w["temporal"].AsDouble();
+    if (w.Has("anchor")) r.weights.anchor = w["anchor"].AsDouble();
+  }
+  if (v.Has("solver")) {
+    const YamlValue s = v["solver"];
+    s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
+                 "time_budget_s", "trust_region", "linear_solver", "threads",
+                 "rigid_prealign", "rigid_iterations", "predict_motion", "backend"});
+    SolverOptions& o = r.solver;
+    if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
+    if (s.Has("max_inner_iterations")) o.max_inner_iterations = s["max_inner_iterations"].AsInt();
+    if (s.Has("relative_energy_tolerance")) {
+      o.relative_energy_tolerance = s["relative_energy_tolerance"].AsDouble();
+    }
+    if (s.Has("time_budget_s")) o.time_budget_s = s["time_budget_s"].AsDouble();
+    if (s.Has("trust_region")) {
+      o.trust_region = ParseEnum(s["trust_region"],
+                                 std::vector<TrustRegion>{TrustRegion::kLevenbergMarquardt,
+                                                          TrustRegion::kDogleg});
+    }
+    if (s.Has("linear_solver")) {
+      o.linear_solver = ParseEnum(
+          s["linear_solver"], std::vector<LinearSolver>{LinearSolver::kSparseNormalCholesky,
+                                                        LinearSolver::kConjugateGradients});
+    }
+    if (s.Has("threads")) o.num_threads = s["threads"].AsInt();
+    if (s.Has("predict_motion")) o.predict_motion = s["predict_motion"].AsBool();
+    if (s.Has("backend")) {
+      o.backend = ParseEnum(s["backend"],
+                            std::vector<SolverBackend>{SolverBackend::kCeres, SolverBackend::kFast});
+    }
+    if (s.Has("rigid_prealign")) o.rigid_prealign = s["rigid_prealign"].AsBool();
+    if (s.Has("rigid_iterations")) o.rigid_iterations = s["rigid_iterations"].AsInt();
+  }
+  // Range checks live in RegistrationOptions::IsValid; its message starts with the field
+  // ("data.loss_scale must be > 0 (got -1)"), which locates the offending node.
+  std::string error;
+  if (!r.IsValid(&error)) {
+    const size_t space = error.find(' ');
+    const std::string field = error.substr(0, space);
+    std::string rest = space == std::string::npos ? std::string() : error.substr(space + 1);
+    YamlValue node = v;
+    std::string remaining = field;
+    while (!remaining.empty()) {
+      const size_t dot = remaining.find('.');
+      const std::string key = remaining.substr(0, dot);
+      remaining = dot == std::string::npos ? std::string() : remaining.substr(dot + 1);
+      if (!node.Has(key)) break;
+      node = node[key];
+    }
+    // Report the full field path even when only a parent is present in the file.
+    YamlValue located(node.node(), v.path() + "." + field, &node.source(), node.line());
+    located.Fail(rest);
+  }
+}
+
+}  // namespace scene_internal
+}  // namespace femreg

@@ -1,0 +1,94 @@
+// The scene parser behind ParseScene (femreg/scene.h), one file per group of sections:
+//   scene_parser.cc       the document, selections, object names; ParseScene, LoadScene
+//   parse_objects.cc      objects, mesh generators, materials and regions
+//   parse_conditions.cc   boundary conditions, loads, forward; anchors
+//   parse_registration.cc registration
+//   parse_effects.cc      effects, collision
+//   parse_synth.cc        synth
+// Every error is a SceneError thrown by YamlValue::Fail (yaml_reader.h), located at the
+// file, line and key path; ParseScene turns the first one into a Status.
+#ifndef FEMREG_SCENE_SCENE_PARSER_H_
+#define FEMREG_SCENE_SCENE_PARSER_H_
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+#include "femreg/scene.h"
+#include "scene/yaml_reader.h"
+
+namespace femreg {
+namespace scene_internal {
+
+// A number as the messages show it ("got 0.5").
+std::string Number(double v);
+// Checked scalars; each fails at the node ("must be > 0 (got -1)").
+double PositiveDouble(const YamlValue& v);
+double NonNegativeDouble(const YamlValue& v);
+int IntAtLeast(const YamlValue& v, int min);
+
+// Parses an enum through its FromString, listing the accepted names on failure.
+template <typename Enum>
+Enum ParseEnum(const YamlValue& v, const std::vector<Enum>& values) {
+  const std::string name = v.AsString();
+  Enum result = values.front();
+  if (FromString(name, &result)) return result;
+  std::vector<std::string> names;
+  for (Enum e : values) names.push_back(ToString(e));
+  const std::string suggestion = ClosestMatch(name, names);
+  v.Fail("unknown value '" + name + "' (" +
+         (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+         "one of: " + JoinNames(names) + ")");
+}
+
+class SceneParser {
+ public:
+  SceneParser(const std::string& source, const std::string& base_dir, Scene* scene)
+      : source_(source), base_dir_(base_dir), scene_(scene) {}
+
+  // The sections in the order they depend on each other: effects, objects (which the
+  // collision pairs, conditions and anchors name), ..., registration (whose camera synth
+  // renders from), synth.
+  void Parse(const YAML::Node& root_node);
+
+ private:
+  // scene_parser.cc: shared by the sections.
+  // The object a boundary condition, load or anchor applies to.
+  std::string ParseObjectName(const YamlValue& entry);
+  VertexSelection ParseSelection(const YamlValue& entry);
+
+  // parse_objects.cc
+  void ParseObjects(const YamlValue& v);
+  ObjectSpec ParseObject(const YamlValue& v, int index);
+  MeshGeneratorSpec ParseGenerator(const YamlValue& v);
+  Material ParseMaterial(const YamlValue& v, const Material& defaults, bool region = false);
+
+  // parse_conditions.cc
+  void ParseBoundary(const YamlValue& list);
+  void ParseLoads(const YamlValue& list);
+  void ParseForward(const YamlValue& v);
+  void ParseAnchors(const YamlValue& list);
+
+  // parse_registration.cc
+  void ParseRegistration(const YamlValue& v);
+
+  // parse_effects.cc
+  void ParseEffects(const YamlValue& v);
+  void ParseFracture(const YamlValue& v);
+  void ParseCollision(const YamlValue& v);
+
+  // parse_synth.cc
+  void ParseSynth(const YamlValue& v);
+  void ParseSensor(const YamlValue& v, DepthSensorOptions* sensor);
+  std::vector<MotionKeyframe> ParseKeyframes(const YamlValue& entry, bool rotations);
+
+  std::string source_;
+  std::string base_dir_;
+  Scene* scene_;
+};
+
+}  // namespace scene_internal
+}  // namespace femreg
+
+#endif  // FEMREG_SCENE_SCENE_PARSER_H_

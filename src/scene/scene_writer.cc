@@ -1,0 +1,551 @@
+// Writing scenes (femreg/scene.h WriteScene): the YAML layout of scene_parser.cc, built as a
+// yaml-cpp node tree and written by its emitter. Options are written only where they differ
+// from the defaults the parser starts from; what defines a thing (a generator's shape, a
+// camera, a plane, a selection) is written in full. Sections are blocks, their entries flow
+// maps, so that a written scene reads like the hand-written ones.
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "femreg/io.h"
+#include "femreg/scene.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+namespace {
+
+// The shortest decimal that reads back to the same double: fixed notation for magnitudes
+// in [1e-4, 1e7), else "d.ddde-N" (with a '.' and a signed exponent, which every YAML
+// reader takes for a number).
+std::string Number(double x) {
+  char buf[64];
+  const std::to_chars_result r =
+      std::to_chars(buf, buf + sizeof(buf), x, std::chars_format::scientific);
+  std::string sci(buf, r.ptr);  // "-1.2345e-05": shortest round-trip digits
+  std::string sign;
+  if (!sci.empty() && sci[0] == '-') {
+    sign = "-";
+    sci.erase(0, 1);
+  }
+  if (sci == "inf" || sci == "nan") return sign + "." + sci;  // YAML's .inf / .nan
+  const size_t e = sci.find('e');
+  std::string digits = sci.substr(0, e);
+  const int exponent = std::atoi(sci.c_str() + e + 1);
+  if (digits.size() > 1) digits.erase(1, 1);  // drop the '.'
+  const double magnitude = std::abs(x);
+  if (magnitude == 0.0 || (magnitude >= 1e-4 && magnitude < 1e7)) {
+    std::string fixed;
+    if (exponent < 0) {
+      fixed = "0." + std::string(static_cast<size_t>(-exponent - 1), '0') + digits;
+    } else if (static_cast<int>(digits.size()) <= exponent + 1) {
+      fixed = digits + std::string(static_cast<size_t>(exponent + 1) - digits.size(), '0');
+    } else {
+      fixed = digits.substr(0, exponent + 1) + "." + digits.substr(exponent + 1);
+    }
+    return sign + fixed;
+  }
+  const std::string mantissa = digits.substr(0, 1) + "." + (digits.size() > 1 ? digits.substr(1) : "0");
+  return sign + mantissa + "e" + (exponent < 0 ? "-" : "+") + std::to_string(std::abs(exponent));
+}
+
+YAML::Node Flow(YAML::Node node) {
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  return node;
+}
+
+YAML::Node Map() { return YAML::Node(YAML::NodeType::Map); }
+YAML::Node FlowMap() { return Flow(Map()); }
+YAML::Node FlowSeq() { return Flow(YAML::Node(YAML::NodeType::Sequence)); }
+
+YAML::Node Vec(const Eigen::Vector3d& v) {
+  YAML::Node n = FlowSeq();
+  for (int k = 0; k < 3; ++k) n.push_back(Number(v[k]));
+  return n;
+}
+
+YAML::Node Vec(const Eigen::Vector3i& v) {
+  YAML::Node n = FlowSeq();
+  for (int k = 0; k < 3; ++k) n.push_back(v[k]);
+  return n;
+}
+
+// map[key] = value where it differs from the default.
+void Put(YAML::Node map, const char* key, double value, double default_value) {
+  if (value != default_value) map[key] = Number(value);
+}
+void Put(YAML::Node map, const char* key, int value, int default_value) {
+  if (value != default_value) map[key] = value;
+}
+void Put(YAML::Node map, const char* key, bool value, bool default_value) {
+  if (value != default_value) map[key] = value;
+}
+void Put(YAML::Node map, const char* key, const Eigen::Vector3d& value,
+         const Eigen::Vector3d& default_value) {
+  if (value != default_value) map[key] = Vec(value);
+}
+// map[key] = child when the child has entries.
+void PutMap(YAML::Node map, const char* key, const YAML::Node& child) {
+  if (child.size() > 0) map[key] = child;
+}
+
+// A file path as the scene file's reader resolves it: relative to base_dir.
+std::string FilePath(const std::string& path, const std::string& base_dir) {
+  if (base_dir.empty() || path.empty()) return path;
+  std::error_code ec;
+  fs::path base = fs::absolute(base_dir, ec).lexically_normal();
+  if (base.has_parent_path() && base.filename().empty()) base = base.parent_path();  // "dir/"
+  const fs::path file = fs::absolute(path, ec).lexically_normal();
+  const fs::path relative = file.lexically_relative(base);
+  return relative.empty() ? file.string() : relative.generic_string();
+}
+
+YAML::Node MaterialNode(const Material& m, const Material& base) {
+  YAML::Node n = FlowMap();
+  Put(n, "youngs_modulus", m.youngs_modulus, base.youngs_modulus);
+  Put(n, "poisson_ratio", m.poisson_ratio, base.poisson_ratio);
+  Put(n, "density", m.density, base.density);
+  return n;
+}
+
+YAML::Node GeneratorNode(const MeshGeneratorSpec& g) {
+  YAML::Node n = FlowMap();
+  n["shape"] = ToString(g.shape);
+  switch (g.shape) {
+    case MeshGeneratorSpec::Shape::kBox:
+      n["size"] = Vec(g.size);
+      n["cells"] = Vec(g.cells);
+      Put(n, "origin", g.origin, Eigen::Vector3d::Zero());
+      break;
+    case MeshGeneratorSpec::Shape::kCylinder: {
+      n["radius"] = Number(g.radius);
+      n["length"] = Number(g.length);
+      YAML::Node cells = FlowSeq();
+      cells.push_back(g.radial_cells);
+      cells.push_back(g.axial_cells);
+      n["cells"] = cells;
+      break;
+    }
+    case MeshGeneratorSpec::Shape::kSphere:
+      n["radius"] = Number(g.radius);
+      n["cells"] = g.radial_cells;
+      break;
+    case MeshGeneratorSpec::Shape::kNone:
+      break;
+  }
+  return n;
+}
+
+YAML::Node SelectionNode(const VertexSelection& s) {
+  YAML::Node n = FlowMap();
+  switch (s.kind) {
+    case VertexSelection::Kind::kBox: {
+      YAML::Node box = FlowMap();
+      box["min"] = Vec(s.box_min);
+      box["max"] = Vec(s.box_max);
+      n["box"] = box;
+      break;
+    }
+    case VertexSelection::Kind::kPlane: {
+      YAML::Node plane = FlowMap();
+      plane["point"] = Vec(s.plane_point);
+      plane["normal"] = Vec(s.plane_normal);
+      n["plane"] = plane;
+      break;
+    }
+    case VertexSelection::Kind::kIndices: {
+      YAML::Node indices = FlowSeq();
+      for (int i : s.indices) indices.push_back(i);
+      n["indices"] = indices;
+      break;
+    }
+    case VertexSelection::Kind::kAll:
+      n["all"] = true;
+      break;
+  }
+  Put(n, "tolerance", s.tolerance, VertexSelection().tolerance);
+  return n;
+}
+
+// The object a condition applies to: left out where the reader infers it (one object).
+void PutObject(YAML::Node entry, const Scene& scene, const std::string& object) {
+  if (object.empty()) return;
+  if (scene.objects.size() == 1 && object == scene.objects[0].name) return;
+  entry["object"] = object;
+}
+
+// A keyframe: frame (unless it is a pose), translation and rotation where not zero.
+YAML::Node KeyframeNode(int frame, bool with_frame, const Eigen::Vector3d& translation,
+                        const Eigen::Vector3d& rotation, bool with_rotation) {
+  YAML::Node n = FlowMap();
+  if (with_frame) n["frame"] = frame;
+  Put(n, "translation", translation, Eigen::Vector3d::Zero());
+  if (with_rotation) Put(n, "rotation", rotation, Eigen::Vector3d::Zero());
+  return n;
+}
+
+YAML::Node MotionKeyframes(const std::vector<MotionKeyframe>& keyframes, bool rotations) {
+  YAML::Node list = FlowSeq();
+  for (const MotionKeyframe& k : keyframes) {
+    list.push_back(KeyframeNode(k.frame, true, k.translation, k.rotation, rotations));
+  }
+  return list;
+}
+
+YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
+  YAML::Node n = Map();
+  n["name"] = o.name;
+  if (o.generate.shape != MeshGeneratorSpec::Shape::kNone) {
+    n["generate"] = GeneratorNode(o.generate);
+  } else {
+    n["mesh"] = FilePath(o.mesh_path, base_dir);
+  }
+  Put(n, "scale", o.scale, 1.0);
+  YAML::Node pose = FlowMap();
+  Put(pose, "translation", o.translation, Eigen::Vector3d::Zero());
+  Put(pose, "rotation", o.rotation, Eigen::Vector3d::Zero());
+  PutMap(n, "pose", pose);
+  PutMap(n, "material", MaterialNode(o.material, Material()));
+  if (!o.region_materials.empty()) {
+    YAML::Node regions = FlowMap();
+    for (const auto& [region, material] : o.region_materials) {
+      YAML::Node entry = MaterialNode(material, o.material);
+      for (const auto& [id, toughness] : o.region_toughness) {
+        if (id == region) entry["toughness"] = Number(toughness);
+      }
+      regions[std::to_string(region)] = entry;
+    }
+    n["regions"] = regions;
+  }
+  Put(n, "toughness", o.toughness, 0.0);
+  Put(n, "label", o.label, -1);
+  return n;
+}
+
+YAML::Node ForwardNode(const Scene& scene) {
+  const ForwardOptions& f = scene.forward;
+  const ForwardOptions d;
+  YAML::Node n = FlowMap();
+  if (scene.forward_model != ElasticModelType::kCorotational) n["model"] = ToString(scene.forward_model);
+  Put(n, "max_iterations", f.max_iterations, d.max_iterations);
+  Put(n, "load_steps", f.load_steps, d.load_steps);
+  Put(n, "tolerance", f.relative_tolerance, d.relative_tolerance);
+  Put(n, "absolute_tolerance", f.absolute_tolerance, d.absolute_tolerance);
+  return n;
+}
+
+YAML::Node RegistrationNode(const RegistrationOptions& r) {
+  const RegistrationOptions d;
+  YAML::Node n = Map();
+  if (r.regularizer != d.regularizer) n["regularizer"] = ToString(r.regularizer);
+  if (r.camera.enabled) {
+    const CameraOptions& c = r.camera;
+    YAML::Node camera = FlowMap();
+    camera["position"] = Vec(c.position);
+    camera["target"] = Vec(c.target);
+    camera["up"] = Vec(c.up);
+    camera["fx"] = Number(c.fx);
+    camera["fy"] = Number(c.fy);
+    camera["cx"] = Number(c.cx);
+    camera["cy"] = Number(c.cy);
+    camera["width"] = c.width;
+    camera["height"] = c.height;
+    n["camera"] = camera;
+  }
+  const PreprocessOptions& p = r.preprocess;
+  YAML::Node preprocess = FlowMap();
+  if (p.crop) {
+    YAML::Node crop = FlowMap();
+    crop["min"] = Vec(p.crop_min);
+    crop["max"] = Vec(p.crop_max);
+    preprocess["crop"] = crop;
+  }
+  if (p.plane_distance != d.preprocess.plane_distance ||
+      p.plane_iterations != d.preprocess.plane_iterations) {
+    YAML::Node plane = FlowMap();
+    plane["distance"] = Number(p.plane_distance);
+    Put(plane, "iterations", p.plane_iterations, d.preprocess.plane_iterations);
+    preprocess["plane"] = plane;
+  }
+  Put(preprocess, "voxel_size", p.voxel_size, d.preprocess.voxel_size);
+  YAML::Node outliers = FlowMap();
+  Put(outliers, "neighbors", p.outlier_neighbors, d.preprocess.outlier_neighbors);
+  Put(outliers, "stddev", p.outlier_stddev, d.preprocess.outlier_stddev);
+  PutMap(preprocess, "outliers", outliers);
+  YAML::Node normals = FlowMap();
+  Put(normals, "neighbors", p.normal_neighbors, d.preprocess.normal_neighbors);
+  PutMap(preprocess, "normals", normals);
+  PutMap(n, "preprocess", preprocess);
+
+  const DataTermOptions& a = r.data;
+  YAML::Node data = FlowMap();
+  Put(data, "model_to_cloud", a.model_to_cloud, d.data.model_to_cloud);
+  Put(data, "cloud_to_model", a.cloud_to_model, d.data.cloud_to_model);
+  Put(data, "max_distance", a.max_distance, d.data.max_distance);
+  if (a.loss != d.data.loss) data["loss"] = ToString(a.loss);
+  Put(data, "loss_scale", a.loss_scale, d.data.loss_scale);
+  if (a.metric != d.data.metric) data["metric"] = ToString(a.metric);
+  Put(data, "visibility", a.visibility, d.data.visibility);
+  Put(data, "cloud_stride", a.cloud_stride, d.data.cloud_stride);
+  PutMap(n, "data", data);
+
+  YAML::Node weights = FlowMap();
+  Put(weights, "data", r.weights.data, d.weights.data);
+  Put(weights, "elastic", r.weights.elastic, d.weights.elastic);
+  Put(weights, "temporal", r.weights.temporal, d.weights.temporal);
+  Put(weights, "anchor", r.weights.anchor, d.weights.anchor);
+  PutMap(n, "weights", weights);
+
+  const SolverOptions& s = r.solver;
+  YAML::Node solver = FlowMap();
+  if (s.backend != d.solver.backend) solver["backend"] = ToString(s.backend);
+  Put(solver, "max_outer_iterations", s.max_outer_iterations, d.solver.max_outer_iterations);
+  Put(solver, "max_inner_iterations", s.max_inner_iterations, d.solver.max_inner_iterations);
+  Put(solver, "relative_energy_tolerance", s.relative_energy_tolerance,
+      d.solver.relative_energy_tolerance);
+  Put(solver, "time_budget_s", s.time_budget_s, d.solver.time_budget_s);
+  if (s.trust_region != d.solver.trust_region) solver["trust_region"] = ToString(s.trust_region);
+  if (s.linear_solver != d.solver.linear_solver) solver["linear_solver"] = ToString(s.linear_solver);
+  Put(solver, "threads", s.num_threads, d.solver.num_threads);
+  Put(solver, "predict_motion", s.predict_motion, d.solver.predict_motion);
+  Put(solver, "rigid_prealign", s.rigid_prealign, d.solver.rigid_prealign);
+  Put(solver, "rigid_iterations", s.rigid_iterations, d.solver.rigid_iterations);
+  PutMap(n, "solver", solver);
+  return n;
+}
+
+// Anchors without a trajectory fit on one line; a trajectory gets a line per frame.
+YAML::Node AnchorNode(const Scene& scene, const AnchorSpec& a) {
+  YAML::Node n = a.translations.empty() ? FlowMap() : Map();
+  n["name"] = a.name;
+  PutObject(n, scene, a.object);
+  n["select"] = SelectionNode(a.selection);
+  Put(n, "hard", a.hard, false);
+  Put(n, "weight", a.weight, 0.0);
+  if (!a.translations.empty()) {
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (const Eigen::Vector3d& t : a.translations) list.push_back(Vec(t));
+    n["translations"] = list;
+  }
+  return n;
+}
+
+YAML::Node EffectsNode(const EffectsSpec& e) {
+  const FractureOptions d;
+  const FractureOptions& f = e.fracture_options;
+  YAML::Node fracture = FlowMap();
+  Put(fracture, "max_splits_per_iteration", f.max_splits_per_iteration, d.max_splits_per_iteration);
+  Put(fracture, "max_splits_per_frame", f.max_splits_per_frame, d.max_splits_per_frame);
+  Put(fracture, "crossing_tolerance", f.crossing_tolerance, d.crossing_tolerance);
+  Put(fracture, "max_cracks", f.max_cracks, d.max_cracks);
+  Put(fracture, "data_gap", f.data_gap, d.data_gap);
+  YAML::Node n = FlowMap();
+  if (fracture.size() > 0) {
+    if (!e.fracture) fracture["enabled"] = false;
+    n["fracture"] = fracture;
+  } else if (e.fracture) {
+    n["fracture"] = true;
+  }
+  if (e.collision) n["collision"] = true;
+  return n;
+}
+
+YAML::Node ObstacleNode(const ObstacleSpec& o, const std::string& base_dir) {
+  YAML::Node n = o.keyframes.size() > 1 ? Map() : FlowMap();
+  n["name"] = o.name;
+  switch (o.kind) {
+    case ObstacleSpec::Kind::kPlane: {
+      YAML::Node plane = FlowMap();
+      plane["point"] = Vec(o.plane_point);
+      plane["normal"] = Vec(o.plane_normal);
+      n["plane"] = plane;
+      break;
+    }
+    case ObstacleSpec::Kind::kBox: {
+      YAML::Node box = FlowMap();
+      box["size"] = Vec(o.box_size);
+      n["box"] = box;
+      break;
+    }
+    case ObstacleSpec::Kind::kMesh:
+      n["mesh"] = FilePath(o.mesh_path, base_dir);
+      break;
+  }
+  Put(n, "scale", o.scale, 1.0);
+  if (!o.objects.empty()) {
+    YAML::Node objects = FlowSeq();
+    for (const std::string& name : o.objects) objects.push_back(name);
+    n["objects"] = objects;
+  }
+  if (o.keyframes.size() == 1 && o.keyframes[0].frame == 0) {  // a fixed pose
+    const ObstacleKeyframe& k = o.keyframes[0];
+    n["pose"] = KeyframeNode(0, false, k.translation, k.rotation, true);
+  } else if (!o.keyframes.empty()) {
+    YAML::Node keyframes = FlowSeq();
+    for (const ObstacleKeyframe& k : o.keyframes) {
+      keyframes.push_back(KeyframeNode(k.frame, true, k.translation, k.rotation, true));
+    }
+    n["keyframes"] = keyframes;
+  }
+  return n;
+}
+
+YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
+  const CollisionSpec d;
+  YAML::Node n = Map();
+  if (!c.pairs.empty()) {
+    YAML::Node pairs = FlowSeq();
+    for (const auto& [a, b] : c.pairs) {
+      YAML::Node pair = FlowSeq();
+      pair.push_back(a);
+      pair.push_back(b);
+      pairs.push_back(pair);
+    }
+    n["pairs"] = pairs;
+  }
+  Put(n, "stiffness", c.stiffness, d.stiffness);
+  Put(n, "distance", c.distance, d.distance);
+  if (!c.obstacles.empty()) {
+    YAML::Node obstacles(YAML::NodeType::Sequence);
+    for (const ObstacleSpec& o : c.obstacles) obstacles.push_back(ObstacleNode(o, base_dir));
+    n["obstacles"] = obstacles;
+  }
+  return n;
+}
+
+YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
+  const SynthSpec& s = scene.synth;
+  const SynthSpec d;
+  YAML::Node n = Map();
+  Put(n, "frames", s.frames, d.frames);
+  if (s.seed != d.seed) n["seed"] = s.seed;
+  Put(n, "sanity_check", s.sanity_check, d.sanity_check);
+  YAML::Node truth = FlowMap();
+  Put(truth, "refinement", s.refinement, d.refinement);
+  if (!s.mesh_path.empty()) truth["mesh"] = FilePath(s.mesh_path, base_dir);
+  if (s.generate.shape != MeshGeneratorSpec::Shape::kNone) truth["generate"] = GeneratorNode(s.generate);
+  if (!scene.objects.empty()) PutMap(truth, "material", MaterialNode(s.material, scene.objects[0].material));
+  PutMap(n, "ground_truth", truth);
+  const DepthSensorOptions& o = s.sensor;
+  YAML::Node sensor = FlowMap();
+  Put(sensor, "noise_coefficient", o.noise_coefficient, d.sensor.noise_coefficient);
+  Put(sensor, "grazing_angle_deg", o.grazing_angle_deg, d.sensor.grazing_angle_deg);
+  Put(sensor, "pixel_stride", o.pixel_stride, d.sensor.pixel_stride);
+  Put(sensor, "outlier_fraction", o.outlier_fraction, d.sensor.outlier_fraction);
+  Put(sensor, "outlier_margin", o.outlier_margin, d.sensor.outlier_margin);
+  Put(sensor, "near", o.near, d.sensor.near);
+  PutMap(n, "sensor", sensor);
+  if (s.background) {
+    YAML::Node background = FlowMap();
+    background["point"] = Vec(s.background_point);
+    background["normal"] = Vec(s.background_normal);
+    background["size"] = Number(s.background_size);
+    n["background"] = background;
+  }
+  if (!s.motion.empty()) {
+    YAML::Node motion(YAML::NodeType::Sequence);
+    for (const MotionTrackSpec& t : s.motion) {
+      YAML::Node track = Map();
+      track["name"] = t.name;
+      track["select"] = SelectionNode(t.selection);
+      if (t.has_centre) track["centre"] = Vec(t.centre);
+      YAML::Node keyframes(YAML::NodeType::Sequence);
+      for (const MotionKeyframe& k : t.keyframes) {
+        keyframes.push_back(KeyframeNode(k.frame, true, k.translation, k.rotation, true));
+      }
+      track["keyframes"] = keyframes;
+      if (t.anchor != MotionTrackSpec::Anchor::kNone) {
+        track["anchor"] = t.anchor == MotionTrackSpec::Anchor::kHard ? "hard" : "soft";
+      }
+      motion.push_back(track);
+    }
+    n["motion"] = motion;
+  }
+  if (!s.bodies.empty()) {
+    YAML::Node bodies(YAML::NodeType::Sequence);
+    const SynthBodySpec body_defaults;
+    for (const SynthBodySpec& b : s.bodies) {
+      YAML::Node body = FlowMap();
+      body["name"] = b.name;
+      YAML::Node box = FlowMap();
+      box["min"] = Vec(b.box_min);
+      box["max"] = Vec(b.box_max);
+      body["box"] = box;
+      if (!b.keyframes.empty()) body["keyframes"] = MotionKeyframes(b.keyframes, false);
+      Put(body, "in_cloud", b.in_cloud, body_defaults.in_cloud);
+      Put(body, "press", b.press, body_defaults.press);
+      Put(body, "contact_tolerance", b.contact_tolerance, body_defaults.contact_tolerance);
+      bodies.push_back(body);
+    }
+    n["bodies"] = bodies;
+  }
+  return n;
+}
+
+}  // namespace
+
+std::string SceneToYaml(const Scene& scene, const std::string& base_dir,
+                        const std::string& comment) {
+  YAML::Node root = Map();
+  if (!scene.description.empty()) root["description"] = scene.description;
+  YAML::Node objects(YAML::NodeType::Sequence);
+  for (const ObjectSpec& o : scene.objects) objects.push_back(ObjectNode(o, base_dir));
+  root["objects"] = objects;
+  Put(root, "gravity", scene.gravity, Eigen::Vector3d::Zero());
+  if (!scene.boundary_conditions.empty()) {
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
+      YAML::Node entry = FlowMap();
+      PutObject(entry, scene, bc.object);
+      entry["select"] = SelectionNode(bc.selection);
+      if (bc.type == BoundaryConditionSpec::Type::kClamp) {
+        entry["clamp"] = true;
+      } else {
+        entry["displacement"] = Vec(bc.displacement);
+      }
+      list.push_back(entry);
+    }
+    root["boundary"] = list;
+  }
+  if (!scene.loads.empty()) {
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (const LoadSpec& load : scene.loads) {
+      YAML::Node entry = FlowMap();
+      PutObject(entry, scene, load.object);
+      entry["select"] = SelectionNode(load.selection);
+      entry["force"] = Vec(load.force);
+      list.push_back(entry);
+    }
+    root["loads"] = list;
+  }
+  PutMap(root, "forward", ForwardNode(scene));
+  PutMap(root, "registration", RegistrationNode(scene.registration));
+  if (!scene.anchors.empty()) {
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (const AnchorSpec& a : scene.anchors) list.push_back(AnchorNode(scene, a));
+    root["anchors"] = list;
+  }
+  PutMap(root, "effects", EffectsNode(scene.effects));
+  PutMap(root, "collision", CollisionNode(scene.collision, base_dir));
+  if (scene.synth.enabled) root["synth"] = SynthNode(scene, base_dir);
+
+  std::ostringstream text;
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) text << (line.empty() ? "#" : "# " + line) << "\n";
+  YAML::Emitter emitter;
+  emitter << root;
+  text << emitter.c_str() << "\n";
+  return text.str();
+}
+
+Status WriteScene(const Scene& scene, const std::string& path, const std::string& comment) {
+  const fs::path parent = fs::path(path).parent_path();
+  return WriteFileAtomically(path, SceneToYaml(scene, parent.empty() ? "." : parent.string(), comment));
+}
+
+}  // namespace femreg

@@ -1,0 +1,305 @@
+// Geometry: exact closest points (point-triangle against dense sampling, triangle-triangle
+// against a brute-force convex QP), the AABB hierarchy against brute force, and the
+// nearest-neighbour and closest-surface-point queries against brute force.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <random>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "femreg/geometry.h"
+#include "femreg/io.h"
+#include "geometry/nearest.h"
+
+namespace femreg {
+namespace {
+
+using V3 = Eigen::Vector3d;
+
+// Euclidean projection onto the probability simplex.
+Eigen::Vector3d ProjectSimplex(const Eigen::Vector3d& y) {
+  std::array<double, 3> u = {y[0], y[1], y[2]};
+  std::sort(u.begin(), u.end(), std::greater<double>());
+  double css = 0, theta = 0;
+  for (int i = 0; i < 3; ++i) {
+    css += u[i];
+    const double t = (css - 1) / (i + 1);
+    if (u[i] - t > 0) theta = t;
+  }
+  return (y.array() - theta).max(0.0);
+}
+
+// Reference: min |A u - B v| over u, v in the simplex, a convex QP solved by accelerated
+// projected gradient (FISTA) to convergence. Independent of the feature enumeration.
+double BruteForceDistance(const V3* t1, const V3* t2) {
+  Eigen::Matrix<double, 3, 6> M;
+  for (int k = 0; k < 3; ++k) {
+    M.col(k) = t1[k];
+    M.col(3 + k) = -t2[k];
+  }
+  const double L = 2.0 * (M.transpose() * M).eigenvalues().real().maxCoeff() + 1e-12;
+  Eigen::Matrix<double, 6, 1> z, y, z_prev;
+  z << 1, 1, 1, 1, 1, 1;
+  z /= 3.0;
+  y = z;
+  double t = 1.0;
+  double best = (M * z).norm();
+  for (int it = 0; it < 30000; ++it) {
+    const Eigen::Matrix<double, 6, 1> g = 2.0 * M.transpose() * (M * y);
+    Eigen::Matrix<double, 6, 1> w = y - g / L;
+    z_prev = z;
+    z.head<3>() = ProjectSimplex(w.head<3>());
+    z.tail<3>() = ProjectSimplex(w.tail<3>());
+    const double t_next = 0.5 * (1 + std::sqrt(1 + 4 * t * t));
+    y = z + ((t - 1) / t_next) * (z - z_prev);
+    t = t_next;
+    best = std::min(best, (M * z).norm());
+  }
+  return best;
+}
+
+void ExpectConsistent(const TrianglePairDistance& d, const V3* t1, const V3* t2) {
+  EXPECT_NEAR(d.bary_p.sum(), 1.0, 1e-12);
+  EXPECT_NEAR(d.bary_q.sum(), 1.0, 1e-12);
+  EXPECT_GE(d.bary_p.minCoeff(), -1e-12);
+  EXPECT_GE(d.bary_q.minCoeff(), -1e-12);
+  const V3 p = d.bary_p[0] * t1[0] + d.bary_p[1] * t1[1] + d.bary_p[2] * t1[2];
+  const V3 q = d.bary_q[0] * t2[0] + d.bary_q[1] * t2[1] + d.bary_q[2] * t2[2];
+  EXPECT_LT((p - d.p).norm(), 1e-9);
+  EXPECT_LT((q - d.q).norm(), 1e-9);
+  EXPECT_NEAR((d.p - d.q).norm(), d.distance, 1e-9);
+}
+
+TEST(TriangleDistance, MatchesBruteForceOnRandomPairs) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int intersecting = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    V3 t1[3], t2[3];
+    const V3 shift(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 3; ++k) {
+      t1[k] = V3(u(rng), u(rng), u(rng));
+      t2[k] = V3(u(rng), u(rng), u(rng)) + 0.8 * shift;
+    }
+    const TrianglePairDistance d = TriangleTriangleDistance(t1, t2);
+    const double ref = BruteForceDistance(t1, t2);
+    intersecting += d.intersecting;
+    ASSERT_NEAR(d.distance, ref, 2e-6) << "trial " << trial;
+    ExpectConsistent(d, t1, t2);
+  }
+  EXPECT_GT(intersecting, 10);  // the random set exercises the intersection branch
+  EXPECT_LT(intersecting, 590);
+}
+
+TEST(TriangleDistance, ParallelCoplanarAndTouchingCases) {
+  const V3 a[3] = {V3(0, 0, 0), V3(1, 0, 0), V3(0, 1, 0)};
+  // Parallel planes, overlapping in projection: distance is the offset.
+  const V3 b[3] = {V3(0.1, 0.1, 0.3), V3(0.9, 0.05, 0.3), V3(0.1, 0.7, 0.3)};
+  TrianglePairDistance d = TriangleTriangleDistance(a, b);
+  EXPECT_NEAR(d.distance, 0.3, 1e-12);
+  EXPECT_FALSE(d.intersecting);
+  ExpectConsistent(d, a, b);
+  // Parallel edges (edge-edge with a 1-D family of closest pairs).
+  const V3 c[3] = {V3(0.2, -0.5, 0), V3(0.8, -0.5, 0), V3(0.5, -1.5, 0)};
+  d = TriangleTriangleDistance(a, c);
+  EXPECT_NEAR(d.distance, 0.5, 1e-12);
+  ExpectConsistent(d, a, c);
+  // Coplanar, disjoint: nearest vertex to edge.
+  const V3 e[3] = {V3(1, 1, 0), V3(2, 1, 0), V3(1, 2, 0)};
+  d = TriangleTriangleDistance(a, e);
+  EXPECT_NEAR(d.distance, std::sqrt(0.5), 1e-12);
+  ExpectConsistent(d, a, e);
+  // Coplanar, overlapping: distance 0.
+  const V3 f[3] = {V3(0.2, 0.2, 0), V3(1.2, 0.2, 0), V3(0.2, 1.2, 0)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, f).distance, 0.0, 1e-12);
+  // Touching at a shared vertex, at a vertex on a face, along an edge.
+  const V3 g[3] = {V3(0, 0, 0), V3(-1, 0, 1), V3(0, -1, 1)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, g).distance, 0.0, 1e-12);
+  const V3 h[3] = {V3(0.2, 0.2, 0), V3(0.2, 0.2, 1), V3(0.5, 0.1, 1)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, h).distance, 0.0, 1e-12);
+  const V3 i[3] = {V3(0, 0, 0), V3(1, 0, 0), V3(0.5, 0, 1)};
+  EXPECT_NEAR(TriangleTriangleDistance(a, i).distance, 0.0, 1e-12);
+  // Piercing: an edge of b through the face of a.
+  const V3 j[3] = {V3(0.2, 0.2, -1), V3(0.2, 0.2, 1), V3(3, 3, 0)};
+  d = TriangleTriangleDistance(a, j);
+  EXPECT_TRUE(d.intersecting);
+  EXPECT_EQ(d.distance, 0.0);
+  // Degenerate triangle (a segment).
+  const V3 k[3] = {V3(0.3, 0.3, 0.5), V3(0.6, 0.3, 0.5), V3(0.9, 0.3, 0.5)};
+  d = TriangleTriangleDistance(a, k);
+  EXPECT_NEAR(d.distance, BruteForceDistance(a, k), 2e-6);
+}
+
+TEST(TriangleDistance, SegmentsParallelAndDegenerate) {
+  double s, t;
+  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(1, 0, 0), V3(2, 1, 0), V3(3, 1, 0), &s, &t),
+              std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(1, 0, 0), V3(0.5, 1, 0), V3(1.5, 1, 0), &s, &t),
+              1.0, 1e-12);
+  EXPECT_NEAR(ClosestSegmentSegment(V3(0, 0, 0), V3(0, 0, 0), V3(1, 1, 0), V3(1, -1, 0), &s, &t),
+              1.0, 1e-12);
+}
+
+// A random closed surface: a sphere's surface, jittered.
+void RandomSurface(std::mt19937* rng, const V3& centre, Vertices* x, Triangles* tris) {
+  TetMesh m = MakeSphere(0.1, 3);
+  std::normal_distribution<double> n(0, 0.01);
+  *x = m.rest;
+  for (int v = 0; v < x->rows(); ++v) x->row(v) += (centre + V3(n(*rng), n(*rng), n(*rng))).transpose();
+  *tris = m.surface;
+}
+
+std::set<std::pair<int, int>> BruteForcePairs(const Vertices& xa, const Triangles& ta,
+                                              const Vertices& xb, const Triangles& tb,
+                                              double margin) {
+  std::set<std::pair<int, int>> out;
+  auto box = [](const Vertices& x, const Triangles& t, int f) {
+    Eigen::AlignedBox3d b(V3(x.row(t(f, 0))));
+    b.extend(V3(x.row(t(f, 1))));
+    b.extend(V3(x.row(t(f, 2))));
+    return b;
+  };
+  for (int i = 0; i < ta.rows(); ++i)
+    for (int j = 0; j < tb.rows(); ++j) {
+      const auto a = box(xa, ta, i), b = box(xb, tb, j);
+      if ((a.min().array() <= b.max().array() + margin).all() &&
+          (b.min().array() <= a.max().array() + margin).all())
+        out.emplace(i, j);
+    }
+  return out;
+}
+
+TEST(AabbTree, QueriesEqualBruteForceBeforeAndAfterRefit) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 4; ++trial) {
+    Vertices xa, xb;
+    Triangles ta, tb;
+    RandomSurface(&rng, V3(0, 0, 0), &xa, &ta);
+    RandomSurface(&rng, V3(0.15 + 0.02 * trial, 0.03, 0), &xb, &tb);
+    AabbTree a, b;
+    a.Build(xa, ta);
+    b.Build(xb, tb);
+    EXPECT_EQ(a.num_nodes(), 2 * ta.rows() - 1);
+    for (int pass = 0; pass < 2; ++pass) {
+      const double margin = 0.004;
+      std::vector<std::pair<int, int>> found;
+      a.Overlapping(b, margin, &found);
+      const std::set<std::pair<int, int>> got(found.begin(), found.end());
+      EXPECT_EQ(got.size(), found.size()) << "no duplicates";
+      const auto ref = BruteForcePairs(xa, ta, xb, tb, margin);
+      EXPECT_EQ(got, ref);
+      EXPECT_GT(ref.size(), 0u);
+      // Move b towards a and refit.
+      std::normal_distribution<double> n(0, 0.003);
+      for (int v = 0; v < xb.rows(); ++v) xb.row(v) += V3(-0.02 + n(rng), n(rng), n(rng)).transpose();
+      b.Refit(xb);
+    }
+  }
+}
+
+
+TEST(PointIndex, NearestMatchesBruteForce) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Vertices pts(2000, 3);
+  for (int i = 0; i < pts.rows(); ++i) pts.row(i) << u(rng), u(rng), u(rng);
+  PointIndex index(pts);
+  for (int q = 0; q < 500; ++q) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    int best = -1;
+    double best_d2 = 1e30;
+    for (int i = 0; i < pts.rows(); ++i) {
+      const double d2 = (Eigen::Vector3d(pts.row(i)) - p).squaredNorm();
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        best = i;
+      }
+    }
+    double d2 = 0;
+    EXPECT_EQ(index.Nearest(p, &d2), best);
+    EXPECT_NEAR(d2, best_d2, 1e-12);
+  }
+}
+
+TEST(PointIndex, EmptyIndexFindsNothing) {
+  PointIndex index(Vertices(0, 3));
+  double d2 = 0;
+  EXPECT_EQ(index.Nearest(Eigen::Vector3d::Zero(), &d2), -1);
+}
+
+TEST(TriangleClosestPoint, MatchesDenseSampling) {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Vector3d a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)),
+        c(u(rng), u(rng), u(rng)), p(2 * u(rng), 2 * u(rng), 2 * u(rng));
+    Eigen::Vector3d bary;
+    const Eigen::Vector3d closest = TriangleClosestPoint(p, a, b, c, &bary);
+    EXPECT_NEAR(bary.sum(), 1.0, 1e-12);
+    EXPECT_GE(bary.minCoeff(), -1e-12);
+    const double d = (bary[0] * a + bary[1] * b + bary[2] * c - p).norm();
+    EXPECT_LT((closest - (bary[0] * a + bary[1] * b + bary[2] * c)).norm(), 1e-12);
+    double brute = 1e30;
+    const int n = 200;
+    for (int i = 0; i <= n; ++i) {
+      for (int j = 0; i + j <= n; ++j) {
+        const double s = double(i) / n, t = double(j) / n;
+        brute = std::min(brute, ((1 - s - t) * a + s * b + t * c - p).norm());
+      }
+    }
+    EXPECT_LE(d, brute + 1e-12);
+    EXPECT_GT(d, brute - 0.02);  // the sampling's resolution
+  }
+}
+
+TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
+  // An octahedron-like closed surface with some refinement: a UV sphere.
+  const int nu = 24, nv = 12;
+  Vertices pos((nv - 1) * nu + 2, 3);
+  int k = 0;
+  for (int i = 1; i < nv; ++i) {
+    for (int j = 0; j < nu; ++j) {
+      const double th = M_PI * i / nv, ph = 2 * M_PI * j / nu;
+      pos.row(k++) << std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th);
+    }
+  }
+  pos.row(k++) << 0, 0, 1;
+  pos.row(k++) << 0, 0, -1;
+  std::vector<Eigen::Vector3i> tris;
+  auto id = [&](int i, int j) { return (i - 1) * nu + (j % nu); };
+  for (int i = 1; i < nv - 1; ++i) {
+    for (int j = 0; j < nu; ++j) {
+      tris.emplace_back(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+      tris.emplace_back(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+    }
+  }
+  for (int j = 0; j < nu; ++j) {
+    tris.emplace_back(k - 2, id(1, j), id(1, j + 1));
+    tris.emplace_back(k - 1, id(nv - 1, j + 1), id(nv - 1, j));
+  }
+  Triangles T(static_cast<int>(tris.size()), 3);
+  for (size_t f = 0; f < tris.size(); ++f) T.row(static_cast<int>(f)) = tris[f].transpose();
+  SurfaceIndex index(pos, T);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.5, 1.5);
+  for (int q = 0; q < 300; ++q) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    double brute = 1e30;
+    for (int f = 0; f < T.rows(); ++f) {
+      const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
+      brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
+    }
+    const SurfaceIndex::Hit hit = index.Closest(p);
+    ASSERT_GE(hit.triangle, 0);
+    EXPECT_NEAR(hit.squared_distance, brute, 1e-9) << "query " << p.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace femreg
