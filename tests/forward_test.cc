@@ -894,5 +894,79 @@ TEST(SolveQuasiStatic, HoldsOpenBlasToNumThreads) {
   set(original);
 }
 
+// ---------------------------------------------------------------------------------------
+// femreg simulate: iterations per load step in the report, exit code 1 when not converged.
+
+#ifdef FEMREG_CLI_PATH
+int RunCommand(const std::string& command) {
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string ReadFile(const std::filesystem::path& path) {
+  std::stringstream text;
+  text << std::ifstream(path.string()).rdbuf();
+  return text.str();
+}
+
+class SimulateTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = std::filesystem::temp_directory_path() /
+           (std::string("femreg_forward_test_") + info->name() + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::filesystem::path dir_;
+};
+
+TEST_F(SimulateTest, ReportsNewtonIterationsPerLoadStep) {
+  const std::string scene = std::string(FEMREG_DATASETS_DIR) + "/beam/beam.yaml";
+  const std::string command = std::string(FEMREG_CLI_PATH) + " simulate " + scene + " --out " +
+                              (dir_ / "out").string() + " > " + (dir_ / "log.txt").string() +
+                              " 2>&1";
+  ASSERT_EQ(RunCommand(command), 0) << ReadFile(dir_ / "log.txt");
+  const std::string log = ReadFile(dir_ / "log.txt");
+  EXPECT_NE(log.find("Newton iterations in 2 load steps ["), std::string::npos) << log;
+  const std::string json = ReadFile(dir_ / "out" / "summary.json");
+  EXPECT_NE(json.find("\"ok\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"tangent\": \"full\""), std::string::npos) << json;
+  EXPECT_NE(json.find("{\"load_step\": 1, \"load_factor\": 0.5, \"termination\": \"CONVERGED\", "
+                      "\"newton_iterations\": "),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("{\"load_step\": 2, \"load_factor\": 1, \"termination\": \"CONVERGED\""),
+            std::string::npos)
+      << json;
+}
+
+// E = 100 Pa on the bundled 1 m beam: the load would stretch it several times over and
+// invert its cross-section; the solve does not converge, so simulate says so and exits 1.
+TEST_F(SimulateTest, NotConvergedIsAnError) {
+  std::string scene = ReadFile(std::string(FEMREG_DATASETS_DIR) + "/beam/beam.yaml");
+  const std::string stiff = "youngs_modulus: 1.0e6";
+  ASSERT_NE(scene.find(stiff), std::string::npos);
+  scene.replace(scene.find(stiff), stiff.size(), "youngs_modulus: 100");
+  std::ofstream((dir_ / "soft.yaml").string()) << scene;
+  const std::string command = std::string(FEMREG_CLI_PATH) + " simulate " +
+                              (dir_ / "soft.yaml").string() + " --max-iterations 15 --out " +
+                              (dir_ / "out").string() + " > " + (dir_ / "log.txt").string() +
+                              " 2> " + (dir_ / "err.txt").string();
+  EXPECT_EQ(RunCommand(command), 1) << ReadFile(dir_ / "log.txt");
+  const std::string err = ReadFile(dir_ / "err.txt");
+  EXPECT_NE(err.find("MAX_ITERATIONS"), std::string::npos) << err;
+  EXPECT_NE(err.find("Try more load steps"), std::string::npos) << err;
+  const std::string json = ReadFile(dir_ / "out" / "summary.json");
+  EXPECT_NE(json.find("\"ok\": false"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"vtu\": null"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"termination\": \"MAX_ITERATIONS\", \"newton_iterations\": 15"),
+            std::string::npos)
+      << json;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "out" / "beam.vtu"));
+}
+#endif  // FEMREG_CLI_PATH
+
 }  // namespace
 }  // namespace femreg
