@@ -64,11 +64,11 @@ struct ForwardOptions {
   double absolute_tolerance = 1e-12; // ... or below this (N)
   double min_step = 1e-10;           // line search gives up below this step length
   ForwardTangent tangent = ForwardTangent::kFull;  // corotational model only
-  // Watchdog: a full Newton step that raises the potential is still taken, up to this many
-  // iterations in a row; if the potential has not dropped below the point before them by
-  // then, the solve returns there and backtracks. 0 = a monotone line search only.
-  // Corotational model without problem.potential only.
-  int watchdog_steps = 3;
+  // Watchdog: a full Newton step that raises the potential is still taken; if within this
+  // many further iterations the potential has not dropped below the point before it, the
+  // solve returns there and backtracks. 0 = a monotone line search only. Corotational
+  // model without problem.potential only.
+  int watchdog_steps = 2;
   // Threads for the element loops and for the BLAS under CHOLMOD (OpenBLAS is held to
   // this many during the solve); 0 = OpenMP's current default (omp_get_max_threads).
   int num_threads = 0;

@@ -854,9 +854,9 @@ void QuasiStaticSolver::Run() {
   Eigen::VectorXd gradient, residual(3 * nv()), load(3 * nv());
   Eigen::VectorXd rhs(free_dofs_.size()), step(free_dofs_.size());
   // The watchdog (Chamberlain et al. 1982): when the full Newton step raises the potential,
-  // take it anyway, for at most options.watchdog_steps iterations; if by then the potential
-  // has not dropped below the last point accepted by the monotone rule (the reference),
-  // return there and backtrack. A slender or nearly incompressible body makes the full step
+  // take it anyway; if within options.watchdog_steps further iterations (full steps too) the
+  // potential has not dropped below the point before it (the reference), return there and
+  // backtrack. A slender or nearly incompressible body makes the full step
   // from a rotating configuration stretch stiff directions that are curved in x: the
   // potential rises although the next iterate lands next to the solution (the Maratos
   // effect), and a monotone search would crawl with short steps instead. Contact potentials
@@ -990,7 +990,7 @@ void QuasiStaticSolver::Run() {
       double alpha = 1.0;
       bool relaxed = false;
       const bool may_relax = watchdog_allowed &&
-                             (!watch.active || watch.steps < options_.watchdog_steps);
+                             (!watch.active || watch.steps <= options_.watchdog_steps);
       if (!LineSearch(x, step, slope, potential, residual_norm, load, may_relax, &alpha,
                       &relaxed, &trial)) {
         step_result = ForwardTermination::kLineSearchFailed;
@@ -1025,7 +1025,7 @@ void QuasiStaticSolver::Run() {
         ++watch.steps;
         if (potential <= watch.potential + 1e-4 * watch.slope || residual_norm <= tolerance) {
           watch.active = false;  // the relaxed steps paid off (or reached an equilibrium)
-        } else if (watch.steps >= options_.watchdog_steps) {
+        } else if (watch.steps > options_.watchdog_steps) {
           // They did not: back to the reference, and the monotone search along its step
           // (the full step there is known to fail, so start from the interpolated length).
           watch.active = false;
