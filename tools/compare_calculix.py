@@ -10,6 +10,7 @@ import argparse
 import csv
 import math
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -72,11 +73,13 @@ def main():
     parser.add_argument("--ccx", default="ccx")
     parser.add_argument("--keep", default=None, help="keep the decks and results in DIR")
     args = parser.parse_args()
+    args.probe = os.path.abspath(args.probe)  # the probe runs in the work folder
     work = args.keep or tempfile.mkdtemp(prefix="femreg_ccx_")
     os.makedirs(work, exist_ok=True)
 
     header = (f"{'case':32s} {'model':27s} {'nodes':>6s} {'max|u| femreg':>14s} {'max|u| ccx':>12s}"
-              f" {'tip femreg':>12s} {'tip ccx':>12s} {'tip rel':>9s} {'max|du|/max|u|':>15s}")
+              f" {'tip femreg':>12s} {'tip ccx':>12s} {'tip rel':>9s} {'max|du|/max|u|':>15s}"
+              f" {'femreg its':>10s}")
     print(header)
     print("-" * len(header))
     for index, (name, probe_args, steps) in enumerate(CASES):
@@ -87,7 +90,11 @@ def main():
             cmd = [args.probe] + probe_args.split() + [
                 f"model={femreg_model}", f"load_steps={steps if nlgeom else 1}",
                 f"csv={csv_path}", f"inp={os.path.join(work, stem + '.inp')}", f"nlgeom={nlgeom}"]
-            run(cmd, work, os.path.join(work, stem + ".probe.log"))
+            probe_log = os.path.join(work, stem + ".probe.log")
+            run(cmd, work, probe_log)
+            # Newton iterations over all load steps, from the probe's brief report.
+            found = re.search(r"(\d+) Newton iterations", open(probe_log).read())
+            iterations = found.group(1) if found else "?"
             run([args.ccx, "-i", stem], work, os.path.join(work, stem + ".ccx.log"))
             ids, _, uf, tip = read_probe_csv(csv_path)
             uc_map = read_ccx_dat(os.path.join(work, stem + ".dat"))
@@ -100,7 +107,8 @@ def main():
             tip_c = [sum(uc[k][c] for k in tip_ids) / len(tip_ids) for c in range(3)]
             tip_rel = norm([a - b for a, b in zip(tip_f, tip_c)]) / norm(tip_c)
             print(f"{name:32s} {label:27s} {len(ids):6d} {max_f:14.6e} {max_c:12.6e}"
-                  f" {norm(tip_f):12.6e} {norm(tip_c):12.6e} {tip_rel:9.2e} {max_diff / max_c:15.2e}")
+                  f" {norm(tip_f):12.6e} {norm(tip_c):12.6e} {tip_rel:9.2e} {max_diff / max_c:15.2e}"
+                  f" {iterations:>10s}")
             sys.stdout.flush()
     print(f"\n(decks and results in {work}; ccx prints 7 significant digits, so ~1e-6 is the floor)")
 

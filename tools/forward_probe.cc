@@ -8,6 +8,8 @@
 //     E=1e6 nu=0.3 density=1000  model=corotational|linear  load_steps=1
 //     tip_load=0 (N, total, on the free end, along -z for the box, -x for the cylinder)
 //     gravity=0 (m/s^2, same direction)  csv=out.csv  inp=out.inp  nlgeom=0|1
+//     tangent=full|projected|warped  watchdog=3 (steps)  max_iterations=200
+//     verbose=0|1 (the full report)
 //
 // The box lies along +x and is clamped at x = 0; the cylinder along +z, clamped at z = 0.
 #include <chrono>
@@ -112,9 +114,15 @@ int main(int argc, char** argv) {
   ForwardOptions options;
   options.load_steps = static_cast<int>(Number(args, "load_steps", 1));
   options.max_iterations = static_cast<int>(Number(args, "max_iterations", 200));
+  if (!FromString(Text(args, "tangent", "full"), &options.tangent)) {
+    std::cerr << "femreg_forward_probe: tangent must be full, projected or warped\n";
+    return 2;
+  }
+  options.watchdog_steps = static_cast<int>(Number(args, "watchdog", 3));
+  options.verbose = Number(args, "verbose", 0) != 0;
   ForwardSummary summary;
   const Status status = SolveQuasiStatic(problem, options, &model, &mesh, &summary);
-  std::cerr << summary.BriefReport() << "\n";
+  std::cerr << (options.verbose ? summary.FullReport() : summary.BriefReport()) << "\n";
   if (!status.ok()) {
     std::cerr << status.message() << "\n";
     return 1;

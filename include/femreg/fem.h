@@ -135,6 +135,63 @@ class ElasticModel {
   std::vector<Eigen::Matrix3d> rotations_;
 };
 
+// ---------------------------------------------------------------------------------------
+// The consistent corotational tangent (used by the forward solve).
+//
+// The element energy E_e(x) = 0.5 u^T K u with u = R(x)^T x - X is V_e psi(F) with
+// psi(F) = mu |S - I|^2 + lambda/2 tr(S - I)^2 for F = R S (C isotropic, as
+// IsotropicElasticity builds it). ElementForce's f = -R K u is its exact negative gradient
+// (the dR terms cancel), but the warped stiffness R K R^T is not its Hessian: it leaves out
+// dR/dx, which is why Newton on R K R^T converges only linearly. In the signed SVD
+// F = U diag(sigma) V^T the Hessian of psi is the warped one plus, along the three twist
+// directions T_ij = U (e_i e_j^T - e_j e_i^T) V^T / sqrt(2) (where R K R^T is zero), the
+// eigenvalues
+//     g_ij = 2 mu + 2 (lambda tr(S - I) - 2 mu) / (sigma_i + sigma_j),
+// which follow from dR = U W V^T, W_ij = (A_ij - A_ji) / (sigma_i + sigma_j), A = U^T dF V
+// (equivalently dR = R [w]x with (tr(S) I - S) w = axial(R^T dF - dF^T R)). g_ij < 0 under
+// compression (sigma_i + sigma_j < 2 at small tr(S - I)), so the exact tangent can be
+// indefinite.
+
+// F = U diag(sigma) V^T with U, V proper rotations, |sigma| sorted decreasing, and the sign
+// of det F on sigma(2) (Irving et al. 2004, as PolarRotation): R = U V^T is PolarRotation(F)
+// and S = V diag(sigma) V^T.
+struct SignedSvd {
+  Eigen::Matrix3d U = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d V = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d sigma = Eigen::Vector3d::Ones();
+};
+SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F);
+
+// Below this sigma_i + sigma_j the derivative of the rotation is undefined (an element
+// collapsed to a line, or inverted with sigma_i = -sigma_j): that twist mode keeps the
+// warped stiffness' zero.
+constexpr double kMinTwistSingularSum = 1e-6;
+
+enum class TangentProjection {
+  kNone,                    // the exact Hessian of the element energy (may be indefinite)
+  kPositiveSemiDefinite,    // negative twist eigenvalues clamped to 0: the nearest PSD
+                            // matrix in the element's own eigenbasis
+};
+
+// What CorotationalTangent did, for statistics.
+struct ElementTangentInfo {
+  int negative_modes = 0;    // twist eigenvalues g_ij < 0 (clamped under kPositiveSemiDefinite)
+  int degenerate_modes = 0;  // twist modes with sigma_i + sigma_j < kMinTwistSingularSum
+  double min_eigenvalue = 0.0;  // min g_ij before projection (Pa), 0 when all degenerate
+};
+
+// The element's consistent stiffness d^2 E_e / dx^2 = -d f_e / dx (12 by 12, symmetric) at
+// positions x, with R = R(x) recomputed from x (not the model's stored rotation):
+// WarpedStiffness(rest, R) + V_e sum_ij g_ij b_ij b_ij^T with b_ij = dF/dx^T : T_ij.
+Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
+                             TangentProjection projection,
+                             ElementTangentInfo* info = nullptr);
+
+// Energy 0.5 u^T K u and force f = -R K u (12) of an element in one pass (u = R^T x - X
+// formed once); same values as ElementEnergy and ElementForce.
+double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
+                             const Vector12& x, Vector12* force);
+
 }  // namespace femreg
 
 #endif  // FEMREG_FEM_H_

@@ -1,5 +1,6 @@
 // femreg/forward.h - the forward quasi-static solve: clamps, prescribed displacements,
-// gravity and nodal loads, Newton-type iterations on the warped stiffness with CHOLMOD.
+// gravity and nodal loads, Newton iterations on the consistent corotational tangent (the
+// derivative of the element rotations included) with a line search, CHOLMOD.
 #ifndef FEMREG_FORWARD_H_
 #define FEMREG_FORWARD_H_
 
@@ -39,12 +40,38 @@ struct ForwardProblem {
   ForwardPotential* potential = nullptr;  // extra energy (not owned), e.g. contacts
 };
 
+// The matrix Newton solves with (the corotational model; the linear one always uses K).
+enum class ForwardTangent {
+  // sum_e R_e K_e R_e^T: the rotations held fixed. Positive semi-definite, but not the
+  // derivative of the forces, so Newton converges only linearly.
+  kWarped,
+  // The consistent tangent with each element's negative twist eigenvalues clamped to 0
+  // (CorotationalTangent, kPositiveSemiDefinite): always a descent direction, exact where
+  // no element is compressed, linear convergence otherwise.
+  kProjected,
+  // The exact consistent tangent (the Hessian of the potential), quadratic convergence
+  // near a stable equilibrium; when the assembled matrix is not positive definite (far
+  // from it, or near a limit point), the iteration uses kProjected instead.
+  kFull,
+};
+const char* ToString(ForwardTangent tangent);
+bool FromString(const std::string& name, ForwardTangent* tangent);
+
 struct ForwardOptions {
   int max_iterations = 100;          // Newton iterations per load step
   int load_steps = 1;                // loads and prescribed displacements applied in steps
   double relative_tolerance = 1e-8;  // stop when |free residual| <= tol * |external load|
   double absolute_tolerance = 1e-12; // ... or below this (N)
   double min_step = 1e-10;           // line search gives up below this step length
+  ForwardTangent tangent = ForwardTangent::kFull;  // corotational model only
+  // Watchdog: a full Newton step that raises the potential is still taken; if within this
+  // many further iterations the potential has not dropped below the point before it, the
+  // solve returns there and backtracks. 0 = a monotone line search only. Corotational
+  // model without problem.potential only.
+  int watchdog_steps = 2;
+  // Threads for the element loops and for the BLAS under CHOLMOD (OpenBLAS is held to
+  // this many during the solve); 0 = OpenMP's current default (omp_get_max_threads).
+  int num_threads = 0;
   bool verbose = false;              // one line per iteration on stdout
   bool IsValid(std::string* error) const;
 };
@@ -61,26 +88,52 @@ const char* ToString(ForwardTermination termination);
 
 struct ForwardIteration {
   int load_step = 0;
-  int iteration = 0;
+  int iteration = 0;           // 0: the step's starting point; k: after k Newton steps
   double energy = 0.0;         // elastic energy minus work of the external loads (J)
   double residual_norm = 0.0;  // |free-dof force imbalance| (N)
   double step_length = 0.0;    // line-search step taken
+  // The matrix of the Newton step that led here (kFull, or kProjected after a fallback).
+  ForwardTangent tangent = ForwardTangent::kWarped;
+};
+
+// One load step: the loads and prescribed displacements scaled by load_factor.
+struct ForwardLoadStep {
+  int load_step = 0;         // 1-based
+  double load_factor = 0.0;  // load_step / load_steps
+  ForwardTermination termination = ForwardTermination::kNotRun;
+  int iterations = 0;        // Newton iterations (factorizations that were solved with)
+  // kFull: iterations where the full tangent was not positive definite and the projected
+  // one was used.
+  int projected_iterations = 0;
+  int relaxed_steps = 0;      // full steps taken by the watchdog although the potential rose
+  int watchdog_restarts = 0;  // ... that did not pay off (the solve went back)
+  double initial_residual_norm = 0.0;  // N
+  double final_residual_norm = 0.0;    // N
 };
 
 struct ForwardSummary {
   ForwardTermination termination = ForwardTermination::kNotRun;
   std::string message = "SolveQuasiStatic was not called.";
-  std::vector<ForwardIteration> iterations;
+  std::vector<ForwardIteration> iterations;  // every load step's rows, in order
+  std::vector<ForwardLoadStep> load_steps;
   int num_free_dofs = 0;
   double initial_residual_norm = 0.0;
   double final_residual_norm = 0.0;
   double final_energy = 0.0;
   double max_displacement = 0.0;  // m
+  // Elements with det F <= 0 (inverted or flat) at the final state: the model stays defined
+  // there (PolarRotation's sign fix), but its answer is not physical.
+  int inverted_elements = 0;
   double total_time_s = 0.0;
   double factorization_time_s = 0.0;
+  int num_threads = 0;            // threads the solve ran with
   std::string BriefReport() const;
   std::string FullReport() const;
+  // Converged, or stopped at max_iterations in a finite state (Ceres' sense: a result
+  // a caller may look at). Only termination == kConverged is an equilibrium.
   bool IsSolutionUsable() const;
+  // Newton iterations of all load steps (rows minus each step's starting row).
+  int NumNewtonIterations() const;
 };
 
 // Solves for the equilibrium of `model` (already built on `mesh`) under `problem`, starting
@@ -88,6 +141,17 @@ struct ForwardSummary {
 // non-zero. The corotational model refreshes its rotations every iteration.
 Status SolveQuasiStatic(const ForwardProblem& problem, const ForwardOptions& options,
                         ElasticModel* model, TetMesh* mesh, ForwardSummary* summary);
+
+// The system Newton solves at positions x (#V by 3; clamped and prescribed vertices as
+// given) under the full load of `problem`, for tests and tools: the residual (gradient of
+// the potential minus the load, 3 #V) and the matrix the solver factorizes for `tangent`
+// over the free DOFs (n by n, both triangles; free_dofs[i] is the DOF 3 v + axis of
+// row i). With ForwardTangent::kFull it is the exact tangent even when indefinite.
+// The contact potential, if any, is refreshed at x.
+Status EvaluateForwardSystem(const ForwardProblem& problem, const ForwardOptions& options,
+                             const ElasticModel& model, const TetMesh& mesh, const Vertices& x,
+                             Eigen::VectorXd* residual, Eigen::SparseMatrix<double>* tangent,
+                             std::vector<int>* free_dofs);
 
 }  // namespace femreg
 

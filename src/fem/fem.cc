@@ -282,4 +282,78 @@ void ElasticModel::AddStiffnessTriplets(std::vector<Eigen::Triplet<double>>* tri
   }
 }
 
+// ---------------------------------------------------------------------------------------
+// The consistent corotational tangent (see fem.h for the derivation).
+
+SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F) {
+  SignedSvd out;
+  if (!F.allFinite()) return out;
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  out.U = svd.matrixU();
+  out.V = svd.matrixV();
+  out.sigma = svd.singularValues();
+  // As PolarRotation: a reflection in U or V moves to the smallest singular value.
+  if (out.U.determinant() < 0) {
+    out.U.col(2) *= -1.0;
+    out.sigma(2) *= -1.0;
+  }
+  if (out.V.determinant() < 0) {
+    out.V.col(2) *= -1.0;
+    out.sigma(2) *= -1.0;
+  }
+  return out;
+}
+
+Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
+                             TangentProjection projection, ElementTangentInfo* info) {
+  Eigen::Matrix<double, 3, 4> xm;
+  for (int k = 0; k < 4; ++k) xm.col(k) = x.segment<3>(3 * k);
+  const SignedSvd svd = SignedSingularValueDecomposition(DeformationGradient(xm, rest.dm_inv));
+  Matrix12 tangent = WarpedStiffness(rest, svd.U * svd.V.transpose());
+
+  // Lame parameters of the (isotropic) Hooke matrix, and tr(S - I).
+  const double mu = rest.C(3, 3);
+  const double lambda = rest.C(0, 1);
+  const double trace = svd.sigma.sum() - 3.0;
+  // Shape-function gradients (columns): F = sum_k x_k grad N_k^T.
+  Eigen::Matrix<double, 3, 4> grad;
+  grad.rightCols<3>() = rest.dm_inv.transpose();
+  grad.col(0) = -grad.rightCols<3>().rowwise().sum();
+
+  ElementTangentInfo stats;
+  bool have_min = false;
+  static const int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+  for (const auto& pair : kPairs) {
+    const int i = pair[0], j = pair[1];
+    const double sum = svd.sigma(i) + svd.sigma(j);
+    if (!(sum >= kMinTwistSingularSum)) {
+      ++stats.degenerate_modes;
+      continue;
+    }
+    double g = 2.0 * mu + 2.0 * (lambda * trace - 2.0 * mu) / sum;
+    stats.min_eigenvalue = have_min ? std::fmin(stats.min_eigenvalue, g) : g;
+    have_min = true;
+    if (g < 0.0) {
+      ++stats.negative_modes;
+      if (projection == TangentProjection::kPositiveSemiDefinite) continue;
+    }
+    const Eigen::Matrix3d T = (svd.U.col(i) * svd.V.col(j).transpose() -
+                               svd.U.col(j) * svd.V.col(i).transpose()) /
+                              std::sqrt(2.0);
+    Vector12 b;
+    for (int k = 0; k < 4; ++k) b.segment<3>(3 * k) = T * grad.col(k);
+    tangent.noalias() += (rest.volume * g) * b * b.transpose();
+  }
+  if (info != nullptr) *info = stats;
+  return tangent;
+}
+
+double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
+                             const Vector12& x, Vector12* force) {
+  const Vector12 u = RotatedDisplacement(rest, R, x);
+  const Vector12 ku = rest.K * u;
+  for (int i = 0; i < 4; ++i) force->segment<3>(3 * i) = -R * ku.segment<3>(3 * i);
+  return 0.5 * u.dot(ku);
+}
+
 }  // namespace femreg

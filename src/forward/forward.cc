@@ -1,12 +1,18 @@
-// The forward quasi-static solve: Newton-type iterations on the warped stiffness
-// K = sum_e R_e K_e R_e^T with the exact corotational gradient, a backtracking line search
-// on the total potential (rotations recomputed at every trial point), load stepping, and
-// clamped / prescribed DOFs eliminated. The reduced system is solved with CHOLMOD's
-// supernodal Cholesky; its sparsity pattern is fixed, so the symbolic analysis is done once
-// per solve and values are scattered into a preallocated matrix every iteration.
+// The forward quasi-static solve: Newton iterations on the consistent corotational tangent
+// (fem.h's CorotationalTangent: the warped stiffness R K R^T plus the derivative of the
+// rotations) with the exact corotational gradient, a backtracking line search on the total
+// potential (rotations recomputed at every trial point), load stepping, and clamped /
+// prescribed DOFs eliminated. By default the exact tangent is tried first and, when CHOLMOD
+// finds it not positive definite, the element-wise PSD projection is used for that
+// iteration. The reduced system is solved with CHOLMOD's supernodal Cholesky; its sparsity
+// pattern is fixed, so the symbolic analysis is done once per solve and values are
+// scattered into a preallocated matrix every iteration.
 #include "femreg/forward.h"
 
+#include <dlfcn.h>
+
 #include <Eigen/CholmodSupport>
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -17,6 +23,9 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace femreg {
 
@@ -34,11 +43,40 @@ bool ForwardOptions::IsValid(std::string* error) const {
     os << "relative_tolerance and absolute_tolerance cannot both be 0";
   } else if (!(std::isfinite(min_step) && min_step > 0 && min_step < 1)) {
     os << "min_step must be in (0, 1) (got " << min_step << ")";
+  } else if (watchdog_steps < 0) {
+    os << "watchdog_steps must be >= 0 (got " << watchdog_steps << ")";
+  } else if (num_threads < 0) {
+    os << "num_threads must be >= 0 (got " << num_threads << "; 0 = OpenMP's default)";
   } else {
     return true;
   }
   if (error) *error = os.str();
   return false;
+}
+
+const char* ToString(ForwardTangent tangent) {
+  switch (tangent) {
+    case ForwardTangent::kWarped:
+      return "warped";
+    case ForwardTangent::kProjected:
+      return "projected";
+    case ForwardTangent::kFull:
+      return "full";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& name, ForwardTangent* tangent) {
+  if (name == "warped") {
+    *tangent = ForwardTangent::kWarped;
+  } else if (name == "projected") {
+    *tangent = ForwardTangent::kProjected;
+  } else if (name == "full") {
+    *tangent = ForwardTangent::kFull;
+  } else {
+    return false;
+  }
+  return true;
 }
 
 const char* ToString(ForwardTermination termination) {
@@ -64,12 +102,40 @@ bool ForwardSummary::IsSolutionUsable() const {
          termination == ForwardTermination::kMaxIterations;
 }
 
+int ForwardSummary::NumNewtonIterations() const {
+  int total = 0;
+  for (const ForwardLoadStep& step : load_steps) total += step.iterations;
+  return total;
+}
+
+namespace {
+
+// "5, 6, 4" (Newton iterations per load step), with "(2 projected)" where the full tangent
+// fell back.
+std::string IterationsPerStep(const std::vector<ForwardLoadStep>& steps) {
+  std::ostringstream os;
+  for (size_t i = 0; i < steps.size(); ++i) {
+    os << (i ? ", " : "") << steps[i].iterations;
+    if (steps[i].projected_iterations > 0) os << " (" << steps[i].projected_iterations << " projected)";
+    if (steps[i].termination != ForwardTermination::kConverged) {
+      os << " " << ToString(steps[i].termination);
+    }
+  }
+  return os.str();
+}
+
+}  // namespace
+
 std::string ForwardSummary::BriefReport() const {
   std::ostringstream os;
-  os << "Forward solve: " << ToString(termination) << ", " << iterations.size()
-     << " iterations, |residual| " << std::scientific << std::setprecision(3)
-     << initial_residual_norm << " -> " << final_residual_norm << " N, max displacement "
-     << max_displacement << " m, " << std::fixed << std::setprecision(3) << total_time_s << " s";
+  os << "Forward solve: " << ToString(termination) << ", " << NumNewtonIterations()
+     << " Newton iterations in " << load_steps.size() << " load step"
+     << (load_steps.size() == 1 ? "" : "s");
+  if (!load_steps.empty()) os << " [" << IterationsPerStep(load_steps) << "]";
+  os << ", |residual| " << std::scientific << std::setprecision(3) << initial_residual_norm
+     << " -> " << final_residual_norm << " N, max displacement " << max_displacement << " m, ";
+  if (inverted_elements > 0) os << inverted_elements << " inverted elements, ";
+  os << std::fixed << std::setprecision(3) << total_time_s << " s";
   return os.str();
 }
 
@@ -82,15 +148,28 @@ std::string ForwardSummary::FullReport() const {
     os << "  " << std::setw(4) << (&it - iterations.data()) << "  " << std::setw(4) << it.load_step
        << "  " << std::setw(2) << it.iteration << "  " << std::scientific << std::setprecision(6)
        << std::setw(16) << it.energy << "  " << std::setw(14) << std::setprecision(4)
-       << it.residual_norm << "  " << std::setw(13) << it.step_length << "\n";
+       << it.residual_norm << "  " << std::setw(13) << it.step_length
+       << (it.iteration > 0 && it.tangent == ForwardTangent::kProjected ? "  projected" : "")
+       << "\n";
+  }
+  os << "  load step  factor  Newton its  projected  |residual| start -> end (N)  termination\n";
+  for (const ForwardLoadStep& step : load_steps) {
+    os << "  " << std::setw(9) << step.load_step << "  " << std::fixed << std::setprecision(3)
+       << std::setw(6) << step.load_factor << "  " << std::setw(10) << step.iterations << "  "
+       << std::setw(9) << step.projected_iterations << "  " << std::scientific
+       << std::setprecision(3) << std::setw(10) << step.initial_residual_norm << " -> "
+       << std::setw(10) << step.final_residual_norm << "        "
+       << ToString(step.termination) << "\n";
   }
   os << std::scientific << std::setprecision(6);
   os << "  initial |residual|   " << initial_residual_norm << " N\n";
   os << "  final |residual|     " << final_residual_norm << " N\n";
   os << "  final potential      " << final_energy << " J\n";
   os << "  max displacement     " << max_displacement << " m\n";
+  os << "  inverted elements    " << inverted_elements << "\n";
   os << std::fixed << std::setprecision(4);
   os << "  factorization time   " << factorization_time_s << " s\n";
+  os << "  threads              " << num_threads << "\n";
   os << "  total time           " << total_time_s << " s\n";
   os << "  termination          " << ToString(termination) << ": " << message << "\n";
   return os.str();
@@ -119,18 +198,79 @@ class Factorization : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
 // mode leaves a pivot at round-off level, about sqrt(eps) ~ 1e-8 of the largest.
 constexpr double kMinReciprocalCondition = 1e-7;
 
+int ResolveThreads(int requested) {
+  if (requested > 0) return requested;
+#ifdef _OPENMP
+  return std::max(1, omp_get_max_threads());
+#else
+  return 1;
+#endif
+}
+
+// Holds OpenBLAS (the BLAS under CHOLMOD's supernodal factorization, which otherwise runs on
+// every core) to `threads` while alive, and restores its setting after. Looked up at run
+// time, so that another BLAS (reference, ATLAS) links as well; then it does nothing. Its
+// idle thread pool is made when the library loads; this limits how many threads work.
+class ScopedBlasThreads {
+ public:
+  explicit ScopedBlasThreads(int threads) {
+    using Get = int (*)();
+    const auto get = reinterpret_cast<Get>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+    set_ = reinterpret_cast<Set>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    if (get == nullptr || set_ == nullptr) {
+      set_ = nullptr;
+      return;
+    }
+    previous_ = get();
+    if (previous_ == threads) {
+      set_ = nullptr;
+    } else {
+      set_(threads);
+    }
+  }
+  ~ScopedBlasThreads() {
+    if (set_ != nullptr) set_(previous_);
+  }
+  ScopedBlasThreads(const ScopedBlasThreads&) = delete;
+  ScopedBlasThreads& operator=(const ScopedBlasThreads&) = delete;
+
+ private:
+  using Set = void (*)(int);
+  Set set_ = nullptr;
+  int previous_ = 1;
+};
+
+// The element matrices the reduced system can be filled with.
+enum class ElementMatrix {
+  kLinear,     // K_e
+  kWarped,     // R_e K_e R_e^T
+  kProjected,  // CorotationalTangent, PSD-projected
+  kExact,      // CorotationalTangent, exact
+};
+
 // The state of one solve: DOF numbering, the element-to-matrix scatter map, buffers.
 class QuasiStaticSolver {
  public:
   QuasiStaticSolver(const ForwardProblem& problem, const ForwardOptions& options,
-                    ElasticModel* model, TetMesh* mesh, ForwardSummary* summary)
-      : problem_(problem), options_(options), model_(*model), mesh_(*mesh), summary_(*summary) {}
+                    const ElasticModel* model, TetMesh* mesh, ForwardSummary* summary)
+      : problem_(problem),
+        options_(options),
+        model_(*model),
+        mesh_(*mesh),
+        summary_(*summary),
+        threads_(ResolveThreads(options.num_threads)) {
+    summary_.num_threads = threads_;
+  }
 
   // Checks the inputs; on error fills the summary and returns false.
   bool Validate();
   // Numbers the free DOFs, checks that every connected piece is held, builds the pattern.
   bool Setup();
   void Run();
+  // For EvaluateForwardSystem (after Validate and Setup): the residual at x under the full
+  // load and the reduced matrix of `tangent`, both triangles.
+  void EvaluateSystem(const Vertices& x, ForwardTangent tangent, Eigen::VectorXd* residual,
+                      Eigen::SparseMatrix<double>* matrix, std::vector<int>* free_dofs);
 
  private:
   bool Fail(ForwardTermination termination, const std::string& message) {
@@ -148,8 +288,20 @@ class QuasiStaticSolver {
                           std::vector<Vector12>* element_force) const;
   // Gathers the element forces into the elastic gradient (3 #V).
   void GatherGradient(const std::vector<Vector12>& element_force, Eigen::VectorXd* gradient) const;
-  // Assembles the reduced warped stiffness at `rotations` into matrix_ and factorizes it.
-  // With problem.potential, its Hessian at x is added (the pattern is then re-analyzed).
+  // The element matrix of element e at x (rotations computed from x).
+  Matrix12 ElementMatrixOf(int e, const Vertices& x, const std::vector<Eigen::Matrix3d>& rotations,
+                           ElementMatrix kind) const;
+  // Scatters the element matrices into the reduced lower triangle matrix_.
+  void Fill(const Vertices& x, const std::vector<Eigen::Matrix3d>& rotations, ElementMatrix kind);
+  // problem.potential's Hessian at x over the reduced DOFs (lower triangle).
+  std::vector<Eigen::Triplet<double>> ReducedExtraHessian(const Vertices& x) const;
+  // Factorizes matrix_ (+ extra); false with *error when not positive definite or
+  // numerically singular.
+  bool Factorize(const std::vector<Eigen::Triplet<double>>& extra, std::string* error);
+  // Assembles the reduced tangent of options.tangent at x into matrix_ and factorizes it
+  // (kFull: the exact tangent, or the projected one when that is not positive definite;
+  // element_matrix_ says which). With problem.potential, its Hessian at x is added (the
+  // pattern is then re-analyzed).
   bool AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations, const Vertices& x);
   // problem.potential's energy at x (0 without one); adds its gradient when not null.
   double Extra(const Vertices& x, Eigen::VectorXd* gradient) const {
@@ -161,6 +313,30 @@ class QuasiStaticSolver {
   // The force imbalance that round-off alone leaves at positions x (N).
   double RoundoffFloor(const Vertices& x) const;
   void ScatterFree(const Eigen::VectorXd& reduced, double alpha, Vertices* x) const;
+
+  // A point on a line search: positions, their rotations, element forces and energies.
+  struct Trial {
+    Vertices x;
+    std::vector<Eigen::Matrix3d> rotations;
+    std::vector<Vector12> forces;
+    double elastic = 0.0;
+    double potential = 0.0;
+  };
+  // Backtracking (Armijo, safeguarded quadratic interpolation) from x along `step` with
+  // directional derivative `slope` < 0, starting at *alpha. With may_relax, a full step
+  // (alpha = 1) with a finite potential is accepted even when it raises the potential
+  // (*relaxed; the caller's watchdog checks it later). False when no step >= min_step
+  // decreases the potential; *trial then holds the last point tried.
+  bool LineSearch(const Vertices& x, const Eigen::VectorXd& step, double slope, double potential,
+                  double residual_norm, const Eigen::VectorXd& load, bool may_relax,
+                  double* alpha, bool* relaxed, Trial* trial) const;
+  // Moves the trial's state into x, rotations and forces (the trial keeps the old ones).
+  static void Accept(Trial* trial, Vertices* x, std::vector<Eigen::Matrix3d>* rotations,
+                     std::vector<Vector12>* forces) {
+    x->swap(trial->x);
+    rotations->swap(trial->rotations);
+    forces->swap(trial->forces);
+  }
 
   const ForwardProblem& problem_;
   const ForwardOptions& options_;
@@ -176,6 +352,8 @@ class QuasiStaticSolver {
   std::vector<int> scatter_;         // 144 per element: index into matrix_ values, or -1
   std::vector<std::vector<int>> colors_;  // elements sharing no vertex, for parallel scatter
   Factorization factorization_;
+  const int threads_;                // OpenMP threads of the element loops
+  ElementMatrix element_matrix_ = ElementMatrix::kWarped;  // of the last factorization
   bool factorized_for_linear_ = false;
   bool analyzed_elastic_pattern_ = true;  // false after a potential's entries widened it
   Eigen::VectorXd full_load_;        // 3 #V external load at full scale
@@ -372,7 +550,7 @@ bool QuasiStaticSolver::Setup() {
   scatter_.assign(144 * static_cast<size_t>(nt()), -1);
   const int* outer = matrix_.outerIndexPtr();
   const int* inner = matrix_.innerIndexPtr();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads_)
   for (int e = 0; e < nt(); ++e) {
     for (int a = 0; a < 12; ++a) {
       const int r = free_index_[3 * tets(e, a / 3) + a % 3];
@@ -421,7 +599,7 @@ double QuasiStaticSolver::EvaluateElements(const Vertices& x,
                                            std::vector<Vector12>* element_force) const {
   double energy = 0.0;
   const bool corotational = !linear();
-#pragma omp parallel for schedule(static) reduction(+ : energy)
+#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
   for (int e = 0; e < nt(); ++e) {
     const ElementRest& rest = model_.rest(e);
     const Vector12 xe = model_.Gather(x, e);
@@ -433,12 +611,7 @@ double QuasiStaticSolver::EvaluateElements(const Vertices& x,
     } else {
       R.setIdentity();
     }
-    Vector12 u;
-    for (int k = 0; k < 4; ++k) u.segment<3>(3 * k) = R.transpose() * xe.segment<3>(3 * k) - rest.X.segment<3>(3 * k);
-    const Vector12 ku = rest.K * u;
-    energy += 0.5 * u.dot(ku);
-    Vector12& f = (*element_force)[e];
-    for (int k = 0; k < 4; ++k) f.segment<3>(3 * k) = -R * ku.segment<3>(3 * k);
+    energy += ElementEnergyAndForce(rest, R, xe, &(*element_force)[e]);
   }
   return energy;
 }
@@ -446,7 +619,7 @@ double QuasiStaticSolver::EvaluateElements(const Vertices& x,
 void QuasiStaticSolver::GatherGradient(const std::vector<Vector12>& element_force,
                                        Eigen::VectorXd* gradient) const {
   gradient->resize(3 * nv());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads_)
   for (int v = 0; v < nv(); ++v) {
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
     for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
@@ -457,33 +630,57 @@ void QuasiStaticSolver::GatherGradient(const std::vector<Vector12>& element_forc
   }
 }
 
-bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations,
-                                             const Vertices& x) {
-  if (linear() && factorized_for_linear_ && problem_.potential == nullptr) return true;  // K does not change
+Matrix12 QuasiStaticSolver::ElementMatrixOf(int e, const Vertices& x,
+                                            const std::vector<Eigen::Matrix3d>& rotations,
+                                            ElementMatrix kind) const {
+  const ElementRest& rest = model_.rest(e);
+  switch (kind) {
+    case ElementMatrix::kLinear:
+      return rest.K;
+    case ElementMatrix::kWarped:
+      return WarpedStiffness(rest, rotations[e]);
+    case ElementMatrix::kProjected:
+      return CorotationalTangent(rest, model_.Gather(x, e), TangentProjection::kPositiveSemiDefinite);
+    case ElementMatrix::kExact:
+      return CorotationalTangent(rest, model_.Gather(x, e), TangentProjection::kNone);
+  }
+  return rest.K;
+}
+
+void QuasiStaticSolver::Fill(const Vertices& x, const std::vector<Eigen::Matrix3d>& rotations,
+                             ElementMatrix kind) {
   double* values = matrix_.valuePtr();
   std::fill(values, values + matrix_.nonZeros(), 0.0);
   for (const std::vector<int>& elements : colors_) {
     const int count = static_cast<int>(elements.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads_)
     for (int i = 0; i < count; ++i) {
       const int e = elements[i];
-      const Matrix12 K = WarpedStiffness(model_.rest(e), rotations[e]);
+      const Matrix12 K = ElementMatrixOf(e, x, rotations, kind);
       const int* map = scatter_.data() + 144 * static_cast<size_t>(e);
       for (int b = 0; b < 12; ++b)
         for (int a = 0; a < 12; ++a)
           if (map[12 * a + b] >= 0) values[map[12 * a + b]] += K(a, b);
     }
   }
-  const auto start = Clock::now();
+}
+
+std::vector<Eigen::Triplet<double>> QuasiStaticSolver::ReducedExtraHessian(const Vertices& x) const {
   std::vector<Eigen::Triplet<double>> extra, reduced;
   if (problem_.potential != nullptr) problem_.potential->AddHessian(x, &extra);
   for (const auto& t : extra) {
     const int r = free_index_[t.row()], c = free_index_[t.col()];
     if (r >= 0 && c >= 0 && r >= c) reduced.emplace_back(r, c, t.value());
   }
-  if (!reduced.empty()) {
+  return reduced;
+}
+
+bool QuasiStaticSolver::Factorize(const std::vector<Eigen::Triplet<double>>& extra,
+                                  std::string* error) {
+  const auto start = Clock::now();
+  if (!extra.empty()) {
     SparseMatrix contact(matrix_.rows(), matrix_.cols());
-    contact.setFromTriplets(reduced.begin(), reduced.end());
+    contact.setFromTriplets(extra.begin(), extra.end());
     const SparseMatrix sum = matrix_ + contact;
     factorization_.analyzePattern(sum);
     factorization_.factorize(sum);
@@ -495,19 +692,88 @@ bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>&
   }
   summary_.factorization_time_s += Seconds(start);
   if (factorization_.info() != Eigen::Success) {
-    return Fail(ForwardTermination::kFactorizationFailed,
-                "CHOLMOD: the reduced stiffness is not positive definite (too few clamps, or a "
-                "mechanism such as elements joined only at an edge or a vertex)");
+    *error = "CHOLMOD: the reduced stiffness is not positive definite (too few clamps, or a "
+             "mechanism such as elements joined only at an edge or a vertex)";
+    return false;
   }
   const double rcond = factorization_.ReciprocalCondition();
   if (!(rcond > kMinReciprocalCondition)) {
     std::ostringstream os;
     os << "the reduced stiffness is numerically singular (CHOLMOD min/max pivot " << rcond
        << "): too few clamps, or a mechanism such as elements joined only at an edge or a vertex";
-    return Fail(ForwardTermination::kFactorizationFailed, os.str());
+    *error = os.str();
+    return false;
   }
+  return true;
+}
+
+bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations,
+                                             const Vertices& x) {
+  if (linear() && factorized_for_linear_ && problem_.potential == nullptr) return true;  // K does not change
+  const std::vector<Eigen::Triplet<double>> extra = ReducedExtraHessian(x);
+  std::string error;
+  if (!linear() && options_.tangent == ForwardTangent::kFull) {
+    // The exact tangent when it is positive definite (near a stable equilibrium); a limit
+    // point or a compressed state far from it makes it indefinite (or nearly singular).
+    Fill(x, rotations, ElementMatrix::kExact);
+    if (Factorize(extra, &error)) {
+      element_matrix_ = ElementMatrix::kExact;
+      return true;
+    }
+  }
+  ElementMatrix kind = ElementMatrix::kLinear;
+  if (!linear()) {
+    kind = options_.tangent == ForwardTangent::kWarped ? ElementMatrix::kWarped
+                                                        : ElementMatrix::kProjected;
+  }
+  // The projected tangent is the warped stiffness plus PSD terms: when it is singular, so
+  // is the warped one, and the problem has a mechanism.
+  Fill(x, rotations, kind);
+  if (!Factorize(extra, &error)) return Fail(ForwardTermination::kFactorizationFailed, error);
+  element_matrix_ = kind;
   factorized_for_linear_ = linear();
   return true;
+}
+
+void QuasiStaticSolver::EvaluateSystem(const Vertices& x, ForwardTangent tangent,
+                                       Eigen::VectorXd* residual,
+                                       Eigen::SparseMatrix<double>* matrix,
+                                       std::vector<int>* free_dofs) {
+  std::vector<Eigen::Matrix3d> rotations(nt());
+  std::vector<Vector12> forces(nt());
+  EvaluateElements(x, &rotations, &forces);
+  if (problem_.potential != nullptr) problem_.potential->Refresh(x);
+  Eigen::VectorXd gradient;
+  GatherGradient(forces, &gradient);
+  Extra(x, &gradient);
+  *residual = gradient - full_load_;
+  *free_dofs = free_dofs_;
+  const int n = static_cast<int>(free_dofs_.size());
+  if (n == 0) {
+    matrix->resize(0, 0);
+    return;
+  }
+  ElementMatrix kind = ElementMatrix::kLinear;
+  if (!linear()) {
+    kind = tangent == ForwardTangent::kWarped      ? ElementMatrix::kWarped
+           : tangent == ForwardTangent::kProjected ? ElementMatrix::kProjected
+                                                   : ElementMatrix::kExact;
+  }
+  Fill(x, rotations, kind);
+  SparseMatrix lower = matrix_;
+  const std::vector<Eigen::Triplet<double>> extra = ReducedExtraHessian(x);
+  if (!extra.empty()) {
+    SparseMatrix contact(n, n);
+    contact.setFromTriplets(extra.begin(), extra.end());
+    lower += contact;
+  }
+  SparseMatrix diagonal(n, n);
+  std::vector<Eigen::Triplet<double>> d;
+  for (int col = 0; col < n; ++col)
+    for (SparseMatrix::InnerIterator it(lower, col); it; ++it)
+      if (it.row() == col) d.emplace_back(col, col, it.value());
+  diagonal.setFromTriplets(d.begin(), d.end());
+  *matrix = lower + SparseMatrix(lower.transpose()) - diagonal;
 }
 
 double QuasiStaticSolver::Potential(double elastic, const Vertices& x,
@@ -538,22 +804,96 @@ void QuasiStaticSolver::ScatterFree(const Eigen::VectorXd& reduced, double alpha
   for (size_t i = 0; i < free_dofs_.size(); ++i) data[free_dofs_[i]] += alpha * reduced(i);
 }
 
+bool QuasiStaticSolver::LineSearch(const Vertices& x, const Eigen::VectorXd& step, double slope,
+                                   double potential, double residual_norm,
+                                   const Eigen::VectorXd& load, bool may_relax, double* alpha,
+                                   bool* relaxed, Trial* trial) const {
+  *relaxed = false;
+  Eigen::VectorXd trial_gradient;
+  while (*alpha >= options_.min_step) {
+    trial->x = x;
+    ScatterFree(step, *alpha, &trial->x);
+    trial->elastic = EvaluateElements(trial->x, &trial->rotations, &trial->forces);
+    trial->potential = Potential(trial->elastic, trial->x, load) + Extra(trial->x, nullptr);
+    const double value = trial->potential;
+    if (std::isfinite(value)) {
+      if (value <= potential + 1e-4 * *alpha * slope) return true;
+      // Near the solution the decrease drowns in round-off of the energy: accept a step
+      // that does not raise the potential beyond that noise and reduces the force imbalance.
+      const double noise = 1e-12 * (std::abs(trial->elastic) + std::abs(value)) +
+                           std::numeric_limits<double>::min();
+      if (value - potential <= noise) {
+        GatherGradient(trial->forces, &trial_gradient);
+        Extra(trial->x, &trial_gradient);
+        if (FreeNorm(trial_gradient - load) < residual_norm) return true;
+      }
+      if (may_relax && *alpha == 1.0) {
+        *relaxed = true;
+        return true;
+      }
+    }
+    // Safeguarded quadratic interpolation of the potential along the step.
+    double next = 0.5 * *alpha;
+    if (std::isfinite(value)) {
+      const double denom = 2.0 * (value - potential - slope * *alpha);
+      if (denom > 0) next = std::clamp(-slope * *alpha * *alpha / denom, 0.1 * *alpha, 0.5 * *alpha);
+    }
+    *alpha = next;
+  }
+  return false;
+}
+
 void QuasiStaticSolver::Run() {
   Vertices x = mesh_.x;
   for (int v : problem_.clamped) x.row(v) = mesh_.rest.row(v);
-  std::vector<Eigen::Matrix3d> rotations(nt()), trial_rotations(nt());
-  std::vector<Vector12> forces(nt()), trial_forces(nt());
-  Eigen::VectorXd gradient, trial_gradient, residual(3 * nv()), load(3 * nv());
+  std::vector<Eigen::Matrix3d> rotations(nt());
+  std::vector<Vector12> forces(nt());
+  Trial trial;
+  trial.rotations.resize(nt());
+  trial.forces.resize(nt());
+  Eigen::VectorXd gradient, residual(3 * nv()), load(3 * nv());
   Eigen::VectorXd rhs(free_dofs_.size()), step(free_dofs_.size());
+  // The watchdog (Chamberlain et al. 1982): when the full Newton step raises the potential,
+  // take it anyway; if within options.watchdog_steps further iterations (full steps too) the
+  // potential has not dropped below the point before it (the reference), return there and
+  // backtrack. A slender or nearly incompressible body makes the full step
+  // from a rotating configuration stretch stiff directions that are curved in x: the
+  // potential rises although the next iterate lands next to the solution (the Maratos
+  // effect), and a monotone search would crawl with short steps instead. Contact potentials
+  // change their active set per iteration, so their potentials are not compared across
+  // iterations: no watchdog with problem.potential.
+  struct Watchdog {
+    bool active = false;
+    int steps = 0;  // iterations since the reference
+    Vertices x;
+    std::vector<Eigen::Matrix3d> rotations;
+    std::vector<Vector12> forces;
+    double elastic = 0.0, potential = 0.0, residual_norm = 0.0;
+    Eigen::VectorXd step;
+    double slope = 0.0;
+    double full_step_potential = 0.0;  // at reference + step
+  } watch;
+  const bool watchdog_allowed =
+      options_.watchdog_steps > 0 && !linear() && problem_.potential == nullptr;
   bool have_initial = false;
   double reference = 0.0;  // force scale of the relative tolerance
   double potential = 0.0, residual_norm = 0.0;
 
+  double tolerance = 0.0;  // N, of the current iteration
   summary_.termination = ForwardTermination::kConverged;
   summary_.message = "converged";
   for (int load_step = 1; load_step <= options_.load_steps; ++load_step) {
     const double scale = static_cast<double>(load_step) / options_.load_steps;
     load = scale * full_load_;
+    ForwardLoadStep record;
+    record.load_step = load_step;
+    record.load_factor = scale;
+    // A factorization failure ends the solve; its step is reported as such.
+    auto fail_step = [&] {
+      record.termination = summary_.termination;
+      record.final_residual_norm = residual_norm;
+      summary_.load_steps.push_back(record);
+    };
 
     // Move the prescribed vertices; predict the free ones with the current stiffness
     // (K_ff dx_f = -K_fp dx_p), so that elements next to them are not crushed.
@@ -566,12 +906,13 @@ void QuasiStaticSolver::Run() {
       }
       if (moved && !free_dofs_.empty()) {
         EvaluateElements(x, &rotations, &forces);
-        if (!AssembleAndFactorize(rotations, x)) return;
+        if (!AssembleAndFactorize(rotations, x)) return fail_step();
+        // The coupling with the matrix just factorized.
         Eigen::VectorXd coupling = Eigen::VectorXd::Zero(3 * nv());
         for (int e = 0; e < nt(); ++e) {
           const Vector12 de = model_.Gather(delta, e);
           if (de.squaredNorm() == 0) continue;
-          const Vector12 fe = WarpedStiffness(model_.rest(e), rotations[e]) * de;
+          const Vector12 fe = ElementMatrixOf(e, x, rotations, element_matrix_) * de;
           for (int k = 0; k < 4; ++k) coupling.segment<3>(3 * model_.tets()(e, k)) += fe.segment<3>(3 * k);
         }
         for (size_t i = 0; i < free_dofs_.size(); ++i) rhs(i) = -coupling(free_dofs_[i]);
@@ -593,6 +934,8 @@ void QuasiStaticSolver::Run() {
     }
 
     double step_length = 0.0;
+    watch.active = false;
+    ForwardTangent step_tangent = options_.tangent;
     ForwardTermination step_result = ForwardTermination::kMaxIterations;
     for (int iteration = 0;; ++iteration) {
       if (problem_.potential != nullptr) {  // e.g. contacts: refreshed per Newton iteration
@@ -607,108 +950,183 @@ void QuasiStaticSolver::Run() {
       for (int d = 0; d < 3 * nv(); ++d)
         if (free_index_[d] < 0) reaction += residual(d) * residual(d);
       reference = std::max({reference, load.norm(), std::sqrt(reaction)});
-      summary_.iterations.push_back({load_step, iteration, potential, residual_norm, step_length});
+      summary_.iterations.push_back(
+          {load_step, iteration, potential, residual_norm, step_length, step_tangent});
+      if (iteration == 0) record.initial_residual_norm = residual_norm;
+      tolerance = std::max({options_.absolute_tolerance, options_.relative_tolerance * reference,
+                            RoundoffFloor(x)});
       if (options_.verbose) {
-        std::printf("forward step %d iter %3d  potential %+.9e  |r| %.3e  alpha %.3g\n", load_step,
-                    iteration, potential, residual_norm, step_length);
+        std::printf("forward step %d iter %3d  potential %+.9e  |r| %.3e  alpha %.3g%s\n",
+                    load_step, iteration, potential, residual_norm, step_length,
+                    iteration > 0 && step_tangent == ForwardTangent::kProjected &&
+                            options_.tangent == ForwardTangent::kFull
+                        ? "  (projected)"
+                        : "");
       }
-      if (free_dofs_.empty() ||
-          residual_norm <= std::max({options_.absolute_tolerance,
-                                     options_.relative_tolerance * reference,
-                                     RoundoffFloor(x)})) {
+      if (free_dofs_.empty() || residual_norm <= tolerance) {
         step_result = ForwardTermination::kConverged;
         break;
       }
       if (iteration >= options_.max_iterations) break;
 
-      if (!AssembleAndFactorize(rotations, x)) return;
+      if (!AssembleAndFactorize(rotations, x)) return fail_step();
+      ++record.iterations;
+      step_tangent = element_matrix_ == ElementMatrix::kExact       ? ForwardTangent::kFull
+                     : element_matrix_ == ElementMatrix::kProjected ? ForwardTangent::kProjected
+                                                                    : ForwardTangent::kWarped;
+      if (options_.tangent == ForwardTangent::kFull && step_tangent == ForwardTangent::kProjected) {
+        ++record.projected_iterations;
+      }
       for (size_t i = 0; i < free_dofs_.size(); ++i) rhs(i) = -residual(free_dofs_[i]);
       step = factorization_.solve(rhs);
       if (!step.allFinite()) {
         Fail(ForwardTermination::kFactorizationFailed,
              "the Newton step is not finite: the reduced stiffness is singular");
-        return;
+        return fail_step();
       }
       const double slope = -rhs.dot(step);  // directional derivative, < 0
 
-      // Backtracking (Armijo) on the total potential with rotations recomputed at x + a d.
+      // Line search on the total potential, rotations recomputed at every trial point.
       double alpha = 1.0;
-      bool accepted = false;
-      Vertices trial;
-      double trial_potential = 0.0, trial_elastic = 0.0;
-      while (alpha >= options_.min_step) {
-        trial = x;
-        ScatterFree(step, alpha, &trial);
-        trial_elastic = EvaluateElements(trial, &trial_rotations, &trial_forces);
-        trial_potential = Potential(trial_elastic, trial, load) + Extra(trial, nullptr);
-        if (std::isfinite(trial_potential)) {
-          if (trial_potential <= potential + 1e-4 * alpha * slope) {
-            accepted = true;
-          } else {
-            // Near the solution the decrease drowns in round-off of the energy: accept a
-            // step that does not raise the potential beyond that noise and reduces the
-            // force imbalance.
-            const double noise = 1e-12 * (std::abs(trial_elastic) + std::abs(trial_potential)) +
-                                 std::numeric_limits<double>::min();
-            if (trial_potential - potential <= noise) {
-              GatherGradient(trial_forces, &trial_gradient);
-              Extra(trial, &trial_gradient);
-              accepted = FreeNorm(trial_gradient - load) < residual_norm;
-            }
-          }
-        }
-        if (accepted) break;
-        // Safeguarded quadratic interpolation of the potential along the step.
-        double next = 0.5 * alpha;
-        if (std::isfinite(trial_potential)) {
-          const double denom = 2.0 * (trial_potential - potential - slope * alpha);
-          if (denom > 0) next = std::clamp(-slope * alpha * alpha / denom, 0.1 * alpha, 0.5 * alpha);
-        }
-        alpha = next;
-      }
-      if (!accepted) {
+      bool relaxed = false;
+      const bool may_relax = watchdog_allowed &&
+                             (!watch.active || watch.steps <= options_.watchdog_steps);
+      if (!LineSearch(x, step, slope, potential, residual_norm, load, may_relax, &alpha,
+                      &relaxed, &trial)) {
         step_result = ForwardTermination::kLineSearchFailed;
         break;
       }
-      x.swap(trial);
-      rotations.swap(trial_rotations);
-      forces.swap(trial_forces);
+      if (relaxed) {
+        ++record.relaxed_steps;
+        if (!watch.active) {  // the last accepted point becomes the watchdog's reference
+          watch.active = true;
+          watch.steps = 0;
+          watch.x = x;
+          watch.rotations = rotations;
+          watch.forces = forces;
+          watch.elastic = elastic;
+          watch.potential = potential;
+          watch.residual_norm = residual_norm;
+          watch.step = step;
+          watch.slope = slope;
+          watch.full_step_potential = trial.potential;
+        }
+      }
+      Accept(&trial, &x, &rotations, &forces);
+      elastic = trial.elastic;
+      potential = trial.potential;
       GatherGradient(forces, &gradient);
       Extra(x, &gradient);
       residual = gradient - load;
-      potential = trial_potential;
-      elastic = trial_elastic;
       residual_norm = FreeNorm(residual);
       step_length = alpha;
+
+      if (watch.active) {
+        ++watch.steps;
+        if (potential <= watch.potential + 1e-4 * watch.slope || residual_norm <= tolerance) {
+          watch.active = false;  // the relaxed steps paid off (or reached an equilibrium)
+        } else if (watch.steps > options_.watchdog_steps) {
+          // They did not: back to the reference, and the monotone search along its step
+          // (the full step there is known to fail, so start from the interpolated length).
+          watch.active = false;
+          ++record.watchdog_restarts;
+          x = watch.x;
+          rotations = watch.rotations;
+          forces = watch.forces;
+          elastic = watch.elastic;
+          potential = watch.potential;
+          residual_norm = watch.residual_norm;
+          double start = 0.5;
+          const double denom = 2.0 * (watch.full_step_potential - potential - watch.slope);
+          if (std::isfinite(watch.full_step_potential) && denom > 0) {
+            start = std::clamp(-watch.slope / denom, 0.1, 0.5);
+          }
+          alpha = start;
+          if (!LineSearch(x, watch.step, watch.slope, potential, residual_norm, load,
+                          /*may_relax=*/false, &alpha, &relaxed, &trial)) {
+            GatherGradient(forces, &gradient);
+            Extra(x, &gradient);
+            residual = gradient - load;
+            residual_norm = FreeNorm(residual);
+            step_result = ForwardTermination::kLineSearchFailed;
+            break;
+          }
+          Accept(&trial, &x, &rotations, &forces);
+          elastic = trial.elastic;
+          potential = trial.potential;
+          GatherGradient(forces, &gradient);
+          Extra(x, &gradient);
+          residual = gradient - load;
+          residual_norm = FreeNorm(residual);
+          step_length = alpha;
+        }
+      }
     }
 
-    if (load_step == options_.load_steps) {
-      summary_.termination = step_result;
-      std::ostringstream os;
-      const ForwardIteration& last = summary_.iterations.back();
-      switch (step_result) {
-        case ForwardTermination::kConverged:
-          os << "converged: |residual| " << residual_norm << " N <= tolerance at load step "
-             << load_step << " after " << last.iteration << " iterations";
-          break;
-        case ForwardTermination::kMaxIterations:
-          os << "max_iterations (" << options_.max_iterations << ") reached at load step "
-             << load_step << ", |residual| " << residual_norm << " N";
-          break;
-        default:
-          os << "the line search found no decrease of the potential above min_step ("
-             << options_.min_step << ") at load step " << load_step << ", |residual| "
-             << residual_norm << " N (try more load_steps)";
-          break;
-      }
-      summary_.message = os.str();
+    record.termination = step_result;
+    record.final_residual_norm = residual_norm;
+    summary_.load_steps.push_back(record);
+  }
+
+  // The last load step decides: an earlier one that stopped short only gave the next a
+  // worse start (load steps are a continuation device), but the records and the message
+  // keep it.
+  const ForwardLoadStep& last = summary_.load_steps.back();
+  summary_.termination = last.termination;
+  std::ostringstream os;
+  os << std::setprecision(4);
+  const int steps = options_.load_steps;
+  std::string earlier;
+  for (const ForwardLoadStep& step : summary_.load_steps) {
+    if (&step == &last || step.termination == ForwardTermination::kConverged) continue;
+    earlier += (earlier.empty() ? "" : ", ") + std::to_string(step.load_step) + " (" +
+               ToString(step.termination) + ")";
+  }
+  switch (last.termination) {
+    case ForwardTermination::kConverged:
+      os << "converged: |residual| " << residual_norm << " N <= " << tolerance
+         << " N; Newton iterations per load step: " << IterationsPerStep(summary_.load_steps);
+      if (!earlier.empty()) os << "; earlier load steps that did not converge: " << earlier;
+      break;
+    case ForwardTermination::kMaxIterations:
+      os << "not converged: max_iterations (" << options_.max_iterations
+         << ") reached at load step " << last.load_step << " of " << steps << " (load factor "
+         << last.load_factor << "), |residual| " << residual_norm << " N > " << tolerance << " N";
+      break;
+    default:
+      os << "not converged: the line search found no decrease of the potential above min_step ("
+         << options_.min_step << ") at load step " << last.load_step << " of " << steps
+         << " (load factor " << last.load_factor << "), |residual| " << residual_norm
+         << " N > " << tolerance << " N";
+      break;
+  }
+  if (last.termination != ForwardTermination::kConverged && last.load_step > 1) {
+    if (earlier.empty()) {
+      os << " (the earlier load steps converged)";
+    } else {
+      os << " (earlier load steps that did not converge: " << earlier << ")";
     }
   }
+  if (last.termination != ForwardTermination::kConverged) {
+    os << ". Try more load steps (forward.load_steps, now " << steps
+       << ") or a larger forward.max_iterations; if it still fails, the load may have no "
+          "equilibrium that the model can represent: look for inverted elements ("
+       << "inverted_elements in the summary), e.g. a very soft material under its own weight";
+  }
+  summary_.message = os.str();
 
   mesh_.x = x;
   summary_.final_residual_norm = residual_norm;
   summary_.final_energy = potential;
   summary_.max_displacement = (x - mesh_.rest).rowwise().norm().maxCoeff();
+  int inverted = 0;
+  for (int e = 0; e < nt(); ++e) {
+    const Vector12 xe = model_.Gather(x, e);
+    Eigen::Matrix<double, 3, 4> xm;
+    for (int k = 0; k < 4; ++k) xm.col(k) = xe.segment<3>(3 * k);
+    if (!(DeformationGradient(xm, model_.rest(e).dm_inv).determinant() > 0)) ++inverted;
+  }
+  summary_.inverted_elements = inverted;
 }
 
 }  // namespace
@@ -718,7 +1136,10 @@ Status SolveQuasiStatic(const ForwardProblem& problem, const ForwardOptions& opt
   const auto start = Clock::now();
   *summary = ForwardSummary();
   QuasiStaticSolver solver(problem, options, model, mesh, summary);
-  if (solver.Validate() && solver.Setup()) solver.Run();
+  {
+    const ScopedBlasThreads blas_threads(summary->num_threads);
+    if (solver.Validate() && solver.Setup()) solver.Run();
+  }
   // Leave the model's rotations consistent with the result.
   if (summary->termination != ForwardTermination::kInvalidInput) model->UpdateRotations(mesh->x);
   summary->total_time_s = Seconds(start);
@@ -727,6 +1148,25 @@ Status SolveQuasiStatic(const ForwardProblem& problem, const ForwardOptions& opt
     return Status::Error(std::string("SolveQuasiStatic: ") + ToString(summary->termination) +
                          ": " + summary->message);
   }
+  return Status::Ok();
+}
+
+Status EvaluateForwardSystem(const ForwardProblem& problem, const ForwardOptions& options,
+                             const ElasticModel& model, const TetMesh& mesh, const Vertices& x,
+                             Eigen::VectorXd* residual, Eigen::SparseMatrix<double>* tangent,
+                             std::vector<int>* free_dofs) {
+  if (x.rows() != mesh.num_vertices() || x.cols() != 3 || !x.allFinite()) {
+    return Status::Error("EvaluateForwardSystem: x must be a finite #V by 3 matrix");
+  }
+  ForwardSummary summary;
+  TetMesh copy = mesh;  // the solver's mesh is writable; this one is not written
+  QuasiStaticSolver solver(problem, options, &model, &copy, &summary);
+  const ScopedBlasThreads blas_threads(summary.num_threads);
+  if (!solver.Validate() || !solver.Setup()) {
+    return Status::Error(std::string("EvaluateForwardSystem: ") + ToString(summary.termination) +
+                         ": " + summary.message);
+  }
+  solver.EvaluateSystem(x, options.tangent, residual, tangent, free_dofs);
   return Status::Ok();
 }
 

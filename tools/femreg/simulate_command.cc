@@ -32,6 +32,9 @@ struct SimulateOptions {
   std::string object;      // "" = every object
   std::string model;       // "" = the scene's forward.model
   int load_steps = 0;      // 0 = the scene's forward.load_steps
+  int max_iterations = 0;  // 0 = the scene's forward.max_iterations
+  std::string tangent;     // "" = ForwardOptions' default (full)
+  int threads = 0;         // 0 = OpenMP's default
   bool verbose = false;
   bool force = false;
 };
@@ -129,8 +132,10 @@ bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
         (result->max_rest - centroid).norm() >= 0.95 * farthest;
   }
 
-  if (!result->summary.IsSolutionUsable()) {
-    result->error = "the solve did not reach a usable equilibrium (" +
+  // Only a converged solve is an equilibrium; a state left at max_iterations is not
+  // written (summary.json says how far each load step got).
+  if (result->summary.termination != ForwardTermination::kConverged) {
+    result->error = "the solve did not reach equilibrium (" +
                     std::string(ToString(result->summary.termination)) + "): " +
                     result->summary.message;
     return false;
@@ -158,13 +163,35 @@ bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
   return true;
 }
 
+// Per load step: [{"load_step": 1, "load_factor": 0.5, "termination": ..., ...}, ...].
+std::string LoadStepsJson(const ForwardSummary& s) {
+  std::ostringstream os;
+  os << "[";
+  for (size_t i = 0; i < s.load_steps.size(); ++i) {
+    const ForwardLoadStep& step = s.load_steps[i];
+    os << (i ? "," : "") << "\n        {\"load_step\": " << step.load_step
+       << ", \"load_factor\": " << JsonNumber(step.load_factor)
+       << ", \"termination\": " << JsonString(ToString(step.termination))
+       << ", \"newton_iterations\": " << step.iterations
+       << ", \"projected_iterations\": " << step.projected_iterations
+       << ", \"relaxed_steps\": " << step.relaxed_steps
+       << ", \"watchdog_restarts\": " << step.watchdog_restarts
+       << ", \"initial_residual\": " << JsonNumber(step.initial_residual_norm)
+       << ", \"final_residual\": " << JsonNumber(step.final_residual_norm) << "}";
+  }
+  os << (s.load_steps.empty() ? "]" : "\n      ]");
+  return os.str();
+}
+
 std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
                         ElasticModelType model_type, const ForwardOptions& forward,
                         const std::vector<ObjectResult>& results, double total_time_s) {
   std::ostringstream os;
   os << "{\n  \"scene\": " << JsonString(options.scene_path) << ",\n"
      << "  \"model\": " << JsonString(ToString(model_type)) << ",\n"
+     << "  \"tangent\": " << JsonString(ToString(forward.tangent)) << ",\n"
      << "  \"load_steps\": " << forward.load_steps << ",\n"
+     << "  \"max_iterations\": " << forward.max_iterations << ",\n"
      << "  \"gravity\": " << JsonVector(scene.gravity) << ",\n"
      << "  \"objects\": [";
   for (size_t i = 0; i < results.size(); ++i) {
@@ -182,12 +209,14 @@ std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
        << "      \"loaded_vertices\": " << r.num_loaded << ",\n"
        << "      \"termination\": " << JsonString(ToString(s.termination)) << ",\n"
        << "      \"message\": " << JsonString(s.message) << ",\n"
-       << "      \"iterations\": " << s.iterations.size() << ",\n"
+       << "      \"iterations\": " << s.NumNewtonIterations() << ",\n"
+       << "      \"load_steps\": " << LoadStepsJson(s) << ",\n"
        << "      \"free_dofs\": " << s.num_free_dofs << ",\n"
        << "      \"initial_residual\": " << JsonNumber(s.initial_residual_norm) << ",\n"
        << "      \"final_residual\": " << JsonNumber(s.final_residual_norm) << ",\n"
        << "      \"final_energy\": " << JsonNumber(s.final_energy) << ",\n"
        << "      \"max_displacement\": " << JsonNumber(r.max_displacement) << ",\n"
+       << "      \"inverted_elements\": " << s.inverted_elements << ",\n"
        << "      \"max_displacement_vertex\": " << r.max_vertex << ",\n"
        << "      \"max_displacement_rest_position\": " << JsonVector(r.max_rest) << ",\n"
        << "      \"free_end_vertex\": " << r.end_vertex << ",\n"
@@ -196,7 +225,8 @@ std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
        << "      \"time_s\": {\"load\": " << JsonNumber(r.load_time_s)
        << ", \"solve\": " << JsonNumber(r.solve_time_s)
        << ", \"factorization\": " << JsonNumber(s.factorization_time_s)
-       << ", \"write\": " << JsonNumber(r.write_time_s) << "}\n    }";
+       << ", \"write\": " << JsonNumber(r.write_time_s) << "}"
+       << ",\n      \"threads\": " << s.num_threads << "\n    }";
   }
   os << "\n  ],\n  \"total_time_s\": " << JsonNumber(total_time_s) << "\n}\n";
   return os.str();
@@ -231,6 +261,11 @@ void RunSimulate(const SimulateOptions& options) {
   }
   ForwardOptions forward = scene.forward;
   if (options.load_steps > 0) forward.load_steps = options.load_steps;
+  if (options.max_iterations > 0) forward.max_iterations = options.max_iterations;
+  if (!options.tangent.empty() && !FromString(options.tangent, &forward.tangent)) {
+    return Fail("--tangent " + options.tangent + ": use full, projected or warped");
+  }
+  forward.num_threads = options.threads;
   forward.verbose = options.verbose;
 
   // The output folder: created when missing; an existing non-empty one only with --force.
@@ -287,7 +322,9 @@ void AddSimulateCommand(CLI::App* app) {
   cmd->footer(
       "Writes DIR/<object>.vtu (point fields: displacement, boundary [0 free, 1 clamped,\n"
       "2 displaced], nodal_load; cell field: region) and DIR/summary.json (termination,\n"
-      "iterations, residuals, max displacement, times). Exit code 1 on any error.\n"
+      "Newton iterations and termination per load step, residuals, max displacement,\n"
+      "times). Exit code 1 on any error, and when a solve does not converge (no VTU is\n"
+      "written for that object; try more --load-steps).\n"
       "The scene format is described in datasets/README.md.\n"
       "Example: femreg simulate datasets/beam/beam.yaml --out /tmp/beam");
   // No CLI::ExistingFile check: LoadScene reports a missing file with exit code 1 like any
@@ -301,6 +338,17 @@ void AddSimulateCommand(CLI::App* app) {
       ->check(CLI::IsMember({"corotational", "linear"}));
   cmd->add_option("--load-steps", options->load_steps,
                   "Apply loads and displacements in N steps, overrides forward.load_steps")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-iterations", options->max_iterations,
+                  "Newton iterations per load step, overrides forward.max_iterations")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--tangent", options->tangent,
+                  "Newton matrix: full (consistent tangent, default), projected (its PSD "
+                  "projection per element) or warped (R K R^T, the rotations held fixed)")
+      ->check(CLI::IsMember({"full", "projected", "warped"}));
+  cmd->add_option("--threads", options->threads,
+                  "Threads for the element loops and the BLAS under CHOLMOD (default: "
+                  "OpenMP's, OMP_NUM_THREADS)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("-v,--verbose", options->verbose,
                 "One line per Newton iteration and the full report");
