@@ -99,8 +99,9 @@ struct MeshingReport {
   double max_edge_length = 0.0;
   MeshQuality quality;
   // Wall-clock seconds.
-  double check_seconds = 0.0;  // reading excluded: merging, checks, shells
-  double tetgen_seconds = 0.0;
+  double check_seconds = 0.0;   // reading excluded: merging, checks, shells
+  double tetgen_seconds = 0.0;  // TetGen in its child process, the mesh sent back
+  double finish_seconds = 0.0;  // FinalizeMesh, quality and edge statistics
   double total_seconds = 0.0;
 };
 

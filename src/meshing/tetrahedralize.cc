@@ -494,6 +494,7 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   }
 
   // TetGen's output as a femreg mesh, without vertices no element uses.
+  const Clock::time_point finish_start = Clock::now();
   const int np = static_cast<int>(run.points.size() / 3),
             nt = static_cast<int>(run.tets.size() / 4);
   std::vector<int> index(static_cast<size_t>(np), -1);
@@ -571,6 +572,7 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
     report.max_edge_length = std::max(report.max_edge_length, l);
   }
   report.mean_edge_length = sum / static_cast<double>(edges.size());
+  report.finish_seconds = Seconds(finish_start);
   report.total_seconds = Seconds(start);
 
   // The tetrahedra fill exactly the solid the surface bounds (TetGen splits triangles in

@@ -1,6 +1,7 @@
 // femreg mesh SURFACE --out MESH: a closed triangle surface (PLY, OBJ, STL) tetrahedralized by
 // TetGen, written in a format femreg reads, with a report of what was done.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -98,7 +99,8 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << "  \"tetgen_log\": " << JsonString(r.tetgen_log) << ",\n"
      << "  \"seconds\": {\"read\": " << JsonNumber(t.read)
      << ", \"checks\": " << JsonNumber(r.check_seconds)
-     << ", \"tetgen\": " << JsonNumber(r.tetgen_seconds) << ", \"write\": " << JsonNumber(t.write)
+     << ", \"tetgen\": " << JsonNumber(r.tetgen_seconds)
+     << ", \"finish\": " << JsonNumber(r.finish_seconds) << ", \"write\": " << JsonNumber(t.write)
      << ", \"total\": " << JsonNumber(t.total) << "}\n}\n";
   return os.str();
 }
@@ -127,14 +129,16 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << " region" << (r.regions == 1 ? "" : "s") << ", " << r.boundary_triangles
      << " boundary triangles\n"
      << "volume:    " << G(r.mesh_volume) << " (the surface encloses " << G(r.surface_volume)
-     << ")\n"
+     << "; relative difference "
+     << G(std::abs(r.mesh_volume - r.surface_volume) / std::abs(r.surface_volume)) << ")\n"
      << "edges:     min " << G(r.min_edge_length) << ", mean " << G(r.mean_edge_length) << ", max "
      << G(r.max_edge_length) << " (target " << G(r.edge_length) << ")\n"
      << "quality:   dihedral angles " << G(q.min_dihedral_deg) << " .. " << G(q.max_dihedral_deg)
      << " deg, aspect ratio max " << G(q.max_aspect_ratio) << ", mean " << G(q.mean_aspect_ratio)
      << " (1 = regular)\n"
      << "time:      " << G(t.total) << " s (read " << G(t.read) << ", checks " << G(r.check_seconds)
-     << ", TetGen " << G(r.tetgen_seconds) << ", write " << G(t.write) << ")\n";
+     << ", TetGen " << G(r.tetgen_seconds) << ", finish " << G(r.finish_seconds) << ", write "
+     << G(t.write) << ")\n";
   if (!r.tetgen_warnings.empty()) os << "TetGen warns:\n" << r.tetgen_warnings;
   os << "wrote:     " << args.out << " (" << OutputFormat(args.out) << ")\n";
   return os.str();
