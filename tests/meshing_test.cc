@@ -377,6 +377,36 @@ TEST(MeshingTest, PlyAsciiAndBinaryReadTheSameSurface) {
   EXPECT_EQ(ascii.F, sphere.F);
   EXPECT_EQ(binary.F, sphere.F);
 
+  // Big-endian binary: the same tetrahedron as in little-endian, bytes reversed.
+  {
+    std::ofstream out(dir.path() + "/big.ply", std::ios::binary);
+    out << "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty float x\n"
+           "property float y\nproperty float z\nelement face 4\n"
+           "property list uchar int vertex_indices\nend_header\n";
+    auto put = [&out](auto value) {
+      char bytes[sizeof(value)];
+      std::memcpy(bytes, &value, sizeof(value));
+      std::reverse(bytes, bytes + sizeof(value));
+      out.write(bytes, sizeof(value));
+    };
+    const float corners[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (const auto& c : corners) {
+      for (float x : c) put(x);
+    }
+    const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    for (const auto& f : faces) {
+      out.put(3);
+      for (int i : f) put(static_cast<int32_t>(i));
+    }
+  }
+  Surface big;
+  s = ReadSurface(dir.path() + "/big.ply", &big.V, &big.F);
+  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_EQ(big.V.rows(), 4);
+  EXPECT_EQ(big.V.row(3), Eigen::RowVector3d(0, 0, 1));
+  EXPECT_EQ(big.F.row(3), Eigen::RowVector3i(1, 2, 3));
+  EXPECT_NEAR(EnclosedVolume(big), 1.0 / 6.0, 1e-15);
+
   // Quads and polygons are fanned into triangles.
   const std::string quads =
       "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"

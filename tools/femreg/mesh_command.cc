@@ -202,7 +202,8 @@ void AddMeshCommand(CLI::App* app) {
       "fine: disjoint ones become separate regions, nested ones cavities.");
   cmd->footer(
       "Units: whatever the surface file uses, times --scale (femreg works in metres: a scan "
-      "in millimetres wants --scale 0.001). Lengths and volumes below are in those units.\n"
+      "in millimetres wants --scale 0.001). The lengths and volumes of the options are in those "
+      "units.\n"
       "TetGen does not coarsen the surface: near a surface finer than --edge-length the "
       "elements are as fine as the surface. Without --keep-surface it may split surface "
       "triangles for quality and size.\n"
@@ -231,7 +232,8 @@ void AddMeshCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::Range(1.1, 100.0));
   cmd->add_option("--min-dihedral", args->options.min_dihedral_deg,
-                  "Smallest dihedral angle to aim for, degrees (0 to 18; 0: no bound)")
+                  "Smallest dihedral angle to aim for, degrees (0 to 18; 0: no bound; elements "
+                  "on the surface keep the angles its triangles force)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 18.0));
   cmd->add_option(
