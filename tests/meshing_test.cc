@@ -581,7 +581,7 @@ TEST(MeshingTest, NearDuplicateVerticesAreMerged) {
   EXPECT_EQ(report.surface_vertices, 8);
   EXPECT_NEAR(RestVolume(mesh), 1.0, 1e-9);  // the corners moved by <= 2e-13
 
-  // With merging limited to exact duplicates the soup is open everywhere.
+  // With merging limited to exact copies the soup is open everywhere.
   MeshingOptions exact;
   exact.merge_distance = 0.0;
   status = TetrahedralizeSurface(soup.V, soup.F, exact, &mesh, &report, "soup.stl");

@@ -47,7 +47,7 @@ struct MeshingOptions {
   bool keep_surface = false;
   // Vertices closer than this are merged before anything else (STL stores every corner
   // of every triangle). Negative: 1e-9 times the bounding box diagonal. 0: only exact
-  // duplicates.
+  // copies.
   double merge_distance = -1.0;
   // Each closed shell's solid gets its own region id (0, 1, ... by the order of its first
   // triangle); off: every element is in region 0. Shells inside another shell's solid are

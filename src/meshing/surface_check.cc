@@ -73,7 +73,7 @@ uint64_t EdgeKey(int a, int b) {
 }
 
 // Vertices within `d` of each other are merged (transitively); rep[i] is the smallest index
-// of i's group. d <= 0: exact duplicates only.
+// of i's group. d <= 0: exact copies only.
 std::vector<int> MergeGroups(const Vertices& V, double d, const Eigen::Vector3d& lo,
                              double diagonal) {
   const int n = static_cast<int>(V.rows());
@@ -286,7 +286,7 @@ Status CheckSurface(const Vertices& V, const Triangles& F, double merge_distance
     }
   }
 
-  // Merge duplicates, drop unused vertices (keeping the input's vertex order).
+  // Merge coincident vertices, drop unused vertices (keeping the input's vertex order).
   const Eigen::Vector3d lo = V.colwise().minCoeff().transpose();
   const Eigen::Vector3d hi = V.colwise().maxCoeff().transpose();
   const double diagonal = (hi - lo).norm();

@@ -207,7 +207,8 @@ void AddMeshCommand(CLI::App* app) {
       "TetGen does not coarsen the surface: near a surface finer than --edge-length the "
       "elements are as fine as the surface. Without --keep-surface it may split surface "
       "triangles for quality and size.\n"
-      "Prints the input and output counts, merged duplicates, the volume of the surface and "
+      "Prints the input and output counts, merged duplicate vertices, the volume of the surface "
+      "and "
       "of the mesh, edge lengths, element quality (dihedral angles, aspect ratio) and times.\n"
       "Exit code 0 on success; 1 when the surface cannot be read or meshed, the output "
       "exists (without --force) or cannot be written (the reason goes to stderr; nothing is "
@@ -248,7 +249,7 @@ void AddMeshCommand(CLI::App* app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--merge-distance", args->options.merge_distance,
                   "Merge vertices closer than this, in the scaled units (default: 1e-9 of the "
-                  "bounding box diagonal; 0: exact duplicates only)")
+                  "bounding box diagonal; 0: exact copies only)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--time-limit", args->options.time_limit_seconds,
                   "Stop TetGen after this many seconds (default: no limit)")
