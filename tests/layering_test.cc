@@ -32,6 +32,7 @@ const std::map<std::string, int> kRank = {
     {"collision", 4},     // collision specs, contact detection, the penalty
     {"fracture", 4},      // separation tensor, node splits
     {"solvers", 5},       // the back ends (Ceres, fast) behind one interface
+    {"meshing", 5},       // closed surfaces to tetrahedra (TetGen)
     {"registration", 6},  // options, summaries, point clouds, the Tracker
     {"eval", 7},          // ground truth, errors, surfaces
     {"synth", 8},         // the virtual depth camera, the ground truth embedding
@@ -47,6 +48,7 @@ const std::map<std::string, std::string> kHeaderModule = {
     {"io.h", "io"},                 {"geometry.h", "geometry"},
     {"fem.h", "fem"},               {"forward.h", "forward"},
     {"energy.h", "energy"},         {"solver.h", "solvers"},
+    {"meshing.h", "meshing"},
     {"collision_spec.h", "collision"}, {"collision.h", "collision"},
     {"fracture.h", "fracture"},     {"registration.h", "registration"},
     {"point_cloud.h", "registration"}, {"tracker.h", "registration"},

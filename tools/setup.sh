@@ -12,6 +12,7 @@ PACKAGES=(
   libnanoflann-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libyaml-cpp-dev
+  libtet1.5-dev
   python3 python3-matplotlib python3-numpy
 )
 # Only for the cross-check against an independent FEM code (tools/compare_calculix.sh).
