@@ -273,6 +273,14 @@ class VtuChecker {
     long long components, tuples_attr, offset;
     Status s = IntAttribute(tag, "NumberOfComponents", 1, 1, kMaxComponents, &components);
     if (!s.ok()) return s;
+    // VTK refuses other shapes here, but leaks the arrays it had made on the way.
+    if (parent == "Points" && components != 3) {
+      return Error(tag.begin, "the Points array must have NumberOfComponents=\"3\", not " +
+                                  std::to_string(components));
+    }
+    if (parent == "Cells" && components != 1) {
+      return Error(tag.begin, "a Cells array must have one component, not " + std::to_string(components));
+    }
     const long long size = static_cast<long long>(data_.size());
     const long long tuple_bound = std::min(kMaxItems, compressed_ ? size * kMaxCompressionRatio : size);
     if (!(s = IntAttribute(tag, "NumberOfTuples", -1, 0, tuple_bound, &tuples_attr)).ok()) return s;
