@@ -267,6 +267,13 @@ INSTANTIATE_TEST_SUITE_P(
                  "<DataArray type=\"Float32\" NumberOfComponents=\"4294967299\" format=\"ascii\">"
                  "0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points></Piece></UnstructuredGrid></VTKFile>\n",
                  0, "byte 145: DataArray NumberOfComponents='4294967299' is out of range (1 to 1024)"},
+        // VTK 9.1 crashed (SIGSEGV) on a token it could not parse in an ascii array.
+        BadInput{"VtuAsciiValueNotANumber", "t.vtu",
+                 "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                 "<UnstructuredGrid><Piece NumberOfPoints=\"4\" NumberOfCells=\"1\"><Points>\n"
+                 "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">"
+                 "0 0 0 1 0 0 0 =1 0 0 0 1</DataArray></Points></Piece></UnstructuredGrid></VTKFile>\n",
+                 0, "ascii DataArray '' value 7 is not a number: '=1'"},
         BadInput{"VtuPointsBeyondTheFile", "t.vtu",
                  "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
                  "<UnstructuredGrid><Piece NumberOfPoints=\"2000000000\" NumberOfCells=\"1\"><Points>\n"

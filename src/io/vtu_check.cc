@@ -308,6 +308,37 @@ class VtuChecker {
            << " values, its text has " << text << " bytes";
         return Error(tag.begin, os.str());
       }
+      // Every value a number of the array's kind: VTK 9.1 dereferences a null pointer
+      // (SIGSEGV in vtkXMLDataReader::ReadPieceData) after a token it cannot parse.
+      const bool integer = type.find("Float") == std::string::npos;
+      long long count = 0;
+      size_t p = tag.content;
+      const size_t stop = tag.content + text;
+      while (p < stop) {
+        while (p < stop && std::isspace(static_cast<unsigned char>(data_[p]))) ++p;
+        const size_t begin = p;
+        while (p < stop && !std::isspace(static_cast<unsigned char>(data_[p]))) ++p;
+        if (begin == p) break;
+        const std::string token = data_.substr(begin, p - begin);
+        long long i;
+        double d;
+        // Plain decimal only: hexadecimal floats, "nan" and "inf" are what strtod takes but
+        // not necessarily VTK's parser.
+        const bool decimal = token.find_first_not_of("0123456789+-.eE") == std::string::npos;
+        if (!decimal || (integer ? !ParseInt(token, &i) : !ParseDouble(token, &d))) {
+          std::ostringstream os;
+          os << "ascii DataArray " << Quoted(name, 40) << " value " << count << " is not "
+             << (integer ? "an integer" : "a number") << ": " << Quoted(token);
+          return Error(begin, os.str());
+        }
+        ++count;
+      }
+      if (count < values) {
+        std::ostringstream os;
+        os << "ascii DataArray " << Quoted(name, 40) << " has " << count << " values, the header's counts need "
+           << values;
+        return Error(tag.begin, os.str());
+      }
       return Status::Ok();
     }
     if (format == "binary") {
