@@ -195,9 +195,20 @@ class VtuChecker {
     const size_t close = data_.find('>', tag_start);
     if (close == std::string::npos) return Error(tag_start, "unterminated <AppendedData> tag");
     const std::string tag = data_.substr(tag_start, close - tag_start);
-    appended_base64_ = tag.find("base64") != std::string::npos;
+    const bool raw = tag.find("encoding=\"raw\"") != std::string::npos;
+    appended_base64_ = tag.find("encoding=\"base64\"") != std::string::npos;
+    if (raw == appended_base64_) {
+      return Error(tag_start, "<AppendedData> must have encoding=\"raw\" or encoding=\"base64\"");
+    }
     const size_t underscore = data_.find('_', close);
     if (underscore == std::string::npos) return Error(close, "appended data without its '_' marker");
+    // Only white space before the marker: VTK's own scan for it reads other bytes otherwise
+    // (a NUL there made it take a block count of 1.6e9 and allocate 6 GB).
+    for (size_t p = close + 1; p < underscore; ++p) {
+      if (!std::isspace(static_cast<unsigned char>(data_[p]))) {
+        return Error(p, "a byte other than white space before the appended data's '_' marker");
+      }
+    }
     appended_begin_ = underscore + 1;
     const size_t end_tag = data_.rfind("</AppendedData>");
     appended_end_ = end_tag == std::string::npos || end_tag < appended_begin_ ? data_.size() : end_tag;
