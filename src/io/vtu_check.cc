@@ -405,8 +405,10 @@ class VtuChecker {
       os << blocks << " compressed blocks, more than the data holds";
       return Error(at, os.str());
     }
-    if (blocks > 0 && (block_size == 0 || last_size > block_size ||
-                       block_size > static_cast<uint64_t>(std::numeric_limits<int>::max()))) {
+    // No blocks with a last block of some size made VTK 9.1 read through a null pointer.
+    if ((blocks == 0 && last_size != 0) ||
+        (blocks > 0 && (block_size == 0 || last_size > block_size ||
+                        block_size > static_cast<uint64_t>(std::numeric_limits<int>::max())))) {
       os << "block size " << block_size << " and last block size " << last_size << " are inconsistent";
       return Error(at, os.str());
     }
