@@ -13,6 +13,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -72,7 +73,14 @@ class VtuChecker {
         saw_piece = true;
       } else if (tag.name == "DataArray") {
         if (!(s = CheckArray(tag, parent, open)).ok()) return s;
+        // Two arrays of one name in one section made VTK 9.1 read through a null pointer
+        // (vtkXMLUnstructuredGridReader::ReadArrayForCells).
+        auto name = tag.attributes.find("Name");
+        if (name != tag.attributes.end() && !section_names_.insert(name->second).second) {
+          return Error(tag.begin, "a second DataArray named " + Quoted(name->second, 40) + " in <" + parent + ">");
+        }
       }
+      if (tag.name != "DataArray") section_names_.clear();  // a new section
       if (!tag.empty) open.push_back(tag.name);
       if (tag.name == "DataArray" && !tag.empty) {
         // Skip the array's content (text or base64) to its end tag.
@@ -448,6 +456,7 @@ class VtuChecker {
   bool big_endian_ = false, compressed_ = false;
   int header_size_ = 4;
   long long points_ = 0, cells_ = 0;
+  std::set<std::string> section_names_;  // array names in the current section
 };
 
 }  // namespace
