@@ -25,6 +25,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "regenerate_compare.h"
 #include "test_util.h"
 
 namespace femreg {
@@ -604,26 +605,93 @@ TEST(CollisionSequences, ToolTableStaysOutOfTheToolAndTheTable) {
   EXPECT_LT(on.Mean(on.hidden), off.Mean(off.hidden));
 }
 
-// The bundled contact sequences are what `femreg contact-data` writes today, byte for byte
-// (one thread, as tools/make_datasets.sh runs it).
-TEST(CollisionSequences, BundledSequencesRegenerateBitIdentically) {
+// truth_contacts.csv rows: frame,newton_iterations,termination,final_residual_N,contacts,
+// max_penetration_mm.
+void CompareTruthContacts(const std::string& bundled, const std::string& regenerated, double max_shift) {
+  auto rows = [](const std::string& path) {
+    std::vector<std::vector<std::string>> out;
+    std::ifstream in(path);
+    std::string line;
+    while (std::getline(in, line)) {
+      std::vector<std::string> cells;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+      out.push_back(cells);
+    }
+    return out;
+  };
+  const auto a = rows(bundled), b = rows(regenerated);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(a[0], b[0]);  // header
+  for (size_t r = 1; r < a.size(); ++r) {
+    SCOPED_TRACE("row " + std::to_string(r));
+    ASSERT_EQ(a[r].size(), 6u);
+    ASSERT_EQ(b[r].size(), 6u);
+    EXPECT_EQ(a[r][0], b[r][0]);  // frame
+    EXPECT_EQ(a[r][2], b[r][2]);  // termination
+    const double ca = std::atof(a[r][4].c_str()), cb = std::atof(b[r][4].c_str());
+    EXPECT_LE(std::abs(ca - cb), 0.1 * std::max(ca, cb)) << "contacts";
+    EXPECT_LE(std::abs(std::atof(a[r][5].c_str()) - std::atof(b[r][5].c_str())), max_shift * 1e3)
+        << "max_penetration_mm";
+  }
+}
+
+// The bundled contact sequences are what `femreg contact-data` writes today (one thread, as
+// tools/make_datasets.sh runs it), within tolerances that say what can vary from one CPU or
+// BLAS build to another:
+//
+// - What is integer by construction is compared exactly: the files and their rows, the
+//   vertex counts, and scene.yaml, README.md and tool.stl (written from constants).
+// - Ground-truth positions: the solve converges to a force imbalance below 1e-8 N (see
+//   truth_contacts.csv); with a stiffness of order E h = 3e4 Pa x 7.5 mm = 225 N/m for the
+//   softest block that alone is 1e-8 / 225 = 4e-11 m. What varies far more is which contact
+//   pairs are active: ContactPotential re-detects them when a vertex has moved more than half
+//   the margin, a floating-point comparison, and its header measures that two detection
+//   histories differ by up to 0.27 mm at the edge of the pressed face. Roundoff (OpenBLAS
+//   picks its kernels by CPU; CHOLMOD factorizes through it) can change that history, so a
+//   vertex may move by up to kMaxShift = 0.3 mm; only the vertices near that edge do, so the
+//   mean over all vertices stays below a tenth of it. (Measured against the bundled files on
+//   the machine of issue 13 and on another: at most 0.11 mm, mean 9 um, both at frame 5.)
+// - Visibility: a vertex is seen when it lies within 2 mm of the depth image; one within
+//   0.3 mm of that threshold may flip: at most 2 per frame.
+// - Clouds: as regen::CloudsAgree says (the camera sees the moved surface; a pixel that
+//   flips shifts the noise draws of the pixels after it).
+// - truth_contacts.csv: the same frames, terminations and (within 10%) contact counts; the
+//   deepest penetration within kMaxShift; the Newton iteration counts may differ.
+TEST(CollisionSequences, BundledSequencesRegenerateWithinTolerance) {
   namespace fs = std::filesystem;
+  const double kMaxShift = 3e-4;  // m
   for (const std::string name : {"tool_table", "contact_pair"}) {
+    SCOPED_TRACE(name);
     testing_util::TempDir dir("femreg_contact_regen");
-    ASSERT_TRUE(GenerateContactSequence(name, dir.path()).ok()) << name;
+    ASSERT_TRUE(GenerateContactSequence(name, dir.path()).ok());
     const fs::path bundled = fs::path(FEMREG_DATASETS_DIR) / name;
     int files = 0;
     for (const auto& entry : fs::recursive_directory_iterator(dir.path())) {
       if (!entry.is_regular_file()) continue;
       const fs::path rel = fs::relative(entry.path(), dir.path());
-      std::ifstream a(entry.path(), std::ios::binary), b(bundled / rel, std::ios::binary);
-      ASSERT_TRUE(b.good()) << name << ": " << rel << " is not bundled";
-      const std::string x((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
-      const std::string y((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
-      EXPECT_TRUE(x == y) << name << ": " << rel << " differs (regenerate with tools/make_datasets.sh)";
+      const std::string mine = entry.path().string(), theirs = (bundled / rel).string();
+      SCOPED_TRACE(rel.string() + " (regenerate with tools/make_datasets.sh)");
+      ASSERT_TRUE(fs::is_regular_file(theirs)) << "not bundled";
       ++files;
+      const std::string ext = rel.extension().string();
+      if (rel.parent_path() == "ground_truth") {
+        const regen::Deviation d = regen::CompareGroundTruth(theirs, mine);
+        ASSERT_TRUE(d.ok) << d.Report();
+        EXPECT_LE(d.max, kMaxShift) << d.Report();
+        EXPECT_LE(d.mean, 0.1 * kMaxShift) << d.Report();
+        EXPECT_LE(d.flips, 2) << d.Report();
+      } else if (ext == ".pcd") {
+        std::string why;
+        EXPECT_TRUE(regen::CloudsAgree(theirs, mine, &why)) << why;
+      } else if (rel == "truth_contacts.csv") {
+        CompareTruthContacts(theirs, mine, kMaxShift);
+      } else {
+        EXPECT_TRUE(regen::ReadBytes(theirs) == regen::ReadBytes(mine)) << "differs";
+      }
     }
-    EXPECT_GT(files, 24) << name;
+    EXPECT_GT(files, 24);
   }
 }
 

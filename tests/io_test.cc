@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -234,11 +235,96 @@ INSTANTIATE_TEST_SUITE_P(
                  "POINTS 4 float\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 4\n"
                  "CELL_TYPES 1\n10\n",
                  11, "out of range"},
+        // Counts are checked against the file before anything is sized from them.
+        BadInput{"VtkLegacyPointsBeyondTheFile", "t.vtk",
+                 "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                 "POINTS 4000000000 double\n0 0 0 1 0 0\n",
+                 5, "POINTS: 4000000000 tuples of 3 values cannot fit"},
+        BadInput{"VtkLegacyNegativeCellCount", "t.vtk",
+                 "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                 "POINTS 1 float\n0 0 0\nCELLS -2147483649 5\n",
+                 7, "CELLS counts are negative"},
+        BadInput{"VtkLegacySecondCells", "t.vtk",
+                 "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                 "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n"
+                 "CELLS 1 5\n4 0 1 2 3\n",
+                 11, "a second CELLS section"},
+        BadInput{"VtkLegacyRegionOutOfRange", "t.vtk",
+                 "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                 "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n"
+                 "CELL_DATA 1\nSCALARS region int 1\nLOOKUP_TABLE default\n1e300\n",
+                 14, "is not a region id"},
+        BadInput{"Msh41NodeBlockBeyondTheFile", "t.msh",
+                 "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4611686018427387904\n"
+                 "1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n",
+                 6, "the number of nodes in the block is 4611686018427387904, more than the rest"},
+        BadInput{"MeditSkippedBlockOverflow", "t.mesh",
+                 "MeshVersionFormatted 2\nDimension 3\nTriangles 4611686018427387904\n1 2 3 1\n", 3,
+                 "the number of Triangles is 4611686018427387904"},
+        BadInput{"VtuComponentsOutOfRange", "t.vtu",
+                 "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                 "<UnstructuredGrid><Piece NumberOfPoints=\"4\" NumberOfCells=\"1\"><Points>\n"
+                 "<DataArray type=\"Float32\" NumberOfComponents=\"4294967299\" format=\"ascii\">"
+                 "0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points></Piece></UnstructuredGrid></VTKFile>\n",
+                 0, "byte 145: DataArray NumberOfComponents='4294967299' is out of range (1 to 1024)"},
+        // VTK 9.1 crashed (SIGSEGV) on a token it could not parse in an ascii array.
+        BadInput{"VtuAsciiValueNotANumber", "t.vtu",
+                 "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                 "<UnstructuredGrid><Piece NumberOfPoints=\"4\" NumberOfCells=\"1\"><Points>\n"
+                 "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">"
+                 "0 0 0 1 0 0 0 =1 0 0 0 1</DataArray></Points></Piece></UnstructuredGrid></VTKFile>\n",
+                 0, "ascii DataArray '' value 7 is not a number: '=1'"},
+        BadInput{"VtuPointsBeyondTheFile", "t.vtu",
+                 "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                 "<UnstructuredGrid><Piece NumberOfPoints=\"2000000000\" NumberOfCells=\"1\"><Points>\n"
+                 "<DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"ascii\">"
+                 "0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points></Piece></UnstructuredGrid></VTKFile>\n",
+                 0, "NumberOfPoints='2000000000' is out of range"},
         BadInput{"VtkLegacyNoTetrahedra", "t.vtk",
                  "# vtk DataFile Version 2.0\ntriangle\nASCII\nDATASET UNSTRUCTURED_GRID\n"
                  "POINTS 3 float\n0 0 0\n1 0 0\n0 1 0\nCELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n",
                  0, "no tetrahedra"}),
     [](const ::testing::TestParamInfo<BadInput>& info) { return std::string(info.param.name); });
+
+// BINARY legacy files (written by VTK 9.1, file versions 4.2 and 5.1) are read by femreg
+// itself, not by VTK's reader: 12 vertices, 12 tetrahedra with regions 0 1 2 ..., and a
+// triangle that is skipped.
+TEST(ReadTetMesh, BinaryLegacyVtkOfBothVersions) {
+  const TetMesh box = MakeBox(Eigen::Vector3d(1, 0.5, 0.25), 2, 1, 1);
+  for (const char* file : {"box_binary_v42.vtk", "box_binary_v51.vtk"}) {
+    SCOPED_TRACE(file);
+    TetMesh mesh;
+    const Status status = ReadTetMesh(kFixtures + file, &mesh);
+    ASSERT_TRUE(status.ok()) << status.message();
+    ASSERT_EQ(mesh.num_vertices(), box.num_vertices());
+    ASSERT_EQ(mesh.num_tets(), box.num_tets());
+    EXPECT_TRUE(mesh.tets == box.tets);
+    EXPECT_EQ((mesh.rest - box.rest).cwiseAbs().maxCoeff(), 0.0);  // doubles stored exactly
+    for (int t = 0; t < mesh.num_tets(); ++t) EXPECT_EQ(mesh.region(t), t % 3);
+  }
+}
+
+// A BINARY legacy file cut short, or with a count beyond its length, is refused at the
+// byte offset where its data would start.
+TEST(ReadTetMesh, BinaryLegacyVtkCountsAreCheckedAgainstTheFile) {
+  std::ifstream in(kFixtures + "box_binary_v42.vtk", std::ios::binary);
+  const std::string whole((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  TempDir dir;
+  TetMesh mesh;
+  const std::string cut = dir.Write("cut.vtk", whole.substr(0, whole.size() / 2));
+  Status status = ReadTetMesh(cut, &mesh);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind(cut + ": byte ", 0), 0u) << status.message();
+  std::string huge = whole;
+  const size_t at = huge.find("POINTS 12");
+  ASSERT_NE(at, std::string::npos);
+  huge.replace(at, 9, "POINTS -2147483649");
+  const std::string path = dir.Write("huge.vtk", huge);
+  status = ReadTetMesh(path, &mesh);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind(path + ":5: POINTS: negative size", 0), 0u) << status.message();
+  EXPECT_EQ(mesh.num_tets(), 0);
+}
 
 // TetGen: an index out of range in the .ele names the .ele file and its line.
 TEST(ReadTetMesh, TetGenErrorsNameTheEleFile) {

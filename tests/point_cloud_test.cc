@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <filesystem>
 #include <limits>
 #include <random>
@@ -89,6 +90,79 @@ TEST(ReadPointCloud, ErrorsNameTheFileAndLine) {
   s = ReadPointCloud(Fixture("missing.pcd"), &cloud);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("missing.pcd"), std::string::npos);
+}
+
+// Written by PCL (savePCDFileBinaryCompressed of PointXYZLNormal with a sensor pose): five
+// points, labels 7..11, normals +z, VIEWPOINT 0.5 -1 2 / (w 0, x 1, y 0, z 0).
+TEST(ReadPointCloud, CompressedPcdKeepsLabelsNormalsAndTheViewpoint) {
+  PointCloud cloud;
+  SensorPose sensor;
+  const Status status = ReadPointCloud(Fixture("labels_normals_compressed.pcd"), &cloud, nullptr, &sensor);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(cloud.size(), 5);
+  ASSERT_TRUE(cloud.has_normals());
+  ASSERT_TRUE(cloud.has_labels());
+  for (int i = 0; i < 5; ++i) {
+    // Stored as float: 0.1f * i is within 1e-7 of 0.1 * i.
+    EXPECT_NEAR(cloud.points(i, 0), 0.1 * i, 1e-6);
+    EXPECT_EQ(cloud.points(i, 2), 1.0 + i);
+    EXPECT_EQ(cloud.normals(i, 2), 1.0);
+    EXPECT_EQ(cloud.labels(i), 7 + i);
+  }
+  ASSERT_TRUE(sensor.known);
+  EXPECT_EQ(sensor.origin, Eigen::Vector3d(0.5, -1.0, 2.0));
+  EXPECT_EQ(sensor.orientation.coeffs(), Eigen::Vector4d(1, 0, 0, 0));  // x y z w
+  // PLY and text clouds have no viewpoint.
+  ASSERT_TRUE(ReadPointCloud(Fixture("cloud.xyz"), &cloud, nullptr, &sensor).ok());
+  EXPECT_FALSE(sensor.known);
+}
+
+// Written by PCL's PLYWriter (binary, PointNormal): normals named normal_x ... are kept.
+TEST(ReadPointCloud, BinaryPlyWithNormals) {
+  PointCloud cloud;
+  const Status status = ReadPointCloud(Fixture("binary_normals.ply"), &cloud);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(cloud.size(), 4);
+  ASSERT_TRUE(cloud.has_normals());
+  EXPECT_EQ(cloud.points(3, 2), 9.0);
+  EXPECT_EQ(cloud.normals(2, 0), 1.0);
+}
+
+// PCD headers that PCL's reader crashed on, or read as nothing, are refused naming the line
+// (or the byte offset in binary data), and the cloud is left as it was.
+TEST(ReadPointCloud, InconsistentPcdHeadersAreRefused) {
+  const std::string head = "# .PCD v0.7\nVERSION 0.7\n";
+  const std::string xyz = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n";
+  const struct {
+    std::string text;
+    std::string expected;
+  } cases[] = {
+      {head + "FIELDS label x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       ":4: SIZE has 3 entries, FIELDS (line 3) has 4"},
+      {head + "SIZE 4 4 4\nTYPE F F F\nWIDTH 1\nPOINTS 1\nDATA ascii\n1 2 3\n", ":7: no FIELDS line before DATA"},
+      {head + xyz + "WIDTH 3\nHEIGHT 2\nPOINTS 5\nDATA ascii\n", ":10: POINTS 5 is not WIDTH x HEIGHT = 3 x 2"},
+      {head + "FIELDS x y w\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n1 2 3\n", ":3: no field z"},
+      {head + "FIELDS x y z\nSIZE 4 4 4\nTYPE F F I\nWIDTH 1\nDATA ascii\n1 2 3\n", ":3: field z must be one float"},
+      {head + xyz + "WIDTH 2\nDATA ascii\n1 2 3\n4 5\n" + std::string(20, ' '), ":10: point 1: 2 values, the fields need 3"},
+      {head + xyz + "WIDTH 3\nDATA ascii\n1 2 3\n", ":8: 3 points of 3 values cannot fit in the 6 bytes after the header"},
+      {head + xyz + "WIDTH 3\nDATA ascii\n1 2 3\n" + std::string(20, '\n'), ":9: the file ends after 1 of 3 points"},
+      {head + xyz + "WIDTH 1000\nDATA binary\n" + std::string(24, '\0'),
+       ": byte 94: binary data of 1000 points of 12 bytes needs 12000 bytes, the file has 24"},
+      {head + xyz + "WIDTH 1\nDATA binary_compressed\n" + std::string("\xff\xff\xff\x0f\x0c\0\0\0", 8),
+       ": byte 102: compressed size 268435455 is more than the 0 bytes after the header"},
+      {head + xyz + "WIDTH 1\nVIEWPOINT 0 0 0 0 0 0 0\nDATA ascii\n1 2 3\n", ":8: VIEWPOINT orientation is a zero quaternion"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = TempPath("bad.pcd");
+    std::ofstream(path, std::ios::binary) << c.text;
+    PointCloud cloud;
+    cloud.points = Vertices::Ones(2, 3);
+    const Status s = ReadPointCloud(path, &cloud);
+    std::remove(path.c_str());
+    ASSERT_FALSE(s.ok()) << c.expected;
+    EXPECT_EQ(s.message().rfind(path + c.expected, 0), 0u) << s.message() << "\nexpected " << c.expected;
+    EXPECT_EQ(cloud.size(), 2);  // untouched
+  }
 }
 
 TEST(WritePointCloud, RoundTripsWithAndWithoutNormals) {

@@ -1,6 +1,6 @@
 // The virtual depth camera, the scene's synth section and femreg synth: noise model, z-buffer
 // occlusion, grazing drop-outs, validation messages, and the bundled datasets regenerating
-// bit-identically from their seeds.
+// from their seeds (within tolerances that hold across CPUs).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +16,7 @@
 #include "femreg/scene.h"
 #include "femreg/synth.h"
 #include "femreg_test_config.h"
+#include "regenerate_compare.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -312,9 +313,24 @@ TEST(SynthSequenceTest, SanityCheckIsLabelledAndThePressMovesThePatch) {
   EXPECT_LT(truth.positions(0, 2), 1e-9);  // clamped bottom stays
 }
 
-// Each bundled dataset regenerates bit-identically from its seed: its first two frames and
-// its scene.yaml.
-TEST(SynthSequenceTest, BundledDatasetsRegenerateBitIdentically) {
+// Each bundled dataset regenerates from its seed: its first two frames and its scene.yaml,
+// within tolerances that say what can vary from one CPU or BLAS build to another:
+//
+// - Exactly: scene.yaml (written from the synth section), the vertex counts, and the
+//   truth surfaces' triangles (integer topology).
+// - Ground-truth positions (CSV and truth VTU): each frame is a quasi-static solve stopped
+//   when the force imbalance is below its tolerance, so a position may be off the exact
+//   equilibrium by up to |r| / k with k the stiffness of the softest mode. The loosest case
+//   is occlusion: absolute_tolerance 1e-5 N on a clamped beam 0.25 m long of 4 x 4 cm,
+//   E = 5e4 Pa, whose tip stiffness 3 E I / L^3 = 3 * 5e4 * 2.1e-7 / 0.0156 is about 2 N/m:
+//   5 um from the exact solution, so two machines may differ by 10 um; kMaxShift = 20 um
+//   leaves a factor 2 (the VTU stores float32: 0.3 m * 6e-8 adds 2e-8 m). This is 10 times
+//   below the camera's depth noise at 0.3 m, so it cannot hide a change that matters.
+// - Visibility: a vertex within 2 mm of the depth image is seen; one within kMaxShift of that
+//   threshold may flip: at most 2 per frame.
+// - Clouds: regen::CloudsAgree.
+TEST(SynthSequenceTest, BundledDatasetsRegenerateWithinTolerance) {
+  const double kMaxShift = 20e-6;  // m
   int checked = 0;
   for (const auto& entry : fs::directory_iterator(FEMREG_DATASETS_DIR)) {
     const fs::path synth = entry.path() / "synth.yaml";
@@ -327,16 +343,26 @@ TEST(SynthSequenceTest, BundledDatasetsRegenerateBitIdentically) {
     SynthReport report;
     status = GenerateSynthSequence(scene, dir.path(), 2, &report);
     ASSERT_TRUE(status.ok()) << status.message();
-    std::vector<std::string> files = {"scene.yaml"};
-    for (const char* f : {"clouds/frame_0000.pcd", "clouds/frame_0001.pcd",
-                          "ground_truth/frame_0000.csv", "ground_truth/frame_0001.csv",
-                          "truth/frame_0000.vtu", "truth/frame_0001.vtu"}) {
-      files.push_back(f);
-    }
-    for (const std::string& f : files) {
-      const std::string bundled = ReadFile((entry.path() / f).string());
-      ASSERT_FALSE(bundled.empty()) << f << " is not bundled";
-      EXPECT_TRUE(bundled == ReadFile(dir.path() + "/" + f)) << f << " differs";
+    const std::string bundled_yaml = ReadFile((entry.path() / "scene.yaml").string());
+    ASSERT_FALSE(bundled_yaml.empty()) << "scene.yaml is not bundled";
+    EXPECT_TRUE(bundled_yaml == ReadFile(dir.path() + "/scene.yaml")) << "scene.yaml differs";
+    for (const char* frame : {"frame_0000", "frame_0001"}) {
+      SCOPED_TRACE(frame);
+      const std::string name(frame);
+      auto bundled = [&](const std::string& f) { return (entry.path() / f).string(); };
+      auto mine = [&](const std::string& f) { return dir.path() + "/" + f; };
+      const regen::Deviation truth =
+          regen::CompareGroundTruth(bundled("ground_truth/" + name + ".csv"), mine("ground_truth/" + name + ".csv"));
+      ASSERT_TRUE(truth.ok) << truth.Report();
+      EXPECT_LE(truth.max, kMaxShift) << truth.Report();
+      EXPECT_LE(truth.flips, 2) << truth.Report();
+      const regen::Deviation surface =
+          regen::CompareVtuSurfaces(bundled("truth/" + name + ".vtu"), mine("truth/" + name + ".vtu"));
+      ASSERT_TRUE(surface.ok) << surface.Report();
+      EXPECT_LE(surface.max, kMaxShift) << surface.Report();
+      std::string why;
+      EXPECT_TRUE(regen::CloudsAgree(bundled("clouds/" + name + ".pcd"), mine("clouds/" + name + ".pcd"), &why))
+          << why;
     }
     ++checked;
   }

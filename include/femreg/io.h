@@ -16,7 +16,7 @@ enum class MeshFormat {
   kGmsh,       // MSH 1, 2.2 or 4.1 ASCII
   kTetGen,     // .node + .ele
   kMedit,      // .mesh
-  kVtkLegacy,  // "# vtk DataFile" ASCII unstructured grid
+  kVtkLegacy,  // "# vtk DataFile" unstructured grid, ASCII or BINARY
   kVtu,        // VTK XML UnstructuredGrid
 };
 const char* ToString(MeshFormat format);
@@ -25,8 +25,10 @@ const char* ToString(MeshFormat format);
 MeshFormat DetectMeshFormat(const std::string& path);
 
 // Reads a tetrahedral mesh of any supported format (cells other than tetrahedra are
-// skipped; physical tags become region ids) and finalizes it (FinalizeMesh). Errors name
-// the file and, for text formats, the line.
+// skipped; physical tags become region ids) and finalizes it (FinalizeMesh). Every count,
+// size and offset in a file is checked against the file's length before anything is
+// allocated or read; errors name the file and the line (text) or byte offset (binary), and
+// quote a bad token by at most 80 characters. `mesh` is left as it was on error.
 Status ReadTetMesh(const std::string& path, TetMesh* mesh);
 
 // A field written with a mesh: `values` has one row per vertex (point field) or per

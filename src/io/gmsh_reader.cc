@@ -47,7 +47,7 @@ class GmshReader {
       } else if (!s.empty() && s[0] == '$') {
         status = SkipSection(s);
       } else {
-        return in_.Error("unexpected '" + s + "' outside of a section");
+        return in_.Error("unexpected " + Quoted(s) + " outside of a section");
       }
       if (!status.ok()) return status;
     }
@@ -69,9 +69,9 @@ class GmshReader {
       version_ = 2;
     } else if (version.rfind("4", 0) == 0) {
       version_ = 4;
-      if (version != "4.1") return in_.Error("MSH version " + version + " is not supported (use 4.1)");
+      if (version != "4.1") return in_.Error("MSH version " + Quoted(version) + " is not supported (use 4.1)");
     } else {
-      return in_.Error("MSH version " + version + " is not supported (1, 2.2 and 4.1 are)");
+      return in_.Error("MSH version " + Quoted(version) + " is not supported (1, 2.2 and 4.1 are)");
     }
     return Expect("$EndMeshFormat");
   }
@@ -79,7 +79,7 @@ class GmshReader {
   Status Expect(const std::string& word) {
     Token t;
     if (!in_.Next(&t)) return in_.Error("unexpected end of file, expected " + word);
-    if (t.text != word) return in_.Error("expected " + word + ", found '" + t.text + "'");
+    if (t.text != word) return in_.Error("expected " + word + ", found " + Quoted(t.text));
     return Status::Ok();
   }
 
@@ -139,7 +139,9 @@ class GmshReader {
       if (!(s = in_.NextInt("the entity tag", &entity)).ok()) return s;
       if (!(s = in_.NextInt("the parametric flag", &parametric)).ok()) return s;
       if (!(s = in_.NextInt("the number of nodes in the block", &count)).ok()) return s;
-      std::vector<long long> tags(static_cast<size_t>(std::max(0LL, count)));
+      // Each node takes its tag and 3 coordinates.
+      if (!(s = in_.CheckCount("the number of nodes in the block", count, 4)).ok()) return s;
+      std::vector<long long> tags(static_cast<size_t>(count));
       for (auto& tag : tags) {
         if (!(s = in_.NextInt("a node tag", &tag)).ok()) return s;
       }
@@ -198,7 +200,7 @@ class GmshReader {
     for (int k = 0; k < 4; ++k) {
       long long tag;
       if (!ParseInt(nodes[k].text, &tag)) {
-        return in_.ErrorAt(line, "expected a node number, found '" + nodes[k].text + "'");
+        return in_.ErrorAt(line, "expected a node number, found " + Quoted(nodes[k].text));
       }
       auto it = node_index_.find(tag);
       if (it == node_index_.end()) {
@@ -227,7 +229,7 @@ class GmshReader {
       for (const Token& tok : rest) {
         long long v;
         if (!ParseInt(tok.text, &v)) {
-          return in_.ErrorAt(line, "expected an integer in the element, found '" + tok.text + "'");
+          return in_.ErrorAt(line, "expected an integer in the element, found " + Quoted(tok.text));
         }
         ints.push_back(v);
       }

@@ -10,6 +10,10 @@
 #include "femreg/status.h"
 
 namespace femreg {
+
+struct PointCloud;
+struct SensorPose;
+
 namespace internal {
 
 // A mesh as a reader found it, before unused vertices are dropped and it is finalized.
@@ -29,10 +33,11 @@ Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh);
 // "path:line: message" (or "path: message" when line <= 0).
 Status FileError(const std::string& path, int line, const std::string& message);
 
-// Reads a VTK XML unstructured grid (.vtu), or a legacy VTK file through VTK's own reader
-// (used for binary legacy files).
+// Reads a VTK XML unstructured grid (.vtu) through VTK, after CheckVtuFile.
 Status ReadVtuFile(const std::string& path, RawTetMesh* raw);
-Status ReadLegacyVtkWithVtk(const std::string& path, RawTetMesh* raw);
+// Checks a .vtu's structure against its length before VTK reads it: every count, size,
+// number of components and appended-data offset in range (vtu_check.cc).
+Status CheckVtuFile(const std::string& path);
 
 // Text readers (mesh_readers.cc).
 Status ReadGmshFile(const std::string& path, RawTetMesh* raw);
@@ -40,8 +45,17 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw);
 Status ReadMeditFile(const std::string& path, RawTetMesh* raw);
 Status ReadVtkLegacyFile(const std::string& path, RawTetMesh* raw);
 
+// Point clouds (cloud_readers.cc): PCD and PLY, every header count checked against the
+// file's length first. *sensor receives the PCD VIEWPOINT (may be null).
+Status ReadPcdFile(const std::string& path, PointCloud* cloud, SensorPose* sensor);
+Status ReadPlyFile(const std::string& path, PointCloud* cloud);
+
 // A fresh temporary file name in the folder of `path` (for write-and-rename).
 std::string TemporaryPathFor(const std::string& path);
+
+// A region id from a value read from a file, rounded to the nearest integer: false when it
+// is not finite or outside the range of int.
+bool RegionIdFrom(double value, int* id);
 
 // True when a cell/field name looks like a region id ("region", "tag", "material", ...).
 bool LooksLikeRegionName(const std::string& name);

@@ -1,5 +1,4 @@
 // MEDIT .mesh (ASCII): Vertices and Tetrahedra (reference -> region); other blocks skipped.
-#include <cmath>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -82,9 +81,10 @@ Status ReadMeditFile(const std::string& path, RawTetMesh* raw) {
       }
     } else {
       auto it = kSkipped.find(keyword);
-      if (it == kSkipped.end()) return in.Error("unknown MEDIT keyword '" + keyword + "'");
+      if (it == kSkipped.end()) return in.Error("unknown MEDIT keyword " + Quoted(keyword));
       if (it->second == 0) continue;
       if (!(s = in.NextInt("the number of entries", &n)).ok()) return s;
+      if (!(s = in.CheckCount(("the number of " + keyword).c_str(), n, it->second)).ok()) return s;
       for (long long i = 0; i < n * it->second; ++i) {
         double v;
         if (!(s = in.NextDouble(("an entry of " + keyword).c_str(), &v)).ok()) return s;

@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <sys/stat.h>
 
@@ -19,6 +20,16 @@ Status FileError(const std::string& path, int line, const std::string& message) 
   if (line > 0) os << ":" << line;
   os << ": " << message;
   return Status::Error(os.str());
+}
+
+bool RegionIdFrom(double value, int* id) {
+  const double rounded = std::round(value);
+  if (!std::isfinite(rounded) || rounded < static_cast<double>(std::numeric_limits<int>::min()) ||
+      rounded > static_cast<double>(std::numeric_limits<int>::max())) {
+    return false;
+  }
+  *id = static_cast<int>(rounded);
+  return true;
 }
 
 bool LooksLikeRegionName(const std::string& name) {
@@ -231,7 +242,9 @@ MeshFormat DetectMeshFormat(const std::string& path) {
   return MeshFormat::kUnknown;
 }
 
-Status ReadTetMesh(const std::string& path, TetMesh* mesh) {
+namespace {
+
+Status ReadTetMeshUnchecked(const std::string& path, TetMesh* mesh) {
   internal::RawTetMesh raw;
   Status status;
   const MeshFormat format = DetectMeshFormat(path);
@@ -259,6 +272,20 @@ Status ReadTetMesh(const std::string& path, TetMesh* mesh) {
   }
   if (!status.ok()) return status;
   return internal::FinishRawMesh(path, std::move(raw), mesh);
+}
+
+}  // namespace
+
+Status ReadTetMesh(const std::string& path, TetMesh* mesh) {
+  // The readers check every count against the file's length before they size anything;
+  // this is the last line for a file that is valid but larger than memory.
+  try {
+    return ReadTetMeshUnchecked(path, mesh);
+  } catch (const std::bad_alloc&) {
+    return Status::Error(path + ": out of memory while reading the mesh");
+  } catch (const std::length_error& e) {
+    return Status::Error(path + ": out of memory while reading the mesh (" + e.what() + ")");
+  }
 }
 
 }  // namespace femreg

@@ -23,7 +23,7 @@ Status ReadHeader(TokenStream* in, int min_count, std::vector<long long>* values
   values->assign(1, first);
   for (const Token& t : in->RestOfLine()) {
     long long v;
-    if (!ParseInt(t.text, &v)) return in->Error("expected an integer in the header, found '" + t.text + "'");
+    if (!ParseInt(t.text, &v)) return in->Error("expected an integer in the header, found " + Quoted(t.text));
     values->push_back(v);
   }
   while (static_cast<int>(values->size()) < min_count) values->push_back(0);
@@ -46,6 +46,11 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw) {
   const long long num_points = header[0];
   if (header[1] != 3) return nodes.Error("only 3-dimensional .node files are supported");
   if (num_points <= 0) return nodes.Error("no points");
+  // Attributes and boundary markers per point: a line holds at most what the file holds.
+  if (header[2] < 0 || header[2] > MaxItemsIn(nodes.remaining(), 1)) {
+    return nodes.Error("the number of point attributes is " + std::to_string(header[2]) +
+                       ", negative or more than the file holds");
+  }
   const long long num_values = 3 + header[2] + (header[3] != 0 ? 1 : 0);
   std::unordered_map<long long, int> index;
   for (long long i = 0; i < num_points; ++i) {
@@ -59,7 +64,7 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw) {
     std::array<double, 3> xyz;
     for (int k = 0; k < 3; ++k) {
       if (!ParseDouble(rest[k].text, &xyz[k])) {
-        return nodes.ErrorAt(line, "expected a coordinate, found '" + rest[k].text + "'");
+        return nodes.ErrorAt(line, "expected a coordinate, found " + Quoted(rest[k].text));
       }
       if (!std::isfinite(xyz[k])) {
         std::ostringstream os;
@@ -82,6 +87,11 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw) {
   if (nodes_per_tet != 4 && nodes_per_tet != 10) {
     return eles.Error("nodes per tetrahedron must be 4 or 10");
   }
+  if (num_attributes < 0 || num_attributes > MaxItemsIn(eles.remaining(), 1)) {
+    return eles.Error("the number of element attributes is " + std::to_string(num_attributes) +
+                      ", negative or more than the file holds");
+  }
+
   for (long long i = 0; i < num_tets; ++i) {
     long long id;
     if (!(s = eles.NextInt("an element index", &id)).ok()) return s;
@@ -94,7 +104,7 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw) {
     for (int k = 0; k < 4; ++k) {
       long long v;
       if (!ParseInt(rest[k].text, &v)) {
-        return eles.ErrorAt(line, "expected a point index, found '" + rest[k].text + "'");
+        return eles.ErrorAt(line, "expected a point index, found " + Quoted(rest[k].text));
       }
       auto it = index.find(v);
       if (it == index.end()) {
@@ -108,10 +118,10 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw) {
     int region = 0;
     if (num_attributes > 0) {
       double attribute;
-      if (!ParseDouble(rest[nodes_per_tet].text, &attribute) || !std::isfinite(attribute)) {
-        return eles.ErrorAt(line, "expected a region attribute, found '" + rest[nodes_per_tet].text + "'");
+      if (!ParseDouble(rest[nodes_per_tet].text, &attribute) || !RegionIdFrom(attribute, &region)) {
+        return eles.ErrorAt(line, "expected a region attribute (an integer in the range of int), found " +
+                                      Quoted(rest[nodes_per_tet].text));
       }
-      region = static_cast<int>(std::lround(attribute));
     }
     raw->tets.push_back(tet);
     raw->regions.push_back(region);

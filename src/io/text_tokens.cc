@@ -29,6 +29,34 @@ bool ParseDouble(const std::string& text, double* value) {
   return true;
 }
 
+std::string Quoted(const std::string& text, size_t max_chars) {
+  if (text.size() <= max_chars) return "'" + text + "'";
+  std::ostringstream os;
+  os << "'" << text.substr(0, max_chars) << "...' (" << text.size() << " bytes)";
+  return os.str();
+}
+
+long long MaxItemsIn(size_t bytes, long long tokens_each) {
+  if (tokens_each <= 0) tokens_each = 1;
+  // n items need n * tokens_each tokens and n * tokens_each - 1 separators at least.
+  return static_cast<long long>((bytes + 1) / 2) / tokens_each;
+}
+
+Status TokenStream::CheckCount(const char* what, long long count, long long tokens_each) const {
+  std::ostringstream os;
+  if (count < 0) {
+    os << what << " is negative (" << count << ")";
+    return Error(os.str());
+  }
+  const long long most = MaxItemsIn(remaining(), tokens_each);
+  if (count > most) {
+    os << what << " is " << count << ", more than the rest of the file can hold (" << remaining()
+       << " bytes, at most " << most << ")";
+    return Error(os.str());
+  }
+  return Status::Ok();
+}
+
 Status TokenStream::Open(const std::string& path, char comment) {
   path_ = path;
   comment_ = comment;
@@ -117,7 +145,7 @@ Status TokenStream::NextInt(const char* what, long long* value) {
   Token t;
   if (!Next(&t)) return Error(std::string("unexpected end of file while reading ") + what);
   if (!ParseInt(t.text, value)) {
-    return Error(std::string("expected ") + what + " (an integer), found '" + t.text + "'");
+    return Error(std::string("expected ") + what + " (an integer), found " + Quoted(t.text));
   }
   return Status::Ok();
 }
@@ -126,7 +154,7 @@ Status TokenStream::NextDouble(const char* what, double* value) {
   Token t;
   if (!Next(&t)) return Error(std::string("unexpected end of file while reading ") + what);
   if (!ParseDouble(t.text, value)) {
-    return Error(std::string("expected ") + what + " (a number), found '" + t.text + "'");
+    return Error(std::string("expected ") + what + " (a number), found " + Quoted(t.text));
   }
   return Status::Ok();
 }
@@ -138,7 +166,27 @@ Status TokenStream::NextWord(const char* what, std::string* value) {
   return Status::Ok();
 }
 
+Status TokenStream::TakeBytes(const char* what, size_t bytes, const char** data) {
+  while (pos_ < data_.size() && data_[pos_] != '\n') ++pos_;
+  if (pos_ < data_.size()) ++pos_;
+  binary_ = true;
+  if (bytes > data_.size() - pos_) {
+    std::ostringstream os;
+    os << what << " needs " << bytes << " bytes, the file has " << data_.size() - pos_
+       << " left (truncated file?)";
+    return Error(os.str());
+  }
+  *data = data_.data() + pos_;
+  pos_ += bytes;
+  return Status::Ok();
+}
+
 Status TokenStream::Error(const std::string& message) const {
+  if (binary_) {
+    std::ostringstream os;
+    os << "byte " << pos_ << ": " << message;
+    return FileError(path_, 0, os.str());
+  }
   return FileError(path_, last_line_, message);
 }
 

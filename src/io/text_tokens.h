@@ -41,6 +41,22 @@ class TokenStream {
   Status Error(const std::string& message) const;
   Status ErrorAt(int line, const std::string& message) const;
 
+  // Binary data after a text header line (legacy VTK BINARY): skips the rest of the line
+  // of the last token and its newline, then points *data at the next `bytes` bytes and
+  // moves past them. Refuses, naming the byte offset, when the file is shorter. From then
+  // on errors name byte offsets instead of lines (a line count is meaningless in binary).
+  Status TakeBytes(const char* what, size_t bytes, const char** data);
+  // The whole file, and the byte offset of the next unread character.
+  const std::string& data() const { return data_; }
+  size_t offset() const { return pos_; }
+
+  // Refuses a header count before anything is sized from it: negative, or more items of
+  // `tokens_each` whitespace-separated tokens than the rest of the file can hold (each
+  // token takes at least one character and one separator). `what` names the count.
+  Status CheckCount(const char* what, long long count, long long tokens_each) const;
+  // Bytes not yet read.
+  size_t remaining() const { return data_.size() - pos_; }
+
   const std::string& path() const { return path_; }
   int line() const { return last_line_; }
 
@@ -52,10 +68,18 @@ class TokenStream {
   int current_line_ = 1;  // line of data_[pos_]
   int last_line_ = 1;     // line of the last token returned
   char comment_ = '\0';
+  bool binary_ = false;  // errors name byte offsets
 };
 
 bool ParseInt(const std::string& text, long long* value);
 bool ParseDouble(const std::string& text, double* value);
+
+// `text` for an error message: whole when it has at most `max_chars` characters, else its
+// first `max_chars` and "... (N bytes)", so that a bad 4 MB token is not echoed whole.
+std::string Quoted(const std::string& text, size_t max_chars = 80);
+
+// How many items of `tokens_each` tokens `bytes` characters of text can hold at most.
+long long MaxItemsIn(size_t bytes, long long tokens_each);
 
 }  // namespace internal
 }  // namespace femreg

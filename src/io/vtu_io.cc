@@ -14,7 +14,6 @@
 #include <vtkPoints.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
@@ -28,6 +27,7 @@
 
 #include "femreg/io.h"
 #include "io/io_internal.h"
+#include "io/text_tokens.h"
 
 namespace femreg {
 namespace internal {
@@ -105,6 +105,7 @@ std::string Summarize(const std::string& text) {
     const size_t paren = line.find("): ");
     if (paren != std::string::npos && paren < 80) line = line.substr(paren + 3);
     if (line.rfind("Algorithm ", 0) == 0) break;  // then a dump of the pipeline request
+    if (line.size() > 200) line = line.substr(0, 200) + "...";
     if (joined.find(line) != std::string::npos) continue;
     if (joined.size() > 300) break;
     joined += (joined.empty() ? "" : "; ") + line;
@@ -161,8 +162,14 @@ Status GridToRaw(const std::string& path, vtkUnstructuredGrid* grid, RawTetMesh*
       tet[k] = static_cast<int>(v);
     }
     raw->tets.push_back(tet);
-    const double r = region != nullptr ? region->GetTuple1(c) : 0.0;
-    raw->regions.push_back(std::isfinite(r) ? static_cast<int>(std::lround(r)) : 0);
+    int id = 0;
+    if (region != nullptr && !RegionIdFrom(region->GetTuple1(c), &id)) {
+      std::ostringstream os;
+      os << "cell " << c << ": region value " << region->GetTuple1(c) << " in array "
+         << Quoted(region->GetName()) << " is not a region id (an integer in the range of int)";
+      return FileError(path, 0, os.str());
+    }
+    raw->regions.push_back(id);
   }
   if (raw->tets.empty()) return FileError(path, 0, "no tetrahedra (no cells of VTK type 10)");
   return Status::Ok();
@@ -178,7 +185,13 @@ Status ReadWithVtk(const std::string& path, RawTetMesh* raw) {
     vtkNew<ErrorObserver> observer;
     reader->AddObserver(vtkCommand::ErrorEvent, observer);
     reader->SetFileName(path.c_str());
-    reader->Update();
+    try {  // an allocation VTK sizes from the file can still fail
+      reader->Update();
+    } catch (const std::bad_alloc&) {
+      return FileError(path, 0, "VTK reader failed: out of memory (a count in the file is too large?)");
+    } catch (const std::exception& e) {
+      return FileError(path, 0, std::string("VTK reader failed: ") + e.what());
+    }
     errors = observer->text + capture.text();
     grid = reader->GetOutput();
   }
@@ -191,11 +204,9 @@ std::atomic<int> g_temp_counter{0};
 }  // namespace
 
 Status ReadVtuFile(const std::string& path, RawTetMesh* raw) {
+  Status s = CheckVtuFile(path);
+  if (!s.ok()) return s;
   return ReadWithVtk<vtkXMLUnstructuredGridReader>(path, raw);
-}
-
-Status ReadLegacyVtkWithVtk(const std::string& path, RawTetMesh* raw) {
-  return ReadWithVtk<vtkUnstructuredGridReader>(path, raw);
 }
 
 // A temporary name in the folder of `path`.

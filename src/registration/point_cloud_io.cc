@@ -1,4 +1,5 @@
-// Point clouds through PCL: PCD and PLY readers, the binary PCD writer and the filters.
+// Point clouds: the reader front end (PCD and PLY in io/cloud_readers.cc, text here), the
+// binary PCD writer (PCL) and the filters (PCL).
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>
 #include <pcl/features/normal_3d.h>
@@ -6,7 +7,6 @@
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/io/pcd_io.h>
-#include <pcl/io/ply_io.h>
 #include <pcl/point_types.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
@@ -14,23 +14,19 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "femreg/point_cloud.h"
+#include "io/io_internal.h"
+#include "io/text_tokens.h"
 
 namespace femreg {
 
 namespace {
 
 using PclCloud = pcl::PointCloud<pcl::PointNormal>;
-
-bool HasField(const pcl::PCLPointCloud2& blob, const std::string& name) {
-  for (const auto& f : blob.fields) {
-    if (f.name == name) return true;
-  }
-  return false;
-}
 
 // Labels ride through the PCL filters in the (otherwise unused) curvature field.
 void FromPcl(const PclCloud& in, bool with_normals, PointCloud* out, bool with_labels = false) {
@@ -69,47 +65,6 @@ PclCloud::Ptr ToPcl(const PointCloud& in) {
   return out;
 }
 
-Status ReadBlob(const std::string& path, bool ply, PointCloud* cloud) {
-  pcl::PCLPointCloud2 blob;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int rc = -1;
-  try {  // PCL throws when it cannot open or parse the file
-    if (ply) {
-      pcl::PLYReader reader;
-      int version = 0;
-      rc = reader.read(path, blob, origin, orientation, version);
-    } else {
-      pcl::PCDReader reader;
-      int version = 0;
-      rc = reader.read(path, blob, origin, orientation, version);
-    }
-  } catch (const std::exception&) {
-    rc = -1;
-  }
-  if (rc < 0) {
-    return Status::Error(path + ": could not read as " + (ply ? "PLY" : "PCD") +
-                         " (truncated or malformed file)");
-  }
-  if (!HasField(blob, "x") || !HasField(blob, "y") || !HasField(blob, "z")) {
-    return Status::Error(path + ": the cloud has no x, y, z fields");
-  }
-  const bool normals =
-      HasField(blob, "normal_x") && HasField(blob, "normal_y") && HasField(blob, "normal_z");
-  PclCloud pcl_cloud;
-  pcl::fromPCLPointCloud2(blob, pcl_cloud);
-  FromPcl(pcl_cloud, normals, cloud);
-  if (HasField(blob, "label")) {
-    pcl::PointCloud<pcl::PointXYZL> labelled;
-    pcl::fromPCLPointCloud2(blob, labelled);
-    cloud->labels.resize(static_cast<Eigen::Index>(labelled.size()));
-    for (size_t i = 0; i < labelled.size(); ++i) {
-      cloud->labels(static_cast<Eigen::Index>(i)) = static_cast<int>(labelled[i].label);
-    }
-  }
-  return Status::Ok();
-}
-
 Status ReadText(const std::string& path, PointCloud* cloud) {
   std::ifstream in(path);
   if (!in) return Status::Error(path + ": cannot open");
@@ -132,7 +87,7 @@ Status ReadText(const std::string& path, PointCloud* cloud) {
       const double v = std::strtod(token.c_str(), &end);
       if (end == token.c_str() || *end != '\0') {
         std::ostringstream os;
-        os << path << ":" << line_no << ": not a number: '" << token << "'";
+        os << path << ":" << line_no << ": not a number: " << internal::Quoted(token);
         return Status::Error(os.str());
       }
       values.push_back(v);
@@ -187,8 +142,10 @@ int DropNonFinite(PointCloud* cloud) {
   return dropped;
 }
 
-Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite_dropped) {
-  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+namespace {
+
+Status ReadPointCloudUnchecked(const std::string& path, PointCloud* cloud, int* nonfinite_dropped,
+                               SensorPose* sensor) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::Error(path + ": cannot open");
   std::string head(256, '\0');
@@ -196,11 +153,17 @@ Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite
   head.resize(static_cast<size_t>(in.gcount()));
   in.close();
   Status status;
+  if (sensor != nullptr) *sensor = SensorPose();
+  // A PCD header is recognized by any of its keywords, so that one with a line missing
+  // (FIELDS deleted, say) is refused as a PCD rather than read as text.
+  auto pcd_key = [&](const char* key) {
+    return head.compare(0, std::strlen(key), key) == 0 || head.find(std::string("\n") + key) != std::string::npos;
+  };
   if (head.compare(0, 3, "ply") == 0) {
-    status = ReadBlob(path, true, cloud);
-  } else if (head.find("# .PCD") != std::string::npos ||
-             head.compare(0, 7, "VERSION") == 0 || head.find("\nFIELDS") != std::string::npos) {
-    status = ReadBlob(path, false, cloud);
+    status = internal::ReadPlyFile(path, cloud);
+  } else if (head.find("# .PCD") != std::string::npos || pcd_key("VERSION") || pcd_key("FIELDS") ||
+             pcd_key("SIZE") || pcd_key("TYPE") || pcd_key("WIDTH") || pcd_key("DATA")) {
+    status = internal::ReadPcdFile(path, cloud, sensor);
   } else {
     status = ReadText(path, cloud);
   }
@@ -208,6 +171,24 @@ Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite
   const int dropped = DropNonFinite(cloud);
   if (nonfinite_dropped) *nonfinite_dropped = dropped;
   return Status::Ok();
+}
+
+}  // namespace
+
+Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite_dropped,
+                      SensorPose* sensor) {
+  // The readers check every count against the file first; this catches a file that is
+  // valid but larger than memory.
+  try {
+    PointCloud read;
+    Status status = ReadPointCloudUnchecked(path, &read, nonfinite_dropped, sensor);
+    if (status.ok()) *cloud = std::move(read);
+    return status;
+  } catch (const std::bad_alloc&) {
+    return Status::Error(path + ": out of memory while reading the point cloud");
+  } catch (const std::length_error& e) {
+    return Status::Error(path + ": out of memory while reading the point cloud (" + e.what() + ")");
+  }
 }
 
 Status WritePointCloud(const std::string& path, const PointCloud& cloud) {

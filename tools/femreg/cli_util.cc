@@ -41,6 +41,11 @@ std::string JsonNumber(double v) {
   return buf;
 }
 
+std::string CapForMessage(const std::string& text, size_t max_chars) {
+  if (text.size() <= max_chars) return text;
+  return text.substr(0, max_chars) + "... (" + std::to_string(text.size()) + " bytes)";
+}
+
 Status PrepareOutputDir(const std::string& dir, bool force) {
   std::error_code ec;
   if (fs::exists(dir, ec)) {

@@ -17,6 +17,10 @@ std::string JsonString(const std::string& s);
 // A JSON number (null for NaN or infinity).
 std::string JsonNumber(double v);
 
+// `text` for a message, at most `max_chars` characters of it: longer text is cut and
+// "... (N bytes)" added, so that a 4 MB bad token is not echoed whole.
+std::string CapForMessage(const std::string& text, size_t max_chars = 80);
+
 // Makes `dir` (and parents). A non-empty existing folder is refused unless `force`.
 Status PrepareOutputDir(const std::string& dir, bool force);
 

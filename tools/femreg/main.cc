@@ -2,8 +2,22 @@
 // through the functions declared in commands.h.
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <new>
+#include <stdexcept>
 
+#include "cli_util.h"
 #include "commands.h"
+
+namespace {
+
+// "femreg NAME" for the subcommand that was running ("femreg" before one was chosen).
+std::string CommandName(const CLI::App& app) {
+  std::string name = "femreg";
+  for (const CLI::App* sub : app.get_subcommands()) name += " " + sub->get_name();
+  return name;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -12,10 +26,28 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "femreg 0.1.0");
   femreg::cli::RegisterCommands(&app);
+  // The subcommands run inside parse(). Readers refuse what a file cannot hold before they
+  // allocate, and return what they cannot read as a Status; what still escapes as an
+  // exception (memory exhausted by a valid but huge input, a library's own throw) ends the
+  // command here with a message instead of std::terminate.
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const std::bad_alloc&) {
+    std::cerr << CommandName(app) << ": out of memory (an input larger than this machine can hold?)\n";
+    return 2;
+  } catch (const std::length_error& e) {
+    std::cerr << CommandName(app) << ": a size is too large (" << femreg::cli::CapForMessage(e.what())
+              << ")\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << CommandName(app) << ": unexpected error: " << femreg::cli::CapForMessage(e.what())
+              << "\n";
+    return 2;
+  } catch (...) {
+    std::cerr << CommandName(app) << ": unexpected error\n";
+    return 2;
   }
   return femreg::cli::ExitCode();
 }
