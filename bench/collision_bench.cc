@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/scene.h"
 #include "femreg/collision.h"
 #include "femreg/point_cloud.h"
 #include "femreg/tracker.h"

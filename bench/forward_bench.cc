@@ -7,6 +7,7 @@
 
 #include <vector>
 
+#include "femreg/scene.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/io.h"

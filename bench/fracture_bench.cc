@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/scene.h"
 #include "femreg/fracture.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"

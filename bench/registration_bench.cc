@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/scene.h"
 #include "femreg/experiment.h"
 #include "femreg/point_cloud.h"
 #include "femreg/tracker.h"

@@ -7,7 +7,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "femreg/fem.h"
@@ -253,6 +255,71 @@ TEST(PolarRotation, RecoversTheRotationOfRotationTimesStretch) {
     const Eigen::Matrix3d R = PolarRotation(Q * S);
     ExpectProperRotation(R);
     EXPECT_LT((R - Q).norm(), 1e-8) << "trial " << trial;
+  }
+}
+
+// The warm-started Newton rotation is PolarRotation's (the SVD's) to round-off: on random F
+// of either sign of det, flat F (rank 2 and rank 1), inverted elements, from a close start,
+// the identity and a random one.
+TEST(PolarRotation, WarmStartedNewtonMatchesTheSvd) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto small_rotation = [&](double angle) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    return Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+  };
+  std::vector<std::pair<std::string, Eigen::Matrix3d>> cases;
+  for (int trial = 0; trial < 300; ++trial) {
+    Eigen::Matrix3d F;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) F(i, j) = u(rng);
+    cases.emplace_back("random " + std::to_string(trial), F);
+    // Flat: one singular value zero (a tetrahedron squashed onto a plane).
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Vector3d sigma = svd.singularValues();
+    sigma(2) = 0.0;
+    cases.emplace_back("flat " + std::to_string(trial),
+                       svd.matrixU() * sigma.asDiagonal() * svd.matrixV().transpose());
+    // Inverted: a rotation times a stretch with one negative entry, away from the tie.
+    const Eigen::Matrix3d Q = RandomRotation(&rng);
+    const Eigen::Vector3d s(1.0 + 0.5 * std::abs(u(rng)), 0.6 + 0.3 * std::abs(u(rng)),
+                            -0.4 * std::abs(u(rng)));
+    cases.emplace_back("inverted " + std::to_string(trial), Q * s.asDiagonal() * RandomRotation(&rng));
+  }
+  cases.emplace_back("rank 1", Eigen::Vector3d(1, 2, 3) * Eigen::RowVector3d(0.5, -1, 2));
+  cases.emplace_back("zero", Eigen::Matrix3d::Zero());
+  cases.emplace_back("minus identity (the tie)", -Eigen::Matrix3d::Identity());
+  for (const auto& [name, F] : cases) {
+    const Eigen::Matrix3d exact = PolarRotation(F);
+    const double scale = std::max(1.0, F.norm());
+    for (const Eigen::Matrix3d& start :
+         {Eigen::Matrix3d(exact * small_rotation(0.05)), Eigen::Matrix3d(Eigen::Matrix3d::Identity()),
+          RandomRotation(&rng)}) {
+      const Eigen::Matrix3d R = PolarRotation(F, start);
+      ExpectProperRotation(R);
+      // The objective is what is unique (at the tie several rotations share its maximum).
+      EXPECT_NEAR((R.transpose() * F).trace(), (exact.transpose() * F).trace(), 1e-13 * scale) << name;
+      const bool unique = name.rfind("minus", 0) != 0 && name != "rank 1" && name != "zero";
+      if (unique) {
+        EXPECT_LT((R - exact).cwiseAbs().maxCoeff(), 1e-10) << name;
+      }
+    }
+  }
+}
+
+// Warm starts chained over many steps (an element turning slowly, frame after frame) keep
+// the rotation orthonormal to round-off.
+TEST(PolarRotation, ChainedWarmStartsStayOrthonormal) {
+  const Eigen::Matrix3d S = Eigen::Vector3d(1.2, 0.9, 0.7).asDiagonal();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  for (int step = 1; step <= 20000; ++step) {
+    const Eigen::Matrix3d Q =
+        Eigen::AngleAxisd(1e-3 * step, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    R = PolarRotation(Q * S, R);
+    if (step % 5000 == 0) {
+      EXPECT_LT((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-14);
+      EXPECT_LT((R - Q).cwiseAbs().maxCoeff(), 1e-12) << step;
+    }
   }
 }
 

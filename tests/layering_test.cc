@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 // rank; modules of the same rank do not include each other.
 const std::map<std::string, int> kRank = {
     {"mesh", 0},          // tetrahedral meshes, topology, Status
+    {"parallel", 0},      // the thread count every parallel part follows
     {"io", 1},            // mesh files and generators
     {"geometry", 1},      // closest points, AABB tree, nearest-point search
     {"fem", 2},           // materials, element rest data, the elastic models

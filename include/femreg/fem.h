@@ -69,6 +69,12 @@ ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Materia
 // Irving et al. 2004 so that det R = +1 also for inverted and flat F (S then has a
 // negative or zero entry). Always finite for finite F.
 Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F);
+// The same rotation (to round-off), found by Newton's method on SO(3) from `start` (e.g. the
+// element's rotation at the previous step): R maximizes tr(R^T F) over rotations, which is
+// the rotation above, also for inverted and flat F. Two or three 3x3 steps from a close
+// start instead of an SVD; falls back to the SVD when the start is far or F is near the
+// inverted tie (two equal singular values with the sign on one of them).
+Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& start);
 
 // Deformation gradient F = D_s D_m^-1 of an element at positions x (3 by 4).
 Eigen::Matrix3d DeformationGradient(const Eigen::Matrix<double, 3, 4>& x,

@@ -276,6 +276,7 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   fracture.max_splits_per_iteration = 16;
   fracture.max_splits_per_frame = 400;
   ForwardOptions forward;
+  forward.num_threads = 1;  // one summation order: the same bytes on every machine load
   forward.max_iterations = 60;
   DepthSensorOptions sensor_options;
   sensor_options.camera = s.camera;

@@ -9,11 +9,8 @@
 #include <map>
 #include <sstream>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "datasets/scene_numbers.h"
+#include "parallel/threads.h"
 #include "femreg/datasets.h"
 #include "femreg/eval.h"
 #include "femreg/forward.h"
@@ -34,25 +31,6 @@ Eigen::Matrix3d RotationMatrix(const Eigen::Vector3d& r) {
   return angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix()
                    : Eigen::Matrix3d::Identity();
 }
-
-// Runs OpenMP regions on one thread while alive, so that reductions sum in one order.
-class SingleThreaded {
- public:
-  SingleThreaded() {
-#ifdef _OPENMP
-    previous_ = omp_get_max_threads();
-    omp_set_num_threads(1);
-#endif
-  }
-  ~SingleThreaded() {
-#ifdef _OPENMP
-    omp_set_num_threads(previous_);
-#endif
-  }
-
- private:
-  int previous_ = 1;
-};
 
 // A box as a closed triangle surface (12 triangles).
 void BoxSurface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Vertices* points,
@@ -156,7 +134,8 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   const int num_frames = frames > 0 ? frames : s.frames;
   std::string error;
   if (!s.sensor.IsValid(&error)) return Status::Error(scene.path + ": synth." + error);
-  SingleThreaded single_threaded;
+  // One thread (OpenMP and BLAS): sums in one order, the same bytes on every run.
+  const ScopedThreads one_thread(1);
 
   // The tracked mesh and the ground truth mesh (the same object, refined or replaced).
   TetMesh coarse, fine;
@@ -298,7 +277,9 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
       }
     }
     ForwardSummary summary;
-    status = SolveQuasiStatic(problem, scene.forward, &model, &fine, &summary);
+    ForwardOptions forward = scene.forward;
+    forward.num_threads = 1;
+    status = SolveQuasiStatic(problem, forward, &model, &fine, &summary);
     if (!status.ok()) return Status::Error(scene.path + ": frame " + std::to_string(f) + ": " + status.message());
     if (!summary.IsSolutionUsable()) {
       return Status::Error(scene.path + ": frame " + std::to_string(f) +

@@ -1,5 +1,6 @@
 #include "femreg/fem.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -133,6 +134,49 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F) {
   return R;
 }
 
+Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& start) {
+  // Newton's method on SO(3) for the R that maximizes f(R) = tr(R^T F), R <- R exp([w]):
+  // with A = R^T F, f(R exp([w])) = f(R) + g.w - 1/2 w^T M w + O(|w|^3), where
+  // g = 2 axial(skew(A)) and M = tr(A) I - sym(A), so w = M^-1 g. At the maximum A = R^T F
+  // is symmetric (the stretch S) and M's eigenvalues are the sums of pairs of its
+  // eigenvalues, s1 + s2, s1 + s3, s2 + s3 with s3 < 0 for an inverted F: M is positive
+  // definite, and the maximum unique, unless an inverted F has s2 = |s3| (then the SVD's
+  // choice is as good as any other, and is taken).
+  if (!F.allFinite()) return PolarRotation(F);
+  const double scale = F.cwiseAbs().maxCoeff();
+  if (scale == 0.0) return PolarRotation(F);
+  Eigen::Matrix3d R = start;
+  for (int iteration = 0; iteration < 12; ++iteration) {
+    const Eigen::Matrix3d A = R.transpose() * F;
+    const Eigen::Vector3d g(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
+    Eigen::Matrix3d M = -0.5 * (A + A.transpose());
+    M.diagonal().array() += A.trace();
+    // M must be well inside the positive definite cone: its Cholesky pivots, relative to
+    // F's size, say how far (an inverted element near the tie, or a start past a saddle).
+    const Eigen::LLT<Eigen::Matrix3d> llt(M);
+    if (llt.info() != Eigen::Success || llt.matrixLLT().diagonal().minCoeff() < 1e-2 * std::sqrt(scale)) {
+      return PolarRotation(F);
+    }
+    const Eigen::Vector3d w = llt.solve(g);
+    const double angle = w.norm();
+    if (!(angle < 1.0)) return PolarRotation(F);  // far from the start: Newton's basin unclear
+    if (angle > 0.0) {  // R <- R exp([w]) (Rodrigues)
+      Eigen::Matrix3d W;
+      W << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+      const double a = std::sin(angle) / angle;
+      const double b = (1.0 - std::cos(angle)) / (angle * angle);
+      R = R * (Eigen::Matrix3d::Identity() + a * W + b * W * W);
+    }
+    // Quadratic convergence: the error after a step of size |w| is O(|w|^2).
+    if (angle <= 1e-9) {
+      // One Newton-Schulz step restores orthonormality to round-off (the products above
+      // drift by an ulp each, and warm starts chain them frame after frame).
+      return R * (1.5 * Eigen::Matrix3d::Identity() - 0.5 * R.transpose() * R);
+    }
+  }
+  return PolarRotation(F);
+}
+
 Eigen::Matrix3d DeformationGradient(const Eigen::Matrix<double, 3, 4>& x,
                                     const Eigen::Matrix3d& dm_inv) {
   Eigen::Matrix3d Ds;
@@ -251,7 +295,8 @@ void ElasticModel::UpdateRotations(const Vertices& x) {
   for (int e = 0; e < n; ++e) {
     Eigen::Matrix<double, 3, 4> xe;
     for (int k = 0; k < 4; ++k) xe.col(k) = x.row(tets_(e, k)).transpose();
-    rotations_[e] = PolarRotation(DeformationGradient(xe, rest_[e].dm_inv));
+    // Warm-started from the rotation before: a few Newton steps instead of an SVD.
+    rotations_[e] = PolarRotation(DeformationGradient(xe, rest_[e].dm_inv), rotations_[e]);
   }
 }
 

@@ -9,8 +9,6 @@
 // scattered into a preallocated matrix every iteration.
 #include "femreg/forward.h"
 
-#include <dlfcn.h>
-
 #include <Eigen/CholmodSupport>
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -23,9 +21,8 @@
 #include <limits>
 #include <memory>
 #include <sstream>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+
+#include "parallel/threads.h"
 
 namespace femreg {
 
@@ -198,48 +195,6 @@ class Factorization : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
 // mode leaves a pivot at round-off level, about sqrt(eps) ~ 1e-8 of the largest.
 constexpr double kMinReciprocalCondition = 1e-7;
 
-int ResolveThreads(int requested) {
-  if (requested > 0) return requested;
-#ifdef _OPENMP
-  return std::max(1, omp_get_max_threads());
-#else
-  return 1;
-#endif
-}
-
-// Holds OpenBLAS (the BLAS under CHOLMOD's supernodal factorization, which otherwise runs on
-// every core) to `threads` while alive, and restores its setting after. Looked up at run
-// time, so that another BLAS (reference, ATLAS) links as well; then it does nothing. Its
-// idle thread pool is made when the library loads; this limits how many threads work.
-class ScopedBlasThreads {
- public:
-  explicit ScopedBlasThreads(int threads) {
-    using Get = int (*)();
-    const auto get = reinterpret_cast<Get>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
-    set_ = reinterpret_cast<Set>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-    if (get == nullptr || set_ == nullptr) {
-      set_ = nullptr;
-      return;
-    }
-    previous_ = get();
-    if (previous_ == threads) {
-      set_ = nullptr;
-    } else {
-      set_(threads);
-    }
-  }
-  ~ScopedBlasThreads() {
-    if (set_ != nullptr) set_(previous_);
-  }
-  ScopedBlasThreads(const ScopedBlasThreads&) = delete;
-  ScopedBlasThreads& operator=(const ScopedBlasThreads&) = delete;
-
- private:
-  using Set = void (*)(int);
-  Set set_ = nullptr;
-  int previous_ = 1;
-};
-
 // The element matrices the reduced system can be filled with.
 enum class ElementMatrix {
   kLinear,     // K_e
@@ -258,7 +213,7 @@ class QuasiStaticSolver {
         model_(*model),
         mesh_(*mesh),
         summary_(*summary),
-        threads_(ResolveThreads(options.num_threads)) {
+        threads_(ResolveThreadCount(options.num_threads)) {
     summary_.num_threads = threads_;
   }
 
@@ -1137,7 +1092,7 @@ Status SolveQuasiStatic(const ForwardProblem& problem, const ForwardOptions& opt
   *summary = ForwardSummary();
   QuasiStaticSolver solver(problem, options, model, mesh, summary);
   {
-    const ScopedBlasThreads blas_threads(summary->num_threads);
+    const ScopedThreads threads(summary->num_threads);
     if (solver.Validate() && solver.Setup()) solver.Run();
   }
   // Leave the model's rotations consistent with the result.
@@ -1161,7 +1116,7 @@ Status EvaluateForwardSystem(const ForwardProblem& problem, const ForwardOptions
   ForwardSummary summary;
   TetMesh copy = mesh;  // the solver's mesh is writable; this one is not written
   QuasiStaticSolver solver(problem, options, &model, &copy, &summary);
-  const ScopedBlasThreads blas_threads(summary.num_threads);
+  const ScopedThreads threads(summary.num_threads);
   if (!solver.Validate() || !solver.Setup()) {
     return Status::Error(std::string("EvaluateForwardSystem: ") + ToString(summary.termination) +
                          ": " + summary.message);

@@ -1,0 +1,96 @@
+// The sparse Cholesky choices of the fast back end, measured on the system it solves: the
+// corotational stiffness (R = I) of a box mesh plus a diagonal (masses, data springs), 3 #V
+// by 3 #V with full 3x3 vertex blocks. Simplicial and supernodal CHOLMOD, the factorization
+// and one solve, and one product H p (what an iteration of PCG costs besides a solve).
+// Run single-threaded to compare the kernels, then with more threads:
+//   bench/femreg_linear_solver_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only
+#include <benchmark/benchmark.h>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCore>
+#include <vector>
+
+#include "femreg/scene.h"
+#include "femreg/fem.h"
+#include "femreg/io.h"
+#include "parallel/threads.h"
+
+namespace {
+
+// A box of about `vertices` vertices, 5:1:1 like the demo's beam.
+Eigen::SparseMatrix<double> BoxSystem(int vertices) {
+  // (5n + 1)(n + 1)^2 ~ vertices
+  int n = 1;
+  while ((5 * (n + 1) + 1) * (n + 2) * (n + 2) <= vertices) ++n;
+  const femreg::TetMesh mesh = femreg::MakeBox(Eigen::Vector3d(0.5, 0.1, 0.1), 5 * n, n, n);
+  femreg::Material material;
+  material.youngs_modulus = 5e4;
+  femreg::ElasticModel model;
+  model.Build(mesh, femreg::ElasticModelType::kCorotational, material);
+  std::vector<Eigen::Triplet<double>> triplets;
+  model.AddStiffnessTriplets(&triplets);
+  const int dofs = 3 * mesh.num_vertices();
+  for (int i = 0; i < dofs; ++i) triplets.emplace_back(i, i, 1.0);
+  Eigen::SparseMatrix<double> H(dofs, dofs);
+  H.setFromTriplets(triplets.begin(), triplets.end());
+  H.makeCompressed();
+  return H;
+}
+
+template <int kMode>
+void Factorize(benchmark::State& state) {
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
+  femreg::ScopedThreads threads(static_cast<int>(state.range(1)));
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  llt.setMode(static_cast<Eigen::CholmodMode>(kMode));
+  llt.analyzePattern(H);
+  for (auto _ : state) {
+    llt.factorize(H);
+    benchmark::DoNotOptimize(llt.info());
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+}
+
+template <int kMode>
+void Solve(benchmark::State& state) {
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
+  femreg::ScopedThreads threads(static_cast<int>(state.range(1)));
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> llt;
+  llt.setMode(static_cast<Eigen::CholmodMode>(kMode));
+  llt.compute(H);
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(H.rows());
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    x = llt.solve(b);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+}
+
+void Product(benchmark::State& state) {
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
+  const Eigen::VectorXd p = Eigen::VectorXd::Ones(H.rows());
+  Eigen::VectorXd y(H.rows());
+  for (auto _ : state) {
+    y.noalias() = H * p;
+    benchmark::DoNotOptimize(y.data());
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+}
+
+void Sizes(benchmark::internal::Benchmark* b) {
+  for (int v : {1000, 4000, 16000, 64000}) {
+    for (int t : {1, 2}) b->Args({v, t});
+  }
+  b->ArgNames({"vertices", "threads"})->Unit(benchmark::kMillisecond);
+}
+
+BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
+BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
+BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
+BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
+BENCHMARK(Product)->Apply(Sizes);
+
+}  // namespace
+
+BENCHMARK_MAIN();
