@@ -17,22 +17,47 @@ namespace femreg {
 
 struct BackendOptions {
   SolverBackend type = SolverBackend::kCeres;
-  int max_iterations = 10;              // Ceres iterations / fast back end factorizations
+  int max_iterations = 10;              // Ceres iterations / fast back end Gauss-Newton steps
   // Stop when a step changes the energy by less than this fraction (Ceres' function
   // tolerance).
   double relative_tolerance = 1e-6;
+  // Fast back end: stop when no vertex moved more than this in a step (m; 0: off). The
+  // tracker sets it from the mesh's edge length (solver.step_tolerance).
+  double step_tolerance = 0.0;
+  // Fast back end: a step is first solved by conjugate gradients preconditioned with the last
+  // factorization (of an earlier, similar system), for at most this many iterations; only
+  // if that does not converge is the system factorized anew. 0: factorize every step.
+  int max_pcg_iterations = 10;
   int num_threads = 1;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;  // Ceres
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;  // Ceres
 };
 
+// Why an inner solve stopped.
+enum class StopReason {
+  kNotRun,
+  kGradient,       // the gradient fell to 1e-9 of where it started (or to zero)
+  kStep,           // no vertex moved more than step_tolerance
+  kEnergy,         // the energy fell by less than relative_tolerance
+  kNoDecrease,     // no step along the descent direction lowered the energy (round-off)
+  kMaxIterations,
+  kTimeLimit,
+  kSolver,         // Ceres' own criteria (its message says which)
+  kFailure,
+};
+const char* ToString(StopReason reason);
+
 struct SolveReport {
   bool success = false;
   std::string message = "Backend::Solve was not called.";
+  StopReason stop = StopReason::kNotRun;
   int iterations = 0;        // steps taken, accepted and rejected
   int factorizations = 0;    // numeric factorizations of the system
-  int linear_solves = 0;
+  int linear_solves = 0;     // direct solves with a factor (PCG's preconditioner included)
+  int pcg_iterations = 0;    // conjugate-gradient iterations on steps solved that way
   int pattern_rebuilds = 0;  // new symbolic analyses (a widened or new sparsity pattern)
+  // Where the time went (s). Ceres: linear_solve_s includes its factorizations.
+  double assemble_s = 0.0, factorize_s = 0.0, linear_solve_s = 0.0, evaluate_s = 0.0;
 };
 
 class Backend {

@@ -97,20 +97,27 @@ struct WeightOptions {
 
 struct SolverOptions {
   int max_outer_iterations = 5;          // correspondences and rotations refreshed per outer iteration
-  int max_inner_iterations = 10;         // Ceres iterations per outer iteration
+  int max_inner_iterations = 10;         // Ceres iterations / fast Gauss-Newton steps per outer iteration
   // An inner solve stops when a step changes the energy by less than this fraction (Ceres'
   // function tolerance).
   double inner_tolerance = 1e-6;
-  // Stop when the energy after an outer iteration changed by less than this fraction
-  // from the previous outer iteration.
+  // The frame stops when an outer iteration changed the energy by less than this fraction
+  // from the previous outer iteration...
   double relative_energy_tolerance = 1e-3;
+  // ... or moved no vertex farther than this fraction of the mesh's mean surface edge length.
+  // Inner solves of the fast back end stop at a tenth of it.
+  double step_tolerance = 0.01;
   double time_budget_s = 0.0;            // per frame; 0 = none
-  // Which back end minimizes each outer iteration. The fast one does not take contacts
-  // (effects.collision): such scenes use Ceres whatever this says.
+  // Which back end minimizes each outer iteration (both take every term, contacts included).
   SolverBackend backend = SolverBackend::kCeres;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
-  int num_threads = 1;
+  // Threads of every parallel part (element loops, correspondences, CHOLMOD's BLAS, Ceres);
+  // 0: the machine's hardware threads.
+  int num_threads = 0;
+  // Fast back end: conjugate-gradient iterations preconditioned by the kept factorization
+  // before a step factorizes anew (0: factorize every step).
+  int max_pcg_iterations = 10;
   // Start each frame from a constant-velocity extrapolation of the last two frames.
   bool predict_motion = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
@@ -148,6 +155,7 @@ struct OuterIteration {
   int inner_iterations = 0;
   int contacts = 0;             // contact residuals added (collision on)
   double rms_residual = 0.0;    // m, over kept pairs, after the solve
+  double max_move = 0.0;        // m, the largest vertex move of the solve
   double time_s = 0.0;
 };
 
@@ -155,6 +163,9 @@ struct OuterIteration {
 struct StageTimes {
   double preprocess = 0.0, prealign = 0.0, rotations = 0.0, correspondences = 0.0,
          build = 0.0, solve = 0.0, total = 0.0;
+  // Inside solve: assembling gradient and system, factorizations, linear solves (PCG and
+  // triangular solves; Ceres: its whole linear solver), energy evaluations.
+  double assembly = 0.0, factorization = 0.0, linear_solve = 0.0, evaluation = 0.0;
   double collision = 0.0;  // contact detection (refit, broad and narrow phase)
   double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
 };
@@ -169,6 +180,10 @@ struct FrameSummary {
   int points_used = 0;            // after preprocessing
   EnergyTerms initial, final;
   int outer_iterations = 0, inner_iterations = 0;
+  int factorizations = 0, linear_solves = 0, pcg_iterations = 0;
+  // Which criterion ended the frame: "step" (solver.step_tolerance), "energy"
+  // (solver.relative_energy_tolerance), or the termination's name otherwise.
+  std::string stopped_by;
   int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
   double rms_residual = 0.0;      // m
   // Collision (effects.collision): active contacts (penetration delta = D - gap > 0) at the

@@ -4,6 +4,8 @@
 #include <memory>
 #include <vector>
 
+#include "parallel/threads.h"
+
 namespace femreg {
 namespace ceres_backend {
 
@@ -49,7 +51,7 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   ceres::Solver::Options solver_options;
   solver_options.max_num_iterations = options_.max_iterations;
   solver_options.function_tolerance = options_.relative_tolerance;
-  solver_options.num_threads = options_.num_threads;
+  solver_options.num_threads = ResolveThreadCount(options_.num_threads);
   solver_options.logging_type = ceres::SILENT;
   solver_options.minimizer_progress_to_stdout = false;
   solver_options.trust_region_strategy_type = options_.trust_region == TrustRegion::kDogleg
@@ -77,6 +79,7 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   }
   const Vertices start = *x;
   ceres::Solver::Summary summary;
+  const ScopedThreads threads(options_.num_threads);  // also the BLAS under CHOLMOD
   ceres::Solve(solver_options, &ceres_problem, &summary);
   report.success = summary.IsSolutionUsable() && x->allFinite();
   report.message = "Ceres: " + summary.message;
@@ -84,6 +87,10 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   report.linear_solves = summary.num_linear_solves;
   report.factorizations =
       options_.linear_solver == LinearSolver::kSparseNormalCholesky ? summary.num_linear_solves : 0;
+  report.stop = report.success ? StopReason::kSolver : StopReason::kFailure;
+  report.assemble_s = summary.jacobian_evaluation_time_in_seconds;
+  report.evaluate_s = summary.residual_evaluation_time_in_seconds;
+  report.linear_solve_s = summary.linear_solver_time_in_seconds;
   if (!report.success) *x = start;
   return report;
 }

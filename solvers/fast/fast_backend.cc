@@ -1,3 +1,22 @@
+// The fast back end: Gauss-Newton on the frame's energy with a sparse Cholesky factor that
+// is kept and reused.
+//
+// A step solves H dx = -g, H the Gauss-Newton Hessian (sum of w rho' J^T J over the blocks),
+// g the gradient. The factorization of H is what costs; H changes little from one step to
+// the next (robust weights), from one outer iteration to the next (rotations, pairs) and
+// from one frame to the next. So a step is first solved by conjugate gradients
+// preconditioned with the last factor: when that factor is of a similar matrix, a few
+// iterations (each a product with H and two triangular solves) reach the tolerance; when
+// not, H is factorized and the factor kept for the steps after. The symbolic analysis is
+// done once per sparsity pattern (the mesh's topology, widened by contact stencils).
+//
+// Steps are taken with a backtracking line search on the energy (the Gauss-Newton direction
+// is a descent direction: H is positive semi-definite by construction). A failed
+// factorization (H not numerically positive definite) is retried with Marquardt damping.
+//
+// Assembly runs in parallel over the blocks of each set, one colour at a time: blocks of a
+// colour share no vertex, so they scatter without races and each entry of H and g receives
+// its contributions in the same order whatever the number of threads.
 #include "solvers/fast/fast_backend.h"
 
 #include <Eigen/CholmodSupport>
@@ -5,11 +24,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <type_traits>
 #include <utility>
 #include <vector>
+
+#include "parallel/threads.h"
 
 namespace femreg {
 namespace fast_backend {
@@ -31,45 +53,70 @@ struct Slot {
   int stride = 0;
 };
 
+// Below this many degrees of freedom CHOLMOD's simplicial factorization is faster than its
+// supernodal one on the systems assembled here (box meshes, 1 thread; measured by
+// bench/linear_solver_bench.cc).
+constexpr int kSupernodalMinDofs = 12000;
+
+// Conjugate gradients stop at this relative residual |H dx + g| / |g|: far below what changes
+// a step that the line search and the next iteration see.
+constexpr double kPcgTolerance = 1e-8;
+
 }  // namespace
 
 struct FastBackend::Impl {
   BackendOptions options;
+  int threads = 1;
 
   // The pattern: 3 #V by 3 #V, both triangles, full 3x3 blocks for the coupling's cells,
   // the diagonal and the extra pairs.
   int num_vertices = -1;
   uint64_t coupling_revision = 0;
+  std::vector<std::array<int, 4>> cells;        // the coupling the pattern was built from
   std::vector<std::pair<int, int>> extra_pairs;  // a < b
   Eigen::SparseMatrix<double> H;
   std::vector<int> diagonal_at;  // per column: where its diagonal entry sits
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> cholesky;
-  bool analysed = false;
 
-  // Per set revision, each block's slots (#blocks * n * n), found once per set.
-  std::map<uint64_t, std::vector<Slot>> slots;
-  std::map<uint64_t, bool> slots_used;
+  // The factor, of the pattern's matrix at some earlier step (factor_valid).
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+  bool analysed = false;
+  bool factor_valid = false;
+
+  // Per set revision: each block's slots (#blocks * n * n) and its blocks by colour.
+  struct SetCache {
+    std::vector<Slot> slots;
+    std::vector<int> order;         // block indices, colour by colour
+    std::vector<int> colour_begin;  // colour c is order[colour_begin[c], colour_begin[c + 1])
+    bool used = false;
+  };
+  std::map<uint64_t, SetCache> cache;
 
   // The part of H that is constant within one Solve.
   std::vector<double> constant_values;
 
   void ResetPattern(const energy::Problem& problem);
-  void BuildPattern(const std::vector<std::array<int, 4>>& cells);
+  void BuildPattern();
   Slot Find(int a, int b) const;
-  // The slots of a set's blocks; pairs outside the pattern are added to *missing.
+  // The cache of a set; pairs outside the pattern are added to *missing.
   template <class Set>
-  const std::vector<Slot>& SlotsOf(const Set& set, std::vector<std::pair<int, int>>* missing);
+  SetCache& CacheOf(const Set& set, std::vector<std::pair<int, int>>* missing);
   // Adds the blocks of the sets for which take(set) holds: gradient always, Hessian when
   // hessian(set).
   template <class Take, class WithHessian>
   void Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
                   WithHessian hessian, Eigen::VectorXd* g);
   void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g);
-  std::vector<std::array<int, 4>> cells;  // the coupling the pattern was built from
+  // Factorizes H (with `damping` on the diagonal); false if it is not positive definite.
+  bool Factorize(SolveReport* report);
+  // dx = -H^-1 g: by PCG with the kept factor, else with a new factorization.
+  bool SolveStep(const Eigen::VectorXd& g, Eigen::VectorXd* dx, SolveReport* report);
+  bool Pcg(const Eigen::VectorXd& b, Eigen::VectorXd* x, SolveReport* report);
+  double Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
   impl_->options = options;
+  impl_->threads = ResolveThreadCount(options.num_threads);
 }
 FastBackend::~FastBackend() = default;
 
@@ -78,10 +125,10 @@ void FastBackend::Impl::ResetPattern(const energy::Problem& problem) {
   coupling_revision = problem.coupling_revision();
   cells = problem.coupling();
   extra_pairs.clear();
-  BuildPattern(cells);
+  BuildPattern();
 }
 
-void FastBackend::Impl::BuildPattern(const std::vector<std::array<int, 4>>& cells) {
+void FastBackend::Impl::BuildPattern() {
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(cells.size() * 144 + 9 * static_cast<size_t>(num_vertices) +
                    18 * extra_pairs.size());
@@ -110,8 +157,8 @@ void FastBackend::Impl::BuildPattern(const std::vector<std::array<int, 4>>& cell
         static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], c) - inner);
   }
   analysed = false;
-  slots.clear();
-  slots_used.clear();
+  factor_valid = false;
+  cache.clear();
   constant_values.clear();
 }
 
@@ -126,57 +173,95 @@ Slot FastBackend::Impl::Find(int a, int b) const {
 }
 
 template <class Set>
-const std::vector<Slot>& FastBackend::Impl::SlotsOf(const Set& set,
-                                                   std::vector<std::pair<int, int>>* missing) {
+FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
+                                                       std::vector<std::pair<int, int>>* missing) {
   using T = BlockType<Set>;
   constexpr int n = T::kVertices;
-  slots_used[set.revision()] = true;
-  auto it = slots.find(set.revision());
-  if (it != slots.end()) return it->second;
-  std::vector<Slot>& s = slots[set.revision()];
-  s.resize(static_cast<size_t>(set.size()) * n * n);
+  auto it = cache.find(set.revision());
+  if (it != cache.end()) {
+    it->second.used = true;
+    return it->second;
+  }
+  SetCache& c = cache[set.revision()];
+  c.used = true;
+  c.slots.resize(static_cast<size_t>(set.size()) * n * n);
   size_t k = 0;
   for (const T& block : set.blocks()) {
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j, ++k) {
-        s[k] = Find(block.vertices[i], block.vertices[j]);
-        if (s[k].offset < 0) {
+        c.slots[k] = Find(block.vertices[i], block.vertices[j]);
+        if (c.slots[k].offset < 0) {
           missing->emplace_back(std::min(block.vertices[i], block.vertices[j]),
                                 std::max(block.vertices[i], block.vertices[j]));
         }
       }
     }
   }
-  return s;
+  // Greedy colouring: a block takes the first colour none of its vertices has yet (64
+  // colours per vertex mask; blocks that find none go to a last colour run serially).
+  std::vector<uint64_t> taken(static_cast<size_t>(num_vertices), 0);
+  std::vector<int> colour(static_cast<size_t>(set.size()), 64);
+  int num_colours = 0;
+  for (int b = 0; b < set.size(); ++b) {
+    const T& block = set.blocks()[static_cast<size_t>(b)];
+    uint64_t mask = 0;
+    for (int i = 0; i < n; ++i) mask |= taken[static_cast<size_t>(block.vertices[i])];
+    if (~mask == 0) continue;  // no free colour: the serial one
+    int free = 0;
+    while (mask & (uint64_t{1} << free)) ++free;
+    colour[static_cast<size_t>(b)] = free;
+    num_colours = std::max(num_colours, free + 1);
+    for (int i = 0; i < n; ++i) taken[static_cast<size_t>(block.vertices[i])] |= uint64_t{1} << free;
+  }
+  std::vector<int> count(66, 0);
+  for (int col : colour) ++count[static_cast<size_t>(col) + 1];
+  for (size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
+  c.colour_begin.assign(count.begin(), count.end());
+  c.order.assign(static_cast<size_t>(set.size()), 0);
+  std::vector<int> next(count.begin(), count.end() - 1);
+  for (int b = 0; b < set.size(); ++b) c.order[static_cast<size_t>(next[static_cast<size_t>(colour[b])]++)] = b;
+  (void)num_colours;
+  return c;
 }
 
 template <class Take, class WithHessian>
 void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
                                    WithHessian hessian, Eigen::VectorXd* g) {
   double* values = H.valuePtr();
+  double* gradient = g->data();
   problem.ForEachSet([&](const auto& set) {
     if (!take(set)) return;
     using T = BlockType<std::decay_t<decltype(set)>>;
     constexpr int n = T::kVertices;
     const bool with_hessian = hessian(set);
     std::vector<std::pair<int, int>> missing;
-    const std::vector<Slot>& s = SlotsOf(set, &missing);  // complete: checked before
-    energy::Linearization<T> lin;
-    size_t k = 0;
-    for (const T& block : set.blocks()) {
-      const size_t first = k;
-      k += static_cast<size_t>(n) * n;
-      if (!energy::Linearize(block, set.loss(), x, &lin, with_hessian) || lin.scale == 0.0) continue;
-      for (int i = 0; i < n; ++i) g->segment<3>(3 * block.vertices[i]) += lin.gradient[i];
-      if (!with_hessian) continue;
+    const SetCache& c = CacheOf(set, &missing);  // complete: checked before
+    const std::vector<T>& blocks = set.blocks();
+    auto add = [&](int b) {
+      energy::Linearization<T> lin;
+      const T& block = blocks[static_cast<size_t>(b)];
+      if (!energy::Linearize(block, set.loss(), x, &lin, with_hessian) || lin.scale == 0.0) return;
+      for (int i = 0; i < n; ++i) {
+        double* gi = gradient + 3 * block.vertices[i];
+        for (int d = 0; d < 3; ++d) gi[d] += lin.gradient[i][d];
+      }
+      if (!with_hessian) return;
+      const Slot* s = c.slots.data() + static_cast<size_t>(b) * n * n;
       for (int ij = 0; ij < n * n; ++ij) {
-        const Slot& slot = s[first + ij];
         const Eigen::Matrix3d& M = lin.hessian[ij];
         for (int j = 0; j < 3; ++j) {
-          double* column = values + slot.offset + j * slot.stride;
+          double* column = values + s[ij].offset + j * s[ij].stride;
           for (int i = 0; i < 3; ++i) column[i] += M(i, j);
         }
       }
+    };
+    const int num_colours = static_cast<int>(c.colour_begin.size()) - 1;
+    for (int col = 0; col < num_colours; ++col) {
+      const int begin = c.colour_begin[static_cast<size_t>(col)];
+      const int end = c.colour_begin[static_cast<size_t>(col) + 1];
+      const bool parallel = threads > 1 && col < 64 && end - begin >= 64;
+#pragma omp parallel for schedule(static) num_threads(threads) if (parallel)
+      for (int k = begin; k < end; ++k) add(c.order[static_cast<size_t>(k)]);
     }
   });
 }
@@ -199,6 +284,105 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
     Accumulate(problem, x, constant, [](const auto&) { return false; }, g);
   }
   Accumulate(problem, x, varying, always, g);
+  // Hard anchors: identity rows and columns, no gradient.
+  if (!problem.fixed().empty()) {
+    const int n = static_cast<int>(H.cols());
+    const int* outer = H.outerIndexPtr();
+    const int* inner = H.innerIndexPtr();
+    double* values = H.valuePtr();
+    for (int c = 0; c < n; ++c) {
+      const bool col_fixed = problem.is_fixed(c / 3);
+      for (int p = outer[c]; p < outer[c + 1]; ++p) {
+        if (col_fixed || problem.is_fixed(inner[p] / 3)) values[p] = (inner[p] == c) ? 1.0 : 0.0;
+      }
+      if (col_fixed) (*g)[c] = 0.0;
+    }
+  }
+  // A whisper of Tikhonov on the diagonal, for degrees of freedom no term references.
+  double max_diagonal = 0.0;
+  for (int at : diagonal_at) max_diagonal = std::max(max_diagonal, H.valuePtr()[at]);
+  for (int at : diagonal_at) H.valuePtr()[at] += 1e-12 * max_diagonal;
+}
+
+bool FastBackend::Impl::Factorize(SolveReport* report) {
+  const auto t0 = Clock::now();
+  if (!analysed) {
+    factor.setMode(H.cols() >= kSupernodalMinDofs ? Eigen::CholmodSupernodalLLt
+                                                  : Eigen::CholmodSimplicialLLt);
+    factor.analyzePattern(H);
+    analysed = true;
+  }
+  factor.factorize(H);
+  ++report->factorizations;
+  report->factorize_s += Seconds(t0);
+  factor_valid = factor.info() == Eigen::Success;
+  return factor_valid;
+}
+
+bool FastBackend::Impl::Pcg(const Eigen::VectorXd& b, Eigen::VectorXd* x, SolveReport* report) {
+  const int max_iterations = options.max_pcg_iterations;
+  const double b_norm = b.norm();
+  x->setZero(b.size());
+  if (b_norm == 0.0) return true;
+  Eigen::VectorXd r = b;
+  Eigen::VectorXd z = factor.solve(r);
+  ++report->linear_solves;
+  Eigen::VectorXd p = z;
+  Eigen::VectorXd q(b.size());
+  double rz = r.dot(z);
+  for (int k = 0; k < max_iterations; ++k) {
+    q.noalias() = H * p;
+    const double pq = p.dot(q);
+    if (!(pq > 0.0) || !std::isfinite(rz)) return false;
+    const double alpha = rz / pq;
+    *x += alpha * p;
+    r -= alpha * q;
+    ++report->pcg_iterations;
+    if (r.norm() <= kPcgTolerance * b_norm) return true;
+    z = factor.solve(r);
+    ++report->linear_solves;
+    const double rz_next = r.dot(z);
+    p = z + (rz_next / rz) * p;
+    rz = rz_next;
+  }
+  return false;
+}
+
+bool FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, Eigen::VectorXd* dx,
+                                  SolveReport* report) {
+  const auto t0 = Clock::now();
+  if (factor_valid && options.max_pcg_iterations > 0) {
+    const bool converged = Pcg(-g, dx, report);
+    report->linear_solve_s += Seconds(t0);
+    if (converged && dx->allFinite()) return true;
+  }
+  // A new factor; if H is not numerically positive definite, Marquardt damping until it is.
+  std::vector<double> diagonal(diagonal_at.size());
+  for (size_t c = 0; c < diagonal_at.size(); ++c) diagonal[c] = H.valuePtr()[diagonal_at[c]];
+  double lambda = 0.0;
+  bool ok = Factorize(report);
+  for (int attempt = 0; !ok && attempt < 12; ++attempt) {
+    lambda = lambda == 0.0 ? 1e-6 : lambda * 100.0;
+    for (size_t c = 0; c < diagonal_at.size(); ++c) {
+      H.valuePtr()[diagonal_at[c]] = diagonal[c] * (1.0 + lambda);
+    }
+    ok = Factorize(report);
+  }
+  for (size_t c = 0; c < diagonal_at.size(); ++c) H.valuePtr()[diagonal_at[c]] = diagonal[c];
+  if (!ok) return false;
+  const auto t1 = Clock::now();
+  *dx = factor.solve(-g);
+  ++report->linear_solves;
+  report->linear_solve_s += Seconds(t1);
+  return dx->allFinite();
+}
+
+double FastBackend::Impl::Energy(const energy::Problem& problem, const Vertices& x,
+                                 SolveReport* report) const {
+  const auto t0 = Clock::now();
+  const double e = problem.Evaluate(x).total();
+  report->evaluate_s += Seconds(t0);
+  return e;
 }
 
 SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
@@ -208,17 +392,20 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   if (x->rows() != problem.num_vertices()) {
     report.message = "fast back end: the problem has " + std::to_string(problem.num_vertices()) +
                      " vertices, x has " + std::to_string(x->rows());
+    report.stop = StopReason::kFailure;
     return report;
   }
+  const ScopedThreads threads(m.threads);  // OpenMP here and the BLAS under CHOLMOD
+  auto t0 = Clock::now();
   if (m.num_vertices != problem.num_vertices() || m.coupling_revision != problem.coupling_revision()) {
     m.ResetPattern(problem);
     ++report.pattern_rebuilds;
   }
   // Every block's slots; pairs outside the pattern widen it (and redo the analysis).
   {
-    for (auto& used : m.slots_used) used.second = false;
+    for (auto& c : m.cache) c.second.used = false;
     std::vector<std::pair<int, int>> missing;
-    problem.ForEachSet([&](const auto& set) { m.SlotsOf(set, &missing); });
+    problem.ForEachSet([&](const auto& set) { m.CacheOf(set, &missing); });
     missing.erase(std::remove_if(missing.begin(), missing.end(),
                                  [](const std::pair<int, int>& p) { return p.first == p.second; }),
                   missing.end());
@@ -226,105 +413,84 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
       std::sort(missing.begin(), missing.end());
       missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
       m.extra_pairs.insert(m.extra_pairs.end(), missing.begin(), missing.end());
-      m.BuildPattern(m.cells);
+      m.BuildPattern();
       ++report.pattern_rebuilds;
-      problem.ForEachSet([&](const auto& set) { m.SlotsOf(set, &missing); });
+      problem.ForEachSet([&](const auto& set) { m.CacheOf(set, &missing); });
     }
-    // Forget the slots of sets that are gone.
-    for (auto it = m.slots_used.begin(); it != m.slots_used.end();) {
-      if (!it->second) {
-        m.slots.erase(it->first);
-        it = m.slots_used.erase(it);
-      } else {
-        ++it;
-      }
+    for (auto it = m.cache.begin(); it != m.cache.end();) {  // forget the sets that are gone
+      it = it->second.used ? std::next(it) : m.cache.erase(it);
     }
   }
 
-  const int n = static_cast<int>(m.H.cols());
-  const int* outer = m.H.outerIndexPtr();
-  const int* inner = m.H.innerIndexPtr();
-  const bool any_fixed = !problem.fixed().empty();
-  double energy = problem.Evaluate(*x).total();
-  double lambda = 1e-8;
-  double first_gradient = -1.0;
-  Eigen::VectorXd g;
-  std::vector<double> diagonal(static_cast<size_t>(n));
-  const int max_iterations = m.options.max_iterations;
-  int steps = 0;
-  bool first = true;
+  Eigen::VectorXd g, dx;
+  m.Assemble(problem, *x, /*first=*/true, &g);
+  report.assemble_s += Seconds(t0);
+  double energy = m.Energy(problem, *x, &report);
+  const double first_gradient = g.lpNorm<Eigen::Infinity>();
   report.success = true;
-  report.message = "fast back end: converged";
-  while (steps < max_iterations) {
-    m.Assemble(problem, *x, first, &g);
-    first = false;
-    double* values = m.H.valuePtr();
-    if (any_fixed) {  // identity rows and columns, no step
-      for (int c = 0; c < n; ++c) {
-        const bool col_fixed = problem.is_fixed(c / 3);
-        for (int p = outer[c]; p < outer[c + 1]; ++p) {
-          if (col_fixed || problem.is_fixed(inner[p] / 3)) values[p] = (inner[p] == c) ? 1.0 : 0.0;
-        }
-        if (col_fixed) g[c] = 0.0;
-      }
-    }
-    // Converged when the gradient has fallen far below where it started: with rotations and
-    // pairs fixed the problem is quadratic but for the robust weights, so this usually
-    // holds right after the first step, without another factorization.
+  report.stop = StopReason::kMaxIterations;
+  Vertices trial;
+  for (int step = 0; step < m.options.max_iterations; ++step) {
     const double gradient = g.lpNorm<Eigen::Infinity>();
-    if (first_gradient < 0) first_gradient = gradient;
-    if (gradient <= 1e-9 * first_gradient || gradient == 0.0) break;
-    double max_diagonal = 0.0;
-    for (int c = 0; c < n; ++c) {
-      diagonal[static_cast<size_t>(c)] = values[m.diagonal_at[static_cast<size_t>(c)]];
-      max_diagonal = std::max(max_diagonal, diagonal[static_cast<size_t>(c)]);
+    if (gradient == 0.0 || (step > 0 && gradient <= 1e-9 * first_gradient)) {
+      report.stop = StopReason::kGradient;
+      break;
     }
+    if (!m.SolveStep(g, &dx, &report)) {
+      report.success = false;
+      report.stop = StopReason::kFailure;
+      report.message = "fast back end: the system is not positive definite even with damping";
+      break;
+    }
+    ++report.iterations;
+    // Backtracking on the energy along the step.
+    double alpha = 1.0;
     bool accepted = false;
-    bool done = false;
-    while (!accepted && steps < max_iterations) {
-      // Marquardt damping on the diagonal (and a whisper of Tikhonov for unreferenced dofs).
-      for (int c = 0; c < n; ++c) {
-        values[m.diagonal_at[static_cast<size_t>(c)]] =
-            diagonal[static_cast<size_t>(c)] * (1.0 + lambda) + 1e-12 * max_diagonal;
-      }
-      if (!m.analysed) {
-        m.cholesky.analyzePattern(m.H);
-        m.analysed = true;
-      }
-      m.cholesky.factorize(m.H);
-      ++report.factorizations;
-      ++steps;
-      if (m.cholesky.info() != Eigen::Success) {
-        lambda = std::max(lambda * 100.0, 1e-6);
-        continue;
-      }
-      const Eigen::VectorXd dx = m.cholesky.solve(-g);
-      ++report.linear_solves;
-      Vertices trial = *x;
-      for (int v = 0; v < m.num_vertices; ++v) trial.row(v) += dx.segment<3>(3 * v).transpose();
-      const double trial_energy = problem.Evaluate(trial).total();
+    double trial_energy = energy;
+    for (int halving = 0; halving < 8; ++halving, alpha *= 0.5) {
+      trial = *x;
+      for (int v = 0; v < m.num_vertices; ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
+      trial_energy = m.Energy(problem, trial, &report);
       if (std::isfinite(trial_energy) && trial_energy <= energy) {
-        const double change = (energy - trial_energy) / std::max(energy, 1e-300);
-        *x = trial;
-        energy = trial_energy;
-        lambda = std::max(lambda * 0.1, 1e-12);
         accepted = true;
-        if (change < m.options.relative_tolerance || dx.lpNorm<Eigen::Infinity>() < 1e-14) done = true;
-      } else {
-        lambda = std::max(lambda * 10.0, 1e-6);
+        break;
       }
-      if (time_limit_s > 0 && Seconds(start) >= time_limit_s) done = true;
     }
-    if (!accepted || done) break;
+    if (!accepted) {
+      report.stop = StopReason::kNoDecrease;
+      break;
+    }
+    double largest = 0.0;
+    for (int v = 0; v < m.num_vertices; ++v) largest = std::max(largest, dx.segment<3>(3 * v).norm());
+    largest *= alpha;
+    const double decrease = (energy - trial_energy) / std::max(energy, 1e-300);
+    x->swap(trial);
+    energy = trial_energy;
+    if (largest <= m.options.step_tolerance || largest == 0.0) {
+      report.stop = StopReason::kStep;
+      break;
+    }
+    if (decrease < m.options.relative_tolerance) {
+      report.stop = StopReason::kEnergy;
+      break;
+    }
+    if (time_limit_s > 0 && Seconds(start) >= time_limit_s) {
+      report.stop = StopReason::kTimeLimit;
+      break;
+    }
+    if (step + 1 == m.options.max_iterations) break;
+    t0 = Clock::now();
+    m.Assemble(problem, *x, /*first=*/false, &g);
+    report.assemble_s += Seconds(t0);
   }
-  report.iterations = steps;
+  if (report.success) report.message = std::string("fast back end: ") + ToString(report.stop);
   if (!x->allFinite()) {
     report.success = false;
+    report.stop = StopReason::kFailure;
     report.message = "fast back end: the step made the positions non-finite";
   }
   return report;
 }
-
 
 }  // namespace fast_backend
 }  // namespace femreg

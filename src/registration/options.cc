@@ -246,7 +246,17 @@ bool SolverOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(time_budget_s) && time_budget_s >= 0)) {
     return Fail(error, "solver.time_budget_s", "must be >= 0 (0 = none)", time_budget_s);
   }
-  if (num_threads < 1) return Fail(error, "solver.threads", "must be >= 1", num_threads);
+  if (!(std::isfinite(step_tolerance) && step_tolerance >= 0)) {
+    return Fail(error, "solver.step_tolerance", "must be >= 0 (a fraction of the mean edge length)",
+                step_tolerance);
+  }
+  if (num_threads < 0) {
+    return Fail(error, "solver.threads", "must be >= 0 (0: the machine's hardware threads)", num_threads);
+  }
+  if (max_pcg_iterations < 0) {
+    return Fail(error, "solver.max_pcg_iterations", "must be >= 0 (0: factorize every step)",
+                max_pcg_iterations);
+  }
   if (rigid_iterations < 0) {
     return Fail(error, "solver.rigid_iterations", "must be >= 0", rigid_iterations);
   }

@@ -36,14 +36,14 @@ std::string FrameSummary::FullReport() const {
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
      << points_used << " used\n";
   os << "  iter   E_data      E_elastic   E_temporal  E_anchor    E_total     m2c    c2m    rej  "
-        "inner  rms(mm)  ms\n";
+        "inner  rms(mm)  move(mm)  ms\n";
   for (const OuterIteration& it : iterations) {
     std::snprintf(buf, sizeof(buf),
                   "  %4d   %-10.4g  %-10.4g  %-10.4g  %-10.4g  %-10.4g  %-6d %-6d %-4d %-6d %-8.3f "
-                  "%.1f\n",
+                  "%-9.3f %.1f\n",
                   it.iteration, it.after.data, it.after.elastic, it.after.temporal, it.after.anchor,
                   it.after.total(), it.model_to_cloud, it.cloud_to_model, it.rejected,
-                  it.inner_iterations, it.rms_residual * 1e3, it.time_s * 1e3);
+                  it.inner_iterations, it.rms_residual * 1e3, it.max_move * 1e3, it.time_s * 1e3);
     os << buf;
   }
   std::snprintf(buf, sizeof(buf),
@@ -51,6 +51,13 @@ std::string FrameSummary::FullReport() const {
                 "%.2f, build %.2f, solve %.2f, total %.2f\n",
                 time.preprocess * 1e3, time.prealign * 1e3, time.rotations * 1e3,
                 time.correspondences * 1e3, time.build * 1e3, time.solve * 1e3, time.total * 1e3);
+  os << buf;
+  std::snprintf(buf, sizeof(buf),
+                "  solve (ms): assembly %.2f, factorization %.2f (%d), linear solves %.2f (%d, %d "
+                "PCG iterations), energy evaluations %.2f; stopped by %s\n",
+                time.assembly * 1e3, time.factorization * 1e3, factorizations,
+                time.linear_solve * 1e3, linear_solves, pcg_iterations, time.evaluation * 1e3,
+                stopped_by.c_str());
   os << buf;
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf),

@@ -16,6 +16,7 @@
 #include "geometry/nearest.h"
 #include "registration/prealign.h"
 #include "registration/tracker_state.h"
+#include "parallel/threads.h"
 #include "solvers/backend.h"
 
 namespace femreg {
@@ -27,12 +28,14 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-BackendOptions MakeBackendOptions(const SolverOptions& solver) {
+BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
   b.type = solver.backend;
   b.max_iterations = solver.max_inner_iterations;
   b.relative_tolerance = solver.inner_tolerance;
-  b.num_threads = solver.num_threads;
+  b.step_tolerance = 0.1 * solver.step_tolerance * mean_edge_length;
+  b.max_pcg_iterations = solver.max_pcg_iterations;
+  b.num_threads = ResolveThreadCount(solver.num_threads);
   b.trust_region = solver.trust_region;
   b.linear_solver = solver.linear_solver;
   return b;
@@ -82,13 +85,16 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
   state.x.resize(state.num_vertices, 3);
   for (const ObjectState& o : state.objects) state.x.middleRows(o.offset, o.mesh.num_vertices()) = o.mesh.x;
   frame_problem.BuildElastic(state);
-  backend = MakeBackend(MakeBackendOptions(options.solver));
+  backend = MakeBackend(MakeBackendOptions(options.solver, state.mean_edge_length));
   return Status::Ok();
 }
 
 Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   const auto t_frame = Clock::now();
   const RegistrationOptions& options = state.options;
+  // Every parallel part of the frame (element loops, correspondences, the BLAS under
+  // CHOLMOD) on solver.num_threads threads, whatever the environment says.
+  const ScopedThreads threads(options.solver.num_threads);
   FrameSummary& s = *summary;
   s = FrameSummary();
   s.frame = state.frame;
@@ -149,6 +155,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   if (s.termination == TerminationType::kNoCorrespondences) state.x = previous;
   if (state.collision) MeasureContacts(&s);
+  if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
   UpdateOutputs(&cloud_index, pairs, &state);
   s.time.total = Seconds(t_frame);
@@ -210,8 +217,16 @@ bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIn
   const double time_left = options.solver.time_budget_s > 0
                                ? std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame))
                                : 0.0;
+  const Vertices before_solve = state.x;
   const SolveReport report = backend->Solve(problem, time_left, &state.x);
   s->time.solve += Seconds(t0);
+  s->time.assembly += report.assemble_s;
+  s->time.factorization += report.factorize_s;
+  s->time.linear_solve += report.linear_solve_s;
+  s->time.evaluation += report.evaluate_s;
+  s->factorizations += report.factorizations;
+  s->linear_solves += report.linear_solves;
+  s->pcg_iterations += report.pcg_iterations;
   row.inner_iterations = report.iterations;
   if (!report.success) {
     s->termination = TerminationType::kSolverFailure;
@@ -220,6 +235,9 @@ bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIn
     return false;
   }
   row.after = problem.Evaluate(state.x);
+  // The largest vertex move of this outer iteration, against the mesh's edge length.
+  double moved = (state.x - before_solve).rowwise().norm().maxCoeff();
+  row.max_move = moved;
   double sum2 = 0.0;
   for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();
   row.rms_residual = std::sqrt(sum2 / static_cast<double>(pairs->size()));
@@ -241,6 +259,7 @@ bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIn
       frame_problem.BuildFrameTerms(&state);
       FindPairs(state, cloud, cloud_index, pairs, &counts);  // for the outputs
       *previous_energy = std::numeric_limits<double>::infinity();
+      moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
     }
   }
 
@@ -249,10 +268,18 @@ bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIn
   const double e1 = row.after.total();
   const double change = std::abs(*previous_energy - e1) / std::max(e1, 1e-300);
   *previous_energy = e1;
-  if (k > 0 && change < options.solver.relative_energy_tolerance) {
+  const double step_limit = options.solver.step_tolerance * state.mean_edge_length;
+  if (k > 0 && (moved <= step_limit || change < options.solver.relative_energy_tolerance)) {
     s->termination = TerminationType::kConverged;
     std::ostringstream os;
-    os << "relative energy change " << change << " < " << options.solver.relative_energy_tolerance;
+    if (moved <= step_limit) {
+      s->stopped_by = "step";
+      os << "largest vertex move " << moved * 1e3 << " mm <= " << options.solver.step_tolerance
+         << " x mean edge " << state.mean_edge_length * 1e3 << " mm";
+    } else {
+      s->stopped_by = "energy";
+      os << "relative energy change " << change << " < " << options.solver.relative_energy_tolerance;
+    }
     s->message = os.str();
     return false;
   }

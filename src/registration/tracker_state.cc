@@ -36,6 +36,17 @@ void TrackerState::RebuildGlobalArrays() {
     row += o.mesh.num_surface_triangles();
     for (int v : o.mesh.surface_vertices) surface_vertices.push_back(v + o.offset);
   }
+  double length = 0.0;
+  int edges = 0;
+  for (const ObjectState& o : objects) {
+    for (int f = 0; f < o.mesh.num_surface_triangles(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        length += (o.mesh.rest.row(o.mesh.surface(f, k)) - o.mesh.rest.row(o.mesh.surface(f, (k + 1) % 3))).norm();
+        ++edges;
+      }
+    }
+  }
+  mean_edge_length = edges > 0 ? length / edges : 0.0;
 }
 
 Eigen::MatrixXd TrackerState::VertexNormals() const {

@@ -69,6 +69,9 @@ struct TrackerState {
   std::unique_ptr<CollisionWorld> collision;
   std::vector<Contact> contacts;
   std::unique_ptr<FractureState> fracture;
+  // Mean length of the surface triangles' edges at rest (m): the length scale of the
+  // step tolerances (solver.step_tolerance).
+  double mean_edge_length = 0.0;
   Vertices frame_start;  // x when the frame's temporal springs were made (fracture only)
   int frame = 0;
   // Per object, for the outputs: distance of each surface vertex to the cloud and whether

@@ -308,6 +308,9 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   Put(solver, "max_inner_iterations", s.max_inner_iterations, d.solver.max_inner_iterations);
   Put(solver, "relative_energy_tolerance", s.relative_energy_tolerance,
       d.solver.relative_energy_tolerance);
+  Put(solver, "inner_tolerance", s.inner_tolerance, d.solver.inner_tolerance);
+  Put(solver, "step_tolerance", s.step_tolerance, d.solver.step_tolerance);
+  Put(solver, "max_pcg_iterations", s.max_pcg_iterations, d.solver.max_pcg_iterations);
   Put(solver, "time_budget_s", s.time_budget_s, d.solver.time_budget_s);
   if (s.trust_region != d.solver.trust_region) solver["trust_region"] = ToString(s.trust_region);
   if (s.linear_solver != d.solver.linear_solver) solver["linear_solver"] = ToString(s.linear_solver);

@@ -72,7 +72,9 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
         "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
         "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
         "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
-        "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,message\n";
+        "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,stopped_by,"
+        "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
+        "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,message\n";
   char buf[1024];
   for (size_t i = 0; i < rows.size(); ++i) {
     const FrameSummary& s = rows[i].summary;
@@ -104,6 +106,11 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
     std::snprintf(buf, sizeof(buf), ",%.6g,%d,%d,%d,%.4f,%.3f", s.final.collision, s.contacts,
                   s.object_contacts, s.obstacle_contacts, s.max_penetration * 1e3,
                   s.time.collision * 1e3);
+    os << buf;
+    std::snprintf(buf, sizeof(buf), ",%s,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f", s.stopped_by.c_str(),
+                  s.factorizations, s.linear_solves, s.pcg_iterations, s.time.assembly * 1e3,
+                  s.time.factorization * 1e3, s.time.linear_solve * 1e3, s.time.evaluation * 1e3,
+                  s.time.fracture * 1e3);
     os << buf;
     std::string msg = rows[i].read_error.empty() ? s.message : rows[i].read_error;
     std::replace(msg.begin(), msg.end(), '"', '\'');
