@@ -37,6 +37,7 @@ struct SimulateOptions {
   int threads = 0;         // 0 = OpenMP's default
   bool verbose = false;
   bool force = false;
+  std::vector<std::string> sets;  // --set key.path=value
 };
 
 // What one object's run produced, for the report and summary.json.
@@ -241,7 +242,7 @@ void Fail(const std::string& message) {
 void RunSimulate(const SimulateOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   Scene scene;
-  Status status = LoadScene(options.scene_path, &scene);
+  Status status = LoadSceneWithSets(options.scene_path, options.sets, &scene);
   if (!status.ok()) return Fail(status.message());
 
   std::vector<int> objects;
@@ -353,6 +354,7 @@ void AddSimulateCommand(CLI::App* app) {
   cmd->add_flag("-v,--verbose", options->verbose,
                 "One line per Newton iteration and the full report");
   cmd->add_flag("-f,--force", options->force, "Write into a non-empty output folder");
+  AddSetOption(cmd, &options->sets);
   cmd->callback([options] { RunSimulate(*options); });
 }
 
