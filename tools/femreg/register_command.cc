@@ -224,7 +224,8 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                 {"threads", args.threads}};
   j["command_line"] = flags;
   j["provenance"] = ProvenanceJson(scene, o, args.sets, files, truth_files);
-  return j.dump(2) + "\n";
+  // A file name or description that is not UTF-8 must not end the run: replace its bytes.
+  return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
 // With --no-collision: the scene's collision section used only to measure, after each frame,
