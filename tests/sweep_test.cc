@@ -255,6 +255,9 @@ TEST(SweepCli, SetOnRegisterAndSimulateIsCheckedLikeTheFile) {
       << ReadText(err);
   const std::string json = ReadText(fs::path(dir.path()) / "s" / "summary.json");
   EXPECT_NE(json.find("\"load_steps\": 3"), std::string::npos) << json;
+  const nlohmann::json parsed = nlohmann::json::parse(json);
+  EXPECT_EQ(parsed["overrides"], nlohmann::json::array({"forward.load_steps=3"}));
+  EXPECT_FALSE(parsed["femreg_version"].get<std::string>().empty());
 }
 
 // One frame registered with ground truth: the VTU carries the per-vertex error, the cloud

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -188,7 +189,13 @@ std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
                         ElasticModelType model_type, const ForwardOptions& forward,
                         const std::vector<ObjectResult>& results, double total_time_s) {
   std::ostringstream os;
-  os << "{\n  \"scene\": " << JsonString(options.scene_path) << ",\n"
+  // The --set overrides through nlohmann-json (register's summary.json is written with it
+  // whole; this one keeps its layout, which tests and scripts match as text).
+  const std::string overrides =
+      nlohmann::json(options.sets).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  os << "{\n  \"femreg_version\": " << JsonString(Version()) << ",\n"
+     << "  \"scene\": " << JsonString(options.scene_path) << ",\n"
+     << "  \"overrides\": " << overrides << ",\n"
      << "  \"model\": " << JsonString(ToString(model_type)) << ",\n"
      << "  \"tangent\": " << JsonString(ToString(forward.tangent)) << ",\n"
      << "  \"load_steps\": " << forward.load_steps << ",\n"
