@@ -185,11 +185,24 @@ TEST(OutcomesCsv, ReadsBackWhatItWrote) {
   EXPECT_NEAR(o[0].all_mean, 1.23456e-3, 0.5e-7);
   EXPECT_NEAR(o[0].median_rms_residual, 4.5e-4, 0.5e-8);
   // Merging puts the shards back in sweep order and refuses a setting twice.
+  Outcome like = o[1];  // the second setting as it would run beside the first
+  like.has_truth = true;
+  like.frames = 3;
   std::vector<Setting> ms;
   std::vector<Outcome> mo;
-  ASSERT_TRUE(MergeOutcomes({{s[1]}, {s[0]}}, {{o[1]}, {o[0]}}, &ms, &mo).ok());
+  ASSERT_TRUE(MergeOutcomes({{s[1]}, {s[0]}}, {{like}, {o[0]}}, &ms, &mo).ok());
   EXPECT_EQ(mo[0].setting, "baseline");
+  EXPECT_EQ(ms[1].parameters.size(), 1u);
   EXPECT_FALSE(MergeOutcomes({{s[0]}, {s[0]}}, {{o[0]}, {o[0]}}, &ms, &mo).ok());
+  // Shards of different runs (another frame count, or without ground truth) are refused.
+  like.frames = 4;
+  Status mixed = MergeOutcomes({{s[0]}, {s[1]}}, {{o[0]}, {like}}, &ms, &mo);
+  ASSERT_FALSE(mixed.ok());
+  EXPECT_NE(mixed.message().find("ran 4 frames with ground truth"), std::string::npos)
+      << mixed.message();
+  mixed = MergeOutcomes({{s[0]}, {s[1]}}, {{o[0]}, {o[1]}}, &ms, &mo);
+  ASSERT_FALSE(mixed.ok());
+  EXPECT_NE(mixed.message().find("without ground truth"), std::string::npos) << mixed.message();
   // A file that is not such a CSV is named with its line.
   std::ofstream(path) << "setting,vertices\n\"a\",1\n";
   const Status status = ReadOutcomesCsv(path, &s, &o);
@@ -323,7 +336,7 @@ TEST(SweepCli, FourJobsMergedEqualOneRun) {
                   shard.string() + " > " + log.string() + " 2>&1"),
               0)
         << ReadText(log);
-    shards += " " + shard.string();
+    shards = " " + shard.string() + shards;  // last first: the merge restores sweep order
   }
   // The merge runs nothing: it reads the shards' CSVs, in any order.
   ASSERT_EQ(RunShell(kCli + " bench --no-plot --merge" + shards + " --out " +

@@ -109,7 +109,8 @@ std::string OutcomesCsv(const std::vector<Setting>& settings, const std::vector<
 Status ReadOutcomesCsv(const std::string& path, std::vector<Setting>* settings,
                        std::vector<Outcome>* outcomes);
 // Merges shards (settings and outcomes read from several CSVs of the same dataset) into one
-// table in sweep order (by setting_index). The same setting in two shards is an error.
+// table in sweep order (by setting_index). The same setting in two shards is an error, and
+// so are shards that ran a different number of frames or differ in having ground truth.
 Status MergeOutcomes(const std::vector<std::vector<Setting>>& shard_settings,
                      const std::vector<std::vector<Outcome>>& shard_outcomes,
                      std::vector<Setting>* settings, std::vector<Outcome>* outcomes);

@@ -548,6 +548,18 @@ Status MergeOutcomes(const std::vector<std::vector<Setting>>& shard_settings,
           return Status::Error("setting '" + o.setting + "' is in two shards");
         }
       }
+      // One table compares like with like: the same frames, with or without ground truth.
+      for (const auto& r : rows) {
+        if (!o.error.empty() || !r.second.error.empty()) continue;
+        if (r.second.frames != o.frames || r.second.has_truth != o.has_truth) {
+          return Status::Error("setting '" + o.setting + "' ran " + std::to_string(o.frames) +
+                               " frames " + (o.has_truth ? "with" : "without") +
+                               " ground truth, setting '" + r.second.setting + "' " +
+                               std::to_string(r.second.frames) + " frames " +
+                               (r.second.has_truth ? "with" : "without") +
+                               " (shards of different runs?)");
+        }
+      }
       rows.push_back({shard_settings[k][i], o});
     }
   }
