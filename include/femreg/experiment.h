@@ -91,7 +91,7 @@ std::vector<Setting> DefaultComparison(const Scene& scene);
 // The settings of `sweep` picked by `selectors`, each an exact setting name or its 0-based
 // index in the sweep (as `femreg bench --list-settings` prints them), in the sweep's order
 // and without repeats; *indices receives their places in the sweep. An unknown name is an
-// error that lists the closest names.
+// error that lists the sweep's names.
 Status SelectSettings(const std::vector<Setting>& sweep, const std::vector<std::string>& selectors,
                       std::vector<Setting>* selected, std::vector<int>* indices);
 

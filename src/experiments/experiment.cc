@@ -325,7 +325,7 @@ Status SelectSettings(const std::vector<Setting>& sweep, const std::vector<std::
       found = static_cast<int>(index);
     }
     if (found < 0) {
-      // The names that share the most leading characters, for the message.
+      // Every name, for the message: the sweep is short and names are easier to copy than to guess.
       std::string names;
       for (const Setting& s : sweep) names += (names.empty() ? "'" : ", '") + s.name + "'";
       return Status::Error("--setting '" + sel + "': no such setting (run --list-settings; the "
