@@ -14,6 +14,6 @@ export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
 "$FEMREG" compare --force --out "$OUT/compare" \
   --dataset datasets/demo --dataset datasets/beam_bend --dataset datasets/block_press \
   --dataset datasets/slab_stretch --dataset datasets/fast_motion --dataset datasets/occlusion
-/usr/bin/python3 tools/accuracy_tables.py "$OUT"/bench/*_bench.csv "$OUT"/compare/*_compare.csv \
+"${FEMREG_PYTHON:-python3}" tools/accuracy_tables.py "$OUT"/bench/*_bench.csv "$OUT"/compare/*_compare.csv \
   > "$OUT/tables.md"
 echo "Tables: $OUT/tables.md; plots: $OUT/bench/bench.png, $OUT/compare/compare.png"

@@ -26,5 +26,5 @@ for name in contact_pair tool_table; do
     done
   done
 done
-/usr/bin/python3 tools/contact_tables.py "$OUT" > docs/accuracy/contacts.md
+"${FEMREG_PYTHON:-python3}" tools/contact_tables.py "$OUT" > docs/accuracy/contacts.md
 cat docs/accuracy/contacts.md

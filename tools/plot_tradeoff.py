@@ -5,7 +5,9 @@
 
 bench: mean vertex error (mm) against median time per frame (ms), one marker per setting,
 the Pareto front drawn as a line. compare: seen and hidden vertex error per setting as bars,
-with the time per frame written on each. Needs Debian's python3-matplotlib.
+with the time per frame written on each. On a recording without ground truth (empty error
+columns) the median RMS residual to the cloud takes the error's place. Needs matplotlib
+(Debian: python3-matplotlib); femreg runs it with $FEMREG_PYTHON or python3 from PATH.
 """
 import argparse
 import csv
@@ -25,11 +27,23 @@ def read(path):
     return name, rows
 
 
+def has_truth(rows):
+    return all(r.get("err_mean_mm") for r in rows)
+
+
+def accuracy(rows, column):
+    """The error column, or the RMS residual when the sequence has no ground truth."""
+    if has_truth(rows):
+        return [float(r[column]) for r in rows], "mean vertex error (mm)"
+    return ([float(r["median_rms_residual_mm"]) for r in rows],
+            "median RMS residual to the cloud (mm; no ground truth)")
+
+
 def plot_bench(tables, out):
     fig, axes = plt.subplots(1, len(tables), figsize=(6.5 * len(tables), 5), squeeze=False)
     for ax, (name, rows) in zip(axes[0], tables):
         ms = [float(r["median_ms"]) for r in rows]
-        err = [float(r["err_mean_mm"]) for r in rows]
+        err, ylabel = accuracy(rows, "err_mean_mm")
         front = sorted((m, e) for m, e, r in zip(ms, err, rows) if r["pareto"] == "1")
         ax.scatter(ms, err, color="tab:blue", zorder=3)
         for m, e, r in zip(ms, err, rows):
@@ -40,7 +54,7 @@ def plot_bench(tables, out):
             ax.legend(loc="upper right")
         ax.set_xscale("log")
         ax.set_xlabel("median time per frame (ms, log scale)")
-        ax.set_ylabel("mean vertex error (mm)")
+        ax.set_ylabel(ylabel)
         ax.set_title(f"{name}: accuracy against time")
         ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
@@ -51,17 +65,23 @@ def plot_compare(tables, out):
     fig, axes = plt.subplots(len(tables), 1, figsize=(10, 4.2 * len(tables)), squeeze=False)
     for ax, (name, rows) in zip(axes[:, 0], tables):
         labels = [r["setting"] for r in rows]
-        seen = [float(r["err_seen_mean_mm"]) for r in rows]
-        hidden = [float(r["err_hidden_mean_mm"]) for r in rows]
         x = range(len(rows))
-        ax.bar([i - 0.2 for i in x], seen, width=0.4, label="seen vertices")
-        ax.bar([i + 0.2 for i in x], hidden, width=0.4, label="hidden vertices")
+        if has_truth(rows):
+            seen = [float(r["err_seen_mean_mm"]) for r in rows]
+            hidden = [float(r["err_hidden_mean_mm"]) for r in rows]
+            ax.bar([i - 0.2 for i in x], seen, width=0.4, label="seen vertices")
+            ax.bar([i + 0.2 for i in x], hidden, width=0.4, label="hidden vertices")
+            ylabel = "mean vertex error (mm)"
+        else:
+            seen, ylabel = accuracy(rows, "err_seen_mean_mm")
+            hidden = seen
+            ax.bar(list(x), seen, width=0.6, label="RMS residual (no ground truth)")
         for i, r in enumerate(rows):
             ax.text(i, max(seen[i], hidden[i]) * 1.02, f'{float(r["median_ms"]):.0f} ms',
                     ha="center", va="bottom", fontsize=7)
         ax.set_xticks(list(x))
         ax.set_xticklabels(labels, rotation=25, ha="right", fontsize=8)
-        ax.set_ylabel("mean vertex error (mm)")
+        ax.set_ylabel(ylabel)
         ax.set_yscale("log")
         ax.set_title(f"{name}: regularizers (ms per frame above the bars)")
         ax.legend()

@@ -11,7 +11,7 @@ PACKAGES=(
   libpcl-dev libvtk9-dev
   libnanoflann-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libcli11-dev libyaml-cpp-dev
+  libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libtet1.5-dev
   python3 python3-matplotlib python3-numpy
 )

@@ -1,6 +1,7 @@
 #include "cli_util.h"
 
 #include <glob.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,8 +10,17 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
+
+#include "femreg/experiment.h"
+#include "femreg/io.h"
+
+#ifndef FEMREG_VERSION
+#define FEMREG_VERSION "unknown"
+#endif
 
 namespace fs = std::filesystem;
 
@@ -147,6 +157,154 @@ void ProgressBar::Update(int done, const std::string& note) {
 
 void ProgressBar::Finish() {
   if (enabled_ && tty_) std::fprintf(stderr, "\n");
+}
+
+const char* Version() { return FEMREG_VERSION; }
+
+void AddSetOption(CLI::App* cmd, std::vector<std::string>* sets) {
+  cmd->add_option("--set", *sets,
+                  "Override one scene key for this run, checked like the scene file: "
+                  "--set registration.solver.backend=fast --set "
+                  "objects[0].material.youngs_modulus=2e5 (repeatable; the value is YAML)")
+      ->type_name("KEY.PATH=VALUE")
+      ->take_all()
+      ->allow_extra_args(false);
+}
+
+Status LoadSceneWithSets(const std::string& path, const std::vector<std::string>& sets, Scene* scene) {
+  std::vector<SceneOverride> overrides;
+  for (const std::string& text : sets) {
+    SceneOverride o;
+    Status status = ParseSceneOverride(text, &o);
+    if (!status.ok()) return status;
+    overrides.push_back(o);
+  }
+  return LoadSceneWithOverrides(path, overrides, scene);
+}
+
+namespace {
+bool IsExecutable(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(p, ec) && access(p.c_str(), X_OK) == 0;
+}
+std::string OnPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  if (path == nullptr) return "";
+  std::stringstream dirs(path);
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (dir.empty()) continue;
+    const fs::path candidate = fs::path(dir) / name;
+    if (IsExecutable(candidate)) return candidate.string();
+  }
+  return "";
+}
+}  // namespace
+
+std::string FindPython() {
+  const char* env = std::getenv("FEMREG_PYTHON");
+  if (env != nullptr && *env != '\0') {
+    const std::string p = env;
+    return p.find('/') == std::string::npos ? OnPath(p) : (IsExecutable(p) ? p : "");
+  }
+  std::string p = OnPath("python3");
+  if (p.empty()) p = OnPath("python");
+  return p;
+}
+
+int RunProgram(const std::vector<std::string>& argv) {
+  if (argv.empty()) return -1;
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  const pid_t pid = fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    execvp(args[0], args.data());
+    std::_Exit(127);
+  }
+  int status = 0;
+  if (waitpid(pid, &status, 0) < 0) return -1;
+  if (WIFEXITED(status)) return WEXITSTATUS(status) == 127 ? -1 : WEXITSTATUS(status);
+  return -1;
+}
+
+namespace {
+// One array of VTK's raw appended data: a UInt64 byte count, then the values.
+template <typename T>
+void AppendArray(const std::vector<T>& values, std::string* block) {
+  const uint64_t bytes = values.size() * sizeof(T);
+  block->append(reinterpret_cast<const char*>(&bytes), sizeof(bytes));
+  block->append(reinterpret_cast<const char*>(values.data()), bytes);
+}
+}  // namespace
+
+Status WriteCloudVtp(const std::string& path, const PointCloud& cloud) {
+  const Eigen::Index n = cloud.points.rows();
+  if (n > (Eigen::Index(1) << 31) - 2) return Status::Error(path + ": too many points for a VTP");
+  const bool normals = cloud.has_normals();
+  // Float32 like the clouds femreg reads (PCD F 4); little-endian like the machines it runs on.
+  std::vector<float> points(static_cast<size_t>(3 * n)), normal_values;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) points[static_cast<size_t>(3 * i + k)] = static_cast<float>(cloud.points(i, k));
+  }
+  if (normals) {
+    normal_values.resize(static_cast<size_t>(3 * n));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        normal_values[static_cast<size_t>(3 * i + k)] = static_cast<float>(cloud.normals(i, k));
+      }
+    }
+  }
+  std::vector<int32_t> connectivity(static_cast<size_t>(n)), offsets(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    connectivity[static_cast<size_t>(i)] = static_cast<int32_t>(i);
+    offsets[static_cast<size_t>(i)] = static_cast<int32_t>(i + 1);
+  }
+  std::string block;
+  uint64_t offset_points = 0, offset_normals = 0, offset_connectivity = 0, offset_offsets = 0;
+  offset_points = block.size();
+  AppendArray(points, &block);
+  if (normals) {
+    offset_normals = block.size();
+    AppendArray(normal_values, &block);
+  }
+  offset_connectivity = block.size();
+  AppendArray(connectivity, &block);
+  offset_offsets = block.size();
+  AppendArray(offsets, &block);
+
+  std::ostringstream os;
+  os << "<?xml version=\"1.0\"?>\n"
+     << "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+        "header_type=\"UInt64\">\n"
+     << "  <PolyData>\n"
+     << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << n
+     << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
+  if (normals) {
+    os << "      <PointData Normals=\"normals\">\n"
+       << "        <DataArray type=\"Float32\" Name=\"normals\" NumberOfComponents=\"3\" "
+          "format=\"appended\" offset=\"" << offset_normals << "\"/>\n"
+       << "      </PointData>\n";
+  }
+  os << "      <Points>\n"
+     << "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" "
+        "format=\"appended\" offset=\"" << offset_points << "\"/>\n"
+     << "      </Points>\n"
+     << "      <Verts>\n"
+     << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\""
+     << offset_connectivity << "\"/>\n"
+     << "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\""
+     << offset_offsets << "\"/>\n"
+     << "      </Verts>\n"
+     << "    </Piece>\n  </PolyData>\n"
+     << "  <AppendedData encoding=\"raw\">\n   _";
+  std::string text = os.str();
+  text += block;
+  text += "\n  </AppendedData>\n</VTKFile>\n";
+  return WriteFileAtomically(path, text);
 }
 
 namespace {

@@ -2,11 +2,14 @@
 #ifndef FEMREG_TOOLS_CLI_UTIL_H_
 #define FEMREG_TOOLS_CLI_UTIL_H_
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <string>
 #include <vector>
 
 #include "femreg/ground_truth.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
 #include "femreg/status.h"
 
 namespace femreg {
@@ -59,6 +62,27 @@ struct FractureFrame {
 // tells), not the node splits.
 void PrintFractureReport(const std::vector<FractureFrame>& frames, const std::string& truth_dir,
                          bool counts_vertices = false);
+
+// femreg's version ("0.1.0"), from the project's CMake version.
+const char* Version();
+
+// --set key.path=value (repeatable) on a subcommand: scene overrides for LoadSceneWithSets.
+void AddSetOption(CLI::App* cmd, std::vector<std::string>* sets);
+// LoadScene with the --set overrides applied to the YAML before the scene is parsed
+// (femreg/experiment.h: LoadSceneWithOverrides); errors name the file, line and key, and
+// the --set when the bad value came from one.
+Status LoadSceneWithSets(const std::string& path, const std::vector<std::string>& sets, Scene* scene);
+
+// The Python interpreter for the plotting scripts: $FEMREG_PYTHON when set, else python3
+// (then python) found on PATH; "" when there is none.
+std::string FindPython();
+// Runs argv[0] (searched on PATH when it has no '/') with the arguments, no shell between;
+// returns its exit code, or -1 when it could not start.
+int RunProgram(const std::vector<std::string>& argv);
+
+// Writes the points (and normals when the cloud has them) as a VTK PolyData file (.vtp,
+// float32 in raw appended binary, one vertex cell per point) that ParaView opens; atomically.
+Status WriteCloudVtp(const std::string& path, const PointCloud& cloud);
 
 // Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one exits at once.
 void InstallInterruptHandler();

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <memory>
 #include <regex>
 #include <sstream>
@@ -47,15 +48,17 @@ Status ResultObjects(const std::string& result, const std::vector<std::string>& 
   if (frames->empty()) return Status::Error(result + "/frames: no <object>_NNNN.vtu files");
   std::ifstream in((fs::path(result) / "summary.json").string());
   if (in) {
-    std::stringstream text;
-    text << in.rdbuf();
-    const std::string json = text.str();
-    const size_t objects = json.find("\"objects\"");
-    const std::regex name(R"re("name": "([^"]*)")re");
-    for (auto it = std::sregex_iterator(json.begin() + (objects == std::string::npos ? 0 : objects),
-                                        json.end(), name);
-         it != std::sregex_iterator(); ++it) {
-      if (frames->count((*it)[1].str())) names->push_back((*it)[1].str());
+    // The scene order of the objects; a summary that cannot be read leaves the files' order.
+    const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+    if (summary.is_object() && summary.contains("objects") && summary["objects"].is_array()) {
+      for (const nlohmann::json& o : summary["objects"]) {
+        if (!o.is_object() || !o.contains("name") || !o["name"].is_string()) continue;
+        const std::string name = o["name"].get<std::string>();
+        if (frames->count(name) &&
+            std::find(names->begin(), names->end(), name) == names->end()) {
+          names->push_back(name);
+        }
+      }
     }
   }
   for (const auto& kv : *frames) {

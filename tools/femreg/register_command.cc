@@ -1,11 +1,13 @@
 // femreg register: registers the scene's meshes to a sequence of point clouds.
 //
 // Writes, into OUT:
-//   frames/<object>_NNNN.vtu   the deformed mesh per frame (displacement, residual, observed)
-//   <object>.pvd               the ParaView collection of the sequence
+//   frames/<object>_NNNN.vtu   the deformed mesh per frame (displacement, residual, observed;
+//                              error and error_vector with ground truth)
+//   frames/cloud_NNNN.vtp      the cloud the frame was fitted to, after preprocessing
+//   <object>.pvd, cloud.pvd    the ParaView collections of the sequence
 //   stats.csv                  one row per frame: termination, iterations, pairs, energies,
 //                              time per stage, and vertex errors when ground truth is given
-//   summary.json               the run's settings and totals
+//   summary.json               the run's totals, version, back end, resolved options, inputs
 // Every file is written through a temporary file and a rename, after every frame, so an
 // interrupt (Ctrl-C) leaves whole files behind that cover the frames done so far.
 #include <algorithm>
@@ -20,6 +22,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "provenance.h"
 #include "femreg/collision.h"
 #include "femreg/eval.h"
 #include "femreg/ground_truth.h"
@@ -45,6 +48,7 @@ struct RegisterArgs {
   bool progress = true;
   int threads = 0;
   bool no_collision = false;
+  std::vector<std::string> sets;  // --set key.path=value
 };
 
 struct FrameRow {
@@ -159,43 +163,58 @@ Totals ComputeTotals(const std::vector<FrameRow>& rows) {
   return t;
 }
 
+// summary.json: the run's totals (fields read by scripts and tests), and what it ran: the
+// version, the back end, the resolved options, the --set overrides and the input files.
 std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Tracker& tracker,
-                        const std::vector<FrameRow>& rows, int total_frames, bool interrupted) {
+                        const std::vector<FrameRow>& rows, const std::vector<std::string>& files,
+                        const std::vector<std::string>& truth_files, bool interrupted) {
+  using json = nlohmann::ordered_json;
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   const Totals t = ComputeTotals(rows);
   const RegistrationOptions& o = tracker.options();
-  std::ostringstream os;
-  os << "{\n";
-  os << "  \"scene\": " << JsonString(args.scene) << ",\n";
-  os << "  \"frames_source\": " << JsonString(args.frames) << ",\n";
-  os << "  \"frames_total\": " << total_frames << ",\n";
-  os << "  \"frames_done\": " << t.frames << ",\n";
-  os << "  \"interrupted\": " << (interrupted ? "true" : "false") << ",\n";
-  os << "  \"frames_usable\": " << t.usable << ",\n";
-  os << "  \"regularizer\": " << JsonString(ToString(o.regularizer)) << ",\n";
-  os << "  \"objects\": [";
+  json j;
+  j["femreg_version"] = Version();
+  j["scene"] = args.scene;
+  j["frames_source"] = args.frames;
+  j["frames_total"] = files.size();
+  j["frames_done"] = t.frames;
+  j["interrupted"] = interrupted;
+  j["frames_usable"] = t.usable;
+  j["regularizer"] = ToString(o.regularizer);
+  j["backend"] = ToString(o.solver.backend);
+  // What solved the frames (a contact scene runs on Ceres whatever the option says).
+  json used = json::array();
+  for (const FrameRow& r : rows) {
+    const std::string b = ToString(r.summary.backend);
+    if (std::find(used.begin(), used.end(), b) == used.end()) used.push_back(b);
+  }
+  j["backends_used"] = used;
+  json objects = json::array();
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const TetMesh& m = tracker.mesh(static_cast<int>(i));
-    os << (i ? ", " : "") << "{\"name\": " << JsonString(scene.objects[i].name)
-       << ", \"vertices\": " << m.num_vertices() << ", \"tetrahedra\": " << m.num_tets()
-       << ", \"youngs_modulus\": " << JsonNumber(scene.objects[i].material.youngs_modulus)
-       << ", \"poisson_ratio\": " << JsonNumber(scene.objects[i].material.poisson_ratio) << "}";
+    objects.push_back({{"name", scene.objects[i].name},
+                       {"vertices", m.num_vertices()},
+                       {"tetrahedra", m.num_tets()},
+                       {"youngs_modulus", number(scene.objects[i].material.youngs_modulus)},
+                       {"poisson_ratio", number(scene.objects[i].material.poisson_ratio)}});
   }
-  os << "],\n";
-  os << "  \"solver\": {\"max_outer_iterations\": " << o.solver.max_outer_iterations
-     << ", \"max_inner_iterations\": " << o.solver.max_inner_iterations
-     << ", \"linear_solver\": " << JsonString(ToString(o.solver.linear_solver))
-     << ", \"trust_region\": " << JsonString(ToString(o.solver.trust_region))
-     << ", \"threads\": " << o.solver.num_threads << "},\n";
-  os << "  \"ms_per_frame_median\": " << JsonNumber(t.median_ms) << ",\n";
-  os << "  \"ms_per_frame_mean\": " << JsonNumber(t.mean_ms) << ",\n";
-  os << "  \"frames_per_second\": " << JsonNumber(t.fps);
+  j["objects"] = objects;
+  j["solver"] = {{"backend", ToString(o.solver.backend)},
+                 {"max_outer_iterations", o.solver.max_outer_iterations},
+                 {"max_inner_iterations", o.solver.max_inner_iterations},
+                 {"linear_solver", ToString(o.solver.linear_solver)},
+                 {"trust_region", ToString(o.solver.trust_region)},
+                 {"threads", o.solver.num_threads}};
+  j["ms_per_frame_median"] = number(t.median_ms);
+  j["ms_per_frame_mean"] = number(t.mean_ms);
+  j["frames_per_second"] = number(t.fps);
   if (t.have_errors) {
-    os << ",\n  \"vertex_error_mm\": {\"mean\": " << JsonNumber(t.err_mean * 1e3)
-       << ", \"max\": " << JsonNumber(t.err_max * 1e3)
-       << ", \"seen_mean\": " << JsonNumber(t.seen_mean * 1e3)
-       << ", \"seen_max\": " << JsonNumber(t.seen_max * 1e3)
-       << ", \"hidden_mean\": " << JsonNumber(t.hidden_mean * 1e3)
-       << ", \"hidden_max\": " << JsonNumber(t.hidden_max * 1e3) << "}";
+    j["vertex_error_mm"] = {{"mean", number(t.err_mean * 1e3)},
+                            {"max", number(t.err_max * 1e3)},
+                            {"seen_mean", number(t.seen_mean * 1e3)},
+                            {"seen_max", number(t.seen_max * 1e3)},
+                            {"hidden_mean", number(t.hidden_mean * 1e3)},
+                            {"hidden_max", number(t.hidden_max * 1e3)}};
   }
   double deepest = 0.0;
   int contacts = 0;
@@ -204,12 +223,16 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
     contacts = std::max(contacts, r.summary.contacts);
   }
   if (contacts > 0 || deepest > 0) {
-    os << ",\n  \"contacts\": {\"max_per_frame\": " << contacts
-       << ", \"max_penetration_mm\": " << JsonNumber(deepest * 1e3)
-       << ", \"collision\": " << (tracker.collision() != nullptr ? "true" : "false") << "}";
+    j["contacts"] = {{"max_per_frame", contacts},
+                     {"max_penetration_mm", number(deepest * 1e3)},
+                     {"collision", tracker.collision() != nullptr}};
   }
-  os << "\n}\n";
-  return os.str();
+  json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
+                {"threads", args.threads}};
+  j["command_line"] = flags;
+  j["provenance"] = ProvenanceJson(scene, o, args.sets, files, truth_files);
+  // A file name or description that is not UTF-8 must not end the run: replace its bytes.
+  return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
 // With --no-collision: the scene's collision section used only to measure, after each frame,
@@ -261,7 +284,7 @@ class ContactMeter {
 
 int RunRegister(const RegisterArgs& args) {
   Scene scene;
-  Status status = LoadScene(args.scene, &scene);
+  Status status = LoadSceneWithSets(args.scene, args.sets, &scene);
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;
@@ -330,6 +353,7 @@ int RunRegister(const RegisterArgs& args) {
   InstallInterruptHandler();
   std::vector<FrameRow> rows;
   std::vector<std::vector<PvdEntry>> pvd(static_cast<size_t>(tracker->num_objects()));
+  std::vector<PvdEntry> cloud_pvd;
   ProgressBar bar("register", static_cast<int>(files.size()), args.progress);
   bool interrupted = false;
   for (size_t f = 0; f < files.size(); ++f) {
@@ -358,6 +382,7 @@ int RunRegister(const RegisterArgs& args) {
     }
 
     // Ground truth covers all objects' vertices in scene order.
+    Vertices vertex_error;  // #V (all objects) by 3: result - truth, when known per vertex
     if (!truth_files.empty()) {
       GroundTruthFrame truth;
       Status gt = ReadGroundTruthFrame(truth_files[f], &truth);
@@ -401,10 +426,31 @@ int RunRegister(const RegisterArgs& args) {
       if (!row.have_errors) {
         row.errors = ComputeVertexErrors(all, truth);
         row.have_errors = true;
+        vertex_error = all - truth.positions;
       }
     }
 
     char name[64];
+    // The cloud the frame was fitted to, as the tracker used it (after the scene's
+    // preprocessing), beside the meshes: ParaView shows it over them.
+    {
+      PointCloud used = cloud;
+      const RegistrationOptions& o = tracker->options();
+      PreprocessPointCloud(o.preprocess, &used, nullptr,
+                           o.camera.enabled ? o.camera.position : Eigen::Vector3d::Zero());
+      std::snprintf(name, sizeof(name), "cloud_%04zu.vtp", f);
+      const std::string rel = std::string("frames/") + name;
+      status = WriteCloudVtp((fs::path(args.out) / rel).string(), used);
+      if (status.ok()) {
+        cloud_pvd.push_back({static_cast<double>(f), rel});
+        status = WritePvd((fs::path(args.out) / "cloud.pvd").string(), cloud_pvd);
+      }
+      if (!status.ok()) {
+        std::cerr << "\nfemreg register: " << status.message() << "\n";
+        return 1;
+      }
+    }
+    int vertex_offset = 0;
     for (int i = 0; i < tracker->num_objects(); ++i) {
       const TetMesh& m = tracker->mesh(i);
       std::snprintf(name, sizeof(name), "%s_%04zu.vtu", scene.objects[static_cast<size_t>(i)].name.c_str(), f);
@@ -428,6 +474,16 @@ int RunRegister(const RegisterArgs& args) {
       fields[2].name = "observed";
       fields[2].values.resize(m.num_vertices(), 1);
       for (int v = 0; v < m.num_vertices(); ++v) fields[2].values(v, 0) = tracker->vertex_observed(i)[v];
+      if (vertex_error.rows() >= vertex_offset + m.num_vertices()) {
+        const Vertices e = vertex_error.middleRows(vertex_offset, m.num_vertices());
+        fields.emplace_back();
+        fields.back().name = "error";  // m, |x - x_true| against the ground truth
+        fields.back().values = e.rowwise().norm();
+        fields.emplace_back();
+        fields.back().name = "error_vector";  // m, x - x_true
+        fields.back().values = e;
+      }
+      vertex_offset += m.num_vertices();
       const std::string rel = std::string("frames/") + name;
       status = WriteVtu((fs::path(args.out) / rel).string(), m, m.x, fields);
       if (!status.ok()) {
@@ -446,8 +502,7 @@ int RunRegister(const RegisterArgs& args) {
     status = WriteFileAtomically((fs::path(args.out) / "stats.csv").string(), StatsCsv(rows));
     if (status.ok()) {
       status = WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
-                                   SummaryJson(args, scene, *tracker, rows,
-                                               static_cast<int>(files.size()), false));
+                                   SummaryJson(args, scene, *tracker, rows, files, truth_files, false));
     }
     if (!status.ok()) {
       std::cerr << "\nfemreg register: " << status.message() << "\n";
@@ -468,7 +523,7 @@ int RunRegister(const RegisterArgs& args) {
   if (interrupted || Interrupted()) {
     interrupted = true;
     WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
-                        SummaryJson(args, scene, *tracker, rows, static_cast<int>(files.size()), true));
+                        SummaryJson(args, scene, *tracker, rows, files, truth_files, true));
   }
 
   const Totals t = ComputeTotals(rows);
@@ -512,8 +567,8 @@ int RunRegister(const RegisterArgs& args) {
     }
     PrintFractureReport(fracture, args.ground_truth);
   }
-  std::printf("Results in %s: %s.pvd (open in ParaView), stats.csv, summary.json\n", args.out.c_str(),
-              scene.objects.empty() ? "" : scene.objects[0].name.c_str());
+  std::printf("Results in %s: %s.pvd and cloud.pvd (open in ParaView), stats.csv, summary.json\n",
+              args.out.c_str(), scene.objects.empty() ? "" : scene.objects[0].name.c_str());
   if (interrupted) {
     std::fprintf(stderr, "Interrupted: the files cover the %d frames done.\n", t.frames);
     return 130;
@@ -553,6 +608,7 @@ void AddRegisterCommand(CLI::App* app) {
                 "Switch effects.collision off for this run, to compare with it on: the tracker adds "
                 "no contact term, and the scene's collision section only measures the contacts and "
                 "the deepest penetration of each frame's result (stats.csv)");
+  AddSetOption(cmd, &args->sets);
   cmd->callback([args] { SetExitCode(RunRegister(*args)); });
 }
 

@@ -10,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,7 @@ struct SimulateOptions {
   int threads = 0;         // 0 = OpenMP's default
   bool verbose = false;
   bool force = false;
+  std::vector<std::string> sets;  // --set key.path=value
 };
 
 // What one object's run produced, for the report and summary.json.
@@ -187,7 +189,13 @@ std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
                         ElasticModelType model_type, const ForwardOptions& forward,
                         const std::vector<ObjectResult>& results, double total_time_s) {
   std::ostringstream os;
-  os << "{\n  \"scene\": " << JsonString(options.scene_path) << ",\n"
+  // The --set overrides through nlohmann-json (register's summary.json is written with it
+  // whole; this one keeps its layout, which tests and scripts match as text).
+  const std::string overrides =
+      nlohmann::json(options.sets).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  os << "{\n  \"femreg_version\": " << JsonString(Version()) << ",\n"
+     << "  \"scene\": " << JsonString(options.scene_path) << ",\n"
+     << "  \"overrides\": " << overrides << ",\n"
      << "  \"model\": " << JsonString(ToString(model_type)) << ",\n"
      << "  \"tangent\": " << JsonString(ToString(forward.tangent)) << ",\n"
      << "  \"load_steps\": " << forward.load_steps << ",\n"
@@ -241,7 +249,7 @@ void Fail(const std::string& message) {
 void RunSimulate(const SimulateOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   Scene scene;
-  Status status = LoadScene(options.scene_path, &scene);
+  Status status = LoadSceneWithSets(options.scene_path, options.sets, &scene);
   if (!status.ok()) return Fail(status.message());
 
   std::vector<int> objects;
@@ -353,6 +361,7 @@ void AddSimulateCommand(CLI::App* app) {
   cmd->add_flag("-v,--verbose", options->verbose,
                 "One line per Newton iteration and the full report");
   cmd->add_flag("-f,--force", options->force, "Write into a non-empty output folder");
+  AddSetOption(cmd, &options->sets);
   cmd->callback([options] { RunSimulate(*options); });
 }
 

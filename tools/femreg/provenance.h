@@ -1,0 +1,31 @@
+// What a run's summary.json records so that the run can be told apart and repeated: the
+// version, the resolved options, the inputs.
+#ifndef FEMREG_TOOLS_PROVENANCE_H_
+#define FEMREG_TOOLS_PROVENANCE_H_
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "femreg/registration.h"
+#include "femreg/scene.h"
+
+namespace femreg {
+namespace cli {
+
+// Every field of the options, as the scene file names them (registration.*), after the
+// scene, --set and command-line flags were applied.
+nlohmann::ordered_json RegistrationOptionsJson(const RegistrationOptions& options);
+
+// {"femreg_version", "scene": path, "overrides": [--set ...], "scene_resolved": the scene as
+// YAML after the overrides (SceneToYaml: what differs from the defaults), "options": the
+// resolved registration options, "frames": the cloud files, "ground_truth": its files}.
+nlohmann::ordered_json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
+                              const std::vector<std::string>& overrides,
+                              const std::vector<std::string>& frame_files,
+                              const std::vector<std::string>& truth_files);
+
+}  // namespace cli
+}  // namespace femreg
+
+#endif  // FEMREG_TOOLS_PROVENANCE_H_
