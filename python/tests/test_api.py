@@ -64,6 +64,7 @@ def test_mesh_arrays_are_read_only_views():
     rest = mesh.rest
     assert rest.shape == (8, 3) and rest.dtype == np.float64
     assert not rest.flags.owndata  # a view of the C++ mesh, not a copy
+    assert not rest.flags.writeable
 
 
 def test_point_cloud_round_trip(tmp_path):
