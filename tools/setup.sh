@@ -1,7 +1,12 @@
 #!/usr/bin/env bash
-# Installs every Debian package that femreg's build, tests and demo need.
-# Does nothing when all are present. Run as root (or with sudo) on Debian 12.
+# Installs every Debian package that femreg's build, tests and demo need (nothing when all
+# are present), then builds the femreg Python package for Debian's python3 and installs it
+# into its site directory (/usr/local/lib/python3.11/dist-packages), so that
+# `python3 -c "import femreg"` works. Run as root (or with sudo) on Debian 12.
+# FEMREG_SETUP_PYTHON=0 skips the Python package; BUILD_DIR (default build) and JOBS as in
+# tools/build.sh.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 PACKAGES=(
   build-essential cmake pkg-config git
@@ -13,7 +18,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libtet1.5-dev
-  python3 python3-matplotlib python3-numpy
+  libpng-dev
+  python3 python3-dev python3-matplotlib python3-numpy python3-pytest pybind11-dev python3-venv
 )
 # Only for the cross-check against an independent FEM code (tools/compare_calculix.sh).
 OPTIONAL=(calculix-ccx)
@@ -28,18 +34,32 @@ for p in "${want[@]}"; do
   fi
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "setup: all ${#want[@]} packages present"
-  exit 0
-fi
-
-echo "setup: installing ${#missing[@]} package(s): ${missing[*]}"
 SUDO=""
 if [ "$(id -u)" != 0 ]; then
   command -v sudo >/dev/null || { echo "setup: need root or sudo to install packages" >&2; exit 1; }
   SUDO=sudo
 fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#want[@]} packages present"
+else
+  echo "setup: installing ${#missing[@]} package(s): ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  echo "setup: packages done"
+fi
+
+# The Python package, for Debian's interpreter (the one with python3-numpy), in the same
+# build folder as tools/build.sh (an up-to-date build costs nothing).
+if [ "${FEMREG_SETUP_PYTHON:-1}" = 1 ]; then
+  BUILD_DIR=${BUILD_DIR:-build}
+  JOBS=${JOBS:-$(nproc)}
+  echo "setup: building the femreg Python package in $BUILD_DIR"
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DFEMREG_BUILD_PYTHON=ON \
+    -DPython_EXECUTABLE=/usr/bin/python3 >/dev/null
+  cmake --build "$BUILD_DIR" --target femreg_python -j "$JOBS" >/dev/null
+  $SUDO cmake --install "$BUILD_DIR" --component python >/dev/null
+  (cd / && /usr/bin/python3 -c "import femreg; print('setup: python3 -c \"import femreg\" works (' + femreg.__file__ + ')')")
+fi
 echo "setup: done"

@@ -78,6 +78,20 @@ EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points);
 Vertices InterpolateEmbedded(const TetMesh& fine, const Vertices& fine_positions,
                              const EmbeddedPoints& embedded);
 
+// femreg synth --depth-png: every clouds_dir/NAME.pcd (points on the camera's pixel rays,
+// as the virtual camera returns them) written as depth_dir/NAME.png, the 16-bit depth image
+// the camera would store (CloudToDepthImage, femreg/point_cloud.h; depth_scale metres per
+// unit). Points two to a pixel (outliers) keep the nearer; points outside the image or
+// beyond 65535 units are left out and counted.
+struct DepthFramesReport {
+  int frames = 0;
+  long points = 0;   // cloud points read
+  long dropped = 0;  // not in any image
+};
+Status WriteDepthFrames(const std::string& clouds_dir, const CameraOptions& camera,
+                        double depth_scale, const std::string& depth_dir,
+                        DepthFramesReport* report);
+
 }  // namespace femreg
 
 #endif  // FEMREG_SYNTH_H_

@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "femreg/datasets.h"
 #include "femreg/scene.h"
+#include "femreg/synth.h"
 
 namespace femreg {
 namespace cli {
@@ -19,7 +20,7 @@ void Progress(int done, int total) {
 }
 
 int RunSynth(const std::string& scene_path, const std::string& out, int frames, bool force,
-             bool progress) {
+             bool progress, double depth_scale) {
   Scene scene;
   Status status = LoadScene(scene_path, &scene);
   if (status.ok() && !scene.synth.enabled) {
@@ -47,6 +48,18 @@ int RunSynth(const std::string& scene_path, const std::string& out, int frames, 
             << static_cast<int>(100 * report.mean_seen_fraction + 0.5) << "% of the vertices seen.\n"
             << "Track it with: femreg register --scene " << out << "/scene.yaml --frames " << out
             << "/clouds --ground-truth " << out << "/ground_truth --out OUT\n";
+  if (depth_scale > 0) {
+    DepthFramesReport depth;
+    status = WriteDepthFrames(out + "/clouds", scene.registration.camera, depth_scale,
+                              out + "/depth", &depth);
+    if (!status.ok()) {
+      std::cerr << "femreg synth: --depth-png: " << status.message() << "\n";
+      return 1;
+    }
+    std::cout << "Wrote " << depth.frames << " 16-bit depth images to " << out << "/depth ("
+              << depth_scale << " m per unit; " << depth.dropped << " of " << depth.points
+              << " points not in an image).\n";
+  }
   return 0;
 }
 
@@ -58,6 +71,8 @@ void AddSynthCommand(CLI::App* app) {
   auto frames = std::make_shared<int>(0);
   auto force = std::make_shared<bool>(false);
   auto progress = std::make_shared<bool>(true);
+  auto depth_png = std::make_shared<bool>(false);
+  auto depth_scale = std::make_shared<double>(0.001);
   CLI::App* cmd = app->add_subcommand(
       "synth",
       "Make a synthetic sequence with ground truth from a scene's 'synth:' section: the motion "
@@ -72,7 +87,15 @@ void AddSynthCommand(CLI::App* app) {
       ->check(CLI::Range(1, 100000));
   cmd->add_flag("--force", *force, "Write into a non-empty folder");
   cmd->add_flag("!--no-progress", *progress, "No progress bar");
-  cmd->callback([=] { SetExitCode(RunSynth(*scene, *out, *frames, *force, *progress)); });
+  cmd->add_flag("--depth-png", *depth_png,
+                "Also write OUT/depth/frame_NNNN.png: each cloud as the 16-bit depth image the "
+                "camera stores (millimetres unless --depth-scale)");
+  cmd->add_option("--depth-scale", *depth_scale, "Metres per depth unit of --depth-png")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->callback([=] {
+    SetExitCode(RunSynth(*scene, *out, *frames, *force, *progress, *depth_png ? *depth_scale : 0.0));
+  });
 }
 
 }  // namespace cli

@@ -1,0 +1,49 @@
+"""femreg: physics-regularized non-rigid registration from Python.
+
+A tetrahedral mesh of a deformable object is fitted to each point cloud of a sequence by
+minimizing data terms regularized by a corotational linear FEM energy (the C++ library,
+through pybind11). Units are SI: metres, pascals, seconds.
+
+    import femreg
+    scene = femreg.load_scene("datasets/demo/scene.yaml")
+    tracker = femreg.Tracker(scene)
+    for points in clouds:               # (N, 3) float arrays, metres, scene frame
+        x = tracker.track(points)       # (V, 3) vertices of object 0
+        print(tracker.summary["termination"], tracker.summary["rms_residual"])
+
+Every error of the C++ library (a bad file, a bad scene) is raised as femreg.Error with
+the library's message (which names the file, line or field); bad argument shapes and
+option names raise ValueError.
+"""
+
+from ._femreg import (  # noqa: F401  (the public API)
+    CameraOptions,
+    DataTermOptions,
+    Error,
+    Material,
+    Mesh,
+    PointCloud,
+    PreprocessOptions,
+    RegistrationOptions,
+    Scene,
+    SolverOptions,
+    Tracker,
+    WeightOptions,
+    load_scene,
+    make_box,
+    depth_to_points,
+    mesh_from_arrays,
+    parse_scene,
+    read_depth_frame,
+    read_depth_png,
+    read_mesh,
+    read_point_cloud,
+    simulate,
+    write_depth_png,
+    write_obj_surface,
+    write_ply_surface,
+    write_point_cloud,
+    write_vtu,
+)
+
+__version__ = "@PROJECT_VERSION@"

@@ -1,0 +1,141 @@
+"""The Python API: readers and writers, options, errors as exceptions, the tracker on a
+small synthetic problem, the forward solve."""
+import numpy as np
+import pytest
+
+import femreg
+
+
+def test_error_is_raised_with_the_library_message(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("objects:\n  - name: a\n    generate: {shape: box}\n"
+                   "    material: {poisson_ratio: 0.7}\n")
+    with pytest.raises(femreg.Error) as info:
+        femreg.load_scene(str(bad))
+    message = str(info.value)
+    # The C++ message names the file, the line and the key.
+    assert "bad.yaml:4" in message
+    assert "poisson_ratio" in message
+    assert isinstance(info.value, RuntimeError)
+
+
+def test_missing_files_raise():
+    with pytest.raises(femreg.Error, match="no_such_mesh.vtu"):
+        femreg.read_mesh("no_such_mesh.vtu")
+    with pytest.raises(femreg.Error, match="no_such_cloud.pcd"):
+        femreg.read_point_cloud("no_such_cloud.pcd")
+
+
+def test_bad_shapes_and_names_raise_value_error():
+    mesh = femreg.make_box([0.1, 0.02, 0.02], [5, 1, 1])
+    tracker = femreg.Tracker([mesh], [femreg.Material()])
+    with pytest.raises(ValueError, match=r"points: expected an \(N, 3\) array, got shape \(4, 2\)"):
+        tracker.track(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="normals"):
+        tracker.track(np.zeros((4, 3)), normals=np.zeros((3, 3)))
+    options = femreg.RegistrationOptions()
+    with pytest.raises(ValueError, match="solver.backend: unknown value 'fastest'"):
+        options.solver.backend = "fastest"
+    with pytest.raises(IndexError):
+        tracker.vertices(1)
+    # Nothing was tracked by the failed calls.
+    assert tracker.frame == 0
+
+
+def test_mesh_round_trip(tmp_path):
+    mesh = femreg.make_box([0.2, 0.05, 0.05], [4, 1, 1])
+    assert mesh.num_vertices == 20 and mesh.num_tets == 24
+    moved = mesh.rest + np.array([0.01, 0.0, 0.0])
+    path = tmp_path / "box.vtu"
+    femreg.write_vtu(str(path), mesh, moved,
+                     fields={"displacement": moved - mesh.rest,
+                             "cell_id": np.arange(mesh.num_tets, dtype=float)})
+    back = femreg.read_mesh(str(path))
+    # VTU stores Float64: the positions come back exactly (up to the last bit; 1e-15 m).
+    np.testing.assert_allclose(back.rest, moved, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(np.sort(back.tets, axis=1), np.sort(mesh.tets, axis=1))
+    femreg.write_ply_surface(str(tmp_path / "s.ply"), mesh)
+    femreg.write_obj_surface(str(tmp_path / "s.obj"), mesh, moved)
+    assert (tmp_path / "s.obj").read_text().startswith(("#", "v "))
+
+
+def test_mesh_arrays_are_read_only_views():
+    mesh = femreg.make_box([1, 1, 1], [1, 1, 1])
+    rest = mesh.rest
+    assert rest.shape == (8, 3) and rest.dtype == np.float64
+    assert not rest.flags.owndata  # a view of the C++ mesh, not a copy
+    assert not rest.flags.writeable
+
+
+def test_point_cloud_round_trip(tmp_path):
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-1, 1, (50, 3))
+    normals = rng.normal(size=(50, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    path = tmp_path / "c.pcd"
+    femreg.write_point_cloud(str(path), points, normals)
+    cloud, info = femreg.read_point_cloud(str(path))
+    assert len(cloud) == 50 and info["nonfinite_dropped"] == 0
+    # Binary PCD stores float32: 6e-8 relative; coordinates are <= 1 m.
+    np.testing.assert_allclose(cloud.points, points, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(cloud.normals, normals, rtol=0, atol=1e-7)
+
+
+def _surface_cloud(mesh, positions):
+    """Points on every surface triangle (centroids and vertices) at `positions`."""
+    tri = positions[mesh.surface]
+    return np.concatenate([tri.mean(axis=1), positions[np.unique(mesh.surface)]])
+
+
+def test_tracker_follows_a_rigid_translation():
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    options = femreg.RegistrationOptions()
+    options.solver.max_outer_iterations = 10
+    tracker = femreg.Tracker([mesh], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+    shift = np.array([0.004, -0.002, 0.001])
+    for _ in range(4):
+        x = tracker.track(_surface_cloud(mesh, mesh.rest + shift))
+    assert x.shape == (mesh.num_vertices, 3)
+    summary = tracker.summary
+    assert summary["usable"] and summary["frame"] == 3
+    assert summary["termination"] in ("converged", "max_iterations")
+    assert summary["points_used"] > 0 and summary["iterations"]
+    # A rigid motion costs no elastic energy: the fit reaches the shifted mesh to well below
+    # the 4.9 mm shift (0.1 mm: the data term's gating and temporal pull leave micrometres).
+    assert np.abs(x - (mesh.rest + shift)).max() < 1e-4
+    np.testing.assert_array_equal(tracker.vertices(0), x)
+
+
+def test_tracker_reports_bad_frames_in_the_summary():
+    mesh = femreg.make_box([0.1, 0.02, 0.02], [5, 1, 1])
+    tracker = femreg.Tracker([mesh], [femreg.Material()])
+    x = tracker.track(np.full((10, 3), np.nan))
+    assert tracker.summary["termination"] in ("invalid_input", "no_correspondences")
+    assert tracker.summary["nonfinite_dropped"] == 10
+    np.testing.assert_array_equal(x, mesh.rest)  # the shape is held
+
+
+def test_float32_and_strided_input_are_accepted():
+    mesh = femreg.make_box([0.1, 0.02, 0.02], [5, 1, 1])
+    cloud = _surface_cloud(mesh, mesh.rest)
+    a = femreg.Tracker([mesh], [femreg.Material()])
+    b = femreg.Tracker([mesh], [femreg.Material()])
+    xa = a.track(cloud.astype(np.float32).astype(np.float64))
+    # A float32 array and a non-contiguous view (every column of a (N, 6) array) give the
+    # same cloud, hence the same result bit for bit.
+    wide = np.concatenate([cloud.astype(np.float32).astype(np.float64), np.zeros_like(cloud)], axis=1)
+    xb = b.track(wide[:, :3])
+    np.testing.assert_array_equal(xa, xb)
+
+
+def test_simulate_beam(datasets):
+    scene = femreg.load_scene(str(datasets / "beam" / "beam.yaml"))
+    result = femreg.simulate(scene)
+    assert result["converged"], result["message"]
+    x = result["vertices"]
+    rest = result["mesh"].rest
+    assert x.shape == rest.shape
+    np.testing.assert_allclose(np.linalg.norm(x - rest, axis=1).max(), result["max_displacement"],
+                               rtol=1e-12)
+    with pytest.raises(ValueError, match="no such object"):
+        femreg.simulate(scene, object="nope")
