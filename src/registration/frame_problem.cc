@@ -143,12 +143,27 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
   auto& point3 = *problem_.AddSet<energy::PointToPoint<3>>(TermGroup::kData, loss).mutable_blocks();
   auto& plane1 = *problem_.AddSet<energy::PointToPlane<1>>(TermGroup::kData, loss).mutable_blocks();
   auto& plane3 = *problem_.AddSet<energy::PointToPlane<3>>(TermGroup::kData, loss).mutable_blocks();
-  // Per pair: the legacy weight, or data_per_area times the area the pair stands for.
+  // Per pair: the legacy weight, or data_per_area times the area the pair stands for. The
+  // area of a cloud point is the median over the touched surface triangles of (triangle's
+  // rest area / its cloud->model pairs): the cloud's spacing, measured where it covers the
+  // surface. One value for all points: a triangle reached by a single stray point (an
+  // outlier, a hand next to the object) must not hand it the triangle's whole area.
   const bool per_pair = options.weights.data >= 0;
-  std::unordered_map<uint64_t, int> triangle_pairs;  // cloud->model pairs per triangle
+  double point_area = 0.0;
   if (!per_pair) {
+    std::unordered_map<uint64_t, int> triangle_pairs;  // cloud->model pairs per triangle
     for (const DataPair& p : pairs) {
       if (p.num_vertices == 3) ++triangle_pairs[TriangleKey(p.vertices[0], p.vertices[1], p.vertices[2])];
+    }
+    std::vector<double> shares;
+    shares.reserve(triangle_pairs.size());
+    for (const auto& [key, count] : triangle_pairs) {
+      const auto it = triangle_area_.find(key);
+      if (it != triangle_area_.end()) shares.push_back(it->second / count);
+    }
+    if (!shares.empty()) {
+      std::nth_element(shares.begin(), shares.begin() + shares.size() / 2, shares.end());
+      point_area = shares[shares.size() / 2];
     }
   }
   auto weight_of = [&](const DataPair& p) {
@@ -159,11 +174,7 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
                  ? k * options.weights.model_to_cloud_share * vertex_area_[p.vertices[0]]
                  : 0.0;
     }
-    const uint64_t key = TriangleKey(p.vertices[0], p.vertices[1], p.vertices[2]);
-    const auto it = triangle_area_.find(key);
-    // A triangle made after BuildElastic (cannot happen: topology changes rebuild it) has no
-    // area; its pairs then weigh nothing rather than an invented amount.
-    return it == triangle_area_.end() ? 0.0 : k * it->second / triangle_pairs[key];
+    return k * point_area;
   };
   auto fill = [&](const DataPair& p, auto* b) {
     for (size_t k = 0; k < b->vertices.size(); ++k) {

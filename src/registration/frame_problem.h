@@ -28,7 +28,8 @@ class FrameProblem {
   // The data blocks of this outer iteration's pairs with the data loss. Their weights: with
   // weights.data set (legacy), that per pair; else weights.data_per_area times the observed
   // area each pair stands for: a model->cloud pair its vertex's share of the rest surface
-  // around it, a cloud->model pair its triangle's rest area over the triangle's pairs.
+  // around it (times model_to_cloud_share), a cloud->model pair the cloud's area per point
+  // (the median over the touched triangles of rest area / pairs on it).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
   // The contact penalty of the detected contacts (k and D from the world).
   void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world);
