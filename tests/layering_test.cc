@@ -40,6 +40,7 @@ const std::map<std::string, int> kRank = {
     {"scene", 9},         // scene files: reading, writing, setting up meshes and problems
     {"datasets", 10},     // the sequence generators
     {"experiments", 10},  // the bench / compare sweep
+    {"calibration", 10},  // material from data: forward solves against observed clouds
     {"tools", 11},        // the femreg command line
 };
 
@@ -56,6 +57,7 @@ const std::map<std::string, std::string> kHeaderModule = {
     {"ground_truth.h", "eval"},     {"eval.h", "eval"},
     {"synth.h", "synth"},           {"scene.h", "scene"},
     {"datasets.h", "datasets"},     {"experiment.h", "experiments"},
+    {"calibration.h", "calibration"},
 };
 
 // Arrows that point up today, each with the change that removes it. Keep this list short.

@@ -88,7 +88,20 @@ struct DataTermOptions {
 };
 
 struct WeightOptions {
-  double data = 200.0;     // w_data (N/m): stiffness of one correspondence
+  // The data term's stiffness per unit of observed surface (N/m per m^2 = N/m^3): a point on
+  // the model pulled d metres from the cloud over an area A stores 0.5 data_per_area A d^2.
+  // Each cloud->model pair gets the rest area of its surface triangle shared among the
+  // triangle's pairs, each model->cloud pair its vertex's third of the areas of the surface
+  // triangles around it, so that a denser or sparser cloud of the same surface gives the
+  // same energy (README, "The data weight").
+  double data_per_area = 2.0e7;
+  // Model->cloud pairs weigh this fraction of data_per_area per unit area: they pair a
+  // vertex with its nearest cloud point, which lies up to half the cloud's spacing off the
+  // closest surface point, so at full weight a sparser cloud would bias the fit.
+  double model_to_cloud_share = 0.03;
+  // Legacy: a stiffness per correspondence (N/m), whatever the cloud's density. When set
+  // (>= 0) it replaces data_per_area; < 0 = not set (the default).
+  double data = -1.0;
   double elastic = 1.0;    // w_elastic, multiplies the FEM energy (J)
   double temporal = 1.0;   // w_temporal, multiplies 0.5 sum m_i |x_i - x_i^prev|^2 (kg m^2)
   double anchor = 1.0e4;   // soft anchors: 0.5 w |x_i - target_i|^2 per vertex (N/m)

@@ -180,6 +180,7 @@ Scene TrackingScene(const Scenario& s) {
   r.camera = s.camera;
   r.data.max_distance = 0.03;
   r.data.visibility = s.tracked_visibility;
+  r.weights.data = 200;  // the tracked toughness was tuned with the per-pair data weight
   r.solver.max_outer_iterations = 6;
   r.solver.max_inner_iterations = 10;
   scene.effects.fracture = true;

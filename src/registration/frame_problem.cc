@@ -8,7 +8,34 @@ namespace femreg {
 
 using energy::TermGroup;
 
+namespace {
+// A surface triangle's key: its three global vertex indices, sorted, 21 bits each.
+uint64_t TriangleKey(int a, int b, int c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return (static_cast<uint64_t>(a) << 42) | (static_cast<uint64_t>(b) << 21) | static_cast<uint64_t>(c);
+}
+}  // namespace
+
+// Rest areas of the surface for the data weights per unit area.
+void FrameProblem::BuildAreas(const TrackerState& state) {
+  vertex_area_.assign(state.num_vertices, 0.0);
+  triangle_area_.clear();
+  for (const ObjectState& o : state.objects) {
+    const TetMesh& m = o.mesh;
+    for (int f = 0; f < m.num_surface_triangles(); ++f) {
+      const int a = m.surface(f, 0), b = m.surface(f, 1), c = m.surface(f, 2);
+      const Eigen::Vector3d ab = m.rest.row(b) - m.rest.row(a), ac = m.rest.row(c) - m.rest.row(a);
+      const double area = 0.5 * ab.cross(ac).norm();
+      triangle_area_[TriangleKey(a + o.offset, b + o.offset, c + o.offset)] = area;
+      for (int v : {a, b, c}) vertex_area_[v + o.offset] += area / 3.0;
+    }
+  }
+}
+
 void FrameProblem::BuildElastic(const TrackerState& state) {
+  BuildAreas(state);
   problem_.Clear(TermGroup::kElastic);
   problem_.Reset(state.num_vertices);
   std::vector<std::array<int, 4>> cells;
@@ -116,14 +143,46 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
   auto& point3 = *problem_.AddSet<energy::PointToPoint<3>>(TermGroup::kData, loss).mutable_blocks();
   auto& plane1 = *problem_.AddSet<energy::PointToPlane<1>>(TermGroup::kData, loss).mutable_blocks();
   auto& plane3 = *problem_.AddSet<energy::PointToPlane<3>>(TermGroup::kData, loss).mutable_blocks();
-  const double w = options.weights.data;
+  // Per pair: the legacy weight, or data_per_area times the area the pair stands for. The
+  // area of a cloud point is the median over the touched surface triangles of (triangle's
+  // rest area / its cloud->model pairs): the cloud's spacing, measured where it covers the
+  // surface. One value for all points: a triangle reached by a single stray point (an
+  // outlier, a hand next to the object) must not hand it the triangle's whole area.
+  const bool per_pair = options.weights.data >= 0;
+  double point_area = 0.0;
+  if (!per_pair) {
+    std::unordered_map<uint64_t, int> triangle_pairs;  // cloud->model pairs per triangle
+    for (const DataPair& p : pairs) {
+      if (p.num_vertices == 3) ++triangle_pairs[TriangleKey(p.vertices[0], p.vertices[1], p.vertices[2])];
+    }
+    std::vector<double> shares;
+    shares.reserve(triangle_pairs.size());
+    for (const auto& [key, count] : triangle_pairs) {
+      const auto it = triangle_area_.find(key);
+      if (it != triangle_area_.end()) shares.push_back(it->second / count);
+    }
+    if (!shares.empty()) {
+      std::nth_element(shares.begin(), shares.begin() + shares.size() / 2, shares.end());
+      point_area = shares[shares.size() / 2];
+    }
+  }
+  auto weight_of = [&](const DataPair& p) {
+    if (per_pair) return options.weights.data;
+    const double k = options.weights.data_per_area;
+    if (p.num_vertices == 1) {
+      return p.vertices[0] < static_cast<int>(vertex_area_.size())
+                 ? k * options.weights.model_to_cloud_share * vertex_area_[p.vertices[0]]
+                 : 0.0;
+    }
+    return k * point_area;
+  };
   auto fill = [&](const DataPair& p, auto* b) {
     for (size_t k = 0; k < b->vertices.size(); ++k) {
       b->vertices[k] = p.vertices[k];
       b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];
     }
     b->target = p.target;
-    b->weight = w;
+    b->weight = weight_of(p);
   };
   for (const DataPair& p : pairs) {
     const bool plane = p.normal.squaredNorm() > 0;

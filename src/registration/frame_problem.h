@@ -4,6 +4,8 @@
 #ifndef FEMREG_REGISTRATION_FRAME_PROBLEM_H_
 #define FEMREG_REGISTRATION_FRAME_PROBLEM_H_
 
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "energy/problem.h"
@@ -23,7 +25,11 @@ class FrameProblem {
   // The temporal springs (w_t m_i towards state.frame_start) and the anchors at this frame's
   // targets: hard anchors move state->x onto their targets and hold them.
   void BuildFrameTerms(TrackerState* state);
-  // The data blocks of this outer iteration's pairs: w_data, the data loss.
+  // The data blocks of this outer iteration's pairs with the data loss. Their weights: with
+  // weights.data set (legacy), that per pair; else weights.data_per_area times the observed
+  // area each pair stands for: a model->cloud pair its vertex's share of the rest surface
+  // around it (times model_to_cloud_share), a cloud->model pair the cloud's area per point
+  // (the median over the touched triangles of rest area / pairs on it).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
   // The contact penalty of the detected contacts (k and D from the world).
   void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world);
@@ -31,7 +37,12 @@ class FrameProblem {
   const energy::Problem& problem() const { return problem_; }
 
  private:
+  void BuildAreas(const TrackerState& state);
   energy::Problem problem_;
+  // Rest areas (m^2), from BuildElastic: per global vertex, a third of the surface
+  // triangles around it; per surface triangle, keyed by its sorted vertices.
+  std::vector<double> vertex_area_;
+  std::unordered_map<uint64_t, double> triangle_area_;
 };
 
 }  // namespace femreg

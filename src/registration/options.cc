@@ -213,7 +213,13 @@ bool DataTermOptions::IsValid(std::string* error) const {
 }
 
 bool WeightOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(data) && data >= 0)) return Fail(error, "weights.data", "must be >= 0", data);
+  if (!(std::isfinite(data_per_area) && data_per_area >= 0)) {
+    return Fail(error, "weights.data_per_area", "must be >= 0", data_per_area);
+  }
+  if (!std::isfinite(data)) return Fail(error, "weights.data", "must be finite", data);
+  if (!(std::isfinite(model_to_cloud_share) && model_to_cloud_share >= 0)) {
+    return Fail(error, "weights.model_to_cloud_share", "must be >= 0", model_to_cloud_share);
+  }
   if (!(std::isfinite(elastic) && elastic >= 0)) {
     return Fail(error, "weights.elastic", "must be >= 0", elastic);
   }

@@ -86,8 +86,19 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
-    w.CheckKeys({"data", "elastic", "temporal", "anchor"});
-    if (w.Has("data")) r.weights.data = w["data"].AsDouble();
+    w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "elastic", "temporal", "anchor"});
+    if (w.Has("data") && w.Has("data_per_area")) {
+      w["data"].Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
+                     "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
+    }
+    if (w.Has("data")) {
+      r.weights.data = w["data"].AsDouble();
+      if (!(r.weights.data >= 0)) w["data"].Fail("must be >= 0 (N/m per correspondence)");
+    }
+    if (w.Has("data_per_area")) r.weights.data_per_area = w["data_per_area"].AsDouble();
+    if (w.Has("model_to_cloud_share")) {
+      r.weights.model_to_cloud_share = w["model_to_cloud_share"].AsDouble();
+    }
     if (w.Has("elastic")) r.weights.elastic = w["elastic"].AsDouble();
     if (w.Has("temporal")) r.weights.temporal = w["temporal"].AsDouble();
     if (w.Has("anchor")) r.weights.anchor = w["anchor"].AsDouble();

@@ -296,6 +296,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
 
   YAML::Node weights = FlowMap();
   Put(weights, "data", r.weights.data, d.weights.data);
+  if (r.weights.data < 0) Put(weights, "data_per_area", r.weights.data_per_area, d.weights.data_per_area);
+  Put(weights, "model_to_cloud_share", r.weights.model_to_cloud_share, d.weights.model_to_cloud_share);
   Put(weights, "elastic", r.weights.elastic, d.weights.elastic);
   Put(weights, "temporal", r.weights.temporal, d.weights.temporal);
   Put(weights, "anchor", r.weights.anchor, d.weights.anchor);

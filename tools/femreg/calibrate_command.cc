@@ -1,0 +1,284 @@
+// femreg calibrate --scene SCENE --observed CLOUD... --out DIR: fits a material parameter
+// (Young's modulus by default) of a scene object so that its simulated equilibrium under
+// the scene's loads and boundary conditions matches the observed clouds
+// (femreg/calibration.h). Writes DIR/calibration.json, DIR/scene.yaml (the scene with the
+// fitted value) and DIR/misfit.png.
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_util.h"
+#include "commands.h"
+#include "femreg/calibration.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
+
+namespace femreg {
+namespace cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CalibrateArgs {
+  std::string scene_path;
+  std::vector<std::string> observed;
+  std::string out_dir;
+  std::string object;
+  std::string param = "E";
+  int region = -1;
+  double lower = 0.0, upper = 0.0;
+  int grid = 9;
+  double tolerance = 1e-3;
+  int max_evaluations = 40;
+  double loss_scale = 0.002;
+  double max_distance = 0.02;
+  bool no_preprocess = false;
+  bool plot = true;
+  bool verbose = false;
+  bool force = false;
+};
+
+void Fail(const std::string& message) {
+  std::cerr << "femreg calibrate: " << message << "\n";
+  SetExitCode(1);
+}
+
+std::string SamplesJson(const CalibrationSummary& s) {
+  std::ostringstream os;
+  os << "[";
+  for (size_t i = 0; i < s.samples.size(); ++i) {
+    const CalibrationSample& c = s.samples[i];
+    os << (i ? "," : "") << "\n    {\"value\": " << JsonNumber(c.value)
+       << ", \"objective\": " << JsonNumber(c.objective)
+       << ", \"mean_mm\": " << JsonNumber(c.mean_distance * 1e3)
+       << ", \"rms_mm\": " << JsonNumber(c.rms_distance * 1e3)
+       << ", \"inlier_fraction\": " << JsonNumber(c.inlier_fraction)
+       << ", \"newton_iterations\": " << c.newton_iterations
+       << ", \"time_s\": " << JsonNumber(c.time_s)
+       << ", \"stage\": " << JsonString(c.grid ? "grid" : "golden") << "}";
+  }
+  os << (s.samples.empty() ? "]" : "\n  ]");
+  return os.str();
+}
+
+std::string OptionalNumber(bool known, double v) { return known ? JsonNumber(v) : "null"; }
+
+std::string SummaryJson(const CalibrateArgs& args, const Scene& scene,
+                        const CalibrationOptions& options, const CalibrationSummary& s,
+                        const std::vector<int>& cloud_points) {
+  const bool width = s.sigma_t > 0;
+  std::ostringstream os;
+  os << "{\n  \"scene\": " << JsonString(args.scene_path) << ",\n  \"observed\": [";
+  for (size_t i = 0; i < args.observed.size(); ++i) {
+    os << (i ? ", " : "") << "{\"file\": " << JsonString(args.observed[i])
+       << ", \"points\": " << cloud_points[i] << "}";
+  }
+  os << "],\n"
+     << "  \"object\": " << JsonString(scene.objects[options.object].name) << ",\n"
+     << "  \"parameter\": " << JsonString(ToString(s.parameter)) << ",\n"
+     << "  \"region\": " << (options.parameter == CalibrationParameter::kRegionYoungsModulus
+                                 ? std::to_string(options.region) : std::string("null"))
+     << ",\n"
+     << "  \"termination\": " << JsonString(ToString(s.termination)) << ",\n"
+     << "  \"message\": " << JsonString(s.message) << ",\n"
+     << "  \"usable\": " << (s.IsSolutionUsable() ? "true" : "false") << ",\n"
+     << "  \"value\": " << JsonNumber(s.value) << ",\n"
+     << "  \"initial_value\": " << JsonNumber(s.initial_value) << ",\n"
+     << "  \"interval\": [" << JsonNumber(s.lower) << ", " << JsonNumber(s.upper) << "],\n"
+     << "  \"misfit_mean_mm\": " << JsonNumber(s.mean_distance * 1e3) << ",\n"
+     << "  \"misfit_rms_mm\": " << JsonNumber(s.rms_distance * 1e3) << ",\n"
+     << "  \"objective\": " << JsonNumber(s.objective) << ",\n"
+     << "  \"inlier_fraction\": " << JsonNumber(s.inlier_fraction) << ",\n"
+     << "  \"points\": " << s.num_points << ",\n"
+     << "  \"uncertainty\": {\"sigma\": " << OptionalNumber(width, s.sigma_t)
+     << ", \"sigma_of\": " << JsonString(options.parameter == CalibrationParameter::kPoissonRatio ? "nu" : "ln E")
+     << ", \"one_sigma\": [" << OptionalNumber(width, s.value_low) << ", "
+     << OptionalNumber(width, s.value_high) << "], \"rms_within_10_percent\": ["
+     << OptionalNumber(width, s.width_low) << ", " << OptionalNumber(width, s.width_high) << "]},\n"
+     << "  \"loss\": {\"huber_scale_m\": " << JsonNumber(options.loss_scale)
+     << ", \"max_distance_m\": " << JsonNumber(options.max_distance) << "},\n"
+     << "  \"evaluations\": " << s.evaluations << ",\n"
+     << "  \"newton_iterations\": " << s.newton_iterations << ",\n"
+     << "  \"time_s\": " << JsonNumber(s.total_time_s) << ",\n"
+     << "  \"forward_time_s\": " << JsonNumber(s.forward_time_s) << ",\n"
+     << "  \"samples\": " << SamplesJson(s) << "\n}\n";
+  return os.str();
+}
+
+// The plotting script beside the sources, or installed.
+std::string FindMisfitScript() {
+  const std::vector<fs::path> candidates = {
+      fs::path(FEMREG_SOURCE_DIR) / "tools" / "plot_misfit.py",
+      fs::read_symlink("/proc/self/exe").parent_path() / ".." / "share" / "femreg" / "plot_misfit.py"};
+  std::error_code ec;
+  for (const auto& c : candidates) {
+    if (fs::exists(c, ec)) return c.string();
+  }
+  return "";
+}
+
+// FEMREG_PYTHON, else the python3 on PATH if it has matplotlib, else the system one.
+std::string FindPython() {
+  if (const char* p = std::getenv("FEMREG_PYTHON"); p != nullptr && *p) return p;
+  if (std::system("python3 -c 'import matplotlib' >/dev/null 2>&1") == 0) return "python3";
+  return "/usr/bin/python3";
+}
+
+void RunCalibrate(const CalibrateArgs& args) {
+  Scene scene;
+  Status status = LoadScene(args.scene_path, &scene);
+  if (!status.ok()) return Fail(status.message());
+
+  CalibrationOptions options;
+  if (!FromString(args.param, &options.parameter)) {
+    return Fail("--param " + args.param + ": use E, nu or region_E");
+  }
+  options.object = -1;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    if (args.object.empty() ? i == 0 : scene.objects[i].name == args.object) {
+      options.object = static_cast<int>(i);
+      break;
+    }
+  }
+  if (options.object < 0) return Fail("--object " + args.object + ": the scene has no such object");
+  if (args.object.empty() && scene.objects.size() > 1) {
+    return Fail("the scene has " + std::to_string(scene.objects.size()) +
+                " objects: say which one with --object");
+  }
+  options.region = args.region;
+  options.lower = args.lower;
+  options.upper = args.upper;
+  options.grid_samples = args.grid;
+  options.tolerance = args.tolerance;
+  options.max_evaluations = args.max_evaluations;
+  options.loss_scale = args.loss_scale;
+  options.max_distance = args.max_distance;
+  options.verbose = args.verbose;
+  std::string error;
+  if (!options.IsValid(&error)) return Fail("--" + error);
+
+  std::vector<PointCloud> clouds;
+  std::vector<int> points;
+  for (const std::string& path : args.observed) {
+    PointCloud cloud;
+    int dropped = 0;
+    SensorPose pose;
+    status = ReadPointCloud(path, &cloud, &dropped, &pose);
+    if (!status.ok()) return Fail(status.message());
+    if (!args.no_preprocess) {
+      const Eigen::Vector3d viewpoint =
+          pose.known ? pose.origin : scene.registration.camera.position;
+      PreprocessPointCloud(scene.registration.preprocess, &cloud, nullptr, viewpoint);
+    }
+    if (cloud.size() == 0) return Fail(path + ": no point left (after the scene's preprocess)");
+    points.push_back(cloud.size());
+    clouds.push_back(std::move(cloud));
+  }
+
+  const Status prepared = PrepareOutputDir(args.out_dir, args.force);
+  if (!prepared.ok()) return Fail("--out " + prepared.message());
+  const fs::path out(args.out_dir);
+
+  std::cout << "calibrating " << ToString(options.parameter) << " of "
+            << scene.objects[options.object].name << " against " << clouds.size()
+            << " cloud(s)\n";
+  CalibrationSummary summary;
+  status = Calibrate(scene, clouds, options, &summary, args.observed);
+  if (!status.ok()) return Fail(status.message());
+  std::cout << summary.BriefReport() << "\n";
+
+  const std::string json_path = (out / "calibration.json").string();
+  status = WriteFileAtomically(json_path, SummaryJson(args, scene, options, summary, points));
+  if (!status.ok()) return Fail(status.message());
+  std::cout << "wrote " << json_path << "\n";
+
+  if (summary.IsSolutionUsable()) {
+    const Scene fitted = ApplyCalibration(scene, options, summary.value);
+    std::ostringstream comment;
+    comment << args.scene_path << " with " << ToString(options.parameter) << " fitted by femreg "
+            << "calibrate to " << summary.num_points << " observed points: "
+            << summary.value << " (was " << summary.initial_value << "), mean distance "
+            << summary.mean_distance * 1e3 << " mm";
+    const std::string scene_out = (out / "scene.yaml").string();
+    status = WriteScene(fitted, scene_out, comment.str());
+    if (!status.ok()) return Fail(status.message());
+    std::cout << "wrote " << scene_out << "\n";
+  }
+
+  if (args.plot && !summary.samples.empty()) {
+    const std::string script = FindMisfitScript();
+    const std::string png = (out / "misfit.png").string();
+    const std::string cmd = FindPython() + " '" + script + "' '" + json_path + "' '" + png + "'";
+    if (script.empty() || std::system(cmd.c_str()) != 0) {
+      std::cerr << "femreg calibrate: no plot drawn (needs tools/plot_misfit.py and matplotlib; "
+                   "set FEMREG_PYTHON to a python that has it)\n";
+    } else {
+      std::cout << "wrote " << png << "\n";
+    }
+  }
+  if (!summary.IsSolutionUsable()) Fail(summary.message);
+}
+
+}  // namespace
+
+void AddCalibrateCommand(CLI::App* app) {
+  auto args = std::make_shared<CalibrateArgs>();
+  CLI::App* cmd = app->add_subcommand(
+      "calibrate",
+      "Fit a material parameter (Young's modulus by default) so that the scene's simulated "
+      "equilibrium matches observed point clouds.");
+  cmd->footer(
+      "Every observed cloud is a view of the object in equilibrium under the scene's\n"
+      "boundary conditions, loads and gravity (the scene's frame, metres); the scene's\n"
+      "registration.preprocess (crop, plane removal, ...) is applied to it. The misfit of a\n"
+      "value is the mean robust (Huber, capped at --max-distance) distance of the points to\n"
+      "the simulated surface; a grid over the interval (log-spaced for E) brackets the best\n"
+      "value and a golden-section search refines it.\n"
+      "Writes DIR/calibration.json (value, misfit, uncertainty, every sample), DIR/scene.yaml\n"
+      "(the scene with the fitted value: pass it to femreg register --scene) and\n"
+      "DIR/misfit.png. Exit code 1 when the fit is not usable: no load (the parameter cannot\n"
+      "be observed), a cloud that does not overlap the object, a best value at an end of the\n"
+      "interval (widen it), a forward solve that does not converge.\n"
+      "Example: femreg calibrate --scene datasets/sag_track/scene.yaml\n"
+      "           --observed datasets/sag_track/clouds/frame_0000.pcd --out /tmp/cal");
+  cmd->add_option("--scene,-s", args->scene_path, "Scene file (YAML)")->required();
+  cmd->add_option("--observed", args->observed, "Observed cloud(s): PCD, PLY or text")
+      ->required()
+      ->expected(1, -1);
+  cmd->add_option("--out,-o", args->out_dir, "Output folder (created when missing)")->required();
+  cmd->add_option("--object", args->object, "The object to fit (required with several)");
+  cmd->add_option("--param", args->param, "E (default), nu, or region_E (with --region)")
+      ->check(CLI::IsMember({"E", "nu", "region_E"}));
+  cmd->add_option("--region", args->region, "Region id for --param region_E");
+  cmd->add_option("--lower", args->lower,
+                  "Lower end of the search interval (default: scene's E / 10; nu: 0)");
+  cmd->add_option("--upper", args->upper,
+                  "Upper end of the search interval (default: scene's E * 10; nu: 0.495)");
+  cmd->add_option("--grid", args->grid, "Samples of the bracketing grid (>= 3)")
+      ->capture_default_str();
+  cmd->add_option("--tolerance", args->tolerance,
+                  "Golden section stops at this bracket width (in ln E, or in nu)")
+      ->capture_default_str();
+  cmd->add_option("--max-evaluations", args->max_evaluations, "Forward solves in all")
+      ->capture_default_str();
+  cmd->add_option("--loss-scale", args->loss_scale, "Huber scale of the distance (m)")
+      ->capture_default_str();
+  cmd->add_option("--max-distance", args->max_distance,
+                  "Points farther than this from the simulated surface count as outliers (m)")
+      ->capture_default_str();
+  cmd->add_flag("--no-preprocess", args->no_preprocess,
+                "Use the clouds as read (skip the scene's registration.preprocess)");
+  cmd->add_flag("!--no-plot", args->plot, "Do not draw misfit.png");
+  cmd->add_flag("-v,--verbose", args->verbose, "One line per forward solve");
+  cmd->add_flag("-f,--force", args->force, "Write into a non-empty output folder");
+  cmd->callback([args] { RunCalibrate(*args); });
+}
+
+}  // namespace cli
+}  // namespace femreg
