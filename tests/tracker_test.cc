@@ -236,7 +236,7 @@ TEST(Tracker, EmptyCloudHoldsTheShapeAndSaysWhy) {
   ASSERT_TRUE(tracker->Track(PointCloud(), &summary).ok());
   EXPECT_EQ(summary.termination, TerminationType::kNoCorrespondences);
   EXPECT_NE(summary.message.find("empty"), std::string::npos);
-  EXPECT_TRUE(summary.IsSolutionUsable());
+  EXPECT_FALSE(summary.IsSolutionUsable());  // held, not fitted: not a usable result
   EXPECT_EQ((tracker->vertices(0) - before).norm(), 0.0);
   // Tracking resumes with the next cloud.
   ASSERT_TRUE(tracker->Track(seq.clouds.back(), &summary).ok());

@@ -123,7 +123,7 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
       b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];
     }
     b->target = p.target;
-    b->weight = w;
+    b->weight = w * p.weight;
   };
   for (const DataPair& p : pairs) {
     const bool plane = p.normal.squaredNorm() > 0;
