@@ -61,8 +61,11 @@ void PrintFractureReport(const std::vector<FractureFrame>& frames, const std::st
                          bool counts_vertices = false);
 
 // Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one exits at once.
+// SIGTERM (timeout, schedulers, docker stop) is handled the same way.
 void InstallInterruptHandler();
 bool Interrupted();
+int InterruptExitCode();      // 128 + the signal (130 for SIGINT, 143 for SIGTERM)
+const char* InterruptName();  // "SIGINT" or "SIGTERM"
 
 }  // namespace cli
 }  // namespace femreg
