@@ -96,22 +96,23 @@ TEST(PartialView, OrganPatchWithoutTrimOrVisibilityPullsTheSurfaceOntoThePatch) 
   EXPECT_GT(mean, nothing);
 }
 
-TEST(CloudPreparation, SubsamplingKeepsTheWeightAndTheCentroids) {
+TEST(CloudPreparation, SubsamplingKeepsTheWeightAndThePointsNearestTheCentroids) {
   PointCloud cloud;
   cloud.points.resize(8, 3);
   // Two voxels of 1 cm: four points in each.
   cloud.points << 0.001, 0.001, 0.001, 0.002, 0.003, 0.004, 0.009, 0.001, 0.001, 0.005, 0.005, 0.005,
       0.011, 0.001, 0.001, 0.012, 0.003, 0.004, 0.019, 0.001, 0.001, 0.015, 0.005, 0.005;
-  const Eigen::RowVector3d c0 = cloud.points.topRows(4).colwise().mean();
-  const Eigen::RowVector3d c1 = cloud.points.bottomRows(4).colwise().mean();
+  // The points nearest each voxel's centroid (4.25, 2.5, 2.75) mm and (14.25, 2.5, 2.75) mm.
+  const Eigen::RowVector3d c0 = cloud.points.row(1);
+  const Eigen::RowVector3d c1 = cloud.points.row(5);
   Eigen::VectorXd weights;
   SubsampleCloud(0.01, &cloud, &weights);
   ASSERT_EQ(cloud.size(), 2);
   EXPECT_EQ(weights.sum(), 8.0);
   EXPECT_EQ(weights(0), 4.0);
-  // Means of four numbers: exact up to round-off.
-  EXPECT_LT((cloud.points.row(0) - c0).norm(), 1e-15);
-  EXPECT_LT((cloud.points.row(1) - c1).norm(), 1e-15);
+  // Measured points are kept as they are (copied, not computed).
+  EXPECT_EQ(cloud.points.row(0), c0);
+  EXPECT_EQ(cloud.points.row(1), c1);
 }
 
 TEST(CloudPreparation, ScaleAndRigidTransformApplyToPointsNormalsAndViewpoint) {
@@ -139,17 +140,17 @@ TEST(CloudPreparation, ScaleAndRigidTransformApplyToPointsNormalsAndViewpoint) {
 
 // ---- The command line.
 
-struct Run {
+struct CliRun {
   int code = -1;
   std::string out;  // stdout and stderr
 };
 
-Run Femreg(const std::string& args, const std::string& prefix = "") {
+CliRun Femreg(const std::string& args, const std::string& prefix = "") {
   testing_util::TempDir tmp("femreg_cli_out");
   const std::string log = tmp.path() + "/log.txt";
   const std::string cmd = prefix + std::string(FEMREG_CLI_PATH) + " " + args + " > " + log + " 2>&1";
   const int status = std::system(cmd.c_str());
-  Run r;
+  CliRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   std::ifstream in(log);
   std::stringstream ss;
@@ -172,7 +173,7 @@ TEST(RegisterCommand, UnreadableFrameIsAnErrorNamingTheFile) {
   std::ofstream(tmp.path() + "/clouds/frame_0001.npy") << "\x93NUMPY garbage";
   const std::string args = "register --scene " + kOrgan + "/scene.yaml --frames '" + tmp.path() +
                            "/clouds/*' --no-progress --force --out " + tmp.path() + "/out";
-  Run r = Femreg(args);
+  CliRun r = Femreg(args);
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("frame_0001.npy"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("--skip-bad-frames"), std::string::npos) << r.out;
@@ -201,7 +202,7 @@ TEST(RegisterCommand, MillimetreCloudsWarnAndScaleFixesThem) {
   std::ofstream(tmp.path() + "/scene.yaml") << scene;
   const std::string args = "register --scene " + tmp.path() + "/scene.yaml --frames " + tmp.path() +
                            "/clouds --no-progress --force --out " + tmp.path() + "/out";
-  Run r = Femreg(args);
+  CliRun r = Femreg(args);
   EXPECT_EQ(r.code, 1) << r.out;  // no frame usable: every pair is beyond max_distance
   EXPECT_NE(r.out.find("times larger"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("registration.preprocess.scale"), std::string::npos) << r.out;
@@ -216,7 +217,7 @@ TEST(RegisterCommand, MillimetreCloudsWarnAndScaleFixesThem) {
 TEST(RegisterCommand, SigtermLeavesWholeFilesAndAnHonestSummary) {
   testing_util::TempDir tmp;
   const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
-  const Run r = Femreg("register --scene " + demo + "/scene.yaml --frames " + demo +
+  const CliRun r = Femreg("register --scene " + demo + "/scene.yaml --frames " + demo +
                            "/clouds --no-progress --force --out " + tmp.path() + "/out",
                        "timeout --preserve-status -s TERM 3 ");
   ASSERT_EQ(r.code, 143) << r.out;
@@ -234,7 +235,7 @@ TEST(RegisterCommand, SceneKeysRegisterDoesNotUseAreRejected) {
                            "/clouds --max-frames 1 --no-progress --force --out " + tmp.path() + "/out";
   std::ofstream(tmp.path() + "/scene.yaml")
       << base << "loads:\n  - {select: {all: true}, force: [0, 0, -1]}\n";
-  Run r = Femreg(args);
+  CliRun r = Femreg(args);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.out.find("loads are not used by register"), std::string::npos) << r.out;
   std::ofstream(tmp.path() + "/scene.yaml")
@@ -261,7 +262,7 @@ TEST(InfoCommand, ReportsFoldedRestElements) {
   // inverted in the file; the reader re-orients it, which hides the fold from num_inverted.
   std::ofstream(tmp.path() + "/fold.node") << "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 0.2 0.2 0.5\n";
   std::ofstream(tmp.path() + "/fold.ele") << "2 4 0\n0 0 1 2 3\n1 0 2 1 4\n";
-  const Run r = Femreg("info " + tmp.path() + "/fold.node --json");
+  const CliRun r = Femreg("info " + tmp.path() + "/fold.node --json");
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("\"num_folded\": 2"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("warning"), std::string::npos) << r.out;
