@@ -219,7 +219,7 @@ TEST(RegisterCommand, SigtermLeavesWholeFilesAndAnHonestSummary) {
   const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
   const CliRun r = Femreg("register --scene " + demo + "/scene.yaml --frames " + demo +
                            "/clouds --no-progress --force --out " + tmp.path() + "/out",
-                       "timeout --preserve-status -s TERM 3 ");
+                       "timeout --preserve-status -s TERM 5 ");
   ASSERT_EQ(r.code, 143) << r.out;
   EXPECT_NE(r.out.find("Interrupted (SIGTERM)"), std::string::npos) << r.out;
   const std::string summary = Slurp(tmp.path() + "/out/summary.json");

@@ -231,7 +231,10 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
     fc->spacing = nearest[nearest.size() / 2];
   }
   // The trim never goes below the robust loss's scale: the distance the user calls noise.
-  fc->trim = options.data.reciprocity > 0
+  // With fracture on, no trim: an opening crack shows exactly as model vertices with no cloud
+  // point near, and their pull is what separates the pieces (beam_break: the break is found
+  // 14 frames late with the trim, on time without).
+  fc->trim = options.data.reciprocity > 0 && state.fracture == nullptr
                  ? std::max(options.data.reciprocity * fc->spacing, options.data.loss_scale)
                  : std::numeric_limits<double>::infinity();
 

@@ -345,6 +345,9 @@ void WarnUnits(const std::string& file, const PointCloud& cloud, double scale, d
 }
 
 int RunRegister(const RegisterArgs& args) {
+  // From the start: a SIGTERM while the scene loads still ends with whole files and an
+  // honest summary.
+  InstallInterruptHandler();
   Scene scene;
   Status status = LoadScene(args.scene, &scene);
   if (!status.ok()) {
@@ -426,7 +429,6 @@ int RunRegister(const RegisterArgs& args) {
             << ToString(scene.registration.regularizer) << ", "
             << ToString(scene.registration.solver.backend) << " back end" << std::endl;
 
-  InstallInterruptHandler();
   std::vector<FrameRow> rows;
   std::vector<std::vector<PvdEntry>> pvd(static_cast<size_t>(tracker->num_objects()));
   ProgressBar bar("register", static_cast<int>(files.size()), args.progress);
