@@ -95,7 +95,7 @@ void Record(const std::string& name, SolverBackend backend, const Outcome& o) {
   if (path == nullptr) return;
   FILE* f = std::fopen(path, "a");
   if (f == nullptr) return;
-  std::fprintf(f, "%s,%s,%s,%.3f,%.3f,%.3f,%.2f,\"%s\"\n", name.c_str(), ToString(backend),
+  std::fprintf(f, "\"%s\",%s,%s,%.3f,%.3f,%.3f,%.2f,\"%s\"\n", name.c_str(), ToString(backend),
                ToString(o.termination), o.mean_error * 1e3, o.nothing_error * 1e3,
                o.max_motion * 1e3, o.ms_per_frame, o.message.substr(0, 120).c_str());
   std::fclose(f);
