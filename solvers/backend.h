@@ -27,7 +27,7 @@ struct BackendOptions {
   // Fast back end: a step is first solved by conjugate gradients preconditioned with the last
   // factorization (of an earlier, similar system), for at most this many iterations; only
   // if that does not converge is the system factorized anew. 0: factorize every step.
-  int max_pcg_iterations = 10;
+  int max_pcg_iterations = 20;
   int num_threads = 1;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;  // Ceres
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;  // Ceres

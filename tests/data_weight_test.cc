@@ -69,7 +69,10 @@ TEST(DataWeight, DecimatingTheCloudFourTimesKeepsVertexErrorsWithinTenPercent) {
   const Frames frames = LoadFrames();
   Scene scene;
   ASSERT_TRUE(LoadScene(kDataset + "/scene.yaml", &scene).ok());
-  ASSERT_LT(scene.registration.weights.data, 0) << "the dataset should use the default (per area)";
+  scene.registration.weights.data = -1;  // per unit area (data_per_area's default)
+  // The weighting is what is compared, not where the solver stops: frames stop on the
+  // energy criterion only, as both runs' solves then end at the same relative accuracy.
+  scene.registration.solver.step_tolerance = 0.0;
   const double full = TrackError(scene, frames, 1);
   const double sparse = TrackError(scene, frames, 4);
   // The legacy weight per point, for the record (not asserted: it is what changed).

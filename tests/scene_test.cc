@@ -308,8 +308,8 @@ TEST_F(SceneTest, InvalidRegistrationOptions) {
               {"beam.yaml:12: registration.data.loss_scale: must be > 0 (got -1)"});
   ExpectError(std::string(kBaseScene) + "registration:\n  camera:\n    position: [0, 0, 1]\n",
               {"beam.yaml:12: registration.camera.target: must differ from camera.position"});
-  ExpectError(std::string(kBaseScene) + "registration:\n  solver:\n    threads: 0\n",
-              {"beam.yaml:12: registration.solver.threads: must be >= 1 (got 0)"});
+  ExpectError(std::string(kBaseScene) + "registration:\n  solver:\n    threads: -1\n",
+              {"beam.yaml:12: registration.solver.threads: must be >= 0 (0: the machine's hardware threads) (got -1)"});
 }
 
 TEST_F(SceneTest, SyntaxErrorNamesTheLine) {

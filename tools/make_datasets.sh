@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the bundled datasets: `femreg synth datasets/<name>/synth.yaml` into
-# datasets/<name> for every dataset that has a synth.yaml, and `femreg contact-data` for the
-# contact sequences (or only those named). The output is deterministic: rerunning rewrites
+# datasets/<name> for every dataset that has a synth.yaml, `femreg contact-data` for the
+# contact sequences and `femreg organ-data` for organ_patch (or only those named). The output is deterministic: rerunning rewrites
 # the same bytes.
 #   tools/make_datasets.sh                 # all
 #   tools/make_datasets.sh demo beam_bend  # some
@@ -18,7 +18,7 @@ fi
 names=("$@")
 if [[ ${#names[@]} -eq 0 ]]; then
   for f in datasets/*/synth.yaml; do names+=("$(basename "$(dirname "$f")")"); done
-  names+=(contact_pair tool_table)
+  names+=(contact_pair tool_table organ_patch)
 fi
 for name in "${names[@]}"; do
   dir=datasets/$name
@@ -27,6 +27,11 @@ for name in "${names[@]}"; do
       echo "== $name"
       rm -rf "$dir"
       "$FEMREG" contact-data --scenario "$name" --out "$dir"
+      continue ;;
+    organ_patch)  # the partial-view sequence, from its own generator
+      echo "== $name"
+      rm -rf "$dir"
+      "$FEMREG" organ-data --out "$dir"
       continue ;;
   esac
   [[ -f $dir/synth.yaml ]] || { echo "make_datasets: $dir/synth.yaml not found" >&2; exit 1; }

@@ -75,6 +75,16 @@ std::vector<std::string> FractureScenarios();
 Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
                                 void (*progress)(int done, int total) = nullptr);
 
+// ---------------------------------------------------------------------------------------
+// femreg organ-data: the bundled partial-view sequence.
+
+// "organ_patch": an organ-like body clamped at one end and pushed by a tool, seen as
+// 500-point patches on ~15% of its surface, no camera and no viewpoint. Writes
+// DIR/organ.vtu (the tracked mesh), DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd,
+// DIR/ground_truth/frame_NNNN.csv (visible = in the patch) and DIR/README.md; deterministic.
+Status GenerateOrganPatchSequence(const std::string& dir,
+                                  void (*progress)(int done, int total) = nullptr);
+
 }  // namespace femreg
 
 #endif  // FEMREG_DATASETS_H_

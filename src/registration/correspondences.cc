@@ -1,9 +1,13 @@
 #include "registration/correspondences.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <memory>
+#include <unordered_map>
 
 namespace femreg {
 
@@ -83,42 +87,255 @@ struct LabelSplit {
 
 }  // namespace
 
-void FindPairs(const TrackerState& state, const PointCloud& cloud, const PointIndex& cloud_index,
-               std::vector<DataPair>* pairs, PairCounts* counts) {
+std::string FrameCloud::Describe() const {
+  char buf[128];
+  switch (view) {
+    case View::kNone:
+      return "none";
+    case View::kCamera:
+      return "camera";
+    case View::kViewpoint:
+      std::snprintf(buf, sizeof(buf), "viewpoint (%.3g, %.3g, %.3g)", eye.x(), eye.y(), eye.z());
+      return buf;
+    case View::kDirection:
+      std::snprintf(buf, sizeof(buf), "direction (%.2f, %.2f, %.2f)", eye.x(), eye.y(), eye.z());
+      return buf;
+  }
+  return "none";
+}
+
+void TransformCloud(const PreprocessOptions& options, PointCloud* cloud) {
+  if (options.scale == 1.0 && options.translation.isZero(0) && options.rotation.isZero(0)) return;
+  const double angle = options.rotation.norm();
+  const Eigen::Matrix3d R =
+      angle > 0 ? Eigen::AngleAxisd(angle, options.rotation / angle).toRotationMatrix()
+                : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d A = options.scale * R;
+  if (cloud->points.rows() > 0) {
+    cloud->points = (cloud->points * A.transpose()).rowwise() + options.translation.transpose();
+  }
+  if (cloud->normals.rows() > 0) cloud->normals = cloud->normals * R.transpose();
+  if (cloud->has_viewpoint) cloud->viewpoint = A * cloud->viewpoint + options.translation;
+}
+
+void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights) {
+  const int n = cloud->size();
+  weights->setOnes(n);
+  if (!(voxel > 0) || n == 0) return;
+  struct Key {
+    int64_t i, j, k;
+    int label;
+    bool operator==(const Key& o) const { return i == o.i && j == o.j && k == o.k && label == o.label; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& key) const {
+      uint64_t h = static_cast<uint64_t>(key.i) * 73856093u;
+      h ^= static_cast<uint64_t>(key.j) * 19349663u;
+      h ^= static_cast<uint64_t>(key.k) * 83492791u;
+      h ^= static_cast<uint64_t>(key.label) * 2654435761u;
+      return static_cast<size_t>(h);
+    }
+  };
+  const bool labels = cloud->has_labels(), normals = cloud->has_normals();
+  auto cell = [voxel](double v) {  // clamped: far outliers share a cell rather than overflow
+    return static_cast<int64_t>(std::floor(std::max(-1e15, std::min(1e15, v / voxel))));
+  };
+  std::unordered_map<Key, int, KeyHash> cells;
+  cells.reserve(static_cast<size_t>(n));
+  std::vector<int> first;   // voxel -> its first point
+  std::vector<int> voxel_of(static_cast<size_t>(n));
+  for (int p = 0; p < n; ++p) {
+    const Key key{cell(cloud->points(p, 0)), cell(cloud->points(p, 1)), cell(cloud->points(p, 2)),
+                  labels ? cloud->labels(p) : 0};
+    const auto it = cells.emplace(key, static_cast<int>(first.size())).first;
+    if (it->second == static_cast<int>(first.size())) first.push_back(p);
+    voxel_of[static_cast<size_t>(p)] = it->second;
+  }
+  const int m = static_cast<int>(first.size());
+  if (m == n) return;
+  // Each voxel keeps its point nearest to the voxel's centroid: a measured point, on the
+  // surface (a centroid would sit inside the surface wherever it bends within the voxel).
+  Vertices centroid = Vertices::Zero(m, 3);
+  Eigen::VectorXd count = Eigen::VectorXd::Zero(m);
+  for (int p = 0; p < n; ++p) {
+    const int v = voxel_of[static_cast<size_t>(p)];
+    centroid.row(v) += cloud->points.row(p);
+    count(v) += 1.0;
+  }
+  centroid.array().colwise() /= count.array();
+  std::vector<int> keep(first);
+  std::vector<double> best(static_cast<size_t>(m), std::numeric_limits<double>::infinity());
+  for (int p = 0; p < n; ++p) {
+    const int v = voxel_of[static_cast<size_t>(p)];
+    const double d2 = (cloud->points.row(p) - centroid.row(v)).squaredNorm();
+    if (d2 < best[static_cast<size_t>(v)]) {
+      best[static_cast<size_t>(v)] = d2;
+      keep[static_cast<size_t>(v)] = p;
+    }
+  }
+  Vertices points(m, 3);
+  Vertices normals_kept = normals ? Vertices(m, 3) : Vertices();
+  Eigen::VectorXi labels_kept = labels ? Eigen::VectorXi(m) : Eigen::VectorXi();
+  for (int v = 0; v < m; ++v) {
+    const int p = keep[static_cast<size_t>(v)];
+    points.row(v) = cloud->points.row(p);
+    if (normals) normals_kept.row(v) = cloud->normals.row(p);
+    if (labels) labels_kept(v) = cloud->labels(p);
+  }
+  cloud->points = points;
+  cloud->normals = normals_kept;
+  cloud->labels = labels_kept;
+  *weights = count;
+}
+
+const SurfaceIndex& ModelIndex::Get(const TrackerState& state, double tolerance) {
+  bool rebuild = index_ == nullptr || x_data_ != state.x.data() || x_rows_ != state.x.rows() ||
+                 surface_data_ != state.surface.data() || surface_rows_ != state.surface.rows();
+  if (!rebuild) {
+    const double tol2 = tolerance * tolerance;
+    for (int v : state.surface_vertices) {
+      if ((state.x.row(v) - built_at_.row(v)).squaredNorm() > tol2) {
+        rebuild = true;
+        break;
+      }
+    }
+  }
+  if (rebuild) {
+    index_ = std::make_unique<SurfaceIndex>(state.x, state.surface);
+    x_data_ = state.x.data();
+    x_rows_ = state.x.rows();
+    surface_data_ = state.surface.data();
+    surface_rows_ = state.surface.rows();
+    built_at_ = state.x;
+    ++builds_;
+  }
+  return *index_;
+}
+
+void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc) {
+  const RegistrationOptions& options = state.options;
+  const PointCloud& cloud = fc->cloud;
+  fc->index = std::make_unique<PointIndex>(cloud.points);
+  const int n = cloud.size();
+  // The spacing from at most ~2000 evenly spread points.
+  const int stride = std::max(1, n / 2000);
+  std::vector<double> nearest;
+  for (int i = 0; i < n; i += stride) {
+    int idx[2];
+    double d2[2];
+    if (fc->index->KNearest(cloud.points.row(i), 2, idx, d2) == 2) nearest.push_back(std::sqrt(d2[1]));
+  }
+  fc->spacing = 0.0;
+  if (!nearest.empty()) {
+    std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+    fc->spacing = nearest[nearest.size() / 2];
+  }
+  // The trim never goes below the robust loss's scale: the distance the user calls noise.
+  // With fracture on, no trim: an opening crack shows exactly as model vertices with no cloud
+  // point near, and their pull is what separates the pieces (beam_break: the break is found
+  // 14 frames late with the trim, on time without).
+  fc->trim = options.data.reciprocity > 0 && state.fracture == nullptr
+                 ? std::max(options.data.reciprocity * fc->spacing, options.data.loss_scale)
+                 : std::numeric_limits<double>::infinity();
+
+  fc->view = FrameCloud::View::kNone;
+  if (options.camera.enabled && (options.data.visibility || options.data.auto_visibility)) {
+    fc->view = FrameCloud::View::kCamera;
+    fc->eye = options.camera.position;
+    return;
+  }
+  if (!options.data.auto_visibility || state.x.rows() == 0) return;
+  if (cloud.has_viewpoint) {
+    const Eigen::Vector3d lo = state.x.colwise().minCoeff().transpose();
+    const Eigen::Vector3d hi = state.x.colwise().maxCoeff().transpose();
+    const bool inside = (cloud.viewpoint.array() >= lo.array()).all() &&
+                        (cloud.viewpoint.array() <= hi.array()).all();
+    if (!inside) {
+      fc->view = FrameCloud::View::kViewpoint;
+      fc->eye = cloud.viewpoint;
+      return;
+    }
+  }
+  // The side of the model the cloud lies on: the mean outward normal of the surface
+  // triangles closest to the cloud's points (those within the trim). Near zero when the
+  // cloud surrounds the model: then no direction is assumed.
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int count = 0;
+  const double near2 = std::isfinite(fc->trim) ? fc->trim * fc->trim : options.data.max_distance *
+                                                                           options.data.max_distance;
+  for (int i = 0; i < n; i += stride) {
+    const SurfaceIndex::Hit hit = surface.Closest(cloud.points.row(i));
+    if (hit.triangle < 0 || (near2 > 0 && hit.squared_distance > near2)) continue;
+    const Eigen::Vector3d a = state.x.row(state.surface(hit.triangle, 0)),
+                          b = state.x.row(state.surface(hit.triangle, 1)),
+                          c = state.x.row(state.surface(hit.triangle, 2));
+    const Eigen::Vector3d fn = (b - a).cross(c - a);
+    if (fn.norm() > 0) {
+      sum += fn.normalized();
+      ++count;
+    }
+  }
+  constexpr double kMinMeanNormal = 0.3;  // |mean of unit normals|: 1 = a flat patch, 0 = all round
+  if (count > 0 && sum.norm() / count >= kMinMeanNormal) {
+    fc->view = FrameCloud::View::kDirection;
+    fc->eye = sum.normalized();
+  }
+}
+
+void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceIndex& surface,
+               int num_threads, std::vector<DataPair>* pairs, PairCounts* counts) {
   pairs->clear();
   *counts = PairCounts();
+  const PointCloud& cloud = fc.cloud;
+  const PointIndex& cloud_index = *fc.index;
   const RegistrationOptions& options = state.options;
   const DataTermOptions& data = options.data;
   const Vertices& x = state.x;
   const double gate2 = data.max_distance > 0 ? data.max_distance * data.max_distance
                                              : std::numeric_limits<double>::infinity();
+  const double trim2 = std::isfinite(fc.trim) ? fc.trim * fc.trim : std::numeric_limits<double>::infinity();
   const bool plane = data.metric == DataMetric::kPointToPlane;
-  const Eigen::MatrixXd normals =
-      (data.visibility || plane) ? state.VertexNormals() : Eigen::MatrixXd();
+  const bool view = fc.view != FrameCloud::View::kNone;
+  const Eigen::MatrixXd normals = (view || plane) ? state.VertexNormals() : Eigen::MatrixXd();
   const LabelSplit labels(state, cloud);
+  const int threads = std::max(1, num_threads);
 
-  if (data.model_to_cloud) {
-    for (int v : state.surface_vertices) {
+  if (data.model_to_cloud && cloud_index.size() > 0) {
+    const int ns = static_cast<int>(state.surface_vertices.size());
+    std::vector<int> nearest(static_cast<size_t>(ns), -1);
+    std::vector<double> dist2(static_cast<size_t>(ns), 0.0);
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int i = 0; i < ns; ++i) {
+      const int v = state.surface_vertices[static_cast<size_t>(i)];
       const Eigen::Vector3d p = x.row(v);
-      if (data.visibility && options.camera.enabled) {
-        const Eigen::Vector3d n = normals.row(v);
-        if (n.dot(options.camera.position - p) <= 0.0) continue;
-      }
-      double d2 = 0.0;
       int q = -1;
+      double d2 = 0.0;
       if (!labels.active()) {
         q = cloud_index.Nearest(p, &d2);
-        if (q < 0) break;
       } else {
         const int o = state.vertex_object[v];
         const bool labelled = state.objects[o].label >= 0;
         const PointIndex& index = labelled ? *labels.object_index[o] : *labels.free_index;
         q = index.Nearest(p, &d2);
-        if (q < 0) continue;
-        q = labelled ? labels.object_points[o][q] : labels.free_points[q];
+        if (q >= 0) q = labelled ? labels.object_points[o][q] : labels.free_points[q];
       }
+      nearest[static_cast<size_t>(i)] = q;
+      dist2[static_cast<size_t>(i)] = d2;
+    }
+    for (int i = 0; i < ns; ++i) {
+      const int q = nearest[static_cast<size_t>(i)];
+      if (q < 0) continue;
+      const double d2 = dist2[static_cast<size_t>(i)];
+      const int v = state.surface_vertices[static_cast<size_t>(i)];
+      if (d2 <= trim2) ++counts->covered;
       if (d2 > gate2) {
         ++counts->rejected;
+        continue;
+      }
+      // Reciprocity: a vertex with no cloud point near it was not seen (or not yet reached);
+      // the cloud->model pairs bring it closer, and it pulls once within the trim.
+      if (d2 > trim2 || (view && !fc.Faces(x.row(v), normals.row(v)))) {
+        ++counts->trimmed;
         continue;
       }
       DataPair pair;
@@ -139,28 +356,35 @@ void FindPairs(const TrackerState& state, const PointCloud& cloud, const PointIn
   if (data.cloud_to_model && state.surface.rows() > 0) {
     // Points without an object's label: every surface, or with labels the unlabelled
     // objects' surfaces (none: the point is no one's).
-    std::unique_ptr<SurfaceIndex> whole_index;
-    if (!labels.active()) whole_index = std::make_unique<SurfaceIndex>(x, state.surface);
     const Triangles& other_surface = labels.active() ? labels.free_surface : state.surface;
-    const SurfaceIndex* other_index =
-        labels.active() ? labels.free_surface_index.get() : whole_index.get();
-    for (int i = 0; i < cloud.size(); i += data.cloud_stride) {
-      const Eigen::Vector3d q = cloud.points.row(i);
+    const SurfaceIndex* other_index = labels.active() ? labels.free_surface_index.get() : &surface;
+    const int nq = (cloud.size() + data.cloud_stride - 1) / data.cloud_stride;
+    std::vector<SurfaceIndex::Hit> hits(static_cast<size_t>(nq));
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int j = 0; j < nq; ++j) {
+      const int i = j * data.cloud_stride;
       const int labelled = labels.active() ? labels.point_object[i] : -1;
       if (labelled < 0 && other_index == nullptr) continue;
-      const Triangles& tris = labelled >= 0 ? labels.object_surface[labelled] : other_surface;
-      const SurfaceIndex::Hit hit = labelled >= 0 ? labels.object_surface_index[labelled]->Closest(q)
-                                                  : other_index->Closest(q);
+      const Eigen::Vector3d q = cloud.points.row(i);
+      hits[static_cast<size_t>(j)] = labelled >= 0 ? labels.object_surface_index[labelled]->Closest(q)
+                                                   : other_index->Closest(q);
+    }
+    for (int j = 0; j < nq; ++j) {
+      const int i = j * data.cloud_stride;
+      const SurfaceIndex::Hit& hit = hits[static_cast<size_t>(j)];
       if (hit.triangle < 0) continue;
       if (hit.squared_distance > gate2) {
         ++counts->rejected;
         continue;
       }
+      const int labelled = labels.active() ? labels.point_object[i] : -1;
+      const Triangles& tris = labelled >= 0 ? labels.object_surface[labelled] : other_surface;
       DataPair pair;
       pair.num_vertices = 3;
       for (int k = 0; k < 3; ++k) pair.vertices[k] = tris(hit.triangle, k);
       pair.barycentric = hit.barycentric;
-      pair.target = q;
+      pair.target = cloud.points.row(i);
+      if (fc.weights.size() == cloud.size()) pair.weight = fc.weights(i);
       if (plane) {
         const Eigen::Vector3d a = x.row(pair.vertices[0]), b = x.row(pair.vertices[1]),
                               c = x.row(pair.vertices[2]);
@@ -174,17 +398,21 @@ void FindPairs(const TrackerState& state, const PointCloud& cloud, const PointIn
 }
 
 void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs,
-                   TrackerState* state) {
+                   TrackerState* state, int num_threads) {
   for (size_t i = 0; i < state->objects.size(); ++i) {
     ObjectState& o = state->objects[i];
     o.mesh.x = state->x.middleRows(o.offset, o.mesh.num_vertices());
     state->residuals[i].setConstant(std::numeric_limits<double>::quiet_NaN());
     std::fill(state->observed[i].begin(), state->observed[i].end(), 0);
     if (cloud_index != nullptr && cloud_index->size() > 0) {
-      for (int v : o.mesh.surface_vertices) {
+      const int ns = static_cast<int>(o.mesh.surface_vertices.size());
+      Eigen::VectorXd& residuals = state->residuals[i];
+#pragma omp parallel for num_threads(std::max(1, num_threads)) schedule(static)
+      for (int j = 0; j < ns; ++j) {
+        const int v = o.mesh.surface_vertices[static_cast<size_t>(j)];
         double d2 = 0.0;
         cloud_index->Nearest(o.mesh.x.row(v), &d2);
-        state->residuals[i](v) = std::sqrt(d2);
+        residuals(v) = std::sqrt(d2);
       }
     }
   }

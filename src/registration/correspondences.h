@@ -7,6 +7,9 @@
 #define FEMREG_REGISTRATION_CORRESPONDENCES_H_
 
 #include <Eigen/Core>
+#include <limits>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "femreg/registration.h"
@@ -23,24 +26,90 @@ struct DataPair {
   Eigen::Vector3d barycentric = Eigen::Vector3d(1, 0, 0);
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  // the cloud point
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit for point-to-plane; zero: point-to-point
+  double weight = 1.0;  // multiplies weights.data: the cloud points a subsampled point stands for
   Eigen::Vector3d Point(const Vertices& x) const;    // the model point at x
 };
 
 struct PairCounts {
   int model_to_cloud = 0, cloud_to_model = 0;  // kept
   int rejected = 0;                            // gated out by data.max_distance
+  int trimmed = 0;   // model->cloud: beyond the reciprocity trim, or facing away
+  int covered = 0;   // surface vertices with a cloud point within the trim (the coverage)
 };
 
-// The pairs at state.x (#V by 3). A point whose label names an object pairs with that
-// object only; the other points of a labelled cloud pair only with the objects that have no
-// label, and are ignored when every object has one.
-void FindPairs(const TrackerState& state, const PointCloud& cloud, const PointIndex& cloud_index,
-               std::vector<DataPair>* pairs, PairCounts* counts);
+// One frame's cloud, prepared once per frame: scaled and transformed, preprocessed,
+// subsampled, its k-d tree, its spacing and how visibility is decided.
+struct FrameCloud {
+  enum class View { kNone, kCamera, kViewpoint, kDirection };
+  PointCloud cloud;
+  Eigen::VectorXd weights;  // #P: the input points each point stands for (all 1 unless subsampled)
+  std::unique_ptr<PointIndex> index;
+  double spacing = 0.0;     // m: median distance from a point to its nearest other point
+  double trim = std::numeric_limits<double>::infinity();  // m: reciprocity trim (inf = off)
+  View view = View::kNone;
+  // kCamera, kViewpoint: the sensor's position; kDirection: the unit direction towards it.
+  Eigen::Vector3d eye = Eigen::Vector3d::Zero();
+
+  // Whether a surface point p with outward normal n faces the sensor.
+  bool Faces(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
+    switch (view) {
+      case View::kNone:
+        return true;
+      case View::kDirection:
+        return n.dot(eye) > 0.0;
+      default:
+        return n.dot(eye - p) > 0.0;
+    }
+  }
+  std::string Describe() const;  // "camera", "viewpoint (x, y, z)", "direction (x, y, z)", "none"
+};
+
+// preprocess.scale and the rigid preprocess.transform applied to the points, normals and
+// viewpoint of *cloud.
+void TransformCloud(const PreprocessOptions& options, PointCloud* cloud);
+
+// One point per occupied voxel of edge `voxel` (m): its point nearest to the voxel's
+// centroid, with that point's normal and label (labelled points only share a voxel with
+// points of the same label), in the order the voxels are first met. *weights: the points
+// each kept point stands for.
+void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights);
+
+// A closest-point index over the whole surface at state.x, kept across outer iterations
+// and frames and rebuilt only when a surface vertex moved more than `tolerance` (m) from
+// where it was at the last build, or the topology changed.
+class ModelIndex {
+ public:
+  const SurfaceIndex& Get(const TrackerState& state, double tolerance);
+  void Reset() { index_.reset(); }
+  int builds() const { return builds_; }
+
+ private:
+  std::unique_ptr<SurfaceIndex> index_;
+  const double* x_data_ = nullptr;   // the positions and triangles the index refers to
+  const int* surface_data_ = nullptr;
+  Eigen::Index x_rows_ = 0, surface_rows_ = 0;
+  Vertices built_at_;  // state.x when built
+  int builds_ = 0;
+};
+
+// Builds fc->index, fc->spacing and fc->trim, and decides the visibility (at state.x):
+// the camera when known (data.visibility or data.auto_visibility), else with
+// data.auto_visibility the cloud's viewpoint when usable, else the side of the model the
+// cloud lies on (the mean outward normal at the cloud points' closest surface points), else
+// none. fc->cloud and fc->weights must be set.
+void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc);
+
+// The pairs at state.x (#V by 3), with queries on num_threads OpenMP threads. A point
+// whose label names an object pairs with that object only; the other points of a labelled
+// cloud pair only with the objects that have no label, and are ignored when every object
+// has one. `surface` indexes the whole surface at state.x (ModelIndex).
+void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceIndex& surface,
+               int num_threads, std::vector<DataPair>* pairs, PairCounts* counts);
 
 // The frame's per-vertex outputs (state.residuals, state.observed) and each object's
 // mesh.x from state.x. cloud_index may be null (no data).
 void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs,
-                   TrackerState* state);
+                   TrackerState* state, int num_threads = 1);
 
 // Per vertex of object i: by how much a camera-facing surface vertex's distance to its
 // nearest cloud point exceeds twice the median of that distance (other vertices: the mean

@@ -182,7 +182,9 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
       b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];
     }
     b->target = p.target;
-    b->weight = weight_of(p);
+    // A legacy per-pair weight counts the points a voxel stands for (p.weight); a weight per
+    // unit area already divides the area among the points that are there.
+    b->weight = per_pair ? weight_of(p) * p.weight : weight_of(p);
   };
   for (const DataPair& p : pairs) {
     const bool plane = p.normal.squaredNorm() > 0;

@@ -113,6 +113,8 @@ const char* ToString(TerminationType t) {
       return "solver_failure";
     case TerminationType::kInvalidInput:
       return "invalid_input";
+    case TerminationType::kTooFewPoints:
+      return "too_few_points";
   }
   return "unknown";
 }
@@ -160,6 +162,19 @@ bool CameraOptions::IsValid(std::string* error) const {
 }
 
 bool PreprocessOptions::IsValid(std::string* error) const {
+  if (!(std::isfinite(scale) && scale > 0)) return Fail(error, "preprocess.scale", "must be > 0", scale);
+  if (!Finite(translation)) {
+    return Fail(error, "preprocess.transform.translation", "must be finite", VectorString(translation));
+  }
+  if (!Finite(rotation)) {
+    return Fail(error, "preprocess.transform.rotation", "must be finite", VectorString(rotation));
+  }
+  if (!(std::isfinite(auto_voxel) && auto_voxel >= 0)) {
+    return Fail(error, "preprocess.auto_voxel", "must be >= 0 (0 = off)", auto_voxel);
+  }
+  if (!(std::isfinite(auto_voxel_min_ratio) && auto_voxel_min_ratio >= 0)) {
+    return Fail(error, "preprocess.auto_voxel_min_ratio", "must be >= 0", auto_voxel_min_ratio);
+  }
   if (crop) {
     if (!Finite(crop_min)) {
       return Fail(error, "preprocess.crop.min", "must be finite", VectorString(crop_min));
@@ -209,6 +224,14 @@ bool DataTermOptions::IsValid(std::string* error) const {
     return Fail(error, "data.loss_scale", "must be > 0", loss_scale);
   }
   if (cloud_stride < 1) return Fail(error, "data.cloud_stride", "must be >= 1", cloud_stride);
+  if (!(std::isfinite(reciprocity) && reciprocity >= 0)) {
+    return Fail(error, "data.reciprocity", "must be >= 0 (0 = off)", reciprocity);
+  }
+  if (min_points < 0) return Fail(error, "data.min_points", "must be >= 0", min_points);
+  if (!(std::isfinite(min_points_per_surface_vertex) && min_points_per_surface_vertex >= 0)) {
+    return Fail(error, "data.min_points_per_surface_vertex", "must be >= 0",
+                min_points_per_surface_vertex);
+  }
   return true;
 }
 

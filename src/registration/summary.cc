@@ -8,8 +8,7 @@ namespace femreg {
 bool FrameSummary::IsSolutionUsable() const {
   return termination == TerminationType::kConverged ||
          termination == TerminationType::kMaxIterations ||
-         termination == TerminationType::kTimeBudget ||
-         termination == TerminationType::kNoCorrespondences;
+         termination == TerminationType::kTimeBudget;
 }
 
 std::string FrameSummary::BriefReport() const {

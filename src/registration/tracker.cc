@@ -41,21 +41,45 @@ BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_
   return b;
 }
 
+// The mean length of the surface edges of all objects at rest (m).
+double MeanSurfaceEdge(const TrackerState& state) {
+  double sum = 0.0;
+  long long count = 0;
+  for (const ObjectState& o : state.objects) {
+    const Triangles& t = o.mesh.surface;
+    for (Eigen::Index f = 0; f < t.rows(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        sum += (o.mesh.rest.row(t(f, k)) - o.mesh.rest.row(t(f, (k + 1) % 3))).norm();
+        ++count;
+      }
+    }
+  }
+  return count > 0 ? sum / static_cast<double>(count) : 0.0;
+}
+
 }  // namespace
 
 struct Tracker::Impl {
   TrackerState state;
   FrameProblem frame_problem;
   std::unique_ptr<Backend> backend;
+  ModelIndex model_index;
+  double mean_edge = 0.0;  // m, at rest: the auto voxel and the model index's tolerance
 
   Status Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials);
   Status Track(const PointCloud& input, FrameSummary* summary);
+  // The frame's cloud: transformed, preprocessed and subsampled (s: counts, voxel, time).
+  void PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameSummary* s);
+  // A frame that cannot be solved: the shape stays at state.x (held or predicted).
+  void Hold(TerminationType t, const std::string& message, const PointIndex* index,
+            Clock::time_point t_frame, FrameSummary* s);
   // One outer iteration k; false when the frame stops (the summary says why).
-  bool OuterIteration(int k, const PointCloud& cloud, const PointIndex& cloud_index,
-                      Clock::time_point t_frame, std::vector<DataPair>* pairs,
-                      double* previous_energy, Vertices* previous, FrameSummary* s);
+  bool OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
+                      std::vector<DataPair>* pairs, double* previous_energy, Vertices* previous,
+                      FrameSummary* s);
   // The contacts the result keeps and the deepest penetration (collision on).
   void MeasureContacts(FrameSummary* s);
+  const SurfaceIndex& Surface() { return model_index.Get(state, 0.1 * mean_edge); }
 };
 
 Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials) {
@@ -84,9 +108,40 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
   state.RebuildGlobalArrays();
   state.x.resize(state.num_vertices, 3);
   for (const ObjectState& o : state.objects) state.x.middleRows(o.offset, o.mesh.num_vertices()) = o.mesh.x;
+  mean_edge = MeanSurfaceEdge(state);
   frame_problem.BuildElastic(state);
   backend = MakeBackend(MakeBackendOptions(options.solver, state.mean_edge_length));
   return Status::Ok();
+}
+
+void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameSummary* s) {
+  const PreprocessOptions& pre = state.options.preprocess;
+  const auto t0 = Clock::now();
+  fc->cloud = input;
+  TransformCloud(pre, &fc->cloud);
+  PreprocessPointCloud(pre, &fc->cloud, &s->nonfinite_dropped,
+                       state.options.camera.enabled ? state.options.camera.position
+                       : fc->cloud.has_viewpoint    ? fc->cloud.viewpoint
+                                                    : Eigen::Vector3d::Zero());
+  const double dense = pre.auto_voxel_min_ratio * static_cast<double>(state.surface_vertices.size());
+  if (pre.voxel_size == 0 && pre.auto_voxel > 0 && fc->cloud.size() > dense) {
+    s->voxel_size = pre.auto_voxel * mean_edge;
+    SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights);
+  } else {
+    fc->weights.setOnes(fc->cloud.size());
+  }
+  s->points_used = fc->cloud.size();
+  s->time.preprocess = Seconds(t0);
+}
+
+void Tracker::Impl::Hold(TerminationType t, const std::string& message, const PointIndex* index,
+                         Clock::time_point t_frame, FrameSummary* s) {
+  s->termination = t;
+  s->message = message;
+  state.x_before = state.x;  // held: no velocity to carry on
+  UpdateOutputs(index, {}, &state, state.options.solver.num_threads);
+  s->time.total = Seconds(t_frame);
+  ++state.frame;
 }
 
 Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
@@ -107,47 +162,59 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     ++state.frame;
     return Status::Ok();
   }
-
-  auto t0 = Clock::now();
-  PointCloud cloud = input;
-  PreprocessPointCloud(options.preprocess, &cloud, &s.nonfinite_dropped,
-                       options.camera.enabled ? options.camera.position : Eigen::Vector3d::Zero());
-  s.points_used = cloud.size();
-  s.time.preprocess = Seconds(t0);
-  Vertices previous = state.x;
-  std::vector<DataPair> pairs;
-  if (cloud.size() == 0) {
+  FrameCloud fc;
+  PrepareCloud(input, &fc, &s);
+  if (fc.cloud.size() == 0) {
     const bool dropped = s.cloud_points > 0;
-    s.termination = dropped ? TerminationType::kInvalidInput : TerminationType::kNoCorrespondences;
-    s.message = dropped ? "every point of the cloud was dropped (" + std::to_string(s.nonfinite_dropped) +
-                              " non-finite); the shape was held at the previous frame"
-                        : "empty cloud; the shape was held at the previous frame";
-    state.x_before = state.x;  // held: no velocity to carry on
-    UpdateOutputs(nullptr, pairs, &state);
-    s.time.total = Seconds(t_frame);
-    ++state.frame;
+    Hold(dropped ? TerminationType::kInvalidInput : TerminationType::kNoCorrespondences,
+         dropped ? "every point of the cloud was dropped (" + std::to_string(s.nonfinite_dropped) +
+                       " non-finite); the shape was held at the previous frame"
+                 : "empty cloud; the shape was held at the previous frame",
+         nullptr, t_frame, &s);
     return Status::Ok();
   }
-  const PointIndex cloud_index(cloud.points);
 
   // Constant-velocity prediction from the last two results.
+  Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
     const Vertices predicted = 2.0 * state.x - state.x_before;
     if (predicted.allFinite()) state.x = predicted;
   }
+  const int min_points = std::max(
+      options.data.min_points,
+      static_cast<int>(std::ceil(options.data.min_points_per_surface_vertex *
+                                 static_cast<double>(state.surface_vertices.size()))));
+  auto t0 = Clock::now();
+  fc.index = std::make_unique<PointIndex>(fc.cloud.points);
+  s.time.correspondences += Seconds(t0);
+  if (fc.cloud.size() < min_points) {
+    Hold(TerminationType::kTooFewPoints,
+         std::to_string(fc.cloud.size()) + " cloud points cannot constrain " +
+             std::to_string(state.surface_vertices.size()) + " surface vertices (at least " +
+             std::to_string(min_points) + " needed: data.min_points, "
+             "data.min_points_per_surface_vertex); the shape was kept at the prediction",
+         fc.index.get(), t_frame, &s);
+    return Status::Ok();
+  }
   if (options.solver.rigid_prealign) {
     t0 = Clock::now();
-    RigidPrealign(cloud, &state);
+    RigidPrealign(fc.cloud, &state);
     s.time.prealign = Seconds(t0);
   }
+  t0 = Clock::now();
+  PrepareFrameCloud(state, Surface(), &fc);
+  s.time.correspondences += Seconds(t0);
+  s.visibility = fc.Describe();
+  s.trim_distance = std::isfinite(fc.trim) ? fc.trim : 0.0;
   // The temporal springs hold to where the frame starts (the prediction, moved by the rigid
   // pre-alignment, so that inertia does not fight the rigid step) and the anchors.
   state.frame_start = state.x;
   frame_problem.BuildFrameTerms(&state);
 
+  std::vector<DataPair> pairs;
   double previous_energy = std::numeric_limits<double>::infinity();
   for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
-    if (!OuterIteration(k, cloud, cloud_index, t_frame, &pairs, &previous_energy, &previous, &s)) break;
+    if (!OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s)) break;
   }
   if (s.termination == TerminationType::kNotRun) {
     s.termination = TerminationType::kMaxIterations;
@@ -157,15 +224,15 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   if (state.collision) MeasureContacts(&s);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
-  UpdateOutputs(&cloud_index, pairs, &state);
+  UpdateOutputs(fc.index.get(), pairs, &state, options.solver.num_threads);
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();
 }
 
-bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIndex& cloud_index,
-                                   Clock::time_point t_frame, std::vector<DataPair>* pairs,
-                                   double* previous_energy, Vertices* previous, FrameSummary* s) {
+bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
+                                   std::vector<DataPair>* pairs, double* previous_energy,
+                                   Vertices* previous, FrameSummary* s) {
   const RegistrationOptions& options = state.options;
   const auto t_outer = Clock::now();
   femreg::OuterIteration row;
@@ -181,11 +248,14 @@ bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIn
 
   t0 = Clock::now();
   PairCounts counts;
-  FindPairs(state, cloud, cloud_index, pairs, &counts);
+  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);
   s->time.correspondences += Seconds(t0);
   row.model_to_cloud = counts.model_to_cloud;
   row.cloud_to_model = counts.cloud_to_model;
   row.rejected = counts.rejected;
+  if (!state.surface_vertices.empty()) {
+    s->coverage = static_cast<double>(counts.covered) / static_cast<double>(state.surface_vertices.size());
+  }
   if (pairs->empty()) {
     s->rejected = counts.rejected;
     if (k == 0) {
@@ -252,12 +322,13 @@ bool Tracker::Impl::OuterIteration(int k, const PointCloud& cloud, const PointIn
   s->rms_residual = row.rms_residual;
 
   if (state.fracture) {  // seed Section 4: between outer iterations
-    const std::vector<int> source = FractureStep(k, cloud_index, &state, s);
+    const std::vector<int> source = FractureStep(k, *fc.index, &state, s);
     if (!source.empty()) {
       *previous = RemapRows(*previous, source);
       frame_problem.BuildElastic(state);
       frame_problem.BuildFrameTerms(&state);
-      FindPairs(state, cloud, cloud_index, pairs, &counts);  // for the outputs
+      model_index.Reset();
+      FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
       *previous_energy = std::numeric_limits<double>::infinity();
       moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
     }

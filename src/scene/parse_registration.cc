@@ -33,7 +33,19 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("preprocess")) {
     const YamlValue p = v["preprocess"];
-    p.CheckKeys({"crop", "plane", "voxel_size", "outliers", "normals"});
+    p.CheckKeys({"scale", "transform", "crop", "plane", "voxel_size", "auto_voxel",
+                 "auto_voxel_min_ratio", "outliers", "normals"});
+    if (p.Has("scale")) r.preprocess.scale = p["scale"].AsDouble();
+    if (p.Has("transform")) {
+      const YamlValue t = p["transform"];
+      t.CheckKeys({"translation", "rotation"});
+      if (t.Has("translation")) r.preprocess.translation = t["translation"].AsVector3();
+      if (t.Has("rotation")) r.preprocess.rotation = t["rotation"].AsVector3();
+    }
+    if (p.Has("auto_voxel")) r.preprocess.auto_voxel = p["auto_voxel"].AsDouble();
+    if (p.Has("auto_voxel_min_ratio")) {
+      r.preprocess.auto_voxel_min_ratio = p["auto_voxel_min_ratio"].AsDouble();
+    }
     if (p.Has("crop")) {
       const YamlValue crop = p["crop"];
       crop.CheckKeys({"min", "max"});
@@ -65,7 +77,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("data")) {
     const YamlValue d = v["data"];
     d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
-                 "metric", "visibility", "cloud_stride"});
+                 "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity",
+                 "min_points", "min_points_per_surface_vertex"});
     DataTermOptions& o = r.data;
     if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
     if (d.Has("cloud_to_model")) o.cloud_to_model = d["cloud_to_model"].AsBool();
@@ -83,6 +96,12 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (d.Has("visibility")) o.visibility = d["visibility"].AsBool();
     if (d.Has("cloud_stride")) o.cloud_stride = d["cloud_stride"].AsInt();
+    if (d.Has("auto_visibility")) o.auto_visibility = d["auto_visibility"].AsBool();
+    if (d.Has("reciprocity")) o.reciprocity = d["reciprocity"].AsDouble();
+    if (d.Has("min_points")) o.min_points = d["min_points"].AsInt();
+    if (d.Has("min_points_per_surface_vertex")) {
+      o.min_points_per_surface_vertex = d["min_points_per_surface_vertex"].AsDouble();
+    }
   }
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
@@ -95,7 +114,10 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       r.weights.data = w["data"].AsDouble();
       if (!(r.weights.data >= 0)) w["data"].Fail("must be >= 0 (N/m per correspondence)");
     }
-    if (w.Has("data_per_area")) r.weights.data_per_area = w["data_per_area"].AsDouble();
+    if (w.Has("data_per_area")) {
+      r.weights.data_per_area = w["data_per_area"].AsDouble();
+      r.weights.data = -1.0;  // per unit area instead of per correspondence
+    }
     if (w.Has("model_to_cloud_share")) {
       r.weights.model_to_cloud_share = w["model_to_cloud_share"].AsDouble();
     }

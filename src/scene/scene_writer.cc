@@ -259,6 +259,13 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   }
   const PreprocessOptions& p = r.preprocess;
   YAML::Node preprocess = FlowMap();
+  Put(preprocess, "scale", p.scale, d.preprocess.scale);
+  if (!p.translation.isZero(0) || !p.rotation.isZero(0)) {
+    YAML::Node transform = FlowMap();
+    transform["translation"] = Vec(p.translation);
+    transform["rotation"] = Vec(p.rotation);
+    preprocess["transform"] = transform;
+  }
   if (p.crop) {
     YAML::Node crop = FlowMap();
     crop["min"] = Vec(p.crop_min);
@@ -273,6 +280,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
     preprocess["plane"] = plane;
   }
   Put(preprocess, "voxel_size", p.voxel_size, d.preprocess.voxel_size);
+  Put(preprocess, "auto_voxel", p.auto_voxel, d.preprocess.auto_voxel);
+  Put(preprocess, "auto_voxel_min_ratio", p.auto_voxel_min_ratio, d.preprocess.auto_voxel_min_ratio);
   YAML::Node outliers = FlowMap();
   Put(outliers, "neighbors", p.outlier_neighbors, d.preprocess.outlier_neighbors);
   Put(outliers, "stddev", p.outlier_stddev, d.preprocess.outlier_stddev);
@@ -292,11 +301,19 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   if (a.metric != d.data.metric) data["metric"] = ToString(a.metric);
   Put(data, "visibility", a.visibility, d.data.visibility);
   Put(data, "cloud_stride", a.cloud_stride, d.data.cloud_stride);
+  Put(data, "auto_visibility", a.auto_visibility, d.data.auto_visibility);
+  Put(data, "reciprocity", a.reciprocity, d.data.reciprocity);
+  Put(data, "min_points", a.min_points, d.data.min_points);
+  Put(data, "min_points_per_surface_vertex", a.min_points_per_surface_vertex,
+      d.data.min_points_per_surface_vertex);
   PutMap(n, "data", data);
 
   YAML::Node weights = FlowMap();
-  Put(weights, "data", r.weights.data, d.weights.data);
-  if (r.weights.data < 0) Put(weights, "data_per_area", r.weights.data_per_area, d.weights.data_per_area);
+  if (r.weights.data < 0) {
+    weights["data_per_area"] = r.weights.data_per_area;  // always: it selects the per-area weight
+  } else {
+    Put(weights, "data", r.weights.data, d.weights.data);
+  }
   Put(weights, "model_to_cloud_share", r.weights.model_to_cloud_share, d.weights.model_to_cloud_share);
   Put(weights, "elastic", r.weights.elastic, d.weights.elastic);
   Put(weights, "temporal", r.weights.temporal, d.weights.temporal);

@@ -309,13 +309,20 @@ Status WriteCloudVtp(const std::string& path, const PointCloud& cloud) {
 
 namespace {
 std::atomic<bool> g_interrupted{false};
-void OnSigint(int) {
-  if (g_interrupted.exchange(true)) std::_Exit(130);
+std::atomic<int> g_signal{0};
+void OnInterrupt(int signal) {
+  if (g_interrupted.exchange(true)) std::_Exit(128 + signal);
+  g_signal.store(signal);
 }
 }  // namespace
 
-void InstallInterruptHandler() { std::signal(SIGINT, OnSigint); }
+void InstallInterruptHandler() {
+  std::signal(SIGINT, OnInterrupt);
+  std::signal(SIGTERM, OnInterrupt);  // what timeout, schedulers and docker stop send
+}
 bool Interrupted() { return g_interrupted.load(); }
+int InterruptExitCode() { return 128 + (g_signal.load() != 0 ? g_signal.load() : SIGINT); }
+const char* InterruptName() { return g_signal.load() == SIGTERM ? "SIGTERM" : "SIGINT"; }
 
 }  // namespace cli
 }  // namespace femreg

@@ -85,8 +85,11 @@ int RunProgram(const std::vector<std::string>& argv);
 Status WriteCloudVtp(const std::string& path, const PointCloud& cloud);
 
 // Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one exits at once.
+// SIGTERM (timeout, schedulers, docker stop) is handled the same way.
 void InstallInterruptHandler();
 bool Interrupted();
+int InterruptExitCode();      // 128 + the signal (130 for SIGINT, 143 for SIGTERM)
+const char* InterruptName();  // "SIGINT" or "SIGTERM"
 
 }  // namespace cli
 }  // namespace femreg

@@ -19,6 +19,7 @@ void RegisterCommands(CLI::App* app) {
   AddEvalCommand(app);
   AddFractureDataCommand(app);
   AddContactDataCommand(app);
+  AddOrganDataCommand(app);
   AddMeshCommand(app);
   AddCalibrateCommand(app);
 }

@@ -17,6 +17,7 @@ void AddSynthCommand(CLI::App* app);
 void AddEvalCommand(CLI::App* app);
 void AddFractureDataCommand(CLI::App* app);
 void AddContactDataCommand(CLI::App* app);
+void AddOrganDataCommand(CLI::App* app);
 void AddMeshCommand(CLI::App* app);
 void AddCalibrateCommand(CLI::App* app);
 

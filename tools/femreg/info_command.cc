@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "femreg/io.h"
 #include "femreg/mesh.h"
+#include "mesh_warnings.h"
 
 namespace femreg {
 namespace cli {
@@ -45,6 +46,11 @@ void RunInfo(const InfoOptions& options) {
   const Eigen::Vector3d hi = mesh.rest.colwise().maxCoeff().transpose();
   const double volume = RestVolume(mesh);
   const MeshQuality q = ComputeQuality(mesh, mesh.rest);
+  // Readers re-orient inverted elements, so num_inverted is 0 for a file; a fold shows as
+  // elements overlapping across a shared face.
+  std::vector<int> folded = FoldedElements(mesh);
+  const int num_folded = static_cast<int>(folded.size());
+  if (folded.size() > 100) folded.resize(100);
 
   std::ostringstream os;
   os << std::setprecision(6);
@@ -71,7 +77,9 @@ void RunInfo(const InfoOptions& options) {
        << "  \"num_inverted\": " << q.num_inverted << ",\n"
        << "  \"inverted\": " << JsonIntList(q.inverted) << ",\n"
        << "  \"num_degenerate\": " << q.num_degenerate << ",\n"
-       << "  \"degenerate\": " << JsonIntList(q.degenerate) << "\n}\n";
+       << "  \"degenerate\": " << JsonIntList(q.degenerate) << ",\n"
+       << "  \"num_folded\": " << num_folded << ",\n"
+       << "  \"folded\": " << JsonIntList(folded) << "\n}\n";
   } else {
     os << "file:              " << options.mesh_path << "\n"
        << "format:            " << ToString(format) << "\n"
@@ -98,9 +106,12 @@ void RunInfo(const InfoOptions& options) {
     if (!q.inverted.empty()) os << "  first: " << JsonIntList(q.inverted);
     os << "\ndegenerate:        " << q.num_degenerate;
     if (!q.degenerate.empty()) os << "  first: " << JsonIntList(q.degenerate);
+    os << "\nfolded elements:   " << num_folded;
+    if (num_folded > 0) os << "  first: " << JsonIntList(folded) << " (overlap a neighbour)";
     os << "\n";
   }
   std::cout << os.str();
+  if (num_folded > 0) WarnFoldedElements("info", options.mesh_path, mesh);
   SetExitCode(0);
 }
 
@@ -112,7 +123,9 @@ void AddInfoCommand(CLI::App* app) {
       "info",
       "Read a tetrahedral mesh and print its format, vertex, element and surface-triangle "
       "counts, elements per region, total volume, bounding box and element quality "
-      "(dihedral angles, aspect ratios, inverted and degenerate elements).");
+      "(dihedral angles, aspect ratios, inverted, degenerate and folded elements: readers "
+      "re-orient inverted elements, so a fold in the file shows as elements overlapping a "
+      "neighbour).");
   cmd->footer(
       "Formats (detected from the content, not the extension): Gmsh MSH 1/2.2/4.1 ASCII, "
       "TetGen .node/.ele (give either file or the base name), MEDIT .mesh, VTK legacy "

@@ -30,6 +30,7 @@
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
+#include "mesh_warnings.h"
 
 namespace fs = std::filesystem;
 
@@ -49,6 +50,7 @@ struct RegisterArgs {
   int threads = 0;
   bool no_collision = false;
   std::vector<std::string> sets;  // --set key.path=value
+  bool skip_bad_frames = false;
 };
 
 struct FrameRow {
@@ -171,6 +173,20 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   using json = nlohmann::ordered_json;
   auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
   const Totals t = ComputeTotals(rows);
+  int unreadable = 0;
+  double voxel = 0.0, coverage = 1.0;
+  std::string visibility = "none";
+  for (const FrameRow& r : rows) {
+    if (!r.read_error.empty()) {
+      ++unreadable;
+      continue;
+    }
+    voxel = std::max(voxel, r.summary.voxel_size);
+    if (r.summary.outer_iterations > 0) {
+      coverage = std::min(coverage, r.summary.coverage);
+      visibility = r.summary.visibility;
+    }
+  }
   const RegistrationOptions& o = tracker.options();
   json j;
   j["femreg_version"] = Version();
@@ -179,7 +195,15 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   j["frames_total"] = files.size();
   j["frames_done"] = t.frames;
   j["interrupted"] = interrupted;
+  if (interrupted) j["interrupted_by"] = InterruptName();
   j["frames_usable"] = t.usable;
+  j["frames_unreadable"] = unreadable;
+  // How the clouds were used: the automatic subsampling's voxel (0: none), how visibility
+  // was decided (the last solved frame) and the smallest coverage of the surface.
+  j["clouds"] = {{"auto_voxel_m", number(voxel)},
+                 {"visibility", visibility},
+                 {"reciprocity", number(o.data.reciprocity)},
+                 {"min_coverage", number(coverage)}};
   j["regularizer"] = ToString(o.regularizer);
   j["backend"] = ToString(o.solver.backend);
   // What solved the frames (a contact scene runs on Ceres whatever the option says).
@@ -282,9 +306,85 @@ class ContactMeter {
   std::vector<Triangles> surfaces_;
 };
 
+// Scene keys that register would not use are refused, naming the key and what to use.
+// Clamps in `boundary` are used: they become hard anchors (AddBoundaryClamps).
+Status CheckRegisterKeys(const Scene& scene) {
+  const std::string file = scene.path.empty() ? "scene" : scene.path;
+  for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
+    const BoundaryConditionSpec& b = scene.boundary_conditions[i];
+    if (b.type == BoundaryConditionSpec::Type::kDisplacement) {
+      return Status::Error(b.selection.where + ": boundary[" + std::to_string(i) +
+                           "].displacement is not used by register (clamps are held as hard "
+                           "anchors); for a support that moves, use anchors with translations");
+    }
+  }
+  if (!scene.loads.empty()) {
+    return Status::Error(scene.loads[0].selection.where +
+                         ": loads are not used by register (the clouds drive the shape); remove "
+                         "them, or use femreg simulate");
+  }
+  if (!scene.gravity.isZero(0)) {
+    return Status::Error(file + ": gravity is not used by register (the clouds drive the shape); "
+                                "remove it, or use femreg simulate");
+  }
+  return Status::Ok();
+}
+
+Status AddBoundaryClamps(const Scene& scene, Tracker* tracker) {
+  for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
+    const BoundaryConditionSpec& b = scene.boundary_conditions[i];
+    int object = 0;
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+      if (scene.objects[o].name == b.object) object = static_cast<int>(o);
+    }
+    std::vector<int> vertices;
+    Status status = SelectVertices(b.selection, tracker->mesh(object).rest, &vertices);
+    if (status.ok()) {
+      status = tracker->AddAnchor("boundary[" + std::to_string(i) + "]", object, vertices, true, 0.0);
+    }
+    if (!status.ok()) return Status::Error(b.selection.where + ": " + status.message());
+  }
+  return Status::Ok();
+}
+
+// The diagonal of the meshes' rest bounding box (m).
+double MeshExtent(const Tracker& tracker) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (int i = 0; i < tracker.num_objects(); ++i) {
+    lo = lo.cwiseMin(tracker.mesh(i).rest.colwise().minCoeff().transpose());
+    hi = hi.cwiseMax(tracker.mesh(i).rest.colwise().maxCoeff().transpose());
+  }
+  return (hi - lo).norm();
+}
+
+// The units hint: warns once when the first cloud's extent and the meshes' differ by more
+// than 10 times (a cloud in mm against a mesh in m).
+void WarnUnits(const std::string& file, const PointCloud& cloud, double scale, double mesh_extent) {
+  const double extent =
+      scale * (cloud.points.colwise().maxCoeff() - cloud.points.colwise().minCoeff()).norm();
+  if (!(mesh_extent > 0) || !(extent > 0)) return;
+  const double ratio = extent / mesh_extent;
+  if (ratio <= 10.0 && ratio >= 0.1) return;
+  std::fprintf(stderr,
+               "femreg register: warning: the first cloud (%s) spans %.4g (bounding box diagonal%s) "
+               "and the meshes %.4g m: %.3g times %s. Different units? Scale the clouds with "
+               "registration.preprocess.scale (e.g. 0.001 for mm) or the meshes with "
+               "objects[].scale.\n",
+               file.c_str(), extent, scale != 1.0 ? ", after preprocess.scale" : "", mesh_extent,
+               ratio > 1 ? ratio : 1.0 / ratio, ratio > 1 ? "larger" : "smaller");
+}
+
 int RunRegister(const RegisterArgs& args) {
+  // From the start: a SIGTERM while the scene loads still ends with whole files and an
+  // honest summary.
+  InstallInterruptHandler();
   Scene scene;
   Status status = LoadSceneWithSets(args.scene, args.sets, &scene);
+  if (!status.ok()) {
+    std::cerr << "femreg register: " << status.message() << "\n";
+    return 1;
+  }
+  status = CheckRegisterKeys(scene);
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;
@@ -328,6 +428,15 @@ int RunRegister(const RegisterArgs& args) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;
   }
+  status = AddBoundaryClamps(scene, tracker.get());
+  if (!status.ok()) {
+    std::cerr << "femreg register: " << status.message() << "\n";
+    return 1;
+  }
+  for (int i = 0; i < tracker->num_objects(); ++i) {
+    WarnFoldedElements("register", "object '" + scene.objects[static_cast<size_t>(i)].name + "'",
+                       tracker->mesh(i));
+  }
   status = PrepareOutputDir(args.out, args.force);
   if (status.ok()) status = PrepareOutputDir((fs::path(args.out) / "frames").string(), true);
   if (!status.ok()) {
@@ -350,12 +459,14 @@ int RunRegister(const RegisterArgs& args) {
             << ToString(scene.registration.regularizer) << ", "
             << ToString(scene.registration.solver.backend) << " back end" << std::endl;
 
-  InstallInterruptHandler();
   std::vector<FrameRow> rows;
   std::vector<std::vector<PvdEntry>> pvd(static_cast<size_t>(tracker->num_objects()));
   std::vector<PvdEntry> cloud_pvd;
   ProgressBar bar("register", static_cast<int>(files.size()), args.progress);
   bool interrupted = false;
+  bool units_checked = false, coverage_warned = false;
+  const double mesh_extent = MeshExtent(*tracker);
+  std::vector<std::string> unreadable;
   for (size_t f = 0; f < files.size(); ++f) {
     if (Interrupted()) {
       interrupted = true;
@@ -365,12 +476,43 @@ int RunRegister(const RegisterArgs& args) {
     row.file = files[f];
     PointCloud cloud;
     int dropped = 0;
-    Status read = ReadPointCloud(files[f], &cloud, &dropped);
+    SensorPose sensor;
+    Status read = ReadPointCloud(files[f], &cloud, &dropped, &sensor);
     if (!read.ok()) {
+      if (!args.skip_bad_frames) {
+        bar.Finish();
+        std::cerr << "\nfemreg register: cannot read frame " << f << ": " << read.message()
+                  << "\n  (the outputs cover the " << rows.size()
+                  << " frames before it; --skip-bad-frames counts such frames as unusable and "
+                     "goes on)\n";
+        return 1;
+      }
       row.read_error = read.message();
-      cloud = PointCloud();  // an unreadable frame is tracked as an empty one
+      unreadable.push_back(read.message());
+      cloud = PointCloud();  // an unreadable frame is tracked as an empty one: the shape holds
+    }
+    // The PCL default VIEWPOINT (origin, identity) says nothing about where the sensor was.
+    if (sensor.known && !(sensor.origin.isZero(0) && sensor.orientation.coeffs().isApprox(
+                                                         Eigen::Quaterniond::Identity().coeffs()))) {
+      cloud.has_viewpoint = true;
+      cloud.viewpoint = sensor.origin;
+    }
+    if (!units_checked && cloud.size() > 0) {
+      units_checked = true;
+      WarnUnits(files[f], cloud, scene.registration.preprocess.scale, mesh_extent);
     }
     tracker->Track(cloud, &row.summary);
+    if (!read.ok()) row.summary.termination = TerminationType::kInvalidInput;
+    if (!coverage_warned && row.summary.outer_iterations > 0 && row.summary.coverage < 0.25) {
+      coverage_warned = true;
+      bar.Finish();
+      std::fprintf(stderr,
+                   "femreg register: note: frame %zu's cloud covers %.0f%% of the surface (vertices "
+                   "with a cloud point within %.1f mm): a partial view; only those vertices pull "
+                   "towards the cloud (visibility: %s). Shown once.\n",
+                   f, 100.0 * row.summary.coverage, row.summary.trim_distance * 1e3,
+                   row.summary.visibility.c_str());
+    }
     if (measure_contacts) meter.Measure(*tracker, static_cast<int>(f), &row.summary);
     row.summary.nonfinite_dropped += dropped;
     row.summary.cloud_points += dropped;
@@ -520,6 +662,10 @@ int RunRegister(const RegisterArgs& args) {
     bar.Update(static_cast<int>(f + 1), note);
   }
   bar.Finish();
+  if (!unreadable.empty()) {
+    std::fprintf(stderr, "femreg register: %zu frame(s) could not be read and were counted as unusable "
+                 "(--skip-bad-frames); the first: %s\n", unreadable.size(), unreadable[0].c_str());
+  }
   if (interrupted || Interrupted()) {
     interrupted = true;
     WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
@@ -529,10 +675,11 @@ int RunRegister(const RegisterArgs& args) {
   const Totals t = ComputeTotals(rows);
   std::printf("\nRegistered %d/%zu frames (%d usable): median %.1f ms/frame, %.1f frames/s\n",
               t.frames, files.size(), t.usable, t.median_ms, t.fps);
-  int counts[7] = {0};
+  constexpr int kTerminations = static_cast<int>(TerminationType::kTooFewPoints) + 1;
+  int counts[kTerminations] = {0};
   for (const FrameRow& r : rows) ++counts[static_cast<int>(r.summary.termination)];
   std::printf("Terminations:");
-  for (int k = 0; k < 7; ++k) {
+  for (int k = 0; k < kTerminations; ++k) {
     if (counts[k]) std::printf(" %s %d", ToString(static_cast<TerminationType>(k)), counts[k]);
   }
   std::printf("\n");
@@ -570,8 +717,15 @@ int RunRegister(const RegisterArgs& args) {
   std::printf("Results in %s: %s.pvd and cloud.pvd (open in ParaView), stats.csv, summary.json\n",
               args.out.c_str(), scene.objects.empty() ? "" : scene.objects[0].name.c_str());
   if (interrupted) {
-    std::fprintf(stderr, "Interrupted: the files cover the %d frames done.\n", t.frames);
-    return 130;
+    std::fprintf(stderr, "Interrupted (%s): the files cover the %d frames done.\n", InterruptName(),
+                 t.frames);
+    return InterruptExitCode();
+  }
+  if (t.frames > 0 && t.usable == 0) {
+    std::fprintf(stderr,
+                 "femreg register: no frame gave a usable result (see the terminations above and "
+                 "the message column of stats.csv)\n");
+    return 1;
   }
   return 0;
 }
@@ -604,6 +758,9 @@ void AddRegisterCommand(CLI::App* app) {
       ->check(CLI::IsMember({"brief", "full", "none"}));
   cmd->add_option("--threads", args->threads, "Solver threads (overrides the scene)");
   cmd->add_flag("!--no-progress", args->progress, "No progress bar (print a line per frame)");
+  cmd->add_flag("--skip-bad-frames", args->skip_bad_frames,
+                "Count a frame that cannot be read as unusable and go on (default: stop with the "
+                "file and the reason, exit code 1)");
   cmd->add_flag("--no-collision", args->no_collision,
                 "Switch effects.collision off for this run, to compare with it on: the tracker adds "
                 "no contact term, and the scene's collision section only measures the contacts and "

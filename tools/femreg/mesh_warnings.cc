@@ -1,0 +1,57 @@
+#include "mesh_warnings.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <iostream>
+#include <map>
+#include <utility>
+
+namespace femreg {
+namespace cli {
+
+std::vector<int> FoldedElements(const TetMesh& mesh) {
+  // Face (sorted vertices) -> the first element met with it and that element's fourth vertex.
+  std::map<std::array<int, 3>, std::pair<int, int>> faces;
+  std::vector<char> folded(static_cast<size_t>(mesh.num_tets()), 0);
+  static const int kFace[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    for (const auto& f : kFace) {
+      std::array<int, 3> key = {mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2])};
+      std::sort(key.begin(), key.end());
+      const int apex = mesh.tets(t, f[3]);
+      const auto it = faces.find(key);
+      if (it == faces.end()) {
+        faces.emplace(key, std::make_pair(t, apex));
+        continue;
+      }
+      const Eigen::Vector3d a = mesh.rest.row(key[0]), b = mesh.rest.row(key[1]),
+                            c = mesh.rest.row(key[2]);
+      const Eigen::Vector3d n = (b - a).cross(c - a);
+      const double s1 = n.dot(Eigen::Vector3d(mesh.rest.row(it->second.second)) - a);
+      const double s2 = n.dot(Eigen::Vector3d(mesh.rest.row(apex)) - a);
+      if (s1 * s2 > 0) {  // both apexes on the same side: the elements overlap
+        folded[static_cast<size_t>(t)] = 1;
+        folded[static_cast<size_t>(it->second.first)] = 1;
+      }
+    }
+  }
+  std::vector<int> out;
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    if (folded[static_cast<size_t>(t)]) out.push_back(t);
+  }
+  return out;
+}
+
+int WarnFoldedElements(const std::string& command, const std::string& what, const TetMesh& mesh) {
+  const std::vector<int> folded = FoldedElements(mesh);
+  if (folded.empty()) return 0;
+  std::cerr << "femreg " << command << ": warning: " << what << " has " << folded.size()
+            << " folded rest element(s) overlapping a neighbour (first:";
+  for (size_t i = 0; i < folded.size() && i < 10; ++i) std::cerr << " " << folded[i];
+  std::cerr << "); the results there are not meaningful: fix the mesh (femreg info lists them)\n";
+  return static_cast<int>(folded.size());
+}
+
+}  // namespace cli
+}  // namespace femreg
