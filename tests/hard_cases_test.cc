@@ -157,9 +157,10 @@ class HardCases : public ::testing::TestWithParam<SolverBackend> {
 
 // Error bounds: the bend moves the end 20 mm and the mean vertex ~7 mm (doing nothing). A
 // tracker that follows the data ends within a few millimetres: measured 0.1-3.3 mm, the
-// largest with Ceres stopping at 8 outer iterations on flat elements and on outliers. 4 mm
-// means "followed the data", well below doing nothing.
-constexpr double kFollowed = 4e-3;
+// largest with Ceres stopping at 8 outer iterations on flat elements and on outliers; 4.4 mm
+// on the 1:1000 flat plate with both back ends once frames stop on solver.step_tolerance.
+// 5 mm means "followed the data", well below doing nothing (the bend is 20 mm).
+constexpr double kFollowed = 5e-3;
 
 TEST_P(HardCases, PoissonRatioUpToTheIncompressibleLimit) {
   for (double nu : {0.45, 0.49, 0.499}) {

@@ -310,7 +310,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
 
   YAML::Node weights = FlowMap();
   if (r.weights.data < 0) {
-    weights["data_per_area"] = r.weights.data_per_area;  // always: it selects the per-area weight
+    // Always written: it selects the per-area weight.
+    weights["data_per_area"] = Number(r.weights.data_per_area);
   } else {
     Put(weights, "data", r.weights.data, d.weights.data);
   }

@@ -51,6 +51,7 @@ struct RegisterArgs {
   bool no_collision = false;
   std::vector<std::string> sets;  // --set key.path=value
   bool skip_bad_frames = false;
+  double depth_scale = 0.001;  // m per unit of 16-bit depth PNG frames
 };
 
 struct FrameRow {
@@ -393,7 +394,7 @@ int RunRegister(const RegisterArgs& args) {
   const bool measure_contacts = args.no_collision && scene.effects.collision;
   if (args.no_collision) scene.effects.collision = false;
   std::vector<std::string> files;
-  status = ListFrames(args.frames, {".pcd", ".ply", ".xyz", ".txt"}, &files);
+  status = ListFrames(args.frames, {".pcd", ".ply", ".xyz", ".txt", ".png"}, &files);
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;
@@ -477,7 +478,10 @@ int RunRegister(const RegisterArgs& args) {
     PointCloud cloud;
     int dropped = 0;
     SensorPose sensor;
-    Status read = ReadPointCloud(files[f], &cloud, &dropped, &sensor);
+    // A .png frame is a 16-bit depth image, back-projected with the scene's camera.
+    DepthImageOptions depth;
+    depth.depth_scale = args.depth_scale;
+    Status read = ReadFrame(files[f], scene.registration.camera, depth, &cloud, &dropped, &sensor);
     if (!read.ok()) {
       if (!args.skip_bad_frames) {
         bar.Finish();
@@ -744,7 +748,7 @@ void AddRegisterCommand(CLI::App* app) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--frames,-f", args->frames,
-                  "A folder of clouds (.pcd, .ply, .xyz, .txt; natural order) or a quoted glob "
+                  "A folder of clouds (.pcd, .ply, .xyz, .txt) or 16-bit depth PNGs (natural order) or a quoted glob "
                   "pattern such as 'scans/*.pcd'")
       ->required();
   cmd->add_option("--out,-o", args->out, "Output folder (refused if not empty, unless --force)")
@@ -758,6 +762,10 @@ void AddRegisterCommand(CLI::App* app) {
       ->check(CLI::IsMember({"brief", "full", "none"}));
   cmd->add_option("--threads", args->threads, "Solver threads (overrides the scene)");
   cmd->add_flag("!--no-progress", args->progress, "No progress bar (print a line per frame)");
+  cmd->add_option("--depth-scale", args->depth_scale,
+                  "Metres per unit of 16-bit depth PNG frames (default 0.001: millimetres, the "
+                  "common sensor convention); PNG frames need the scene's camera")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--skip-bad-frames", args->skip_bad_frames,
                 "Count a frame that cannot be read as unusable and go on (default: stop with the "
                 "file and the reason, exit code 1)");
