@@ -202,7 +202,6 @@ FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
   // colours per vertex mask; blocks that find none go to a last colour run serially).
   std::vector<uint64_t> taken(static_cast<size_t>(num_vertices), 0);
   std::vector<int> colour(static_cast<size_t>(set.size()), 64);
-  int num_colours = 0;
   for (int b = 0; b < set.size(); ++b) {
     const T& block = set.blocks()[static_cast<size_t>(b)];
     uint64_t mask = 0;
@@ -211,7 +210,6 @@ FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
     int free = 0;
     while (mask & (uint64_t{1} << free)) ++free;
     colour[static_cast<size_t>(b)] = free;
-    num_colours = std::max(num_colours, free + 1);
     for (int i = 0; i < n; ++i) taken[static_cast<size_t>(block.vertices[i])] |= uint64_t{1} << free;
   }
   std::vector<int> count(66, 0);
@@ -221,7 +219,6 @@ FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
   c.order.assign(static_cast<size_t>(set.size()), 0);
   std::vector<int> next(count.begin(), count.end() - 1);
   for (int b = 0; b < set.size(); ++b) c.order[static_cast<size_t>(next[static_cast<size_t>(colour[b])]++)] = b;
-  (void)num_colours;
   return c;
 }
 

@@ -3,8 +3,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
-#include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -189,22 +187,15 @@ Status ParseSceneOverride(const std::string& text, SceneOverride* override_out) 
 Status LoadSceneWithOverrides(const std::string& path, const std::vector<SceneOverride>& overrides,
                               Scene* scene) {
   if (overrides.empty()) return LoadScene(path, scene);
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    return Status::Error(path + ": is a folder, not a scene file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path + ": cannot open the scene file (missing or unreadable)");
-  std::ostringstream text;
-  text << in.rdbuf();
-  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  const std::string base_dir = parent.empty() ? "." : parent.string();
+  std::string text, base_dir;
+  const Status read = scene_internal::ReadSceneText(path, &text, &base_dir);
+  if (!read.ok()) return read;
 
   std::vector<std::string> paths;
   Scene parsed;
   parsed.path = path;
   try {
-    YAML::Node root = YAML::Load(text.str());
+    YAML::Node root = YAML::Load(text);
     for (const SceneOverride& o : overrides) {
       std::vector<KeyStep> steps;
       Status status = SplitKey(o.key, &steps);

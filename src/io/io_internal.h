@@ -16,6 +16,17 @@ struct SensorPose;
 
 namespace internal {
 
+// A scalar type of a binary file (VTK legacy BINARY, PCD binary, PLY binary): its size in
+// bytes (1, 2, 4 or 8; 0: a type that cannot be read), float or integer, signed or not.
+struct BinaryScalar {
+  int size = 0;
+  bool is_float = false;
+  bool is_signed = false;
+};
+
+// The value of one scalar of `type` stored at p, in either byte order.
+double DecodeBinaryScalar(const char* p, const BinaryScalar& type, bool big_endian);
+
 // A mesh as a reader found it, before unused vertices are dropped and it is finalized.
 struct RawTetMesh {
   std::vector<std::array<double, 3>> vertices;  // #V positions

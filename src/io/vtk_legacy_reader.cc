@@ -38,12 +38,8 @@ const std::set<std::string>& Keywords() {
   return keywords;
 }
 
-// A legacy data type: its size in a BINARY file and how to decode one big-endian value.
-struct ValueType {
-  int size = 0;  // 0: not a type we can read in binary
-  bool is_float = false;
-  bool is_signed = true;
-};
+// A legacy data type: its size in a BINARY file (values are big-endian).
+using ValueType = BinaryScalar;
 
 ValueType TypeOf(const std::string& name) {
   const std::string t = Upper(name);
@@ -60,25 +56,6 @@ ValueType TypeOf(const std::string& name) {
   return {};
 }
 
-double DecodeBigEndian(const char* p, const ValueType& type) {
-  uint64_t bits = 0;
-  for (int i = 0; i < type.size; ++i) bits = (bits << 8) | static_cast<unsigned char>(p[i]);
-  if (type.is_float) {
-    if (type.size == 4) {
-      const uint32_t b32 = static_cast<uint32_t>(bits);
-      float f;
-      std::memcpy(&f, &b32, 4);
-      return f;
-    }
-    double d;
-    std::memcpy(&d, &bits, 8);
-    return d;
-  }
-  if (!type.is_signed) return static_cast<double>(bits);
-  const int shift = 64 - 8 * type.size;
-  const int64_t value = static_cast<int64_t>(bits << shift) >> shift;  // sign-extend
-  return static_cast<double>(value);
-}
 
 class VtkLegacyReader {
  public:
@@ -205,7 +182,7 @@ class VtkLegacyReader {
     if (!s.ok()) return s;
     if (values != nullptr) {
       values->resize(static_cast<size_t>(count));
-      for (long long i = 0; i < count; ++i) (*values)[i] = DecodeBigEndian(data + i * vt.size, vt);
+      for (long long i = 0; i < count; ++i) (*values)[i] = DecodeBinaryScalar(data + i * vt.size, vt, /*big_endian=*/true);
     }
     return Status::Ok();
   }

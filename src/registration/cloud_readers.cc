@@ -26,34 +26,7 @@ namespace {
 
 constexpr long long kMaxPoints = std::numeric_limits<int>::max();  // PointCloud::size() is int
 
-// A scalar type of a binary file: size in bytes, and how to decode it.
-struct Scalar {
-  int size = 0;  // 0: unknown type
-  bool is_float = false;
-  bool is_signed = false;
-};
-
-double Decode(const char* p, const Scalar& type, bool big_endian) {
-  uint64_t bits = 0;
-  for (int i = 0; i < type.size; ++i) {
-    const int k = big_endian ? i : type.size - 1 - i;
-    bits = (bits << 8) | static_cast<unsigned char>(p[k]);
-  }
-  if (type.is_float) {
-    if (type.size == 4) {
-      const uint32_t b32 = static_cast<uint32_t>(bits);
-      float f;
-      std::memcpy(&f, &b32, 4);
-      return f;
-    }
-    double d;
-    std::memcpy(&d, &bits, 8);
-    return d;
-  }
-  if (!type.is_signed) return static_cast<double>(bits);
-  const int shift = 64 - 8 * type.size;
-  return static_cast<double>(static_cast<int64_t>(bits << shift) >> shift);
-}
+using Scalar = BinaryScalar;
 
 std::vector<std::string> Split(const std::string& line) {
   std::istringstream in(line);
@@ -431,16 +404,16 @@ class PcdReader {
     if (normals_) normals->resize(3 * static_cast<size_t>(points_));
     if (labels_) labels->resize(static_cast<size_t>(points_));
     for (long long i = 0; i < points_; ++i) {
-      (*xyz)[3 * i] = Decode(at_value(fx, i), ScalarOf(fields_[fx]), false);
-      (*xyz)[3 * i + 1] = Decode(at_value(fy, i), ScalarOf(fields_[fy]), false);
-      (*xyz)[3 * i + 2] = Decode(at_value(fz, i), ScalarOf(fields_[fz]), false);
+      (*xyz)[3 * i] = DecodeBinaryScalar(at_value(fx, i), ScalarOf(fields_[fx]), false);
+      (*xyz)[3 * i + 1] = DecodeBinaryScalar(at_value(fy, i), ScalarOf(fields_[fy]), false);
+      (*xyz)[3 * i + 2] = DecodeBinaryScalar(at_value(fz, i), ScalarOf(fields_[fz]), false);
       if (normals_) {
-        (*normals)[3 * i] = Decode(at_value(nx, i), ScalarOf(fields_[nx]), false);
-        (*normals)[3 * i + 1] = Decode(at_value(ny, i), ScalarOf(fields_[ny]), false);
-        (*normals)[3 * i + 2] = Decode(at_value(nz, i), ScalarOf(fields_[nz]), false);
+        (*normals)[3 * i] = DecodeBinaryScalar(at_value(nx, i), ScalarOf(fields_[nx]), false);
+        (*normals)[3 * i + 1] = DecodeBinaryScalar(at_value(ny, i), ScalarOf(fields_[ny]), false);
+        (*normals)[3 * i + 2] = DecodeBinaryScalar(at_value(nz, i), ScalarOf(fields_[nz]), false);
       }
       if (labels_) {
-        const double v = Decode(at_value(fl, i), ScalarOf(fields_[fl]), false);
+        const double v = DecodeBinaryScalar(at_value(fl, i), ScalarOf(fields_[fl]), false);
         if (!LabelFrom(v, &(*labels)[i])) {
           std::ostringstream os;
           os << "point " << i << ": label " << v << " is not an integer in the range of int";
@@ -673,7 +646,7 @@ class PlyReader {
          << " (truncated file?)";
       return ByteError(os.str());
     }
-    *value = Decode(data.data() + pos_, type, big_endian_);
+    *value = DecodeBinaryScalar(data.data() + pos_, type, big_endian_);
     pos_ += static_cast<size_t>(type.size);
     return Status::Ok();
   }

@@ -248,17 +248,30 @@ Status ParseScene(const std::string& yaml_text, const std::string& source,
   return Status::Ok();
 }
 
-Status LoadScene(const std::string& path, Scene* scene) {
+namespace scene_internal {
+
+Status ReadSceneText(const std::string& path, std::string* text, std::string* base_dir) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
     return Status::Error(path + ": is a folder, not a scene file");
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::Error(path + ": cannot open the scene file (missing or unreadable)");
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::ostringstream os;
+  os << in.rdbuf();
+  *text = os.str();
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();
-  return ParseScene(text.str(), path, parent.empty() ? "." : parent.string(), scene);
+  *base_dir = parent.empty() ? "." : parent.string();
+  return Status::Ok();
+}
+
+}  // namespace scene_internal
+
+Status LoadScene(const std::string& path, Scene* scene) {
+  std::string text, base_dir;
+  const Status status = scene_internal::ReadSceneText(path, &text, &base_dir);
+  if (!status.ok()) return status;
+  return ParseScene(text, path, base_dir, scene);
 }
 
 }  // namespace femreg

@@ -88,6 +88,10 @@ class SceneParser {
   Scene* scene_;
 };
 
+// Reads a scene file's text and the folder its relative paths start from; errors name the
+// path (a folder, missing, unreadable). LoadScene and the --set overrides share it.
+Status ReadSceneText(const std::string& path, std::string* text, std::string* base_dir);
+
 }  // namespace scene_internal
 }  // namespace femreg
 
