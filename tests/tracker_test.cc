@@ -368,6 +368,7 @@ TEST(Tracker, FastAndCeresBackEndsReachTheSameMinimumOnAFrame) {
       options.solver.max_outer_iterations = 1;  // same pairs: one minimization to compare
       options.solver.max_inner_iterations = 200;
       options.solver.inner_tolerance = 1e-14;  // both to the minimum, not to a tolerance
+      options.solver.step_tolerance = 0.0;
       options.solver.predict_motion = false;
       auto tracker = MakeTracker(options);
       FrameSummary summary;

@@ -19,6 +19,10 @@ Eigen::Vector3d DataPair::Point(const Vertices& x) const {
 
 namespace {
 
+// A cloud point closer to the surface than this fraction of the triangle's longest edge is on
+// it: the direction to it is round-off, and the face normal is used.
+constexpr double kOnSurface = 1e-9;
+
 // A labelled cloud split by object: per labelled object its points (k-d tree) and its
 // surface (closest-point index); the points no label claims ("free"), which pair only with
 // the objects without a label, and those objects' surfaces.
@@ -386,10 +390,21 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       pair.target = cloud.points.row(i);
       if (fc.weights.size() == cloud.size()) pair.weight = fc.weights(i);
       if (plane) {
+        // Inside a triangle the distance to the surface changes along the face normal. On
+        // an edge or a corner (a zero barycentric coordinate) it changes along the line from
+        // the closest point to the cloud point, which turns continuously from one face's
+        // normal to the next: taking a face normal there pulls an edge out along one face in
+        // one outer iteration and lets it go in the next, a cycle that never converges.
+        const Eigen::Vector3d to_point = pair.target - pair.Point(x);
         const Eigen::Vector3d a = x.row(pair.vertices[0]), b = x.row(pair.vertices[1]),
                               c = x.row(pair.vertices[2]);
         const Eigen::Vector3d fn = (b - a).cross(c - a);
-        if (fn.norm() > 0) pair.normal = fn.normalized();
+        const double edge2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+        if (hit.barycentric.minCoeff() <= 0.0 && to_point.squaredNorm() > kOnSurface * kOnSurface * edge2) {
+          pair.normal = to_point.normalized();
+        } else if (fn.norm() > 0) {
+          pair.normal = fn.normalized();
+        }
       }
       pairs->push_back(pair);
       ++counts->cloud_to_model;
