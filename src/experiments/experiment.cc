@@ -16,6 +16,7 @@
 #include "femreg/point_cloud.h"
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
+#include "parallel/threads.h"
 
 namespace fs = std::filesystem;
 
@@ -208,6 +209,12 @@ std::vector<Setting> DefaultBenchSweep(const Scene& base) {
   const RegistrationOptions& r = base.registration;
   std::vector<Setting> s;
   s.push_back({"baseline", {}, nullptr, 1.0});
+  // Frames per second on one thread and on all of them (the baseline runs on the scene's
+  // solver.threads, by default all).
+  const int all = ResolveThreadCount(0);
+  s.push_back({"1 thread", {{"threads", "1"}}, [](Scene* sc) { sc->registration.solver.num_threads = 1; }, 1.0});
+  s.push_back({"all threads (" + std::to_string(all) + ")", {{"threads", std::to_string(all)}},
+               [all](Scene* sc) { sc->registration.solver.num_threads = all; }, 1.0});
   for (double res : {0.5, 0.75, 1.5}) {
     s.push_back({"resolution x" + Num(res), {{"resolution", Num(res)}}, nullptr, res});
   }
@@ -224,6 +231,16 @@ std::vector<Setting> DefaultBenchSweep(const Scene& base) {
   for (int stride : {2, 4, 8}) {
     s.push_back({"cloud stride " + std::to_string(stride), {{"cloud_stride", std::to_string(stride)}},
                  [stride](Scene* sc) { sc->registration.data.cloud_stride = stride; }, 1.0});
+  }
+  if (r.solver.backend == SolverBackend::kFast) {
+    s.push_back({"Ceres back end", {{"backend", "ceres"}},
+                 [](Scene* sc) { sc->registration.solver.backend = SolverBackend::kCeres; }, 1.0});
+    s.push_back({"Ceres, 1 thread", {{"backend", "ceres"}, {"threads", "1"}},
+                 [](Scene* sc) {
+                   sc->registration.solver.backend = SolverBackend::kCeres;
+                   sc->registration.solver.num_threads = 1;
+                 },
+                 1.0});
   }
   if (r.solver.backend != SolverBackend::kFast) {
     s.push_back({"fast back end", {{"backend", "fast"}},

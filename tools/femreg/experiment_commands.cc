@@ -62,8 +62,8 @@ std::string Mm(double metres, bool measured, int width, int precision = 2) {
 void PrintTable(const std::string& title, const std::vector<Outcome>& outcomes) {
   const std::vector<int> front = ParetoFront(outcomes);
   std::printf("\n%s\n", title.c_str());
-  std::printf("%-30s %7s %9s %6s %9s %9s %9s %10s %10s %9s  %s\n", "setting", "verts", "ms/frame",
-              "outer", "conv", "resid mm", "mean mm", "seen mm", "hidden mm", "max mm", "pareto");
+  std::printf("%-30s %7s %9s %7s %6s %9s %9s %9s %10s %10s %9s  %s\n", "setting", "verts", "ms/frame",
+              "frames/s", "outer", "conv", "resid mm", "mean mm", "seen mm", "hidden mm", "max mm", "pareto");
   for (size_t i = 0; i < outcomes.size(); ++i) {
     const Outcome& o = outcomes[i];
     if (!o.error.empty()) {
@@ -73,8 +73,8 @@ void PrintTable(const std::string& title, const std::vector<Outcome>& outcomes) 
     const bool on_front = std::find(front.begin(), front.end(), static_cast<int>(i)) != front.end();
     char conv[32];
     std::snprintf(conv, sizeof(conv), "%d/%d", o.converged, o.frames);
-    std::printf("%-30s %7d %9.1f %6.2f %9s %s %s %s %s %s  %s\n", o.setting.c_str(), o.vertices,
-                o.median_ms, o.mean_outer_iterations, conv,
+    std::printf("%-30s %7d %9.1f %7.1f %6.2f %9s %s %s %s %s %s  %s\n", o.setting.c_str(), o.vertices,
+                o.median_ms, o.median_ms > 0 ? 1e3 / o.median_ms : 0.0, o.mean_outer_iterations, conv,
                 Mm(o.median_rms_residual, true, 9, 3).c_str(), Mm(o.all_mean, o.has_truth, 9).c_str(),
                 Mm(o.seen_mean, o.has_truth, 10).c_str(), Mm(o.hidden_mean, o.has_truth, 10).c_str(),
                 Mm(o.all_max, o.has_truth, 9).c_str(), on_front ? "*" : "");
