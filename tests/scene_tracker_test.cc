@@ -1,8 +1,9 @@
 // Tracker::Create(scene): what a scene file says reaches registration — per-region materials
-// and the clamps of `boundary`.
+// and the clamps of `boundary` — whoever calls it (femreg register, Python, bench / compare).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -143,6 +144,78 @@ TEST(SceneTracker, StifferRegionDeformsLess) {
     EXPECT_LT(stiff.stiff_region, 0.2 * uniform.stiff_region);
     EXPECT_GT(stiff.other, 1.5 * uniform.other);
   }
+}
+
+// `boundary: [{clamp: true}]` holds its vertices through the library call itself (not only
+// in femreg register): every user of Tracker::Create(scene) gets the clamp.
+TEST(SceneTracker, BoundaryClampHoldsItsVertices) {
+  const std::string no_anchor =
+      "objects:\n"
+      "  - name: beam\n"
+      "    mesh: beam.vtu\n"
+      "    material: {youngs_modulus: 1e5, poisson_ratio: 0.3, density: 100}\n";
+  const std::string clamp =
+      "boundary:\n"
+      "  - {select: {box: {min: [-1, -1, -1], max: [0.0001, 1, 1]}}, clamp: true}\n";
+  for (const std::string backend : {"ceres", "fast"}) {
+    SCOPED_TRACE(backend);
+    const std::string registration = "registration: {solver: {backend: " + backend + "}}\n";
+    // Largest motion of the vertices at x = 0 after the tip is pulled down 3 cm.
+    auto root_motion = [&](const std::string& yaml) {
+      testing_util::TempDir tmp;
+      WriteBeam(tmp.path() + "/beam.vtu");
+      std::ofstream(tmp.path() + "/scene.yaml") << yaml;
+      Scene scene;
+      Status status = LoadScene(tmp.path() + "/scene.yaml", &scene);
+      EXPECT_TRUE(status.ok()) << status.message();
+      std::unique_ptr<Tracker> tracker;
+      if (status.ok()) status = Tracker::Create(scene, &tracker);
+      EXPECT_TRUE(status.ok()) << status.message();
+      if (!status.ok()) return -1.0;
+      for (int f = 1; f <= 3; ++f) {
+        FrameSummary summary;
+        EXPECT_TRUE(tracker->Track(TipCloud(tracker->mesh(0), 0.01 * f), &summary).ok());
+        EXPECT_TRUE(summary.IsSolutionUsable()) << summary.FullReport();
+      }
+      const TetMesh& mesh = tracker->mesh(0);
+      double moved = 0.0;
+      int root = 0;
+      for (int v = 0; v < mesh.num_vertices(); ++v) {
+        if (mesh.rest(v, 0) > 1e-9) continue;
+        moved = std::max(moved, (tracker->vertices(0).row(v) - mesh.rest.row(v)).norm());
+        ++root;
+      }
+      EXPECT_EQ(root, 9);  // 3 x 3 vertices on the end face
+      std::printf("%s: the vertices at x = 0 moved up to %.3g mm\n",
+                  yaml.find("clamp") != std::string::npos ? "clamped" : "free", moved * 1e3);
+      return moved;
+    };
+    // Without it the root follows the pull: the test below could fail.
+    EXPECT_GT(root_motion(no_anchor + registration), 1e-3);
+    // Hard anchors are removed from the unknowns, so the clamped vertices keep their rest
+    // positions exactly; 1e-12 m only allows for a copy through another representation.
+    EXPECT_LT(root_motion(no_anchor + clamp + registration), 1e-12);
+  }
+}
+
+// A clamp that selects nothing is an error naming the scene file's line.
+TEST(SceneTracker, EmptyClampSelectionIsAnErrorNamingTheLine) {
+  testing_util::TempDir tmp;
+  WriteBeam(tmp.path() + "/beam.vtu");
+  std::ofstream(tmp.path() + "/scene.yaml")
+      << "objects:\n"
+         "  - {name: beam, mesh: beam.vtu}\n"
+         "boundary:\n"
+         "  - {select: {box: {min: [5, 5, 5], max: [6, 6, 6]}}, clamp: true}\n";
+  Scene scene;
+  Status status = LoadScene(tmp.path() + "/scene.yaml", &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  std::unique_ptr<Tracker> tracker;
+  status = Tracker::Create(scene, &tracker);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("scene.yaml:4"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("boundary[0]"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("no vertex"), std::string::npos) << status.message();
 }
 
 }  // namespace
