@@ -132,7 +132,9 @@ class CollisionWorld {
   double frame_ = 0.0;
 };
 
-// The penalty as an energy of the forward solve (ForwardProblem::potential). The solver calls
+// The penalty as an energy of the forward solve (ForwardProblem::potential): each contact
+// becomes the energy layer's ContactPenalty block (the same one registration's frame problem
+// minimizes), whose value, gradient and k J^T J are evaluated here. The solver calls
 // Refresh at every Newton iteration; contacts are re-detected (with `margin`) only when a
 // vertex has moved more than margin / 2 since the last detection or the obstacles were posed
 // for another frame: the margin is a skin, so no pair left out can have come within D, and

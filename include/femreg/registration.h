@@ -110,9 +110,11 @@ struct DataTermOptions {
   // direction estimated from the side of the model the cloud lies on (none when the cloud
   // surrounds the model). auto_visibility false: no such test.
   bool auto_visibility = true;
-  // Reciprocity trim, in every case: a model vertex whose nearest cloud point is farther
-  // than reciprocity * (the cloud's median point spacing) does not pull (model->cloud);
-  // the cloud still pulls the model (cloud->model). 0 = off.
+  // Reciprocity trim, with or without a camera: a model vertex whose nearest cloud point is
+  // farther than max(reciprocity * (the cloud's median point spacing), loss_scale) does not
+  // pull (model->cloud); the cloud still pulls the model (cloud->model). 0 = off. Not
+  // applied while fracture is on (effects.fracture): an opening crack is model surface with
+  // no cloud point near, and its pull is what separates the pieces.
   double reciprocity = 5.0;
   // A cloud with fewer points (after preprocessing) than max(min_points,
   // min_points_per_surface_vertex * surface vertices) cannot constrain the object: the

@@ -33,8 +33,9 @@ struct Scene;  // femreg/scene.h
 class Tracker {
  public:
   // Loads every object's mesh, builds the rest data once, and checks the options; the
-  // scene's labels, anchors and effects (fracture, collision) are set up. Defined with the
-  // scene module (link femreg::femreg; include femreg/scene.h to call it).
+  // scene's labels, anchors, boundary clamps (hard anchors "boundary[i]", held at rest) and
+  // effects (fracture, collision) are set up. Defined with the scene module (link
+  // femreg::femreg; include femreg/scene.h to call it).
   static Status Create(const Scene& scene, std::unique_ptr<Tracker>* tracker);
   // The same with meshes built by the caller (positions in mesh.x are the initial shape):
   // materials[i] (one Material, or per region) belongs to meshes[i]; lumped masses come from

@@ -1,24 +1,59 @@
 // The contact penalty for the forward solver, and merging meshes for multi-object solves.
+// The penalty itself (value, gradient, Gauss-Newton Hessian) is energy::ContactPenalty's,
+// evaluated through the generic block functions of energy/term.h; this file only turns
+// contacts into blocks and scatters the blocks' shares into the solver's global arrays.
+#include <type_traits>
+
+#include "collision/contact_blocks.h"
+#include "energy/term.h"
 #include "femreg/collision.h"
 
 namespace femreg {
 
+energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double distance, double stiffness) {
+  energy::ContactPenalty<3> block;
+  for (int k = 0; k < 3; ++k) {
+    block.vertices[k] = c.vertices_a[k];
+    block.coefficients[k] = c.bary_a[k];
+  }
+  block.normal = c.normal;
+  block.offset = distance + c.normal.dot(c.point_b);
+  block.weight = stiffness;
+  return block;
+}
+
+energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double distance, double stiffness) {
+  energy::ContactPenalty<6> block;
+  for (int k = 0; k < 3; ++k) {
+    block.vertices[k] = c.vertices_a[k];
+    block.coefficients[k] = c.bary_a[k];
+    block.vertices[3 + k] = c.vertices_b[k];
+    block.coefficients[3 + k] = -c.bary_b[k];
+  }
+  block.normal = c.normal;
+  block.offset = distance;
+  block.weight = stiffness;
+  return block;
+}
+
 namespace {
 
-// The DOFs and weights of delta = D - n . (p_a - p_b): d delta / d x_v = w_v (-n).
-int Stencil(const Contact& c, int* vertex, double* weight) {
-  int n = 0;
-  for (int k = 0; k < 3; ++k) {
-    vertex[n] = c.vertices_a[k];
-    weight[n++] = c.bary_a[k];
-  }
-  if (!c.obstacle()) {
-    for (int k = 0; k < 3; ++k) {
-      vertex[n] = c.vertices_b[k];
-      weight[n++] = -c.bary_b[k];
+// Calls f(block) with the penalty block of every contact (3 or 6 vertices).
+template <class F>
+void ForEachPenaltyBlock(const std::vector<Contact>& contacts, const CollisionWorld& world, F&& f) {
+  for (const Contact& c : contacts) {
+    if (c.obstacle()) {
+      f(ObstaclePenaltyBlock(c, world.distance(), world.stiffness()));
+    } else {
+      f(PairPenaltyBlock(c, world.distance(), world.stiffness()));
     }
   }
-  return n;
+}
+
+// Whether the block's contact is active (delta > 0) at x: an open contact adds nothing.
+template <class Block>
+bool Active(const Block& block, const Vertices& x) {
+  return block.Penetration(energy::StencilPositions(block, x).data()) > 0;
 }
 
 }  // namespace
@@ -35,36 +70,46 @@ void ContactPotential::Refresh(const Vertices& x) {
 }
 
 double ContactPotential::Evaluate(const Vertices& x, Eigen::VectorXd* gradient) const {
-  double energy = 0.0;
-  const double k = world_->stiffness();
-  for (const Contact& c : contacts_) {
-    const double delta = world_->Penetration(c, x);
-    if (!(delta > 0)) continue;
-    energy += 0.5 * k * delta * delta;
-    if (gradient == nullptr) continue;
-    int v[6];
-    double w[6];
-    const int n = Stencil(c, v, w);
-    for (int i = 0; i < n; ++i) gradient->segment<3>(3 * v[i]) -= k * delta * w[i] * c.normal;
-  }
-  return energy;
+  const energy::Loss none;  // 1/2 k delta^2 as it is
+  double value = 0.0;
+  ForEachPenaltyBlock(contacts_, *world_, [&](const auto& block) {
+    using Block = std::decay_t<decltype(block)>;
+    if (!Active(block, x)) return;
+    if (gradient == nullptr) {
+      value += energy::BlockValue(block, none, x);
+      return;
+    }
+    energy::Linearization<Block> share;
+    energy::Linearize(block, none, x, &share, /*with_hessian=*/false);
+    value += share.value;
+    for (int i = 0; i < Block::kVertices; ++i) {
+      gradient->segment<3>(3 * block.vertices[i]) += share.gradient[i];
+    }
+  });
+  return value;
 }
 
 void ContactPotential::AddHessian(const Vertices& x,
                                   std::vector<Eigen::Triplet<double>>* triplets) const {
-  const double k = world_->stiffness();
-  for (const Contact& c : contacts_) {
-    if (!(world_->Penetration(c, x) > 0)) continue;
-    int v[6];
-    double w[6];
-    const int n = Stencil(c, v, w);
-    const Eigen::Matrix3d nn = k * c.normal * c.normal.transpose();
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j)
-        for (int r = 0; r < 3; ++r)
-          for (int s = 0; s < 3; ++s)
-            triplets->emplace_back(3 * v[i] + r, 3 * v[j] + s, w[i] * w[j] * nn(r, s));
-  }
+  const energy::Loss none;
+  ForEachPenaltyBlock(contacts_, *world_, [&](const auto& block) {
+    using Block = std::decay_t<decltype(block)>;
+    constexpr int n = Block::kVertices;
+    if (!Active(block, x)) return;
+    // k J^T J: exact for the penalty while the normal is held (the residual is linear in x).
+    energy::Linearization<Block> share;
+    energy::Linearize(block, none, x, &share);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        const Eigen::Matrix3d& h = share.hessian[i * n + j];
+        for (int r = 0; r < 3; ++r) {
+          for (int s = 0; s < 3; ++s) {
+            triplets->emplace_back(3 * block.vertices[i] + r, 3 * block.vertices[j] + s, h(r, s));
+          }
+        }
+      }
+    }
+  });
 }
 
 TetMesh MergeMeshes(const std::vector<TetMesh>& meshes, std::vector<int>* offsets) {

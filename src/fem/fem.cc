@@ -11,18 +11,33 @@
 namespace femreg {
 
 bool Material::IsValid(std::string* error) const {
-  std::ostringstream os;
-  if (!(std::isfinite(youngs_modulus) && youngs_modulus > 0)) {
-    os << "youngs_modulus must be > 0 (got " << youngs_modulus << ")";
-  } else if (!(std::isfinite(poisson_ratio) && poisson_ratio > -1.0 && poisson_ratio < 0.5)) {
-    os << "poisson_ratio must be in (-1, 0.5) (got " << poisson_ratio << ")";
-  } else if (!(std::isfinite(density) && density > 0)) {
-    os << "density must be > 0 (got " << density << ")";
-  } else {
-    return true;
+  // The first violated constraint as "FIELD must be ... (got VALUE)", the field's name first:
+  // the scene parser puts the message at that key's line (scene/parse_objects.cc).
+  struct Check {
+    const char* field;
+    double value;
+    bool ok;
+    const char* constraint;
+  };
+  const Check checks[] = {
+      {"youngs_modulus", youngs_modulus, std::isfinite(youngs_modulus), "must be finite"},
+      {"youngs_modulus", youngs_modulus, youngs_modulus > 0, "must be > 0"},
+      {"poisson_ratio", poisson_ratio, std::isfinite(poisson_ratio), "must be finite"},
+      {"poisson_ratio", poisson_ratio, poisson_ratio < 0.5, "must be < 0.5"},
+      {"poisson_ratio", poisson_ratio, poisson_ratio > -1.0, "must be > -1"},
+      {"density", density, std::isfinite(density), "must be finite"},
+      {"density", density, density > 0, "must be > 0"},
+  };
+  for (const Check& c : checks) {
+    if (c.ok) continue;
+    if (error) {
+      std::ostringstream os;
+      os << c.field << " " << c.constraint << " (got " << c.value << ")";
+      *error = os.str();
+    }
+    return false;
   }
-  if (error) *error = os.str();
-  return false;
+  return true;
 }
 
 const Material& ObjectMaterial::ForRegion(int region) const {

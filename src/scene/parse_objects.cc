@@ -2,6 +2,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 
 #include "scene/scene_parser.h"
 
@@ -127,26 +128,23 @@ Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults
   } else {
     v.CheckKeys({"youngs_modulus", "poisson_ratio", "density"});
   }
+  // The ranges are Material::IsValid's alone. The defaults are valid, so checking after each
+  // key is set blames the key just read, and the message goes to its line:
+  // "beam.yaml:6: objects[0].material.poisson_ratio: must be < 0.5 (got 0.5)".
   Material m = defaults;
-  if (v.Has("youngs_modulus")) {
-    m.youngs_modulus = v["youngs_modulus"].AsDouble();
-    if (!(m.youngs_modulus > 0)) {
-      v["youngs_modulus"].Fail("must be > 0 (got " + Number(m.youngs_modulus) + ")");
-    }
-  }
-  if (v.Has("poisson_ratio")) {
-    const YamlValue nu = v["poisson_ratio"];
-    m.poisson_ratio = nu.AsDouble();
-    if (!(m.poisson_ratio < 0.5)) {
-      nu.Fail("must be < 0.5 (got " + Number(m.poisson_ratio) + ")");
-    }
-    if (!(m.poisson_ratio > -1.0)) {
-      nu.Fail("must be > -1 (got " + Number(m.poisson_ratio) + ")");
-    }
-  }
-  if (v.Has("density")) {
-    m.density = v["density"].AsDouble();
-    if (!(m.density > 0)) v["density"].Fail("must be > 0 (got " + Number(m.density) + ")");
+  std::string error;
+  if (!m.IsValid(&error)) v.Fail(error);
+  const std::pair<const char*, double*> fields[] = {{"youngs_modulus", &m.youngs_modulus},
+                                                    {"poisson_ratio", &m.poisson_ratio},
+                                                    {"density", &m.density}};
+  for (const auto& [key, value] : fields) {
+    if (!v.Has(key)) continue;
+    const YamlValue field = v[key];
+    *value = field.AsDouble();
+    if (m.IsValid(&error)) continue;
+    // IsValid names the field first ("poisson_ratio must be ..."); the location names it too.
+    const std::string prefix = std::string(key) + " ";
+    field.Fail(error.compare(0, prefix.size(), prefix) == 0 ? error.substr(prefix.size()) : error);
   }
   return m;
 }

@@ -1,10 +1,24 @@
 // Tracker::Create(const Scene&): a scene's objects (meshes, materials per region, labels),
-// anchors and effects handed to the tracker. It lives with the scene module, above
-// registration, so that the tracker needs no scene.
+// anchors, boundary clamps and effects handed to the tracker. It lives with the scene module,
+// above registration, so that the tracker needs no scene.
+#include <string>
+#include <vector>
+
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 
 namespace femreg {
+namespace {
+
+// The object a boundary entry or an anchor names ("" with one object: that one).
+int ObjectIndex(const Scene& scene, const std::string& name) {
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    if (scene.objects[i].name == name) return static_cast<int>(i);
+  }
+  return 0;
+}
+
+}  // namespace
 
 Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
   std::vector<TetMesh> meshes(scene.objects.size());
@@ -42,10 +56,7 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
     if (!status.ok()) return Status::Error(scene.path + ": " + status.message());
   }
   for (const AnchorSpec& a : scene.anchors) {
-    int object = 0;
-    for (size_t i = 0; i < scene.objects.size(); ++i) {
-      if (scene.objects[i].name == a.object) object = static_cast<int>(i);
-    }
+    const int object = ObjectIndex(scene, a.object);
     std::vector<int> vertices;
     status = SelectVertices(a.selection, t->mesh(object).rest, &vertices);
     if (!status.ok()) return status;
@@ -55,6 +66,21 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
       status = t->SetAnchorTrajectory(a.name, a.translations);
       if (!status.ok()) return status;
     }
+  }
+  // Clamps hold their vertices where the mesh starts, as simulate holds them at rest: hard
+  // anchors named "boundary[i]". Prescribed displacements drive a simulation and are not
+  // used here (femreg register refuses them; a support that moves is an anchor with
+  // translations).
+  for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
+    const BoundaryConditionSpec& b = scene.boundary_conditions[i];
+    if (b.type != BoundaryConditionSpec::Type::kClamp) continue;
+    const int object = ObjectIndex(scene, b.object);
+    std::vector<int> vertices;
+    status = SelectVertices(b.selection, t->mesh(object).rest, &vertices);
+    if (status.ok()) {
+      status = t->AddAnchor("boundary[" + std::to_string(i) + "]", object, vertices, /*hard=*/true);
+    }
+    if (!status.ok()) return Status::Error(b.selection.where + ": " + status.message());
   }
   *tracker = std::move(t);
   return Status::Ok();

@@ -7,6 +7,8 @@
 #include <map>
 #include <utility>
 
+#include "femreg/io.h"
+
 namespace femreg {
 namespace cli {
 
@@ -51,6 +53,24 @@ int WarnFoldedElements(const std::string& command, const std::string& what, cons
   for (size_t i = 0; i < folded.size() && i < 10; ++i) std::cerr << " " << folded[i];
   std::cerr << "); the results there are not meaningful: fix the mesh (femreg info lists them)\n";
   return static_cast<int>(folded.size());
+}
+
+int WarnFoldedSceneMeshes(const std::string& command, const Scene& scene) {
+  int folded = 0;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    TetMesh mesh;
+    if (!LoadObjectMesh(scene, static_cast<int>(i), &mesh).ok()) continue;
+    folded += WarnFoldedElements(command, "object '" + scene.objects[i].name + "'", mesh);
+  }
+  // The object's scale and pose, which apply to this mesh too, keep every fold (an invertible
+  // affine map keeps which side of a face a vertex is on): reading the file is enough.
+  if (scene.synth.enabled && !scene.synth.mesh_path.empty()) {
+    TetMesh truth;
+    if (ReadTetMesh(scene.synth.mesh_path, &truth).ok()) {
+      folded += WarnFoldedElements(command, "the ground truth mesh " + scene.synth.mesh_path, truth);
+    }
+  }
+  return folded;
 }
 
 }  // namespace cli

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "femreg/mesh.h"
+#include "femreg/scene.h"
 
 namespace femreg {
 namespace cli {
@@ -19,6 +20,12 @@ std::vector<int> FoldedElements(const TetMesh& mesh);
 // Prints "femreg COMMAND: warning: WHAT has N folded rest element(s) (first: ...)" to stderr
 // when there are any; returns their number.
 int WarnFoldedElements(const std::string& command, const std::string& what, const TetMesh& mesh);
+
+// The same for the mesh of every object of a scene ("object 'beam'"), and for a synth
+// section's ground truth mesh file when it has one, for commands that do not load them
+// themselves. A mesh that cannot be loaded is skipped: the command reports that error where
+// it loads it. Returns the number of folded elements over all of them.
+int WarnFoldedSceneMeshes(const std::string& command, const Scene& scene);
 
 }  // namespace cli
 }  // namespace femreg

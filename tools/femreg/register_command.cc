@@ -308,7 +308,7 @@ class ContactMeter {
 };
 
 // Scene keys that register would not use are refused, naming the key and what to use.
-// Clamps in `boundary` are used: they become hard anchors (AddBoundaryClamps).
+// Clamps in `boundary` are used: Tracker::Create(scene) makes them hard anchors.
 Status CheckRegisterKeys(const Scene& scene) {
   const std::string file = scene.path.empty() ? "scene" : scene.path;
   for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
@@ -327,23 +327,6 @@ Status CheckRegisterKeys(const Scene& scene) {
   if (!scene.gravity.isZero(0)) {
     return Status::Error(file + ": gravity is not used by register (the clouds drive the shape); "
                                 "remove it, or use femreg simulate");
-  }
-  return Status::Ok();
-}
-
-Status AddBoundaryClamps(const Scene& scene, Tracker* tracker) {
-  for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
-    const BoundaryConditionSpec& b = scene.boundary_conditions[i];
-    int object = 0;
-    for (size_t o = 0; o < scene.objects.size(); ++o) {
-      if (scene.objects[o].name == b.object) object = static_cast<int>(o);
-    }
-    std::vector<int> vertices;
-    Status status = SelectVertices(b.selection, tracker->mesh(object).rest, &vertices);
-    if (status.ok()) {
-      status = tracker->AddAnchor("boundary[" + std::to_string(i) + "]", object, vertices, true, 0.0);
-    }
-    if (!status.ok()) return Status::Error(b.selection.where + ": " + status.message());
   }
   return Status::Ok();
 }
@@ -425,11 +408,6 @@ int RunRegister(const RegisterArgs& args) {
   }
   std::unique_ptr<Tracker> tracker;
   status = Tracker::Create(scene, &tracker);
-  if (!status.ok()) {
-    std::cerr << "femreg register: " << status.message() << "\n";
-    return 1;
-  }
-  status = AddBoundaryClamps(scene, tracker.get());
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;

@@ -16,6 +16,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "mesh_warnings.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/io.h"
@@ -88,6 +89,7 @@ bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
     result->error = status.message();
     return false;
   }
+  WarnFoldedElements("simulate", "object '" + spec.name + "'", mesh);
   result->num_vertices = mesh.num_vertices();
   result->num_tets = mesh.num_tets();
   result->num_clamped = static_cast<int>(problem.clamped.size());

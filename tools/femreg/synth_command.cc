@@ -5,6 +5,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "mesh_warnings.h"
 #include "femreg/datasets.h"
 #include "femreg/scene.h"
 #include "femreg/synth.h"
@@ -31,6 +32,7 @@ int RunSynth(const std::string& scene_path, const std::string& out, int frames, 
     std::cerr << "femreg synth: " << status.message() << "\n";
     return 1;
   }
+  WarnFoldedSceneMeshes("synth", scene);
   const int total = frames > 0 ? frames : scene.synth.frames;
   g_bar = std::make_unique<ProgressBar>("synth", total, progress);
   SynthReport report;

@@ -1,0 +1,121 @@
+// Material ranges are checked by Material::IsValid alone; the scene parser puts its message at
+// the file, line and key path of the value that broke it, for an object's material and for a
+// region's.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "femreg/fem.h"
+#include "femreg/scene.h"
+
+namespace femreg {
+namespace {
+
+// Line numbers matter below.
+const char kScene[] =
+    "objects:\n"                                                          // 1
+    "  - name: block\n"                                                   // 2
+    "    generate: {shape: box, size: [0.1, 0.1, 0.1], cells: [2, 2, 2]}\n"  // 3
+    "    material:\n"                                                     // 4
+    "      youngs_modulus: 1e5\n"                                         // 5
+    "      poisson_ratio: 0.3\n"                                          // 6
+    "      density: 1000\n"                                               // 7
+    "    regions:\n"                                                      // 8
+    "      2:\n"                                                          // 9
+    "        youngs_modulus: 1e6\n"                                       // 10
+    "        poisson_ratio: 0.4\n"                                        // 11
+    "        density: 500\n";                                             // 12
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+std::string ParseError(const std::string& text) {
+  Scene scene;
+  const Status status = ParseScene(text, "materials.yaml", ".", &scene);
+  EXPECT_FALSE(status.ok()) << "expected an error for:\n" << text;
+  return status.message();
+}
+
+TEST(SceneMaterials, ValidMaterialsAndRegionsParse) {
+  Scene scene;
+  const Status status = ParseScene(kScene, "materials.yaml", ".", &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(scene.objects.size(), 1u);
+  EXPECT_EQ(scene.objects[0].material.youngs_modulus, 1e5);
+  ASSERT_EQ(scene.objects[0].region_materials.size(), 1u);
+  EXPECT_EQ(scene.objects[0].region_materials[0].first, 2);
+  EXPECT_EQ(scene.objects[0].region_materials[0].second.youngs_modulus, 1e6);
+  EXPECT_EQ(scene.objects[0].region_materials[0].second.density, 500);
+}
+
+struct BadValue {
+  std::string from, to;  // the edit of kScene
+  std::string expected;  // the whole location and message
+};
+
+TEST(SceneMaterials, BadValuesNameFileLineAndKey) {
+  const std::vector<BadValue> cases = {
+      {"youngs_modulus: 1e5", "youngs_modulus: 0",
+       "materials.yaml:5: objects[0].material.youngs_modulus: must be > 0 (got 0)"},
+      {"youngs_modulus: 1e5", "youngs_modulus: -2e3",
+       "materials.yaml:5: objects[0].material.youngs_modulus: must be > 0 (got -2000)"},
+      {"poisson_ratio: 0.3", "poisson_ratio: 0.5",
+       "materials.yaml:6: objects[0].material.poisson_ratio: must be < 0.5 (got 0.5)"},
+      {"poisson_ratio: 0.3", "poisson_ratio: -1",
+       "materials.yaml:6: objects[0].material.poisson_ratio: must be > -1 (got -1)"},
+      {"density: 1000", "density: 0",
+       "materials.yaml:7: objects[0].material.density: must be > 0 (got 0)"},
+      // A region's material: its own key path and line.
+      {"youngs_modulus: 1e6", "youngs_modulus: -1",
+       "materials.yaml:10: objects[0].regions.2.youngs_modulus: must be > 0 (got -1)"},
+      {"poisson_ratio: 0.4", "poisson_ratio: 0.75",
+       "materials.yaml:11: objects[0].regions.2.poisson_ratio: must be < 0.5 (got 0.75)"},
+      {"density: 500", "density: -3",
+       "materials.yaml:12: objects[0].regions.2.density: must be > 0 (got -3)"},
+  };
+  for (const BadValue& c : cases) {
+    EXPECT_EQ(ParseError(Replace(kScene, c.from, c.to)), c.expected);
+  }
+}
+
+// The parser's words are IsValid's: a material with the same bad value gives the same
+// constraint, named after the field.
+TEST(SceneMaterials, MessagesAreMaterialIsValids) {
+  Material m;
+  m.poisson_ratio = 0.75;
+  std::string error;
+  ASSERT_FALSE(m.IsValid(&error));
+  EXPECT_EQ(error, "poisson_ratio must be < 0.5 (got 0.75)");
+  const std::string message = ParseError(Replace(kScene, "poisson_ratio: 0.3", "poisson_ratio: 0.75"));
+  EXPECT_NE(message.find("poisson_ratio: " + error.substr(std::string("poisson_ratio ").size())),
+            std::string::npos)
+      << message;
+  // Library callers get the same checks (the parser refuses non-finite numbers itself).
+  m = Material();
+  m.youngs_modulus = std::numeric_limits<double>::infinity();
+  ASSERT_FALSE(m.IsValid(&error));
+  EXPECT_EQ(error, "youngs_modulus must be finite (got inf)");
+}
+
+// A region that sets one value inherits the others from the object's material.
+TEST(SceneMaterials, RegionInheritsTheObjectsMaterial) {
+  const std::string text = Replace(Replace(kScene, "        poisson_ratio: 0.4\n", ""),
+                                   "        density: 500\n", "");
+  Scene scene;
+  const Status status = ParseScene(text, "materials.yaml", ".", &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(scene.objects[0].region_materials.size(), 1u);
+  const Material& region = scene.objects[0].region_materials[0].second;
+  EXPECT_EQ(region.youngs_modulus, 1e6);
+  EXPECT_EQ(region.poisson_ratio, 0.3);
+  EXPECT_EQ(region.density, 1000);
+}
+
+}  // namespace
+}  // namespace femreg
