@@ -4,6 +4,8 @@
 #include <map>
 #include <utility>
 
+#include "collision/contact_blocks.h"
+
 namespace femreg {
 
 using energy::TermGroup;
@@ -216,27 +218,9 @@ void FrameProblem::SetContacts(const std::vector<Contact>& contacts, const Colli
   auto& pair = *problem_.AddSet<energy::ContactPenalty<6>>(TermGroup::kCollision).mutable_blocks();
   for (const Contact& c : contacts) {
     if (c.obstacle()) {
-      energy::ContactPenalty<3> b;
-      for (int j = 0; j < 3; ++j) {
-        b.vertices[j] = c.vertices_a[j];
-        b.coefficients[j] = c.bary_a[j];
-      }
-      b.normal = c.normal;
-      b.offset = world.distance() + c.normal.dot(c.point_b);
-      b.weight = world.stiffness();
-      obstacle.push_back(b);
+      obstacle.push_back(ObstaclePenaltyBlock(c, world.distance(), world.stiffness()));
     } else {
-      energy::ContactPenalty<6> b;
-      for (int j = 0; j < 3; ++j) {
-        b.vertices[j] = c.vertices_a[j];
-        b.coefficients[j] = c.bary_a[j];
-        b.vertices[3 + j] = c.vertices_b[j];
-        b.coefficients[3 + j] = -c.bary_b[j];
-      }
-      b.normal = c.normal;
-      b.offset = world.distance();
-      b.weight = world.stiffness();
-      pair.push_back(b);
+      pair.push_back(PairPenaltyBlock(c, world.distance(), world.stiffness()));
     }
   }
 }
