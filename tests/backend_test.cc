@@ -28,7 +28,8 @@ struct Setup {
   energy::Problem problem;
 };
 
-std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool contacts, uint64_t seed) {
+std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool contacts, uint64_t seed,
+                                 bool loads = false) {
   auto s = std::make_unique<Setup>();
   s->mesh = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 5, 2, 2);
   ComputeLumpedMasses(&s->mesh, 500);
@@ -152,6 +153,16 @@ std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool
     pair.weight = 1e3;
     p.AddSet<energy::ContactPenalty<6>>(TermGroup::kCollision).Add(pair);
   }
+  if (loads) {  // gravity, about the rest positions, 20x its weight to show against the data
+    auto& set = p.AddSet<energy::ExternalLoad>(TermGroup::kLoad);
+    for (int v = 0; v < nv; ++v) {
+      energy::ExternalLoad b;
+      if (energy::MakeExternalLoad(v, s->mesh.mass(v) * Eigen::Vector3d(0, 0, -200), s->mesh.rest.row(v).transpose(),
+                                   0.02, &b)) {
+        set.Add(b);
+      }
+    }
+  }
   if (fixed) {
     p.fixed().assign(nv, 0);
     for (int v = 0; v < nv; ++v) {
@@ -176,13 +187,14 @@ Vertices Minimize(SolverBackend type, const energy::Problem& problem, const Vert
 struct Case {
   RobustLoss loss;
   bool springs, fixed, contacts;
+  bool loads = false;
 };
 
 class BackendTest : public ::testing::TestWithParam<Case> {};
 
 TEST_P(BackendTest, BothReachTheSameMinimum) {
   const Case c = GetParam();
-  auto s = MakeSetup(c.loss, c.springs, c.fixed, c.contacts, 3);
+  auto s = MakeSetup(c.loss, c.springs, c.fixed, c.contacts, 3, c.loads);
   const Vertices start = s->mesh.rest;
   const Vertices x_ceres = Minimize(SolverBackend::kCeres, s->problem, start);
   const Vertices x_fast = Minimize(SolverBackend::kFast, s->problem, start);
@@ -191,6 +203,11 @@ TEST_P(BackendTest, BothReachTheSameMinimum) {
   const double e_start = s->problem.Evaluate(start).total();
   ASSERT_GT(e_start - e_ceres, 1e-6) << "the problem must not start at its minimum";
   if (c.contacts) EXPECT_GT(s->problem.Evaluate(x_ceres).collision, 0.0);
+  if (c.loads) {  // the loads pull the beam down against the data
+    auto unloaded = MakeSetup(c.loss, c.springs, c.fixed, c.contacts, 3, false);
+    const Vertices x_unloaded = Minimize(SolverBackend::kFast, unloaded->problem, start);
+    EXPECT_LT(x_fast.col(2).mean(), x_unloaded.col(2).mean() - 1e-4);
+  }
   // Both stop where a step no longer lowers the energy by 1e-15 relative: their energies
   // agree to far better than 1e-7, their positions to well under a micrometre.
   EXPECT_NEAR(e_fast, e_ceres, 1e-7 * e_ceres + 1e-12);
@@ -213,7 +230,9 @@ INSTANTIATE_TEST_SUITE_P(AllTerms, BackendTest,
                                            Case{RobustLoss::kTukey, false, false, false},
                                            Case{RobustLoss::kHuber, true, true, false},
                                            Case{RobustLoss::kHuber, false, false, true},
-                                           Case{RobustLoss::kNone, true, true, true}));
+                                           Case{RobustLoss::kNone, true, true, true},
+                                           Case{RobustLoss::kHuber, false, true, false, true},
+                                           Case{RobustLoss::kNone, true, true, true, true}));
 
 // The fast back end keeps its pattern and analysis while the coupling holds, and widens it
 // once for a contact between vertices outside it.

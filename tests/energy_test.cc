@@ -170,6 +170,19 @@ struct Sample<energy::ContactPenalty<N>> {
   }
 };
 
+template <>
+struct Sample<energy::ExternalLoad> {
+  static constexpr const char* kName = "ExternalLoad";
+  energy::ExternalLoad block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    const Eigen::Vector3d origin = RandomPoint(rng, 0.1);
+    x.resize(1, 3);
+    x.row(0) = (origin + RandomPoint(rng, 0.01)).transpose();
+    EXPECT_TRUE(energy::MakeExternalLoad(0, RandomPoint(rng, 2.0), origin, 0.01, &block));
+  }
+};
+
 // The registry's block types, as a gtest type list.
 template <class Tuple>
 struct BlockTypesOf;
@@ -306,6 +319,25 @@ TEST(EnergyProblem, EvaluateSumsTheSetsByGroup) {
 
 // rho', rho'' against central differences, on both sides of the bend; the same numbers as
 // Ceres' own losses.
+// The load's force is exactly f where the block is made (the outer iteration's start), and
+// its energy is the potential -f . dx there to first order.
+TEST(ExternalLoad, ForceIsExactAtTheOriginAndTheEnergyIsThePotential) {
+  const Eigen::Vector3d f(0.3, -0.1, -2.0), origin(0.1, 0.2, 0.3);
+  energy::ExternalLoad block;
+  ASSERT_TRUE(energy::MakeExternalLoad(0, f, origin, 0.01, &block));
+  EXPECT_FALSE(energy::MakeExternalLoad(0, Eigen::Vector3d::Zero(), origin, 0.01, &block));
+  Vertices x(1, 3);
+  x.row(0) = origin.transpose();
+  energy::Linearization<energy::ExternalLoad> lin;
+  ASSERT_TRUE(energy::Linearize(block, energy::Loss(), x, &lin));
+  EXPECT_LT((lin.gradient[0] + f).norm(), 1e-14 * f.norm());
+  const double at_origin = lin.value;
+  const Eigen::Vector3d dx(1e-5, -2e-5, 3e-5);
+  x.row(0) += dx.transpose();
+  const double moved = energy::BlockValue(block, energy::Loss(), x);
+  EXPECT_NEAR(moved - at_origin, -f.dot(dx), 1e-3 * std::abs(f.dot(dx)));
+}
+
 TEST(RobustLoss, DerivativesMatchCentralDifferencesAndCeres) {
   const double a = 0.005;
   for (RobustLoss kind : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {

@@ -240,8 +240,8 @@ TEST(SynthSceneTest, ErrorsNameTheFileLineAndKey) {
                                   "    - select: {all: true}\n"
                                   "      anchor: hard\n"
                                   "      keyframes: [{frame: 0}, {frame: 4, rotation: [0, 0, 1]}]\n")),
-            "synth.yaml:14: synth.motion[0].anchor: anchors follow translations only, and this "
-            "track rotates");
+            "synth.yaml:14: synth.motion[0].anchor: this track rotates: its anchor turns about the "
+            "track's centre, so give centre: [x, y, z]");
   EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
                                   "  motion:\n"
                                   "    - select: {all: true}\n"

@@ -11,10 +11,12 @@ namespace femreg {
 // Tukey rho = a^2 / 3 (1 - (1 - s / a^2)^3) (s <= a^2), a^2 / 3 beyond. Ceres' conventions.
 enum class RobustLoss { kNone, kHuber, kCauchy, kTukey };
 
-// The energy of one frame by term (J), robust losses applied.
+// The energy of one frame by term (J), robust losses applied. `load`: the external loads'
+// (gravity, nodal loads) potential about the outer iteration's start, plus a constant
+// (src/energy/load.h); 0 without loads.
 struct EnergyTerms {
-  double data = 0.0, elastic = 0.0, temporal = 0.0, anchor = 0.0, collision = 0.0;
-  double total() const { return data + elastic + temporal + anchor + collision; }
+  double data = 0.0, elastic = 0.0, temporal = 0.0, anchor = 0.0, collision = 0.0, load = 0.0;
+  double total() const { return data + elastic + temporal + anchor + collision + load; }
 };
 
 }  // namespace femreg

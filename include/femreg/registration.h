@@ -183,6 +183,9 @@ struct RegistrationOptions {
   DataTermOptions data;
   WeightOptions weights;
   SolverOptions solver;
+  // The scene's gravity (on the lumped masses) and nodal loads act in the registration
+  // energy as they do in simulate (Tracker::Create(scene); Tracker::SetExternalLoads).
+  bool loads = true;
   bool IsValid(std::string* error) const;  // names the first bad field, e.g. "data.loss_scale"
 };
 

@@ -98,6 +98,10 @@ struct AnchorSpec {
   // Per-frame translation of the anchored set from its rest position; a frame beyond the
   // list uses the last entry; an empty list holds the set at rest.
   std::vector<Eigen::Vector3d> translations;
+  // Optional per-frame rotation (axis * angle, rad; as many as translations) about `centre`
+  // (m), applied before the translation: a gripper that turns.
+  std::vector<Eigen::Vector3d> rotations;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
 };
 
 struct EffectsSpec {
@@ -213,6 +217,11 @@ Status WriteScene(const Scene& scene, const std::string& path, const std::string
 // them against; "" writes them as they are).
 std::string SceneToYaml(const Scene& scene, const std::string& base_dir = "",
                         const std::string& comment = "");
+
+// Each object's material (and its regions' materials) taken from the object of the same
+// name in `from`, e.g. the scene `femreg calibrate` wrote: a fitted material used to track.
+// Errors name an object `from` does not have.
+Status CopyMaterials(const Scene& from, Scene* scene);
 
 // Loads (or generates) object i's mesh, applies scale and pose to rest and x, and computes
 // the lumped masses from its density and region densities. Errors name the scene and the

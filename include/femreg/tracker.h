@@ -15,6 +15,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "femreg/collision.h"
@@ -74,6 +75,21 @@ class Tracker {
   // clears it.
   Status SetAnchorTrajectory(const std::string& name,
                              const std::vector<Eigen::Vector3d>& translations);
+  // The same with a rotation per frame too (axis * angle, rad, both lists as long): the set
+  // is turned by rotations[frame] about `centre` (m, scene frame), then moved by
+  // translations[frame], both from where it was when added.
+  Status SetAnchorTrajectory(const std::string& name,
+                             const std::vector<Eigen::Vector3d>& translations,
+                             const std::vector<Eigen::Vector3d>& rotations,
+                             const Eigen::Vector3d& centre);
+
+  // External loads on object i, constant over frames, in the registration energy as in a
+  // forward solve: gravity (m/s^2) on its lumped masses and nodal forces (vertex, N). The
+  // data hold the object where it is seen; the loads shape what is not (a sag under the
+  // object's own weight). Create(scene) sets the scene's gravity and loads unless
+  // registration.loads is false. Replaces what was set before.
+  Status SetExternalLoads(int object, const Eigen::Vector3d& gravity,
+                          const std::vector<std::pair<int, Eigen::Vector3d>>& nodal_loads);
 
   // Cloud points with this label (PointCloud::labels) belong to the object; -1: none.
   Status SetObjectLabel(int object, int label);

@@ -12,9 +12,11 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -109,6 +111,7 @@ py::dict EnergyDict(const EnergyTerms& e) {
   d["temporal"] = e.temporal;
   d["anchor"] = e.anchor;
   d["collision"] = e.collision;
+  d["load"] = e.load;
   d["total"] = e.total();
   return d;
 }
@@ -452,6 +455,8 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("data", &RegistrationOptions::data)
       .def_readwrite("weights", &RegistrationOptions::weights)
       .def_readwrite("solver", &RegistrationOptions::solver)
+      .def_readwrite("loads", &RegistrationOptions::loads,
+                     "The scene's gravity and loads act in the registration energy.")
       .def("validate",
            [](const RegistrationOptions& o) {
              std::string why;
@@ -846,6 +851,49 @@ PYBIND11_MODULE(_femreg, m) {
              Check(t.tracker().SetAnchorTargets(name, v));
            },
            py::arg("name"), py::arg("targets"))
+      .def("set_anchor_trajectory",
+           [](PyTracker& t, const std::string& name, const DoubleArray& translations,
+              const std::optional<DoubleArray>& rotations, const std::array<double, 3>& centre) {
+             Vertices tr;
+             CopyRows3(translations, "translations", &tr);
+             std::vector<Eigen::Vector3d> tv;
+             for (Eigen::Index i = 0; i < tr.rows(); ++i) tv.push_back(tr.row(i).transpose());
+             if (!rotations) {
+               Check(t.tracker().SetAnchorTrajectory(name, tv));
+               return;
+             }
+             Vertices rot;
+             CopyRows3(*rotations, "rotations", &rot);
+             std::vector<Eigen::Vector3d> rv;
+             for (Eigen::Index i = 0; i < rot.rows(); ++i) rv.push_back(rot.row(i).transpose());
+             Check(t.tracker().SetAnchorTrajectory(name, tv, rv, Eigen::Vector3d(centre[0], centre[1], centre[2])));
+           },
+           py::arg("name"), py::arg("translations"), py::arg("rotations") = py::none(),
+           py::arg("centre") = std::array<double, 3>{0, 0, 0},
+           "Moves the anchored set by translations[frame] (F, 3) from where it was added, after "
+           "turning it by rotations[frame] (axis * angle, rad) about centre.")
+      .def("set_external_loads",
+           [](PyTracker& t, int object, const std::array<double, 3>& gravity,
+              const std::optional<std::vector<int>>& vertices, const std::optional<DoubleArray>& forces) {
+             t.CheckObject(object);
+             std::vector<std::pair<int, Eigen::Vector3d>> nodal;
+             if (vertices.has_value() != forces.has_value()) {
+               throw py::value_error("set_external_loads: give vertices and forces together");
+             }
+             if (vertices) {
+               Vertices f;
+               CopyRows3(*forces, "forces", &f);
+               if (static_cast<Eigen::Index>(vertices->size()) != f.rows()) {
+                 throw py::value_error("set_external_loads: one force row per vertex");
+               }
+               for (size_t i = 0; i < vertices->size(); ++i) {
+                 nodal.emplace_back((*vertices)[i], f.row(static_cast<Eigen::Index>(i)).transpose());
+               }
+             }
+             Check(t.tracker().SetExternalLoads(object, Eigen::Vector3d(gravity[0], gravity[1], gravity[2]), nodal));
+           },
+           py::arg("object"), py::arg("gravity"), py::arg("vertices") = py::none(), py::arg("forces") = py::none(),
+           "Gravity (m/s^2, on the lumped masses) and nodal forces (N) in the registration energy.")
       .def_property_readonly("options", [](PyTracker& t) { return t.tracker().options(); });
 
   // ---- forward simulation ---------------------------------------------------------------

@@ -106,6 +106,27 @@ def test_tracker_follows_a_rigid_translation():
     np.testing.assert_array_equal(tracker.vertices(0), x)
 
 
+def test_gravity_bends_what_the_camera_does_not_see():
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    options = femreg.RegistrationOptions()
+    options.solver.max_outer_iterations = 20
+    clamped = [int(v) for v in np.flatnonzero(mesh.rest[:, 0] < 1e-9)]
+    near = mesh.rest[mesh.rest[:, 0] < 0.1]  # the camera sees the clamped half, at rest
+    unseen = mesh.rest[:, 0] > 0.15
+    sag = {}
+    for g in (0.0, -9.81):
+        tracker = femreg.Tracker([mesh], [femreg.Material(youngs_modulus=2e5, density=1000)], options)
+        tracker.add_anchor("clamp", 0, clamped, hard=True)
+        tracker.set_external_loads(0, [0, 0, g])
+        x = tracker.track(near)
+        sag[g] = float((mesh.rest[unseen, 2] - x[unseen, 2]).mean())
+        assert (tracker.summary["final_energy"]["load"] != 0.0) == (g != 0.0)
+    assert abs(sag[0.0]) < 1e-3
+    assert sag[-9.81] > 5e-3  # the free end hangs down
+    with pytest.raises(ValueError):
+        tracker.set_external_loads(0, [0, 0, -9.81], vertices=[0])
+
+
 def test_tracker_reports_bad_frames_in_the_summary():
     mesh = femreg.make_box([0.1, 0.02, 0.02], [5, 1, 1])
     tracker = femreg.Tracker([mesh], [femreg.Material()])

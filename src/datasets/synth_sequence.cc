@@ -99,6 +99,9 @@ Scene SynthTrackingScene(const Scene& scene, const std::string& dir) {
     }
   }
   tracking.registration = scene.registration;
+  // Gravity is a fact of the world the robot knows; loads, clamps and prescribed motion
+  // drive the ground truth only (the robot knows what it holds: the anchors below).
+  tracking.gravity = scene.gravity;
   tracking.anchors = scene.anchors;
   tracking.effects = scene.effects;
   tracking.collision = scene.collision;
@@ -110,16 +113,29 @@ Scene SynthTrackingScene(const Scene& scene, const std::string& dir) {
     anchor.selection = track.selection;
     anchor.selection.where.clear();
     anchor.hard = track.anchor == MotionTrackSpec::Anchor::kHard;
+    bool rotates = false;
     for (int f = 0; f < s.frames; ++f) {
       Eigen::Vector3d t, r;
       InterpolateKeyframes(track.keyframes, f, &t, &r);
       t = datasets_internal::RoundSignificant(t, 9);
+      r = datasets_internal::RoundSignificant(r, 9);
       for (int k = 0; k < 3; ++k) t[k] = t[k] == 0 ? 0.0 : t[k];  // no "-0"
+      for (int k = 0; k < 3; ++k) r[k] = r[k] == 0 ? 0.0 : r[k];
       anchor.translations.push_back(t);
+      anchor.rotations.push_back(r);
+      rotates = rotates || r.norm() > 0;
+    }
+    // The anchor turns about the track's centre (required when the track rotates).
+    if (rotates) {
+      anchor.centre = track.centre;
+    } else {
+      anchor.rotations.clear();
     }
     while (anchor.translations.size() > 1 &&
-           anchor.translations.back() == anchor.translations[anchor.translations.size() - 2]) {
+           anchor.translations.back() == anchor.translations[anchor.translations.size() - 2] &&
+           (!rotates || anchor.rotations.back() == anchor.rotations[anchor.rotations.size() - 2])) {
       anchor.translations.pop_back();
+      if (rotates) anchor.rotations.pop_back();
     }
     tracking.anchors.push_back(anchor);
   }

@@ -21,6 +21,8 @@ double& GroupEnergy(TermGroup group, EnergyTerms* terms) {
       return terms->anchor;
     case TermGroup::kData:
       return terms->data;
+    case TermGroup::kLoad:
+      return terms->load;
     case TermGroup::kCollision:
       break;
   }

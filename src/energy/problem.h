@@ -15,6 +15,7 @@
 #include "energy/contact.h"
 #include "energy/data.h"
 #include "energy/elastic.h"
+#include "energy/load.h"
 #include "energy/term.h"
 #include "femreg/energy.h"
 #include "femreg/mesh.h"
@@ -29,7 +30,7 @@ class Problem {
                           std::vector<TermSet<PointToPoint<1>>>, std::vector<TermSet<PointToPoint<3>>>,
                           std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
                           std::vector<TermSet<ContactPenalty<3>>>,
-                          std::vector<TermSet<ContactPenalty<6>>>>;
+                          std::vector<TermSet<ContactPenalty<6>>>, std::vector<TermSet<ExternalLoad>>>;
 
   // Sets the number of vertices and empties the problem.
   void Reset(int num_vertices);
@@ -47,7 +48,7 @@ class Problem {
   void Clear(TermGroup group);
 
   // Calls f(set) for every set, elastic group first, then temporal, anchor, data, collision
-  // (the order a Ceres problem adds its residual blocks in), each group in registry order.
+  // then loads (the order a Ceres problem adds its residual blocks in), each group in registry order.
   template <class F>
   void ForEachSet(F&& f) const {
     for (int g = 0; g < kNumTermGroups; ++g) {

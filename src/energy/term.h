@@ -31,8 +31,8 @@ namespace femreg {
 namespace energy {
 
 // Which line of EnergyTerms a set adds to.
-enum class TermGroup { kElastic, kTemporal, kAnchor, kData, kCollision };
-constexpr int kNumTermGroups = 5;
+enum class TermGroup { kElastic, kTemporal, kAnchor, kData, kCollision, kLoad };
+constexpr int kNumTermGroups = 6;
 double& GroupEnergy(TermGroup group, EnergyTerms* terms);
 
 // A number not handed out before in this process (revisions of sets and couplings).

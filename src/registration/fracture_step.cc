@@ -108,6 +108,16 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
     f.original[i] = std::move(original);
     f.separation[i].measure = std::move(measure);
     f.separation[i].weight.resize(0);
+    if (o.loads.rows() > 0) {  // a split node's load, shared evenly among its copies
+      std::vector<int> copies(static_cast<size_t>(o.loads.rows()), 0);
+      for (int src : change.source) ++copies[static_cast<size_t>(src)];
+      Vertices loads(static_cast<Eigen::Index>(change.source.size()), 3);
+      for (size_t v = 0; v < change.source.size(); ++v) {
+        const int src = change.source[v];
+        loads.row(static_cast<Eigen::Index>(v)) = o.loads.row(src) / copies[static_cast<size_t>(src)];
+      }
+      o.loads = std::move(loads);
+    }
     ComputeLumpedMasses(&o.mesh, o.material.material.density, RegionDensities(o.material));
     sources[i] = std::move(change.source);
   }

@@ -1,5 +1,6 @@
 #include "registration/frame_problem.h"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <map>
 #include <utility>
@@ -123,7 +124,14 @@ void FrameProblem::BuildFrameTerms(TrackerState* state) {
     Anchor& a = kv.second;
     if (!a.translations.empty()) {
       const size_t i = std::min(static_cast<size_t>(state->frame), a.translations.size() - 1);
-      a.targets = a.origin.rowwise() + a.translations[i].transpose();
+      if (a.rotations.size() == a.translations.size() && a.rotations[i].norm() > 0) {
+        const Eigen::Matrix3d R =
+            Eigen::AngleAxisd(a.rotations[i].norm(), a.rotations[i].normalized()).toRotationMatrix();
+        const Eigen::RowVector3d c = a.centre.transpose();
+        a.targets = ((a.origin.rowwise() - c) * R.transpose()).rowwise() + (c + a.translations[i].transpose());
+      } else {
+        a.targets = a.origin.rowwise() + a.translations[i].transpose();
+      }
     }
     for (size_t i = 0; i < a.vertices.size(); ++i) {
       const int g = a.vertices[i];
@@ -208,6 +216,31 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
       energy::PointToPoint<3> b;
       fill(p, &b);
       point3.push_back(b);
+    }
+  }
+}
+
+void FrameProblem::SetLoads(const TrackerState& state) {
+  problem_.Clear(TermGroup::kLoad);
+  const bool any = std::any_of(state.objects.begin(), state.objects.end(), [](const ObjectState& o) {
+    return o.gravity.squaredNorm() > 0 || o.loads.rows() > 0;
+  });
+  if (!any) return;  // a scene without loads gets no load set
+  auto* blocks = problem_.AddSet<energy::ExternalLoad>(TermGroup::kLoad).mutable_blocks();
+  for (const ObjectState& o : state.objects) {
+    const bool gravity = o.gravity.squaredNorm() > 0;
+    const bool nodal = o.loads.rows() == o.mesh.num_vertices();
+    if (!gravity && !nodal) continue;
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) {
+      const int g = v + o.offset;
+      if (problem_.is_fixed(g)) continue;
+      Eigen::Vector3d f = Eigen::Vector3d::Zero();
+      if (gravity) f += state.mass(g) * o.gravity;
+      if (nodal) f += o.loads.row(v).transpose();
+      energy::ExternalLoad b;
+      if (energy::MakeExternalLoad(g, f, state.x.row(g).transpose(), state.mean_edge_length, &b)) {
+        blocks->push_back(b);
+      }
     }
   }
 }

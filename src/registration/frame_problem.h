@@ -31,6 +31,9 @@ class FrameProblem {
   // around it (times model_to_cloud_share), a cloud->model pair the cloud's area per point
   // (the median over the touched triangles of rest area / pairs on it).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
+  // The external loads (gravity, nodal forces) of the objects that have them, about the
+  // positions at the start of this outer iteration (energy/load.h). Every outer iteration.
+  void SetLoads(const TrackerState& state);
   // The contact penalty of the detected contacts (k and D from the world).
   void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world);
 

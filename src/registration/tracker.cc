@@ -270,6 +270,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // the solve may bring within D.
   t0 = Clock::now();
   frame_problem.SetData(*pairs, options);
+  frame_problem.SetLoads(state);
   s->time.build += Seconds(t0);
   if (state.collision) {
     const auto t_collision = Clock::now();
@@ -520,6 +521,51 @@ Status Tracker::SetAnchorTrajectory(const std::string& name,
     if (!t.allFinite()) return Status::Error("anchor '" + name + "': non-finite translation");
   }
   it->second.translations = translations;
+  it->second.rotations.clear();
+  return Status::Ok();
+}
+
+Status Tracker::SetAnchorTrajectory(const std::string& name,
+                                    const std::vector<Eigen::Vector3d>& translations,
+                                    const std::vector<Eigen::Vector3d>& rotations,
+                                    const Eigen::Vector3d& centre) {
+  if (rotations.size() != translations.size()) {
+    return Status::Error("anchor '" + name + "': " + std::to_string(rotations.size()) + " rotations for " +
+                         std::to_string(translations.size()) + " translations");
+  }
+  for (const auto& r : rotations) {
+    if (!r.allFinite()) return Status::Error("anchor '" + name + "': non-finite rotation");
+  }
+  if (!centre.allFinite()) return Status::Error("anchor '" + name + "': non-finite centre");
+  Status status = SetAnchorTrajectory(name, translations);
+  if (!status.ok()) return status;
+  Anchor& a = impl_->state.anchors[name];
+  a.rotations = rotations;
+  a.centre = centre;
+  return Status::Ok();
+}
+
+Status Tracker::SetExternalLoads(int object, const Eigen::Vector3d& gravity,
+                                 const std::vector<std::pair<int, Eigen::Vector3d>>& nodal_loads) {
+  if (object < 0 || object >= num_objects()) {
+    return Status::Error("external loads: no object " + std::to_string(object));
+  }
+  ObjectState& o = impl_->state.objects[object];
+  if (!gravity.allFinite()) return Status::Error("external loads: non-finite gravity");
+  Vertices loads;
+  if (!nodal_loads.empty()) loads = Vertices::Zero(o.mesh.num_vertices(), 3);
+  for (const auto& [v, f] : nodal_loads) {
+    if (v < 0 || v >= o.mesh.num_vertices()) {
+      return Status::Error("external loads: vertex " + std::to_string(v) + " out of range");
+    }
+    if (!f.allFinite()) return Status::Error("external loads: non-finite force on vertex " + std::to_string(v));
+    loads.row(v) += f.transpose();
+  }
+  if (gravity.squaredNorm() > 0 && !(o.mesh.mass.size() == o.mesh.num_vertices() && o.mesh.mass.sum() > 0)) {
+    return Status::Error("external loads: gravity needs the object's masses (a density)");
+  }
+  o.gravity = gravity;
+  o.loads = std::move(loads);
   return Status::Ok();
 }
 

@@ -31,6 +31,10 @@ struct ObjectState {
   ObjectMaterial material;
   int offset = 0;  // its first vertex in the global numbering
   int label = -1;  // the cloud label of its points; -1 = none
+  // External loads (Tracker::SetExternalLoads): gravity on the lumped masses and nodal
+  // forces (#V by 3, N; empty: none).
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  Vertices loads;
 };
 
 struct Anchor {
@@ -40,9 +44,12 @@ struct Anchor {
   double weight = 0.0;        // soft: N/m per vertex; <= 0: weights.anchor
   Vertices targets;           // one row per vertex
   Vertices origin;            // positions when the anchor was added
-  // Per-frame translations from origin (frame beyond the list: the last one); empty: the
-  // targets stay as set.
+  // Per-frame rigid motion from origin (frame beyond the list: the last one): a rotation
+  // (axis * angle, rad; empty list: none) about `centre`, then the translation; empty
+  // translations: the targets stay as set.
   std::vector<Eigen::Vector3d> translations;
+  std::vector<Eigen::Vector3d> rotations;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
 };
 
 // Fracture (effects.fracture): allocated only when on.

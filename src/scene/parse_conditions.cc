@@ -67,7 +67,7 @@ void SceneParser::ParseAnchors(const YamlValue& list) {
   std::set<std::string> names;
   for (int i = 0; i < list.size(); ++i) {
     const YamlValue v = list[i];
-    v.CheckKeys({"name", "object", "select", "hard", "weight", "translations"});
+    v.CheckKeys({"name", "object", "select", "hard", "weight", "translations", "rotations", "centre"});
     AnchorSpec anchor;
     anchor.name = v.Has("name") ? v["name"].AsString() : "anchor" + std::to_string(i);
     if (!names.insert(anchor.name).second) {
@@ -82,6 +82,17 @@ void SceneParser::ParseAnchors(const YamlValue& list) {
       if (!t.IsSequence()) t.Fail("must be a list of [x, y, z] per frame");
       for (int k = 0; k < t.size(); ++k) anchor.translations.push_back(t[k].AsVector3());
     }
+    if (v.Has("rotations")) {
+      const YamlValue r = v["rotations"];
+      if (!r.IsSequence()) r.Fail("must be a list of [x, y, z] (axis * angle, rad) per frame");
+      for (int k = 0; k < r.size(); ++k) anchor.rotations.push_back(r[k].AsVector3());
+      if (anchor.rotations.size() != anchor.translations.size()) {
+        r.Fail("has " + std::to_string(anchor.rotations.size()) + " entries and translations " +
+               std::to_string(anchor.translations.size()) + ": one rotation per translation");
+      }
+      if (!v.Has("centre")) r.Fail("rotations need a centre: [x, y, z] (m) to turn about");
+    }
+    if (v.Has("centre")) anchor.centre = v["centre"].AsVector3();
     scene_->anchors.push_back(anchor);
   }
 }

@@ -8,8 +8,9 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseRegistration(const YamlValue& v) {
-  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver"});
+  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads"});
   RegistrationOptions& r = scene_->registration;
+  if (v.Has("loads")) r.loads = v["loads"].AsBool();
   if (v.Has("regularizer")) {
     r.regularizer = ParseEnum(v["regularizer"],
                               std::vector<Regularizer>{Regularizer::kCorotational,

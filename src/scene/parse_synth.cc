@@ -105,8 +105,8 @@ void SceneParser::ParseSynth(const YamlValue& v) {
           a.Fail("unknown value '" + kind + "' (one of: none, hard, soft)");
         }
         for (const MotionKeyframe& k : track.keyframes) {
-          if (track.anchor != MotionTrackSpec::Anchor::kNone && k.rotation.norm() > 0) {
-            a.Fail("anchors follow translations only, and this track rotates");
+          if (track.anchor != MotionTrackSpec::Anchor::kNone && k.rotation.norm() > 0 && !track.has_centre) {
+            a.Fail("this track rotates: its anchor turns about the track's centre, so give centre: [x, y, z]");
           }
         }
       }

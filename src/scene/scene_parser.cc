@@ -24,6 +24,7 @@
 //             tolerance: 1e-8, absolute_tolerance: 1e-12}
 //   registration:
 //     regularizer: corotational|linear|mass_spring|none
+//     loads: true                                  # the scene's gravity and loads act
 //     camera: {position: [0, 0, 1], target: [0, 0, 0], up: [0, -1, 0], fx: 525, fy: 525,
 //              cx: 319.5, cy: 239.5, width: 640, height: 480}  # present = a known camera
 //     preprocess: {crop: {min: [..], max: [..]}, plane: {distance: 0.005, iterations: 200},
@@ -41,7 +42,8 @@
 //              backend: ceres|fast}
 //   anchors:
 //     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
-//        translations: [[0, 0, 0], [0, 0, 0.01]]}   # per frame; the last one repeats
+//        translations: [[0, 0, 0], [0, 0, 0.01]],   # per frame; the last one repeats
+//        rotations: [[0, 0, 0], [0, 0.3, 0]], centre: [x, y, z]}   # optional, about centre
 //   effects: {fracture: false, collision: false}   # fracture: true or a map of limits
 //   collision:                                 # used when effects.collision is true
 //     pairs: [[a, b]]                          # object pairs; default: every pair
@@ -69,7 +71,7 @@
 //       - {name: grip, select: SELECTION, centre: [x, y, z],   # centre default: the centroid
 //          keyframes: [{frame: 0}, {frame: 9, translation: [..], rotation: [..]}],
 //          anchor: none}                       # hard|soft: the tracking scene gets an anchor
-//                                              # following the translations (no rotation)
+//                                              # following the motion (rotating: needs centre)
 //     bodies:                                  # rigid boxes rendered with the object
 //       - {name: tool, box: {min: [..], max: [..]}, keyframes: [{frame: 0, translation: [..]}],
 //          in_cloud: false,                    # false: hides points but returns none

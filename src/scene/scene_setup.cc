@@ -204,6 +204,19 @@ Status BuildForwardProblem(const Scene& scene, int object, const TetMesh& mesh,
   return Status::Ok();
 }
 
+Status CopyMaterials(const Scene& from, Scene* scene) {
+  for (ObjectSpec& o : scene->objects) {
+    const auto it = std::find_if(from.objects.begin(), from.objects.end(),
+                                 [&](const ObjectSpec& f) { return f.name == o.name; });
+    if (it == from.objects.end()) {
+      return Status::Error(from.path + ": no object named '" + o.name + "' (the scene " + scene->path + " has it)");
+    }
+    o.material = it->material;
+    o.region_materials = it->region_materials;
+  }
+  return Status::Ok();
+}
+
 void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,
                           Eigen::Vector3d* translation, Eigen::Vector3d* rotation) {
   translation->setZero();

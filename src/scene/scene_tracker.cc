@@ -1,5 +1,5 @@
 // Tracker::Create(const Scene&): a scene's objects (meshes, materials per region, labels),
-// anchors, boundary clamps and effects handed to the tracker. It lives with the scene module,
+// anchors, boundary clamps, gravity and loads and effects handed to the tracker. It lives with the scene module,
 // above registration, so that the tracker needs no scene.
 #include <string>
 #include <vector>
@@ -62,7 +62,10 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
     if (!status.ok()) return status;
     status = t->AddAnchor(a.name, object, vertices, a.hard, a.weight);
     if (!status.ok()) return status;
-    if (!a.translations.empty()) {
+    if (!a.rotations.empty()) {
+      status = t->SetAnchorTrajectory(a.name, a.translations, a.rotations, a.centre);
+      if (!status.ok()) return status;
+    } else if (!a.translations.empty()) {
       status = t->SetAnchorTrajectory(a.name, a.translations);
       if (!status.ok()) return status;
     }
@@ -81,6 +84,15 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
       status = t->AddAnchor("boundary[" + std::to_string(i) + "]", object, vertices, /*hard=*/true);
     }
     if (!status.ok()) return Status::Error(b.selection.where + ": " + status.message());
+  }
+  // The scene's gravity and nodal loads, resolved as simulate resolves them.
+  if (scene.registration.loads && (scene.gravity.squaredNorm() > 0 || !scene.loads.empty())) {
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+      ForwardProblem forward;
+      status = BuildForwardProblem(scene, static_cast<int>(i), t->mesh(static_cast<int>(i)), &forward);
+      if (status.ok()) status = t->SetExternalLoads(static_cast<int>(i), forward.gravity, forward.nodal_loads);
+      if (!status.ok()) return Status::Error(scene.path + ": object '" + scene.objects[i].name + "': " + status.message());
+    }
   }
   *tracker = std::move(t);
   return Status::Ok();

@@ -243,6 +243,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   const RegistrationOptions d;
   YAML::Node n = Map();
   if (r.regularizer != d.regularizer) n["regularizer"] = ToString(r.regularizer);
+  if (r.loads != d.loads) n["loads"] = r.loads;
   if (r.camera.enabled) {
     const CameraOptions& c = r.camera;
     YAML::Node camera = FlowMap();
@@ -354,6 +355,12 @@ YAML::Node AnchorNode(const Scene& scene, const AnchorSpec& a) {
     YAML::Node list(YAML::NodeType::Sequence);
     for (const Eigen::Vector3d& t : a.translations) list.push_back(Vec(t));
     n["translations"] = list;
+  }
+  if (!a.rotations.empty()) {
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (const Eigen::Vector3d& r : a.rotations) list.push_back(Vec(r));
+    n["rotations"] = list;
+    n["centre"] = Vec(a.centre);
   }
   return n;
 }

@@ -49,6 +49,7 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
   const WeightOptions& w = o.weights;
   j["weights"] = {{"data", w.data}, {"elastic", w.elastic}, {"temporal", w.temporal},
                   {"anchor", w.anchor}};
+  j["loads"] = o.loads;
   const SolverOptions& s = o.solver;
   j["solver"] = {{"backend", ToString(s.backend)},
                  {"max_outer_iterations", s.max_outer_iterations},

@@ -43,6 +43,7 @@ struct RegisterArgs {
   std::string frames;
   std::string out;
   std::string ground_truth;
+  std::string material;  // a scene whose objects' materials replace the scene's
   bool force = false;
   int max_frames = 0;
   std::string report = "brief";
@@ -81,7 +82,7 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
         "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
         "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,stopped_by,"
         "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
-        "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,message\n";
+        "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,message\n";
   char buf[1024];
   for (size_t i = 0; i < rows.size(); ++i) {
     const FrameSummary& s = rows[i].summary;
@@ -118,6 +119,8 @@ std::string StatsCsv(const std::vector<FrameRow>& rows) {
                   s.factorizations, s.linear_solves, s.pcg_iterations, s.time.assembly * 1e3,
                   s.time.factorization * 1e3, s.time.linear_solve * 1e3, s.time.evaluation * 1e3,
                   s.time.fracture * 1e3);
+    os << buf;
+    std::snprintf(buf, sizeof(buf), ",%.6g", s.final.load);
     os << buf;
     std::string msg = rows[i].read_error.empty() ? s.message : rows[i].read_error;
     std::replace(msg.begin(), msg.end(), '"', '\'');
@@ -308,7 +311,8 @@ class ContactMeter {
 };
 
 // Scene keys that register would not use are refused, naming the key and what to use.
-// Clamps in `boundary` are used: Tracker::Create(scene) makes them hard anchors.
+// Clamps in `boundary` are used: Tracker::Create(scene) makes them hard anchors; gravity
+// and loads act in the registration energy (registration.loads).
 Status CheckRegisterKeys(const Scene& scene) {
   const std::string file = scene.path.empty() ? "scene" : scene.path;
   for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
@@ -318,15 +322,6 @@ Status CheckRegisterKeys(const Scene& scene) {
                            "].displacement is not used by register (clamps are held as hard "
                            "anchors); for a support that moves, use anchors with translations");
     }
-  }
-  if (!scene.loads.empty()) {
-    return Status::Error(scene.loads[0].selection.where +
-                         ": loads are not used by register (the clouds drive the shape); remove "
-                         "them, or use femreg simulate");
-  }
-  if (!scene.gravity.isZero(0)) {
-    return Status::Error(file + ": gravity is not used by register (the clouds drive the shape); "
-                                "remove it, or use femreg simulate");
   }
   return Status::Ok();
 }
@@ -372,6 +367,19 @@ int RunRegister(const RegisterArgs& args) {
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;
+  }
+  if (!args.material.empty()) {
+    Scene calibrated;
+    status = LoadScene(args.material, &calibrated);
+    if (status.ok()) status = CopyMaterials(calibrated, &scene);
+    if (!status.ok()) {
+      std::cerr << "femreg register: --material: " << status.message() << "\n";
+      return 1;
+    }
+    for (const ObjectSpec& o : scene.objects) {
+      std::cout << "Material of '" << o.name << "' from " << args.material << ": E = " << o.material.youngs_modulus
+                << " Pa, nu = " << o.material.poisson_ratio << "\n";
+    }
   }
   if (args.threads > 0) scene.registration.solver.num_threads = args.threads;
   const bool measure_contacts = args.no_collision && scene.effects.collision;
@@ -734,6 +742,10 @@ void AddRegisterCommand(CLI::App* app) {
   cmd->add_option("--ground-truth", args->ground_truth,
                   "Folder of per-frame ground truth CSVs (x,y,z,visible per vertex): adds vertex "
                   "errors (mm) for seen and hidden vertices");
+  cmd->add_option("--material", args->material,
+                  "Take each object's material from this scene (matched by object name), e.g. "
+                  "the scene.yaml `femreg calibrate` wrote: track with the identified material")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--force", args->force, "Write into a non-empty output folder");
   cmd->add_option("--max-frames", args->max_frames, "Register only the first N frames");
   cmd->add_option("--report", args->report, "Per-frame report: brief, full or none")
