@@ -1,0 +1,145 @@
+// Cost against size (issue 12): ms per registered frame for box meshes of about 1k, 4k, 16k
+// and 64k vertices against clouds of 2k to 300k points, the fast back end with default
+// settings, one thread. The clouds are the mesh's own surface under a growing bend, sampled
+// uniformly by area with 0.5 mm noise, so every size sees the same motion. Run from a build
+// with -DFEMREG_BUILD_BENCHMARKS=ON (tools/scaling.sh writes the table and the plot):
+//   bench/femreg_scaling_bench --benchmark_filter='Track/1000/'
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "femreg/io.h"
+#include "femreg/mesh.h"
+#include "femreg/point_cloud.h"
+#include "femreg/registration.h"
+#include "femreg/tracker.h"
+
+namespace {
+
+constexpr int kFrames = 5;
+const Eigen::Vector3d kSize(0.2, 0.1, 0.05);  // m; cells 4k x 2k x k
+
+// A box with about `vertices` vertices: (4k + 1)(2k + 1)(k + 1) ~ 8 k^3.
+femreg::TetMesh Box(int vertices) {
+  const int k = std::max(1, static_cast<int>(std::lround(std::cbrt(vertices / 8.0))));
+  return femreg::MakeBox(kSize, 4 * k, 2 * k, k);
+}
+
+// The rest shape bent by `amount` (m at the far end: z += amount (x / L)^2).
+femreg::Vertices Bent(const femreg::TetMesh& mesh, double amount) {
+  femreg::Vertices x = mesh.rest;
+  for (int v = 0; v < x.rows(); ++v) {
+    const double s = x(v, 0) / kSize.x();
+    x(v, 2) += amount * s * s;
+  }
+  return x;
+}
+
+// `points` points on the surface at x, uniform by area, with Gaussian noise (sigma 0.5 mm).
+femreg::PointCloud SampleSurface(const femreg::TetMesh& mesh, const femreg::Vertices& x, int points,
+                                 uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<double> cumulative;
+  double total = 0.0;
+  for (int f = 0; f < mesh.num_surface_triangles(); ++f) {
+    const Eigen::Vector3d a = x.row(mesh.surface(f, 0)), b = x.row(mesh.surface(f, 1)),
+                          c = x.row(mesh.surface(f, 2));
+    total += 0.5 * (b - a).cross(c - a).norm();
+    cumulative.push_back(total);
+  }
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 5e-4);
+  femreg::PointCloud cloud;
+  cloud.points.resize(points, 3);
+  for (int i = 0; i < points; ++i) {
+    const int f = static_cast<int>(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) -
+                                   cumulative.begin());
+    double r1 = u(rng), r2 = u(rng);
+    if (r1 + r2 > 1.0) {
+      r1 = 1.0 - r1;
+      r2 = 1.0 - r2;
+    }
+    const Eigen::Vector3d a = x.row(mesh.surface(f, 0)), b = x.row(mesh.surface(f, 1)),
+                          c = x.row(mesh.surface(f, 2));
+    const Eigen::Vector3d p = a + r1 * (b - a) + r2 * (c - a) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    cloud.points.row(i) = p.transpose();
+  }
+  return cloud;
+}
+
+struct Case {
+  femreg::TetMesh mesh;
+  std::vector<femreg::PointCloud> clouds;
+};
+
+const Case& CaseFor(int vertices, int points) {
+  static std::map<std::pair<int, int>, std::unique_ptr<Case>> cases;
+  auto& c = cases[{vertices, points}];
+  if (!c) {
+    c = std::make_unique<Case>();
+    c->mesh = Box(vertices);
+    for (int f = 0; f < kFrames; ++f) {
+      c->clouds.push_back(SampleSurface(c->mesh, Bent(c->mesh, 0.004 * (f + 1)), points, 17u + static_cast<uint32_t>(f)));
+    }
+  }
+  return *c;
+}
+
+// One iteration: a new tracker (not timed) and kFrames frames; the time per frame is the
+// reported time / kFrames, items_per_second the frames per second.
+void Track(benchmark::State& state) {
+  const int vertices = static_cast<int>(state.range(0));
+  const int points = static_cast<int>(state.range(1));
+  const Case& c = CaseFor(vertices, points);
+  femreg::RegistrationOptions options;
+  options.solver.backend = femreg::SolverBackend::kFast;
+  options.solver.num_threads = 1;
+  femreg::ObjectMaterial material;
+  material.material.youngs_modulus = 5e4;
+  material.material.poisson_ratio = 0.4;
+  std::map<std::string, double> phase;
+  double converged = 0, frames = 0, used = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::unique_ptr<femreg::Tracker> tracker;
+    if (!femreg::Tracker::Create({c.mesh}, {material}, options, &tracker).ok()) {
+      state.SkipWithError("Tracker::Create failed");
+      return;
+    }
+    state.ResumeTiming();
+    for (const femreg::PointCloud& cloud : c.clouds) {
+      femreg::FrameSummary s;
+      tracker->Track(cloud, &s);
+      phase["correspondences"] += s.time.correspondences;
+      phase["rotations"] += s.time.rotations;
+      phase["solve"] += s.time.solve;
+      phase["preprocess"] += s.time.preprocess;
+      converged += s.termination == femreg::TerminationType::kConverged;
+      used += s.points_used;
+      frames += 1;
+    }
+  }
+  state.SetItemsProcessed(state.iterations() * kFrames);
+  state.counters["vertices"] = c.mesh.num_vertices();
+  state.counters["tets"] = c.mesh.num_tets();
+  state.counters["points"] = points;
+  state.counters["points_used"] = frames > 0 ? used / frames : 0;
+  state.counters["converged"] = frames > 0 ? converged / frames : 0;
+  for (const auto& [name, seconds] : phase) state.counters[name + "_ms"] = frames > 0 ? 1e3 * seconds / frames : 0;
+}
+
+BENCHMARK(Track)
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,62 @@
+"""Table and plot of bench/femreg_scaling_bench's JSON: ms per frame against mesh size, one
+line per cloud size, and the per-phase split. Usage: plot_scaling.py scaling.json OUT_DIR"""
+import csv
+import json
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main():
+    data = json.loads(Path(sys.argv[1]).read_text())
+    out = Path(sys.argv[2])
+    rows = []
+    for b in data["benchmarks"]:
+        if b.get("run_type") == "aggregate" or "error_occurred" in b:
+            continue
+        frames = b["items_per_second"] * b["real_time"] / 1e3
+        ms = b["real_time"] / frames  # real_time is for the iteration's frames (ms)
+        rows.append({
+            "vertices": int(b["vertices"]), "tets": int(b["tets"]), "points": int(b["points"]),
+            "points_used": int(round(b["points_used"])), "ms_per_frame": ms,
+            "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
+            "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
+            "converged": b["converged"],
+        })
+    rows.sort(key=lambda r: (r["points"], r["vertices"]))
+    with open(out / "scaling.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.2f}" if isinstance(v, float) else v) for k, v in r.items()})
+    lines = ["| vertices | tets | cloud points (used) | ms/frame | correspondences | rotations | solve | preprocess | converged |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['ms_per_frame']:.1f} | "
+                     f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} | "
+                     f"{r['preprocess_ms']:.1f} | {100 * r['converged']:.0f}% |")
+    (out / "table.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for points in sorted({r["points"] for r in rows}):
+        sel = [r for r in rows if r["points"] == points]
+        ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "o-", label=f"{points} points")
+    v = sorted({r["vertices"] for r in rows})
+    if v:
+        base = min(r["ms_per_frame"] for r in rows if r["vertices"] == v[0])
+        ax.loglog(v, [base * x / v[0] for x in v], "k:", label="linear growth")
+    ax.set_xlabel("mesh vertices")
+    ax.set_ylabel("ms per frame (1 thread)")
+    ax.set_title("femreg fast back end: cost against size")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "scaling.png", dpi=120)
+
+
+if __name__ == "__main__":
+    main()
