@@ -16,6 +16,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -31,12 +32,9 @@ struct Frames {
 Frames LoadFrames() {
   Frames f;
   for (int i = 0; i < kFrames; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%04d", i);
     PointCloud cloud;
     GroundTruthFrame truth;
-    EXPECT_TRUE(ReadPointCloud(kDataset + "/clouds/" + name + ".pcd", &cloud).ok());
-    EXPECT_TRUE(ReadGroundTruthFrame(kDataset + "/ground_truth/" + name + ".csv", &truth).ok());
+    EXPECT_TRUE(testing_util::ReadDatasetFrame(kDataset, i, &cloud, &truth).ok());
     f.clouds.push_back(cloud);
     f.truth.push_back(truth);
   }

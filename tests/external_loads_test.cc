@@ -97,12 +97,9 @@ double SagTrackError(const Scene& scene) {
   double sum = 0.0;
   int frames = 0;
   for (int i = 0; i < 16; ++i) {
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%04d", i);
     PointCloud cloud;
     GroundTruthFrame truth;
-    EXPECT_TRUE(ReadPointCloud(dir + "/clouds/" + name + ".pcd", &cloud).ok());
-    EXPECT_TRUE(ReadGroundTruthFrame(dir + "/ground_truth/" + name + ".csv", &truth).ok());
+    EXPECT_TRUE(testing_util::ReadDatasetFrame(dir, i, &cloud, &truth).ok());
     FrameSummary summary;
     EXPECT_TRUE(tracker->Track(cloud, &summary).ok());
     EXPECT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();

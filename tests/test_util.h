@@ -5,8 +5,13 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdio>
 #include <filesystem>
 #include <string>
+
+#include "femreg/ground_truth.h"
+#include "femreg/point_cloud.h"
+#include "femreg/status.h"
 
 namespace femreg {
 namespace testing_util {
@@ -32,6 +37,15 @@ class TempDir {
  private:
   std::string path_;
 };
+
+// Frame `index` of a bundled sequence: clouds/frame_NNNN.pcd and ground_truth/frame_NNNN.csv.
+inline Status ReadDatasetFrame(const std::string& dir, int index, PointCloud* cloud, GroundTruthFrame* truth) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "frame_%04d", index);
+  Status status = ReadPointCloud(dir + "/clouds/" + name + ".pcd", cloud);
+  if (status.ok()) status = ReadGroundTruthFrame(dir + "/ground_truth/" + name + ".csv", truth);
+  return status;
+}
 
 }  // namespace testing_util
 }  // namespace femreg

@@ -14,6 +14,13 @@
 
 namespace femreg {
 
+// The rotation of a rotation vector r (axis * angle, rad; the scene files' `rotation`);
+// the identity for r = 0.
+inline Eigen::Matrix3d RotationFromVector(const Eigen::Vector3d& r) {
+  const double angle = r.norm();
+  return angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix() : Eigen::Matrix3d::Identity();
+}
+
 // ---------------------------------------------------------------------------------------
 // Exact closest-point queries.
 

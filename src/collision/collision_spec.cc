@@ -1,13 +1,14 @@
 // Keyframed obstacle poses (the collision section of a scene, femreg/collision_spec.h).
 #include "femreg/collision_spec.h"
 
+#include "femreg/geometry.h"
+
 namespace femreg {
 
 Eigen::Isometry3d ObstaclePose(const std::vector<ObstacleKeyframe>& keyframes, double frame) {
   auto pose = [](const ObstacleKeyframe& k) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    const double angle = k.rotation.norm();
-    if (angle > 0) T.linear() = Eigen::AngleAxisd(angle, k.rotation / angle).toRotationMatrix();
+    T.linear() = RotationFromVector(k.rotation);
     T.translation() = k.translation;
     return T;
   };

@@ -13,6 +13,7 @@
 #include "parallel/threads.h"
 #include "femreg/datasets.h"
 #include "femreg/eval.h"
+#include "femreg/geometry.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
@@ -25,12 +26,6 @@ namespace fs = std::filesystem;
 namespace femreg {
 
 namespace {
-
-Eigen::Matrix3d RotationMatrix(const Eigen::Vector3d& r) {
-  const double angle = r.norm();
-  return angle > 0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix()
-                   : Eigen::Matrix3d::Identity();
-}
 
 // A box as a closed triangle surface (12 triangles).
 void BoxSurface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Vertices* points,
@@ -261,7 +256,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     for (const Track& track : tracks) {
       Eigen::Vector3d t, rv;
       InterpolateKeyframes(track.spec->keyframes, f, &t, &rv);
-      const Eigen::Matrix3d R = RotationMatrix(rv);
+      const Eigen::Matrix3d R = RotationFromVector(rv);
       for (int v : track.vertices) {
         const Eigen::Vector3d X = fine.rest.row(v).transpose();
         problem.prescribed.emplace_back(v, track.centre + t + R * (X - track.centre) - X);

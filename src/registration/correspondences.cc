@@ -9,6 +9,8 @@
 #include <memory>
 #include <unordered_map>
 
+#include "femreg/geometry.h"
+
 namespace femreg {
 
 Eigen::Vector3d DataPair::Point(const Vertices& x) const {
@@ -110,10 +112,7 @@ std::string FrameCloud::Describe() const {
 
 void TransformCloud(const PreprocessOptions& options, PointCloud* cloud) {
   if (options.scale == 1.0 && options.translation.isZero(0) && options.rotation.isZero(0)) return;
-  const double angle = options.rotation.norm();
-  const Eigen::Matrix3d R =
-      angle > 0 ? Eigen::AngleAxisd(angle, options.rotation / angle).toRotationMatrix()
-                : Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d R = RotationFromVector(options.rotation);
   const Eigen::Matrix3d A = options.scale * R;
   if (cloud->points.rows() > 0) {
     cloud->points = (cloud->points * A.transpose()).rowwise() + options.translation.transpose();

@@ -1,11 +1,11 @@
 #include "registration/frame_problem.h"
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <map>
 #include <utility>
 
 #include "collision/contact_blocks.h"
+#include "femreg/geometry.h"
 
 namespace femreg {
 
@@ -124,14 +124,10 @@ void FrameProblem::BuildFrameTerms(TrackerState* state) {
     Anchor& a = kv.second;
     if (!a.translations.empty()) {
       const size_t i = std::min(static_cast<size_t>(state->frame), a.translations.size() - 1);
-      if (a.rotations.size() == a.translations.size() && a.rotations[i].norm() > 0) {
-        const Eigen::Matrix3d R =
-            Eigen::AngleAxisd(a.rotations[i].norm(), a.rotations[i].normalized()).toRotationMatrix();
-        const Eigen::RowVector3d c = a.centre.transpose();
-        a.targets = ((a.origin.rowwise() - c) * R.transpose()).rowwise() + (c + a.translations[i].transpose());
-      } else {
-        a.targets = a.origin.rowwise() + a.translations[i].transpose();
-      }
+      // Turned about the centre (no rotations: the identity), then moved.
+      const Eigen::Matrix3d R = a.rotations.empty() ? Eigen::Matrix3d::Identity() : RotationFromVector(a.rotations[i]);
+      const Eigen::RowVector3d c = a.centre.transpose();
+      a.targets = ((a.origin.rowwise() - c) * R.transpose()).rowwise() + (c + a.translations[i].transpose());
     }
     for (size_t i = 0; i < a.vertices.size(); ++i) {
       const int g = a.vertices[i];

@@ -5,6 +5,7 @@
 #include <map>
 #include <sstream>
 
+#include "femreg/geometry.h"
 #include "femreg/io.h"
 #include "femreg/scene.h"
 
@@ -114,11 +115,7 @@ Status LoadObjectMesh(const Scene& scene, int object, TetMesh* mesh) {
 
   // x = R * scale * X_file + t. A rotation and a positive scale keep the orientation of
   // every element, so the surface and adjacency stay valid.
-  const double angle = spec.rotation.norm();
-  const Eigen::Matrix3d R =
-      angle > 0 ? Eigen::AngleAxisd(angle, spec.rotation / angle).toRotationMatrix()
-                : Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d A = spec.scale * R;
+  const Eigen::Matrix3d A = spec.scale * RotationFromVector(spec.rotation);
   for (int i = 0; i < mesh->num_vertices(); ++i) {
     mesh->rest.row(i) = (A * mesh->rest.row(i).transpose() + spec.translation).transpose();
   }
