@@ -56,6 +56,8 @@ struct SolveReport {
   int linear_solves = 0;     // direct solves with a factor (PCG's preconditioner included)
   int pcg_iterations = 0;    // conjugate-gradient iterations on steps solved that way
   int pattern_rebuilds = 0;  // new symbolic analyses (a widened or new sparsity pattern)
+  // The problem's energy where the solve started and where it ended (*x on return).
+  EnergyTerms before, after;
   // Where the time went (s). Ceres: linear_solve_s includes its factorizations.
   double assemble_s = 0.0, factorize_s = 0.0, linear_solve_s = 0.0, evaluate_s = 0.0;
 };

@@ -181,6 +181,11 @@ Vertices Minimize(SolverBackend type, const energy::Problem& problem, const Vert
   Vertices x = start;
   const SolveReport report = backend->Solve(problem, 0.0, &x);
   EXPECT_TRUE(report.success) << report.message;
+  // The energies the report carries (the tracker's per-iteration rows) are the problem's.
+  const double before = problem.Evaluate(start).total(), after = problem.Evaluate(x).total();
+  EXPECT_NEAR(report.before.total(), before, 1e-12 * before);
+  EXPECT_NEAR(report.after.total(), after, 1e-12 * before);
+  EXPECT_LE(report.after.total(), report.before.total());
   return x;
 }
 

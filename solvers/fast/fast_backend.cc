@@ -121,7 +121,7 @@ struct FastBackend::Impl {
   // dx = -H^-1 g: by PCG with the kept factor, else with a new factorization.
   bool SolveStep(const Eigen::VectorXd& g, Eigen::VectorXd* dx, SolveReport* report);
   bool Pcg(const Eigen::VectorXd& b, Eigen::VectorXd* x, SolveReport* report);
-  double Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
+  EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
@@ -267,7 +267,13 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
       const int begin = c.colour_begin[static_cast<size_t>(col)];
       const int end = c.colour_begin[static_cast<size_t>(col) + 1];
       const bool parallel = threads > 1 && col < 64 && end - begin >= kParallelBlocks;
-#pragma omp parallel for schedule(static) num_threads(threads) if (parallel)
+      if (!parallel) {
+        // No OpenMP region: even an if(false) team of one costs libgomp a futex wake-up
+        // (demo, 1 thread: 139k futex calls in 30 frames).
+        for (int k = begin; k < end; ++k) add(c.order[static_cast<size_t>(k)]);
+        continue;
+      }
+#pragma omp parallel for schedule(static) num_threads(threads)
       for (int k = begin; k < end; ++k) add(c.order[static_cast<size_t>(k)]);
     }
   });
@@ -325,7 +331,7 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
     pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   }
-  factor.factorize(H);
+  WithThreadLimit(threads, [&] { factor.factorize(H); });
   ++report->factorizations;
   report->factorize_s += Seconds(t0);
   factor_valid = factor.info() == Eigen::Success;
@@ -394,10 +400,10 @@ bool FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, Eigen::VectorXd* dx,
   return dx->allFinite();
 }
 
-double FastBackend::Impl::Energy(const energy::Problem& problem, const Vertices& x,
-                                 SolveReport* report) const {
+EnergyTerms FastBackend::Impl::Energy(const energy::Problem& problem, const Vertices& x,
+                                      SolveReport* report) const {
   const auto t0 = Clock::now();
-  const double e = problem.Evaluate(x).total();
+  const EnergyTerms e = problem.Evaluate(x);
   report->evaluate_s += Seconds(t0);
   return e;
 }
@@ -442,7 +448,9 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   Eigen::VectorXd g, dx;
   m.Assemble(problem, *x, /*first=*/true, &g);
   report.assemble_s += Seconds(t0);
-  double energy = m.Energy(problem, *x, &report);
+  report.before = m.Energy(problem, *x, &report);
+  report.after = report.before;
+  double energy = report.before.total();
   const double first_gradient = g.lpNorm<Eigen::Infinity>();
   report.success = true;
   report.stop = StopReason::kMaxIterations;
@@ -464,10 +472,12 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     double alpha = 1.0;
     bool accepted = false;
     double trial_energy = energy;
+    EnergyTerms trial_terms;
     for (int halving = 0; halving < 8; ++halving, alpha *= 0.5) {
       trial = *x;
       for (int v = 0; v < m.num_vertices; ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
-      trial_energy = m.Energy(problem, trial, &report);
+      trial_terms = m.Energy(problem, trial, &report);
+      trial_energy = trial_terms.total();
       if (std::isfinite(trial_energy) && trial_energy <= energy) {
         accepted = true;
         break;
@@ -483,6 +493,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     const double decrease = (energy - trial_energy) / std::max(energy, 1e-300);
     x->swap(trial);
     energy = trial_energy;
+    report.after = trial_terms;
     if (largest <= m.options.step_tolerance || largest == 0.0) {
       report.stop = StopReason::kStep;
       break;

@@ -638,12 +638,12 @@ bool QuasiStaticSolver::Factorize(const std::vector<Eigen::Triplet<double>>& ext
     contact.setFromTriplets(extra.begin(), extra.end());
     const SparseMatrix sum = matrix_ + contact;
     factorization_.analyzePattern(sum);
-    factorization_.factorize(sum);
+    WithThreadLimit(threads_, [&] { factorization_.factorize(sum); });
     analyzed_elastic_pattern_ = false;
   } else {
     if (!analyzed_elastic_pattern_) factorization_.analyzePattern(matrix_);
     analyzed_elastic_pattern_ = true;
-    factorization_.factorize(matrix_);
+    WithThreadLimit(threads_, [&] { factorization_.factorize(matrix_); });
   }
   summary_.factorization_time_s += Seconds(start);
   if (factorization_.info() != Eigen::Success) {

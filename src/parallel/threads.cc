@@ -61,4 +61,16 @@ ScopedThreads::~ScopedThreads() {
   if (previous_blas_ > 0) OpenBlas().set(previous_blas_);
 }
 
+void WithThreadLimit(int threads, const std::function<void()>& f) {
+#ifdef _OPENMP
+  if (!omp_in_parallel()) {
+    const int limit = ResolveThreadCount(threads);
+#pragma omp teams num_teams(1) thread_limit(limit)
+    f();
+    return;
+  }
+#endif
+  f();
+}
+
 }  // namespace femreg

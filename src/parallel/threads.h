@@ -4,6 +4,8 @@
 #ifndef FEMREG_PARALLEL_THREADS_H_
 #define FEMREG_PARALLEL_THREADS_H_
 
+#include <functional>
+
 namespace femreg {
 
 // The machine's hardware threads (at least 1): the default of every `num_threads`.
@@ -29,6 +31,14 @@ class ScopedThreads {
   int previous_omp_ = 0;     // 0: OpenMP not in use
   int previous_blas_ = 0;    // 0: OpenBLAS not found or unchanged
 };
+
+// Runs f() with OpenMP's thread limit at `threads` (<= 0: the default), so that parallel
+// regions inside libraries that ask for a fixed team get at most `threads`: CHOLMOD 5's
+// supernodal factorization opens teams of 4 (its compile-time CHOLMOD_OMP_NUM_THREADS)
+// whatever omp_set_num_threads says. Done with a host `teams` region of one team
+// (OpenMP 5.0), whose thread_limit bounds every region inside it; from inside a parallel
+// region, where teams may not nest, f() runs as it is.
+void WithThreadLimit(int threads, const std::function<void()>& f);
 
 }  // namespace femreg
 

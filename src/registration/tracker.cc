@@ -281,8 +281,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->time.collision += Seconds(t_collision);
   }
   const energy::Problem& problem = frame_problem.problem();
-  row.before = problem.Evaluate(state.x);
-  if (k == 0) s->initial = row.before;
 
   t0 = Clock::now();
   const double time_left = options.solver.time_budget_s > 0
@@ -291,6 +289,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const Vertices before_solve = state.x;
   const SolveReport report = backend->Solve(problem, time_left, &state.x);
   s->time.solve += Seconds(t0);
+  row.before = report.before;
+  if (k == 0) s->initial = row.before;
   s->time.assembly += report.assemble_s;
   s->time.factorization += report.factorize_s;
   s->time.linear_solve += report.linear_solve_s;
@@ -305,7 +305,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->iterations.push_back(row);
     return false;
   }
-  row.after = problem.Evaluate(state.x);
+  row.after = report.after;
   // The largest vertex move of this outer iteration, against the mesh's edge length.
   double moved = (state.x - before_solve).rowwise().norm().maxCoeff();
   row.max_move = moved;
