@@ -150,8 +150,11 @@ struct SolverOptions {
   int max_outer_iterations = 5;          // correspondences and rotations refreshed per outer iteration
   int max_inner_iterations = 10;         // Ceres iterations / fast Gauss-Newton steps per outer iteration
   // An inner solve stops when a step changes the energy by less than this fraction (Ceres'
-  // function tolerance).
-  double inner_tolerance = 1e-6;
+  // function tolerance). Steps smaller than that are worth less than new rotations and
+  // pairs: on the 12 bundled datasets, 1e-3 instead of 1e-6 takes 17-45% fewer inner
+  // iterations at the same vertex errors with either back end (1e-2 cost Ceres accuracy on
+  // the fracture sequence).
+  double inner_tolerance = 1e-3;
   // The frame stops when an outer iteration changed the energy by less than this fraction
   // from the previous outer iteration...
   double relative_energy_tolerance = 1e-3;

@@ -10,6 +10,7 @@
 #ifndef FEMREG_SOLVERS_FAST_FAST_BACKEND_H_
 #define FEMREG_SOLVERS_FAST_FAST_BACKEND_H_
 
+#include <Eigen/SparseCore>
 #include <memory>
 
 #include "solvers/backend.h"
@@ -28,6 +29,12 @@ class FastBackend : public Backend {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// y = H p for a symmetric H stored column-major with both triangles and full 3x3 vertex
+// blocks (the three columns of a vertex share their row pattern), the back end's system;
+// in parallel on `threads` from a size on. Equal to Eigen's H * p up to round-off.
+void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
+                  Eigen::VectorXd* y);
 
 }  // namespace fast_backend
 }  // namespace femreg
