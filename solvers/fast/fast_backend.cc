@@ -14,14 +14,17 @@
 // is a descent direction: H is positive semi-definite by construction). A failed
 // factorization (H not numerically positive definite) is retried with Marquardt damping.
 //
-// Assembly runs in parallel over the blocks of each set, one colour at a time: blocks of a
-// colour share no vertex, so they scatter without races and each entry of H and g receives
-// its contributions in the same order whatever the number of threads.
+// Assembly on several threads splits the vertices into one range per thread: a thread
+// linearizes and adds the blocks whose stencil lies in its range; blocks that straddle two
+// ranges are linearized in parallel into a buffer, and each thread then adds their parts
+// that land in its range (its columns of H, its entries of g). One barrier per set, no
+// race; the sums are the serial ones up to the order of their terms (round-off).
 #include "solvers/fast/fast_backend.h"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -32,6 +35,10 @@
 #include <vector>
 
 #include "parallel/threads.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace femreg {
 namespace fast_backend {
@@ -65,9 +72,9 @@ struct Slot {
 // 1e-3 instead of 1e-6 takes 27% fewer PCG iterations at the same vertex errors.
 constexpr double kPcgTolerance = 1e-3;
 
-// A colour's blocks are assembled in parallel from this many on. Measured on the demo (2
-// threads, farm-bench -n 5, wall): 1024 instead of 64 (the elastic set serial) is 7% slower.
-constexpr int kParallelBlocks = 64;
+// A set is assembled on several threads from this many blocks on (below, the team's start
+// costs more than it saves).
+constexpr int kParallelBlocks = 256;
 
 // The product H p runs in parallel from this many vertices on: below, a team's start costs
 // more than it saves.
@@ -134,17 +141,25 @@ struct FastBackend::Impl {
   // analysis): beyond them a new factor is cheaper.
   int pcg_budget = 0;
 
-  // Per set revision: each block's slots (#blocks * n * n) and its blocks by colour.
+  // Per set revision: each block's slots (#blocks * n * n), and for the parallel assembly
+  // its blocks by the thread whose vertex range holds their whole stencil (interior[t]) and
+  // those that straddle two ranges.
   struct SetCache {
     std::vector<Slot> slots;
-    std::vector<int> order;         // block indices, colour by colour
-    std::vector<int> colour_begin;  // colour c is order[colour_begin[c], colour_begin[c + 1])
     bool used = false;
+    std::vector<std::vector<int>> interior;
+    std::vector<int> straddling;
   };
+  // The parallel assembly's linearized blocks (gradient, then Hessian blocks, per block).
+  std::vector<double> scratch;
   std::map<uint64_t, SetCache> cache;
 
   // The part of H that is constant within one Solve.
   std::vector<double> constant_values;
+  // Hard anchors: the fixed flags the lists below were made for, and where H holds the
+  // entries of fixed rows and columns (off the diagonal: 0; on it: 1).
+  std::vector<char> fixed_for;
+  std::vector<int> fixed_off_diagonal, fixed_diagonal;
 
   void ResetPattern(const energy::Problem& problem);
   void BuildPattern();
@@ -212,6 +227,7 @@ void FastBackend::Impl::BuildPattern() {
   factor_valid = false;
   cache.clear();
   constant_values.clear();
+  fixed_for.clear();
 }
 
 Slot FastBackend::Impl::Find(int a, int b) const {
@@ -249,27 +265,6 @@ FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
       }
     }
   }
-  // Greedy colouring: a block takes the first colour none of its vertices has yet (64
-  // colours per vertex mask; blocks that find none go to a last colour run serially).
-  std::vector<uint64_t> taken(static_cast<size_t>(num_vertices), 0);
-  std::vector<int> colour(static_cast<size_t>(set.size()), 64);
-  for (int b = 0; b < set.size(); ++b) {
-    const T& block = set.blocks()[static_cast<size_t>(b)];
-    uint64_t mask = 0;
-    for (int i = 0; i < n; ++i) mask |= taken[static_cast<size_t>(block.vertices[i])];
-    if (~mask == 0) continue;  // no free colour: the serial one
-    int free = 0;
-    while (mask & (uint64_t{1} << free)) ++free;
-    colour[static_cast<size_t>(b)] = free;
-    for (int i = 0; i < n; ++i) taken[static_cast<size_t>(block.vertices[i])] |= uint64_t{1} << free;
-  }
-  std::vector<int> count(66, 0);
-  for (int col : colour) ++count[static_cast<size_t>(col) + 1];
-  for (size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
-  c.colour_begin.assign(count.begin(), count.end());
-  c.order.assign(static_cast<size_t>(set.size()), 0);
-  std::vector<int> next(count.begin(), count.end() - 1);
-  for (int b = 0; b < set.size(); ++b) c.order[static_cast<size_t>(next[static_cast<size_t>(colour[b])]++)] = b;
   return c;
 }
 
@@ -286,37 +281,125 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
     std::vector<std::pair<int, int>> missing;
     const SetCache& c = CacheOf(set, &missing);  // complete: checked before
     const std::vector<T>& blocks = set.blocks();
-    auto add = [&](int b) {
-      energy::Linearization<T> lin;
+    const int size = set.size();
+    // Adds block b's linearization to the entries of H and g owned by vertices [lo, hi).
+    auto scatter = [&](int b, const Eigen::Vector3d* grad, const Eigen::Matrix3d* hess, int lo,
+                       int hi) {
       const T& block = blocks[static_cast<size_t>(b)];
-      if (!energy::Linearize(block, set.loss(), x, &lin, with_hessian) || lin.scale == 0.0) return;
       for (int i = 0; i < n; ++i) {
-        double* gi = gradient + 3 * block.vertices[i];
-        for (int d = 0; d < 3; ++d) gi[d] += lin.gradient[i][d];
+        const int v = block.vertices[i];
+        if (v < lo || v >= hi) continue;
+        double* gi = gradient + 3 * v;
+        for (int d = 0; d < 3; ++d) gi[d] += grad[i][d];
       }
       if (!with_hessian) return;
       const Slot* s = c.slots.data() + static_cast<size_t>(b) * n * n;
-      for (int ij = 0; ij < n * n; ++ij) {
-        const Eigen::Matrix3d& M = lin.hessian[ij];
-        for (int j = 0; j < 3; ++j) {
-          double* column = values + s[ij].offset + j * s[ij].stride;
-          for (int i = 0; i < 3; ++i) column[i] += M(i, j);
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          const int column_vertex = block.vertices[j];
+          if (column_vertex < lo || column_vertex >= hi) continue;
+          const int ij = i * n + j;
+          const Eigen::Matrix3d& M = hess[ij];
+          for (int jj = 0; jj < 3; ++jj) {
+            double* column = values + s[ij].offset + jj * s[ij].stride;
+            for (int ii = 0; ii < 3; ++ii) column[ii] += M(ii, jj);
+          }
         }
       }
     };
-    const int num_colours = static_cast<int>(c.colour_begin.size()) - 1;
-    for (int col = 0; col < num_colours; ++col) {
-      const int begin = c.colour_begin[static_cast<size_t>(col)];
-      const int end = c.colour_begin[static_cast<size_t>(col) + 1];
-      const bool parallel = threads > 1 && col < 64 && end - begin >= kParallelBlocks;
-      if (!parallel) {
-        // No OpenMP region: even an if(false) team of one costs libgomp a futex wake-up
-        // (demo, 1 thread: 139k futex calls in 30 frames).
-        for (int k = begin; k < end; ++k) add(c.order[static_cast<size_t>(k)]);
-        continue;
+    if (threads == 1 || size < kParallelBlocks) {
+      // One pass, no OpenMP region (even a team of one costs libgomp a futex wake-up).
+      energy::Linearization<T> lin;
+      for (int b = 0; b < size; ++b) {
+        if (!energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) ||
+            lin.scale == 0.0) {
+          continue;
+        }
+        scatter(b, lin.gradient.data(), lin.hessian.data(), 0, num_vertices);
       }
-#pragma omp parallel for schedule(static) num_threads(threads)
-      for (int k = begin; k < end; ++k) add(c.order[static_cast<size_t>(k)]);
+      return;
+    }
+    // Vertex ranges, one per thread: a thread linearizes and adds its interior blocks in one
+    // pass; the straddling ones are linearized in parallel into a buffer and each thread
+    // adds their parts in its range. (Meshes numbered along space, as generated or ordered
+    // meshes are, have few straddling blocks.)
+    auto range = [&](int t) {
+      return static_cast<int>(static_cast<int64_t>(num_vertices) * t / threads);
+    };
+    SetCache& cache_entry = const_cast<SetCache&>(c);
+    if (static_cast<int>(cache_entry.interior.size()) != threads) {
+      cache_entry.interior.assign(static_cast<size_t>(threads), {});
+      cache_entry.straddling.clear();
+      for (int b = 0; b < size; ++b) {
+        const T& block = blocks[static_cast<size_t>(b)];
+        int low = block.vertices[0], high = block.vertices[0];
+        for (int i = 1; i < n; ++i) {
+          low = std::min(low, block.vertices[i]);
+          high = std::max(high, block.vertices[i]);
+        }
+        int t = 0;
+        while (t + 1 < threads && low >= range(t + 1)) ++t;
+        if (high < range(t + 1)) {
+          cache_entry.interior[static_cast<size_t>(t)].push_back(b);
+        } else {
+          cache_entry.straddling.push_back(b);
+        }
+      }
+    }
+    const std::vector<int>& straddling = cache_entry.straddling;
+    const int num_straddling = static_cast<int>(straddling.size());
+    // Per straddling block: a flag (1: adds something), n gradient vectors, n * n blocks.
+    constexpr size_t kStride = 1 + 3 * n + 9 * n * n;
+    scratch.resize(kStride * straddling.size());
+    double* buffer = scratch.data();
+#pragma omp parallel num_threads(threads)
+    {
+#ifdef _OPENMP
+      const int t = omp_get_thread_num();
+#else
+      const int t = 0;
+#endif
+      energy::Linearization<T> lin;
+      for (int b : cache_entry.interior[static_cast<size_t>(t)]) {
+        if (energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) &&
+            lin.scale != 0.0) {
+          scatter(b, lin.gradient.data(), lin.hessian.data(), 0, num_vertices);
+        }
+      }
+#pragma omp for schedule(static)
+      for (int k = 0; k < num_straddling; ++k) {
+        double* out = buffer + kStride * static_cast<size_t>(k);
+        const bool adds = energy::Linearize(blocks[static_cast<size_t>(straddling[static_cast<size_t>(k)])],
+                                            set.loss(), x, &lin, with_hessian) &&
+                          lin.scale != 0.0;
+        out[0] = adds ? 1.0 : 0.0;
+        if (!adds) continue;
+        for (int i = 0; i < n; ++i) Eigen::Map<Eigen::Vector3d>(out + 1 + 3 * i) = lin.gradient[i];
+        if (with_hessian) {
+          for (int ij = 0; ij < n * n; ++ij) {
+            Eigen::Map<Eigen::Matrix3d>(out + 1 + 3 * n + 9 * ij) = lin.hessian[ij];
+          }
+        }
+      }  // a barrier: every straddling block is linearized
+      const int lo = range(t), hi = range(t + 1);
+      for (int k = 0; k < num_straddling; ++k) {
+        const double* in = buffer + kStride * static_cast<size_t>(k);
+        if (in[0] == 0.0) continue;
+        const int b = straddling[static_cast<size_t>(k)];
+        bool mine = false;
+        for (int i = 0; i < n; ++i) {
+          const int v = blocks[static_cast<size_t>(b)].vertices[i];
+          mine = mine || (v >= lo && v < hi);
+        }
+        if (!mine) continue;
+        for (int i = 0; i < n; ++i) lin.gradient[i] = Eigen::Map<const Eigen::Vector3d>(in + 1 + 3 * i);
+        if (with_hessian) {
+          for (int ij = 0; ij < n * n; ++ij) {
+            lin.hessian[ij] = Eigen::Map<const Eigen::Matrix3d>(in + 1 + 3 * n + 9 * ij);
+          }
+        }
+        scatter(b, lin.gradient.data(), lin.hessian.data(), lo, hi);
+      }
     }
   });
 }
@@ -341,16 +424,27 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
   Accumulate(problem, x, varying, always, g);
   // Hard anchors: identity rows and columns, no gradient.
   if (!problem.fixed().empty()) {
-    const int n = static_cast<int>(H.cols());
-    const int* outer = H.outerIndexPtr();
-    const int* inner = H.innerIndexPtr();
-    double* values = H.valuePtr();
-    for (int c = 0; c < n; ++c) {
-      const bool col_fixed = problem.is_fixed(c / 3);
-      for (int p = outer[c]; p < outer[c + 1]; ++p) {
-        if (col_fixed || problem.is_fixed(inner[p] / 3)) values[p] = (inner[p] == c) ? 1.0 : 0.0;
+    if (fixed_for != problem.fixed()) {
+      fixed_for = problem.fixed();
+      fixed_off_diagonal.clear();
+      fixed_diagonal.clear();
+      const int n = static_cast<int>(H.cols());
+      const int* outer = H.outerIndexPtr();
+      const int* inner = H.innerIndexPtr();
+      for (int c = 0; c < n; ++c) {
+        const bool col_fixed = problem.is_fixed(c / 3);
+        for (int p = outer[c]; p < outer[c + 1]; ++p) {
+          if (col_fixed || problem.is_fixed(inner[p] / 3)) {
+            (inner[p] == c ? fixed_diagonal : fixed_off_diagonal).push_back(p);
+          }
+        }
       }
-      if (col_fixed) (*g)[c] = 0.0;
+    }
+    double* values = H.valuePtr();
+    for (int p : fixed_off_diagonal) values[p] = 0.0;
+    for (int p : fixed_diagonal) values[p] = 1.0;
+    for (int v = 0; v < num_vertices; ++v) {
+      if (problem.is_fixed(v)) g->segment<3>(3 * v).setZero();
     }
   }
   // A whisper of Tikhonov on the diagonal, for degrees of freedom no term references.

@@ -160,27 +160,48 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& s
   if (!F.allFinite()) return PolarRotation(F);
   const double scale = F.cwiseAbs().maxCoeff();
   if (scale == 0.0) return PolarRotation(F);
+  // The 3x3 algebra below is written out (Cholesky, its two triangular solves, Rodrigues'
+  // matrix): this runs for every element in every outer iteration.
+  const double min_pivot = 1e-4 * scale;  // Cholesky diagonal >= 1e-2 sqrt(scale)
   Eigen::Matrix3d R = start;
   for (int iteration = 0; iteration < 12; ++iteration) {
     const Eigen::Matrix3d A = R.transpose() * F;
-    const Eigen::Vector3d g(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
-    Eigen::Matrix3d M = -0.5 * (A + A.transpose());
-    M.diagonal().array() += A.trace();
-    // M must be well inside the positive definite cone: its Cholesky pivots, relative to
-    // F's size, say how far (an inverted element near the tie, or a start past a saddle).
-    const Eigen::LLT<Eigen::Matrix3d> llt(M);
-    if (llt.info() != Eigen::Success || llt.matrixLLT().diagonal().minCoeff() < 1e-2 * std::sqrt(scale)) {
-      return PolarRotation(F);
-    }
-    const Eigen::Vector3d w = llt.solve(g);
-    const double angle = w.norm();
+    const double g0 = A(2, 1) - A(1, 2), g1 = A(0, 2) - A(2, 0), g2 = A(1, 0) - A(0, 1);
+    // M = tr(A) I - sym(A) must be well inside the positive definite cone: its Cholesky
+    // pivots, relative to F's size, say how far (an inverted element near the tie, or a
+    // start past a saddle).
+    const double trace = A.trace();
+    const double m00 = trace - A(0, 0), m11 = trace - A(1, 1), m22 = trace - A(2, 2);
+    const double m10 = -0.5 * (A(1, 0) + A(0, 1)), m20 = -0.5 * (A(2, 0) + A(0, 2)),
+                 m21 = -0.5 * (A(2, 1) + A(1, 2));
+    if (!(m00 >= min_pivot)) return PolarRotation(F);
+    const double l00 = std::sqrt(m00), l10 = m10 / l00, l20 = m20 / l00;
+    const double p11 = m11 - l10 * l10;
+    if (!(p11 >= min_pivot)) return PolarRotation(F);
+    const double l11 = std::sqrt(p11), l21 = (m21 - l20 * l10) / l11;
+    const double p22 = m22 - l20 * l20 - l21 * l21;
+    if (!(p22 >= min_pivot)) return PolarRotation(F);
+    const double l22 = std::sqrt(p22);
+    // w = M^-1 g: L y = g, then L^T w = y.
+    const double y0 = g0 / l00, y1 = (g1 - l10 * y0) / l11, y2 = (g2 - l20 * y0 - l21 * y1) / l22;
+    const double w2 = y2 / l22, w1 = (y1 - l21 * w2) / l11, w0 = (y0 - l10 * w1 - l20 * w2) / l00;
+    const double angle2 = w0 * w0 + w1 * w1 + w2 * w2;
+    const double angle = std::sqrt(angle2);
     if (!(angle < 1.0)) return PolarRotation(F);  // far from the start: Newton's basin unclear
-    if (angle > 0.0) {  // R <- R exp([w]) (Rodrigues)
-      Eigen::Matrix3d W;
-      W << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
-      const double a = std::sin(angle) / angle;
-      const double b = (1.0 - std::cos(angle)) / (angle * angle);
-      R = R * (Eigen::Matrix3d::Identity() + a * W + b * W * W);
+    if (angle > 0.0) {  // R <- R exp([w]) = R (I + a W + b W^2), W^2 = w w^T - |w|^2 I
+      double a, b;
+      if (angle < 1e-4) {  // sin(t)/t and (1 - cos(t))/t^2 by their series, exact here
+        a = 1.0 - angle2 / 6.0 + angle2 * angle2 / 120.0;
+        b = 0.5 - angle2 / 24.0 + angle2 * angle2 / 720.0;
+      } else {
+        a = std::sin(angle) / angle;
+        b = (1.0 - std::cos(angle)) / angle2;
+      }
+      Eigen::Matrix3d E;
+      E << 1.0 + b * (w0 * w0 - angle2), b * w0 * w1 - a * w2, b * w0 * w2 + a * w1,
+          b * w1 * w0 + a * w2, 1.0 + b * (w1 * w1 - angle2), b * w1 * w2 - a * w0,
+          b * w2 * w0 - a * w1, b * w2 * w1 + a * w0, 1.0 + b * (w2 * w2 - angle2);
+      R = (R * E).eval();
     }
     // Quadratic convergence: the error after a step of size |w| is O(|w|^2).
     if (angle <= 1e-9) {
