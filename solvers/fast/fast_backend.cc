@@ -467,7 +467,10 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
     pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   }
-  WithThreadLimit(threads, [&] { factor.factorize(H); });
+  // The BLAS under CHOLMOD runs on the solve's threads; CHOLMOD's own OpenMP teams (copies
+  // into the supernodes) on one: with both on 2 threads they fought over the 2 cores (demo,
+  // 2 threads: factorizations of 263-324 ms instead of 11 ms, now and then).
+  WithThreadLimit(1, [&] { factor.factorize(H); });
   ++report->factorizations;
   report->factorize_s += Seconds(t0);
   factor_valid = factor.info() == Eigen::Success;
