@@ -208,7 +208,9 @@ TEST_P(BackendTest, BothReachTheSameMinimum) {
   const double e_fast = s->problem.Evaluate(x_fast).total();
   const double e_start = s->problem.Evaluate(start).total();
   ASSERT_GT(e_start - e_ceres, 1e-6) << "the problem must not start at its minimum";
-  if (c.contacts) EXPECT_GT(s->problem.Evaluate(x_ceres).collision, 0.0);
+  if (c.contacts) {
+    EXPECT_GT(s->problem.Evaluate(x_ceres).collision, 0.0);
+  }
   if (c.loads) {  // the loads pull the beam down against the data
     auto unloaded = MakeSetup(c.loss, c.springs, c.fixed, c.contacts, 3, false);
     const Vertices x_unloaded = Minimize(SolverBackend::kFast, unloaded->problem, start);
@@ -218,7 +220,9 @@ TEST_P(BackendTest, BothReachTheSameMinimum) {
   // agree to far better than 1e-7, their positions to well under a micrometre.
   EXPECT_NEAR(e_fast, e_ceres, 1e-7 * e_ceres + 1e-12);
   // Tukey is not convex: the two may stop in different (equally good) minima.
-  if (c.loss != RobustLoss::kTukey) EXPECT_LT((x_fast - x_ceres).cwiseAbs().maxCoeff(), 1e-6);
+  if (c.loss != RobustLoss::kTukey) {
+    EXPECT_LT((x_fast - x_ceres).cwiseAbs().maxCoeff(), 1e-6);
+  }
   if (c.fixed) {
     for (int v = 0; v < start.rows(); ++v) {
       if (s->problem.is_fixed(v)) {
@@ -240,8 +244,6 @@ INSTANTIATE_TEST_SUITE_P(AllTerms, BackendTest,
                                            Case{RobustLoss::kHuber, false, true, false, true},
                                            Case{RobustLoss::kNone, true, true, true, true}));
 
-// The fast back end keeps its pattern and analysis while the coupling holds, and widens it
-// once for a contact between vertices outside it.
 // The PCG product: full 3x3 vertex blocks on a random symmetric pattern (some vertices with
 // no neighbour), against Eigen's product, serial and on 2 threads above the parallel size.
 TEST(FastBackend, BlockProductIsTheMatrixProduct) {
@@ -302,6 +304,8 @@ TEST(FastBackend, TwoThreadsTakeTheSameStep) {
   EXPECT_LE((one - two).cwiseAbs().maxCoeff(), 1e-9 * moved);
 }
 
+// The fast back end keeps its pattern and analysis while the coupling holds, and widens it
+// once for a contact between vertices outside it.
 TEST(FastBackend, PatternIsReusedAndWidenedOnce) {
   auto s = MakeSetup(RobustLoss::kHuber, false, false, true, 5);
   BackendOptions options;

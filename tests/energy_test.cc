@@ -286,7 +286,9 @@ TYPED_TEST(EnergyBlockTest, LinearizationIsTheValuesGradientAndItsBlocksArePsd) 
               << Sample<T>::kName << " loss " << static_cast<int>(kind) << " vertex " << i << " coordinate " << c;
         }
       }
-      if (lin.scale > 0) EXPECT_GT(norm, 0.0) << Sample<T>::kName << ": trivially zero gradient";
+      if (lin.scale > 0) {
+        EXPECT_GT(norm, 0.0) << Sample<T>::kName << ": trivially zero gradient";
+      }
       Eigen::MatrixXd H(3 * n, 3 * n);
       for (int i = 0; i < n; ++i)
         for (int j = 0; j < n; ++j) H.block<3, 3>(3 * i, 3 * j) = lin.hessian[i * n + j];
