@@ -5,12 +5,11 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
+#include <cmath>
 #include <filesystem>
 #include <iterator>
 #include <vector>
 
-#include "femreg/fem.h"
-#include "femreg/io.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -21,25 +20,24 @@ int ThreadsInProcess() {
   return static_cast<int>(std::distance(begin(tasks), end(tasks)));
 }
 
-// The stiffness of a box of about 3k vertices plus a diagonal: its last supernodes are
-// wider than the 64 columns from which CHOLMOD 5 factorizes in parallel.
-Eigen::SparseMatrix<double> BoxSystem() {
-  const TetMesh mesh = MakeBox(Eigen::Vector3d(0.5, 0.1, 0.1), 40, 8, 8);
-  Material material;
-  material.youngs_modulus = 5e4;
-  ElasticModel model;
-  model.Build(mesh, ElasticModelType::kCorotational, material);
+// A sparse system with one dense 300 x 300 block (and a diagonal beside it): its factor has
+// a supernode far wider than the 64 columns from which CHOLMOD 5 factorizes in parallel.
+Eigen::SparseMatrix<double> SystemWithAWideSupernode() {
+  constexpr int kDense = 300, kSize = 1000;
   std::vector<Eigen::Triplet<double>> triplets;
-  model.AddStiffnessTriplets(&triplets);
-  const int dofs = 3 * mesh.num_vertices();
-  for (int i = 0; i < dofs; ++i) triplets.emplace_back(i, i, 1.0);
-  Eigen::SparseMatrix<double> H(dofs, dofs);
+  for (int i = 0; i < kDense; ++i) {
+    for (int j = 0; j < kDense; ++j) {
+      triplets.emplace_back(i, j, i == j ? 2.0 * kDense : 1.0 / (1.0 + std::abs(i - j)));
+    }
+  }
+  for (int i = kDense; i < kSize; ++i) triplets.emplace_back(i, i, 1.0);
+  Eigen::SparseMatrix<double> H(kSize, kSize);
   H.setFromTriplets(triplets.begin(), triplets.end());
   return H;
 }
 
 TEST(Threads, ThreadLimitHoldsCholmodsOwnTeams) {
-  const Eigen::SparseMatrix<double> H = BoxSystem();
+  const Eigen::SparseMatrix<double> H = SystemWithAWideSupernode();
   Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
   factor.setMode(Eigen::CholmodSupernodalLLt);
   factor.analyzePattern(H);

@@ -286,7 +286,7 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
     constexpr int n = T::kVertices;
     const bool with_hessian = hessian(set);
     std::vector<std::pair<int, int>> missing;
-    const SetCache& c = CacheOf(set, &missing);  // complete: checked before
+    SetCache& c = CacheOf(set, &missing);  // complete: checked before
     const std::vector<T>& blocks = set.blocks();
     const int size = set.size();
     // Adds block b's linearization to the entries of H and g owned by vertices [lo, hi).
@@ -333,10 +333,9 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
     auto range = [&](int t) {
       return static_cast<int>(static_cast<int64_t>(num_vertices) * t / threads);
     };
-    SetCache& cache_entry = const_cast<SetCache&>(c);
-    if (static_cast<int>(cache_entry.interior.size()) != threads) {
-      cache_entry.interior.assign(static_cast<size_t>(threads), {});
-      cache_entry.straddling.clear();
+    if (static_cast<int>(c.interior.size()) != threads) {
+      c.interior.assign(static_cast<size_t>(threads), {});
+      c.straddling.clear();
       for (int b = 0; b < size; ++b) {
         const T& block = blocks[static_cast<size_t>(b)];
         int low = block.vertices[0], high = block.vertices[0];
@@ -347,13 +346,13 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
         int t = 0;
         while (t + 1 < threads && low >= range(t + 1)) ++t;
         if (high < range(t + 1)) {
-          cache_entry.interior[static_cast<size_t>(t)].push_back(b);
+          c.interior[static_cast<size_t>(t)].push_back(b);
         } else {
-          cache_entry.straddling.push_back(b);
+          c.straddling.push_back(b);
         }
       }
     }
-    const std::vector<int>& straddling = cache_entry.straddling;
+    const std::vector<int>& straddling = c.straddling;
     const int num_straddling = static_cast<int>(straddling.size());
     // Per straddling block: a flag (1: adds something), n gradient vectors, n * n blocks.
     constexpr size_t kStride = 1 + 3 * n + 9 * n * n;
@@ -367,7 +366,7 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
       const int t = 0;
 #endif
       energy::Linearization<T> lin;
-      for (int b : cache_entry.interior[static_cast<size_t>(t)]) {
+      for (int b : c.interior[static_cast<size_t>(t)]) {
         if (energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) &&
             lin.scale != 0.0) {
           scatter(b, lin.gradient.data(), lin.hessian.data(), 0, num_vertices);
