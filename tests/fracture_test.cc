@@ -389,13 +389,14 @@ TEST(FractureTracking, BeamBreakSequence) {
   EXPECT_LE(std::abs(r.first_break - r.truth_break), 1);
   EXPECT_EQ(r.final_pieces, 2);
   ASSERT_GE(r.piece_mean.size(), 2u);
-  // Stated bounds: the clamped piece within 6 mm, the free piece within 10 mm (mean over
-  // its vertices and the frames after the break; measured 4.4 and 6.6 mm). The scene has
-  // visibility off: with it on, the free piece (seen on its side and top only) slid along
-  // its axis and was off by 14-19 mm.
+  // Stated bounds: the clamped piece within 6 mm, the free piece within 7.5 mm (mean over
+  // its vertices and the frames after the break; measured 3.2 and 5.0 mm). The scene has
+  // the camera's visibility test off: with it on, the free piece (seen on its side and top
+  // only) slides along its axis and is off by 9-19 mm.
   EXPECT_FALSE(r.tracker->options().data.visibility);
+  EXPECT_FALSE(r.tracker->options().data.auto_visibility);
   EXPECT_LT(r.piece_mean[0], 0.006);
-  EXPECT_LT(r.piece_mean[1], 0.010);
+  EXPECT_LT(r.piece_mean[1], 0.0075);
   for (size_t p = 0; p < r.piece_mean.size(); ++p) {
     std::printf("beam_break piece %zu: mean error %.2f mm\n", p, 1e3 * r.piece_mean[p]);
   }

@@ -208,6 +208,27 @@ effects: {fracture: false, collision: false}
   EXPECT_FALSE(scene.effects.fracture);
 }
 
+// `data.visibility: false` written out turns the automatic test off too (with a camera in
+// the scene it would otherwise still decide which vertices pull); unwritten, the automatic
+// test stays on; written beside it, auto_visibility wins.
+TEST_F(SceneTest, VisibilityFalseWrittenOutTurnsTheAutomaticTestOff) {
+  const struct {
+    const char* data;
+    bool visibility, auto_visibility;
+  } cases[] = {{"", false, true},
+               {"registration: {data: {visibility: false}}\n", false, false},
+               {"registration: {data: {visibility: true}}\n", true, true},
+               {"registration: {data: {visibility: false, auto_visibility: true}}\n", false, true},
+               {"registration: {data: {auto_visibility: false}}\n", false, false}};
+  for (const auto& c : cases) {
+    Scene scene;
+    const Status status = Load(std::string(kBaseScene) + c.data, &scene);
+    ASSERT_TRUE(status.ok()) << status.message();
+    EXPECT_EQ(scene.registration.data.visibility, c.visibility) << c.data;
+    EXPECT_EQ(scene.registration.data.auto_visibility, c.auto_visibility) << c.data;
+  }
+}
+
 TEST_F(SceneTest, UnknownKeySuggestsTheClosest) {
   ExpectError(Replace(kBaseScene, "poisson_ratio", "poison_ratio"),
               {"beam.yaml:6: objects[0].material.poison_ratio: unknown key",

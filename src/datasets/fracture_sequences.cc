@@ -41,7 +41,9 @@ struct Scenario {
   // The tracking scene's effects.fracture.max_cracks and data_gap (FractureOptions).
   int tracked_max_cracks = 0;
   bool tracked_data_gap = false;
-  // The tracking scene's registration.data.visibility. Off, every surface vertex is pulled
+  // Whether the tracking scene lets the camera decide which surface vertices pull
+  // (registration.data.visibility and auto_visibility: with a camera in the scene,
+  // auto_visibility alone turns the camera's test on). Off, every surface vertex is pulled
   // to its nearest point, so the silhouette's end edges pin the sliding along a box's axis
   // that point-to-plane pairs on the faces the camera sees leave free.
   bool tracked_visibility = true;
@@ -180,6 +182,7 @@ Scene TrackingScene(const Scenario& s) {
   r.camera = s.camera;
   r.data.max_distance = 0.03;
   r.data.visibility = s.tracked_visibility;
+  r.data.auto_visibility = s.tracked_visibility;
   r.weights.data = 200;  // the tracked toughness was tuned with the per-pair data weight
   r.solver.max_outer_iterations = 6;
   r.solver.max_inner_iterations = 10;
@@ -423,7 +426,7 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
                  : " (one crack that grows from its front: `max_cracks: " +
                        std::to_string(s.tracked_max_cracks) + "`)")
          << (s.tracked_visibility ? std::string()
-                                  : std::string(", `registration.data.visibility: false` (every surface vertex "
+                                  : std::string(", `registration.data.auto_visibility: false` (every surface vertex "
                                                 "pulled to its nearest point: the silhouette's ends pin the "
                                                 "sliding along the beam that point-to-plane leaves free)"))
          << "; the grippers the robot knows as hard anchors.\n"

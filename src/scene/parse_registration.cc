@@ -97,7 +97,13 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (d.Has("visibility")) o.visibility = d["visibility"].AsBool();
     if (d.Has("cloud_stride")) o.cloud_stride = d["cloud_stride"].AsInt();
-    if (d.Has("auto_visibility")) o.auto_visibility = d["auto_visibility"].AsBool();
+    if (d.Has("auto_visibility")) {
+      o.auto_visibility = d["auto_visibility"].AsBool();
+    } else if (d.Has("visibility") && !o.visibility) {
+      // `visibility: false` written out means every surface vertex pulls: without this, a
+      // scene with a camera would still get the camera's test from auto_visibility.
+      o.auto_visibility = false;
+    }
     if (d.Has("reciprocity")) o.reciprocity = d["reciprocity"].AsDouble();
     if (d.Has("min_points")) o.min_points = d["min_points"].AsInt();
     if (d.Has("min_points_per_surface_vertex")) {
