@@ -3,6 +3,12 @@
 // (a weight per point would make the sparse cloud's data term four times weaker on the
 // cloud->model side). And the scene keys: legacy weights.data still read, both keys at
 // once refused with what to write.
+//
+// Two sets of clouds of the same frames: the bundled, noisy ones, and noiseless ones the
+// test renders from the ground truth with the scene's camera. The noiseless ones isolate
+// the weighting: from noisy clouds, a quarter of the points also averages a quarter of the
+// noise samples, which costs accuracy whatever the weighting (beam_bend shows ~450 points
+// of the beam, about two per visible triangle; decimated, most triangles hold none).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,9 +17,11 @@
 #include <string>
 #include <vector>
 
+#include "femreg/eval.h"
 #include "femreg/ground_truth.h"
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
+#include "femreg/synth.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
 #include "test_util.h"
@@ -41,6 +49,28 @@ Frames LoadFrames() {
   return f;
 }
 
+// The ground truth's surface as the scene's camera sees it, without noise (every 2nd
+// pixel, as the bundled clouds; no table).
+Frames RenderNoiseless(const Scene& scene, const Frames& noisy) {
+  std::unique_ptr<Tracker> tracker;
+  EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
+  const Triangles surface = BoundaryFaces(tracker->mesh(0).tets);
+  DepthSensorOptions options;
+  options.camera = scene.registration.camera;
+  options.noise_coefficient = 0.0;
+  options.pixel_stride = 2;
+  const DepthSensor sensor(options);
+  Frames f;
+  for (int i = 0; i < kFrames; ++i) {
+    RenderSurface s;
+    s.positions = &noisy.truth[i].positions;
+    s.triangles = &surface;
+    f.clouds.push_back(sensor.Sample(sensor.Render({s}), {s}, 1 + i));
+    f.truth.push_back(noisy.truth[i]);
+  }
+  return f;
+}
+
 // Every `stride`-th point (a cloud four times sparser over the same surface).
 PointCloud Decimate(const PointCloud& cloud, int stride) {
   PointCloud out;
@@ -64,32 +94,52 @@ double TrackError(const Scene& scene, const Frames& frames, int stride) {
 }
 
 TEST(DataWeight, DecimatingTheCloudFourTimesKeepsVertexErrorsWithinTenPercent) {
-  const Frames frames = LoadFrames();
+  const Frames noisy = LoadFrames();
   Scene scene;
   ASSERT_TRUE(LoadScene(kDataset + "/scene.yaml", &scene).ok());
+  const Frames noiseless = RenderNoiseless(scene, noisy);
+  ASSERT_GT(noiseless.clouds[0].size(), 300);
   scene.registration.weights.data = -1;  // per unit area (data_per_area's default)
-  // The weighting is what is compared, not where the solver stops: frames stop on the
-  // energy criterion only, as both runs' solves then end at the same relative accuracy.
-  scene.registration.solver.step_tolerance = 0.0;
-  const double full = TrackError(scene, frames, 1);
-  const double sparse = TrackError(scene, frames, 4);
-  // The legacy weight per point, for the record (not asserted: it is what changed).
+  // The weighting is what is compared, not where the solver stops: every frame is solved to
+  // its minimum (stopping at a relative accuracy instead put the ratio anywhere between +8 %
+  // and +14 % on the noisy clouds, with the back end and the tolerances).
+  SolverOptions& solver = scene.registration.solver;
+  solver.backend = SolverBackend::kFast;
+  solver.max_outer_iterations = 30;
+  solver.relative_energy_tolerance = 1e-7;
+  solver.inner_tolerance = 1e-8;
+  solver.step_tolerance = 0.0;
   Scene legacy = scene;
-  legacy.registration.weights.data = 200;
-  const double legacy_full = TrackError(legacy, frames, 1);
-  const double legacy_sparse = TrackError(legacy, frames, 4);
-  std::printf("mean vertex error over %d frames: per area %.3f mm (full) / %.3f mm (1/4 of the "
-              "points), %+.1f %%; per point (weights.data 200) %.3f / %.3f mm, %+.1f %%\n",
-              kFrames, full * 1e3, sparse * 1e3, 100 * (sparse / full - 1), legacy_full * 1e3,
-              legacy_sparse * 1e3, 100 * (legacy_sparse / legacy_full - 1));
-  // The tracking errors are ~1 mm, set by the noise (sigma ~ 0.5 mm here) and the mesh; a
-  // sparser cloud averages fewer points per triangle, so some change is expected, but not
-  // a change of the data term's strength. Issue 14 asks for 10 %; with face normals on the
-  // surface's edges this was +9.6 %, with the distance's own direction there (continuous, so
-  // outer iterations converge) it is +13.5 % (per point: +26 %). The bound below is the
-  // measured value with a margin, to catch a weighting that stops scaling with area.
-  EXPECT_LT(std::abs(sparse / full - 1), 0.16);
-  EXPECT_GT(full, 0.0);
+  legacy.registration.weights.data = 200;  // the weight per point, for comparison
+  struct Run {
+    const char* name;
+    const Scene* scene;
+    const Frames* frames;
+    double full = 0, sparse = 0;
+  } runs[] = {{"per area, noiseless", &scene, &noiseless},
+              {"per point, noiseless", &legacy, &noiseless},
+              {"per area, noisy", &scene, &noisy},
+              {"per point, noisy", &legacy, &noisy}};
+  for (Run& run : runs) {
+    Scene s = *run.scene;
+    // The rendered clouds have no table to remove (the plane found would be the beam's side).
+    if (run.frames == &noiseless) s.registration.preprocess.plane_distance = 0.0;
+    run.full = TrackError(s, *run.frames, 1);
+    run.sparse = TrackError(s, *run.frames, 4);
+    std::printf("mean vertex error over %d frames, %s: %.3f mm (full) / %.3f mm (1/4 of the "
+                "points), %+.1f %%\n",
+                kFrames, run.name, run.full * 1e3, run.sparse * 1e3, 100 * (run.sparse / run.full - 1));
+    EXPECT_GT(run.full, 0.0);
+  }
+  // Measured: noiseless +4 % per area, +23 % per point; noisy +12 % per area, +26 % per
+  // point. The issue's 10 % holds where only the weighting differs; on the noisy clouds the
+  // bound is the measured value with a margin, and the weight per area still has to halve
+  // the per-point change.
+  const auto change = [](const Run& r) { return std::abs(r.sparse / r.full - 1); };
+  EXPECT_LT(change(runs[0]), 0.10);
+  EXPECT_GT(change(runs[1]), 2 * change(runs[0]));
+  EXPECT_LT(change(runs[2]), 0.16);
+  EXPECT_LT(change(runs[2]), 0.75 * change(runs[3]));
 }
 
 TEST(DataWeight, SceneKeys) {
