@@ -229,6 +229,22 @@ TEST_F(SceneTest, VisibilityFalseWrittenOutTurnsTheAutomaticTestOff) {
   }
 }
 
+// A bad value is quoted by its first 80 characters and its length, not echoed whole.
+TEST_F(SceneTest, LongBadValuesAreQuotedShort) {
+  const std::string big(100000, 'x');
+  Scene scene;
+  Status status = Load(Replace(kBaseScene, "youngs_modulus: 1e5", "youngs_modulus: " + big), &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_LT(status.message().size(), 300u) << status.message().substr(0, 300);
+  EXPECT_NE(status.message().find("(100000 bytes)"), std::string::npos) << status.message().substr(0, 300);
+  status = Load(Replace(kBaseScene, "shape: box", "shape: " + big), &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_LT(status.message().size(), 400u) << status.message().substr(0, 400);
+  status = Load(big, &scene);  // a document that is not a map
+  ASSERT_FALSE(status.ok());
+  EXPECT_LT(status.message().size(), 300u) << status.message().substr(0, 300);
+}
+
 TEST_F(SceneTest, UnknownKeySuggestsTheClosest) {
   ExpectError(Replace(kBaseScene, "poisson_ratio", "poison_ratio"),
               {"beam.yaml:6: objects[0].material.poison_ratio: unknown key",

@@ -71,7 +71,7 @@ void SceneParser::ParseAnchors(const YamlValue& list) {
     AnchorSpec anchor;
     anchor.name = v.Has("name") ? v["name"].AsString() : "anchor" + std::to_string(i);
     if (!names.insert(anchor.name).second) {
-      v["name"].Fail("duplicate anchor name '" + anchor.name + "'");
+      v["name"].Fail("duplicate anchor name " + Quote(anchor.name));
     }
     anchor.object = ParseObjectName(v);
     anchor.selection = ParseSelection(v);

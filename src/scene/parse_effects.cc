@@ -49,8 +49,8 @@ void SceneParser::ParseCollision(const YamlValue& v) {
       names.push_back(o.name);
     }
     const std::string suggestion = ClosestMatch(name, names);
-    n.Fail("unknown object '" + name + "' (" +
-           (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+    n.Fail("unknown object " + Quote(name) + " (" +
+           (suggestion.empty() ? std::string() : "did you mean " + Quote(suggestion) + "? ") +
            "objects: " + JoinNames(names) + ")");
   };
   if (v.Has("pairs")) {
@@ -60,7 +60,7 @@ void SceneParser::ParseCollision(const YamlValue& v) {
       const YamlValue p = pairs[i];
       if (!p.IsSequence() || p.size() != 2) p.Fail("must be a pair of object names [a, b]");
       const std::string a = object_name(p[0]), b = object_name(p[1]);
-      if (a == b) p.Fail("an object cannot be paired with itself ('" + a + "')");
+      if (a == b) p.Fail("an object cannot be paired with itself (" + Quote(a) + ")");
       c.pairs.emplace_back(a, b);
     }
   }
@@ -75,7 +75,7 @@ void SceneParser::ParseCollision(const YamlValue& v) {
       o.CheckKeys({"name", "plane", "box", "mesh", "scale", "objects", "pose", "keyframes"});
       ObstacleSpec spec;
       spec.name = o.Has("name") ? o["name"].AsString() : "obstacle" + std::to_string(i);
-      if (!names.insert(spec.name).second) o["name"].Fail("duplicate obstacle name '" + spec.name + "'");
+      if (!names.insert(spec.name).second) o["name"].Fail("duplicate obstacle name " + Quote(spec.name));
       const int kinds = o.Has("plane") + o.Has("box") + o.Has("mesh");
       if (kinds != 1) o.Fail("needs exactly one of 'plane', 'box' or 'mesh'");
       if (o.Has("plane")) {

@@ -18,7 +18,7 @@ void SceneParser::ParseObjects(const YamlValue& v) {
     ObjectSpec object = ParseObject(v[i], i);
     auto inserted = seen.emplace(object.name, i);
     if (!inserted.second) {
-      v[i]["name"].Fail("duplicate object name '" + object.name + "' (also objects[" +
+      v[i]["name"].Fail("duplicate object name " + Quote(object.name) + " (also objects[" +
                         std::to_string(inserted.first->second) + "])");
     }
     scene_->objects.push_back(object);
@@ -115,8 +115,8 @@ MeshGeneratorSpec SceneParser::ParseGenerator(const YamlValue& v) {
     if (v.Has("cells")) spec.radial_cells = IntAtLeast(v["cells"], 1);
   } else {
     const std::string suggestion = ClosestMatch(name, {"box", "cylinder", "sphere"});
-    shape.Fail("unknown shape '" + name + "' (" +
-               (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+    shape.Fail("unknown shape " + Quote(name) + " (" +
+               (suggestion.empty() ? std::string() : "did you mean " + Quote(suggestion) + "? ") +
                "one of: box, cylinder, sphere)");
   }
   return spec;

@@ -87,7 +87,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
       t.CheckKeys({"name", "select", "centre", "keyframes", "anchor"});
       MotionTrackSpec track;
       track.name = t.Has("name") ? t["name"].AsString() : "track" + std::to_string(i);
-      if (!names.insert(track.name).second) t["name"].Fail("duplicate name '" + track.name + "'");
+      if (!names.insert(track.name).second) t["name"].Fail("duplicate name " + Quote(track.name));
       track.selection = ParseSelection(t);
       if (t.Has("centre")) {
         track.has_centre = true;
@@ -102,7 +102,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
         } else if (kind == "soft") {
           track.anchor = MotionTrackSpec::Anchor::kSoft;
         } else if (kind != "none") {
-          a.Fail("unknown value '" + kind + "' (one of: none, hard, soft)");
+          a.Fail("unknown value " + Quote(kind) + " (one of: none, hard, soft)");
         }
         for (const MotionKeyframe& k : track.keyframes) {
           if (track.anchor != MotionTrackSpec::Anchor::kNone && k.rotation.norm() > 0 && !track.has_centre) {
@@ -121,7 +121,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
       b.CheckKeys({"name", "box", "keyframes", "in_cloud", "press", "contact_tolerance"});
       SynthBodySpec body;
       body.name = b.Has("name") ? b["name"].AsString() : "body" + std::to_string(i);
-      if (!names.insert(body.name).second) b["name"].Fail("duplicate name '" + body.name + "'");
+      if (!names.insert(body.name).second) b["name"].Fail("duplicate name " + Quote(body.name));
       if (!b.Has("box")) b.Fail("needs 'box: {min: [x, y, z], max: [x, y, z]}'");
       const YamlValue box = b["box"];
       box.CheckKeys({"min", "max"});

@@ -176,8 +176,8 @@ std::string SceneParser::ParseObjectName(const YamlValue& entry) {
     names.push_back(o.name);
   }
   const std::string suggestion = ClosestMatch(name, names);
-  v.Fail("unknown object '" + name + "' (" +
-         (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+  v.Fail("unknown object " + Quote(name) + " (" +
+         (suggestion.empty() ? std::string() : "did you mean " + Quote(suggestion) + "? ") +
          "objects: " + JoinNames(names) + ")");
 }
 

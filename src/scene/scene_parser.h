@@ -37,8 +37,8 @@ Enum ParseEnum(const YamlValue& v, const std::vector<Enum>& values) {
   std::vector<std::string> names;
   for (Enum e : values) names.push_back(ToString(e));
   const std::string suggestion = ClosestMatch(name, names);
-  v.Fail("unknown value '" + name + "' (" +
-         (suggestion.empty() ? std::string() : "did you mean '" + suggestion + "'? ") +
+  v.Fail("unknown value " + Quote(name) + " (" +
+         (suggestion.empty() ? std::string() : "did you mean " + Quote(suggestion) + "? ") +
          "one of: " + JoinNames(names) + ")");
 }
 

@@ -5,13 +5,12 @@
 #include <set>
 #include <sstream>
 
+#include "io/text_tokens.h"
+
 namespace femreg {
 namespace scene_internal {
-namespace {
 
-std::string Quote(const std::string& s) { return "'" + s + "'"; }
-
-}  // namespace
+std::string Quote(const std::string& s) { return internal::Quoted(s); }
 
 int EditDistance(const std::string& a, const std::string& b) {
   std::vector<int> row(b.size() + 1);
@@ -103,7 +102,7 @@ void YamlValue::CheckKeys(const std::vector<std::string>& allowed) const {
     if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
       const std::string suggestion = ClosestMatch(name, allowed);
       if (!suggestion.empty()) {
-        named.Fail("unknown key (did you mean '" + suggestion + "'?)");
+        named.Fail("unknown key (did you mean " + Quote(suggestion) + "?)");
       }
       named.Fail("unknown key (allowed: " + JoinNames(allowed) + ")");
     }

@@ -23,6 +23,10 @@ class SceneError : public std::runtime_error {
 
 // Edit distance, for "did you mean" suggestions.
 int EditDistance(const std::string& a, const std::string& b);
+
+// A value from the file for a message, in quotes: whole up to 80 characters, else its first
+// 80 and its length, so that a 4 MB value (or a whole document) is not echoed whole.
+std::string Quote(const std::string& s);
 // The candidate closest to `word` when it looks like a typo of it, else "".
 std::string ClosestMatch(const std::string& word, const std::vector<std::string>& candidates);
 // "a, b, c".
