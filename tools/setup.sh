@@ -18,7 +18,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libtet1.5-dev
-  libpng-dev
+  libpng-dev zlib1g-dev
   python3 python3-dev python3-matplotlib python3-numpy python3-pytest pybind11-dev python3-venv
 )
 # Only for the cross-check against an independent FEM code (tools/compare_calculix.sh).

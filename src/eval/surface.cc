@@ -1,16 +1,11 @@
-// VTU geometry in file order, triangle surfaces and surface-to-surface distances.
+// VTU geometry in file order (femreg's own VTU reader), triangle surfaces and surface-to-surface distances.
 #include <vtkCallbackCommand.h>
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
 #include <vtkCommand.h>
-#include <vtkDataArray.h>
-#include <vtkFloatArray.h>
-#include <vtkIdList.h>
 #include <vtkNew.h>
-#include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include <algorithm>
@@ -19,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <sstream>
 
 #include "femreg/eval.h"
 #include "io/io_internal.h"
@@ -80,48 +76,65 @@ Triangles BoundaryFaces(const Tets& tets) {
 Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return Status::Error(path + ": cannot open");
-  std::string errors;
-  vtkNew<vtkCallbackCommand> callback;
-  callback->SetCallback(&CollectError);
-  callback->SetClientData(&errors);
-  vtkNew<vtkXMLUnstructuredGridReader> reader;
-  reader->AddObserver(vtkCommand::ErrorEvent, callback);
-  reader->SetFileName(path.c_str());
-  reader->Update();
-  vtkUnstructuredGrid* grid = reader->GetOutput();
-  if (!errors.empty() || grid == nullptr || grid->GetNumberOfPoints() == 0) {
-    return Status::Error(path + ": not a readable VTU file with points" +
-                         (errors.empty() ? std::string() : " (" + errors.substr(0, 200) + ")"));
-  }
-  const vtkIdType n = grid->GetNumberOfPoints();
-  geometry->points.resize(n, 3);
-  for (vtkIdType i = 0; i < n; ++i) {
-    double p[3];
-    grid->GetPoint(i, p);
-    geometry->points.row(i) << p[0], p[1], p[2];
-  }
-  geometry->original.clear();
-  if (vtkDataArray* original = grid->GetPointData()->GetArray("original_vertex")) {
-    if (original->GetNumberOfTuples() == n && original->GetNumberOfComponents() == 1) {
-      geometry->original.resize(static_cast<size_t>(n));
-      for (vtkIdType i = 0; i < n; ++i) {
-        geometry->original[static_cast<size_t>(i)] = static_cast<int>(std::lround(original->GetTuple1(i)));
-      }
+  internal::VtuGrid grid;
+  const Status read = internal::ReadVtuGrid(path, &grid);
+  if (!read.ok()) return read;
+  // The pieces one after the other; original_vertex is kept when every piece has it.
+  long long n = 0;
+  bool has_original = true;
+  for (const internal::VtuPiece& piece : grid.pieces) {
+    n += static_cast<long long>(piece.points.size());
+    bool found = false;
+    for (const internal::VtuArray& array : piece.point_data) {
+      found = found || (array.name == "original_vertex" && array.components == 1);
     }
+    has_original = has_original && found;
   }
+  if (n == 0) return Status::Error(path + ": not a readable VTU file with points (it has none)");
+  geometry->points.resize(n, 3);
+  geometry->original.clear();
+  if (has_original) geometry->original.reserve(static_cast<size_t>(n));
   std::vector<std::array<int, 4>> tets;
   std::vector<std::array<int, 3>> tris;
-  vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
-    const int type = grid->GetCellType(c);
-    grid->GetCellPoints(c, ids);
-    if (type == VTK_TETRA && ids->GetNumberOfIds() == 4) {
-      tets.push_back({static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
-                      static_cast<int>(ids->GetId(2)), static_cast<int>(ids->GetId(3))});
-    } else if (type == VTK_TRIANGLE && ids->GetNumberOfIds() == 3) {
-      tris.push_back({static_cast<int>(ids->GetId(0)), static_cast<int>(ids->GetId(1)),
-                      static_cast<int>(ids->GetId(2))});
+  long long base = 0;
+  for (size_t p = 0; p < grid.pieces.size(); ++p) {
+    const internal::VtuPiece& piece = grid.pieces[p];
+    const long long np = static_cast<long long>(piece.points.size());
+    for (long long i = 0; i < np; ++i) {
+      const std::array<double, 3>& point = piece.points[static_cast<size_t>(i)];
+      geometry->points.row(base + i) << point[0], point[1], point[2];
     }
+    if (has_original) {
+      for (const internal::VtuArray& array : piece.point_data) {
+        if (array.name != "original_vertex" || array.components != 1) continue;
+        for (double v : array.values) {
+          geometry->original.push_back(std::isfinite(v) && std::abs(v) < 2e9 ? static_cast<int>(std::lround(v)) : -1);
+        }
+        break;
+      }
+    }
+    for (size_t c = 0; c < piece.types.size(); ++c) {
+      const int type = piece.types[c];
+      const long long begin = piece.offsets[c], count = piece.offsets[c + 1] - begin;
+      if (!((type == VTK_TETRA && count == 4) || (type == VTK_TRIANGLE && count == 3))) continue;
+      std::array<int, 4> ids{};
+      for (long long k = 0; k < count; ++k) {
+        const long long v = piece.connectivity[static_cast<size_t>(begin + k)];
+        if (v < 0 || v >= np) {
+          std::ostringstream os;
+          os << path << ": piece " << p << " cell " << c << " refers to point " << v << ", outside 0.."
+             << np - 1;
+          return Status::Error(os.str());
+        }
+        ids[static_cast<size_t>(k)] = static_cast<int>(base + v);
+      }
+      if (count == 4) {
+        tets.push_back(ids);
+      } else {
+        tris.push_back({ids[0], ids[1], ids[2]});
+      }
+    }
+    base += np;
   }
   geometry->tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
   for (size_t t = 0; t < tets.size(); ++t) {

@@ -44,11 +44,31 @@ Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh);
 // "path:line: message" (or "path: message" when line <= 0).
 Status FileError(const std::string& path, int line, const std::string& message);
 
-// Reads a VTK XML unstructured grid (.vtu) through VTK, after CheckVtuFile.
+// A VTK XML unstructured grid (.vtu) as femreg's own reader found it (vtu_reader.cc), one
+// VtuPiece per <Piece> of the file: indices in a piece's connectivity refer to its own points.
+struct VtuArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;  // tuple-major: #tuples x components
+};
+struct VtuPiece {
+  std::vector<std::array<double, 3>> points;
+  std::vector<long long> offsets = {0};  // #cells + 1: cell c is connectivity[offsets[c], offsets[c + 1])
+  std::vector<long long> connectivity;   // point indices as in the file (not checked against #points)
+  std::vector<int> types;                // VTK cell type of each cell (-1: outside 0..255)
+  std::vector<VtuArray> point_data, cell_data;  // in file order
+};
+struct VtuGrid {
+  std::vector<VtuPiece> pieces;
+};
+// Reads every piece, point and cell of a .vtu, each header count, size, offset and
+// compressed block checked against the bytes the file has before anything is sized from
+// it. Errors name the file and the byte offset of the problem.
+Status ReadVtuGrid(const std::string& path, VtuGrid* grid);
+// A .vtu as a tetrahedral mesh (vtu_io.cc): tetrahedra (VTK type 10) kept, other cells
+// skipped, the pieces concatenated; the first one-component cell array named like a region
+// gives the region ids.
 Status ReadVtuFile(const std::string& path, RawTetMesh* raw);
-// Checks a .vtu's structure against its length before VTK reads it: every count, size,
-// number of components and appended-data offset in range (vtu_check.cc).
-Status CheckVtuFile(const std::string& path);
 
 // Text readers (mesh_readers.cc).
 Status ReadGmshFile(const std::string& path, RawTetMesh* raw);

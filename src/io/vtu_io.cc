@@ -1,11 +1,10 @@
-// VTU (VTK XML unstructured grid) reading and writing through VTK. VTK's error messages
-// are captured and returned in a Status instead of being printed.
+// VTU (VTK XML unstructured grid): reading with femreg's own reader (vtu_reader.cc) into a
+// tetrahedral mesh, and writing through VTK, whose error messages are captured and returned
+// in a Status instead of being printed.
 #include <vtkCellData.h>
 #include <vtkCellType.h>
 #include <vtkCommand.h>
-#include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
-#include <vtkIdList.h>
 #include <vtkIntArray.h>
 #include <vtkLogger.h>
 #include <vtkNew.h>
@@ -14,7 +13,6 @@
 #include <vtkPoints.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
 #include <atomic>
@@ -32,6 +30,8 @@
 namespace femreg {
 namespace internal {
 namespace {
+
+constexpr int kVtkTetra = 10;
 
 // Collects everything VTK would print while it is installed as the output window.
 class CapturingOutputWindow : public vtkOutputWindow {
@@ -113,90 +113,12 @@ std::string Summarize(const std::string& text) {
   return joined.empty() ? "VTK could not read it" : joined;
 }
 
-Status GridToRaw(const std::string& path, vtkUnstructuredGrid* grid, RawTetMesh* raw) {
-  if (grid == nullptr || grid->GetNumberOfPoints() == 0) {
-    return FileError(path, 0, "no points (empty or unreadable grid)");
+// The first one-component cell array of `piece` named like a region id, or null.
+const VtuArray* RegionArray(const VtuPiece& piece) {
+  for (const VtuArray& array : piece.cell_data) {
+    if (array.components == 1 && LooksLikeRegionName(array.name)) return &array;
   }
-  const vtkIdType np = grid->GetNumberOfPoints();
-  raw->vertices.resize(static_cast<size_t>(np));
-  for (vtkIdType i = 0; i < np; ++i) {
-    double p[3];
-    grid->GetPoint(i, p);
-    for (int k = 0; k < 3; ++k) {
-      if (!std::isfinite(p[k])) {
-        std::ostringstream os;
-        os << "point " << i << " has a non-finite coordinate";
-        return FileError(path, 0, os.str());
-      }
-      raw->vertices[i][k] = p[k];
-    }
-  }
-  vtkDataArray* region = nullptr;
-  vtkCellData* cell_data = grid->GetCellData();
-  for (int a = 0; cell_data != nullptr && a < cell_data->GetNumberOfArrays(); ++a) {
-    vtkDataArray* array = cell_data->GetArray(a);
-    if (array != nullptr && array->GetName() != nullptr && array->GetNumberOfComponents() == 1 &&
-        LooksLikeRegionName(array->GetName())) {
-      region = array;
-      break;
-    }
-  }
-  vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
-    if (grid->GetCellType(c) != VTK_TETRA) continue;
-    grid->GetCellPoints(c, ids);
-    if (ids->GetNumberOfIds() != 4) {
-      std::ostringstream os;
-      os << "cell " << c << " is a tetrahedron with " << ids->GetNumberOfIds() << " points";
-      return FileError(path, 0, os.str());
-    }
-    std::array<int, 4> tet;
-    for (int k = 0; k < 4; ++k) {
-      const vtkIdType v = ids->GetId(k);
-      if (v < 0 || v >= np) {
-        std::ostringstream os;
-        os << "cell " << c << " refers to point " << v << ", outside 0.." << np - 1
-           << " (index out of range)";
-        return FileError(path, 0, os.str());
-      }
-      tet[k] = static_cast<int>(v);
-    }
-    raw->tets.push_back(tet);
-    int id = 0;
-    if (region != nullptr && !RegionIdFrom(region->GetTuple1(c), &id)) {
-      std::ostringstream os;
-      os << "cell " << c << ": region value " << region->GetTuple1(c) << " in array "
-         << Quoted(region->GetName()) << " is not a region id (an integer in the range of int)";
-      return FileError(path, 0, os.str());
-    }
-    raw->regions.push_back(id);
-  }
-  if (raw->tets.empty()) return FileError(path, 0, "no tetrahedra (no cells of VTK type 10)");
-  return Status::Ok();
-}
-
-template <typename Reader>
-Status ReadWithVtk(const std::string& path, RawTetMesh* raw) {
-  vtkSmartPointer<vtkUnstructuredGrid> grid;
-  std::string errors;
-  {
-    ScopedVtkCapture capture;
-    vtkNew<Reader> reader;
-    vtkNew<ErrorObserver> observer;
-    reader->AddObserver(vtkCommand::ErrorEvent, observer);
-    reader->SetFileName(path.c_str());
-    try {  // an allocation VTK sizes from the file can still fail
-      reader->Update();
-    } catch (const std::bad_alloc&) {
-      return FileError(path, 0, "VTK reader failed: out of memory (a count in the file is too large?)");
-    } catch (const std::exception& e) {
-      return FileError(path, 0, std::string("VTK reader failed: ") + e.what());
-    }
-    errors = observer->text + capture.text();
-    grid = reader->GetOutput();
-  }
-  if (!errors.empty()) return FileError(path, 0, "VTK reader failed: " + Summarize(errors));
-  return GridToRaw(path, grid, raw);
+  return nullptr;
 }
 
 std::atomic<int> g_temp_counter{0};
@@ -204,9 +126,82 @@ std::atomic<int> g_temp_counter{0};
 }  // namespace
 
 Status ReadVtuFile(const std::string& path, RawTetMesh* raw) {
-  Status s = CheckVtuFile(path);
+  VtuGrid grid;
+  Status s = ReadVtuGrid(path, &grid);
   if (!s.ok()) return s;
-  return ReadWithVtk<vtkXMLUnstructuredGridReader>(path, raw);
+  // The pieces one after the other: point indices shifted by the points before, the region
+  // array the one the first piece names.
+  size_t total_points = 0;
+  for (const VtuPiece& piece : grid.pieces) total_points += piece.points.size();
+  if (total_points == 0) return FileError(path, 0, "no points (empty or unreadable grid)");
+  raw->vertices.reserve(total_points);
+  const VtuArray* first_region = RegionArray(grid.pieces[0]);
+  long long point_base = 0, cell_base = 0;
+  for (size_t p = 0; p < grid.pieces.size(); ++p) {
+    const VtuPiece& piece = grid.pieces[p];
+    const long long np = static_cast<long long>(piece.points.size());
+    for (long long i = 0; i < np; ++i) {
+      const std::array<double, 3>& point = piece.points[static_cast<size_t>(i)];
+      for (int k = 0; k < 3; ++k) {
+        if (!std::isfinite(point[k])) {
+          std::ostringstream os;
+          os << "point " << point_base + i << " has a non-finite coordinate";
+          return FileError(path, 0, os.str());
+        }
+      }
+      raw->vertices.push_back(point);
+    }
+    const VtuArray* region = nullptr;
+    if (first_region != nullptr) {
+      for (const VtuArray& array : piece.cell_data) {
+        if (array.components == 1 && array.name == first_region->name) {
+          region = &array;
+          break;
+        }
+      }
+      if (region == nullptr) {
+        std::ostringstream os;
+        os << "piece " << p << " has no cell array " << Quoted(first_region->name) << " (the region ids of piece 0)";
+        return FileError(path, 0, os.str());
+      }
+    }
+    const long long cells = static_cast<long long>(piece.types.size());
+    for (long long local = 0; local < cells; ++local) {
+      const long long c = cell_base + local;
+      if (piece.types[static_cast<size_t>(local)] != kVtkTetra) continue;
+      const long long begin = piece.offsets[static_cast<size_t>(local)];
+      const long long count = piece.offsets[static_cast<size_t>(local) + 1] - begin;
+      if (count != 4) {
+        std::ostringstream os;
+        os << "cell " << c << " is a tetrahedron with " << count << " points";
+        return FileError(path, 0, os.str());
+      }
+      std::array<int, 4> tet;
+      for (int k = 0; k < 4; ++k) {
+        const long long v = piece.connectivity[static_cast<size_t>(begin + k)];
+        if (v < 0 || v >= np) {
+          std::ostringstream os;
+          os << "cell " << c << " refers to point " << v << ", outside 0.." << np - 1 << " (index out of range)";
+          return FileError(path, 0, os.str());
+        }
+        tet[k] = static_cast<int>(point_base + v);
+      }
+      raw->tets.push_back(tet);
+      int id = 0;
+      const double value = region == nullptr ? 0.0 : region->values[static_cast<size_t>(local)];
+      if (region != nullptr && !RegionIdFrom(value, &id)) {
+        std::ostringstream os;
+        os << "cell " << c << ": region value " << value << " in array " << Quoted(region->name)
+           << " is not a region id (an integer in the range of int)";
+        return FileError(path, 0, os.str());
+      }
+      raw->regions.push_back(id);
+    }
+    point_base += np;
+    cell_base += cells;
+  }
+  if (raw->tets.empty()) return FileError(path, 0, "no tetrahedra (no cells of VTK type 10)");
+  return Status::Ok();
 }
 
 // A temporary name in the folder of `path`.
