@@ -23,7 +23,7 @@ JOBS="${JOBS:-1}"
 
 # Setup: clang and its libFuzzer runtime (Debian 12: clang 14, libclang-rt-14-dev), besides
 # what tools/setup.sh installs for the normal build.
-bash tools/setup.sh >/dev/null
+env -u BUILD_DIR bash tools/setup.sh >/dev/null  # its BUILD_DIR is the normal build's
 missing=()
 for p in clang libclang-rt-14-dev; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,5 +1,6 @@
 #include "io/text_tokens.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <fstream>
@@ -30,9 +31,22 @@ bool ParseDouble(const std::string& text, double* value) {
 }
 
 std::string Quoted(const std::string& text, size_t max_chars) {
-  if (text.size() <= max_chars) return "'" + text + "'";
+  // Control bytes and bytes outside ASCII (a binary file read as text) as \xNN, so that a
+  // message does not write raw binary to the user's terminal.
   std::ostringstream os;
-  os << "'" << text.substr(0, max_chars) << "...' (" << text.size() << " bytes)";
+  os << "'";
+  const size_t n = std::min(text.size(), max_chars);
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      os << text[i];
+    } else {
+      static const char kHex[] = "0123456789abcdef";
+      os << "\\x" << kHex[c >> 4] << kHex[c & 15];
+    }
+  }
+  os << (text.size() > max_chars ? "...'" : "'");
+  if (text.size() > max_chars) os << " (" << text.size() << " bytes)";
   return os.str();
 }
 

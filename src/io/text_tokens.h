@@ -75,7 +75,8 @@ bool ParseInt(const std::string& text, long long* value);
 bool ParseDouble(const std::string& text, double* value);
 
 // `text` for an error message: whole when it has at most `max_chars` characters, else its
-// first `max_chars` and "... (N bytes)", so that a bad 4 MB token is not echoed whole.
+// first `max_chars` and "... (N bytes)", so that a bad 4 MB token is not echoed whole;
+// bytes that are not printable ASCII as \xNN.
 std::string Quoted(const std::string& text, size_t max_chars = 80);
 
 // How many items of `tokens_each` tokens `bytes` characters of text can hold at most.
