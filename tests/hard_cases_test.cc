@@ -111,7 +111,9 @@ Outcome RunCase(const TetMesh& mesh, const Material& material, RegistrationOptio
   Status status = Tracker::Create({mesh}, {material}, options, &tracker);
   EXPECT_TRUE(status.ok()) << status.message();
   if (!status.ok()) return out;
-  if (clamp) EXPECT_TRUE(tracker->AddAnchor("clamp", 0, Clamped(mesh), true).ok());
+  if (clamp) {
+    EXPECT_TRUE(tracker->AddAnchor("clamp", 0, Clamped(mesh), true).ok());
+  }
   if (setup) setup(tracker.get());
   const auto t0 = std::chrono::steady_clock::now();
   FrameSummary s;

@@ -229,6 +229,22 @@ TEST_F(SceneTest, VisibilityFalseWrittenOutTurnsTheAutomaticTestOff) {
   }
 }
 
+// The fast back end by default; Ceres' own settings without a backend select Ceres, and are
+// refused beside `backend: fast` (they would do nothing there).
+TEST_F(SceneTest, BackendDefaultsToFastAndCeresSettingsSelectCeres) {
+  Scene scene;
+  ASSERT_TRUE(Load(kBaseScene, &scene).ok());
+  EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kFast);
+  for (const char* solver : {"{trust_region: dogleg}", "{linear_solver: conjugate_gradients}",
+                             "{backend: ceres}"}) {
+    ASSERT_TRUE(Load(std::string(kBaseScene) + "registration: {solver: " + solver + "}\n", &scene).ok())
+        << solver;
+    EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kCeres) << solver;
+  }
+  ExpectError(std::string(kBaseScene) + "registration:\n  solver: {backend: fast, trust_region: dogleg}\n",
+              {"beam.yaml:11: registration.solver.trust_region: is a setting of the Ceres back end"});
+}
+
 // A bad value is quoted by its first 80 characters and its length, not echoed whole.
 TEST_F(SceneTest, LongBadValuesAreQuotedShort) {
   const std::string big(100000, 'x');

@@ -297,7 +297,7 @@ const char kEverything[] =
     "         metric: point_to_point, visibility: true, cloud_stride: 2}\n"
     "  weights: {data: 150, elastic: 2, temporal: 0.5, anchor: 2e4}\n"
     "  solver: {max_outer_iterations: 7, max_inner_iterations: 4, relative_energy_tolerance: 1e-4,\n"
-    "           time_budget_s: 0.25, linear_solver: conjugate_gradients,\n"
+    "           time_budget_s: 0.25,\n"
     "           threads: 2, rigid_prealign: true, rigid_iterations: 12, predict_motion: false,\n"
     "           backend: fast}\n"
     "anchors:\n"

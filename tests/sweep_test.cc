@@ -64,10 +64,10 @@ TEST_F(SceneOverrideTest, ReplacesAndAddsKeys) {
   Scene scene;
   ASSERT_TRUE(Load({}, &scene).ok());
   EXPECT_EQ(scene.registration.solver.max_outer_iterations, 4);
-  EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kCeres);
+  EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kFast);
 
   ASSERT_TRUE(Load({"registration.solver.max_outer_iterations=7",     // replaces a key
-                    "registration.solver.backend=fast",               // adds one to a map
+                    "registration.solver.backend=ceres",              // adds one to a map
                     "registration.weights.elastic=0.3",               // adds a map
                     "objects[0].material.youngs_modulus=2e5",         // through a list
                     "objects[0].generate.cells=[2, 2, 1]",            // a YAML list value
@@ -75,7 +75,7 @@ TEST_F(SceneOverrideTest, ReplacesAndAddsKeys) {
                    &scene)
                   .ok());
   EXPECT_EQ(scene.registration.solver.max_outer_iterations, 7);
-  EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kFast);
+  EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kCeres);
   EXPECT_EQ(scene.registration.weights.elastic, 0.3);  // exact: parsed from the same text
   EXPECT_EQ(scene.objects[0].material.youngs_modulus, 2e5);
   EXPECT_EQ(scene.objects[0].generate.cells, Eigen::Vector3i(2, 2, 1));
@@ -281,7 +281,7 @@ TEST(SweepCli, RegisterWritesErrorFieldCloudAndProvenance) {
   const fs::path log = fs::path(dir.path()) / "log.txt";
   ASSERT_EQ(RunShell(kCli + " register --scene " + kBlock + "/scene.yaml --frames " + kBlock +
                 "/clouds --ground-truth " + kBlock + "/ground_truth --max-frames 2 --no-progress "
-                "--report none --set registration.solver.backend=fast --set "
+                "--report none --set registration.solver.backend=ceres --set "
                 "registration.solver.max_outer_iterations=3 --out " + out.string() + " > " +
                 log.string() + " 2>&1"),
             0)
@@ -302,8 +302,8 @@ TEST(SweepCli, RegisterWritesErrorFieldCloudAndProvenance) {
   }
   EXPECT_EQ(s["frames_done"], 2);
   EXPECT_FALSE(s["femreg_version"].get<std::string>().empty());
-  EXPECT_EQ(s["backend"], "fast");
-  EXPECT_EQ(s["backends_used"], nlohmann::json::array({"fast"}));
+  EXPECT_EQ(s["backend"], "ceres");
+  EXPECT_EQ(s["backends_used"], nlohmann::json::array({"ceres"}));
   const nlohmann::json& p = s["provenance"];
   EXPECT_EQ(p["overrides"].size(), 2u);
   EXPECT_EQ(p["options"]["solver"]["max_outer_iterations"], 3);
@@ -311,7 +311,7 @@ TEST(SweepCli, RegisterWritesErrorFieldCloudAndProvenance) {
   ASSERT_EQ(p["frame_files"].size(), 2u);
   EXPECT_NE(p["frame_files"][1].get<std::string>().find("frame_0001.pcd"), std::string::npos);
   EXPECT_EQ(p["ground_truth_files"].size(), 2u);
-  EXPECT_NE(p["scene_resolved"].get<std::string>().find("backend: fast"), std::string::npos)
+  EXPECT_NE(p["scene_resolved"].get<std::string>().find("backend: ceres"), std::string::npos)
       << p["scene_resolved"];
   // The error field agrees with the run's totals: the mean over vertices of frame 1 is in
   // stats.csv; here only its presence and the max of the totals are checked by value.

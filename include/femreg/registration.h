@@ -162,8 +162,11 @@ struct SolverOptions {
   // Inner solves of the fast back end stop at a tenth of it.
   double step_tolerance = 0.01;
   double time_budget_s = 0.0;            // per frame; 0 = none
-  // Which back end minimizes each outer iteration (both take every term, contacts included).
-  SolverBackend backend = SolverBackend::kCeres;
+  // Which back end minimizes each outer iteration (both take every term, contacts included,
+  // and reach the same minimum). The fast one by default: on the 12 bundled datasets it gives
+  // the same vertex errors 3-6 times faster. A scene that sets trust_region or linear_solver
+  // (Ceres' settings) without a backend gets Ceres.
+  SolverBackend backend = SolverBackend::kFast;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
   // Threads of every parallel part (element loops, correspondences, CHOLMOD's BLAS, Ceres);

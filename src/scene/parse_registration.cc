@@ -162,6 +162,13 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     if (s.Has("backend")) {
       o.backend = ParseEnum(s["backend"],
                             std::vector<SolverBackend>{SolverBackend::kCeres, SolverBackend::kFast});
+    } else if (s.Has("trust_region") || s.Has("linear_solver")) {
+      o.backend = SolverBackend::kCeres;  // only Ceres has them: applied, not ignored
+    }
+    if (o.backend == SolverBackend::kFast) {
+      for (const char* key : {"trust_region", "linear_solver"}) {
+        if (s.Has(key)) s[key].Fail("is a setting of the Ceres back end (solver.backend: ceres); the fast back end has none");
+      }
     }
     if (s.Has("rigid_prealign")) o.rigid_prealign = s["rigid_prealign"].AsBool();
     if (s.Has("rigid_iterations")) o.rigid_iterations = s["rigid_iterations"].AsInt();

@@ -333,8 +333,10 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   Put(solver, "step_tolerance", s.step_tolerance, d.solver.step_tolerance);
   Put(solver, "max_pcg_iterations", s.max_pcg_iterations, d.solver.max_pcg_iterations);
   Put(solver, "time_budget_s", s.time_budget_s, d.solver.time_budget_s);
-  if (s.trust_region != d.solver.trust_region) solver["trust_region"] = ToString(s.trust_region);
-  if (s.linear_solver != d.solver.linear_solver) solver["linear_solver"] = ToString(s.linear_solver);
+  if (s.backend == SolverBackend::kCeres) {  // Ceres' own settings (refused beside backend: fast)
+    if (s.trust_region != d.solver.trust_region) solver["trust_region"] = ToString(s.trust_region);
+    if (s.linear_solver != d.solver.linear_solver) solver["linear_solver"] = ToString(s.linear_solver);
+  }
   Put(solver, "threads", s.num_threads, d.solver.num_threads);
   Put(solver, "predict_motion", s.predict_motion, d.solver.predict_motion);
   Put(solver, "rigid_prealign", s.rigid_prealign, d.solver.rigid_prealign);
