@@ -10,7 +10,9 @@
 #include <iterator>
 #include <vector>
 
+#include "femreg/io.h"
 #include "parallel/threads.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -54,6 +56,19 @@ TEST(Threads, ThreadLimitHoldsCholmodsOwnTeams) {
   ASSERT_EQ(factor.info(), Eigen::Success);
   if (ThreadsInProcess() == before) GTEST_SKIP() << "this CHOLMOD starts no threads of its own";
   EXPECT_GT(ThreadsInProcess(), before);
+}
+
+// Writing a VTU (VTK's writer computes each array's range with its SMP tools, which on
+// Debian's VTK 9.1 start a TBB worker pool, one thread per core) leaves the thread count as
+// it was: femreg runs VTK's SMP tools on one thread.
+TEST(Threads, WritingAVtuStartsNoThreads) {
+  TetMesh mesh = MakeBox(Eigen::Vector3d(1, 1, 1), 20, 20, 20);
+  testing_util::TempDir dir("femreg_threads");
+  const int before = ThreadsInProcess();
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(WriteVtu(dir.path() + "/box.vtu", mesh, mesh.rest, {}).ok());
+  }
+  EXPECT_EQ(ThreadsInProcess(), before);
 }
 
 TEST(Threads, ThreadLimitRunsTheFunctionOnce) {

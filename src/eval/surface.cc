@@ -169,6 +169,7 @@ Status WriteVtuSurface(const std::string& path, const Vertices& points, const Tr
   vtkNew<vtkCallbackCommand> callback;
   callback->SetCallback(&CollectError);
   callback->SetClientData(&errors);
+  internal::UseSequentialVtk();
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->AddObserver(vtkCommand::ErrorEvent, callback);
   writer->SetFileName(temp.c_str());

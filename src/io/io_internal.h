@@ -91,6 +91,12 @@ bool RegionIdFrom(double value, int* id);
 // True when a cell/field name looks like a region id ("region", "tag", "material", ...).
 bool LooksLikeRegionName(const std::string& name);
 
+// Before VTK writes anything: its SMP tools on one thread. VTK 9.1 is built with the TBB
+// back end, which otherwise starts a pool of worker threads (one per core) the first time a
+// writer computes an array's range; femreg owns its threads (solver.num_threads), and
+// writing a frame is not where parallel work pays.
+void UseSequentialVtk();
+
 }  // namespace internal
 }  // namespace femreg
 

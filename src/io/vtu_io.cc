@@ -11,6 +11,7 @@
 #include <vtkOutputWindow.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkSMPTools.h>
 #include <vtkSmartPointer.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridWriter.h>
@@ -124,6 +125,11 @@ const VtuArray* RegionArray(const VtuPiece& piece) {
 std::atomic<int> g_temp_counter{0};
 
 }  // namespace
+
+void UseSequentialVtk() {
+  static std::once_flag once;
+  std::call_once(once, [] { vtkSMPTools::Initialize(1); });
+}
 
 Status ReadVtuFile(const std::string& path, RawTetMesh* raw) {
   VtuGrid grid;
@@ -270,6 +276,7 @@ Status WriteVtu(const std::string& path, const TetMesh& mesh, const Vertices& po
   std::string errors;
   {
     internal::ScopedVtkCapture capture;
+    internal::UseSequentialVtk();
     vtkNew<vtkXMLUnstructuredGridWriter> writer;
     vtkNew<internal::ErrorObserver> observer;
     writer->AddObserver(vtkCommand::ErrorEvent, observer);
