@@ -357,16 +357,12 @@ class VtuReader {
     Status s = IntAttribute(tag, "NumberOfPoints", 0, 0, bound, &piece.points);
     if (!s.ok()) return s;
     if (!(s = IntAttribute(tag, "NumberOfCells", 0, 0, bound, &piece.cells)).ok()) return s;
-    if (!pieces_.empty()) {
-      long long points = piece.points, cells = piece.cells;
-      for (const PieceRef& p : pieces_) {
-        points += p.points;
-        cells += p.cells;
-      }
-      if (points > kMaxItems || cells > kMaxItems) {
-        return Error(tag.begin, "the pieces have more than 2147483647 points or cells in all");
-      }
+    // Running totals (each at most kMaxItems, so the sums cannot overflow).
+    if (total_points_ + piece.points > kMaxItems || total_cells_ + piece.cells > kMaxItems) {
+      return Error(tag.begin, "the pieces have more than 2147483647 points or cells in all");
     }
+    total_points_ += piece.points;
+    total_cells_ += piece.cells;
     pieces_.push_back(piece);
     return Status::Ok();
   }
@@ -765,6 +761,7 @@ class VtuReader {
   bool big_endian_ = false, compressed_ = false;
   int header_size_ = 4;
   std::vector<PieceRef> pieces_;
+  long long total_points_ = 0, total_cells_ = 0;  // over pieces_
 };
 
 }  // namespace
