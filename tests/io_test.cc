@@ -13,34 +13,18 @@
 #include <sstream>
 #include <string>
 #include <sys/stat.h>
-#include <unistd.h>
 
 #include "femreg/io.h"
 #include "femreg/mesh.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
 
 const std::string kFixtures = std::string(FEMREG_FIXTURES_DIR) + "/io/";
 
-// A fresh folder under /tmp for files a test writes.
-class TempDir {
- public:
-  TempDir() {
-    char name[] = "/tmp/femreg_io_test_XXXXXX";
-    path_ = mkdtemp(name) != nullptr ? name : "/tmp";
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string File(const std::string& name) const { return path_ + "/" + name; }
-  std::string Write(const std::string& name, const std::string& contents) const {
-    std::ofstream(File(name)) << contents;
-    return File(name);
-  }
-
- private:
-  std::string path_;
-};
+using testing_util::TempDir;
 
 bool Exists(const std::string& path) {
   struct stat st;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "femreg/ground_truth.h"
@@ -33,6 +34,12 @@ class TempDir {
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
   const std::string& path() const { return path_; }
+  // The path of `name` in the folder, and that file written with `contents` (bytes as given).
+  std::string File(const std::string& name) const { return path_ + "/" + name; }
+  std::string Write(const std::string& name, const std::string& contents) const {
+    std::ofstream(File(name), std::ios::binary) << contents;
+    return File(name);
+  }
 
  private:
   std::string path_;

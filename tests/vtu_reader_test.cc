@@ -14,15 +14,14 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <string>
-#include <unistd.h>
 
 #include "femreg/eval.h"
 #include "femreg/io.h"
 #include "io/io_internal.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -31,22 +30,7 @@ using internal::VtuArray;
 using internal::VtuGrid;
 using internal::VtuPiece;
 
-class TempDir {
- public:
-  TempDir() {
-    char name[] = "/tmp/femreg_vtu_test_XXXXXX";
-    path_ = mkdtemp(name) != nullptr ? name : "/tmp";
-  }
-  ~TempDir() { std::system(("rm -rf '" + path_ + "'").c_str()); }
-  std::string File(const std::string& name) const { return path_ + "/" + name; }
-  std::string Write(const std::string& name, const std::string& contents) const {
-    std::ofstream(File(name), std::ios::binary) << contents;
-    return File(name);
-  }
-
- private:
-  std::string path_;
-};
+using testing_util::TempDir;
 
 std::string ReadBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
