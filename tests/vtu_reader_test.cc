@@ -268,6 +268,24 @@ TEST(VtuReader, TwoPiecesAreConcatenated) {
   EXPECT_EQ(mesh.region(0), 4);
   EXPECT_EQ(mesh.region(1), 9);
   EXPECT_EQ(mesh.rest(mesh.tets(1, 0), 0), 5.0);
+
+  // Piece 0's tetrahedron pointing at point 4: in the file, the first point of piece 1; in
+  // piece 0, out of range. Refused, not read as the other piece's point.
+  std::string stray = first;
+  stray.replace(stray.find("0 1 2 3"), 7, "0 1 2 4");
+  Status s = ReadTetMesh(dir.Write("stray.vtu", "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\">"
+                                                "<UnstructuredGrid>" + stray + second + "</UnstructuredGrid></VTKFile>\n"),
+                         &mesh);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("cell 0 refers to point -1"), std::string::npos) << s.message();
+  // A piece without piece 0's region array.
+  std::string untagged = second;
+  untagged.erase(untagged.find("<CellData>"), untagged.find("</CellData>") + 11 - untagged.find("<CellData>"));
+  s = ReadTetMesh(dir.Write("untagged.vtu", "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\">"
+                                            "<UnstructuredGrid>" + first + untagged + "</UnstructuredGrid></VTKFile>\n"),
+                  &mesh);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("has no cell array 'tag'"), std::string::npos) << s.message();
 }
 
 // Malformed files: refused with the byte offset of the problem, before anything is sized

@@ -79,62 +79,45 @@ Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry) {
   internal::VtuGrid grid;
   const Status read = internal::ReadVtuGrid(path, &grid);
   if (!read.ok()) return read;
-  // The pieces one after the other; original_vertex is kept when every piece has it.
-  long long n = 0;
-  bool has_original = true;
-  for (const internal::VtuPiece& piece : grid.pieces) {
-    n += static_cast<long long>(piece.points.size());
-    bool found = false;
-    for (const internal::VtuArray& array : piece.point_data) {
-      found = found || (array.name == "original_vertex" && array.components == 1);
-    }
-    has_original = has_original && found;
-  }
+  const internal::VtuPiece piece = internal::MergePieces(std::move(grid));
+  const long long n = static_cast<long long>(piece.points.size());
   if (n == 0) return Status::Error(path + ": not a readable VTU file with points (it has none)");
   geometry->points.resize(n, 3);
+  for (long long i = 0; i < n; ++i) {
+    const std::array<double, 3>& point = piece.points[static_cast<size_t>(i)];
+    geometry->points.row(i) << point[0], point[1], point[2];
+  }
+  // original_vertex, when every piece has it.
   geometry->original.clear();
-  if (has_original) geometry->original.reserve(static_cast<size_t>(n));
+  for (const internal::VtuArray& array : piece.point_data) {
+    if (array.name != "original_vertex" || array.components != 1) continue;
+    geometry->original.reserve(array.values.size());
+    for (double v : array.values) {
+      geometry->original.push_back(std::isfinite(v) && std::abs(v) < 2e9 ? static_cast<int>(std::lround(v)) : -1);
+    }
+    break;
+  }
   std::vector<std::array<int, 4>> tets;
   std::vector<std::array<int, 3>> tris;
-  long long base = 0;
-  for (size_t p = 0; p < grid.pieces.size(); ++p) {
-    const internal::VtuPiece& piece = grid.pieces[p];
-    const long long np = static_cast<long long>(piece.points.size());
-    for (long long i = 0; i < np; ++i) {
-      const std::array<double, 3>& point = piece.points[static_cast<size_t>(i)];
-      geometry->points.row(base + i) << point[0], point[1], point[2];
-    }
-    if (has_original) {
-      for (const internal::VtuArray& array : piece.point_data) {
-        if (array.name != "original_vertex" || array.components != 1) continue;
-        for (double v : array.values) {
-          geometry->original.push_back(std::isfinite(v) && std::abs(v) < 2e9 ? static_cast<int>(std::lround(v)) : -1);
-        }
-        break;
+  for (size_t c = 0; c < piece.types.size(); ++c) {
+    const int type = piece.types[c];
+    const long long begin = piece.offsets[c], count = piece.offsets[c + 1] - begin;
+    if (!((type == VTK_TETRA && count == 4) || (type == VTK_TRIANGLE && count == 3))) continue;
+    std::array<int, 4> ids{};
+    for (long long k = 0; k < count; ++k) {
+      const long long v = piece.connectivity[static_cast<size_t>(begin + k)];
+      if (v < 0 || v >= n) {
+        std::ostringstream os;
+        os << path << ": cell " << c << " refers to point " << v << ", outside 0.." << n - 1;
+        return Status::Error(os.str());
       }
+      ids[static_cast<size_t>(k)] = static_cast<int>(v);
     }
-    for (size_t c = 0; c < piece.types.size(); ++c) {
-      const int type = piece.types[c];
-      const long long begin = piece.offsets[c], count = piece.offsets[c + 1] - begin;
-      if (!((type == VTK_TETRA && count == 4) || (type == VTK_TRIANGLE && count == 3))) continue;
-      std::array<int, 4> ids{};
-      for (long long k = 0; k < count; ++k) {
-        const long long v = piece.connectivity[static_cast<size_t>(begin + k)];
-        if (v < 0 || v >= np) {
-          std::ostringstream os;
-          os << path << ": piece " << p << " cell " << c << " refers to point " << v << ", outside 0.."
-             << np - 1;
-          return Status::Error(os.str());
-        }
-        ids[static_cast<size_t>(k)] = static_cast<int>(base + v);
-      }
-      if (count == 4) {
-        tets.push_back(ids);
-      } else {
-        tris.push_back({ids[0], ids[1], ids[2]});
-      }
+    if (count == 4) {
+      tets.push_back(ids);
+    } else {
+      tris.push_back({ids[0], ids[1], ids[2]});
     }
-    base += np;
   }
   geometry->tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
   for (size_t t = 0; t < tets.size(); ++t) {

@@ -65,9 +65,14 @@ struct VtuGrid {
 // compressed block checked against the bytes the file has before anything is sized from
 // it. Errors name the file and the byte offset of the problem.
 Status ReadVtuGrid(const std::string& path, VtuGrid* grid);
+// The pieces one after the other as one piece: points, cells and the arrays that every piece
+// has (same name and components; the first of that name in each). A point index is shifted
+// by the points of the pieces before; one outside its own piece becomes -1 (out of range
+// for any reader). One piece comes back as it is.
+VtuPiece MergePieces(VtuGrid grid);
 // A .vtu as a tetrahedral mesh (vtu_io.cc): tetrahedra (VTK type 10) kept, other cells
-// skipped, the pieces concatenated; the first one-component cell array named like a region
-// gives the region ids.
+// skipped, the pieces merged (MergePieces); the first one-component cell array named like a
+// region gives the region ids.
 Status ReadVtuFile(const std::string& path, RawTetMesh* raw);
 
 // Text readers (mesh_readers.cc).

@@ -32,8 +32,6 @@ namespace femreg {
 namespace internal {
 namespace {
 
-constexpr int kVtkTetra = 10;
-
 // Collects everything VTK would print while it is installed as the output window.
 class CapturingOutputWindow : public vtkOutputWindow {
  public:
@@ -135,76 +133,60 @@ Status ReadVtuFile(const std::string& path, RawTetMesh* raw) {
   VtuGrid grid;
   Status s = ReadVtuGrid(path, &grid);
   if (!s.ok()) return s;
-  // The pieces one after the other: point indices shifted by the points before, the region
-  // array the one the first piece names.
-  size_t total_points = 0;
-  for (const VtuPiece& piece : grid.pieces) total_points += piece.points.size();
-  if (total_points == 0) return FileError(path, 0, "no points (empty or unreadable grid)");
-  raw->vertices.reserve(total_points);
   const VtuArray* first_region = RegionArray(grid.pieces[0]);
-  long long point_base = 0, cell_base = 0;
-  for (size_t p = 0; p < grid.pieces.size(); ++p) {
-    const VtuPiece& piece = grid.pieces[p];
-    const long long np = static_cast<long long>(piece.points.size());
-    for (long long i = 0; i < np; ++i) {
-      const std::array<double, 3>& point = piece.points[static_cast<size_t>(i)];
-      for (int k = 0; k < 3; ++k) {
-        if (!std::isfinite(point[k])) {
-          std::ostringstream os;
-          os << "point " << point_base + i << " has a non-finite coordinate";
-          return FileError(path, 0, os.str());
-        }
-      }
-      raw->vertices.push_back(point);
+  const std::string region_name = first_region != nullptr ? first_region->name : std::string();
+  const VtuPiece piece = MergePieces(std::move(grid));
+  const long long np = static_cast<long long>(piece.points.size());
+  if (np == 0) return FileError(path, 0, "no points (empty or unreadable grid)");
+  for (long long i = 0; i < np; ++i) {
+    const std::array<double, 3>& point = piece.points[static_cast<size_t>(i)];
+    if (!std::isfinite(point[0]) || !std::isfinite(point[1]) || !std::isfinite(point[2])) {
+      std::ostringstream os;
+      os << "point " << i << " has a non-finite coordinate";
+      return FileError(path, 0, os.str());
     }
-    const VtuArray* region = nullptr;
-    if (first_region != nullptr) {
-      for (const VtuArray& array : piece.cell_data) {
-        if (array.components == 1 && array.name == first_region->name) {
-          region = &array;
-          break;
-        }
-      }
-      if (region == nullptr) {
+  }
+  raw->vertices = piece.points;
+  // The region ids: the array the first piece names, which every piece must have.
+  const VtuArray* region = nullptr;
+  if (!region_name.empty()) {
+    for (const VtuArray& array : piece.cell_data) {
+      if (array.components == 1 && array.name == region_name) region = &array;
+    }
+    if (region == nullptr) {
+      return FileError(path, 0, "a piece has no cell array " + Quoted(region_name) +
+                                    " (the region ids of piece 0)");
+    }
+  }
+  for (size_t c = 0; c < piece.types.size(); ++c) {
+    if (piece.types[c] != VTK_TETRA) continue;
+    const long long begin = piece.offsets[c], count = piece.offsets[c + 1] - begin;
+    if (count != 4) {
+      std::ostringstream os;
+      os << "cell " << c << " is a tetrahedron with " << count << " points";
+      return FileError(path, 0, os.str());
+    }
+    std::array<int, 4> tet;
+    for (int k = 0; k < 4; ++k) {
+      const long long v = piece.connectivity[static_cast<size_t>(begin + k)];
+      if (v < 0 || v >= np) {
         std::ostringstream os;
-        os << "piece " << p << " has no cell array " << Quoted(first_region->name) << " (the region ids of piece 0)";
+        os << "cell " << c << " refers to point " << v << ", outside 0.." << np - 1
+           << " (index out of range)";
         return FileError(path, 0, os.str());
       }
+      tet[k] = static_cast<int>(v);
     }
-    const long long cells = static_cast<long long>(piece.types.size());
-    for (long long local = 0; local < cells; ++local) {
-      const long long c = cell_base + local;
-      if (piece.types[static_cast<size_t>(local)] != kVtkTetra) continue;
-      const long long begin = piece.offsets[static_cast<size_t>(local)];
-      const long long count = piece.offsets[static_cast<size_t>(local) + 1] - begin;
-      if (count != 4) {
-        std::ostringstream os;
-        os << "cell " << c << " is a tetrahedron with " << count << " points";
-        return FileError(path, 0, os.str());
-      }
-      std::array<int, 4> tet;
-      for (int k = 0; k < 4; ++k) {
-        const long long v = piece.connectivity[static_cast<size_t>(begin + k)];
-        if (v < 0 || v >= np) {
-          std::ostringstream os;
-          os << "cell " << c << " refers to point " << v << ", outside 0.." << np - 1 << " (index out of range)";
-          return FileError(path, 0, os.str());
-        }
-        tet[k] = static_cast<int>(point_base + v);
-      }
-      raw->tets.push_back(tet);
-      int id = 0;
-      const double value = region == nullptr ? 0.0 : region->values[static_cast<size_t>(local)];
-      if (region != nullptr && !RegionIdFrom(value, &id)) {
-        std::ostringstream os;
-        os << "cell " << c << ": region value " << value << " in array " << Quoted(region->name)
-           << " is not a region id (an integer in the range of int)";
-        return FileError(path, 0, os.str());
-      }
-      raw->regions.push_back(id);
+    raw->tets.push_back(tet);
+    int id = 0;
+    const double value = region == nullptr ? 0.0 : region->values[c];
+    if (region != nullptr && !RegionIdFrom(value, &id)) {
+      std::ostringstream os;
+      os << "cell " << c << ": region value " << value << " in array " << Quoted(region->name)
+         << " is not a region id (an integer in the range of int)";
+      return FileError(path, 0, os.str());
     }
-    point_base += np;
-    cell_base += cells;
+    raw->regions.push_back(id);
   }
   if (raw->tets.empty()) return FileError(path, 0, "no tetrahedra (no cells of VTK type 10)");
   return Status::Ok();

@@ -775,5 +775,43 @@ Status ReadVtuGrid(const std::string& path, VtuGrid* grid) {
   return VtuReader(path, ss.str()).Read(grid);
 }
 
+VtuPiece MergePieces(VtuGrid grid) {
+  if (grid.pieces.size() == 1) return std::move(grid.pieces[0]);
+  VtuPiece merged;
+  // The arrays every piece has: the first of each name in piece 0, kept while each later
+  // piece has one of that name and component count.
+  auto common = [&](std::vector<VtuArray> VtuPiece::*section) {
+    std::vector<VtuArray> out;
+    if (grid.pieces.empty()) return out;
+    for (const VtuArray& first : grid.pieces[0].*section) {
+      bool everywhere = std::none_of(out.begin(), out.end(),
+                                     [&](const VtuArray& a) { return a.name == first.name; });
+      VtuArray joined{first.name, first.components, {}};
+      for (size_t p = 0; everywhere && p < grid.pieces.size(); ++p) {
+        const std::vector<VtuArray>& arrays = grid.pieces[p].*section;
+        const auto it = std::find_if(arrays.begin(), arrays.end(),
+                                     [&](const VtuArray& a) { return a.name == first.name; });
+        everywhere = it != arrays.end() && it->components == first.components;
+        if (everywhere) joined.values.insert(joined.values.end(), it->values.begin(), it->values.end());
+      }
+      if (everywhere) out.push_back(std::move(joined));
+    }
+    return out;
+  };
+  merged.point_data = common(&VtuPiece::point_data);
+  merged.cell_data = common(&VtuPiece::cell_data);
+  long long base = 0;
+  for (const VtuPiece& piece : grid.pieces) {
+    const long long np = static_cast<long long>(piece.points.size());
+    merged.points.insert(merged.points.end(), piece.points.begin(), piece.points.end());
+    const long long shift = static_cast<long long>(merged.connectivity.size());
+    for (long long v : piece.connectivity) merged.connectivity.push_back(v >= 0 && v < np ? v + base : -1);
+    for (size_t c = 1; c < piece.offsets.size(); ++c) merged.offsets.push_back(piece.offsets[c] + shift);
+    merged.types.insert(merged.types.end(), piece.types.begin(), piece.types.end());
+    base += np;
+  }
+  return merged;
+}
+
 }  // namespace internal
 }  // namespace femreg
