@@ -299,6 +299,44 @@ TYPED_TEST(EnergyBlockTest, LinearizationIsTheValuesGradientAndItsBlocksArePsd) 
   }
 }
 
+// Linearize's value, gradient and Gauss-Newton blocks are w rho' (J^T r, J^T J) from
+// Evaluate's r and J, with every loss: for a block type with a closed form (Normal), that
+// form against the residual and Jacobian the Ceres back end uses.
+TYPED_TEST(EnergyBlockTest, LinearizationIsTheNormalEquationsOfEvaluate) {
+  using T = TypeParam;
+  constexpr int m = T::kResiduals, n = T::kVertices;
+  std::mt19937 rng(17);
+  for (RobustLoss kind : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {
+    for (int trial = 0; trial < kTrials; ++trial) {
+      Sample<T> s(&rng);
+      std::array<Eigen::Matrix<double, m, 3, Eigen::RowMajor>, n> J;
+      std::array<double*, n> Jp;
+      for (int i = 0; i < n; ++i) Jp[i] = J[i].data();
+      Eigen::Matrix<double, m, 1> r;
+      const auto p = energy::StencilPositions(s.block, s.x);
+      ASSERT_TRUE(s.block.Evaluate(p.data(), r.data(), Jp.data()));
+      const Loss loss{kind, kind == RobustLoss::kNone ? 1.0 : (0.45 + 0.1 * (trial % 10)) * std::max(r.norm(), 1e-9)};  // not at the bend: rho' there is 0 up to round-off
+      double rho[3];
+      loss.Evaluate(r.squaredNorm(), rho);
+      const double scale = s.block.weight * rho[1];
+      energy::Linearization<T> lin;
+      ASSERT_TRUE(energy::Linearize(s.block, loss, s.x, &lin));
+      EXPECT_NEAR(lin.value, 0.5 * s.block.weight * rho[0], 1e-12 * std::abs(lin.value) + 1e-300) << Sample<T>::kName;
+      EXPECT_NEAR(lin.scale, scale, 1e-10 * std::abs(scale) + 1e-300) << Sample<T>::kName;
+      for (int i = 0; i < n; ++i) {
+        const Eigen::Vector3d g = scale * J[i].transpose() * r;
+        EXPECT_LT((lin.gradient[i] - g).norm(), 1e-10 * (g.norm() + 1e-300) + 1e-300)
+            << Sample<T>::kName << " loss " << static_cast<int>(kind) << " vertex " << i;
+        for (int j = 0; j < n; ++j) {
+          const Eigen::Matrix3d h = scale * J[i].transpose() * J[j];
+          EXPECT_LT((lin.hessian[i * n + j] - h).norm(), 1e-10 * (h.norm() + 1e-300) + 1e-300)
+              << Sample<T>::kName << " loss " << static_cast<int>(kind) << " block " << i << "," << j;
+        }
+      }
+    }
+  }
+}
+
 // The value and gradient of a whole problem: the sum of its blocks'.
 TEST(EnergyProblem, EvaluateSumsTheSetsByGroup) {
   std::mt19937 rng(3);

@@ -57,6 +57,8 @@ struct ElementRest {
   double volume = 0.0;     // rest volume V_e (> 0)
   Matrix6x12 L;            // strain-displacement: eps = L u, u = [u0; u1; u2; u3]
   Matrix6 C;               // Hooke matrix of the element's material
+  double lambda = 0.0;     // its Lame parameters (C is isotropic): lambda ...
+  double mu = 0.0;         // ... and the shear modulus
   Matrix6x12 S;            // sqrt(V_e) C^(1/2) L, so that S^T S = K
   Matrix12 K;              // V_e L^T C L
   Vector12 X;              // rest positions [X0; X1; X2; X3]

@@ -16,6 +16,48 @@ bool ElasticElement::Evaluate(const double* const* x, double* r, double** J) con
   return true;
 }
 
+bool ElasticElement::Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
+                            Eigen::Matrix3d* jtj) const {
+  const Eigen::Matrix3d& R = *rotation;
+  const Eigen::Matrix3d& dm_inv = rest->dm_inv;
+  const double V = rest->volume, lambda = rest->lambda, mu = rest->mu;
+  // Shape gradients as rows: b_1..b_3 the rows of D_m^-1, b_0 = -(b_1 + b_2 + b_3).
+  Eigen::Matrix<double, 4, 3> b;
+  b.bottomRows<3>() = dm_inv;
+  b.row(0) = -(dm_inv.row(0) + dm_inv.row(1) + dm_inv.row(2));
+  // sum_j u_j b_j^T = R^T F - I (sum_j X_j b_j^T = I): the displacement gradient in the
+  // element's frame, from edge vectors (no cancellation of a large translation).
+  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
+  Eigen::Matrix3d Ds;
+  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
+  const Eigen::Matrix3d F = Ds * dm_inv;
+  Eigen::Matrix3d e = R.transpose() * F;
+  e.diagonal().array() -= 1.0;
+  e = (0.5 * (e + e.transpose())).eval();
+  const double trace = e.trace();
+  *squared_norm = V * (2.0 * mu * e.squaredNorm() + lambda * trace * trace);
+  if (jtr == nullptr) return true;
+  Eigen::Matrix3d P = 2.0 * mu * e;
+  P.diagonal().array() += lambda * trace;
+  // Row i: (V R P b_i)^T = b_i^T (V P R^T) (P symmetric).
+  const Eigen::Matrix<double, 4, 3> forces = b * (V * P * R.transpose());
+  for (int i = 0; i < 4; ++i) jtr[i] = forces.row(i).transpose();
+  if (jtj == nullptr) return true;
+  const Eigen::Matrix<double, 4, 3> c = b * R.transpose();  // row i: (R b_i)^T
+  const Eigen::Matrix4d dots = b * b.transpose();
+  const double Vmu = V * mu, Vlambda = V * lambda;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i; j < 4; ++j) {
+      Eigen::Matrix3d& block = jtj[i * 4 + j];
+      block.noalias() = Vmu * c.row(j).transpose() * c.row(i);
+      block.noalias() += Vlambda * c.row(i).transpose() * c.row(j);
+      block.diagonal().array() += Vmu * dots(i, j);
+      if (j != i) jtj[j * 4 + i] = block.transpose();
+    }
+  }
+  return true;
+}
+
 bool EdgeSpring::Evaluate(const double* const* x, double* r, double** J) const {
   const Eigen::Vector3d d =
       Eigen::Map<const Eigen::Vector3d>(x[0]) - Eigen::Map<const Eigen::Vector3d>(x[1]);

@@ -24,6 +24,13 @@ struct ElasticElement {
   const Eigen::Matrix3d* rotation = nullptr;
 
   bool Evaluate(const double* const* x, double* r, double** J) const;
+  // The same in closed form (see energy/term.h): |r|^2 = V (2 mu e:e + lambda tr(e)^2) with
+  // the small strain e = sym(R^T F - I); J_i^T r = V R P b_i with P = 2 mu e + lambda tr(e) I
+  // and b_i the shape gradients; J_i^T J_j = V (mu (b_i.b_j) I + mu c_j c_i^T + lambda c_i c_j^T)
+  // with c = R b. A third of the flops of forming J = S R^T and J^T J, and S is not read.
+  // jtr null: |r|^2 only.
+  bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
+              Eigen::Matrix3d* jtj) const;
 };
 
 // A spring on an edge: r = |x_a - x_b| - L, 1/2 k r^2 with k the weight. At zero length the

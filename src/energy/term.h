@@ -15,12 +15,20 @@
 //   // positions x[i] (3 each). Returns false if the block cannot be evaluated.
 //   bool Evaluate(const double* const* x, double* r, double** J) const;
 // and its energy is 1/2 w rho(|r|^2) with the set's robust loss rho (none: rho(s) = s).
+// It may also provide the normal-equation pieces in closed form, where that is much cheaper
+// than forming J (the FEM element):
+//   // |r|^2 and, if jtr is not null, J_i^T r (n) and, if jtj is not null too, J_i^T J_j at
+//   // i * n + j (n * n).
+//   bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
+//               Eigen::Matrix3d* jtj) const;
+// Linearize then uses it; the tests check it against Evaluate's r and J.
 #ifndef FEMREG_ENERGY_TERM_H_
 #define FEMREG_ENERGY_TERM_H_
 
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "energy/loss.h"
@@ -68,6 +76,15 @@ class TermSet {
   uint64_t revision_ = 0;
 };
 
+// Whether T provides Normal (above).
+template <class T, class = void>
+struct HasNormal : std::false_type {};
+template <class T>
+struct HasNormal<T, std::void_t<decltype(std::declval<const T&>().Normal(
+                        std::declval<const double* const*>(), std::declval<double*>(),
+                        std::declval<Eigen::Vector3d*>(), std::declval<Eigen::Matrix3d*>()))>>
+    : std::true_type {};
+
 // Pointers to the stencil's positions in x (#V by 3, row-major: vertex v is x.data() + 3 v).
 template <class T>
 std::array<const double*, T::kVertices> StencilPositions(const T& block, const Vertices& x) {
@@ -79,11 +96,15 @@ std::array<const double*, T::kVertices> StencilPositions(const T& block, const V
 // 1/2 w rho(|r|^2) of one block at x; 0 if it cannot be evaluated (see Evaluate).
 template <class T>
 double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
-  double r[T::kResiduals];
   const auto p = StencilPositions(block, x);
-  if (!block.Evaluate(p.data(), r, nullptr)) return 0.0;
   double s = 0.0;
-  for (int i = 0; i < T::kResiduals; ++i) s += r[i] * r[i];
+  if constexpr (HasNormal<T>::value) {
+    if (!block.Normal(p.data(), &s, nullptr, nullptr)) return 0.0;
+  } else {
+    double r[T::kResiduals];
+    if (!block.Evaluate(p.data(), r, nullptr)) return 0.0;
+    for (int i = 0; i < T::kResiduals; ++i) s += r[i] * r[i];
+  }
   double rho[3];
   loss.Evaluate(s, rho);
   return 0.5 * block.weight * rho[0];
@@ -115,6 +136,25 @@ template <class T>
 bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearization<T>* out,
                bool with_hessian = true) {
   constexpr int m = T::kResiduals, n = T::kVertices;
+  if constexpr (HasNormal<T>::value) {
+    const auto p = StencilPositions(block, x);
+    out->scale = 0.0;
+    out->value = 0.0;
+    double s = 0.0;
+    if (!block.Normal(p.data(), &s, out->gradient.data(), with_hessian ? out->hessian.data() : nullptr)) {
+      for (auto& g : out->gradient) g.setZero();
+      return false;
+    }
+    double rho[3];
+    loss.Evaluate(s, rho);
+    out->value = 0.5 * block.weight * rho[0];
+    out->scale = block.weight * rho[1];
+    for (auto& g : out->gradient) g *= out->scale;
+    if (with_hessian) {
+      for (auto& h : out->hessian) h *= out->scale;
+    }
+    return true;
+  }
   using Jacobian = Eigen::Matrix<double, m, 3, Eigen::RowMajor>;
   Eigen::Matrix<double, m, 1> r;
   std::array<Jacobian, n> J;

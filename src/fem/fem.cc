@@ -126,6 +126,8 @@ ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Materia
     r.L(5, c + 1) = gx;
   }
   r.C = IsotropicElasticity(material.youngs_modulus, material.poisson_ratio);
+  r.lambda = r.C(0, 1);
+  r.mu = r.C(3, 3);
   Eigen::SelfAdjointEigenSolver<Matrix6> eig(r.C);
   const Matrix6 C_half = eig.eigenvectors() *
                          eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
