@@ -190,15 +190,12 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& s
     const double angle2 = w0 * w0 + w1 * w1 + w2 * w2;
     const double angle = std::sqrt(angle2);
     if (!(angle < 1.0)) return PolarRotation(F);  // far from the start: Newton's basin unclear
-    if (angle > 0.0) {  // R <- R exp([w]) = R (I + a W + b W^2), W^2 = w w^T - |w|^2 I
-      double a, b;
-      if (angle < 1e-4) {  // sin(t)/t and (1 - cos(t))/t^2 by their series, exact here
-        a = 1.0 - angle2 / 6.0 + angle2 * angle2 / 120.0;
-        b = 0.5 - angle2 / 24.0 + angle2 * angle2 / 720.0;
-      } else {
-        a = std::sin(angle) / angle;
-        b = (1.0 - std::cos(angle)) / angle2;
-      }
+    if (angle > 0.0) {
+      // R <- R Q(w), Q the rotation of the unit quaternion (1, w/2)/|(1, w/2)|: Q = I + a W +
+      // b W^2 with W^2 = w w^T - |w|^2 I, a = 1/n^2, b = 1/(2 n^2), n^2 = 1 + |w|^2/4. It agrees
+      // with exp([w]) (a = sin t/t, b = (1 - cos t)/t^2) to second order, so the steps still
+      // converge quadratically, is orthogonal for any w, and needs no sine or cosine.
+      const double a = 1.0 / (1.0 + 0.25 * angle2), b = 0.5 * a;
       Eigen::Matrix3d E;
       E << 1.0 + b * (w0 * w0 - angle2), b * w0 * w1 - a * w2, b * w0 * w2 + a * w1,
           b * w1 * w0 + a * w2, 1.0 + b * (w1 * w1 - angle2), b * w1 * w2 - a * w0,
