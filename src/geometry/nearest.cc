@@ -52,9 +52,14 @@ int PointIndex::Nearest(const Eigen::Vector3d& query, double* squared_distance) 
 int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,
                          double* squared_distances) const {
   if (!tree_ || k <= 0) return 0;
-  std::vector<uint32_t> idx(k);
+  // A small k (the surface queries' 4 to 16) on the stack: this runs per cloud point per
+  // outer iteration: no allocation per call.
+  constexpr int kOnStack = 32;
+  uint32_t on_stack[kOnStack];
+  std::vector<uint32_t> on_heap(k > kOnStack ? k : 0);
+  uint32_t* idx = k > kOnStack ? on_heap.data() : on_stack;
   nanoflann::KNNResultSet<double, uint32_t> result(k);
-  result.init(idx.data(), squared_distances);
+  result.init(idx, squared_distances);
   tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   const int n = static_cast<int>(result.size());
   for (int i = 0; i < n; ++i) indices[i] = static_cast<int>(idx[i]);
