@@ -11,6 +11,7 @@ const char* ToString(StopReason reason) {
     case StopReason::kGradient: return "gradient";
     case StopReason::kStep: return "step";
     case StopReason::kEnergy: return "energy";
+    case StopReason::kPredicted: return "predicted_decrease";
     case StopReason::kNoDecrease: return "no_decrease";
     case StopReason::kMaxIterations: return "max_iterations";
     case StopReason::kTimeLimit: return "time_limit";

@@ -39,6 +39,7 @@ enum class StopReason {
   kGradient,       // the gradient fell to 1e-9 of where it started (or to zero)
   kStep,           // no vertex moved more than step_tolerance
   kEnergy,         // the energy fell by less than relative_tolerance
+  kPredicted,      // the next step would lower it by less than that (fast back end's model)
   kNoDecrease,     // no step along the descent direction lowered the energy (round-off)
   kMaxIterations,
   kTimeLimit,

@@ -304,6 +304,48 @@ TEST(FastBackend, TwoThreadsTakeTheSameStep) {
   EXPECT_LE((one - two).cwiseAbs().maxCoeff(), 1e-9 * moved);
 }
 
+// A step whose Gauss-Newton gain (predicted along the kept factor's direction) is
+// negligible against the relative tolerance is not taken, and the solve says so. A
+// quadratic problem (no robust loss, no springs, no contacts) solved once; its rotations
+// change (a new outer iteration); solved again, the first step is PCG preconditioned with
+// the old factor, to PCG's tolerance: what a second step would add is round-off.
+TEST(FastBackend, StopsBeforeAStepThatWouldGainNothing) {
+  // Refined so that a factorization costs more than a few PCG iterations.
+  auto s = MakeSetup(RobustLoss::kNone, false, false, false, 9, false, 3);
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.relative_tolerance = 1e-3;
+  std::unique_ptr<Backend> backend = MakeBackend(options);
+  Vertices x = s->mesh.rest;
+  ASSERT_TRUE(backend->Solve(s->problem, 0.0, &x).success);
+  Vertices twisted = s->mesh.rest;
+  for (int v = 0; v < twisted.rows(); ++v) {
+    const double angle = 0.3 * twisted(v, 0) / 0.1;
+    const double y = twisted(v, 1) - 0.02, z = twisted(v, 2) - 0.02;
+    twisted(v, 1) = 0.02 + std::cos(angle) * y - std::sin(angle) * z;
+    twisted(v, 2) = 0.02 + std::sin(angle) * y + std::cos(angle) * z;
+  }
+  s->model.UpdateRotations(twisted);
+  const Vertices start = x;
+  const SolveReport report = backend->Solve(s->problem, 0.0, &x);
+  ASSERT_TRUE(report.success) << report.message;
+  EXPECT_EQ(report.stop, StopReason::kPredicted) << report.message;
+  EXPECT_EQ(report.iterations, 1);
+  EXPECT_EQ(report.factorizations, 0);  // the first step by PCG with the kept factor
+  EXPECT_GT(report.pcg_iterations, 1);
+  const double e_min = s->problem.Evaluate(Minimize(SolverBackend::kFast, s->problem, start)).total();
+  EXPECT_LT(e_min, report.before.total() * (1 - 1e-3));  // the first step gained more than the tolerance
+  EXPECT_LE(report.after.total() - e_min, 1e-5 * e_min);
+  // Without a tolerance, the second step is taken.
+  options.relative_tolerance = 0.0;
+  backend = MakeBackend(options);
+  x = start;
+  ASSERT_TRUE(backend->Solve(s->problem, 0.0, &x).success);  // a factor, of this system
+  s->model.UpdateRotations(s->mesh.rest);
+  x = start;
+  EXPECT_NE(backend->Solve(s->problem, 0.0, &x).stop, StopReason::kPredicted);
+}
+
 // The fast back end keeps its pattern and analysis while the coupling holds, and widens it
 // once for a contact between vertices outside it.
 TEST(FastBackend, PatternIsReusedAndWidenedOnce) {
