@@ -258,8 +258,8 @@ TEST(TriangleClosestPoint, MatchesDenseSampling) {
   }
 }
 
-TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
-  // An octahedron-like closed surface with some refinement: a UV sphere.
+// A UV sphere of radius 1 (24 by 12): positions and triangles.
+void UvSphere(Vertices* out_pos, Triangles* out_T) {
   const int nu = 24, nv = 12;
   Vertices pos((nv - 1) * nu + 2, 3);
   int k = 0;
@@ -285,6 +285,14 @@ TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
   }
   Triangles T(static_cast<int>(tris.size()), 3);
   for (size_t f = 0; f < tris.size(); ++f) T.row(static_cast<int>(f)) = tris[f].transpose();
+  *out_pos = pos;
+  *out_T = T;
+}
+
+TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
+  Vertices pos;
+  Triangles T;
+  UvSphere(&pos, &T);
   SurfaceIndex index(pos, T);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.5, 1.5);
@@ -299,6 +307,57 @@ TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
     ASSERT_GE(hit.triangle, 0);
     EXPECT_NEAR(hit.squared_distance, brute, 1e-9) << "query " << p.transpose();
   }
+}
+
+// Warm-started from the hit of an earlier surface (moved by up to a third of an edge, as
+// between outer iterations), or from a triangle two rings away, the walk finds the closest
+// point; from a start < 0 it is Closest.
+TEST(SurfaceIndex, ClosestFromAnEarlierHitMatchesBruteForce) {
+  Vertices rest;
+  Triangles T;
+  UvSphere(&rest, &T);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), jitter(-0.04, 0.04);  // edge ~0.26
+  Vertices moved = rest;
+  for (int v = 0; v < moved.rows(); ++v) {
+    for (int c = 0; c < 3; ++c) moved(v, c) += jitter(rng);
+  }
+  moved.col(0) *= 1.1;  // and stretched
+  const SurfaceIndex before(rest, T), after(moved, T);
+  int walked = 0;
+  for (int q = 0; q < 300; ++q) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    double brute = 1e30;
+    for (int f = 0; f < T.rows(); ++f) {
+      const Eigen::Vector3d a = moved.row(T(f, 0)), b = moved.row(T(f, 1)), c = moved.row(T(f, 2));
+      brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
+    }
+    const int start = before.Closest(p).triangle;
+    ASSERT_GE(start, 0);
+    const SurfaceIndex::Hit hit = after.ClosestFrom(p, start);
+    ASSERT_GE(hit.triangle, 0);
+    EXPECT_NEAR(hit.squared_distance, brute, 1e-9) << "query " << p.transpose();
+    walked += hit.triangle != start;
+    // From two rings away (a triangle sharing a vertex with one that shares a vertex with
+    // the closest, but none with the closest).
+    auto share = [&](int f, int g) {
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (T(f, i) == T(g, j)) return true;
+      return false;
+    };
+    int far = -1;
+    for (int g = 0; g < T.rows() && far < 0; ++g) {
+      if (!share(g, hit.triangle)) continue;
+      for (int f = 0; f < T.rows() && far < 0; ++f) {
+        if (share(f, g) && !share(f, hit.triangle)) far = f;
+      }
+    }
+    ASSERT_GE(far, 0);
+    EXPECT_NEAR(after.ClosestFrom(p, far).squared_distance, brute, 1e-9) << "query " << p.transpose();
+    EXPECT_NEAR(after.ClosestFrom(p, -1).squared_distance, after.Closest(p).squared_distance, 0.0);
+  }
+  EXPECT_GT(walked, 10);  // the walk, not only the start, found them
 }
 
 }  // namespace

@@ -94,6 +94,41 @@ SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles
   index_ = std::make_unique<PointIndex>(pts);
 }
 
+SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int start) const {
+  if (start < 0 || start >= triangles_.rows()) return Closest(query);
+  Hit best;
+  best.squared_distance = std::numeric_limits<double>::infinity();
+  constexpr int kMaxTested = 128;
+  int tested[kMaxTested];
+  int num_tested = 0;
+  int center = start;
+  constexpr int kMaxRings = 4;
+  for (int ring = 0; ring < kMaxRings; ++ring) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = triangles_(center, k);
+      for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
+        const int f = tri_list_[j];
+        if (std::find(tested, tested + num_tested, f) != tested + num_tested) continue;
+        if (num_tested < kMaxTested) tested[num_tested++] = f;
+        Eigen::Vector3d bary;
+        const Eigen::Vector3d point =
+            TriangleClosestPoint(query, positions_.row(triangles_(f, 0)), positions_.row(triangles_(f, 1)),
+                                 positions_.row(triangles_(f, 2)), &bary);
+        const double dist2 = (point - query).squaredNorm();
+        if (dist2 < best.squared_distance) {
+          best.triangle = f;
+          best.barycentric = bary;
+          best.point = point;
+          best.squared_distance = dist2;
+        }
+      }
+    }
+    if (best.triangle == center) return best;  // no triangle around it is closer
+    center = best.triangle;
+  }
+  return best;
+}
+
 SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
   Hit best;
   best.squared_distance = std::numeric_limits<double>::infinity();

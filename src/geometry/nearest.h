@@ -49,6 +49,12 @@ class SurfaceIndex {
     double squared_distance = 0.0;
   };
   Hit Closest(const Eigen::Vector3d& query) const;
+  // Warm-started from `start`, the triangle of an earlier hit of the same query (the last
+  // outer iteration's): the closest point among the triangles around start's vertices,
+  // walked on from the best of them until it stays (a few rings at most). The same as
+  // Closest while the query's closest triangle is within reach of start's rings, without
+  // the k-nearest search. start < 0 (or out of range): Closest(query).
+  Hit ClosestFrom(const Eigen::Vector3d& query, int start) const;
 
  private:
   const Vertices& positions_;

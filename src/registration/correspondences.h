@@ -102,9 +102,14 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
 // The pairs at state.x (#V by 3), with queries on num_threads OpenMP threads. A point
 // whose label names an object pairs with that object only; the other points of a labelled
 // cloud pair only with the objects that have no label, and are ignored when every object
-// has one. `surface` indexes the whole surface at state.x (ModelIndex).
+// has one. `surface` indexes the whole surface at state.x (ModelIndex). `warm`, if not
+// null, holds per cloud query the triangle of its last hit (empty: none): the cloud->model
+// queries start from it (SurfaceIndex::ClosestFrom) and it is updated. It belongs to one
+// frame's cloud and one surface topology: the caller empties it for a new frame or after
+// a fracture edit.
 void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceIndex& surface,
-               int num_threads, std::vector<DataPair>* pairs, PairCounts* counts);
+               int num_threads, std::vector<DataPair>* pairs, PairCounts* counts,
+               std::vector<int>* warm = nullptr);
 
 // The frame's per-vertex outputs (state.residuals, state.observed) and each object's
 // mesh.x from state.x. cloud_index may be null (no data).

@@ -80,6 +80,8 @@ struct Tracker::Impl {
   // The contacts the result keeps and the deepest penetration (collision on).
   void MeasureContacts(FrameSummary* s);
   const SurfaceIndex& Surface() { return model_index.Get(state, 0.1 * mean_edge); }
+  // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
+  std::vector<int> warm_triangles;
 };
 
 Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials) {
@@ -212,6 +214,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   frame_problem.BuildFrameTerms(&state);
 
   std::vector<DataPair> pairs;
+  warm_triangles.clear();  // a new cloud
   double previous_energy = std::numeric_limits<double>::infinity();
   for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
     if (!OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s)) break;
@@ -248,7 +251,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
 
   t0 = Clock::now();
   PairCounts counts;
-  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);
+  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles);
   s->time.correspondences += Seconds(t0);
   row.model_to_cloud = counts.model_to_cloud;
   row.cloud_to_model = counts.cloud_to_model;
@@ -329,6 +332,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       frame_problem.BuildElastic(state);
       frame_problem.BuildFrameTerms(&state);
       model_index.Reset();
+      warm_triangles.clear();  // a new surface
       FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
       *previous_energy = std::numeric_limits<double>::infinity();
       moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
