@@ -490,10 +490,17 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
     pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   }
-  // The BLAS under CHOLMOD runs on the solve's threads; CHOLMOD's own OpenMP teams (copies
-  // into the supernodes) on one: with both on 2 threads they fought over the 2 cores (demo,
-  // 2 threads: factorizations of 263-324 ms instead of 11 ms, now and then).
-  WithThreadLimit(1, [&] { factor.factorize(H); });
+  // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the
+  // supernodes), as the triangular solves in Pcg: the supernodes of these systems are too
+  // small to share. Demo, 2 threads, quiet machine: 13.3 ms per factorization with the BLAS
+  // on both threads, 7.6 on one; the 1.5x-resolution demo (3.7k vertices) 170 and 166 ms per
+  // frame; bench/linear_solver_bench.cc at 16k vertices: 1.46 s on one BLAS thread, 1.56 on
+  // two. (With both the BLAS and CHOLMOD's teams on 2 threads they fought over the 2 cores:
+  // factorizations of 263-324 ms instead of 11 ms, now and then.)
+  {
+    const ScopedThreads one_thread(1);
+    WithThreadLimit(1, [&] { factor.factorize(H); });
+  }
   pcg_since_factor = 0;
   ++report->factorizations;
   report->factorize_s += Seconds(t0);
