@@ -123,13 +123,6 @@ std::string FindMisfitScript() {
   return "";
 }
 
-// FEMREG_PYTHON, else the python3 on PATH if it has matplotlib, else the system one.
-std::string FindPython() {
-  if (const char* p = std::getenv("FEMREG_PYTHON"); p != nullptr && *p) return p;
-  if (std::system("python3 -c 'import matplotlib' >/dev/null 2>&1") == 0) return "python3";
-  return "/usr/bin/python3";
-}
-
 void RunCalibrate(const CalibrateArgs& args) {
   Scene scene;
   Status status = LoadScene(args.scene_path, &scene);
@@ -214,8 +207,8 @@ void RunCalibrate(const CalibrateArgs& args) {
   if (args.plot && !summary.samples.empty()) {
     const std::string script = FindMisfitScript();
     const std::string png = (out / "misfit.png").string();
-    const std::string cmd = FindPython() + " '" + script + "' '" + json_path + "' '" + png + "'";
-    if (script.empty() || std::system(cmd.c_str()) != 0) {
+    const std::string python = FindPython();
+    if (script.empty() || python.empty() || RunProgram({python, script, json_path, png}) != 0) {
       std::cerr << "femreg calibrate: no plot drawn (needs tools/plot_misfit.py and matplotlib; "
                    "set FEMREG_PYTHON to a python that has it)\n";
     } else {

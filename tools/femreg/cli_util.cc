@@ -201,6 +201,14 @@ std::string OnPath(const std::string& name) {
 }
 }  // namespace
 
+namespace {
+// Whether `python` imports matplotlib (quietly: its traceback is not the user's business).
+bool HasMatplotlib(const std::string& python) {
+  if (python.empty() || python.find('\'') != std::string::npos) return false;
+  return std::system(("'" + python + "' -c 'import matplotlib' >/dev/null 2>&1").c_str()) == 0;
+}
+}  // namespace
+
 std::string FindPython() {
   const char* env = std::getenv("FEMREG_PYTHON");
   if (env != nullptr && *env != '\0') {
@@ -209,6 +217,10 @@ std::string FindPython() {
   }
   std::string p = OnPath("python3");
   if (p.empty()) p = OnPath("python");
+  // A python3 first on PATH without matplotlib (a pyenv or virtualenv one) while the
+  // system's has it (Debian's python3-matplotlib, which tools/setup.sh installs).
+  const std::string system = "/usr/bin/python3";
+  if (p != system && IsExecutable(system) && !HasMatplotlib(p) && HasMatplotlib(system)) return system;
   return p;
 }
 

@@ -74,7 +74,8 @@ void AddSetOption(CLI::App* cmd, std::vector<std::string>* sets);
 Status LoadSceneWithSets(const std::string& path, const std::vector<std::string>& sets, Scene* scene);
 
 // The Python interpreter for the plotting scripts: $FEMREG_PYTHON when set, else python3
-// (then python) found on PATH; "" when there is none.
+// (then python) found on PATH, unless that one lacks matplotlib and /usr/bin/python3 has
+// it; "" when there is none.
 std::string FindPython();
 // Runs argv[0] (searched on PATH when it has no '/') with the arguments, no shell between;
 // returns its exit code, or -1 when it could not start.
