@@ -103,7 +103,7 @@ void Track(benchmark::State& state) {
   femreg::ObjectMaterial material;
   material.material.youngs_modulus = 5e4;
   material.material.poisson_ratio = 0.4;
-  std::map<std::string, double> phase;
+  std::map<std::string, double> phase, counts;  // per frame, summed
   double converged = 0, frames = 0, used = 0;
   for (auto _ : state) {
     state.PauseTiming();
@@ -120,6 +120,13 @@ void Track(benchmark::State& state) {
       phase["rotations"] += s.time.rotations;
       phase["solve"] += s.time.solve;
       phase["preprocess"] += s.time.preprocess;
+      phase["assembly"] += s.time.assembly;
+      phase["factorization"] += s.time.factorization;
+      phase["linear_solve"] += s.time.linear_solve;
+      counts["factorizations"] += s.factorizations;
+      counts["pcg_iterations"] += s.pcg_iterations;
+      counts["outer_iterations"] += s.outer_iterations;
+      counts["inner_iterations"] += s.inner_iterations;
       converged += s.termination == femreg::TerminationType::kConverged;
       used += s.points_used;
       frames += 1;
@@ -132,6 +139,7 @@ void Track(benchmark::State& state) {
   state.counters["points_used"] = frames > 0 ? used / frames : 0;
   state.counters["converged"] = frames > 0 ? converged / frames : 0;
   for (const auto& [name, seconds] : phase) state.counters[name + "_ms"] = frames > 0 ? 1e3 * seconds / frames : 0;
+  for (const auto& [name, n] : counts) state.counters[name] = frames > 0 ? n / frames : 0;
 }
 
 BENCHMARK(Track)
