@@ -25,6 +25,11 @@ def main():
             "points_used": int(round(b["points_used"])), "ms_per_frame": ms,
             "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
             "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
+            # The solve's parts and counts (benchmarks from 2026-11-26 on; 0 before).
+            "assembly_ms": b.get("assembly_ms", 0.0), "factorization_ms": b.get("factorization_ms", 0.0),
+            "linear_solve_ms": b.get("linear_solve_ms", 0.0),
+            "factorizations": b.get("factorizations", 0.0), "pcg_iterations": b.get("pcg_iterations", 0.0),
+            "outer_iterations": b.get("outer_iterations", 0.0),
             "converged": b["converged"],
         })
     rows.sort(key=lambda r: (r["points"], r["vertices"]))
@@ -33,11 +38,15 @@ def main():
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.2f}" if isinstance(v, float) else v) for k, v in r.items()})
-    lines = ["| vertices | tets | cloud points (used) | ms/frame | correspondences | rotations | solve | preprocess | converged |",
-             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["| vertices | tets | cloud points (used) | ms/frame | correspondences | rotations | solve "
+             "(assembly / factorization / linear solves) | factorizations, PCG iterations, outer iterations "
+             "per frame | preprocess | converged |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['ms_per_frame']:.1f} | "
-                     f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} | "
+                     f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} "
+                     f"({r['assembly_ms']:.0f} / {r['factorization_ms']:.0f} / {r['linear_solve_ms']:.0f}) | "
+                     f"{r['factorizations']:.1f}, {r['pcg_iterations']:.0f}, {r['outer_iterations']:.1f} | "
                      f"{r['preprocess_ms']:.1f} | {100 * r['converged']:.0f}% |")
     (out / "table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
