@@ -94,35 +94,47 @@ SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles
   index_ = std::make_unique<PointIndex>(pts);
 }
 
+// The triangles already tested for one query (neighbouring vertices share most of theirs:
+// on the demo 4 vertices list ~24 triangles, ~13 of them distinct).
+struct SurfaceIndex::Tested {
+  static constexpr int kMax = 128;
+  int list[kMax];
+  int count = 0;
+  // True the first time f is offered (past kMax, every time: tested again, never skipped).
+  bool Add(int f) {
+    if (std::find(list, list + count, f) != list + count) return false;
+    if (count < kMax) list[count++] = f;
+    return true;
+  }
+};
+
+void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const {
+  for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
+    const int f = tri_list_[j];
+    if (!tested->Add(f)) continue;
+    Eigen::Vector3d bary;
+    const Eigen::Vector3d point =
+        TriangleClosestPoint(query, positions_.row(triangles_(f, 0)), positions_.row(triangles_(f, 1)),
+                             positions_.row(triangles_(f, 2)), &bary);
+    const double dist2 = (point - query).squaredNorm();
+    if (dist2 < best->squared_distance) {
+      best->triangle = f;
+      best->barycentric = bary;
+      best->point = point;
+      best->squared_distance = dist2;
+    }
+  }
+}
+
 SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int start) const {
   if (start < 0 || start >= triangles_.rows()) return Closest(query);
   Hit best;
   best.squared_distance = std::numeric_limits<double>::infinity();
-  constexpr int kMaxTested = 128;
-  int tested[kMaxTested];
-  int num_tested = 0;
+  Tested tested;
   int center = start;
   constexpr int kMaxRings = 4;
   for (int ring = 0; ring < kMaxRings; ++ring) {
-    for (int k = 0; k < 3; ++k) {
-      const int v = triangles_(center, k);
-      for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
-        const int f = tri_list_[j];
-        if (std::find(tested, tested + num_tested, f) != tested + num_tested) continue;
-        if (num_tested < kMaxTested) tested[num_tested++] = f;
-        Eigen::Vector3d bary;
-        const Eigen::Vector3d point =
-            TriangleClosestPoint(query, positions_.row(triangles_(f, 0)), positions_.row(triangles_(f, 1)),
-                                 positions_.row(triangles_(f, 2)), &bary);
-        const double dist2 = (point - query).squaredNorm();
-        if (dist2 < best.squared_distance) {
-          best.triangle = f;
-          best.barycentric = bary;
-          best.point = point;
-          best.squared_distance = dist2;
-        }
-      }
-    }
+    for (int k = 0; k < 3; ++k) TestAround(triangles_(center, k), query, &tested, &best);
     if (best.triangle == center) return best;  // no triangle around it is closer
     center = best.triangle;
   }
@@ -136,31 +148,9 @@ SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
   double d2[16];
   const int k = std::min(candidate_vertices_, 16);
   const int n = index_->KNearest(query, k, idx, d2);
-  // The candidates' triangles, each once (neighbouring vertices share most of theirs: on
-  // the demo 4 vertices list ~24 triangles, ~13 of them distinct), in the order first met.
-  constexpr int kMaxTested = 64;
-  int tested[kMaxTested];
-  int num_tested = 0;
-  for (int i = 0; i < n; ++i) {
-    const int v = surface_vertex_ids_[idx[i]];
-    for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
-      const int f = tri_list_[j];
-      if (std::find(tested, tested + num_tested, f) != tested + num_tested) continue;
-      if (num_tested < kMaxTested) tested[num_tested++] = f;
-      const Eigen::Vector3d a = positions_.row(triangles_(f, 0));
-      const Eigen::Vector3d b = positions_.row(triangles_(f, 1));
-      const Eigen::Vector3d c = positions_.row(triangles_(f, 2));
-      Eigen::Vector3d bary;
-      const Eigen::Vector3d point = TriangleClosestPoint(query, a, b, c, &bary);
-      const double dist2 = (point - query).squaredNorm();
-      if (dist2 < best.squared_distance) {
-        best.triangle = f;
-        best.barycentric = bary;
-        best.point = point;
-        best.squared_distance = dist2;
-      }
-    }
-  }
+  // The candidates' triangles, each once, in the order first met.
+  Tested tested;
+  for (int i = 0; i < n; ++i) TestAround(surface_vertex_ids_[idx[i]], query, &tested, &best);
   return best;
 }
 

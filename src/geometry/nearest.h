@@ -57,6 +57,9 @@ class SurfaceIndex {
   Hit ClosestFrom(const Eigen::Vector3d& query, int start) const;
 
  private:
+  struct Tested;
+  // Tests the triangles around vertex v not yet in *tested; *best keeps the closest.
+  void TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const;
   const Vertices& positions_;
   const Triangles& triangles_;
   int candidate_vertices_;
