@@ -193,12 +193,13 @@ struct FastBackend::Impl {
   void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g);
   // Factorizes H (with `damping` on the diagonal); false if it is not positive definite.
   bool Factorize(SolveReport* report);
-  // dx = -H^-1 g: by PCG with the kept factor, else with a new factorization.
-  // z0, if not null, is factor.solve(-g), already computed.
-  bool SolveStep(const Eigen::VectorXd& g, const Eigen::VectorXd* z0, Eigen::VectorXd* dx,
-                 SolveReport* report);
-  bool Pcg(const Eigen::VectorXd& b, const Eigen::VectorXd* z0, Eigen::VectorXd* x,
-           SolveReport* report);
+  // dx = -H^-1 g: by PCG with the kept factor, else with a new factorization. kNegligible:
+  // PCG's first iteration gained less than `negligible` (the Gauss-Newton model's decrease;
+  // <= 0: never), and no step was made.
+  enum class Outcome { kSolved, kNegligible, kFailed };
+  Outcome SolveStep(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
+                    SolveReport* report);
+  Outcome Pcg(const Eigen::VectorXd& b, double negligible, Eigen::VectorXd* x, SolveReport* report);
   EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
 
@@ -527,52 +528,51 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
   return factor_valid;
 }
 
-bool FastBackend::Impl::Pcg(const Eigen::VectorXd& b, const Eigen::VectorXd* z0, Eigen::VectorXd* x,
-                            SolveReport* report) {
+FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
+                                                  Eigen::VectorXd* x, SolveReport* report) {
   const int max_iterations = std::min(options.max_pcg_iterations, std::max(1, pcg_budget));
   // The triangular solves on one BLAS thread: they are too small to share (demo, 2 threads:
   // PCG 77 ms per frame against 41 ms on one); the factorization keeps the solve's threads.
   const ScopedThreads one_thread(1);
   const double b_norm = b.norm();
   x->setZero(b.size());
-  if (b_norm == 0.0) return true;
+  if (b_norm == 0.0) return Outcome::kSolved;
   Eigen::VectorXd r = b;
-  Eigen::VectorXd z;
-  if (z0 != nullptr) {
-    z = *z0;
-  } else {
-    z = factor.solve(r);
-    ++report->linear_solves;
-  }
+  Eigen::VectorXd z = factor.solve(r);
+  ++report->linear_solves;
   Eigen::VectorXd p = z;
   Eigen::VectorXd q(b.size());
   double rz = r.dot(z);
   for (int k = 0; k < max_iterations; ++k) {
     BlockProduct(H, p, threads, &q);
     const double pq = p.dot(q);
-    if (!(pq > 0.0) || !std::isfinite(rz)) return false;
+    if (!(pq > 0.0) || !std::isfinite(rz)) return Outcome::kFailed;
+    // The first iteration minimizes the model 1/2 dx^T H dx - b.dx along z: it gains
+    // 1/2 (b.z)^2 / (z^T H z), a lower bound on the whole step's gain.
+    if (k == 0 && 0.5 * rz * rz / pq < negligible) return Outcome::kNegligible;
     const double alpha = rz / pq;
     *x += alpha * p;
     r -= alpha * q;
     ++report->pcg_iterations;
     ++pcg_since_factor;
-    if (r.norm() <= kPcgTolerance * b_norm) return true;
+    if (r.norm() <= kPcgTolerance * b_norm) return Outcome::kSolved;
     z = factor.solve(r);
     ++report->linear_solves;
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;
     rz = rz_next;
   }
-  return false;
+  return Outcome::kFailed;
 }
 
-bool FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, const Eigen::VectorXd* z0,
-                                  Eigen::VectorXd* dx, SolveReport* report) {
+FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, double negligible,
+                                                        Eigen::VectorXd* dx, SolveReport* report) {
   const auto t0 = Clock::now();
   if (factor_valid && options.max_pcg_iterations > 0 && pcg_since_factor < pcg_budget) {
-    const bool converged = Pcg(-g, z0, dx, report);
+    const Outcome outcome = Pcg(-g, negligible, dx, report);
     report->linear_solve_s += Seconds(t0);
-    if (converged && dx->allFinite()) return true;
+    if (outcome == Outcome::kNegligible) return outcome;
+    if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
   }
   // A new factor; if H is not numerically positive definite, Marquardt damping until it is.
   std::vector<double> diagonal(diagonal_at.size());
@@ -587,13 +587,13 @@ bool FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, const Eigen::VectorX
     ok = Factorize(report);
   }
   for (size_t c = 0; c < diagonal_at.size(); ++c) H.valuePtr()[diagonal_at[c]] = diagonal[c];
-  if (!ok) return false;
+  if (!ok) return Outcome::kFailed;
   const auto t1 = Clock::now();
   const ScopedThreads one_thread(1);  // as in Pcg
   *dx = factor.solve(-g);
   ++report->linear_solves;
   report->linear_solve_s += Seconds(t1);
-  return dx->allFinite();
+  return dx->allFinite() ? Outcome::kSolved : Outcome::kFailed;
 }
 
 EnergyTerms FastBackend::Impl::Energy(const energy::Problem& problem, const Vertices& x,
@@ -651,40 +651,22 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   report.success = true;
   report.stop = StopReason::kMaxIterations;
   Vertices trial;
-  Eigen::VectorXd z, hz;
   for (int step = 0; step < m.options.max_iterations; ++step) {
     const double gradient = g.lpNorm<Eigen::Infinity>();
     if (gradient == 0.0 || (step > 0 && gradient <= 1e-9 * first_gradient)) {
       report.stop = StopReason::kGradient;
       break;
     }
-    // After the first step: what the next would gain. z = -M^-1 g with M the kept factor is
-    // PCG's first direction; the Gauss-Newton model's decrease along it with the current H,
-    // (g.z)^2 / (2 z^T H z), is what PCG's first iteration gains, a lower bound on the
-    // step's. A step that would gain less than kNegligibleGain of the tolerance is not
-    // taken (see there); its cost, a solve pair and a product, is PCG's first iteration's.
-    const Eigen::VectorXd* z0 = nullptr;
-    if (step > 0 && m.factor_valid && m.options.max_pcg_iterations > 0 &&
-        m.pcg_since_factor < m.pcg_budget) {
-      const auto t1 = Clock::now();
-      double gz = 0.0, zhz = 0.0;
-      {
-        const ScopedThreads one_thread(1);  // as in Pcg
-        z = m.factor.solve(-g);
-        BlockProduct(m.H, z, m.threads, &hz);
-        gz = -g.dot(z);
-        zhz = z.dot(hz);
-      }
-      ++report.linear_solves;
-      report.linear_solve_s += Seconds(t1);
-      z0 = &z;
-      const double predicted = zhz > 0.0 ? 0.5 * gz * gz / zhz : 0.0;
-      if (zhz > 0.0 && predicted < kNegligibleGain * m.options.relative_tolerance * energy) {
-        report.stop = StopReason::kPredicted;
-        break;
-      }
+    // After the first step, a step that would gain less than kNegligibleGain of the
+    // tolerance is not taken (see there): PCG's first iteration, with the kept factor, tells.
+    const double negligible =
+        step > 0 ? kNegligibleGain * m.options.relative_tolerance * energy : 0.0;
+    const Impl::Outcome outcome = m.SolveStep(g, negligible, &dx, &report);
+    if (outcome == Impl::Outcome::kNegligible) {
+      report.stop = StopReason::kPredicted;
+      break;
     }
-    if (!m.SolveStep(g, z0, &dx, &report)) {
+    if (outcome == Impl::Outcome::kFailed) {
       report.success = false;
       report.stop = StopReason::kFailure;
       report.message = "fast back end: the system is not positive definite even with damping";

@@ -142,7 +142,6 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
     out->value = 0.0;
     double s = 0.0;
     if (!block.Normal(p.data(), &s, out->gradient.data(), with_hessian ? out->hessian.data() : nullptr)) {
-      for (auto& g : out->gradient) g.setZero();
       return false;
     }
     double rho[3];
