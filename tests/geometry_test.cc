@@ -289,6 +289,16 @@ void UvSphere(Vertices* out_pos, Triangles* out_T) {
   *out_T = T;
 }
 
+// The squared distance from p to the closest of all triangles T over positions pos.
+double BruteForceSquaredDistance(const Eigen::Vector3d& p, const Vertices& pos, const Triangles& T) {
+  double brute = 1e30;
+  for (int f = 0; f < T.rows(); ++f) {
+    const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
+    brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
+  }
+  return brute;
+}
+
 TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
   Vertices pos;
   Triangles T;
@@ -298,11 +308,7 @@ TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
   std::uniform_real_distribution<double> u(-1.5, 1.5);
   for (int q = 0; q < 300; ++q) {
     const Eigen::Vector3d p(u(rng), u(rng), u(rng));
-    double brute = 1e30;
-    for (int f = 0; f < T.rows(); ++f) {
-      const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
-      brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
-    }
+    const double brute = BruteForceSquaredDistance(p, pos, T);
     const SurfaceIndex::Hit hit = index.Closest(p);
     ASSERT_GE(hit.triangle, 0);
     EXPECT_NEAR(hit.squared_distance, brute, 1e-9) << "query " << p.transpose();
@@ -327,11 +333,7 @@ TEST(SurfaceIndex, ClosestFromAnEarlierHitMatchesBruteForce) {
   int walked = 0;
   for (int q = 0; q < 300; ++q) {
     const Eigen::Vector3d p(u(rng), u(rng), u(rng));
-    double brute = 1e30;
-    for (int f = 0; f < T.rows(); ++f) {
-      const Eigen::Vector3d a = moved.row(T(f, 0)), b = moved.row(T(f, 1)), c = moved.row(T(f, 2));
-      brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
-    }
+    const double brute = BruteForceSquaredDistance(p, moved, T);
     const int start = before.Closest(p).triangle;
     ASSERT_GE(start, 0);
     const SurfaceIndex::Hit hit = after.ClosestFrom(p, start);
@@ -355,7 +357,7 @@ TEST(SurfaceIndex, ClosestFromAnEarlierHitMatchesBruteForce) {
     }
     ASSERT_GE(far, 0);
     EXPECT_NEAR(after.ClosestFrom(p, far).squared_distance, brute, 1e-9) << "query " << p.transpose();
-    EXPECT_NEAR(after.ClosestFrom(p, -1).squared_distance, after.Closest(p).squared_distance, 0.0);
+    EXPECT_NEAR(after.ClosestFrom(p, -1).squared_distance, after.Closest(p).squared_distance, 1e-12);
   }
   EXPECT_GT(walked, 10);  // the walk, not only the start, found them
 }
