@@ -218,44 +218,25 @@ void FastBackend::Impl::ResetPattern(const energy::Problem& problem) {
 }
 
 void FastBackend::Impl::BuildPattern() {
-  // The coupled vertex pairs (b, a), both orders and the diagonal, sorted: column 3b + j of
-  // H holds rows 3a + i for every a coupled to b, ascending. Written straight into the
-  // compressed arrays: a 105k-tet mesh has 1.7M pairs, where triplets would be 15M entries
-  // to sort.
-  std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(cells.size() * 16 + static_cast<size_t>(num_vertices) + 2 * extra_pairs.size());
-  for (int v = 0; v < num_vertices; ++v) pairs.emplace_back(v, v);
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(cells.size() * 144 + 9 * static_cast<size_t>(num_vertices) +
+                   18 * extra_pairs.size());
+  auto add = [&](int a, int b) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) triplets.emplace_back(3 * a + i, 3 * b + j, 0.0);
+  };
+  for (int v = 0; v < num_vertices; ++v) add(v, v);
   for (const auto& c : cells) {
     for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) pairs.emplace_back(c[b], c[a]);
+      for (int b = 0; b < 4; ++b) add(c[a], c[b]);
   }
   for (const auto& p : extra_pairs) {
-    pairs.emplace_back(p.first, p.second);
-    pairs.emplace_back(p.second, p.first);
+    add(p.first, p.second);
+    add(p.second, p.first);
   }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  H = Eigen::SparseMatrix<double>(3 * num_vertices, 3 * num_vertices);
-  H.resizeNonZeros(static_cast<Eigen::Index>(9 * pairs.size()));
-  {
-    int* outer = H.outerIndexPtr();
-    int* inner = H.innerIndexPtr();
-    outer[0] = 0;
-    int k = 0;
-    size_t begin = 0;
-    for (int b = 0; b < num_vertices; ++b) {
-      size_t end = begin;
-      while (end < pairs.size() && pairs[end].first == b) ++end;
-      for (int j = 0; j < 3; ++j) {
-        for (size_t p = begin; p < end; ++p) {
-          for (int i = 0; i < 3; ++i) inner[k++] = 3 * pairs[p].second + i;
-        }
-        outer[3 * b + j + 1] = k;
-      }
-      begin = end;
-    }
-    std::fill(H.valuePtr(), H.valuePtr() + k, 0.0);
-  }
+  H.resize(3 * num_vertices, 3 * num_vertices);
+  H.setFromTriplets(triplets.begin(), triplets.end());
+  H.makeCompressed();
   const int n = static_cast<int>(H.cols());
   const int* outer = H.outerIndexPtr();
   const int* inner = H.innerIndexPtr();
