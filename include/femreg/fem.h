@@ -20,11 +20,24 @@ struct Material {
   bool IsValid(std::string* error) const;
 };
 
+// The constitutive law of an object's elements.
+enum class MaterialModel {
+  kHooke,       // linear elasticity: the corotational (or small-strain linear) element
+  kNeoHookean,  // the stable neo-Hookean element (below): large strain, nu -> 0.5
+};
+const char* ToString(MaterialModel model);
+bool FromString(const std::string& name, MaterialModel* model);
+
 // The materials of one object: one for every element, or per region (the mesh's element
 // tags) with a default for the regions not listed.
 struct ObjectMaterial {
   Material material;                              // elements of regions not listed
   std::vector<std::pair<int, Material>> regions;  // region id -> material
+  MaterialModel model = MaterialModel::kHooke;    // one law for the whole object
+  // kNeoHookean only: the volumetric energy on the vertices' volumes (a quarter of each
+  // element around a vertex) instead of each element's, against the locking of linear
+  // tetrahedra as nu -> 0.5 (see NodalVolume below). The forward solve only.
+  bool nodal_volume = false;
   ObjectMaterial() = default;
   ObjectMaterial(const Material& m) : material(m) {}  // NOLINT: one material everywhere
   // The material of an element of `region`.
@@ -37,6 +50,7 @@ struct ObjectMaterial {
 enum class ElasticModelType {
   kCorotational,  // R K (R^T x - X): rotation-invariant, for large rotations
   kLinear,        // K (x - X): small-strain linear FEM, for comparison
+  kNeoHookean,    // the stable neo-Hookean element (below); rotations kept for fracture
 };
 const char* ToString(ElasticModelType type);
 bool FromString(const std::string& name, ElasticModelType* type);
@@ -105,9 +119,9 @@ class ElasticModel {
   // default_material.
   void Build(const TetMesh& mesh, ElasticModelType type, const Material& default_material,
              const std::vector<std::pair<int, Material>>& material_per_region = {});
-  void Build(const TetMesh& mesh, ElasticModelType type, const ObjectMaterial& material) {
-    Build(mesh, type, material.material, material.regions);
-  }
+  // An object whose material.model is kNeoHookean gets that element whatever `type` says
+  // (type picks between the Hooke elements).
+  void Build(const TetMesh& mesh, ElasticModelType type, const ObjectMaterial& material);
   // Rebuilds the rest data of the listed elements only (after a topology change).
   void RebuildElements(const TetMesh& mesh, const std::vector<int>& elements);
   // After elements were removed or renumbered (fracture): element i of `mesh` was element
@@ -119,15 +133,18 @@ class ElasticModel {
   // Recomputes R_e from positions (identity for the linear model).
   void UpdateRotations(const Vertices& x);
 
-  // With the current rotations held fixed.
+  // With the current rotations held fixed (the neo-Hookean model: its element form, without
+  // the nodal volume, which only the forward solve has).
   double Energy(const Vertices& x) const;
   // Adds the energy gradient (= -force) to gradient (#V by 3).
   void AddGradient(const Vertices& x, Vertices* gradient) const;
   // Adds the warped stiffness R K R^T (the Gauss-Newton Hessian) as (row, col, value)
-  // triplets over 3 #V dofs.
+  // triplets over 3 #V dofs (the Hooke models; for the neo-Hookean one its stiffness at rest).
   void AddStiffnessTriplets(std::vector<Eigen::Triplet<double>>* triplets) const;
 
   ElasticModelType type() const { return type_; }
+  // kNeoHookean: the volumetric energy on the vertices (ObjectMaterial::nodal_volume).
+  bool nodal_volume() const { return nodal_volume_; }
   int num_elements() const { return static_cast<int>(rest_.size()); }
   const ElementRest& rest(int e) const { return rest_[e]; }
   const Eigen::Matrix3d& rotation(int e) const { return rotations_[e]; }
@@ -136,6 +153,7 @@ class ElasticModel {
 
  private:
   ElasticModelType type_ = ElasticModelType::kCorotational;
+  bool nodal_volume_ = false;
   Material default_material_;
   std::vector<std::pair<int, Material>> material_per_region_;
   Tets tets_;
@@ -199,6 +217,59 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
 // formed once); same values as ElementEnergy and ElementForce.
 double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
                              const Vector12& x, Vector12* force);
+
+// ---------------------------------------------------------------------------------------
+// The stable neo-Hookean element (Smith, de Goes and Kim, "Stable Neo-Hookean Flesh
+// Simulation", 2018, in the form without the log term of Kim and Eberle, "Dynamic
+// Deformables", 2022). Per unit rest volume,
+//     psi(F) = mu/2 (|F|^2 - 3) - mu (J - 1) + kappa/2 (J - 1)^2,    J = det F,
+// with kappa = lambda + mu: its first Piola-Kirchhoff stress
+//     P = mu F + (kappa (J - 1) - mu) cof F,    cof F = J F^-T,
+// is 2 mu eps + lambda tr(eps) I at small strain, so E and nu mean what they mean for the
+// Hooke elements. Unlike the classical forms (log J, J^(-2/3)), psi is a polynomial in F:
+// finite, and pushing back, for flat and inverted elements (J <= 0). Its Hessian,
+//     d2psi/dF2 = mu I + kappa g g^T + (kappa (J - 1) - mu) H_J,   g = vec cof F,
+// (H_J the Hessian of det F, vec column-major) is indefinite under compression; the
+// projection clamps its negative eigenvalues (in F's 9-space, so the element matrix stays
+// positive semi-definite).
+//
+// Linear tetrahedra lock as nu -> 0.5: one volume constraint per element is too many for
+// their few degrees of freedom. With the volume averaged over the nodes (Bonet and Burton's
+// average nodal pressure tetrahedron, 1998) psi splits into
+//     psi_dev(F) = mu/2 (|F|^2 - 3) - mu (J - 1) + mu/6 (J - 1)^2      (kappa = mu/3),
+// per element, which is mu |dev eps|^2 at small strain, and the volumetric energy
+//     sum_a K_a V_a / 2 (J_a - 1)^2,   K = lambda + 2 mu / 3 (the bulk modulus),
+// on the vertices: V_a a quarter of the rest volumes of the elements around vertex a, J_a
+// the ratio of their current to rest volumes. The sum of the two is the element form at
+// uniform strain.
+
+using Matrix9 = Eigen::Matrix<double, 9, 9>;
+
+// kappa of the element form (lambda + mu), and of the deviatoric part (mu / 3).
+double NeoHookeanKappa(const ElementRest& rest, bool nodal_volume);
+// The bulk modulus lambda + 2 mu / 3 (Pa), of the nodal volume's energy.
+double BulkModulus(const ElementRest& rest);
+
+// psi(F) (per unit rest volume) and, if P is not null, dpsi/dF.
+double NeoHookeanDensity(const Eigen::Matrix3d& F, double mu, double kappa, Eigen::Matrix3d* P);
+// The Hessian of det F over vec F (column-major).
+Matrix9 DeterminantHessian(const Eigen::Matrix3d& F);
+// d2psi/dF2 plus pressure * H_J (the nodal volume's share; 0 for the element form),
+// projected to positive semi-definite if asked. info: negative eigenvalues, the smallest.
+Matrix9 NeoHookeanDensityHessian(const Eigen::Matrix3d& F, double mu, double kappa,
+                                 double pressure, TangentProjection projection,
+                                 ElementTangentInfo* info = nullptr);
+
+// The element's energy V psi(F) and forces -V (P + pressure cof F) b_i at x (12): the
+// pressure p (Pa) is the nodal volume's dE/dv_e (its energy is counted on the vertices).
+double NeoHookeanEnergyAndForce(const ElementRest& rest, double kappa, double pressure,
+                                const Vector12& x, Vector12* force);
+// Its stiffness V B^T NeoHookeanDensityHessian B (12 by 12), B = dvec F / dx.
+Matrix12 NeoHookeanTangent(const ElementRest& rest, double kappa, double pressure,
+                           const Vector12& x, TangentProjection projection,
+                           ElementTangentInfo* info = nullptr);
+// dv_e/dx = V cof(F) b_i (12): the gradient of the element's current volume.
+Vector12 VolumeGradient(const ElementRest& rest, const Vector12& x);
 
 }  // namespace femreg
 

@@ -71,6 +71,8 @@ const char* ToString(ElasticModelType type) {
       return "corotational";
     case ElasticModelType::kLinear:
       return "linear";
+    case ElasticModelType::kNeoHookean:
+      return "neo_hookean";
   }
   return "unknown";
 }
@@ -80,6 +82,29 @@ bool FromString(const std::string& name, ElasticModelType* type) {
     *type = ElasticModelType::kCorotational;
   } else if (name == "linear") {
     *type = ElasticModelType::kLinear;
+  } else if (name == "neo_hookean") {
+    *type = ElasticModelType::kNeoHookean;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* ToString(MaterialModel model) {
+  switch (model) {
+    case MaterialModel::kHooke:
+      return "hooke";
+    case MaterialModel::kNeoHookean:
+      return "neo_hookean";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& name, MaterialModel* model) {
+  if (name == "hooke") {
+    *model = MaterialModel::kHooke;
+  } else if (name == "neo_hookean") {
+    *model = MaterialModel::kNeoHookean;
   } else {
     return false;
   }
@@ -271,9 +296,17 @@ Vector6 ElementStress(const ElementRest& rest, const Eigen::Matrix3d& R, const V
 }
 
 void ElasticModel::Build(const TetMesh& mesh, ElasticModelType type,
+                         const ObjectMaterial& material) {
+  Build(mesh, material.model == MaterialModel::kNeoHookean ? ElasticModelType::kNeoHookean : type,
+        material.material, material.regions);
+  nodal_volume_ = type_ == ElasticModelType::kNeoHookean && material.nodal_volume;
+}
+
+void ElasticModel::Build(const TetMesh& mesh, ElasticModelType type,
                          const Material& default_material,
                          const std::vector<std::pair<int, Material>>& material_per_region) {
   type_ = type;
+  nodal_volume_ = false;
   default_material_ = default_material;
   material_per_region_ = material_per_region;
   tets_ = mesh.tets;
@@ -337,13 +370,24 @@ void ElasticModel::UpdateRotations(const Vertices& x) {
 
 double ElasticModel::Energy(const Vertices& x) const {
   double total = 0.0;
-  for (int e = 0; e < num_elements(); ++e) total += ElementEnergy(rest_[e], rotations_[e], Gather(x, e));
+  Vector12 unused;
+  for (int e = 0; e < num_elements(); ++e) {
+    total += type_ == ElasticModelType::kNeoHookean
+                 ? NeoHookeanEnergyAndForce(rest_[e], NeoHookeanKappa(rest_[e], false), 0.0,
+                                            Gather(x, e), &unused)
+                 : ElementEnergy(rest_[e], rotations_[e], Gather(x, e));
+  }
   return total;
 }
 
 void ElasticModel::AddGradient(const Vertices& x, Vertices* gradient) const {
   for (int e = 0; e < num_elements(); ++e) {
-    const Vector12 f = ElementForce(rest_[e], rotations_[e], Gather(x, e));
+    Vector12 f;
+    if (type_ == ElasticModelType::kNeoHookean) {
+      NeoHookeanEnergyAndForce(rest_[e], NeoHookeanKappa(rest_[e], false), 0.0, Gather(x, e), &f);
+    } else {
+      f = ElementForce(rest_[e], rotations_[e], Gather(x, e));
+    }
     for (int k = 0; k < 4; ++k) gradient->row(tets_(e, k)) -= f.segment<3>(3 * k).transpose();
   }
 }

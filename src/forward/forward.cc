@@ -1,12 +1,14 @@
 // The forward quasi-static solve: Newton iterations on the consistent corotational tangent
 // (fem.h's CorotationalTangent: the warped stiffness R K R^T plus the derivative of the
-// rotations) with the exact corotational gradient, a backtracking line search on the total
-// potential (rotations recomputed at every trial point), load stepping, and clamped /
-// prescribed DOFs eliminated. By default the exact tangent is tried first and, when CHOLMOD
-// finds it not positive definite, the element-wise PSD projection is used for that
-// iteration. The reduced system is solved with CHOLMOD's supernodal Cholesky; its sparsity
-// pattern is fixed, so the symbolic analysis is done once per solve and values are
-// scattered into a preallocated matrix every iteration.
+// rotations) or the stable neo-Hookean element's Hessian, with the exact gradient, a
+// backtracking line search on the total potential (rotations recomputed at every trial
+// point), load stepping, and clamped / prescribed DOFs eliminated. By default the exact
+// tangent is tried first and, when CHOLMOD finds it not positive definite, the element-wise
+// PSD projection is used for that iteration. With the neo-Hookean nodal volume the
+// volumetric energy lives on the vertices: its Hessian couples the vertices of each vertex's
+// elements, and the pattern holds those pairs. The reduced system is solved with CHOLMOD's
+// supernodal Cholesky; its sparsity pattern is fixed, so the symbolic analysis is done once
+// per solve and values are scattered into a preallocated matrix every iteration.
 #include "femreg/forward.h"
 
 #include <Eigen/CholmodSupport>
@@ -236,11 +238,21 @@ class QuasiStaticSolver {
   int nv() const { return mesh_.num_vertices(); }
   int nt() const { return model_.num_elements(); }
   bool linear() const { return model_.type() == ElasticModelType::kLinear; }
+  bool neo_hookean() const { return model_.type() == ElasticModelType::kNeoHookean; }
+  bool nodal_volume() const { return neo_hookean() && model_.nodal_volume(); }
 
   // Elastic energy at x with rotations recomputed from x (stored in `rotations`), and the
   // per-element forces in element_force_ (f = -gradient).
   double EvaluateElements(const Vertices& x, std::vector<Eigen::Matrix3d>* rotations,
                           std::vector<Vector12>* element_force) const;
+  // The nodal volume's energy at x (fem.h, NeoHookeanKappa); per element the pressure
+  // dE/dv_e = sum of its vertices' K_a (J_a - 1) / 4 (Pa), and, if not null, the gradients
+  // of the elements' volumes.
+  double NodalVolume(const Vertices& x, std::vector<double>* element_pressure,
+                     std::vector<Vector12>* volume_gradient) const;
+  // Adds the nodal volume's K_a / V_a (dv_a/dx)(dv_a/dx)^T, v_a the vertex's current share
+  // of volume, into matrix_ (its element-wise part is in the element matrices).
+  void FillNodalVolume(const std::vector<Vector12>& volume_gradient);
   // Gathers the element forces into the elastic gradient (3 #V).
   void GatherGradient(const std::vector<Vector12>& element_force, Eigen::VectorXd* gradient) const;
   // The element matrix of element e at x (rotations computed from x).
@@ -306,6 +318,10 @@ class QuasiStaticSolver {
   SparseMatrix matrix_;              // reduced stiffness, lower triangle
   std::vector<int> scatter_;         // 144 per element: index into matrix_ values, or -1
   std::vector<std::vector<int>> colors_;  // elements sharing no vertex, for parallel scatter
+  // Nodal volume (neo-Hookean): per vertex its rest volume V_a (a quarter of each element
+  // around it) and sum K_e V_e / 4 (the volume-weighted bulk modulus times V_a).
+  std::vector<double> nodal_rest_volume_, nodal_stiffness_;
+  std::vector<double> element_pressure_;  // of the last Fill, for ElementMatrixOf
   Factorization factorization_;
   const int threads_;                // OpenMP threads of the element loops
   ElementMatrix element_matrix_ = ElementMatrix::kWarped;  // of the last factorization
@@ -497,6 +513,37 @@ bool QuasiStaticSolver::Setup() {
       }
     }
   }
+  element_pressure_.assign(nt(), 0.0);
+  if (nodal_volume()) {
+    // A vertex's volume couples every vertex of the elements around it.
+    nodal_rest_volume_.assign(nv(), 0.0);
+    nodal_stiffness_.assign(nv(), 0.0);
+    for (int e = 0; e < nt(); ++e) {
+      const ElementRest& rest = model_.rest(e);
+      for (int k = 0; k < 4; ++k) {
+        nodal_rest_volume_[tets(e, k)] += 0.25 * rest.volume;
+        nodal_stiffness_[tets(e, k)] += 0.25 * rest.volume * BulkModulus(rest);
+      }
+    }
+    std::vector<int> star;
+    for (int v = 0; v < nv(); ++v) {
+      star.clear();
+      for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s)
+        for (int k = 0; k < 4; ++k) star.push_back(tets(element_slots_[s] / 4, k));
+      std::sort(star.begin(), star.end());
+      star.erase(std::unique(star.begin(), star.end()), star.end());
+      for (int p : star)
+        for (int q : star)
+          for (int i = 0; i < 3; ++i) {
+            const int r = free_index_[3 * p + i];
+            if (r < 0) continue;
+            for (int j = 0; j < 3; ++j) {
+              const int c = free_index_[3 * q + j];
+              if (c >= 0 && r >= c) triplets.emplace_back(r, c, 0.0);
+            }
+          }
+    }
+  }
   matrix_.resize(n, n);
   matrix_.setFromTriplets(triplets.begin(), triplets.end());
   matrix_.makeCompressed();
@@ -553,6 +600,19 @@ double QuasiStaticSolver::EvaluateElements(const Vertices& x,
                                            std::vector<Eigen::Matrix3d>* rotations,
                                            std::vector<Vector12>* element_force) const {
   double energy = 0.0;
+  if (neo_hookean()) {
+    std::vector<double> pressure;
+    if (nodal_volume()) energy = NodalVolume(x, &pressure, nullptr);
+    const bool nodal = nodal_volume();
+#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
+    for (int e = 0; e < nt(); ++e) {
+      const ElementRest& rest = model_.rest(e);
+      (*rotations)[e].setIdentity();
+      energy += NeoHookeanEnergyAndForce(rest, NeoHookeanKappa(rest, nodal), nodal ? pressure[e] : 0.0,
+                                         model_.Gather(x, e), &(*element_force)[e]);
+    }
+    return energy;
+  }
   const bool corotational = !linear();
 #pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
   for (int e = 0; e < nt(); ++e) {
@@ -569,6 +629,82 @@ double QuasiStaticSolver::EvaluateElements(const Vertices& x,
     energy += ElementEnergyAndForce(rest, R, xe, &(*element_force)[e]);
   }
   return energy;
+}
+
+double QuasiStaticSolver::NodalVolume(const Vertices& x, std::vector<double>* element_pressure,
+                                      std::vector<Vector12>* volume_gradient) const {
+  const Tets& tets = model_.tets();
+  std::vector<double> volume(nt());
+  if (volume_gradient != nullptr) volume_gradient->resize(nt());
+#pragma omp parallel for schedule(static) num_threads(threads_)
+  for (int e = 0; e < nt(); ++e) {
+    const ElementRest& rest = model_.rest(e);
+    const Vector12 xe = model_.Gather(x, e);
+    Eigen::Matrix<double, 3, 4> xm;
+    for (int k = 0; k < 4; ++k) xm.col(k) = xe.segment<3>(3 * k);
+    volume[e] = rest.volume * DeformationGradient(xm, rest.dm_inv).determinant();
+    if (volume_gradient != nullptr) (*volume_gradient)[e] = VolumeGradient(rest, xe);
+  }
+  std::vector<double> vertex_pressure(nv(), 0.0);
+  double energy = 0.0;
+#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
+  for (int v = 0; v < nv(); ++v) {
+    const double V = nodal_rest_volume_[v];
+    if (!(V > 0)) continue;
+    double current = 0.0;
+    for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s)
+      current += 0.25 * volume[element_slots_[s] / 4];
+    const double K = nodal_stiffness_[v] / V, strain = current / V - 1.0;
+    vertex_pressure[v] = K * strain;
+    energy += 0.5 * K * V * strain * strain;
+  }
+  element_pressure->resize(nt());
+  for (int e = 0; e < nt(); ++e) {
+    double p = 0.0;
+    for (int k = 0; k < 4; ++k) p += 0.25 * vertex_pressure[tets(e, k)];
+    (*element_pressure)[e] = p;
+  }
+  return energy;
+}
+
+void QuasiStaticSolver::FillNodalVolume(const std::vector<Vector12>& volume_gradient) {
+  double* values = matrix_.valuePtr();
+  const int* outer = matrix_.outerIndexPtr();
+  const int* inner = matrix_.innerIndexPtr();
+  const Tets& tets = model_.tets();
+  std::vector<std::pair<int, Eigen::Vector3d>> w;  // star vertex, d v_a / d x_vertex
+  for (int v = 0; v < nv(); ++v) {
+    const double V = nodal_rest_volume_[v];
+    if (!(V > 0)) continue;
+    w.clear();
+    for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
+      const int e = element_slots_[s] / 4;
+      for (int k = 0; k < 4; ++k) {
+        const int u = tets(e, k);
+        auto it = std::find_if(w.begin(), w.end(), [u](const auto& p) { return p.first == u; });
+        if (it == w.end()) {
+          w.emplace_back(u, Eigen::Vector3d::Zero());
+          it = w.end() - 1;
+        }
+        it->second += 0.25 * volume_gradient[e].segment<3>(3 * k);
+      }
+    }
+    const double scale = nodal_stiffness_[v] / (V * V);  // K_a / V_a
+    for (const auto& [p, gp] : w) {
+      for (const auto& [q, gq] : w) {
+        for (int j = 0; j < 3; ++j) {
+          const int c = free_index_[3 * q + j];
+          if (c < 0) continue;
+          for (int i = 0; i < 3; ++i) {
+            const int r = free_index_[3 * p + i];
+            if (r < c) continue;
+            const int* pos = std::lower_bound(inner + outer[c], inner + outer[c + 1], r);
+            values[pos - inner] += scale * gp(i) * gq(j);
+          }
+        }
+      }
+    }
+  }
 }
 
 void QuasiStaticSolver::GatherGradient(const std::vector<Vector12>& element_force,
@@ -589,6 +725,13 @@ Matrix12 QuasiStaticSolver::ElementMatrixOf(int e, const Vertices& x,
                                             const std::vector<Eigen::Matrix3d>& rotations,
                                             ElementMatrix kind) const {
   const ElementRest& rest = model_.rest(e);
+  if (neo_hookean()) {
+    // No warped matrix here: kWarped is the projected tangent too.
+    return NeoHookeanTangent(rest, NeoHookeanKappa(rest, nodal_volume()), element_pressure_[e],
+                             model_.Gather(x, e),
+                             kind == ElementMatrix::kExact ? TangentProjection::kNone
+                                                           : TangentProjection::kPositiveSemiDefinite);
+  }
   switch (kind) {
     case ElementMatrix::kLinear:
       return rest.K;
@@ -606,6 +749,8 @@ void QuasiStaticSolver::Fill(const Vertices& x, const std::vector<Eigen::Matrix3
                              ElementMatrix kind) {
   double* values = matrix_.valuePtr();
   std::fill(values, values + matrix_.nonZeros(), 0.0);
+  std::vector<Vector12> volume_gradient;
+  if (nodal_volume()) NodalVolume(x, &element_pressure_, &volume_gradient);
   for (const std::vector<int>& elements : colors_) {
     const int count = static_cast<int>(elements.size());
 #pragma omp parallel for schedule(static) num_threads(threads_)
@@ -618,6 +763,7 @@ void QuasiStaticSolver::Fill(const Vertices& x, const std::vector<Eigen::Matrix3
           if (map[12 * a + b] >= 0) values[map[12 * a + b]] += K(a, b);
     }
   }
+  if (nodal_volume()) FillNodalVolume(volume_gradient);
 }
 
 std::vector<Eigen::Triplet<double>> QuasiStaticSolver::ReducedExtraHessian(const Vertices& x) const {

@@ -1,0 +1,122 @@
+// The stable neo-Hookean element (see femreg/fem.h for the energy and its split).
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+
+#include "femreg/fem.h"
+
+namespace femreg {
+
+namespace {
+
+// The cross-product matrix [v]x (v x w = [v]x w).
+Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
+  return m;
+}
+
+// cof F = J F^-T, column by column: [f1 x f2, f2 x f0, f0 x f1] (defined for singular F).
+Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
+
+// Shape-function gradients b_k as columns (F = sum_k x_k b_k^T).
+Eigen::Matrix<double, 3, 4> ShapeGradients(const ElementRest& rest) {
+  Eigen::Matrix<double, 3, 4> b;
+  b.rightCols<3>() = rest.dm_inv.transpose();
+  b.col(0) = -b.rightCols<3>().rowwise().sum();
+  return b;
+}
+
+Eigen::Matrix3d ElementF(const ElementRest& rest, const Vector12& x) {
+  Eigen::Matrix3d Ds;
+  for (int j = 0; j < 3; ++j) Ds.col(j) = x.segment<3>(3 * (j + 1)) - x.segment<3>(0);
+  return Ds * rest.dm_inv;
+}
+
+}  // namespace
+
+double NeoHookeanKappa(const ElementRest& rest, bool nodal_volume) {
+  return nodal_volume ? rest.mu / 3.0 : rest.lambda + rest.mu;
+}
+
+double BulkModulus(const ElementRest& rest) { return rest.lambda + 2.0 * rest.mu / 3.0; }
+
+double NeoHookeanDensity(const Eigen::Matrix3d& F, double mu, double kappa, Eigen::Matrix3d* P) {
+  const double J = F.determinant();
+  if (P != nullptr) *P = mu * F + (kappa * (J - 1.0) - mu) * Cofactor(F);
+  return 0.5 * mu * (F.squaredNorm() - 3.0) - mu * (J - 1.0) + 0.5 * kappa * (J - 1.0) * (J - 1.0);
+}
+
+Matrix9 DeterminantHessian(const Eigen::Matrix3d& F) {
+  // Block (c, d) is d2 J / df_c df_d over the columns f of F: J = f0 . (f1 x f2).
+  Matrix9 H = Matrix9::Zero();
+  H.block<3, 3>(0, 3) = -Cross(F.col(2));
+  H.block<3, 3>(0, 6) = Cross(F.col(1));
+  H.block<3, 3>(3, 6) = -Cross(F.col(0));
+  H.block<3, 3>(3, 0) = H.block<3, 3>(0, 3).transpose();
+  H.block<3, 3>(6, 0) = H.block<3, 3>(0, 6).transpose();
+  H.block<3, 3>(6, 3) = H.block<3, 3>(3, 6).transpose();
+  return H;
+}
+
+Matrix9 NeoHookeanDensityHessian(const Eigen::Matrix3d& F, double mu, double kappa,
+                                 double pressure, TangentProjection projection,
+                                 ElementTangentInfo* info) {
+  const double J = F.determinant();
+  const Eigen::Matrix3d cof = Cofactor(F);
+  const Eigen::Map<const Eigen::Matrix<double, 9, 1>> g(cof.data());
+  Matrix9 H = (kappa * (J - 1.0) - mu + pressure) * DeterminantHessian(F);
+  H.noalias() += kappa * g * g.transpose();
+  H.diagonal().array() += mu;
+  if (projection == TangentProjection::kNone && info == nullptr) return H;
+  Eigen::SelfAdjointEigenSolver<Matrix9> eig(H);
+  const Eigen::Matrix<double, 9, 1> values = eig.eigenvalues();
+  if (info != nullptr) {
+    *info = ElementTangentInfo();
+    info->min_eigenvalue = values.minCoeff();
+    info->negative_modes = static_cast<int>((values.array() < 0.0).count());
+  }
+  if (projection == TangentProjection::kNone || values.minCoeff() >= 0.0) return H;
+  return eig.eigenvectors() * values.cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+}
+
+double NeoHookeanEnergyAndForce(const ElementRest& rest, double kappa, double pressure,
+                                const Vector12& x, Vector12* force) {
+  const Eigen::Matrix3d F = ElementF(rest, x);
+  Eigen::Matrix3d P;
+  const double psi = NeoHookeanDensity(F, rest.mu, kappa, &P);
+  if (pressure != 0.0) P += pressure * Cofactor(F);
+  // f_k = -V P b_k.
+  const Eigen::Matrix<double, 3, 4> f = -rest.volume * P * ShapeGradients(rest);
+  for (int k = 0; k < 4; ++k) force->segment<3>(3 * k) = f.col(k);
+  return rest.volume * psi;
+}
+
+Matrix12 NeoHookeanTangent(const ElementRest& rest, double kappa, double pressure,
+                           const Vector12& x, TangentProjection projection,
+                           ElementTangentInfo* info) {
+  const Eigen::Matrix<double, 3, 4> b = ShapeGradients(rest);
+  const Matrix9 H =
+      NeoHookeanDensityHessian(ElementF(rest, x), rest.mu, kappa, pressure, projection, info);
+  // B (9 by 12): vec F (3 c + a) depends on x_k (3 k + a) with weight b_k(c).
+  Eigen::Matrix<double, 9, 12> B = Eigen::Matrix<double, 9, 12>::Zero();
+  for (int k = 0; k < 4; ++k)
+    for (int c = 0; c < 3; ++c)
+      for (int a = 0; a < 3; ++a) B(3 * c + a, 3 * k + a) = b(c, k);
+  Matrix12 K = rest.volume * B.transpose() * H * B;
+  return 0.5 * (K + K.transpose());
+}
+
+Vector12 VolumeGradient(const ElementRest& rest, const Vector12& x) {
+  const Eigen::Matrix<double, 3, 4> g = rest.volume * Cofactor(ElementF(rest, x)) * ShapeGradients(rest);
+  Vector12 out;
+  for (int k = 0; k < 4; ++k) out.segment<3>(3 * k) = g.col(k);
+  return out;
+}
+
+}  // namespace femreg
