@@ -29,8 +29,9 @@ struct Setup {
   energy::Problem problem;
 };
 
+// neo_hookean: the elastic blocks are the neo-Hookean element's (no rotations held).
 std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool contacts, uint64_t seed,
-                                 bool loads = false, int refine = 1) {
+                                 bool loads = false, int refine = 1, bool neo_hookean = false) {
   auto s = std::make_unique<Setup>();
   s->mesh = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 5 * refine, 2 * refine, 2 * refine);
   ComputeLumpedMasses(&s->mesh, 500);
@@ -53,6 +54,7 @@ std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool
   for (int v = 0; v < nv; ++v) bent(v, 2) += 0.02 * std::pow(bent(v, 0) / 0.1, 2);
   s->model.UpdateRotations(bent);
   auto& elastic = p.AddSet<energy::ElasticElement>(TermGroup::kElastic);
+  auto& neo = p.AddSet<energy::NeoHookeanElement>(TermGroup::kElastic);
   auto& edges = p.AddSet<energy::EdgeSpring>(TermGroup::kElastic);
   for (int e = 0; e < s->model.num_elements(); ++e) {
     energy::ElasticElement b;
@@ -60,7 +62,15 @@ std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool
     b.rest = &s->model.rest(e);
     b.rotation = &s->model.rotation(e);
     b.weight = 1.5;
-    elastic.Add(b);
+    if (neo_hookean) {
+      energy::NeoHookeanElement nh;
+      nh.vertices = b.vertices;
+      nh.rest = b.rest;
+      nh.weight = b.weight;
+      neo.Add(nh);
+    } else {
+      elastic.Add(b);
+    }
     if (springs) {
       energy::EdgeSpring edge;
       edge.vertices = {{b.vertices[0], b.vertices[1]}};
@@ -194,13 +204,14 @@ struct Case {
   RobustLoss loss;
   bool springs, fixed, contacts;
   bool loads = false;
+  bool neo_hookean = false;
 };
 
 class BackendTest : public ::testing::TestWithParam<Case> {};
 
 TEST_P(BackendTest, BothReachTheSameMinimum) {
   const Case c = GetParam();
-  auto s = MakeSetup(c.loss, c.springs, c.fixed, c.contacts, 3, c.loads);
+  auto s = MakeSetup(c.loss, c.springs, c.fixed, c.contacts, 3, c.loads, 1, c.neo_hookean);
   const Vertices start = s->mesh.rest;
   const Vertices x_ceres = Minimize(SolverBackend::kCeres, s->problem, start);
   const Vertices x_fast = Minimize(SolverBackend::kFast, s->problem, start);
@@ -242,7 +253,9 @@ INSTANTIATE_TEST_SUITE_P(AllTerms, BackendTest,
                                            Case{RobustLoss::kHuber, false, false, true},
                                            Case{RobustLoss::kNone, true, true, true},
                                            Case{RobustLoss::kHuber, false, true, false, true},
-                                           Case{RobustLoss::kNone, true, true, true, true}));
+                                           Case{RobustLoss::kNone, true, true, true, true},
+                                           Case{RobustLoss::kHuber, false, true, false, false, true},
+                                           Case{RobustLoss::kNone, false, false, true, true, true}));
 
 // The PCG product: full 3x3 vertex blocks on a random symmetric pattern (some vertices with
 // no neighbour), against Eigen's product, serial and on 2 threads above the parallel size.

@@ -117,5 +117,34 @@ TEST(SceneMaterials, RegionInheritsTheObjectsMaterial) {
   EXPECT_EQ(region.density, 1000);
 }
 
+// material.model and material.volume: parsed, checked against each other, written back.
+TEST(SceneMaterials, ModelAndVolume) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene(kScene, "materials.yaml", ".", &scene).ok());
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+  EXPECT_FALSE(scene.objects[0].nodal_volume);
+  const std::string text = Replace(kScene, "      density: 1000\n",
+                                   "      density: 1000\n      model: neo_hookean\n      volume: nodal\n");
+  ASSERT_TRUE(ParseScene(text, "materials.yaml", ".", &scene).ok());
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
+  EXPECT_TRUE(scene.objects[0].nodal_volume);
+  const ObjectMaterial m = scene.objects[0].Materials();
+  EXPECT_EQ(m.model, MaterialModel::kNeoHookean);
+  EXPECT_TRUE(m.nodal_volume);
+  EXPECT_EQ(m.regions.size(), 1u);
+  // Written and read back.
+  Scene again;
+  ASSERT_TRUE(ParseScene(SceneToYaml(scene), "again.yaml", ".", &again).ok()) << SceneToYaml(scene);
+  EXPECT_EQ(again.objects[0].material_model, MaterialModel::kNeoHookean);
+  EXPECT_TRUE(again.objects[0].nodal_volume);
+
+  EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      model: neohooke\n")),
+            "materials.yaml:8: objects[0].material.model: unknown value 'neohooke' (one of: hooke, "
+            "neo_hookean)");
+  EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      volume: nodal\n")),
+            "materials.yaml:8: objects[0].material.volume: 'nodal' needs 'model: neo_hookean' (the "
+            "nodal volume is the neo-Hookean element's remedy for locking)");
+}
+
 }  // namespace
 }  // namespace femreg

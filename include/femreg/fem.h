@@ -250,6 +250,9 @@ double NeoHookeanKappa(const ElementRest& rest, bool nodal_volume);
 // The bulk modulus lambda + 2 mu / 3 (Pa), of the nodal volume's energy.
 double BulkModulus(const ElementRest& rest);
 
+// cof F = det(F) F^-T = dJ/dF, column by column [f1 x f2, f2 x f0, f0 x f1] (also for
+// singular F).
+Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F);
 // psi(F) (per unit rest volume) and, if P is not null, dpsi/dF.
 double NeoHookeanDensity(const Eigen::Matrix3d& F, double mu, double kappa, Eigen::Matrix3d* P);
 // The Hessian of det F over vec F (column-major).

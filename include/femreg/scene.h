@@ -67,6 +67,12 @@ struct ObjectSpec {
   Eigen::Vector3d rotation = Eigen::Vector3d::Zero();  // axis * angle (rad)
   Material material;
   std::vector<std::pair<int, Material>> region_materials;  // region id -> material
+  // material.model: the constitutive law of all its elements; material.volume: nodal
+  // (neo-Hookean only, simulate only): the volumetric energy on the vertices (fem.h).
+  MaterialModel material_model = MaterialModel::kHooke;
+  bool nodal_volume = false;
+  // The above as the FEM layer takes them.
+  ObjectMaterial Materials() const;
   // Fracture toughness (Pa): a node breaks when its fracture measure exceeds it; used when
   // effects.fracture is on; 0 = unbreakable.
   double toughness = 0.0;

@@ -921,8 +921,7 @@ PYBIND11_MODULE(_femreg, m) {
           {
             py::gil_scoped_release release;
             ElasticModel elastic;
-            elastic.Build(mesh, model_type, scene.objects[index].material,
-                          scene.objects[index].region_materials);
+            elastic.Build(mesh, model_type, scene.objects[index].Materials());
             status = SolveQuasiStatic(problem, forward, &elastic, &mesh, &summary);
           }
           Check(status);

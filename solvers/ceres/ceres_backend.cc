@@ -1,5 +1,6 @@
 #include "solvers/ceres/ceres_backend.h"
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <vector>
@@ -74,6 +75,14 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   SolveReport report;
   report.before = problem.Evaluate(*x);
   report.after = report.before;
+  // Ceres' relative decrease is over its cost, which carries the blocks' offsets (the
+  // neo-Hookean element's constant): scaled so that it means the same decrease of the
+  // energy (at its value at the start).
+  const double offset = problem.Offset();
+  if (offset > 0) {
+    const double energy = std::max(report.before.total(), 0.0);
+    solver_options.function_tolerance *= energy / (energy + offset);
+  }
   if (ceres_problem.NumResidualBlocks() == 0) {
     report.success = true;
     report.message = "nothing to solve";

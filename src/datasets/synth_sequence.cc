@@ -169,7 +169,9 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   status = LoadObjectMesh(truth_scene, 0, &fine);
   if (!status.ok()) return Status::Error(s.ground_truth_where + ": " + status.message());
   ElasticModel model;
-  model.Build(fine, scene.forward_model, s.material, truth_object.region_materials);
+  ObjectMaterial truth_material = truth_object.Materials();
+  truth_material.material = s.material;
+  model.Build(fine, scene.forward_model, truth_material);
 
   // Static boundary conditions and loads of the scene, on the ground truth mesh.
   ForwardProblem base;

@@ -1,5 +1,8 @@
 #include "energy/elastic.h"
 
+#include <Eigen/LU>
+#include <cmath>
+
 namespace femreg {
 namespace energy {
 
@@ -56,6 +59,36 @@ bool ElasticElement::Normal(const double* const* x, double* squared_norm, Eigen:
     }
   }
   return true;
+}
+
+bool NeoHookeanElement::Evaluate(const double* const* x, double* r, double** J) const {
+  const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
+  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
+  Eigen::Matrix3d Ds;
+  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
+  const Eigen::Matrix3d F = Ds * rest->dm_inv;
+  const double a = std::sqrt(V * mu), c = std::sqrt(V * kappa);
+  Eigen::Map<Eigen::Matrix<double, 9, 1>>{r} = a * Eigen::Map<const Eigen::Matrix<double, 9, 1>>(F.data());
+  r[9] = c * (F.determinant() - (1.0 + mu / kappa));
+  if (J == nullptr) return true;
+  // Shape gradients as columns: b_1..b_3 the rows of D_m^-1, b_0 = -(their sum).
+  Eigen::Matrix<double, 3, 4> b;
+  b.rightCols<3>() = rest->dm_inv.transpose();
+  b.col(0) = -b.rightCols<3>().rowwise().sum();
+  const Eigen::Matrix3d cof = Cofactor(F);
+  for (int i = 0; i < 4; ++i) {
+    if (J[i] == nullptr) continue;
+    Eigen::Map<Eigen::Matrix<double, 10, 3, Eigen::RowMajor>> Ji(J[i]);
+    Ji.setZero();
+    for (int col = 0; col < 3; ++col) Ji.block<3, 3>(3 * col, 0).diagonal().setConstant(a * b(col, i));
+    Ji.row(9) = c * (cof * b.col(i)).transpose();
+  }
+  return true;
+}
+
+double NeoHookeanElement::Offset() const {
+  const double mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
+  return rest->volume * (3.0 * mu + mu * mu / kappa);
 }
 
 bool EdgeSpring::Evaluate(const double* const* x, double* r, double** J) const {

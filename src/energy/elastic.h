@@ -33,6 +33,27 @@ struct ElasticElement {
               Eigen::Matrix3d* jtj) const;
 };
 
+// The stable neo-Hookean element (femreg/fem.h) as least squares. With kappa = lambda + mu
+// and alpha = 1 + mu / kappa,
+//   r = sqrt(V) [sqrt(mu) vec F; sqrt(kappa) (J - alpha)]   (10 residuals),
+// 1/2 |r|^2 = V (psi(F) + c), c = 3 mu / 2 + mu^2 / (2 kappa): the element's energy plus a
+// constant, which Offset() gives (|r|^2 at rest) and the energy layer leaves out of the
+// value (energy/term.h). Its Gauss-Newton matrix V (mu I + kappa g g^T) (g = vec cof F) is
+// the Hessian without the (kappa (J - alpha)) H_J term: positive semi-definite for every F,
+// also inverted ones, with no rotation to hold. J_i = sqrt(V) [sqrt(mu) (b_i^T (x) I);
+// sqrt(kappa) (cof F b_i)^T], b_i the shape gradients.
+struct NeoHookeanElement {
+  static constexpr int kResiduals = 10;
+  static constexpr int kVertices = 4;
+  static constexpr bool kConstantJacobian = false;
+  std::array<int, 4> vertices = {{0, 0, 0, 0}};
+  double weight = 1.0;
+  const ElementRest* rest = nullptr;
+
+  bool Evaluate(const double* const* x, double* r, double** J) const;
+  double Offset() const;
+};
+
 // A spring on an edge: r = |x_a - x_b| - L, 1/2 k r^2 with k the weight. At zero length the
 // direction is undefined and the Jacobian is zero.
 struct EdgeSpring {

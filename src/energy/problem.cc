@@ -58,6 +58,14 @@ EnergyTerms Problem::Evaluate(const Vertices& x) const {
   return terms;
 }
 
+double Problem::Offset() const {
+  double total = 0.0;
+  ForEachSet([&](const auto& set) {
+    for (const auto& block : set.blocks()) total += OffsetValue(block, set.loss());
+  });
+  return total;
+}
+
 int Problem::num_blocks() const {
   int n = 0;
   ForEachSet([&](const auto& set) { n += set.size(); });

@@ -26,7 +26,8 @@ namespace energy {
 class Problem {
  public:
   // The registry: one vector of sets per block type.
-  using Sets = std::tuple<std::vector<TermSet<ElasticElement>>, std::vector<TermSet<EdgeSpring>>,
+  using Sets = std::tuple<std::vector<TermSet<ElasticElement>>, std::vector<TermSet<NeoHookeanElement>>,
+                          std::vector<TermSet<EdgeSpring>>,
                           std::vector<TermSet<PointToPoint<1>>>, std::vector<TermSet<PointToPoint<3>>>,
                           std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
                           std::vector<TermSet<ContactPenalty<3>>>,
@@ -71,6 +72,9 @@ class Problem {
 
   // The energy at x by group, robust losses applied.
   EnergyTerms Evaluate(const Vertices& x) const;
+  // The sum of the blocks' offsets (energy/term.h): a least-squares cost over the same
+  // residuals is Evaluate's total plus this.
+  double Offset() const;
   int num_blocks() const;
 
  private:

@@ -22,6 +22,12 @@
 //   bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
 //               Eigen::Matrix3d* jtj) const;
 // Linearize then uses it; the tests check it against Evaluate's r and J.
+// A block whose |r|^2 cannot reach 0 (the neo-Hookean element: its energy is a sum of
+// squares only up to a constant) provides that constant, |r|^2 at rest:
+//   double Offset() const;
+// and its value is 1/2 w (rho(|r|^2) - rho(Offset())), zero at rest, so that the energies
+// reported and compared (relative tolerances) are the physical ones. The Ceres back end's
+// cost still carries it (Problem::Offset).
 #ifndef FEMREG_ENERGY_TERM_H_
 #define FEMREG_ENERGY_TERM_H_
 
@@ -85,6 +91,22 @@ struct HasNormal<T, std::void_t<decltype(std::declval<const T&>().Normal(
                         std::declval<Eigen::Vector3d*>(), std::declval<Eigen::Matrix3d*>()))>>
     : std::true_type {};
 
+// Whether T provides Offset (above), and 1/2 w rho(Offset()) (0 without).
+template <class T, class = void>
+struct HasOffset : std::false_type {};
+template <class T>
+struct HasOffset<T, std::void_t<decltype(std::declval<const T&>().Offset())>> : std::true_type {};
+template <class T>
+double OffsetValue(const T& block, const Loss& loss) {
+  if constexpr (HasOffset<T>::value) {
+    double rho[3];
+    loss.Evaluate(block.Offset(), rho);
+    return 0.5 * block.weight * rho[0];
+  } else {
+    return 0.0;
+  }
+}
+
 // Pointers to the stencil's positions in x (#V by 3, row-major: vertex v is x.data() + 3 v).
 template <class T>
 std::array<const double*, T::kVertices> StencilPositions(const T& block, const Vertices& x) {
@@ -107,7 +129,7 @@ double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
   }
   double rho[3];
   loss.Evaluate(s, rho);
-  return 0.5 * block.weight * rho[0];
+  return 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
 }
 
 // The energy of a set at x.
@@ -146,7 +168,7 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
     }
     double rho[3];
     loss.Evaluate(s, rho);
-    out->value = 0.5 * block.weight * rho[0];
+    out->value = 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
     out->scale = block.weight * rho[1];
     for (auto& g : out->gradient) g *= out->scale;
     if (with_hessian) {
@@ -165,7 +187,7 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
   if (!block.Evaluate(p.data(), r.data(), Jp.data())) return false;
   double rho[3];
   loss.Evaluate(r.squaredNorm(), rho);
-  out->value = 0.5 * block.weight * rho[0];
+  out->value = 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
   out->scale = block.weight * rho[1];
   if (out->scale == 0.0) {  // an outlier past Tukey's scale, an open contact
     for (auto& g : out->gradient) g.setZero();

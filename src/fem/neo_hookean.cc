@@ -1,5 +1,7 @@
 // The stable neo-Hookean element (see femreg/fem.h for the energy and its split).
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 
 #include "femreg/fem.h"
@@ -13,15 +15,6 @@ Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0, -v(2), v(1), v(2), 0, -v(0), -v(1), v(0), 0;
   return m;
-}
-
-// cof F = J F^-T, column by column: [f1 x f2, f2 x f0, f0 x f1] (defined for singular F).
-Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
-  Eigen::Matrix3d c;
-  c.col(0) = F.col(1).cross(F.col(2));
-  c.col(1) = F.col(2).cross(F.col(0));
-  c.col(2) = F.col(0).cross(F.col(1));
-  return c;
 }
 
 // Shape-function gradients b_k as columns (F = sum_k x_k b_k^T).
@@ -39,6 +32,14 @@ Eigen::Matrix3d ElementF(const ElementRest& rest, const Vector12& x) {
 }
 
 }  // namespace
+
+Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
+  Eigen::Matrix3d c;
+  c.col(0) = F.col(1).cross(F.col(2));
+  c.col(1) = F.col(2).cross(F.col(0));
+  c.col(2) = F.col(0).cross(F.col(1));
+  return c;
+}
 
 double NeoHookeanKappa(const ElementRest& rest, bool nodal_volume) {
   return nodal_volume ? rest.mu / 3.0 : rest.lambda + rest.mu;

@@ -57,9 +57,25 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
       return;
     case Regularizer::kCorotational:
     case Regularizer::kLinear: {
+      // Neo-Hookean objects (material.model) have their own element.
+      std::vector<energy::NeoHookeanElement>* neo_hookean = nullptr;
+      for (const ObjectState& o : state.objects) {
+        if (o.model.type() != ElasticModelType::kNeoHookean) continue;
+        if (neo_hookean == nullptr) {
+          neo_hookean = problem_.AddSet<energy::NeoHookeanElement>(TermGroup::kElastic).mutable_blocks();
+        }
+        for (int e = 0; e < o.model.num_elements(); ++e) {
+          energy::NeoHookeanElement b;
+          for (int k = 0; k < 4; ++k) b.vertices[k] = o.model.tets()(e, k) + o.offset;
+          b.weight = w;
+          b.rest = &o.model.rest(e);
+          neo_hookean->push_back(b);
+        }
+      }
       auto& set = problem_.AddSet<energy::ElasticElement>(TermGroup::kElastic);
       auto* blocks = set.mutable_blocks();
       for (const ObjectState& o : state.objects) {
+        if (o.model.type() == ElasticModelType::kNeoHookean) continue;
         for (int e = 0; e < o.model.num_elements(); ++e) {
           energy::ElasticElement b;
           for (int k = 0; k < 4; ++k) b.vertices[k] = o.model.tets()(e, k) + o.offset;

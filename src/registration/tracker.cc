@@ -97,6 +97,17 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
   for (size_t i = 0; i < meshes.size(); ++i) {
     const std::string name = "object " + std::to_string(i);
     if (!materials[i].IsValid(&error)) return Status::Error(name + " material: " + error);
+    if (materials[i].model == MaterialModel::kNeoHookean) {
+      if (options.regularizer != Regularizer::kCorotational) {
+        return Status::Error(name + ": material.model neo_hookean needs registration.regularizer "
+                             "corotational (the FEM regularizer; got " +
+                             std::string(ToString(options.regularizer)) + ")");
+      }
+      if (materials[i].nodal_volume) {
+        return Status::Error(name + ": material.volume nodal is for simulate only; register uses "
+                             "each element's volume (write volume: element, or leave it out)");
+      }
+    }
     ObjectState& o = state.objects[i];
     o.mesh = std::move(meshes[i]);
     o.material = materials[i];

@@ -53,7 +53,26 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
     if (pose.Has("translation")) object.translation = pose["translation"].AsVector3();
     if (pose.Has("rotation")) object.rotation = pose["rotation"].AsVector3();
   }
-  if (v.Has("material")) object.material = ParseMaterial(v["material"], object.material);
+  if (v.Has("material")) {
+    const YamlValue material = v["material"];
+    object.material = ParseMaterial(material, object.material);
+    if (material.Has("model")) {
+      object.material_model = ParseEnum(
+          material["model"], std::vector<MaterialModel>{MaterialModel::kHooke, MaterialModel::kNeoHookean});
+    }
+    if (material.Has("volume")) {
+      const YamlValue volume = material["volume"];
+      const std::string name = volume.AsString();
+      if (name != "element" && name != "nodal") {
+        volume.Fail("unknown value " + Quote(name) + " (one of: element, nodal)");
+      }
+      object.nodal_volume = name == "nodal";
+      if (object.nodal_volume && object.material_model != MaterialModel::kNeoHookean) {
+        volume.Fail("'nodal' needs 'model: neo_hookean' (the nodal volume is the neo-Hookean "
+                    "element's remedy for locking)");
+      }
+    }
+  }
   if (v.Has("regions")) {
     const YamlValue regions = v["regions"];
     regions.RequireMap();
@@ -126,7 +145,7 @@ Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults
   if (region) {
     v.CheckKeys({"youngs_modulus", "poisson_ratio", "density", "toughness"});
   } else {
-    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density"});
+    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density", "model", "volume"});
   }
   // The ranges are Material::IsValid's alone. The defaults are valid, so checking after each
   // key is set blames the key just read, and the message goes to its line:

@@ -102,6 +102,15 @@
 
 namespace femreg {
 
+ObjectMaterial ObjectSpec::Materials() const {
+  ObjectMaterial m;
+  m.material = material;
+  m.regions = region_materials;
+  m.model = material_model;
+  m.nodal_volume = nodal_volume;
+  return m;
+}
+
 const char* ToString(MeshGeneratorSpec::Shape shape) {
   switch (shape) {
     case MeshGeneratorSpec::Shape::kNone:

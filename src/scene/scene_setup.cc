@@ -210,6 +210,8 @@ Status CopyMaterials(const Scene& from, Scene* scene) {
     }
     o.material = it->material;
     o.region_materials = it->region_materials;
+    o.material_model = it->material_model;
+    o.nodal_volume = it->nodal_volume;
   }
   return Status::Ok();
 }

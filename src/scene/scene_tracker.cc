@@ -26,10 +26,7 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     Status status = LoadObjectMesh(scene, static_cast<int>(i), &meshes[i]);
     if (!status.ok()) return status;
-    ObjectMaterial m;
-    m.material = scene.objects[i].material;
-    m.regions = scene.objects[i].region_materials;
-    materials.push_back(m);
+    materials.push_back(scene.objects[i].Materials());
   }
   std::unique_ptr<Tracker> t;
   Status status = Create(meshes, materials, scene.registration, &t);

@@ -210,7 +210,12 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
   Put(pose, "translation", o.translation, Eigen::Vector3d::Zero());
   Put(pose, "rotation", o.rotation, Eigen::Vector3d::Zero());
   PutMap(n, "pose", pose);
-  PutMap(n, "material", MaterialNode(o.material, Material()));
+  {
+    YAML::Node material = MaterialNode(o.material, Material());
+    if (o.material_model != MaterialModel::kHooke) material["model"] = ToString(o.material_model);
+    if (o.nodal_volume) material["volume"] = "nodal";
+    PutMap(n, "material", material);
+  }
   if (!o.region_materials.empty()) {
     YAML::Node regions = FlowMap();
     for (const auto& [region, material] : o.region_materials) {

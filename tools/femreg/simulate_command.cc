@@ -96,7 +96,7 @@ bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
   result->num_prescribed = static_cast<int>(problem.prescribed.size());
   result->num_loaded = static_cast<int>(problem.nodal_loads.size());
   ElasticModel model;
-  model.Build(mesh, model_type, spec.material, spec.region_materials);
+  model.Build(mesh, model_type, spec.Materials());
   result->load_time_s = Seconds(start);
 
   start = std::chrono::steady_clock::now();
