@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
-"""Compares femreg's forward solve with CalculiX (ccx) on the same C3D4 meshes and loads.
+"""Compares femreg's forward solve with CalculiX (ccx) on the same meshes and loads.
 
-For every case, femreg_forward_probe solves the problem (linear and corotational) and writes
-the displacements and a CalculiX deck; ccx solves the deck (linear, and with NLGEOM); the
-displacements of every node are compared. Usage:
+For every case, femreg_forward_probe solves the problem (linear, corotational, neo-Hookean
+with the element or the nodal volume) and writes the displacements and a CalculiX deck
+(*ELASTIC or *HYPERELASTIC, NEO HOOKE with the same small-strain moduli; C3D4 on femreg's
+mesh, or C3D10 with a node added at every edge's midpoint); ccx solves the deck (linear, or
+with NLGEOM); the displacements of femreg's vertices (C3D10's corner nodes) are compared.
+Usage:
     compare_calculix.py PROBE [--ccx ccx] [--keep DIR]
 """
 import argparse
@@ -15,13 +18,38 @@ import subprocess
 import sys
 import tempfile
 
-# name, probe arguments, femreg load steps for the nonlinear run
+# The comparisons of a case: femreg model, volume, ccx material, ccx element, NLGEOM, label.
+HOOKE_RUNS = [
+    ("linear", "element", "elastic", "c3d4", 0, "linear vs ccx linear"),
+    ("corotational", "element", "elastic", "c3d4", 1, "corotational vs ccx NLGEOM"),
+]
+NEO_HOOKE_RUNS = [
+    ("neo_hookean", "element", "neo_hooke", "c3d4", 1, "neo-Hookean vs ccx NEO HOOKE"),
+]
+# Near incompressible: the same C3D4 mesh in both (the element form locks in both), and
+# the nodal volume and the element form against quadratic C3D10 on that mesh (no locking).
+LOCKING_RUNS = [
+    ("neo_hookean", "element", "neo_hooke", "c3d4", 1, "neo-Hookean vs ccx NEO HOOKE"),
+    ("neo_hookean", "element", "neo_hooke", "c3d10", 1, "NH element vol. vs C3D10 NH"),
+    ("neo_hookean", "nodal", "neo_hooke", "c3d10", 1, "NH nodal volume vs C3D10 NH"),
+    ("corotational", "element", "elastic", "c3d10", 1, "corotational vs C3D10 NLGEOM"),
+]
+
+# name, probe arguments, femreg load steps for the nonlinear runs, runs
 CASES = [
-    ("beam 1k, gravity (E=1e8)", "shape=box n=4 length=1 height=0.1 E=1e8 nu=0.3 gravity=9.81", 1),
-    ("beam 1k, small tip 0.025 N", "shape=box n=4 length=1 height=0.1 E=1e6 nu=0.3 tip_load=0.025", 1),
-    ("beam 1k, large tip 16 N", "shape=box n=4 length=1 height=0.1 E=1e6 nu=0.3 tip_load=16", 8),
+    ("beam 1k, gravity (E=1e8)", "shape=box n=4 length=1 height=0.1 E=1e8 nu=0.3 gravity=9.81", 1,
+     HOOKE_RUNS),
+    ("beam 1k, small tip 0.025 N", "shape=box n=4 length=1 height=0.1 E=1e6 nu=0.3 tip_load=0.025", 1,
+     HOOKE_RUNS),
+    ("beam 1k, large tip 16 N", "shape=box n=4 length=1 height=0.1 E=1e6 nu=0.3 tip_load=16", 8,
+     HOOKE_RUNS + NEO_HOOKE_RUNS),
     ("soft cylinder, gravity (E=1e6)",
-     "shape=cylinder n=3 radius=0.05 length=0.5 axial=20 E=1e6 nu=0.35 gravity=9.81", 4),
+     "shape=cylinder n=3 radius=0.05 length=0.5 axial=20 E=1e6 nu=0.35 gravity=9.81", 4,
+     HOOKE_RUNS + NEO_HOOKE_RUNS),
+    ("beam 1k, gravity, nu 0.49 (E=1e8)", "shape=box n=4 length=1 height=0.1 E=1e8 nu=0.49 gravity=9.81",
+     1, LOCKING_RUNS),
+    ("soft cylinder, gravity, nu 0.49 (E=3e5)",
+     "shape=cylinder n=3 radius=0.05 length=0.5 axial=20 E=3e5 nu=0.49 gravity=9.81", 4, LOCKING_RUNS),
 ]
 
 
@@ -77,19 +105,19 @@ def main():
     work = args.keep or tempfile.mkdtemp(prefix="femreg_ccx_")
     os.makedirs(work, exist_ok=True)
 
-    header = (f"{'case':32s} {'model':27s} {'nodes':>6s} {'max|u| femreg':>14s} {'max|u| ccx':>12s}"
+    header = (f"{'case':40s} {'model':30s} {'nodes':>6s} {'max|u| femreg':>14s} {'max|u| ccx':>12s}"
               f" {'tip femreg':>12s} {'tip ccx':>12s} {'tip rel':>9s} {'max|du|/max|u|':>15s}"
               f" {'femreg its':>10s}")
     print(header)
     print("-" * len(header))
-    for index, (name, probe_args, steps) in enumerate(CASES):
-        for femreg_model, nlgeom, label in (("linear", 0, "linear vs ccx linear"),
-                                            ("corotational", 1, "corotational vs ccx NLGEOM")):
-            stem = f"case{index}_{femreg_model}"
+    for index, (name, probe_args, steps, runs) in enumerate(CASES):
+        for run_index, (femreg_model, volume, ccx_material, element, nlgeom, label) in enumerate(runs):
+            stem = f"case{index}_{run_index}_{femreg_model}"
             csv_path = os.path.join(work, stem + ".csv")
             cmd = [args.probe] + probe_args.split() + [
-                f"model={femreg_model}", f"load_steps={steps if nlgeom else 1}",
-                f"csv={csv_path}", f"inp={os.path.join(work, stem + '.inp')}", f"nlgeom={nlgeom}"]
+                f"model={femreg_model}", f"volume={volume}", f"load_steps={steps if nlgeom else 1}",
+                f"csv={csv_path}", f"inp={os.path.join(work, stem + '.inp')}", f"nlgeom={nlgeom}",
+                f"ccx_material={ccx_material}", f"element={element}"]
             probe_log = os.path.join(work, stem + ".probe.log")
             run(cmd, work, probe_log)
             # Newton iterations over all load steps, from the probe's brief report.
@@ -106,7 +134,7 @@ def main():
             tip_f = [sum(uf[k][c] for k in tip_ids) / len(tip_ids) for c in range(3)]
             tip_c = [sum(uc[k][c] for k in tip_ids) / len(tip_ids) for c in range(3)]
             tip_rel = norm([a - b for a, b in zip(tip_f, tip_c)]) / norm(tip_c)
-            print(f"{name:32s} {label:27s} {len(ids):6d} {max_f:14.6e} {max_c:12.6e}"
+            print(f"{name:40s} {label:30s} {len(ids):6d} {max_f:14.6e} {max_c:12.6e}"
                   f" {norm(tip_f):12.6e} {norm(tip_c):12.6e} {tip_rel:9.2e} {max_diff / max_c:15.2e}"
                   f" {iterations:>10s}")
             sys.stdout.flush()

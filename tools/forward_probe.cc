@@ -1,17 +1,23 @@
 // femreg_forward_probe: builds a clamped beam (box) or cylinder, solves it with femreg's
 // forward quasi-static solver, writes the displacements as CSV and, on request, the same
-// problem as a CalculiX input deck (C3D4), so that tools/compare_calculix.sh can compare.
+// problem as a CalculiX input deck, so that tools/compare_calculix.sh can compare.
 //
 //   femreg_forward_probe key=value ...
 //     shape=box|cylinder  length=1  height=0.1 (box section)  radius=0.05 (cylinder)
 //     n=4 (cells across; the box has 10 n along)  axial=0 (cells along; 0 = automatic)
-//     E=1e6 nu=0.3 density=1000  model=corotational|linear  load_steps=1
+//     E=1e6 nu=0.3 density=1000  model=corotational|linear|neo_hookean  load_steps=1
+//     volume=element|nodal (neo_hookean)
 //     tip_load=0 (N, total, on the free end, along -z for the box, -x for the cylinder)
 //     gravity=0 (m/s^2, same direction)  csv=out.csv  inp=out.inp  nlgeom=0|1
 //     tangent=full|projected|warped  watchdog=3 (steps)  max_iterations=200
 //     verbose=0|1 (the full report)
+//     deck: ccx_material=elastic|neo_hooke (*ELASTIC, or *HYPERELASTIC, NEO HOOKE with
+//     C10 = mu / 2, D1 = 2 / K, K the bulk modulus: the same small-strain moduli)
+//     element=c3d4|c3d10 (c3d10: a node at every edge's midpoint, the corner nodes
+//     numbered as femreg's vertices; the loads stay on the corner nodes, gravity on all)
 //
 // The box lies along +x and is clamped at x = 0; the cylinder along +z, clamped at z = 0.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -19,6 +25,8 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "femreg/fem.h"
 #include "femreg/forward.h"
@@ -68,9 +76,12 @@ int main(int argc, char** argv) {
   material.density = Number(args, "density", 1000.0);
   ElasticModelType type = ElasticModelType::kCorotational;
   if (!FromString(Text(args, "model", "corotational"), &type)) {
-    std::cerr << "femreg_forward_probe: model must be corotational or linear\n";
+    std::cerr << "femreg_forward_probe: model must be corotational, linear or neo_hookean\n";
     return 2;
   }
+  ObjectMaterial object_material(material);
+  if (type == ElasticModelType::kNeoHookean) object_material.model = MaterialModel::kNeoHookean;
+  object_material.nodal_volume = Text(args, "volume", "element") == "nodal";
   const double tip_load = Number(args, "tip_load", 0.0);
   const double gravity = Number(args, "gravity", 0.0);
 
@@ -110,7 +121,7 @@ int main(int argc, char** argv) {
   problem.gravity = gravity * direction;
 
   ElasticModel model;
-  model.Build(mesh, type, material);
+  model.Build(mesh, type, object_material);
   ForwardOptions options;
   options.load_steps = static_cast<int>(Number(args, "load_steps", 1));
   options.max_iterations = static_cast<int>(Number(args, "max_iterations", 200));
@@ -145,22 +156,66 @@ int main(int argc, char** argv) {
   const std::string inp = Text(args, "inp", "");
   if (!inp.empty()) {
     const bool nlgeom = Number(args, "nlgeom", 0) != 0;
+    const std::string element = Text(args, "element", "c3d4");
+    const std::string ccx_material = Text(args, "ccx_material", "elastic");
+    if ((element != "c3d4" && element != "c3d10") ||
+        (ccx_material != "elastic" && ccx_material != "neo_hooke")) {
+      std::cerr << "femreg_forward_probe: element must be c3d4 or c3d10, ccx_material elastic or neo_hooke\n";
+      return 2;
+    }
+    // C3D10: a midside node per edge (CalculiX's order: 1-2, 2-3, 3-1, 1-4, 2-4, 3-4).
+    std::map<std::pair<int, int>, int> midside;
+    std::vector<int> clamped_nodes;
+    for (int v : problem.clamped) clamped_nodes.push_back(v + 1);
+    std::vector<char> is_clamped(mesh.num_vertices(), 0);
+    for (int v : problem.clamped) is_clamped[v] = 1;
+    static const int kEdges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
     std::ofstream out(inp);
     out.precision(15);
-    out << "** femreg_forward_probe: " << shape << ", " << mesh.num_vertices() << " nodes, "
-        << mesh.num_tets() << " C3D4\n*NODE, NSET=Nall\n";
+    out << "** femreg_forward_probe: " << shape << ", " << mesh.num_vertices() << " vertices, "
+        << mesh.num_tets() << " " << element << "\n*NODE, NSET=Nall\n";
     for (int v = 0; v < mesh.num_vertices(); ++v)
       out << v + 1 << ", " << mesh.rest(v, 0) << ", " << mesh.rest(v, 1) << ", " << mesh.rest(v, 2) << "\n";
-    out << "*ELEMENT, TYPE=C3D4, ELSET=Eall\n";
-    for (int t = 0; t < mesh.num_tets(); ++t)
-      out << t + 1 << ", " << mesh.tets(t, 0) + 1 << ", " << mesh.tets(t, 1) + 1 << ", "
-          << mesh.tets(t, 2) + 1 << ", " << mesh.tets(t, 3) + 1 << "\n";
+    if (element == "c3d10") {
+      int next = mesh.num_vertices() + 1;
+      for (int t = 0; t < mesh.num_tets(); ++t) {
+        for (const auto& e : kEdges) {
+          int a = mesh.tets(t, e[0]), b = mesh.tets(t, e[1]);
+          if (a > b) std::swap(a, b);
+          if (!midside.emplace(std::make_pair(a, b), next).second) continue;
+          const Eigen::RowVector3d m = 0.5 * (mesh.rest.row(a) + mesh.rest.row(b));
+          out << next << ", " << m(0) << ", " << m(1) << ", " << m(2) << "\n";
+          if (is_clamped[a] && is_clamped[b]) clamped_nodes.push_back(next);
+          ++next;
+        }
+      }
+    }
+    out << "*ELEMENT, TYPE=" << (element == "c3d10" ? "C3D10" : "C3D4") << ", ELSET=Eall\n";
+    for (int t = 0; t < mesh.num_tets(); ++t) {
+      out << t + 1;
+      for (int k = 0; k < 4; ++k) out << ", " << mesh.tets(t, k) + 1;
+      if (element == "c3d10") {
+        for (const auto& e : kEdges) {
+          const int a = std::min(mesh.tets(t, e[0]), mesh.tets(t, e[1]));
+          const int b = std::max(mesh.tets(t, e[0]), mesh.tets(t, e[1]));
+          out << ", " << midside.at({a, b});
+        }
+      }
+      out << "\n";
+    }
     out << "*NSET, NSET=Nclamp\n";
-    for (size_t i = 0; i < problem.clamped.size(); ++i)
-      out << problem.clamped[i] + 1 << (i % 10 == 9 || i + 1 == problem.clamped.size() ? "\n" : ", ");
+    for (size_t i = 0; i < clamped_nodes.size(); ++i)
+      out << clamped_nodes[i] << (i % 10 == 9 || i + 1 == clamped_nodes.size() ? "\n" : ", ");
     out << "*BOUNDARY\nNclamp, 1, 3\n";
-    out << "*MATERIAL, NAME=M\n*ELASTIC\n" << material.youngs_modulus << ", "
-        << material.poisson_ratio << "\n*DENSITY\n" << material.density << "\n";
+    out << "*MATERIAL, NAME=M\n";
+    if (ccx_material == "neo_hooke") {
+      const double E = material.youngs_modulus, nu = material.poisson_ratio;
+      const double mu = E / (2 * (1 + nu)), K = E / (3 * (1 - 2 * nu));
+      out << "*HYPERELASTIC, NEO HOOKE\n" << mu / 2 << ", " << 2 / K << "\n";
+    } else {
+      out << "*ELASTIC\n" << material.youngs_modulus << ", " << material.poisson_ratio << "\n";
+    }
+    out << "*DENSITY\n" << material.density << "\n";
     out << "*SOLID SECTION, ELSET=Eall, MATERIAL=M\n";
     if (nlgeom) {
       out << "*STEP, NLGEOM, INC=1000\n*STATIC\n0.05, 1.0, 1e-6, 0.1\n";

@@ -253,6 +253,8 @@ double BulkModulus(const ElementRest& rest);
 // cof F = det(F) F^-T = dJ/dF, column by column [f1 x f2, f2 x f0, f0 x f1] (also for
 // singular F).
 Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F);
+// det F - 1 without cancellation near F = I (in H = F - I: tr H + i2(H) + det H).
+double DeterminantMinusOne(const Eigen::Matrix3d& F);
 // psi(F) (per unit rest volume) and, if P is not null, dpsi/dF.
 double NeoHookeanDensity(const Eigen::Matrix3d& F, double mu, double kappa, Eigen::Matrix3d* P);
 // The Hessian of det F over vec F (column-major).

@@ -67,7 +67,9 @@ struct ForwardOptions {
   // Watchdog: a full Newton step that raises the potential is still taken; if within this
   // many further iterations the potential has not dropped below the point before it, the
   // solve returns there and backtracks. 0 = a monotone line search only. Corotational
-  // model without problem.potential only.
+  // model without problem.potential only (the neo-Hookean energy, not quadratic in the
+  // rotated frame, grows too fast along a rejected full step: from rest under a large load
+  // the first step can leave elements so distorted that the next tangent is singular).
   int watchdog_steps = 2;
   // Threads for the element loops and for the BLAS under CHOLMOD (OpenBLAS is held to
   // this many during the solve); 0 = OpenMP's current default (omp_get_max_threads).

@@ -47,10 +47,30 @@ double NeoHookeanKappa(const ElementRest& rest, bool nodal_volume) {
 
 double BulkModulus(const ElementRest& rest) { return rest.lambda + 2.0 * rest.mu / 3.0; }
 
+double DeterminantMinusOne(const Eigen::Matrix3d& F) {
+  const Eigen::Matrix3d H = F - Eigen::Matrix3d::Identity();
+  const double trace = H.trace();
+  return trace + 0.5 * (trace * trace - (H * H).trace()) + H.determinant();
+}
+
 double NeoHookeanDensity(const Eigen::Matrix3d& F, double mu, double kappa, Eigen::Matrix3d* P) {
-  const double J = F.determinant();
-  if (P != nullptr) *P = mu * F + (kappa * (J - 1.0) - mu) * Cofactor(F);
-  return 0.5 * mu * (F.squaredNorm() - 3.0) - mu * (J - 1.0) + 0.5 * kappa * (J - 1.0) * (J - 1.0);
+  // In H = F - I, so that no term of size mu cancels another near rest (|F|^2 - 3 and J - 1
+  // formed directly would leave round-off of eps mu in psi, which swamps the last Newton
+  // steps' decrease of a stiff body's potential):
+  //   J - 1 = tr H + i2(H) + det H,  i2 = ((tr H)^2 - tr(H^2)) / 2,
+  //   mu/2 (|F|^2 - 3) - mu (J - 1) = mu/2 |H|^2 - mu (i2(H) + det H),
+  //   F - cof F = H + H^T - tr(H) I - cof H.
+  const Eigen::Matrix3d H = F - Eigen::Matrix3d::Identity();
+  const double trace = H.trace();
+  const double i2 = 0.5 * (trace * trace - (H * H).trace());
+  const double det = H.determinant();
+  const double j1 = trace + i2 + det;  // J - 1
+  if (P != nullptr) {
+    Eigen::Matrix3d f_minus_cof = H + H.transpose() - Cofactor(H);
+    f_minus_cof.diagonal().array() -= trace;
+    *P = mu * f_minus_cof + (kappa * j1) * Cofactor(F);
+  }
+  return 0.5 * mu * H.squaredNorm() - mu * (i2 + det) + 0.5 * kappa * j1 * j1;
 }
 
 Matrix9 DeterminantHessian(const Eigen::Matrix3d& F) {

@@ -634,7 +634,7 @@ double QuasiStaticSolver::EvaluateElements(const Vertices& x,
 double QuasiStaticSolver::NodalVolume(const Vertices& x, std::vector<double>* element_pressure,
                                       std::vector<Vector12>* volume_gradient) const {
   const Tets& tets = model_.tets();
-  std::vector<double> volume(nt());
+  std::vector<double> volume_change(nt());  // v_e - V_e
   if (volume_gradient != nullptr) volume_gradient->resize(nt());
 #pragma omp parallel for schedule(static) num_threads(threads_)
   for (int e = 0; e < nt(); ++e) {
@@ -642,7 +642,7 @@ double QuasiStaticSolver::NodalVolume(const Vertices& x, std::vector<double>* el
     const Vector12 xe = model_.Gather(x, e);
     Eigen::Matrix<double, 3, 4> xm;
     for (int k = 0; k < 4; ++k) xm.col(k) = xe.segment<3>(3 * k);
-    volume[e] = rest.volume * DeformationGradient(xm, rest.dm_inv).determinant();
+    volume_change[e] = rest.volume * DeterminantMinusOne(DeformationGradient(xm, rest.dm_inv));
     if (volume_gradient != nullptr) (*volume_gradient)[e] = VolumeGradient(rest, xe);
   }
   std::vector<double> vertex_pressure(nv(), 0.0);
@@ -651,10 +651,10 @@ double QuasiStaticSolver::NodalVolume(const Vertices& x, std::vector<double>* el
   for (int v = 0; v < nv(); ++v) {
     const double V = nodal_rest_volume_[v];
     if (!(V > 0)) continue;
-    double current = 0.0;
+    double change = 0.0;
     for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s)
-      current += 0.25 * volume[element_slots_[s] / 4];
-    const double K = nodal_stiffness_[v] / V, strain = current / V - 1.0;
+      change += 0.25 * volume_change[element_slots_[s] / 4];
+    const double K = nodal_stiffness_[v] / V, strain = change / V;  // J_a - 1
     vertex_pressure[v] = K * strain;
     energy += 0.5 * K * V * strain * strain;
   }
@@ -977,7 +977,8 @@ void QuasiStaticSolver::Run() {
     double full_step_potential = 0.0;  // at reference + step
   } watch;
   const bool watchdog_allowed =
-      options_.watchdog_steps > 0 && !linear() && problem_.potential == nullptr;
+      options_.watchdog_steps > 0 && model_.type() == ElasticModelType::kCorotational &&
+      problem_.potential == nullptr;
   bool have_initial = false;
   double reference = 0.0;  // force scale of the relative tolerance
   double potential = 0.0, residual_norm = 0.0;
