@@ -14,6 +14,7 @@
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/io.h"
+#include "femreg/tracker.h"
 
 namespace femreg {
 namespace {
@@ -295,6 +296,29 @@ TEST(NeoHookeanForward, NodalVolumeRemovesVolumetricLocking) {
     EXPECT_GT(TipDeflection(nodal), 0.9 * reference);     // measured 1.15, 1.01
     EXPECT_LT(TipDeflection(nodal), 1.5 * reference);
   }
+}
+
+// Registration takes the element form under the FEM regularizer, and says what to change
+// otherwise.
+TEST(NeoHookeanRegistration, TrackerTakesTheElementAndRefusesWhatItCannotDo) {
+  const TetMesh mesh = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 4, 2, 2);
+  ObjectMaterial material;
+  material.model = MaterialModel::kNeoHookean;
+  RegistrationOptions options;
+  std::unique_ptr<Tracker> tracker;
+  EXPECT_TRUE(Tracker::Create({mesh}, {material}, options, &tracker).ok());
+
+  material.nodal_volume = true;
+  Status status = Tracker::Create({mesh}, {material}, options, &tracker);
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("volume nodal is for simulate only"), std::string::npos) << status.message();
+
+  material.nodal_volume = false;
+  options.regularizer = Regularizer::kMassSpring;
+  status = Tracker::Create({mesh}, {material}, options, &tracker);
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("needs registration.regularizer corotational"), std::string::npos)
+      << status.message();
 }
 
 }  // namespace

@@ -46,6 +46,10 @@ CASES = [
     ("soft cylinder, gravity (E=1e6)",
      "shape=cylinder n=3 radius=0.05 length=0.5 axial=20 E=1e6 nu=0.35 gravity=9.81", 4,
      HOOKE_RUNS + NEO_HOOKE_RUNS),
+    # What quadratic elements gain in bending at nu 0.3 (no locking): the reference for the
+    # nu 0.49 rows below.
+    ("beam 1k, gravity (E=1e8)", "shape=box n=4 length=1 height=0.1 E=1e8 nu=0.3 gravity=9.81", 1,
+     [("corotational", "element", "elastic", "c3d10", 1, "corotational vs C3D10 NLGEOM")]),
     ("beam 1k, gravity, nu 0.49 (E=1e8)", "shape=box n=4 length=1 height=0.1 E=1e8 nu=0.49 gravity=9.81",
      1, LOCKING_RUNS),
     ("soft cylinder, gravity, nu 0.49 (E=3e5)",

@@ -51,7 +51,8 @@ void SceneParser::ParseForward(const YamlValue& v) {
   if (v.Has("model")) {
     scene_->forward_model =
         ParseEnum(v["model"], std::vector<ElasticModelType>{ElasticModelType::kCorotational,
-                                                            ElasticModelType::kLinear});
+                                                            ElasticModelType::kLinear,
+                                                            ElasticModelType::kNeoHookean});
   }
   ForwardOptions& f = scene_->forward;
   if (v.Has("max_iterations")) f.max_iterations = IntAtLeast(v["max_iterations"], 1);

@@ -49,6 +49,7 @@ struct ObjectResult {
   int num_vertices = 0, num_tets = 0;
   int num_clamped = 0, num_prescribed = 0, num_loaded = 0;
   ForwardSummary summary;
+  std::string model, volume;  // the element it was solved with: model.type(), element/nodal
   std::string error;  // set when the object could not be run
   int max_vertex = -1;
   double max_displacement = 0.0;
@@ -97,6 +98,8 @@ bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
   result->num_loaded = static_cast<int>(problem.nodal_loads.size());
   ElasticModel model;
   model.Build(mesh, model_type, spec.Materials());
+  result->model = ToString(model.type());
+  result->volume = model.nodal_volume() ? "nodal" : "element";
   result->load_time_s = Seconds(start);
 
   start = std::chrono::steady_clock::now();
@@ -214,6 +217,8 @@ std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
        << "      \"error\": " << (r.error.empty() ? "null" : JsonString(r.error)) << ",\n"
        << "      \"vertices\": " << r.num_vertices << ",\n"
        << "      \"elements\": " << r.num_tets << ",\n"
+       << "      \"model\": " << JsonString(r.model) << ",\n"
+       << "      \"volume\": " << JsonString(r.volume) << ",\n"
        << "      \"clamped_vertices\": " << r.num_clamped << ",\n"
        << "      \"prescribed_vertices\": " << r.num_prescribed << ",\n"
        << "      \"loaded_vertices\": " << r.num_loaded << ",\n"
@@ -267,7 +272,14 @@ void RunSimulate(const SimulateOptions& options) {
 
   ElasticModelType model_type = scene.forward_model;
   if (!options.model.empty() && !FromString(options.model, &model_type)) {
-    return Fail("--model " + options.model + ": use corotational or linear");
+    return Fail("--model " + options.model + ": use corotational, linear or neo_hookean");
+  }
+  if (!options.model.empty()) {  // every object, whatever its material.model says
+    for (ObjectSpec& o : scene.objects) {
+      const bool neo_hookean = model_type == ElasticModelType::kNeoHookean;
+      o.material_model = neo_hookean ? MaterialModel::kNeoHookean : MaterialModel::kHooke;
+      o.nodal_volume = neo_hookean && o.nodal_volume;
+    }
   }
   ForwardOptions forward = scene.forward;
   if (options.load_steps > 0) forward.load_steps = options.load_steps;
@@ -344,8 +356,11 @@ void AddSimulateCommand(CLI::App* app) {
       ->required();
   cmd->add_option("--object", options->object, "Simulate only the object of this name");
   cmd->add_option("--model", options->model,
-                  "Elastic model, overrides the scene's forward.model")
-      ->check(CLI::IsMember({"corotational", "linear"}));
+                  "Elastic model of every object, overrides the scene's forward.model and its "
+                  "objects' material.model: corotational, linear (small strain) or neo_hookean "
+                  "(stable neo-Hookean, large strain and nu -> 0.5; per object: "
+                  "objects[i].material.model, with material.volume: nodal against locking)")
+      ->check(CLI::IsMember({"corotational", "linear", "neo_hookean"}));
   cmd->add_option("--load-steps", options->load_steps,
                   "Apply loads and displacements in N steps, overrides forward.load_steps")
       ->check(CLI::PositiveNumber);
