@@ -44,6 +44,22 @@ std::array<double, N> RandomBarycentric(std::mt19937* rng) {
   return b;
 }
 
+// A tetrahedron of 10 cm legs, its vertices moved by up to 2 cm, and its rest data.
+ElementRest RandomRest(std::mt19937* rng, double poisson_ratio) {
+  Eigen::Matrix<double, 3, 4> X;
+  X << 0, 0.1, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 0.1;
+  for (int c = 0; c < 4; ++c) X.col(c) += RandomPoint(rng, 0.02);
+  Material material;
+  material.youngs_modulus = 1e5;
+  material.poisson_ratio = poisson_ratio;
+  return BuildElementRest(X, material);
+}
+
+Eigen::Matrix3d RandomRotation(std::mt19937* rng) {
+  return Eigen::AngleAxisd(std::uniform_real_distribution<double>(0, 6)(*rng), RandomPoint(rng, 1).normalized())
+      .toRotationMatrix();
+}
+
 template <>
 struct Sample<energy::ElasticElement> {
   static constexpr const char* kName = "ElasticElement";
@@ -52,21 +68,13 @@ struct Sample<energy::ElasticElement> {
   energy::ElasticElement block;
   Vertices x;
   explicit Sample(std::mt19937* rng) {
-    Eigen::Matrix<double, 3, 4> X;
-    X << 0, 0.1, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 0.1;
-    for (int c = 0; c < 4; ++c) X.col(c) += RandomPoint(rng, 0.02);
-    Material material;
-    material.youngs_modulus = 1e5;
-    material.poisson_ratio = 0.35;
-    rest = BuildElementRest(X, material);
+    rest = RandomRest(rng, 0.35);
     // A rotated and strained state; its rotation held as in one inner solve.
-    const Eigen::Matrix3d Q =
-        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0, 6)(*rng), RandomPoint(rng, 1).normalized())
-            .toRotationMatrix();
+    const Eigen::Matrix3d Q = RandomRotation(rng);
     x.resize(4, 3);
     Eigen::Matrix<double, 3, 4> xm;
     for (int c = 0; c < 4; ++c) {
-      xm.col(c) = Q * X.col(c) + RandomPoint(rng, 0.02);
+      xm.col(c) = Q * rest.X.segment<3>(3 * c) + RandomPoint(rng, 0.02);
       x.row(c) = xm.col(c).transpose();
     }
     rotation = PolarRotation(DeformationGradient(xm, rest.dm_inv));
@@ -85,23 +93,16 @@ struct Sample<energy::NeoHookeanElement> {
   energy::NeoHookeanElement block;
   Vertices x;
   explicit Sample(std::mt19937* rng) {
-    Eigen::Matrix<double, 3, 4> X;
-    X << 0, 0.1, 0, 0, 0, 0, 0.1, 0, 0, 0, 0, 0.1;
-    for (int c = 0; c < 4; ++c) X.col(c) += RandomPoint(rng, 0.02);
-    Material material;
-    material.youngs_modulus = 1e5;
-    material.poisson_ratio = 0.45;
-    rest = BuildElementRest(X, material);
+    rest = RandomRest(rng, 0.45);
     // Rotated, stretched or compressed; one sample in five inverted (a vertex through the
     // opposite face).
-    const Eigen::Matrix3d Q =
-        Eigen::AngleAxisd(std::uniform_real_distribution<double>(0, 6)(*rng), RandomPoint(rng, 1).normalized())
-            .toRotationMatrix();
+    const Eigen::Matrix3d Q = RandomRotation(rng);
     const bool invert = std::uniform_int_distribution<int>(0, 4)(*rng) == 0;
     x.resize(4, 3);
     for (int c = 0; c < 4; ++c) {
-      Eigen::Vector3d p = X.col(c);
-      if (invert && c == 3) p = X.col(0) + (X.col(0) - X.col(3)) * 0.5;
+      const Eigen::Vector3d X0 = rest.X.segment<3>(0);
+      Eigen::Vector3d p = rest.X.segment<3>(3 * c);
+      if (invert && c == 3) p = X0 + (X0 - p) * 0.5;
       x.row(c) = (Q * p + RandomPoint(rng, 0.02)).transpose();
     }
     block.vertices = {{0, 1, 2, 3}};
