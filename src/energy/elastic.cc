@@ -86,6 +86,36 @@ bool NeoHookeanElement::Evaluate(const double* const* x, double* r, double** J) 
   return true;
 }
 
+bool NeoHookeanElement::Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
+                               Eigen::Matrix3d* jtj) const {
+  const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
+  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
+  Eigen::Matrix3d Ds;
+  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
+  const Eigen::Matrix3d F = Ds * rest->dm_inv;
+  const double d = F.determinant() - (1.0 + mu / kappa);
+  *squared_norm = V * (mu * F.squaredNorm() + kappa * d * d);
+  if (jtr == nullptr) return true;
+  Eigen::Matrix<double, 3, 4> b;
+  b.rightCols<3>() = rest->dm_inv.transpose();
+  b.col(0) = -b.rightCols<3>().rowwise().sum();
+  const Eigen::Matrix3d cof = Cofactor(F);
+  const Eigen::Matrix<double, 3, 4> forces = V * (mu * F + kappa * d * cof) * b;
+  for (int i = 0; i < 4; ++i) jtr[i] = forces.col(i);
+  if (jtj == nullptr) return true;
+  const Eigen::Matrix<double, 3, 4> c = cof * b;
+  const Eigen::Matrix4d dots = b.transpose() * b;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i; j < 4; ++j) {
+      Eigen::Matrix3d& block = jtj[i * 4 + j];
+      block.noalias() = (V * kappa) * c.col(i) * c.col(j).transpose();
+      block.diagonal().array() += V * mu * dots(i, j);
+      if (j != i) jtj[j * 4 + i] = block.transpose();
+    }
+  }
+  return true;
+}
+
 double NeoHookeanElement::Offset() const {
   const double mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
   return rest->volume * (3.0 * mu + mu * mu / kappa);

@@ -51,6 +51,11 @@ struct NeoHookeanElement {
   const ElementRest* rest = nullptr;
 
   bool Evaluate(const double* const* x, double* r, double** J) const;
+  // In closed form: |r|^2 = V (mu |F|^2 + kappa (J - alpha)^2), J_i^T r = V (mu F +
+  // kappa (J - alpha) cof F) b_i, J_i^T J_j = V (mu (b_i . b_j) I + kappa c_i c_j^T) with
+  // c = cof(F) b.
+  bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
+              Eigen::Matrix3d* jtj) const;
   double Offset() const;
 };
 
