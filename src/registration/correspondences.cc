@@ -287,7 +287,7 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
 
 void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceIndex& surface,
                int num_threads, std::vector<DataPair>* pairs, PairCounts* counts,
-               std::vector<int>* warm) {
+               std::vector<int>* warm, std::vector<char>* paired, bool freeze) {
   pairs->clear();
   *counts = PairCounts();
   const PointCloud& cloud = fc.cloud;
@@ -326,8 +326,12 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       nearest[static_cast<size_t>(i)] = q;
       dist2[static_cast<size_t>(i)] = d2;
     }
+    const bool hold = paired != nullptr && freeze && static_cast<int>(paired->size()) == ns;
+    if (paired != nullptr && !hold) paired->assign(static_cast<size_t>(ns), 0);
     for (int i = 0; i < ns; ++i) {
       const int q = nearest[static_cast<size_t>(i)];
+      const bool was_paired = hold && (*paired)[static_cast<size_t>(i)];
+      if (hold) (*paired)[static_cast<size_t>(i)] = 0;
       if (q < 0) continue;
       const double d2 = dist2[static_cast<size_t>(i)];
       const int v = state.surface_vertices[static_cast<size_t>(i)];
@@ -336,12 +340,19 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
         ++counts->rejected;
         continue;
       }
-      // Reciprocity: a vertex with no cloud point near it was not seen (or not yet reached);
-      // the cloud->model pairs bring it closer, and it pulls once within the trim.
-      if (d2 > trim2 || (view && !fc.Faces(x.row(v), normals.row(v)))) {
+      if (hold) {
+        // The set is held: the trim and the visibility are not asked again.
+        if (!was_paired) {
+          ++counts->trimmed;
+          continue;
+        }
+      } else if (d2 > trim2 || (view && !fc.Faces(x.row(v), normals.row(v)))) {
+        // Reciprocity: a vertex with no cloud point near it was not seen (or not yet
+        // reached); the cloud->model pairs bring it closer, and it pulls once within the trim.
         ++counts->trimmed;
         continue;
       }
+      if (paired != nullptr) (*paired)[static_cast<size_t>(i)] = 1;
       DataPair pair;
       pair.num_vertices = 1;
       pair.vertices[0] = v;

@@ -107,9 +107,16 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
 // queries start from it (SurfaceIndex::ClosestFrom) and it is updated. It belongs to one
 // frame's cloud and one surface topology: the caller empties it for a new frame or after
 // a fracture edit.
+// `paired`, if not null, is set to which surface vertices got a model->cloud pair. With
+// `freeze` (and `paired` from the last call on this frame), that set is held instead: a
+// vertex pairs, with its nearest point now, iff it was paired before and is within
+// data.max_distance, whatever the trim and the visibility say now. The pair set then no
+// longer switches between outer iterations, and the energy they minimize changes
+// continuously.
 void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceIndex& surface,
                int num_threads, std::vector<DataPair>* pairs, PairCounts* counts,
-               std::vector<int>* warm = nullptr);
+               std::vector<int>* warm = nullptr, std::vector<char>* paired = nullptr,
+               bool freeze = false);
 
 // The frame's per-vertex outputs (state.residuals, state.observed) and each object's
 // mesh.x from state.x. cloud_index may be null (no data).

@@ -227,6 +227,9 @@ bool DataTermOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(reciprocity) && reciprocity >= 0)) {
     return Fail(error, "data.reciprocity", "must be >= 0 (0 = off)", reciprocity);
   }
+  if (hold_pairs_after < 0) {
+    return Fail(error, "data.hold_pairs_after", "must be >= 0 (0 = never held)", hold_pairs_after);
+  }
   if (min_points < 0) return Fail(error, "data.min_points", "must be >= 0", min_points);
   if (!(std::isfinite(min_points_per_surface_vertex) && min_points_per_surface_vertex >= 0)) {
     return Fail(error, "data.min_points_per_surface_vertex", "must be >= 0",

@@ -82,6 +82,7 @@ struct Tracker::Impl {
   const SurfaceIndex& Surface() { return model_index.Get(state, 0.1 * mean_edge); }
   // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
   std::vector<int> warm_triangles;
+  std::vector<char> paired_vertices;
 };
 
 Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials) {
@@ -226,6 +227,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
 
   std::vector<DataPair> pairs;
   warm_triangles.clear();  // a new cloud
+  paired_vertices.clear();
   double previous_energy = std::numeric_limits<double>::infinity();
   for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
     if (!OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s)) break;
@@ -262,7 +264,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
 
   t0 = Clock::now();
   PairCounts counts;
-  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles);
+  const int hold = options.data.hold_pairs_after;
+  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
+            &paired_vertices, hold > 0 && k >= hold);
   s->time.correspondences += Seconds(t0);
   row.model_to_cloud = counts.model_to_cloud;
   row.cloud_to_model = counts.cloud_to_model;
@@ -344,6 +348,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       frame_problem.BuildFrameTerms(&state);
       model_index.Reset();
       warm_triangles.clear();  // a new surface
+      paired_vertices.clear();
       FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
       *previous_energy = std::numeric_limits<double>::infinity();
       moved = std::numeric_limits<double>::infinity();  // a new topology: not converged

@@ -78,7 +78,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("data")) {
     const YamlValue d = v["data"];
     d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
-                 "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity",
+                 "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity", "hold_pairs_after",
                  "min_points", "min_points_per_surface_vertex"});
     DataTermOptions& o = r.data;
     if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
@@ -105,6 +105,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       o.auto_visibility = false;
     }
     if (d.Has("reciprocity")) o.reciprocity = d["reciprocity"].AsDouble();
+    if (d.Has("hold_pairs_after")) o.hold_pairs_after = IntAtLeast(d["hold_pairs_after"], 0);
     if (d.Has("min_points")) o.min_points = d["min_points"].AsInt();
     if (d.Has("min_points_per_surface_vertex")) {
       o.min_points_per_surface_vertex = d["min_points_per_surface_vertex"].AsDouble();

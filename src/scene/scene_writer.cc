@@ -309,6 +309,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   Put(data, "cloud_stride", a.cloud_stride, d.data.cloud_stride);
   Put(data, "auto_visibility", a.auto_visibility, d.data.auto_visibility);
   Put(data, "reciprocity", a.reciprocity, d.data.reciprocity);
+  Put(data, "hold_pairs_after", a.hold_pairs_after, d.data.hold_pairs_after);
   Put(data, "min_points", a.min_points, d.data.min_points);
   Put(data, "min_points_per_surface_vertex", a.min_points_per_surface_vertex,
       d.data.min_points_per_surface_vertex);
