@@ -250,6 +250,9 @@ double NeoHookeanKappa(const ElementRest& rest, bool nodal_volume);
 // The bulk modulus lambda + 2 mu / 3 (Pa), of the nodal volume's energy.
 double BulkModulus(const ElementRest& rest);
 
+// The shape-function gradients b_k of the element as columns (F = sum_k x_k b_k^T; b_1..b_3
+// the rows of D_m^-1, b_0 = -(their sum)).
+Eigen::Matrix<double, 3, 4> ShapeGradients(const ElementRest& rest);
 // cof F = det(F) F^-T = dJ/dF, column by column [f1 x f2, f2 x f0, f0 x f1] (also for
 // singular F).
 Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F);

@@ -6,6 +6,17 @@
 namespace femreg {
 namespace energy {
 
+namespace {
+// F = D_s D_m^-1 at the stencil's positions, from edge vectors (no cancellation of a large
+// translation).
+Eigen::Matrix3d StencilF(const double* const* x, const Eigen::Matrix3d& dm_inv) {
+  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
+  Eigen::Matrix3d Ds;
+  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
+  return Ds * dm_inv;
+}
+}  // namespace
+
 bool ElasticElement::Evaluate(const double* const* x, double* r, double** J) const {
   Vector12 xe;
   for (int i = 0; i < 4; ++i) xe.segment<3>(3 * i) = Eigen::Map<const Eigen::Vector3d>(x[i]);
@@ -29,12 +40,8 @@ bool ElasticElement::Normal(const double* const* x, double* squared_norm, Eigen:
   b.bottomRows<3>() = dm_inv;
   b.row(0) = -(dm_inv.row(0) + dm_inv.row(1) + dm_inv.row(2));
   // sum_j u_j b_j^T = R^T F - I (sum_j X_j b_j^T = I): the displacement gradient in the
-  // element's frame, from edge vectors (no cancellation of a large translation).
-  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
-  Eigen::Matrix3d Ds;
-  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
-  const Eigen::Matrix3d F = Ds * dm_inv;
-  Eigen::Matrix3d e = R.transpose() * F;
+  // element's frame.
+  Eigen::Matrix3d e = R.transpose() * StencilF(x, dm_inv);
   e.diagonal().array() -= 1.0;
   e = (0.5 * (e + e.transpose())).eval();
   const double trace = e.trace();
@@ -63,18 +70,12 @@ bool ElasticElement::Normal(const double* const* x, double* squared_norm, Eigen:
 
 bool NeoHookeanElement::Evaluate(const double* const* x, double* r, double** J) const {
   const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
-  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
-  Eigen::Matrix3d Ds;
-  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
-  const Eigen::Matrix3d F = Ds * rest->dm_inv;
+  const Eigen::Matrix3d F = StencilF(x, rest->dm_inv);
   const double a = std::sqrt(V * mu), c = std::sqrt(V * kappa);
   Eigen::Map<Eigen::Matrix<double, 9, 1>>{r} = a * Eigen::Map<const Eigen::Matrix<double, 9, 1>>(F.data());
   r[9] = c * (F.determinant() - (1.0 + mu / kappa));
   if (J == nullptr) return true;
-  // Shape gradients as columns: b_1..b_3 the rows of D_m^-1, b_0 = -(their sum).
-  Eigen::Matrix<double, 3, 4> b;
-  b.rightCols<3>() = rest->dm_inv.transpose();
-  b.col(0) = -b.rightCols<3>().rowwise().sum();
+  const Eigen::Matrix<double, 3, 4> b = ShapeGradients(*rest);
   const Eigen::Matrix3d cof = Cofactor(F);
   for (int i = 0; i < 4; ++i) {
     if (J[i] == nullptr) continue;
@@ -89,16 +90,11 @@ bool NeoHookeanElement::Evaluate(const double* const* x, double* r, double** J) 
 bool NeoHookeanElement::Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
                                Eigen::Matrix3d* jtj) const {
   const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
-  const Eigen::Vector3d x0 = Eigen::Map<const Eigen::Vector3d>(x[0]);
-  Eigen::Matrix3d Ds;
-  for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
-  const Eigen::Matrix3d F = Ds * rest->dm_inv;
+  const Eigen::Matrix3d F = StencilF(x, rest->dm_inv);
   const double d = F.determinant() - (1.0 + mu / kappa);
   *squared_norm = V * (mu * F.squaredNorm() + kappa * d * d);
   if (jtr == nullptr) return true;
-  Eigen::Matrix<double, 3, 4> b;
-  b.rightCols<3>() = rest->dm_inv.transpose();
-  b.col(0) = -b.rightCols<3>().rowwise().sum();
+  const Eigen::Matrix<double, 3, 4> b = ShapeGradients(*rest);
   const Eigen::Matrix3d cof = Cofactor(F);
   const Eigen::Matrix<double, 3, 4> forces = V * (mu * F + kappa * d * cof) * b;
   for (int i = 0; i < 4; ++i) jtr[i] = forces.col(i);

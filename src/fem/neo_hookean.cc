@@ -17,21 +17,19 @@ Eigen::Matrix3d Cross(const Eigen::Vector3d& v) {
   return m;
 }
 
-// Shape-function gradients b_k as columns (F = sum_k x_k b_k^T).
+// F of the element at x (its 4 positions stacked: a 3 by 4 matrix column by column).
+Eigen::Matrix3d ElementF(const ElementRest& rest, const Vector12& x) {
+  return DeformationGradient(Eigen::Map<const Eigen::Matrix<double, 3, 4>>(x.data()), rest.dm_inv);
+}
+
+}  // namespace
+
 Eigen::Matrix<double, 3, 4> ShapeGradients(const ElementRest& rest) {
   Eigen::Matrix<double, 3, 4> b;
   b.rightCols<3>() = rest.dm_inv.transpose();
   b.col(0) = -b.rightCols<3>().rowwise().sum();
   return b;
 }
-
-Eigen::Matrix3d ElementF(const ElementRest& rest, const Vector12& x) {
-  Eigen::Matrix3d Ds;
-  for (int j = 0; j < 3; ++j) Ds.col(j) = x.segment<3>(3 * (j + 1)) - x.segment<3>(0);
-  return Ds * rest.dm_inv;
-}
-
-}  // namespace
 
 Eigen::Matrix3d Cofactor(const Eigen::Matrix3d& F) {
   Eigen::Matrix3d c;

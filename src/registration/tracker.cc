@@ -254,9 +254,11 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   femreg::OuterIteration row;
   row.iteration = k + 1;
   auto t0 = Clock::now();
-  // Only the corotational regularizer reads rotations: what is off costs nothing.
+  // Only the corotational element reads rotations: what is off costs nothing (neo-Hookean
+  // objects have none to hold; the fracture step refreshes its own).
   if (options.regularizer == Regularizer::kCorotational) {
     for (ObjectState& o : state.objects) {
+      if (o.model.type() == ElasticModelType::kNeoHookean) continue;
       o.model.UpdateRotations(state.x.middleRows(o.offset, o.mesh.num_vertices()));
     }
   }

@@ -199,9 +199,7 @@ std::string OnPath(const std::string& name) {
   }
   return "";
 }
-}  // namespace
 
-namespace {
 // Whether `python` imports matplotlib (quietly: its traceback is not the user's business).
 bool HasMatplotlib(const std::string& python) {
   if (python.empty() || python.find('\'') != std::string::npos) return false;
