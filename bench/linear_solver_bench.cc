@@ -15,6 +15,7 @@
 #include "femreg/io.h"
 #include "parallel/threads.h"
 #include "solvers/fast/fast_backend.h"
+#include "solvers/fast/supernodal_solve.h"
 
 namespace {
 
@@ -68,6 +69,30 @@ void Solve(benchmark::State& state) {
   state.counters["dofs"] = static_cast<double>(H.rows());
 }
 
+// The back end's own substitutions with the supernodal factor (PCG's preconditioner), its
+// values in Scalar; on `threads` threads.
+template <class Scalar>
+void OwnSolve(benchmark::State& state) {
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
+  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
+    const cholmod_factor* raw() const { return m_cholmodFactor; }
+  } llt;
+  llt.setMode(Eigen::CholmodSupernodalLLt);
+  llt.compute(H);
+  femreg::fast_backend::SupernodalSolve<Scalar> solve;
+  solve.Load(*llt.raw(), true, static_cast<int>(state.range(1)));
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(H.rows());
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    solve.Solve(b, &x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+  state.counters["serial"] = solve.serial_fraction();
+  state.counters["nnzL"] = static_cast<double>(llt.raw()->xsize);
+  state.counters["nsuper"] = static_cast<double>(llt.raw()->nsuper);
+}
+
 void Product(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
   const Eigen::VectorXd p = Eigen::VectorXd::Ones(H.rows());
@@ -102,6 +127,8 @@ BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
+BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(Sizes);
+BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
 BENCHMARK(Product)->Apply(Sizes);
 BENCHMARK(BlockProduct)->Apply(Sizes);
 
