@@ -161,10 +161,32 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
 // The dense kernels of one supernode: L its nrow x ncol block (column-major, the diagonal
 // block on top), z its rows. Columns go four at a time: one pass over the rows below a
 // block of four updates them (forward) or forms their four dot products (backward), so z
-// is read once per four columns, and the sums run in fixed order (the same result on every
-// machine up to the compiler's contraction into fused multiply-adds).
+// is read once per four columns. The rows go four at a time in GCC's vector types (two SSE
+// registers each by default, one AVX register in the x86-64-v3 clone); a dot product keeps
+// four lane sums added in a fixed order at the end, so the result does not depend on the
+// clone (up to the fused multiply-adds the compiler forms).
+// (GCC notes that passing these types by value changes the ABI between the clones; they are
+// inlined, never passed across a call.)
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double Double4 __attribute__((vector_size(32)));
+typedef float Float4 __attribute__((vector_size(16)));
+
+inline Double4 Load4(const double* p) {
+  Double4 v;
+  __builtin_memcpy(&v, p, sizeof(v));
+  return v;
+}
+inline Double4 Load4(const float* p) {
+  Float4 v;
+  __builtin_memcpy(&v, p, sizeof(v));
+  return __builtin_convertvector(v, Double4);
+}
+inline void Store4(double* p, Double4 v) { __builtin_memcpy(p, &v, sizeof(v)); }
+inline double Sum(Double4 v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
 template <class Scalar>
-__attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(const Scalar* L, int nrow, int ncol, double* z) {
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(
+    const Scalar* L, int nrow, int ncol, double* z) {
   int j0 = 0;
   for (; j0 + 4 <= ncol; j0 += 4) {
     const Scalar* c0 = L + static_cast<int64_t>(j0) * nrow;
@@ -179,7 +201,12 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(c
     z[j0 + 1] = z1;
     z[j0 + 2] = z2;
     z[j0 + 3] = z3;
-    for (int i = j0 + 4; i < nrow; ++i) {
+    int i = j0 + 4;
+    for (; i + 4 <= nrow; i += 4) {
+      Store4(z + i, Load4(z + i) - ((Load4(c0 + i) * z0 + Load4(c1 + i) * z1) +
+                                    (Load4(c2 + i) * z2 + Load4(c3 + i) * z3)));
+    }
+    for (; i < nrow; ++i) {
       z[i] -= (static_cast<double>(c0[i]) * z0 + static_cast<double>(c1[i]) * z1) +
               (static_cast<double>(c2[i]) * z2 + static_cast<double>(c3[i]) * z3);
     }
@@ -188,37 +215,44 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(c
     const Scalar* c = L + static_cast<int64_t>(j) * nrow;
     const double zj = z[j] / c[j];
     z[j] = zj;
-    for (int i = j + 1; i < nrow; ++i) z[i] -= static_cast<double>(c[i]) * zj;
+    int i = j + 1;
+    for (; i + 4 <= nrow; i += 4) Store4(z + i, Load4(z + i) - Load4(c + i) * zj);
+    for (; i < nrow; ++i) z[i] -= static_cast<double>(c[i]) * zj;
   }
 }
 
+// sum_{i in [begin, nrow)} c[i] z[i], in four lanes.
 template <class Scalar>
-__attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardKernel(const Scalar* L, int nrow, int ncol, double* z) {
+inline double Dot(const Scalar* c, const double* z, int begin, int nrow) {
+  Double4 a = {0.0, 0.0, 0.0, 0.0};
+  int i = begin;
+  for (; i + 4 <= nrow; i += 4) a += Load4(c + i) * Load4(z + i);
+  for (int l = 0; i < nrow; ++i, ++l) a[l] += static_cast<double>(c[i]) * z[i];
+  return Sum(a);
+}
+
+template <class Scalar>
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardKernel(
+    const Scalar* L, int nrow, int ncol, double* z) {
   // The columns past the last full block of four, last first; then the blocks.
   const int blocks_end = ncol - ncol % 4;
   for (int j = ncol - 1; j >= blocks_end; --j) {
     const Scalar* c = L + static_cast<int64_t>(j) * nrow;
-    double sum = 0.0;
-    for (int i = j + 1; i < nrow; ++i) sum += static_cast<double>(c[i]) * z[i];
-    z[j] = (z[j] - sum) / c[j];
+    z[j] = (z[j] - Dot(c, z, j + 1, nrow)) / c[j];
   }
   for (int j0 = blocks_end - 4; j0 >= 0; j0 -= 4) {
     const Scalar* c0 = L + static_cast<int64_t>(j0) * nrow;
     const Scalar* c1 = c0 + nrow;
     const Scalar* c2 = c1 + nrow;
     const Scalar* c3 = c2 + nrow;
-    // Four lanes per sum (rows i, i + 1, i + 2, i + 3), added at the end: vector registers
-    // without reordering any sum.
-    double a0[4] = {0, 0, 0, 0}, a1[4] = {0, 0, 0, 0}, a2[4] = {0, 0, 0, 0}, a3[4] = {0, 0, 0, 0};
+    Double4 a0 = {0.0, 0.0, 0.0, 0.0}, a1 = a0, a2 = a0, a3 = a0;
     int i = j0 + 4;
     for (; i + 4 <= nrow; i += 4) {
-      for (int l = 0; l < 4; ++l) {
-        const double zi = z[i + l];
-        a0[l] += static_cast<double>(c0[i + l]) * zi;
-        a1[l] += static_cast<double>(c1[i + l]) * zi;
-        a2[l] += static_cast<double>(c2[i + l]) * zi;
-        a3[l] += static_cast<double>(c3[i + l]) * zi;
-      }
+      const Double4 zi = Load4(z + i);
+      a0 += Load4(c0 + i) * zi;
+      a1 += Load4(c1 + i) * zi;
+      a2 += Load4(c2 + i) * zi;
+      a3 += Load4(c3 + i) * zi;
     }
     for (int l = 0; i < nrow; ++i, ++l) {
       a0[l] += static_cast<double>(c0[i]) * z[i];
@@ -226,10 +260,7 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardKernel(
       a2[l] += static_cast<double>(c2[i]) * z[i];
       a3[l] += static_cast<double>(c3[i]) * z[i];
     }
-    const double s0 = (a0[0] + a0[1]) + (a0[2] + a0[3]);
-    const double s1 = (a1[0] + a1[1]) + (a1[2] + a1[3]);
-    const double s2 = (a2[0] + a2[1]) + (a2[2] + a2[3]);
-    const double s3 = (a3[0] + a3[1]) + (a3[2] + a3[3]);
+    const double s0 = Sum(a0), s1 = Sum(a1), s2 = Sum(a2), s3 = Sum(a3);
     const double z3 = (z[j0 + 3] - s3) / c3[j0 + 3];
     const double z2 = (z[j0 + 2] - s2 - c2[j0 + 3] * z3) / c2[j0 + 2];
     const double z1 = (z[j0 + 1] - s1 - c1[j0 + 2] * z2 - c1[j0 + 3] * z3) / c1[j0 + 1];
