@@ -496,9 +496,16 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
   bool new_structure = false;
   if (!analysed) {
     factor.setMode(Eigen::CholmodSupernodalLLt);
-    // The fill-reducing ordering is CHOLMOD's default choice, AMD: on the demo's system
-    // (nnz(H) 123k) it gives nnz(L) 364k and 51 Mflop per factorization, METIS 418k and 73
-    // Mflop, nested dissection 413k and 72 Mflop.
+    // The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
+    // nnz(L). Neither wins everywhere: on the demo's slender beam AMD gives nnz(L) 364k and
+    // 51 Mflop per factorization, METIS 418k and 73; on the organ_patch body at 2197
+    // vertices AMD 1853k and 908 Mflop, METIS 1478k and 534, at 3375 vertices 3947k / 2918
+    // against 2793k / 1300. (CHOLMOD's default tries METIS only when AMD's flops per entry
+    // of L pass 500, which the 2197-vertex body misses at 490.)
+    cholmod_common& common = factor.cholmod();
+    common.nmethods = 2;
+    common.method[0].ordering = CHOLMOD_AMD;
+    common.method[1].ordering = CHOLMOD_METIS;
     factor.analyzePattern(H);
     analysed = true;
     new_structure = true;
@@ -506,7 +513,6 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     // (2 nnz(H)); the factorization: CHOLMOD's count. Both run at about the same rate on one
     // core (bench/linear_solver_bench.cc, 1k vertices: factorization 8.2 ms, solve pair
     // 0.22 ms, product 0.05 ms: 29 iterations; this estimate gives 29 on the demo).
-    const cholmod_common& common = factor.cholmod();
     const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
     pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   }

@@ -29,6 +29,7 @@ namespace {
 constexpr double kA = 0.08, kB = 0.055, kC = 0.035, kD = 0.012;  // m
 constexpr double kClampX = -0.056;       // vertices with x <= this are clamped (the far lobe)
 constexpr int kFrames = 12;
+constexpr int kTruthDivisions = 8;       // the ground truth's mesh (4913 vertices)
 constexpr int kPoints = 500;             // per cloud
 constexpr double kNoise = 3e-4;          // m, per coordinate
 constexpr double kPatchFraction = 0.15;  // of the rest surface area
@@ -98,14 +99,22 @@ struct Gaussian {
 
 }  // namespace
 
-Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int done, int total)) {
+TetMesh OrganPatchMesh(int divisions) { return OrganMesh(divisions); }
+
+Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int done, int total),
+                                  int divisions) {
+  if (divisions < 2 || divisions > kTruthDivisions - 1) {
+    return Status::Error("organ_patch: divisions must be 2 to " + std::to_string(kTruthDivisions - 1) +
+                         " (the ground truth's mesh has " + std::to_string(kTruthDivisions) +
+                         "), got " + std::to_string(divisions));
+  }
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "clouds", ec);
   fs::create_directories(fs::path(dir) / "ground_truth", ec);
   if (ec) return Status::Error(dir + ": cannot create: " + ec.message());
 
-  const TetMesh coarse = OrganMesh(4);
-  TetMesh fine = OrganMesh(8);
+  const TetMesh coarse = OrganMesh(divisions);
+  TetMesh fine = OrganMesh(kTruthDivisions);
   Material truth_material;
   truth_material.youngs_modulus = 5e3;
   truth_material.poisson_ratio = 0.47;
@@ -224,15 +233,16 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   readme << line
          << " of the surface (the tool's footprint hidden). The clouds carry no viewpoint and "
             "the scene no camera: the partial-view case of docs/hard_cases.md.\n\n"
-            "Ground truth: corotational FEM on the same shape twice as finely divided ("
+            "Ground truth: corotational FEM on the same shape more finely divided ("
          << fine.num_vertices() << " vertices), Poisson ratio 0.47 against the tracker's 0.45, "
             "interpolated at the tracked vertices; `visible` marks the tracked vertices in the "
             "patch. ";
   std::snprintf(line, sizeof(line), "Mean vertex motion at the last frame: %.2f mm (the error of doing nothing).\n\n",
                 mean_motion * 1e3);
   readme << line
-         << "Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); "
-            "deterministic.\n\n"
+         << (divisions == 4 ? std::string("Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ")
+                            : "Made by `femreg organ-data --divisions " + std::to_string(divisions) + "`; ")
+         << "deterministic.\n\n"
             "    femreg register --scene datasets/organ_patch/scene.yaml --frames datasets/organ_patch/clouds \\\n"
             "        --ground-truth datasets/organ_patch/ground_truth --out /tmp/organ_patch\n";
   return WriteFileAtomically((fs::path(dir) / "README.md").string(), readme.str());
