@@ -165,24 +165,25 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
 // registers each by default, one AVX register in the x86-64-v3 clone); a dot product keeps
 // four lane sums added in a fixed order at the end, so the result does not depend on the
 // clone (up to the fused multiply-adds the compiler forms).
-// (GCC notes that passing these types by value changes the ABI between the clones; they are
-// inlined, never passed across a call.)
-#pragma GCC diagnostic ignored "-Wpsabi"
+// The helpers take and give them through pointers and references: a vector passed by
+// value would have one calling convention in the AVX2 clone and another in the default one.
 typedef double Double4 __attribute__((vector_size(32)));
 typedef float Float4 __attribute__((vector_size(16)));
 
-inline Double4 Load4(const double* p) {
-  Double4 v;
-  __builtin_memcpy(&v, p, sizeof(v));
-  return v;
+inline void Load4(const double* p, Double4* v) { __builtin_memcpy(v, p, sizeof(*v)); }
+inline void Load4(const float* p, Double4* v) {
+  Float4 f;
+  __builtin_memcpy(&f, p, sizeof(f));
+  *v = __builtin_convertvector(f, Double4);
 }
-inline Double4 Load4(const float* p) {
-  Float4 v;
-  __builtin_memcpy(&v, p, sizeof(v));
-  return __builtin_convertvector(v, Double4);
+inline void Store4(double* p, const Double4& v) { __builtin_memcpy(p, &v, sizeof(v)); }
+inline double Sum(const Double4& v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+// Rows i..i+3 of z and of the four columns starting at c0 (nrow apart).
+template <class Scalar>
+inline void LoadRows(const Scalar* c0, int nrow, int i, const double* z, Double4* zi, Double4* l) {
+  Load4(z + i, zi);
+  for (int k = 0; k < 4; ++k) Load4(c0 + static_cast<int64_t>(k) * nrow + i, l + k);
 }
-inline void Store4(double* p, Double4 v) { __builtin_memcpy(p, &v, sizeof(v)); }
-inline double Sum(Double4 v) { return (v[0] + v[1]) + (v[2] + v[3]); }
 
 template <class Scalar>
 __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(
@@ -203,8 +204,9 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(
     z[j0 + 3] = z3;
     int i = j0 + 4;
     for (; i + 4 <= nrow; i += 4) {
-      Store4(z + i, Load4(z + i) - ((Load4(c0 + i) * z0 + Load4(c1 + i) * z1) +
-                                    (Load4(c2 + i) * z2 + Load4(c3 + i) * z3)));
+      Double4 zi, l[4];
+      LoadRows(c0, nrow, i, z, &zi, l);
+      Store4(z + i, zi - ((l[0] * z0 + l[1] * z1) + (l[2] * z2 + l[3] * z3)));
     }
     for (; i < nrow; ++i) {
       z[i] -= (static_cast<double>(c0[i]) * z0 + static_cast<double>(c1[i]) * z1) +
@@ -216,7 +218,12 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(
     const double zj = z[j] / c[j];
     z[j] = zj;
     int i = j + 1;
-    for (; i + 4 <= nrow; i += 4) Store4(z + i, Load4(z + i) - Load4(c + i) * zj);
+    for (; i + 4 <= nrow; i += 4) {
+      Double4 zi, l;
+      Load4(z + i, &zi);
+      Load4(c + i, &l);
+      Store4(z + i, zi - l * zj);
+    }
     for (; i < nrow; ++i) z[i] -= static_cast<double>(c[i]) * zj;
   }
 }
@@ -226,7 +233,12 @@ template <class Scalar>
 inline double Dot(const Scalar* c, const double* z, int begin, int nrow) {
   Double4 a = {0.0, 0.0, 0.0, 0.0};
   int i = begin;
-  for (; i + 4 <= nrow; i += 4) a += Load4(c + i) * Load4(z + i);
+  for (; i + 4 <= nrow; i += 4) {
+    Double4 l, zi;
+    Load4(c + i, &l);
+    Load4(z + i, &zi);
+    a += l * zi;
+  }
   for (int l = 0; i < nrow; ++i, ++l) a[l] += static_cast<double>(c[i]) * z[i];
   return Sum(a);
 }
@@ -248,11 +260,12 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardKernel(
     Double4 a0 = {0.0, 0.0, 0.0, 0.0}, a1 = a0, a2 = a0, a3 = a0;
     int i = j0 + 4;
     for (; i + 4 <= nrow; i += 4) {
-      const Double4 zi = Load4(z + i);
-      a0 += Load4(c0 + i) * zi;
-      a1 += Load4(c1 + i) * zi;
-      a2 += Load4(c2 + i) * zi;
-      a3 += Load4(c3 + i) * zi;
+      Double4 zi, l[4];
+      LoadRows(c0, nrow, i, z, &zi, l);
+      a0 += l[0] * zi;
+      a1 += l[1] * zi;
+      a2 += l[2] * zi;
+      a3 += l[3] * zi;
     }
     for (int l = 0; i < nrow; ++i, ++l) {
       a0[l] += static_cast<double>(c0[i]) * z[i];
