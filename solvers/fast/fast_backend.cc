@@ -526,8 +526,8 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
   factor_valid = factor.info() == Eigen::Success;
   // PCG's substitutions: the factor's values in single precision, on the back end's threads.
   // Demo, 24 PCG iterations per frame (the same count as with CHOLMOD's double solves),
-  // linear solves per frame: 1 thread 8.5 -> 7.5 ms, 2 threads 8.4 -> 5.9; 3.7k vertices,
-  // 2 threads: 147 -> 84-92 ms.
+  // linear solves per frame on 1 thread: 8.4-8.7 -> 5.6-5.9 ms; the organ_patch body at 3375
+  // vertices, 2 threads: 191-288 -> 61-124 ms (with METIS, below; shared, noisy machine).
   if (!factor_valid || !substitutions.Load(*factor.raw(), new_structure, threads)) {
     substitutions = SupernodalSolve<float>();
   }
