@@ -338,7 +338,9 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
     Eigen::VectorXd x;
     exact.Solve(b, &x);
     EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-10 * scale) << threads << " threads";
-    if (threads > 1) EXPECT_GT(exact.serial_fraction(), 0.0);
+    if (threads > 1) {
+      EXPECT_GT(exact.serial_fraction(), 0.0);
+    }
     EXPECT_LT(exact.serial_fraction(), 1.0);
     fast_backend::SupernodalSolve<float> single;
     ASSERT_TRUE(single.Load(*llt.raw(), true, threads));
@@ -356,6 +358,13 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
     EXPECT_LE((x - 0.5 * expected).lpNorm<Eigen::Infinity>(), 1e-10 * scale) << threads << " threads";
     llt.factorize(H);
   }
+  // A failed factorization (not positive definite): refused.
+  Eigen::SparseMatrix<double> indefinite = -H;
+  llt.factorize(indefinite);
+  ASSERT_NE(llt.info(), Eigen::Success);
+  fast_backend::SupernodalSolve<float> failed;
+  EXPECT_FALSE(failed.Load(*llt.raw(), false, 2));
+  EXPECT_FALSE(failed.loaded());
   // Not a supernodal LL^T factor: refused.
   Factor simplicial;
   simplicial.setMode(Eigen::CholmodSimplicialLLt);

@@ -16,7 +16,7 @@ namespace {
 // set per thread (owner[s] = its thread) and the rest, the top (owner -1), which runs on one
 // thread. Starting from the roots, the heaviest subtree is split (its root goes to the top,
 // its children become subtrees) while that lowers the cost top + largest group; the groups
-// are filled heaviest subtree first into the lightest group.
+// are filled heaviest subtree first into the lightest group. Empty: no cut beats one thread.
 std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<double>& work,
                          int threads) {
   const int nsuper = static_cast<int>(parent.size());
@@ -55,9 +55,10 @@ std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<doubl
       best_candidates = candidates;
       best_bin_of = bin_of;
     }
-    // Split the heaviest subtree, unless it is a leaf or already small.
+    // Split the heaviest subtree, unless it is a leaf or already small, or the top alone
+    // already costs as much as the best cut (it only grows).
     const int heaviest = candidates.front();
-    if (children[static_cast<size_t>(heaviest)].empty() ||
+    if (children[static_cast<size_t>(heaviest)].empty() || top_work + work[static_cast<size_t>(heaviest)] >= best_cost ||
         subtree[static_cast<size_t>(heaviest)] < 0.25 * total / threads) {
       break;
     }
@@ -66,11 +67,8 @@ std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<doubl
     top_work += work[static_cast<size_t>(heaviest)];
     for (int c : children[static_cast<size_t>(heaviest)]) candidates.push_back(c);
   }
+  if (best_candidates.empty()) return {};  // no cut does better than one thread
   std::vector<int> owner(static_cast<size_t>(nsuper), -2);
-  if (best_candidates.empty()) {  // one thread does it all
-    std::fill(owner.begin(), owner.end(), 0);
-    return owner;
-  }
   for (int s : best_top) owner[static_cast<size_t>(s)] = -1;
   for (size_t k = 0; k < best_candidates.size(); ++k) {
     owner[static_cast<size_t>(best_candidates[k])] = best_bin_of[k];
@@ -86,12 +84,14 @@ std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<doubl
 template <class Scalar>
 bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, int threads) {
   if (!L.is_super || !L.is_ll || L.itype != CHOLMOD_INT || L.xtype != CHOLMOD_REAL ||
-      L.dtype != CHOLMOD_DOUBLE || L.x == nullptr) {
+      L.dtype != CHOLMOD_DOUBLE || L.x == nullptr || L.minor != L.n) {
     loaded_ = false;
     return false;
   }
   threads = std::max(1, threads);
-  if (new_structure || !loaded_ || n_ != static_cast<int>(L.n) || threads != threads_) {
+  if (new_structure || !loaded_ || n_ != static_cast<int>(L.n) || threads != threads_ ||
+      super_.size() != L.nsuper + 1 || values_.size() != L.xsize) {
+    loaded_ = false;  // until the structure is whole again
     n_ = static_cast<int>(L.n);
     threads_ = threads;
     const int nsuper = static_cast<int>(L.nsuper);
@@ -128,11 +128,12 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
     groups_.assign(1, {});
     top_.clear();
     serial_fraction_ = 0.0;
-    if (threads_ == 1) {
+    const std::vector<int> owner = threads_ == 1 ? std::vector<int>() : CutTree(parent, work, threads_);
+    if (owner.empty()) {  // one thread, or no cut worth a team: the serial order
       groups_[0].resize(static_cast<size_t>(nsuper));
       std::iota(groups_[0].begin(), groups_[0].end(), 0);
+      serial_fraction_ = threads_ == 1 ? 0.0 : 1.0;
     } else {
-      const std::vector<int> owner = CutTree(parent, work, threads_);
       groups_.assign(static_cast<size_t>(threads_), {});
       for (int k = 0; k < nsuper; ++k) {
         const int o = owner[static_cast<size_t>(k)];
@@ -157,6 +158,8 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
   loaded_ = true;
   return true;
 }
+
+namespace {
 
 // The dense kernels of one supernode: L its nrow x ncol block (column-major, the diagonal
 // block on top), z its rows. Columns go four at a time: one pass over the rows below a
@@ -284,6 +287,8 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardKernel(
     z[j0 + 3] = z3;
   }
 }
+
+}  // namespace
 
 // Supernode s of L y = b: its columns' values from b less the updates `acc` holds, then
 // its own updates of the rows below into `acc`.

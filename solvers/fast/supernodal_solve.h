@@ -37,7 +37,8 @@ class SupernodalSolve {
   bool loaded() const { return loaded_; }
   // x = A^-1 b for the factorized A = P^T L L^T P. x may not alias b.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
-  // The share of L's entries in the top, solved on one thread (0 on one thread).
+  // The share of L's entries solved on one thread while the others wait: the top (0 on one
+  // thread; 1 when no cut of the tree beats one thread).
   double serial_fraction() const { return serial_fraction_; }
 
  private:
