@@ -152,12 +152,14 @@ class HardCases : public ::testing::TestWithParam<SolverBackend> {
     return o;
   }
   TetMesh Beam() const { return MakeBox(Eigen::Vector3d(kLength, kWidth, kWidth), 10, 2, 2); }
-  // Three frames bending the beam's end down to `drop`, full-surface clouds of 2000 points.
-  std::vector<PointCloud> BendClouds(const TetMesh& mesh, double drop, Vertices* truth) const {
+  // Three frames bending the beam's end down to `drop`, full-surface clouds of 2000 points
+  // with `noise` (m, standard deviation).
+  std::vector<PointCloud> BendClouds(const TetMesh& mesh, double drop, Vertices* truth,
+                                     double noise = 2e-4) const {
     std::vector<PointCloud> clouds;
     for (int f = 1; f <= 3; ++f) {
       *truth = Bend(mesh.rest, drop * f / 3.0);
-      clouds.push_back(SampleSurface(mesh, *truth, 2000, 2e-4, 11 + f));
+      clouds.push_back(SampleSurface(mesh, *truth, 2000, noise, 11 + f));
     }
     return clouds;
   }
@@ -265,16 +267,29 @@ TEST_P(HardCases, NearlyFlatElements) {
   // A 0.2 x 0.04 x 0.00004 m plate: every element 1000 times flatter than it is wide.
   TetMesh mesh = MakeBox(Eigen::Vector3d(kLength, kWidth, 4e-5), 10, 2, 1);
   Vertices truth;
-  const auto clouds = BendClouds(mesh, 0.02, &truth);
-  const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
-  Record("flat elements (1:1000)", GetParam(), o);
-  EXPECT_TRUE(o.finite);
-  // The plate is 5 times thinner than the cloud's noise (0.2 mm): its top and bottom faces
-  // take each other's points and its rim's edges pull along the distance direction. Frames run
-  // to the 8-outer-iteration cap; run to convergence (30) both back ends end at 5.6-5.8 mm
-  // (4.6-4.8 mm when edge points took a face normal, which made the demo's edges oscillate).
-  // So the bound here is "stable and well on the way": below 85% of doing nothing (7 mm).
-  EXPECT_LT(o.mean_error, 0.85 * o.nothing_error) << o.message;
+  // Clouds with noise below the plate's thickness (10 um against 40): the data are well posed,
+  // and what is tested is the elements' numerics. Measured 0.65-1.0 mm on both back ends,
+  // 1-3 threads, PCG tolerances 1e-3 and 1e-2.
+  {
+    const auto clouds = BendClouds(mesh, 0.02, &truth, 1e-5);
+    const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
+    Record("flat elements (1:1000)", GetParam(), o);
+    EXPECT_TRUE(o.finite);
+    EXPECT_LT(o.mean_error, kFollowed) << o.message;
+  }
+  // With the usual 0.2 mm of noise, five times the thickness, the top and bottom faces take
+  // each other's points and the rim's edges pull along the distance direction: the outer
+  // iterations do not settle, and where they end is chaotic: after the 8th, 4.9 to 7.8 mm
+  // (doing nothing: 7 mm) with the fast back end's PCG tolerance (1e-3 to 3e-2); after 30,
+  // 3.1 to 6.6 mm with its thread count (round-off), Ceres 6.1. So here only stability is
+  // asserted: finite, and no vertex moved more than 1.5 times the bend's 20 mm.
+  {
+    const auto clouds = BendClouds(mesh, 0.02, &truth);
+    const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
+    Record("flat elements (1:1000), noise 5x the thickness", GetParam(), o);
+    EXPECT_TRUE(o.finite);
+    EXPECT_LT(o.max_motion, 0.03) << o.message;
+  }
 }
 
 TEST_P(HardCases, BadClouds) {
