@@ -624,7 +624,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g
 EnergyTerms FastBackend::Impl::Energy(const energy::Problem& problem, const Vertices& x,
                                       SolveReport* report) const {
   const auto t0 = Clock::now();
-  const EnergyTerms e = problem.Evaluate(x);
+  const EnergyTerms e = problem.Evaluate(x, threads);
   report->evaluate_s += Seconds(t0);
   return e;
 }

@@ -70,8 +70,10 @@ class Problem {
   const std::vector<std::array<int, 4>>& coupling() const { return coupling_; }
   uint64_t coupling_revision() const { return coupling_revision_; }
 
-  // The energy at x by group, robust losses applied.
-  EnergyTerms Evaluate(const Vertices& x) const;
+  // The energy at x by group, robust losses applied. Each set is summed in fixed chunks of
+  // blocks, the chunks on up to `threads` threads, their sums added in chunk order: the
+  // result does not depend on the thread count.
+  EnergyTerms Evaluate(const Vertices& x, int threads = 1) const;
   // The sum of the blocks' offsets (energy/term.h): a least-squares cost over the same
   // residuals is Evaluate's total plus this.
   double Offset() const;
