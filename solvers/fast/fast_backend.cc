@@ -505,6 +505,21 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     common.nmethods = 2;
     common.method[0].ordering = CHOLMOD_AMD;
     common.method[1].ordering = CHOLMOD_METIS;
+    // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with
+    // {0.8, 0.1, 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold
+    // merges little more than one vertex, and the demo's slender beam had 207 supernodes of
+    // 16 columns on average, each a BLAS call too small to run at speed. Per factorization
+    // and substitution pair (one thread, /tmp experiment, median of 25 / 200): demo beam
+    // 7.4 -> 6.1 ms and 0.144 -> 0.140 ms; the 3.7k-vertex beam 34.9 -> 31.5 and 0.67 ->
+    // 0.67; organ_patch at 2197 vertices 29.0 -> 26.6 and 0.53 -> 0.52, at 3375 vertices
+    // 57 -> 55 and 1.06 -> 1.04. Larger settings ({12, 48, 96}) factorized the demo in 5.1 ms
+    // but slowed the 3375-vertex organ's substitutions by 15%.
+    common.nrelax[0] = 6;
+    common.nrelax[1] = 24;
+    common.nrelax[2] = 64;
+    common.zrelax[0] = 0.8;
+    common.zrelax[1] = 0.15;
+    common.zrelax[2] = 0.06;
     factor.analyzePattern(H);
     analysed = true;
     new_structure = true;
