@@ -218,7 +218,10 @@ const SurfaceIndex& ModelIndex::Get(const TrackerState& state, double tolerance)
 void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc) {
   const RegistrationOptions& options = state.options;
   const PointCloud& cloud = fc->cloud;
-  fc->index = std::make_unique<PointIndex>(cloud.points);
+  // The tracker has built it already (to count the usable points): not twice per frame.
+  if (fc->index == nullptr || fc->index->size() != cloud.size()) {
+    fc->index = std::make_unique<PointIndex>(cloud.points);
+  }
   const int n = cloud.size();
   // The spacing from at most ~2000 evenly spread points.
   const int stride = std::max(1, n / 2000);

@@ -92,7 +92,8 @@ class ModelIndex {
   int builds_ = 0;
 };
 
-// Builds fc->index, fc->spacing and fc->trim, and decides the visibility (at state.x):
+// Builds fc->index (unless it is set, of fc->cloud's points), fc->spacing and fc->trim, and
+// decides the visibility (at state.x):
 // the camera when known (data.visibility or data.auto_visibility), else with
 // data.auto_visibility the cloud's viewpoint when usable, else the side of the model the
 // cloud lies on (the mean outward normal at the cloud points' closest surface points), else
