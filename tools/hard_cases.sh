@@ -11,7 +11,6 @@ if [[ ! -x $TEST ]]; then
   echo "hard_cases: $TEST not found; build first (cmake --build $BUILD)" >&2
   exit 1
 fi
-export OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 csv=$(mktemp)
 trap 'rm -f "$csv"' EXIT
 status=0
@@ -24,8 +23,9 @@ def num(v):
     return "–" if v in ("nan", "-nan") else v
 print("# Hard cases\n")
 print("Made by `tools/hard_cases.sh` from `tests/hard_cases_test.cc` (`ctest -L hard_cases`);")
-print("one thread (`OMP_NUM_THREADS=1`), so the times are comparable between rows, not with a")
-print("loaded or a faster machine. Each case must end finite, bounded, and with a termination")
+print("on the machine's cores (`solver.num_threads` left at its default: femreg sets its own")
+print("thread count, whatever `OMP_NUM_THREADS` says), so the times are comparable between rows,")
+print("not with a loaded or a faster machine. Each case must end finite, bounded, and with a termination")
 print("that says what happened; the test's assertions are in the source, next to each case.\n")
 print("Errors are mean vertex distances (mm) to the truth after the last frame; *nothing* is the")
 print("error of the rest shape (doing nothing). The beam is 0.2 x 0.04 x 0.04 m (10 x 2 x 2")
