@@ -29,6 +29,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <type_traits>
@@ -98,6 +100,27 @@ constexpr int kParallelBlocks = 256;
 // The product H p runs in parallel from this many vertices on: below, a team's start costs
 // more than it saves.
 constexpr int kParallelProduct = 8192;
+
+// Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the
+// largest update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has
+// been freed) each is a fresh mapping, faulted in page by page on every factorization: on
+// this project's virtual machines that cost the demo's factorization 10.3 against 6.4 ms,
+// the 3375-vertex organ's 72 against 55 ms. glibc raises the threshold (and keeps twice that
+// much heap before trimming) when a mapped block is freed, up to 32 MiB: one block of the
+// workspace's size, allocated and freed once per analysis, lets it do so. (Until this was
+// written the same had happened by accident, through the triplets of the pattern's build.)
+// Elsewhere than glibc: an allocation and a free, nothing more.
+void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& H) {
+  const size_t copy = static_cast<size_t>(H.nonZeros()) * (sizeof(double) + sizeof(int)) +
+                      static_cast<size_t>(H.cols() + 1) * sizeof(int);
+  const size_t update = L.is_super ? L.maxcsize * sizeof(double) : 0;
+  const size_t bytes = std::min<size_t>(std::max(copy, update), size_t{32} << 20);
+  if (bytes == 0) return;
+  void* block = std::malloc(bytes);
+  if (block == nullptr) return;
+  static_cast<volatile char*>(block)[0] = 0;  // not optimized away
+  std::free(block);
+}
 
 }  // namespace
 
@@ -230,25 +253,43 @@ void FastBackend::Impl::ResetPattern(const energy::Problem& problem) {
 }
 
 void FastBackend::Impl::BuildPattern() {
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(cells.size() * 144 + 9 * static_cast<size_t>(num_vertices) +
-                   18 * extra_pairs.size());
-  auto add = [&](int a, int b) {
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) triplets.emplace_back(3 * a + i, 3 * b + j, 0.0);
-  };
-  for (int v = 0; v < num_vertices; ++v) add(v, v);
+  // Each vertex's neighbours (itself, its cells' vertices, its extra pairs), sorted; then the
+  // compressed columns directly: column 3 b + j holds rows 3 a + i for every neighbour a of
+  // b. (Through triplets, 144 per cell, this took 68 ms of the demo's first frame.)
+  std::vector<std::vector<int>> neighbours(static_cast<size_t>(num_vertices));
+  for (int v = 0; v < num_vertices; ++v) neighbours[static_cast<size_t>(v)].push_back(v);
   for (const auto& c : cells) {
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) add(c[a], c[b]);
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) {
+        if (a != b) neighbours[static_cast<size_t>(c[a])].push_back(c[b]);
+      }
+    }
   }
   for (const auto& p : extra_pairs) {
-    add(p.first, p.second);
-    add(p.second, p.first);
+    neighbours[static_cast<size_t>(p.first)].push_back(p.second);
+    neighbours[static_cast<size_t>(p.second)].push_back(p.first);
   }
-  H.resize(3 * num_vertices, 3 * num_vertices);
-  H.setFromTriplets(triplets.begin(), triplets.end());
-  H.makeCompressed();
+  int64_t nnz = 0;
+  for (auto& list : neighbours) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    nnz += 9 * static_cast<int64_t>(list.size());
+  }
+  H = Eigen::SparseMatrix<double>(3 * num_vertices, 3 * num_vertices);
+  H.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer_out = H.outerIndexPtr();
+  int* inner_out = H.innerIndexPtr();
+  int at = 0;
+  for (int b = 0; b < num_vertices; ++b) {
+    for (int j = 0; j < 3; ++j) {
+      outer_out[3 * b + j] = at;
+      for (int a : neighbours[static_cast<size_t>(b)]) {
+        for (int i = 0; i < 3; ++i) inner_out[at++] = 3 * a + i;
+      }
+    }
+  }
+  outer_out[3 * num_vertices] = at;
+  std::fill(H.valuePtr(), H.valuePtr() + nnz, 0.0);
   const int n = static_cast<int>(H.cols());
   const int* outer = H.outerIndexPtr();
   const int* inner = H.innerIndexPtr();
@@ -527,7 +568,9 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     // (2 nnz(H)); the factorization: CHOLMOD's count. Both run at about the same rate on one
     // core (bench/linear_solver_bench.cc, 1k vertices: factorization 8.2 ms, solve pair
     // 0.22 ms, product 0.05 ms: 29 iterations; this estimate gives 29 on the demo).
+    PrimeAllocator(*factor.raw(), H);
     const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
+    if (getenv("X_DBG")) fprintf(stderr, "DBG nnzH %ld lnz %.0f fl %.0f sel %d compressed %d\n", (long)H.nonZeros(), common.lnz, common.fl, common.selected, (int)H.isCompressed());
     pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   }
   // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the
