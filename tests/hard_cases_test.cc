@@ -268,7 +268,7 @@ TEST_P(HardCases, NearlyFlatElements) {
   TetMesh mesh = MakeBox(Eigen::Vector3d(kLength, kWidth, 4e-5), 10, 2, 1);
   Vertices truth;
   // Clouds with noise below the plate's thickness (10 um against 40): the data are well posed,
-  // and what is tested is the elements' numerics. Measured 0.65-1.0 mm on both back ends,
+  // and what is tested is the elements' numerics. Measured 0.58-1.0 mm on both back ends,
   // 1-3 threads, PCG tolerances 1e-3 and 1e-2.
   {
     const auto clouds = BendClouds(mesh, 0.02, &truth, 1e-5);

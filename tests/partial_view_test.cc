@@ -259,7 +259,8 @@ TEST(RegisterCommand, MillimetreCloudsWarnAndScaleFixesThem) {
 TEST(RegisterCommand, SigtermLeavesWholeFilesAndAnHonestSummary) {
   testing_util::TempDir tmp;
   const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
-  // Every frame runs 200 outer iterations (no stop criterion): the 30 frames take ~30 s here,
+  // Every frame runs 200 outer iterations (both stop criteria at 0: only a step that moves no
+  // vertex at all would end a frame early): the 30 frames take ~30 s here,
   // far longer than the 3 s before the signal, so the run is interrupted mid-sequence. (With
   // 20, the whole run had come down to 3.3 s: the signal raced the end.)
   const CliRun r = Femreg("register --scene " + demo + "/scene.yaml --frames " + demo +

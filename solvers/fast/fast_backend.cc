@@ -30,7 +30,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <cstdio>
 #include <limits>
 #include <map>
 #include <type_traits>
@@ -109,12 +108,14 @@ constexpr int kParallelProduct = 8192;
 // much heap before trimming) when a mapped block is freed, up to 32 MiB: one block of the
 // workspace's size, allocated and freed once per analysis, lets it do so. (Until this was
 // written the same had happened by accident, through the triplets of the pattern's build.)
+// glibc then also keeps up to twice that much freed heap before trimming (at most 64 MiB).
 // Elsewhere than glibc: an allocation and a free, nothing more.
 void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& H) {
   const size_t copy = static_cast<size_t>(H.nonZeros()) * (sizeof(double) + sizeof(int)) +
                       static_cast<size_t>(H.cols() + 1) * sizeof(int);
   const size_t update = L.is_super ? L.maxcsize * sizeof(double) : 0;
-  const size_t bytes = std::min<size_t>(std::max(copy, update), size_t{32} << 20);
+  // glibc raises the threshold only for a freed mapping of at most 32 MiB, header included.
+  const size_t bytes = std::min<size_t>(std::max(copy, update), (size_t{32} << 20) - (size_t{64} << 10));
   if (bytes == 0) return;
   void* block = std::malloc(bytes);
   if (block == nullptr) return;
@@ -568,9 +569,8 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     // (2 nnz(H)); the factorization: CHOLMOD's count. Both run at about the same rate on one
     // core (bench/linear_solver_bench.cc, 1k vertices: factorization 8.2 ms, solve pair
     // 0.22 ms, product 0.05 ms: 29 iterations; this estimate gives 29 on the demo).
-    PrimeAllocator(*factor.raw(), H);
+    if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
     const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
-    if (getenv("X_DBG")) fprintf(stderr, "DBG nnzH %ld lnz %.0f fl %.0f sel %d compressed %d\n", (long)H.nonZeros(), common.lnz, common.fl, common.selected, (int)H.isCompressed());
     pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   }
   // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the
@@ -634,12 +634,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
     r -= alpha * q;
     ++report->pcg_iterations;
     ++pcg_since_factor;
-    static const double tol = getenv("X_PCGTOL") ? atof(getenv("X_PCGTOL")) : kPcgTolerance;
-    static const double qtol = getenv("X_QTOL") ? atof(getenv("X_QTOL")) : 0.0;
-    // Model gain of this iteration: 1/2 rz^2 / pq; total: -q(x) = 1/2 b.x
-    const double gain_k = 0.5 * rz * rz / pq;
-    const double total = 0.5 * b.dot(*x);
-    if (r.norm() <= tol * b_norm && (qtol <= 0 || gain_k <= qtol * total)) return Outcome::kSolved;
+    if (r.norm() <= kPcgTolerance * b_norm) return Outcome::kSolved;
     precondition();
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;
