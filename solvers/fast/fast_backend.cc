@@ -104,12 +104,11 @@ constexpr int kParallelProduct = 8192;
 // largest update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has
 // been freed) each is a fresh mapping, faulted in page by page on every factorization: on
 // this project's virtual machines that cost the demo's factorization 10.3 against 6.4 ms,
-// the 3375-vertex organ's 72 against 55 ms. glibc raises the threshold (and keeps twice that
-// much heap before trimming) when a mapped block is freed, up to 32 MiB: one block of the
-// workspace's size, allocated and freed once per analysis, lets it do so. (Until this was
-// written the same had happened by accident, through the triplets of the pattern's build.)
-// glibc then also keeps up to twice that much freed heap before trimming (at most 64 MiB).
-// Elsewhere than glibc: an allocation and a free, nothing more.
+// the 3375-vertex organ's 72 against 55 ms. glibc raises the threshold when a mapped block
+// of up to 32 MiB is freed (and then keeps up to twice that much freed heap before trimming):
+// one block of the workspace's size, allocated and freed once per analysis, lets it do so.
+// (Until this was written the same had happened by accident, through the triplets of the
+// pattern's build.) Elsewhere than glibc: an allocation and a free, nothing more.
 void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& H) {
   const size_t copy = static_cast<size_t>(H.nonZeros()) * (sizeof(double) + sizeof(int)) +
                       static_cast<size_t>(H.cols() + 1) * sizeof(int);
@@ -256,7 +255,8 @@ void FastBackend::Impl::ResetPattern(const energy::Problem& problem) {
 void FastBackend::Impl::BuildPattern() {
   // Each vertex's neighbours (itself, its cells' vertices, its extra pairs), sorted; then the
   // compressed columns directly: column 3 b + j holds rows 3 a + i for every neighbour a of
-  // b. (Through triplets, 144 per cell, this took 68 ms of the demo's first frame.)
+  // b. (Through triplets, 144 per cell, the demo's first frame assembled in 76-94 ms, now
+  // 38-51; the 3375-vertex organ's in 267-333 ms, now 57-79.)
   std::vector<std::vector<int>> neighbours(static_cast<size_t>(num_vertices));
   for (int v = 0; v < num_vertices; ++v) neighbours[static_cast<size_t>(v)].push_back(v);
   for (const auto& c : cells) {

@@ -72,7 +72,7 @@ class Problem {
 
   // The energy at x by group, robust losses applied. Each set is summed in fixed chunks of
   // blocks, the chunks on up to `threads` threads, their sums added in chunk order: the
-  // result does not depend on the thread count.
+  // same additions in the same order on any thread count.
   EnergyTerms Evaluate(const Vertices& x, int threads = 1) const;
   // The sum of the blocks' offsets (energy/term.h): a least-squares cost over the same
   // residuals is Evaluate's total plus this.
