@@ -16,6 +16,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "parallel/threads.h"
 #include "solvers/backend.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/supernodal_solve.h"
@@ -372,6 +373,104 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
   fast_backend::SupernodalSolve<float> refused;
   EXPECT_FALSE(refused.Load(*simplicial.raw(), true, 1));
   EXPECT_FALSE(refused.loaded());
+}
+
+// The back end's own factorization, on CHOLMOD's symbolic analysis alone: its solves match
+// CHOLMOD's double ones (in double to round-off, in float to float's precision), on 1, 2
+// and 3 threads (the subtrees in parallel) with the same factor on each; new values on the
+// same structure; a matrix that is not positive definite refused. The structure may also
+// come from a numeric factor. The matrix: two beams' stiffness (a forest of two trees), one
+// four times stiffer, plus a diagonal (a data term's share).
+TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
+  std::vector<Eigen::Triplet<double>> t;
+  int offset = 0;
+  for (auto [cells, modulus] : {std::pair<int, double>{14, 5e4}, std::pair<int, double>{9, 2e5}}) {
+    const TetMesh mesh = MakeBox(Eigen::Vector3d(0.3, 0.05, 0.05), cells, 3, 3);
+    Material material;
+    material.youngs_modulus = modulus;
+    material.poisson_ratio = 0.45;
+    ElasticModel model;
+    model.Build(mesh, ElasticModelType::kCorotational, material);
+    std::vector<Eigen::Triplet<double>> own;
+    model.AddStiffnessTriplets(&own);
+    for (const auto& e : own) t.emplace_back(e.row() + offset, e.col() + offset, e.value());
+    offset += 3 * mesh.num_vertices();
+  }
+  for (int i = 0; i < offset; ++i) t.emplace_back(i, i, 1.0 * (1 + i % 5));
+  Eigen::SparseMatrix<double> H(offset, offset);
+  H.setFromTriplets(t.begin(), t.end());
+  H.makeCompressed();
+  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
+    const cholmod_factor* raw() const { return m_cholmodFactor; }
+  };
+  Factor exact;
+  exact.setMode(Eigen::CholmodSupernodalLLt);
+  exact.compute(H);
+  ASSERT_EQ(exact.info(), Eigen::Success);
+  Factor symbolic;
+  symbolic.setMode(Eigen::CholmodSupernodalLLt);
+  symbolic.analyzePattern(H);
+  ASSERT_NE(symbolic.raw(), nullptr);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd b(offset);
+  for (int i = 0; i < offset; ++i) b[i] = u(rng);
+  const Eigen::VectorXd expected = exact.solve(b);
+  const double scale = expected.lpNorm<Eigen::Infinity>();
+  std::vector<float> first;
+  for (int threads : {1, 2, 3}) {
+    const ScopedThreads one_blas_thread(1);
+    fast_backend::SupernodalSolve<double> in_double;
+    ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, true, threads)) << threads << " threads";
+    ASSERT_TRUE(in_double.loaded());
+    Eigen::VectorXd x;
+    in_double.Solve(b, &x);
+    EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << threads << " threads";
+    // In float: the error of a float factorization, its relative round-off times the
+    // condition number (the PCG it preconditions corrects it).
+    fast_backend::SupernodalSolve<float> in_float;
+    ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, true, threads)) << threads << " threads";
+    Eigen::VectorXd y;
+    in_float.Solve(b, &y);
+    EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 3e-3 * scale) << threads << " threads";
+    EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);  // float, not CHOLMOD's values
+    // The same factor on every thread count (the substitutions' sums may differ in order).
+    if (threads == 1) {
+      first = in_float.values();
+    } else {
+      EXPECT_TRUE(in_float.values() == first) << threads << " threads: another factor";
+    }
+    // New values on the same structure.
+    const Eigen::SparseMatrix<double> H2 = 4.0 * H;
+    ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H2, false, threads));
+    in_double.Solve(b, &x);
+    EXPECT_LE((x - 0.25 * expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << threads << " threads";
+    // Not positive definite: refused, nothing kept; and back.
+    const Eigen::SparseMatrix<double> indefinite = -H;
+    EXPECT_FALSE(in_float.Factorize(*symbolic.raw(), indefinite, false, threads));
+    EXPECT_FALSE(in_float.loaded());
+    ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, false, threads));
+    EXPECT_TRUE(in_float.values() == first) << threads << " threads";
+  }
+  // The structure of a numeric factor serves as well.
+  {
+    const ScopedThreads one_blas_thread(1);
+    fast_backend::SupernodalSolve<double> from_numeric;
+    ASSERT_TRUE(from_numeric.Factorize(*exact.raw(), H, true, 2));
+    Eigen::VectorXd x;
+    from_numeric.Solve(b, &x);
+    EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+  }
+  // A matrix with entries outside the analysed pattern: refused.
+  {
+    Eigen::SparseMatrix<double> wider = H;
+    wider.coeffRef(0, offset - 1) = 1e-3;
+    wider.coeffRef(offset - 1, 0) = 1e-3;
+    wider.makeCompressed();
+    fast_backend::SupernodalSolve<float> refused;
+    EXPECT_FALSE(refused.Factorize(*symbolic.raw(), wider, true, 1));
+    EXPECT_FALSE(refused.loaded());
+  }
 }
 
 // The parallel assembly (sets of 256 blocks and more, split by vertex ranges) builds the

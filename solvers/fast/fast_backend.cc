@@ -1,5 +1,7 @@
 // The fast back end: Gauss-Newton on the frame's energy with a sparse Cholesky factor that
-// is kept and reused (supernodal CHOLMOD).
+// is kept and reused: CHOLMOD's symbolic analysis (ordering, supernodes), the numeric
+// factorization in single precision by the back end itself (solvers/fast/supernodal_solve.h),
+// CHOLMOD's double one where that fails.
 //
 // A step solves H dx = -g, H the Gauss-Newton Hessian (sum of w rho' J^T J over the blocks),
 // g the gradient. The factorization of H is what costs; H changes little from one step to
@@ -8,12 +10,15 @@
 // preconditioned with the last factor: when that factor is of a similar matrix, a few
 // iterations (each a product with H and two triangular solves) reach the tolerance; when
 // not, or once the iterations run with a factor have cost as much as a factorization, H is
-// factorized and the factor kept for the steps after. The symbolic analysis is
-// done once per sparsity pattern (the mesh's topology, widened by contact stencils).
+// factorized, the step solved by PCG with the new factor (one or two iterations: the
+// factor's float round-off), and the factor kept for the steps after. The symbolic
+// analysis is done once per sparsity pattern (the mesh's topology, widened by contact
+// stencils).
 //
 // Steps are taken with a backtracking line search on the energy (the Gauss-Newton direction
 // is a descent direction: H is positive semi-definite by construction). A failed
-// factorization (H not numerically positive definite) is retried with Marquardt damping.
+// factorization (H not numerically positive definite in float) is done again by CHOLMOD in
+// double, and retried with Marquardt damping if H is not positive definite there either.
 //
 // Assembly on several threads splits the vertices into one range per thread: a thread
 // linearizes and adds the blocks whose stencil lies in its range; blocks that straddle two
@@ -91,6 +96,18 @@ constexpr double kPcgTolerance = 1e-2;
 // cases (tests/hard_cases_test.cc, deep penetration: a cycle of ~10 mm moves per outer
 // iteration, whose end point moves with any change of the steps).
 constexpr double kNegligibleGain = 1e-2;
+
+// The single-precision factorization (SupernodalSolve::Factorize) does its flops about this
+// many times faster than PCG's iterations do theirs (memory-bound substitutions and
+// products), so the factorization's flop count divided by an iteration's, over this, is
+// the PCG iterations a factorization costs. Measured, 2 threads: demo 2.4 ms per
+// factorization against 0.24 ms per PCG iteration (10 iterations; the flop counts say 29),
+// the 3375-vertex organ_patch body 19.4 against 0.91 ms (21; the counts say 55). Per frame,
+// with this 3 against 1 and 2 (`femreg register`, 2 threads, 2 runs each): the 3375-vertex
+// organ 95 / 94 ms against 98 / 100 and 105 / 104 (PCG iterations 41.5 against 55.5), the
+// 2197-vertex one 48 / 49 against 51 / 50 and 52 / 54; the demo 20.3 / 21.5 ms against
+// 20.4 / 19.7 and 20.7 / 21.5 (noise; 15.5 PCG iterations against 20).
+constexpr double kSingleFactorizationSpeed = 3.0;
 
 // A set is assembled on several threads from this many blocks on (below, the team's start
 // costs more than it saves).
@@ -184,6 +201,12 @@ struct FastBackend::Impl {
   SupernodalSolve<float> substitutions;
   bool analysed = false;
   bool factor_valid = false;
+  // The analysis changed since `substitutions` last took L's structure.
+  bool structure_pending = false;
+  // False once a single-precision factorization failed on this pattern, or PCG did not
+  // converge with a new one (H too ill-conditioned for float): CHOLMOD's double factors from
+  // then on, until the pattern changes.
+  bool single_ok = true;
   // PCG iterations that cost as much as a factorization (CHOLMOD's flop counts, from the
   // analysis): beyond them a new factor is cheaper.
   int pcg_budget = 0;
@@ -226,8 +249,15 @@ struct FastBackend::Impl {
   void Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
                   WithHessian hessian, Eigen::VectorXd* g);
   void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g);
-  // Factorizes H (with `damping` on the diagonal); false if it is not positive definite.
+  // CHOLMOD's symbolic analysis of the pattern, unless done; the PCG budget from its counts.
+  void Analyse();
+  // Factorizes H in double with CHOLMOD (its values also copied to `substitutions` for
+  // PCG); false if H is not positive definite.
   bool Factorize(SolveReport* report);
+  // Factorizes H in single precision into `substitutions` (the preconditioner, and the
+  // first PCG iteration after it the step); false if that fails (not positive definite in
+  // float), and nothing is kept.
+  bool FactorizeSingle(SolveReport* report);
   // dx = -H^-1 g: by PCG with the kept factor, else with a new factorization. kNegligible:
   // PCG's first iteration gained less than `negligible` (the Gauss-Newton model's decrease;
   // <= 0: never), and no step was made.
@@ -301,6 +331,7 @@ void FastBackend::Impl::BuildPattern() {
   }
   analysed = false;
   factor_valid = false;
+  single_ok = true;
   cache.clear();
   constant_values.clear();
   fixed_for.clear();
@@ -532,47 +563,50 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
   for (int at : diagonal_at) H.valuePtr()[at] += 1e-12 * max_diagonal;
 }
 
+void FastBackend::Impl::Analyse() {
+  if (analysed) return;
+  factor.setMode(Eigen::CholmodSupernodalLLt);
+  // The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
+  // nnz(L). Neither wins everywhere: on the demo's slender beam AMD gives nnz(L) 364k and
+  // 51 Mflop per factorization, METIS 418k and 73; on the organ_patch body at 2197
+  // vertices AMD 1853k and 908 Mflop, METIS 1478k and 534, at 3375 vertices 3947k / 2918
+  // against 2793k / 1300. (CHOLMOD's default tries METIS only when AMD's flops per entry
+  // of L pass 500, which the 2197-vertex body misses at 490.)
+  cholmod_common& common = factor.cholmod();
+  common.nmethods = 2;
+  common.method[0].ordering = CHOLMOD_AMD;
+  common.method[1].ordering = CHOLMOD_METIS;
+  // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with
+  // {0.8, 0.1, 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold
+  // merges little more than one vertex, and the demo's slender beam had 207 supernodes of
+  // 16 columns on average, each a BLAS call too small to run at speed. Per factorization
+  // and substitution pair (one thread, /tmp experiment, median of 25 / 200): demo beam
+  // 7.4 -> 6.1 ms and 0.144 -> 0.140 ms; the 3.7k-vertex beam 34.9 -> 31.5 and 0.67 ->
+  // 0.67; organ_patch at 2197 vertices 29.0 -> 26.6 and 0.53 -> 0.52, at 3375 vertices
+  // 57 -> 55 and 1.06 -> 1.04. Larger settings ({12, 48, 96}) factorized the demo in 5.1 ms
+  // but slowed the 3375-vertex organ's substitutions by 15%.
+  common.nrelax[0] = 6;
+  common.nrelax[1] = 24;
+  common.nrelax[2] = 64;
+  common.zrelax[0] = 0.8;
+  common.zrelax[1] = 0.15;
+  common.zrelax[2] = 0.06;
+  factor.analyzePattern(H);
+  analysed = true;
+  // A PCG iteration: two triangular solves (2 x 2 nnz(L) flops) and a product with H
+  // (2 nnz(H)); the factorization: CHOLMOD's count, at kSingleFactorizationSpeed times
+  // the substitutions' rate.
+  if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
+  const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
+  pcg_budget = iteration_flops > 0
+                   ? static_cast<int>(common.fl / iteration_flops / kSingleFactorizationSpeed)
+                   : 0;
+  structure_pending = true;
+}
+
 bool FastBackend::Impl::Factorize(SolveReport* report) {
   const auto t0 = Clock::now();
-  bool new_structure = false;
-  if (!analysed) {
-    factor.setMode(Eigen::CholmodSupernodalLLt);
-    // The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
-    // nnz(L). Neither wins everywhere: on the demo's slender beam AMD gives nnz(L) 364k and
-    // 51 Mflop per factorization, METIS 418k and 73; on the organ_patch body at 2197
-    // vertices AMD 1853k and 908 Mflop, METIS 1478k and 534, at 3375 vertices 3947k / 2918
-    // against 2793k / 1300. (CHOLMOD's default tries METIS only when AMD's flops per entry
-    // of L pass 500, which the 2197-vertex body misses at 490.)
-    cholmod_common& common = factor.cholmod();
-    common.nmethods = 2;
-    common.method[0].ordering = CHOLMOD_AMD;
-    common.method[1].ordering = CHOLMOD_METIS;
-    // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with
-    // {0.8, 0.1, 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold
-    // merges little more than one vertex, and the demo's slender beam had 207 supernodes of
-    // 16 columns on average, each a BLAS call too small to run at speed. Per factorization
-    // and substitution pair (one thread, /tmp experiment, median of 25 / 200): demo beam
-    // 7.4 -> 6.1 ms and 0.144 -> 0.140 ms; the 3.7k-vertex beam 34.9 -> 31.5 and 0.67 ->
-    // 0.67; organ_patch at 2197 vertices 29.0 -> 26.6 and 0.53 -> 0.52, at 3375 vertices
-    // 57 -> 55 and 1.06 -> 1.04. Larger settings ({12, 48, 96}) factorized the demo in 5.1 ms
-    // but slowed the 3375-vertex organ's substitutions by 15%.
-    common.nrelax[0] = 6;
-    common.nrelax[1] = 24;
-    common.nrelax[2] = 64;
-    common.zrelax[0] = 0.8;
-    common.zrelax[1] = 0.15;
-    common.zrelax[2] = 0.06;
-    factor.analyzePattern(H);
-    analysed = true;
-    new_structure = true;
-    // A PCG iteration: two triangular solves (2 x 2 nnz(L) flops) and a product with H
-    // (2 nnz(H)); the factorization: CHOLMOD's count. Both run at about the same rate on one
-    // core (bench/linear_solver_bench.cc, 1k vertices: factorization 8.2 ms, solve pair
-    // 0.22 ms, product 0.05 ms: 29 iterations; this estimate gives 29 on the demo).
-    if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
-    const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
-    pcg_budget = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
-  }
+  Analyse();
   // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the
   // supernodes), as the triangular solves in Pcg: the supernodes of these systems are too
   // small to share. Demo, 2 threads, quiet machine: 13.3 ms per factorization with the BLAS
@@ -592,9 +626,27 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
   // Demo, 24 PCG iterations per frame (the same count as with CHOLMOD's double solves),
   // linear solves per frame on 1 thread: 8.4-8.7 -> 5.6-5.9 ms; the organ_patch body at 3375
   // vertices, 2 threads: 191-288 -> 61-124 ms (with METIS, below; shared, noisy machine).
-  if (!factor_valid || !substitutions.Load(*factor.raw(), new_structure, threads)) {
+  if (factor_valid && substitutions.Load(*factor.raw(), structure_pending, threads)) {
+    structure_pending = false;
+  } else {
     substitutions = SupernodalSolve<float>();
   }
+  return factor_valid;
+}
+
+bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
+  const auto t0 = Clock::now();
+  Analyse();
+  pcg_since_factor = 0;
+  ++report->factorizations;
+  // Its BLAS calls on one thread; its own team of `threads`.
+  {
+    const ScopedThreads one_thread(1);
+    factor_valid = factor.raw() != nullptr &&
+                   substitutions.Factorize(*factor.raw(), H, structure_pending, threads);
+  }
+  if (factor_valid) structure_pending = false;
+  report->factorize_s += Seconds(t0);
   return factor_valid;
 }
 
@@ -652,7 +704,19 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g
     if (outcome == Outcome::kNegligible) return outcome;
     if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
   }
-  // A new factor; if H is not numerically positive definite, Marquardt damping until it is.
+  // A new factor in single precision, and the step by PCG with it (its first iteration is
+  // the solve with the factor; PCG corrects the factor's float round-off).
+  if (options.max_pcg_iterations > 0 && single_ok) {
+    if (FactorizeSingle(report)) {
+      const auto t1 = Clock::now();
+      const Outcome outcome = Pcg(-g, 0.0, dx, report);
+      report->linear_solve_s += Seconds(t1);
+      if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
+    }
+    single_ok = false;
+  }
+  // Else (or with max_pcg_iterations 0) CHOLMOD's factor in double, and the step solved
+  // with it; if H is not numerically positive definite, Marquardt damping until it is.
   std::vector<double> diagonal(diagonal_at.size());
   for (size_t c = 0; c < diagonal_at.size(); ++c) diagonal[c] = H.valuePtr()[diagonal_at[c]];
   double lambda = 0.0;

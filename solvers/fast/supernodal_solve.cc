@@ -1,16 +1,81 @@
 #include "solvers/fast/supernodal_solve.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <numeric>
+#include <type_traits>
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
 
+
+// The BLAS and LAPACK (Fortran interface, as CHOLMOD calls them).
+extern "C" {
+void spotrf_(const char* uplo, const int* n, float* a, const int* lda, int* info);
+void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info);
+void strsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const float* alpha, const float* a, const int* lda, float* b, const int* ldb);
+void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
+            const int* n, const double* alpha, const double* a, const int* lda, double* b, const int* ldb);
+void ssyrk_(const char* uplo, const char* trans, const int* n, const int* k, const float* alpha,
+            const float* a, const int* lda, const float* beta, float* c, const int* ldc);
+void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
+            const double* a, const int* lda, const double* beta, double* c, const int* ldc);
+void sgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const float* alpha, const float* a, const int* lda, const float* b, const int* ldb,
+            const float* beta, float* c, const int* ldc);
+void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+            const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
+            const double* beta, double* c, const int* ldc);
+}
+
 namespace femreg {
 namespace fast_backend {
 
 namespace {
+
+inline int Potrf(int n, float* a, int lda) {
+  int info = 0;
+  spotrf_("L", &n, a, &lda, &info);
+  return info;
+}
+inline int Potrf(int n, double* a, int lda) {
+  int info = 0;
+  dpotrf_("L", &n, a, &lda, &info);
+  return info;
+}
+// b (m x n) = b L^-T, L the n x n lower triangle of a.
+template <class T>
+inline void TrsmRightLowerTransposed(int m, int n, const T* a, int lda, T* b, int ldb) {
+  const T one = 1;
+  if constexpr (std::is_same_v<T, float>) {
+    strsm_("R", "L", "T", "N", &m, &n, &one, a, &lda, b, &ldb);
+  } else {
+    dtrsm_("R", "L", "T", "N", &m, &n, &one, a, &lda, b, &ldb);
+  }
+}
+// c (lower n x n) = a a^T, a n x k.
+template <class T>
+inline void SyrkLower(int n, int k, const T* a, int lda, T* c, int ldc) {
+  const T one = 1, zero = 0;
+  if constexpr (std::is_same_v<T, float>) {
+    ssyrk_("L", "N", &n, &k, &one, a, &lda, &zero, c, &ldc);
+  } else {
+    dsyrk_("L", "N", &n, &k, &one, a, &lda, &zero, c, &ldc);
+  }
+}
+// c (m x n) = a b^T, a m x k, b n x k.
+template <class T>
+inline void GemmNT(int m, int n, int k, const T* a, int lda, const T* b, int ldb, T* c, int ldc) {
+  const T one = 1, zero = 0;
+  if constexpr (std::is_same_v<T, float>) {
+    sgemm_("N", "T", &m, &n, &k, &one, a, &lda, b, &ldb, &zero, c, &ldc);
+  } else {
+    dgemm_("N", "T", &m, &n, &k, &one, a, &lda, b, &ldb, &zero, c, &ldc);
+  }
+}
 
 // Cuts the supernodal elimination tree for `threads` threads: subtrees grouped into one
 // set per thread (owner[s] = its thread) and the rest, the top (owner -1), which runs on one
@@ -82,6 +147,76 @@ std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<doubl
 }  // namespace
 
 template <class Scalar>
+bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L, int threads) {
+  // (CHOLMOD's supernodal factors are always LL^T; a symbolic one need not say so yet.)
+  if (!L.is_super || L.itype != CHOLMOD_INT || L.super == nullptr || L.pi == nullptr ||
+      L.px == nullptr || L.s == nullptr) {
+    return false;
+  }
+  prepared_ = false;
+  n_ = static_cast<int>(L.n);
+  threads_ = threads;
+  const int nsuper = static_cast<int>(L.nsuper);
+  const int* super = static_cast<const int*>(L.super);
+  const int* pi = static_cast<const int*>(L.pi);
+  const int* px = static_cast<const int*>(L.px);
+  const int* s = static_cast<const int*>(L.s);
+  const int* perm = static_cast<const int*>(L.Perm);
+  super_.assign(super, super + nsuper + 1);
+  pi_.assign(pi, pi + nsuper + 1);
+  px_.assign(px, px + nsuper + 1);
+  rows_.assign(s, s + L.ssize);
+  if (perm != nullptr) {
+    perm_.assign(perm, perm + n_);
+  } else {
+    perm_.resize(static_cast<size_t>(n_));
+    std::iota(perm_.begin(), perm_.end(), 0);
+  }
+  // The supernodal tree: a supernode's parent holds the first row below its diagonal
+  // block. Work: the supernode's entries.
+  std::vector<int> super_of(static_cast<size_t>(n_));
+  for (int k = 0; k < nsuper; ++k) {
+    for (int c = super[k]; c < super[k + 1]; ++c) super_of[static_cast<size_t>(c)] = k;
+  }
+  std::vector<int> parent(static_cast<size_t>(nsuper), -1);
+  std::vector<double> work(static_cast<size_t>(nsuper));
+  double total = 0.0;
+  for (int k = 0; k < nsuper; ++k) {
+    const int ncol = super[k + 1] - super[k], nrow = pi[k + 1] - pi[k];
+    if (nrow > ncol) parent[static_cast<size_t>(k)] = super_of[static_cast<size_t>(s[pi[k] + ncol])];
+    work[static_cast<size_t>(k)] = static_cast<double>(nrow) * ncol - 0.5 * ncol * (ncol - 1);
+    total += work[static_cast<size_t>(k)];
+  }
+  groups_.assign(1, {});
+  top_.clear();
+  serial_fraction_ = 0.0;
+  const std::vector<int> owner = threads_ == 1 ? std::vector<int>() : CutTree(parent, work, threads_);
+  if (owner.empty()) {  // one thread, or no cut worth a team: the serial order
+    groups_[0].resize(static_cast<size_t>(nsuper));
+    std::iota(groups_[0].begin(), groups_[0].end(), 0);
+    serial_fraction_ = threads_ == 1 ? 0.0 : 1.0;
+  } else {
+    groups_.assign(static_cast<size_t>(threads_), {});
+    for (int k = 0; k < nsuper; ++k) {
+      const int o = owner[static_cast<size_t>(k)];
+      if (o < 0) {
+        top_.push_back(k);
+        serial_fraction_ += work[static_cast<size_t>(k)] / std::max(total, 1.0);
+      } else {
+        groups_[static_cast<size_t>(o)].push_back(k);
+      }
+    }
+  }
+  int max_rows = 0;
+  for (int k = 0; k < nsuper; ++k) max_rows = std::max(max_rows, pi[k + 1] - pi[k]);
+  acc_.assign(groups_.size(), Eigen::VectorXd::Zero(n_));
+  z_.assign(groups_.size(), Eigen::VectorXd::Zero(max_rows));
+  b_.resize(n_);
+  y_.resize(n_);
+  return true;
+}
+
+template <class Scalar>
 bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, int threads) {
   if (!L.is_super || !L.is_ll || L.itype != CHOLMOD_INT || L.xtype != CHOLMOD_REAL ||
       L.dtype != CHOLMOD_DOUBLE || L.x == nullptr || L.minor != L.n) {
@@ -92,71 +227,181 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
   if (new_structure || !loaded_ || n_ != static_cast<int>(L.n) || threads != threads_ ||
       super_.size() != L.nsuper + 1 || values_.size() != L.xsize) {
     loaded_ = false;  // until the structure is whole again
-    n_ = static_cast<int>(L.n);
-    threads_ = threads;
-    const int nsuper = static_cast<int>(L.nsuper);
-    const int* super = static_cast<const int*>(L.super);
-    const int* pi = static_cast<const int*>(L.pi);
-    const int* px = static_cast<const int*>(L.px);
-    const int* s = static_cast<const int*>(L.s);
-    const int* perm = static_cast<const int*>(L.Perm);
-    super_.assign(super, super + nsuper + 1);
-    pi_.assign(pi, pi + nsuper + 1);
-    px_.assign(px, px + nsuper + 1);
-    rows_.assign(s, s + L.ssize);
-    if (perm != nullptr) {
-      perm_.assign(perm, perm + n_);
-    } else {
-      perm_.resize(static_cast<size_t>(n_));
-      std::iota(perm_.begin(), perm_.end(), 0);
-    }
-    // The supernodal tree: a supernode's parent holds the first row below its diagonal
-    // block. Work: the supernode's entries.
-    std::vector<int> super_of(static_cast<size_t>(n_));
-    for (int k = 0; k < nsuper; ++k) {
-      for (int c = super[k]; c < super[k + 1]; ++c) super_of[static_cast<size_t>(c)] = k;
-    }
-    std::vector<int> parent(static_cast<size_t>(nsuper), -1);
-    std::vector<double> work(static_cast<size_t>(nsuper));
-    double total = 0.0;
-    for (int k = 0; k < nsuper; ++k) {
-      const int ncol = super[k + 1] - super[k], nrow = pi[k + 1] - pi[k];
-      if (nrow > ncol) parent[static_cast<size_t>(k)] = super_of[static_cast<size_t>(s[pi[k] + ncol])];
-      work[static_cast<size_t>(k)] = static_cast<double>(nrow) * ncol - 0.5 * ncol * (ncol - 1);
-      total += work[static_cast<size_t>(k)];
-    }
-    groups_.assign(1, {});
-    top_.clear();
-    serial_fraction_ = 0.0;
-    const std::vector<int> owner = threads_ == 1 ? std::vector<int>() : CutTree(parent, work, threads_);
-    if (owner.empty()) {  // one thread, or no cut worth a team: the serial order
-      groups_[0].resize(static_cast<size_t>(nsuper));
-      std::iota(groups_[0].begin(), groups_[0].end(), 0);
-      serial_fraction_ = threads_ == 1 ? 0.0 : 1.0;
-    } else {
-      groups_.assign(static_cast<size_t>(threads_), {});
-      for (int k = 0; k < nsuper; ++k) {
-        const int o = owner[static_cast<size_t>(k)];
-        if (o < 0) {
-          top_.push_back(k);
-          serial_fraction_ += work[static_cast<size_t>(k)] / std::max(total, 1.0);
-        } else {
-          groups_[static_cast<size_t>(o)].push_back(k);
-        }
-      }
-    }
-    int max_rows = 0;
-    for (int k = 0; k < nsuper; ++k) max_rows = std::max(max_rows, pi[k + 1] - pi[k]);
-    acc_.assign(groups_.size(), Eigen::VectorXd::Zero(n_));
-    z_.assign(groups_.size(), Eigen::VectorXd::Zero(max_rows));
-    b_.resize(n_);
-    y_.resize(n_);
+    if (!TakeStructure(L, threads)) return false;
   }
   const double* x = static_cast<const double*>(L.x);
   values_.resize(L.xsize);
   for (size_t k = 0; k < L.xsize; ++k) values_[k] = static_cast<Scalar>(x[k]);
   loaded_ = true;
   return true;
+}
+
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<double>& A) {
+  prepared_ = false;
+  if (A.rows() != n_ || A.cols() != n_ || !A.isCompressed()) return false;
+  const int nsuper = static_cast<int>(super_.size()) - 1;
+  std::vector<int> super_of(static_cast<size_t>(n_));
+  for (int k = 0; k < nsuper; ++k) {
+    for (int c = super_[k]; c < super_[k + 1]; ++c) super_of[static_cast<size_t>(c)] = k;
+  }
+  // The updates: descendant d updates, with its rows [r1, r2) (below its diagonal block),
+  // the supernode that holds row r1 and with the rows [r1, end) the entries below. Listed
+  // by target, in ascending d.
+  std::vector<std::vector<std::array<int, 3>>> by_target(static_cast<size_t>(nsuper));
+  max_update_ = 0;
+  for (int d = 0; d < nsuper; ++d) {
+    const int ncol = super_[d + 1] - super_[d];
+    const int nrow = pi_[d + 1] - pi_[d];
+    const int* rows = rows_.data() + pi_[d];
+    int r = ncol;
+    while (r < nrow) {
+      const int t = super_of[static_cast<size_t>(rows[r])];
+      if (t <= d) return false;  // not a supernodal structure
+      int r2 = r;
+      while (r2 < nrow && rows[r2] < super_[t + 1]) ++r2;
+      by_target[static_cast<size_t>(t)].push_back({d, r, r2});
+      max_update_ = std::max<int64_t>(max_update_, static_cast<int64_t>(nrow - r) * (r2 - r));
+      r = r2;
+    }
+  }
+  update_start_.assign(1, 0);
+  update_d_.clear();
+  update_r1_.clear();
+  update_r2_.clear();
+  for (int t = 0; t < nsuper; ++t) {
+    for (const auto& u : by_target[static_cast<size_t>(t)]) {
+      update_d_.push_back(u[0]);
+      update_r1_.push_back(u[1]);
+      update_r2_.push_back(u[2]);
+    }
+    update_start_.push_back(static_cast<int>(update_d_.size()));
+  }
+  // A's entries on or below the permuted diagonal, by supernode, and where each goes.
+  std::vector<int> inverse(static_cast<size_t>(n_));
+  for (int k = 0; k < n_; ++k) inverse[static_cast<size_t>(perm_[static_cast<size_t>(k)])] = k;
+  std::vector<int> position(static_cast<size_t>(n_), -1);
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  a_start_.assign(1, 0);
+  a_src_.clear();
+  a_dst_.clear();
+  for (int k = 0; k < nsuper; ++k) {
+    const int k1 = super_[k], ncol = super_[k + 1] - k1, nrow = pi_[k + 1] - pi_[k];
+    const int* rows = rows_.data() + pi_[k];
+    for (int i = 0; i < nrow; ++i) position[static_cast<size_t>(rows[i])] = i;
+    for (int j = 0; j < ncol; ++j) {
+      const int column = perm_[static_cast<size_t>(k1 + j)];
+      for (int p = outer[column]; p < outer[column + 1]; ++p) {
+        const int row = inverse[static_cast<size_t>(inner[p])];
+        if (row < k1 + j) continue;  // the upper triangle
+        const int i = position[static_cast<size_t>(row)];
+        if (i < 0 || rows[i] != row) return false;  // not in L's pattern: another matrix
+        a_src_.push_back(p);
+        a_dst_.push_back(px_[k] + static_cast<int64_t>(j) * nrow + i);
+      }
+    }
+    for (int i = 0; i < nrow; ++i) position[static_cast<size_t>(rows[i])] = -1;
+    a_start_.push_back(static_cast<int64_t>(a_src_.size()));
+  }
+  map_.assign(groups_.size(), std::vector<int>(static_cast<size_t>(n_), 0));
+  c_.assign(groups_.size(), std::vector<Scalar>(static_cast<size_t>(max_update_)));
+  prepared_nnz_ = A.nonZeros();
+  prepared_ = true;
+  return true;
+}
+
+// Below this many multiply-adds an update is formed by plain loops: a BLAS call costs more.
+constexpr int64_t kBlasUpdate = 4096;
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* map, Scalar* c) {
+  const int k1 = super_[s], ncol = super_[s + 1] - k1, nrow = pi_[s + 1] - pi_[s];
+  const int* rows = rows_.data() + pi_[s];
+  Scalar* L = values_.data() + px_[s];
+  std::fill(L, L + static_cast<int64_t>(nrow) * ncol, Scalar(0));
+  for (int64_t e = a_start_[s]; e < a_start_[s + 1]; ++e) {
+    values_[static_cast<size_t>(a_dst_[static_cast<size_t>(e)])] =
+        static_cast<Scalar>(a[a_src_[static_cast<size_t>(e)]]);
+  }
+  for (int i = 0; i < nrow; ++i) map[rows[i]] = i;
+  for (int u = update_start_[s]; u < update_start_[s + 1]; ++u) {
+    const int d = update_d_[static_cast<size_t>(u)];
+    const int r1 = update_r1_[static_cast<size_t>(u)], r2 = update_r2_[static_cast<size_t>(u)];
+    const int dcol = super_[d + 1] - super_[d], drow = pi_[d + 1] - pi_[d];
+    const int* drows = rows_.data() + pi_[d] + r1;
+    const Scalar* D = values_.data() + px_[d] + r1;  // rows r1.. of d, drow apart
+    const int m = drow - r1, n = r2 - r1;  // the update: m x n, lower part
+    if (static_cast<int64_t>(m) * n * dcol < kBlasUpdate) {
+      for (int j = 0; j < n; ++j) {
+        Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
+        for (int i = j; i < m; ++i) c[i] = 0;
+        for (int k = 0; k < dcol; ++k) {
+          const Scalar* column = D + static_cast<int64_t>(k) * drow;
+          const Scalar djk = column[j];
+          for (int i = j; i < m; ++i) c[i] += column[i] * djk;
+        }
+        for (int i = j; i < m; ++i) target[map[drows[i]]] -= c[i];
+      }
+    } else {
+      SyrkLower(n, dcol, D, drow, c, m);
+      if (m > n) GemmNT(m - n, n, dcol, D + n, drow, D, drow, c + n, m);
+      for (int j = 0; j < n; ++j) {
+        Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
+        const Scalar* cj = c + static_cast<int64_t>(j) * m;
+        for (int i = j; i < m; ++i) target[map[drows[i]]] -= cj[i];
+      }
+    }
+  }
+  if (Potrf(ncol, L, nrow) != 0) return false;
+  for (int j = 0; j < ncol; ++j) {
+    const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
+    if (!(pivot > 0) || !std::isfinite(static_cast<double>(pivot))) return false;
+  }
+  if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
+  return true;
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
+                                        bool new_structure, int threads) {
+  threads = std::max(1, threads);
+  if (new_structure || n_ != static_cast<int>(L.n) || threads != threads_ ||
+      super_.size() != L.nsuper + 1 || px_.empty() || px_.back() != static_cast<int64_t>(L.xsize)) {
+    loaded_ = false;
+    if (!TakeStructure(L, threads)) return false;
+  }
+  loaded_ = false;
+  if (!prepared_ || prepared_nnz_ != A.nonZeros()) {
+    if (!PrepareFactorization(A)) return false;
+  }
+  values_.resize(static_cast<size_t>(px_.back()));
+  const double* a = A.valuePtr();
+  const int num_groups = static_cast<int>(groups_.size());
+  bool ok = true;
+  if (num_groups == 1) {
+    for (int s : groups_[0]) {
+      if (!FactorizeSupernode(s, a, map_[0].data(), c_[0].data())) return false;
+    }
+  } else {
+    std::vector<char> group_ok(static_cast<size_t>(num_groups), 1);
+#pragma omp parallel for schedule(static, 1) num_threads(num_groups)
+    for (int g = 0; g < num_groups; ++g) {
+      for (int s : groups_[static_cast<size_t>(g)]) {
+        if (!FactorizeSupernode(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
+          group_ok[static_cast<size_t>(g)] = 0;
+          break;
+        }
+      }
+    }
+    for (char g : group_ok) ok = ok && g;
+    for (size_t k = 0; ok && k < top_.size(); ++k) {
+      ok = FactorizeSupernode(top_[k], a, map_[0].data(), c_[0].data());
+    }
+  }
+  loaded_ = ok;
+  return ok;
 }
 
 namespace {

@@ -15,12 +15,22 @@
 // the groups in parallel (a supernode reads only its ancestors). No two threads write one
 // entry, and the order of every sum is fixed by the cut, so a thread count gives the same
 // result on every run.
+//
+// The values either come from a CHOLMOD factor (Load) or are computed here (Factorize): a
+// left-looking supernodal Cholesky factorization in `Scalar` on CHOLMOD's symbolic analysis
+// (the supernodes, their rows, the ordering), the subtrees of the same cut in parallel and
+// the top on one thread. Each supernode adds its descendants' updates in ascending order
+// of the descendant, so the factor is the same on any thread count. In float the dense
+// kernels (the BLAS) do twice the flops per second, and the matrix goes into the factor
+// through a map made once per analysis, where CHOLMOD permutes and transposes it again at
+// every factorization.
 #ifndef FEMREG_SOLVERS_FAST_SUPERNODAL_SOLVE_H_
 #define FEMREG_SOLVERS_FAST_SUPERNODAL_SOLVE_H_
 
 #include <cholmod.h>
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <cstdint>
 #include <vector>
 
@@ -34,14 +44,34 @@ class SupernodalSolve {
   // and copies its values. False, and nothing kept, unless L is a supernodal LL^T factor
   // with int indices and real double values.
   bool Load(const cholmod_factor& L, bool new_structure, int threads);
+  // Factorizes A = P^T L L^T P here, in Scalar, with the structure and the ordering of L (a
+  // supernodal factor of A's pattern from CHOLMOD's analysis, symbolic or numeric; taken
+  // again only when `new_structure`). A: both triangles, the pattern that was analysed.
+  // False, and nothing kept, when a pivot is not positive and finite in Scalar (A is not
+  // numerically positive definite at that precision) or L is not a supernodal LL^T
+  // structure with int indices. The BLAS must run on one thread here (the caller's
+  // ScopedThreads): the threads are this function's own.
+  bool Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A, bool new_structure,
+                 int threads);
   bool loaded() const { return loaded_; }
   // x = A^-1 b for the factorized A = P^T L L^T P. x may not alias b.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
   // The share of L's entries solved on one thread while the others wait: the top (0 on one
   // thread; 1 when no cut of the tree beats one thread).
   double serial_fraction() const { return serial_fraction_; }
+  // L's values, supernode by supernode (CHOLMOD's layout).
+  const std::vector<Scalar>& values() const { return values_; }
 
  private:
+  // Takes L's structure and cuts the tree for `threads`; false if L is not supernodal LL^T
+  // with int indices.
+  bool TakeStructure(const cholmod_factor& L, int threads);
+  // For Factorize, once per structure and pattern of A: which descendants update each
+  // supernode (and with which of their rows), where A's entries go.
+  bool PrepareFactorization(const Eigen::SparseMatrix<double>& A);
+  // Supernode s of the factorization: A's entries, its descendants' updates, its dense
+  // factorization. map: n ints, c: the largest update. False: a pivot not positive.
+  bool FactorizeSupernode(int s, const double* a, int* map, Scalar* c);
   void Forward(int s, const double* b, double* acc, double* y, double* z) const;
   void Backward(int s, double* y, double* z) const;
 
@@ -51,6 +81,17 @@ class SupernodalSolve {
   std::vector<int> super_, pi_, rows_, perm_;
   std::vector<int64_t> px_;
   std::vector<Scalar> values_;
+  // The factorization's plan (PrepareFactorization): per supernode s, its updates
+  // [update_start_[s], update_start_[s + 1]) as (descendant, first row, end row) within the
+  // descendant's rows; A's entries [a_start_[s], a_start_[s + 1]) as (index in A's values,
+  // index in values_).
+  bool prepared_ = false;
+  int64_t prepared_nnz_ = -1;
+  std::vector<int> update_start_, update_d_, update_r1_, update_r2_;
+  std::vector<int64_t> a_start_, a_src_, a_dst_;
+  int64_t max_update_ = 0;
+  std::vector<std::vector<int>> map_;
+  std::vector<std::vector<Scalar>> c_;
   // Per thread, its supernodes in ascending order (children before parents); the top.
   std::vector<std::vector<int>> groups_;
   std::vector<int> top_;
