@@ -473,12 +473,13 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
   }
 }
 
-// The parallel assembly (sets of 256 blocks and more, split by vertex ranges) builds the
-// serial system up to round-off: one Gauss-Newton step, solved directly, lands in the same
-// place on 1 and 2 threads. With anchors (their rows and columns) and a robust loss.
+// The parallel assembly (sets of 4096 blocks and more, split by vertex ranges: here the
+// elements and the edge springs) builds the serial system up to round-off: one Gauss-Newton
+// step, solved directly, lands in the same place on 1 and 2 threads. With anchors (their
+// rows and columns) and a robust loss.
 TEST(FastBackend, TwoThreadsTakeTheSameStep) {
-  auto s = MakeSetup(RobustLoss::kHuber, true, true, false, 11, false, 3);
-  ASSERT_GE(s->problem.num_blocks(), 2000);
+  auto s = MakeSetup(RobustLoss::kHuber, true, true, false, 11, false, 4);
+  ASSERT_GE(s->model.num_elements(), 4096);
   auto step = [&](int threads) {
     BackendOptions options;
     options.type = SolverBackend::kFast;
