@@ -473,8 +473,8 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
   }
 }
 
-// The parallel assembly (sets of 4096 blocks and more, split by vertex ranges: here the
-// elements and the edge springs) builds the serial system up to round-off: one Gauss-Newton
+// The parallel assembly (sets of 32768 3x3 blocks and more, split by vertex ranges: here
+// the 6400 elements) builds the serial system up to round-off: one Gauss-Newton
 // step, solved directly, lands in the same place on 1 and 2 threads. With anchors (their
 // rows and columns) and a robust loss.
 TEST(FastBackend, TwoThreadsTakeTheSameStep) {

@@ -109,14 +109,18 @@ constexpr double kNegligibleGain = 1e-2;
 // 20.4 / 19.7 and 20.7 / 21.5 (noise; 15.5 PCG iterations against 20).
 constexpr double kSingleFactorizationSpeed = 3.0;
 
-// A set is assembled on several threads from this many blocks on. Below, the team costs
-// more than it saves: not its start (3 us) but H's cache lines, which the main thread
-// filled and the others must fetch from its core (this project's 2-core virtual machines:
-// 0.55 MB written in random order, 14 us from the core that holds it, 62 from the other).
-// Demo, 2 threads, per assembly of its ~2.3k data blocks: 117 us on one thread, 200 on two;
-// its 4500 elements: 815 against 637 us. With 4096 instead of 256 the demo's assembly went
-// from 5.3-5.5 to 5.2-5.3 ms per frame (median) and from 5.8-6.8 to 5.4-5.5 (mean).
-constexpr int kParallelBlocks = 4096;
+// A set is assembled on several threads once its blocks hold this many 3x3 Hessian blocks
+// (#blocks x n^2, n the vertices per block: the work grows with it). Below, the team costs
+// more than it saves: not its start (3 us) but the cache lines of H (and of the elements'
+// rotations) that the other core must fetch from the one that wrote them last (this
+// project's 2-core virtual machines: 0.55 MB written in random order, 14 us from the core
+// that holds it, 62 from the other). Per assembly, 2 threads against 1: the demo's ~2.3k
+// triangle data blocks (~21k 3x3 blocks) 200 against 117 us; its 4500 elements (72k) 637
+// against 815 us. With a threshold of 256 blocks whatever their size, against 4096, the
+// demo's assembly took 5.3-5.5 against 5.2-5.3 ms per frame (median) and 5.8-6.8 against
+// 5.4-5.5 (mean), but the bundled organ_patch body's 3072 elements (49k) lost their second
+// thread: assembly 2.8-3.8 -> 3.7-3.8 ms, rotations 1.2-1.4 -> 1.8-1.9.
+constexpr int kParallelWork = 32768;
 
 // The product H p runs in parallel from this many vertices on: below, a team's start costs
 // more than it saves.
@@ -419,7 +423,7 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
         }
       }
     };
-    if (threads == 1 || size < kParallelBlocks) {
+    if (threads == 1 || static_cast<int64_t>(size) * n * n < kParallelWork) {
       // One pass, no OpenMP region (even a team of one costs libgomp a futex wake-up).
       energy::Linearization<T> lin;
       for (int b = 0; b < size; ++b) {
