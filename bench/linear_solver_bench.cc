@@ -1,7 +1,8 @@
 // The sparse Cholesky choices of the fast back end, measured on the system it solves: the
 // corotational stiffness (R = I) of a box mesh plus a diagonal (masses, data springs), 3 #V
 // by 3 #V with full 3x3 vertex blocks. Simplicial and supernodal CHOLMOD, the factorization
-// and one solve, and one product H p (what an iteration of PCG costs besides a solve).
+// and one solve; the back end's own factorization and substitutions (float and double); one
+// product H p (what an iteration of PCG costs besides a solve).
 // Run single-threaded to compare the kernels, then with more threads:
 //   bench/femreg_linear_solver_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only
 #include <benchmark/benchmark.h>
@@ -93,6 +94,28 @@ void OwnSolve(benchmark::State& state) {
   state.counters["nsuper"] = static_cast<double>(llt.raw()->nsuper);
 }
 
+// The back end's own numeric factorization (Scalar) on CHOLMOD's supernodal analysis of the
+// same pattern (CHOLMOD's default ordering here, as in Factorize above); its subtrees on
+// `threads` threads, each BLAS call on one.
+template <class Scalar>
+void OwnFactorize(benchmark::State& state) {
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
+  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
+    const cholmod_factor* raw() const { return m_cholmodFactor; }
+  } llt;
+  llt.setMode(Eigen::CholmodSupernodalLLt);
+  llt.analyzePattern(H);
+  const femreg::ScopedThreads one_blas_thread(1);
+  const int threads = static_cast<int>(state.range(1));
+  femreg::fast_backend::SupernodalSolve<Scalar> factor;
+  if (!factor.Factorize(*llt.raw(), H, true, threads)) state.SkipWithError("not positive definite");
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(factor.Factorize(*llt.raw(), H, false, threads));
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+  state.counters["serial"] = factor.serial_fraction();
+}
+
 void Product(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
   const Eigen::VectorXd p = Eigen::VectorXd::Ones(H.rows());
@@ -127,6 +150,8 @@ BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
+BENCHMARK_TEMPLATE(OwnFactorize, float)->Apply(Sizes);
+BENCHMARK_TEMPLATE(OwnFactorize, double)->Apply(Sizes);
 BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(Sizes);
 BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
 BENCHMARK(Product)->Apply(Sizes);

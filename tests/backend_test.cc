@@ -434,7 +434,11 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
     in_float.Solve(b, &y);
     EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 3e-3 * scale) << threads << " threads";
     EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);  // float, not CHOLMOD's values
-    // The same factor on every thread count (the substitutions' sums may differ in order).
+    // The same factor on every thread count (the substitutions' sums may differ in order),
+    // with the subtrees in parallel on more than one.
+    if (threads > 1) {
+      EXPECT_LT(in_float.serial_fraction(), 1.0) << threads << " threads";
+    }
     if (threads == 1) {
       first = in_float.values();
     } else {
@@ -451,6 +455,30 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
     EXPECT_FALSE(in_float.loaded());
     ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, false, threads));
     EXPECT_TRUE(in_float.values() == first) << threads << " threads";
+  }
+  // Another pattern with as many entries, without a new structure: planned again, not
+  // scattered through the old plan (entry (0, 1) dropped, (0, n - 1) added, both triangles).
+  {
+    const ScopedThreads one_blas_thread(1);
+    fast_backend::SupernodalSolve<double> reused;
+    ASSERT_TRUE(reused.Factorize(*exact.raw(), H, true, 1));
+    std::vector<Eigen::Triplet<double>> u;
+    for (int c = 0; c < H.outerSize(); ++c) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(H, c); it; ++it) {
+        if ((it.row() == 0 && it.col() == 1) || (it.row() == 1 && it.col() == 0)) continue;
+        u.emplace_back(it.row(), it.col(), it.value());
+      }
+    }
+    ASSERT_EQ(H.coeff(0, offset - 1), 0.0);
+    u.emplace_back(0, offset - 1, 0.0);
+    u.emplace_back(offset - 1, 0, 0.0);
+    Eigen::SparseMatrix<double> moved(offset, offset);
+    moved.setFromTriplets(u.begin(), u.end());
+    moved.makeCompressed();
+    ASSERT_EQ(moved.nonZeros(), H.nonZeros());
+    // (0, n - 1) joins the two beams, outside L's pattern: refused rather than written
+    // through the old plan.
+    EXPECT_FALSE(reused.Factorize(*exact.raw(), moved, false, 1));
   }
   // The structure of a numeric factor serves as well.
   {

@@ -109,6 +109,13 @@ constexpr double kNegligibleGain = 1e-2;
 // 20.4 / 19.7 and 20.7 / 21.5 (noise; 15.5 PCG iterations against 20).
 constexpr double kSingleFactorizationSpeed = 3.0;
 
+// After a single-precision factorization failed (or PCG did not converge with it), this many
+// factorizations are CHOLMOD's in double before single precision is tried again: a matrix
+// too ill-conditioned for float (the 1:1000 flat plate of tests/hard_cases_test.cc) stays so
+// for a while, and each try costs a factorization and PCG iterations; a frame or two later
+// the next try is cheap.
+constexpr int kSingleBackoff = 8;
+
 // A set is assembled on several threads once its blocks hold this many 3x3 Hessian blocks
 // (#blocks x n^2, n the vertices per block: the work grows with it). Below, the team costs
 // more than it saves: not its start (3 us) but the cache lines of H (and of the elements'
@@ -212,13 +219,17 @@ struct FastBackend::Impl {
   bool factor_valid = false;
   // The analysis changed since `substitutions` last took L's structure.
   bool structure_pending = false;
-  // False once a single-precision factorization failed on this pattern, or PCG did not
-  // converge with a new one (H too ill-conditioned for float): CHOLMOD's double factors from
-  // then on, until the pattern changes.
-  bool single_ok = true;
+  // Factorizations left to CHOLMOD in double before single precision is tried again: set
+  // to kSingleBackoff when a single-precision factorization failed, or PCG did not converge
+  // with a new one (H too ill-conditioned for float, or not positive definite at all).
+  int single_backoff = 0;
+  // The kept factor is a single-precision one (else CHOLMOD's).
+  bool factor_single = false;
   // PCG iterations that cost as much as a factorization (CHOLMOD's flop counts, from the
-  // analysis): beyond them a new factor is cheaper.
-  int pcg_budget = 0;
+  // analysis; for the single-precision one over kSingleFactorizationSpeed): beyond them a
+  // new factor is cheaper.
+  int pcg_budget_double = 0, pcg_budget_single = 0;
+  int PcgBudget() const { return factor_single ? pcg_budget_single : pcg_budget_double; }
   // PCG iterations run with the kept factor since it was made. Once they have cost as much
   // as a factorization, the next step factorizes anew (the ski-rental rule: never more than
   // twice the cost of the better choice in hindsight). Demo, 1 thread: 55-57 -> 45 ms per
@@ -273,7 +284,9 @@ struct FastBackend::Impl {
   enum class Outcome { kSolved, kNegligible, kFailed };
   Outcome SolveStep(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
                     SolveReport* report);
-  Outcome Pcg(const Eigen::VectorXd& b, double negligible, Eigen::VectorXd* x, SolveReport* report);
+  // At most `limit` iterations.
+  Outcome Pcg(const Eigen::VectorXd& b, double negligible, int limit, Eigen::VectorXd* x,
+              SolveReport* report);
   EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
 
@@ -340,7 +353,7 @@ void FastBackend::Impl::BuildPattern() {
   }
   analysed = false;
   factor_valid = false;
-  single_ok = true;
+  single_backoff = 0;
   cache.clear();
   constant_values.clear();
   fixed_for.clear();
@@ -609,9 +622,10 @@ void FastBackend::Impl::Analyse() {
   // the substitutions' rate.
   if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
   const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
-  pcg_budget = iteration_flops > 0
-                   ? static_cast<int>(common.fl / iteration_flops / kSingleFactorizationSpeed)
-                   : 0;
+  pcg_budget_double = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
+  pcg_budget_single = iteration_flops > 0
+                          ? static_cast<int>(common.fl / iteration_flops / kSingleFactorizationSpeed)
+                          : 0;
   structure_pending = true;
 }
 
@@ -630,6 +644,7 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     WithThreadLimit(1, [&] { factor.factorize(H); });
   }
   pcg_since_factor = 0;
+  factor_single = false;
   ++report->factorizations;
   report->factorize_s += Seconds(t0);
   factor_valid = factor.info() == Eigen::Success;
@@ -649,6 +664,7 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
   const auto t0 = Clock::now();
   Analyse();
   pcg_since_factor = 0;
+  factor_single = true;
   ++report->factorizations;
   // Its BLAS calls on one thread; its own team of `threads`.
   {
@@ -662,8 +678,8 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
 }
 
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
-                                                  Eigen::VectorXd* x, SolveReport* report) {
-  const int max_iterations = std::min(options.max_pcg_iterations, std::max(1, pcg_budget));
+                                                  int limit, Eigen::VectorXd* x, SolveReport* report) {
+  const int max_iterations = limit;
   // The substitutions are the back end's own (`substitutions`, on its threads); CHOLMOD's,
   // only if that copy could not be made, on one BLAS thread: too small to share (demo, 2
   // threads: PCG 77 ms per frame against 41 ms on one).
@@ -709,22 +725,26 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
 FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, double negligible,
                                                         Eigen::VectorXd* dx, SolveReport* report) {
   const auto t0 = Clock::now();
-  if (factor_valid && options.max_pcg_iterations > 0 && pcg_since_factor < pcg_budget) {
-    const Outcome outcome = Pcg(-g, negligible, dx, report);
+  if (factor_valid && options.max_pcg_iterations > 0 && pcg_since_factor < PcgBudget()) {
+    const Outcome outcome =
+        Pcg(-g, negligible, std::min(options.max_pcg_iterations, std::max(1, PcgBudget())), dx, report);
     report->linear_solve_s += Seconds(t0);
     if (outcome == Outcome::kNegligible) return outcome;
     if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
   }
   // A new factor in single precision, and the step by PCG with it (its first iteration is
-  // the solve with the factor; PCG corrects the factor's float round-off).
-  if (options.max_pcg_iterations > 0 && single_ok) {
+  // the solve with the factor; PCG corrects the factor's float round-off, in one or two
+  // more: up to max_pcg_iterations, whatever the budget for a kept factor).
+  if (options.max_pcg_iterations > 0 && single_backoff == 0) {
     if (FactorizeSingle(report)) {
       const auto t1 = Clock::now();
-      const Outcome outcome = Pcg(-g, 0.0, dx, report);
+      const Outcome outcome = Pcg(-g, 0.0, options.max_pcg_iterations, dx, report);
       report->linear_solve_s += Seconds(t1);
       if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
     }
-    single_ok = false;
+    single_backoff = kSingleBackoff;
+  } else if (single_backoff > 0) {
+    --single_backoff;
   }
   // Else (or with max_pcg_iterations 0) CHOLMOD's factor in double, and the step solved
   // with it; if H is not numerically positive definite, Marquardt damping until it is.

@@ -307,7 +307,8 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
   }
   map_.assign(groups_.size(), std::vector<int>(static_cast<size_t>(n_), 0));
   c_.assign(groups_.size(), std::vector<Scalar>(static_cast<size_t>(max_update_)));
-  prepared_nnz_ = A.nonZeros();
+  prepared_outer_.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
+  prepared_inner_.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
   prepared_ = true;
   return true;
 }
@@ -373,7 +374,14 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
     if (!TakeStructure(L, threads)) return false;
   }
   loaded_ = false;
-  if (!prepared_ || prepared_nnz_ != A.nonZeros()) {
+  // The plan holds for the pattern it was made for (compared whole: a pass over A's
+  // indices, a few percent of a factorization).
+  const bool same_pattern =
+      prepared_ && A.cols() + 1 == static_cast<Eigen::Index>(prepared_outer_.size()) &&
+      A.nonZeros() == static_cast<Eigen::Index>(prepared_inner_.size()) &&
+      std::equal(prepared_outer_.begin(), prepared_outer_.end(), A.outerIndexPtr()) &&
+      std::equal(prepared_inner_.begin(), prepared_inner_.end(), A.innerIndexPtr());
+  if (!same_pattern) {
     if (!PrepareFactorization(A)) return false;
   }
   values_.resize(static_cast<size_t>(px_.back()));

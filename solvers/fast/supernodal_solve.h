@@ -86,7 +86,7 @@ class SupernodalSolve {
   // descendant's rows; A's entries [a_start_[s], a_start_[s + 1]) as (index in A's values,
   // index in values_).
   bool prepared_ = false;
-  int64_t prepared_nnz_ = -1;
+  std::vector<int> prepared_outer_, prepared_inner_;  // A's pattern the plan was made for
   std::vector<int> update_start_, update_d_, update_r1_, update_r2_;
   std::vector<int64_t> a_start_, a_src_, a_dst_;
   int64_t max_update_ = 0;
