@@ -297,18 +297,15 @@ TEST(FastBackend, BlockProductIsTheMatrixProduct) {
   }
 }
 
-// PCG's preconditioner, the back end's own substitutions with CHOLMOD's supernodal factor,
-// solve the factorized system: in double to round-off, in float to float's precision, on
-// 1, 2 and 3 threads (the elimination tree cut into subtrees per thread), the same result
-// on every run with a thread count. The matrix: two beams' stiffness (a forest of two
-// trees) plus a diagonal.
-TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
+// Beams' corotational stiffness (R = I) side by side, one per (cells along, Young's modulus):
+// a forest of independent trees; plus a diagonal of `diagonal` x (1 .. 5).
+Eigen::SparseMatrix<double> BeamsSystem(const std::vector<std::pair<int, double>>& beams, double diagonal) {
   std::vector<Eigen::Triplet<double>> t;
   int offset = 0;
-  for (int cells : {12, 7}) {
+  for (const auto& [cells, modulus] : beams) {
     const TetMesh mesh = MakeBox(Eigen::Vector3d(0.3, 0.05, 0.05), cells, 3, 3);
     Material material;
-    material.youngs_modulus = 5e4;
+    material.youngs_modulus = modulus;
     material.poisson_ratio = 0.45;
     ElasticModel model;
     model.Build(mesh, ElasticModelType::kCorotational, material);
@@ -317,10 +314,21 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
     for (const auto& e : own) t.emplace_back(e.row() + offset, e.col() + offset, e.value());
     offset += 3 * mesh.num_vertices();
   }
-  for (int i = 0; i < offset; ++i) t.emplace_back(i, i, 1e-2 * (1 + i % 5));
+  for (int i = 0; i < offset; ++i) t.emplace_back(i, i, diagonal * (1 + i % 5));
   Eigen::SparseMatrix<double> H(offset, offset);
   H.setFromTriplets(t.begin(), t.end());
   H.makeCompressed();
+  return H;
+}
+
+// PCG's preconditioner, the back end's own substitutions with CHOLMOD's supernodal factor,
+// solve the factorized system: in double to round-off, in float to float's precision, on
+// 1, 2 and 3 threads (the elimination tree cut into subtrees per thread), the same result
+// on every run with a thread count. The matrix: two beams' stiffness (a forest of two
+// trees) plus a diagonal.
+TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{12, 5e4}, {7, 5e4}}, 1e-2);
+  const int offset = static_cast<int>(H.rows());
   struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
     const cholmod_factor* raw() const { return m_cholmodFactor; }
   } llt;
@@ -382,24 +390,8 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
 // come from a numeric factor. The matrix: two beams' stiffness (a forest of two trees), one
 // four times stiffer, plus a diagonal (a data term's share).
 TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
-  std::vector<Eigen::Triplet<double>> t;
-  int offset = 0;
-  for (auto [cells, modulus] : {std::pair<int, double>{14, 5e4}, std::pair<int, double>{9, 2e5}}) {
-    const TetMesh mesh = MakeBox(Eigen::Vector3d(0.3, 0.05, 0.05), cells, 3, 3);
-    Material material;
-    material.youngs_modulus = modulus;
-    material.poisson_ratio = 0.45;
-    ElasticModel model;
-    model.Build(mesh, ElasticModelType::kCorotational, material);
-    std::vector<Eigen::Triplet<double>> own;
-    model.AddStiffnessTriplets(&own);
-    for (const auto& e : own) t.emplace_back(e.row() + offset, e.col() + offset, e.value());
-    offset += 3 * mesh.num_vertices();
-  }
-  for (int i = 0; i < offset; ++i) t.emplace_back(i, i, 1.0 * (1 + i % 5));
-  Eigen::SparseMatrix<double> H(offset, offset);
-  H.setFromTriplets(t.begin(), t.end());
-  H.makeCompressed();
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{14, 5e4}, {9, 2e5}}, 1.0);
+  const int offset = static_cast<int>(H.rows());
   struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
     const cholmod_factor* raw() const { return m_cholmodFactor; }
   };
