@@ -75,9 +75,7 @@ void Solve(benchmark::State& state) {
 template <class Scalar>
 void OwnSolve(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
-  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
-    const cholmod_factor* raw() const { return m_cholmodFactor; }
-  } llt;
+  femreg::fast_backend::CholmodFactor llt;
   llt.setMode(Eigen::CholmodSupernodalLLt);
   llt.compute(H);
   femreg::fast_backend::SupernodalSolve<Scalar> solve;
@@ -100,9 +98,7 @@ void OwnSolve(benchmark::State& state) {
 template <class Scalar>
 void OwnFactorize(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
-  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
-    const cholmod_factor* raw() const { return m_cholmodFactor; }
-  } llt;
+  femreg::fast_backend::CholmodFactor llt;
   llt.setMode(Eigen::CholmodSupernodalLLt);
   llt.analyzePattern(H);
   const femreg::ScopedThreads one_blas_thread(1);

@@ -329,9 +329,7 @@ Eigen::SparseMatrix<double> BeamsSystem(const std::vector<std::pair<int, double>
 TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
   const Eigen::SparseMatrix<double> H = BeamsSystem({{12, 5e4}, {7, 5e4}}, 1e-2);
   const int offset = static_cast<int>(H.rows());
-  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
-    const cholmod_factor* raw() const { return m_cholmodFactor; }
-  } llt;
+  fast_backend::CholmodFactor llt;
   llt.setMode(Eigen::CholmodSupernodalLLt);
   llt.compute(H);
   ASSERT_EQ(llt.info(), Eigen::Success);
@@ -375,7 +373,7 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
   EXPECT_FALSE(failed.Load(*llt.raw(), false, 2));
   EXPECT_FALSE(failed.loaded());
   // Not a supernodal LL^T factor: refused.
-  Factor simplicial;
+  fast_backend::CholmodFactor simplicial;
   simplicial.setMode(Eigen::CholmodSimplicialLLt);
   simplicial.compute(H);
   fast_backend::SupernodalSolve<float> refused;
@@ -392,14 +390,11 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
 TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
   const Eigen::SparseMatrix<double> H = BeamsSystem({{14, 5e4}, {9, 2e5}}, 1.0);
   const int offset = static_cast<int>(H.rows());
-  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
-    const cholmod_factor* raw() const { return m_cholmodFactor; }
-  };
-  Factor exact;
+  fast_backend::CholmodFactor exact;
   exact.setMode(Eigen::CholmodSupernodalLLt);
   exact.compute(H);
   ASSERT_EQ(exact.info(), Eigen::Success);
-  Factor symbolic;
+  fast_backend::CholmodFactor symbolic;
   symbolic.setMode(Eigen::CholmodSupernodalLLt);
   symbolic.analyzePattern(H);
   ASSERT_NE(symbolic.raw(), nullptr);

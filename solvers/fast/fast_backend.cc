@@ -208,12 +208,11 @@ struct FastBackend::Impl {
   Eigen::SparseMatrix<double> H;
   std::vector<int> diagonal_at;  // per column: where its diagonal entry sits
 
-  // The factor, of the pattern's matrix at some earlier step (factor_valid), and its copy
-  // in single precision for PCG's substitutions (solvers/fast/supernodal_solve.h).
-  struct Factor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
-    const cholmod_factor* raw() const { return m_cholmodFactor; }
-  };
-  Factor factor;
+  // CHOLMOD's analysis of the pattern (and its double factor, where single precision
+  // failed); the kept factor of the matrix at some earlier step (factor_valid), in single
+  // precision, factorized there or copied from CHOLMOD's, for PCG's substitutions
+  // (solvers/fast/supernodal_solve.h).
+  CholmodFactor factor;
   SupernodalSolve<float> substitutions;
   bool analysed = false;
   bool factor_valid = false;
@@ -284,8 +283,7 @@ struct FastBackend::Impl {
   enum class Outcome { kSolved, kNegligible, kFailed };
   Outcome SolveStep(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
                     SolveReport* report);
-  // At most `limit` iterations.
-  Outcome Pcg(const Eigen::VectorXd& b, double negligible, int limit, Eigen::VectorXd* x,
+  Outcome Pcg(const Eigen::VectorXd& b, double negligible, int max_iterations, Eigen::VectorXd* x,
               SolveReport* report);
   EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
@@ -678,8 +676,8 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
 }
 
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
-                                                  int limit, Eigen::VectorXd* x, SolveReport* report) {
-  const int max_iterations = limit;
+                                                  int max_iterations, Eigen::VectorXd* x,
+                                                  SolveReport* report) {
   // The substitutions are the back end's own (`substitutions`, on its threads); CHOLMOD's,
   // only if that copy could not be made, on one BLAS thread: too small to share (demo, 2
   // threads: PCG 77 ms per frame against 41 ms on one).

@@ -10,7 +10,6 @@
 #include <omp.h>
 #endif
 
-
 // The BLAS and LAPACK (Fortran interface, as CHOLMOD calls them).
 extern "C" {
 void spotrf_(const char* uplo, const int* n, float* a, const int* lda, int* info);
@@ -174,16 +173,16 @@ bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L, int threads
   }
   // The supernodal tree: a supernode's parent holds the first row below its diagonal
   // block. Work: the supernode's entries.
-  std::vector<int> super_of(static_cast<size_t>(n_));
+  super_of_.assign(static_cast<size_t>(n_), 0);
   for (int k = 0; k < nsuper; ++k) {
-    for (int c = super[k]; c < super[k + 1]; ++c) super_of[static_cast<size_t>(c)] = k;
+    for (int c = super[k]; c < super[k + 1]; ++c) super_of_[static_cast<size_t>(c)] = k;
   }
   std::vector<int> parent(static_cast<size_t>(nsuper), -1);
   std::vector<double> work(static_cast<size_t>(nsuper));
   double total = 0.0;
   for (int k = 0; k < nsuper; ++k) {
     const int ncol = super[k + 1] - super[k], nrow = pi[k + 1] - pi[k];
-    if (nrow > ncol) parent[static_cast<size_t>(k)] = super_of[static_cast<size_t>(s[pi[k] + ncol])];
+    if (nrow > ncol) parent[static_cast<size_t>(k)] = super_of_[static_cast<size_t>(s[pi[k] + ncol])];
     work[static_cast<size_t>(k)] = static_cast<double>(nrow) * ncol - 0.5 * ncol * (ncol - 1);
     total += work[static_cast<size_t>(k)];
   }
@@ -236,16 +235,11 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
   return true;
 }
 
-
 template <class Scalar>
 bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<double>& A) {
   prepared_ = false;
   if (A.rows() != n_ || A.cols() != n_ || !A.isCompressed()) return false;
   const int nsuper = static_cast<int>(super_.size()) - 1;
-  std::vector<int> super_of(static_cast<size_t>(n_));
-  for (int k = 0; k < nsuper; ++k) {
-    for (int c = super_[k]; c < super_[k + 1]; ++c) super_of[static_cast<size_t>(c)] = k;
-  }
   // The updates: descendant d updates, with its rows [r1, r2) (below its diagonal block),
   // the supernode that holds row r1 and with the rows [r1, end) the entries below. Listed
   // by target, in ascending d.
@@ -257,7 +251,7 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
     const int* rows = rows_.data() + pi_[d];
     int r = ncol;
     while (r < nrow) {
-      const int t = super_of[static_cast<size_t>(rows[r])];
+      const int t = super_of_[static_cast<size_t>(rows[r])];
       if (t <= d) return false;  // not a supernodal structure
       int r2 = r;
       while (r2 < nrow && rows[r2] < super_[t + 1]) ++r2;

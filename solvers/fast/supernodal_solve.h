@@ -29,6 +29,7 @@
 
 #include <cholmod.h>
 
+#include <Eigen/CholmodSupport>
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <cstdint>
@@ -36,6 +37,12 @@
 
 namespace femreg {
 namespace fast_backend {
+
+// CHOLMOD's decomposition (through Eigen) with its factor in reach: the structure (and, once
+// factorized, the values) that SupernodalSolve takes.
+struct CholmodFactor : Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> {
+  const cholmod_factor* raw() const { return m_cholmodFactor; }
+};
 
 template <class Scalar>
 class SupernodalSolve {
@@ -79,6 +86,7 @@ class SupernodalSolve {
   int n_ = 0;
   int threads_ = 1;
   std::vector<int> super_, pi_, rows_, perm_;
+  std::vector<int> super_of_;  // column -> its supernode
   std::vector<int64_t> px_;
   std::vector<Scalar> values_;
   // The factorization's plan (PrepareFactorization): per supernode s, its updates
