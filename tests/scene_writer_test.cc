@@ -465,7 +465,7 @@ TEST_F(SceneWriterTest, WritesOnlyWhatDiffersFromTheDefaults) {
   RoundTrip(scene, "");
   scene.description.clear();
   scene.registration.data.visibility = true;
-  scene.registration.solver.max_outer_iterations = 8;
+  scene.registration.solver.max_outer_iterations = 12;
   scene.effects.fracture = true;
   AnchorSpec anchor;
   anchor.name = "base";
@@ -481,7 +481,7 @@ TEST_F(SceneWriterTest, WritesOnlyWhatDiffersFromTheDefaults) {
             "    generate: {shape: box, size: [1, 1, 1], cells: [2, 2, 2]}\n"
             "registration:\n"
             "  data: {visibility: true}\n"
-            "  solver: {max_outer_iterations: 8}\n"
+            "  solver: {max_outer_iterations: 12}\n"
             "anchors:\n"
             "  - {name: base, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.001]}}, hard: true}\n"
             "effects: {fracture: true}\n");

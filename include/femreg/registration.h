@@ -154,7 +154,7 @@ struct WeightOptions {
 };
 
 struct SolverOptions {
-  int max_outer_iterations = 5;          // correspondences and rotations refreshed per outer iteration
+  int max_outer_iterations = 8;          // correspondences and rotations refreshed per outer iteration
   int max_inner_iterations = 10;         // Ceres iterations / fast Gauss-Newton steps per outer iteration
   // An inner solve stops when a step changes the energy by less than this fraction (Ceres'
   // function tolerance). Steps smaller than that are worth less than new rotations and
@@ -162,8 +162,9 @@ struct SolverOptions {
   // iterations at the same vertex errors with either back end (1e-2 cost Ceres accuracy on
   // the fracture sequence).
   double inner_tolerance = 1e-3;
-  // The frame stops when an outer iteration changed the energy by less than this fraction
-  // from the previous outer iteration...
+  // The frame stops when an outer iteration lowered the energy by less than this fraction
+  // of it from the previous outer iteration, or raised it by more (stopped_by "energy" and
+  // "energy_rise"; 0: neither)...
   double relative_energy_tolerance = 1e-3;
   // ... or moved no vertex farther than this fraction of the mesh's mean surface edge length.
   // Inner solves of the fast back end stop at a tenth of it.
@@ -257,8 +258,9 @@ struct FrameSummary {
   EnergyTerms initial, final;
   int outer_iterations = 0, inner_iterations = 0;
   int factorizations = 0, linear_solves = 0, pcg_iterations = 0;
-  // Which criterion ended the frame: "step" (solver.step_tolerance), "energy"
-  // (solver.relative_energy_tolerance), or the termination's name otherwise.
+  // Which criterion ended the frame: "step" (solver.step_tolerance), "energy" or
+  // "energy_rise" (solver.relative_energy_tolerance: the energy fell by less than it, or rose
+  // by more), or the termination's name otherwise.
   std::string stopped_by;
   int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
   double rms_residual = 0.0;      // m

@@ -184,7 +184,6 @@ Scene TrackingScene(const Scenario& s) {
   r.data.visibility = s.tracked_visibility;
   r.data.auto_visibility = s.tracked_visibility;
   r.weights.data = 200;  // the tracked toughness was tuned with the per-pair data weight
-  r.solver.max_outer_iterations = 6;
   r.solver.max_inner_iterations = 10;
   scene.effects.fracture = true;
   FractureOptions& f = scene.effects.fracture_options;

@@ -34,7 +34,7 @@
 //            loss: huber|cauchy|tukey|none, loss_scale: 0.005,
 //            metric: point_to_plane|point_to_point, visibility: false, cloud_stride: 1}
 //     weights: {data: 200, elastic: 1, temporal: 1, anchor: 1e4}
-//     solver: {max_outer_iterations: 5, max_inner_iterations: 10,
+//     solver: {max_outer_iterations: 8, max_inner_iterations: 10,
 //              relative_energy_tolerance: 1e-3, time_budget_s: 0,
 //              trust_region: levenberg_marquardt|dogleg,
 //              linear_solver: sparse_normal_cholesky|conjugate_gradients, threads: 1,
