@@ -138,8 +138,8 @@ TEST(PartialView, HeldPairSetStopsSwitching) {
   EXPECT_GT(changed[0], 0);
 }
 
-// The outer iterations stop when the energy rises while no vertex moves as far as a mean
-// surface edge (stopped_by "energy_rise"): on organ_patch's sparse partial clouds they cycle
+// The outer iterations stop when the energy rises, once the pair set is held, while no vertex
+// moves as far as a mean surface edge (stopped_by "energy_rise"): on organ_patch's sparse partial clouds they cycle
 // there, and before that criterion (5 outer iterations, no stop on a rise) 9 of its 12 frames
 // converged. A rise during a larger move goes on: HardCases.NeoHookeanInvertedStartUnfolds.
 TEST(PartialView, OuterIterationsStopWhereTheEnergyRisesWithoutMotion) {
@@ -170,11 +170,13 @@ TEST(PartialView, OuterIterationsStopWhereTheEnergyRisesWithoutMotion) {
     converged += s.termination == TerminationType::kConverged;
     if (s.stopped_by != "energy_rise") continue;
     ++rises;
-    ASSERT_GE(s.iterations.size(), 2u);
+    // Counted once the pair set is held (from the third outer iteration).
+    ASSERT_GE(s.iterations.size(), static_cast<size_t>(scene.registration.data.hold_pairs_after) + 1);
     const OuterIteration& last = s.iterations.back();
     const OuterIteration& before = s.iterations[s.iterations.size() - 2];
     EXPECT_GT(last.after.total(), (1.0 + tolerance) * before.after.total() * (1.0 - 1e-12))
         << "frame " << f << ": " << s.message;
+    EXPECT_LE(last.after.total(), 1.1 * before.after.total()) << "frame " << f << ": " << s.message;
     EXPECT_LE(last.max_move, edge) << "frame " << f << ": " << s.message;
   }
   std::printf("organ_patch: %d of %d frames converged, %d stopped by an energy rise\n", converged,
