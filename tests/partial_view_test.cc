@@ -33,6 +33,20 @@ struct FrameErrors {
   double hidden = 0.0, nothing = 0.0;  // m: mean over the hidden vertices, tracked and at rest
 };
 
+// organ_patch's clouds, in frame order.
+std::vector<PointCloud> OrganClouds() {
+  std::vector<PointCloud> clouds;
+  for (int f = 0;; ++f) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "frame_%04d.pcd", f);
+    const std::string path = kOrgan + "/clouds/" + name;
+    if (!fs::exists(path)) break;
+    clouds.emplace_back();
+    EXPECT_TRUE(ReadPointCloud(path, &clouds.back()).ok()) << path;
+  }
+  return clouds;
+}
+
 // Registers organ_patch with `scene`'s settings changed by `edit`; per-frame hidden errors.
 std::vector<FrameErrors> RunOrgan(void (*edit)(Scene*)) {
   Scene scene;
@@ -106,6 +120,7 @@ TEST(PartialView, HeldPairSetStopsSwitching) {
   int joined[2] = {0, 0};   // outer iterations where model->cloud pairs grew: free, held
   int changed[2] = {0, 0};  // ... where their number changed (from the second on)
   int converged[2] = {0, 0};
+  const std::vector<PointCloud> clouds = OrganClouds();
   for (int held = 1; held >= 0; --held) {
     Scene scene;
     ASSERT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
@@ -113,13 +128,7 @@ TEST(PartialView, HeldPairSetStopsSwitching) {
     ASSERT_EQ(RegistrationOptions().data.hold_pairs_after, 2);
     std::unique_ptr<Tracker> tracker;
     ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
-    for (int f = 0;; ++f) {
-      char name[64];
-      std::snprintf(name, sizeof(name), "frame_%04d.pcd", f);
-      const std::string cloud_path = kOrgan + "/clouds/" + name;
-      if (!fs::exists(cloud_path)) break;
-      PointCloud cloud;
-      ASSERT_TRUE(ReadPointCloud(cloud_path, &cloud).ok());
+    for (const PointCloud& cloud : clouds) {
       FrameSummary s;
       ASSERT_TRUE(tracker->Track(cloud, &s).ok());
       converged[held] += s.termination == TerminationType::kConverged;
@@ -157,15 +166,10 @@ TEST(PartialView, OuterIterationsStopWhereTheEnergyRisesWithoutMotion) {
   edge /= 3.0 * static_cast<double>(mesh.surface.rows());
   const double tolerance = scene.registration.solver.relative_energy_tolerance;
   int frames = 0, converged = 0, rises = 0;
-  for (int f = 0;; ++f) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "frame_%04d.pcd", f);
-    const std::string cloud_path = kOrgan + "/clouds/" + name;
-    if (!fs::exists(cloud_path)) break;
-    PointCloud cloud;
-    ASSERT_TRUE(ReadPointCloud(cloud_path, &cloud).ok());
+  const std::vector<PointCloud> clouds = OrganClouds();
+  for (size_t f = 0; f < clouds.size(); ++f) {
     FrameSummary s;
-    ASSERT_TRUE(tracker->Track(cloud, &s).ok());
+    ASSERT_TRUE(tracker->Track(clouds[f], &s).ok());
     ++frames;
     converged += s.termination == TerminationType::kConverged;
     if (s.stopped_by != "energy_rise") continue;
