@@ -147,10 +147,12 @@ TEST(PartialView, HeldPairSetStopsSwitching) {
   EXPECT_GT(changed[0], 0);
 }
 
-// The outer iterations stop when the energy rises, once the pair set is held, while no vertex
-// moves as far as a mean surface edge (stopped_by "energy_rise"): on organ_patch's sparse partial clouds they cycle
-// there, and before that criterion (5 outer iterations, no stop on a rise) 9 of its 12 frames
-// converged. A rise during a larger move goes on: HardCases.NeoHookeanInvertedStartUnfolds.
+// The outer iterations stop when the energy rises, once the pair set is held, by at most
+// 10 % while no vertex moves as far as a mean surface edge (stopped_by "energy_rise"): on
+// organ_patch's sparse partial clouds they cycle there, and before that criterion (5 outer
+// iterations, no stop on a rise) 9 of its 12 frames converged. A rise during a larger move
+// goes on: HardCases.NeoHookeanInvertedStartUnfolds. relative_energy_tolerance 0 switches
+// the energy criteria off, this one included.
 TEST(PartialView, OuterIterationsStopWhereTheEnergyRisesWithoutMotion) {
   Scene scene;
   ASSERT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
@@ -186,8 +188,19 @@ TEST(PartialView, OuterIterationsStopWhereTheEnergyRisesWithoutMotion) {
   std::printf("organ_patch: %d of %d frames converged, %d stopped by an energy rise\n", converged,
               frames, rises);
   ASSERT_GE(frames, 10);
-  EXPECT_EQ(converged, frames);
+  // 12 of 12 here; one frame of slack for other machines' round-off (and thread counts).
+  EXPECT_GE(converged, frames - 1);
   EXPECT_GT(rises, 0);
+
+  scene.registration.solver.relative_energy_tolerance = 0.0;
+  scene.registration.solver.max_outer_iterations = 4;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  for (size_t f = 0; f < clouds.size(); ++f) {
+    FrameSummary s;
+    ASSERT_TRUE(tracker->Track(clouds[f], &s).ok());
+    EXPECT_NE(s.stopped_by, "energy_rise") << "frame " << f;
+    EXPECT_NE(s.stopped_by, "energy") << "frame " << f;
+  }
 }
 
 TEST(CloudPreparation, SubsamplingKeepsTheWeightAndThePointsNearestTheCentroids) {

@@ -120,8 +120,10 @@ struct DataTermOptions {
   // model->cloud pair is held for the rest of the frame: each keeps pulling to its nearest
   // cloud point (within max_distance) and no other vertex starts, whatever the trim and the
   // visibility say. The pair set then stops switching, and the outer iterations converge
-  // instead of cycling as vertices hop across the trim (12 bundled datasets: 195 -> 216 of
-  // 270 frames converged, mean errors within 2.2%). 0 = never held.
+  // instead of cycling as vertices hop across the trim (12 bundled datasets, at the time with
+  // at most 5 outer iterations: 195 -> 216 of 270 frames converged, mean errors within
+  // 2.2%). A rise of the energy stops a frame only from here on (solver.
+  // relative_energy_tolerance). 0 = never held (rises then count from the second).
   int hold_pairs_after = 2;
   // A cloud with fewer points (after preprocessing) than max(min_points,
   // min_points_per_surface_vertex * surface vertices) cannot constrain the object: the
@@ -162,9 +164,11 @@ struct SolverOptions {
   // iterations at the same vertex errors with either back end (1e-2 cost Ceres accuracy on
   // the fracture sequence).
   double inner_tolerance = 1e-3;
-  // The frame stops when an outer iteration lowered the energy by less than this fraction
-  // of it from the previous outer iteration, or raised it by more (stopped_by "energy" and
-  // "energy_rise"; 0: neither)...
+  // The frame stops when an outer iteration changed the energy by less than this fraction
+  // of it from the previous outer iteration (stopped_by "energy"), or raised it by more
+  // (stopped_by "energy_rise") once the model->cloud pair set is held (hold_pairs_after),
+  // by at most 10 % and with no vertex moving as far as a mean surface edge: the outer
+  // iterations then cycle among nearly equal pairings (README, "How a frame is registered"). 0: neither...
   double relative_energy_tolerance = 1e-3;
   // ... or moved no vertex farther than this fraction of the mesh's mean surface edge length.
   // Inner solves of the fast back end stop at a tenth of it.
@@ -259,8 +263,8 @@ struct FrameSummary {
   int outer_iterations = 0, inner_iterations = 0;
   int factorizations = 0, linear_solves = 0, pcg_iterations = 0;
   // Which criterion ended the frame: "step" (solver.step_tolerance), "energy" or
-  // "energy_rise" (solver.relative_energy_tolerance: the energy fell by less than it, or rose
-  // by more), or the termination's name otherwise.
+  // "energy_rise" (solver.relative_energy_tolerance: the energy changed by less than it, or
+  // rose by more without motion, see there), or the termination's name otherwise.
   std::string stopped_by;
   int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
   double rms_residual = 0.0;      // m

@@ -218,7 +218,7 @@ std::vector<Setting> DefaultBenchSweep(const Scene& base) {
   for (double res : {0.5, 0.75, 1.5}) {
     s.push_back({"resolution x" + Num(res), {{"resolution", Num(res)}}, nullptr, res});
   }
-  for (int outer : {1, 2, 3, 8, 12}) {
+  for (int outer : {1, 2, 3, 5, 8, 12}) {
     if (outer == r.solver.max_outer_iterations) continue;
     s.push_back({"outer " + std::to_string(outer), {{"max_outer_iterations", std::to_string(outer)}},
                  [outer](Scene* sc) { sc->registration.solver.max_outer_iterations = outer; }, 1.0});
