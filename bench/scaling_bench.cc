@@ -92,13 +92,17 @@ const Case& CaseFor(int vertices, int points) {
 }
 
 // One iteration: a new tracker (not timed) and kFrames frames; the time per frame is the
-// reported time / kFrames, items_per_second the frames per second.
+// reported time / kFrames, items_per_second the frames per second. Arguments: vertices,
+// points, preconditioner (0: auto, the default; 1: factor; 2: multigrid).
 void Track(benchmark::State& state) {
   const int vertices = static_cast<int>(state.range(0));
   const int points = static_cast<int>(state.range(1));
   const Case& c = CaseFor(vertices, points);
   femreg::RegistrationOptions options;
   options.solver.backend = femreg::SolverBackend::kFast;
+  const femreg::Preconditioner preconditioners[] = {femreg::Preconditioner::kAuto, femreg::Preconditioner::kFactor,
+                                                    femreg::Preconditioner::kMultigrid};
+  options.solver.preconditioner = preconditioners[state.range(2)];
   options.solver.num_threads = 1;
   femreg::ObjectMaterial material;
   material.material.youngs_modulus = 5e4;
@@ -136,6 +140,7 @@ void Track(benchmark::State& state) {
   state.counters["vertices"] = c.mesh.num_vertices();
   state.counters["tets"] = c.mesh.num_tets();
   state.counters["points"] = points;
+  state.counters["preconditioner"] = static_cast<double>(state.range(2));
   state.counters["points_used"] = frames > 0 ? used / frames : 0;
   state.counters["converged"] = frames > 0 ? converged / frames : 0;
   for (const auto& [name, seconds] : phase) state.counters[name + "_ms"] = frames > 0 ? 1e3 * seconds / frames : 0;
@@ -143,7 +148,11 @@ void Track(benchmark::State& state) {
 }
 
 BENCHMARK(Track)
-    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}})
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}, {0}})
+    // The factor where auto takes multigrid (from 4000 vertices), to compare.
+    ->Args({4000, 2000, 1})
+    ->Args({16000, 2000, 1})
+    ->Args({64000, 2000, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);

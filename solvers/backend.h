@@ -28,6 +28,9 @@ struct BackendOptions {
   // factorization (of an earlier, similar system), for at most this many iterations; only
   // if that does not converge is the system factorized anew. 0: factorize every step.
   int max_pcg_iterations = 20;
+  // Fast back end: the factor, or from multigrid_from_vertices on (kAuto) multigrid.
+  Preconditioner preconditioner = Preconditioner::kAuto;
+  int multigrid_from_vertices = kMultigridFromVertices;
   int num_threads = 1;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;  // Ceres
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;  // Ceres
@@ -54,7 +57,8 @@ struct SolveReport {
   StopReason stop = StopReason::kNotRun;
   int iterations = 0;        // steps taken, accepted and rejected
   int factorizations = 0;    // numeric factorizations of the system
-  int linear_solves = 0;     // direct solves with a factor (PCG's preconditioner included)
+  int hierarchies = 0;       // multigrid hierarchies built (fast back end; their time in factorize_s)
+  int linear_solves = 0;     // preconditioner applications (PCG's) and direct solves
   int pcg_iterations = 0;    // conjugate-gradient iterations on steps solved that way
   int pattern_rebuilds = 0;  // new symbolic analyses (a widened or new sparsity pattern)
   // The problem's energy where the solve started and where it ended (*x on return).

@@ -245,6 +245,19 @@ TEST_F(SceneTest, BackendDefaultsToFastAndCeresSettingsSelectCeres) {
               {"beam.yaml:11: registration.solver.trust_region: is a setting of the Ceres back end"});
 }
 
+// The fast back end's preconditioner: auto unless the scene names one.
+TEST_F(SceneTest, PreconditionerIsAutoUnlessNamed) {
+  Scene scene;
+  ASSERT_TRUE(Load(kBaseScene, &scene).ok());
+  EXPECT_EQ(scene.registration.solver.preconditioner, Preconditioner::kAuto);
+  ASSERT_TRUE(Load(std::string(kBaseScene) + "registration: {solver: {preconditioner: multigrid}}\n", &scene).ok());
+  EXPECT_EQ(scene.registration.solver.preconditioner, Preconditioner::kMultigrid);
+  ASSERT_TRUE(Load(std::string(kBaseScene) + "registration: {solver: {preconditioner: factor}}\n", &scene).ok());
+  EXPECT_EQ(scene.registration.solver.preconditioner, Preconditioner::kFactor);
+  ExpectError(std::string(kBaseScene) + "registration: {solver: {preconditioner: amg}}\n",
+              {"registration.solver.preconditioner", "amg"});
+}
+
 // A bad value is quoted by its first 80 characters and its length, not echoed whole.
 TEST_F(SceneTest, LongBadValuesAreQuotedShort) {
   const std::string big(100000, 'x');

@@ -111,6 +111,7 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(s.backend, t.backend);
   EXPECT_EQ(s.trust_region, t.trust_region);
   EXPECT_EQ(s.linear_solver, t.linear_solver);
+  EXPECT_EQ(s.preconditioner, t.preconditioner);
   EXPECT_EQ(s.num_threads, t.num_threads);
   EXPECT_EQ(s.predict_motion, t.predict_motion);
   EXPECT_EQ(s.rigid_prealign, t.rigid_prealign);
@@ -466,6 +467,7 @@ TEST_F(SceneWriterTest, WritesOnlyWhatDiffersFromTheDefaults) {
   scene.description.clear();
   scene.registration.data.visibility = true;
   scene.registration.solver.max_outer_iterations = 12;
+  scene.registration.solver.preconditioner = Preconditioner::kMultigrid;
   scene.effects.fracture = true;
   AnchorSpec anchor;
   anchor.name = "base";
@@ -481,7 +483,7 @@ TEST_F(SceneWriterTest, WritesOnlyWhatDiffersFromTheDefaults) {
             "    generate: {shape: box, size: [1, 1, 1], cells: [2, 2, 2]}\n"
             "registration:\n"
             "  data: {visibility: true}\n"
-            "  solver: {max_outer_iterations: 12}\n"
+            "  solver: {max_outer_iterations: 12, preconditioner: multigrid}\n"
             "anchors:\n"
             "  - {name: base, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.001]}}, hard: true}\n"
             "effects: {fracture: true}\n");

@@ -1,11 +1,15 @@
 """Table and plot of bench/femreg_scaling_bench's JSON: ms per frame against mesh size, one
-line per cloud size, and the per-phase split. Usage: plot_scaling.py scaling.json OUT_DIR"""
+line per cloud size (the default preconditioner), a dashed one for the sparse factor at every
+size, and the per-phase split. Usage: plot_scaling.py scaling.json OUT_DIR"""
 import csv
 import json
 import sys
 from pathlib import Path
 
 import matplotlib
+
+# bench/femreg_scaling_bench's third argument.
+PRECONDITIONERS = {0: "auto", 1: "factor", 2: "multigrid"}
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -22,7 +26,9 @@ def main():
         ms = b["real_time"] / frames  # real_time is for the iteration's frames (ms)
         rows.append({
             "vertices": int(b["vertices"]), "tets": int(b["tets"]), "points": int(b["points"]),
-            "points_used": int(round(b["points_used"])), "ms_per_frame": ms,
+            "points_used": int(round(b["points_used"])),
+            # Before 2026-11-27 there was no choice: the default was the factor at every size.
+            "preconditioner": PRECONDITIONERS[int(b.get("preconditioner", 0))], "ms_per_frame": ms,
             "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
             "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
             # The solve's parts and counts (benchmarks from 2026-11-26 on; 0 before).
@@ -32,18 +38,19 @@ def main():
             "outer_iterations": b.get("outer_iterations", 0.0),
             "converged": b["converged"],
         })
-    rows.sort(key=lambda r: (r["points"], r["vertices"]))
+    rows.sort(key=lambda r: (r["preconditioner"] != "auto", r["points"], r["vertices"]))
     with open(out / "scaling.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.2f}" if isinstance(v, float) else v) for k, v in r.items()})
-    lines = ["| vertices | tets | cloud points (used) | ms/frame | correspondences | rotations | solve "
-             "(assembly / factorization / linear solves) | factorizations, PCG iterations, outer iterations "
+    lines = ["| vertices | tets | cloud points (used) | preconditioner | ms/frame | correspondences | rotations | solve "
+             "(assembly / factorization or hierarchy / linear solves) | factorizations or hierarchies, PCG iterations, outer iterations "
              "per frame | preprocess | converged |",
-             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
-        lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['ms_per_frame']:.1f} | "
+        lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['preconditioner']} | "
+                     f"{r['ms_per_frame']:.1f} | "
                      f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} "
                      f"({r['assembly_ms']:.0f} / {r['factorization_ms']:.0f} / {r['linear_solve_ms']:.0f}) | "
                      f"{r['factorizations']:.1f}, {r['pcg_iterations']:.0f}, {r['outer_iterations']:.1f} | "
@@ -51,9 +58,20 @@ def main():
     (out / "table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     fig, ax = plt.subplots(figsize=(6, 4.2))
-    for points in sorted({r["points"] for r in rows}):
-        sel = [r for r in rows if r["points"] == points]
+    default = [r for r in rows if r["preconditioner"] == "auto"]
+    for points in sorted({r["points"] for r in default}):
+        sel = [r for r in default if r["points"] == points]
         ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "o-", label=f"{points} points")
+    # The factor at every size: the auto rows below the switch and the factor rows above it.
+    factor = [r for r in rows if r["preconditioner"] == "factor"]
+    if factor:
+        points = factor[0]["points"]
+        sizes = {r["vertices"] for r in factor}
+        sel = sorted([r for r in factor if r["points"] == points] +
+                     [r for r in default if r["points"] == points and r["vertices"] < min(sizes)],
+                     key=lambda r: r["vertices"])
+        ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "s--", color="0.5",
+                  label=f"{points} points, sparse factor throughout")
     v = sorted({r["vertices"] for r in rows})
     if v:
         base = min(r["ms_per_frame"] for r in rows if r["vertices"] == v[0])

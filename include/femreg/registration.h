@@ -45,12 +45,14 @@ const char* ToString(Regularizer v);
 const char* ToString(TrustRegion v);
 const char* ToString(SolverBackend v);
 const char* ToString(LinearSolver v);
+const char* ToString(Preconditioner v);
 bool FromString(const std::string& s, RobustLoss* v);
 bool FromString(const std::string& s, DataMetric* v);
 bool FromString(const std::string& s, Regularizer* v);
 bool FromString(const std::string& s, TrustRegion* v);
 bool FromString(const std::string& s, SolverBackend* v);
 bool FromString(const std::string& s, LinearSolver* v);
+bool FromString(const std::string& s, Preconditioner* v);
 
 struct CameraOptions {
   bool enabled = false;                                 // known camera: enables visibility
@@ -187,6 +189,11 @@ struct SolverOptions {
   // Fast back end: conjugate-gradient iterations preconditioned by the kept factorization
   // before a step factorizes anew (0: factorize every step).
   int max_pcg_iterations = 20;
+  // Fast back end: what preconditions those iterations. auto: the kept factorization below
+  // 4,000 vertices, smoothed-aggregation multigrid from there (README, "Cost against
+  // size"); factor; multigrid. With multigrid a step runs up to 100 iterations whatever
+  // max_pcg_iterations says (0 still means: factorize every step, no multigrid).
+  Preconditioner preconditioner = Preconditioner::kAuto;
   // Start each frame from a constant-velocity extrapolation of the last two frames.
   bool predict_motion = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
@@ -236,8 +243,10 @@ struct OuterIteration {
 struct StageTimes {
   double preprocess = 0.0, prealign = 0.0, rotations = 0.0, correspondences = 0.0,
          build = 0.0, solve = 0.0, total = 0.0;
-  // Inside solve: assembling gradient and system, factorizations, linear solves (PCG and
-  // triangular solves; Ceres: its whole linear solver), energy evaluations.
+  // Inside solve: assembling gradient and system, factorizations (with the multigrid
+  // preconditioner: building its hierarchies), linear solves (PCG with the factor's
+  // triangular solves or multigrid V-cycles; Ceres: its whole linear solver), energy
+  // evaluations.
   double assembly = 0.0, factorization = 0.0, linear_solve = 0.0, evaluation = 0.0;
   double collision = 0.0;  // contact detection (refit, broad and narrow phase)
   double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
@@ -261,6 +270,8 @@ struct FrameSummary {
   double coverage = 1.0;
   EnergyTerms initial, final;
   int outer_iterations = 0, inner_iterations = 0;
+  // Fast back end: factorizations (or multigrid hierarchies built), preconditioner
+  // applications, conjugate-gradient iterations.
   int factorizations = 0, linear_solves = 0, pcg_iterations = 0;
   // Which criterion ended the frame: "step" (solver.step_tolerance), "energy" or
   // "energy_rise" (solver.relative_energy_tolerance: the energy changed by less than it, or

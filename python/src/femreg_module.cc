@@ -446,6 +446,9 @@ PYBIND11_MODULE(_femreg, m) {
   EnumProperty(solver, "linear_solver", &SolverOptions::linear_solver, "solver.linear_solver",
                {LinearSolver::kSparseNormalCholesky, LinearSolver::kConjugateGradients},
                "Ceres only");
+  EnumProperty(solver, "preconditioner", &SolverOptions::preconditioner, "solver.preconditioner",
+               {Preconditioner::kAuto, Preconditioner::kFactor, Preconditioner::kMultigrid},
+               "fast back end: auto (multigrid from 4000 vertices), factor or multigrid");
 
   auto options = py::class_<RegistrationOptions>(
       m, "RegistrationOptions",

@@ -36,6 +36,11 @@ def test_bad_shapes_and_names_raise_value_error():
     options = femreg.RegistrationOptions()
     with pytest.raises(ValueError, match="solver.backend: unknown value 'fastest'"):
         options.solver.backend = "fastest"
+    assert options.solver.preconditioner == "auto"
+    options.solver.preconditioner = "multigrid"
+    assert options.solver.preconditioner == "multigrid"
+    with pytest.raises(ValueError, match="solver.preconditioner: unknown value 'amg'"):
+        options.solver.preconditioner = "amg"
     with pytest.raises(IndexError):
         tracker.vertices(1)
     # Nothing was tracked by the failed calls.

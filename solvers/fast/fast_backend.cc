@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "parallel/threads.h"
+#include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
 
 #ifdef _OPENMP
@@ -128,6 +129,11 @@ constexpr int kSingleBackoff = 8;
 // 5.4-5.5 (mean), but the bundled organ_patch body's 3072 elements (49k) lost their second
 // thread: assembly 2.8-3.8 -> 3.7-3.8 ms, rotations 1.2-1.4 -> 1.8-1.9.
 constexpr int kParallelWork = 32768;
+
+// With the multigrid preconditioner (large meshes, BackendOptions::preconditioner), a step's
+// PCG runs up to this many iterations before the hierarchy is built anew (and, if that
+// does not converge either, the step goes to the factorization).
+constexpr int kMultigridMaxIterations = 100;
 
 // The product H p runs in parallel from this many vertices on: below, a team's start costs
 // more than it saves.
@@ -236,6 +242,22 @@ struct FastBackend::Impl {
   // 297 ms. Twice the budget: 50 and 282 ms; half: 57 and 323.
   int pcg_since_factor = 0;
 
+  // The multigrid preconditioner, for meshes of options.multigrid_from_vertices and more
+  // (solvers/fast/multigrid.h): a hierarchy of an earlier step's H, kept while the PCG
+  // solves with it take few iterations more than the first one after it was built.
+  Multigrid multigrid;
+  int multigrid_fresh_iterations = 0;  // the first solve's after the build
+  int multigrid_last_iterations = 0;   // the last solve's
+  const Vertices* positions = nullptr;  // the rigid motions' centre: the current iterate
+  // PCG did not converge even with a new hierarchy: the factor until the pattern changes.
+  bool multigrid_failed = false;
+  bool UseMultigrid() const {
+    return options.max_pcg_iterations > 0 && !multigrid_failed &&
+           (options.preconditioner == Preconditioner::kMultigrid ||
+            (options.preconditioner == Preconditioner::kAuto &&
+             num_vertices >= options.multigrid_from_vertices));
+  }
+
   // Per set revision: each block's slots (#blocks * n * n), and for the parallel assembly
   // its blocks by the thread whose vertex range holds their whole stencil (interior[t]) and
   // those that straddle two ranges.
@@ -283,8 +305,13 @@ struct FastBackend::Impl {
   enum class Outcome { kSolved, kNegligible, kFailed };
   Outcome SolveStep(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
                     SolveReport* report);
+  // The step by PCG with the multigrid hierarchy (built anew when stale); kFailed: leave
+  // the step to the factorization.
+  Outcome SolveStepMultigrid(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
+                             SolveReport* report);
+  // PCG on H x = b, preconditioned by the kept factor, or the multigrid hierarchy.
   Outcome Pcg(const Eigen::VectorXd& b, double negligible, int max_iterations, Eigen::VectorXd* x,
-              SolveReport* report);
+              SolveReport* report, bool with_multigrid = false);
   EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
 
@@ -352,6 +379,8 @@ void FastBackend::Impl::BuildPattern() {
   analysed = false;
   factor_valid = false;
   single_backoff = 0;
+  multigrid = Multigrid();
+  multigrid_failed = false;
   cache.clear();
   constant_values.clear();
   fixed_for.clear();
@@ -677,7 +706,7 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
 
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
                                                   int max_iterations, Eigen::VectorXd* x,
-                                                  SolveReport* report) {
+                                                  SolveReport* report, bool with_multigrid) {
   // The substitutions are the back end's own (`substitutions`, on its threads); CHOLMOD's,
   // only if that copy could not be made, on one BLAS thread: too small to share (demo, 2
   // threads: PCG 77 ms per frame against 41 ms on one).
@@ -688,7 +717,9 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   Eigen::VectorXd r = b;
   Eigen::VectorXd z;
   auto precondition = [&] {
-    if (substitutions.loaded()) {
+    if (with_multigrid) {
+      multigrid.Apply(H, r, &z);
+    } else if (substitutions.loaded()) {
       substitutions.Solve(r, &z);
     } else {
       z = factor.solve(r);
@@ -702,7 +733,9 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   for (int k = 0; k < max_iterations; ++k) {
     BlockProduct(H, p, threads, &q);
     const double pq = p.dot(q);
-    if (!(pq > 0.0) || !std::isfinite(rz)) return Outcome::kFailed;
+    // (rz <= 0: the preconditioner is not positive definite, e.g. a multigrid smoother
+    // whose eigenvalue bound fell short.)
+    if (!(pq > 0.0) || !(rz > 0.0) || !std::isfinite(rz)) return Outcome::kFailed;
     // The first iteration minimizes the model 1/2 dx^T H dx - b.dx along z: it gains
     // 1/2 (b.z)^2 / (z^T H z), a lower bound on the whole step's gain.
     if (k == 0 && 0.5 * rz * rz / pq < negligible) return Outcome::kNegligible;
@@ -710,7 +743,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
     *x += alpha * p;
     r -= alpha * q;
     ++report->pcg_iterations;
-    ++pcg_since_factor;
+    if (!with_multigrid) ++pcg_since_factor;
     if (r.norm() <= kPcgTolerance * b_norm) return Outcome::kSolved;
     precondition();
     const double rz_next = r.dot(z);
@@ -720,8 +753,53 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   return Outcome::kFailed;
 }
 
+FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::VectorXd& g,
+                                                                 double negligible,
+                                                                 Eigen::VectorXd* dx,
+                                                                 SolveReport* report) {
+  // The kept hierarchy while the last solve with it took at most twice (and 4 more than) the
+  // iterations of the first one after its build. If PCG fails with it (the V-cycle not
+  // positive definite for this H: the finest smoother's eigenvalue bound is an earlier
+  // H's), once more with that smoother refreshed from this H.
+  if (multigrid.built() &&
+      multigrid_last_iterations <= std::max(2 * multigrid_fresh_iterations, multigrid_fresh_iterations + 4)) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      const auto t0 = Clock::now();
+      if (attempt == 1 && !multigrid.RefreshFinest(H)) break;
+      const int before = report->pcg_iterations;
+      const Outcome outcome = Pcg(-g, negligible, kMultigridMaxIterations, dx, report, true);
+      report->linear_solve_s += Seconds(t0);
+      multigrid_last_iterations = report->pcg_iterations - before;
+      if (outcome == Outcome::kNegligible) return outcome;
+      if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
+    }
+  }
+  const auto t0 = Clock::now();
+  ++report->hierarchies;
+  const bool built = positions != nullptr && multigrid.Build(H, *positions, threads);
+  report->factorize_s += Seconds(t0);
+  if (!built) {
+    multigrid_failed = true;
+    return Outcome::kFailed;
+  }
+  const auto t1 = Clock::now();
+  const int before = report->pcg_iterations;
+  const Outcome outcome = Pcg(-g, negligible, kMultigridMaxIterations, dx, report, true);
+  report->linear_solve_s += Seconds(t1);
+  multigrid_fresh_iterations = multigrid_last_iterations = report->pcg_iterations - before;
+  if (outcome == Outcome::kNegligible) return outcome;
+  if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
+  multigrid = Multigrid();
+  multigrid_failed = true;
+  return Outcome::kFailed;
+}
+
 FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g, double negligible,
                                                         Eigen::VectorXd* dx, SolveReport* report) {
+  if (UseMultigrid()) {
+    const Outcome outcome = SolveStepMultigrid(g, negligible, dx, report);
+    if (outcome != Outcome::kFailed) return outcome;
+  }
   const auto t0 = Clock::now();
   if (factor_valid && options.max_pcg_iterations > 0 && pcg_since_factor < PcgBudget()) {
     const Outcome outcome =
@@ -813,6 +891,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   }
 
   Eigen::VectorXd g, dx;
+  m.positions = x;
   m.Assemble(problem, *x, /*first=*/true, &g);
   report.assemble_s += Seconds(t0);
   report.before = m.Energy(problem, *x, &report);
@@ -887,6 +966,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     m.Assemble(problem, *x, /*first=*/false, &g);
     report.assemble_s += Seconds(t0);
   }
+  m.positions = nullptr;
   if (report.success) report.message = std::string("fast back end: ") + ToString(report.stop);
   if (!x->allFinite()) {
     report.success = false;

@@ -97,6 +97,18 @@ const char* ToString(LinearSolver v) {
   return "unknown";
 }
 
+const char* ToString(Preconditioner v) {
+  switch (v) {
+    case Preconditioner::kAuto:
+      return "auto";
+    case Preconditioner::kFactor:
+      return "factor";
+    case Preconditioner::kMultigrid:
+      return "multigrid";
+  }
+  return "unknown";
+}
+
 const char* ToString(TerminationType t) {
   switch (t) {
     case TerminationType::kNotRun:
@@ -140,6 +152,8 @@ FEMREG_FROM_STRING(SolverBackend, SolverBackend::kCeres, SolverBackend::kFast)
 FEMREG_FROM_STRING(TrustRegion, TrustRegion::kLevenbergMarquardt, TrustRegion::kDogleg)
 FEMREG_FROM_STRING(LinearSolver, LinearSolver::kSparseNormalCholesky,
                    LinearSolver::kConjugateGradients)
+FEMREG_FROM_STRING(Preconditioner, Preconditioner::kAuto, Preconditioner::kFactor,
+                   Preconditioner::kMultigrid)
 #undef FEMREG_FROM_STRING
 
 bool CameraOptions::IsValid(std::string* error) const {

@@ -65,6 +65,7 @@ BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_
   b.relative_tolerance = solver.inner_tolerance;
   b.step_tolerance = 0.1 * solver.step_tolerance * mean_edge_length;
   b.max_pcg_iterations = solver.max_pcg_iterations;
+  b.preconditioner = solver.preconditioner;
   b.num_threads = ResolveThreadCount(solver.num_threads);
   b.trust_region = solver.trust_region;
   b.linear_solver = solver.linear_solver;
@@ -349,7 +350,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   s->time.factorization += report.factorize_s;
   s->time.linear_solve += report.linear_solve_s;
   s->time.evaluation += report.evaluate_s;
-  s->factorizations += report.factorizations;
+  s->factorizations += report.factorizations + report.hierarchies;
   s->linear_solves += report.linear_solves;
   s->pcg_iterations += report.pcg_iterations;
   row.inner_iterations = report.iterations;

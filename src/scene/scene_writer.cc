@@ -338,6 +338,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   Put(solver, "inner_tolerance", s.inner_tolerance, d.solver.inner_tolerance);
   Put(solver, "step_tolerance", s.step_tolerance, d.solver.step_tolerance);
   Put(solver, "max_pcg_iterations", s.max_pcg_iterations, d.solver.max_pcg_iterations);
+  if (s.preconditioner != d.solver.preconditioner) solver["preconditioner"] = ToString(s.preconditioner);
   Put(solver, "time_budget_s", s.time_budget_s, d.solver.time_budget_s);
   if (s.backend == SolverBackend::kCeres) {  // Ceres' own settings (refused beside backend: fast)
     if (s.trust_region != d.solver.trust_region) solver["trust_region"] = ToString(s.trust_region);

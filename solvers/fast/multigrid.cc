@@ -1,0 +1,479 @@
+#include "solvers/fast/multigrid.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "solvers/fast/fast_backend.h"
+
+namespace femreg {
+namespace fast_backend {
+
+namespace {
+
+// Coarsening stops at this many unknowns, and that level is solved directly: its inverse,
+// dense (~0.2 Gflop once, 2 n^2 per cycle). A coarsest level that stopped above it
+// (coarsening stalled, or kMaxLevels) is inverted up to kDenseLimit unknowns, and only
+// smoothed beyond.
+constexpr int kCoarsest = 500;
+constexpr int kDenseLimit = 1000;
+constexpr int kMaxLevels = 10;
+// Coarsening stops when a level keeps more than this share of the unknowns above it.
+constexpr double kStall = 0.7;
+// Chebyshev smoothing: degree, and the interval [lambda_max / kChebyshevRatio,
+// kChebyshevSafety lambda_max] of D^-1 A it damps (lambda_max from power iterations, which
+// approach it from below).
+constexpr int kChebyshevDegree = 2;
+constexpr double kChebyshevRatio = 30.0;
+constexpr double kChebyshevSafety = 1.1;
+constexpr int kPowerIterations = 15;
+// Products run in parallel from this many unknowns on.
+constexpr int kParallelUnknowns = 24576;
+
+using SparseMatrix = Eigen::SparseMatrix<double>;
+
+// y = M^T x for a column-major M: y_c = M(:, c) . x, a gather per column (for a symmetric A,
+// A x). In parallel without races, the same sums on any thread count.
+void TransposeProduct(const SparseMatrix& M, const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) {
+  const int n = static_cast<int>(M.cols());
+  y->resize(n);
+  const int* outer = M.outerIndexPtr();
+  const int* inner = M.innerIndexPtr();
+  const double* values = M.valuePtr();
+  const double* xx = x.data();
+  double* yy = y->data();
+  auto column = [&](int c) {
+    double s = 0.0;
+    for (int p = outer[c]; p < outer[c + 1]; ++p) s += values[p] * xx[inner[p]];
+    yy[c] = s;
+  };
+  if (threads > 1 && n >= kParallelUnknowns) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int c = 0; c < n; ++c) column(c);
+  } else {
+    for (int c = 0; c < n; ++c) column(c);
+  }
+}
+
+// The largest eigenvalue of D^-1 A (real and positive: it is similar to D^-1/2 A D^-1/2),
+// by power iterations from a fixed start.
+template <class Product, class Jacobi>
+double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
+  Eigen::VectorXd v(n), av, w;
+  // A start with every frequency in it (a smooth one barely holds the largest modes).
+  uint64_t state = 0x9E3779B97F4A7C15ull;
+  for (int i = 0; i < n; ++i) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    v[i] = static_cast<double>(state >> 11) * (1.0 / 9007199254740992.0) - 0.5;
+  }
+  v.normalize();
+  double lambda = 0.0;
+  for (int k = 0; k < kPowerIterations; ++k) {
+    product(v, &av);
+    jacobi(av, &w);
+    const double norm = w.norm();
+    if (!(norm > 0.0) || !std::isfinite(norm)) break;
+    lambda = std::max(lambda, norm);
+    v = w / norm;
+  }
+  return lambda > 0.0 ? lambda : 1.0;
+}
+
+}  // namespace
+
+void Multigrid::Product(int level, const SparseMatrix& A, const Eigen::VectorXd& v,
+                        Eigen::VectorXd* y) const {
+  if (level == 0) {
+    BlockProduct(A, v, threads_, y);  // the back end's system: full 3x3 blocks
+  } else {
+    TransposeProduct(A, v, threads_, y);
+  }
+}
+
+void Multigrid::BlockJacobi(const Level& L, const Eigen::VectorXd& r, Eigen::VectorXd* z) const {
+  z->resize(r.size());
+  const int nodes = static_cast<int>(L.node_begin.size()) - 1;
+  const double* rr = r.data();
+  double* zz = z->data();
+  auto node = [&](int k) {
+    const int b = L.node_begin[static_cast<size_t>(k)];
+    const int m = L.node_begin[static_cast<size_t>(k) + 1] - b;
+    const double* D = L.dinv.data() + L.dinv_at[static_cast<size_t>(k)];
+    for (int i = 0; i < m; ++i) {
+      double s = 0.0;
+      for (int j = 0; j < m; ++j) s += D[j * m + i] * rr[b + j];
+      zz[b + i] = s;
+    }
+  };
+  if (threads_ > 1 && r.size() >= kParallelUnknowns) {
+#pragma omp parallel for schedule(static) num_threads(threads_)
+    for (int k = 0; k < nodes; ++k) node(k);
+  } else {
+    for (int k = 0; k < nodes; ++k) node(k);
+  }
+}
+
+bool Multigrid::PrepareSmoother(int l, const SparseMatrix& A, std::vector<double>* diagonal_norm) {
+  Level& L = levels_[static_cast<size_t>(l)];
+  const int n = static_cast<int>(A.cols());
+  const int nodes = static_cast<int>(L.node_begin.size()) - 1;
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  const double* values = A.valuePtr();
+  // Each node's diagonal block: its Frobenius norm (for the strength of connection) and
+  // its inverse (block Jacobi).
+  diagonal_norm->resize(static_cast<size_t>(nodes));
+  L.dinv_at.resize(static_cast<size_t>(nodes));
+  L.dinv.clear();
+  for (int k = 0; k < nodes; ++k) {
+    const int b = L.node_begin[static_cast<size_t>(k)];
+    const int m = L.node_begin[static_cast<size_t>(k) + 1] - b;
+    Eigen::MatrixXd D = Eigen::MatrixXd::Zero(m, m);
+    for (int j = 0; j < m; ++j) {
+      for (int p = outer[b + j]; p < outer[b + j + 1]; ++p) {
+        const int i = inner[p] - b;
+        if (i >= 0 && i < m) D(i, j) = values[p];
+      }
+    }
+    D = 0.5 * (D + D.transpose()).eval();
+    (*diagonal_norm)[static_cast<size_t>(k)] = D.norm();
+    Eigen::LLT<Eigen::MatrixXd> llt(D);
+    if (llt.info() != Eigen::Success || !(D.diagonal().minCoeff() > 0.0)) return false;
+    const Eigen::MatrixXd inverse = llt.solve(Eigen::MatrixXd::Identity(m, m));
+    if (!inverse.allFinite()) return false;
+    L.dinv_at[static_cast<size_t>(k)] = static_cast<int>(L.dinv.size());
+    L.dinv.insert(L.dinv.end(), inverse.data(), inverse.data() + m * m);
+  }
+  L.lambda_max = LargestEigenvalue(
+      n, [&](const Eigen::VectorXd& v, Eigen::VectorXd* y) { Product(l, A, v, y); },
+      [&](const Eigen::VectorXd& r, Eigen::VectorXd* z) { BlockJacobi(L, r, z); });
+  return true;
+}
+
+bool Multigrid::RefreshFinest(const SparseMatrix& A) {
+  if (levels_.empty() || A.cols() != levels_[0].node_begin.back()) return false;
+  std::vector<double> unused;
+  if (!PrepareSmoother(0, A, &unused)) {
+    levels_.clear();
+    return false;
+  }
+  return true;
+}
+
+bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int threads) {
+  levels_.clear();
+  coarse_inverse_.resize(0, 0);
+  threads_ = std::max(1, threads);
+  const int n0 = static_cast<int>(A0.cols());
+  if (n0 == 0 || n0 != 3 * positions.rows() || A0.rows() != A0.cols()) return false;
+
+  // The near null space at the finest level: the rigid motions of the positions, about
+  // their centroid and in units of their extent (columns of one size).
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n0, 6);
+  {
+    const Eigen::RowVector3d center = positions.colwise().mean();
+    double extent = (positions.rowwise() - center).cwiseAbs().maxCoeff();
+    if (!(extent > 0.0) || !std::isfinite(extent)) extent = 1.0;
+    for (int v = 0; v < positions.rows(); ++v) {
+      const Eigen::RowVector3d p = (positions.row(v) - center) / extent;
+      for (int d = 0; d < 3; ++d) B(3 * v + d, d) = 1.0;
+      // e_k x p
+      B(3 * v + 1, 3) = -p.z(); B(3 * v + 2, 3) = p.y();
+      B(3 * v + 0, 4) = p.z();  B(3 * v + 2, 4) = -p.x();
+      B(3 * v + 0, 5) = -p.y(); B(3 * v + 1, 5) = p.x();
+    }
+  }
+  levels_.reserve(kMaxLevels);
+  levels_.emplace_back();
+  levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
+  for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
+
+  for (int l = 0;; ++l) {
+    Level& L = levels_[static_cast<size_t>(l)];
+    const SparseMatrix& A = l == 0 ? A0 : L.A;
+    const int n = static_cast<int>(A.cols());
+    const int nodes = static_cast<int>(L.node_begin.size()) - 1;
+    L.nonzeros = static_cast<int>(A.nonZeros());
+    const int* outer = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const double* values = A.valuePtr();
+    std::vector<int> node_of(static_cast<size_t>(n));
+    for (int k = 0; k < nodes; ++k) {
+      for (int i = L.node_begin[static_cast<size_t>(k)]; i < L.node_begin[static_cast<size_t>(k) + 1]; ++i) {
+        node_of[static_cast<size_t>(i)] = k;
+      }
+    }
+    std::vector<double> diagonal_norm;
+    if (!PrepareSmoother(l, A, &diagonal_norm)) {
+      levels_.clear();
+      return false;
+    }
+    if (n <= kCoarsest || l + 1 == kMaxLevels) break;
+
+    // The strong neighbours of each node (b != a with ||A_ab|| above round-off of the
+    // diagonal blocks): the tetrahedra's couplings and the data terms', not the explicit
+    // zeros of the pattern (fixed vertices, widened stencils).
+    std::vector<int> adjacency_begin(static_cast<size_t>(nodes) + 1, 0);
+    std::vector<int> adjacency;
+    std::vector<double> strength;
+    {
+      std::vector<double> sum(static_cast<size_t>(nodes), 0.0);
+      std::vector<char> seen(static_cast<size_t>(nodes), 0);
+      std::vector<int> touched;
+      for (int a = 0; a < nodes; ++a) {
+        touched.clear();
+        for (int c = L.node_begin[static_cast<size_t>(a)]; c < L.node_begin[static_cast<size_t>(a) + 1]; ++c) {
+          for (int p = outer[c]; p < outer[c + 1]; ++p) {
+            const int b = node_of[static_cast<size_t>(inner[p])];
+            if (b == a) continue;
+            if (!seen[static_cast<size_t>(b)]) {
+              seen[static_cast<size_t>(b)] = 1;
+              touched.push_back(b);
+            }
+            sum[static_cast<size_t>(b)] += values[p] * values[p];
+          }
+        }
+        std::sort(touched.begin(), touched.end());
+        for (int b : touched) {
+          const double s = std::sqrt(sum[static_cast<size_t>(b)]) /
+                           std::sqrt(diagonal_norm[static_cast<size_t>(a)] * diagonal_norm[static_cast<size_t>(b)]);
+          sum[static_cast<size_t>(b)] = 0.0;
+          seen[static_cast<size_t>(b)] = 0;
+          if (s > 1e-10) {
+            adjacency.push_back(b);
+            strength.push_back(s);
+          }
+        }
+        adjacency_begin[static_cast<size_t>(a) + 1] = static_cast<int>(adjacency.size());
+      }
+    }
+    // Aggregation. -2: no strong neighbour (left to the smoother), -1: not yet aggregated.
+    std::vector<int> aggregate(static_cast<size_t>(nodes), -1);
+    int aggregates = 0;
+    auto neighbours = [&](int a) {
+      return std::make_pair(adjacency.data() + adjacency_begin[static_cast<size_t>(a)],
+                            adjacency.data() + adjacency_begin[static_cast<size_t>(a) + 1]);
+    };
+    for (int a = 0; a < nodes; ++a) {
+      if (adjacency_begin[static_cast<size_t>(a)] == adjacency_begin[static_cast<size_t>(a) + 1]) {
+        aggregate[static_cast<size_t>(a)] = -2;
+      }
+    }
+    for (int a = 0; a < nodes; ++a) {  // a node whose neighbours are all free, with them
+      if (aggregate[static_cast<size_t>(a)] != -1) continue;
+      const auto nb = neighbours(a);
+      bool free = true;
+      for (const int* b = nb.first; b != nb.second && free; ++b) free = aggregate[static_cast<size_t>(*b)] == -1;
+      if (!free) continue;
+      aggregate[static_cast<size_t>(a)] = aggregates;
+      for (const int* b = nb.first; b != nb.second; ++b) aggregate[static_cast<size_t>(*b)] = aggregates;
+      ++aggregates;
+    }
+    {  // the rest joins the aggregate it is most strongly connected to
+      const std::vector<int> first = aggregate;
+      for (int a = 0; a < nodes; ++a) {
+        if (aggregate[static_cast<size_t>(a)] != -1) continue;
+        double best = 0.0;
+        for (int q = adjacency_begin[static_cast<size_t>(a)]; q < adjacency_begin[static_cast<size_t>(a) + 1]; ++q) {
+          const int b = adjacency[static_cast<size_t>(q)];
+          if (first[static_cast<size_t>(b)] >= 0 && strength[static_cast<size_t>(q)] > best) {
+            best = strength[static_cast<size_t>(q)];
+            aggregate[static_cast<size_t>(a)] = first[static_cast<size_t>(b)];
+          }
+        }
+      }
+    }
+    for (int a = 0; a < nodes; ++a) {  // what is left, with its free neighbours
+      if (aggregate[static_cast<size_t>(a)] != -1) continue;
+      aggregate[static_cast<size_t>(a)] = aggregates;
+      const auto nb = neighbours(a);
+      for (const int* b = nb.first; b != nb.second; ++b) {
+        if (aggregate[static_cast<size_t>(*b)] == -1) aggregate[static_cast<size_t>(*b)] = aggregates;
+      }
+      ++aggregates;
+    }
+    if (aggregates == 0) break;
+
+    // The tentative prolongator: per aggregate, the near null space on its unknowns,
+    // orthonormalized (modified Gram-Schmidt, twice; a column that is dependent on the ones
+    // before it to round-off is dropped: a one-vertex aggregate keeps 3, a collinear one 5).
+    std::vector<std::vector<int>> members(static_cast<size_t>(aggregates));
+    for (int a = 0; a < nodes; ++a) {
+      if (aggregate[static_cast<size_t>(a)] >= 0) members[static_cast<size_t>(aggregate[static_cast<size_t>(a)])].push_back(a);
+    }
+    std::vector<Eigen::Triplet<double>> t_entries;
+    std::vector<int> coarse_begin(1, 0);
+    Eigen::MatrixXd coarse_B(6 * aggregates, 6);
+    int coarse_rows = 0;
+    for (int g = 0; g < aggregates; ++g) {
+      std::vector<int> rows;
+      for (int a : members[static_cast<size_t>(g)]) {
+        for (int i = L.node_begin[static_cast<size_t>(a)]; i < L.node_begin[static_cast<size_t>(a) + 1]; ++i) rows.push_back(i);
+      }
+      const int m = static_cast<int>(rows.size());
+      Eigen::MatrixXd Bg(m, B.cols());
+      for (int i = 0; i < m; ++i) Bg.row(i) = B.row(rows[static_cast<size_t>(i)]);
+      Eigen::MatrixXd Q(m, B.cols());
+      Eigen::MatrixXd R = Eigen::MatrixXd::Zero(B.cols(), B.cols());
+      int kept = 0;
+      for (int j = 0; j < B.cols(); ++j) {
+        Eigen::VectorXd q = Bg.col(j);
+        const double original = q.norm();
+        if (!(original > 0.0)) continue;
+        Eigen::VectorXd coefficients = Eigen::VectorXd::Zero(kept);
+        for (int pass = 0; pass < 2; ++pass) {
+          for (int k = 0; k < kept; ++k) {
+            const double c = Q.col(k).dot(q);
+            q -= c * Q.col(k);
+            coefficients[k] += c;
+          }
+        }
+        const double norm = q.norm();
+        if (!(norm > 1e-8 * original)) continue;
+        Q.col(kept) = q / norm;
+        R.block(0, j, kept, 1) = coefficients;
+        R(kept, j) = norm;
+        ++kept;
+      }
+      if (m < kept) kept = m;
+      for (int i = 0; i < m; ++i) {
+        for (int k = 0; k < kept; ++k) t_entries.emplace_back(rows[static_cast<size_t>(i)], coarse_rows + k, Q(i, k));
+      }
+      coarse_B.block(coarse_rows, 0, kept, B.cols()) = R.topRows(kept);
+      coarse_rows += kept;
+      coarse_begin.push_back(coarse_rows);
+    }
+    if (coarse_rows == 0 || coarse_rows > kStall * n) break;
+    SparseMatrix T(n, coarse_rows);
+    T.setFromTriplets(t_entries.begin(), t_entries.end());
+    // Smoothed: P = T - omega D^-1 A T, omega = 4 / (3 lambda_max).
+    SparseMatrix Dinv(n, n);
+    {
+      std::vector<Eigen::Triplet<double>> d_entries;
+      d_entries.reserve(L.dinv.size());
+      for (int k = 0; k < nodes; ++k) {
+        const int b = L.node_begin[static_cast<size_t>(k)];
+        const int m = L.node_begin[static_cast<size_t>(k) + 1] - b;
+        const double* D = L.dinv.data() + L.dinv_at[static_cast<size_t>(k)];
+        for (int j = 0; j < m; ++j) {
+          for (int i = 0; i < m; ++i) d_entries.emplace_back(b + i, b + j, D[j * m + i]);
+        }
+      }
+      Dinv.setFromTriplets(d_entries.begin(), d_entries.end());
+    }
+    const double omega = 4.0 / (3.0 * L.lambda_max);
+    const SparseMatrix AT = A * T;
+    const SparseMatrix DAT = Dinv * AT;
+    L.P = T - omega * DAT;
+    L.P.makeCompressed();
+    L.Pt = L.P.transpose();
+    L.Pt.makeCompressed();
+    const SparseMatrix AP = A * L.P;
+    SparseMatrix Ac = L.Pt * AP;
+    const SparseMatrix Act = Ac.transpose();
+    Ac = 0.5 * (Ac + Act);
+    Ac.makeCompressed();
+
+    levels_.emplace_back();  // no reallocation: reserved
+    Level& C = levels_.back();
+    C.A = std::move(Ac);
+    C.node_begin = std::move(coarse_begin);
+    B = coarse_B.topRows(coarse_rows);
+  }
+  Level& last = levels_.back();
+  const SparseMatrix& A = levels_.size() == 1 ? A0 : last.A;
+  if (A.cols() <= kDenseLimit) {
+    const Eigen::MatrixXd dense = Eigen::MatrixXd(A);
+    Eigen::LDLT<Eigen::MatrixXd> ldlt(dense);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+      coarse_inverse_ = ldlt.solve(Eigen::MatrixXd::Identity(A.rows(), A.cols()));
+      if (!coarse_inverse_.allFinite()) coarse_inverse_.resize(0, 0);
+    }
+  }
+  return true;
+}
+
+void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
+  Level& L = levels_[static_cast<size_t>(level)];
+  const double upper = kChebyshevSafety * L.lambda_max;
+  const double lower = L.lambda_max / kChebyshevRatio;
+  const double theta = 0.5 * (upper + lower);
+  const double delta = 0.5 * (upper - lower);
+  const double sigma = theta / delta;
+  double rho = 1.0 / sigma;
+  if (zero_start) {
+    L.r = L.b;
+  } else {
+    Product(level, A, L.x, &L.ad);
+    L.r = L.b - L.ad;
+  }
+  Eigen::VectorXd& z = L.ad;  // reused: ad is free between products
+  BlockJacobi(L, L.r, &L.d);
+  L.d /= theta;
+  for (int k = 0; k < kChebyshevDegree; ++k) {
+    L.x += L.d;
+    if (k + 1 == kChebyshevDegree) break;
+    Product(level, A, L.d, &z);
+    L.r -= z;
+    Eigen::VectorXd jz;
+    BlockJacobi(L, L.r, &jz);
+    const double rho_next = 1.0 / (2.0 * sigma - rho);
+    L.d = (rho_next * rho) * L.d + (2.0 * rho_next / delta) * jz;
+    rho = rho_next;
+  }
+}
+
+void Multigrid::Cycle(int level, const SparseMatrix& A) {
+  Level& L = levels_[static_cast<size_t>(level)];
+  const int n = static_cast<int>(A.cols());
+  if (level + 1 == static_cast<int>(levels_.size())) {
+    if (coarse_inverse_.rows() == n) {
+      L.x.noalias() = coarse_inverse_ * L.b;
+    } else {  // too large to solve directly: smoothing only, twice
+      L.x.setZero(n);
+      Smooth(level, A, true);
+      Smooth(level, A, false);
+    }
+    return;
+  }
+  L.x.setZero(n);
+  Smooth(level, A, true);
+  Product(level, A, L.x, &L.ad);
+  L.r = L.b - L.ad;
+  Level& C = levels_[static_cast<size_t>(level) + 1];
+  TransposeProduct(L.P, L.r, threads_, &C.b);
+  Cycle(level + 1, C.A);
+  TransposeProduct(L.Pt, C.x, threads_, &L.d);
+  L.x += L.d;
+  Smooth(level, A, false);
+}
+
+void Multigrid::Apply(const SparseMatrix& A, const Eigen::VectorXd& r, Eigen::VectorXd* z) {
+  if (levels_.empty()) {
+    *z = r;
+    return;
+  }
+  levels_[0].b = r;
+  Cycle(0, A);
+  *z = levels_[0].x;
+}
+
+double Multigrid::grid_complexity() const {
+  if (levels_.empty()) return 0.0;
+  double total = 0.0;
+  for (const Level& L : levels_) total += L.node_begin.back();
+  return total / levels_[0].node_begin.back();
+}
+
+double Multigrid::operator_complexity() const {
+  if (levels_.empty()) return 0.0;
+  double total = 0.0;
+  for (const Level& L : levels_) total += L.nonzeros;
+  return total / levels_[0].nonzeros;
+}
+
+}  // namespace fast_backend
+}  // namespace femreg
