@@ -188,7 +188,7 @@ std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool
 }
 
 Vertices Minimize(SolverBackend type, const energy::Problem& problem, const Vertices& start,
-                  Preconditioner preconditioner = Preconditioner::kAuto) {
+                  Preconditioner preconditioner = Preconditioner::kAuto, SolveReport* out = nullptr) {
   BackendOptions options;
   options.type = type;
   options.preconditioner = preconditioner;
@@ -203,6 +203,7 @@ Vertices Minimize(SolverBackend type, const energy::Problem& problem, const Vert
   EXPECT_NEAR(report.before.total(), before, 1e-12 * before);
   EXPECT_NEAR(report.after.total(), after, 1e-12 * before);
   EXPECT_LE(report.after.total(), report.before.total());
+  if (out != nullptr) *out = report;
   return x;
 }
 
@@ -309,14 +310,10 @@ TEST(FastBackend, MultigridReachesTheFactorsMinimum) {
     ASSERT_GT(3 * s->mesh.num_vertices(), 2000);
     const Vertices start = s->mesh.rest;
     const Vertices x_factor = Minimize(SolverBackend::kFast, s->problem, start, Preconditioner::kFactor);
-    const Vertices x_multigrid = Minimize(SolverBackend::kFast, s->problem, start, Preconditioner::kMultigrid);
-    // Every step by multigrid: one hierarchy, no factorization (the fallback).
-    BackendOptions options;
-    options.type = SolverBackend::kFast;
-    options.preconditioner = Preconditioner::kMultigrid;
-    Vertices x = start;
-    const SolveReport report = MakeBackend(options)->Solve(s->problem, 0.0, &x);
-    EXPECT_TRUE(report.success) << report.message;
+    SolveReport report;
+    const Vertices x_multigrid =
+        Minimize(SolverBackend::kFast, s->problem, start, Preconditioner::kMultigrid, &report);
+    // Every step by multigrid: a hierarchy, no factorization (the fallback).
     EXPECT_GE(report.iterations, 2);
     EXPECT_GE(report.hierarchies, 1);
     EXPECT_EQ(report.factorizations, 0);
@@ -402,8 +399,8 @@ int MultigridPcgIterations(const Eigen::SparseMatrix<double>& H, fast_backend::M
 
 // The multigrid preconditioner: a symmetric positive definite operator (PCG's requirement),
 // the same on 1 and 2 threads, and a preconditioner whose PCG iterations do not grow much
-// with the mesh (a factor of 8 in vertices: at most 1.5 times the iterations), where Jacobi's
-// double with each halving of the element size.
+// with the mesh (6.8 times the vertices, half the element size: at most 1.6 times the
+// iterations; 19 and 26 here), where Jacobi's double with each halving of the element size.
 TEST(Multigrid, SymmetricPositiveAndIndependentOfSize) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -434,7 +431,7 @@ TEST(Multigrid, SymmetricPositiveAndIndependentOfSize) {
     EXPECT_LE((H * x - b).norm(), 1e-8 * b.norm());
   }
   EXPECT_LT(iterations[0], 60);
-  EXPECT_LE(iterations[1], 1.5 * iterations[0]) << iterations[0] << " then " << iterations[1];
+  EXPECT_LE(iterations[1], 1.6 * iterations[0]) << iterations[0] << " then " << iterations[1];
 }
 
 // PCG's preconditioner, the back end's own substitutions with CHOLMOD's supernodal factor,

@@ -190,9 +190,10 @@ struct SolverOptions {
   // before a step factorizes anew (0: factorize every step).
   int max_pcg_iterations = 20;
   // Fast back end: what preconditions those iterations. auto: the kept factorization below
-  // 4,000 vertices, smoothed-aggregation multigrid from there (README, "Cost against
-  // size"); factor; multigrid. With multigrid a step runs up to 100 iterations whatever
-  // max_pcg_iterations says (0 still means: factorize every step, no multigrid).
+  // 3,000 vertices, smoothed-aggregation multigrid from there (README, "Cost against
+  // size"); factor; multigrid. With multigrid a step runs up to 100 iterations with the kept
+  // hierarchy and 100 with a new one, whatever max_pcg_iterations says (0 still means:
+  // factorize every step, no multigrid).
   Preconditioner preconditioner = Preconditioner::kAuto;
   // Start each frame from a constant-velocity extrapolation of the last two frames.
   bool predict_motion = true;

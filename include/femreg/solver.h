@@ -17,17 +17,17 @@ enum class LinearSolver {                                 // Ceres only
 
 // Fast back end: what preconditions the conjugate gradients that solve each step.
 enum class Preconditioner {
-  kAuto,       // the factor below kMultigridFromVertices (4000) vertices, multigrid from there
+  kAuto,       // the factor below kMultigridFromVertices (3000) vertices, multigrid from there
   kFactor,     // a sparse Cholesky factor of an earlier step's system, kept while it serves
   kMultigrid,  // smoothed-aggregation algebraic multigrid (cost linear in the mesh's size)
 };
 
 // Where `auto` changes from the factor to multigrid (vertices of the frame's problem).
-// Measured (ms per frame, factor against multigrid): the 2197-vertex organ_patch body 88
-// against 120-150 (2 threads), the 3375-vertex one 191-217 against 168-170; the scaling
-// benchmark's boxes (one thread) at 5049 vertices 301 against 274, at 20034 vertices 2978
-// against 1478, at 69741 vertices 33.6 s against 11.2 s.
-constexpr int kMultigridFromVertices = 4000;
+// Measured (median ms per frame, factor against multigrid): the 2197-vertex organ_patch
+// body 84 / 91 against 103 / 92 (2 threads), the 3375-vertex one 209 / 210 against
+// 141 / 166; the scaling benchmark's boxes (one thread) at 5049 vertices 301 against 274,
+// at 20034 vertices 2978 against 1478, at 69741 vertices 33.6 s against 11.2 s.
+constexpr int kMultigridFromVertices = 3000;
 
 }  // namespace femreg
 

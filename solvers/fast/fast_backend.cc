@@ -131,13 +131,11 @@ constexpr int kSingleBackoff = 8;
 constexpr int kParallelWork = 32768;
 
 // With the multigrid preconditioner (large meshes, BackendOptions::preconditioner), a step's
-// PCG runs up to this many iterations before the hierarchy is built anew (and, if that
-// does not converge either, the step goes to the factorization).
+// PCG runs up to this many iterations with the kept hierarchy (again after refreshing its
+// smoother, if PCG found it indefinite), then as many with a new one; if that does not
+// converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
 
-// The product H p runs in parallel from this many vertices on: below, a team's start costs
-// more than it saves.
-constexpr int kParallelProduct = 8192;
 
 // Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the
 // largest update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has
@@ -167,7 +165,7 @@ void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& 
 // without races and in the same order on any number of threads; a 3x3 block costs one row
 // index instead of nine.
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y) {
+                  Eigen::VectorXd* y, int parallel_from) {
   const int blocks = static_cast<int>(H.cols()) / 3;
   const int* outer = H.outerIndexPtr();
   const int* inner = H.innerIndexPtr();
@@ -193,7 +191,7 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
     yy[3 * b + 1] = s1;
     yy[3 * b + 2] = s2;
   };
-  if (threads > 1 && blocks >= kParallelProduct) {
+  if (threads > 1 && blocks >= parallel_from) {
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (int b = 0; b < blocks; ++b) column(b);
   } else {
@@ -246,11 +244,13 @@ struct FastBackend::Impl {
   // (solvers/fast/multigrid.h): a hierarchy of an earlier step's H, kept while the PCG
   // solves with it take few iterations more than the first one after it was built.
   Multigrid multigrid;
-  int multigrid_fresh_iterations = 0;  // the first solve's after the build
+  int multigrid_fresh_iterations = -1;  // the first solved step's after the build (-1: none yet)
   int multigrid_last_iterations = 0;   // the last solve's
   const Vertices* positions = nullptr;  // the rigid motions' centre: the current iterate
-  // PCG did not converge even with a new hierarchy: the factor until the pattern changes.
+  // PCG did not converge even with a new hierarchy: the factor for the rest of the Solve.
   bool multigrid_failed = false;
+  // The last Pcg failed because r.z <= 0: the preconditioner is not positive definite.
+  bool pcg_indefinite = false;
   bool UseMultigrid() const {
     return options.max_pcg_iterations > 0 && !multigrid_failed &&
            (options.preconditioner == Preconditioner::kMultigrid ||
@@ -711,6 +711,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   // only if that copy could not be made, on one BLAS thread: too small to share (demo, 2
   // threads: PCG 77 ms per frame against 41 ms on one).
   const ScopedThreads one_thread(1);
+  pcg_indefinite = false;
   const double b_norm = b.norm();
   x->setZero(b.size());
   if (b_norm == 0.0) return Outcome::kSolved;
@@ -735,6 +736,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
     const double pq = p.dot(q);
     // (rz <= 0: the preconditioner is not positive definite, e.g. a multigrid smoother
     // whose eigenvalue bound fell short.)
+    if (!(rz > 0.0) && std::isfinite(rz)) pcg_indefinite = true;
     if (!(pq > 0.0) || !(rz > 0.0) || !std::isfinite(rz)) return Outcome::kFailed;
     // The first iteration minimizes the model 1/2 dx^T H dx - b.dx along z: it gains
     // 1/2 (b.z)^2 / (z^T H z), a lower bound on the whole step's gain.
@@ -758,37 +760,48 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
                                                                  Eigen::VectorXd* dx,
                                                                  SolveReport* report) {
   // The kept hierarchy while the last solve with it took at most twice (and 4 more than) the
-  // iterations of the first one after its build. If PCG fails with it (the V-cycle not
-  // positive definite for this H: the finest smoother's eigenvalue bound is an earlier
-  // H's), once more with that smoother refreshed from this H.
-  if (multigrid.built() &&
-      multigrid_last_iterations <= std::max(2 * multigrid_fresh_iterations, multigrid_fresh_iterations + 4)) {
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      const auto t0 = Clock::now();
-      if (attempt == 1 && !multigrid.RefreshFinest(H)) break;
-      const int before = report->pcg_iterations;
-      const Outcome outcome = Pcg(-g, negligible, kMultigridMaxIterations, dx, report, true);
-      report->linear_solve_s += Seconds(t0);
-      multigrid_last_iterations = report->pcg_iterations - before;
-      if (outcome == Outcome::kNegligible) return outcome;
-      if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
+  // iterations of the first solve after its build. If PCG finds the V-cycle not positive
+  // definite for this H (the finest smoother's eigenvalue bound is an earlier H's), once
+  // more with that smoother refreshed from this H.
+  auto solve = [&](double* seconds) {
+    const auto t0 = Clock::now();
+    const int before = report->pcg_iterations;
+    const Outcome outcome = Pcg(-g, negligible, kMultigridMaxIterations, dx, report, true);
+    *seconds += Seconds(t0);
+    const int iterations = report->pcg_iterations - before;
+    if (outcome == Outcome::kSolved) {
+      multigrid_last_iterations = iterations;
+      if (multigrid_fresh_iterations < 0) multigrid_fresh_iterations = iterations;
     }
+    return outcome;
+  };
+  const int fresh = std::max(multigrid_fresh_iterations, 0);
+  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + 4)) {
+    Outcome outcome = solve(&report->linear_solve_s);
+    if (outcome == Outcome::kFailed && pcg_indefinite) {
+      const auto t0 = Clock::now();
+      const bool refreshed = multigrid.RefreshFinest(H);
+      report->factorize_s += Seconds(t0);
+      if (refreshed) outcome = solve(&report->linear_solve_s);
+    }
+    if (outcome == Outcome::kNegligible) return outcome;
+    if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
   }
   const auto t0 = Clock::now();
-  ++report->hierarchies;
   const bool built = positions != nullptr && multigrid.Build(H, *positions, threads);
   report->factorize_s += Seconds(t0);
   if (!built) {
     multigrid_failed = true;
     return Outcome::kFailed;
   }
-  const auto t1 = Clock::now();
-  const int before = report->pcg_iterations;
-  const Outcome outcome = Pcg(-g, negligible, kMultigridMaxIterations, dx, report, true);
-  report->linear_solve_s += Seconds(t1);
-  multigrid_fresh_iterations = multigrid_last_iterations = report->pcg_iterations - before;
+  ++report->hierarchies;
+  multigrid_fresh_iterations = -1;  // the next solved step's count
+  multigrid_last_iterations = 0;
+  const Outcome outcome = solve(&report->linear_solve_s);
   if (outcome == Outcome::kNegligible) return outcome;
   if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
+  // Not even a fresh hierarchy: the factor for the rest of this Solve (H itself may be
+  // indefinite, which the factor path answers with damping).
   multigrid = Multigrid();
   multigrid_failed = true;
   return Outcome::kFailed;
@@ -892,6 +905,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
 
   Eigen::VectorXd g, dx;
   m.positions = x;
+  m.multigrid_failed = false;
   m.Assemble(problem, *x, /*first=*/true, &g);
   report.assemble_s += Seconds(t0);
   report.before = m.Energy(problem, *x, &report);
@@ -908,7 +922,10 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
       break;
     }
     // After the first step, a step that would gain less than kNegligibleGain of the
-    // tolerance is not taken (see there): PCG's first iteration, with the kept factor, tells.
+    // tolerance is not taken (see there): PCG's first iteration tells. Its gain is a lower
+    // bound on the step's, looser by up to the preconditioner's condition number: ~1 with
+    // a factor of a similar H, a few with a multigrid V-cycle, so that a step skipped there
+    // would still gain less than the tolerance.
     const double negligible =
         step > 0 ? kNegligibleGain * m.options.relative_tolerance * energy : 0.0;
     const Impl::Outcome outcome = m.SolveStep(g, negligible, &dx, &report);

@@ -32,9 +32,11 @@ class FastBackend : public Backend {
 
 // y = H p for a symmetric H stored column-major with both triangles and full 3x3 vertex
 // blocks (the three columns of a vertex share their row pattern), the back end's system;
-// in parallel on `threads` from a size on. Equal to Eigen's H * p up to round-off.
+// in parallel on `threads` from `parallel_from` vertices on (below, PCG's product alone
+// does not pay for a team's start). Equal to Eigen's H * p up to round-off, the same on
+// any thread count.
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y);
+                  Eigen::VectorXd* y, int parallel_from = 8192);
 
 }  // namespace fast_backend
 }  // namespace femreg

@@ -24,14 +24,18 @@ constexpr int kMaxLevels = 10;
 // Coarsening stops when a level keeps more than this share of the unknowns above it.
 constexpr double kStall = 0.7;
 // Chebyshev smoothing: degree, and the interval [lambda_max / kChebyshevRatio,
-// kChebyshevSafety lambda_max] of D^-1 A it damps (lambda_max from power iterations, which
-// approach it from below).
+// kChebyshevSafety lambda_max] of D^-1 A it damps (lambda_max from power iterations: an
+// estimate above it only weakens the smoothing; one more than ~10 % below it can make the
+// V-cycle indefinite, which PCG notices (r.z <= 0) and the back end answers by refreshing
+// the estimate, then by a new hierarchy).
 constexpr int kChebyshevDegree = 2;
 constexpr double kChebyshevRatio = 30.0;
 constexpr double kChebyshevSafety = 1.1;
 constexpr int kPowerIterations = 15;
-// Products run in parallel from this many unknowns on.
-constexpr int kParallelUnknowns = 24576;
+// Products and block Jacobi run in parallel from this many unknowns on: a V-cycle has ~15
+// of them, each worth a team's start from here (the 3375-vertex organ_patch body, 2
+// threads: linear solves 130-138 ms per frame with 24576 here, 90-96 with 4096).
+constexpr int kParallelUnknowns = 4096;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
@@ -87,7 +91,7 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
 void Multigrid::Product(int level, const SparseMatrix& A, const Eigen::VectorXd& v,
                         Eigen::VectorXd* y) const {
   if (level == 0) {
-    BlockProduct(A, v, threads_, y);  // the back end's system: full 3x3 blocks
+    BlockProduct(A, v, threads_, y, kParallelUnknowns / 3);  // the back end's system: 3x3 blocks
   } else {
     TransposeProduct(A, v, threads_, y);
   }
@@ -331,10 +335,13 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
             coefficients[k] += c;
           }
         }
+        // Column j is Q times its coefficients (plus q, unless dropped): the coarse near
+        // null space keeps them either way (a one-vertex aggregate's rotations are
+        // translations there).
+        R.block(0, j, kept, 1) = coefficients;
         const double norm = q.norm();
         if (!(norm > 1e-8 * original)) continue;
         Q.col(kept) = q / norm;
-        R.block(0, j, kept, 1) = coefficients;
         R(kept, j) = norm;
         ++kept;
       }

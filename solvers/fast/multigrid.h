@@ -21,7 +21,8 @@
 //    diagonal block inverted), on [lambda_max / 30, 1.1 lambda_max], the same before and
 //    after the coarse correction, so that a V-cycle is a symmetric positive definite
 //    operator (a preconditioner for conjugate gradients);
-//  - the coarsest level (at most 500 unknowns): its dense inverse (from an LDL^T).
+//  - the coarsest level (500 unknowns or fewer, unless coarsening stalls): its dense
+//    inverse (from an LDL^T).
 // Kept across steps: the caller passes the current system to Apply (the finest level's
 // residuals and smoothing use it) and refreshes the finest smoother from it when PCG says
 // the V-cycle is not positive definite (RefreshFinest).
@@ -41,8 +42,9 @@ namespace fast_backend {
 
 class Multigrid {
  public:
-  // Builds the hierarchy of A (3 #V by 3 #V, symmetric, both triangles stored, column-major)
-  // with the rigid motions of `positions` (#V by 3) as its near null space. False (and
+  // Builds the hierarchy of A (3 #V by 3 #V, symmetric, both triangles stored, column-major,
+  // full 3x3 vertex blocks with sorted rows: the back end's system, whose products are
+  // BlockProduct's) with the rigid motions of `positions` (#V by 3) as its near null space. False (and
   // nothing kept) if A has no unknowns or is not positive on its diagonal.
   bool Build(const Eigen::SparseMatrix<double>& A,
              const Vertices& positions, int threads);

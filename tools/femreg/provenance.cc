@@ -59,6 +59,8 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                  {"time_budget_s", s.time_budget_s},
                  {"trust_region", ToString(s.trust_region)},
                  {"linear_solver", ToString(s.linear_solver)},
+                 {"max_pcg_iterations", s.max_pcg_iterations},
+                 {"preconditioner", ToString(s.preconditioner)},
                  {"threads", s.num_threads},
                  {"predict_motion", s.predict_motion},
                  {"rigid_prealign", s.rigid_prealign},

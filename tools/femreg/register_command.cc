@@ -232,6 +232,7 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                  {"max_inner_iterations", o.solver.max_inner_iterations},
                  {"linear_solver", ToString(o.solver.linear_solver)},
                  {"trust_region", ToString(o.solver.trust_region)},
+                 {"preconditioner", ToString(o.solver.preconditioner)},
                  {"threads", o.solver.num_threads}};
   j["ms_per_frame_median"] = number(t.median_ms);
   j["ms_per_frame_mean"] = number(t.mean_ms);
