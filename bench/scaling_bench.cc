@@ -149,7 +149,7 @@ void Track(benchmark::State& state) {
 
 BENCHMARK(Track)
     ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}, {0}})
-    // The factor where auto takes multigrid (from 3000 vertices), to compare.
+    // The factor where auto takes multigrid (the boxes from 5k vertices on), to compare.
     ->Args({4000, 2000, 1})
     ->Args({16000, 2000, 1})
     ->Args({64000, 2000, 1})

@@ -28,9 +28,9 @@ struct BackendOptions {
   // factorization (of an earlier, similar system), for at most this many iterations; only
   // if that does not converge is the system factorized anew. 0: factorize every step.
   int max_pcg_iterations = 20;
-  // Fast back end: the factor, or from multigrid_from_vertices on (kAuto) multigrid.
+  // Fast back end: the factor, or (kAuto: where nnz(L) >= multigrid_fill nnz(H)) multigrid.
   Preconditioner preconditioner = Preconditioner::kAuto;
-  int multigrid_from_vertices = kMultigridFromVertices;
+  double multigrid_fill = kMultigridFill;
   int num_threads = 1;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;  // Ceres
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;  // Ceres

@@ -351,6 +351,28 @@ Eigen::SparseMatrix<double> BeamsSystem(const std::vector<std::pair<int, double>
   return H;
 }
 
+// `auto` takes the factor on a small mesh (its factor holds few entries per entry of the
+// system) and multigrid on a compact one of 5239 vertices (the factor would fill in).
+TEST(FastBackend, AutoTakesMultigridWhereTheFactorFillsIn) {
+  for (int refine : {1, 6}) {
+    auto s = MakeSetup(RobustLoss::kHuber, false, true, false, 3, false, refine);
+    BackendOptions options;
+    options.type = SolverBackend::kFast;
+    ASSERT_EQ(options.preconditioner, Preconditioner::kAuto);
+    Vertices x = s->mesh.rest;
+    const SolveReport report = MakeBackend(options)->Solve(s->problem, 0.0, &x);
+    ASSERT_TRUE(report.success) << report.message;
+    if (refine == 1) {
+      EXPECT_EQ(report.hierarchies, 0);
+      EXPECT_GE(report.factorizations, 1);
+    } else {
+      ASSERT_GT(s->mesh.num_vertices(), 5000);
+      EXPECT_GE(report.hierarchies, 1);
+      EXPECT_EQ(report.factorizations, 0);
+    }
+  }
+}
+
 // A box's corotational stiffness (R = I) with full 3x3 vertex blocks, plus a diagonal of
 // `diagonal` x (1 .. 5); the vertices at x = 0 fixed as the back end fixes them (identity
 // rows and columns).

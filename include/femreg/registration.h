@@ -189,9 +189,10 @@ struct SolverOptions {
   // Fast back end: conjugate-gradient iterations preconditioned by the kept factorization
   // before a step factorizes anew (0: factorize every step).
   int max_pcg_iterations = 20;
-  // Fast back end: what preconditions those iterations. auto: the kept factorization below
-  // 3,000 vertices, smoothed-aggregation multigrid from there (README, "Cost against
-  // size"); factor; multigrid. With multigrid a step runs up to 100 iterations with the kept
+  // Fast back end: what preconditions those iterations. auto: smoothed-aggregation
+  // multigrid where the sparse factor would hold 6 or more entries per entry of the system
+  // (large, compact meshes: ~3k vertices and up), else the kept factorization (README, "How
+  // a frame is registered"); factor; multigrid. With multigrid a step runs up to 100 iterations with the kept
   // hierarchy and 100 with a new one, whatever max_pcg_iterations says (0 still means:
   // factorize every step, no multigrid).
   Preconditioner preconditioner = Preconditioner::kAuto;

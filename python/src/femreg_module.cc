@@ -448,7 +448,7 @@ PYBIND11_MODULE(_femreg, m) {
                "Ceres only");
   EnumProperty(solver, "preconditioner", &SolverOptions::preconditioner, "solver.preconditioner",
                {Preconditioner::kAuto, Preconditioner::kFactor, Preconditioner::kMultigrid},
-               "fast back end: auto (multigrid from 3000 vertices), factor or multigrid");
+               "fast back end: auto (multigrid where the sparse factor would fill in), factor or multigrid");
 
   auto options = py::class_<RegistrationOptions>(
       m, "RegistrationOptions",

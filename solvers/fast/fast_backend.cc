@@ -240,9 +240,9 @@ struct FastBackend::Impl {
   // 297 ms. Twice the budget: 50 and 282 ms; half: 57 and 323.
   int pcg_since_factor = 0;
 
-  // The multigrid preconditioner, for meshes of options.multigrid_from_vertices and more
-  // (solvers/fast/multigrid.h): a hierarchy of an earlier step's H, kept while the PCG
-  // solves with it take few iterations more than the first one after it was built.
+  // The multigrid preconditioner (solvers/fast/multigrid.h), where the factor would fill in
+  // (options.multigrid_fill): a hierarchy of an earlier step's H, kept while the PCG solves
+  // with it take few iterations more than the first one after it was built.
   Multigrid multigrid;
   int multigrid_fresh_iterations = -1;  // the first solved step's after the build (-1: none yet)
   int multigrid_last_iterations = 0;   // the last solve's
@@ -251,11 +251,20 @@ struct FastBackend::Impl {
   bool multigrid_failed = false;
   // The last Pcg failed because r.z <= 0: the preconditioner is not positive definite.
   bool pcg_indefinite = false;
-  bool UseMultigrid() const {
-    return options.max_pcg_iterations > 0 && !multigrid_failed &&
-           (options.preconditioner == Preconditioner::kMultigrid ||
-            (options.preconditioner == Preconditioner::kAuto &&
-             num_vertices >= options.multigrid_from_vertices));
+  // nnz(L) / nnz(H) from the analysis of the pattern.
+  double fill = 0.0;
+  bool UseMultigrid() {
+    if (options.max_pcg_iterations <= 0 || multigrid_failed) return false;
+    switch (options.preconditioner) {
+      case Preconditioner::kFactor:
+        return false;
+      case Preconditioner::kMultigrid:
+        return true;
+      case Preconditioner::kAuto:
+        Analyse();  // once per pattern (the factor path needs it anyway)
+        return fill >= options.multigrid_fill;
+    }
+    return false;
   }
 
   // Per set revision: each block's slots (#blocks * n * n), and for the parallel assembly
@@ -648,6 +657,7 @@ void FastBackend::Impl::Analyse() {
   // (2 nnz(H)); the factorization: CHOLMOD's count, at kSingleFactorizationSpeed times
   // the substitutions' rate.
   if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
+  fill = H.nonZeros() > 0 ? common.lnz / static_cast<double>(H.nonZeros()) : 0.0;
   const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
   pcg_budget_double = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   pcg_budget_single = iteration_flops > 0
