@@ -2,7 +2,9 @@
 // corotational stiffness (R = I) of a box mesh plus a diagonal (masses, data springs), 3 #V
 // by 3 #V with full 3x3 vertex blocks. Simplicial and supernodal CHOLMOD, the factorization
 // and one solve; the back end's own factorization and substitutions (float and double); one
-// product H p (what an iteration of PCG costs besides a solve).
+// product H p (what an iteration of PCG costs besides a solve); the multigrid preconditioner
+// that replaces the factor on large meshes (its hierarchy, and one V-cycle against OwnSolve's
+// substitution pair).
 // Run single-threaded to compare the kernels, then with more threads:
 //   bench/femreg_linear_solver_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only
 #include <benchmark/benchmark.h>
@@ -16,12 +18,13 @@
 #include "femreg/io.h"
 #include "parallel/threads.h"
 #include "solvers/fast/fast_backend.h"
+#include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
 
 namespace {
 
-// A box of about `vertices` vertices, 5:1:1 like the demo's beam.
-Eigen::SparseMatrix<double> BoxSystem(int vertices) {
+// A box of about `vertices` vertices, 5:1:1 like the demo's beam (the mesh to *mesh).
+Eigen::SparseMatrix<double> BoxSystem(int vertices, femreg::TetMesh* mesh_out = nullptr) {
   // (5n + 1)(n + 1)^2 ~ vertices
   int n = 1;
   while ((5 * (n + 1) + 1) * (n + 2) * (n + 2) <= vertices) ++n;
@@ -37,6 +40,7 @@ Eigen::SparseMatrix<double> BoxSystem(int vertices) {
   Eigen::SparseMatrix<double> H(dofs, dofs);
   H.setFromTriplets(triplets.begin(), triplets.end());
   H.makeCompressed();
+  if (mesh_out != nullptr) *mesh_out = mesh;
   return H;
 }
 
@@ -135,6 +139,37 @@ void BlockProduct(benchmark::State& state) {
   state.counters["dofs"] = static_cast<double>(H.rows());
 }
 
+// The multigrid hierarchy's build (aggregation, prolongators, Galerkin products), with the
+// box's rest positions as the rigid motions' centre.
+void MultigridBuild(benchmark::State& state) {
+  femreg::TetMesh mesh;
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)), &mesh);
+  const femreg::ScopedThreads threads(static_cast<int>(state.range(1)));
+  femreg::fast_backend::Multigrid mg;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(mg.Build(H, mesh.rest, static_cast<int>(state.range(1))));
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+  state.counters["levels"] = mg.num_levels();
+  state.counters["operator_complexity"] = mg.operator_complexity();
+}
+
+// One V-cycle: what a PCG iteration with multigrid costs besides the product.
+void MultigridCycle(benchmark::State& state) {
+  femreg::TetMesh mesh;
+  const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)), &mesh);
+  const femreg::ScopedThreads threads(static_cast<int>(state.range(1)));
+  femreg::fast_backend::Multigrid mg;
+  if (!mg.Build(H, mesh.rest, static_cast<int>(state.range(1)))) state.SkipWithError("build failed");
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(H.rows());
+  Eigen::VectorXd x;
+  for (auto _ : state) {
+    mg.Apply(H, b, &x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+}
+
 void Sizes(benchmark::internal::Benchmark* b) {
   for (int v : {1000, 4000, 16000, 64000}) {
     for (int t : {1, 2}) b->Args({v, t});
@@ -152,6 +187,8 @@ BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(Sizes);
 BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
 BENCHMARK(Product)->Apply(Sizes);
 BENCHMARK(BlockProduct)->Apply(Sizes);
+BENCHMARK(MultigridBuild)->Apply(Sizes);
+BENCHMARK(MultigridCycle)->Apply(Sizes);
 
 }  // namespace
 
