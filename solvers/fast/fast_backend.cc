@@ -389,7 +389,6 @@ void FastBackend::Impl::BuildPattern() {
   factor_valid = false;
   single_backoff = 0;
   multigrid = Multigrid();
-  multigrid_failed = false;
   cache.clear();
   constant_values.clear();
   fixed_for.clear();
@@ -746,8 +745,10 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
     const double pq = p.dot(q);
     // (rz <= 0: the preconditioner is not positive definite, e.g. a multigrid smoother
     // whose eigenvalue bound fell short.)
-    if (!(rz > 0.0) && std::isfinite(rz)) pcg_indefinite = true;
-    if (!(pq > 0.0) || !(rz > 0.0) || !std::isfinite(rz)) return Outcome::kFailed;
+    if (!(pq > 0.0) || !(rz > 0.0) || !std::isfinite(rz)) {
+      pcg_indefinite = std::isfinite(rz) && !(rz > 0.0);
+      return Outcome::kFailed;
+    }
     // The first iteration minimizes the model 1/2 dx^T H dx - b.dx along z: it gains
     // 1/2 (b.z)^2 / (z^T H z), a lower bound on the whole step's gain.
     if (k == 0 && 0.5 * rz * rz / pq < negligible) return Outcome::kNegligible;

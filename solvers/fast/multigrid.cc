@@ -417,7 +417,7 @@ void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
     Product(level, A, L.x, &L.ad);
     L.r = L.b - L.ad;
   }
-  Eigen::VectorXd& z = L.ad;  // reused: ad is free between products
+  Eigen::VectorXd& z = L.ad;  // reused: ad is free between products (no allocation per cycle)
   BlockJacobi(L, L.r, &L.d);
   L.d /= theta;
   for (int k = 0; k < kChebyshevDegree; ++k) {
@@ -425,10 +425,9 @@ void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
     if (k + 1 == kChebyshevDegree) break;
     Product(level, A, L.d, &z);
     L.r -= z;
-    Eigen::VectorXd jz;
-    BlockJacobi(L, L.r, &jz);
+    BlockJacobi(L, L.r, &z);
     const double rho_next = 1.0 / (2.0 * sigma - rho);
-    L.d = (rho_next * rho) * L.d + (2.0 * rho_next / delta) * jz;
+    L.d = (rho_next * rho) * L.d + (2.0 * rho_next / delta) * z;
     rho = rho_next;
   }
 }
