@@ -164,21 +164,23 @@ void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& 
 // H is symmetric, so y_c = H(:, c) . p: each entry a gather over its column, in parallel
 // without races and in the same order on any number of threads; a 3x3 block costs one row
 // index instead of nine.
-void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from) {
+namespace {
+template <class Value>
+void BlockProductOf(const Eigen::SparseMatrix<Value>& H, const Eigen::VectorXd& p, int threads,
+                    Eigen::VectorXd* y, int parallel_from) {
   const int blocks = static_cast<int>(H.cols()) / 3;
   const int* outer = H.outerIndexPtr();
   const int* inner = H.innerIndexPtr();
-  const double* values = H.valuePtr();
+  const Value* values = H.valuePtr();
   const double* pp = p.data();
   y->resize(p.size());
   double* yy = y->data();
   auto column = [&](int b) {
     const int begin = outer[3 * b];
     const int stride = outer[3 * b + 1] - begin;
-    const double* v0 = values + begin;
-    const double* v1 = v0 + stride;
-    const double* v2 = v1 + stride;
+    const Value* v0 = values + begin;
+    const Value* v1 = v0 + stride;
+    const Value* v2 = v1 + stride;
     const int* rows = inner + begin;
     double s0 = 0.0, s1 = 0.0, s2 = 0.0;
     for (int k = 0; k < stride; k += 3) {
@@ -197,6 +199,17 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
   } else {
     for (int b = 0; b < blocks; ++b) column(b);
   }
+}
+}  // namespace
+
+void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
+                  Eigen::VectorXd* y, int parallel_from) {
+  BlockProductOf(H, p, threads, y, parallel_from);
+}
+
+void BlockProduct(const Eigen::SparseMatrix<float>& H, const Eigen::VectorXd& p, int threads,
+                  Eigen::VectorXd* y, int parallel_from) {
+  BlockProductOf(H, p, threads, y, parallel_from);
 }
 
 struct FastBackend::Impl {
@@ -728,7 +741,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   Eigen::VectorXd z;
   auto precondition = [&] {
     if (with_multigrid) {
-      multigrid.Apply(H, r, &z);
+      multigrid.Apply(r, &z);
     } else if (substitutions.loaded()) {
       substitutions.Solve(r, &z);
     } else {
@@ -787,7 +800,9 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
     return outcome;
   };
   const int fresh = std::max(multigrid_fresh_iterations, 0);
-  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + 4)) {
+  // (SetFinest: the V-cycle's single-precision copy of this step's H.)
+  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + 4) &&
+      multigrid.SetFinest(H)) {
     Outcome outcome = solve(&report->linear_solve_s);
     if (outcome == Outcome::kFailed && pcg_indefinite) {
       const auto t0 = Clock::now();

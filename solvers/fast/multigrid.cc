@@ -36,17 +36,22 @@ constexpr int kPowerIterations = 15;
 // of them, each worth a team's start from here (the 3375-vertex organ_patch body, 2
 // threads: linear solves 130-138 ms per frame with 24576 here, 90-96 with 4096).
 constexpr int kParallelUnknowns = 4096;
+// ... or this many stored entries: a coarse level has few unknowns, but many entries per
+// column (the 3375-vertex body's level 1: 1098 unknowns, 189k entries, against level 0's
+// 10125 and 409k).
+constexpr int64_t kParallelNonzeros = 65536;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
 // y = M^T x for a column-major M: y_c = M(:, c) . x, a gather per column (for a symmetric A,
-// A x). In parallel without races, the same sums on any thread count.
-void TransposeProduct(const SparseMatrix& M, const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) {
+// A x), summed in double. In parallel without races, the same sums on any thread count.
+void TransposeProduct(const Eigen::SparseMatrix<float>& M, const Eigen::VectorXd& x, int threads,
+                      Eigen::VectorXd* y) {
   const int n = static_cast<int>(M.cols());
   y->resize(n);
   const int* outer = M.outerIndexPtr();
   const int* inner = M.innerIndexPtr();
-  const double* values = M.valuePtr();
+  const float* values = M.valuePtr();
   const double* xx = x.data();
   double* yy = y->data();
   auto column = [&](int c) {
@@ -54,7 +59,7 @@ void TransposeProduct(const SparseMatrix& M, const Eigen::VectorXd& x, int threa
     for (int p = outer[c]; p < outer[c + 1]; ++p) s += values[p] * xx[inner[p]];
     yy[c] = s;
   };
-  if (threads > 1 && n >= kParallelUnknowns) {
+  if (threads > 1 && (n >= kParallelUnknowns || M.nonZeros() >= kParallelNonzeros)) {
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (int c = 0; c < n; ++c) column(c);
   } else {
@@ -88,8 +93,8 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
 
 }  // namespace
 
-void Multigrid::Product(int level, const SparseMatrix& A, const Eigen::VectorXd& v,
-                        Eigen::VectorXd* y) const {
+void Multigrid::Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) const {
+  const Eigen::SparseMatrix<float>& A = levels_[static_cast<size_t>(level)].A_f;
   if (level == 0) {
     BlockProduct(A, v, threads_, y, kParallelUnknowns / 3);  // the back end's system: 3x3 blocks
   } else {
@@ -152,13 +157,23 @@ bool Multigrid::PrepareSmoother(int l, const SparseMatrix& A, std::vector<double
     L.dinv.insert(L.dinv.end(), inverse.data(), inverse.data() + m * m);
   }
   L.lambda_max = LargestEigenvalue(
-      n, [&](const Eigen::VectorXd& v, Eigen::VectorXd* y) { Product(l, A, v, y); },
+      n, [&](const Eigen::VectorXd& v, Eigen::VectorXd* y) { Product(l, v, y); },
       [&](const Eigen::VectorXd& r, Eigen::VectorXd* z) { BlockJacobi(L, r, z); });
   return true;
 }
 
+bool Multigrid::SetFinest(const SparseMatrix& A) {
+  if (levels_.empty()) return false;
+  Eigen::SparseMatrix<float>& A_f = levels_[0].A_f;
+  if (A.cols() != A_f.cols() || A.nonZeros() != A_f.nonZeros() || !A.isCompressed()) return false;
+  const double* from = A.valuePtr();
+  float* to = A_f.valuePtr();
+  for (Eigen::Index p = 0; p < A.nonZeros(); ++p) to[p] = static_cast<float>(from[p]);
+  return true;
+}
+
 bool Multigrid::RefreshFinest(const SparseMatrix& A) {
-  if (levels_.empty() || A.cols() != levels_[0].node_begin.back()) return false;
+  if (!SetFinest(A)) return false;
   std::vector<double> unused;
   if (!PrepareSmoother(0, A, &unused)) {
     levels_.clear();
@@ -192,6 +207,8 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   }
   levels_.reserve(kMaxLevels);
   levels_.emplace_back();
+  levels_[0].A_f = A0.cast<float>();
+  levels_[0].A_f.makeCompressed();
   levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
   for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
 
@@ -384,8 +401,14 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
     Ac = 0.5 * (Ac + Act);
     Ac.makeCompressed();
 
+    L.P_f = L.P.cast<float>();
+    L.Pt_f = L.Pt.cast<float>();
+    L.P = SparseMatrix();
+    L.Pt = SparseMatrix();
+    if (l > 0) L.A = SparseMatrix();  // the coarse system's product is built: A_f from here on
     levels_.emplace_back();  // no reallocation: reserved
     Level& C = levels_.back();
+    C.A_f = Ac.cast<float>();
     C.A = std::move(Ac);
     C.node_begin = std::move(coarse_begin);
     B = coarse_B.topRows(coarse_rows);
@@ -403,7 +426,7 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   return true;
 }
 
-void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
+void Multigrid::Smooth(int level, bool zero_start) {
   Level& L = levels_[static_cast<size_t>(level)];
   const double upper = kChebyshevSafety * L.lambda_max;
   const double lower = L.lambda_max / kChebyshevRatio;
@@ -414,7 +437,7 @@ void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
   if (zero_start) {
     L.r = L.b;
   } else {
-    Product(level, A, L.x, &L.ad);
+    Product(level, L.x, &L.ad);
     L.r = L.b - L.ad;
   }
   Eigen::VectorXd& z = L.ad;  // reused: ad is free between products (no allocation per cycle)
@@ -423,7 +446,7 @@ void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
   for (int k = 0; k < kChebyshevDegree; ++k) {
     L.x += L.d;
     if (k + 1 == kChebyshevDegree) break;
-    Product(level, A, L.d, &z);
+    Product(level, L.d, &z);
     L.r -= z;
     BlockJacobi(L, L.r, &z);
     const double rho_next = 1.0 / (2.0 * sigma - rho);
@@ -432,38 +455,38 @@ void Multigrid::Smooth(int level, const SparseMatrix& A, bool zero_start) {
   }
 }
 
-void Multigrid::Cycle(int level, const SparseMatrix& A) {
+void Multigrid::Cycle(int level) {
   Level& L = levels_[static_cast<size_t>(level)];
-  const int n = static_cast<int>(A.cols());
+  const int n = static_cast<int>(L.A_f.cols());
   if (level + 1 == static_cast<int>(levels_.size())) {
     if (coarse_inverse_.rows() == n) {
       L.x.noalias() = coarse_inverse_ * L.b;
     } else {  // too large to solve directly: smoothing only, twice
       L.x.setZero(n);
-      Smooth(level, A, true);
-      Smooth(level, A, false);
+      Smooth(level, true);
+      Smooth(level, false);
     }
     return;
   }
   L.x.setZero(n);
-  Smooth(level, A, true);
-  Product(level, A, L.x, &L.ad);
+  Smooth(level, true);
+  Product(level, L.x, &L.ad);
   L.r = L.b - L.ad;
   Level& C = levels_[static_cast<size_t>(level) + 1];
-  TransposeProduct(L.P, L.r, threads_, &C.b);
-  Cycle(level + 1, C.A);
-  TransposeProduct(L.Pt, C.x, threads_, &L.d);
+  TransposeProduct(L.P_f, L.r, threads_, &C.b);
+  Cycle(level + 1);
+  TransposeProduct(L.Pt_f, C.x, threads_, &L.d);
   L.x += L.d;
-  Smooth(level, A, false);
+  Smooth(level, false);
 }
 
-void Multigrid::Apply(const SparseMatrix& A, const Eigen::VectorXd& r, Eigen::VectorXd* z) {
+void Multigrid::Apply(const Eigen::VectorXd& r, Eigen::VectorXd* z) {
   if (levels_.empty()) {
     *z = r;
     return;
   }
   levels_[0].b = r;
-  Cycle(0, A);
+  Cycle(0);
   *z = levels_[0].x;
 }
 
