@@ -691,6 +691,56 @@ TEST(FastBackend, StopsBeforeAStepThatWouldGainNothing) {
   EXPECT_NE(backend->Solve(s->problem, 0.0, &x).stop, StopReason::kPredicted);
 }
 
+// The slots of a stencil met before are the ones a search finds: the data sets are made
+// anew each outer iteration, mostly on triangles met before, and the back end takes their
+// slots from what it found then. One exact Gauss-Newton step (CHOLMOD's factor, no PCG) on
+// a problem whose data sets were rebuilt (new targets), by a back end that solved the old
+// ones, equals a fresh back end's step to round-off.
+TEST(FastBackend, RebuiltDataSetsScatterWhereASearchWould) {
+  auto s = MakeSetup(RobustLoss::kNone, false, false, false, 13);
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.max_iterations = 1;
+  options.max_pcg_iterations = 0;
+  std::unique_ptr<Backend> seasoned = MakeBackend(options);
+  Vertices x = s->mesh.rest;
+  ASSERT_TRUE(seasoned->Solve(s->problem, 0.0, &x).success);
+
+  std::vector<energy::PointToPlane<3>> planes;
+  std::vector<energy::PointToPoint<3>> points;
+  energy::Loss loss;
+  s->problem.ForEachSet([&](const auto& set) {
+    using T = typename std::decay_t<decltype(set)>::Block;
+    if constexpr (std::is_same_v<T, energy::PointToPlane<3>>) {
+      planes.insert(planes.end(), set.blocks().begin(), set.blocks().end());
+      loss = set.loss();
+    } else if constexpr (std::is_same_v<T, energy::PointToPoint<3>>) {
+      points.insert(points.end(), set.blocks().begin(), set.blocks().end());
+    }
+  });
+  ASSERT_GT(planes.size() + points.size(), 10u);
+  s->problem.Clear(TermGroup::kData);
+  auto& l3 = s->problem.AddSet<energy::PointToPlane<3>>(TermGroup::kData, loss);
+  auto& p3 = s->problem.AddSet<energy::PointToPoint<3>>(TermGroup::kData, loss);
+  // The same stencils in another order, pulled elsewhere.
+  for (auto it = planes.rbegin(); it != planes.rend(); ++it) {
+    energy::PointToPlane<3> b = *it;
+    b.target += Eigen::Vector3d(0.0, 0.003, -0.002);
+    l3.Add(b);
+  }
+  for (auto it = points.rbegin(); it != points.rend(); ++it) {
+    energy::PointToPoint<3> b = *it;
+    b.target += Eigen::Vector3d(0.002, 0.0, 0.004);
+    p3.Add(b);
+  }
+  Vertices a = s->mesh.rest, b = s->mesh.rest;
+  ASSERT_TRUE(seasoned->Solve(s->problem, 0.0, &a).success);
+  ASSERT_TRUE(MakeBackend(options)->Solve(s->problem, 0.0, &b).success);
+  const double moved = (b - s->mesh.rest).cwiseAbs().maxCoeff();
+  ASSERT_GT(moved, 1e-4);
+  EXPECT_LE((a - b).cwiseAbs().maxCoeff(), 1e-9 * moved);
+}
+
 // The fast back end keeps its pattern and analysis while the coupling holds, and widens it
 // once for a contact between vertices outside it.
 TEST(FastBackend, PatternIsReusedAndWidenedOnce) {
