@@ -43,30 +43,6 @@ constexpr int64_t kParallelNonzeros = 65536;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
-// y = M^T x for a column-major M: y_c = M(:, c) . x, a gather per column (for a symmetric A,
-// A x), summed in double. In parallel without races, the same sums on any thread count.
-void TransposeProduct(const Eigen::SparseMatrix<float>& M, const Eigen::VectorXd& x, int threads,
-                      Eigen::VectorXd* y) {
-  const int n = static_cast<int>(M.cols());
-  y->resize(n);
-  const int* outer = M.outerIndexPtr();
-  const int* inner = M.innerIndexPtr();
-  const float* values = M.valuePtr();
-  const double* xx = x.data();
-  double* yy = y->data();
-  auto column = [&](int c) {
-    double s = 0.0;
-    for (int p = outer[c]; p < outer[c + 1]; ++p) s += values[p] * xx[inner[p]];
-    yy[c] = s;
-  };
-  if (threads > 1 && (n >= kParallelUnknowns || M.nonZeros() >= kParallelNonzeros)) {
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int c = 0; c < n; ++c) column(c);
-  } else {
-    for (int c = 0; c < n; ++c) column(c);
-  }
-}
-
 // The largest eigenvalue of D^-1 A (real and positive: it is similar to D^-1/2 A D^-1/2),
 // by power iterations from a fixed start.
 template <class Product, class Jacobi>
@@ -91,14 +67,140 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
   return lambda > 0.0 ? lambda : 1.0;
 }
 
+// One column node's gather: y_j = sum over its blocks B (R x C, column-major, R and C
+// fixed or, with 0, given) of B(:, j) . x(rows of B).
+template <int R, int C>
+void GatherNode(const float* values, const int* value_at, const int* row_first, const int* row_count,
+                int begin, int end, int c_size, const double* x, double* y) {
+  const int nc = C > 0 ? C : c_size;
+  double acc[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  for (int k = begin; k < end; ++k) {
+    const float* B = values + value_at[k];
+    const double* xr = x + row_first[k];
+    const int nr = R > 0 ? R : row_count[k];
+    for (int j = 0; j < nc; ++j) {
+      double s = 0.0;
+      for (int i = 0; i < nr; ++i) s += static_cast<double>(B[j * nr + i]) * xr[i];
+      acc[j] += s;
+    }
+  }
+  for (int j = 0; j < nc; ++j) y[j] = acc[j];
+}
+
 }  // namespace
 
-void Multigrid::Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) const {
-  const Eigen::SparseMatrix<float>& A = levels_[static_cast<size_t>(level)].A_f;
-  if (level == 0) {
-    BlockProduct(A, v, threads_, y, kParallelUnknowns / 3);  // the back end's system: 3x3 blocks
+void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>& row_nodes,
+                                   const std::vector<int>& col_nodes) {
+  rows = static_cast<int>(M.rows());
+  cols = static_cast<int>(M.cols());
+  col_begin = col_nodes;
+  const int num_row_nodes = static_cast<int>(row_nodes.size()) - 1;
+  const int num_col_nodes = static_cast<int>(col_nodes.size()) - 1;
+  std::vector<int> node_of_row(static_cast<size_t>(rows));
+  for (int r = 0; r < num_row_nodes; ++r) {
+    for (int i = row_nodes[static_cast<size_t>(r)]; i < row_nodes[static_cast<size_t>(r) + 1]; ++i) {
+      node_of_row[static_cast<size_t>(i)] = r;
+    }
+  }
+  block_begin.assign(1, 0);
+  row_first.clear();
+  row_count.clear();
+  value_at.clear();
+  values.clear();
+  const int* outer = M.outerIndexPtr();
+  const int* inner = M.innerIndexPtr();
+  const double* v = M.valuePtr();
+  auto column_end = [&](int j) { return M.isCompressed() ? outer[j + 1] : outer[j] + M.innerNonZeroPtr()[j]; };
+  std::vector<int> block_of(static_cast<size_t>(num_row_nodes), -1);
+  std::vector<int> touched;
+  for (int c = 0; c < num_col_nodes; ++c) {
+    const int c0 = col_nodes[static_cast<size_t>(c)], nc = col_nodes[static_cast<size_t>(c) + 1] - c0;
+    touched.clear();
+    for (int j = c0; j < c0 + nc; ++j) {
+      for (int p = outer[j]; p < column_end(j); ++p) {
+        const int r = node_of_row[static_cast<size_t>(inner[p])];
+        if (block_of[static_cast<size_t>(r)] < 0) {
+          block_of[static_cast<size_t>(r)] = 0;
+          touched.push_back(r);
+        }
+      }
+    }
+    std::sort(touched.begin(), touched.end());
+    for (int r : touched) {
+      const int nr = row_nodes[static_cast<size_t>(r) + 1] - row_nodes[static_cast<size_t>(r)];
+      block_of[static_cast<size_t>(r)] = static_cast<int>(values.size());
+      row_first.push_back(row_nodes[static_cast<size_t>(r)]);
+      row_count.push_back(nr);
+      value_at.push_back(static_cast<int>(values.size()));
+      values.resize(values.size() + static_cast<size_t>(nr) * static_cast<size_t>(nc), 0.0f);
+    }
+    for (int j = c0; j < c0 + nc; ++j) {
+      for (int p = outer[j]; p < column_end(j); ++p) {
+        const int i = inner[p];
+        const int r = node_of_row[static_cast<size_t>(i)];
+        const int nr = row_nodes[static_cast<size_t>(r) + 1] - row_nodes[static_cast<size_t>(r)];
+        values[static_cast<size_t>(block_of[static_cast<size_t>(r)] + (j - c0) * nr +
+                                   (i - row_nodes[static_cast<size_t>(r)]))] = static_cast<float>(v[p]);
+      }
+    }
+    for (int r : touched) block_of[static_cast<size_t>(r)] = -1;
+    block_begin.push_back(static_cast<int>(row_first.size()));
+  }
+}
+
+void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) const {
+  y->resize(cols);
+  const int nodes = static_cast<int>(col_begin.size()) - 1;
+  const double* xx = x.data();
+  double* yy = y->data();
+  auto node = [&](int c) {
+    const int c0 = col_begin[static_cast<size_t>(c)], nc = col_begin[static_cast<size_t>(c) + 1] - c0;
+    const int b = block_begin[static_cast<size_t>(c)], e = block_begin[static_cast<size_t>(c) + 1];
+    if (nc > 6) {  // not made here (nodes have up to 6 unknowns); kept correct all the same
+      for (int j = 0; j < nc; ++j) {
+        double s = 0.0;
+        for (int k = b; k < e; ++k) {
+          const float* B = values.data() + value_at[static_cast<size_t>(k)];
+          const int nr = row_count[static_cast<size_t>(k)];
+          for (int i = 0; i < nr; ++i) s += static_cast<double>(B[j * nr + i]) * xx[row_first[static_cast<size_t>(k)] + i];
+        }
+        yy[c0 + j] = s;
+      }
+      return;
+    }
+    // Every block of a column node has one row node size where the rows are uniform (a
+    // coarse level's 6, the vertices' 3); else the general loop.
+    const int nr = e > b ? row_count[static_cast<size_t>(b)] : 0;
+    bool uniform = true;
+    for (int k = b + 1; k < e && uniform; ++k) uniform = row_count[static_cast<size_t>(k)] == nr;
+    const float* v = values.data();
+    const int* at = value_at.data();
+    const int* first = row_first.data();
+    const int* count = row_count.data();
+    if (uniform && nr == 6 && nc == 6) {
+      GatherNode<6, 6>(v, at, first, count, b, e, nc, xx, yy + c0);
+    } else if (uniform && nr == 3 && nc == 6) {
+      GatherNode<3, 6>(v, at, first, count, b, e, nc, xx, yy + c0);
+    } else if (uniform && nr == 6 && nc == 3) {
+      GatherNode<6, 3>(v, at, first, count, b, e, nc, xx, yy + c0);
+    } else {
+      GatherNode<0, 0>(v, at, first, count, b, e, nc, xx, yy + c0);
+    }
+  };
+  if (threads > 1 && (cols >= kParallelUnknowns || static_cast<int64_t>(values.size()) >= kParallelNonzeros)) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (int c = 0; c < nodes; ++c) node(c);
   } else {
-    TransposeProduct(A, v, threads_, y);
+    for (int c = 0; c < nodes; ++c) node(c);
+  }
+}
+
+void Multigrid::Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) const {
+  const Level& L = levels_[static_cast<size_t>(level)];
+  if (level == 0) {
+    BlockProduct(L.A_f, v, threads_, y, kParallelUnknowns / 3);  // the back end's system: 3x3 blocks
+  } else {
+    L.A_b.Multiply(v, threads_, y);
   }
 }
 
@@ -401,14 +503,14 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
     Ac = 0.5 * (Ac + Act);
     Ac.makeCompressed();
 
-    L.P_f = L.P.cast<float>();
-    L.Pt_f = L.Pt.cast<float>();
+    L.P_b.Assign(L.P, L.node_begin, coarse_begin);
+    L.Pt_b.Assign(L.Pt, coarse_begin, L.node_begin);
     L.P = SparseMatrix();
     L.Pt = SparseMatrix();
-    if (l > 0) L.A = SparseMatrix();  // the coarse system's product is built: A_f from here on
+    if (l > 0) L.A = SparseMatrix();  // the coarse system's product is built: A_b from here on
     levels_.emplace_back();  // no reallocation: reserved
     Level& C = levels_.back();
-    C.A_f = Ac.cast<float>();
+    C.A_b.Assign(Ac, coarse_begin, coarse_begin);
     C.A = std::move(Ac);
     C.node_begin = std::move(coarse_begin);
     B = coarse_B.topRows(coarse_rows);
@@ -457,7 +559,7 @@ void Multigrid::Smooth(int level, bool zero_start) {
 
 void Multigrid::Cycle(int level) {
   Level& L = levels_[static_cast<size_t>(level)];
-  const int n = static_cast<int>(L.A_f.cols());
+  const int n = L.node_begin.back();
   if (level + 1 == static_cast<int>(levels_.size())) {
     if (coarse_inverse_.rows() == n) {
       L.x.noalias() = coarse_inverse_ * L.b;
@@ -473,9 +575,9 @@ void Multigrid::Cycle(int level) {
   Product(level, L.x, &L.ad);
   L.r = L.b - L.ad;
   Level& C = levels_[static_cast<size_t>(level) + 1];
-  TransposeProduct(L.P_f, L.r, threads_, &C.b);
+  L.P_b.Multiply(L.r, threads_, &C.b);
   Cycle(level + 1);
-  TransposeProduct(L.Pt_f, C.x, threads_, &L.d);
+  L.Pt_b.Multiply(C.x, threads_, &L.d);
   L.x += L.d;
   Smooth(level, false);
 }

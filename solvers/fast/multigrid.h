@@ -68,26 +68,48 @@ class Multigrid {
   double grid_complexity() const;
   double operator_complexity() const;
 
+  // (The V-cycle's storage below the finest level, see Level; public for its test.)
+  // M (rows by cols, its unknowns grouped into row and column nodes) as dense column-major
+  // blocks, by column node; Multiply gives y = M^T x (for a symmetric M, M x).
+  struct NodeBlocks {
+    int rows = 0, cols = 0;
+    std::vector<int> col_begin;    // the column nodes' first unknowns, and cols
+    std::vector<int> block_begin;  // column node c's blocks: [block_begin[c], block_begin[c + 1])
+    std::vector<int> row_first;    // per block: its row node's first unknown
+    std::vector<int> row_count;    // per block: its row node's unknowns
+    std::vector<int> value_at;     // per block: its row_count x (column node's size) values
+    std::vector<float> values;
+    // From a column-major M with both partitions (the nodes' first unknowns, then the size).
+    void Assign(const Eigen::SparseMatrix<double>& M, const std::vector<int>& row_nodes,
+                const std::vector<int>& col_nodes);
+    void Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) const;
+  };
+
  private:
-  // The V-cycle reads its matrices in single precision (A_f, P_f, Pt_f): its products
-  // stream them from memory, and float halves the values' bytes (an index stays 4 bytes:
-  // 12 -> 8 bytes per entry, 9.3 -> 5.3 at level 0 with its one index per 3x3 block). The
-  // vectors and every sum stay in double, and a matrix rounded to float is still
-  // symmetric, so the V-cycle is still a symmetric positive definite operator; what
-  // changes is the operator itself, by a relative 6e-8 per entry, far less than what
-  // separates it from A^-1 (PCG in double solves with A itself).
+  // The V-cycle reads its matrices in single precision: its products stream them from
+  // memory, and float halves the values' bytes. The vectors and every sum stay in double,
+  // and a matrix rounded to float is still symmetric, so the V-cycle is still a symmetric
+  // positive definite operator; what changes is the operator itself, by a relative 6e-8
+  // per entry, far less than what separates it from A^-1 (PCG in double solves with A
+  // itself). Level 0's system keeps the back end's layout (one row index per 3x3 vertex
+  // block: 5.3 bytes per entry); the coarse systems and the prolongators are stored as
+  // dense blocks between nodes (an aggregate's up to 6 unknowns, a vertex's 3), one row
+  // index per block: ~4.1 bytes per entry instead of 8 with an index per entry, and inner
+  // loops of fixed length.
+
   struct Level {
-    Eigen::SparseMatrix<double> A;  // while building, below level 0 (level 0: the caller's)
-    Eigen::SparseMatrix<float> A_f;  // the V-cycle's (level 0: the last system given)
+    Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
+    Eigen::SparseMatrix<float> A_f;  // level 0: the V-cycle's copy of the last system given
+    NodeBlocks A_b;                  // below level 0: the V-cycle's system
     int nonzeros = 0;               // of A (level 0's too)
     std::vector<int> node_begin;    // the unknowns of node k: [node_begin[k], node_begin[k + 1])
     std::vector<int> dinv_at;       // node k's inverted diagonal block in dinv
     std::vector<double> dinv;
     double lambda_max = 1.0;        // of D^-1 A
-    // To the next level: P (this level's unknowns by the next's) and its transpose, both
-    // column-major, so that both products are gathers (in double while building).
+    // To the next level: P (this level's unknowns by the next's) and its transpose, so
+    // that both products are gathers (column-major Eigen matrices while building).
     Eigen::SparseMatrix<double> P, Pt;
-    Eigen::SparseMatrix<float> P_f, Pt_f;
+    NodeBlocks P_b, Pt_b;
     // Work vectors.
     Eigen::VectorXd x, b, r, d, ad;
   };
