@@ -103,6 +103,7 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
     }
   }
   block_begin.assign(1, 0);
+  rows_of.clear();
   row_first.clear();
   row_count.clear();
   value_at.clear();
@@ -144,6 +145,11 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
       }
     }
     for (int r : touched) block_of[static_cast<size_t>(r)] = -1;
+    int shared = touched.empty() ? 0 : row_count[static_cast<size_t>(block_begin.back())];
+    for (size_t k = static_cast<size_t>(block_begin.back()); k < row_count.size(); ++k) {
+      if (row_count[k] != shared) shared = 0;
+    }
+    rows_of.push_back(shared);
     block_begin.push_back(static_cast<int>(row_first.size()));
   }
 }
@@ -168,11 +174,10 @@ void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eige
       }
       return;
     }
-    // Every block of a column node has one row node size where the rows are uniform (a
-    // coarse level's 6, the vertices' 3); else the general loop.
-    const int nr = e > b ? row_count[static_cast<size_t>(b)] : 0;
-    bool uniform = true;
-    for (int k = b + 1; k < e && uniform; ++k) uniform = row_count[static_cast<size_t>(k)] == nr;
+    // Fixed-length loops where every block of the column node has the same rows (a coarse
+    // level's 6, the vertices' 3); else the general loop.
+    const int nr = rows_of[static_cast<size_t>(c)];
+    const bool uniform = nr > 0;
     const float* v = values.data();
     const int* at = value_at.data();
     const int* first = row_first.data();

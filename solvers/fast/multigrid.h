@@ -78,6 +78,7 @@ class Multigrid {
     std::vector<int> row_first;    // per block: its row node's first unknown
     std::vector<int> row_count;    // per block: its row node's unknowns
     std::vector<int> value_at;     // per block: its row_count x (column node's size) values
+    std::vector<int> rows_of;      // per column node: its blocks' row count if all share one, else 0
     std::vector<float> values;
     // From a column-major M with both partitions (the nodes' first unknowns, then the size).
     void Assign(const Eigen::SparseMatrix<double>& M, const std::vector<int>& row_nodes,
