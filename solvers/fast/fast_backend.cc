@@ -854,9 +854,14 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
     return outcome;
   };
   const int fresh = std::max(multigrid_fresh_iterations, 0);
-  // (SetFinest: the V-cycle's single-precision copy of this step's H.)
-  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + 4) &&
-      multigrid.SetFinest(H)) {
+  // The V-cycle's single-precision copy of this step's H, timed with the hierarchy.
+  auto set_finest = [&] {
+    const auto t0 = Clock::now();
+    const bool set = multigrid.SetFinest(H);
+    report->factorize_s += Seconds(t0);
+    return set;
+  };
+  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + 4) && set_finest()) {
     Outcome outcome = solve(&report->linear_solve_s);
     if (outcome == Outcome::kFailed && pcg_indefinite) {
       const auto t0 = Clock::now();
