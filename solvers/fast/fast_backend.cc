@@ -37,8 +37,8 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
-#include <unordered_map>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 

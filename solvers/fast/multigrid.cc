@@ -272,7 +272,12 @@ bool Multigrid::PrepareSmoother(int l, const SparseMatrix& A, std::vector<double
 bool Multigrid::SetFinest(const SparseMatrix& A) {
   if (levels_.empty()) return false;
   Eigen::SparseMatrix<float>& A_f = levels_[0].A_f;
-  if (A.cols() != A_f.cols() || A.nonZeros() != A_f.nonZeros() || !A.isCompressed()) return false;
+  // The pattern: its size and where each column starts (a pattern change also resets the
+  // back end's hierarchy; this catches a caller that did not).
+  if (A.cols() != A_f.cols() || A.nonZeros() != A_f.nonZeros() || !A.isCompressed() ||
+      !std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1, A_f.outerIndexPtr())) {
+    return false;
+  }
   const double* from = A.valuePtr();
   float* to = A_f.valuePtr();
   for (Eigen::Index p = 0; p < A.nonZeros(); ++p) to[p] = static_cast<float>(from[p]);
