@@ -419,8 +419,9 @@ int MultigridPcgIterations(const Eigen::SparseMatrix<double>& H, fast_backend::M
   return 1000;
 }
 
-// The multigrid preconditioner: a symmetric positive definite operator (PCG's requirement),
-// the same on 1 and 2 threads, and a preconditioner whose PCG iterations do not grow much
+// The multigrid preconditioner: a symmetric positive definite operator (PCG's requirement;
+// symmetric to float round-off: level 0's products sum in single precision), the same on 1
+// and 2 threads, and a preconditioner whose PCG iterations do not grow much
 // with the mesh (6.8 times the vertices, half the element size: at most 1.6 times the
 // iterations; 19 and 26 here), where Jacobi's double with each halving of the element size.
 TEST(Multigrid, SymmetricPositiveAndIndependentOfSize) {
@@ -439,7 +440,7 @@ TEST(Multigrid, SymmetricPositiveAndIndependentOfSize) {
     for (int i = 0; i < n; ++i) a[i] = u(rng), b[i] = u(rng);
     mg.Apply(a, &ma);
     mg.Apply(b, &mb);
-    EXPECT_NEAR(a.dot(mb), b.dot(ma), 1e-10 * a.norm() * mb.norm());
+    EXPECT_NEAR(a.dot(mb), b.dot(ma), 1e-7 * a.norm() * mb.norm());
     EXPECT_GT(a.dot(ma), 0.0);
     EXPECT_GT(b.dot(mb), 0.0);
     // On 2 threads (the products run in parallel from 4096 unknowns or 65536 entries).

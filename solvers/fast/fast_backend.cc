@@ -165,23 +165,21 @@ void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& 
 // H is symmetric, so y_c = H(:, c) . p: each entry a gather over its column, in parallel
 // without races and in the same order on any number of threads; a 3x3 block costs one row
 // index instead of nine.
-namespace {
-template <class Value>
-void BlockProductOf(const Eigen::SparseMatrix<Value>& H, const Eigen::VectorXd& p, int threads,
-                    Eigen::VectorXd* y, int parallel_from) {
+void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
+                  Eigen::VectorXd* y, int parallel_from) {
   const int blocks = static_cast<int>(H.cols()) / 3;
   const int* outer = H.outerIndexPtr();
   const int* inner = H.innerIndexPtr();
-  const Value* values = H.valuePtr();
+  const double* values = H.valuePtr();
   const double* pp = p.data();
   y->resize(p.size());
   double* yy = y->data();
   auto column = [&](int b) {
     const int begin = outer[3 * b];
     const int stride = outer[3 * b + 1] - begin;
-    const Value* v0 = values + begin;
-    const Value* v1 = v0 + stride;
-    const Value* v2 = v1 + stride;
+    const double* v0 = values + begin;
+    const double* v1 = v0 + stride;
+    const double* v2 = v1 + stride;
     const int* rows = inner + begin;
     double s0 = 0.0, s1 = 0.0, s2 = 0.0;
     for (int k = 0; k < stride; k += 3) {
@@ -200,17 +198,6 @@ void BlockProductOf(const Eigen::SparseMatrix<Value>& H, const Eigen::VectorXd& 
   } else {
     for (int b = 0; b < blocks; ++b) column(b);
   }
-}
-}  // namespace
-
-void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from) {
-  BlockProductOf(H, p, threads, y, parallel_from);
-}
-
-void BlockProduct(const Eigen::SparseMatrix<float>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from) {
-  BlockProductOf(H, p, threads, y, parallel_from);
 }
 
 struct FastBackend::Impl {

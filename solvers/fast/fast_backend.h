@@ -37,10 +37,6 @@ class FastBackend : public Backend {
 // any thread count.
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
                   Eigen::VectorXd* y, int parallel_from = 8192);
-// The same with H's values in single precision (the multigrid preconditioner's copy); the
-// sums in double.
-void BlockProduct(const Eigen::SparseMatrix<float>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from = 8192);
 
 }  // namespace fast_backend
 }  // namespace femreg

@@ -88,15 +88,17 @@ class Multigrid {
 
  private:
   // The V-cycle reads its matrices in single precision: its products stream them from
-  // memory, and float halves the values' bytes. The vectors and every sum stay in double,
-  // and a matrix rounded to float is still symmetric, so the V-cycle is still a symmetric
-  // positive definite operator; what changes is the operator itself, by a relative 6e-8
-  // per entry, far less than what separates it from A^-1 (PCG in double solves with A
-  // itself). Level 0's system keeps the back end's layout (one row index per 3x3 vertex
-  // block: 5.3 bytes per entry); the coarse systems and the prolongators are stored as
-  // dense blocks between nodes (an aggregate's up to 6 unknowns, a vertex's 3), one row
-  // index per block: ~4.1 bytes per entry instead of 8 with an index per entry, and inner
-  // loops of fixed length.
+  // memory, and float halves the values' bytes. The vectors stay in double, and so do the
+  // sums below level 0; a matrix rounded to float is still symmetric, so what changes is
+  // the operator itself, by a relative 6e-8 per entry, far less than what separates it
+  // from A^-1 (PCG in double solves with A itself). Level 0's products also sum in float
+  // (FloatBlockProduct in the .cc: 4-lane sums, ~1.4x faster), which leaves the V-cycle
+  // symmetric to ~1e-6 rather than to round-off in double, still positive definite, and
+  // far inside what PCG tolerates at its 1e-2. Level 0's system keeps the back end's layout
+  // (one row index per 3x3 vertex block: 5.3 bytes per entry); the coarse systems and the
+  // prolongators are stored as dense blocks between nodes (an aggregate's up to 6
+  // unknowns, a vertex's 3), one row index per block: ~4.1 bytes per entry instead of 8
+  // with an index per entry, and inner loops of fixed length.
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
@@ -118,7 +120,7 @@ class Multigrid {
   // Level l's block-Jacobi inverses and lambda_max from A (its diagonal blocks' Frobenius
   // norms out); false if a diagonal block is not positive definite.
   bool PrepareSmoother(int l, const Eigen::SparseMatrix<double>& A, std::vector<double>* diagonal_norm);
-  void Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) const;
+  void Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y);
   void BlockJacobi(const Level& L, const Eigen::VectorXd& r, Eigen::VectorXd* z) const;
   // Chebyshev smoothing of A x = b at `level` from *x (zero_start: *x is 0).
   void Smooth(int level, bool zero_start);
@@ -127,6 +129,7 @@ class Multigrid {
   int threads_ = 1;
   std::vector<Level> levels_;
   Eigen::MatrixXd coarse_inverse_;  // the coarsest level's A^-1 (dense)
+  std::vector<float> v4_;           // level 0's product: its vector in float, 4 per vertex
 };
 
 }  // namespace fast_backend
