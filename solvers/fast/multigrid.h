@@ -83,22 +83,24 @@ class Multigrid {
     // From a column-major M with both partitions (the nodes' first unknowns, then the size).
     void Assign(const Eigen::SparseMatrix<double>& M, const std::vector<int>& row_nodes,
                 const std::vector<int>& col_nodes);
-    void Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) const;
+    void Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y);
+    std::vector<float> x_float;  // Multiply's x in single precision (with SSE)
   };
 
  private:
   // The V-cycle reads its matrices in single precision: its products stream them from
-  // memory, and float halves the values' bytes. The vectors stay in double, and so do the
-  // sums below level 0; a matrix rounded to float is still symmetric, so what changes is
-  // the operator itself, by a relative 6e-8 per entry, far less than what separates it
-  // from A^-1 (PCG in double solves with A itself). Level 0's products also sum in float
-  // (FloatBlockProduct in the .cc: 4-lane sums, ~1.4x faster), which leaves the V-cycle
-  // symmetric to ~1e-6 rather than to round-off in double, still positive definite, and
-  // far inside what PCG tolerates at its 1e-2. Level 0's system keeps the back end's layout
-  // (one row index per 3x3 vertex block: 5.3 bytes per entry); the coarse systems and the
-  // prolongators are stored as dense blocks between nodes (an aggregate's up to 6
-  // unknowns, a vertex's 3), one row index per block: ~4.1 bytes per entry instead of 8
-  // with an index per entry, and inner loops of fixed length.
+  // memory, and float halves the values' bytes. The vectors stay in double. A matrix
+  // rounded to float is still symmetric: what changes is the operator itself, by a
+  // relative 6e-8 per entry, far less than what separates it from A^-1 (PCG in double
+  // solves with A itself). With SSE the products also sum in float, 4 lanes at a time
+  // (FloatBlockProduct and GatherNodeFloat in the .cc), which leaves the V-cycle symmetric
+  // to ~1e-8 relative rather than to double round-off: still positive definite, and far
+  // inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g. AmgX's float
+  // preconditioner for double solves, does the same). Level 0's system keeps the back
+  // end's layout (one row index per 3x3 vertex block: 5.3 bytes per entry); the coarse
+  // systems and the prolongators are stored as dense blocks between nodes (an aggregate's
+  // up to 6 unknowns, a vertex's 3), one row index per block: ~4.1 bytes per entry instead
+  // of 8 with an index per entry, and inner loops of fixed length.
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
