@@ -6,7 +6,9 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <memory>
+#include <numeric>
 #include <random>
 
 #include "energy/problem.h"
@@ -34,10 +36,27 @@ struct Setup {
 };
 
 // neo_hookean: the elastic blocks are the neo-Hookean element's (no rotations held).
+// shuffled: the box's vertices numbered in random order, as a mesh generator's often are.
 std::unique_ptr<Setup> MakeSetup(RobustLoss loss, bool springs, bool fixed, bool contacts, uint64_t seed,
-                                 bool loads = false, int refine = 1, bool neo_hookean = false) {
+                                 bool loads = false, int refine = 1, bool neo_hookean = false,
+                                 bool shuffled = false) {
   auto s = std::make_unique<Setup>();
   s->mesh = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 5 * refine, 2 * refine, 2 * refine);
+  if (shuffled) {
+    std::vector<int> number(static_cast<size_t>(s->mesh.num_vertices()));
+    std::iota(number.begin(), number.end(), 0);
+    std::shuffle(number.begin(), number.end(), std::mt19937(static_cast<uint32_t>(seed)));
+    TetMesh renumbered;
+    renumbered.rest.resize(s->mesh.num_vertices(), 3);
+    for (int v = 0; v < s->mesh.num_vertices(); ++v) renumbered.rest.row(number[static_cast<size_t>(v)]) = s->mesh.rest.row(v);
+    renumbered.tets = s->mesh.tets;
+    for (int e = 0; e < renumbered.tets.rows(); ++e) {
+      for (int k = 0; k < 4; ++k) renumbered.tets(e, k) = number[static_cast<size_t>(s->mesh.tets(e, k))];
+    }
+    renumbered.region = s->mesh.region;
+    EXPECT_TRUE(FinalizeMesh(&renumbered).ok());
+    s->mesh = renumbered;
+  }
   ComputeLumpedMasses(&s->mesh, 500);
   Material material;
   material.youngs_modulus = 2e4;
@@ -676,28 +695,32 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
   }
 }
 
-// The parallel assembly (sets of 32768 3x3 blocks and more, split by vertex ranges: here
-// the 6400 elements) builds the serial system up to round-off: one Gauss-Newton
-// step, solved directly, lands in the same place on 1 and 2 threads. With anchors (their
-// rows and columns) and a robust loss.
+// The parallel assembly (sets of 32768 3x3 blocks and more, split into a region of vertices
+// per thread: here the 6400 elements) builds the serial system up to round-off: one
+// Gauss-Newton step, solved directly, lands in the same place on 1 and 2 threads. With
+// anchors (their rows and columns) and a robust loss; the box numbered along its length,
+// then in random order (where a split by vertex numbers left most elements straddling).
 TEST(FastBackend, TwoThreadsTakeTheSameStep) {
-  auto s = MakeSetup(RobustLoss::kHuber, true, true, false, 11, false, 4);
-  ASSERT_GE(s->model.num_elements(), 4096);
-  auto step = [&](int threads) {
-    BackendOptions options;
-    options.type = SolverBackend::kFast;
-    options.max_iterations = 1;
-    options.max_pcg_iterations = 0;
-    options.num_threads = threads;
-    std::unique_ptr<Backend> backend = MakeBackend(options);
-    Vertices x = s->mesh.rest;
-    EXPECT_TRUE(backend->Solve(s->problem, 0.0, &x).success);
-    return x;
-  };
-  const Vertices one = step(1), two = step(2);
-  const double moved = (one - s->mesh.rest).cwiseAbs().maxCoeff();
-  ASSERT_GT(moved, 1e-4);
-  EXPECT_LE((one - two).cwiseAbs().maxCoeff(), 1e-9 * moved);
+  for (bool shuffled : {false, true}) {
+    SCOPED_TRACE(shuffled ? "shuffled" : "ordered");
+    auto s = MakeSetup(RobustLoss::kHuber, true, true, false, 11, false, 4, false, shuffled);
+    ASSERT_GE(s->model.num_elements(), 4096);
+    auto step = [&](int threads) {
+      BackendOptions options;
+      options.type = SolverBackend::kFast;
+      options.max_iterations = 1;
+      options.max_pcg_iterations = 0;
+      options.num_threads = threads;
+      std::unique_ptr<Backend> backend = MakeBackend(options);
+      Vertices x = s->mesh.rest;
+      EXPECT_TRUE(backend->Solve(s->problem, 0.0, &x).success);
+      return x;
+    };
+    const Vertices one = step(1), two = step(2);
+    const double moved = (one - s->mesh.rest).cwiseAbs().maxCoeff();
+    ASSERT_GT(moved, 1e-4);
+    EXPECT_LE((one - two).cwiseAbs().maxCoeff(), 1e-9 * moved);
+  }
 }
 
 // A step whose Gauss-Newton gain (predicted along the kept factor's direction) is
