@@ -177,21 +177,8 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
   double* yy = y->data();
   auto column = [&](int b) {
     const int begin = outer[3 * b];
-    const int stride = outer[3 * b + 1] - begin;
-    const double* v0 = values + begin;
-    const double* v1 = v0 + stride;
-    const double* v2 = v1 + stride;
-    const int* rows = inner + begin;
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
-    for (int k = 0; k < stride; k += 3) {
-      const double* pa = pp + rows[k];
-      s0 += v0[k] * pa[0] + v0[k + 1] * pa[1] + v0[k + 2] * pa[2];
-      s1 += v1[k] * pa[0] + v1[k + 1] * pa[1] + v1[k + 2] * pa[2];
-      s2 += v2[k] * pa[0] + v2[k + 1] * pa[1] + v2[k + 2] * pa[2];
-    }
-    yy[3 * b] = s0;
-    yy[3 * b + 1] = s1;
-    yy[3 * b + 2] = s2;
+    BlockColumnSums(values + begin, outer[3 * b + 1] - begin, inner + begin,
+                    [pp](int row) { return pp + row; }, yy + 3 * b);
   };
   if (threads > 1 && blocks >= parallel_from) {
 #pragma omp parallel for schedule(static) num_threads(threads)

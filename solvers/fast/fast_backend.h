@@ -38,6 +38,26 @@ class FastBackend : public Backend {
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
                   Eigen::VectorXd* y, int parallel_from = 8192);
 
+// One vertex's three column sums in that layout, entry by entry: the column block's values
+// start at v0 (its three columns `stride` apart), `rows` its row indices (3a, 3a + 1, 3a + 2
+// per block), and at(3a) the address of the vector's three entries for row block a. (The
+// product above in double; the multigrid V-cycle's in float, where its SSE lanes stop.)
+template <class Value, class Sum, class At>
+void BlockColumnSums(const Value* v0, int stride, const int* rows, At at, Sum* s) {
+  const Value* v1 = v0 + stride;
+  const Value* v2 = v1 + stride;
+  Sum s0 = 0, s1 = 0, s2 = 0;
+  for (int k = 0; k < stride; k += 3) {
+    const auto* pa = at(rows[k]);
+    s0 += v0[k] * pa[0] + v0[k + 1] * pa[1] + v0[k + 2] * pa[2];
+    s1 += v1[k] * pa[0] + v1[k + 1] * pa[1] + v1[k + 2] * pa[2];
+    s2 += v2[k] * pa[0] + v2[k + 1] * pa[1] + v2[k + 2] * pa[2];
+  }
+  s[0] = s0;
+  s[1] = s1;
+  s[2] = s2;
+}
+
 }  // namespace fast_backend
 }  // namespace femreg
 

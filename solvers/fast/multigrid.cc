@@ -83,11 +83,11 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorX
     const int begin = outer[3 * b];
     const int stride = outer[3 * b + 1] - begin;
     const float* v0 = values + begin;
-    const float* v1 = v0 + stride;
-    const float* v2 = v1 + stride;
     const int* rows = inner + begin;
 #ifdef __SSE__
     if (lanes) {
+      const float* v1 = v0 + stride;
+      const float* v2 = v1 + stride;
       __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps(), s2 = _mm_setzero_ps();
       for (int k = 0; k < stride; k += 3) {
         const __m128 pa = _mm_loadu_ps(p + (rows[k] / 3) * 4);
@@ -106,16 +106,9 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorX
     }
 #endif
     (void)lanes;
-    float s0 = 0.0f, s1 = 0.0f, s2 = 0.0f;
-    for (int k = 0; k < stride; k += 3) {
-      const float* pa = p + (rows[k] / 3) * 4;
-      s0 += v0[k] * pa[0] + v0[k + 1] * pa[1] + v0[k + 2] * pa[2];
-      s1 += v1[k] * pa[0] + v1[k + 1] * pa[1] + v1[k + 2] * pa[2];
-      s2 += v2[k] * pa[0] + v2[k + 1] * pa[1] + v2[k + 2] * pa[2];
-    }
-    yy[3 * b] = s0;
-    yy[3 * b + 1] = s1;
-    yy[3 * b + 2] = s2;
+    float sums[3];
+    BlockColumnSums(v0, stride, rows, [p](int row) { return p + (row / 3) * 4; }, sums);
+    for (int j = 0; j < 3; ++j) yy[3 * b + j] = sums[j];
   };
   if (threads > 1 && blocks >= parallel_from) {
 #pragma omp parallel num_threads(threads)
