@@ -47,22 +47,21 @@ constexpr int64_t kParallelNonzeros = 65536;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
-// Level 0's product y = A v in single precision: A's float copy (the back end's layout:
-// both triangles, full 3x3 vertex blocks whose three columns share their rows), v rounded
-// once into `v4` (4 floats per vertex, the 4th 0), and each column's sum in float. With
-// SSE, a 3x3 block's column is one 4-lane multiply-add whose 4th lane reads the next stored
-// entry (times that 0; the lane is dropped from the sum, so even a non-finite entry there
-// changes nothing); the last vertex's third column, whose next entry is past the end, is
-// summed entry by entry. The V-cycle is an approximation of A^-1 to begin
-// with, and PCG, in double with A itself, corrects it (as mixed-precision AMG does, e.g.
-// AmgX's float preconditioner for double solves); what float sums cost is symmetry
-// beyond 1e-6 or so, which PCG does not see at its tolerance. Against the same product
+// Level 0's product y = A v in single precision: A's float copy (the back end's layout: both
+// triangles, full 3x3 vertex blocks whose three columns share their rows), v rounded once into
+// `v4` (4 floats per vertex, the 4th 0), and each column's sum in float. With SSE, a 3x3
+// block's column is one 4-lane multiply-add whose 4th lane reads the next stored entry (times
+// that 0; the lane is dropped from the sum, so even a non-finite entry there changes nothing);
+// the last vertex's third column, whose next entry is past the end, is summed entry by entry.
+// The V-cycle is an approximation of A^-1 to begin with, and PCG, in double with A itself,
+// corrects it (as mixed-precision AMG does, e.g. AmgX's float preconditioner for double
+// solves); what float sums cost is the V-cycle's symmetry beyond ~1e-8 relative
+// (tests/backend_test.cc), which PCG does not see at its tolerance. Against the same product
 // with double sums (and v in double), one thread, box meshes (50 products, 3 runs): 24.8k
 // vertices 2.2-2.4 -> 1.5-1.9 ms, 80k vertices 6.4-6.8 -> 4.6-5.1; a whole V-cycle
-// (bench/linear_solver_bench.cc MultigridCycle, one thread, medians of 7, 3 alternating
-// runs): 4k vertices 1.26-1.33 -> 1.02-1.12 ms, 64k (medians of 5, 2 runs) 43.5-46.6 ->
-// 36.1-38.7. Each column's sums run in a fixed order: the same result on any number of
-// threads.
+// (bench/linear_solver_bench.cc MultigridCycle, one thread, medians of 7, 3 alternating runs):
+// 4k vertices 1.26-1.33 -> 1.02-1.12 ms, 64k (medians of 5, 2 runs) 43.5-46.6 -> 36.1-38.7.
+// Each column's sums run in a fixed order: the same result on any number of threads.
 void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorXd& v, int threads,
                        int parallel_from, std::vector<float>* v4, Eigen::VectorXd* y) {
   const int blocks = static_cast<int>(A.cols()) / 3;
