@@ -147,30 +147,25 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
   return lambda > 0.0 ? lambda : 1.0;
 }
 
-// One column node's gather: y_j = sum over its blocks B (R x C, column-major, R and C
-// fixed or, with 0, given) of B(:, j) . x(rows of B).
-template <int R, int C>
+// One column node's gather, any block shapes, in double: y_j = sum over its blocks B
+// (row_count x nc, column-major) of B(:, j) . x(rows of B).
 void GatherNode(const float* values, const int* value_at, const int* row_first, const int* row_count,
-                int begin, int end, int c_size, const double* x, double* y) {
-  const int nc = C > 0 ? C : c_size;
-  double acc[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-  for (int k = begin; k < end; ++k) {
-    const float* B = values + value_at[k];
-    const double* xr = x + row_first[k];
-    const int nr = R > 0 ? R : row_count[k];
-    for (int j = 0; j < nc; ++j) {
-      double s = 0.0;
-      for (int i = 0; i < nr; ++i) s += static_cast<double>(B[j * nr + i]) * xr[i];
-      acc[j] += s;
+                int begin, int end, int nc, const double* x, double* y) {
+  for (int j = 0; j < nc; ++j) {
+    double s = 0.0;
+    for (int k = begin; k < end; ++k) {
+      const float* B = values + value_at[k] + j * row_count[k];
+      const double* xr = x + row_first[k];
+      for (int i = 0; i < row_count[k]; ++i) s += static_cast<double>(B[i]) * xr[i];
     }
+    y[j] = s;
   }
-  for (int j = 0; j < nc; ++j) y[j] = acc[j];
 }
 
-#ifdef __SSE__
-// GatherNode's fixed shapes in single precision: x in float, each block's column one 4-lane
-// multiply-add per 4 of its rows (6 rows: 4 + 2 lanes; 3 rows: 3 lanes, the 4th reads the
-// next stored value and is dropped), the column's sum in float (see FloatBlockProduct:
+// The shapes the hierarchy makes (R x C blocks, every block of the column node alike) in
+// single precision: x in float and the column's sum in float; with SSE, each block's column
+// one 4-lane multiply-add per 4 of its rows (6 rows: 4 + 2 lanes; 3 rows: 3 lanes, the 4th
+// reads the next stored value and is dropped), else entry by entry (see FloatBlockProduct:
 // ~1e-7 relative, as the values' own rounding). `values` holds 4 more floats than its
 // blocks (the last block's 4th lane). With FloatBlockProduct at level 0, a whole V-cycle
 // (bench/linear_solver_bench.cc MultigridCycle, medians of 5, 3 alternating runs against
@@ -180,6 +175,7 @@ template <int R, int C>
 void GatherNodeFloat(const float* values, const int* value_at, const int* row_first, int begin, int end,
                      const float* x, double* y) {
   static_assert((R == 3 || R == 6) && C >= 1 && C <= 6, "the shapes the hierarchy makes");
+#ifdef __SSE__
   __m128 acc[C];
   for (int j = 0; j < C; ++j) acc[j] = _mm_setzero_ps();
   for (int k = begin; k < end; ++k) {
@@ -203,8 +199,18 @@ void GatherNodeFloat(const float* values, const int* value_at, const int* row_fi
     _mm_store_ps(t, acc[j]);
     y[j] = static_cast<double>(R == 6 ? (t[0] + t[1]) + (t[2] + t[3]) : (t[0] + t[1]) + t[2]);
   }
-}
+#else
+  float acc[C] = {};
+  for (int k = begin; k < end; ++k) {
+    const float* B = values + value_at[k];
+    const float* xr = x + row_first[k];
+    for (int j = 0; j < C; ++j) {
+      for (int i = 0; i < R; ++i) acc[j] += B[j * R + i] * xr[i];
+    }
+  }
+  for (int j = 0; j < C; ++j) y[j] = acc[j];
 #endif
+}
 
 }  // namespace
 
@@ -277,72 +283,41 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
 void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) {
   y->resize(cols);
   const int nodes = static_cast<int>(col_begin.size()) - 1;
+  const int n = static_cast<int>(x.size());
   const double* xx = x.data();
   double* yy = y->data();
-#ifdef __SSE__
-  x_float.resize(static_cast<size_t>(x.size()));
+  x_float.resize(static_cast<size_t>(n));
   float* xf = x_float.data();
-  const int n = static_cast<int>(x.size());
-#endif
+  const float* v = values.data();
+  const int* at = value_at.data();
+  const int* first = row_first.data();
+  const int* count = row_count.data();
   auto node = [&](int c) {
     const int c0 = col_begin[static_cast<size_t>(c)], nc = col_begin[static_cast<size_t>(c) + 1] - c0;
     const int b = block_begin[static_cast<size_t>(c)], e = block_begin[static_cast<size_t>(c) + 1];
-    if (nc > 6) {  // not made here (nodes have up to 6 unknowns); kept correct all the same
-      for (int j = 0; j < nc; ++j) {
-        double s = 0.0;
-        for (int k = b; k < e; ++k) {
-          const float* B = values.data() + value_at[static_cast<size_t>(k)];
-          const int nr = row_count[static_cast<size_t>(k)];
-          for (int i = 0; i < nr; ++i) s += static_cast<double>(B[j * nr + i]) * xx[row_first[static_cast<size_t>(k)] + i];
-        }
-        yy[c0 + j] = s;
-      }
-      return;
-    }
-    // Fixed-length loops where every block of the column node has the same rows (a coarse
-    // level's 6, the vertices' 3), with SSE in single precision; else the general loop.
+    // Where every block of the column node has the same rows (a coarse level's 6, the
+    // vertices' 3): fixed loops in single precision; else the general loop in double.
     const int nr = rows_of[static_cast<size_t>(c)];
-    const bool uniform = nr > 0;
-    const float* v = values.data();
-    const int* at = value_at.data();
-    const int* first = row_first.data();
-    const int* count = row_count.data();
-#ifdef __SSE__
-    if (uniform && nr == 6 && nc == 6) {
+    if (nr == 6 && nc == 6) {
       GatherNodeFloat<6, 6>(v, at, first, b, e, xf, yy + c0);
-    } else if (uniform && nr == 3 && nc == 6) {
+    } else if (nr == 3 && nc == 6) {
       GatherNodeFloat<3, 6>(v, at, first, b, e, xf, yy + c0);
-    } else if (uniform && nr == 6 && nc == 3) {
+    } else if (nr == 6 && nc == 3) {
       GatherNodeFloat<6, 3>(v, at, first, b, e, xf, yy + c0);
     } else {
-      GatherNode<0, 0>(v, at, first, count, b, e, nc, xx, yy + c0);
+      GatherNode(v, at, first, count, b, e, nc, xx, yy + c0);
     }
-#else
-    if (uniform && nr == 6 && nc == 6) {
-      GatherNode<6, 6>(v, at, first, count, b, e, nc, xx, yy + c0);
-    } else if (uniform && nr == 3 && nc == 6) {
-      GatherNode<3, 6>(v, at, first, count, b, e, nc, xx, yy + c0);
-    } else if (uniform && nr == 6 && nc == 3) {
-      GatherNode<6, 3>(v, at, first, count, b, e, nc, xx, yy + c0);
-    } else {
-      GatherNode<0, 0>(v, at, first, count, b, e, nc, xx, yy + c0);
-    }
-#endif
   };
   if (threads > 1 && (cols >= kParallelUnknowns || static_cast<int64_t>(values.size()) >= kParallelNonzeros)) {
 #pragma omp parallel num_threads(threads)
     {
-#ifdef __SSE__
 #pragma omp for schedule(static)
       for (int i = 0; i < n; ++i) xf[i] = static_cast<float>(xx[i]);
-#endif
 #pragma omp for schedule(static)
       for (int c = 0; c < nodes; ++c) node(c);
     }
   } else {
-#ifdef __SSE__
     for (int i = 0; i < n; ++i) xf[i] = static_cast<float>(xx[i]);
-#endif
     for (int c = 0; c < nodes; ++c) node(c);
   }
 }
@@ -682,6 +657,7 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
       if (!coarse_inverse_.allFinite()) coarse_inverse_.resize(0, 0);
     }
   }
+  if (levels_.size() > 1) last.A = SparseMatrix();  // A_b from here on, as above it
   return true;
 }
 

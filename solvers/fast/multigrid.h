@@ -84,7 +84,7 @@ class Multigrid {
     void Assign(const Eigen::SparseMatrix<double>& M, const std::vector<int>& row_nodes,
                 const std::vector<int>& col_nodes);
     void Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y);
-    std::vector<float> x_float;  // Multiply's x in single precision (with SSE)
+    std::vector<float> x_float;  // Multiply's x in single precision
   };
 
  private:
