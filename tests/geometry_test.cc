@@ -315,6 +315,32 @@ TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
   }
 }
 
+// A triangle touches vertex v's closed one-ring when a corner is v or shares a triangle with
+// v: every (vertex, triangle) pair of a closed surface against that definition.
+TEST(SurfaceIndex, TouchesRingIsSharingACornerWithTheOneRing) {
+  Vertices pos;
+  Triangles T;
+  UvSphere(&pos, &T);
+  const SurfaceIndex index(pos, T);
+  int touching = 0;
+  for (int v = 0; v < pos.rows(); ++v) {
+    std::set<int> ring = {v};
+    for (int f = 0; f < T.rows(); ++f) {
+      if (T(f, 0) == v || T(f, 1) == v || T(f, 2) == v) ring.insert({T(f, 0), T(f, 1), T(f, 2)});
+    }
+    for (int f = 0; f < T.rows(); ++f) {
+      const bool expected = ring.count(T(f, 0)) || ring.count(T(f, 1)) || ring.count(T(f, 2));
+      ASSERT_EQ(index.TouchesRing(v, f), expected) << "vertex " << v << ", triangle " << f;
+      touching += expected;
+    }
+  }
+  EXPECT_GT(touching, 0);
+  EXPECT_LT(touching, pos.rows() * T.rows() / 4);  // a ring is a small part of the sphere
+  EXPECT_FALSE(index.TouchesRing(0, -1));
+  EXPECT_FALSE(index.TouchesRing(0, static_cast<int>(T.rows())));
+  EXPECT_FALSE(index.TouchesRing(static_cast<int>(pos.rows()), 0));
+}
+
 // Warm-started from the hit of an earlier surface (moved by up to a third of an edge, as
 // between outer iterations), or from a triangle two rings away, the walk finds the closest
 // point; from a start < 0 it is Closest.

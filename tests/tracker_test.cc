@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -13,6 +14,9 @@
 #include "femreg/io.h"
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
+#include "geometry/nearest.h"
+#include "registration/correspondences.h"
+#include "registration/tracker_state.h"
 
 namespace femreg {
 namespace {
@@ -225,6 +229,49 @@ TEST(Tracker, CloudEqualToRestSurfaceLeavesMeshAtRest) {
     EXPECT_TRUE(summary.IsSolutionUsable());
     EXPECT_LT((tracker->vertices(0) - mesh.rest).cwiseAbs().maxCoeff(), 1e-9) << summary.FullReport();
     EXPECT_LT(summary.final.total(), 1e-12);
+  }
+}
+
+// A model vertex pulls towards its nearest cloud point only if that point's own closest
+// surface point is next to the vertex: two tetrahedra 2 mm apart, a cloud on the second
+// one's surface only. The first one's vertices are nearer to that cloud than the trim and
+// the gate, but its points are the second's; with data.reciprocity 0 they pull across.
+TEST(Correspondences, AVertexDoesNotPullTowardsAPointAnotherPartIsCloserTo) {
+  TrackerState state;
+  state.num_vertices = 8;
+  state.x.resize(8, 3);
+  state.x << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01,  //
+      0.012, 0, 0, 0.022, 0, 0, 0.012, 0.01, 0, 0.012, 0, 0.01;
+  state.surface.resize(8, 3);
+  state.surface << 0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3, 4, 6, 5, 4, 5, 7, 4, 7, 6, 5, 6, 7;
+  state.surface_vertices = {0, 1, 2, 3, 4, 5, 6, 7};
+  state.vertex_object.assign(8, 0);
+  FrameCloud fc;  // the second tetrahedron's corners and face centroids
+  fc.cloud.points.resize(8, 3);
+  for (int v = 0; v < 4; ++v) fc.cloud.points.row(v) = state.x.row(4 + v);
+  for (int f = 0; f < 4; ++f) {
+    fc.cloud.points.row(4 + f) = (state.x.row(state.surface(4 + f, 0)) + state.x.row(state.surface(4 + f, 1)) +
+                                  state.x.row(state.surface(4 + f, 2))) / 3.0;
+  }
+  fc.index = std::make_unique<PointIndex>(fc.cloud.points);
+  const SurfaceIndex surface(state.x, state.surface);
+  for (const double reciprocity : {5.0, 0.0}) {
+    state.options.data.reciprocity = reciprocity;
+    std::vector<DataPair> pairs;
+    PairCounts counts;
+    FindPairs(state, fc, surface, 1, &pairs, &counts);
+    std::vector<int> pulled;
+    for (const DataPair& p : pairs) {
+      if (p.num_vertices == 1) pulled.push_back(p.vertices[0]);
+    }
+    std::sort(pulled.begin(), pulled.end());
+    if (reciprocity > 0) {
+      EXPECT_EQ(pulled, (std::vector<int>{4, 5, 6, 7}));
+      EXPECT_EQ(counts.trimmed, 4);
+    } else {
+      EXPECT_EQ(pulled, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}));
+    }
+    EXPECT_EQ(counts.cloud_to_model, 8);
   }
 }
 

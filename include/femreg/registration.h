@@ -112,11 +112,14 @@ struct DataTermOptions {
   // direction estimated from the side of the model the cloud lies on (none when the cloud
   // surrounds the model). auto_visibility false: no such test.
   bool auto_visibility = true;
-  // Reciprocity trim, with or without a camera: a model vertex whose nearest cloud point is
+  // Reciprocity, with or without a camera: a model vertex whose nearest cloud point is
   // farther than max(reciprocity * (the cloud's median point spacing), loss_scale) does not
-  // pull (model->cloud); the cloud still pulls the model (cloud->model). 0 = off. Not
-  // applied while fracture is on (effects.fracture): an opening crack is model surface with
-  // no cloud point near, and its pull is what separates the pieces.
+  // pull (model->cloud); the cloud still pulls the model (cloud->model). Nor does a vertex
+  // whose nearest cloud point has its own closest surface point away from the vertex (not
+  // on a triangle touching the vertex's one-ring): another part of the model is that
+  // point's. 0 = both off. Not applied while fracture is on (effects.fracture): an opening
+  // crack is model surface with no cloud point near, and its pull is what separates the
+  // pieces.
   double reciprocity = 5.0;
   // From this outer iteration on (counting from 0), the set of surface vertices with a
   // model->cloud pair is held for the rest of the frame: each keeps pulling to its nearest

@@ -126,6 +126,22 @@ void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, Tested* teste
   }
 }
 
+bool SurfaceIndex::TouchesRing(int v, int triangle) const {
+  if (v < 0 || v + 1 >= static_cast<int>(tri_offsets_.size()) || triangle < 0 ||
+      triangle >= triangles_.rows()) {
+    return false;
+  }
+  for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
+    const int f = tri_list_[j];
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        if (triangles_(f, a) == triangles_(triangle, b)) return true;
+      }
+    }
+  }
+  return false;
+}
+
 SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int start) const {
   if (start < 0 || start >= triangles_.rows()) return Closest(query);
   Hit best;

@@ -55,6 +55,9 @@ class SurfaceIndex {
   // Closest while the query's closest triangle is within reach of start's rings, without
   // the k-nearest search. start < 0 (or out of range): Closest(query).
   Hit ClosestFrom(const Eigen::Vector3d& query, int start) const;
+  // Whether `triangle` touches vertex v's closed one-ring: one of its corners is v or shares
+  // a triangle with v. v must be a vertex of `positions` (false for one on no triangle).
+  bool TouchesRing(int v, int triangle) const;
 
  private:
   struct Tested;
