@@ -412,6 +412,8 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("max_distance", &DataTermOptions::max_distance)
       .def_readwrite("loss_scale", &DataTermOptions::loss_scale)
       .def_readwrite("visibility", &DataTermOptions::visibility)
+      .def_readwrite("auto_visibility", &DataTermOptions::auto_visibility)
+      .def_readwrite("reciprocity", &DataTermOptions::reciprocity)
       .def_readwrite("cloud_stride", &DataTermOptions::cloud_stride)
       .def_readwrite("hold_pairs_after", &DataTermOptions::hold_pairs_after);
   EnumProperty(data, "loss", &DataTermOptions::loss, "data.loss",

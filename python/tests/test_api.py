@@ -41,6 +41,10 @@ def test_bad_shapes_and_names_raise_value_error():
     assert options.solver.preconditioner == "multigrid"
     with pytest.raises(ValueError, match="solver.preconditioner: unknown value 'amg'"):
         options.solver.preconditioner = "amg"
+    # The model->cloud tests of partial views (README, "Partial views and visibility").
+    assert options.data.auto_visibility and options.data.reciprocity == 5.0
+    options.data.reciprocity = 0.0
+    assert options.data.reciprocity == 0.0
     with pytest.raises(IndexError):
         tracker.vertices(1)
     # Nothing was tracked by the failed calls.
