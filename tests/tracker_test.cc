@@ -255,23 +255,28 @@ TEST(Correspondences, AVertexDoesNotPullTowardsAPointAnotherPartIsCloserTo) {
   }
   fc.index = std::make_unique<PointIndex>(fc.cloud.points);
   const SurfaceIndex surface(state.x, state.surface);
-  for (const double reciprocity : {5.0, 0.0}) {
-    state.options.data.reciprocity = reciprocity;
-    std::vector<DataPair> pairs;
-    PairCounts counts;
-    FindPairs(state, fc, surface, 1, &pairs, &counts);
-    std::vector<int> pulled;
-    for (const DataPair& p : pairs) {
-      if (p.num_vertices == 1) pulled.push_back(p.vertices[0]);
+  // With cloud_stride 3 most nearest points have no cloud->model hit to reuse: their closest
+  // surface point is searched for the test.
+  for (const int stride : {1, 3}) {
+    for (const double reciprocity : {5.0, 0.0}) {
+      state.options.data.reciprocity = reciprocity;
+      state.options.data.cloud_stride = stride;
+      std::vector<DataPair> pairs;
+      PairCounts counts;
+      FindPairs(state, fc, surface, 1, &pairs, &counts);
+      std::vector<int> pulled;
+      for (const DataPair& p : pairs) {
+        if (p.num_vertices == 1) pulled.push_back(p.vertices[0]);
+      }
+      std::sort(pulled.begin(), pulled.end());
+      if (reciprocity > 0) {
+        EXPECT_EQ(pulled, (std::vector<int>{4, 5, 6, 7})) << "stride " << stride;
+        EXPECT_EQ(counts.trimmed, 4) << "stride " << stride;
+      } else {
+        EXPECT_EQ(pulled, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7})) << "stride " << stride;
+      }
+      EXPECT_EQ(counts.cloud_to_model, stride == 1 ? 8 : 3) << "stride " << stride;
     }
-    std::sort(pulled.begin(), pulled.end());
-    if (reciprocity > 0) {
-      EXPECT_EQ(pulled, (std::vector<int>{4, 5, 6, 7}));
-      EXPECT_EQ(counts.trimmed, 4);
-    } else {
-      EXPECT_EQ(pulled, (std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7}));
-    }
-    EXPECT_EQ(counts.cloud_to_model, 8);
   }
 }
 
