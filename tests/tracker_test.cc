@@ -235,7 +235,8 @@ TEST(Tracker, CloudEqualToRestSurfaceLeavesMeshAtRest) {
 // A model vertex pulls towards its nearest cloud point only if that point's own closest
 // surface point is next to the vertex: two tetrahedra 2 mm apart, a cloud on the second
 // one's surface only. The first one's vertices are nearer to that cloud than the trim and
-// the gate, but its points are the second's; with data.reciprocity 0 they pull across.
+// the gate, but its points are the second's; with reciprocity off (no trim: data.reciprocity
+// 0 or fracture on) they pull across.
 TEST(Correspondences, AVertexDoesNotPullTowardsAPointAnotherPartIsCloserTo) {
   TrackerState state;
   state.num_vertices = 8;
@@ -261,6 +262,8 @@ TEST(Correspondences, AVertexDoesNotPullTowardsAPointAnotherPartIsCloserTo) {
     for (const double reciprocity : {5.0, 0.0}) {
       state.options.data.reciprocity = reciprocity;
       state.options.data.cloud_stride = stride;
+      // As PrepareFrameCloud sets it: 20 mm, past every distance here; off without reciprocity.
+      fc.trim = reciprocity > 0 ? 0.02 : std::numeric_limits<double>::infinity();
       std::vector<DataPair> pairs;
       PairCounts counts;
       FindPairs(state, fc, surface, 1, &pairs, &counts);

@@ -346,7 +346,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     const int ns = static_cast<int>(state.surface_vertices.size());
     std::vector<int> nearest(static_cast<size_t>(ns), -1);
     std::vector<double> dist2(static_cast<size_t>(ns), 0.0);
-    // Reciprocity (data.reciprocity > 0; off with fracture, as the trim): a vertex pulls
+    // Reciprocity (with the trim: data.reciprocity > 0, no fracture): a vertex pulls
     // towards its nearest cloud point only if that point's own closest surface point is
     // next to the vertex (on a triangle touching the vertex's one-ring). Where another part
     // of the model is closer to the point (a thin, partly seen hand beside the body it is
@@ -360,7 +360,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     // of the body, and a distance that rejected their pairs (one mean edge) also rejected
     // pairs of a model still an edge away from its cloud (occlusion 1.37 -> 2.15 mm). Two
     // rings halved the gain on the armadillo (0.98 mm), four left little of it.
-    const bool mutual = data.reciprocity > 0 && state.fracture == nullptr;
+    const bool mutual = std::isfinite(fc.trim);  // the frame's reciprocity is on
     std::vector<char> foreign(static_cast<size_t>(mutual ? ns : 0), 0);
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int i = 0; i < ns; ++i) {

@@ -45,7 +45,9 @@ struct FrameCloud {
   Eigen::VectorXd weights;  // #P: the input points each point stands for (all 1 unless subsampled)
   std::unique_ptr<PointIndex> index;
   double spacing = 0.0;     // m: median distance from a point to its nearest other point
-  double trim = std::numeric_limits<double>::infinity();  // m: reciprocity trim (inf = off)
+  // m: the reciprocity trim; inf = reciprocity off (data.reciprocity 0, or fracture on), also
+  // its one-ring test (FindPairs).
+  double trim = std::numeric_limits<double>::infinity();
   View view = View::kNone;
   // kCamera, kViewpoint: the sensor's position; kDirection: the unit direction towards it.
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();
