@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "femreg/geometry.h"
+#include "parallel/threads.h"
 
 namespace femreg {
 
@@ -308,7 +309,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
   const bool view = fc.view != FrameCloud::View::kNone;
   const Eigen::MatrixXd normals = (view || plane) ? state.VertexNormals() : Eigen::MatrixXd();
   const LabelSplit labels(state, cloud);
-  const int threads = std::max(1, num_threads);
+  const int threads = ResolveThreadCount(num_threads);
 
   // Each cloud point's closest surface point (every cloud_stride-th point), first: the
   // cloud->model pairs, and the model->cloud pairs' reciprocity. Points without an
@@ -486,7 +487,7 @@ void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& p
     if (cloud_index != nullptr && cloud_index->size() > 0) {
       const int ns = static_cast<int>(o.mesh.surface_vertices.size());
       Eigen::VectorXd& residuals = state->residuals[i];
-#pragma omp parallel for num_threads(std::max(1, num_threads)) schedule(static)
+#pragma omp parallel for num_threads(ResolveThreadCount(num_threads)) schedule(static)
       for (int j = 0; j < ns; ++j) {
         const int v = o.mesh.surface_vertices[static_cast<size_t>(j)];
         double d2 = 0.0;

@@ -102,7 +102,8 @@ class ModelIndex {
 // none. fc->cloud and fc->weights must be set.
 void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc);
 
-// The pairs at state.x (#V by 3), with queries on num_threads OpenMP threads. A point
+// The pairs at state.x (#V by 3), with queries on num_threads OpenMP threads (0: the
+// machine's hardware threads, as solver.num_threads). A point
 // whose label names an object pairs with that object only; the other points of a labelled
 // cloud pair only with the objects that have no label, and are ignored when every object
 // has one. `surface` indexes the whole surface at state.x (ModelIndex). `warm`, if not
@@ -122,7 +123,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
                bool freeze = false);
 
 // The frame's per-vertex outputs (state.residuals, state.observed) and each object's
-// mesh.x from state.x. cloud_index may be null (no data).
+// mesh.x from state.x. cloud_index may be null (no data). num_threads as in FindPairs.
 void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs,
                    TrackerState* state, int num_threads = 1);
 
