@@ -695,6 +695,68 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
   }
 }
 
+// Supernodes of many rows are factorized in tiles, those of the top on the whole team. With
+// tiles of 4 and 7 rows on a beam (most supernodes tiled, panels of several widths, the
+// top's tasks shared among 2 and 3 threads): the solves match CHOLMOD's, the factor is the
+// same on every thread count, and a matrix that fails in the last supernode (the root, in
+// the top) is refused on every thread count.
+TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{20, 5e4}}, 1.0);
+  const int n = static_cast<int>(H.rows());
+  fast_backend::CholmodFactor exact;
+  exact.setMode(Eigen::CholmodSupernodalLLt);
+  exact.compute(H);
+  ASSERT_EQ(exact.info(), Eigen::Success);
+  fast_backend::CholmodFactor symbolic;
+  symbolic.setMode(Eigen::CholmodSupernodalLLt);
+  symbolic.analyzePattern(H);
+  ASSERT_NE(symbolic.raw(), nullptr);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd b(n);
+  for (int i = 0; i < n; ++i) b[i] = u(rng);
+  const Eigen::VectorXd expected = exact.solve(b);
+  const double scale = expected.lpNorm<Eigen::Infinity>();
+  // Not positive definite in its last pivot: the variable eliminated last, made negative.
+  const int last = static_cast<const int*>(symbolic.raw()->Perm)[n - 1];
+  Eigen::SparseMatrix<double> indefinite = H;
+  indefinite.coeffRef(last, last) = -1e9;
+  const ScopedThreads one_blas_thread(1);
+  for (int tile : {4, 7}) {
+    std::vector<float> first;
+    for (int threads : {1, 2, 3}) {
+      SCOPED_TRACE(::testing::Message() << "tiles of " << tile << " rows, " << threads << " threads");
+      fast_backend::SupernodalSolve<double> in_double;
+      in_double.set_tile_rows(tile);
+      ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, true, threads));
+      EXPECT_GT(in_double.tiled_supernodes(), 0);
+      Eigen::VectorXd x;
+      in_double.Solve(b, &x);
+      EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+      fast_backend::SupernodalSolve<float> in_float;
+      in_float.set_tile_rows(tile);
+      ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, true, threads));
+      Eigen::VectorXd y;
+      in_float.Solve(b, &y);
+      EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 3e-3 * scale);
+      if (threads > 1) {  // a top, run by the team
+        EXPECT_GT(in_float.serial_fraction(), 0.0);
+        EXPECT_LT(in_float.serial_fraction(), 1.0);
+      }
+      if (threads == 1) {
+        first = in_float.values();
+      } else {
+        EXPECT_TRUE(in_float.values() == first) << "another factor";
+      }
+      EXPECT_FALSE(in_double.Factorize(*symbolic.raw(), indefinite, false, threads));
+      EXPECT_FALSE(in_double.loaded());
+      ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, false, threads));
+      in_double.Solve(b, &x);
+      EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+    }
+  }
+}
+
 // The parallel assembly (sets of 32768 3x3 blocks and more, split into a region of vertices
 // per thread: here the 6400 elements) builds the serial system up to round-off: one
 // Gauss-Newton step, solved directly, lands in the same place on 1 and 2 threads. With

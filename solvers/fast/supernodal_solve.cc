@@ -76,6 +76,17 @@ inline void GemmNT(int m, int n, int k, const T* a, int lda, const T* b, int ldb
   }
 }
 
+// c (m x n) -= a b^T, a m x k, b n x k.
+template <class T>
+inline void GemmNTSubtract(int m, int n, int k, const T* a, int lda, const T* b, int ldb, T* c, int ldc) {
+  const T minus_one = -1, one = 1;
+  if constexpr (std::is_same_v<T, float>) {
+    sgemm_("N", "T", &m, &n, &k, &minus_one, a, &lda, b, &ldb, &one, c, &ldc);
+  } else {
+    dgemm_("N", "T", &m, &n, &k, &minus_one, a, &lda, b, &ldb, &one, c, &ldc);
+  }
+}
+
 // Cuts the supernodal elimination tree for `threads` threads: subtrees grouped into one
 // set per thread (owner[s] = its thread) and the rest, the top (owner -1), which runs on one
 // thread. Starting from the roots, the heaviest subtree is split (its root goes to the top,
@@ -359,6 +370,148 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* ma
 }
 
 template <class Scalar>
+bool SupernodalSolve<Scalar>::Tiled(int s) const {
+  return pi_[s + 1] - pi_[s] >= 2 * tile_rows_;
+}
+
+template <class Scalar>
+int SupernodalSolve<Scalar>::tiled_supernodes() const {
+  int count = 0;
+  for (int s = 0; s + 1 < static_cast<int>(super_.size()); ++s) count += Tiled(s) ? 1 : 0;
+  return count;
+}
+
+template <class Scalar>
+int SupernodalSolve<Scalar>::TileRows(int s) const {
+  const int nrow = pi_[s + 1] - pi_[s];
+  const int even = (nrow + kMaxTiles - 1) / kMaxTiles;
+  return (even + tile_rows_ - 1) / tile_rows_ * tile_rows_;  // a multiple of tile_rows_
+}
+
+template <class Scalar>
+int SupernodalSolve<Scalar>::TiledPhases(int s) const {
+  const int ncol = super_[s + 1] - super_[s], R = TileRows(s);
+  return 2 + 3 * ((ncol + R - 1) / R);
+}
+
+// Phase 0: A's entries (1 task); 1: the descendants' updates, one task per row tile; then
+// per panel p of tile_rows_ columns, 2 + 3p: its diagonal block's Cholesky factor (1 task),
+// 3 + 3p: the rows below it solved, 4 + 3p: the columns right of it updated (a task per
+// chunk of those rows: the rest of the panel's tile, then each tile below).
+template <class Scalar>
+int SupernodalSolve<Scalar>::TiledTasks(int s, int phase) const {
+  const int R = TileRows(s);
+  const int ncol = super_[s + 1] - super_[s], nrow = pi_[s + 1] - pi_[s];
+  const int tiles = (nrow + R - 1) / R;
+  if (phase == 0) return 1;
+  if (phase == 1) return tiles;
+  const int p = (phase - 2) / 3;
+  if ((phase - 2) % 3 == 0) return 1;
+  const int below = std::min(ncol, (p + 1) * R);  // the first row below the panel's diagonal block
+  return below < nrow ? tiles - below / R : 0;
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::TiledTask(int s, int phase, int task, const double* a, int* map,
+                                        Scalar* c) {
+  const int R = TileRows(s);
+  const int k1 = super_[s], ncol = super_[s + 1] - k1, nrow = pi_[s + 1] - pi_[s];
+  const int* rows = rows_.data() + pi_[s];
+  Scalar* L = values_.data() + px_[s];
+  if (phase == 0) {
+    std::fill(L, L + static_cast<int64_t>(nrow) * ncol, Scalar(0));
+    for (int64_t e = a_start_[s]; e < a_start_[s + 1]; ++e) {
+      values_[static_cast<size_t>(a_dst_[static_cast<size_t>(e)])] =
+          static_cast<Scalar>(a[a_src_[static_cast<size_t>(e)]]);
+    }
+    for (int i = 0; i < nrow; ++i) map[rows[i]] = i;
+    return true;
+  }
+  if (phase == 1) {
+    // The updates of the rows [t0, t1), in ascending descendant as FactorizeSupernode.
+    const int t0 = task * R, t1 = std::min(nrow, t0 + R);
+    for (int u = update_start_[s]; u < update_start_[s + 1]; ++u) {
+      const int d = update_d_[static_cast<size_t>(u)];
+      const int r1 = update_r1_[static_cast<size_t>(u)], r2 = update_r2_[static_cast<size_t>(u)];
+      const int dcol = super_[d + 1] - super_[d], drow = pi_[d + 1] - pi_[d];
+      const int* drows = rows_.data() + pi_[d] + r1;
+      const Scalar* D = values_.data() + px_[d] + r1;
+      const int m = drow - r1, n = r2 - r1;
+      // The update's rows [ilo, ihi) land in the tile (its rows ascend, so do their places).
+      const int ilo = static_cast<int>(
+          std::partition_point(drows, drows + m, [&](int row) { return map[row] < t0; }) - drows);
+      const int ihi = static_cast<int>(
+          std::partition_point(drows + ilo, drows + m, [&](int row) { return map[row] < t1; }) - drows);
+      const int jn = std::min(n, ihi);  // columns j <= i
+      if (ilo >= ihi) continue;
+      if (static_cast<int64_t>(m) * n * dcol < kBlasUpdate) {
+        for (int j = 0; j < jn; ++j) {
+          Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
+          const int i0 = std::max(j, ilo);
+          for (int i = i0; i < ihi; ++i) c[i] = 0;
+          for (int k = 0; k < dcol; ++k) {
+            const Scalar* column = D + static_cast<int64_t>(k) * drow;
+            const Scalar djk = column[j];
+            for (int i = i0; i < ihi; ++i) c[i] += column[i] * djk;
+          }
+          for (int i = i0; i < ihi; ++i) target[map[drows[i]]] -= c[i];
+        }
+      } else {
+        const int mt = ihi - ilo;
+        GemmNT(mt, jn, dcol, D + ilo, drow, D, drow, c, mt);
+        for (int j = 0; j < jn; ++j) {
+          Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
+          const Scalar* cj = c + static_cast<int64_t>(j) * mt;
+          for (int i = std::max(j, ilo); i < ihi; ++i) target[map[drows[i]]] -= cj[i - ilo];
+        }
+      }
+    }
+    return true;
+  }
+  const int p = (phase - 2) / 3;
+  const int c0 = p * R, w = std::min(ncol, c0 + R) - c0;
+  Scalar* panel = L + static_cast<int64_t>(c0) * nrow;  // its columns, from row 0
+  if ((phase - 2) % 3 == 0) {
+    if (Potrf(w, panel + c0, nrow) != 0) return false;
+    for (int j = c0; j < c0 + w; ++j) {
+      Scalar* column = L + static_cast<int64_t>(j) * nrow;
+      const Scalar pivot = column[j];
+      if (!(pivot > 0) || !std::isfinite(static_cast<double>(pivot))) return false;
+      // Above the diagonal: zeros (what the trailing updates wrote there is not part of L).
+      std::fill(column, column + j, Scalar(0));
+    }
+    return true;
+  }
+  const int below = c0 + w;
+  const int r0 = std::max(below, (below / R + task) * R), r1 = std::min(nrow, (below / R + task + 1) * R);
+  if ((phase - 2) % 3 == 1) {
+    TrsmRightLowerTransposed(r1 - r0, w, panel + c0, nrow, panel + r0, nrow);
+    return true;
+  }
+  // Columns [below, min(ncol, r1)) of the rows [r0, r1) (entries above the diagonal too,
+  // cleared when their panel is factorized).
+  const int e1 = std::min(ncol, r1);
+  if (below < e1) {
+    GemmNTSubtract(r1 - r0, e1 - below, w, panel + r0, nrow, panel + below, nrow,
+                   L + static_cast<int64_t>(below) * nrow + r0, nrow);
+  }
+  return true;
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::FactorizeAny(int s, const double* a, int* map, Scalar* c) {
+  if (!Tiled(s)) return FactorizeSupernode(s, a, map, c);
+  const int phases = TiledPhases(s);
+  for (int phase = 0; phase < phases; ++phase) {
+    const int tasks = TiledTasks(s, phase);
+    for (int task = 0; task < tasks; ++task) {
+      if (!TiledTask(s, phase, task, a, map, c)) return false;
+    }
+  }
+  return true;
+}
+
+template <class Scalar>
 bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
                                         bool new_structure, int threads) {
   threads = std::max(1, threads);
@@ -384,23 +537,64 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
   bool ok = true;
   if (num_groups == 1) {
     for (int s : groups_[0]) {
-      if (!FactorizeSupernode(s, a, map_[0].data(), c_[0].data())) return false;
+      if (!FactorizeAny(s, a, map_[0].data(), c_[0].data())) return false;
     }
   } else {
     std::vector<char> group_ok(static_cast<size_t>(num_groups), 1);
 #pragma omp parallel for schedule(static, 1) num_threads(num_groups)
     for (int g = 0; g < num_groups; ++g) {
       for (int s : groups_[static_cast<size_t>(g)]) {
-        if (!FactorizeSupernode(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
+        if (!FactorizeAny(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
           group_ok[static_cast<size_t>(g)] = 0;
           break;
         }
       }
     }
     for (char g : group_ok) ok = ok && g;
-    for (size_t k = 0; ok && k < top_.size(); ++k) {
-      ok = FactorizeSupernode(top_[k], a, map_[0].data(), c_[0].data());
+    // The top on the whole team: a tiled supernode's tasks of each phase in parallel (each
+    // task's result is the same whichever thread runs it), the others on one thread. After
+    // a failure the remaining tasks do nothing (every thread still meets every barrier).
+    int failed = ok ? 0 : 1;
+    if (ok && !top_.empty()) {
+#pragma omp parallel num_threads(num_groups)
+      {
+#ifdef _OPENMP
+        const int t = omp_get_thread_num();
+#else
+        const int t = 0;
+#endif
+        Scalar* c = c_[static_cast<size_t>(t)].data();
+        int* map = map_[0].data();
+        auto fail = [&] {
+#pragma omp atomic write
+          failed = 1;
+        };
+        auto has_failed = [&] {
+          int f;
+#pragma omp atomic read
+          f = failed;
+          return f != 0;
+        };
+        for (int s : top_) {
+          if (!Tiled(s)) {
+#pragma omp single
+            {
+              if (!has_failed() && !FactorizeSupernode(s, a, map, c)) fail();
+            }
+            continue;
+          }
+          const int phases = TiledPhases(s);
+          for (int phase = 0; phase < phases; ++phase) {
+            const int tasks = TiledTasks(s, phase);
+#pragma omp for schedule(dynamic, 1)
+            for (int task = 0; task < tasks; ++task) {
+              if (!has_failed() && !TiledTask(s, phase, task, a, map, c)) fail();
+            }
+          }
+        }
+      }
     }
+    ok = failed == 0;
   }
   loaded_ = ok;
   return ok;
