@@ -377,7 +377,9 @@ bool SupernodalSolve<Scalar>::Tiled(int s) const {
 template <class Scalar>
 int SupernodalSolve<Scalar>::tiled_supernodes() const {
   int count = 0;
-  for (int s = 0; s + 1 < static_cast<int>(super_.size()); ++s) count += Tiled(s) ? 1 : 0;
+  if (groups_.size() > 1) {
+    for (int s : top_) count += Tiled(s) ? 1 : 0;
+  }
   return count;
 }
 
@@ -499,19 +501,6 @@ bool SupernodalSolve<Scalar>::TiledTask(int s, int phase, int task, const double
 }
 
 template <class Scalar>
-bool SupernodalSolve<Scalar>::FactorizeAny(int s, const double* a, int* map, Scalar* c) {
-  if (!Tiled(s)) return FactorizeSupernode(s, a, map, c);
-  const int phases = TiledPhases(s);
-  for (int phase = 0; phase < phases; ++phase) {
-    const int tasks = TiledTasks(s, phase);
-    for (int task = 0; task < tasks; ++task) {
-      if (!TiledTask(s, phase, task, a, map, c)) return false;
-    }
-  }
-  return true;
-}
-
-template <class Scalar>
 bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
                                         bool new_structure, int threads) {
   threads = std::max(1, threads);
@@ -537,21 +526,21 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
   bool ok = true;
   if (num_groups == 1) {
     for (int s : groups_[0]) {
-      if (!FactorizeAny(s, a, map_[0].data(), c_[0].data())) return false;
+      if (!FactorizeSupernode(s, a, map_[0].data(), c_[0].data())) return false;
     }
   } else {
     std::vector<char> group_ok(static_cast<size_t>(num_groups), 1);
 #pragma omp parallel for schedule(static, 1) num_threads(num_groups)
     for (int g = 0; g < num_groups; ++g) {
       for (int s : groups_[static_cast<size_t>(g)]) {
-        if (!FactorizeAny(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
+        if (!FactorizeSupernode(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
           group_ok[static_cast<size_t>(g)] = 0;
           break;
         }
       }
     }
     for (char g : group_ok) ok = ok && g;
-    // The top on the whole team: a tiled supernode's tasks of each phase in parallel (each
+    // The top on the whole team: a large supernode's tiles of each phase in parallel (each
     // task's result is the same whichever thread runs it), the others on one thread. After
     // a failure the remaining tasks do nothing (every thread still meets every barrier).
     int failed = ok ? 0 : 1;

@@ -19,11 +19,13 @@
 // The values either come from a CHOLMOD factor (Load) or are computed here (Factorize): a
 // left-looking supernodal Cholesky factorization in `Scalar` on CHOLMOD's symbolic analysis
 // (the supernodes, their rows, the ordering), the subtrees of the same cut in parallel,
-// then the top. The top holds the largest supernodes (on the demo's beam two thirds of a
-// factorization's time, run on one thread): those are factorized in tiles of rows, the
-// tiles of each step on the whole team (TiledTask). Each supernode adds its descendants'
-// updates in ascending order of the descendant, and its tiles depend on its size alone, so
-// the factor is the same on any thread count. In float the dense
+// then the top. The top holds the largest supernodes (on a 1k-vertex box two thirds of a
+// factorization's time on 2 threads, when it ran on one): those of many rows are factorized
+// in tiles, the tiles of each step on the whole team (TiledTask). Each supernode adds its
+// descendants' updates in ascending order of the descendant, and a tiled one's tiles depend
+// on its size alone, so a thread count gives the same factor on every run; the subtrees'
+// supernodes are the same on any thread count (one thread: no top, nothing tiled), the
+// top's tiled ones differ by float round-off. In float the dense
 // kernels (the BLAS) do twice the flops per second, and the matrix goes into the factor
 // through a map made once per analysis, where CHOLMOD permutes and transposes it again at
 // every factorization.
@@ -68,7 +70,7 @@ class SupernodalSolve {
   // The rows of a tile in Factorize (tests: small tiles on small matrices). Takes effect at
   // the next Factorize.
   void set_tile_rows(int rows) { tile_rows_ = std::max(1, rows); }
-  // The supernodes Factorize takes in tiles (with the structure taken).
+  // The supernodes Factorize takes in tiles: the top's large ones (with the structure taken).
   int tiled_supernodes() const;
   // x = A^-1 b for the factorized A = P^T L L^T P. x may not alias b.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
@@ -88,27 +90,27 @@ class SupernodalSolve {
   // Supernode s of the factorization: A's entries, its descendants' updates, its dense
   // factorization. map: n ints, c: the largest update. False: a pivot not positive.
   bool FactorizeSupernode(int s, const double* a, int* map, Scalar* c);
-  // A supernode of at least two tiles' rows (tile_rows_) is factorized in tiles instead:
-  // its updates a row tile at a time, its dense part by panels of as many columns
+  // A supernode of the top with at least two tiles' rows (tile_rows_) is factorized in
+  // tiles: its updates a row tile at a time, its dense part by panels of as many columns
   // (right-looking: the panel's diagonal block, the rows below it, the columns right of
-  // it). The tasks of a phase are independent, so that the top's large supernodes run on
-  // the whole team; the tiles depend on the supernode's size alone, so the factor is the
-  // same on any thread count. Phases and tasks: TiledTasks (supernodal_solve.cc).
+  // it). The tasks of a phase are independent and run on the whole team; the tiles depend
+  // on the supernode's size alone. Phases and tasks: TiledTasks (supernodal_solve.cc). In
+  // the subtrees, on one thread each, the whole supernode's BLAS calls are faster (a
+  // 16k-vertex box in tiles everywhere: 320-327 -> 365 ms on one thread).
   bool Tiled(int s) const;
   int TileRows(int s) const;  // a multiple of tile_rows_: at most kMaxTiles row tiles
   int TiledPhases(int s) const;
   int TiledTasks(int s, int phase) const;
   bool TiledTask(int s, int phase, int task, const double* a, int* map, Scalar* c);
-  // FactorizeSupernode or the tiled tasks in order, on this thread.
-  bool FactorizeAny(int s, const double* a, int* map, Scalar* c);
   void Forward(int s, const double* b, double* acc, double* y, double* z) const;
   void Backward(int s, double* y, double* z) const;
 
   // Tiles of 64 rows, against 32, 48, 96 and 128 (bench/linear_solver_bench.cc, own float
-  // factorization of box meshes, 2 threads): 1k vertices 1.57 ms against 1.84, 1.76, 1.59
-  // and 1.83; 4k vertices 13.8 ms against 15.3, 15.2, 13.3 and 14.3. At most 8 tiles: a
-  // 16k-vertex box's supernodes of thousands of rows in tiles of 64 cost one thread 399 ms
-  // against 332 untiled, in at most 8 tiles 373-386.
+  // factorization of box meshes, 2 threads, every supernode of 128 rows or more tiled):
+  // 1k vertices 1.57 ms against 1.84, 1.76, 1.59 and 1.83; 4k vertices 13.8 ms against
+  // 15.3, 15.2, 13.3 and 14.3. At most 8 tiles: a 16k-vertex box's supernodes of thousands
+  // of rows in tiles of 64 took one thread 399 ms against 332 untiled, in at most 8 tiles
+  // 373-386.
   static constexpr int kMaxTiles = 8;
   bool loaded_ = false;
   int tile_rows_ = 64;
