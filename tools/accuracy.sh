@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates "What accuracy costs in time" (README): femreg bench and femreg compare on the
 # bundled datasets, their CSVs and plots in docs/accuracy/, and the markdown tables printed
-# for the README. Takes a while (tens of minutes on 2 cores); run on a quiet machine.
+# for the README. About a minute on 2 cores (2026-11-27); run on a quiet machine.
 #   tools/accuracy.sh [BUILD_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
