@@ -594,23 +594,39 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
 // same structure; a matrix that is not positive definite refused. The structure may also
 // come from a numeric factor. The matrix: two beams' stiffness (a forest of two trees), one
 // four times stiffer, plus a diagonal (a data term's share).
+// CHOLMOD's factor of H (numeric and symbolic) and its solve of a random b: what the own
+// factorization is checked against.
+struct CholmodReference {
+  fast_backend::CholmodFactor exact, symbolic;
+  Eigen::VectorXd b, expected;
+  double scale = 0.0;
+  bool ok = false;
+  CholmodReference(const Eigen::SparseMatrix<double>& H, unsigned seed) {
+    exact.setMode(Eigen::CholmodSupernodalLLt);
+    exact.compute(H);
+    symbolic.setMode(Eigen::CholmodSupernodalLLt);
+    symbolic.analyzePattern(H);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    b.resize(H.rows());
+    for (Eigen::Index i = 0; i < H.rows(); ++i) b[i] = u(rng);
+    ok = exact.info() == Eigen::Success && symbolic.raw() != nullptr;
+    if (!ok) return;
+    expected = exact.solve(b);
+    scale = expected.lpNorm<Eigen::Infinity>();
+  }
+};
+
 TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
   const Eigen::SparseMatrix<double> H = BeamsSystem({{14, 5e4}, {9, 2e5}}, 1.0);
   const int offset = static_cast<int>(H.rows());
-  fast_backend::CholmodFactor exact;
-  exact.setMode(Eigen::CholmodSupernodalLLt);
-  exact.compute(H);
-  ASSERT_EQ(exact.info(), Eigen::Success);
-  fast_backend::CholmodFactor symbolic;
-  symbolic.setMode(Eigen::CholmodSupernodalLLt);
-  symbolic.analyzePattern(H);
-  ASSERT_NE(symbolic.raw(), nullptr);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::VectorXd b(offset);
-  for (int i = 0; i < offset; ++i) b[i] = u(rng);
-  const Eigen::VectorXd expected = exact.solve(b);
-  const double scale = expected.lpNorm<Eigen::Infinity>();
+  const CholmodReference reference(H, 5);
+  ASSERT_TRUE(reference.ok);
+  const fast_backend::CholmodFactor& exact = reference.exact;
+  const fast_backend::CholmodFactor& symbolic = reference.symbolic;
+  const Eigen::VectorXd& b = reference.b;
+  const Eigen::VectorXd& expected = reference.expected;
+  const double scale = reference.scale;
   std::vector<float> first;
   for (int threads : {1, 2, 3}) {
     const ScopedThreads one_blas_thread(1);
@@ -705,20 +721,12 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
 TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
   const Eigen::SparseMatrix<double> H = BeamsSystem({{20, 5e4}}, 1.0);
   const int n = static_cast<int>(H.rows());
-  fast_backend::CholmodFactor exact;
-  exact.setMode(Eigen::CholmodSupernodalLLt);
-  exact.compute(H);
-  ASSERT_EQ(exact.info(), Eigen::Success);
-  fast_backend::CholmodFactor symbolic;
-  symbolic.setMode(Eigen::CholmodSupernodalLLt);
-  symbolic.analyzePattern(H);
-  ASSERT_NE(symbolic.raw(), nullptr);
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::VectorXd b(n);
-  for (int i = 0; i < n; ++i) b[i] = u(rng);
-  const Eigen::VectorXd expected = exact.solve(b);
-  const double scale = expected.lpNorm<Eigen::Infinity>();
+  const CholmodReference reference(H, 11);
+  ASSERT_TRUE(reference.ok);
+  const fast_backend::CholmodFactor& symbolic = reference.symbolic;
+  const Eigen::VectorXd& b = reference.b;
+  const Eigen::VectorXd& expected = reference.expected;
+  const double scale = reference.scale;
   // Not positive definite in its last pivot: the variable eliminated last, made negative.
   const int last = static_cast<const int*>(symbolic.raw()->Perm)[n - 1];
   Eigen::SparseMatrix<double> indefinite = H;

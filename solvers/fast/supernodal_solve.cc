@@ -322,8 +322,8 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
 constexpr int64_t kBlasUpdate = 4096;
 
 template <class Scalar>
-bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* map, Scalar* c) {
-  const int k1 = super_[s], ncol = super_[s + 1] - k1, nrow = pi_[s + 1] - pi_[s];
+void SupernodalSolve<Scalar>::Gather(int s, const double* a, int* map) {
+  const int ncol = super_[s + 1] - super_[s], nrow = pi_[s + 1] - pi_[s];
   const int* rows = rows_.data() + pi_[s];
   Scalar* L = values_.data() + px_[s];
   std::fill(L, L + static_cast<int64_t>(nrow) * ncol, Scalar(0));
@@ -332,6 +332,13 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* ma
         static_cast<Scalar>(a[a_src_[static_cast<size_t>(e)]]);
   }
   for (int i = 0; i < nrow; ++i) map[rows[i]] = i;
+}
+
+template <class Scalar>
+void SupernodalSolve<Scalar>::SubtractUpdates(int s, int t0, int t1, bool whole, const int* map,
+                                              Scalar* c) {
+  const int k1 = super_[s], nrow = pi_[s + 1] - pi_[s];
+  Scalar* L = values_.data() + px_[s];
   for (int u = update_start_[s]; u < update_start_[s + 1]; ++u) {
     const int d = update_d_[static_cast<size_t>(u)];
     const int r1 = update_r1_[static_cast<size_t>(u)], r2 = update_r2_[static_cast<size_t>(u)];
@@ -339,27 +346,54 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* ma
     const int* drows = rows_.data() + pi_[d] + r1;
     const Scalar* D = values_.data() + px_[d] + r1;  // rows r1.. of d, drow apart
     const int m = drow - r1, n = r2 - r1;  // the update: m x n, lower part
+    // Its rows [ilo, ihi) land in [t0, t1) (its rows ascend, so do their places).
+    int ilo = 0, ihi = m;
+    if (!whole) {
+      ilo = static_cast<int>(
+          std::partition_point(drows, drows + m, [&](int row) { return map[row] < t0; }) - drows);
+      ihi = static_cast<int>(
+          std::partition_point(drows + ilo, drows + m, [&](int row) { return map[row] < t1; }) - drows);
+    }
+    if (ilo >= ihi) continue;
+    const int jn = std::min(n, ihi);  // columns j <= i
     if (static_cast<int64_t>(m) * n * dcol < kBlasUpdate) {
-      for (int j = 0; j < n; ++j) {
+      for (int j = 0; j < jn; ++j) {
         Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
-        for (int i = j; i < m; ++i) c[i] = 0;
+        const int i0 = std::max(j, ilo);
+        for (int i = i0; i < ihi; ++i) c[i] = 0;
         for (int k = 0; k < dcol; ++k) {
           const Scalar* column = D + static_cast<int64_t>(k) * drow;
           const Scalar djk = column[j];
-          for (int i = j; i < m; ++i) c[i] += column[i] * djk;
+          for (int i = i0; i < ihi; ++i) c[i] += column[i] * djk;
         }
-        for (int i = j; i < m; ++i) target[map[drows[i]]] -= c[i];
+        for (int i = i0; i < ihi; ++i) target[map[drows[i]]] -= c[i];
       }
-    } else {
+      continue;
+    }
+    // c: (ihi - ilo) x jn, row i - ilo, column j. The whole update: its diagonal part as a
+    // rank update and the rows below as a product; a tile's rows: one product (also above
+    // the diagonal: a rank update of the tile's part cost more than it saved).
+    const int mt = ihi - ilo;
+    if (whole) {
       SyrkLower(n, dcol, D, drow, c, m);
       if (m > n) GemmNT(m - n, n, dcol, D + n, drow, D, drow, c + n, m);
-      for (int j = 0; j < n; ++j) {
-        Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
-        const Scalar* cj = c + static_cast<int64_t>(j) * m;
-        for (int i = j; i < m; ++i) target[map[drows[i]]] -= cj[i];
-      }
+    } else {
+      GemmNT(mt, jn, dcol, D + ilo, drow, D, drow, c, mt);
+    }
+    for (int j = 0; j < jn; ++j) {
+      Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
+      const Scalar* cj = c + static_cast<int64_t>(j) * mt;
+      for (int i = std::max(j, ilo); i < ihi; ++i) target[map[drows[i]]] -= cj[i - ilo];
     }
   }
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* map, Scalar* c) {
+  const int ncol = super_[s + 1] - super_[s], nrow = pi_[s + 1] - pi_[s];
+  Scalar* L = values_.data() + px_[s];
+  Gather(s, a, map);
+  SubtractUpdates(s, 0, nrow, /*whole=*/true, map, c);
   if (Potrf(ncol, L, nrow) != 0) return false;
   for (int j = 0; j < ncol; ++j) {
     const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
@@ -417,57 +451,14 @@ template <class Scalar>
 bool SupernodalSolve<Scalar>::TiledTask(int s, int phase, int task, const double* a, int* map,
                                         Scalar* c) {
   const int R = TileRows(s);
-  const int k1 = super_[s], ncol = super_[s + 1] - k1, nrow = pi_[s + 1] - pi_[s];
-  const int* rows = rows_.data() + pi_[s];
+  const int ncol = super_[s + 1] - super_[s], nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
   if (phase == 0) {
-    std::fill(L, L + static_cast<int64_t>(nrow) * ncol, Scalar(0));
-    for (int64_t e = a_start_[s]; e < a_start_[s + 1]; ++e) {
-      values_[static_cast<size_t>(a_dst_[static_cast<size_t>(e)])] =
-          static_cast<Scalar>(a[a_src_[static_cast<size_t>(e)]]);
-    }
-    for (int i = 0; i < nrow; ++i) map[rows[i]] = i;
+    Gather(s, a, map);
     return true;
   }
-  if (phase == 1) {
-    // The updates of the rows [t0, t1), in ascending descendant as FactorizeSupernode.
-    const int t0 = task * R, t1 = std::min(nrow, t0 + R);
-    for (int u = update_start_[s]; u < update_start_[s + 1]; ++u) {
-      const int d = update_d_[static_cast<size_t>(u)];
-      const int r1 = update_r1_[static_cast<size_t>(u)], r2 = update_r2_[static_cast<size_t>(u)];
-      const int dcol = super_[d + 1] - super_[d], drow = pi_[d + 1] - pi_[d];
-      const int* drows = rows_.data() + pi_[d] + r1;
-      const Scalar* D = values_.data() + px_[d] + r1;
-      const int m = drow - r1, n = r2 - r1;
-      // The update's rows [ilo, ihi) land in the tile (its rows ascend, so do their places).
-      const int ilo = static_cast<int>(
-          std::partition_point(drows, drows + m, [&](int row) { return map[row] < t0; }) - drows);
-      const int ihi = static_cast<int>(
-          std::partition_point(drows + ilo, drows + m, [&](int row) { return map[row] < t1; }) - drows);
-      const int jn = std::min(n, ihi);  // columns j <= i
-      if (ilo >= ihi) continue;
-      if (static_cast<int64_t>(m) * n * dcol < kBlasUpdate) {
-        for (int j = 0; j < jn; ++j) {
-          Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
-          const int i0 = std::max(j, ilo);
-          for (int i = i0; i < ihi; ++i) c[i] = 0;
-          for (int k = 0; k < dcol; ++k) {
-            const Scalar* column = D + static_cast<int64_t>(k) * drow;
-            const Scalar djk = column[j];
-            for (int i = i0; i < ihi; ++i) c[i] += column[i] * djk;
-          }
-          for (int i = i0; i < ihi; ++i) target[map[drows[i]]] -= c[i];
-        }
-      } else {
-        const int mt = ihi - ilo;
-        GemmNT(mt, jn, dcol, D + ilo, drow, D, drow, c, mt);
-        for (int j = 0; j < jn; ++j) {
-          Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
-          const Scalar* cj = c + static_cast<int64_t>(j) * mt;
-          for (int i = std::max(j, ilo); i < ihi; ++i) target[map[drows[i]]] -= cj[i - ilo];
-        }
-      }
-    }
+  if (phase == 1) {  // the updates of the rows [task R, task R + R)
+    SubtractUpdates(s, task * R, std::min(nrow, (task + 1) * R), /*whole=*/false, map, c);
     return true;
   }
   const int p = (phase - 2) / 3;

@@ -90,6 +90,11 @@ class SupernodalSolve {
   // Supernode s of the factorization: A's entries, its descendants' updates, its dense
   // factorization. map: n ints, c: the largest update. False: a pivot not positive.
   bool FactorizeSupernode(int s, const double* a, int* map, Scalar* c);
+  // Supernode s's values: zeros, then A's entries; map[row] = the row's place in s.
+  void Gather(int s, const double* a, int* map);
+  // Subtracts the descendants' updates of s's rows [t0, t1) (whole: all of them), in
+  // ascending descendant. c: the largest update.
+  void SubtractUpdates(int s, int t0, int t1, bool whole, const int* map, Scalar* c);
   // A supernode of the top with at least two tiles' rows (tile_rows_) is factorized in
   // tiles: its updates a row tile at a time, its dense part by panels of as many columns
   // (right-looking: the panel's diagonal block, the rows below it, the columns right of
