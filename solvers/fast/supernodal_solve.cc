@@ -431,7 +431,7 @@ int SupernodalSolve<Scalar>::TiledPhases(int s) const {
 }
 
 // Phase 0: A's entries (1 task); 1: the descendants' updates, one task per row tile; then
-// per panel p of tile_rows_ columns, 2 + 3p: its diagonal block's Cholesky factor (1 task),
+// per panel p of TileRows(s) columns, 2 + 3p: its diagonal block's Cholesky factor (1 task),
 // 3 + 3p: the rows below it solved, 4 + 3p: the columns right of it updated (a task per
 // chunk of those rows: the rest of the panel's tile, then each tile below).
 template <class Scalar>
