@@ -88,8 +88,10 @@ inline void GemmNTSubtract(int m, int n, int k, const T* a, int lda, const T* b,
 }
 
 // Cuts the supernodal elimination tree for `threads` threads: subtrees grouped into one
-// set per thread (owner[s] = its thread) and the rest, the top (owner -1), which runs on one
-// thread. Starting from the roots, the heaviest subtree is split (its root goes to the top,
+// set per thread (owner[s] = its thread) and the rest, the top (owner -1), which runs after
+// them: on one thread in the substitutions, and in the factorization its large supernodes
+// in tiles on the whole team, the others on one thread. (The cost below still counts the
+// top as serial, as it is for the substitutions the cut is made for.) Starting from the roots, the heaviest subtree is split (its root goes to the top,
 // its children become subtrees) while that lowers the cost top + largest group; the groups
 // are filled heaviest subtree first into the lightest group. Empty: no cut beats one thread.
 std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<double>& work,
