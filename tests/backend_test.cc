@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <memory>
 #include <numeric>
+#include <map>
 #include <random>
 
 #include "energy/problem.h"
@@ -714,10 +715,11 @@ TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
 }
 
 // The top's supernodes of many rows are factorized in tiles on the whole team. With tiles
-// of 4 and 7 rows on a beam (the top's supernodes tiled, panels of several widths, their
-// tasks shared among 2 and 3 threads): the solves match CHOLMOD's, a thread count gives the
-// same factor on every run, and a matrix that fails in the last supernode (the root, in
-// the top) is refused.
+// of 4 and 7 rows on a beam (every supernode of the top tiled, panels of several widths,
+// their tasks shared among 2 and 3 threads), and of 44 (a top of tiled and untiled
+// supernodes; the root, 87 rows, untiled): the solves match CHOLMOD's, a thread count
+// gives the same factor on every run, and a matrix that fails in the last supernode (the
+// root, in the top) is refused.
 TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
   const Eigen::SparseMatrix<double> H = BeamsSystem({{20, 5e4}}, 1.0);
   const int n = static_cast<int>(H.rows());
@@ -732,7 +734,8 @@ TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
   Eigen::SparseMatrix<double> indefinite = H;
   indefinite.coeffRef(last, last) = -1e9;
   const ScopedThreads one_blas_thread(1);
-  for (int tile : {4, 7}) {
+  std::map<int, int> all_tiled;  // threads -> the top's supernodes with tiles of 4 rows
+  for (int tile : {4, 7, 44}) {
     for (int threads : {1, 2, 3}) {
       SCOPED_TRACE(::testing::Message() << "tiles of " << tile << " rows, " << threads << " threads");
       fast_backend::SupernodalSolve<double> in_double;
@@ -740,6 +743,8 @@ TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
       ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, true, threads));
       if (threads > 1) {
         EXPECT_GT(in_double.tiled_supernodes(), 0);
+        if (tile == 4) all_tiled[threads] = in_double.tiled_supernodes();
+        if (tile == 44) EXPECT_LT(in_double.tiled_supernodes(), all_tiled[threads]);  // mixed
       } else {
         EXPECT_EQ(in_double.tiled_supernodes(), 0);  // no top
       }
