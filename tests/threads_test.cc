@@ -77,5 +77,31 @@ TEST(Threads, ThreadLimitRunsTheFunctionOnce) {
   EXPECT_EQ(calls, 1);
 }
 
+// Each thread of a team knows its number and the team's size; outside a team, 0 and 1.
+TEST(Threads, TeamThreadNumbersTheTeam) {
+  EXPECT_EQ(TeamThread(), 0);
+  EXPECT_EQ(TeamSize(), 1);
+  std::vector<int> seen(3, 0), sizes(3, 0);
+#pragma omp parallel num_threads(3)
+  {
+    const int t = TeamThread();
+    if (t >= 0 && t < 3) {
+      seen[static_cast<size_t>(t)] = 1;
+      sizes[static_cast<size_t>(t)] = TeamSize();
+    }
+  }
+  const int team = sizes[0];
+  ASSERT_GE(team, 1);
+  for (int t = 0; t < 3; ++t) {
+    EXPECT_EQ(seen[static_cast<size_t>(t)], t < team ? 1 : 0) << t;
+    if (t < team) {
+      EXPECT_EQ(sizes[static_cast<size_t>(t)], team) << t;
+    }
+  }
+#ifdef _OPENMP
+  EXPECT_EQ(team, 3);  // dynamic adjustment is off by default
+#endif
+}
+
 }  // namespace
 }  // namespace femreg

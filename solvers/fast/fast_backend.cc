@@ -47,10 +47,6 @@
 #include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 namespace femreg {
 namespace fast_backend {
 
@@ -604,11 +600,7 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
     double* buffer = scratch.data();
 #pragma omp parallel num_threads(threads)
     {
-#ifdef _OPENMP
-      const int t = omp_get_thread_num();
-#else
-      const int t = 0;
-#endif
+      const int t = TeamThread();
       energy::Linearization<T> lin;
       for (int b : c.interior[static_cast<size_t>(t)]) {
         if (energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) &&

@@ -6,9 +6,7 @@
 #include <numeric>
 #include <type_traits>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "parallel/threads.h"
 
 // The BLAS and LAPACK (Fortran interface, as CHOLMOD calls them).
 extern "C" {
@@ -540,11 +538,7 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
     if (ok && !top_.empty()) {
 #pragma omp parallel num_threads(num_groups)
       {
-#ifdef _OPENMP
-        const int t = omp_get_thread_num();
-#else
-        const int t = 0;
-#endif
+        const int t = TeamThread();
         Scalar* c = c_[static_cast<size_t>(t)].data();
         int* map = map_[0].data();
         auto fail = [&] {
@@ -757,11 +751,7 @@ void SupernodalSolve<Scalar>::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x
   } else {
 #pragma omp parallel num_threads(num_groups)
     {
-#ifdef _OPENMP
-      const int t = omp_get_thread_num(), team = omp_get_num_threads();
-#else
-      const int t = 0, team = 1;
-#endif
+      const int t = TeamThread(), team = TeamSize();
       for (int g = t; g < num_groups; g += team) {
         acc_[static_cast<size_t>(g)].setZero();
         for (int s : groups_[static_cast<size_t>(g)]) {

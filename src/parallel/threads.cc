@@ -61,6 +61,22 @@ ScopedThreads::~ScopedThreads() {
   if (previous_blas_ > 0) OpenBlas().set(previous_blas_);
 }
 
+int TeamThread() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+int TeamSize() {
+#ifdef _OPENMP
+  return omp_get_num_threads();
+#else
+  return 1;
+#endif
+}
+
 void WithThreadLimit(int threads, const std::function<void()>& f) {
 #ifdef _OPENMP
   if (!omp_in_parallel()) {

@@ -32,6 +32,11 @@ class ScopedThreads {
   int previous_blas_ = 0;    // 0: OpenBLAS not found or unchanged
 };
 
+// The calling thread's number in its OpenMP team and the team's size (0 and 1 outside a
+// parallel region, or without OpenMP).
+int TeamThread();
+int TeamSize();
+
 // Runs f() with OpenMP's thread limit at `threads` (<= 0: the default), so that parallel
 // regions inside libraries that ask for a fixed team get at most `threads`: CHOLMOD 5's
 // supernodal factorization opens teams of 4 (its compile-time CHOLMOD_OMP_NUM_THREADS)
