@@ -56,6 +56,55 @@ TEST(EvalTest, SurfaceDistanceOfAShiftedBox) {
   EXPECT_LT(d.mean, 0.003);
 }
 
+// Ground truth CSVs: what WriteGroundTruthFrame writes reads back; blanks, '+', CRLF and
+// comment lines are accepted; a malformed row is refused with its line and field.
+TEST(EvalTest, GroundTruthCsvRoundTripAndErrors) {
+  TempDir dir;
+  GroundTruthFrame frame;
+  frame.positions.resize(3, 3);
+  frame.positions << 0.1, -0.25, 3e-5, 1.5, 0.0, -2.0, -1e-10, 0.5, 0.125;
+  frame.visible = {1, 0, 1};
+  const std::string path = dir.path() + "/truth.csv";
+  ASSERT_TRUE(WriteGroundTruthFrame(path, frame).ok());
+  GroundTruthFrame back;
+  ASSERT_TRUE(ReadGroundTruthFrame(path, &back).ok());
+  ASSERT_EQ(back.positions.rows(), 3);
+  EXPECT_LT((back.positions - frame.positions).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_EQ(back.visible, frame.visible);
+
+  auto read = [&](const std::string& text, GroundTruthFrame* out) {
+    std::ofstream(path, std::ios::binary) << text;
+    return ReadGroundTruthFrame(path, out);
+  };
+  ASSERT_TRUE(read("x,y,z,visible\r\n# a comment\r\n 1.5 , +2,-3e-3,1\r\n\r\n4,5,6,0", &back).ok());
+  ASSERT_EQ(back.positions.rows(), 2);
+  EXPECT_EQ(back.positions(0, 0), 1.5);
+  EXPECT_EQ(back.positions(0, 1), 2.0);
+  EXPECT_EQ(back.positions(0, 2), -3e-3);
+  EXPECT_EQ(back.positions(1, 2), 6.0);
+  EXPECT_EQ(back.visible, (std::vector<char>{1, 0}));
+
+  const struct {
+    const char* text;
+    const char* message;
+  } bad[] = {
+      {"x,y,z,visible\n1,2,3,1\n1,2,3\n", "truth.csv:3: expected 'x,y,z,visible', the row ends after z"},
+      {"1,2,3,\n", "truth.csv:1: expected 'x,y,z,visible', visible is not a number"},
+      {"1,abc,3,1\n", "truth.csv:1: expected 'x,y,z,visible', y is not a number"},
+      {"1,2 3,3,1\n", "truth.csv:1: expected 'x,y,z,visible', y is not a number"},
+      {"1,2,3,1,5\n", "truth.csv:1: expected 'x,y,z,visible', the row has more fields"},
+      {"1,2,3,1,\n", "truth.csv:1: expected 'x,y,z,visible', the row has more fields"},
+      {"1,nan,3,1\n", "truth.csv:1: non-finite coordinate"},
+      {"x,y,z,visible\n", "truth.csv: no vertex rows"},
+  };
+  for (const auto& b : bad) {
+    const Status s = read(b.text, &back);
+    EXPECT_FALSE(s.ok()) << b.text;
+    EXPECT_NE(s.message().find(b.message), std::string::npos) << s.message();
+  }
+  EXPECT_FALSE(ReadGroundTruthFrame(dir.path() + "/missing.csv", &back).ok());
+}
+
 #ifdef FEMREG_CLI_PATH
 // A fake `femreg register` result and `femreg synth` ground truth for one frame.
 void WriteCase(const std::string& root, const Eigen::Vector3d& offset) {
