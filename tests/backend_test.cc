@@ -846,6 +846,72 @@ TEST(FastBackend, StopsBeforeAStepThatWouldGainNothing) {
   EXPECT_NE(backend->Solve(s->problem, 0.0, &x).stop, StopReason::kPredicted);
 }
 
+// A full step whose decrease the Gauss-Newton model predicted ends the solve when what its
+// PCG left (1/2 r^T M^-1 r) is below the tolerance: the step after it would gain less than
+// the tolerance (and end the loop), and is not taken. The setup above (a kept factor, then
+// twisted rotations: the first step is PCG with the old factor, to PCG's 1e-2), with the
+// tolerance 10x what one step leaves above the minimum: one step, kPredicted, the energy
+// within the tolerance of the minimum (with the negligible-gain test alone, a second step
+// was taken: the gap is 10x its threshold). With the tolerance 1/10 of the gap, the solve
+// goes on. On the neo-Hookean element the model is not the energy: more than one step.
+TEST(FastBackend, AStepTheModelPredictedEndsTheSolveWhenPcgLeftLessThanTheTolerance) {
+  auto s = MakeSetup(RobustLoss::kNone, false, false, false, 9, false, 3);
+  Vertices bent = s->mesh.rest, twisted = s->mesh.rest;  // MakeSetup's rotations, and a twist
+  for (int v = 0; v < twisted.rows(); ++v) {
+    bent(v, 2) += 0.02 * std::pow(bent(v, 0) / 0.1, 2);
+    const double angle = 0.3 * twisted(v, 0) / 0.1;
+    const double y = twisted(v, 1) - 0.02, z = twisted(v, 2) - 0.02;
+    twisted(v, 1) = 0.02 + std::cos(angle) * y - std::sin(angle) * z;
+    twisted(v, 2) = 0.02 + std::sin(angle) * y + std::cos(angle) * z;
+  }
+  // A back end with a factor of the bent rotations' system (the same H wherever that solve
+  // stops: no robust loss), then a solve with the twisted rotations from `start`.
+  Vertices start;
+  auto twisted_solve = [&](double tolerance, int max_iterations, Vertices* x) {
+    s->model.UpdateRotations(bent);
+    BackendOptions options;
+    options.type = SolverBackend::kFast;
+    options.relative_tolerance = tolerance;
+    options.max_iterations = max_iterations;
+    std::unique_ptr<Backend> backend = MakeBackend(options);
+    *x = s->mesh.rest;
+    EXPECT_TRUE(backend->Solve(s->problem, 0.0, x).success);
+    if (start.rows() == 0) start = *x;
+    s->model.UpdateRotations(twisted);
+    *x = start;
+    return backend->Solve(s->problem, 0.0, x);
+  };
+  Vertices one_step;
+  const SolveReport first = twisted_solve(0.0, 1, &one_step);
+  ASSERT_EQ(first.iterations, 1);
+  EXPECT_EQ(first.factorizations, 0);  // PCG with the kept factor
+  EXPECT_GT(first.pcg_iterations, 1);
+  const double e_min = s->problem.Evaluate(Minimize(SolverBackend::kFast, s->problem, start)).total();
+  const double e_one = s->problem.Evaluate(one_step).total();
+  const double gap = e_one - e_min;
+  ASSERT_GT(gap, 0.0);
+  ASSERT_GT(first.before.total() - e_one, 100.0 * gap);  // the first step gained far more
+
+  Vertices x;
+  SolveReport report = twisted_solve(10.0 * gap / e_one, 10, &x);
+  ASSERT_TRUE(report.success) << report.message;
+  EXPECT_EQ(report.stop, StopReason::kPredicted) << report.message;
+  EXPECT_EQ(report.iterations, 1);
+  EXPECT_LE(report.after.total() - e_min, 10.0 * gap);
+  report = twisted_solve(0.1 * gap / e_one, 10, &x);
+  ASSERT_TRUE(report.success) << report.message;
+  EXPECT_GT(report.iterations, 1) << report.message;
+
+  auto neo = MakeSetup(RobustLoss::kNone, false, false, false, 9, false, 3, /*neo_hookean=*/true);
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.relative_tolerance = 1e-3;
+  x = twisted;  // far from the minimum: the element's energy is not quadratic there
+  report = MakeBackend(options)->Solve(neo->problem, 0.0, &x);
+  ASSERT_TRUE(report.success) << report.message;
+  EXPECT_GT(report.iterations, 1) << report.message;
+}
+
 // The slots of a stencil met before are the ones a search finds: the data sets are made
 // anew each outer iteration, mostly on triangles met before, and the back end takes their
 // slots from what it found then. One exact Gauss-Newton step (CHOLMOD's factor, no PCG) on
