@@ -1112,7 +1112,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     // iterations stop on.) With a nonlinear energy along the step (contacts, the neo-Hookean
     // element, robust losses past their quadratic part) the model's error is larger, and the
     // loop goes on as before.
-    if (alpha == 1.0 && m.pcg_model_gain > 0.0) {
+    if (alpha == 1.0 && m.pcg_model_gain > 0.0 && !m.pcg_with_multigrid) {
       const double model_error = std::abs(gain - m.pcg_model_gain);
       const double limit = m.options.relative_tolerance * energy;
       if (model_error < limit && model_error + m.ResidualGain(&report) < limit) {
