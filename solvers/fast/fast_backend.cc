@@ -302,11 +302,17 @@ struct FastBackend::Impl {
   template <class Set>
   SetCache& CacheOf(const Set& set, std::vector<std::pair<int, int>>* missing);
   // Adds the blocks of the sets for which take(set) holds: gradient always, Hessian when
-  // hessian(set).
+  // hessian(set). With set_energy: the energy of each set taken, at its place in
+  // ForEachSet's order (Problem::SumBlockValues of its blocks' values).
   template <class Take, class WithHessian>
   void Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
-                  WithHessian hessian, Eigen::VectorXd* g);
-  void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g);
+                  WithHessian hessian, Eigen::VectorXd* g, std::vector<double>* set_energy = nullptr);
+  std::vector<double> block_values;  // Accumulate's, of one set
+  std::vector<double> assembled_energy;  // Assemble's, per set
+  // H and g at x; first: H's constant part anew, and *energy (if given) the energy at x,
+  // from the same linearization (Problem::Evaluate's value, to the bit).
+  void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g,
+                EnergyTerms* energy = nullptr);
   // CHOLMOD's symbolic analysis of the pattern, unless done; the PCG budget from its counts.
   void Analyse();
   // Factorizes H in double with CHOLMOD (its values also copied to `substitutions` for
@@ -537,10 +543,13 @@ FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
 
 template <class Take, class WithHessian>
 void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
-                                   WithHessian hessian, Eigen::VectorXd* g) {
+                                   WithHessian hessian, Eigen::VectorXd* g,
+                                   std::vector<double>* set_energy) {
   double* values = H.valuePtr();
   double* gradient = g->data();
+  int ordinal = -1;
   problem.ForEachSet([&](const auto& set) {
+    ++ordinal;
     if (!take(set)) return;
     using T = BlockType<std::decay_t<decltype(set)>>;
     constexpr int n = T::kVertices;
@@ -575,16 +584,26 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
         }
       }
     };
+    // Each block's value (Linearize's: 0 where it cannot be evaluated), for set_energy.
+    double* value_of = nullptr;
+    if (set_energy != nullptr) {
+      block_values.resize(static_cast<size_t>(size));
+      value_of = block_values.data();
+    }
+    auto set_done = [&] {
+      if (set_energy == nullptr) return;
+      if (static_cast<int>(set_energy->size()) <= ordinal) set_energy->resize(static_cast<size_t>(ordinal) + 1, 0.0);
+      (*set_energy)[static_cast<size_t>(ordinal)] = energy::Problem::SumBlockValues(block_values);
+    };
     if (threads == 1 || static_cast<int64_t>(size) * n * n < kParallelWork) {
       // One pass, no OpenMP region (even a team of one costs libgomp a futex wake-up).
       energy::Linearization<T> lin;
       for (int b = 0; b < size; ++b) {
-        if (!energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) ||
-            lin.scale == 0.0) {
-          continue;
-        }
-        scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
+        const bool linearized = energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian);
+        if (value_of != nullptr) value_of[b] = lin.value;
+        if (linearized && lin.scale != 0.0) scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
       }
+      set_done();
       return;
     }
     // A region of vertices per thread (vertex_owner): a thread linearizes and adds its
@@ -614,17 +633,17 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
       const int t = TeamThread();
       energy::Linearization<T> lin;
       for (int b : c.interior[static_cast<size_t>(t)]) {
-        if (energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) &&
-            lin.scale != 0.0) {
-          scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
-        }
+        const bool linearized = energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian);
+        if (value_of != nullptr) value_of[b] = lin.value;
+        if (linearized && lin.scale != 0.0) scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
       }
 #pragma omp for schedule(static)
       for (int k = 0; k < num_straddling; ++k) {
         double* out = buffer + kStride * static_cast<size_t>(k);
-        const bool adds = energy::Linearize(blocks[static_cast<size_t>(straddling[static_cast<size_t>(k)])],
-                                            set.loss(), x, &lin, with_hessian) &&
+        const int b = straddling[static_cast<size_t>(k)];
+        const bool adds = energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) &&
                           lin.scale != 0.0;
+        if (value_of != nullptr) value_of[b] = lin.value;
         out[0] = adds ? 1.0 : 0.0;
         if (!adds) continue;
         for (int i = 0; i < n; ++i) Eigen::Map<Eigen::Vector3d>(out + 1 + 3 * i) = lin.gradient[i];
@@ -650,11 +669,12 @@ void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertice
         scatter(b, lin.gradient.data(), lin.hessian.data(), t);
       }
     }
+    set_done();
   });
 }
 
 void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices& x, bool first,
-                                 Eigen::VectorXd* g) {
+                                 Eigen::VectorXd* g, EnergyTerms* energy) {
   auto constant = [](const auto& set) {
     using T = BlockType<std::decay_t<decltype(set)>>;
     return T::kConstantJacobian && !set.loss().robust();
@@ -662,9 +682,11 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
   auto varying = [&](const auto& set) { return !constant(set); };
   auto always = [](const auto&) { return true; };
   g->setZero(3 * num_vertices);
+  std::vector<double>* set_energy = first && energy != nullptr ? &assembled_energy : nullptr;
+  if (set_energy != nullptr) set_energy->clear();
   if (first) {
     std::fill(H.valuePtr(), H.valuePtr() + H.nonZeros(), 0.0);
-    Accumulate(problem, x, constant, always, g);
+    Accumulate(problem, x, constant, always, g, set_energy);
     constant_values.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
   } else {
     // The constant sets' gradient is linearized element by element again, not formed as the
@@ -674,7 +696,15 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
     std::copy(constant_values.begin(), constant_values.end(), H.valuePtr());
     Accumulate(problem, x, constant, [](const auto&) { return false; }, g);
   }
-  Accumulate(problem, x, varying, always, g);
+  Accumulate(problem, x, varying, always, g, set_energy);
+  if (set_energy != nullptr) {  // added up by group in ForEachSet's order, as Evaluate does
+    *energy = EnergyTerms();
+    size_t ordinal = 0;
+    problem.ForEachSet([&](const auto& set) {
+      energy::GroupEnergy(set.group(), energy) += ordinal < set_energy->size() ? (*set_energy)[ordinal] : 0.0;
+      ++ordinal;
+    });
+  }
   // Hard anchors: identity rows and columns, no gradient.
   if (!problem.fixed().empty()) {
     if (fixed_for != problem.fixed()) {
@@ -1031,9 +1061,9 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   Eigen::VectorXd g, dx;
   m.positions = x;
   m.multigrid_failed = false;
-  m.Assemble(problem, *x, /*first=*/true, &g);
+  // The energy at the start from the assembly's linearization (an evaluation less per solve).
+  m.Assemble(problem, *x, /*first=*/true, &g, &report.before);
   report.assemble_s += Seconds(t0);
-  report.before = m.Energy(problem, *x, &report);
   report.after = report.before;
   double energy = report.before.total();
   const double first_gradient = g.lpNorm<Eigen::Infinity>();

@@ -115,6 +115,15 @@ std::array<const double*, T::kVertices> StencilPositions(const T& block, const V
   return p;
 }
 
+// |r|^2 added in residual order: BlockValue and Linearize give a block the same value, to
+// the bit (a back end's energy from its linearization is Problem::Evaluate's).
+template <int m>
+double SquaredSum(const double* r) {
+  double s = 0.0;
+  for (int i = 0; i < m; ++i) s += r[i] * r[i];
+  return s;
+}
+
 // 1/2 w rho(|r|^2) of one block at x; 0 if it cannot be evaluated (see Evaluate).
 template <class T>
 double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
@@ -125,19 +134,11 @@ double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
   } else {
     double r[T::kResiduals];
     if (!block.Evaluate(p.data(), r, nullptr)) return 0.0;
-    for (int i = 0; i < T::kResiduals; ++i) s += r[i] * r[i];
+    s = SquaredSum<T::kResiduals>(r);
   }
   double rho[3];
   loss.Evaluate(s, rho);
   return 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
-}
-
-// The energy of a set at x.
-template <class T>
-double SetValue(const TermSet<T>& set, const Vertices& x) {
-  double value = 0.0;
-  for (const T& block : set.blocks()) value += BlockValue(block, set.loss(), x);
-  return value;
 }
 
 // A block's share of the gradient and of the Gauss-Newton Hessian at x: with the loss
@@ -186,7 +187,7 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
   out->value = 0.0;
   if (!block.Evaluate(p.data(), r.data(), Jp.data())) return false;
   double rho[3];
-  loss.Evaluate(r.squaredNorm(), rho);
+  loss.Evaluate(SquaredSum<m>(r.data()), rho);
   out->value = 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
   out->scale = block.weight * rho[1];
   if (out->scale == 0.0) {  // an outlier past Tukey's scale, an open contact
