@@ -344,6 +344,9 @@ struct FastBackend::Impl {
   // What a further step on the same model would gain: 1/2 r^T M^-1 r, with the
   // preconditioner M of that PCG (H, or an earlier H, approximately).
   double ResidualGain(SolveReport* report);
+  // z = M^-1 r: the multigrid V-cycle, or the kept factor's substitutions (CHOLMOD's where
+  // the single-precision copy could not be made); counted as a linear solve.
+  void Precondition(const Eigen::VectorXd& r, bool with_multigrid, Eigen::VectorXd* z, SolveReport* report);
   EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
 };
 
@@ -841,16 +844,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   if (b_norm == 0.0) return Outcome::kSolved;
   Eigen::VectorXd r = b;
   Eigen::VectorXd z;
-  auto precondition = [&] {
-    if (with_multigrid) {
-      multigrid.Apply(r, &z);
-    } else if (substitutions.loaded()) {
-      substitutions.Solve(r, &z);
-    } else {
-      z = factor.solve(r);
-    }
-    ++report->linear_solves;
-  };
+  auto precondition = [&] { Precondition(r, with_multigrid, &z, report); };
   precondition();
   Eigen::VectorXd p = z;
   Eigen::VectorXd q(b.size());
@@ -886,18 +880,23 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   return Outcome::kFailed;
 }
 
+void FastBackend::Impl::Precondition(const Eigen::VectorXd& r, bool with_multigrid, Eigen::VectorXd* z,
+                                     SolveReport* report) {
+  if (with_multigrid) {
+    multigrid.Apply(r, z);
+  } else if (substitutions.loaded()) {
+    substitutions.Solve(r, z);
+  } else {
+    *z = factor.solve(r);
+  }
+  ++report->linear_solves;
+}
+
 double FastBackend::Impl::ResidualGain(SolveReport* report) {
   const auto t0 = Clock::now();
   const ScopedThreads one_thread(1);  // as in Pcg
   Eigen::VectorXd z;
-  if (pcg_with_multigrid) {
-    multigrid.Apply(pcg_residual, &z);
-  } else if (substitutions.loaded()) {
-    substitutions.Solve(pcg_residual, &z);
-  } else {
-    z = factor.solve(pcg_residual);
-  }
-  ++report->linear_solves;
+  Precondition(pcg_residual, pcg_with_multigrid, &z, report);
   report->linear_solve_s += Seconds(t0);
   return 0.5 * pcg_residual.dot(z);
 }
