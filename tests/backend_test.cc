@@ -4,6 +4,8 @@
 // vertices), from the same start.
 #include <gtest/gtest.h>
 
+#include <csignal>
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -942,6 +944,27 @@ TEST(FastBackend, AStepTheModelPredictedEndsTheSolveWhenPcgLeftLessThanTheTolera
   const SolveReport report = MakeBackend(options)->Solve(neo->problem, 0.0, &x);
   ASSERT_TRUE(report.success) << report.message;
   EXPECT_GT(report.iterations, 1) << report.message;
+}
+
+// CHOLMOD's analysis runs METIS, whose GKlib traps SIGTERM and SIGABRT with signal() and
+// puts the old handlers back with System V semantics (reset after one delivery): a host's
+// handler fired once and the next SIGTERM killed the process. The back end leaves the
+// dispositions as they were, flags and all.
+void IgnoreSignal(int) {}
+TEST(FastBackend, LeavesTheHostsSignalHandlersAsTheyWere) {
+  struct sigaction mine {}, before {}, after {};
+  mine.sa_handler = IgnoreSignal;
+  sigemptyset(&mine.sa_mask);
+  mine.sa_flags = SA_RESTART;
+  ASSERT_EQ(sigaction(SIGTERM, &mine, &before), 0);
+  auto s = MakeSetup(RobustLoss::kNone, false, false, false, 3, false, 2);
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  Vertices x = s->mesh.rest;
+  EXPECT_TRUE(MakeBackend(options)->Solve(s->problem, 0.0, &x).success);
+  ASSERT_EQ(sigaction(SIGTERM, &before, &after), 0);
+  EXPECT_EQ(after.sa_handler, &IgnoreSignal);
+  EXPECT_EQ(after.sa_flags & (SA_RESETHAND | SA_NODEFER | SA_RESTART), SA_RESTART);
 }
 
 // The slots of a stencil met before are the ones a search finds: the data sets are made

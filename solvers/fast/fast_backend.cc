@@ -43,6 +43,7 @@
 #include <utility>
 #include <vector>
 
+#include "parallel/signals.h"
 #include "parallel/threads.h"
 #include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
@@ -780,7 +781,10 @@ void FastBackend::Impl::Analyse() {
   common.zrelax[0] = 0.8;
   common.zrelax[1] = 0.15;
   common.zrelax[2] = 0.06;
-  factor.analyzePattern(H);
+  {
+    const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
+    factor.analyzePattern(H);
+  }
   analysed = true;
   // A PCG iteration: two triangular solves (2 x 2 nnz(L) flops) and a product with H
   // (2 nnz(H)); the factorization: CHOLMOD's count, at kSingleFactorizationSpeed times

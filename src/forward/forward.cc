@@ -24,6 +24,7 @@
 #include <memory>
 #include <sstream>
 
+#include "parallel/signals.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -587,7 +588,10 @@ bool QuasiStaticSolver::Setup() {
   }
 
   const auto start = Clock::now();
-  factorization_.analyzePattern(matrix_);
+  {
+    const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
+    factorization_.analyzePattern(matrix_);
+  }
   summary_.factorization_time_s += Seconds(start);
   if (factorization_.info() != Eigen::Success) {
     return Fail(ForwardTermination::kFactorizationFailed,
@@ -783,13 +787,19 @@ bool QuasiStaticSolver::Factorize(const std::vector<Eigen::Triplet<double>>& ext
     SparseMatrix contact(matrix_.rows(), matrix_.cols());
     contact.setFromTriplets(extra.begin(), extra.end());
     const SparseMatrix sum = matrix_ + contact;
-    factorization_.analyzePattern(sum);
+    {
+      const KeepSignalHandlers keep;
+      factorization_.analyzePattern(sum);
+    }
     // CHOLMOD's own OpenMP teams on one thread, its BLAS on threads_ (see the fast back end;
     // calculix_sag on 2 threads: wall 0.84x against teams of 2).
     WithThreadLimit(1, [&] { factorization_.factorize(sum); });
     analyzed_elastic_pattern_ = false;
   } else {
-    if (!analyzed_elastic_pattern_) factorization_.analyzePattern(matrix_);
+    if (!analyzed_elastic_pattern_) {
+      const KeepSignalHandlers keep;
+      factorization_.analyzePattern(matrix_);
+    }
     analyzed_elastic_pattern_ = true;
     WithThreadLimit(1, [&] { factorization_.factorize(matrix_); });
   }

@@ -85,8 +85,9 @@ int RunProgram(const std::vector<std::string>& argv);
 // float32 in raw appended binary, one vertex cell per point) that ParaView opens; atomically.
 Status WriteCloudVtp(const std::string& path, const PointCloud& cloud);
 
-// Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one exits at once.
-// SIGTERM (timeout, schedulers, docker stop) is handled the same way.
+// Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one, a second or more
+// later, exits at once (one sooner is the same request: timeout signals the command and its
+// process group). SIGTERM (timeout, schedulers, docker stop) is handled the same way.
 void InstallInterruptHandler();
 bool Interrupted();
 int InterruptExitCode();      // 128 + the signal (130 for SIGINT, 143 for SIGTERM)
