@@ -78,10 +78,10 @@ TEST(EvalTest, GroundTruthCsvRoundTripAndErrors) {
   };
   ASSERT_TRUE(read("x,y,z,visible\r\n# a comment\r\n 1.5 , +2,-3e-3,1\r\n\r\n4,5,6,0", &back).ok());
   ASSERT_EQ(back.positions.rows(), 2);
-  EXPECT_EQ(back.positions(0, 0), 1.5);
-  EXPECT_EQ(back.positions(0, 1), 2.0);
-  EXPECT_EQ(back.positions(0, 2), -3e-3);
-  EXPECT_EQ(back.positions(1, 2), 6.0);
+  EXPECT_DOUBLE_EQ(back.positions(0, 0), 1.5);
+  EXPECT_DOUBLE_EQ(back.positions(0, 1), 2.0);
+  EXPECT_DOUBLE_EQ(back.positions(0, 2), -3e-3);
+  EXPECT_DOUBLE_EQ(back.positions(1, 2), 6.0);
   EXPECT_EQ(back.visible, (std::vector<char>{1, 0}));
 
   const struct {

@@ -324,7 +324,7 @@ struct FastBackend::Impl {
   std::vector<double> block_values;  // Accumulate's, of one set
   std::vector<double> assembled_energy;  // Assemble's, per set
   // H and g at x; first: H's constant part anew, and *energy (if given) the energy at x,
-  // from the same linearization (Problem::Evaluate's value, to the bit).
+  // from the same linearization (its values added as Problem::Evaluate adds them).
   void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g,
                 EnergyTerms* energy = nullptr);
   // CHOLMOD's symbolic analysis of the pattern, unless done; the PCG budget from its counts.

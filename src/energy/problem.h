@@ -75,7 +75,7 @@ class Problem {
   // same additions in the same order on any thread count.
   EnergyTerms Evaluate(const Vertices& x, int threads = 1) const;
   // A set's energy from its blocks' values (1/2 w rho - offset each, in block order, as a
-  // linearization gives them), added as Evaluate adds them: the same bits.
+  // linearization gives them), added as Evaluate adds them.
   static double SumBlockValues(const std::vector<double>& values);
   // The sum of the blocks' offsets (energy/term.h): a least-squares cost over the same
   // residuals is Evaluate's total plus this.

@@ -115,8 +115,8 @@ std::array<const double*, T::kVertices> StencilPositions(const T& block, const V
   return p;
 }
 
-// |r|^2 added in residual order: BlockValue and Linearize give a block the same value, to
-// the bit (a back end's energy from its linearization is Problem::Evaluate's).
+// |r|^2 added in residual order: BlockValue and Linearize compute a block's value the same
+// way (a back end's energy from its linearization is Problem::Evaluate's).
 template <int m>
 double SquaredSum(const double* r) {
   double s = 0.0;
