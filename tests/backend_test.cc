@@ -235,7 +235,7 @@ Vertices Minimize(SolverBackend type, const energy::Problem& problem, const Vert
   // by group (the fast back end's starting energy comes from its assembly's linearization,
   // added in Evaluate's order; to round-off, which other compilers and CPUs may change).
   const EnergyTerms at_start = problem.Evaluate(start), at_end = problem.Evaluate(x);
-  const double before = at_start.total(), after = at_end.total();
+  const double before = at_start.total();
   ExpectSameEnergies(report.before, at_start, before);
   ExpectSameEnergies(report.after, at_end, before);
   EXPECT_LE(report.after.total(), report.before.total());
@@ -543,6 +543,135 @@ TEST(Multigrid, NodeBlocksMultiplyLikeTheSparseMatrix) {
     blocks.Multiply(x, 2, &y2);
     EXPECT_EQ((y1 - y2).lpNorm<Eigen::Infinity>(), 0.0);
   }
+}
+
+// The hierarchy's construction by node blocks: P = T - omega D^-1 A T and A_c = P^T A P
+// (symmetrized) from a random symmetric A whose nodes have 3 or 6 unknowns (a vertex, a full
+// aggregate) or others (the general loops), some nodes without an aggregate, against the
+// same products with dense matrices; the same bits on 2 threads; and P's and P^T's block
+// storage (NodeBlocks::AssignTransposed) multiplying like P itself.
+TEST(Multigrid, GalerkinProductsMatchTheDenseOnes) {
+  using BlockRows = fast_backend::Multigrid::BlockRows;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const std::vector<int> sizes = {3, 3, 6, 3, 2, 6, 3, 5, 3, 3, 1, 6, 3, 4, 3, 3};
+  const int nodes = 48, aggregates = 9;
+  std::vector<int> node_begin(1, 0);
+  for (int k = 0; k < nodes; ++k) node_begin.push_back(node_begin.back() + sizes[static_cast<size_t>(k) % sizes.size()]);
+  const int n = node_begin.back();
+  // A: symmetric, block pattern random (about 1 in 5 pairs of nodes), every diagonal block.
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  for (int a = 0; a < nodes; ++a) {
+    for (int b = a; b < nodes; ++b) {
+      if (a != b && rng() % 5 != 0) continue;
+      for (int i = node_begin[a]; i < node_begin[a + 1]; ++i) {
+        for (int j = node_begin[b]; j < node_begin[b + 1]; ++j) A(i, j) = A(j, i) = u(rng);
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> A_sparse = A.sparseView(0.0, 0.0);
+  A_sparse.makeCompressed();
+  // T: node k in aggregate k % aggregates, except every 7th node (none); each aggregate's
+  // column count 6, or 1 to 5.
+  BlockRows T;
+  std::vector<int> coarse_begin(1, 0);
+  for (int g = 0; g < aggregates; ++g) {
+    T.col_size.push_back(g % 3 == 0 ? 1 + g % 5 : 6);
+    coarse_begin.push_back(coarse_begin.back() + T.col_size.back());
+  }
+  Eigen::MatrixXd T_dense = Eigen::MatrixXd::Zero(n, coarse_begin.back());
+  T.begin.assign(1, 0);
+  for (int k = 0; k < nodes; ++k) {
+    const int m = node_begin[k + 1] - node_begin[k];
+    T.row_size.push_back(m);
+    if (k % 7 != 3) {
+      const int g = k % aggregates;
+      T.col.push_back(g);
+      T.at.push_back(static_cast<int>(T.values.size()));
+      for (int j = 0; j < T.col_size[g]; ++j) {
+        for (int i = 0; i < m; ++i) {
+          T.values.push_back(u(rng));
+          T_dense(node_begin[k] + i, coarse_begin[g] + j) = T.values.back();
+        }
+      }
+    }
+    T.begin.push_back(static_cast<int>(T.col.size()));
+  }
+  // D^-1: any blocks will do for the algebra.
+  std::vector<int> dinv_at;
+  std::vector<double> dinv;
+  Eigen::MatrixXd D_dense = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < nodes; ++k) {
+    const int m = node_begin[k + 1] - node_begin[k];
+    dinv_at.push_back(static_cast<int>(dinv.size()));
+    for (int j = 0; j < m; ++j) {
+      for (int i = 0; i < m; ++i) {
+        dinv.push_back(u(rng));
+        D_dense(node_begin[k] + i, node_begin[k] + j) = dinv.back();
+      }
+    }
+  }
+  const double omega = 0.7;
+  const Eigen::MatrixXd P_expected = T_dense - omega * D_dense * A * T_dense;
+  Eigen::MatrixXd Ac_expected = P_expected.transpose() * A * P_expected;
+  Ac_expected = (0.5 * (Ac_expected + Ac_expected.transpose())).eval();
+
+  auto dense = [](const BlockRows& R, const std::vector<int>& row_begin, const std::vector<int>& col_begin) {
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(row_begin.back(), col_begin.back());
+    for (size_t r = 0; r + 1 < R.begin.size(); ++r) {
+      for (int q = R.begin[r]; q < R.begin[r + 1]; ++q) {
+        EXPECT_TRUE(q == R.begin[r] || R.col[q - 1] < R.col[q]) << "row " << r << " not sorted";
+        const int c = R.col[q], m = R.row_size[r];
+        for (int j = 0; j < R.col_size[c]; ++j) {
+          for (int i = 0; i < m; ++i) M(row_begin[r] + i, col_begin[c] + j) = R.values[R.at[q] + i + m * j];
+        }
+      }
+    }
+    return M;
+  };
+  BlockRows P1, Pt1, P2, Pt2;
+  Eigen::SparseMatrix<double> Ac1, Ac2;
+  ASSERT_TRUE(fast_backend::Multigrid::Galerkin(A_sparse, node_begin, T, dinv_at, dinv, omega, 1, &P1, &Pt1, &Ac1));
+  const double scale = Ac_expected.cwiseAbs().maxCoeff();
+  EXPECT_LE((dense(P1, node_begin, coarse_begin) - P_expected).cwiseAbs().maxCoeff(),
+            1e-13 * P_expected.cwiseAbs().maxCoeff());
+  EXPECT_LE((dense(Pt1, coarse_begin, node_begin) - P_expected.transpose()).cwiseAbs().maxCoeff(),
+            1e-13 * P_expected.cwiseAbs().maxCoeff());
+  const Eigen::MatrixXd Ac1_dense = Eigen::MatrixXd(Ac1);
+  EXPECT_LE((Ac1_dense - Ac_expected).cwiseAbs().maxCoeff(), 1e-12 * scale);
+  EXPECT_EQ((Ac1_dense - Ac1_dense.transpose()).cwiseAbs().maxCoeff(), 0.0);  // symmetric exactly
+  for (int c = 0; c < Ac1.outerSize(); ++c) {  // rows sorted in every column
+    for (int p = Ac1.outerIndexPtr()[c] + 1; p < Ac1.outerIndexPtr()[c + 1]; ++p) {
+      EXPECT_LT(Ac1.innerIndexPtr()[p - 1], Ac1.innerIndexPtr()[p]);
+    }
+  }
+  ASSERT_TRUE(fast_backend::Multigrid::Galerkin(A_sparse, node_begin, T, dinv_at, dinv, omega, 2, &P2, &Pt2, &Ac2));
+  EXPECT_EQ(P1.values, P2.values);
+  EXPECT_EQ(P1.col, P2.col);
+  EXPECT_EQ(Eigen::MatrixXd(Ac2), Ac1_dense);
+  // The V-cycle's storage of P (gathers P^T x) and P^T (gathers P x).
+  fast_backend::Multigrid::NodeBlocks p_blocks, pt_blocks;
+  p_blocks.AssignTransposed(Pt1, node_begin, coarse_begin);
+  pt_blocks.AssignTransposed(P1, coarse_begin, node_begin);
+  Eigen::VectorXd x(n), y(coarse_begin.back()), px, ptx;
+  for (int i = 0; i < n; ++i) x[i] = u(rng);
+  for (int i = 0; i < y.size(); ++i) y[i] = u(rng);
+  p_blocks.Multiply(x, 1, &ptx);   // P^T x
+  pt_blocks.Multiply(y, 1, &px);   // P y
+  const Eigen::VectorXd ptx_expected = P_expected.transpose() * x, px_expected = P_expected * y;
+  EXPECT_LE((ptx - ptx_expected).lpNorm<Eigen::Infinity>(), 1e-5 * ptx_expected.lpNorm<Eigen::Infinity>());
+  EXPECT_LE((px - px_expected).lpNorm<Eigen::Infinity>(), 1e-5 * px_expected.lpNorm<Eigen::Infinity>());
+  // A row node of T without A's diagonal block is refused.
+  Eigen::SparseMatrix<double> no_diagonal = A_sparse;
+  for (int c = node_begin[5]; c < node_begin[6]; ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(no_diagonal, c); it; ++it) {
+      if (it.row() >= node_begin[5] && it.row() < node_begin[6]) it.valueRef() = 0.0;
+    }
+  }
+  no_diagonal.prune(0.0);
+  BlockRows P3, Pt3;
+  Eigen::SparseMatrix<double> Ac3;
+  EXPECT_FALSE(fast_backend::Multigrid::Galerkin(no_diagonal, node_begin, T, dinv_at, dinv, omega, 1, &P3, &Pt3, &Ac3));
 }
 
 // PCG's preconditioner, the back end's own substitutions with CHOLMOD's supernodal factor,

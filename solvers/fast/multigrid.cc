@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -280,6 +281,41 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
   values.resize(values.size() + 4, 0.0f);  // the last block's 4th lane (GatherNodeFloat)
 }
 
+void Multigrid::NodeBlocks::AssignTransposed(const BlockRows& R, const std::vector<int>& row_nodes,
+                                             const std::vector<int>& col_nodes) {
+  rows = row_nodes.back();
+  cols = col_nodes.back();
+  col_begin = col_nodes;
+  const int num_col_nodes = static_cast<int>(col_nodes.size()) - 1;
+  block_begin.assign(1, 0);
+  rows_of.clear();
+  row_first.assign(R.col.size(), 0);
+  row_count.assign(R.col.size(), 0);
+  value_at.assign(R.col.size(), 0);
+  values.assign(R.values.size() + 4, 0.0f);  // 4 more: the last block's 4th lane (GatherNodeFloat)
+  for (int c = 0; c < num_col_nodes; ++c) {
+    const int nc = R.row_size[static_cast<size_t>(c)];
+    int shared = -1;
+    for (int q = R.begin[static_cast<size_t>(c)]; q < R.begin[static_cast<size_t>(c) + 1]; ++q) {
+      const int r = R.col[static_cast<size_t>(q)];
+      const int nr = R.col_size[static_cast<size_t>(r)];
+      const size_t k = static_cast<size_t>(q);
+      row_first[k] = row_nodes[static_cast<size_t>(r)];
+      row_count[k] = nr;
+      value_at[k] = R.at[k];
+      // M's block (nr x nc) is R's (nc x nr) transposed.
+      const double* from = R.values.data() + R.at[k];
+      float* to = values.data() + R.at[k];
+      for (int j = 0; j < nc; ++j) {
+        for (int i = 0; i < nr; ++i) to[i + nr * j] = static_cast<float>(from[j + nc * i]);
+      }
+      shared = shared == -1 || shared == nr ? nr : 0;
+    }
+    rows_of.push_back(std::max(shared, 0));
+    block_begin.push_back(R.begin[static_cast<size_t>(c) + 1]);
+  }
+}
+
 void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eigen::VectorXd* y) {
   y->resize(cols);
   const int nodes = static_cast<int>(col_begin.size()) - 1;
@@ -413,6 +449,352 @@ bool Multigrid::RefreshFinest(const SparseMatrix& A) {
     levels_.clear();
     return false;
   }
+  return true;
+}
+
+namespace {
+
+using BlockRows = Multigrid::BlockRows;
+
+template <int M, int K, int N>
+inline void AddProductFixed(const double* X, const double* Y, double* C) {
+  for (int j = 0; j < N; ++j) {
+    for (int l = 0; l < K; ++l) {
+      const double y = Y[l + K * j];
+      for (int i = 0; i < M; ++i) C[i + M * j] += X[i + M * l] * y;
+    }
+  }
+}
+
+// C += X Y for column-major X (m x k), Y (k x n), C (m x n); the sizes of vertex (3) and
+// full aggregate (6) nodes with loops of fixed length (the same sums in the same order).
+inline void AddProduct(const double* X, int m, int k, const double* Y, int n, double* C) {
+  if (k == 3 && n == 6) {
+    if (m == 3) return AddProductFixed<3, 3, 6>(X, Y, C);
+    if (m == 6) return AddProductFixed<6, 3, 6>(X, Y, C);
+  }
+  if (m == 6 && k == 6 && n == 6) return AddProductFixed<6, 6, 6>(X, Y, C);
+  if (m == 3 && k == 3 && n == 3) return AddProductFixed<3, 3, 3>(X, Y, C);
+  for (int j = 0; j < n; ++j) {
+    for (int l = 0; l < k; ++l) {
+      const double y = Y[l + k * j];
+      for (int i = 0; i < m; ++i) C[i + m * j] += X[i + m * l] * y;
+    }
+  }
+}
+
+// Runs row(r, scratch) for r in [0, rows) on `threads` threads (static schedule), each
+// thread with its own scratch of `width` ints set to -1.
+template <class Row>
+void ForRows(int rows, int width, int threads, const Row& row) {
+  if (threads > 1 && rows >= 64) {
+#pragma omp parallel num_threads(threads)
+    {
+      std::vector<int> scratch(static_cast<size_t>(width), -1);
+#pragma omp for schedule(static)
+      for (int r = 0; r < rows; ++r) row(r, &scratch);
+    }
+  } else {
+    std::vector<int> scratch(static_cast<size_t>(width), -1);
+    for (int r = 0; r < rows; ++r) row(r, &scratch);
+  }
+}
+
+// Row r's value offsets from its blocks' column nodes (C.begin, C.col set): C.at and the
+// values' total.
+void PlaceValues(BlockRows* C) {
+  const int rows = static_cast<int>(C->row_size.size());
+  C->at.resize(C->col.size());
+  size_t total = 0;
+  for (int r = 0; r < rows; ++r) {
+    for (int q = C->begin[static_cast<size_t>(r)]; q < C->begin[static_cast<size_t>(r) + 1]; ++q) {
+      C->at[static_cast<size_t>(q)] = static_cast<int>(total);
+      total += static_cast<size_t>(C->row_size[static_cast<size_t>(r)]) *
+               static_cast<size_t>(C->col_size[static_cast<size_t>(C->col[static_cast<size_t>(q)])]);
+    }
+  }
+  C->values.assign(total, 0.0);
+}
+
+// A symmetric A (column-major, both triangles) by node blocks: row node i's block A_ij
+// holds A's entries with column in node i and row in node j, transposed (= A_ij, as A is
+// symmetric).
+BlockRows RowsOfSymmetric(const Eigen::SparseMatrix<double>& A, const std::vector<int>& node_begin,
+                          int threads) {
+  const int nodes = static_cast<int>(node_begin.size()) - 1;
+  BlockRows R;
+  R.row_size.resize(static_cast<size_t>(nodes));
+  for (int k = 0; k < nodes; ++k) {
+    R.row_size[static_cast<size_t>(k)] = node_begin[static_cast<size_t>(k) + 1] - node_begin[static_cast<size_t>(k)];
+  }
+  R.col_size = R.row_size;
+  std::vector<int> node_of(static_cast<size_t>(A.cols()));
+  for (int k = 0; k < nodes; ++k) {
+    for (int c = node_begin[static_cast<size_t>(k)]; c < node_begin[static_cast<size_t>(k) + 1]; ++c) {
+      node_of[static_cast<size_t>(c)] = k;
+    }
+  }
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  const int* inner_count = A.innerNonZeroPtr();  // null when compressed
+  const double* values = A.valuePtr();
+  auto column_end = [&](int c) { return inner_count == nullptr ? outer[c + 1] : outer[c] + inner_count[c]; };
+  std::vector<int> count(static_cast<size_t>(nodes), 0);
+  ForRows(nodes, nodes, threads, [&](int i, std::vector<int>* marker) {
+    int n = 0;
+    for (int c = node_begin[static_cast<size_t>(i)]; c < node_begin[static_cast<size_t>(i) + 1]; ++c) {
+      for (int p = outer[c]; p < column_end(c); ++p) {
+        const int j = node_of[static_cast<size_t>(inner[p])];
+        if ((*marker)[static_cast<size_t>(j)] != i) {
+          (*marker)[static_cast<size_t>(j)] = i;
+          ++n;
+        }
+      }
+    }
+    count[static_cast<size_t>(i)] = n;
+  });
+  R.begin.assign(static_cast<size_t>(nodes) + 1, 0);
+  for (int i = 0; i < nodes; ++i) R.begin[static_cast<size_t>(i) + 1] = R.begin[static_cast<size_t>(i)] + count[static_cast<size_t>(i)];
+  R.col.resize(static_cast<size_t>(R.begin.back()));
+  // The column nodes of each row, sorted.
+  ForRows(nodes, nodes, threads, [&](int i, std::vector<int>* marker) {
+    int q = R.begin[static_cast<size_t>(i)];
+    for (int c = node_begin[static_cast<size_t>(i)]; c < node_begin[static_cast<size_t>(i) + 1]; ++c) {
+      for (int p = outer[c]; p < column_end(c); ++p) {
+        const int j = node_of[static_cast<size_t>(inner[p])];
+        if ((*marker)[static_cast<size_t>(j)] != i) {
+          (*marker)[static_cast<size_t>(j)] = i;
+          R.col[static_cast<size_t>(q++)] = j;
+        }
+      }
+    }
+    std::sort(R.col.begin() + R.begin[static_cast<size_t>(i)], R.col.begin() + R.begin[static_cast<size_t>(i) + 1]);
+  });
+  PlaceValues(&R);
+  ForRows(nodes, nodes, threads, [&](int i, std::vector<int>* position) {
+    for (int q = R.begin[static_cast<size_t>(i)]; q < R.begin[static_cast<size_t>(i) + 1]; ++q) {
+      (*position)[static_cast<size_t>(R.col[static_cast<size_t>(q)])] = q;
+    }
+    const int first = node_begin[static_cast<size_t>(i)];
+    const int m = R.row_size[static_cast<size_t>(i)];
+    for (int c = first; c < node_begin[static_cast<size_t>(i) + 1]; ++c) {
+      for (int p = outer[c]; p < column_end(c); ++p) {
+        const int row = inner[p];
+        const int j = node_of[static_cast<size_t>(row)];
+        const int q = (*position)[static_cast<size_t>(j)];
+        R.values[static_cast<size_t>(R.at[static_cast<size_t>(q)] + (c - first) +
+                                     m * (row - node_begin[static_cast<size_t>(j)]))] = values[p];
+      }
+    }
+  });
+  return R;
+}
+
+// C = X Y (X's column nodes are Y's row nodes); each row's blocks summed in X's, then Y's
+// order.
+BlockRows Multiply(const BlockRows& X, const BlockRows& Y, int threads) {
+  const int rows = static_cast<int>(X.row_size.size());
+  const int cols = static_cast<int>(Y.col_size.size());
+  BlockRows C;
+  C.row_size = X.row_size;
+  C.col_size = Y.col_size;
+  std::vector<int> count(static_cast<size_t>(rows), 0);
+  ForRows(rows, cols, threads, [&](int r, std::vector<int>* marker) {
+    int n = 0;
+    for (int q = X.begin[static_cast<size_t>(r)]; q < X.begin[static_cast<size_t>(r) + 1]; ++q) {
+      const int k = X.col[static_cast<size_t>(q)];
+      for (int t = Y.begin[static_cast<size_t>(k)]; t < Y.begin[static_cast<size_t>(k) + 1]; ++t) {
+        const int h = Y.col[static_cast<size_t>(t)];
+        if ((*marker)[static_cast<size_t>(h)] != r) {
+          (*marker)[static_cast<size_t>(h)] = r;
+          ++n;
+        }
+      }
+    }
+    count[static_cast<size_t>(r)] = n;
+  });
+  C.begin.assign(static_cast<size_t>(rows) + 1, 0);
+  for (int r = 0; r < rows; ++r) C.begin[static_cast<size_t>(r) + 1] = C.begin[static_cast<size_t>(r)] + count[static_cast<size_t>(r)];
+  C.col.resize(static_cast<size_t>(C.begin.back()));
+  ForRows(rows, cols, threads, [&](int r, std::vector<int>* marker) {
+    int q0 = C.begin[static_cast<size_t>(r)];
+    for (int q = X.begin[static_cast<size_t>(r)]; q < X.begin[static_cast<size_t>(r) + 1]; ++q) {
+      const int k = X.col[static_cast<size_t>(q)];
+      for (int t = Y.begin[static_cast<size_t>(k)]; t < Y.begin[static_cast<size_t>(k) + 1]; ++t) {
+        const int h = Y.col[static_cast<size_t>(t)];
+        if ((*marker)[static_cast<size_t>(h)] != r) {
+          (*marker)[static_cast<size_t>(h)] = r;
+          C.col[static_cast<size_t>(q0++)] = h;
+        }
+      }
+    }
+    std::sort(C.col.begin() + C.begin[static_cast<size_t>(r)], C.col.begin() + C.begin[static_cast<size_t>(r) + 1]);
+  });
+  PlaceValues(&C);
+  ForRows(rows, cols, threads, [&](int r, std::vector<int>* position) {
+    for (int q = C.begin[static_cast<size_t>(r)]; q < C.begin[static_cast<size_t>(r) + 1]; ++q) {
+      (*position)[static_cast<size_t>(C.col[static_cast<size_t>(q)])] = q;
+    }
+    const int m = X.row_size[static_cast<size_t>(r)];
+    for (int q = X.begin[static_cast<size_t>(r)]; q < X.begin[static_cast<size_t>(r) + 1]; ++q) {
+      const int k = X.col[static_cast<size_t>(q)];
+      const int s = X.col_size[static_cast<size_t>(k)];
+      const double* x = X.values.data() + X.at[static_cast<size_t>(q)];
+      for (int t = Y.begin[static_cast<size_t>(k)]; t < Y.begin[static_cast<size_t>(k) + 1]; ++t) {
+        const int h = Y.col[static_cast<size_t>(t)];
+        double* c = C.values.data() + C.at[static_cast<size_t>((*position)[static_cast<size_t>(h)])];
+        AddProduct(x, m, s, Y.values.data() + Y.at[static_cast<size_t>(t)], Y.col_size[static_cast<size_t>(h)], c);
+      }
+    }
+  });
+  return C;
+}
+
+// X^T by node blocks (each row's blocks in increasing column node).
+BlockRows Transpose(const BlockRows& X) {
+  const int rows = static_cast<int>(X.row_size.size());
+  const int cols = static_cast<int>(X.col_size.size());
+  BlockRows T;
+  T.row_size = X.col_size;
+  T.col_size = X.row_size;
+  T.begin.assign(static_cast<size_t>(cols) + 1, 0);
+  for (int c : X.col) ++T.begin[static_cast<size_t>(c) + 1];
+  for (int c = 0; c < cols; ++c) T.begin[static_cast<size_t>(c) + 1] += T.begin[static_cast<size_t>(c)];
+  T.col.resize(X.col.size());
+  std::vector<int> next(T.begin.begin(), T.begin.end() - 1);
+  std::vector<int> source(X.col.size());  // T's block q is X's block source[q]
+  for (int r = 0; r < rows; ++r) {
+    for (int q = X.begin[static_cast<size_t>(r)]; q < X.begin[static_cast<size_t>(r) + 1]; ++q) {
+      const int slot = next[static_cast<size_t>(X.col[static_cast<size_t>(q)])]++;
+      T.col[static_cast<size_t>(slot)] = r;
+      source[static_cast<size_t>(slot)] = q;
+    }
+  }
+  PlaceValues(&T);
+  for (int c = 0; c < cols; ++c) {
+    const int m = T.row_size[static_cast<size_t>(c)];
+    for (int q = T.begin[static_cast<size_t>(c)]; q < T.begin[static_cast<size_t>(c) + 1]; ++q) {
+      const int n = T.col_size[static_cast<size_t>(T.col[static_cast<size_t>(q)])];
+      const double* x = X.values.data() + X.at[static_cast<size_t>(source[static_cast<size_t>(q)])];  // n x m
+      double* t = T.values.data() + T.at[static_cast<size_t>(q)];                                      // m x n
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < m; ++i) t[i + m * j] = x[j + n * i];
+      }
+    }
+  }
+  return T;
+}
+
+// The column-major matrix M whose columns are R's rows: R is M^T by node blocks, its row
+// nodes' unknowns start at col_begin, its column nodes' at row_begin.
+Eigen::SparseMatrix<double> ColumnMajorOfTranspose(const BlockRows& R, const std::vector<int>& row_begin,
+                                                   const std::vector<int>& col_begin) {
+  const int col_nodes = static_cast<int>(R.row_size.size());
+  Eigen::SparseMatrix<double> M(row_begin.back(), col_begin.back());
+  int64_t nonzeros = 0;
+  for (int j = 0; j < col_nodes; ++j) {
+    int64_t per_column = 0;
+    for (int q = R.begin[static_cast<size_t>(j)]; q < R.begin[static_cast<size_t>(j) + 1]; ++q) {
+      per_column += R.col_size[static_cast<size_t>(R.col[static_cast<size_t>(q)])];
+    }
+    nonzeros += per_column * R.row_size[static_cast<size_t>(j)];
+  }
+  M.resizeNonZeros(static_cast<Eigen::Index>(nonzeros));
+  int* outer = M.outerIndexPtr();
+  int* inner = M.innerIndexPtr();
+  double* values = M.valuePtr();
+  int p = 0;
+  outer[0] = 0;
+  for (int j = 0; j < col_nodes; ++j) {
+    const int m = R.row_size[static_cast<size_t>(j)];
+    for (int a = 0; a < m; ++a) {
+      for (int q = R.begin[static_cast<size_t>(j)]; q < R.begin[static_cast<size_t>(j) + 1]; ++q) {
+        const int h = R.col[static_cast<size_t>(q)];
+        const double* block = R.values.data() + R.at[static_cast<size_t>(q)];
+        for (int b = 0; b < R.col_size[static_cast<size_t>(h)]; ++b) {
+          inner[p] = row_begin[static_cast<size_t>(h)] + b;
+          values[p] = block[a + m * b];
+          ++p;
+        }
+      }
+      outer[col_begin[static_cast<size_t>(j)] + a + 1] = p;
+    }
+  }
+  return M;
+}
+
+}  // namespace
+
+bool Multigrid::Galerkin(const SparseMatrix& A, const std::vector<int>& node_begin, const BlockRows& T,
+                         const std::vector<int>& dinv_at, const std::vector<double>& dinv, double omega,
+                         int threads, BlockRows* P, BlockRows* Pt, SparseMatrix* Ac) {
+  const int nodes = static_cast<int>(node_begin.size()) - 1;
+  const BlockRows rows_of_A = RowsOfSymmetric(A, node_begin, threads);
+  // P = T - omega D^-1 (A T): A T has every block of T (A's diagonal blocks are there).
+  BlockRows prolongator = Multiply(rows_of_A, T, threads);
+  std::atomic<bool> complete(true);
+  ForRows(nodes, 0, threads, [&](int i, std::vector<int>*) {
+    const int m = prolongator.row_size[static_cast<size_t>(i)];
+    const double* D = dinv.data() + dinv_at[static_cast<size_t>(i)];
+    std::vector<double> column(static_cast<size_t>(m));
+    const int t = T.begin[static_cast<size_t>(i)] < T.begin[static_cast<size_t>(i) + 1] ? T.begin[static_cast<size_t>(i)] : -1;
+    bool found = t < 0;
+    for (int q = prolongator.begin[static_cast<size_t>(i)]; q < prolongator.begin[static_cast<size_t>(i) + 1]; ++q) {
+      const int g = prolongator.col[static_cast<size_t>(q)];
+      const int n = prolongator.col_size[static_cast<size_t>(g)];
+      double* block = prolongator.values.data() + prolongator.at[static_cast<size_t>(q)];
+      const double* tentative = nullptr;
+      if (t >= 0 && T.col[static_cast<size_t>(t)] == g) {
+        tentative = T.values.data() + T.at[static_cast<size_t>(t)];
+        found = true;
+      }
+      for (int j = 0; j < n; ++j) {
+        for (int a = 0; a < m; ++a) {
+          double s = 0.0;
+          for (int b = 0; b < m; ++b) s += D[a + m * b] * block[b + m * j];
+          column[static_cast<size_t>(a)] = s;
+        }
+        for (int a = 0; a < m; ++a) {
+          block[a + m * j] = (tentative != nullptr ? tentative[a + m * j] : 0.0) - omega * column[static_cast<size_t>(a)];
+        }
+      }
+    }
+    if (!found) complete = false;
+  });
+  if (!complete) return false;
+  BlockRows prolongator_t = Transpose(prolongator);
+  BlockRows coarse = Multiply(prolongator_t, Multiply(rows_of_A, prolongator, threads), threads);
+  // Symmetric: each pair of blocks (g, h) and (h, g) replaced by their mean.
+  const int coarse_nodes = static_cast<int>(coarse.row_size.size());
+  for (int g = 0; g < coarse_nodes; ++g) {
+    const int m = coarse.row_size[static_cast<size_t>(g)];
+    for (int q = coarse.begin[static_cast<size_t>(g)]; q < coarse.begin[static_cast<size_t>(g) + 1]; ++q) {
+      const int h = coarse.col[static_cast<size_t>(q)];
+      if (h < g) continue;
+      const int n = coarse.row_size[static_cast<size_t>(h)];
+      const auto first = coarse.col.begin() + coarse.begin[static_cast<size_t>(h)];
+      const auto last = coarse.col.begin() + coarse.begin[static_cast<size_t>(h) + 1];
+      const auto it = std::lower_bound(first, last, g);
+      if (it == last || *it != g) continue;  // (P^T A P's pattern is symmetric)
+      double* gh = coarse.values.data() + coarse.at[static_cast<size_t>(q)];                          // m x n
+      double* hg = coarse.values.data() + coarse.at[static_cast<size_t>(it - coarse.col.begin())];    // n x m
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < m; ++i) {
+          if (h == g && j <= i) continue;  // a diagonal block: each pair once
+          const double mean = 0.5 * (gh[i + m * j] + hg[j + n * i]);
+          gh[i + m * j] = mean;
+          hg[j + n * i] = mean;
+        }
+      }
+    }
+  }
+  std::vector<int> coarse_begin(static_cast<size_t>(coarse_nodes) + 1, 0);
+  for (int g = 0; g < coarse_nodes; ++g) {
+    coarse_begin[static_cast<size_t>(g) + 1] = coarse_begin[static_cast<size_t>(g)] + coarse.row_size[static_cast<size_t>(g)];
+  }
+  *Ac = ColumnMajorOfTranspose(coarse, coarse_begin, coarse_begin);
+  *P = std::move(prolongator);
+  *Pt = std::move(prolongator_t);
   return true;
 }
 
@@ -559,7 +941,14 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
     for (int a = 0; a < nodes; ++a) {
       if (aggregate[static_cast<size_t>(a)] >= 0) members[static_cast<size_t>(aggregate[static_cast<size_t>(a)])].push_back(a);
     }
-    std::vector<Eigen::Triplet<double>> t_entries;
+    // T by node blocks: node a's rows of its aggregate's basis (a row node without an
+    // aggregate has none).
+    BlockRows T;
+    T.row_size.resize(static_cast<size_t>(nodes));
+    for (int a = 0; a < nodes; ++a) {
+      T.row_size[static_cast<size_t>(a)] = L.node_begin[static_cast<size_t>(a) + 1] - L.node_begin[static_cast<size_t>(a)];
+    }
+    std::vector<int> t_at(static_cast<size_t>(nodes), -1);
     std::vector<int> coarse_begin(1, 0);
     Eigen::MatrixXd coarse_B(6 * aggregates, 6);
     int coarse_rows = 0;
@@ -597,48 +986,42 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
         ++kept;
       }
       if (m < kept) kept = m;
-      for (int i = 0; i < m; ++i) {
-        for (int k = 0; k < kept; ++k) t_entries.emplace_back(rows[static_cast<size_t>(i)], coarse_rows + k, Q(i, k));
+      int row = 0;
+      for (int a : members[static_cast<size_t>(g)]) {
+        const int size = T.row_size[static_cast<size_t>(a)];
+        t_at[static_cast<size_t>(a)] = static_cast<int>(T.values.size());
+        for (int k = 0; k < kept; ++k) {
+          for (int i = 0; i < size; ++i) T.values.push_back(Q(row + i, k));
+        }
+        row += size;
       }
+      T.col_size.push_back(kept);
       coarse_B.block(coarse_rows, 0, kept, B.cols()) = R.topRows(kept);
       coarse_rows += kept;
       coarse_begin.push_back(coarse_rows);
     }
     if (coarse_rows == 0 || coarse_rows > kStall * n) break;
-    SparseMatrix T(n, coarse_rows);
-    T.setFromTriplets(t_entries.begin(), t_entries.end());
-    // Smoothed: P = T - omega D^-1 A T, omega = 4 / (3 lambda_max).
-    SparseMatrix Dinv(n, n);
-    {
-      std::vector<Eigen::Triplet<double>> d_entries;
-      d_entries.reserve(L.dinv.size());
-      for (int k = 0; k < nodes; ++k) {
-        const int b = L.node_begin[static_cast<size_t>(k)];
-        const int m = L.node_begin[static_cast<size_t>(k) + 1] - b;
-        const double* D = L.dinv.data() + L.dinv_at[static_cast<size_t>(k)];
-        for (int j = 0; j < m; ++j) {
-          for (int i = 0; i < m; ++i) d_entries.emplace_back(b + i, b + j, D[j * m + i]);
-        }
+    T.begin.assign(static_cast<size_t>(nodes) + 1, 0);
+    for (int a = 0; a < nodes; ++a) {
+      const bool has = aggregate[static_cast<size_t>(a)] >= 0;
+      T.begin[static_cast<size_t>(a) + 1] = T.begin[static_cast<size_t>(a)] + (has ? 1 : 0);
+      if (has) {
+        T.col.push_back(aggregate[static_cast<size_t>(a)]);
+        T.at.push_back(t_at[static_cast<size_t>(a)]);
       }
-      Dinv.setFromTriplets(d_entries.begin(), d_entries.end());
     }
+    // Smoothed: P = T - omega D^-1 A T, omega = 4 / (3 lambda_max); A_c = P^T A P.
     const double omega = 4.0 / (3.0 * L.lambda_max);
-    const SparseMatrix AT = A * T;
-    const SparseMatrix DAT = Dinv * AT;
-    L.P = T - omega * DAT;
-    L.P.makeCompressed();
-    L.Pt = L.P.transpose();
-    L.Pt.makeCompressed();
-    const SparseMatrix AP = A * L.P;
-    SparseMatrix Ac = L.Pt * AP;
-    const SparseMatrix Act = Ac.transpose();
-    Ac = 0.5 * (Ac + Act);
-    Ac.makeCompressed();
-
-    L.P_b.Assign(L.P, L.node_begin, coarse_begin);
-    L.Pt_b.Assign(L.Pt, coarse_begin, L.node_begin);
-    L.P = SparseMatrix();
-    L.Pt = SparseMatrix();
+    SparseMatrix Ac;
+    {
+      BlockRows P, Pt;
+      if (!Galerkin(A, L.node_begin, T, L.dinv_at, L.dinv, omega, threads_, &P, &Pt, &Ac)) {
+        levels_.clear();
+        return false;
+      }
+      L.P_b.AssignTransposed(Pt, L.node_begin, coarse_begin);
+      L.Pt_b.AssignTransposed(P, coarse_begin, L.node_begin);
+    }
     if (l > 0) L.A = SparseMatrix();  // the coarse system's product is built: A_b from here on
     levels_.emplace_back();  // no reallocation: reserved
     Level& C = levels_.back();
