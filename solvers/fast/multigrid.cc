@@ -516,6 +516,39 @@ void PlaceValues(BlockRows* C) {
   C->values.assign(total, 0.0);
 }
 
+// R's pattern (begin, col, at) and zeroed values: row r's column nodes are the distinct
+// ones for_each_column(r, emit) emits, sorted.
+template <class ForEachColumn>
+void MakePattern(int rows, int cols, int threads, const ForEachColumn& for_each_column, BlockRows* R) {
+  std::vector<int> count(static_cast<size_t>(rows), 0);
+  ForRows(rows, cols, threads, [&](int r, std::vector<int>* marker) {
+    int n = 0;
+    for_each_column(r, [&](int h) {
+      if ((*marker)[static_cast<size_t>(h)] != r) {
+        (*marker)[static_cast<size_t>(h)] = r;
+        ++n;
+      }
+    });
+    count[static_cast<size_t>(r)] = n;
+  });
+  R->begin.assign(static_cast<size_t>(rows) + 1, 0);
+  for (int r = 0; r < rows; ++r) {
+    R->begin[static_cast<size_t>(r) + 1] = R->begin[static_cast<size_t>(r)] + count[static_cast<size_t>(r)];
+  }
+  R->col.resize(static_cast<size_t>(R->begin.back()));
+  ForRows(rows, cols, threads, [&](int r, std::vector<int>* marker) {
+    int q = R->begin[static_cast<size_t>(r)];
+    for_each_column(r, [&](int h) {
+      if ((*marker)[static_cast<size_t>(h)] != r) {
+        (*marker)[static_cast<size_t>(h)] = r;
+        R->col[static_cast<size_t>(q++)] = h;
+      }
+    });
+    std::sort(R->col.begin() + R->begin[static_cast<size_t>(r)], R->col.begin() + R->begin[static_cast<size_t>(r) + 1]);
+  });
+  PlaceValues(R);
+}
+
 // A symmetric A (column-major, both triangles) by node blocks: row node i's block A_ij
 // holds A's entries with column in node i and row in node j, transposed (= A_ij, as A is
 // symmetric).
@@ -539,38 +572,11 @@ BlockRows RowsOfSymmetric(const Eigen::SparseMatrix<double>& A, const std::vecto
   const int* inner_count = A.innerNonZeroPtr();  // null when compressed
   const double* values = A.valuePtr();
   auto column_end = [&](int c) { return inner_count == nullptr ? outer[c + 1] : outer[c] + inner_count[c]; };
-  std::vector<int> count(static_cast<size_t>(nodes), 0);
-  ForRows(nodes, nodes, threads, [&](int i, std::vector<int>* marker) {
-    int n = 0;
+  MakePattern(nodes, nodes, threads, [&](int i, const auto& emit) {
     for (int c = node_begin[static_cast<size_t>(i)]; c < node_begin[static_cast<size_t>(i) + 1]; ++c) {
-      for (int p = outer[c]; p < column_end(c); ++p) {
-        const int j = node_of[static_cast<size_t>(inner[p])];
-        if ((*marker)[static_cast<size_t>(j)] != i) {
-          (*marker)[static_cast<size_t>(j)] = i;
-          ++n;
-        }
-      }
+      for (int p = outer[c]; p < column_end(c); ++p) emit(node_of[static_cast<size_t>(inner[p])]);
     }
-    count[static_cast<size_t>(i)] = n;
-  });
-  R.begin.assign(static_cast<size_t>(nodes) + 1, 0);
-  for (int i = 0; i < nodes; ++i) R.begin[static_cast<size_t>(i) + 1] = R.begin[static_cast<size_t>(i)] + count[static_cast<size_t>(i)];
-  R.col.resize(static_cast<size_t>(R.begin.back()));
-  // The column nodes of each row, sorted.
-  ForRows(nodes, nodes, threads, [&](int i, std::vector<int>* marker) {
-    int q = R.begin[static_cast<size_t>(i)];
-    for (int c = node_begin[static_cast<size_t>(i)]; c < node_begin[static_cast<size_t>(i) + 1]; ++c) {
-      for (int p = outer[c]; p < column_end(c); ++p) {
-        const int j = node_of[static_cast<size_t>(inner[p])];
-        if ((*marker)[static_cast<size_t>(j)] != i) {
-          (*marker)[static_cast<size_t>(j)] = i;
-          R.col[static_cast<size_t>(q++)] = j;
-        }
-      }
-    }
-    std::sort(R.col.begin() + R.begin[static_cast<size_t>(i)], R.col.begin() + R.begin[static_cast<size_t>(i) + 1]);
-  });
-  PlaceValues(&R);
+  }, &R);
   ForRows(nodes, nodes, threads, [&](int i, std::vector<int>* position) {
     for (int q = R.begin[static_cast<size_t>(i)]; q < R.begin[static_cast<size_t>(i) + 1]; ++q) {
       (*position)[static_cast<size_t>(R.col[static_cast<size_t>(q)])] = q;
@@ -598,39 +604,14 @@ BlockRows Multiply(const BlockRows& X, const BlockRows& Y, int threads) {
   BlockRows C;
   C.row_size = X.row_size;
   C.col_size = Y.col_size;
-  std::vector<int> count(static_cast<size_t>(rows), 0);
-  ForRows(rows, cols, threads, [&](int r, std::vector<int>* marker) {
-    int n = 0;
+  MakePattern(rows, cols, threads, [&](int r, const auto& emit) {
     for (int q = X.begin[static_cast<size_t>(r)]; q < X.begin[static_cast<size_t>(r) + 1]; ++q) {
       const int k = X.col[static_cast<size_t>(q)];
       for (int t = Y.begin[static_cast<size_t>(k)]; t < Y.begin[static_cast<size_t>(k) + 1]; ++t) {
-        const int h = Y.col[static_cast<size_t>(t)];
-        if ((*marker)[static_cast<size_t>(h)] != r) {
-          (*marker)[static_cast<size_t>(h)] = r;
-          ++n;
-        }
+        emit(Y.col[static_cast<size_t>(t)]);
       }
     }
-    count[static_cast<size_t>(r)] = n;
-  });
-  C.begin.assign(static_cast<size_t>(rows) + 1, 0);
-  for (int r = 0; r < rows; ++r) C.begin[static_cast<size_t>(r) + 1] = C.begin[static_cast<size_t>(r)] + count[static_cast<size_t>(r)];
-  C.col.resize(static_cast<size_t>(C.begin.back()));
-  ForRows(rows, cols, threads, [&](int r, std::vector<int>* marker) {
-    int q0 = C.begin[static_cast<size_t>(r)];
-    for (int q = X.begin[static_cast<size_t>(r)]; q < X.begin[static_cast<size_t>(r) + 1]; ++q) {
-      const int k = X.col[static_cast<size_t>(q)];
-      for (int t = Y.begin[static_cast<size_t>(k)]; t < Y.begin[static_cast<size_t>(k) + 1]; ++t) {
-        const int h = Y.col[static_cast<size_t>(t)];
-        if ((*marker)[static_cast<size_t>(h)] != r) {
-          (*marker)[static_cast<size_t>(h)] = r;
-          C.col[static_cast<size_t>(q0++)] = h;
-        }
-      }
-    }
-    std::sort(C.col.begin() + C.begin[static_cast<size_t>(r)], C.col.begin() + C.begin[static_cast<size_t>(r) + 1]);
-  });
-  PlaceValues(&C);
+  }, &C);
   ForRows(rows, cols, threads, [&](int r, std::vector<int>* position) {
     for (int q = C.begin[static_cast<size_t>(r)]; q < C.begin[static_cast<size_t>(r) + 1]; ++q) {
       (*position)[static_cast<size_t>(C.col[static_cast<size_t>(q)])] = q;
