@@ -93,7 +93,9 @@ const Case& CaseFor(int vertices, int points) {
 
 // One iteration: a new tracker (not timed) and kFrames frames; the time per frame is the
 // reported time / kFrames, items_per_second the frames per second. Arguments: vertices,
-// points, preconditioner (0: auto, the default; 1: factor; 2: multigrid).
+// points, preconditioner (0: auto, the default; 1: factor; 2: multigrid), data weight (0:
+// per pair, the default; 1: per area, README "The data weight": data_per_area 2e7 with
+// model_to_cloud_share 0.1).
 void Track(benchmark::State& state) {
   const int vertices = static_cast<int>(state.range(0));
   const int points = static_cast<int>(state.range(1));
@@ -104,6 +106,11 @@ void Track(benchmark::State& state) {
                                                     femreg::Preconditioner::kMultigrid};
   options.solver.preconditioner = preconditioners[state.range(2)];
   options.solver.num_threads = 1;
+  if (state.range(3) == 1) {
+    options.weights.data = -1.0;
+    options.weights.data_per_area = 2e7;
+    options.weights.model_to_cloud_share = 0.1;
+  }
   femreg::ObjectMaterial material;
   material.material.youngs_modulus = 5e4;
   material.material.poisson_ratio = 0.4;
@@ -141,6 +148,7 @@ void Track(benchmark::State& state) {
   state.counters["tets"] = c.mesh.num_tets();
   state.counters["points"] = points;
   state.counters["preconditioner"] = static_cast<double>(state.range(2));
+  state.counters["per_area"] = static_cast<double>(state.range(3));
   state.counters["points_used"] = frames > 0 ? used / frames : 0;
   state.counters["converged"] = frames > 0 ? converged / frames : 0;
   for (const auto& [name, seconds] : phase) state.counters[name + "_ms"] = frames > 0 ? 1e3 * seconds / frames : 0;
@@ -148,11 +156,14 @@ void Track(benchmark::State& state) {
 }
 
 BENCHMARK(Track)
-    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}, {0}})
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}, {0}, {0}})
     // The factor where auto takes multigrid (the boxes from 5k vertices on), to compare.
-    ->Args({4000, 2000, 1})
-    ->Args({16000, 2000, 1})
-    ->Args({64000, 2000, 1})
+    ->Args({4000, 2000, 1, 0})
+    ->Args({16000, 2000, 1, 0})
+    ->Args({64000, 2000, 1, 0})
+    // The data weight per area: the same problem at every mesh size (per pair, each surface
+    // vertex's model->cloud pair adds its own stiffness, so a finer mesh pulls harder).
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000}, {0}, {1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);

@@ -28,7 +28,9 @@ def main():
             "vertices": int(b["vertices"]), "tets": int(b["tets"]), "points": int(b["points"]),
             "points_used": int(round(b["points_used"])),
             # Before 2026-11-27 there was no choice: the default was the factor at every size.
-            "preconditioner": PRECONDITIONERS[int(b.get("preconditioner", 0))], "ms_per_frame": ms,
+            "preconditioner": PRECONDITIONERS[int(b.get("preconditioner", 0))],
+            # The fourth argument (from 2026-11-27 on): the data weight per pair or per area.
+            "data_weight": "per area" if b.get("per_area", 0) else "per pair", "ms_per_frame": ms,
             "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
             "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
             # The solve's parts and counts (benchmarks from 2026-11-26 on; 0 before).
@@ -38,18 +40,21 @@ def main():
             "outer_iterations": b.get("outer_iterations", 0.0),
             "converged": b["converged"],
         })
-    rows.sort(key=lambda r: (r["preconditioner"] != "auto", r["points"], r["vertices"]))
+    rows.sort(key=lambda r: (r["data_weight"] != "per pair", r["preconditioner"] != "auto", r["points"],
+                             r["vertices"]))
     with open(out / "scaling.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.2f}" if isinstance(v, float) else v) for k, v in r.items()})
-    lines = ["| vertices | tets | cloud points (used) | preconditioner | ms/frame | correspondences | rotations | solve "
+    lines = ["| vertices | tets | cloud points (used) | preconditioner | data weight | ms/frame | correspondences | "
+             "rotations | solve "
              "(assembly / factorization or hierarchy / linear solves) | factorizations or hierarchies, PCG iterations, outer iterations "
              "per frame | preprocess | converged |",
-             "|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['preconditioner']} | "
+                     f"{r['data_weight']} | "
                      f"{r['ms_per_frame']:.1f} | "
                      f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} "
                      f"({r['assembly_ms']:.0f} / {r['factorization_ms']:.0f} / {r['linear_solve_ms']:.0f}) | "
@@ -58,7 +63,7 @@ def main():
     (out / "table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     fig, ax = plt.subplots(figsize=(6, 4.2))
-    default = [r for r in rows if r["preconditioner"] == "auto"]
+    default = [r for r in rows if r["preconditioner"] == "auto" and r["data_weight"] == "per pair"]
     for points in sorted({r["points"] for r in default}):
         sel = [r for r in default if r["points"] == points]
         ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "o-", label=f"{points} points")
@@ -72,6 +77,12 @@ def main():
                      key=lambda r: r["vertices"])
         ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "s--", color="0.5",
                   label=f"{points} points, sparse factor throughout")
+    per_area = [r for r in rows if r["data_weight"] == "per area"]
+    if per_area:
+        points = per_area[0]["points"]
+        sel = sorted([r for r in per_area if r["points"] == points], key=lambda r: r["vertices"])
+        ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "^-.", color="C4",
+                  label=f"{points} points, data weight per area")
     v = sorted({r["vertices"] for r in rows})
     if v:
         base = min(r["ms_per_frame"] for r in rows if r["vertices"] == v[0])
