@@ -61,6 +61,10 @@ struct SolveReport {
   int linear_solves = 0;     // preconditioner applications (PCG's) and direct solves
   int pcg_iterations = 0;    // conjugate-gradient iterations on steps solved that way
   int pattern_rebuilds = 0;  // new symbolic analyses (a widened or new sparsity pattern)
+  // Fast back end: CHOLMOD analyses of the system's pattern (orderings and symbolic
+  // factorization), at most one per pattern: where the factor is used, or where the
+  // preconditioner is kAuto and the vertex graph's estimate of the fill does not settle it.
+  int analyses = 0;
   // The problem's energy where the solve started and where it ended (*x on return).
   EnergyTerms before, after;
   // Where the time went (s). Ceres: linear_solve_s includes its factorizations.

@@ -150,6 +150,16 @@ constexpr int kParallelWork = 32768;
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
 
+// kAuto decides without analysing H itself (AMD and METIS on every unknown, and the
+// factor's workspace: at 64k vertices 1.9 s of the first frame, at 16k 0.23 s) where the
+// vertex graph's estimate of the fill (EstimateFill) is this far above multigrid_fill. The
+// estimate was 0.98-1.02 of the analysis's fill on 14 meshes (the demo 2.96, organ_patch
+// 3.58, slab_tear 1.80, the organ at 2197 and 3375 vertices 5.65 and 6.84, the public
+// meshes 0.83-3.95, the scaling benchmark's boxes at 1.4k, 5k and 20k vertices 4.30, 7.54
+// and 13.24), so only meshes that clearly take multigrid skip the analysis, and the choice
+// is the one the analysis would make.
+constexpr double kFillEstimateMargin = 1.5;
+
 
 // Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the
 // largest update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has
@@ -254,6 +264,11 @@ struct FastBackend::Impl {
   bool pcg_indefinite = false;
   // nnz(L) / nnz(H) from the analysis of the pattern.
   double fill = 0.0;
+  int analyses = 0;  // Analyse's, over the back end's life (SolveReport::analyses per solve)
+  // Before that analysis, for kAuto: an estimate of it from the vertex graph (-1: not yet
+  // made for this pattern), see EstimateFill.
+  double fill_estimate = -1.0;
+  double EstimateFill() const;
   bool UseMultigrid() {
     if (options.max_pcg_iterations <= 0 || multigrid_failed) return false;
     switch (options.preconditioner) {
@@ -262,6 +277,10 @@ struct FastBackend::Impl {
       case Preconditioner::kMultigrid:
         return true;
       case Preconditioner::kAuto:
+        if (!analysed) {
+          if (fill_estimate < 0.0) fill_estimate = EstimateFill();
+          if (fill_estimate >= kFillEstimateMargin * options.multigrid_fill) return true;
+        }
         Analyse();  // once per pattern (the factor path needs it anyway)
         return fill >= options.multigrid_fill;
     }
@@ -467,6 +486,7 @@ void FastBackend::Impl::BuildPattern() {
         static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], c) - inner);
   }
   analysed = false;
+  fill_estimate = -1.0;
   factor_valid = false;
   single_backoff = 0;
   multigrid = Multigrid();
@@ -786,6 +806,7 @@ void FastBackend::Impl::Analyse() {
     factor.analyzePattern(H);
   }
   analysed = true;
+  ++analyses;
   // A PCG iteration: two triangular solves (2 x 2 nnz(L) flops) and a product with H
   // (2 nnz(H)); the factorization: CHOLMOD's count, at kSingleFactorizationSpeed times
   // the substitutions' rate.
@@ -797,6 +818,40 @@ void FastBackend::Impl::Analyse() {
                           ? static_cast<int>(common.fl / iteration_flops / kSingleFactorizationSpeed)
                           : 0;
   structure_pending = true;
+}
+
+double FastBackend::Impl::EstimateFill() const {
+  // H's vertex graph (its 3x3 blocks are whole, their rows sorted: every third row of a
+  // vertex's first column), its lower triangle, analysed with the same two orderings
+  // without supernodes: nnz(L) of the vertex graph, each entry below the diagonal a 3x3
+  // block of H's L and each diagonal one its lower triangle (6). Supernodal padding and the
+  // orderings' ties make the analysis of H itself give a little more.
+  const int vertices = static_cast<int>(H.cols()) / 3;
+  if (vertices == 0 || H.nonZeros() == 0) return 0.0;
+  const int* outer = H.outerIndexPtr();
+  const int* inner = H.innerIndexPtr();
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(H.nonZeros() / 18 + vertices));
+  for (int v = 0; v < vertices; ++v) {
+    for (int p = outer[3 * v]; p < outer[3 * v + 1]; p += 3) {
+      const int w = inner[p] / 3;
+      if (w >= v) entries.emplace_back(w, v, w == v ? 1.0 : 0.0);
+    }
+  }
+  Eigen::SparseMatrix<double> graph(vertices, vertices);
+  graph.setFromTriplets(entries.begin(), entries.end());
+  CholmodFactor estimate;
+  estimate.setMode(Eigen::CholmodSimplicialLLt);
+  cholmod_common& common = estimate.cholmod();
+  common.nmethods = 2;
+  common.method[0].ordering = CHOLMOD_AMD;
+  common.method[1].ordering = CHOLMOD_METIS;
+  {
+    const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
+    estimate.analyzePattern(graph);
+  }
+  const double lnz = 9.0 * (common.lnz - vertices) + 6.0 * vertices;
+  return lnz / static_cast<double>(H.nonZeros());
 }
 
 bool FastBackend::Impl::Factorize(SolveReport* report) {
@@ -1048,6 +1103,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     return report;
   }
   const ScopedThreads threads(m.threads);  // OpenMP here and the BLAS under CHOLMOD
+  const int analyses_before = m.analyses;
   auto t0 = Clock::now();
   if (m.num_vertices != problem.num_vertices() || m.coupling_revision != problem.coupling_revision()) {
     m.ResetPattern(problem, *x);
@@ -1176,6 +1232,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     report.stop = StopReason::kFailure;
     report.message = "fast back end: the step made the positions non-finite";
   }
+  report.analyses = m.analyses - analyses_before;
   return report;
 }
 
