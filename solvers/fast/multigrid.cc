@@ -391,8 +391,20 @@ void Multigrid::BlockJacobi(const Level& L, const Eigen::VectorXd& r, Eigen::Vec
 }
 
 bool Multigrid::PrepareSmoother(int l, const SparseMatrix& A, std::vector<double>* diagonal_norm) {
+  if (!InvertDiagonalBlocks(l, A, diagonal_norm)) return false;
+  EstimateLambdaMax(l);
+  return true;
+}
+
+void Multigrid::EstimateLambdaMax(int l) {
   Level& L = levels_[static_cast<size_t>(l)];
-  const int n = static_cast<int>(A.cols());
+  L.lambda_max = LargestEigenvalue(
+      L.node_begin.back(), [&](const Eigen::VectorXd& v, Eigen::VectorXd* y) { Product(l, v, y); },
+      [&](const Eigen::VectorXd& r, Eigen::VectorXd* z) { BlockJacobi(L, r, z); });
+}
+
+bool Multigrid::InvertDiagonalBlocks(int l, const SparseMatrix& A, std::vector<double>* diagonal_norm) {
+  Level& L = levels_[static_cast<size_t>(l)];
   const int nodes = static_cast<int>(L.node_begin.size()) - 1;
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
@@ -406,10 +418,11 @@ bool Multigrid::PrepareSmoother(int l, const SparseMatrix& A, std::vector<double
     const int b = L.node_begin[static_cast<size_t>(k)];
     const int m = L.node_begin[static_cast<size_t>(k) + 1] - b;
     Eigen::MatrixXd D = Eigen::MatrixXd::Zero(m, m);
-    for (int j = 0; j < m; ++j) {
-      for (int p = outer[b + j]; p < outer[b + j + 1]; ++p) {
-        const int i = inner[p] - b;
-        if (i >= 0 && i < m) D(i, j) = values[p];
+    for (int j = 0; j < m; ++j) {  // (every level's rows are sorted)
+      const int end = outer[b + j + 1];
+      for (int p = static_cast<int>(std::lower_bound(inner + outer[b + j], inner + end, b) - inner);
+           p < end && inner[p] < b + m; ++p) {
+        D(inner[p] - b, j) = values[p];
       }
     }
     D = 0.5 * (D + D.transpose()).eval();
@@ -421,9 +434,6 @@ bool Multigrid::PrepareSmoother(int l, const SparseMatrix& A, std::vector<double
     L.dinv_at[static_cast<size_t>(k)] = static_cast<int>(L.dinv.size());
     L.dinv.insert(L.dinv.end(), inverse.data(), inverse.data() + m * m);
   }
-  L.lambda_max = LargestEigenvalue(
-      n, [&](const Eigen::VectorXd& v, Eigen::VectorXd* y) { Product(l, v, y); },
-      [&](const Eigen::VectorXd& r, Eigen::VectorXd* z) { BlockJacobi(L, r, z); });
   return true;
 }
 
@@ -439,16 +449,17 @@ bool Multigrid::SetFinest(const SparseMatrix& A) {
   const double* from = A.valuePtr();
   float* to = A_f.valuePtr();
   for (Eigen::Index p = 0; p < A.nonZeros(); ++p) to[p] = static_cast<float>(from[p]);
+  std::vector<double> unused;
+  if (!InvertDiagonalBlocks(0, A, &unused)) {
+    levels_.clear();
+    return false;
+  }
   return true;
 }
 
 bool Multigrid::RefreshFinest(const SparseMatrix& A) {
   if (!SetFinest(A)) return false;
-  std::vector<double> unused;
-  if (!PrepareSmoother(0, A, &unused)) {
-    levels_.clear();
-    return false;
-  }
+  EstimateLambdaMax(0);
   return true;
 }
 

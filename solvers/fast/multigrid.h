@@ -26,9 +26,9 @@
 //    operator (a preconditioner for conjugate gradients);
 //  - the coarsest level (500 unknowns or fewer, unless coarsening stalls): its dense
 //    inverse (from an LDL^T).
-// Kept across steps: the caller passes the current system to Apply (the finest level's
-// residuals and smoothing use it) and refreshes the finest smoother from it when PCG says
-// the V-cycle is not positive definite (RefreshFinest).
+// Kept across steps: the caller passes each new system (SetFinest: the finest level's
+// residuals and block-Jacobi inverses use it) and refreshes the finest smoother's eigenvalue
+// bound from it when PCG says the V-cycle is not positive definite (RefreshFinest).
 // Products run on `threads` threads from a size on (gathers over columns of symmetric
 // matrices: no races, and the same sums on any thread count).
 #ifndef FEMREG_SOLVERS_FAST_MULTIGRID_H_
@@ -59,9 +59,11 @@ class Multigrid {
   // blocks are not positive definite.
   bool RefreshFinest(const Eigen::SparseMatrix<double>& A);
   // The current system at the finest level: A, a later system on the pattern the hierarchy
-  // was built on, whose values Apply's finest products use from here on (Build and
-  // RefreshFinest take theirs). Call it whenever the system's values change. False if A's
-  // pattern is not the hierarchy's (nothing changes then).
+  // was built on, whose values Apply's finest products and block-Jacobi inverses use from
+  // here on (Build and RefreshFinest take theirs; the eigenvalue bound stays the last
+  // one's). Call it whenever the system's values change. False if A's pattern is not the
+  // hierarchy's (nothing changes then), or if a diagonal block of A is not positive
+  // definite (the hierarchy dropped).
   bool SetFinest(const Eigen::SparseMatrix<double>& A);
   // z = M^-1 r: one V-cycle from z = 0, on the system last given (Build, RefreshFinest,
   // SetFinest); z may not alias r.
@@ -151,6 +153,10 @@ class Multigrid {
   // Level l's block-Jacobi inverses and lambda_max from A (its diagonal blocks' Frobenius
   // norms out); false if a diagonal block is not positive definite.
   bool PrepareSmoother(int l, const Eigen::SparseMatrix<double>& A, std::vector<double>* diagonal_norm);
+  // Its two parts: the block-Jacobi inverses (and the diagonal blocks' norms), and
+  // lambda_max of D^-1 A with the level's current system.
+  bool InvertDiagonalBlocks(int l, const Eigen::SparseMatrix<double>& A, std::vector<double>* diagonal_norm);
+  void EstimateLambdaMax(int l);
   void Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y);
   void BlockJacobi(const Level& L, const Eigen::VectorXd& r, Eigen::VectorXd* z) const;
   // Chebyshev smoothing of A x = b at `level` from *x (zero_start: *x is 0).
