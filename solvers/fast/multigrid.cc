@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #ifdef __SSE__
@@ -410,14 +411,24 @@ bool Multigrid::InvertDiagonalBlocks(int l, const SparseMatrix& A, std::vector<d
   const int* inner = A.innerIndexPtr();
   const double* values = A.valuePtr();
   // Each node's diagonal block: its Frobenius norm (for the strength of connection) and
-  // its inverse (block Jacobi).
+  // its inverse (block Jacobi), at offsets fixed by the node sizes (SetFinest refills them
+  // in place, once per step).
   diagonal_norm->resize(static_cast<size_t>(nodes));
   L.dinv_at.resize(static_cast<size_t>(nodes));
-  L.dinv.clear();
+  size_t total = 0;
   for (int k = 0; k < nodes; ++k) {
+    const int m = L.node_begin[static_cast<size_t>(k) + 1] - L.node_begin[static_cast<size_t>(k)];
+    L.dinv_at[static_cast<size_t>(k)] = static_cast<int>(total);
+    total += static_cast<size_t>(m) * static_cast<size_t>(m);
+  }
+  L.dinv.resize(total);
+  // Node k's block, inverted (M: its size, Eigen::Dynamic for any).
+  auto invert = [&](auto size_tag, int k) {
+    constexpr int M = decltype(size_tag)::value;
     const int b = L.node_begin[static_cast<size_t>(k)];
     const int m = L.node_begin[static_cast<size_t>(k) + 1] - b;
-    Eigen::MatrixXd D = Eigen::MatrixXd::Zero(m, m);
+    using Block = Eigen::Matrix<double, M, M>;
+    Block D = Block::Zero(m, m);
     for (int j = 0; j < m; ++j) {  // (every level's rows are sorted)
       const int end = outer[b + j + 1];
       for (int p = static_cast<int>(std::lower_bound(inner + outer[b + j], inner + end, b) - inner);
@@ -425,16 +436,31 @@ bool Multigrid::InvertDiagonalBlocks(int l, const SparseMatrix& A, std::vector<d
         D(inner[p] - b, j) = values[p];
       }
     }
-    D = 0.5 * (D + D.transpose()).eval();
+    D = (0.5 * (D + D.transpose())).eval();
     (*diagonal_norm)[static_cast<size_t>(k)] = D.norm();
-    Eigen::LLT<Eigen::MatrixXd> llt(D);
+    Eigen::LLT<Block> llt(D);
     if (llt.info() != Eigen::Success || !(D.diagonal().minCoeff() > 0.0)) return false;
-    const Eigen::MatrixXd inverse = llt.solve(Eigen::MatrixXd::Identity(m, m));
+    const Block inverse = llt.solve(Block::Identity(m, m));
     if (!inverse.allFinite()) return false;
-    L.dinv_at[static_cast<size_t>(k)] = static_cast<int>(L.dinv.size());
-    L.dinv.insert(L.dinv.end(), inverse.data(), inverse.data() + m * m);
+    std::copy(inverse.data(), inverse.data() + m * m, L.dinv.data() + L.dinv_at[static_cast<size_t>(k)]);
+    return true;
+  };
+  auto node = [&](int k) {
+    const int m = L.node_begin[static_cast<size_t>(k) + 1] - L.node_begin[static_cast<size_t>(k)];
+    return m == 3 ? invert(std::integral_constant<int, 3>(), k) : invert(std::integral_constant<int, Eigen::Dynamic>(), k);
+  };
+  std::atomic<bool> positive(true);
+  if (threads_ > 1 && total >= static_cast<size_t>(3 * kParallelUnknowns)) {
+#pragma omp parallel for schedule(static) num_threads(threads_)
+    for (int k = 0; k < nodes; ++k) {
+      if (!node(k)) positive = false;
+    }
+  } else {
+    for (int k = 0; k < nodes && positive; ++k) {
+      if (!node(k)) positive = false;
+    }
   }
-  return true;
+  return positive;
 }
 
 bool Multigrid::SetFinest(const SparseMatrix& A) {
