@@ -398,8 +398,7 @@ TEST(FastBackend, AutoTakesMultigridWhereTheFactorFillsIn) {
     Vertices x = s->mesh.rest;
     const SolveReport report = MakeBackend(options)->Solve(s->problem, 0.0, &x);
     ASSERT_TRUE(report.success) << report.message;
-    // The fill decides, from CHOLMOD's analysis: the vertex graph's estimate (0.9 and 8.2
-    // on these meshes) is not 1.5 times multigrid_fill (9).
+    // The fill decides, from CHOLMOD's analysis (below 8192 vertices no estimate is made).
     EXPECT_EQ(report.analyses, 1);
     if (refine == 1) {
       EXPECT_EQ(report.hierarchies, 0);
@@ -408,21 +407,43 @@ TEST(FastBackend, AutoTakesMultigridWhereTheFactorFillsIn) {
       ASSERT_GT(s->mesh.num_vertices(), 5000);
       EXPECT_GE(report.hierarchies, 1);
       EXPECT_EQ(report.factorizations, 0);
-      // Where the estimate is far above multigrid_fill (here 8.2 against 2), multigrid
-      // without the analysis; with a threshold the estimate does not clear by 1.5 times
-      // (8.2 against 6): the analysis, and multigrid from its fill.
-      for (const double threshold : {2.0, 6.0}) {
-        options.multigrid_fill = threshold;
-        Vertices y = s->mesh.rest;
-        const SolveReport with = MakeBackend(options)->Solve(s->problem, 0.0, &y);
-        ASSERT_TRUE(with.success) << with.message;
-        EXPECT_EQ(with.analyses, threshold == 2.0 ? 0 : 1) << threshold;
-        EXPECT_GE(with.hierarchies, 1);
-        EXPECT_EQ(with.factorizations, 0);
-        EXPECT_LE((y - x).cwiseAbs().maxCoeff(), 1e-12) << "the same solve either way";
-      }
+      // Even with a switch its fill clears by far (8.2 against 2), the analysis: too small
+      // a mesh for the estimate to pay.
+      options.multigrid_fill = 2.0;
+      Vertices y = s->mesh.rest;
+      const SolveReport with = MakeBackend(options)->Solve(s->problem, 0.0, &y);
+      ASSERT_TRUE(with.success) << with.message;
+      EXPECT_EQ(with.analyses, 1);
+      EXPECT_LE((y - x).cwiseAbs().maxCoeff(), 1e-12) << "the same solve";
     }
   }
+  // 11849 vertices: where the vertex graph's estimate is 1.5 times the switch or more,
+  // multigrid without the analysis (the same solve as with it); below, the analysis, and
+  // here the factor from its fill.
+  auto s = MakeSetup(RobustLoss::kHuber, false, true, false, 3, false, 8);
+  ASSERT_GE(s->mesh.num_vertices(), 8192);
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.multigrid_fill = 2.0;
+  Vertices x = s->mesh.rest;
+  const SolveReport skipped = MakeBackend(options)->Solve(s->problem, 0.0, &x);
+  ASSERT_TRUE(skipped.success) << skipped.message;
+  EXPECT_EQ(skipped.analyses, 0);
+  EXPECT_GE(skipped.hierarchies, 1);
+  EXPECT_EQ(skipped.factorizations, 0);
+  options.preconditioner = Preconditioner::kMultigrid;
+  Vertices y = s->mesh.rest;
+  const SolveReport multigrid = MakeBackend(options)->Solve(s->problem, 0.0, &y);
+  ASSERT_TRUE(multigrid.success) << multigrid.message;
+  EXPECT_LE((y - x).cwiseAbs().maxCoeff(), 1e-12) << "the same solve as multigrid chosen outright";
+  options.preconditioner = Preconditioner::kAuto;
+  options.multigrid_fill = 100.0;
+  Vertices z = s->mesh.rest;
+  const SolveReport analysed = MakeBackend(options)->Solve(s->problem, 0.0, &z);
+  ASSERT_TRUE(analysed.success) << analysed.message;
+  EXPECT_EQ(analysed.analyses, 1);
+  EXPECT_EQ(analysed.hierarchies, 0);
+  EXPECT_GE(analysed.factorizations, 1);
 }
 
 // A box's corotational stiffness (R = I) with full 3x3 vertex blocks, plus a diagonal of

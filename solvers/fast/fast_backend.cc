@@ -159,6 +159,11 @@ constexpr int kMultigridMaxIterations = 100;
 // and 13.24), so only meshes that clearly take multigrid skip the analysis, and the choice
 // is the one the analysis would make.
 constexpr double kFillEstimateMargin = 1.5;
+// ... and only from this many vertices: below, the estimate (METIS's fixed costs) takes
+// about as long as the analysis it could save (the demo, 1116 vertices: 7.7 against 7.5 ms;
+// a 5k-vertex box 24 against 52 ms, whose fill of 7.5 does not clear the margin anyway),
+// and it would be done on top of it. The scaling benchmark's box at 9.5k vertices clears it.
+constexpr int kFillEstimateFrom = 8192;
 
 
 // Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the
@@ -277,7 +282,7 @@ struct FastBackend::Impl {
       case Preconditioner::kMultigrid:
         return true;
       case Preconditioner::kAuto:
-        if (!analysed) {
+        if (!analysed && num_vertices >= kFillEstimateFrom) {
           if (fill_estimate < 0.0) fill_estimate = EstimateFill();
           if (fill_estimate >= kFillEstimateMargin * options.multigrid_fill) return true;
         }
@@ -773,19 +778,25 @@ void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices&
   for (int at : diagonal_at) H.valuePtr()[at] += 1e-12 * max_diagonal;
 }
 
+namespace {
+// The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
+// nnz(L). Neither wins everywhere: on the demo's slender beam AMD gives nnz(L) 364k and
+// 51 Mflop per factorization, METIS 418k and 73; on the organ_patch body at 2197
+// vertices AMD 1853k and 908 Mflop, METIS 1478k and 534, at 3375 vertices 3947k / 2918
+// against 2793k / 1300. (CHOLMOD's default tries METIS only when AMD's flops per entry
+// of L pass 500, which the 2197-vertex body misses at 490.)
+void OrderWithAmdAndMetis(cholmod_common* common) {
+  common->nmethods = 2;
+  common->method[0].ordering = CHOLMOD_AMD;
+  common->method[1].ordering = CHOLMOD_METIS;
+}
+}  // namespace
+
 void FastBackend::Impl::Analyse() {
   if (analysed) return;
   factor.setMode(Eigen::CholmodSupernodalLLt);
-  // The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
-  // nnz(L). Neither wins everywhere: on the demo's slender beam AMD gives nnz(L) 364k and
-  // 51 Mflop per factorization, METIS 418k and 73; on the organ_patch body at 2197
-  // vertices AMD 1853k and 908 Mflop, METIS 1478k and 534, at 3375 vertices 3947k / 2918
-  // against 2793k / 1300. (CHOLMOD's default tries METIS only when AMD's flops per entry
-  // of L pass 500, which the 2197-vertex body misses at 490.)
   cholmod_common& common = factor.cholmod();
-  common.nmethods = 2;
-  common.method[0].ordering = CHOLMOD_AMD;
-  common.method[1].ordering = CHOLMOD_METIS;
+  OrderWithAmdAndMetis(&common);
   // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with
   // {0.8, 0.1, 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold
   // merges little more than one vertex, and the demo's slender beam had 207 supernodes of
@@ -843,9 +854,7 @@ double FastBackend::Impl::EstimateFill() const {
   CholmodFactor estimate;
   estimate.setMode(Eigen::CholmodSimplicialLLt);
   cholmod_common& common = estimate.cholmod();
-  common.nmethods = 2;
-  common.method[0].ordering = CHOLMOD_AMD;
-  common.method[1].ordering = CHOLMOD_METIS;
+  OrderWithAmdAndMetis(&common);
   {
     const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
     estimate.analyzePattern(graph);
