@@ -208,6 +208,15 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     // unit area already divides the area among the points that are there.
     b->weight = per_pair ? weight_of(p) * p.weight : weight_of(p);
   };
+  // Each set sized once (the sets are made anew every outer iteration).
+  size_t counts[4] = {0, 0, 0, 0};  // point1, point3, plane1, plane3
+  for (const DataPair& p : pairs) {
+    ++counts[(p.normal.squaredNorm() > 0 ? 2 : 0) + (p.num_vertices == 1 ? 0 : 1)];
+  }
+  point1.reserve(counts[0]);
+  point3.reserve(counts[1]);
+  plane1.reserve(counts[2]);
+  plane3.reserve(counts[3]);
   for (const DataPair& p : pairs) {
     const bool plane = p.normal.squaredNorm() > 0;
     if (p.num_vertices == 1 && plane) {
