@@ -989,7 +989,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
   // The kept hierarchy while the last solve with it took at most twice (and 4 more than) the
   // iterations of the first solve after its build. If PCG finds the V-cycle not positive
   // definite for this H (the finest smoother's eigenvalue bound is an earlier H's), once
-  // more with that smoother refreshed from this H.
+  // more with that bound estimated for this H.
   auto solve = [&](double* seconds) {
     const auto t0 = Clock::now();
     const int before = report->pcg_iterations;
@@ -1014,7 +1014,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
     Outcome outcome = solve(&report->linear_solve_s);
     if (outcome == Outcome::kFailed && pcg_indefinite) {
       const auto t0 = Clock::now();
-      const bool refreshed = multigrid.RefreshFinest(H);
+      const bool refreshed = multigrid.RefreshFinest();  // H is set: set_finest()
       report->factorize_s += Seconds(t0);
       if (refreshed) outcome = solve(&report->linear_solve_s);
     }

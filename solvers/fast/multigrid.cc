@@ -483,8 +483,8 @@ bool Multigrid::SetFinest(const SparseMatrix& A) {
   return true;
 }
 
-bool Multigrid::RefreshFinest(const SparseMatrix& A) {
-  if (!SetFinest(A)) return false;
+bool Multigrid::RefreshFinest() {
+  if (levels_.empty()) return false;
   EstimateLambdaMax(0);
   return true;
 }

@@ -28,7 +28,7 @@
 //    inverse (from an LDL^T).
 // Kept across steps: the caller passes each new system (SetFinest: the finest level's
 // residuals and block-Jacobi inverses use it) and refreshes the finest smoother's eigenvalue
-// bound from it when PCG says the V-cycle is not positive definite (RefreshFinest).
+// bound for it when PCG says the V-cycle is not positive definite (RefreshFinest).
 // Products run on `threads` threads from a size on (gathers over columns of symmetric
 // matrices: no races, and the same sums on any thread count).
 #ifndef FEMREG_SOLVERS_FAST_MULTIGRID_H_
@@ -52,21 +52,20 @@ class Multigrid {
   bool Build(const Eigen::SparseMatrix<double>& A,
              const Vertices& positions, int threads);
   bool built() const { return !levels_.empty(); }
-  // The finest level's smoother (its block-Jacobi inverses and eigenvalue bound) anew from
-  // A, a later system on the same pattern: a hierarchy kept across steps smooths with the
-  // current system, and its Chebyshev interval must cover that system's spectrum (else the
-  // V-cycle is not positive definite). False (and the hierarchy dropped) if A's diagonal
-  // blocks are not positive definite.
-  bool RefreshFinest(const Eigen::SparseMatrix<double>& A);
+  // The finest smoother's eigenvalue bound anew, for the system last given (SetFinest takes
+  // its block-Jacobi inverses): a hierarchy kept across steps smooths with the current
+  // system, and its Chebyshev interval must cover that system's spectrum (else the V-cycle
+  // is not positive definite). False if there is no hierarchy.
+  bool RefreshFinest();
   // The current system at the finest level: A, a later system on the pattern the hierarchy
   // was built on, whose values Apply's finest products and block-Jacobi inverses use from
-  // here on (Build and RefreshFinest take theirs; the eigenvalue bound stays the last
-  // one's). Call it whenever the system's values change. False if A's pattern is not the
+  // here on (Build takes its own; the eigenvalue bound stays the last one's until
+  // RefreshFinest). Call it whenever the system's values change. False if A's pattern is not the
   // hierarchy's (nothing changes then), or if a diagonal block of A is not positive
   // definite (the hierarchy dropped).
   bool SetFinest(const Eigen::SparseMatrix<double>& A);
-  // z = M^-1 r: one V-cycle from z = 0, on the system last given (Build, RefreshFinest,
-  // SetFinest); z may not alias r.
+  // z = M^-1 r: one V-cycle from z = 0, on the system last given (Build or SetFinest); z
+  // may not alias r.
   void Apply(const Eigen::VectorXd& r, Eigen::VectorXd* z);
   int num_levels() const { return static_cast<int>(levels_.size()); }
   // The unknowns of all levels over the finest one's, and likewise the stored entries.
