@@ -159,6 +159,18 @@ TEST(DataWeight, SceneKeys) {
   EXPECT_NE(SceneToYaml(scene).find("data_per_area: 3.0e+7"), std::string::npos) << SceneToYaml(scene);
   status = ParseScene(
       "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+      "registration: {weights: {data_per_area: 3e7, model_to_cloud_area_cap: 2}}\n", "cap.yaml", ".",
+      &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(scene.registration.weights.model_to_cloud_area_cap, 2.0);
+  EXPECT_NE(SceneToYaml(scene).find("model_to_cloud_area_cap: 2"), std::string::npos) << SceneToYaml(scene);
+  status = ParseScene(
+      "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+      "registration: {weights: {model_to_cloud_area_cap: -1}}\n", "bad_cap.yaml", ".", &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("model_to_cloud_area_cap"), std::string::npos) << status.message();
+  status = ParseScene(
+      "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
       "registration: {weights: {data: 200, data_per_area: 3e7}}\n", "both.yaml", ".", &scene);
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("both.yaml:2"), std::string::npos) << status.message();

@@ -150,6 +150,13 @@ struct WeightOptions {
   // vertex with its nearest cloud point, which lies up to half the cloud's spacing off the
   // closest surface point, so at full weight a sparser cloud would bias the fit.
   double model_to_cloud_share = 0.03;
+  // > 0: a model->cloud pair stands for at most this many times the cloud's area per point
+  // (its vertex's nearest cloud point vouches for about its own patch of surface, not for
+  // all of a coarse mesh's vertex area). With a strong share (0.3) a cap of 2 keeps coarse
+  // meshes from being pulled off by their edges' and corners' biased pairs; it also makes the
+  // model->cloud pull weaker on dense clouds, so the fit is no longer the same from a
+  // denser or sparser cloud (README, "The data weight"). 0 = no cap (the default).
+  double model_to_cloud_area_cap = 0.0;
   // A stiffness per correspondence (N/m), whatever the cloud's density: the default, while
   // the per-area weight costs accuracy on occluded sequences and under many outliers (README,
   // "The data weight"). < 0: data_per_area is used instead (a scene that sets data_per_area).

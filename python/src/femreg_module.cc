@@ -426,6 +426,9 @@ PYBIND11_MODULE(_femreg, m) {
   py::class_<WeightOptions>(m, "WeightOptions")
       .def(py::init<>())
       .def_readwrite("data", &WeightOptions::data)
+      .def_readwrite("data_per_area", &WeightOptions::data_per_area)
+      .def_readwrite("model_to_cloud_share", &WeightOptions::model_to_cloud_share)
+      .def_readwrite("model_to_cloud_area_cap", &WeightOptions::model_to_cloud_area_cap)
       .def_readwrite("elastic", &WeightOptions::elastic)
       .def_readwrite("temporal", &WeightOptions::temporal)
       .def_readwrite("anchor", &WeightOptions::anchor);

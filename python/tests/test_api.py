@@ -115,6 +115,27 @@ def test_tracker_follows_a_rigid_translation():
     np.testing.assert_array_equal(tracker.vertices(0), x)
 
 
+def test_per_area_weights_are_reachable():
+    # The per-area data weight (README, "The data weight") from Python: weights.data < 0
+    # selects it; the fit follows the same rigid translation.
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    options = femreg.RegistrationOptions()
+    options.solver.max_outer_iterations = 10
+    options.weights.data = -1
+    options.weights.data_per_area = 1.15e7
+    options.weights.model_to_cloud_share = 0.3
+    options.weights.model_to_cloud_area_cap = 2
+    tracker = femreg.Tracker([mesh], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+    shift = np.array([0.004, -0.002, 0.001])
+    for _ in range(4):
+        x = tracker.track(_surface_cloud(mesh, mesh.rest + shift))
+    assert tracker.summary["usable"]
+    assert np.abs(x - (mesh.rest + shift)).max() < 1e-4
+    options.weights.model_to_cloud_area_cap = -1
+    with pytest.raises(femreg.Error, match="model_to_cloud_area_cap"):
+        femreg.Tracker([mesh], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+
+
 def test_gravity_bends_what_the_camera_does_not_see():
     mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
     options = femreg.RegistrationOptions()

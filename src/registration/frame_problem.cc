@@ -192,9 +192,11 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     if (per_pair) return options.weights.data;
     const double k = options.weights.data_per_area;
     if (p.num_vertices == 1) {
-      return p.vertices[0] < static_cast<int>(vertex_area_.size())
-                 ? k * options.weights.model_to_cloud_share * vertex_area_[p.vertices[0]]
-                 : 0.0;
+      if (p.vertices[0] >= static_cast<int>(vertex_area_.size())) return 0.0;
+      double area = vertex_area_[p.vertices[0]];
+      const double cap = options.weights.model_to_cloud_area_cap;
+      if (cap > 0 && point_area > 0) area = std::min(area, cap * point_area);
+      return k * options.weights.model_to_cloud_share * area;
     }
     return k * point_area;
   };

@@ -28,8 +28,9 @@ class FrameProblem {
   // The data blocks of this outer iteration's pairs with the data loss. Their weights: with
   // weights.data set (legacy), that per pair; else weights.data_per_area times the observed
   // area each pair stands for: a model->cloud pair its vertex's share of the rest surface
-  // around it (times model_to_cloud_share), a cloud->model pair the cloud's area per point
-  // (the median over the touched triangles of rest area / pairs on it).
+  // around it (times model_to_cloud_share), at most model_to_cloud_area_cap times the
+  // cloud's area per point; a cloud->model pair the cloud's area per point (the median over
+  // the touched triangles of rest area / pairs on it).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
   // The external loads (gravity, nodal forces) of the objects that have them, about the
   // positions at the start of this outer iteration (energy/load.h). Every outer iteration.

@@ -260,6 +260,10 @@ bool WeightOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(model_to_cloud_share) && model_to_cloud_share >= 0)) {
     return Fail(error, "weights.model_to_cloud_share", "must be >= 0", model_to_cloud_share);
   }
+  if (!(std::isfinite(model_to_cloud_area_cap) && model_to_cloud_area_cap >= 0)) {
+    return Fail(error, "weights.model_to_cloud_area_cap", "must be >= 0 (0: no cap)",
+                model_to_cloud_area_cap);
+  }
   if (!(std::isfinite(elastic) && elastic >= 0)) {
     return Fail(error, "weights.elastic", "must be >= 0", elastic);
   }

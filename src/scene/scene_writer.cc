@@ -316,13 +316,18 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   PutMap(n, "data", data);
 
   YAML::Node weights = FlowMap();
+  // Which of the two is written also selects the weighting: written whenever the weighting
+  // differs from the default's, else only when its value does.
   if (r.weights.data < 0) {
-    // Always written: it selects the per-area weight.
-    weights["data_per_area"] = Number(r.weights.data_per_area);
-  } else {
-    Put(weights, "data", r.weights.data, d.weights.data);
+    if (d.weights.data >= 0 || r.weights.data_per_area != d.weights.data_per_area) {
+      weights["data_per_area"] = Number(r.weights.data_per_area);
+    }
+  } else if (d.weights.data < 0 || r.weights.data != d.weights.data) {
+    weights["data"] = Number(r.weights.data);
   }
   Put(weights, "model_to_cloud_share", r.weights.model_to_cloud_share, d.weights.model_to_cloud_share);
+  Put(weights, "model_to_cloud_area_cap", r.weights.model_to_cloud_area_cap,
+      d.weights.model_to_cloud_area_cap);
   Put(weights, "elastic", r.weights.elastic, d.weights.elastic);
   Put(weights, "temporal", r.weights.temporal, d.weights.temporal);
   Put(weights, "anchor", r.weights.anchor, d.weights.anchor);
