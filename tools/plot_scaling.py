@@ -15,6 +15,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+def DataWeight(b):
+    """The fourth argument: per area, or per pair with its N/m when not the default 200."""
+    if b.get("per_area", 0):
+        return "per area"
+    n = b.get("data_per_pair", 200.0)
+    return "per pair" if n == 200.0 else f"per pair, {n:g} N/m"
+
+
 def main():
     data = json.loads(Path(sys.argv[1]).read_text())
     out = Path(sys.argv[2])
@@ -30,7 +38,7 @@ def main():
             # Before 2026-11-27 there was no choice: the default was the factor at every size.
             "preconditioner": PRECONDITIONERS[int(b.get("preconditioner", 0))],
             # The fourth argument (from 2026-11-27 on): the data weight per pair or per area.
-            "data_weight": "per area" if b.get("per_area", 0) else "per pair", "ms_per_frame": ms,
+            "data_weight": DataWeight(b), "ms_per_frame": ms,
             "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
             "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
             # The solve's parts and counts (benchmarks from 2026-11-26 on; 0 before).
@@ -39,9 +47,12 @@ def main():
             "factorizations": b.get("factorizations", 0.0), "pcg_iterations": b.get("pcg_iterations", 0.0),
             "outer_iterations": b.get("outer_iterations", 0.0),
             "converged": b["converged"],
+            # Mean vertex error against the shape the clouds were sampled from (from
+            # 2026-11-28 on).
+            "error_mm": b.get("error_mm", float("nan")),
         })
-    rows.sort(key=lambda r: (r["data_weight"] != "per pair", r["preconditioner"] != "auto", r["points"],
-                             r["vertices"]))
+    rows.sort(key=lambda r: (r["data_weight"] != "per pair", r["data_weight"], r["preconditioner"] != "auto",
+                             r["points"], r["vertices"]))
     with open(out / "scaling.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
@@ -50,8 +61,8 @@ def main():
     lines = ["| vertices | tets | cloud points (used) | preconditioner | data weight | ms/frame | correspondences | "
              "rotations | solve "
              "(assembly / factorization or hierarchy / linear solves) | factorizations or hierarchies, PCG iterations, outer iterations "
-             "per frame | preprocess | converged |",
-             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "per frame | preprocess | converged | error (mm) |",
+             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['preconditioner']} | "
                      f"{r['data_weight']} | "
@@ -59,7 +70,7 @@ def main():
                      f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} "
                      f"({r['assembly_ms']:.0f} / {r['factorization_ms']:.0f} / {r['linear_solve_ms']:.0f}) | "
                      f"{r['factorizations']:.1f}, {r['pcg_iterations']:.0f}, {r['outer_iterations']:.1f} | "
-                     f"{r['preprocess_ms']:.1f} | {100 * r['converged']:.0f}% |")
+                     f"{r['preprocess_ms']:.1f} | {100 * r['converged']:.0f}% | {r['error_mm']:.3f} |")
     (out / "table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     fig, ax = plt.subplots(figsize=(6, 4.2))
@@ -77,12 +88,13 @@ def main():
                      key=lambda r: r["vertices"])
         ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "s--", color="0.5",
                   label=f"{points} points, sparse factor throughout")
-    per_area = [r for r in rows if r["data_weight"] == "per area"]
-    if per_area:
-        points = per_area[0]["points"]
-        sel = sorted([r for r in per_area if r["points"] == points], key=lambda r: r["vertices"])
-        ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "^-.", color="C4",
-                  label=f"{points} points, data weight per area")
+    others = sorted({r["data_weight"] for r in rows} - {"per pair"})
+    for i, weight in enumerate(others):
+        sel = [r for r in rows if r["data_weight"] == weight]
+        points = sel[0]["points"]
+        sel = sorted([r for r in sel if r["points"] == points], key=lambda r: r["vertices"])
+        ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "^-." if i == 0 else "v-.",
+                  color=f"C{4 + i}", label=f"{points} points, data weight {weight}")
     v = sorted({r["vertices"] for r in rows})
     if v:
         base = min(r["ms_per_frame"] for r in rows if r["vertices"] == v[0])
