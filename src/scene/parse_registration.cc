@@ -113,7 +113,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
-    w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "model_to_cloud_area_cap", "elastic", "temporal", "anchor"});
+    w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "model_to_cloud_area_cap", "elastic",
+                 "temporal", "anchor"});
     if (w.Has("data") && w.Has("data_per_area")) {
       w["data"].Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
                      "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
