@@ -210,35 +210,47 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     // unit area already divides the area among the points that are there.
     b->weight = per_pair ? weight_of(p) * p.weight : weight_of(p);
   };
-  // Each set sized once (the sets are made anew every outer iteration).
-  size_t counts[4] = {0, 0, 0, 0};  // point1, point3, plane1, plane3
-  for (const DataPair& p : pairs) {
-    ++counts[(p.normal.squaredNorm() > 0 ? 2 : 0) + (p.num_vertices == 1 ? 0 : 1)];
-  }
-  point1.reserve(counts[0]);
-  point3.reserve(counts[1]);
-  plane1.reserve(counts[2]);
-  plane3.reserve(counts[3]);
-  for (const DataPair& p : pairs) {
+  // Which set a pair goes to; each set sized once (they are made anew every outer iteration).
+  enum Kind { kPoint1, kPoint3, kPlane1, kPlane3 };
+  auto kind_of = [](const DataPair& p) {
     const bool plane = p.normal.squaredNorm() > 0;
-    if (p.num_vertices == 1 && plane) {
-      energy::PointToPlane<1> b;
-      fill(p, &b);
-      b.normal = p.normal;
-      plane1.push_back(b);
-    } else if (p.num_vertices == 1) {
-      energy::PointToPoint<1> b;
-      fill(p, &b);
-      point1.push_back(b);
-    } else if (plane) {
-      energy::PointToPlane<3> b;
-      fill(p, &b);
-      b.normal = p.normal;
-      plane3.push_back(b);
-    } else {
-      energy::PointToPoint<3> b;
-      fill(p, &b);
-      point3.push_back(b);
+    if (p.num_vertices == 1) return plane ? kPlane1 : kPoint1;
+    return plane ? kPlane3 : kPoint3;
+  };
+  size_t counts[4] = {0, 0, 0, 0};
+  for (const DataPair& p : pairs) ++counts[kind_of(p)];
+  point1.reserve(counts[kPoint1]);
+  point3.reserve(counts[kPoint3]);
+  plane1.reserve(counts[kPlane1]);
+  plane3.reserve(counts[kPlane3]);
+  for (const DataPair& p : pairs) {
+    switch (kind_of(p)) {
+      case kPlane1: {
+        energy::PointToPlane<1> b;
+        fill(p, &b);
+        b.normal = p.normal;
+        plane1.push_back(b);
+        break;
+      }
+      case kPoint1: {
+        energy::PointToPoint<1> b;
+        fill(p, &b);
+        point1.push_back(b);
+        break;
+      }
+      case kPlane3: {
+        energy::PointToPlane<3> b;
+        fill(p, &b);
+        b.normal = p.normal;
+        plane3.push_back(b);
+        break;
+      }
+      case kPoint3: {
+        energy::PointToPoint<3> b;
+        fill(p, &b);
+        point3.push_back(b);
+        break;
+      }
     }
   }
 }
