@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <type_traits>
 #include <utility>
 
 #include "collision/contact_blocks.h"
@@ -19,6 +20,12 @@ uint64_t TriangleKey(int a, int b, int c) {
   if (a > b) std::swap(a, b);
   return (static_cast<uint64_t>(a) << 42) | (static_cast<uint64_t>(b) << 21) | static_cast<uint64_t>(c);
 }
+
+// Whether a data block has a normal (point-to-plane) or not (point-to-point).
+template <typename Block, typename = void>
+struct HasNormal : std::false_type {};
+template <typename Block>
+struct HasNormal<Block, std::void_t<decltype(std::declval<Block>().normal)>> : std::true_type {};
 }  // namespace
 
 // Rest areas of the surface for the data weights per unit area.
@@ -206,6 +213,7 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
       b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];
     }
     b->target = p.target;
+    if constexpr (HasNormal<std::remove_pointer_t<decltype(b)>>::value) b->normal = p.normal;
     // A legacy per-pair weight counts the points a voxel stands for (p.weight); a weight per
     // unit area already divides the area among the points that are there.
     b->weight = per_pair ? weight_of(p) * p.weight : weight_of(p);
@@ -223,34 +231,17 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
   point3.reserve(counts[kPoint3]);
   plane1.reserve(counts[kPlane1]);
   plane3.reserve(counts[kPlane3]);
+  auto add = [&](const DataPair& p, auto* set) {
+    typename std::remove_pointer_t<decltype(set)>::value_type b;
+    fill(p, &b);
+    set->push_back(b);
+  };
   for (const DataPair& p : pairs) {
     switch (kind_of(p)) {
-      case kPlane1: {
-        energy::PointToPlane<1> b;
-        fill(p, &b);
-        b.normal = p.normal;
-        plane1.push_back(b);
-        break;
-      }
-      case kPoint1: {
-        energy::PointToPoint<1> b;
-        fill(p, &b);
-        point1.push_back(b);
-        break;
-      }
-      case kPlane3: {
-        energy::PointToPlane<3> b;
-        fill(p, &b);
-        b.normal = p.normal;
-        plane3.push_back(b);
-        break;
-      }
-      case kPoint3: {
-        energy::PointToPoint<3> b;
-        fill(p, &b);
-        point3.push_back(b);
-        break;
-      }
+      case kPoint1: add(p, &point1); break;
+      case kPoint3: add(p, &point3); break;
+      case kPlane1: add(p, &plane1); break;
+      case kPlane3: add(p, &plane3); break;
     }
   }
 }
