@@ -109,6 +109,7 @@ TEST(DataWeight, DecimatingTheCloudFourTimesKeepsVertexErrorsWithinTenPercent) {
   solver.relative_energy_tolerance = 1e-7;
   solver.inner_tolerance = 1e-8;
   solver.step_tolerance = 0.0;
+  solver.bulk_step_tolerance = 0.0;
   Scene legacy = scene;
   legacy.registration.weights.data = 200;  // the weight per point, for comparison
   struct Run {

@@ -33,7 +33,8 @@ boundary:
 forward: {max_iterations: 60, load_steps: 2}
 registration:
   weights: {temporal: 0}
-  solver: {max_outer_iterations: 40, step_tolerance: 1e-5, relative_energy_tolerance: 0, inner_tolerance: 1e-10}
+  solver: {max_outer_iterations: 40, step_tolerance: 1e-5, bulk_step_tolerance: 0, relative_energy_tolerance: 0,
+           inner_tolerance: 1e-10}
 )";
 
 class ExternalLoadsBackend : public ::testing::TestWithParam<SolverBackend> {};

@@ -122,7 +122,8 @@ registration:
          loss_scale: 0.01, metric: point_to_plane, visibility: true, cloud_stride: 2}
   weights: {data: 2, elastic: 3, temporal: 4, anchor: 5}
   solver: {max_outer_iterations: 6, max_inner_iterations: 7, relative_energy_tolerance: 1e-5,
-           time_budget_s: 0.1, trust_region: dogleg, linear_solver: sparse_normal_cholesky,
+           bulk_step_tolerance: 0.1, time_budget_s: 0.1, trust_region: dogleg,
+           linear_solver: sparse_normal_cholesky,
            threads: 2, rigid_prealign: true, rigid_iterations: 30, predict_motion: false}
 anchors:
   - {name: gripper, object: beam, select: {indices: [0]}, hard: true, weight: 1e3,
@@ -190,6 +191,7 @@ effects: {fracture: false, collision: false}
   EXPECT_DOUBLE_EQ(r.weights.temporal, 4);
   EXPECT_DOUBLE_EQ(r.weights.anchor, 5);
   EXPECT_EQ(r.solver.max_outer_iterations, 6);
+  EXPECT_DOUBLE_EQ(r.solver.bulk_step_tolerance, 0.1);
   EXPECT_EQ(r.solver.trust_region, TrustRegion::kDogleg);
   EXPECT_EQ(r.solver.linear_solver, LinearSolver::kSparseNormalCholesky);
   EXPECT_EQ(r.solver.num_threads, 2);
@@ -374,6 +376,9 @@ TEST_F(SceneTest, InvalidRegistrationOptions) {
               {"beam.yaml:12: registration.data.loss_scale: must be > 0 (got -1)"});
   ExpectError(std::string(kBaseScene) + "registration:\n  camera:\n    position: [0, 0, 1]\n",
               {"beam.yaml:12: registration.camera.target: must differ from camera.position"});
+  ExpectError(std::string(kBaseScene) + "registration:\n  solver:\n    bulk_step_tolerance: -1\n",
+              {"beam.yaml:12: registration.solver.bulk_step_tolerance: must be >= 0 (a fraction of "
+               "the mean edge length; 0 = off) (got -1)"});
   ExpectError(std::string(kBaseScene) + "registration:\n  solver:\n    threads: -1\n",
               {"beam.yaml:12: registration.solver.threads: must be >= 0 (0: the machine's hardware threads) (got -1)"});
 }

@@ -107,6 +107,7 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(s.max_outer_iterations, t.max_outer_iterations);
   EXPECT_EQ(s.max_inner_iterations, t.max_inner_iterations);
   EXPECT_EQ(s.relative_energy_tolerance, t.relative_energy_tolerance);
+  EXPECT_EQ(s.bulk_step_tolerance, t.bulk_step_tolerance);
   EXPECT_EQ(s.time_budget_s, t.time_budget_s);
   EXPECT_EQ(s.backend, t.backend);
   EXPECT_EQ(s.trust_region, t.trust_region);
@@ -298,7 +299,7 @@ const char kEverything[] =
     "         metric: point_to_point, visibility: true, cloud_stride: 2}\n"
     "  weights: {data: 150, elastic: 2, temporal: 0.5, anchor: 2e4}\n"
     "  solver: {max_outer_iterations: 7, max_inner_iterations: 4, relative_energy_tolerance: 1e-4,\n"
-    "           time_budget_s: 0.25,\n"
+    "           bulk_step_tolerance: 0.02, time_budget_s: 0.25,\n"
     "           threads: 2, rigid_prealign: true, rigid_iterations: 12, predict_motion: false,\n"
     "           backend: fast}\n"
     "anchors:\n"

@@ -185,6 +185,12 @@ struct SolverOptions {
   // ... or moved no vertex farther than this fraction of the mesh's mean surface edge length.
   // Inner solves of the fast back end stop at a tenth of it.
   double step_tolerance = 0.01;
+  // ... or moved 99 % of each object's free vertices (those not held by a hard anchor) less
+  // than this fraction of the mean surface edge length (stopped_by "bulk_step"): the largest
+  // move alone never settles where a few vertices hop between nearly equal pairings (a
+  // sparse cloud on a fine mesh), and the outer iterations then go on creeping for no gain in
+  // the fit (README, "How a frame is registered"). 0 = off.
+  double bulk_step_tolerance = 0.05;
   double time_budget_s = 0.0;            // per frame; 0 = none
   // Which back end minimizes each outer iteration (both take every term, contacts included,
   // and reach the same minimum). The fast one by default: on the 12 bundled datasets it gives
@@ -285,7 +291,8 @@ struct FrameSummary {
   // Fast back end: factorizations (or multigrid hierarchies built), preconditioner
   // applications, conjugate-gradient iterations.
   int factorizations = 0, linear_solves = 0, pcg_iterations = 0;
-  // Which criterion ended the frame: "step" (solver.step_tolerance), "energy" or
+  // Which criterion ended the frame: "step" (solver.step_tolerance), "bulk_step"
+  // (solver.bulk_step_tolerance), "energy" or
   // "energy_rise" (solver.relative_energy_tolerance: the energy changed by less than it, or
   // rose by more without motion, see there), or the termination's name otherwise.
   std::string stopped_by;

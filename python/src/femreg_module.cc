@@ -439,6 +439,8 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("max_inner_iterations", &SolverOptions::max_inner_iterations)
       .def_readwrite("inner_tolerance", &SolverOptions::inner_tolerance)
       .def_readwrite("relative_energy_tolerance", &SolverOptions::relative_energy_tolerance)
+      .def_readwrite("step_tolerance", &SolverOptions::step_tolerance)
+      .def_readwrite("bulk_step_tolerance", &SolverOptions::bulk_step_tolerance)
       .def_readwrite("time_budget_s", &SolverOptions::time_budget_s)
       .def_readwrite("num_threads", &SolverOptions::num_threads)
       .def_readwrite("predict_motion", &SolverOptions::predict_motion)

@@ -300,6 +300,10 @@ bool SolverOptions::IsValid(std::string* error) const {
     return Fail(error, "solver.step_tolerance", "must be >= 0 (a fraction of the mean edge length)",
                 step_tolerance);
   }
+  if (!(std::isfinite(bulk_step_tolerance) && bulk_step_tolerance >= 0)) {
+    return Fail(error, "solver.bulk_step_tolerance",
+                "must be >= 0 (a fraction of the mean edge length; 0 = off)", bulk_step_tolerance);
+  }
   if (num_threads < 0) {
     return Fail(error, "solver.threads", "must be >= 0 (0: the machine's hardware threads)", num_threads);
   }

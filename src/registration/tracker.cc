@@ -54,6 +54,27 @@ constexpr double kRiseMoveLimit = 1.0;
 // solver.relative_energy_tolerance at this limit or above, no rise stops a frame.
 constexpr double kRiseEnergyLimit = 0.1;
 
+// The vertex move (m) that 99 % of each object's free vertices (not held by a hard anchor)
+// stay within, the largest over the objects; moves: per global vertex. A few vertices that
+// hop between nearly equal pairings do not count; a moving part of more than 1 % of an
+// object's vertices does, and so does one object moving beside a still one.
+double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const energy::Problem& problem) {
+  double bulk = 0.0;
+  std::vector<double> free;
+  for (const ObjectState& o : state.objects) {
+    free.clear();
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) {
+      const int g = v + o.offset;
+      if (g < moves.size() && !problem.is_fixed(g)) free.push_back(moves(g));
+    }
+    if (free.empty()) continue;
+    const size_t at = static_cast<size_t>(0.99 * static_cast<double>(free.size() - 1));
+    std::nth_element(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(at), free.end());
+    bulk = std::max(bulk, free[at]);
+  }
+  return bulk;
+}
+
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
@@ -361,8 +382,11 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     return false;
   }
   row.after = report.after;
-  // The largest vertex move of this outer iteration, against the mesh's edge length.
-  double moved = (state.x - before_solve).rowwise().norm().maxCoeff();
+  // The largest vertex move of this outer iteration and the one 99 % of the free vertices
+  // stay within, against the mesh's edge length.
+  const Eigen::VectorXd moves = (state.x - before_solve).rowwise().norm();
+  double moved = moves.size() > 0 ? moves.maxCoeff() : 0.0;
+  double bulk = BulkMove(state, moves, frame_problem.problem());
   row.max_move = moved;
   double sum2 = 0.0;
   for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();
@@ -388,6 +412,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       paired_vertices.clear();
       FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
       moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
+      bulk = moved;
       // The next outer iteration forms a new pair set, held from the one after.
       rise_from = std::max(k + 2, std::max(1, options.data.hold_pairs_after));
     }
@@ -410,13 +435,21 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const bool rise_goes_on = decrease <= -tolerance &&
                             (k < rise_from || moved > kRiseMoveLimit * state.mean_edge_length ||
                              rise > kRiseEnergyLimit);
-  if (k > 0 && (moved <= step_limit || (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
+  const double bulk_limit = options.solver.bulk_step_tolerance * state.mean_edge_length;
+  const bool settled = bulk_limit > 0 && bulk <= bulk_limit;
+  if (k > 0 && (moved <= step_limit || settled ||
+                (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
     s->termination = TerminationType::kConverged;
     std::ostringstream os;
     if (moved <= step_limit) {
       s->stopped_by = "step";
       os << "largest vertex move " << moved * 1e3 << " mm <= " << options.solver.step_tolerance
          << " x mean edge " << state.mean_edge_length * 1e3 << " mm";
+    } else if (settled) {
+      s->stopped_by = "bulk_step";
+      os << "99 % of the vertices moved at most " << bulk * 1e3 << " mm <= "
+         << options.solver.bulk_step_tolerance << " x mean edge " << state.mean_edge_length * 1e3
+         << " mm (the largest move " << moved * 1e3 << " mm)";
     } else if (decrease > -tolerance) {
       s->stopped_by = "energy";
       os << "relative energy change " << std::abs(decrease) << " < " << tolerance;

@@ -140,7 +140,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("solver")) {
     const YamlValue s = v["solver"];
     s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
-                 "inner_tolerance", "step_tolerance", "max_pcg_iterations", "preconditioner", "time_budget_s", "trust_region", "linear_solver", "threads",
+                 "inner_tolerance", "step_tolerance", "bulk_step_tolerance", "max_pcg_iterations",
+                 "preconditioner", "time_budget_s", "trust_region", "linear_solver", "threads",
                  "rigid_prealign", "rigid_iterations", "predict_motion", "backend"});
     SolverOptions& o = r.solver;
     if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
@@ -150,6 +151,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (s.Has("inner_tolerance")) o.inner_tolerance = s["inner_tolerance"].AsDouble();
     if (s.Has("step_tolerance")) o.step_tolerance = s["step_tolerance"].AsDouble();
+    if (s.Has("bulk_step_tolerance")) o.bulk_step_tolerance = s["bulk_step_tolerance"].AsDouble();
     if (s.Has("max_pcg_iterations")) o.max_pcg_iterations = s["max_pcg_iterations"].AsInt();
     if (s.Has("preconditioner")) {
       o.preconditioner = ParseEnum(s["preconditioner"],

@@ -342,6 +342,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
       d.solver.relative_energy_tolerance);
   Put(solver, "inner_tolerance", s.inner_tolerance, d.solver.inner_tolerance);
   Put(solver, "step_tolerance", s.step_tolerance, d.solver.step_tolerance);
+  Put(solver, "bulk_step_tolerance", s.bulk_step_tolerance, d.solver.bulk_step_tolerance);
   Put(solver, "max_pcg_iterations", s.max_pcg_iterations, d.solver.max_pcg_iterations);
   if (s.preconditioner != d.solver.preconditioner) solver["preconditioner"] = ToString(s.preconditioner);
   Put(solver, "time_budget_s", s.time_budget_s, d.solver.time_budget_s);
