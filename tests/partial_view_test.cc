@@ -335,7 +335,7 @@ TEST(RegisterCommand, SigtermLeavesWholeFilesAndAnHonestSummary) {
                               "/clouds --no-progress --force --out " + tmp.path() + "/out" +
                               " --set registration.solver.max_outer_iterations=200"
                               " --set registration.solver.step_tolerance=0"
-                            " --set registration.solver.bulk_step_tolerance=0"
+                              " --set registration.solver.bulk_step_tolerance=0"
                               " --set registration.solver.relative_energy_tolerance=0",
                           "timeout --preserve-status -s TERM 3 ");
   ASSERT_EQ(r.code, 143) << r.out;

@@ -185,8 +185,8 @@ struct SolverOptions {
   // ... or moved no vertex farther than this fraction of the mesh's mean surface edge length.
   // Inner solves of the fast back end stop at a tenth of it.
   double step_tolerance = 0.01;
-  // ... or moved 99 % of each object's free vertices (those not held by a hard anchor) less
-  // than this fraction of the mean surface edge length (stopped_by "bulk_step"): the largest
+  // ... or moved 99 % of each object's free vertices (those not held by a hard anchor) no
+  // farther than this fraction of the mean surface edge length (stopped_by "bulk_step"): the largest
   // move alone never settles where a few vertices hop between nearly equal pairings (a
   // sparse cloud on a fine mesh), and the outer iterations then go on creeping for no gain in
   // the fit (README, "How a frame is registered"). 0 = off.

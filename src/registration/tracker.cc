@@ -68,7 +68,9 @@ double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const e
       if (g < moves.size() && !problem.is_fixed(g)) free.push_back(moves(g));
     }
     if (free.empty()) continue;
-    const size_t at = static_cast<size_t>(0.99 * static_cast<double>(free.size() - 1));
+    // The smallest move at or above which no more than 1 % of the vertices lie: the
+    // ceil(0.99 n)-th smallest (with 100 or fewer vertices, the largest).
+    const size_t at = (99 * free.size() + 99) / 100 - 1;
     std::nth_element(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(at), free.end());
     bulk = std::max(bulk, free[at]);
   }
@@ -447,7 +449,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
          << " x mean edge " << state.mean_edge_length * 1e3 << " mm";
     } else if (settled) {
       s->stopped_by = "bulk_step";
-      os << "99 % of the vertices moved at most " << bulk * 1e3 << " mm <= "
+      os << "99 % of each object's free vertices moved at most " << bulk * 1e3 << " mm <= "
          << options.solver.bulk_step_tolerance << " x mean edge " << state.mean_edge_length * 1e3
          << " mm (the largest move " << moved * 1e3 << " mm)";
     } else if (decrease > -tolerance) {

@@ -56,6 +56,8 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                  {"max_inner_iterations", s.max_inner_iterations},
                  {"inner_tolerance", s.inner_tolerance},
                  {"relative_energy_tolerance", s.relative_energy_tolerance},
+                 {"step_tolerance", s.step_tolerance},
+                 {"bulk_step_tolerance", s.bulk_step_tolerance},
                  {"time_budget_s", s.time_budget_s},
                  {"trust_region", ToString(s.trust_region)},
                  {"linear_solver", ToString(s.linear_solver)},
