@@ -509,6 +509,41 @@ TEST(Tracker, SummaryStartsNotRunAndReports) {
   EXPECT_EQ(tracker->frame(), 1);
 }
 
+// The bulk move (solver.bulk_step_tolerance) is per object, over its free vertices: two
+// boxes, a large still one and a small one of 216 vertices. 3 of the small one's vertices
+// moving (its ceil(0.99 * 216) = 214th smallest move is theirs) make the bulk move theirs,
+// although they are 0.03 % of all vertices; 2 do not. Moving vertices that a hard anchor
+// holds (fixed) do not count, however many.
+TEST(Tracker, BulkMoveIsPerObjectOverItsFreeVertices) {
+  TrackerState state;
+  state.objects.resize(2);
+  state.objects[0].mesh = MakeBox(Eigen::Vector3d(0.2, 0.2, 0.2), 20, 20, 20);  // 9261 vertices
+  state.objects[1].mesh = MakeBox(Eigen::Vector3d(0.05, 0.05, 0.05), 5, 5, 5);  // 216
+  state.objects[0].offset = 0;
+  state.objects[1].offset = state.objects[0].mesh.num_vertices();
+  const int n0 = state.objects[0].mesh.num_vertices(), n1 = state.objects[1].mesh.num_vertices();
+  ASSERT_EQ(n1, 216);
+  const double still = 1e-5, moving = 1e-2;
+  Eigen::VectorXd moves = Eigen::VectorXd::Constant(n0 + n1, still);
+  std::vector<char> fixed;  // none
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still);
+  moves.segment(n0, 2).setConstant(moving);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still) << "2 of 216 vertices are within the 1 %";
+  moves(n0 + 100) = moving;
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), moving) << "3 of 216 are not, beside a still object";
+  // The large object: 5 % of it moving counts, unless a hard anchor holds those vertices.
+  moves.segment(n0, n1).setConstant(still);
+  moves.head(n0 / 20).setConstant(moving);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), moving);
+  fixed.assign(static_cast<size_t>(n0 + n1), 0);
+  std::fill(fixed.begin(), fixed.begin() + n0 / 20, 1);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still) << "the moving vertices are anchored";
+  // An object with every vertex fixed has no bulk move.
+  std::fill(fixed.begin(), fixed.begin() + n0, 1);
+  moves.head(n0).setConstant(1.0);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still);
+}
+
 // A cloud sparser than a fine mesh (the scaling benchmark's setting, smaller): a few
 // vertices keep hopping between nearly equal pairings long after the rest has settled, so
 // the largest move never gets below solver.step_tolerance and the energy creeps down by

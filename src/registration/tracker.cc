@@ -54,29 +54,6 @@ constexpr double kRiseMoveLimit = 1.0;
 // solver.relative_energy_tolerance at this limit or above, no rise stops a frame.
 constexpr double kRiseEnergyLimit = 0.1;
 
-// The vertex move (m) that 99 % of each object's free vertices (not held by a hard anchor)
-// stay within, the largest over the objects; moves: per global vertex. A few vertices that
-// hop between nearly equal pairings do not count; a moving part of more than 1 % of an
-// object's vertices does, and so does one object moving beside a still one.
-double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const energy::Problem& problem) {
-  double bulk = 0.0;
-  std::vector<double> free;
-  for (const ObjectState& o : state.objects) {
-    free.clear();
-    for (int v = 0; v < o.mesh.num_vertices(); ++v) {
-      const int g = v + o.offset;
-      if (g < moves.size() && !problem.is_fixed(g)) free.push_back(moves(g));
-    }
-    if (free.empty()) continue;
-    // The smallest move at or above which no more than 1 % of the vertices lie: the
-    // ceil(0.99 n)-th smallest (with 100 or fewer vertices, the largest).
-    const size_t at = (99 * free.size() + 99) / 100 - 1;
-    std::nth_element(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(at), free.end());
-    bulk = std::max(bulk, free[at]);
-  }
-  return bulk;
-}
-
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
@@ -388,7 +365,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // stay within, against the mesh's edge length.
   const Eigen::VectorXd moves = (state.x - before_solve).rowwise().norm();
   double moved = moves.size() > 0 ? moves.maxCoeff() : 0.0;
-  double bulk = BulkMove(state, moves, frame_problem.problem());
+  double bulk = BulkMove(state, moves, frame_problem.problem().fixed());
   row.max_move = moved;
   double sum2 = 0.0;
   for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();

@@ -1,5 +1,7 @@
 #include "registration/tracker_state.h"
 
+#include <algorithm>
+#include <cstddef>
 #include <limits>
 
 namespace femreg {
@@ -61,6 +63,24 @@ Eigen::MatrixXd TrackerState::VertexNormals() const {
     if (len > 0) n.row(v) /= len;
   }
   return n;
+}
+
+double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const std::vector<char>& fixed) {
+  double bulk = 0.0;
+  std::vector<double> free;
+  for (const ObjectState& o : state.objects) {
+    free.clear();
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) {
+      const int g = v + o.offset;
+      const bool held = static_cast<size_t>(g) < fixed.size() && fixed[static_cast<size_t>(g)];
+      if (g < moves.size() && !held) free.push_back(moves(g));
+    }
+    if (free.empty()) continue;
+    const size_t at = (99 * free.size() + 99) / 100 - 1;  // the ceil(0.99 n)-th smallest
+    std::nth_element(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(at), free.end());
+    bulk = std::max(bulk, free[at]);
+  }
+  return bulk;
 }
 
 Triangles TrackerState::ObjectSurface(int i) const {

@@ -95,6 +95,14 @@ struct TrackerState {
   Triangles ObjectSurface(int i) const;
 };
 
+// The vertex move (m) that 99 % of each object's free vertices (those not `fixed`, by a hard
+// anchor; empty: none) stay within, the largest over the objects; moves: per global vertex.
+// A few vertices that hop between nearly equal pairings do not count; a moving part of more
+// than 1 % of an object's vertices does, and so does one object moving beside a still one.
+// Per object the ceil(0.99 n)-th smallest of its n free vertices' moves (with 100 or fewer,
+// the largest); 0 when no vertex is free.
+double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const std::vector<char>& fixed);
+
 // Region id -> density of an object's materials (for ComputeLumpedMasses).
 std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material);
 
