@@ -13,17 +13,21 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <utility>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "femreg/eval.h"
+#include "femreg/io.h"
 #include "femreg/ground_truth.h"
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "registration/frame_problem.h"
 #include "test_util.h"
 
 namespace femreg {
@@ -143,6 +147,71 @@ TEST(DataWeight, DecimatingTheCloudFourTimesKeepsVertexErrorsWithinTenPercent) {
   EXPECT_LT(change(runs[2]), 0.75 * change(runs[3]));
 }
 
+// weights.model_to_cloud_balance, per object: an object with more model->cloud pairs than
+// cloud->model pairs (a mesh finer than its cloud) has each of its model->cloud pairs
+// weigh data times their ratio; an object with fewer keeps the weight, and so do all
+// cloud->model pairs; off, or with the weight per area, nothing changes.
+TEST(DataWeight, ModelToCloudPairsOfAMeshFinerThanItsCloudShareOnePullPerCloudPoint) {
+  TrackerState state;
+  state.options.regularizer = Regularizer::kNone;  // the data blocks alone
+  state.objects.resize(2);
+  state.objects[0].mesh = MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 2, 2, 2);  // 27 vertices
+  state.objects[1].mesh = MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 2, 2, 2);
+  state.objects[1].label = 1;
+  state.RebuildGlobalArrays();
+  state.x = Vertices::Zero(state.num_vertices, 3);
+  ASSERT_EQ(state.num_vertices, 54);
+  // Object 0: 10 model->cloud pairs, 2 cloud->model pairs; object 1: 3 and 5.
+  std::vector<DataPair> pairs;
+  auto add = [&](int object, int count, bool model_to_cloud) {
+    for (int i = 0; i < count; ++i) {
+      DataPair p;
+      p.num_vertices = model_to_cloud ? 1 : 3;
+      const int first = state.objects[object].offset;
+      for (int k = 0; k < p.num_vertices; ++k) p.vertices[k] = first + (i + k) % 27;
+      p.normal = Eigen::Vector3d::UnitZ();
+      pairs.push_back(p);
+    }
+  };
+  add(0, 10, true);
+  add(0, 2, false);
+  add(1, 3, true);
+  add(1, 5, false);
+  using Key = std::pair<int, bool>;  // (object, model->cloud)
+  // Weight of each data block by (object, model->cloud).
+  auto weights = [&](const RegistrationOptions& options) {
+    FrameProblem problem;
+    problem.BuildElastic(state);
+    problem.SetData(pairs, options);
+    std::map<Key, std::vector<double>> w;
+    problem.problem().ForEachSet([&](const auto& set) {
+      for (const auto& b : set.blocks()) {
+        const bool m2c = b.vertices.size() == 1;
+        w[Key(state.vertex_object[static_cast<size_t>(b.vertices[0])], m2c)].push_back(b.weight);
+      }
+    });
+    return w;
+  };
+  RegistrationOptions options;
+  auto w = weights(options);
+  ASSERT_EQ(w[Key(0, true)].size(), 10u);
+  for (double x : w[Key(0, true)]) EXPECT_DOUBLE_EQ(x, options.weights.data * 2.0 / 10.0);
+  for (double x : w[Key(0, false)]) EXPECT_DOUBLE_EQ(x, options.weights.data);
+  ASSERT_EQ(w[Key(1, true)].size(), 3u);
+  for (double x : w[Key(1, true)]) EXPECT_DOUBLE_EQ(x, options.weights.data);
+  for (double x : w[Key(1, false)]) EXPECT_DOUBLE_EQ(x, options.weights.data);
+  options.weights.model_to_cloud_balance = false;
+  w = weights(options);
+  for (double x : w[Key(0, true)]) EXPECT_DOUBLE_EQ(x, options.weights.data);
+  // Per area: the model->cloud weights are the vertex areas', with or without the balance.
+  RegistrationOptions area;
+  area.weights.data = -1.0;
+  const auto balanced = weights(area);
+  area.weights.model_to_cloud_balance = false;
+  const auto plain = weights(area);
+  EXPECT_EQ(balanced.at(Key(0, true)), plain.at(Key(0, true)));
+}
+
 TEST(DataWeight, SceneKeys) {
   Scene scene;
   Status status = ParseScene(
@@ -170,6 +239,17 @@ TEST(DataWeight, SceneKeys) {
       "registration: {weights: {model_to_cloud_area_cap: -1}}\n", "bad_cap.yaml", ".", &scene);
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("model_to_cloud_area_cap"), std::string::npos) << status.message();
+  status = ParseScene(
+      "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+      "registration: {weights: {model_to_cloud_balance: false}}\n", "balance.yaml", ".", &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_FALSE(scene.registration.weights.model_to_cloud_balance);
+  EXPECT_NE(SceneToYaml(scene).find("model_to_cloud_balance: false"), std::string::npos) << SceneToYaml(scene);
+  status = ParseScene(
+      "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+      "registration: {weights: {model_to_cloud_balance: 0.5}}\n", "bad_balance.yaml", ".", &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("bad_balance.yaml:2"), std::string::npos) << status.message();
   status = ParseScene(
       "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
       "registration: {weights: {data: 200, data_per_area: 3e7}}\n", "both.yaml", ".", &scene);

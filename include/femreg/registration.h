@@ -161,6 +161,15 @@ struct WeightOptions {
   // the per-area weight costs accuracy on occluded sequences and under many outliers (README,
   // "The data weight"). < 0: data_per_area is used instead (a scene that sets data_per_area).
   double data = 200.0;
+  // With the weight per pair (data >= 0): where an object has more model->cloud pairs than
+  // cloud->model pairs (its mesh is finer than the cloud), each of its model->cloud pairs
+  // weighs data times (cloud->model pairs / model->cloud pairs), so that the model->cloud
+  // term pulls no harder in all than one pair per cloud point, however fine the mesh. Each
+  // surface vertex pairs with its nearest cloud point, which on a sparse cloud lies up to
+  // half the cloud's spacing off the surface; without the balance a mesh refined under the
+  // same cloud is pulled ever harder towards those points (README, "Cost against size").
+  // Where the cloud is the denser (every bundled dataset), nothing changes.
+  bool model_to_cloud_balance = true;
   double elastic = 1.0;    // w_elastic, multiplies the FEM energy (J)
   double temporal = 1.0;   // w_temporal, multiplies 0.5 sum m_i |x_i - x_i^prev|^2 (kg m^2)
   double anchor = 1.0e4;   // soft anchors: 0.5 w |x_i - target_i|^2 per vertex (N/m)
@@ -186,10 +195,12 @@ struct SolverOptions {
   // Inner solves of the fast back end stop at a tenth of it.
   double step_tolerance = 0.01;
   // ... or moved 99 % of each object's free vertices (those not held by a hard anchor) no
-  // farther than this fraction of the mean surface edge length (stopped_by "bulk_step"): the largest
-  // move alone never settles where a few vertices hop between nearly equal pairings (a
-  // sparse cloud on a fine mesh), and the outer iterations then go on creeping for no gain in
-  // the fit (README, "How a frame is registered"). 0 = off.
+  // farther than this fraction of the coarser of the two resolutions, the mean surface edge
+  // length and the cloud's sampling distance (twice its median point spacing)
+  // (stopped_by "bulk_step"): the largest move alone never settles where a few vertices hop
+  // between nearly equal pairings (a sparse cloud on a fine mesh), and the outer iterations
+  // then go on creeping for no gain in the fit; nor does the fit resolve the shape finer
+  // than the cloud samples it (README, "How a frame is registered"). 0 = off.
   double bulk_step_tolerance = 0.05;
   double time_budget_s = 0.0;            // per frame; 0 = none
   // Which back end minimizes each outer iteration (both take every term, contacts included,

@@ -429,6 +429,7 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("data_per_area", &WeightOptions::data_per_area)
       .def_readwrite("model_to_cloud_share", &WeightOptions::model_to_cloud_share)
       .def_readwrite("model_to_cloud_area_cap", &WeightOptions::model_to_cloud_area_cap)
+      .def_readwrite("model_to_cloud_balance", &WeightOptions::model_to_cloud_balance)
       .def_readwrite("elastic", &WeightOptions::elastic)
       .def_readwrite("temporal", &WeightOptions::temporal)
       .def_readwrite("anchor", &WeightOptions::anchor);

@@ -31,6 +31,7 @@ struct HasNormal<Block, std::void_t<decltype(std::declval<Block>().normal)>> : s
 // Rest areas of the surface for the data weights per unit area.
 void FrameProblem::BuildAreas(const TrackerState& state) {
   vertex_area_.assign(state.num_vertices, 0.0);
+  vertex_object_.assign(state.vertex_object.begin(), state.vertex_object.end());
   triangle_area_.clear();
   for (const ObjectState& o : state.objects) {
     const TetMesh& m = o.mesh;
@@ -207,6 +208,24 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     }
     return k * point_area;
   };
+  // The balance (weights.model_to_cloud_balance): per object, the share of its model->cloud
+  // pairs' weight when they outnumber its cloud->model pairs (1 otherwise). A cloud->model
+  // pair is its triangle's object's.
+  std::vector<double> balance;
+  if (per_pair && options.weights.model_to_cloud_balance && !vertex_object_.empty()) {
+    int objects = 0;
+    for (int o : vertex_object_) objects = std::max(objects, o + 1);
+    std::vector<double> m2c(static_cast<size_t>(objects), 0.0), c2m(static_cast<size_t>(objects), 0.0);
+    for (const DataPair& p : pairs) {
+      if (p.vertices[0] >= static_cast<int>(vertex_object_.size())) continue;
+      const auto o = static_cast<size_t>(vertex_object_[static_cast<size_t>(p.vertices[0])]);
+      (p.num_vertices == 1 ? m2c : c2m)[o] += 1.0;
+    }
+    balance.assign(static_cast<size_t>(objects), 1.0);
+    for (size_t o = 0; o < balance.size(); ++o) {
+      if (m2c[o] > c2m[o] && c2m[o] > 0) balance[o] = c2m[o] / m2c[o];
+    }
+  }
   auto fill = [&](const DataPair& p, auto* b) {
     for (size_t k = 0; k < b->vertices.size(); ++k) {
       b->vertices[k] = p.vertices[k];
@@ -217,6 +236,9 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     // A legacy per-pair weight counts the points a voxel stands for (p.weight); a weight per
     // unit area already divides the area among the points that are there.
     b->weight = per_pair ? weight_of(p) * p.weight : weight_of(p);
+    if (p.num_vertices == 1 && !balance.empty() && p.vertices[0] < static_cast<int>(vertex_object_.size())) {
+      b->weight *= balance[static_cast<size_t>(vertex_object_[static_cast<size_t>(p.vertices[0])])];
+    }
   };
   // Which set a pair goes to; each set sized once (they are made anew every outer iteration).
   enum Kind { kPoint1, kPoint3, kPlane1, kPlane3 };

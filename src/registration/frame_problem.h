@@ -30,7 +30,8 @@ class FrameProblem {
   // area each pair stands for: a model->cloud pair its vertex's share of the rest surface
   // around it (times model_to_cloud_share), at most model_to_cloud_area_cap times the
   // cloud's area per point; a cloud->model pair the cloud's area per point (the median over
-  // the touched triangles of rest area / pairs on it).
+  // the touched triangles of rest area / pairs on it). Per pair, an object's model->cloud
+  // pairs weigh less where they outnumber its cloud->model pairs (model_to_cloud_balance).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
   // The external loads (gravity, nodal forces) of the objects that have them, about the
   // positions at the start of this outer iteration (energy/load.h). Every outer iteration.
@@ -46,6 +47,7 @@ class FrameProblem {
   // Rest areas (m^2), from BuildElastic: per global vertex, a third of the surface
   // triangles around it; per surface triangle, keyed by its sorted vertices.
   std::vector<double> vertex_area_;
+  std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
   std::unordered_map<uint64_t, double> triangle_area_;
 };
 

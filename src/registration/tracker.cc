@@ -414,7 +414,13 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const bool rise_goes_on = decrease <= -tolerance &&
                             (k < rise_from || moved > kRiseMoveLimit * state.mean_edge_length ||
                              rise > kRiseEnergyLimit);
-  const double bulk_limit = options.solver.bulk_step_tolerance * state.mean_edge_length;
+  // Against the coarser of the mesh's and the cloud's resolutions: the cloud's sampling
+  // distance is twice its median point spacing (for points scattered at random over a
+  // surface, about the square root of the area per point; for a depth image's grid, two
+  // pixels' pitch). On the bundled datasets the mesh is the coarser; on a fine mesh under a
+  // sparse cloud the fit cannot resolve moves of a twentieth of an edge anyway.
+  const double bulk_reference = std::max(state.mean_edge_length, 2.0 * fc.spacing);
+  const double bulk_limit = options.solver.bulk_step_tolerance * bulk_reference;
   const bool settled = bulk_limit > 0 && bulk <= bulk_limit;
   if (k > 0 && (moved <= step_limit || settled ||
                 (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
@@ -427,8 +433,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     } else if (settled) {
       s->stopped_by = "bulk_step";
       os << "99 % of each object's free vertices moved at most " << bulk * 1e3 << " mm <= "
-         << options.solver.bulk_step_tolerance << " x mean edge " << state.mean_edge_length * 1e3
-         << " mm (the largest move " << moved * 1e3 << " mm)";
+         << options.solver.bulk_step_tolerance
+         << (bulk_reference > state.mean_edge_length ? " x the cloud's sampling distance " : " x mean edge ")
+         << bulk_reference * 1e3 << " mm (the largest move " << moved * 1e3 << " mm)";
     } else if (decrease > -tolerance) {
       s->stopped_by = "energy";
       os << "relative energy change " << std::abs(decrease) << " < " << tolerance;

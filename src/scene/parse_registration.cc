@@ -113,8 +113,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
-    w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "model_to_cloud_area_cap", "elastic",
-                 "temporal", "anchor"});
+    w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "model_to_cloud_area_cap",
+                 "model_to_cloud_balance", "elastic", "temporal", "anchor"});
     if (w.Has("data") && w.Has("data_per_area")) {
       w["data"].Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
                      "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
@@ -132,6 +132,9 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (w.Has("model_to_cloud_area_cap")) {
       r.weights.model_to_cloud_area_cap = w["model_to_cloud_area_cap"].AsDouble();
+    }
+    if (w.Has("model_to_cloud_balance")) {
+      r.weights.model_to_cloud_balance = w["model_to_cloud_balance"].AsBool();
     }
     if (w.Has("elastic")) r.weights.elastic = w["elastic"].AsDouble();
     if (w.Has("temporal")) r.weights.temporal = w["temporal"].AsDouble();

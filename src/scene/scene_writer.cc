@@ -328,6 +328,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   Put(weights, "model_to_cloud_share", r.weights.model_to_cloud_share, d.weights.model_to_cloud_share);
   Put(weights, "model_to_cloud_area_cap", r.weights.model_to_cloud_area_cap,
       d.weights.model_to_cloud_area_cap);
+  Put(weights, "model_to_cloud_balance", r.weights.model_to_cloud_balance,
+      d.weights.model_to_cloud_balance);
   Put(weights, "elastic", r.weights.elastic, d.weights.elastic);
   Put(weights, "temporal", r.weights.temporal, d.weights.temporal);
   Put(weights, "anchor", r.weights.anchor, d.weights.anchor);

@@ -48,7 +48,7 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                {"visibility", d.visibility},         {"cloud_stride", d.cloud_stride}};
   const WeightOptions& w = o.weights;
   j["weights"] = {{"data", w.data}, {"elastic", w.elastic}, {"temporal", w.temporal},
-                  {"anchor", w.anchor}};
+                  {"anchor", w.anchor}, {"model_to_cloud_balance", w.model_to_cloud_balance}};
   j["loads"] = o.loads;
   const SolverOptions& s = o.solver;
   j["solver"] = {{"backend", ToString(s.backend)},
