@@ -14,14 +14,14 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <utility>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "femreg/eval.h"
-#include "femreg/io.h"
 #include "femreg/ground_truth.h"
+#include "femreg/io.h"
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/synth.h"
@@ -157,7 +157,6 @@ TEST(DataWeight, ModelToCloudPairsOfAMeshFinerThanItsCloudShareOnePullPerCloudPo
   state.objects.resize(2);
   state.objects[0].mesh = MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 2, 2, 2);  // 27 vertices
   state.objects[1].mesh = MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 2, 2, 2);
-  state.objects[1].label = 1;
   state.RebuildGlobalArrays();
   state.x = Vertices::Zero(state.num_vertices, 3);
   ASSERT_EQ(state.num_vertices, 54);
@@ -203,12 +202,22 @@ TEST(DataWeight, ModelToCloudPairsOfAMeshFinerThanItsCloudShareOnePullPerCloudPo
   options.weights.model_to_cloud_balance = false;
   w = weights(options);
   for (double x : w[Key(0, true)]) EXPECT_DOUBLE_EQ(x, options.weights.data);
+  // Cloud->model pairs count the points they stand for: object 0's 2 pairs of voxels of 6
+  // points each stand for 12 points, more than its 10 model->cloud pairs.
+  options.weights.model_to_cloud_balance = true;
+  for (DataPair& p : pairs) {
+    if (p.num_vertices == 3 && state.vertex_object[static_cast<size_t>(p.vertices[0])] == 0) p.weight = 6.0;
+  }
+  w = weights(options);
+  for (double x : w[Key(0, true)]) EXPECT_DOUBLE_EQ(x, options.weights.data);
+  for (DataPair& p : pairs) p.weight = 1.0;
   // Per area: the model->cloud weights are the vertex areas', with or without the balance.
   RegistrationOptions area;
   area.weights.data = -1.0;
   const auto balanced = weights(area);
   area.weights.model_to_cloud_balance = false;
   const auto plain = weights(area);
+  EXPECT_GT(plain.at(Key(0, true)).front(), 0.0);
   EXPECT_EQ(balanced.at(Key(0, true)), plain.at(Key(0, true)));
 }
 

@@ -103,6 +103,10 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(a.weights.elastic, b.weights.elastic);
   EXPECT_EQ(a.weights.temporal, b.weights.temporal);
   EXPECT_EQ(a.weights.anchor, b.weights.anchor);
+  EXPECT_EQ(a.weights.data_per_area, b.weights.data_per_area);
+  EXPECT_EQ(a.weights.model_to_cloud_share, b.weights.model_to_cloud_share);
+  EXPECT_EQ(a.weights.model_to_cloud_area_cap, b.weights.model_to_cloud_area_cap);
+  EXPECT_EQ(a.weights.model_to_cloud_balance, b.weights.model_to_cloud_balance);
   const SolverOptions &s = a.solver, &t = b.solver;
   EXPECT_EQ(s.max_outer_iterations, t.max_outer_iterations);
   EXPECT_EQ(s.max_inner_iterations, t.max_inner_iterations);
@@ -297,7 +301,7 @@ const char kEverything[] =
     "               voxel_size: 0.002, outliers: {neighbors: 8, stddev: 2.5}, normals: {neighbors: 12}}\n"
     "  data: {model_to_cloud: false, max_distance: 0.02, loss: cauchy, loss_scale: 0.003,\n"
     "         metric: point_to_point, visibility: true, cloud_stride: 2}\n"
-    "  weights: {data: 150, elastic: 2, temporal: 0.5, anchor: 2e4}\n"
+    "  weights: {data: 150, model_to_cloud_balance: false, elastic: 2, temporal: 0.5, anchor: 2e4}\n"
     "  solver: {max_outer_iterations: 7, max_inner_iterations: 4, relative_energy_tolerance: 1e-4,\n"
     "           bulk_step_tolerance: 0.02, time_budget_s: 0.25,\n"
     "           threads: 2, rigid_prealign: true, rigid_iterations: 12, predict_motion: false,\n"

@@ -162,13 +162,15 @@ struct WeightOptions {
   // "The data weight"). < 0: data_per_area is used instead (a scene that sets data_per_area).
   double data = 200.0;
   // With the weight per pair (data >= 0): where an object has more model->cloud pairs than
-  // cloud->model pairs (its mesh is finer than the cloud), each of its model->cloud pairs
-  // weighs data times (cloud->model pairs / model->cloud pairs), so that the model->cloud
+  // cloud points behind its cloud->model pairs (its mesh is finer than the cloud; a voxel
+  // counts the points it stands for, a cloud_stride its stride), each of its model->cloud
+  // pairs weighs data times (those points / model->cloud pairs), so that the model->cloud
   // term pulls no harder in all than one pair per cloud point, however fine the mesh. Each
   // surface vertex pairs with its nearest cloud point, which on a sparse cloud lies up to
   // half the cloud's spacing off the surface; without the balance a mesh refined under the
   // same cloud is pulled ever harder towards those points (README, "Cost against size").
-  // Where the cloud is the denser (every bundled dataset), nothing changes.
+  // Where the cloud is the denser (every bundled dataset), nothing changes; nor for an object
+  // with no cloud->model pair (data.cloud_to_model off).
   bool model_to_cloud_balance = true;
   double elastic = 1.0;    // w_elastic, multiplies the FEM energy (J)
   double temporal = 1.0;   // w_temporal, multiplies 0.5 sum m_i |x_i - x_i^prev|^2 (kg m^2)

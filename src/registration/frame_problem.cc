@@ -209,8 +209,11 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     return k * point_area;
   };
   // The balance (weights.model_to_cloud_balance): per object, the share of its model->cloud
-  // pairs' weight when they outnumber its cloud->model pairs (1 otherwise). A cloud->model
-  // pair is its triangle's object's.
+  // pairs' weight when they outnumber the cloud points its cloud->model pairs stand for (a
+  // voxel's points, p.weight, and every cloud_stride-th point's stride: a dense cloud
+  // subsampled is still the denser); 1 otherwise, and 1 for an object without cloud->model
+  // pairs (data.cloud_to_model off, or its points all another object's). A cloud->model pair
+  // is its triangle's object's.
   std::vector<double> balance;
   if (per_pair && options.weights.model_to_cloud_balance && !vertex_object_.empty()) {
     int objects = 0;
@@ -219,7 +222,11 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     for (const DataPair& p : pairs) {
       if (p.vertices[0] >= static_cast<int>(vertex_object_.size())) continue;
       const auto o = static_cast<size_t>(vertex_object_[static_cast<size_t>(p.vertices[0])]);
-      (p.num_vertices == 1 ? m2c : c2m)[o] += 1.0;
+      if (p.num_vertices == 1) {
+        m2c[o] += 1.0;
+      } else {
+        c2m[o] += p.weight * options.data.cloud_stride;
+      }
     }
     balance.assign(static_cast<size_t>(objects), 1.0);
     for (size_t o = 0; o < balance.size(); ++o) {

@@ -47,8 +47,8 @@ class FrameProblem {
   // Rest areas (m^2), from BuildElastic: per global vertex, a third of the surface
   // triangles around it; per surface triangle, keyed by its sorted vertices.
   std::vector<double> vertex_area_;
-  std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
   std::unordered_map<uint64_t, double> triangle_area_;
+  std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
 };
 
 }  // namespace femreg

@@ -362,7 +362,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   }
   row.after = report.after;
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices
-  // stay within, against the mesh's edge length.
+  // stay within (compared below with the mesh's edge and the cloud's sampling distance).
   const Eigen::VectorXd moves = (state.x - before_solve).rowwise().norm();
   double moved = moves.size() > 0 ? moves.maxCoeff() : 0.0;
   double bulk = BulkMove(state, moves, frame_problem.problem().fixed());
@@ -418,7 +418,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // distance is twice its median point spacing (for points scattered at random over a
   // surface, about the square root of the area per point; for a depth image's grid, two
   // pixels' pitch). On the bundled datasets the mesh is the coarser; on a fine mesh under a
-  // sparse cloud the fit cannot resolve moves of a twentieth of an edge anyway.
+  // sparse cloud the fit cannot resolve moves of a twentieth of an edge anyway. One length
+  // for the whole cloud: with several objects, the densest part of a labelled cloud sets it.
   const double bulk_reference = std::max(state.mean_edge_length, 2.0 * fc.spacing);
   const double bulk_limit = options.solver.bulk_step_tolerance * bulk_reference;
   const bool settled = bulk_limit > 0 && bulk <= bulk_limit;

@@ -33,7 +33,9 @@
 //     data: {model_to_cloud: true, cloud_to_model: true, max_distance: 0.03,
 //            loss: huber|cauchy|tukey|none, loss_scale: 0.005,
 //            metric: point_to_plane|point_to_point, visibility: false, cloud_stride: 1}
-//     weights: {data: 200, elastic: 1, temporal: 1, anchor: 1e4}
+//     weights: {data: 200 | data_per_area: 2e7, model_to_cloud_share: 0.03,
+//               model_to_cloud_area_cap: 0, model_to_cloud_balance: true, elastic: 1,
+//               temporal: 1, anchor: 1e4}
 //     solver: {max_outer_iterations: 8, max_inner_iterations: 10,
 //              relative_energy_tolerance: 1e-3, time_budget_s: 0,
 //              trust_region: levenberg_marquardt|dogleg,

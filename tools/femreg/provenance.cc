@@ -48,7 +48,10 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                {"visibility", d.visibility},         {"cloud_stride", d.cloud_stride}};
   const WeightOptions& w = o.weights;
   j["weights"] = {{"data", w.data}, {"elastic", w.elastic}, {"temporal", w.temporal},
-                  {"anchor", w.anchor}, {"model_to_cloud_balance", w.model_to_cloud_balance}};
+                  {"anchor", w.anchor}, {"data_per_area", w.data_per_area},
+                  {"model_to_cloud_share", w.model_to_cloud_share},
+                  {"model_to_cloud_area_cap", w.model_to_cloud_area_cap},
+                  {"model_to_cloud_balance", w.model_to_cloud_balance}};
   j["loads"] = o.loads;
   const SolverOptions& s = o.solver;
   j["solver"] = {{"backend", ToString(s.backend)},
