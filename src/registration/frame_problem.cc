@@ -32,6 +32,7 @@ struct HasNormal<Block, std::void_t<decltype(std::declval<Block>().normal)>> : s
 void FrameProblem::BuildAreas(const TrackerState& state) {
   vertex_area_.assign(state.num_vertices, 0.0);
   vertex_object_.assign(state.vertex_object.begin(), state.vertex_object.end());
+  num_objects_ = static_cast<int>(state.objects.size());
   triangle_area_.clear();
   for (const ObjectState& o : state.objects) {
     const TetMesh& m = o.mesh;
@@ -215,10 +216,9 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
   // pairs (data.cloud_to_model off, or its points all another object's). A cloud->model pair
   // is its triangle's object's.
   std::vector<double> balance;
-  if (per_pair && options.weights.model_to_cloud_balance && !vertex_object_.empty()) {
-    int objects = 0;
-    for (int o : vertex_object_) objects = std::max(objects, o + 1);
-    std::vector<double> m2c(static_cast<size_t>(objects), 0.0), c2m(static_cast<size_t>(objects), 0.0);
+  if (per_pair && options.weights.model_to_cloud_balance && num_objects_ > 0) {
+    const auto objects = static_cast<size_t>(num_objects_);
+    std::vector<double> m2c(objects, 0.0), c2m(objects, 0.0);
     for (const DataPair& p : pairs) {
       if (p.vertices[0] >= static_cast<int>(vertex_object_.size())) continue;
       const auto o = static_cast<size_t>(vertex_object_[static_cast<size_t>(p.vertices[0])]);
@@ -228,7 +228,7 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
         c2m[o] += p.weight * options.data.cloud_stride;
       }
     }
-    balance.assign(static_cast<size_t>(objects), 1.0);
+    balance.assign(objects, 1.0);
     for (size_t o = 0; o < balance.size(); ++o) {
       if (m2c[o] > c2m[o] && c2m[o] > 0) balance[o] = c2m[o] / m2c[o];
     }

@@ -49,6 +49,7 @@ class FrameProblem {
   std::vector<double> vertex_area_;
   std::unordered_map<uint64_t, double> triangle_area_;
   std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
+  int num_objects_ = 0;
 };
 
 }  // namespace femreg
