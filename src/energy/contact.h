@@ -18,6 +18,9 @@ struct ContactPenalty {
   static constexpr int kResiduals = 1;
   static constexpr int kVertices = N;
   static constexpr bool kConstantJacobian = false;  // zero once the contact opens
+  // ... but r is affine wherever it is differentiable: J^T J is the exact Hessian of 1/2 r^2
+  // (energy/term.h, Curvature).
+  static constexpr bool kPiecewiseAffine = true;
   std::array<int, N> vertices{};
   double weight = 1.0;                                  // k (N/m)
   std::array<double, N> coefficients{};                 // c_i

@@ -1,6 +1,7 @@
 #include "energy/elastic.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 namespace femreg {
@@ -15,7 +16,69 @@ Eigen::Matrix3d StencilF(const double* const* x, const Eigen::Matrix3d& dm_inv) 
   for (int j = 0; j < 3; ++j) Ds.col(j) = Eigen::Map<const Eigen::Vector3d>(x[j + 1]) - x0;
   return Ds * dm_inv;
 }
+
+Vector12 StencilVector(const double* const* x) {
+  Vector12 xe;
+  for (int i = 0; i < 4; ++i) xe.segment<3>(3 * i) = Eigen::Map<const Eigen::Vector3d>(x[i]);
+  return xe;
+}
+
+// An element's force f (12) and stiffness K (12 by 12) as a block's gradient -f and Hessian.
+void ElementDerivatives(const Vector12& force, const Matrix12* stiffness, Eigen::Vector3d* gradient,
+                        Eigen::Matrix3d* hessian) {
+  for (int i = 0; i < 4; ++i) gradient[i] = -force.segment<3>(3 * i);
+  if (hessian == nullptr) return;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) hessian[i * 4 + j] = stiffness->block<3, 3>(3 * i, 3 * j);
+}
 }  // namespace
+
+bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                                 Eigen::Matrix3d* hessian, TangentProjection projection) const {
+  const Vector12 xe = StencilVector(x);
+  const Eigen::Matrix3d R =
+      corotational ? PolarRotation(StencilF(x, rest->dm_inv)) : Eigen::Matrix3d::Identity();
+  Vector12 force;
+  *energy = ElementEnergyAndForce(*rest, R, xe, &force);
+  Matrix12 K;
+  if (hessian != nullptr) K = corotational ? CorotationalTangent(*rest, xe, projection) : rest->K;
+  ElementDerivatives(force, hessian != nullptr ? &K : nullptr, gradient, hessian);
+  return true;
+}
+
+bool NeoHookeanElement::SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                                    Eigen::Matrix3d* hessian, TangentProjection projection) const {
+  const Vector12 xe = StencilVector(x);
+  const double kappa = NeoHookeanKappa(*rest, false);
+  Vector12 force;
+  *energy = NeoHookeanEnergyAndForce(*rest, kappa, 0.0, xe, &force) + 0.5 * Offset();
+  Matrix12 K;
+  if (hessian != nullptr) K = NeoHookeanTangent(*rest, kappa, 0.0, xe, projection);
+  ElementDerivatives(force, hessian != nullptr ? &K : nullptr, gradient, hessian);
+  return true;
+}
+
+bool EdgeSpring::SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                             Eigen::Matrix3d* hessian, TangentProjection projection) const {
+  const Eigen::Vector3d d =
+      Eigen::Map<const Eigen::Vector3d>(x[0]) - Eigen::Map<const Eigen::Vector3d>(x[1]);
+  const double norm = d.norm(), stretch = norm - length;
+  *energy = 0.5 * stretch * stretch;
+  const Eigen::Vector3d u = norm > 0 ? Eigen::Vector3d(d / norm) : Eigen::Vector3d::Zero();
+  gradient[0] = stretch * u;
+  gradient[1] = -gradient[0];
+  if (hessian == nullptr) return true;
+  const Eigen::Matrix3d uu = u * u.transpose();
+  // At zero length the lateral directions have no defined curvature: the axial part only.
+  double lateral = norm > 0 ? stretch / norm : 0.0;
+  if (projection == TangentProjection::kPositiveSemiDefinite) lateral = std::max(lateral, 0.0);
+  const Eigen::Matrix3d H = uu + lateral * (Eigen::Matrix3d::Identity() - uu);
+  hessian[0] = H;
+  hessian[3] = H;
+  hessian[1] = -H;
+  hessian[2] = -H;
+  return true;
+}
 
 bool ElasticElement::Evaluate(const double* const* x, double* r, double** J) const {
   Vector12 xe;

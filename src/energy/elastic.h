@@ -11,9 +11,10 @@
 namespace femreg {
 namespace energy {
 
-// One tetrahedron: r = S (R^T x_e - X_e) (6 residuals; 1/2 w |r|^2 = w E_e, seed eqs. 1-6),
-// with the element's rest data and rotation (femreg/fem.h) read through pointers, so that
-// refreshing the rotations between outer iterations needs no new block. J_i = S_i R^T.
+// One tetrahedron: r = S (R^T x_e - X_e) (6 residuals; 1/2 w |r|^2 = w E_e, the corotational
+// element of docs/theory), with the element's rest data and rotation (femreg/fem.h) read
+// through pointers, so that refreshing the rotations between outer iterations needs no new
+// block. J_i = S_i R^T.
 struct ElasticElement {
   static constexpr int kResiduals = 6;
   static constexpr int kVertices = 4;
@@ -22,6 +23,8 @@ struct ElasticElement {
   double weight = 1.0;
   const ElementRest* rest = nullptr;
   const Eigen::Matrix3d* rotation = nullptr;
+  // false: the small-strain element, whose R stays I.
+  bool corotational = true;
 
   bool Evaluate(const double* const* x, double* r, double** J) const;
   // The same in closed form (see energy/term.h): |r|^2 = V (2 mu e:e + lambda tr(e)^2) with
@@ -31,6 +34,11 @@ struct ElasticElement {
   // jtr null: |r|^2 only.
   bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
               Eigen::Matrix3d* jtj) const;
+  // The exact element (energy/term.h's SecondOrder): R = R(x), the polar rotation of F(x)
+  // (the held rotation is not read), and the Hessian the consistent corotational tangent
+  // (femreg/fem.h's CorotationalTangent); the small-strain element's is K.
+  bool SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                   Eigen::Matrix3d* hessian, TangentProjection projection) const;
 };
 
 // The stable neo-Hookean element (femreg/fem.h) as least squares. With kappa = lambda + mu
@@ -57,6 +65,10 @@ struct NeoHookeanElement {
   bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
               Eigen::Matrix3d* jtj) const;
   double Offset() const;
+  // e = 1/2 |r|^2 = V psi(F) + Offset() / 2, and the Hessian V B^T (d2psi/dF2) B
+  // (femreg/fem.h's NeoHookeanTangent), projected if asked.
+  bool SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                   Eigen::Matrix3d* hessian, TangentProjection projection) const;
 };
 
 // A spring on an edge: r = |x_a - x_b| - L, 1/2 k r^2 with k the weight. At zero length the
@@ -70,6 +82,10 @@ struct EdgeSpring {
   double length = 0.0;  // L (m)
 
   bool Evaluate(const double* const* x, double* r, double** J) const;
+  // H_00 = u u^T + (1 - L / |d|) (I - u u^T) (d = x_a - x_b, u = d / |d|), H_01 = -H_00;
+  // the projection clamps the compressed spring's negative lateral term to 0.
+  bool SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                   Eigen::Matrix3d* hessian, TangentProjection projection) const;
 };
 
 }  // namespace energy

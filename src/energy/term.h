@@ -28,6 +28,20 @@
 // and its value is 1/2 w (rho(|r|^2) - rho(Offset())), zero at rest, so that the energies
 // reported and compared (relative tolerances) are the physical ones. The Ceres back end's
 // cost still carries it (Problem::Offset).
+//
+// Second order. Newton's method on an equilibrium (the forward solve) needs the exact Hessian
+// of a block's energy, not the Gauss-Newton J^T J. A block type whose residual is affine in
+// x (kConstantJacobian, or kPiecewiseAffine: affine wherever it is differentiable) has J^T J
+// as that Hessian; every other one provides it:
+//   // e = 1/2 |r|^2 of the block's exact energy at x, its gradient (n) and, if hessian is not
+//   // null, its Hessian (n * n, (i, j) at i * n + j), projected to positive semi-definite
+//   // if asked. Parameters a block holds between evaluations (an element's rotation) follow
+//   // x here: e is the energy those parameters approximate, and at x where they are
+//   // current, e and its gradient are Evaluate's.
+//   bool SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+//                    Eigen::Matrix3d* hessian, TangentProjection projection) const;
+// LinearizeSecondOrder below applies the loss; tests/energy_test.cc checks every block type's
+// Hessian against central differences of its gradient.
 #ifndef FEMREG_ENERGY_TERM_H_
 #define FEMREG_ENERGY_TERM_H_
 
@@ -39,6 +53,7 @@
 
 #include "energy/loss.h"
 #include "femreg/energy.h"
+#include "femreg/fem.h"
 #include "femreg/mesh.h"
 
 namespace femreg {
@@ -203,6 +218,75 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
     for (int j = i; j < n; ++j) {
       out->hessian[i * n + j].noalias() = out->scale * J[i].transpose() * J[j];
       if (j != i) out->hessian[j * n + i] = out->hessian[i * n + j].transpose();
+    }
+  }
+  return true;
+}
+
+// Whether T provides SecondOrder (above), and whether its residual is affine in x wherever it
+// is differentiable (J^T J is then its exact Hessian).
+template <class T, class = void>
+struct HasSecondOrder : std::false_type {};
+template <class T>
+struct HasSecondOrder<T, std::void_t<decltype(std::declval<const T&>().SecondOrder(
+                             std::declval<const double* const*>(), std::declval<double*>(),
+                             std::declval<Eigen::Vector3d*>(), std::declval<Eigen::Matrix3d*>(),
+                             TangentProjection::kNone))>> : std::true_type {};
+template <class T, class = void>
+struct IsPiecewiseAffine : std::bool_constant<T::kConstantJacobian> {};
+template <class T>
+struct IsPiecewiseAffine<T, std::void_t<decltype(T::kPiecewiseAffine)>>
+    : std::bool_constant<T::kConstantJacobian || T::kPiecewiseAffine> {};
+
+// The exact Hessian of a block's energy, or its positive semi-definite projection.
+enum class Curvature { kExact, kProjected };
+
+// A block's value, gradient and exact (or projected) Hessian at x, with the loss:
+// d2/dx2 [1/2 w rho(2 e)] = w rho' H_e + 2 w rho'' g_e g_e^T for the block's e, g_e, H_e.
+// The projection projects H_e and leaves out the loss' term where rho'' < 0 (the robust
+// losses bend down), so that the result is positive semi-definite. `scale` = w rho'.
+// Returns false (and a zero scale) if the block cannot be evaluated.
+template <class T>
+bool LinearizeSecondOrder(const T& block, const Loss& loss, const Vertices& x, Curvature curvature,
+                          Linearization<T>* out) {
+  constexpr int m = T::kResiduals, n = T::kVertices;
+  static_assert(HasSecondOrder<T>::value || IsPiecewiseAffine<T>::value,
+                "a block type whose residual is not affine in x provides SecondOrder");
+  const auto p = StencilPositions(block, x);
+  out->scale = 0.0;
+  out->value = 0.0;
+  double e = 0.0;
+  std::array<Eigen::Vector3d, n> g;
+  if constexpr (HasSecondOrder<T>::value) {
+    const TangentProjection projection = curvature == Curvature::kExact
+                                             ? TangentProjection::kNone
+                                             : TangentProjection::kPositiveSemiDefinite;
+    if (!block.SecondOrder(p.data(), &e, g.data(), out->hessian.data(), projection)) return false;
+  } else {
+    using Jacobian = Eigen::Matrix<double, m, 3, Eigen::RowMajor>;
+    Eigen::Matrix<double, m, 1> r;
+    std::array<Jacobian, n> J;
+    std::array<double*, n> Jp;
+    for (int i = 0; i < n; ++i) Jp[i] = J[i].data();
+    if (!block.Evaluate(p.data(), r.data(), Jp.data())) return false;
+    e = 0.5 * SquaredSum<m>(r.data());
+    for (int i = 0; i < n; ++i) {
+      g[i].noalias() = J[i].transpose() * r;
+      for (int j = 0; j < n; ++j) out->hessian[i * n + j].noalias() = J[i].transpose() * J[j];
+    }
+  }
+  double rho[3];
+  loss.Evaluate(2.0 * e, rho);
+  out->value = 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
+  out->scale = block.weight * rho[1];
+  const double bend = 2.0 * block.weight * rho[2];
+  const bool with_bend = bend > 0.0 || (bend < 0.0 && curvature == Curvature::kExact);
+  for (int i = 0; i < n; ++i) out->gradient[i] = out->scale * g[i];
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      Eigen::Matrix3d& h = out->hessian[i * n + j];
+      h *= out->scale;
+      if (with_bend) h.noalias() += bend * g[i] * g[j].transpose();
     }
   }
   return true;

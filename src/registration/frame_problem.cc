@@ -91,6 +91,7 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
           b.weight = w;
           b.rest = &o.model.rest(e);
           b.rotation = &o.model.rotation(e);
+          b.corotational = o.model.type() == ElasticModelType::kCorotational;
           blocks->push_back(b);
         }
       }
