@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Installs every Debian package that femreg's build, tests and demo need (nothing when all
-# are present), then builds the femreg Python package for Debian's python3 and installs it
-# into its site directory (/usr/local/lib/python3.11/dist-packages), so that
+# Installs every Debian package that femreg's build, tests, demo and documentation
+# (tools/docs.sh) need (nothing when all are present), then builds the femreg Python package
+# for Debian's python3 and installs it into its site directory
+# (/usr/local/lib/python3.11/dist-packages), so that
 # `python3 -c "import femreg"` works. Run as root (or with sudo) on Debian 12.
 # FEMREG_SETUP_PYTHON=0 skips the Python package; BUILD_DIR (default build) and JOBS as in
 # tools/build.sh.
@@ -20,6 +21,7 @@ PACKAGES=(
   libtet1.5-dev
   libpng-dev zlib1g-dev
   python3 python3-dev python3-matplotlib python3-numpy python3-pytest pybind11-dev python3-venv
+  python3-sphinx python3-myst-parser python3-sphinx-rtd-theme
 )
 # Only for the cross-check against an independent FEM code (tools/compare_calculix.sh).
 OPTIONAL=(calculix-ccx)
