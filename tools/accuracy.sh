@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Regenerates "What accuracy costs in time" (README): femreg bench and femreg compare on the
-# bundled datasets, their CSVs and plots in docs/accuracy/, and the markdown tables printed
-# for the README. About a minute on 2 cores (2026-11-27); run on a quiet machine.
+# Regenerates the data of "What accuracy costs in time" (docs/performance/accuracy.md, which
+# includes them): femreg bench and femreg compare on the bundled datasets, their CSVs and
+# plots in docs/accuracy/, and the markdown tables (docs/accuracy/tables.md). About a minute
+# on 2 cores (2026-11-27); run on a quiet machine.
 #   tools/accuracy.sh [BUILD_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Markdown tables from femreg bench / compare CSVs (for the README)."""
+"""Markdown tables from femreg bench / compare CSVs (docs/performance/accuracy.md includes them)."""
 import csv
 import os
 import sys

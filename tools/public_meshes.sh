@@ -2,9 +2,9 @@
 # Registration on meshes nobody here designed: for each scene of tools/public_meshes/, a
 # femreg synth sequence on a public mesh (../shared/data/meshes: SOFA's liver, armadillo,
 # cylinder and raptor, libigl's octopus, polyfem's bunny), its ground truth from another
-# material, registered with the default settings. Writes docs/public_meshes.md: per mesh the
-# errors against the truth (seen and hidden vertices apart), what doing nothing would err,
-# how the frames stopped and what they cost.
+# material, registered with the default settings. Writes docs/public_meshes.md (a page of the
+# documentation site): per mesh the errors against the truth (seen and hidden vertices
+# apart), what doing nothing would err, how the frames stopped and what they cost.
 #   tools/public_meshes.sh [BUILD_DIR] [MESHES_DIR]   # defaults: build, ../shared/data/meshes
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -47,7 +47,7 @@ for scene in tools/public_meshes/*.yaml; do
     exit 1
   fi
   tail -3 "$work/$name/register.log" | head -2 >&2
-  # The same with the data weight per unit area instead of per pair (README, "The data weight").
+  # The same with the data weight per unit area instead of per pair (docs/theory/data-weight.md).
   if ! "$FEMREG" register --scene "$work/$name/seq/scene.yaml" --frames "$work/$name/seq/clouds" \
       --ground-truth "$work/$name/seq/ground_truth" --out "$work/$name/out_area" --no-progress \
       --set registration.weights.data_per_area=2e7 > "$work/$name/register_area.log" 2>&1; then
@@ -84,7 +84,7 @@ print("machine's cores). Errors are mean vertex distances to the truth (mm), ave
 print("frames; *max* the largest over all frames; *still* the error of the first frame's true")
 print("shape held (doing nothing). *outer*: outer iterations per frame (at most 8). *per area*: the")
 print("mean error and converged frames with `weights.data_per_area: 2e7` instead of the default")
-print("200 N/m per pair (README, \"The data weight\").\n")
+print("200 N/m per pair ([the data weight](theory/data-weight.md)).\n")
 print("| mesh | vertices / tets | vertices seen | error | seen | hidden | max | still | converged | outer | ms/frame | per area | scene |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for scene in scenes:
@@ -109,7 +109,7 @@ for scene in scenes:
           f"{statistics.mean(f('outer_iterations')):.1f} | {statistics.median(f('t_total_ms')):.0f} | "
           f"{area_error:.2f}, {area_converged} / {len(area)} | {description} |")
 print()
-print("What these sequences show beyond the bundled datasets (the README, \"Checked against\", has")
+print("What these sequences show beyond the bundled datasets ([the public-mesh notes](notes/2026-11-public-meshes.md) have")
 print("the measurements):")
 print("- The cylinder, a faceted surface of revolution seen on 11 % of its vertices, drifts in the")
 print("  second half of its sequence with the default weight per pair, not with the weight per")
@@ -117,7 +117,7 @@ print("  area: its clouds pin little of a twist of such a surface, and ~1400 poi
 print("  each outweigh the elastic term (per area their total does not grow with their number).")
 print("- Thin parts beside the body (the armadillo's hands and claws, one or two elements")
 print("  across, partly seen) are where a vertex's nearest cloud point is most often another")
-print("  part's. The model->cloud reciprocity (README, \"Partial views and visibility\") keeps")
+print("  part's. The model->cloud reciprocity ([partial views](guide/partial-views.md)) keeps")
 print("  them from being pulled across; without it they swung from one outer iteration to the")
 print("  next, most frames stopped at the outer-iteration cap and the largest errors were there.")
 PY

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Cost against size (README "Cost against size"): bench/femreg_scaling_bench (box meshes of
-# ~1k to ~64k vertices, clouds of 2k to 300k points, fast back end, one thread) into
-# docs/scaling/: the benchmark's JSON, a CSV, a markdown table and a log-log plot. Builds the
+# Cost against size (docs/performance/scaling.md includes what this writes):
+# bench/femreg_scaling_bench (box meshes of ~1k to ~64k vertices, clouds of 2k to 300k
+# points, fast back end, one thread) into docs/scaling/: the benchmark's JSON, a CSV, a
+# markdown table and a log-log plot. Builds the
 # benchmarks in BUILD_DIR (default build-bench) if needed. Takes ~6 minutes on 2 cores (plus the build); run
 # on a quiet machine.
 #   tools/scaling.sh [BUILD_DIR] [--benchmark_filter=...]
