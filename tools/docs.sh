@@ -23,7 +23,7 @@ BUILD_DIR=${BUILD_DIR:-build}
 if [[ -n "${FEMREG_PYTHONPATH:-}" ]]; then
   export PYTHONPATH="$FEMREG_PYTHONPATH${PYTHONPATH:+:$PYTHONPATH}"
 elif [[ -f "$BUILD_DIR/python/femreg/__init__.py" ]]; then
-  export PYTHONPATH="$PWD/$BUILD_DIR/python${PYTHONPATH:+:$PYTHONPATH}"
+  export PYTHONPATH="$(cd "$BUILD_DIR/python" && pwd)${PYTHONPATH:+:$PYTHONPATH}"
 fi
 if ! (cd / && "$PYTHON" -c "import femreg") 2>/dev/null; then
   echo "docs: the femreg Python module does not import (looked in ${FEMREG_PYTHONPATH:-$BUILD_DIR/python}" \
