@@ -29,19 +29,19 @@ const std::map<std::string, int> kRank = {
     {"geometry", 1},      // closest points, AABB tree, nearest-point search
     {"fem", 2},           // materials, element rest data, the elastic models
     {"energy", 3},        // the energy terms: per block residuals and Jacobians, losses
-    {"forward", 3},       // the quasi-static forward solve
-    {"collision", 4},     // collision specs, contact detection, the penalty
-    {"fracture", 4},      // separation tensor, node splits
-    {"solvers", 5},       // the back ends (Ceres, fast) behind one interface
-    {"meshing", 5},       // closed surfaces to tetrahedra (TetGen)
-    {"registration", 6},  // options, summaries, point clouds, the Tracker
-    {"eval", 7},          // ground truth, errors, surfaces
-    {"synth", 8},         // the virtual depth camera, the ground truth embedding
-    {"scene", 9},         // scene files: reading, writing, setting up meshes and problems
-    {"datasets", 10},     // the sequence generators
-    {"experiments", 10},  // the bench / compare sweep
-    {"calibration", 10},  // material from data: forward solves against observed clouds
-    {"tools", 11},        // the femreg command line
+    {"forward", 4},       // the quasi-static forward solve, on the energy layer
+    {"collision", 5},     // collision specs, contact detection, the penalty
+    {"fracture", 5},      // separation tensor, node splits
+    {"solvers", 6},       // the back ends (Ceres, fast) behind one interface
+    {"meshing", 6},       // closed surfaces to tetrahedra (TetGen)
+    {"registration", 7},  // options, summaries, point clouds, the Tracker
+    {"eval", 8},          // ground truth, errors, surfaces
+    {"synth", 9},         // the virtual depth camera, the ground truth embedding
+    {"scene", 10},        // scene files: reading, writing, setting up meshes and problems
+    {"datasets", 11},     // the sequence generators
+    {"experiments", 11},  // the bench / compare sweep
+    {"calibration", 11},  // material from data: forward solves against observed clouds
+    {"tools", 12},        // the femreg command line
 };
 
 // Public headers (include/femreg/) by module.

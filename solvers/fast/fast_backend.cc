@@ -20,12 +20,7 @@
 // factorization (H not numerically positive definite in float) is done again by CHOLMOD in
 // double, and retried with Marquardt damping if H is not positive definite there either.
 //
-// Assembly on several threads splits the vertices into one compact region per thread (runs
-// of a Morton curve through them): a thread linearizes and adds the blocks whose stencil
-// lies in its region; blocks that straddle two regions are linearized in parallel into a
-// buffer, and each thread then adds their parts that land in its region (its columns of H,
-// its entries of g). One barrier per set, no race; the sums are the serial ones up to the
-// order of their terms (round-off).
+// H and g come from the energy layer's assembler (energy/assembler.h).
 #include "solvers/fast/fast_backend.h"
 
 #include <Eigen/CholmodSupport>
@@ -43,6 +38,7 @@
 #include <utility>
 #include <vector>
 
+#include "energy/assembler.h"
 #include "parallel/signals.h"
 #include "parallel/threads.h"
 #include "solvers/fast/multigrid.h"
@@ -57,16 +53,6 @@ using Clock = std::chrono::steady_clock;
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
-
-template <class T>
-using BlockType = typename std::decay_t<decltype(std::declval<T>().blocks())>::value_type;
-
-// Where the 3x3 block (a, b) of the system sits in the values of a column-major matrix with
-// full 3x3 blocks: entry (3a + i, 3b + j) is at offset + j * stride + i.
-struct Slot {
-  int offset = -1;
-  int stride = 0;
-};
 
 // CHOLMOD's supernodal factorization is faster than its simplicial one on the systems
 // assembled here at every size measured (bench/linear_solver_bench.cc, box meshes, 1 thread,
@@ -130,19 +116,6 @@ constexpr double kSingleFactorizationSpeed = 3.0;
 // for a while, and each try costs a factorization and PCG iterations; a frame or two later
 // the next try is cheap.
 constexpr int kSingleBackoff = 8;
-
-// A set is assembled on several threads once its blocks hold this many 3x3 Hessian blocks
-// (#blocks x n^2, n the vertices per block: the work grows with it). Below, the team costs
-// more than it saves: not its start (3 us) but the cache lines of H (and of the elements'
-// rotations) that the other core must fetch from the one that wrote them last (this
-// project's 2-core virtual machines: 0.55 MB written in random order, 14 us from the core
-// that holds it, 62 from the other). Per assembly, 2 threads against 1: the demo's ~2.3k
-// triangle data blocks (~21k 3x3 blocks) 200 against 117 us; its 4500 elements (72k) 637
-// against 815 us. With a threshold of 256 blocks whatever their size, against 4096, the
-// demo's assembly took 5.3-5.5 against 5.2-5.3 ms per frame (median) and 5.8-6.8 against
-// 5.4-5.5 (mean), but the bundled organ_patch body's 3072 elements (49k) lost their second
-// thread: assembly 2.8-3.8 -> 3.7-3.8 ms, rotations 1.2-1.4 -> 1.8-1.9.
-constexpr int kParallelWork = 32768;
 
 // With the multigrid preconditioner (large meshes, BackendOptions::preconditioner), a step's
 // PCG runs up to this many iterations with the kept hierarchy (again after refreshing its
@@ -219,14 +192,21 @@ struct FastBackend::Impl {
   BackendOptions options;
   int threads = 1;
 
-  // The pattern: 3 #V by 3 #V, both triangles, full 3x3 blocks for the coupling's cells,
-  // the diagonal and the extra pairs.
-  int num_vertices = -1;
-  uint64_t coupling_revision = 0;
-  std::vector<std::array<int, 4>> cells;        // the coupling the pattern was built from
-  std::vector<std::pair<int, int>> extra_pairs;  // a < b
-  Eigen::SparseMatrix<double> H;
-  std::vector<int> diagonal_at;  // per column: where its diagonal entry sits
+  // The system's pattern and values (energy/assembler.h), and the pattern's revision that
+  // the state below was made for.
+  energy::Assembler assembler;
+  Eigen::SparseMatrix<double>& H = assembler.H();
+  const std::vector<int>& diagonal_at = assembler.diagonal_at();  // per column
+  uint64_t pattern_revision = 0;
+  // After the pattern changed: no analysis, factor or hierarchy of the old one is kept.
+  void PatternChanged() {
+    pattern_revision = assembler.pattern_revision();
+    analysed = false;
+    fill_estimate = -1.0;
+    factor_valid = false;
+    single_backoff = 0;
+    multigrid = Multigrid();
+  }
 
   // CHOLMOD's analysis of the pattern (and its double factor, where single precision
   // failed); the kept factor of the matrix at some earlier step (factor_valid), in single
@@ -282,7 +262,7 @@ struct FastBackend::Impl {
       case Preconditioner::kMultigrid:
         return true;
       case Preconditioner::kAuto:
-        if (!analysed && num_vertices >= kFillEstimateFrom) {
+        if (!analysed && assembler.num_vertices() >= kFillEstimateFrom) {
           if (fill_estimate < 0.0) fill_estimate = EstimateFill();
           if (fill_estimate >= kFillEstimateMargin * options.multigrid_fill) return true;
         }
@@ -292,65 +272,6 @@ struct FastBackend::Impl {
     return false;
   }
 
-  // Per set revision: each block's slots (#blocks * n * n), and for the parallel assembly
-  // its blocks by the thread that owns every vertex of their stencil (interior[t]) and those
-  // whose vertices two threads own.
-  struct SetCache {
-    std::vector<Slot> slots;
-    bool used = false;
-    std::vector<std::vector<int>> interior;
-    std::vector<int> straddling;
-  };
-  // The thread that owns each vertex in the parallel assembly: a Morton curve through the
-  // positions when the pattern was made, cut into `threads` runs of equal length, so that
-  // each thread owns a compact region. Meshes from mesh generators number their vertices in
-  // no spatial order (the public meshes of ../shared/data/meshes: 61-91 % of the elements
-  // have vertices in both halves of the numbering), and with a range of vertex numbers per
-  // thread most of their elements straddled two threads (the slower path: linearized into
-  // a buffer, then read by both). A 4670-vertex bunny (creatures_bunny.msh in a femreg synth
-  // sequence; 65 % of its elements straddled), 2 threads, 3 alternating runs of 6 frames:
-  // assembly 5.4-7.6 -> 3.8-4.4 ms per outer and inner iteration. (Assembling the elements
-  // themselves in that order, too, was slower: 3.6-6.1 -> 10-11 ms on one thread, their
-  // data read out of order.)
-  std::vector<int> vertex_owner;
-  void OrderVertices(const Vertices& x);
-  // The parallel assembly's linearized blocks (gradient, then Hessian blocks, per block).
-  std::vector<double> scratch;
-  std::map<uint64_t, SetCache> cache;
-  // The slots of the 2- and 3-vertex stencils met on this pattern (StencilKey -> their n * n
-  // slots at that offset of stencil_pool). The data terms' sets are made anew every outer
-  // iteration, their blocks mostly on surface triangles met before (the demo: ~2.3k blocks
-  // on a few hundred triangles): a look-up here instead of n^2 binary searches in H's
-  // columns, each a cache miss (a single vertex's slot is its diagonal's). Demo, 2 threads
-  // (perf samples): finding the slots 1.0% -> 0.15% of the run, ~0.75 -> ~0.1 ms per frame.
-  std::unordered_map<uint64_t, int> stencil_slots;
-  std::vector<Slot> stencil_pool;
-
-  // The part of H that is constant within one Solve.
-  std::vector<double> constant_values;
-  // Hard anchors: the fixed flags the lists below were made for, and where H holds the
-  // entries of fixed rows and columns (off the diagonal: 0; on it: 1).
-  std::vector<char> fixed_for;
-  std::vector<int> fixed_off_diagonal, fixed_diagonal;
-
-  void ResetPattern(const energy::Problem& problem, const Vertices& x);
-  void BuildPattern();
-  Slot Find(int a, int b) const;
-  // The cache of a set; pairs outside the pattern are added to *missing.
-  template <class Set>
-  SetCache& CacheOf(const Set& set, std::vector<std::pair<int, int>>* missing);
-  // Adds the blocks of the sets for which take(set) holds: gradient always, Hessian when
-  // hessian(set). With set_energy: the energy of each set taken, at its place in
-  // ForEachSet's order (Problem::SumBlockValues of its blocks' values).
-  template <class Take, class WithHessian>
-  void Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
-                  WithHessian hessian, Eigen::VectorXd* g, std::vector<double>* set_energy = nullptr);
-  std::vector<double> block_values;  // Accumulate's, of one set
-  std::vector<double> assembled_energy;  // Assemble's, per set
-  // H and g at x; first: H's constant part anew, and *energy (if given) the energy at x,
-  // from the same linearization (its values added as Problem::Evaluate adds them).
-  void Assemble(const energy::Problem& problem, const Vertices& x, bool first, Eigen::VectorXd* g,
-                EnergyTerms* energy = nullptr);
   // CHOLMOD's symbolic analysis of the pattern, unless done; the PCG budget from its counts.
   void Analyse();
   // Factorizes H in double with CHOLMOD (its values also copied to `substitutions` for
@@ -391,392 +312,9 @@ struct FastBackend::Impl {
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
   impl_->options = options;
   impl_->threads = ResolveThreadCount(options.num_threads);
+  impl_->assembler.set_threads(impl_->threads);
 }
 FastBackend::~FastBackend() = default;
-
-void FastBackend::Impl::ResetPattern(const energy::Problem& problem, const Vertices& x) {
-  num_vertices = problem.num_vertices();
-  coupling_revision = problem.coupling_revision();
-  cells = problem.coupling();
-  extra_pairs.clear();
-  OrderVertices(x);
-  BuildPattern();
-}
-
-namespace {
-// The bits of v (21 of them) spread to every third bit: one coordinate of a Morton code.
-uint64_t SpreadBits(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
-  return v;
-}
-}  // namespace
-
-void FastBackend::Impl::OrderVertices(const Vertices& x) {
-  const int n = num_vertices;
-  std::vector<uint64_t> code(static_cast<size_t>(n), 0);
-  if (n > 0 && x.allFinite()) {
-    const Eigen::RowVector3d lo = x.colwise().minCoeff();
-    const Eigen::RowVector3d extent = (x.colwise().maxCoeff() - lo).cwiseMax(1e-300);
-    for (int v = 0; v < n; ++v) {
-      uint64_t c = 0;
-      for (int d = 0; d < 3; ++d) {
-        const double t = std::clamp((x(v, d) - lo[d]) / extent[d], 0.0, 1.0);
-        c |= SpreadBits(static_cast<uint64_t>(t * ((1 << 21) - 1))) << d;
-      }
-      code[static_cast<size_t>(v)] = c;
-    }
-  }
-  std::vector<int> along(static_cast<size_t>(n));
-  for (int v = 0; v < n; ++v) along[static_cast<size_t>(v)] = v;
-  // Ties (and non-finite positions: all codes 0) keep the vertex numbering.
-  std::stable_sort(along.begin(), along.end(),
-                   [&](int a, int b) { return code[static_cast<size_t>(a)] < code[static_cast<size_t>(b)]; });
-  vertex_owner.assign(static_cast<size_t>(n), 0);
-  for (int k = 0; k < n; ++k) {
-    vertex_owner[static_cast<size_t>(along[static_cast<size_t>(k)])] =
-        static_cast<int>(static_cast<int64_t>(k) * threads / n);
-  }
-}
-
-void FastBackend::Impl::BuildPattern() {
-  // Each vertex's neighbours (itself, its cells' vertices, its extra pairs), sorted; then the
-  // compressed columns directly: column 3 b + j holds rows 3 a + i for every neighbour a of
-  // b. (Through triplets, 144 per cell, the demo's first frame assembled in 76-94 ms, now
-  // 38-51; the 3375-vertex organ's in 267-333 ms, now 57-79.)
-  std::vector<std::vector<int>> neighbours(static_cast<size_t>(num_vertices));
-  for (int v = 0; v < num_vertices; ++v) neighbours[static_cast<size_t>(v)].push_back(v);
-  for (const auto& c : cells) {
-    for (int a = 0; a < 4; ++a) {
-      for (int b = 0; b < 4; ++b) {
-        if (a != b) neighbours[static_cast<size_t>(c[a])].push_back(c[b]);
-      }
-    }
-  }
-  for (const auto& p : extra_pairs) {
-    neighbours[static_cast<size_t>(p.first)].push_back(p.second);
-    neighbours[static_cast<size_t>(p.second)].push_back(p.first);
-  }
-  int64_t nnz = 0;
-  for (auto& list : neighbours) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-    nnz += 9 * static_cast<int64_t>(list.size());
-  }
-  H = Eigen::SparseMatrix<double>(3 * num_vertices, 3 * num_vertices);
-  H.resizeNonZeros(static_cast<Eigen::Index>(nnz));
-  int* outer_out = H.outerIndexPtr();
-  int* inner_out = H.innerIndexPtr();
-  int at = 0;
-  for (int b = 0; b < num_vertices; ++b) {
-    for (int j = 0; j < 3; ++j) {
-      outer_out[3 * b + j] = at;
-      for (int a : neighbours[static_cast<size_t>(b)]) {
-        for (int i = 0; i < 3; ++i) inner_out[at++] = 3 * a + i;
-      }
-    }
-  }
-  outer_out[3 * num_vertices] = at;
-  std::fill(H.valuePtr(), H.valuePtr() + nnz, 0.0);
-  const int n = static_cast<int>(H.cols());
-  const int* outer = H.outerIndexPtr();
-  const int* inner = H.innerIndexPtr();
-  diagonal_at.assign(static_cast<size_t>(n), -1);
-  for (int c = 0; c < n; ++c) {
-    diagonal_at[static_cast<size_t>(c)] =
-        static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], c) - inner);
-  }
-  analysed = false;
-  fill_estimate = -1.0;
-  factor_valid = false;
-  single_backoff = 0;
-  multigrid = Multigrid();
-  cache.clear();
-  stencil_slots.clear();
-  stencil_pool.clear();
-  constant_values.clear();
-  fixed_for.clear();
-}
-
-Slot FastBackend::Impl::Find(int a, int b) const {
-  const int* outer = H.outerIndexPtr();
-  const int* inner = H.innerIndexPtr();
-  const int* begin = inner + outer[3 * b];
-  const int* end = inner + outer[3 * b + 1];
-  const int* p = std::lower_bound(begin, end, 3 * a);
-  if (p == end || *p != 3 * a) return Slot();
-  return Slot{static_cast<int>(p - inner), outer[3 * b + 1] - outer[3 * b]};
-}
-
-namespace {
-// A key for a stencil of 2 or 3 vertices in that order, each below 2^20 - 1; 0 (no key) else.
-template <size_t n>
-uint64_t StencilKey(const std::array<int, n>& v) {
-  static_assert(n >= 1);
-  if constexpr (n < 2 || n > 3) {
-    return 0;
-  } else {
-    uint64_t key = n;  // the count in the low bits: (a, b) and (a, b, 0) differ
-    for (size_t i = 0; i < n; ++i) {
-      if (v[i] < 0 || v[i] + 1 >= (1 << 20)) return 0;
-      key |= static_cast<uint64_t>(v[i] + 1) << (2 + 20 * i);
-    }
-    return key;
-  }
-}
-}  // namespace
-
-template <class Set>
-FastBackend::Impl::SetCache& FastBackend::Impl::CacheOf(const Set& set,
-                                                       std::vector<std::pair<int, int>>* missing) {
-  using T = BlockType<Set>;
-  constexpr int n = T::kVertices;
-  auto it = cache.find(set.revision());
-  if (it != cache.end()) {
-    it->second.used = true;
-    return it->second;
-  }
-  SetCache& c = cache[set.revision()];
-  c.used = true;
-  c.slots.resize(static_cast<size_t>(set.size()) * n * n);
-  size_t k = 0;
-  for (const T& block : set.blocks()) {
-    if constexpr (n == 1) {  // a vertex's diagonal block: where its first column's diagonal is
-      const int v = block.vertices[0];
-      if (v >= 0 && v < num_vertices) {
-        c.slots[k++] = Slot{diagonal_at[static_cast<size_t>(3 * v)],
-                            H.outerIndexPtr()[3 * v + 1] - H.outerIndexPtr()[3 * v]};
-        continue;
-      }
-    }
-    const uint64_t key = StencilKey(block.vertices);
-    if (key != 0) {
-      const auto known = stencil_slots.find(key);
-      if (known != stencil_slots.end()) {
-        std::copy_n(stencil_pool.begin() + known->second, n * n, c.slots.begin() + static_cast<std::ptrdiff_t>(k));
-        k += n * n;
-        continue;
-      }
-    }
-    bool complete = true;
-    for (int i = 0; i < n; ++i) {
-      for (int j = 0; j < n; ++j) {
-        c.slots[k + static_cast<size_t>(i * n + j)] = Find(block.vertices[i], block.vertices[j]);
-        if (c.slots[k + static_cast<size_t>(i * n + j)].offset < 0) {
-          complete = false;
-          missing->emplace_back(std::min(block.vertices[i], block.vertices[j]),
-                                std::max(block.vertices[i], block.vertices[j]));
-        }
-      }
-    }
-    if (key != 0 && complete) {
-      stencil_slots.emplace(key, static_cast<int>(stencil_pool.size()));
-      stencil_pool.insert(stencil_pool.end(), c.slots.begin() + static_cast<std::ptrdiff_t>(k),
-                          c.slots.begin() + static_cast<std::ptrdiff_t>(k + n * n));
-    }
-    k += n * n;
-  }
-  return c;
-}
-
-template <class Take, class WithHessian>
-void FastBackend::Impl::Accumulate(const energy::Problem& problem, const Vertices& x, Take take,
-                                   WithHessian hessian, Eigen::VectorXd* g,
-                                   std::vector<double>* set_energy) {
-  double* values = H.valuePtr();
-  double* gradient = g->data();
-  int ordinal = -1;
-  problem.ForEachSet([&](const auto& set) {
-    ++ordinal;
-    if (!take(set)) return;
-    using T = BlockType<std::decay_t<decltype(set)>>;
-    constexpr int n = T::kVertices;
-    const bool with_hessian = hessian(set);
-    std::vector<std::pair<int, int>> missing;
-    SetCache& c = CacheOf(set, &missing);  // complete: checked before
-    const std::vector<T>& blocks = set.blocks();
-    const int size = set.size();
-    // Adds block b's linearization to the entries of H and g of the vertices that thread
-    // `owner` owns (-1: all of them).
-    const int* vertex_owner_of = vertex_owner.data();
-    auto scatter = [&](int b, const Eigen::Vector3d* grad, const Eigen::Matrix3d* hess, int owner) {
-      const T& block = blocks[static_cast<size_t>(b)];
-      for (int i = 0; i < n; ++i) {
-        const int v = block.vertices[i];
-        if (owner >= 0 && vertex_owner_of[v] != owner) continue;
-        double* gi = gradient + 3 * v;
-        for (int d = 0; d < 3; ++d) gi[d] += grad[i][d];
-      }
-      if (!with_hessian) return;
-      const Slot* s = c.slots.data() + static_cast<size_t>(b) * n * n;
-      for (int i = 0; i < n; ++i) {
-        for (int j = 0; j < n; ++j) {
-          const int column_vertex = block.vertices[j];
-          if (owner >= 0 && vertex_owner_of[column_vertex] != owner) continue;
-          const int ij = i * n + j;
-          const Eigen::Matrix3d& M = hess[ij];
-          for (int jj = 0; jj < 3; ++jj) {
-            double* column = values + s[ij].offset + jj * s[ij].stride;
-            for (int ii = 0; ii < 3; ++ii) column[ii] += M(ii, jj);
-          }
-        }
-      }
-    };
-    // Each block's value (Linearize's: 0 where it cannot be evaluated), for set_energy.
-    double* value_of = nullptr;
-    if (set_energy != nullptr) {
-      block_values.resize(static_cast<size_t>(size));
-      value_of = block_values.data();
-    }
-    auto set_done = [&] {
-      if (set_energy == nullptr) return;
-      if (static_cast<int>(set_energy->size()) <= ordinal) set_energy->resize(static_cast<size_t>(ordinal) + 1, 0.0);
-      (*set_energy)[static_cast<size_t>(ordinal)] = energy::Problem::SumBlockValues(block_values);
-    };
-    if (threads == 1 || static_cast<int64_t>(size) * n * n < kParallelWork) {
-      // One pass, no OpenMP region (even a team of one costs libgomp a futex wake-up).
-      energy::Linearization<T> lin;
-      for (int b = 0; b < size; ++b) {
-        const bool linearized = energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian);
-        if (value_of != nullptr) value_of[b] = lin.value;
-        if (linearized && lin.scale != 0.0) scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
-      }
-      set_done();
-      return;
-    }
-    // A region of vertices per thread (vertex_owner): a thread linearizes and adds its
-    // interior blocks in one pass; the straddling ones are linearized in parallel into a
-    // buffer and each thread adds their parts that land in its region.
-    if (static_cast<int>(c.interior.size()) != threads) {
-      c.interior.assign(static_cast<size_t>(threads), {});
-      c.straddling.clear();
-      for (int b = 0; b < size; ++b) {
-        const T& block = blocks[static_cast<size_t>(b)];
-        const int t = vertex_owner[static_cast<size_t>(block.vertices[0])];
-        bool interior = true;
-        for (int i = 1; i < n; ++i) interior = interior && vertex_owner[static_cast<size_t>(block.vertices[i])] == t;
-        (interior ? c.interior[static_cast<size_t>(t)] : c.straddling).push_back(b);
-      }
-    }
-    const std::vector<int>& straddling = c.straddling;
-    const int num_straddling = static_cast<int>(straddling.size());
-    // Per straddling block: a flag (1: adds something), n gradient vectors, n * n blocks.
-    constexpr size_t kStride = 1 + 3 * n + 9 * n * n;
-    // Grown, never shrunk: a shrink and a regrowth (the sets take turns) would zero the
-    // regrown part every time.
-    if (scratch.size() < kStride * straddling.size()) scratch.resize(kStride * straddling.size());
-    double* buffer = scratch.data();
-#pragma omp parallel num_threads(threads)
-    {
-      const int t = TeamThread();
-      energy::Linearization<T> lin;
-      for (int b : c.interior[static_cast<size_t>(t)]) {
-        const bool linearized = energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian);
-        if (value_of != nullptr) value_of[b] = lin.value;
-        if (linearized && lin.scale != 0.0) scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
-      }
-#pragma omp for schedule(static)
-      for (int k = 0; k < num_straddling; ++k) {
-        double* out = buffer + kStride * static_cast<size_t>(k);
-        const int b = straddling[static_cast<size_t>(k)];
-        const bool adds = energy::Linearize(blocks[static_cast<size_t>(b)], set.loss(), x, &lin, with_hessian) &&
-                          lin.scale != 0.0;
-        if (value_of != nullptr) value_of[b] = lin.value;
-        out[0] = adds ? 1.0 : 0.0;
-        if (!adds) continue;
-        for (int i = 0; i < n; ++i) Eigen::Map<Eigen::Vector3d>(out + 1 + 3 * i) = lin.gradient[i];
-        if (with_hessian) {
-          for (int ij = 0; ij < n * n; ++ij) {
-            Eigen::Map<Eigen::Matrix3d>(out + 1 + 3 * n + 9 * ij) = lin.hessian[ij];
-          }
-        }
-      }  // a barrier: every straddling block is linearized
-      for (int k = 0; k < num_straddling; ++k) {
-        const double* in = buffer + kStride * static_cast<size_t>(k);
-        if (in[0] == 0.0) continue;
-        const int b = straddling[static_cast<size_t>(k)];
-        bool mine = false;
-        for (int i = 0; i < n; ++i) mine = mine || vertex_owner[static_cast<size_t>(blocks[static_cast<size_t>(b)].vertices[i])] == t;
-        if (!mine) continue;
-        for (int i = 0; i < n; ++i) lin.gradient[i] = Eigen::Map<const Eigen::Vector3d>(in + 1 + 3 * i);
-        if (with_hessian) {
-          for (int ij = 0; ij < n * n; ++ij) {
-            lin.hessian[ij] = Eigen::Map<const Eigen::Matrix3d>(in + 1 + 3 * n + 9 * ij);
-          }
-        }
-        scatter(b, lin.gradient.data(), lin.hessian.data(), t);
-      }
-    }
-    set_done();
-  });
-}
-
-void FastBackend::Impl::Assemble(const energy::Problem& problem, const Vertices& x, bool first,
-                                 Eigen::VectorXd* g, EnergyTerms* energy) {
-  auto constant = [](const auto& set) {
-    using T = BlockType<std::decay_t<decltype(set)>>;
-    return T::kConstantJacobian && !set.loss().robust();
-  };
-  auto varying = [&](const auto& set) { return !constant(set); };
-  auto always = [](const auto&) { return true; };
-  g->setZero(3 * num_vertices);
-  std::vector<double>* set_energy = first && energy != nullptr ? &assembled_energy : nullptr;
-  if (set_energy != nullptr) set_energy->clear();
-  if (first) {
-    std::fill(H.valuePtr(), H.valuePtr() + H.nonZeros(), 0.0);
-    Accumulate(problem, x, constant, always, g, set_energy);
-    constant_values.assign(H.valuePtr(), H.valuePtr() + H.nonZeros());
-  } else {
-    // The constant sets' gradient is linearized element by element again, not formed as the
-    // first one plus H_c (x - x_first): that sum cancels (a 1:1000 flat plate's stiffness
-    // against its small gradient) and cost the nearly-flat-elements hard case its bound
-    // (6.1 mm against 5.95), for 0.7 ms per demo frame.
-    std::copy(constant_values.begin(), constant_values.end(), H.valuePtr());
-    Accumulate(problem, x, constant, [](const auto&) { return false; }, g);
-  }
-  Accumulate(problem, x, varying, always, g, set_energy);
-  if (set_energy != nullptr) {  // added up by group in ForEachSet's order, as Evaluate does
-    *energy = EnergyTerms();
-    size_t ordinal = 0;
-    problem.ForEachSet([&](const auto& set) {
-      energy::GroupEnergy(set.group(), energy) += ordinal < set_energy->size() ? (*set_energy)[ordinal] : 0.0;
-      ++ordinal;
-    });
-  }
-  // Hard anchors: identity rows and columns, no gradient.
-  if (!problem.fixed().empty()) {
-    if (fixed_for != problem.fixed()) {
-      fixed_for = problem.fixed();
-      fixed_off_diagonal.clear();
-      fixed_diagonal.clear();
-      const int n = static_cast<int>(H.cols());
-      const int* outer = H.outerIndexPtr();
-      const int* inner = H.innerIndexPtr();
-      for (int c = 0; c < n; ++c) {
-        const bool col_fixed = problem.is_fixed(c / 3);
-        for (int p = outer[c]; p < outer[c + 1]; ++p) {
-          if (col_fixed || problem.is_fixed(inner[p] / 3)) {
-            (inner[p] == c ? fixed_diagonal : fixed_off_diagonal).push_back(p);
-          }
-        }
-      }
-    }
-    double* values = H.valuePtr();
-    for (int p : fixed_off_diagonal) values[p] = 0.0;
-    for (int p : fixed_diagonal) values[p] = 1.0;
-    for (int v = 0; v < num_vertices; ++v) {
-      if (problem.is_fixed(v)) g->segment<3>(3 * v).setZero();
-    }
-  }
-  // A whisper of Tikhonov on the diagonal, for degrees of freedom no term references.
-  double max_diagonal = 0.0;
-  for (int at : diagonal_at) max_diagonal = std::max(max_diagonal, H.valuePtr()[at]);
-  for (int at : diagonal_at) H.valuePtr()[at] += 1e-12 * max_diagonal;
-}
 
 namespace {
 // The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
@@ -1114,36 +652,15 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   const ScopedThreads threads(m.threads);  // OpenMP here and the BLAS under CHOLMOD
   const int analyses_before = m.analyses;
   auto t0 = Clock::now();
-  if (m.num_vertices != problem.num_vertices() || m.coupling_revision != problem.coupling_revision()) {
-    m.ResetPattern(problem, *x);
-    ++report.pattern_rebuilds;
-  }
   // Every block's slots; pairs outside the pattern widen it (and redo the analysis).
-  {
-    for (auto& c : m.cache) c.second.used = false;
-    std::vector<std::pair<int, int>> missing;
-    problem.ForEachSet([&](const auto& set) { m.CacheOf(set, &missing); });
-    missing.erase(std::remove_if(missing.begin(), missing.end(),
-                                 [](const std::pair<int, int>& p) { return p.first == p.second; }),
-                  missing.end());
-    if (!missing.empty()) {
-      std::sort(missing.begin(), missing.end());
-      missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
-      m.extra_pairs.insert(m.extra_pairs.end(), missing.begin(), missing.end());
-      m.BuildPattern();
-      ++report.pattern_rebuilds;
-      problem.ForEachSet([&](const auto& set) { m.CacheOf(set, &missing); });
-    }
-    for (auto it = m.cache.begin(); it != m.cache.end();) {  // forget the sets that are gone
-      it = it->second.used ? std::next(it) : m.cache.erase(it);
-    }
-  }
+  report.pattern_rebuilds += m.assembler.Prepare(problem, *x);
+  if (m.assembler.pattern_revision() != m.pattern_revision) m.PatternChanged();
 
   Eigen::VectorXd g, dx;
   m.positions = x;
   m.multigrid_failed = false;
   // The energy at the start from the assembly's linearization (an evaluation less per solve).
-  m.Assemble(problem, *x, /*first=*/true, &g, &report.before);
+  m.assembler.AssembleGaussNewton(problem, *x, /*first=*/true, &g, &report.before);
   report.assemble_s += Seconds(t0);
   report.after = report.before;
   double energy = report.before.total();
@@ -1183,7 +700,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     EnergyTerms trial_terms;
     for (int halving = 0; halving < 8; ++halving, alpha *= 0.5) {
       trial = *x;
-      for (int v = 0; v < m.num_vertices; ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
+      for (int v = 0; v < m.assembler.num_vertices(); ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
       trial_terms = m.Energy(problem, trial, &report);
       trial_energy = trial_terms.total();
       if (std::isfinite(trial_energy) && trial_energy <= energy) {
@@ -1196,7 +713,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
       break;
     }
     double largest = 0.0;
-    for (int v = 0; v < m.num_vertices; ++v) largest = std::max(largest, dx.segment<3>(3 * v).norm());
+    for (int v = 0; v < m.assembler.num_vertices(); ++v) largest = std::max(largest, dx.segment<3>(3 * v).norm());
     largest *= alpha;
     const double gain = energy - trial_energy;
     const double decrease = gain / std::max(energy, 1e-300);
@@ -1231,7 +748,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     }
     if (step + 1 == m.options.max_iterations) break;
     t0 = Clock::now();
-    m.Assemble(problem, *x, /*first=*/false, &g);
+    m.assembler.AssembleGaussNewton(problem, *x, /*first=*/false, &g);
     report.assemble_s += Seconds(t0);
   }
   m.positions = nullptr;

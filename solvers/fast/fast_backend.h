@@ -1,12 +1,11 @@
 // The fast back end: Gauss-Newton / Levenberg-Marquardt over a directly assembled sparse
-// system, the robust losses by iterative reweighting. One generic assembler takes every
-// block type of the energy layer: each block's gradient and Gauss-Newton blocks (energy/
-// term.h's Linearize) are scattered into a fixed sparsity pattern, which starts from the
-// problem's coupling (the meshes' tetrahedra) and widens once for blocks that couple other
-// vertices (contacts between objects), so CHOLMOD's symbolic analysis is reused across
-// iterations and frames until the topology changes. Blocks whose Jacobian is constant and
-// whose set has no robust loss (the elastic elements with their rotations held, springs)
-// are assembled once per Solve.
+// system, the robust losses by iterative reweighting. The energy layer's assembler
+// (energy/assembler.h) scatters each block's gradient and Gauss-Newton blocks into a fixed
+// sparsity pattern, which starts from the problem's coupling (the meshes' tetrahedra) and
+// widens once for blocks that couple other vertices (contacts between objects), so CHOLMOD's
+// symbolic analysis is reused across iterations and frames until the topology changes.
+// Blocks whose Jacobian is constant and whose set has no robust loss (the elastic elements
+// with their rotations held, springs) are assembled once per Solve.
 #ifndef FEMREG_SOLVERS_FAST_FAST_BACKEND_H_
 #define FEMREG_SOLVERS_FAST_FAST_BACKEND_H_
 

@@ -36,12 +36,15 @@ void ElementDerivatives(const Vector12& force, const Matrix12* stiffness, Eigen:
 bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
                                  Eigen::Matrix3d* hessian, TangentProjection projection) const {
   const Vector12 xe = StencilVector(x);
-  const Eigen::Matrix3d R =
-      corotational ? PolarRotation(StencilF(x, rest->dm_inv)) : Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Matrix12 K;
+  if (hessian != nullptr) {  // one decomposition for R and the tangent
+    K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R) : rest->K;
+  } else if (corotational) {
+    R = PolarRotation(StencilF(x, rest->dm_inv));
+  }
   Vector12 force;
   *energy = ElementEnergyAndForce(*rest, R, xe, &force);
-  Matrix12 K;
-  if (hessian != nullptr) K = corotational ? CorotationalTangent(*rest, xe, projection) : rest->K;
   ElementDerivatives(force, hessian != nullptr ? &K : nullptr, gradient, hessian);
   return true;
 }
@@ -49,7 +52,7 @@ bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::
 bool NeoHookeanElement::SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
                                     Eigen::Matrix3d* hessian, TangentProjection projection) const {
   const Vector12 xe = StencilVector(x);
-  const double kappa = NeoHookeanKappa(*rest, false);
+  const double kappa = NeoHookeanKappa(*rest, deviatoric);
   Vector12 force;
   *energy = NeoHookeanEnergyAndForce(*rest, kappa, 0.0, xe, &force) + 0.5 * Offset();
   Matrix12 K;
@@ -132,7 +135,7 @@ bool ElasticElement::Normal(const double* const* x, double* squared_norm, Eigen:
 }
 
 bool NeoHookeanElement::Evaluate(const double* const* x, double* r, double** J) const {
-  const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
+  const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, deviatoric);
   const Eigen::Matrix3d F = StencilF(x, rest->dm_inv);
   const double a = std::sqrt(V * mu), c = std::sqrt(V * kappa);
   Eigen::Map<Eigen::Matrix<double, 9, 1>>{r} = a * Eigen::Map<const Eigen::Matrix<double, 9, 1>>(F.data());
@@ -152,7 +155,7 @@ bool NeoHookeanElement::Evaluate(const double* const* x, double* r, double** J) 
 
 bool NeoHookeanElement::Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
                                Eigen::Matrix3d* jtj) const {
-  const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
+  const double V = rest->volume, mu = rest->mu, kappa = NeoHookeanKappa(*rest, deviatoric);
   const Eigen::Matrix3d F = StencilF(x, rest->dm_inv);
   const double d = F.determinant() - (1.0 + mu / kappa);
   *squared_norm = V * (mu * F.squaredNorm() + kappa * d * d);
@@ -176,7 +179,7 @@ bool NeoHookeanElement::Normal(const double* const* x, double* squared_norm, Eig
 }
 
 double NeoHookeanElement::Offset() const {
-  const double mu = rest->mu, kappa = NeoHookeanKappa(*rest, false);
+  const double mu = rest->mu, kappa = NeoHookeanKappa(*rest, deviatoric);
   return rest->volume * (3.0 * mu + mu * mu / kappa);
 }
 

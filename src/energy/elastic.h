@@ -57,6 +57,9 @@ struct NeoHookeanElement {
   std::array<int, 4> vertices = {{0, 0, 0, 0}};
   double weight = 1.0;
   const ElementRest* rest = nullptr;
+  // The deviatoric part of the nodal-volume split (kappa = mu / 3, femreg/fem.h), whose
+  // volumetric energy is energy::NodalVolume's; else the whole element (kappa = lambda + mu).
+  bool deviatoric = false;
 
   bool Evaluate(const double* const* x, double* r, double** J) const;
   // In closed form: |r|^2 = V (mu |F|^2 + kappa (J - alpha)^2), J_i^T r = V (mu F +

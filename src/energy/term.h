@@ -238,20 +238,24 @@ template <class T>
 struct IsPiecewiseAffine<T, std::void_t<decltype(T::kPiecewiseAffine)>>
     : std::bool_constant<T::kConstantJacobian || T::kPiecewiseAffine> {};
 
-// The exact Hessian of a block's energy, or its positive semi-definite projection.
-enum class Curvature { kExact, kProjected };
+// The Hessian a linearization carries: the Gauss-Newton one (Linearize: w rho' J^T J, with
+// the held parameters), the exact Hessian of a block's energy, or its positive semi-definite
+// projection.
+enum class Curvature { kGaussNewton, kExact, kProjected };
 
-// A block's value, gradient and exact (or projected) Hessian at x, with the loss:
+// A block's value, gradient and exact (or projected) Hessian at x (kGaussNewton: Linearize's),
+// with the loss:
 // d2/dx2 [1/2 w rho(2 e)] = w rho' H_e + 2 w rho'' g_e g_e^T for the block's e, g_e, H_e.
 // The projection projects H_e and leaves out the loss' term where rho'' < 0 (the robust
 // losses bend down), so that the result is positive semi-definite. `scale` = w rho'.
 // Returns false (and a zero scale) if the block cannot be evaluated.
 template <class T>
 bool LinearizeSecondOrder(const T& block, const Loss& loss, const Vertices& x, Curvature curvature,
-                          Linearization<T>* out) {
+                          Linearization<T>* out, bool with_hessian = true) {
   constexpr int m = T::kResiduals, n = T::kVertices;
   static_assert(HasSecondOrder<T>::value || IsPiecewiseAffine<T>::value,
                 "a block type whose residual is not affine in x provides SecondOrder");
+  if (curvature == Curvature::kGaussNewton) return Linearize(block, loss, x, out, with_hessian);
   const auto p = StencilPositions(block, x);
   out->scale = 0.0;
   out->value = 0.0;
@@ -261,7 +265,10 @@ bool LinearizeSecondOrder(const T& block, const Loss& loss, const Vertices& x, C
     const TangentProjection projection = curvature == Curvature::kExact
                                              ? TangentProjection::kNone
                                              : TangentProjection::kPositiveSemiDefinite;
-    if (!block.SecondOrder(p.data(), &e, g.data(), out->hessian.data(), projection)) return false;
+    if (!block.SecondOrder(p.data(), &e, g.data(), with_hessian ? out->hessian.data() : nullptr,
+                           projection)) {
+      return false;
+    }
   } else {
     using Jacobian = Eigen::Matrix<double, m, 3, Eigen::RowMajor>;
     Eigen::Matrix<double, m, 1> r;
@@ -272,6 +279,7 @@ bool LinearizeSecondOrder(const T& block, const Loss& loss, const Vertices& x, C
     e = 0.5 * SquaredSum<m>(r.data());
     for (int i = 0; i < n; ++i) {
       g[i].noalias() = J[i].transpose() * r;
+      if (!with_hessian) continue;
       for (int j = 0; j < n; ++j) out->hessian[i * n + j].noalias() = J[i].transpose() * J[j];
     }
   }
@@ -282,6 +290,7 @@ bool LinearizeSecondOrder(const T& block, const Loss& loss, const Vertices& x, C
   const double bend = 2.0 * block.weight * rho[2];
   const bool with_bend = bend > 0.0 || (bend < 0.0 && curvature == Curvature::kExact);
   for (int i = 0; i < n; ++i) out->gradient[i] = out->scale * g[i];
+  if (!with_hessian) return true;
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       Eigen::Matrix3d& h = out->hessian[i * n + j];

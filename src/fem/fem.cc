@@ -430,11 +430,14 @@ SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F) {
 }
 
 Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
-                             TangentProjection projection, ElementTangentInfo* info) {
+                             TangentProjection projection, ElementTangentInfo* info,
+                             Eigen::Matrix3d* rotation) {
   Eigen::Matrix<double, 3, 4> xm;
   for (int k = 0; k < 4; ++k) xm.col(k) = x.segment<3>(3 * k);
   const SignedSvd svd = SignedSingularValueDecomposition(DeformationGradient(xm, rest.dm_inv));
-  Matrix12 tangent = WarpedStiffness(rest, svd.U * svd.V.transpose());
+  const Eigen::Matrix3d R = svd.U * svd.V.transpose();
+  if (rotation != nullptr) *rotation = R;
+  Matrix12 tangent = WarpedStiffness(rest, R);
 
   // Lame parameters of the (isotropic) Hooke matrix, and tr(S - I).
   const double mu = rest.C(3, 3);

@@ -1,14 +1,13 @@
-// The forward quasi-static solve: Newton iterations on the consistent corotational tangent
-// (fem.h's CorotationalTangent: the warped stiffness R K R^T plus the derivative of the
-// rotations) or the stable neo-Hookean element's Hessian, with the exact gradient, a
-// backtracking line search on the total potential (rotations recomputed at every trial
-// point), load stepping, and clamped / prescribed DOFs eliminated. By default the exact
-// tangent is tried first and, when CHOLMOD finds it not positive definite, the element-wise
-// PSD projection is used for that iteration. With the neo-Hookean nodal volume the
-// volumetric energy lives on the vertices: its Hessian couples the vertices of each vertex's
-// elements, and the pattern holds those pairs. The reduced system is solved with CHOLMOD's
-// supernodal Cholesky; its sparsity pattern is fixed, so the symbolic analysis is done once
-// per solve and values are scattered into a preallocated matrix every iteration.
+// The forward quasi-static solve: Newton iterations on the exact Hessian of the potential
+// (the consistent corotational tangent, or the stable neo-Hookean element's), with the exact
+// gradient, a backtracking line search on the total potential (rotations recomputed at every
+// trial point), load stepping, and clamped / prescribed DOFs eliminated. By default the exact
+// Hessian is tried first and, when CHOLMOD finds it not positive definite, its element-wise
+// PSD projection is used for that iteration. The energy is the energy layer's (one block per
+// element, and with the neo-Hookean nodal volume energy::NodalVolume beside them), assembled
+// by its assembler (energy/assembler.h); the free rows and columns of that system, lower
+// triangle, are solved with CHOLMOD's supernodal Cholesky. The pattern is fixed, so the
+// symbolic analysis is done once per solve.
 #include "femreg/forward.h"
 
 #include <Eigen/CholmodSupport>
@@ -24,6 +23,9 @@
 #include <memory>
 #include <sstream>
 
+#include "energy/assembler.h"
+#include "energy/nodal_volume.h"
+#include "energy/problem.h"
 #include "parallel/signals.h"
 #include "parallel/threads.h"
 
@@ -198,15 +200,27 @@ class Factorization : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lo
 // mode leaves a pivot at round-off level, about sqrt(eps) ~ 1e-8 of the largest.
 constexpr double kMinReciprocalCondition = 1e-7;
 
-// The element matrices the reduced system can be filled with.
+// The matrices the reduced system can be filled with.
 enum class ElementMatrix {
-  kLinear,     // K_e
-  kWarped,     // R_e K_e R_e^T
-  kProjected,  // CorotationalTangent, PSD-projected
-  kExact,      // CorotationalTangent, exact
+  kLinear,     // K
+  kWarped,     // the Gauss-Newton one: R K R^T with the rotations of x held
+  kProjected,  // the exact Hessian, projected element by element (energy/term.h)
+  kExact,      // the exact Hessian of the potential
 };
 
-// The state of one solve: DOF numbering, the element-to-matrix scatter map, buffers.
+energy::Curvature CurvatureOf(ElementMatrix kind) {
+  switch (kind) {
+    case ElementMatrix::kExact:
+      return energy::Curvature::kExact;
+    case ElementMatrix::kProjected:
+      return energy::Curvature::kProjected;
+    default:
+      return energy::Curvature::kGaussNewton;
+  }
+}
+
+// The state of one solve: the energy (energy::Problem: the elements, and the nodal volume
+// beside it), its assembler, the DOF numbering and the reduced system.
 class QuasiStaticSolver {
  public:
   QuasiStaticSolver(const ForwardProblem& problem, const ForwardOptions& options,
@@ -216,13 +230,15 @@ class QuasiStaticSolver {
         model_(*model),
         mesh_(*mesh),
         summary_(*summary),
-        threads_(ResolveThreadCount(options.num_threads)) {
+        threads_(ResolveThreadCount(options.num_threads)),
+        assembler_(threads_) {
     summary_.num_threads = threads_;
   }
 
   // Checks the inputs; on error fills the summary and returns false.
   bool Validate();
-  // Numbers the free DOFs, checks that every connected piece is held, builds the pattern.
+  // Numbers the free DOFs, checks that every connected piece is held, builds the energy and
+  // the reduced pattern.
   bool Setup();
   void Run();
   // For EvaluateForwardSystem (after Validate and Setup): the residual at x under the full
@@ -242,25 +258,16 @@ class QuasiStaticSolver {
   bool neo_hookean() const { return model_.type() == ElasticModelType::kNeoHookean; }
   bool nodal_volume() const { return neo_hookean() && model_.nodal_volume(); }
 
-  // Elastic energy at x with rotations recomputed from x (stored in `rotations`), and the
-  // per-element forces in element_force_ (f = -gradient).
-  double EvaluateElements(const Vertices& x, std::vector<Eigen::Matrix3d>* rotations,
-                          std::vector<Vector12>* element_force) const;
-  // The nodal volume's energy at x (fem.h, NeoHookeanKappa); per element the pressure
-  // dE/dv_e = sum of its vertices' K_a (J_a - 1) / 4 (Pa), and, if not null, the gradients
-  // of the elements' volumes.
-  double NodalVolume(const Vertices& x, std::vector<double>* element_pressure,
-                     std::vector<Vector12>* volume_gradient) const;
-  // Adds the nodal volume's K_a / V_a (dv_a/dx)(dv_a/dx)^T, v_a the vertex's current share
-  // of volume, into matrix_ (its element-wise part is in the element matrices).
-  void FillNodalVolume(const std::vector<Vector12>& volume_gradient);
-  // Gathers the element forces into the elastic gradient (3 #V).
-  void GatherGradient(const std::vector<Vector12>& element_force, Eigen::VectorXd* gradient) const;
-  // The element matrix of element e at x (rotations computed from x).
-  Matrix12 ElementMatrixOf(int e, const Vertices& x, const std::vector<Eigen::Matrix3d>& rotations,
-                           ElementMatrix kind) const;
-  // Scatters the element matrices into the reduced lower triangle matrix_.
-  void Fill(const Vertices& x, const std::vector<Eigen::Matrix3d>& rotations, ElementMatrix kind);
+  // The energy's terms: one block per element, the nodal volume beside them.
+  void BuildEnergy(const std::vector<char>& held);
+  // The reduced lower triangle's pattern from the assembler's, and where each entry's value is.
+  void BuildReduced();
+  // Elastic energy at x (the element energies with their rotations of x, and the nodal
+  // volume's); its gradient into *gradient (3 #V).
+  double Elastic(const Vertices& x, Eigen::VectorXd* gradient);
+  // Assembles the matrix of `kind` at x (the assembler's H, all DOFs) and copies its free
+  // lower triangle into matrix_.
+  void Fill(const Vertices& x, ElementMatrix kind);
   // problem.potential's Hessian at x over the reduced DOFs (lower triangle).
   std::vector<Eigen::Triplet<double>> ReducedExtraHessian(const Vertices& x) const;
   // Factorizes matrix_ (+ extra); false with *error when not positive definite or
@@ -270,7 +277,7 @@ class QuasiStaticSolver {
   // (kFull: the exact tangent, or the projected one when that is not positive definite;
   // element_matrix_ says which). With problem.potential, its Hessian at x is added (the
   // pattern is then re-analyzed).
-  bool AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations, const Vertices& x);
+  bool AssembleAndFactorize(const Vertices& x);
   // problem.potential's energy at x (0 without one); adds its gradient when not null.
   double Extra(const Vertices& x, Eigen::VectorXd* gradient) const {
     return problem_.potential != nullptr ? problem_.potential->Evaluate(x, gradient) : 0.0;
@@ -282,11 +289,10 @@ class QuasiStaticSolver {
   double RoundoffFloor(const Vertices& x) const;
   void ScatterFree(const Eigen::VectorXd& reduced, double alpha, Vertices* x) const;
 
-  // A point on a line search: positions, their rotations, element forces and energies.
+  // A point on a line search: positions, the elastic energy's gradient there, energies.
   struct Trial {
     Vertices x;
-    std::vector<Eigen::Matrix3d> rotations;
-    std::vector<Vector12> forces;
+    Eigen::VectorXd gradient;
     double elastic = 0.0;
     double potential = 0.0;
   };
@@ -297,13 +303,11 @@ class QuasiStaticSolver {
   // decreases the potential; *trial then holds the last point tried.
   bool LineSearch(const Vertices& x, const Eigen::VectorXd& step, double slope, double potential,
                   double residual_norm, const Eigen::VectorXd& load, bool may_relax,
-                  double* alpha, bool* relaxed, Trial* trial) const;
-  // Moves the trial's state into x, rotations and forces (the trial keeps the old ones).
-  static void Accept(Trial* trial, Vertices* x, std::vector<Eigen::Matrix3d>* rotations,
-                     std::vector<Vector12>* forces) {
+                  double* alpha, bool* relaxed, Trial* trial);
+  // Moves the trial's state into x and gradient (the trial keeps the old ones).
+  static void Accept(Trial* trial, Vertices* x, Eigen::VectorXd* gradient) {
     x->swap(trial->x);
-    rotations->swap(trial->rotations);
-    forces->swap(trial->forces);
+    gradient->swap(trial->gradient);
   }
 
   const ForwardProblem& problem_;
@@ -311,20 +315,17 @@ class QuasiStaticSolver {
   const ElasticModel& model_;
   TetMesh& mesh_;
   ForwardSummary& summary_;
+  const int threads_;                // OpenMP threads of the element loops
 
+  energy::Problem energy_;           // the elements, held vertices fixed
+  std::unique_ptr<energy::NodalVolume> nodal_;  // neo-Hookean nodal volume, or null
+  std::vector<Eigen::Matrix3d> rotations_;      // held by the elements for kWarped
+  energy::Assembler assembler_;
   std::vector<int> free_index_;      // 3 #V: dof -> reduced index, or -1 when held
   std::vector<int> free_dofs_;       // reduced index -> dof
-  std::vector<int> element_offsets_; // vertex -> element adjacency (compressed)
-  std::vector<int> element_slots_;   // 4 e + k of each adjacent element's local vertex
   SparseMatrix matrix_;              // reduced stiffness, lower triangle
-  std::vector<int> scatter_;         // 144 per element: index into matrix_ values, or -1
-  std::vector<std::vector<int>> colors_;  // elements sharing no vertex, for parallel scatter
-  // Nodal volume (neo-Hookean): per vertex its rest volume V_a (a quarter of each element
-  // around it) and sum K_e V_e / 4 (the volume-weighted bulk modulus times V_a).
-  std::vector<double> nodal_rest_volume_, nodal_stiffness_;
-  std::vector<double> element_pressure_;  // of the last Fill, for ElementMatrixOf
+  std::vector<int> reduced_at_;      // per entry of matrix_: its value's index in H
   Factorization factorization_;
-  const int threads_;                // OpenMP threads of the element loops
   ElementMatrix element_matrix_ = ElementMatrix::kWarped;  // of the last factorization
   bool factorized_for_linear_ = false;
   bool analyzed_elastic_pattern_ = true;  // false after a potential's entries widened it
@@ -411,15 +412,15 @@ bool QuasiStaticSolver::Validate() {
 bool QuasiStaticSolver::Setup() {
   const Tets& tets = model_.tets();
   // Vertex -> element adjacency of the model's elements.
-  element_offsets_.assign(nv() + 1, 0);
+  std::vector<int> element_offsets(nv() + 1, 0), element_slots;
   for (int e = 0; e < nt(); ++e)
-    for (int k = 0; k < 4; ++k) ++element_offsets_[tets(e, k) + 1];
-  for (int v = 0; v < nv(); ++v) element_offsets_[v + 1] += element_offsets_[v];
-  element_slots_.assign(element_offsets_[nv()], 0);
+    for (int k = 0; k < 4; ++k) ++element_offsets[tets(e, k) + 1];
+  for (int v = 0; v < nv(); ++v) element_offsets[v + 1] += element_offsets[v];
+  element_slots.assign(element_offsets[nv()], 0);
   {
-    std::vector<int> fill(element_offsets_.begin(), element_offsets_.end() - 1);
+    std::vector<int> fill(element_offsets.begin(), element_offsets.end() - 1);
     for (int e = 0; e < nt(); ++e)
-      for (int k = 0; k < 4; ++k) element_slots_[fill[tets(e, k)]++] = 4 * e + k;
+      for (int k = 0; k < 4; ++k) element_slots[fill[tets(e, k)]++] = 4 * e + k;
   }
 
   // Held vertices: clamped, prescribed, and vertices no element uses (they cannot move).
@@ -427,7 +428,7 @@ bool QuasiStaticSolver::Setup() {
   for (int v : problem_.clamped) held[v] = 1;
   for (const auto& p : problem_.prescribed) held[p.first] = 1;
   for (int v = 0; v < nv(); ++v) {
-    if (element_offsets_[v] == element_offsets_[v + 1]) held[v] = 1;
+    if (element_offsets[v] == element_offsets[v + 1]) held[v] = 1;
   }
 
   // Every vertex-connected piece must hold at least three non-collinear vertices, or it
@@ -451,8 +452,8 @@ bool QuasiStaticSolver::Setup() {
           listed[v] = num_components + 1;
           held_vertices.push_back(v);
         }
-        for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
-          const int other = element_slots_[s] / 4;
+        for (int s = element_offsets[v]; s < element_offsets[v + 1]; ++s) {
+          const int other = element_slots[s] / 4;
           if (component[other] < 0) {
             component[other] = num_components;
             stack.push_back(other);
@@ -498,95 +499,9 @@ bool QuasiStaticSolver::Setup() {
     }
   }
   summary_.num_free_dofs = static_cast<int>(free_dofs_.size());
+  BuildEnergy(held);
   if (free_dofs_.empty()) return true;
-
-  // The pattern of the reduced lower triangle, and where each element entry goes.
-  const int n = static_cast<int>(free_dofs_.size());
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(78 * static_cast<size_t>(nt()));
-  for (int e = 0; e < nt(); ++e) {
-    for (int a = 0; a < 12; ++a) {
-      const int r = free_index_[3 * tets(e, a / 3) + a % 3];
-      if (r < 0) continue;
-      for (int b = 0; b < 12; ++b) {
-        const int c = free_index_[3 * tets(e, b / 3) + b % 3];
-        if (c >= 0 && r >= c) triplets.emplace_back(r, c, 0.0);
-      }
-    }
-  }
-  element_pressure_.assign(nt(), 0.0);
-  if (nodal_volume()) {
-    // A vertex's volume couples every vertex of the elements around it.
-    nodal_rest_volume_.assign(nv(), 0.0);
-    nodal_stiffness_.assign(nv(), 0.0);
-    for (int e = 0; e < nt(); ++e) {
-      const ElementRest& rest = model_.rest(e);
-      for (int k = 0; k < 4; ++k) {
-        nodal_rest_volume_[tets(e, k)] += 0.25 * rest.volume;
-        nodal_stiffness_[tets(e, k)] += 0.25 * rest.volume * BulkModulus(rest);
-      }
-    }
-    std::vector<int> star;
-    for (int v = 0; v < nv(); ++v) {
-      star.clear();
-      for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s)
-        for (int k = 0; k < 4; ++k) star.push_back(tets(element_slots_[s] / 4, k));
-      std::sort(star.begin(), star.end());
-      star.erase(std::unique(star.begin(), star.end()), star.end());
-      for (int p : star)
-        for (int q : star)
-          for (int i = 0; i < 3; ++i) {
-            const int r = free_index_[3 * p + i];
-            if (r < 0) continue;
-            for (int j = 0; j < 3; ++j) {
-              const int c = free_index_[3 * q + j];
-              if (c >= 0 && r >= c) triplets.emplace_back(r, c, 0.0);
-            }
-          }
-    }
-  }
-  matrix_.resize(n, n);
-  matrix_.setFromTriplets(triplets.begin(), triplets.end());
-  matrix_.makeCompressed();
-  triplets.clear();
-  triplets.shrink_to_fit();
-  scatter_.assign(144 * static_cast<size_t>(nt()), -1);
-  const int* outer = matrix_.outerIndexPtr();
-  const int* inner = matrix_.innerIndexPtr();
-#pragma omp parallel for schedule(static) num_threads(threads_)
-  for (int e = 0; e < nt(); ++e) {
-    for (int a = 0; a < 12; ++a) {
-      const int r = free_index_[3 * tets(e, a / 3) + a % 3];
-      if (r < 0) continue;
-      for (int b = 0; b < 12; ++b) {
-        const int c = free_index_[3 * tets(e, b / 3) + b % 3];
-        if (c < 0 || r < c) continue;
-        const int* pos = std::lower_bound(inner + outer[c], inner + outer[c + 1], r);
-        scatter_[144 * static_cast<size_t>(e) + 12 * a + b] = static_cast<int>(pos - inner);
-      }
-    }
-  }
-
-  // Greedy colouring: elements of one colour share no vertex, so they scatter in parallel.
-  std::vector<int> color(nt(), -1);
-  std::vector<int> mark;
-  for (int e = 0; e < nt(); ++e) {
-    for (int k = 0; k < 4; ++k) {
-      const int v = tets(e, k);
-      for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
-        const int c = color[element_slots_[s] / 4];
-        if (c < 0) continue;
-        if (c >= static_cast<int>(mark.size())) mark.resize(c + 1, -1);
-        mark[c] = e;
-      }
-    }
-    int c = 0;
-    while (c < static_cast<int>(mark.size()) && mark[c] == e) ++c;
-    color[e] = c;
-    if (c >= static_cast<int>(colors_.size())) colors_.resize(c + 1);
-    colors_[c].push_back(e);
-  }
-
+  BuildReduced();
   const auto start = Clock::now();
   {
     const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
@@ -600,174 +515,94 @@ bool QuasiStaticSolver::Setup() {
   return true;
 }
 
-double QuasiStaticSolver::EvaluateElements(const Vertices& x,
-                                           std::vector<Eigen::Matrix3d>* rotations,
-                                           std::vector<Vector12>* element_force) const {
-  double energy = 0.0;
+void QuasiStaticSolver::BuildEnergy(const std::vector<char>& held) {
+  const Tets& tets = model_.tets();
+  energy_.Reset(nv());
+  std::vector<std::array<int, 4>> cells(nt());
+  for (int e = 0; e < nt(); ++e)
+    for (int k = 0; k < 4; ++k) cells[e][k] = tets(e, k);
+  energy_.SetCoupling(std::move(cells));
+  energy_.fixed().assign(held.begin(), held.end());
+  rotations_.assign(nt(), Eigen::Matrix3d::Identity());
   if (neo_hookean()) {
-    std::vector<double> pressure;
-    if (nodal_volume()) energy = NodalVolume(x, &pressure, nullptr);
-    const bool nodal = nodal_volume();
-#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
+    auto* blocks = energy_.AddSet<energy::NeoHookeanElement>(energy::TermGroup::kElastic).mutable_blocks();
+    std::vector<const ElementRest*> rests(nt());
     for (int e = 0; e < nt(); ++e) {
-      const ElementRest& rest = model_.rest(e);
-      (*rotations)[e].setIdentity();
-      energy += NeoHookeanEnergyAndForce(rest, NeoHookeanKappa(rest, nodal), nodal ? pressure[e] : 0.0,
-                                         model_.Gather(x, e), &(*element_force)[e]);
+      energy::NeoHookeanElement b;
+      for (int k = 0; k < 4; ++k) b.vertices[k] = tets(e, k);
+      b.rest = rests[e] = &model_.rest(e);
+      b.deviatoric = nodal_volume();
+      blocks->push_back(b);
     }
-    return energy;
+    if (nodal_volume()) {
+      nodal_ = std::make_unique<energy::NodalVolume>();
+      nodal_->Build(tets, rests, nv(), threads_);
+    }
+  } else {
+    auto* blocks = energy_.AddSet<energy::ElasticElement>(energy::TermGroup::kElastic).mutable_blocks();
+    for (int e = 0; e < nt(); ++e) {
+      energy::ElasticElement b;
+      for (int k = 0; k < 4; ++k) b.vertices[k] = tets(e, k);
+      b.rest = &model_.rest(e);
+      b.rotation = &rotations_[e];
+      b.corotational = !linear();
+      blocks->push_back(b);
+    }
   }
-  const bool corotational = !linear();
-#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
-  for (int e = 0; e < nt(); ++e) {
-    const ElementRest& rest = model_.rest(e);
-    const Vector12 xe = model_.Gather(x, e);
-    Eigen::Matrix3d& R = (*rotations)[e];
-    if (corotational) {
+  assembler_.Prepare(energy_, mesh_.x, nodal_ ? nodal_->Pairs() : std::vector<std::pair<int, int>>());
+}
+
+void QuasiStaticSolver::BuildReduced() {
+  // H's free rows and columns, lower triangle: the reduced index grows with the DOF, so H's
+  // sorted rows stay sorted.
+  const SparseMatrix& H = assembler_.H();
+  const int n = static_cast<int>(free_dofs_.size());
+  matrix_.resize(n, n);
+  std::vector<int> outer(n + 1, 0), inner;
+  reduced_at_.clear();
+  for (int c = 0; c < n; ++c) {
+    const int column = free_dofs_[c];
+    for (SparseMatrix::InnerIterator it(H, column); it; ++it) {
+      const int r = free_index_[it.row()];
+      if (r < c) continue;  // held, or above the diagonal
+      inner.push_back(r);
+      reduced_at_.push_back(static_cast<int>(&it.value() - H.valuePtr()));
+    }
+    outer[c + 1] = static_cast<int>(inner.size());
+  }
+  matrix_.resizeNonZeros(static_cast<Eigen::Index>(inner.size()));
+  std::copy(outer.begin(), outer.end(), matrix_.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), matrix_.innerIndexPtr());
+  std::fill(matrix_.valuePtr(), matrix_.valuePtr() + inner.size(), 0.0);
+}
+
+double QuasiStaticSolver::Elastic(const Vertices& x, Eigen::VectorXd* gradient) {
+  double energy = assembler_.AssembleSecondOrder(energy_, x, energy::Curvature::kExact,
+                                                 /*with_hessian=*/false, gradient);
+  if (nodal_) energy += nodal_->Evaluate(x, gradient);
+  return energy;
+}
+
+void QuasiStaticSolver::Fill(const Vertices& x, ElementMatrix kind) {
+  if (neo_hookean() && kind == ElementMatrix::kWarped) kind = ElementMatrix::kProjected;  // no warped matrix
+  if (kind == ElementMatrix::kWarped && !linear()) {  // the Gauss-Newton matrix holds R(x)
+    const Tets& tets = model_.tets();
+#pragma omp parallel for schedule(static) num_threads(threads_)
+    for (int e = 0; e < nt(); ++e) {
       Eigen::Matrix<double, 3, 4> xm;
-      for (int k = 0; k < 4; ++k) xm.col(k) = xe.segment<3>(3 * k);
-      R = PolarRotation(DeformationGradient(xm, rest.dm_inv));
-    } else {
-      R.setIdentity();
-    }
-    energy += ElementEnergyAndForce(rest, R, xe, &(*element_force)[e]);
-  }
-  return energy;
-}
-
-double QuasiStaticSolver::NodalVolume(const Vertices& x, std::vector<double>* element_pressure,
-                                      std::vector<Vector12>* volume_gradient) const {
-  const Tets& tets = model_.tets();
-  std::vector<double> volume_change(nt());  // v_e - V_e
-  if (volume_gradient != nullptr) volume_gradient->resize(nt());
-#pragma omp parallel for schedule(static) num_threads(threads_)
-  for (int e = 0; e < nt(); ++e) {
-    const ElementRest& rest = model_.rest(e);
-    const Vector12 xe = model_.Gather(x, e);
-    Eigen::Matrix<double, 3, 4> xm;
-    for (int k = 0; k < 4; ++k) xm.col(k) = xe.segment<3>(3 * k);
-    volume_change[e] = rest.volume * DeterminantMinusOne(DeformationGradient(xm, rest.dm_inv));
-    if (volume_gradient != nullptr) (*volume_gradient)[e] = VolumeGradient(rest, xe);
-  }
-  std::vector<double> vertex_pressure(nv(), 0.0);
-  double energy = 0.0;
-#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : energy)
-  for (int v = 0; v < nv(); ++v) {
-    const double V = nodal_rest_volume_[v];
-    if (!(V > 0)) continue;
-    double change = 0.0;
-    for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s)
-      change += 0.25 * volume_change[element_slots_[s] / 4];
-    const double K = nodal_stiffness_[v] / V, strain = change / V;  // J_a - 1
-    vertex_pressure[v] = K * strain;
-    energy += 0.5 * K * V * strain * strain;
-  }
-  element_pressure->resize(nt());
-  for (int e = 0; e < nt(); ++e) {
-    double p = 0.0;
-    for (int k = 0; k < 4; ++k) p += 0.25 * vertex_pressure[tets(e, k)];
-    (*element_pressure)[e] = p;
-  }
-  return energy;
-}
-
-void QuasiStaticSolver::FillNodalVolume(const std::vector<Vector12>& volume_gradient) {
-  double* values = matrix_.valuePtr();
-  const int* outer = matrix_.outerIndexPtr();
-  const int* inner = matrix_.innerIndexPtr();
-  const Tets& tets = model_.tets();
-  std::vector<std::pair<int, Eigen::Vector3d>> w;  // star vertex, d v_a / d x_vertex
-  for (int v = 0; v < nv(); ++v) {
-    const double V = nodal_rest_volume_[v];
-    if (!(V > 0)) continue;
-    w.clear();
-    for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
-      const int e = element_slots_[s] / 4;
-      for (int k = 0; k < 4; ++k) {
-        const int u = tets(e, k);
-        auto it = std::find_if(w.begin(), w.end(), [u](const auto& p) { return p.first == u; });
-        if (it == w.end()) {
-          w.emplace_back(u, Eigen::Vector3d::Zero());
-          it = w.end() - 1;
-        }
-        it->second += 0.25 * volume_gradient[e].segment<3>(3 * k);
-      }
-    }
-    const double scale = nodal_stiffness_[v] / (V * V);  // K_a / V_a
-    for (const auto& [p, gp] : w) {
-      for (const auto& [q, gq] : w) {
-        for (int j = 0; j < 3; ++j) {
-          const int c = free_index_[3 * q + j];
-          if (c < 0) continue;
-          for (int i = 0; i < 3; ++i) {
-            const int r = free_index_[3 * p + i];
-            if (r < c) continue;
-            const int* pos = std::lower_bound(inner + outer[c], inner + outer[c + 1], r);
-            values[pos - inner] += scale * gp(i) * gq(j);
-          }
-        }
-      }
+      for (int k = 0; k < 4; ++k) xm.col(k) = x.row(tets(e, k)).transpose();
+      rotations_[e] = PolarRotation(DeformationGradient(xm, model_.rest(e).dm_inv));
     }
   }
-}
-
-void QuasiStaticSolver::GatherGradient(const std::vector<Vector12>& element_force,
-                                       Eigen::VectorXd* gradient) const {
-  gradient->resize(3 * nv());
-#pragma omp parallel for schedule(static) num_threads(threads_)
-  for (int v = 0; v < nv(); ++v) {
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    for (int s = element_offsets_[v]; s < element_offsets_[v + 1]; ++s) {
-      const int slot = element_slots_[s];
-      g -= element_force[slot / 4].segment<3>(3 * (slot % 4));
-    }
-    gradient->segment<3>(3 * v) = g;
+  Eigen::VectorXd gradient;
+  assembler_.AssembleSecondOrder(energy_, x, CurvatureOf(kind), /*with_hessian=*/true, &gradient);
+  if (nodal_) {
+    nodal_->AddHessian(x, kind == ElementMatrix::kExact ? energy::Curvature::kExact : energy::Curvature::kProjected,
+                       &assembler_);
   }
-}
-
-Matrix12 QuasiStaticSolver::ElementMatrixOf(int e, const Vertices& x,
-                                            const std::vector<Eigen::Matrix3d>& rotations,
-                                            ElementMatrix kind) const {
-  const ElementRest& rest = model_.rest(e);
-  if (neo_hookean()) {
-    // No warped matrix here: kWarped is the projected tangent too.
-    return NeoHookeanTangent(rest, NeoHookeanKappa(rest, nodal_volume()), element_pressure_[e],
-                             model_.Gather(x, e),
-                             kind == ElementMatrix::kExact ? TangentProjection::kNone
-                                                           : TangentProjection::kPositiveSemiDefinite);
-  }
-  switch (kind) {
-    case ElementMatrix::kLinear:
-      return rest.K;
-    case ElementMatrix::kWarped:
-      return WarpedStiffness(rest, rotations[e]);
-    case ElementMatrix::kProjected:
-      return CorotationalTangent(rest, model_.Gather(x, e), TangentProjection::kPositiveSemiDefinite);
-    case ElementMatrix::kExact:
-      return CorotationalTangent(rest, model_.Gather(x, e), TangentProjection::kNone);
-  }
-  return rest.K;
-}
-
-void QuasiStaticSolver::Fill(const Vertices& x, const std::vector<Eigen::Matrix3d>& rotations,
-                             ElementMatrix kind) {
-  double* values = matrix_.valuePtr();
-  std::fill(values, values + matrix_.nonZeros(), 0.0);
-  std::vector<Vector12> volume_gradient;
-  if (nodal_volume()) NodalVolume(x, &element_pressure_, &volume_gradient);
-  for (const std::vector<int>& elements : colors_) {
-    const int count = static_cast<int>(elements.size());
-#pragma omp parallel for schedule(static) num_threads(threads_)
-    for (int i = 0; i < count; ++i) {
-      const int e = elements[i];
-      const Matrix12 K = ElementMatrixOf(e, x, rotations, kind);
-      const int* map = scatter_.data() + 144 * static_cast<size_t>(e);
-      for (int b = 0; b < 12; ++b)
-        for (int a = 0; a < 12; ++a)
-          if (map[12 * a + b] >= 0) values[map[12 * a + b]] += K(a, b);
-    }
-  }
-  if (nodal_volume()) FillNodalVolume(volume_gradient);
+  const double* from = assembler_.H().valuePtr();
+  double* to = matrix_.valuePtr();
+  for (size_t k = 0; k < reduced_at_.size(); ++k) to[k] = from[reduced_at_[k]];
 }
 
 std::vector<Eigen::Triplet<double>> QuasiStaticSolver::ReducedExtraHessian(const Vertices& x) const {
@@ -820,15 +655,14 @@ bool QuasiStaticSolver::Factorize(const std::vector<Eigen::Triplet<double>>& ext
   return true;
 }
 
-bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>& rotations,
-                                             const Vertices& x) {
+bool QuasiStaticSolver::AssembleAndFactorize(const Vertices& x) {
   if (linear() && factorized_for_linear_ && problem_.potential == nullptr) return true;  // K does not change
   const std::vector<Eigen::Triplet<double>> extra = ReducedExtraHessian(x);
   std::string error;
   if (!linear() && options_.tangent == ForwardTangent::kFull) {
     // The exact tangent when it is positive definite (near a stable equilibrium); a limit
     // point or a compressed state far from it makes it indefinite (or nearly singular).
-    Fill(x, rotations, ElementMatrix::kExact);
+    Fill(x, ElementMatrix::kExact);
     if (Factorize(extra, &error)) {
       element_matrix_ = ElementMatrix::kExact;
       return true;
@@ -841,7 +675,7 @@ bool QuasiStaticSolver::AssembleAndFactorize(const std::vector<Eigen::Matrix3d>&
   }
   // The projected tangent is the warped stiffness plus PSD terms: when it is singular, so
   // is the warped one, and the problem has a mechanism.
-  Fill(x, rotations, kind);
+  Fill(x, kind);
   if (!Factorize(extra, &error)) return Fail(ForwardTermination::kFactorizationFailed, error);
   element_matrix_ = kind;
   factorized_for_linear_ = linear();
@@ -852,12 +686,9 @@ void QuasiStaticSolver::EvaluateSystem(const Vertices& x, ForwardTangent tangent
                                        Eigen::VectorXd* residual,
                                        Eigen::SparseMatrix<double>* matrix,
                                        std::vector<int>* free_dofs) {
-  std::vector<Eigen::Matrix3d> rotations(nt());
-  std::vector<Vector12> forces(nt());
-  EvaluateElements(x, &rotations, &forces);
-  if (problem_.potential != nullptr) problem_.potential->Refresh(x);
   Eigen::VectorXd gradient;
-  GatherGradient(forces, &gradient);
+  Elastic(x, &gradient);
+  if (problem_.potential != nullptr) problem_.potential->Refresh(x);
   Extra(x, &gradient);
   *residual = gradient - full_load_;
   *free_dofs = free_dofs_;
@@ -872,7 +703,7 @@ void QuasiStaticSolver::EvaluateSystem(const Vertices& x, ForwardTangent tangent
            : tangent == ForwardTangent::kProjected ? ElementMatrix::kProjected
                                                    : ElementMatrix::kExact;
   }
-  Fill(x, rotations, kind);
+  Fill(x, kind);
   SparseMatrix lower = matrix_;
   const std::vector<Eigen::Triplet<double>> extra = ReducedExtraHessian(x);
   if (!extra.empty()) {
@@ -920,13 +751,13 @@ void QuasiStaticSolver::ScatterFree(const Eigen::VectorXd& reduced, double alpha
 bool QuasiStaticSolver::LineSearch(const Vertices& x, const Eigen::VectorXd& step, double slope,
                                    double potential, double residual_norm,
                                    const Eigen::VectorXd& load, bool may_relax, double* alpha,
-                                   bool* relaxed, Trial* trial) const {
+                                   bool* relaxed, Trial* trial) {
   *relaxed = false;
   Eigen::VectorXd trial_gradient;
   while (*alpha >= options_.min_step) {
     trial->x = x;
     ScatterFree(step, *alpha, &trial->x);
-    trial->elastic = EvaluateElements(trial->x, &trial->rotations, &trial->forces);
+    trial->elastic = Elastic(trial->x, &trial->gradient);
     trial->potential = Potential(trial->elastic, trial->x, load) + Extra(trial->x, nullptr);
     const double value = trial->potential;
     if (std::isfinite(value)) {
@@ -936,7 +767,7 @@ bool QuasiStaticSolver::LineSearch(const Vertices& x, const Eigen::VectorXd& ste
       const double noise = 1e-12 * (std::abs(trial->elastic) + std::abs(value)) +
                            std::numeric_limits<double>::min();
       if (value - potential <= noise) {
-        GatherGradient(trial->forces, &trial_gradient);
+        trial_gradient = trial->gradient;
         Extra(trial->x, &trial_gradient);
         if (FreeNorm(trial_gradient - load) < residual_norm) return true;
       }
@@ -959,11 +790,8 @@ bool QuasiStaticSolver::LineSearch(const Vertices& x, const Eigen::VectorXd& ste
 void QuasiStaticSolver::Run() {
   Vertices x = mesh_.x;
   for (int v : problem_.clamped) x.row(v) = mesh_.rest.row(v);
-  std::vector<Eigen::Matrix3d> rotations(nt());
-  std::vector<Vector12> forces(nt());
+  Eigen::VectorXd elastic_gradient;  // of the elastic energy at x
   Trial trial;
-  trial.rotations.resize(nt());
-  trial.forces.resize(nt());
   Eigen::VectorXd gradient, residual(3 * nv()), load(3 * nv());
   Eigen::VectorXd rhs(free_dofs_.size()), step(free_dofs_.size());
   // The watchdog (Chamberlain et al. 1982): when the full Newton step raises the potential,
@@ -979,8 +807,7 @@ void QuasiStaticSolver::Run() {
     bool active = false;
     int steps = 0;  // iterations since the reference
     Vertices x;
-    std::vector<Eigen::Matrix3d> rotations;
-    std::vector<Vector12> forces;
+    Eigen::VectorXd gradient;
     double elastic = 0.0, potential = 0.0, residual_norm = 0.0;
     Eigen::VectorXd step;
     double slope = 0.0;
@@ -1019,16 +846,10 @@ void QuasiStaticSolver::Run() {
         moved = moved || delta.row(p.first).squaredNorm() > 0;
       }
       if (moved && !free_dofs_.empty()) {
-        EvaluateElements(x, &rotations, &forces);
-        if (!AssembleAndFactorize(rotations, x)) return fail_step();
-        // The coupling with the matrix just factorized.
-        Eigen::VectorXd coupling = Eigen::VectorXd::Zero(3 * nv());
-        for (int e = 0; e < nt(); ++e) {
-          const Vector12 de = model_.Gather(delta, e);
-          if (de.squaredNorm() == 0) continue;
-          const Vector12 fe = ElementMatrixOf(e, x, rotations, element_matrix_) * de;
-          for (int k = 0; k < 4; ++k) coupling.segment<3>(3 * model_.tets()(e, k)) += fe.segment<3>(3 * k);
-        }
+        if (!AssembleAndFactorize(x)) return fail_step();
+        // The coupling with the matrix just factorized (the assembler's, over all DOFs).
+        const Eigen::Map<const Eigen::VectorXd> moved_dofs(delta.data(), 3 * nv());
+        const Eigen::VectorXd coupling = assembler_.H() * moved_dofs;
         for (size_t i = 0; i < free_dofs_.size(); ++i) rhs(i) = -coupling(free_dofs_[i]);
         step = factorization_.solve(rhs);
         if (step.allFinite()) ScatterFree(step, 1.0, &x);
@@ -1036,8 +857,8 @@ void QuasiStaticSolver::Run() {
       x += delta;
     }
 
-    double elastic = EvaluateElements(x, &rotations, &forces);
-    GatherGradient(forces, &gradient);
+    double elastic = Elastic(x, &elastic_gradient);
+    gradient = elastic_gradient;
     residual = gradient - load;
     potential = Potential(elastic, x, load);
     residual_norm = FreeNorm(residual);
@@ -1054,7 +875,7 @@ void QuasiStaticSolver::Run() {
     for (int iteration = 0;; ++iteration) {
       if (problem_.potential != nullptr) {  // e.g. contacts: refreshed per Newton iteration
         problem_.potential->Refresh(x);
-        GatherGradient(forces, &gradient);
+        gradient = elastic_gradient;
         potential = Potential(elastic, x, load) + Extra(x, &gradient);
         residual = gradient - load;
         residual_norm = FreeNorm(residual);
@@ -1083,7 +904,7 @@ void QuasiStaticSolver::Run() {
       }
       if (iteration >= options_.max_iterations) break;
 
-      if (!AssembleAndFactorize(rotations, x)) return fail_step();
+      if (!AssembleAndFactorize(x)) return fail_step();
       ++record.iterations;
       step_tangent = element_matrix_ == ElementMatrix::kExact       ? ForwardTangent::kFull
                      : element_matrix_ == ElementMatrix::kProjected ? ForwardTangent::kProjected
@@ -1116,8 +937,7 @@ void QuasiStaticSolver::Run() {
           watch.active = true;
           watch.steps = 0;
           watch.x = x;
-          watch.rotations = rotations;
-          watch.forces = forces;
+          watch.gradient = elastic_gradient;
           watch.elastic = elastic;
           watch.potential = potential;
           watch.residual_norm = residual_norm;
@@ -1126,10 +946,10 @@ void QuasiStaticSolver::Run() {
           watch.full_step_potential = trial.potential;
         }
       }
-      Accept(&trial, &x, &rotations, &forces);
+      Accept(&trial, &x, &elastic_gradient);
       elastic = trial.elastic;
       potential = trial.potential;
-      GatherGradient(forces, &gradient);
+      gradient = elastic_gradient;
       Extra(x, &gradient);
       residual = gradient - load;
       residual_norm = FreeNorm(residual);
@@ -1145,8 +965,7 @@ void QuasiStaticSolver::Run() {
           watch.active = false;
           ++record.watchdog_restarts;
           x = watch.x;
-          rotations = watch.rotations;
-          forces = watch.forces;
+          elastic_gradient = watch.gradient;
           elastic = watch.elastic;
           potential = watch.potential;
           residual_norm = watch.residual_norm;
@@ -1158,17 +977,17 @@ void QuasiStaticSolver::Run() {
           alpha = start;
           if (!LineSearch(x, watch.step, watch.slope, potential, residual_norm, load,
                           /*may_relax=*/false, &alpha, &relaxed, &trial)) {
-            GatherGradient(forces, &gradient);
+            gradient = elastic_gradient;
             Extra(x, &gradient);
             residual = gradient - load;
             residual_norm = FreeNorm(residual);
             step_result = ForwardTermination::kLineSearchFailed;
             break;
           }
-          Accept(&trial, &x, &rotations, &forces);
+          Accept(&trial, &x, &elastic_gradient);
           elastic = trial.elastic;
           potential = trial.potential;
-          GatherGradient(forces, &gradient);
+          gradient = elastic_gradient;
           Extra(x, &gradient);
           residual = gradient - load;
           residual_norm = FreeNorm(residual);

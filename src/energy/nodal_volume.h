@@ -1,0 +1,58 @@
+// The volumetric energy of the neo-Hookean element on the vertices instead of on each element
+// (femreg/fem.h: the average nodal pressure tetrahedron, against the locking of linear
+// tetrahedra as nu -> 0.5):
+//   N(x) = sum_a K_a V_a / 2 (J_a - 1)^2,   J_a = v_a(x) / V_a,
+// V_a a quarter of the rest volumes of the elements around vertex a, v_a the same of their
+// current volumes, K_a their volume-weighted bulk modulus. Its elements then carry the
+// deviatoric energy only (NeoHookeanElement::deviatoric). A vertex's volume couples every
+// vertex of the elements around it, a stencil of no fixed size, so this term is not a block
+// type: it adds its value, gradient and Hessian next to the assembler's (energy/assembler.h).
+//   dN/dx = sum_e p_e dv_e/dx,  p_e = sum of its vertices' K_a (J_a - 1) / 4 (a pressure, Pa),
+//   d2N/dx2 = sum_a K_a / V_a (dv_a/dx)(dv_a/dx)^T + sum_e p_e d2v_e/dx2.
+// The first sum is positive semi-definite; the second, V_e B^T (p_e H_J) B per element (H_J
+// the Hessian of det F), is indefinite, and its projection clamps the negative eigenvalues
+// of p_e H_J.
+#ifndef FEMREG_ENERGY_NODAL_VOLUME_H_
+#define FEMREG_ENERGY_NODAL_VOLUME_H_
+
+#include <Eigen/Core>
+#include <utility>
+#include <vector>
+
+#include "energy/assembler.h"
+#include "energy/term.h"
+#include "femreg/fem.h"
+#include "femreg/mesh.h"
+
+namespace femreg {
+namespace energy {
+
+class NodalVolume {
+ public:
+  // The elements (vertex indices into the positions) and their rest data, which must
+  // outlive this term.
+  void Build(const Tets& tets, const std::vector<const ElementRest*>& rests, int num_vertices,
+             int threads);
+  // The vertex pairs the Hessian couples (for Assembler::Prepare).
+  std::vector<std::pair<int, int>> Pairs() const;
+  // N(x); adds dN/dx to *gradient (3 #V) when not null.
+  double Evaluate(const Vertices& x, Eigen::VectorXd* gradient) const;
+  // Adds d2N/dx2 at x (or its projection) into the assembler's H.
+  void AddHessian(const Vertices& x, Curvature curvature, Assembler* assembler) const;
+
+ private:
+  // Per element v_e - V_e and, if not null, dv_e/dx; per element its pressure p_e. Returns N.
+  double Pressures(const Vertices& x, std::vector<double>* pressure,
+                   std::vector<Vector12>* volume_gradient) const;
+  Tets tets_;
+  std::vector<const ElementRest*> rests_;
+  int num_vertices_ = 0;
+  int threads_ = 1;
+  std::vector<double> rest_volume_, stiffness_;  // per vertex: V_a, K_a V_a
+  std::vector<int> element_offsets_, element_slots_;  // vertex -> 4 e + k of its elements
+};
+
+}  // namespace energy
+}  // namespace femreg
+
+#endif  // FEMREG_ENERGY_NODAL_VOLUME_H_
