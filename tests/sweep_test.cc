@@ -132,6 +132,13 @@ TEST_F(SceneOverrideTest, ErrorsNameTheKeyAndTheSet) {
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("gravity"), std::string::npos) << status.message();
   EXPECT_EQ(status.message().find("--set"), std::string::npos) << status.message();
+  // A syntax error in the file: the message LoadScene gives (file, line and column).
+  std::ofstream(path_) << std::string(kScene) + "gravity: [0, 0\n";
+  Scene plain;
+  const Status without_sets = LoadScene(path_, &plain);
+  ASSERT_FALSE(without_sets.ok());
+  EXPECT_EQ(without_sets.message().rfind(path_ + ":", 0), 0u) << without_sets.message();
+  EXPECT_EQ(Load({"registration.solver.backend=fast"}, &scene).message(), without_sets.message());
 }
 
 TEST(SelectSettings, ByNameOrIndexInSweepOrder) {
