@@ -24,6 +24,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "mesh/disjoint_sets.h"
 #include "test_util.h"
 
 namespace femreg {
@@ -57,6 +58,22 @@ Vertices Bend(const Vertices& rest, double kappa, double stretch) {
     x(v, 2) = (1.0 / kappa) - std::cos(kappa * s) * (1.0 / kappa - z) + 0.01;
   }
   return x;
+}
+
+// The one union-find (mesh/disjoint_sets.h; fracture, meshing and ConnectedPieces use it):
+// a set is named by its smallest member whatever the order of the unions.
+TEST(DisjointSets, ASetIsNamedByItsSmallestMember) {
+  DisjointSets sets(7);
+  sets.Unite(5, 3);
+  sets.Unite(6, 5);
+  sets.Unite(4, 1);
+  sets.Unite(6, 4);
+  EXPECT_EQ(sets.size(), 7);
+  for (int i : {1, 3, 4, 5, 6}) EXPECT_EQ(sets.Find(i), 1) << i;
+  EXPECT_EQ(sets.Find(0), 0);
+  EXPECT_EQ(sets.Find(2), 2);
+  sets.Unite(2, 0);
+  EXPECT_EQ(sets.Find(2), 0);
 }
 
 TEST(SeparationTensor, ZeroAtRestAndUnderRigidMotion) {

@@ -47,6 +47,7 @@ const std::map<std::string, int> kRank = {
 // Public headers (include/femreg/) by module.
 const std::map<std::string, std::string> kHeaderModule = {
     {"status.h", "mesh"},           {"mesh.h", "mesh"},
+    {"version.h", "mesh"},
     {"io.h", "io"},                 {"geometry.h", "geometry"},
     {"fem.h", "fem"},               {"forward.h", "forward"},
     {"energy.h", "energy"},         {"solver.h", "solvers"},

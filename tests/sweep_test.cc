@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "femreg/experiment.h"
+#include "femreg/version.h"
 #include "femreg_test_config.h"
 #include "test_util.h"
 
@@ -131,6 +132,13 @@ TEST_F(SceneOverrideTest, ErrorsNameTheKeyAndTheSet) {
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("gravity"), std::string::npos) << status.message();
   EXPECT_EQ(status.message().find("--set"), std::string::npos) << status.message();
+  // A syntax error in the file: the message LoadScene gives (file, line and column).
+  std::ofstream(path_) << std::string(kScene) + "gravity: [0, 0\n";
+  Scene plain;
+  const Status without_sets = LoadScene(path_, &plain);
+  ASSERT_FALSE(without_sets.ok());
+  EXPECT_EQ(without_sets.message().rfind(path_ + ":", 0), 0u) << without_sets.message();
+  EXPECT_EQ(Load({"registration.solver.backend=fast"}, &scene).message(), without_sets.message());
 }
 
 TEST(SelectSettings, ByNameOrIndexInSweepOrder) {
@@ -270,7 +278,7 @@ TEST(SweepCli, SetOnRegisterAndSimulateIsCheckedLikeTheFile) {
   EXPECT_NE(json.find("\"load_steps\": 3"), std::string::npos) << json;
   const nlohmann::json parsed = nlohmann::json::parse(json);
   EXPECT_EQ(parsed["overrides"], nlohmann::json::array({"forward.load_steps=3"}));
-  EXPECT_FALSE(parsed["femreg_version"].get<std::string>().empty());
+  EXPECT_EQ(parsed["femreg_version"], Version());
 }
 
 // One frame registered with ground truth: the VTU carries the per-vertex error, the cloud
@@ -301,10 +309,11 @@ TEST(SweepCli, RegisterWritesErrorFieldCloudAndProvenance) {
     EXPECT_TRUE(s.contains(key)) << key;
   }
   EXPECT_EQ(s["frames_done"], 2);
-  EXPECT_FALSE(s["femreg_version"].get<std::string>().empty());
+  EXPECT_EQ(s["femreg_version"], Version());
   EXPECT_EQ(s["backend"], "ceres");
   EXPECT_EQ(s["backends_used"], nlohmann::json::array({"ceres"}));
   const nlohmann::json& p = s["provenance"];
+  EXPECT_EQ(p["femreg_version"], Version());
   EXPECT_EQ(p["overrides"].size(), 2u);
   EXPECT_EQ(p["options"]["solver"]["max_outer_iterations"], 3);
   EXPECT_EQ(p["options"]["data"]["visibility"], true);  // from the scene file

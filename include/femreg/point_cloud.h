@@ -70,7 +70,8 @@ struct RawDepthImage {
 };
 
 // The camera's rotation, world to camera (rows: the image's x, y and optical axes):
-// p_camera = R (p - camera.position), the virtual camera's convention.
+// p_camera = R (p - camera.position). The one construction of the camera frame: depth
+// images are back-projected and the virtual camera (DepthSensor) renders through it.
 Eigen::Matrix3d CameraRotation(const CameraOptions& camera);
 
 // Reads a 16-bit single-channel (greyscale) PNG. Other bit depths or colour types are

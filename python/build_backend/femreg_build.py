@@ -10,9 +10,22 @@ offline with Debian's packages (scikit-build-core is not in Debian 12). The back
      libfemreg with an $ORIGIN rpath) into a staging folder,
   4. writes that folder as a wheel (zip with METADATA, WHEEL and RECORD).
 
+Editable installs (`pip install -e .`, PEP 660) do steps 1 and 2 only and install no copy:
+the wheel holds a .pth file and a small import hook (_femreg_editable.py) that make
+`import femreg` load the package from the source folder python/femreg and its compiled
+module _femreg from the CMake build folder. Edits to the Python files act at once; after a
+C++ change rebuild the module in that folder (`cmake --build build/python-wheel --target
+femreg_python`) or run the pip command again. The build folder must stay where it is. A
+femreg earlier on sys.path (PYTHONPATH, the working folder) wins over the editable one, as
+it would over an installed copy.
+
+The version is read from the project(femreg VERSION x.y.z) line of CMakeLists.txt, the one
+place it is written (the module reports the same as femreg.__version__).
+
 Settings (environment): FEMREG_WHEEL_BUILD_DIR (default build/python-wheel in the source
-tree, kept between builds so a rebuild is incremental), FEMREG_WHEEL_JOBS (parallel build
-jobs, default the CPU count), FEMREG_CMAKE_ARGS (extra arguments to the configure step).
+tree, kept between builds so a rebuild is incremental; also the editable install's build),
+FEMREG_WHEEL_JOBS (parallel build jobs, default the CPU count), FEMREG_CMAKE_ARGS (extra
+arguments to the configure step).
 """
 
 import base64
@@ -70,12 +83,15 @@ def _run(command, **kwargs):
     subprocess.run([str(c) for c in command], check=True, **kwargs)
 
 
-def _build_and_stage(stage):
-    """Builds with CMake and installs the package folder into stage/femreg."""
+def _build_dir():
+    return pathlib.Path(os.environ.get("FEMREG_WHEEL_BUILD_DIR",
+                                       SOURCE_DIR / "build" / "python-wheel")).resolve()
+
+
+def _build(build_dir):
+    """Configures and builds the module target (and libfemreg) in build_dir."""
     if shutil.which("cmake") is None:
         raise RuntimeError("femreg: cmake is not installed (run tools/setup.sh as root)")
-    build_dir = pathlib.Path(os.environ.get("FEMREG_WHEEL_BUILD_DIR",
-                                            SOURCE_DIR / "build" / "python-wheel"))
     jobs = os.environ.get("FEMREG_WHEEL_JOBS", str(os.cpu_count() or 1))
     configure = ["cmake", "-S", SOURCE_DIR, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
                  "-DFEMREG_BUILD_TESTS=OFF", "-DFEMREG_BUILD_TOOLS=OFF",
@@ -86,6 +102,12 @@ def _build_and_stage(stage):
     configure += shlex.split(os.environ.get("FEMREG_CMAKE_ARGS", ""))
     _run(configure)
     _run(["cmake", "--build", build_dir, "--target", "femreg_python", "-j", jobs])
+
+
+def _build_and_stage(stage):
+    """Builds with CMake and installs the package folder into stage/femreg."""
+    build_dir = _build_dir()
+    _build(build_dir)
     _run(["cmake", "--install", build_dir, "--component", "python", "--prefix", stage])
     package = pathlib.Path(stage) / NAME
     if not (package / "__init__.py").exists() or not list(package.glob("_femreg*.so")):
@@ -101,6 +123,73 @@ def _record_line(arcname, data):
 
 def _dist_info_name():
     return f"{NAME}-{_version()}.dist-info"
+
+
+def _editable_finder(source, built):
+    """The import hook of an editable install: femreg from source, _femreg from built."""
+    return f'''"""femreg installed in editable mode (pip install -e; made by femreg_build.py).
+
+The package is the source folder SOURCE; its compiled module _femreg is found in BUILT, the
+CMake build folder. After a C++ change: cmake --build <that build folder> --target
+femreg_python.
+"""
+import importlib.abc
+import importlib.util
+import os
+import sys
+
+NAME = {NAME!r}
+SOURCE = {str(source)!r}
+BUILT = {str(built)!r}
+_SITE = os.path.dirname(os.path.realpath(__file__))
+
+
+class _Finder(importlib.abc.MetaPathFinder):
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != NAME:
+            return None
+        # Where an installed copy would be: a femreg in a sys.path entry before this site
+        # folder (PYTHONPATH, the working folder) wins, and this one wins over later entries.
+        for entry in sys.path:
+            folder = os.path.realpath(entry or os.getcwd())
+            if folder == _SITE:
+                break
+            if os.path.isfile(os.path.join(folder, NAME, "__init__.py")):
+                return None
+        return importlib.util.spec_from_file_location(
+            NAME, os.path.join(SOURCE, "__init__.py"), submodule_search_locations=[SOURCE, BUILT])
+
+
+def install():
+    if not any(isinstance(finder, _Finder) for finder in sys.meta_path):
+        sys.meta_path.insert(0, _Finder())
+'''
+
+
+def _write_wheel(wheel_directory, files):
+    """Writes files ({arcname: (bytes, mode)}) and the dist-info as the wheel; its name."""
+    wheel_name = f"{NAME}-{_version()}-{_tag()}.whl"
+    records = []
+    target = pathlib.Path(wheel_directory) / wheel_name
+    partial = target.with_suffix(".part")
+    with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as wheel:
+        for arcname, (data, mode) in files.items():
+            info = zipfile.ZipInfo(arcname)
+            info.external_attr = mode << 16
+            info.compress_type = zipfile.ZIP_DEFLATED
+            wheel.writestr(info, data)
+            records.append(_record_line(arcname, data))
+        dist_info = _dist_info_name()
+        for name, data in _dist_info_files().items():
+            wheel.writestr(f"{dist_info}/{name}", data)
+            records.append(_record_line(f"{dist_info}/{name}", data))
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerows(records)
+        writer.writerow([f"{dist_info}/RECORD", "", ""])
+        wheel.writestr(f"{dist_info}/RECORD", out.getvalue())
+    os.replace(partial, target)  # no half-written wheel under the final name
+    return wheel_name
 
 
 def _dist_info_files():
@@ -130,36 +219,43 @@ def prepare_metadata_for_build_wheel(metadata_directory, config_settings=None):
 
 
 def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
-    wheel_name = f"{NAME}-{_version()}-{_tag()}.whl"
     with tempfile.TemporaryDirectory(prefix="femreg-wheel-") as stage:
         package = _build_and_stage(stage)
-        records = []
-        target = pathlib.Path(wheel_directory) / wheel_name
-        partial = target.with_suffix(".part")
-        with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as wheel:
-            for path in sorted(package.rglob("*")):
-                if path.is_dir() or path.name.endswith(".pyc"):
-                    continue
-                # libfemreg.so.0 may be a symlink in the staging folder: store its contents.
-                data = path.read_bytes()
-                arcname = f"{NAME}/{path.relative_to(package).as_posix()}"
-                info = zipfile.ZipInfo(arcname)
-                info.external_attr = (0o755 if path.suffix == ".so" or ".so." in path.name
-                                      else 0o644) << 16
-                info.compress_type = zipfile.ZIP_DEFLATED
-                wheel.writestr(info, data)
-                records.append(_record_line(arcname, data))
-            dist_info = _dist_info_name()
-            for name, data in _dist_info_files().items():
-                wheel.writestr(f"{dist_info}/{name}", data)
-                records.append(_record_line(f"{dist_info}/{name}", data))
-            out = io.StringIO()
-            writer = csv.writer(out, lineterminator="\n")
-            writer.writerows(records)
-            writer.writerow([f"{dist_info}/RECORD", "", ""])
-            wheel.writestr(f"{dist_info}/RECORD", out.getvalue())
-        os.replace(partial, target)  # no half-written wheel under the final name
-    return wheel_name
+        files = {}
+        for path in sorted(package.rglob("*")):
+            if path.is_dir() or path.name.endswith(".pyc"):
+                continue
+            # libfemreg.so.0 may be a symlink in the staging folder: store its contents.
+            mode = 0o755 if path.suffix == ".so" or ".so." in path.name else 0o644
+            files[f"{NAME}/{path.relative_to(package).as_posix()}"] = (path.read_bytes(), mode)
+        return _write_wheel(wheel_directory, files)
+
+
+# ---- PEP 660 hooks (pip install -e) -----------------------------------------------------
+
+def get_requires_for_build_editable(config_settings=None):
+    return []
+
+
+def prepare_metadata_for_build_editable(metadata_directory, config_settings=None):
+    return prepare_metadata_for_build_wheel(metadata_directory, config_settings)
+
+
+def build_editable(wheel_directory, config_settings=None, metadata_directory=None):
+    """A wheel that points at the source package and the module built in the build folder."""
+    build_dir = _build_dir()
+    _build(build_dir)
+    source = SOURCE_DIR / "python" / NAME
+    built = build_dir / "python" / NAME
+    if not list(built.glob("_femreg*.so")):
+        raise RuntimeError(f"femreg: the CMake build did not produce {built}/_femreg*.so "
+                           "(is pybind11-dev installed? see the configure output above)")
+    files = {
+        "_femreg_editable.py": (_editable_finder(source, built).encode(), 0o644),
+        f"__editable__.{NAME}-{_version()}.pth": (b"import _femreg_editable; "
+                                                  b"_femreg_editable.install()\n", 0o644),
+    }
+    return _write_wheel(wheel_directory, files)
 
 
 def build_sdist(sdist_directory, config_settings=None):

@@ -17,6 +17,7 @@ option names raise ValueError.
 """
 
 from ._femreg import (  # noqa: F401  (the public API)
+    __version__,
     CameraOptions,
     DataTermOptions,
     Error,
@@ -45,5 +46,3 @@ from ._femreg import (  # noqa: F401  (the public API)
     write_point_cloud,
     write_vtu,
 )
-
-__version__ = "@PROJECT_VERSION@"

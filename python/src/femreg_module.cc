@@ -30,6 +30,7 @@
 #include "femreg/registration.h"
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
+#include "femreg/version.h"
 
 namespace py = pybind11;
 
@@ -347,6 +348,8 @@ PYBIND11_MODULE(_femreg, m) {
   using namespace femreg::python;   // NOLINT
   m.doc() = "femreg: physics-regularized non-rigid registration of tetrahedral meshes to "
             "point clouds (C++ core, pybind11 bindings).";
+  // The library's version (CMakeLists.txt's project() line): femreg.__version__.
+  m.attr("__version__") = femreg::Version();
 
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr p) {

@@ -3,7 +3,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -217,11 +216,7 @@ Status LoadSceneWithOverrides(const std::string& path, const std::vector<SceneOv
   } catch (const scene_internal::SceneError& e) {
     return Status::Error(Attribute(e.what(), overrides, paths));
   } catch (const YAML::Exception& e) {
-    std::ostringstream os;
-    os << path;
-    if (!e.mark.is_null()) os << ":" << e.mark.line + 1 << ":" << e.mark.column + 1;
-    os << ": " << e.msg;
-    return Status::Error(os.str());
+    return scene_internal::YamlErrorStatus(path, e);
   }
   *scene = std::move(parsed);
   return Status::Ok();

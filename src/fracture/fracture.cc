@@ -5,11 +5,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
+
+#include "mesh/disjoint_sets.h"
 
 namespace femreg {
 
@@ -151,24 +152,6 @@ namespace {
 
 // Working state of one batch of splits: elements are flagged instead of erased and the
 // vertex stars kept up to date, so indices stay put until the final compaction.
-// Disjoint sets over 0..n-1 with path halving; a union keeps the smaller root.
-class DisjointSets {
- public:
-  explicit DisjointSets(int n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
-  int Find(int i) {
-    while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
-    return i;
-  }
-  void Unite(int a, int b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
-  }
-
- private:
-  std::vector<int> parent_;
-};
-
 struct SplitState {
   TetMesh* mesh;
   std::vector<std::array<int, 4>> tets;
@@ -350,19 +333,17 @@ struct SplitState {
     auto& s = star[v];
     const int n = static_cast<int>(s.size());
     if (n < 2) return 0;
-    std::vector<int> parent(n);
-    std::iota(parent.begin(), parent.end(), 0);
-    std::function<int(int)> find = [&](int i) { return parent[i] == i ? i : parent[i] = find(parent[i]); };
+    DisjointSets sets(n);  // elements of v's star joined across their shared faces
     for (int a = 0; a < n; ++a) {
       for (int b = a + 1; b < n; ++b) {
         int shared = 0;
         for (int p : tets[s[a]])
           for (int q : tets[s[b]]) shared += (p == q);
-        if (shared >= 3) parent[find(a)] = find(b);
+        if (shared >= 3) sets.Unite(a, b);
       }
     }
     std::map<int, std::vector<int>> groups;  // root -> elements, ordered by first element
-    for (int a = 0; a < n; ++a) groups[find(a)].push_back(s[a]);
+    for (int a = 0; a < n; ++a) groups[sets.Find(a)].push_back(s[a]);
     if (groups.size() < 2) return 0;
     // Keep the group with the smallest element on v, deterministic whatever the star order.
     std::vector<std::vector<int>> list;

@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "femreg/geometry.h"  // AabbTree and the exact closest-point queries
+#include "mesh/disjoint_sets.h"
 
 namespace femreg {
 namespace internal {
@@ -28,32 +29,6 @@ constexpr double kAngleTolerance = 1e-9;
 constexpr double kDegenerateTolerance = 1e-10;
 // Examples listed per problem.
 constexpr int kMaxExamples = 5;
-
-class DisjointSets {
- public:
-  explicit DisjointSets(int n) : parent_(static_cast<size_t>(n)) {
-    for (int i = 0; i < n; ++i) parent_[static_cast<size_t>(i)] = i;
-  }
-  int Find(int i) {
-    while (parent_[static_cast<size_t>(i)] != i) {
-      int& p = parent_[static_cast<size_t>(i)];
-      p = parent_[static_cast<size_t>(p)];
-      i = p;
-    }
-    return i;
-  }
-  // The smaller root stays the root, so a set is named by its smallest member.
-  void Union(int a, int b) {
-    a = Find(a);
-    b = Find(b);
-    if (a == b) return;
-    if (a > b) std::swap(a, b);
-    parent_[static_cast<size_t>(b)] = a;
-  }
-
- private:
-  std::vector<int> parent_;
-};
 
 std::string Fmt(double v) {
   char buf[32];
@@ -96,7 +71,7 @@ std::vector<int> MergeGroups(const Vertices& V, double d, const Eigen::Vector3d&
             auto it = grid.find({cell[0] + dx, cell[1] + dy, cell[2] + dz});
             if (it == grid.end()) continue;
             for (int j : it->second) {
-              if ((Row(V, j) - p).norm() <= d) sets.Union(i, j);
+              if ((Row(V, j) - p).norm() <= d) sets.Unite(i, j);
             }
           }
         }
@@ -107,7 +82,7 @@ std::vector<int> MergeGroups(const Vertices& V, double d, const Eigen::Vector3d&
     std::map<std::array<double, 3>, int> seen;
     for (int i = 0; i < n; ++i) {
       auto it = seen.emplace(std::array<double, 3>{V(i, 0), V(i, 1), V(i, 2)}, i);
-      if (!it.second) sets.Union(i, it.first->second);
+      if (!it.second) sets.Unite(i, it.first->second);
     }
   }
   std::vector<int> rep(static_cast<size_t>(n));
@@ -446,7 +421,7 @@ Status CheckSurface(const Vertices& V, const Triangles& F, double merge_distance
           if (it == seen.end()) {
             seen.emplace_back(w, l);
           } else {
-            fans.Union(l, it->second);
+            fans.Unite(l, it->second);
           }
         }
       }
@@ -496,7 +471,7 @@ Status CheckSurface(const Vertices& V, const Triangles& F, double merge_distance
 
   // Shells: the components of triangles connected across edges.
   DisjointSets components(nf);
-  for (const auto& e : edges) components.Union(e.second.t[0], e.second.t[1]);
+  for (const auto& e : edges) components.Unite(e.second.t[0], e.second.t[1]);
   std::map<int, int> shell_of_root;
   for (int t = 0; t < nf; ++t) {
     auto it = shell_of_root.emplace(components.Find(t), static_cast<int>(out->shells.size()));

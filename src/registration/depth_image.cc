@@ -173,8 +173,8 @@ bool DepthImageOptions::IsValid(std::string* error) const {
 }
 
 Eigen::Matrix3d CameraRotation(const CameraOptions& c) {
-  // The virtual camera's construction (DepthSensor): z along the optical axis, image y
-  // against the part of `up` orthogonal to it, x = y cross z.
+  // z along the optical axis, image y (pointing down) against the part of `up` orthogonal
+  // to it, x = y cross z. The virtual camera (DepthSensor) renders through this frame too.
   Eigen::Vector3d z = c.target - c.position;
   if (z.norm() <= 0) z = Eigen::Vector3d::UnitZ();
   z.normalize();

@@ -250,12 +250,7 @@ Status ParseScene(const std::string& yaml_text, const std::string& source,
   } catch (const scene_internal::SceneError& e) {
     return Status::Error(e.what());
   } catch (const YAML::Exception& e) {
-    // Syntax errors: yaml-cpp's mark is 0-based.
-    std::ostringstream os;
-    os << source;
-    if (!e.mark.is_null()) os << ":" << e.mark.line + 1 << ":" << e.mark.column + 1;
-    os << ": " << e.msg;
-    return Status::Error(os.str());
+    return scene_internal::YamlErrorStatus(source, e);
   }
   *scene = std::move(parsed);
   return Status::Ok();

@@ -12,6 +12,15 @@ namespace scene_internal {
 
 std::string Quote(const std::string& s) { return internal::Quoted(s); }
 
+Status YamlErrorStatus(const std::string& source, const YAML::Exception& e) {
+  std::ostringstream os;
+  os << source;
+  // yaml-cpp's mark is 0-based.
+  if (!e.mark.is_null()) os << ":" << e.mark.line + 1 << ":" << e.mark.column + 1;
+  os << ": " << e.msg;
+  return Status::Error(os.str());
+}
+
 int EditDistance(const std::string& a, const std::string& b) {
   std::vector<int> row(b.size() + 1);
   for (size_t j = 0; j <= b.size(); ++j) row[j] = static_cast<int>(j);

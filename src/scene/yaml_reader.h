@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "femreg/status.h"
+
 namespace femreg {
 namespace scene_internal {
 
@@ -20,6 +22,10 @@ class SceneError : public std::runtime_error {
  public:
   explicit SceneError(const std::string& message) : std::runtime_error(message) {}
 };
+
+// What yaml-cpp threw (a syntax error in the document) as a Status naming the source and,
+// when yaml-cpp knows it, the 1-based line and column: "beam.yaml:3:7: illegal map value".
+Status YamlErrorStatus(const std::string& source, const YAML::Exception& e);
 
 // Edit distance, for "did you mean" suggestions.
 int EditDistance(const std::string& a, const std::string& b);

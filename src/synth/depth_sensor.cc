@@ -5,6 +5,7 @@
 #include <random>
 #include <sstream>
 
+#include "femreg/point_cloud.h"  // CameraRotation
 #include "femreg/synth.h"
 
 namespace femreg {
@@ -30,18 +31,7 @@ bool DepthSensorOptions::IsValid(std::string* error) const {
 }
 
 DepthSensor::DepthSensor(const DepthSensorOptions& options) : options_(options) {
-  const CameraOptions& c = options.camera;
-  Eigen::Vector3d z = c.target - c.position;
-  if (z.norm() <= 0) z = Eigen::Vector3d::UnitZ();
-  z.normalize();
-  // Image y points down: against the projection of `up` orthogonal to the axis.
-  Eigen::Vector3d y = -(c.up - c.up.dot(z) * z);
-  if (y.norm() < 1e-9) y = z.unitOrthogonal();
-  y.normalize();
-  const Eigen::Vector3d x = y.cross(z);
-  R_.row(0) = x.transpose();
-  R_.row(1) = y.transpose();
-  R_.row(2) = z.transpose();
+  R_ = CameraRotation(options.camera);  // the same frame the depth images are read in
 }
 
 bool DepthSensor::Project(const Eigen::Vector3d& p, double* u, double* v, double* z) const {

@@ -19,10 +19,6 @@
 #include "femreg/experiment.h"
 #include "femreg/io.h"
 
-#ifndef FEMREG_VERSION
-#define FEMREG_VERSION "unknown"
-#endif
-
 namespace fs = std::filesystem;
 
 namespace femreg {
@@ -159,8 +155,6 @@ void ProgressBar::Update(int done, const std::string& note) {
 void ProgressBar::Finish() {
   if (enabled_ && tty_) std::fprintf(stderr, "\n");
 }
-
-const char* Version() { return FEMREG_VERSION; }
 
 void AddSetOption(CLI::App* cmd, std::vector<std::string>* sets) {
   cmd->add_option("--set", *sets,

@@ -63,9 +63,6 @@ struct FractureFrame {
 void PrintFractureReport(const std::vector<FractureFrame>& frames, const std::string& truth_dir,
                          bool counts_vertices = false);
 
-// femreg's version ("0.1.0"), from the project's CMake version.
-const char* Version();
-
 // --set key.path=value (repeatable) on a subcommand: scene overrides for LoadSceneWithSets.
 void AddSetOption(CLI::App* cmd, std::vector<std::string>* sets);
 // LoadScene with the --set overrides applied to the YAML before the scene is parsed

@@ -7,6 +7,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "femreg/version.h"
 
 namespace {
 
@@ -24,7 +25,7 @@ int main(int argc, char** argv) {
       "femreg - physics-regularized non-rigid registration of tetrahedral meshes to point "
       "clouds.\nRun 'femreg SUBCOMMAND --help' for the options of one subcommand."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "femreg 0.1.0");
+  app.set_version_flag("--version", std::string("femreg ") + femreg::Version());
   femreg::cli::RegisterCommands(&app);
   // The subcommands run inside parse(). Readers refuse what a file cannot hold before they
   // allocate, and return what they cannot read as a Status; what still escapes as an

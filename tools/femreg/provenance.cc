@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "cli_util.h"
+#include "femreg/version.h"
 
 namespace femreg {
 namespace cli {

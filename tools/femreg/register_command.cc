@@ -36,6 +36,7 @@
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
+#include "femreg/version.h"
 #include "mesh_warnings.h"
 
 namespace fs = std::filesystem;

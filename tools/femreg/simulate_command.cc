@@ -21,6 +21,7 @@
 #include "femreg/forward.h"
 #include "femreg/io.h"
 #include "femreg/scene.h"
+#include "femreg/version.h"
 
 namespace femreg {
 namespace cli {
