@@ -3,7 +3,7 @@
 // divided 4 (729 vertices, the bundled mesh), 6 (2197 / 10368 tetrahedra) and 7 (3375 /
 // 16464): the "3k-vertex organ against 500-point clouds" of the speed targets. Run from a
 // build with -DFEMREG_BUILD_BENCHMARKS=ON:  bench/femreg_registration_bench --benchmark_repetitions=3
-// (the organ cases write their sequences, ~20 s each, into the temporary folder first).
+// (the organ cases write their sequences into the temporary folder first, which takes a while).
 #include <benchmark/benchmark.h>
 
 #include <cstdio>

@@ -96,10 +96,10 @@ const Case& CaseFor(int vertices, int points) {
 // One iteration: a new tracker (not timed) and kFrames frames; the time per frame is the
 // reported time / kFrames, items_per_second the frames per second. Arguments: vertices,
 // points, preconditioner (0: auto, the default; 1: factor; 2: multigrid), data weight (0:
-// per pair, the default 200 N/m; 1: per area, the setting README "The data weight" suggests:
+// per pair, the default 200 N/m; 1: per area, the setting docs/theory/data-weight.md suggests:
 // data_per_area 1.15e7 with model_to_cloud_share 0.1; 2: per pair at 36 N/m, what that
 // per-area setting gives each point of these 2000-point clouds on the 64k-vertex box, where
-// its area-per-point estimate is one triangle's area: README "Cost against size").
+// its area-per-point estimate is one triangle's area: docs/performance/scaling.md).
 void Track(benchmark::State& state) {
   const int vertices = static_cast<int>(state.range(0));
   const int points = static_cast<int>(state.range(1));
@@ -133,7 +133,7 @@ void Track(benchmark::State& state) {
     for (size_t f = 0; f < c.clouds.size(); ++f) {
       femreg::FrameSummary s;
       tracker->Track(c.clouds[f], &s);
-      error += (tracker->vertices(0) - c.truth[f]).rowwise().norm().mean();  // < 1 ms at 70k
+      error += (tracker->vertices(0) - c.truth[f]).rowwise().norm().mean();  // negligible beside a frame
       phase["correspondences"] += s.time.correspondences;
       phase["rotations"] += s.time.rotations;
       phase["solve"] += s.time.solve;

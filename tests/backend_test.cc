@@ -407,8 +407,9 @@ TEST(FastBackend, AutoTakesMultigridWhereTheFactorFillsIn) {
       ASSERT_GT(s->mesh.num_vertices(), 5000);
       EXPECT_GE(report.hierarchies, 1);
       EXPECT_EQ(report.factorizations, 0);
-      // Even with a switch its fill clears by far (8.2 against 2), the analysis: too small
-      // a mesh for the estimate to pay.
+      // Even with a switch its fill clears by far
+      // (docs/notes/2026-11-28-figures-from-code-comments.md), the analysis: too small a mesh for
+      // the estimate to pay.
       options.multigrid_fill = 2.0;
       Vertices y = s->mesh.rest;
       const SolveReport with = MakeBackend(options)->Solve(s->problem, 0.0, &y);

@@ -581,7 +581,7 @@ SequenceRun RegisterSequence(const std::string& name, bool collision) {
 // contact_pair: a block pressed 7 mm onto another, then sheared. With collision on the
 // surfaces never cross and the hidden vertices (the contact faces) are tracked to a fraction
 // of a millimetre; off, the top block sinks into the base by several millimetres.
-// (Measured: on 0.13 / 0.13 mm seen / hidden, deepest 0.14 mm; off 0.38 / 0.99 mm, 6.0 mm.)
+// (The figures when the bounds were set: docs/notes/2026-11-28-figures-from-code-comments.md.)
 TEST(CollisionSequences, ContactPairStaysApartAndTracksTheHiddenContactFaces) {
   const SequenceRun on = RegisterSequence("contact_pair", true);
   const SequenceRun off = RegisterSequence("contact_pair", false);
@@ -593,8 +593,8 @@ TEST(CollisionSequences, ContactPairStaysApartAndTracksTheHiddenContactFaces) {
 }
 
 // tool_table: a slab pushed onto a table by a tool. On, nothing crosses the tool or the
-// table; off, the slab passes into the tool it cannot see under. (Measured: on 0.26 / 0.32 mm,
-// deepest 0.17 mm; off 0.32 / 0.37 mm, 2.0 mm.)
+// table; off, the slab passes into the tool it cannot see under (the figures when the bounds
+// were set: docs/notes/2026-11-28-figures-from-code-comments.md).
 TEST(CollisionSequences, ToolTableStaysOutOfTheToolAndTheTable) {
   const SequenceRun on = RegisterSequence("tool_table", true);
   const SequenceRun off = RegisterSequence("tool_table", false);
@@ -651,8 +651,8 @@ void CompareTruthContacts(const std::string& bundled, const std::string& regener
 //   histories differ by up to 0.27 mm at the edge of the pressed face. Roundoff (OpenBLAS
 //   picks its kernels by CPU; CHOLMOD factorizes through it) can change that history, so a
 //   vertex may move by up to kMaxShift = 0.3 mm; only the vertices near that edge do, so the
-//   mean over all vertices stays below a tenth of it. (Measured against the bundled files on
-//   the machine of issue 13 and on another: at most 0.11 mm, mean 9 um, both at frame 5.)
+//   mean over all vertices stays below a tenth of it (the figures measured against the
+//   bundled files: docs/notes/2026-11-28-figures-from-code-comments.md).
 // - Visibility: a vertex is seen when it lies within 2 mm of the depth image; one within
 //   0.3 mm of that threshold may flip: at most 2 per frame.
 // - Clouds: as regen::CloudsAgree says (the camera sees the moved surface; a pixel that

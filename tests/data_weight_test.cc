@@ -136,10 +136,9 @@ TEST(DataWeight, DecimatingTheCloudFourTimesKeepsVertexErrorsWithinTenPercent) {
                 kFrames, run.name, run.full * 1e3, run.sparse * 1e3, 100 * (run.sparse / run.full - 1));
     EXPECT_GT(run.full, 0.0);
   }
-  // Measured: noiseless +4 % per area, +23 % per point; noisy +12 % per area, +26 % per
-  // point. The 10 % holds where only the weighting differs; on the noisy clouds the
-  // bound is the measured value with a margin, and the weight per area still has to halve
-  // the per-point change.
+  // The 10 % holds where only the weighting differs; on the noisy clouds the bound is the
+  // measured value with a margin (docs/notes/2026-11-28-figures-from-code-comments.md), and the
+  // weight per area still has to halve the per-point change.
   const auto change = [](const Run& r) { return std::abs(r.sparse / r.full - 1); };
   EXPECT_LT(change(runs[0]), 0.10);
   EXPECT_GT(change(runs[1]), 2 * change(runs[0]));

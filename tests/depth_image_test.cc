@@ -224,8 +224,8 @@ double TrackDemo(const Scene& scene, const std::vector<std::string>& frames, boo
 }
 
 // The bundled demo as 16-bit millimetre PNGs (femreg synth --depth-png) is tracked as well
-// as from its PCD clouds: the 1 mm depth rounding (a uniform error of 0.29 mm RMS, against
-// the clouds' 0.2-0.5 mm sensor noise) changes the mean vertex error by less than 5%.
+// as from its PCD clouds: the 1 mm depth rounding is small against the clouds' sensor noise and
+// changes the mean vertex error by little (docs/notes/2026-11-28-figures-from-code-comments.md).
 TEST(DepthFrames, DemoTwinTracksLikeItsClouds) {
   Scene scene;
   Status s = LoadScene(std::string(FEMREG_DATASETS_DIR) + "/demo/scene.yaml", &scene);

@@ -117,7 +117,7 @@ TEST(ExternalLoads, SagTrackWithGravityAndTheCalibratedMaterialTracksCloser) {
   ASSERT_GT(scene.gravity.norm(), 0.0) << "the tracking scene knows gravity";
   Scene no_loads = scene;
   no_loads.registration.loads = false;
-  // What `femreg calibrate` fits on frame 0 with calibration.yaml (README: 202 kPa).
+  // What `femreg calibrate` fits on frame 0 with calibration.yaml (docs/guide/loads.md: 202 kPa).
   Scene calibrated = scene;
   calibrated.objects[0].material.youngs_modulus = 2.025e5;
   const double nominal = SagTrackError(scene);

@@ -175,7 +175,8 @@ TEST(SolveQuasiStatic, CantileverConvergesToTimoshenko) {
     previous_error = error;
     EXPECT_LT(tip, expected * 1.01);  // linear tets are too stiff, never too soft
   }
-  // Measured: 49.6%, 21.3%, 11.3%, 7.0% (linear tets lock in bending).
+  // Linear tets lock in bending; the errors per refinement:
+  // docs/notes/2026-11-28-figures-from-code-comments.md.
   EXPECT_LT(previous_error, 0.08);
 }
 
@@ -254,7 +255,7 @@ TEST(SolveQuasiStatic, GravitySag) {
   const double tip = -MeanDisplacement(c.mesh, c.tip).z();
   std::printf("gravity sag: tip %.6e m, beam theory %.6e m, relative error %.2f%%\n", tip,
               expected, 100 * std::abs(tip - expected) / expected);
-  EXPECT_NEAR(tip, expected, 0.15 * expected);  // measured 11.5% (locking, as above)
+  EXPECT_NEAR(tip, expected, 0.15 * expected);  // locking, as above
 }
 
 // The linear model is one linear solve: it matches a direct solve of the reduced system

@@ -1,5 +1,5 @@
-// Fracture: the separation tensor (seed eqs. 7-14), node splitting (Section 4.2), mesh
-// validity after splits, and tracking through the bundled break and tear sequences.
+// Fracture: the separation tensor (docs/theory/fracture.md#detection), node splitting (#splitting),
+// mesh validity after splits, and tracking through the bundled break and tear sequences.
 #include "femreg/fracture.h"
 
 #include <gtest/gtest.h>
@@ -406,10 +406,10 @@ TEST(FractureTracking, BeamBreakSequence) {
   EXPECT_LE(std::abs(r.first_break - r.truth_break), 1);
   EXPECT_EQ(r.final_pieces, 2);
   ASSERT_GE(r.piece_mean.size(), 2u);
-  // Stated bounds: the clamped piece within 6 mm, the free piece within 7.5 mm (mean over
-  // its vertices and the frames after the break; measured 3.2 and 5.0 mm). The scene has
-  // the camera's visibility test off: with it on, the free piece (seen on its side and top
-  // only) slides along its axis and is off by 9-19 mm.
+  // Stated bounds: the clamped piece within 6 mm, the free piece within 7.5 mm (mean over its
+  // vertices and the frames after the break; the figures when they were set:
+  // docs/notes/2026-11-28-figures-from-code-comments.md). The scene has the camera's visibility
+  // test off: with it on, the free piece (seen on its side and top only) slides along its axis.
   EXPECT_FALSE(r.tracker->options().data.visibility);
   EXPECT_FALSE(r.tracker->options().data.auto_visibility);
   EXPECT_LT(r.piece_mean[0], 0.006);
@@ -456,8 +456,8 @@ TEST(FractureTracking, BeamBreakSequence) {
 // thickness splits together. On both back ends (their rounding differs, and a crack that
 // grows only by luck would show it). Stated bounds: the first split within 2 frames of the
 // ground truth's, two pieces within 1 frame of it and to the end, each piece within 4 mm
-// on average over the frames after the tracker's break (measured: Ceres 3.1 / 2.4 mm, in
-// pieces at frame 5; fast 3.2 / 1.9 mm, at frame 6; truth 5).
+// on average over the frames after the tracker's break (the figures when they were set:
+// docs/notes/2026-11-28-figures-from-code-comments.md).
 class SlabTearSequence : public ::testing::TestWithParam<SolverBackend> {};
 
 TEST_P(SlabTearSequence, TearsIntoTheTwoPiecesOfTheGroundTruth) {

@@ -167,10 +167,10 @@ class HardCases : public ::testing::TestWithParam<SolverBackend> {
 };
 
 // Error bounds: the bend moves the end 20 mm and the mean vertex ~7 mm (doing nothing). A
-// tracker that follows the data ends within a few millimetres: measured 0.1-3.3 mm, the
-// largest with Ceres stopping at 8 outer iterations on outliers; the 1:1000 flat plate has its
-// own bound (NearlyFlatElements). 5 mm means "followed the data", well below doing nothing
-// (the bend is 20 mm).
+// tracker that follows the data ends within a few millimetres
+// (docs/notes/2026-11-28-figures-from-code-comments.md); the 1:1000 flat plate has
+// its own bound (NearlyFlatElements). 5 mm means "followed the data", well below doing
+// nothing (the bend is 20 mm).
 constexpr double kFollowed = 5e-3;
 
 TEST_P(HardCases, PoissonRatioUpToTheIncompressibleLimit) {
@@ -222,8 +222,8 @@ TEST_P(HardCases, InvertedStartRecovers) {
   EXPECT_LT(o.mean_error, kFollowed) << o.message;
 }
 
-// The stable neo-Hookean element follows the bend up to the incompressible limit (measured
-// 1.1 mm at nu 0.3, 0.4 mm at 0.499, fast back end).
+// The stable neo-Hookean element follows the bend up to the incompressible limit
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 TEST_P(HardCases, NeoHookeanUpToTheIncompressibleLimit) {
   for (double nu : {0.3, 0.499}) {
     const TetMesh mesh = Beam();
@@ -241,9 +241,9 @@ TEST_P(HardCases, NeoHookeanUpToTheIncompressibleLimit) {
 // From InvertedStartRecovers' mirrored half, the neo-Hookean element (finite and pushing
 // back for J <= 0) un-inverts every element and stays finite. It does not come back to the
 // truth: the mirrored half's surface matches the clouds as well as the truth's, and its
-// energy leads to another state without inverted elements, 8-9 mm off (both back ends; 11 mm
-// with 30 outer iterations), where the corotational element's sign convention recovers
-// (1.0 mm).
+// energy leads to another state without inverted elements, off by several millimetres, where the
+// corotational element's sign convention recovers
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 TEST_P(HardCases, NeoHookeanInvertedStartUnfolds) {
   const TetMesh mesh = Beam();
   Vertices truth;
@@ -267,9 +267,8 @@ TEST_P(HardCases, NearlyFlatElements) {
   // A 0.2 x 0.04 x 0.00004 m plate: every element 1000 times flatter than it is wide.
   TetMesh mesh = MakeBox(Eigen::Vector3d(kLength, kWidth, 4e-5), 10, 2, 1);
   Vertices truth;
-  // Clouds with noise below the plate's thickness (10 um against 40): the data are well posed,
-  // and what is tested is the elements' numerics. Measured 0.58-1.0 mm on both back ends,
-  // 1-3 threads, PCG tolerances 1e-3 and 1e-2.
+  // Clouds with noise below the plate's thickness: the data are well posed, and what is tested
+  // is the elements' numerics (docs/notes/2026-11-28-figures-from-code-comments.md).
   {
     const auto clouds = BendClouds(mesh, 0.02, &truth, 1e-5);
     const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
@@ -277,13 +276,11 @@ TEST_P(HardCases, NearlyFlatElements) {
     EXPECT_TRUE(o.finite);
     EXPECT_LT(o.mean_error, kFollowed) << o.message;
   }
-  // With the usual 0.2 mm of noise, five times the thickness, the top and bottom faces take
-  // each other's points and the rim's edges pull along the distance direction: the outer
-  // iterations do not settle, and where they end is chaotic: after the 8th, 4.9 to 7.8 mm
-  // (doing nothing: 7 mm) with the fast back end's PCG tolerance (1e-3 to 3e-2); after 30,
-  // 3.1 to 6.6 mm with its thread count (round-off), Ceres 6.1; stopped on an energy rise
-  // (the default since 2026-11-27), 3.8 to 4.1 mm. So here only stability is asserted:
-  // finite, and no vertex moved more than 1.5 times the bend's 20 mm.
+  // With the usual 0.2 mm of noise, five times the thickness, the top and bottom faces take each
+  // other's points and the rim's edges pull along the distance direction: the outer iterations do
+  // not settle, and where they end is chaotic (it moves with the PCG tolerance, the thread count
+  // and the back end (docs/notes/2026-11-28-figures-from-code-comments.md)). So here only stability
+  // is asserted: finite, and no vertex moved more than 1.5 times the bend's 20 mm.
   {
     const auto clouds = BendClouds(mesh, 0.02, &truth);
     const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
@@ -337,7 +334,7 @@ TEST_P(HardCases, ThirtyPercentOutliers) {
   // With the default Huber loss every outlier within data.max_distance keeps pulling with a
   // constant force (w x loss_scale), and outliers around an edge or a corner pull towards
   // themselves: the shape is dragged ~1 cm. Gross outliers need a redescending loss, which
-  // the README's data section recommends for them; with it the beam is followed.
+  // docs/theory/data-terms.md#pairs recommends for them; with it the beam is followed.
   const Outcome huber = RunCase(mesh, Foam(), Options(), clouds, truth);
   Record("30% outliers (default loss: huber)", GetParam(), huber);
   EXPECT_TRUE(huber.finite);

@@ -479,8 +479,9 @@ TEST(ComputeQuality, RegularTetrahedron) {
   EXPECT_EQ(ComputeQuality(mesh, mirrored).num_inverted, 1);
 }
 
-// Every tetrahedral mesh in ../shared/data/meshes loads with the counts of its README.
-// Unused vertices are dropped, so raptorTetra_8418.vtu (3 points no cell uses) has 2993.
+// Every tetrahedral mesh in FEMREG_SHARED_MESHES_DIR loads with the counts below
+// (docs/dev/licences.md). Unused vertices are dropped, so raptorTetra_8418.vtu (3 points no cell
+// uses) has 2993.
 TEST(SharedMeshes, LoadWithReadmeCounts) {
   const std::string dir = FEMREG_SHARED_MESHES_DIR;
   if (!Exists(dir)) GTEST_SKIP() << dir << " does not exist";

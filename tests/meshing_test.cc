@@ -287,9 +287,9 @@ TEST(MeshingTest, CubeFromObjIsFilledWithPositiveTetsOfTheTargetSize) {
   }
 
   // The size is honoured roughly: no tet is larger than the bound, so there are at least
-  // volume / max_volume of them; Delaunay refinement makes tets below the bound (2.4 times
-  // as many measured), so allow up to 5 times as many. The mean edge came out at 0.89 L
-  // (0.97 L at L = 0.05, where the faces weigh less); TetGen is deterministic, the margin
+  // volume / max_volume of them; Delaunay refinement makes tets below the bound, so allow up to 5
+  // times as many (docs/notes/2026-11-28-figures-from-code-comments.md); TetGen is deterministic,
+  // the margin
   // of 0.75 .. 1.1 L leaves room for another TetGen build, not for a wrong volume bound
   // (the regular tetrahedron's volume gives 0.82 L, half of it 0.65 L).
   const double max_volume = std::pow(0.1, 3) / (4.0 * std::sqrt(2.0));
@@ -694,7 +694,7 @@ TEST(MeshingTest, SelfIntersectionCheckAgreesWithTetGen) {
   // Spheres with a few vertices pushed at random, some far enough to fold the surface
   // through itself. Whatever the check refuses, TetGen (without the check) must fail on too,
   // and whatever it accepts TetGen must mesh: no false alarm, no miss, by TetGen's own
-  // judgement. (320 of 320 such cases agreed while this was written.)
+  // judgement (docs/notes/2026-11-28-figures-from-code-comments.md).
   std::mt19937 rng(7);
   std::normal_distribution<double> push(0.0, 0.5);
   int refused = 0, accepted = 0;

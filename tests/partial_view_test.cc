@@ -94,11 +94,11 @@ TEST(PartialView, OrganPatchWithDefaultsKeepsHiddenVerticesInPlace) {
 }
 
 TEST(PartialView, OrganPatchWithoutTrimOrVisibilityPullsTheSurfaceOntoThePatch) {
-  // The failure the defaults prevent (issue: 54.6 mm on a 3k-vertex organ): without the
-  // reciprocity trim and the estimated viewing direction, the model->cloud term drags
-  // unobserved surface onto the patch. (Without the held pair set either: holding it keeps
-  // out the vertices the gate rejected in the first two outer iterations, which hides part of
-  // the failure: 5.7 mm against 6.1 mm for doing nothing.)
+  // The failure the defaults prevent (docs/guide/partial-views.md): without the reciprocity trim
+  // and the estimated viewing direction, the model->cloud term drags unobserved surface onto the
+  // patch. (Without the held pair set either: holding it keeps out the vertices the gate rejected
+  // in the first two outer iterations, which hides part of the failure
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).)
   const std::vector<FrameErrors> frames = RunOrgan([](Scene* s) {
     s->registration.data.auto_visibility = false;
     s->registration.data.reciprocity = 0.0;
@@ -191,7 +191,8 @@ TEST(PartialView, OuterIterationsStopWhereTheEnergyRisesWithoutMotion) {
   std::printf("organ_patch: %d of %d frames converged, %d stopped by an energy rise\n", converged,
               frames, rises);
   ASSERT_GE(frames, 10);
-  // 12 of 12 here; one frame of slack for other machines' round-off (and thread counts).
+  // One frame of slack for other machines' round-off (and thread counts)
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   EXPECT_GE(converged, frames - 1);
   EXPECT_GT(rises, 0);
 
@@ -328,9 +329,9 @@ TEST(RegisterCommand, SigtermLeavesWholeFilesAndAnHonestSummary) {
   testing_util::TempDir tmp;
   const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
   // Every frame runs 200 outer iterations (both stop criteria at 0: only a step that moves no
-  // vertex at all would end a frame early): the 30 frames take ~30 s here,
-  // far longer than the 3 s before the signal, so the run is interrupted mid-sequence. (With
-  // 20, the whole run had come down to 3.3 s: the signal raced the end.)
+  // vertex at all would end a frame early): the run takes far longer than the wait before the
+  // signal, so it is interrupted mid-sequence (fewer iterations let the signal race the end
+  // (docs/notes/2026-11-28-figures-from-code-comments.md)).
   const CliRun r = Femreg("register --scene " + demo + "/scene.yaml --frames " + demo +
                               "/clouds --no-progress --force --out " + tmp.path() + "/out" +
                               " --set registration.solver.max_outer_iterations=200"
@@ -358,7 +359,7 @@ TEST(RegisterCommand, ARepeatedSignalWithinASecondIsTheSameRequest) {
     SCOPED_TRACE(gap);
     const bool same_request = std::string(gap) == "0.2";
     const std::string out = tmp.path() + "/out_" + gap;
-    // As above: up to 200 outer iterations per frame (a frame ~1 s, the run ~30 s).
+    // As above: up to 200 outer iterations per frame, so that the signal comes mid-run.
     const std::string run = std::string(FEMREG_CLI_PATH) + " register --scene " + demo +
                             "/scene.yaml --frames " + demo + "/clouds --no-progress --force --out " + out +
                             " --set registration.solver.max_outer_iterations=" + (same_request ? "200" : "5000") +

@@ -303,7 +303,7 @@ TEST(SweepCli, RegisterWritesErrorFieldCloudAndProvenance) {
   EXPECT_NE(ReadText(out / "cloud.pvd").find("frames/cloud_0001.vtp"), std::string::npos);
 
   const nlohmann::json s = nlohmann::json::parse(ReadText(out / "summary.json"));
-  // Fields that scripts read (tools/contact_tables.py, the README) stay.
+  // Fields that scripts read (tools/contact_tables.py, the docs' tables) stay.
   for (const char* key : {"scene", "frames_done", "frames_usable", "regularizer", "objects",
                           "solver", "ms_per_frame_median", "frames_per_second", "vertex_error_mm"}) {
     EXPECT_TRUE(s.contains(key)) << key;

@@ -153,7 +153,8 @@ TEST_F(TrackerSequenceTest, RegistersBendingAndTwistWithinStatedError) {
   const RunErrors e = Track(tracker.get(), *sequence_);
   std::printf("bending: seen mean %.2f mm, hidden mean %.2f mm, max %.2f mm\n", e.seen_mean * 1e3,
               e.hidden_mean * 1e3, e.max * 1e3);
-  // Measured: seen 0.47 mm, hidden 0.68 mm, max 5.8 mm.
+  // (The test prints its errors; those when the bounds were set:
+  // docs/notes/2026-11-28-figures-from-code-comments.md.)
   EXPECT_LT(e.seen_mean, 1.0e-3);
   EXPECT_LT(e.hidden_mean, 1.2e-3);
   EXPECT_LT(e.max, 8e-3);
@@ -361,7 +362,7 @@ TEST(Tracker, FastRigidJumpIsRecoveredWithPrealignment) {
     std::printf("rigid jump, prealign %d: mean error %.2f mm, max %.2f mm (%s)\n", prealign,
                 mean * 1e3, error * 1e3, ToString(summary.termination));
     if (prealign) {
-      // Measured: mean 0.24 mm, max 0.77 mm.
+      // (The figures when the bound was set: docs/notes/2026-11-28-figures-from-code-comments.md.)
       EXPECT_LT(mean, 0.5e-3) << summary.FullReport();
       EXPECT_LT(error, 1.5e-3) << summary.FullReport();
       EXPECT_GT(summary.time.prealign, 0.0);
@@ -586,12 +587,11 @@ struct SparseBoxSequence {
   }
 };
 
-// A cloud sparser than a fine mesh: a few vertices keep hopping between nearly equal
-// pairings long after the rest has settled, so the largest move never gets below
-// solver.step_tolerance and the energy creeps down by 0.1-1 % per outer iteration. The bulk
-// step (99 % of the free vertices within solver.bulk_step_tolerance of the coarser of a mean
-// edge and the cloud's sampling distance) ends such frames sooner at the same error. Measured here (1000 points, 2 threads): 17 outer
-// iterations over the 5 frames without it, 15 with it, mean vertex error 0.793 mm both.
+// A cloud sparser than a fine mesh: a few vertices keep hopping between nearly equal pairings long
+// after the rest has settled, so the largest move never gets below solver.step_tolerance and the
+// energy creeps down per outer iteration. The bulk step (99 % of the free vertices within
+// solver.bulk_step_tolerance of the coarser of a mean edge and the cloud's sampling distance) ends
+// such frames sooner at the same error (docs/notes/2026-11-28-figures-from-code-comments.md).
 TEST(Tracker, OuterIterationsStopWhenTheBulkOfTheMeshSettles) {
   const SparseBoxSequence seq(1000);
   const TetMesh& mesh = seq.mesh;

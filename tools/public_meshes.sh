@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Registration on meshes nobody here designed: for each scene of tools/public_meshes/, a
-# femreg synth sequence on a public mesh (../shared/data/meshes: SOFA's liver, armadillo,
+# femreg synth sequence on a public mesh (MESHES_DIR, docs/dev/licences.md: SOFA's liver, armadillo,
 # cylinder and raptor, libigl's octopus, polyfem's bunny), its ground truth from another
 # material, registered with the default settings. Writes docs/public_meshes.md (a page of the
 # documentation site): per mesh the errors against the truth (seen and hidden vertices
 # apart), what doing nothing would err, how the frames stopped and what they cost.
-#   tools/public_meshes.sh [BUILD_DIR] [MESHES_DIR]   # defaults: build, ../shared/data/meshes
+#   tools/public_meshes.sh [BUILD_DIR] [MESHES_DIR]   # defaults: build, MESHES below
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${1:-build}

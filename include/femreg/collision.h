@@ -1,7 +1,7 @@
-// femreg/collision.h - contacts between objects and with rigid obstacles (seed Section 5):
+// femreg/collision.h - contacts between objects and with rigid obstacles (docs/theory/contact.md):
 // a broad and a coarse-to-fine narrow phase over the AABB hierarchies and exact closest
 // points of femreg/geometry.h, for the pairs and obstacles of a CollisionSpec
-// (femreg/collision_spec.h), and the penalty E = 1/2 k delta^2 of seed eq. 15.
+// (femreg/collision_spec.h), and the penalty E = 1/2 k delta^2 (docs/theory/contact.md#response).
 //
 // Sign conventions. A contact ties a point p_a on a surface triangle of object a (a
 // barycentric combination of its 3 vertices) to a point p_b on object b or on an obstacle.
@@ -10,7 +10,7 @@
 // distance |p_a - p_b| while the surfaces have not crossed and is negative once they have
 // (p_a inside b). With D > 0 the proximity threshold, the penetration is delta = D - g; the
 // contact is active while delta > 0 and its energy is E = 1/2 k delta^2, whose force on p_a
-// is f_a = -dE/dp_a = k delta n (away from b): seed eq. 15 with its delta = d - D = -delta.
+// is f_a = -dE/dp_a = k delta n (away from b): the penetration of docs/theory/contact.md.
 // "Deepest penetration" below is max delta; delta < D means the surfaces have not crossed.
 #ifndef FEMREG_COLLISION_H_
 #define FEMREG_COLLISION_H_
@@ -142,9 +142,10 @@ class CollisionWorld {
 // (its Gauss-Newton Hessian k J^T J, J = dDelta/dx, is exact) and Newton converges on it;
 // re-detecting at every iteration instead moves the closest points under the solver and
 // stalls it at a force imbalance of 1e-2 N on the contact_pair sequence. (Insisting on a
-// final detection at the solution does not settle either: contacts at the edge of the
-// pressed face switch on and off from one detection to the next, so the solutions of the
-// two ways differ by up to 0.27 mm there; this one is a converged minimum of one potential.)
+// final detection at the solution does not settle either: contacts at the edge of the pressed face
+// switch on and off from one detection to the next, so the solutions of the two ways differ there
+// (docs/notes/2026-11-28-figures-from-code-comments.md); this one is a converged minimum of one
+// potential.)
 class ContactPotential : public ForwardPotential {
  public:
   ContactPotential(CollisionWorld* world, double margin) : world_(world), margin_(margin) {}

@@ -1,4 +1,4 @@
-// femreg/collision_spec.h - what a scene says about collision (seed Section 5): the object
+// femreg/collision_spec.h - what a scene says about collision (docs/theory/contact.md): the object
 // pairs, the penalty and the rigid obstacles with their keyframed poses, and the triangle
 // surfaces obstacle meshes are read from. femreg/collision.h detects and penalizes the
 // contacts a spec describes.

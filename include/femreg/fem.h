@@ -1,5 +1,5 @@
 // femreg/fem.h - linear tetrahedral FEM: isotropic material, per-element rest data, the
-// corotational element (seed eqs. 1-6) and the small-strain linear element.
+// corotational element (docs/theory/corotational.md) and the small-strain linear element.
 #ifndef FEMREG_FEM_H_
 #define FEMREG_FEM_H_
 
@@ -109,7 +109,8 @@ Matrix6x12 ElementResidualJacobian(const ElementRest& rest, const Eigen::Matrix3
 // Its block of vertex i (0..3): S_i R^T (6 by 3), S_i the columns 3i..3i+2 of S.
 Eigen::Matrix<double, 6, 3> ElementResidualJacobianBlock(const ElementRest& rest,
                                                          const Eigen::Matrix3d& R, int i);
-// Corotational stress in the element's unrotated frame, Voigt: C L u_r (seed eq. 7).
+// Corotational stress in the element's unrotated frame, Voigt: C L u_r
+// (docs/theory/fracture.md#detection).
 Vector6 ElementStress(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x);
 
 // The elastic energy of a whole mesh: rest data per element, rotations, and assembly.

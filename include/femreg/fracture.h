@@ -1,19 +1,19 @@
-// femreg/fracture.h - fracture by the separation tensor (seed Section 4, after O'Brien and
+// femreg/fracture.h - fracture by the separation tensor (docs/theory/fracture.md, after O'Brien and
 // Hodgins 1999): detection per node from the tensile and compressive parts of the
 // corotational element stresses, then node replication and re-assignment of the attached
 // elements by the side of the fracture plane.
 //
-// Reading of the seed's eq. 13 (its typeset form is garbled: a missing M() and a flipped
-// sign), the O'Brien and Hodgins form:
+// The separation tensor in O'Brien and Hodgins' form (docs/theory/fracture.md#detection
+// writes it out, with the compressive part's clamp):
 //
 //   zeta_j = 1/2 ( -m(f+_j) + sum_e m(f+_{e,j}) + m(f-_j) - sum_e m(f-_{e,j}) ),
 //   m(a) = a a^T / |a| (0 for a = 0),  f+-_j = sum_e f+-_{e,j},
 //
 // with f+-_{e,j} = R_e (V_e L_e^T sigma+-_e)_j: the element's nodal force of the tensile
-// (compressive) part of sigma_e = C_e L_e (R_e^T x_e - X_e) (eqs. 7-12), rotated to the
-// world frame. zeta_j is in newtons; the fracture measure divides its largest eigenvalue
-// by the node's area A_j = (V_j)^(2/3), V_j = sum_e V_e / 4 (rest), so that it is a stress
-// (Pa, roughly independent of the mesh size) and compares with the scene's toughness.
+// (compressive) part of sigma_e = C_e L_e (R_e^T x_e - X_e) (docs/theory/fracture.md#detection),
+// rotated to the world frame. zeta_j is in newtons; the fracture measure divides its largest
+// eigenvalue by the node's area A_j = (V_j)^(2/3), V_j = sum_e V_e / 4 (rest), so that it is a
+// stress (Pa, roughly independent of the mesh size) and compares with the scene's toughness.
 #ifndef FEMREG_FRACTURE_H_
 #define FEMREG_FRACTURE_H_
 
@@ -79,7 +79,8 @@ std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const Elasti
 void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
                     const FractureOptions& options, NodeSeparation* out);
 
-// A node split by the fracture model (seed Section 4.2): where, when and by which plane.
+// A node split by the fracture model (docs/theory/fracture.md#splitting): where, when and by which
+// plane.
 struct FractureEvent {
   int frame = -1;
   int object = 0;
@@ -105,8 +106,8 @@ struct TopologyChange {
 
 // Splits up to max_splits nodes whose measure (times separation.weight) exceeds their
 // toughness, highest ratio first (with options.max_cracks > 0: the highest one that is allowed, see there; the nodes
-// already split are recognised by their shared rest positions) (seed Section 4.2): the
-// node is replicated; its elements whose vertices are all on the
+// already split are recognised by their shared rest positions) (docs/theory/fracture.md#splitting):
+// the node is replicated; its elements whose vertices are all on the
 // positive side of the plane (within the tolerance; ties by the centroid) go to the
 // replica, the others stay; elements the plane crosses are removed. A vertex whose
 // remaining elements no longer connect through faces around it is split once more per

@@ -1,6 +1,6 @@
 // femreg/geometry.h - exact closest points between points, segments and triangles, and an
-// AABB hierarchy over the triangles of a surface (seed Section 5.1). Used by collision
-// detection; the nearest-point search over point sets and surfaces builds on the same
+// AABB hierarchy over the triangles of a surface (docs/theory/contact.md#detection). Used by
+// collision detection; the nearest-point search over point sets and surfaces builds on the same
 // point-triangle routine.
 #ifndef FEMREG_GEOMETRY_H_
 #define FEMREG_GEOMETRY_H_

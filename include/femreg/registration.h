@@ -82,7 +82,7 @@ struct PreprocessOptions {
   // voxel's centroid), weighted by the points it stands for so that the data term keeps its
   // weight. 0 = off. The summary reports the voxel used (FrameSummary::voxel_size).
   // (Coarser voxels, or subsampling clouds of 3-10 points per surface vertex, cost accuracy
-  // on the bundled datasets: contact_pair 0.13 -> 0.30 mm with 0.5 edge and ratio 2.)
+  // on the bundled datasets (docs/notes/2026-11-28-figures-from-code-comments.md).)
   double auto_voxel = 0.25;                             // >= 0, in mean surface edges
   double auto_voxel_min_ratio = 20.0;                   // >= 0
   int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
@@ -121,14 +121,13 @@ struct DataTermOptions {
   // crack is model surface with no cloud point near, and its pull is what separates the
   // pieces.
   double reciprocity = 5.0;
-  // From this outer iteration on (counting from 0), the set of surface vertices with a
-  // model->cloud pair is held for the rest of the frame: each keeps pulling to its nearest
-  // cloud point (within max_distance) and no other vertex starts, whatever the trim and the
-  // visibility say. The pair set then stops switching, and the outer iterations converge
-  // instead of cycling as vertices hop across the trim (12 bundled datasets, at the time with
-  // at most 5 outer iterations: 195 -> 216 of 270 frames converged, mean errors within
-  // 2.2%). A rise of the energy stops a frame only from here on (solver.
-  // relative_energy_tolerance). 0 = never held (rises then count from the second).
+  // From this outer iteration on (counting from 0), the set of surface vertices with a model->cloud
+  // pair is held for the rest of the frame: each keeps pulling to its nearest cloud point (within
+  // max_distance) and no other vertex starts, whatever the trim and the visibility say. The pair
+  // set then stops switching, and the outer iterations converge instead of cycling as vertices hop
+  // across the trim (docs/theory/stopping.md, docs/notes/2026-11-28-figures-from-code-comments.md).
+  // A rise of the energy stops a frame only from here on (solver.relative_energy_tolerance). 0 =
+  // never held (rises then count from the second).
   int hold_pairs_after = 2;
   // A cloud with fewer points (after preprocessing) than max(min_points,
   // min_points_per_surface_vertex * surface vertices) cannot constrain the object: the
@@ -144,7 +143,7 @@ struct WeightOptions {
   // Each cloud->model pair gets the rest area of its surface triangle shared among the
   // triangle's pairs, each model->cloud pair its vertex's third of the areas of the surface
   // triangles around it, so that a denser or sparser cloud of the same surface gives the
-  // same energy (README, "The data weight").
+  // same energy (docs/theory/data-weight.md#per-area).
   double data_per_area = 2.0e7;
   // Model->cloud pairs weigh this fraction of data_per_area per unit area: they pair a
   // vertex with its nearest cloud point, which lies up to half the cloud's spacing off the
@@ -155,11 +154,12 @@ struct WeightOptions {
   // all of a coarse mesh's vertex area). With a strong share (0.3) a cap of 2 keeps coarse
   // meshes from being pulled off by their edges' and corners' biased pairs; it also makes the
   // model->cloud pull weaker on dense clouds, so the fit is no longer the same from a
-  // denser or sparser cloud (README, "The data weight"). 0 = no cap (the default).
+  // denser or sparser cloud (docs/theory/data-weight.md#per-area). 0 = no cap (the default).
   double model_to_cloud_area_cap = 0.0;
   // A stiffness per correspondence (N/m), whatever the cloud's density: the default, while
-  // the per-area weight costs accuracy on occluded sequences and under many outliers (README,
-  // "The data weight"). < 0: data_per_area is used instead (a scene that sets data_per_area).
+  // the per-area weight costs accuracy on occluded sequences and under many outliers
+  // (docs/theory/data-weight.md, docs/notes/2026-11-data-weight.md). < 0: data_per_area is used
+  // instead (a scene that sets data_per_area).
   double data = 200.0;
   // With the weight per pair (data >= 0): where an object has more model->cloud pairs than
   // cloud points behind its cloud->model pairs (its mesh is finer than the cloud; a voxel
@@ -168,7 +168,7 @@ struct WeightOptions {
   // term pulls no harder in all than one pair per cloud point, however fine the mesh. Each
   // surface vertex pairs with its nearest cloud point, which on a sparse cloud lies up to
   // half the cloud's spacing off the surface; without the balance a mesh refined under the
-  // same cloud is pulled ever harder towards those points (README, "Cost against size").
+  // same cloud is pulled ever harder towards those points (docs/performance/scaling.md).
   // Where the cloud is the denser (every bundled dataset), nothing changes; nor for an object
   // with no cloud->model pair (data.cloud_to_model off).
   bool model_to_cloud_balance = true;
@@ -181,17 +181,16 @@ struct WeightOptions {
 struct SolverOptions {
   int max_outer_iterations = 8;          // correspondences and rotations refreshed per outer iteration
   int max_inner_iterations = 10;         // Ceres iterations / fast Gauss-Newton steps per outer iteration
-  // An inner solve stops when a step changes the energy by less than this fraction (Ceres'
-  // function tolerance). Steps smaller than that are worth less than new rotations and
-  // pairs: on the 12 bundled datasets, 1e-3 instead of 1e-6 takes 17-45% fewer inner
-  // iterations at the same vertex errors with either back end (1e-2 cost Ceres accuracy on
-  // the fracture sequence).
+  // An inner solve stops when a step changes the energy by less than this fraction (Ceres' function
+  // tolerance). Steps smaller than that are worth less than new rotations and pairs: a tighter
+  // tolerance costs inner iterations for the same vertex errors with either back end, a looser one
+  // costs Ceres accuracy (docs/notes/2026-11-28-figures-from-code-comments.md).
   double inner_tolerance = 1e-3;
   // The frame stops when an outer iteration changed the energy by less than this fraction
   // of it from the previous outer iteration (stopped_by "energy"), or raised it by more
   // (stopped_by "energy_rise") once the model->cloud pair set is held (hold_pairs_after),
   // by at most 10 % and with no vertex moving as far as a mean surface edge: the outer
-  // iterations then cycle among nearly equal pairings (README, "How a frame is registered"). 0: neither...
+  // iterations then cycle among nearly equal pairings (docs/theory/stopping.md). 0: neither...
   double relative_energy_tolerance = 1e-3;
   // ... or moved no vertex farther than this fraction of the mesh's mean surface edge length.
   // Inner solves of the fast back end stop at a tenth of it.
@@ -202,12 +201,13 @@ struct SolverOptions {
   // (stopped_by "bulk_step"): the largest move alone never settles where a few vertices hop
   // between nearly equal pairings (a sparse cloud on a fine mesh), and the outer iterations
   // then go on creeping for no gain in the fit; nor does the fit resolve the shape finer
-  // than the cloud samples it (README, "How a frame is registered"). 0 = off.
+  // than the cloud samples it (docs/theory/stopping.md, docs/notes/2026-11-28-bulk-step.md). 0 =
+  // off.
   double bulk_step_tolerance = 0.05;
   double time_budget_s = 0.0;            // per frame; 0 = none
   // Which back end minimizes each outer iteration (both take every term, contacts included,
-  // and reach the same minimum). The fast one by default: on the 12 bundled datasets it gives
-  // the same vertex errors 3-6 times faster. A scene that sets trust_region or linear_solver
+  // and reach the same minimum). The fast one by default: the same vertex errors in much less
+  // time (docs/performance/accuracy.md). A scene that sets trust_region or linear_solver
   // (Ceres' settings) without a backend gets Ceres.
   SolverBackend backend = SolverBackend::kFast;
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
@@ -220,10 +220,10 @@ struct SolverOptions {
   int max_pcg_iterations = 20;
   // Fast back end: what preconditions those iterations. auto: smoothed-aggregation
   // multigrid where the sparse factor would hold 6 or more entries per entry of the system
-  // (large, compact meshes: ~3k vertices and up), else the kept factorization (README, "How
-  // a frame is registered"); factor; multigrid. With multigrid a step runs up to 100 iterations with the kept
-  // hierarchy and 100 with a new one, whatever max_pcg_iterations says (0 still means:
-  // factorize every step, no multigrid).
+  // (large, compact meshes: ~3k vertices and up), else the kept factorization
+  // (docs/dev/fast-backend.md); factor; multigrid. With multigrid a step runs up to 100 iterations
+  // with the kept hierarchy and 100 with a new one, whatever max_pcg_iterations says (0 still
+  // means: factorize every step, no multigrid).
   Preconditioner preconditioner = Preconditioner::kAuto;
   // Start each frame from a constant-velocity extrapolation of the last two frames.
   bool predict_motion = true;

@@ -23,16 +23,12 @@ enum class Preconditioner {
 };
 
 // Where `auto` changes from the factor to multigrid: where the sparse Cholesky factor (from
-// CHOLMOD's analysis of the system's pattern) would hold this many entries or more per
-// entry of the system. A PCG iteration with the factor streams the factor twice; one with
-// multigrid costs about 7 products with the system, and the factor's share grows with the
-// mesh (a 3-D mesh's factor has O(V^4/3) entries), at a rate set by its shape. A vertex
-// count would not do: measured (2 threads, median ms per frame, factor against multigrid;
-// the ratio in brackets), the 4670-vertex creatures_bunny (3.9) 503 / 520 against
-// 779 / 753, the organ_patch bodies at 2197 vertices (5.7) 84 / 91 against 103 / 92 and at
-// 3375 (6.8) 209 / 210 against 147 / 175; the scaling benchmark's boxes (one thread) at
-// 1386 vertices 4.3, 5049 (7.5) 301 against 274, 20034 (13.2) 2978 against 1478, 69741 33.6
-// s against 11.2 s.
+// CHOLMOD's analysis of the system's pattern) would hold this many entries or more per entry of the
+// system. A PCG iteration with the factor streams the factor twice; one with multigrid costs about
+// 7 products with the system, and the factor's share grows with the mesh (a 3-D mesh's factor has
+// O(V^4/3) entries), at a rate set by its shape, so a vertex count would not do; the measured
+// crossover is near 6 (docs/dev/fast-backend.md,
+// docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr double kMultigridFill = 6.0;
 
 }  // namespace femreg

@@ -94,12 +94,12 @@ class Tracker {
   // Cloud points with this label (PointCloud::labels) belong to the object; -1: none.
   Status SetObjectLabel(int object, int label);
 
-  // Contacts (seed Section 5; femreg/collision.h): the penalty between the spec's object
+  // Contacts (docs/theory/contact.md; femreg/collision.h): the penalty between the spec's object
   // pairs (named by `names`, one per object; no pairs: every pair) and with its obstacles.
   // Nothing is built when nothing can collide.
   Status EnableCollision(const CollisionSpec& spec, const std::vector<std::string>& names);
 
-  // Fracture (seed Section 4; femreg/fracture.h): detection between outer iterations and
+  // Fracture (docs/theory/fracture.md; femreg/fracture.h): detection between outer iterations and
   // node splits, one FractureOptions per object. Off unless enabled (Create(scene) enables
   // it for effects.fracture); when off nothing is computed. After a split the meshes,
   // vertices() and the per-vertex outputs have the new vertex count.

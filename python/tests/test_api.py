@@ -41,7 +41,7 @@ def test_bad_shapes_and_names_raise_value_error():
     assert options.solver.preconditioner == "multigrid"
     with pytest.raises(ValueError, match="solver.preconditioner: unknown value 'amg'"):
         options.solver.preconditioner = "amg"
-    # The model->cloud tests of partial views (README, "Partial views and visibility").
+    # The model->cloud tests of partial views (docs/guide/partial-views.md).
     assert options.data.auto_visibility and options.data.reciprocity == 5.0
     options.data.reciprocity = 0.0
     assert options.data.reciprocity == 0.0
@@ -116,7 +116,7 @@ def test_tracker_follows_a_rigid_translation():
 
 
 def test_per_area_weights_are_reachable():
-    # The per-area data weight (README, "The data weight") from Python: weights.data < 0
+    # The per-area data weight (docs/theory/data-weight.md#per-area) from Python: weights.data < 0
     # selects it; the fit follows the same rigid translation.
     mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
     options = femreg.RegistrationOptions()
@@ -137,10 +137,9 @@ def test_per_area_weights_are_reachable():
 
 
 def test_model_to_cloud_balance_is_reachable():
-    # weights.model_to_cloud_balance (on by default) from Python: a 1053-vertex box under a
-    # cloud of a tenth of its surface points (153, against ~600 surface vertices) follows a
-    # rigid translation, closer with the balance on (0.17 against 0.29 mm mean coordinate
-    # error when written).
+    # weights.model_to_cloud_balance (on by default) from Python: a 1053-vertex box under a cloud of
+    # a tenth of its surface points (153, against ~600 surface vertices) follows a rigid
+    # translation, closer with the balance on (docs/notes/2026-11-28-figures-from-code-comments.md).
     mesh = femreg.make_box([0.06, 0.04, 0.04], [12, 8, 8])
     assert femreg.RegistrationOptions().weights.model_to_cloud_balance
     shift = np.array([0.004, -0.002, 0.001])

@@ -6,8 +6,9 @@ import numpy as np
 
 import femreg
 
-# Frames of the demo compared (all 30 take ~10 s per side on one core; 12 cover the bend,
-# the swing's start and a motion-prediction history of 10 frames).
+# Frames of the demo compared (not all 30, to keep the test short
+# (docs/notes/2026-11-28-figures-from-code-comments.md); 12 cover the bend, the swing's start and a
+# motion-prediction history of 10 frames).
 FRAMES = 12
 
 

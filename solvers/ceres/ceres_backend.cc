@@ -90,9 +90,9 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   }
   const Vertices start = *x;
   ceres::Solver::Summary summary;
-  // Ceres' own threads (solver_options.num_threads) evaluate the residuals; OpenMP and the
-  // BLAS under CHOLMOD stay on one thread: measured with 2 threads (farm-bench -n 3, paired),
-  // BLAS threads made the demo 1.3x slower in wall time (1116 vertices) and 1.17x at 4.6k.
+  // Ceres' own threads (solver_options.num_threads) evaluate the residuals; OpenMP and the BLAS
+  // under CHOLMOD stay on one thread: BLAS threads made the solve slower
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   // CHOLMOD's own OpenMP teams (4 threads, whatever OpenMP is told) are held to one too.
   const ScopedThreads blas_threads(1);
   WithThreadLimit(1, [&] { ceres::Solve(solver_options, &ceres_problem, &summary); });

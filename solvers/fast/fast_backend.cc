@@ -54,60 +54,38 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-// CHOLMOD's supernodal factorization is faster than its simplicial one on the systems
-// assembled here at every size measured (bench/linear_solver_bench.cc, box meshes, 1 thread,
-// CPU time: 8 vs 18 ms at 1k vertices, 150 vs 358 ms at 4k, 1.1 vs 13.7 s at 16k), so it is
-// always used. A triangular solve pair costs 0.23 ms at 1k vertices: ~35 of them (PCG
-// iterations) for one factorization.
+// CHOLMOD's supernodal factorization is faster than its simplicial one on these systems at
+// every size measured, so it is always used (docs/notes/2026-11-28-figures-from-code-comments.md).
 
-// Conjugate gradients stop at this relative residual |H dx + g| / |g|: an inexact Newton step
-// whose error the next step removes; the line search and the stop criteria see the energy.
-// The outer iterations (new rotations and pairs) converge linearly anyway, at a rate of
-// 0.3-0.7 per iteration on the organ_patch bodies, and a frame's Solve mostly takes one step
-// per outer iteration: a residual far below that rate is not seen in the result. On the
-// demo, 1e-3 instead of 1e-6 took 27% fewer PCG iterations at the same vertex errors; 1e-2
-// instead of 1e-3, on every bundled dataset with ground truth (fast back end, 2 threads):
-// mean vertex errors within 0.02 mm (the 3375-vertex organ 1.10 -> 1.06 mm), the organ at
-// 2197 vertices 80 -> 70 ms per frame, at 3375 vertices 156 -> 138 ms; 3e-2 and 1e-1 gained
-// little more and moved errors by up to 0.03 mm either way.
+// Conjugate gradients stop at this relative residual |H dx + g| / |g|: an inexact Newton step whose
+// error the next step removes; the line search and the stop criteria see the energy. The outer
+// iterations (new rotations and pairs) converge only linearly, so a residual far below their rate
+// is not seen in the result; looser was no better
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr double kPcgTolerance = 1e-2;
 
 // A step predicted to lower the energy by less than this fraction of the inner tolerance
 // (BackendOptions::relative_tolerance) is not taken: it re-solves the linearization the
-// step before it solved (to PCG's tolerance, with robust weights that did not change). On
-// the demo, such second steps predicted a median gain of 6e-9 of the energy, and 88 of 101
-// less than 1e-5; skipping them: 45 -> 36 ms per frame (1 thread), vertex errors +0.3%.
+// step before it solved (to PCG's tolerance, with robust weights that did not change).
 // Steps between this and the tolerance are taken: they move contacts and robust weights,
-// and skipping them (a fraction of 1) changed the end state of non-converging contact
-// cases (tests/hard_cases_test.cc, deep penetration: a cycle of ~10 mm moves per outer
-// iteration, whose end point moves with any change of the steps).
+// and skipping them changed the end state of non-converging contact cases
+// (tests/hard_cases_test.cc) (docs/notes/2026-11-28-figures-from-code-comments.md).
 // (Unless the step before was predicted by the model, which leaves such a step's gain to
 // what PCG left: Solve, after the line search.)
 constexpr double kNegligibleGain = 1e-2;
 
-// A full step whose energy decrease the Gauss-Newton model predicted to this fraction of
-// itself is taken as a step on a quadratic (Solve: the next step is then skipped if what PCG
-// left is below the tolerance). Along the demo's steps the model's relative error is 4e-12
-// to 6e-11 where the energy is quadratic, and 3e-3 to 0.2 where robust weights change. Demo,
-// 2 threads: 74 of the 108 second steps of 30 frames were such (each ~0.7 ms of assembly and
-// PCG: 43 found negligible by their PCG's first iteration, 31 taken, gaining 1e-6 to 7e-5
-// of the energy); per frame 5.6 -> 4.6 steps, 19.2 -> 15.6 PCG iterations, 1.70 -> 1.47
-// factorizations, the vertex errors unchanged to the micrometre. Skipping also where the
-// model was off by up to the tolerance (the robust weights' steps) saved ~1 PCG iteration
-// more per frame but moved the demo's mean error 1.886 -> 1.904 mm, and the mass-spring
-// regularizer's (a nonlinear energy) on the occlusion sequence 2.76 -> 3.57 mm.
+// A full step whose energy decrease the Gauss-Newton model predicted to this fraction of itself is
+// taken as a step on a quadratic (Solve: the next step is then skipped if what PCG left is below
+// the tolerance): where the energy is quadratic the model is exact to round-off, where robust
+// weights change it is not, and skipping those steps too moved the errors
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr double kQuadraticAgreement = 1e-6;
 
-// The single-precision factorization (SupernodalSolve::Factorize) does its flops about this
-// many times faster than PCG's iterations do theirs (memory-bound substitutions and
-// products), so the factorization's flop count divided by an iteration's, over this, is
-// the PCG iterations a factorization costs. Measured, 2 threads: demo 2.4 ms per
-// factorization against 0.24 ms per PCG iteration (10 iterations; the flop counts say 29),
-// the 3375-vertex organ_patch body 19.4 against 0.91 ms (21; the counts say 55). Per frame,
-// with this 3 against 1 and 2 (`femreg register`, 2 threads, 2 runs each): the 3375-vertex
-// organ 95 / 94 ms against 98 / 100 and 105 / 104 (PCG iterations 41.5 against 55.5), the
-// 2197-vertex one 48 / 49 against 51 / 50 and 52 / 54; the demo 20.3 / 21.5 ms against
-// 20.4 / 19.7 and 20.7 / 21.5 (noise; 15.5 PCG iterations against 20).
+// The single-precision factorization (SupernodalSolve::Factorize) does its flops about this many
+// times faster than PCG's iterations do theirs (memory-bound substitutions and products), so the
+// factorization's flop count divided by an iteration's, over this, is the PCG iterations a
+// factorization costs; 3 did better per frame than 1 and 2
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr double kSingleFactorizationSpeed = 3.0;
 
 // After a single-precision factorization failed (or PCG did not converge with it), this many
@@ -123,31 +101,27 @@ constexpr int kSingleBackoff = 8;
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
 
-// kAuto decides without analysing H itself (AMD and METIS on every unknown, and the
-// factor's workspace: at 64k vertices 1.9 s of the first frame, at 16k 0.23 s) where the
-// vertex graph's estimate of the fill (EstimateFill) is this far above multigrid_fill. The
-// estimate was 0.98-1.02 of the analysis's fill on 14 meshes (the demo 2.96, organ_patch
-// 3.58, slab_tear 1.80, the organ at 2197 and 3375 vertices 5.65 and 6.84, the public
-// meshes 0.83-3.95, the scaling benchmark's boxes at 1.4k, 5k and 20k vertices 4.30, 7.54
-// and 13.24), so only meshes that clearly take multigrid skip the analysis, and the choice
-// is the one the analysis would make.
+// kAuto decides without analysing H itself (AMD and METIS on every unknown, and the factor's
+// workspace: a large share of the first frame on large meshes) where the vertex graph's estimate of
+// the fill (EstimateFill) is this far above multigrid_fill. The estimate matched the analysis's
+// fill closely on every mesh tried (docs/notes/2026-11-28-figures-from-code-comments.md), so only
+// meshes that clearly take multigrid skip the analysis, and the choice is the one the analysis
+// would make.
 constexpr double kFillEstimateMargin = 1.5;
-// ... and only from this many vertices: below, the estimate (METIS's fixed costs) takes
-// about as long as the analysis it could save (the demo, 1116 vertices: 7.7 against 7.5 ms;
-// a 5k-vertex box 24 against 52 ms, whose fill of 7.5 does not clear the margin anyway),
-// and it would be done on top of it. The scaling benchmark's box at 9.5k vertices clears it.
+// ... and only from this many vertices: below, the estimate (METIS's fixed costs) takes about as
+// long as the analysis it could save, and it would be done on top of it
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int kFillEstimateFrom = 8192;
 
 
-// Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the
-// largest update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has
-// been freed) each is a fresh mapping, faulted in page by page on every factorization: on
-// this project's virtual machines that cost the demo's factorization 10.3 against 6.4 ms,
-// the 3375-vertex organ's 72 against 55 ms. glibc raises the threshold when a mapped block
-// of up to 32 MiB is freed (and then keeps up to twice that much freed heap before trimming):
-// one block of the workspace's size, allocated and freed once per analysis, lets it do so.
-// (Until this was written the same had happened by accident, through the triplets of the
-// pattern's build.) Elsewhere than glibc: an allocation and a free, nothing more.
+// Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the largest
+// update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has been freed)
+// each is a fresh mapping, faulted in page by page on every factorization, which slowed
+// factorizations markedly (docs/notes/2026-11-28-figures-from-code-comments.md). glibc raises the
+// threshold when a mapped block of up to 32 MiB is freed (and then keeps up to twice that much
+// freed heap before trimming): one block of the workspace's size, allocated and freed once per
+// analysis, lets it do so. (Until this was written the same had happened by accident, through the
+// triplets of the pattern's build.) Elsewhere than glibc: an allocation and a free, nothing more.
 void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& H) {
   const size_t copy = static_cast<size_t>(H.nonZeros()) * (sizeof(double) + sizeof(int)) +
                       static_cast<size_t>(H.cols() + 1) * sizeof(int);
@@ -229,11 +203,9 @@ struct FastBackend::Impl {
   // new factor is cheaper.
   int pcg_budget_double = 0, pcg_budget_single = 0;
   int PcgBudget() const { return factor_single ? pcg_budget_single : pcg_budget_double; }
-  // PCG iterations run with the kept factor since it was made. Once they have cost as much
-  // as a factorization, the next step factorizes anew (the ski-rental rule: never more than
-  // twice the cost of the better choice in hindsight). Demo, 1 thread: 55-57 -> 45 ms per
-  // frame (PCG iterations 82 -> 33, ~1 factorization per frame); a 3.7k-vertex mesh: 465 ->
-  // 297 ms. Twice the budget: 50 and 282 ms; half: 57 and 323.
+  // PCG iterations run with the kept factor since it was made. Once they have cost as much as a
+  // factorization, the next step factorizes anew (the ski-rental rule: never more than twice the
+  // cost of the better choice in hindsight) (docs/notes/2026-11-28-figures-from-code-comments.md).
   int pcg_since_factor = 0;
 
   // The multigrid preconditioner (solvers/fast/multigrid.h), where the factor would fill in
@@ -318,11 +290,9 @@ FastBackend::~FastBackend() = default;
 
 namespace {
 // The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
-// nnz(L). Neither wins everywhere: on the demo's slender beam AMD gives nnz(L) 364k and
-// 51 Mflop per factorization, METIS 418k and 73; on the organ_patch body at 2197
-// vertices AMD 1853k and 908 Mflop, METIS 1478k and 534, at 3375 vertices 3947k / 2918
-// against 2793k / 1300. (CHOLMOD's default tries METIS only when AMD's flops per entry
-// of L pass 500, which the 2197-vertex body misses at 490.)
+// nnz(L). Neither wins everywhere (AMD on slender beams, METIS on compact bodies), and
+// CHOLMOD's default tries METIS only past a flops-per-entry threshold that compact bodies
+// can miss (docs/notes/2026-11-28-figures-from-code-comments.md).
 void OrderWithAmdAndMetis(cholmod_common* common) {
   common->nmethods = 2;
   common->method[0].ordering = CHOLMOD_AMD;
@@ -335,15 +305,11 @@ void FastBackend::Impl::Analyse() {
   factor.setMode(Eigen::CholmodSupernodalLLt);
   cholmod_common& common = factor.cholmod();
   OrderWithAmdAndMetis(&common);
-  // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with
-  // {0.8, 0.1, 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold
-  // merges little more than one vertex, and the demo's slender beam had 207 supernodes of
-  // 16 columns on average, each a BLAS call too small to run at speed. Per factorization
-  // and substitution pair (one thread, /tmp experiment, median of 25 / 200): demo beam
-  // 7.4 -> 6.1 ms and 0.144 -> 0.140 ms; the 3.7k-vertex beam 34.9 -> 31.5 and 0.67 ->
-  // 0.67; organ_patch at 2197 vertices 29.0 -> 26.6 and 0.53 -> 0.52, at 3375 vertices
-  // 57 -> 55 and 1.06 -> 1.04. Larger settings ({12, 48, 96}) factorized the demo in 5.1 ms
-  // but slowed the 3375-vertex organ's substitutions by 15%.
+  // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with {0.8, 0.1,
+  // 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold merges little more
+  // than one vertex, which leaves many small supernodes, each a BLAS call too small to run at
+  // speed; larger settings slowed the substitutions
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   common.nrelax[0] = 6;
   common.nrelax[1] = 24;
   common.nrelax[2] = 64;
@@ -404,13 +370,9 @@ double FastBackend::Impl::EstimateFill() const {
 bool FastBackend::Impl::Factorize(SolveReport* report) {
   const auto t0 = Clock::now();
   Analyse();
-  // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the
-  // supernodes), as the triangular solves in Pcg: the supernodes of these systems are too
-  // small to share. Demo, 2 threads, quiet machine: 13.3 ms per factorization with the BLAS
-  // on both threads, 7.6 on one; the 1.5x-resolution demo (3.7k vertices) 170 and 166 ms per
-  // frame; bench/linear_solver_bench.cc at 16k vertices: 1.46 s on one BLAS thread, 1.56 on
-  // two. (With both the BLAS and CHOLMOD's teams on 2 threads they fought over the 2 cores:
-  // factorizations of 263-324 ms instead of 11 ms, now and then.)
+  // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the supernodes), as
+  // the triangular solves in Pcg: the supernodes of these systems are too small to share, and both
+  // on several threads fought over the cores (docs/notes/2026-11-28-figures-from-code-comments.md).
   {
     const ScopedThreads one_thread(1);
     WithThreadLimit(1, [&] { factor.factorize(H); });
@@ -420,10 +382,9 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
   ++report->factorizations;
   report->factorize_s += Seconds(t0);
   factor_valid = factor.info() == Eigen::Success;
-  // PCG's substitutions: the factor's values in single precision, on the back end's threads.
-  // Demo, 24 PCG iterations per frame (the same count as with CHOLMOD's double solves),
-  // linear solves per frame on 1 thread: 8.4-8.7 -> 5.6-5.9 ms; the organ_patch body at 3375
-  // vertices, 2 threads: 191-288 -> 61-124 ms (with METIS, below; shared, noisy machine).
+  // PCG's substitutions: the factor's values in single precision, on the back end's threads (half
+  // the bytes to stream: solvers/fast/supernodal_solve.h)
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   if (factor_valid && substitutions.Load(*factor.raw(), structure_pending, threads)) {
     structure_pending = false;
   } else {
@@ -452,9 +413,9 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
                                                   int max_iterations, Eigen::VectorXd* x,
                                                   SolveReport* report, bool with_multigrid) {
-  // The substitutions are the back end's own (`substitutions`, on its threads); CHOLMOD's,
-  // only if that copy could not be made, on one BLAS thread: too small to share (demo, 2
-  // threads: PCG 77 ms per frame against 41 ms on one).
+  // The substitutions are the back end's own (`substitutions`, on its threads); CHOLMOD's, only if
+  // that copy could not be made, on one BLAS thread: too small to share
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   const ScopedThreads one_thread(1);
   pcg_indefinite = false;
   pcg_model_gain = -1.0;

@@ -38,13 +38,11 @@ constexpr int kChebyshevDegree = 2;
 constexpr double kChebyshevRatio = 30.0;
 constexpr double kChebyshevSafety = 1.1;
 constexpr int kPowerIterations = 15;
-// Products and block Jacobi run in parallel from this many unknowns on: a V-cycle has ~15
-// of them, each worth a team's start from here (the 3375-vertex organ_patch body, 2
-// threads: linear solves 130-138 ms per frame with 24576 here, 90-96 with 4096).
+// Products and block Jacobi run in parallel from this many unknowns on: a V-cycle has ~15 of them,
+// each worth a team's start from here (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int kParallelUnknowns = 4096;
 // ... or this many stored entries: a coarse level has few unknowns, but many entries per
-// column (the 3375-vertex body's level 1: 1098 unknowns, 189k entries, against level 0's
-// 10125 and 409k).
+// column (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int64_t kParallelNonzeros = 65536;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
@@ -58,11 +56,8 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 // The V-cycle is an approximation of A^-1 to begin with, and PCG, in double with A itself,
 // corrects it (as mixed-precision AMG does, e.g. AmgX's float preconditioner for double
 // solves); what float sums cost is the V-cycle's symmetry beyond ~1e-8 relative
-// (tests/backend_test.cc), which PCG does not see at its tolerance. Against the same product
-// with double sums (and v in double), one thread, box meshes (50 products, 3 runs): 24.8k
-// vertices 2.2-2.4 -> 1.5-1.9 ms, 80k vertices 6.4-6.8 -> 4.6-5.1; a whole V-cycle
-// (bench/linear_solver_bench.cc MultigridCycle, one thread, medians of 7, 3 alternating runs):
-// 4k vertices 1.26-1.33 -> 1.02-1.12 ms, 64k (medians of 5, 2 runs) 43.5-46.6 -> 36.1-38.7.
+// (tests/backend_test.cc), which PCG does not see at its tolerance; float sums made the product and
+// the V-cycle faster than double sums (docs/notes/2026-11-28-figures-from-code-comments.md).
 // Each column's sums run in a fixed order: the same result on any number of threads.
 void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorXd& v, int threads,
                        int parallel_from, std::vector<float>* v4, Eigen::VectorXd* y) {
@@ -169,10 +164,8 @@ void GatherNode(const float* values, const int* value_at, const int* row_first, 
 // one 4-lane multiply-add per 4 of its rows (6 rows: 4 + 2 lanes; 3 rows: 3 lanes, the 4th
 // reads the next stored value and is dropped), else entry by entry (see FloatBlockProduct:
 // ~1e-7 relative, as the values' own rounding). `values` holds 4 more floats than its
-// blocks (the last block's 4th lane). With FloatBlockProduct at level 0, a whole V-cycle
-// (bench/linear_solver_bench.cc MultigridCycle, medians of 5, 3 alternating runs against
-// double sums): 4k vertices 0.96-0.99 -> 0.52-0.57 ms on one thread, 0.58-0.60 -> 0.37-0.42
-// on two; 64k vertices 31-33 -> 24.1-24.5 ms on one, 19.7-22.4 -> 15.4-19.1 on two.
+// blocks (the last block's 4th lane). With FloatBlockProduct at level 0, float sums made a
+// whole V-cycle faster than double sums (docs/notes/2026-11-28-figures-from-code-comments.md).
 template <int R, int C>
 void GatherNodeFloat(const float* values, const int* value_at, const int* row_first, int begin, int end,
                      const float* x, double* y) {

@@ -1,8 +1,7 @@
-// Smoothed-aggregation algebraic multigrid: the fast back end's preconditioner for large
-// meshes, where a sparse Cholesky factor's fill (and the time to stream it once per PCG
-// iteration) grows faster than the mesh: at 20k vertices a factorization took ~1 s and a
-// substitution pair 30 ms, at 70k 7.5 s and 140 ms. One V-cycle here costs a few products
-// with the system, so its cost grows with the mesh.
+// Smoothed-aggregation algebraic multigrid: the fast back end's preconditioner for large meshes,
+// where a sparse Cholesky factor's fill (and the time to stream it once per PCG iteration) grows
+// faster than the mesh. One V-cycle here costs a few products with the system, so its cost grows
+// with the mesh (docs/dev/fast-backend.md, docs/notes/2026-11-28-figures-from-code-comments.md).
 //
 // The hierarchy (Vaněk, Mandel and Brezina's smoothed aggregation, as in ML and PyAMG's
 // smoothed_aggregation_solver, written here from the method):
@@ -15,11 +14,10 @@
 //    aggregate, then what is left in aggregates of its own;
 //  - near null space: the six rigid motions of the vertex positions, restricted to each
 //    aggregate and orthonormalized there (their coefficients are the next level's);
-//  - prolongator: that tentative one smoothed by one step of block-Jacobi,
-//    P = (I - 4/3 D^-1 A / lambda_max) T, and the coarse system P^T A P, both products
-//    formed by node blocks (Galerkin below: dense blocks of fixed size in the inner loops,
-//    rows in parallel; at 64k vertices 0.6-1.1 s against 1.6-2.7 s with Eigen's general
-//    sparse products, one thread);
+//  - prolongator: that tentative one smoothed by one step of block-Jacobi, P = (I - 4/3 D^-1 A /
+//    lambda_max) T, and the coarse system P^T A P, both products formed by node blocks (Galerkin
+//    below: dense blocks of fixed size in the inner loops, rows in parallel; faster than Eigen's
+//    general sparse products (docs/notes/2026-11-28-figures-from-code-comments.md));
 //  - smoother: Chebyshev polynomials of degree 2 in D^-1 A (block Jacobi: each node's
 //    diagonal block inverted), on [lambda_max / 30, 1.1 lambda_max], the same before and
 //    after the coarse correction, so that a V-cycle is a symmetric positive definite

@@ -1,12 +1,12 @@
 // Solves with a CHOLMOD supernodal LL^T factor in the fast back end's own code, for PCG's
 // preconditioner (one forward and one backward substitution per iteration).
 //
-// Those substitutions read all of L once each and do two flops per entry: their time is
-// the time to stream L from memory (demo, nnz(L) 364k: 0.23 ms per pair through CHOLMOD;
-// a 3.7k-vertex beam: ~3 ms). So the values are kept in `Scalar`, float in the back end:
-// half the bytes. The vectors and every sum stay in double; what changes is L itself, by
-// a relative 6e-8 per entry, far less than the difference between the kept factor and the
-// matrix PCG solves (a factor of an earlier step's matrix), which PCG corrects anyway.
+// Those substitutions read all of L once each and do two flops per entry: their time is the time to
+// stream L from memory (docs/notes/2026-11-28-figures-from-code-comments.md). So the values are
+// kept in `Scalar`, float in the back end: half the bytes. The vectors and every sum stay in
+// double; what changes is L itself, by a relative 6e-8 per entry, far less than the difference
+// between the kept factor and the matrix PCG solves (a factor of an earlier step's matrix), which
+// PCG corrects anyway.
 //
 // In parallel: the supernodal elimination tree is cut into disjoint subtrees, grouped into
 // one set per thread, and a "top" of the supernodes above them. The forward substitution
@@ -95,13 +95,12 @@ class SupernodalSolve {
   // Subtracts the descendants' updates of s's rows [t0, t1) (whole: all of them), in
   // ascending descendant. c: the largest update.
   void SubtractUpdates(int s, int t0, int t1, bool whole, const int* map, Scalar* c);
-  // A supernode of the top with at least two tiles' rows (tile_rows_) is factorized in
-  // tiles: its updates a row tile at a time, its dense part by panels of as many columns
-  // (right-looking: the panel's diagonal block, the rows below it, the columns right of
-  // it). The tasks of a phase are independent and run on the whole team; the tiles depend
-  // on the supernode's size alone. Phases and tasks: TiledTasks (supernodal_solve.cc). In
-  // the subtrees, on one thread each, the whole supernode's BLAS calls are faster (a
-  // 16k-vertex box in tiles everywhere: 320-327 -> 365 ms on one thread).
+  // A supernode of the top with at least two tiles' rows (tile_rows_) is factorized in tiles: its
+  // updates a row tile at a time, its dense part by panels of as many columns (right-looking: the
+  // panel's diagonal block, the rows below it, the columns right of it). The tasks of a phase are
+  // independent and run on the whole team; the tiles depend on the supernode's size alone. Phases
+  // and tasks: TiledTasks (supernodal_solve.cc). In the subtrees, on one thread each, the whole
+  // supernode's BLAS calls are faster (docs/notes/2026-11-28-figures-from-code-comments.md).
   bool Tiled(int s) const;
   int TileRows(int s) const;  // a multiple of tile_rows_: at most kMaxTiles row tiles
   int TiledPhases(int s) const;
@@ -110,12 +109,8 @@ class SupernodalSolve {
   void Forward(int s, const double* b, double* acc, double* y, double* z) const;
   void Backward(int s, double* y, double* z) const;
 
-  // Tiles of 64 rows, against 32, 48, 96 and 128 (bench/linear_solver_bench.cc, own float
-  // factorization of box meshes, 2 threads, every supernode of 128 rows or more tiled):
-  // 1k vertices 1.57 ms against 1.84, 1.76, 1.59 and 1.83; 4k vertices 13.8 ms against
-  // 15.3, 15.2, 13.3 and 14.3. At most 8 tiles: a 16k-vertex box's supernodes of thousands
-  // of rows in tiles of 64 took one thread 399 ms against 332 untiled, in at most 8 tiles
-  // 373-386.
+  // Tiles of 64 rows, and at most 8 tiles per supernode: the best of the sizes tried on box
+  // meshes (bench/linear_solver_bench.cc) (docs/notes/2026-11-28-figures-from-code-comments.md).
   static constexpr int kMaxTiles = 8;
   bool loaded_ = false;
   int tile_rows_ = 64;

@@ -107,12 +107,12 @@ Scenario BeamBreak() {
   };
   s.left_anchor_tracked = true;
   s.right_anchor_tracked = false;
-  // The free piece, seen only on its side and top, slid along its axis by up to 12 mm with
-  // visibility on (its mean error 14.2 mm, 6.6 mm with it off).
+  // The free piece, seen only on its side and top, slid along its axis with visibility on
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   s.tracked_visibility = false;
   // One crack that grows from its front: with every node free to split, a change in the last
-  // bit of the solve (another thread count, another CPU) broke the tracked beam into 3-5
-  // pieces in 1 of 6 perturbed runs (Ceres), against 6 of 6 in 2 pieces with one crack.
+  // bit of the solve (another thread count, another CPU) could break the tracked beam into
+  // more pieces (docs/notes/2026-11-28-figures-from-code-comments.md).
   s.tracked_max_cracks = 1;
   return s;
 }

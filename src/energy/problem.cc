@@ -55,8 +55,9 @@ void Problem::SetCoupling(std::vector<std::array<int, 4>> cells) {
 
 namespace {
 
-// Blocks per chunk of a set's sum: a chunk of FEM elements costs ~10 us, a team's start a
-// few. Each chunk is summed in block order, the chunks' sums in chunk order.
+// Blocks per chunk of a set's sum: a chunk's work well above a team's start
+// (docs/notes/2026-11-28-figures-from-code-comments.md). Each chunk is summed in block order, the
+// chunks' sums in chunk order.
 constexpr int kChunk = 256;
 
 // The values of a set's blocks at x, in chunks on up to `threads` threads.

@@ -29,9 +29,9 @@ bool ParseField(const char** p, const char* end, double* value) {
 }
 }  // namespace
 
-// The whole file at once and std::from_chars per field: a CSV of the demo's 1116 vertices
-// took ~1.1 ms through an istringstream per line, read once per frame by `register`, `bench`
-// and the sweeps.
+// The whole file at once and std::from_chars per field: an istringstream per line was slow for a
+// file read once per frame by `register`, `bench` and the sweeps
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
 Status ReadGroundTruthFrame(const std::string& path, GroundTruthFrame* frame) {
   std::string text;
   {

@@ -307,8 +307,8 @@ bool QuasiStaticSolver::Factorize(const std::vector<Eigen::Triplet<double>>& ext
       const KeepSignalHandlers keep;
       factorization_.analyzePattern(sum);
     }
-    // CHOLMOD's own OpenMP teams on one thread, its BLAS on threads_ (see the fast back end;
-    // calculix_sag on 2 threads: wall 0.84x against teams of 2).
+    // CHOLMOD's own OpenMP teams on one thread, its BLAS on threads_ (as in the fast back end,
+    // and for the same reason: faster (docs/notes/2026-11-28-figures-from-code-comments.md)).
     WithThreadLimit(1, [&] { factorization_.factorize(sum); });
     analyzed_elastic_pattern_ = false;
   } else {

@@ -266,10 +266,9 @@ Status WriteVtu(const std::string& path, const TetMesh& mesh, const Vertices& po
     writer->SetInputData(grid);
     writer->SetDataModeToAppended();
     writer->EncodeAppendedDataOff();
-    // zlib at its fastest level: `femreg register` writes one of these per object and frame.
-    // On the demo's 1116-vertex mesh with its 5 fields, VTK's default level (5) took 8.2 ms
-    // per frame and 4.7 MB for 30 frames, level 1 4.1 ms and 4.8 MB (uncompressed: 1.8 ms,
-    // 11 MB); the doubles compress little at any level.
+    // zlib at its fastest level: `femreg register` writes one of these per object and frame, and
+    // the doubles compress little at any level
+    // (docs/notes/2026-11-28-figures-from-code-comments.md).
     writer->SetCompressorTypeToZLib();
     writer->SetCompressionLevel(1);
     ok = writer->Write();

@@ -226,8 +226,8 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
   const int n = cloud.size();
   // The spacing: the median distance to the nearest neighbour, over 500-999 evenly spread
   // points (all of them below 1000; the median's relative standard error ~1.25 x the spread
-  // of the distances over sqrt(500): ~2 % for a spread of a third). Over 2000-3999 points it
-  // cost the demo 0.7 ms per frame, a twenty-fifth of its frame.
+  // of the distances over sqrt(500)): precise enough, at a fraction of the cost of more points
+  // (docs/notes/2026-11-28-figures-from-code-comments.md).
   const int stride = std::max(1, n / 500);
   std::vector<double> nearest;
   for (int i = 0; i < n; i += stride) {
@@ -326,7 +326,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
   std::vector<SurfaceIndex::Hit> hits(static_cast<size_t>(nq));
   if (cloud_to_model) {
     // From the last outer iteration's triangles (each query always uses the same index: its
-    // label's). Demo, 1 thread: correspondences 8.5 -> 5.6 ms per frame, the same pairs.
+    // label's): faster, the same pairs (docs/notes/2026-11-28-figures-from-code-comments.md).
     const bool warm_start = warm != nullptr && static_cast<int>(warm->size()) == nq;
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (int j = 0; j < nq; ++j) {
@@ -347,20 +347,14 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     const int ns = static_cast<int>(state.surface_vertices.size());
     std::vector<int> nearest(static_cast<size_t>(ns), -1);
     std::vector<double> dist2(static_cast<size_t>(ns), 0.0);
-    // Reciprocity (with the trim: data.reciprocity > 0, no fracture): a vertex pulls
-    // towards its nearest cloud point only if that point's own closest surface point is
-    // next to the vertex (on a triangle touching the vertex's one-ring). Where another part
-    // of the model is closer to the point (a thin, partly seen hand beside the body it is
-    // nearest to, another object), the point is that part's: its cloud->model pair pulls
-    // there, and the vertex is not pulled across. The public meshes (docs/public_meshes.md,
-    // 2 threads): the armadillo 1.46 -> 0.71 mm mean error, largest 33 -> 16 mm, its hands
-    // had swung 10-50 mm per outer iteration; the bunny 0.58 -> 0.42 mm; the bundled
-    // datasets within 0.1 % but fast_motion 0.99 -> 0.77 mm, contact_pair 0.109 -> 0.099,
-    // occlusion 1.371 -> 1.351 and block_press 0.679 -> 0.717 (README, "Partial views and
-    // visibility"). A ring of the mesh, not a distance: the hands are within 1.5 mean edges
-    // of the body, and a distance that rejected their pairs (one mean edge) also rejected
-    // pairs of a model still an edge away from its cloud (occlusion 1.37 -> 2.15 mm). Two
-    // rings halved the gain on the armadillo (0.98 mm), four left little of it.
+    // Reciprocity (with the trim: data.reciprocity > 0, no fracture): a vertex pulls towards its
+    // nearest cloud point only if that point's own closest surface point is next to the vertex (on
+    // a triangle touching the vertex's one-ring). Where another part of the model is closer to the
+    // point (a thin, partly seen hand beside the body it is nearest to, another object), the point
+    // is that part's: its cloud->model pair pulls there, and the vertex is not pulled across
+    // (docs/guide/partial-views.md). A ring of the mesh, not a distance: a distance that rejected a
+    // thin part's pairs also rejected pairs of a model still an edge away from its cloud, and two
+    // rings lost most of the gain (docs/notes/2026-11-28-figures-from-code-comments.md).
     const bool mutual = std::isfinite(fc.trim);  // the frame's reciprocity is on
     std::vector<char> foreign(static_cast<size_t>(mutual ? ns : 0), 0);
 #pragma omp parallel for num_threads(threads) schedule(static)

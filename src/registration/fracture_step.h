@@ -1,5 +1,5 @@
-// Fracture between outer iterations (seed Section 4; femreg/fracture.h): detection on every
-// object, node splits, and the tracker's state carried to the new topology.
+// Fracture between outer iterations (docs/theory/fracture.md; femreg/fracture.h): detection on
+// every object, node splits, and the tracker's state carried to the new topology.
 #ifndef FEMREG_REGISTRATION_FRACTURE_STEP_H_
 #define FEMREG_REGISTRATION_FRACTURE_STEP_H_
 

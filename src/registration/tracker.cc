@@ -1,5 +1,5 @@
 // The Tracker: one frame is a few outer iterations of (rotations, correspondences, contacts,
-// solve, fracture); see DESIGN.md "One frame, step by step". The parts live beside this file
+// solve, fracture); see docs/theory/energy.md#one-frame. The parts live beside this file
 // (registration/tracker_state.h lists them); this file holds the outer loop and the API.
 #include "femreg/tracker.h"
 
@@ -25,33 +25,22 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 // The outer iterations stop when the energy rose from one to the next (by more than
-// solver.relative_energy_tolerance) while no vertex moved farther than this many mean
-// surface edges, once the pair set is held: new rotations and pairs no longer lower it.
-// They cycle among nearly equal pairings (a vertex between two sparse cloud points, a cloud
-// point between two faces), or the held rotations of the corotational step stop being a
-// descent; going on costs time and does not help. On the 12 bundled datasets and the 2197-
-// and 3375-vertex organs (2 threads, 2 runs each, alternating with commit 230842e),
-// stopping there too, with max_outer_iterations 8 instead of 5 (6 on three datasets): 272
-// of 274 frames converged instead of 226, per frame 0-30 % faster (the demo and the organs
-// within the noise), mean vertex errors within 5 % (demo 1.88 -> 1.89 mm; fast_motion 1.05
-// -> 0.99, the 3375-vertex organ 1.04 -> 0.96). Their largest moves at such a rise were
-// 0.01 to 0.49 mean edges. A rise during a larger move is progress, not a cycle
-// (tests/hard_cases_test.cc): without the limit the inverted neo-Hookean start stopped while
-// unfolding (30 mm moves, 3 elements left inverted); with half an edge, Ceres stopped early
-// on the Young's modulus sweep and missed its error bound. Counting rises from the second
-// outer iteration instead of the held set's third (data.hold_pairs_after; with 0, never
-// held, from the second): demo 1.91 mm, organ_patch 0.80, the 3375-vertex organ 1.00. A
-// frame that stops on a rise keeps its last iterate, with the pairs and rotations it was
-// solved with.
+// solver.relative_energy_tolerance) while no vertex moved farther than this many mean surface
+// edges, once the pair set is held: new rotations and pairs no longer lower it. They cycle among
+// nearly equal pairings (a vertex between two sparse cloud points, a cloud point between two
+// faces), or the held rotations of the corotational step stop being a descent; going on costs time
+// and does not help (docs/theory/stopping.md). A rise during a larger move is progress, not a cycle
+// (tests/hard_cases_test.cc): the inverted neo-Hookean start would stop while unfolding
+// (docs/notes/2026-11-27-stopping-on-a-rise.md,
+// docs/notes/2026-11-28-figures-from-code-comments.md). A frame that stops on a rise keeps its last
+// iterate, with the pairs and rotations it was solved with.
 constexpr double kRiseMoveLimit = 1.0;
-// ... and by no more than this fraction of the previous energy: a larger rise is a change of
-// the problem (the rotations of nearly flat elements turning over, a new contact set), not a
-// cycle among nearly equal pairings, and the next solve may use it. The 1:1000 flat plate
-// of tests/hard_cases_test.cc rises by 27 % up to 18-fold; going on there takes its error
-// from 1.06 to 0.70 mm (fast back end; 0.58 with at most 5 outer iterations and no stop on a
-// rise) and from 1.12 to 0.72 mm (Ceres; 0.69). The datasets above rise by 0.1-23 %; with
-// this limit only fast_motion changed (0.96 -> 0.99 mm, every frame still converged). With
-// solver.relative_energy_tolerance at this limit or above, no rise stops a frame.
+// ... and by no more than this fraction of the previous energy: a larger rise is a change of the
+// problem (the rotations of nearly flat elements turning over, a new contact set), not a cycle
+// among nearly equal pairings, and the next solve may use it (the 1:1000 flat plate of
+// tests/hard_cases_test.cc gains by going on)
+// (docs/notes/2026-11-28-figures-from-code-comments.md). With solver.relative_energy_tolerance at
+// this limit or above, no rise stops a frame.
 constexpr double kRiseEnergyLimit = 0.1;
 
 double Seconds(Clock::time_point since) {
@@ -380,7 +369,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   s->rejected = counts.rejected;
   s->rms_residual = row.rms_residual;
 
-  if (state.fracture) {  // seed Section 4: between outer iterations
+  if (state.fracture) {  // docs/theory/fracture.md: between outer iterations
     const std::vector<int> source = FractureStep(k, *fc.index, &state, s);
     if (!source.empty()) {
       *previous = RemapRows(*previous, source);

@@ -1,7 +1,7 @@
 // What a Tracker holds between frames, shared by its parts: the objects in one global
 // vertex numbering, the anchors, and the effects that are on (contacts, fracture).
 //
-// The parts of a frame (DESIGN.md "One frame, step by step"):
+// The parts of a frame (docs/theory/energy.md#one-frame):
 //   registration/correspondences  data pairs (model->cloud, cloud->model), normals, data gap
 //   registration/prealign         the rigid pre-alignment
 //   registration/frame_problem    the frame's energy from pairs, springs, anchors, contacts

@@ -158,12 +158,11 @@ class StatsFile {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_{nullptr, &std::fclose};
 };
 
-// Files that are rewritten whole (the .pvd collections, summary.json): after every frame
-// that cost O(frames) per frame, O(frames^2) over a run (the demo's 30 clouds repeated to 300
-// frames: 1.8 ms per frame for these and stats.csv, growing by ~6 us per frame: ~50 ms per
-// frame by the end of a 5-minute recording at 30 Hz). So at most once a second, and by
-// Flush at the end; the destructor writes what is pending on any other way out (an error
-// return), so the files still cover the frames done.
+// Files that are rewritten whole (the .pvd collections, summary.json): after every frame that cost
+// O(frames) per frame, O(frames^2) over a run
+// (docs/notes/2026-11-28-figures-from-code-comments.md). So at most once a second, and by Flush at
+// the end; the destructor writes what is pending on any other way out (an error return), so the
+// files still cover the frames done.
 class ThrottledWrite {
  public:
   explicit ThrottledWrite(std::function<Status()> write) : write_(std::move(write)) {}
