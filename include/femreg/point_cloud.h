@@ -77,7 +77,8 @@ Eigen::Matrix3d CameraRotation(const CameraOptions& camera);
 // Reads a 16-bit single-channel (greyscale) PNG. Other bit depths or colour types are
 // refused naming the file and what it holds; so are images over 2^28 pixels.
 Status ReadDepthPng(const std::string& path, RawDepthImage* image);
-// Reads a mask of width by height pixels (any PNG; non-zero in any channel = keep).
+// Reads a mask of width by height pixels (any PNG, 8- or 16-bit, grey or colour; non-zero
+// in any colour channel = keep). Errors name the file (and both sizes when they differ).
 Status ReadMaskPng(const std::string& path, int width, int height, std::vector<uint8_t>* keep);
 // Writes a 16-bit greyscale PNG, atomically (a temporary file renamed into place).
 Status WriteDepthPng(const std::string& path, const RawDepthImage& image);
