@@ -13,6 +13,7 @@
 // at most once a second and when the run ends, however it ends (an error, Ctrl-C). So an
 // interrupt leaves whole files behind that cover the frames done so far.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cerrno>
 #include <chrono>
@@ -60,6 +61,7 @@ struct RegisterArgs {
   std::vector<std::string> sets;  // --set key.path=value
   bool skip_bad_frames = false;
   double depth_scale = 0.001;  // m per unit of 16-bit depth PNG frames
+  std::string mask_dir;        // masks of depth PNG frames; overrides preprocess.mask_dir
 };
 
 struct FrameRow {
@@ -319,7 +321,8 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                      {"collision", tracker.collision() != nullptr}};
   }
   json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
-                {"threads", args.threads}};
+                {"threads", args.threads}, {"depth_scale", args.depth_scale},
+                {"mask_dir", args.mask_dir.empty() ? json(nullptr) : json(args.mask_dir)}};
   j["command_line"] = flags;
   j["provenance"] = ProvenanceJson(scene, o, args.sets, files, truth_files);
   // A file name or description that is not UTF-8 must not end the run: replace its bytes.
@@ -456,6 +459,32 @@ int RunRegister(const RegisterArgs& args) {
   if (args.max_frames > 0 && static_cast<int>(files.size()) > args.max_frames) {
     files.resize(static_cast<size_t>(args.max_frames));
   }
+  // Masks of depth-image frames: --mask-dir, else the scene's preprocess.mask_dir.
+  if (!args.mask_dir.empty()) scene.registration.preprocess.mask_dir = args.mask_dir;
+  std::string& mask_dir = scene.registration.preprocess.mask_dir;
+  if (!mask_dir.empty()) {
+    const char* from = args.mask_dir.empty() ? "registration.preprocess.mask_dir" : "--mask-dir";
+    const auto cloud_frame = std::find_if(files.begin(), files.end(), [](const std::string& f) {
+      std::string ext = fs::path(f).extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      return ext != ".png";
+    });
+    std::error_code ec;
+    if (cloud_frame != files.end() && !args.mask_dir.empty()) {
+      std::cerr << "femreg register: --mask-dir: masks apply to depth-image (.png) frames; "
+                << *cloud_frame << " is a point cloud (crop it with registration.preprocess.crop)\n";
+      return 1;
+    }
+    if (cloud_frame != files.end()) {
+      std::fprintf(stderr, "femreg register: note: %s (%s) applies to depth-image (.png) frames; "
+                   "%s is a point cloud: no masks\n", from, mask_dir.c_str(), cloud_frame->c_str());
+      mask_dir.clear();
+    } else if (!fs::is_directory(mask_dir, ec)) {
+      std::cerr << "femreg register: " << from << ": " << mask_dir
+                << ": no such folder (it holds a mask per depth frame, named like the frame)\n";
+      return 1;
+    }
+  }
   std::vector<std::string> truth_files;
   if (!args.ground_truth.empty()) {
     status = ListFrames(args.ground_truth, {".csv"}, &truth_files);
@@ -548,6 +577,7 @@ int RunRegister(const RegisterArgs& args) {
     // A .png frame is a 16-bit depth image, back-projected with the scene's camera.
     DepthImageOptions depth;
     depth.depth_scale = args.depth_scale;
+    depth.mask_dir = scene.registration.preprocess.mask_dir;  // mask_dir/<frame name>.png
     Status read = ReadFrame(files[f], scene.registration.camera, depth, &cloud, &dropped, &sensor);
     if (!read.ok()) {
       if (!args.skip_bad_frames) {
@@ -830,9 +860,13 @@ void AddRegisterCommand(CLI::App* app) {
                   "Metres per unit of 16-bit depth PNG frames (default 0.001: millimetres, the "
                   "common sensor convention); PNG frames need the scene's camera")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--mask-dir", args->mask_dir,
+                  "A folder of segmentation masks for depth PNG frames, DIR/<frame name>.png: 8- or "
+                  "16-bit PNGs of the depth image's size, nonzero = the object (overrides the "
+                  "scene's registration.preprocess.mask_dir); a frame without its mask is an error");
   cmd->add_flag("--skip-bad-frames", args->skip_bad_frames,
-                "Count a frame that cannot be read as unusable and go on (default: stop with the "
-                "file and the reason, exit code 1)");
+                "Count a frame that cannot be read (or whose mask is missing or of another size) "
+                "as unusable and go on (default: stop with the file and the reason, exit code 1)");
   cmd->add_flag("--no-collision", args->no_collision,
                 "Switch effects.collision off for this run, to compare with it on: the tracker adds "
                 "no contact term, and the scene's collision section only measures the contacts and "
