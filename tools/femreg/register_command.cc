@@ -402,21 +402,26 @@ double MeshExtent(const Tracker& tracker) {
   return (hi - lo).norm();
 }
 
-// The units hint: warns once when the first cloud's extent and the meshes' differ by more
-// than 10 times (a cloud in mm against a mesh in m).
-void WarnUnits(const std::string& file, const PointCloud& cloud, double scale, double mesh_extent) {
-  const double extent =
-      scale * (cloud.points.colwise().maxCoeff() - cloud.points.colwise().minCoeff()).norm();
+// The units hint: warns once when the extent of the first frame's points as the tracker uses
+// them (`used`: after the mask, preprocess.scale and transform, the crop, the plane removal
+// and the outlier filter) and the meshes' differ by more than 10 times (a cloud in mm against
+// a mesh in m). Not the frame as read: a depth image of the whole room around a masked or
+// cropped object is no units mistake.
+void WarnUnits(const std::string& file, const PointCloud& used, double mesh_extent) {
+  const double extent = (used.points.colwise().maxCoeff() - used.points.colwise().minCoeff()).norm();
   if (!(mesh_extent > 0) || !(extent > 0)) return;
   const double ratio = extent / mesh_extent;
   if (ratio <= 10.0 && ratio >= 0.1) return;
   std::fprintf(stderr,
-               "femreg register: warning: the first cloud (%s) spans %.4g (bounding box diagonal%s) "
-               "and the meshes %.4g m: %.3g times %s. Different units? Scale the clouds with "
-               "registration.preprocess.scale (e.g. 0.001 for mm) or the meshes with "
-               "objects[].scale.\n",
-               file.c_str(), extent, scale != 1.0 ? ", after preprocess.scale" : "", mesh_extent,
-               ratio > 1 ? ratio : 1.0 / ratio, ratio > 1 ? "larger" : "smaller");
+               "femreg register: warning: the first cloud (%s) spans %.4g (bounding box diagonal "
+               "of the %d points used, after masks and preprocessing) and the meshes %.4g m: %.3g "
+               "times %s. Different units? Scale the clouds with registration.preprocess.scale "
+               "(e.g. 0.001 for mm) or the meshes with objects[].scale.%s\n",
+               file.c_str(), extent, used.size(), mesh_extent, ratio > 1 ? ratio : 1.0 / ratio,
+               ratio > 1 ? "larger" : "smaller",
+               ratio > 1 ? " If the cloud holds more than the objects, mask it (--mask-dir, "
+                           "registration.preprocess.mask_dir) or crop it (preprocess.crop)."
+                         : "");
 }
 
 int RunRegister(const RegisterArgs& args) {
@@ -598,9 +603,17 @@ int RunRegister(const RegisterArgs& args) {
       cloud.has_viewpoint = true;
       cloud.viewpoint = sensor.origin;
     }
-    if (!units_checked && cloud.size() > 0) {
+    // The cloud as the tracker uses it: after the mask (when read) and the scene's
+    // preprocessing. The units hint looks at it, and it is written beside the meshes.
+    PointCloud used = cloud;
+    {
+      const RegistrationOptions& o = tracker->options();
+      PreprocessPointCloud(o.preprocess, &used, nullptr,
+                           o.camera.enabled ? o.camera.position : Eigen::Vector3d::Zero());
+    }
+    if (!units_checked && used.size() > 0) {
       units_checked = true;
-      WarnUnits(files[f], cloud, scene.registration.preprocess.scale, mesh_extent);
+      WarnUnits(files[f], used, mesh_extent);
     }
     tracker->Track(cloud, &row.summary);
     if (!read.ok()) row.summary.termination = TerminationType::kInvalidInput;
@@ -674,13 +687,9 @@ int RunRegister(const RegisterArgs& args) {
     }
 
     char name[64];
-    // The cloud the frame was fitted to, as the tracker used it (after the scene's
-    // preprocessing), beside the meshes: ParaView shows it over them.
+    // The cloud the frame was fitted to (`used`, above), beside the meshes: ParaView shows it
+    // over them.
     {
-      PointCloud used = cloud;
-      const RegistrationOptions& o = tracker->options();
-      PreprocessPointCloud(o.preprocess, &used, nullptr,
-                           o.camera.enabled ? o.camera.position : Eigen::Vector3d::Zero());
       std::snprintf(name, sizeof(name), "cloud_%04zu.vtp", f);
       const std::string rel = std::string("frames/") + name;
       status = WriteCloudVtp((fs::path(args.out) / rel).string(), used);
