@@ -42,6 +42,14 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
                           int* nonfinite_dropped = nullptr,
                           const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero());
 
+// The cloud as Tracker::Track fits it, before its automatic subsampling (auto_voxel): the
+// input transform of options.preprocess (scale, rotation, translation), then
+// PreprocessPointCloud oriented towards the camera centre (registration.camera), else the
+// cloud's VIEWPOINT. The tracker's own path; `femreg register` writes the result beside the
+// meshes and checks its units on it.
+void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud,
+                             int* nonfinite_dropped = nullptr);
+
 // Removes points with a non-finite coordinate (or normal); returns how many.
 int DropNonFinite(PointCloud* cloud);
 

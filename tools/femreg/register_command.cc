@@ -403,8 +403,8 @@ double MeshExtent(const Tracker& tracker) {
 }
 
 // The units hint: warns once when the extent of the first frame's points as the tracker uses
-// them (`used`: after the mask, preprocess.scale and transform, the crop, the plane removal
-// and the outlier filter) and the meshes' differ by more than 10 times (a cloud in mm against
+// them (`used`, PrepareCloudForTracking: after the mask, preprocess.scale and transform, the
+// crop, the plane removal and the outlier filter) and the meshes' differ by more than 10 times (a cloud in mm against
 // a mesh in m). Not the frame as read: a depth image of the whole room around a masked or
 // cropped object is no units mistake.
 void WarnUnits(const std::string& file, const PointCloud& used, double mesh_extent) {
@@ -606,11 +606,7 @@ int RunRegister(const RegisterArgs& args) {
     // The cloud as the tracker uses it: after the mask (when read) and the scene's
     // preprocessing. The units hint looks at it, and it is written beside the meshes.
     PointCloud used = cloud;
-    {
-      const RegistrationOptions& o = tracker->options();
-      PreprocessPointCloud(o.preprocess, &used, nullptr,
-                           o.camera.enabled ? o.camera.position : Eigen::Vector3d::Zero());
-    }
+    PrepareCloudForTracking(tracker->options(), &used);
     if (!units_checked && used.size() > 0) {
       units_checked = true;
       WarnUnits(files[f], used, mesh_extent);
