@@ -1,13 +1,17 @@
 // Depth images as frames: 16-bit PNG round trip, refused formats, masks, back-projection
-// against the virtual camera, and the depth-PNG twin of the bundled demo tracked to the
-// same accuracy as its PCD clouds.
+// against the virtual camera, the depth-PNG twin of the bundled demo tracked to the same
+// accuracy as its PCD clouds, and masks on the command line (femreg register --mask-dir,
+// registration.preprocess.mask_dir) with the units hint on the cloud as used.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -19,6 +23,7 @@
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -241,6 +246,248 @@ TEST(DepthFrames, DemoTwinTracksLikeItsClouds) {
   std::printf("mean vertex error: PCD %.4f mm, depth PNG %.4f mm\n", pcd * 1e3, png * 1e3);
   EXPECT_GT(pcd, 0.0);
   EXPECT_LT(std::abs(png - pcd), 0.05 * pcd);
+}
+
+// ---- Masks on the command line.
+
+// A 16-bit mask whose object pixels hold the label 1 (as segmentation tools write them):
+// nonzero, so kept (reducing 16-bit samples to 8 bits would make it 0).
+TEST(DepthMasks, SixteenBitLabelMaskKeepsItsPixels) {
+  testing_util::TempDir tmp;
+  RawDepthImage labels;
+  labels.width = 5;
+  labels.height = 2;
+  labels.values = {0, 1, 0, 2, 0, 300, 0, 0, 0, 65535};
+  ASSERT_TRUE(WriteDepthPng(tmp.File("labels.png"), labels).ok());  // 16-bit greyscale
+  std::vector<uint8_t> keep;
+  Status s = ReadMaskPng(tmp.File("labels.png"), 5, 2, &keep);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(keep, (std::vector<uint8_t>{0, 1, 0, 1, 0, 1, 0, 0, 0, 1}));
+  s = ReadMaskPng(tmp.File("labels.png"), 4, 2, &keep);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find(tmp.File("labels.png")), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("the mask is 5x2 pixels, the depth image 4x2"), std::string::npos) << s.message();
+}
+
+// The scene key: relative to the scene file's folder, written back relative to it.
+TEST(DepthMasks, SceneKeyIsRelativeToTheSceneFile) {
+  testing_util::TempDir tmp;
+  const std::string text =
+      "objects: [{generate: {shape: box, size: [0.1, 0.02, 0.02], cells: [4, 1, 1]}}]\n"
+      "registration:\n  preprocess: {mask_dir: masks, crop: {min: [-1, -1, -1], max: [1, 1, 1]}}\n";
+  const std::string path = tmp.Write("scene.yaml", text);
+  Scene scene;
+  Status s = LoadScene(path, &scene);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(scene.registration.preprocess.mask_dir, tmp.path() + "/masks");
+  EXPECT_NE(SceneToYaml(scene, tmp.path()).find("mask_dir: masks"), std::string::npos)
+      << SceneToYaml(scene, tmp.path());
+  tmp.Write("empty.yaml", "objects: [{generate: {shape: box, size: [0.1, 0.02, 0.02], cells: [4, 1, 1]}}]\n"
+                          "registration: {preprocess: {mask_dir: ''}}\n");
+  s = LoadScene(tmp.File("empty.yaml"), &scene);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("registration.preprocess.mask_dir: must name a folder"), std::string::npos)
+      << s.message();
+}
+
+struct CliRun {
+  int code = -1;
+  std::string out;  // stdout and stderr
+};
+
+CliRun Femreg(const std::string& args) {
+  testing_util::TempDir tmp("femreg_cli_out");
+  const std::string log = tmp.path() + "/log.txt";
+  const std::string cmd = std::string(FEMREG_CLI_PATH) + " " + args + " > " + log + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  r.out = ss.str();
+  return r;
+}
+
+std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// stats.csv's column `name`, one value per frame (the columns before the quoted message).
+std::vector<std::string> StatsColumn(const std::string& out, const std::string& name) {
+  std::ifstream in(out + "/stats.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::stringstream hs(line);
+  for (std::string cell; std::getline(hs, cell, ',');) header.push_back(cell);
+  size_t column = header.size();
+  for (size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == name) column = i;
+  }
+  std::vector<std::string> values;
+  while (std::getline(in, line)) {
+    std::stringstream ls(line);
+    std::string cell;
+    for (size_t i = 0; i <= column && std::getline(ls, cell, ','); ++i) {
+    }
+    values.push_back(cell);
+  }
+  return values;
+}
+
+constexpr int kMaskFrames = 3;
+
+// The first frames of the demo's depth twin in a room: every pixel where the sensor saw
+// nothing gets a wall 2.5 m away (ROOT/room/), so the raw images span about 4 m around a
+// 0.3 m beam; ROOT/masks/ holds 16-bit masks, label 1 on the beam's pixels; ROOT/plain/ the
+// frames as bundled. Returns the beam's pixel count per frame.
+std::vector<int> MakeRoomFrames(const std::string& root) {
+  const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
+  for (const char* d : {"/room", "/masks", "/plain"}) fs::create_directories(root + d);
+  std::vector<int> beam_pixels;
+  for (int f = 0; f < kMaskFrames; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d.png", f);
+    RawDepthImage image, mask;
+    EXPECT_TRUE(ReadDepthPng(demo + "/depth/" + name, &image).ok());
+    fs::copy_file(demo + "/depth/" + name, root + "/plain/" + name);
+    mask = image;
+    int count = 0;
+    for (size_t i = 0; i < image.values.size(); ++i) {
+      mask.values[i] = image.values[i] != 0 ? 1 : 0;
+      count += image.values[i] != 0;
+      if (image.values[i] == 0) image.values[i] = 2500;  // mm
+    }
+    beam_pixels.push_back(count);
+    EXPECT_TRUE(WriteDepthPng(root + "/room/" + name, image).ok());
+    EXPECT_TRUE(WriteDepthPng(root + "/masks/" + name, mask).ok());  // a 16-bit mask
+  }
+  return beam_pixels;
+}
+
+std::string RegisterArgs(const std::string& frames, const std::string& out) {
+  const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
+  return "register --scene " + demo + "/scene.yaml --frames " + frames + " --ground-truth " + demo +
+         "/ground_truth --no-progress --report none --threads 1 --force --out " + out;
+}
+
+// Masked, the room's frames are the bundled frames: the same points read, the same points
+// used, the same vertex errors; the wall is not used. Unmasked, the wall is read and the
+// units hint (which looks at the cloud as used) fires; masked, or cropped to the beam, it
+// does not.
+TEST(DepthMasks, RegisterAppliesMasksFromTheCommandLine) {
+  testing_util::TempDir tmp;
+  const std::vector<int> beam_pixels = MakeRoomFrames(tmp.path());
+  const CliRun plain = Femreg(RegisterArgs(tmp.File("plain"), tmp.File("out_plain")));
+  ASSERT_EQ(plain.code, 0) << plain.out;
+  const CliRun masked = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out_masked")) + " --mask-dir " +
+                               tmp.File("masks"));
+  ASSERT_EQ(masked.code, 0) << masked.out;
+  EXPECT_EQ(masked.out.find("Different units?"), std::string::npos) << masked.out;
+  const CliRun room = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out_room")));
+  ASSERT_EQ(room.code, 0) << room.out;
+  EXPECT_NE(room.out.find("Different units?"), std::string::npos) << room.out;
+  EXPECT_NE(room.out.find("mask it (--mask-dir"), std::string::npos) << room.out;
+
+  const auto read_masked = StatsColumn(tmp.File("out_masked"), "cloud_points");
+  const auto read_room = StatsColumn(tmp.File("out_room"), "cloud_points");
+  const auto used_plain = StatsColumn(tmp.File("out_plain"), "points_used");
+  const auto used_masked = StatsColumn(tmp.File("out_masked"), "points_used");
+  const auto used_room = StatsColumn(tmp.File("out_room"), "points_used");
+  ASSERT_EQ(read_masked.size(), static_cast<size_t>(kMaskFrames));
+  for (int f = 0; f < kMaskFrames; ++f) {
+    std::printf("frame %d: %d beam pixels; read %s of %d pixels unmasked, %s masked; used %s "
+                "unmasked, %s masked, %s bundled\n",
+                f, beam_pixels[f], read_room[f].c_str(), 320 * 240, read_masked[f].c_str(),
+                used_room[f].c_str(), used_masked[f].c_str(), used_plain[f].c_str());
+    EXPECT_EQ(std::stoi(read_masked[f]), beam_pixels[f]);
+    EXPECT_EQ(std::stoi(read_room[f]), 320 * 240);
+    EXPECT_EQ(used_masked[f], used_plain[f]);
+    EXPECT_GT(std::stoi(used_room[f]), 2 * std::stoi(used_masked[f]));
+  }
+  const auto err_plain = StatsColumn(tmp.File("out_plain"), "err_mean_mm");
+  const auto err_masked = StatsColumn(tmp.File("out_masked"), "err_mean_mm");
+  const auto err_room = StatsColumn(tmp.File("out_room"), "err_mean_mm");
+  for (int f = 0; f < kMaskFrames; ++f) {
+    std::printf("frame %d: mean vertex error %s mm bundled, %s masked, %s unmasked\n", f,
+                err_plain[f].c_str(), err_masked[f].c_str(), err_room[f].c_str());
+  }
+  EXPECT_EQ(err_masked, err_plain);
+
+  // summary.json records the masks.
+  const std::string summary = Slurp(tmp.File("out_masked") + "/summary.json");
+  EXPECT_NE(summary.find("\"mask_dir\": \"" + tmp.File("masks") + "\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find(tmp.File("masks") + "/frame_0002.png"), std::string::npos) << summary;
+  EXPECT_NE(Slurp(tmp.File("out_room") + "/summary.json").find("\"mask_dir\": null"), std::string::npos);
+
+  // The scene key does the same (here through --set; relative paths: the test above).
+  const CliRun key = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out_key")) + " --max-frames 1" +
+                            " --set registration.preprocess.mask_dir=" + tmp.File("masks"));
+  ASSERT_EQ(key.code, 0) << key.out;
+  EXPECT_EQ(StatsColumn(tmp.File("out_key"), "points_used")[0], used_plain[0]);
+  EXPECT_EQ(key.out.find("Different units?"), std::string::npos) << key.out;
+
+  // A crop to the beam's surroundings instead of a mask: no units hint either.
+  const CliRun cropped = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out_crop")) + " --max-frames 1" +
+                                " --set 'registration.preprocess.crop={min: [-0.2, -0.2, -0.2], max: [0.5, 0.3, 0.3]}'");
+  ASSERT_EQ(cropped.code, 0) << cropped.out;
+  EXPECT_EQ(cropped.out.find("Different units?"), std::string::npos) << cropped.out;
+}
+
+// A real units mistake is still caught: the demo's first cloud in millimetres against the
+// beam in metres.
+TEST(DepthMasks, UnitsHintStillCatchesACloudInMillimetres) {
+  testing_util::TempDir tmp;
+  const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
+  PointCloud cloud;
+  ASSERT_TRUE(ReadPointCloud(demo + "/clouds/frame_0000.pcd", &cloud).ok());
+  cloud.points *= 1000.0;
+  fs::create_directories(tmp.File("mm"));
+  ASSERT_TRUE(WritePointCloud(tmp.File("mm/frame_0000.pcd"), cloud).ok());
+  const CliRun run = Femreg("register --scene " + demo + "/scene.yaml --frames " + tmp.File("mm") +
+                            " --no-progress --report none --threads 1 --out " + tmp.File("out"));
+  EXPECT_NE(run.out.find("Different units?"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("times larger. Different units?"), std::string::npos) << run.out;
+}
+
+// A missing mask, or one of another size, stops the run naming the file; with
+// --skip-bad-frames the frame is counted as unusable, as an unreadable frame is.
+TEST(DepthMasks, MissingOrWrongSizedMaskNamesTheFile) {
+  testing_util::TempDir tmp;
+  MakeRoomFrames(tmp.path());
+  fs::remove(tmp.File("masks/frame_0001.png"));
+  CliRun run = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out")) + " --mask-dir " + tmp.File("masks"));
+  EXPECT_EQ(run.code, 1) << run.out;
+  EXPECT_NE(run.out.find("cannot read frame 1"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find(tmp.File("masks/frame_0001.png") + ": cannot open"), std::string::npos) << run.out;
+
+  run = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out")) + " --mask-dir " + tmp.File("masks") +
+               " --skip-bad-frames");
+  EXPECT_EQ(run.code, 0) << run.out;
+  EXPECT_NE(run.out.find("1 frame(s) could not be read"), std::string::npos) << run.out;
+  const std::string summary = Slurp(tmp.File("out/summary.json"));
+  EXPECT_NE(summary.find("\"frames_unreadable\": 1"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"frames_usable\": 2"), std::string::npos) << summary;
+  EXPECT_NE(Slurp(tmp.File("out/stats.csv")).find(tmp.File("masks/frame_0001.png")), std::string::npos);
+
+  ASSERT_TRUE(WriteMaskPng(tmp.File("masks/frame_0001.png"), 10, 10, std::vector<uint8_t>(100, 1)).ok());
+  run = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out")) + " --mask-dir " + tmp.File("masks"));
+  EXPECT_EQ(run.code, 1) << run.out;
+  EXPECT_NE(run.out.find(tmp.File("masks/frame_0001.png") + ": the mask is 10x10 pixels, the depth image 320x240"),
+            std::string::npos) << run.out;
+
+  // Masks are for depth images; a folder that is not there is named.
+  run = Femreg(RegisterArgs(tmp.File("room"), tmp.File("out")) + " --mask-dir " + tmp.File("nowhere"));
+  EXPECT_EQ(run.code, 1) << run.out;
+  EXPECT_NE(run.out.find("--mask-dir: " + tmp.File("nowhere") + ": no such folder"), std::string::npos) << run.out;
+  const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
+  run = Femreg(RegisterArgs(demo + "/clouds", tmp.File("out")) + " --mask-dir " + tmp.File("masks"));
+  EXPECT_EQ(run.code, 1) << run.out;
+  EXPECT_NE(run.out.find("masks apply to depth-image (.png) frames"), std::string::npos) << run.out;
 }
 
 }  // namespace

@@ -90,6 +90,7 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(p.normal_neighbors, q.normal_neighbors);
   EXPECT_EQ(p.plane_distance, q.plane_distance);
   EXPECT_EQ(p.plane_iterations, q.plane_iterations);
+  EXPECT_EQ(p.mask_dir, q.mask_dir);
   const DataTermOptions &e = a.data, &f = b.data;
   EXPECT_EQ(e.model_to_cloud, f.model_to_cloud);
   EXPECT_EQ(e.cloud_to_model, f.cloud_to_model);
@@ -297,7 +298,7 @@ const char kEverything[] =
     "  regularizer: mass_spring\n"
     "  camera: {position: [0.1, -0.5, 0.3], target: [0.1, 0, 0], up: [0, 0, 1], fx: 300, fy: 301,\n"
     "           cx: 159.5, cy: 119.5, width: 320, height: 240}\n"
-    "  preprocess: {crop: {min: [-1, -1, -0.01], max: [1, 1, 1]}, plane: {distance: 0.004, iterations: 50},\n"
+    "  preprocess: {mask_dir: masks, crop: {min: [-1, -1, -0.01], max: [1, 1, 1]}, plane: {distance: 0.004, iterations: 50},\n"
     "               voxel_size: 0.002, outliers: {neighbors: 8, stddev: 2.5}, normals: {neighbors: 12}}\n"
     "  data: {model_to_cloud: false, max_distance: 0.02, loss: cauchy, loss_scale: 0.003,\n"
     "         metric: point_to_point, visibility: true, cloud_stride: 2}\n"

@@ -42,6 +42,14 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
                           int* nonfinite_dropped = nullptr,
                           const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero());
 
+// The cloud as Tracker::Track fits it, before its automatic subsampling (auto_voxel): the
+// input transform of options.preprocess (scale, rotation, translation), then
+// PreprocessPointCloud oriented towards the camera centre (registration.camera), else the
+// cloud's VIEWPOINT. The tracker's own path; `femreg register` writes the result beside the
+// meshes and checks its units on it.
+void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud,
+                             int* nonfinite_dropped = nullptr);
+
 // Removes points with a non-finite coordinate (or normal); returns how many.
 int DropNonFinite(PointCloud* cloud);
 
@@ -77,7 +85,8 @@ Eigen::Matrix3d CameraRotation(const CameraOptions& camera);
 // Reads a 16-bit single-channel (greyscale) PNG. Other bit depths or colour types are
 // refused naming the file and what it holds; so are images over 2^28 pixels.
 Status ReadDepthPng(const std::string& path, RawDepthImage* image);
-// Reads a mask of width by height pixels (any PNG; non-zero in any channel = keep).
+// Reads a mask of width by height pixels (any PNG, 8- or 16-bit, grey or colour; non-zero
+// in any colour channel = keep). Errors name the file (and both sizes when they differ).
 Status ReadMaskPng(const std::string& path, int width, int height, std::vector<uint8_t>* keep);
 // Writes a 16-bit greyscale PNG, atomically (a temporary file renamed into place).
 Status WriteDepthPng(const std::string& path, const RawDepthImage& image);

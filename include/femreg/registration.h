@@ -92,6 +92,12 @@ struct PreprocessOptions {
   // of it are dropped, after cropping and before downsampling. 0 = off.
   double plane_distance = 0.0;
   int plane_iterations = 200;                           // RANSAC iterations (>= 1)
+  // A folder of segmentation masks for depth-image frames, one per frame named like it
+  // (mask_dir/<frame name>.png; nonzero = the object): applied when a frame is read, before
+  // everything above (ReadFrame with DepthImageOptions::mask_dir; `femreg register`).
+  // PreprocessPointCloud does not use it. Empty: no masks. A scene file's relative path is
+  // relative to the scene file's folder.
+  std::string mask_dir;
   bool IsValid(std::string* error) const;
 };
 

@@ -406,7 +406,10 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("outlier_stddev", &PreprocessOptions::outlier_stddev)
       .def_readwrite("normal_neighbors", &PreprocessOptions::normal_neighbors)
       .def_readwrite("plane_distance", &PreprocessOptions::plane_distance)
-      .def_readwrite("plane_iterations", &PreprocessOptions::plane_iterations);
+      .def_readwrite("plane_iterations", &PreprocessOptions::plane_iterations)
+      .def_readwrite("mask_dir", &PreprocessOptions::mask_dir,
+                     "Depth frames' masks, mask_dir/<frame name>.png (registration.preprocess."
+                     "mask_dir; read_depth_frame(..., mask_dir=...) applies them)");
 
   auto data = py::class_<DataTermOptions>(m, "DataTermOptions");
   data.def(py::init<>())

@@ -96,7 +96,9 @@ const char* ColorTypeName(int color_type) {
 
 // Decodes `bytes` into rows of `channels` samples of 8 or 16 bits. As a depth image
 // (`depth`): only 16-bit greyscale is accepted and the samples come out in host order. As a
-// mask: everything is expanded or reduced to 8-bit samples, alpha dropped.
+// mask: palettes and 1/2/4-bit grey are expanded to 8-bit samples, alpha dropped, 16-bit
+// samples kept (reducing them to 8 bits would turn the labels 1..255 of a 16-bit mask into 0);
+// *bytes_per_pixel then counts both bytes of each sample.
 // Returns false with *error set ("what went wrong").
 bool DecodePng(const std::string& bytes, bool depth, PngHeader* header, std::vector<uint8_t>* pixels,
                int* bytes_per_pixel, std::string* error) {
@@ -137,7 +139,6 @@ bool DecodePng(const std::string& bytes, bool depth, PngHeader* header, std::vec
     png_set_swap(png);  // PNG stores 16-bit samples big-endian
   } else {
     png_set_expand(png);  // palette -> RGB, 1/2/4-bit grey -> 8 bits, tRNS -> alpha
-    png_set_strip_16(png);
     png_set_strip_alpha(png);
   }
   png_read_update_info(png, info);
@@ -225,7 +226,7 @@ Status ReadMaskPng(const std::string& path, int width, int height, std::vector<u
   }
   keep->assign(static_cast<size_t>(width) * height, 0);
   for (size_t i = 0; i < keep->size(); ++i) {
-    for (int k = 0; k < channels; ++k) {
+    for (int k = 0; k < channels; ++k) {  // every byte of every sample: 8- or 16-bit
       if (pixels[i * channels + k] != 0) (*keep)[i] = 1;
     }
   }

@@ -151,15 +151,19 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
   return Status::Ok();
 }
 
+void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud, int* nonfinite_dropped) {
+  TransformCloud(options.preprocess, cloud);
+  PreprocessPointCloud(options.preprocess, cloud, nonfinite_dropped,
+                       options.camera.enabled ? options.camera.position
+                       : cloud->has_viewpoint ? cloud->viewpoint
+                                              : Eigen::Vector3d::Zero());
+}
+
 void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameSummary* s) {
   const PreprocessOptions& pre = state.options.preprocess;
   const auto t0 = Clock::now();
   fc->cloud = input;
-  TransformCloud(pre, &fc->cloud);
-  PreprocessPointCloud(pre, &fc->cloud, &s->nonfinite_dropped,
-                       state.options.camera.enabled ? state.options.camera.position
-                       : fc->cloud.has_viewpoint    ? fc->cloud.viewpoint
-                                                    : Eigen::Vector3d::Zero());
+  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped);
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(state.surface_vertices.size());
   if (pre.voxel_size == 0 && pre.auto_voxel > 0 && fc->cloud.size() > dense) {
     s->voxel_size = pre.auto_voxel * mean_edge;

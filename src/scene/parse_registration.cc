@@ -1,5 +1,6 @@
 // Scene section: registration (regularizer, camera, preprocessing, data term, weights,
 // solver); range checks through RegistrationOptions::IsValid.
+#include <filesystem>
 #include <string>
 
 #include "scene/scene_parser.h"
@@ -34,8 +35,18 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("preprocess")) {
     const YamlValue p = v["preprocess"];
-    p.CheckKeys({"scale", "transform", "crop", "plane", "voxel_size", "auto_voxel",
+    p.CheckKeys({"mask_dir", "scale", "transform", "crop", "plane", "voxel_size", "auto_voxel",
                  "auto_voxel_min_ratio", "outliers", "normals"});
+    if (p.Has("mask_dir")) {
+      // Depth-image frames' masks (mask_dir/<frame name>.png), relative to the scene's folder
+      // like mesh files. Whether it exists is the frame reader's concern: the scene may be
+      // used with cloud frames or its masks made later.
+      const YamlValue m = p["mask_dir"];
+      std::filesystem::path path(m.AsString());
+      if (path.empty()) m.Fail("must name a folder (leave the key out for no masks)");
+      if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+      r.preprocess.mask_dir = path.lexically_normal().string();
+    }
     if (p.Has("scale")) r.preprocess.scale = p["scale"].AsDouble();
     if (p.Has("transform")) {
       const YamlValue t = p["transform"];

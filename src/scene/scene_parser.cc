@@ -27,7 +27,8 @@
 //     loads: true                                  # the scene's gravity and loads act
 //     camera: {position: [0, 0, 1], target: [0, 0, 0], up: [0, -1, 0], fx: 525, fy: 525,
 //              cx: 319.5, cy: 239.5, width: 640, height: 480}  # present = a known camera
-//     preprocess: {crop: {min: [..], max: [..]}, plane: {distance: 0.005, iterations: 200},
+//     preprocess: {mask_dir: masks,               # depth frames: mask_dir/<frame name>.png
+//                  crop: {min: [..], max: [..]}, plane: {distance: 0.005, iterations: 200},
 //                  voxel_size: 0,
 //                  outliers: {neighbors: 0, stddev: 1}, normals: {neighbors: 0}}
 //     data: {model_to_cloud: true, cloud_to_model: true, max_distance: 0.03,

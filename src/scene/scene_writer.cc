@@ -244,7 +244,7 @@ YAML::Node ForwardNode(const Scene& scene) {
   return n;
 }
 
-YAML::Node RegistrationNode(const RegistrationOptions& r) {
+YAML::Node RegistrationNode(const RegistrationOptions& r, const std::string& base_dir) {
   const RegistrationOptions d;
   YAML::Node n = Map();
   if (r.regularizer != d.regularizer) n["regularizer"] = ToString(r.regularizer);
@@ -265,6 +265,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r) {
   }
   const PreprocessOptions& p = r.preprocess;
   YAML::Node preprocess = FlowMap();
+  if (!p.mask_dir.empty()) preprocess["mask_dir"] = FilePath(p.mask_dir, base_dir);
   Put(preprocess, "scale", p.scale, d.preprocess.scale);
   if (!p.translation.isZero(0) || !p.rotation.isZero(0)) {
     YAML::Node transform = FlowMap();
@@ -571,7 +572,7 @@ std::string SceneToYaml(const Scene& scene, const std::string& base_dir,
     root["loads"] = list;
   }
   PutMap(root, "forward", ForwardNode(scene));
-  PutMap(root, "registration", RegistrationNode(scene.registration));
+  PutMap(root, "registration", RegistrationNode(scene.registration, base_dir));
   if (!scene.anchors.empty()) {
     YAML::Node list(YAML::NodeType::Sequence);
     for (const AnchorSpec& a : scene.anchors) list.push_back(AnchorNode(scene, a));

@@ -33,7 +33,8 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                  {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
                  {"width", c.width}, {"height", c.height}};
   const PreprocessOptions& p = o.preprocess;
-  j["preprocess"] = {{"crop", p.crop},
+  j["preprocess"] = {{"mask_dir", p.mask_dir.empty() ? json(nullptr) : json(Absolute(p.mask_dir))},
+                     {"crop", p.crop},
                      {"crop_min", Vector(p.crop_min)},
                      {"crop_max", Vector(p.crop_max)},
                      {"voxel_size", p.voxel_size},
@@ -93,6 +94,16 @@ json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
   json frames = json::array();
   for (const std::string& f : frame_files) frames.push_back(Absolute(f));
   j["frame_files"] = frames;
+  // The depth frames' masks (--mask-dir or registration.preprocess.mask_dir): the folder and
+  // each frame's mask, in the frames' order; null without masks.
+  const std::string& mask_dir = options.preprocess.mask_dir;
+  j["mask_dir"] = mask_dir.empty() ? json(nullptr) : json(Absolute(mask_dir));
+  json masks = json::array();
+  for (const std::string& f : frame_files) {
+    if (mask_dir.empty()) break;
+    masks.push_back(Absolute((std::filesystem::path(mask_dir) / std::filesystem::path(f).filename()).string()));
+  }
+  j["mask_files"] = mask_dir.empty() ? json(nullptr) : masks;
   json truth = json::array();
   for (size_t i = 0; i < truth_files.size() && i < frame_files.size(); ++i) {
     truth.push_back(Absolute(truth_files[i]));  // the frames' own: a folder may hold more

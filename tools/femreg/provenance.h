@@ -19,7 +19,8 @@ nlohmann::ordered_json RegistrationOptionsJson(const RegistrationOptions& option
 
 // {"femreg_version", "scene": path, "overrides": [--set ...], "scene_resolved": the scene as
 // YAML after the overrides (SceneToYaml: what differs from the defaults), "options": the
-// resolved registration options, "frames": the cloud files, "ground_truth": its files}.
+// resolved registration options, "frame_files", "mask_dir" and "mask_files" (the depth
+// frames' masks; null without), "ground_truth_files"}.
 nlohmann::ordered_json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
                               const std::vector<std::string>& overrides,
                               const std::vector<std::string>& frame_files,

@@ -13,6 +13,7 @@
 // at most once a second and when the run ends, however it ends (an error, Ctrl-C). So an
 // interrupt leaves whole files behind that cover the frames done so far.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cerrno>
 #include <chrono>
@@ -60,6 +61,7 @@ struct RegisterArgs {
   std::vector<std::string> sets;  // --set key.path=value
   bool skip_bad_frames = false;
   double depth_scale = 0.001;  // m per unit of 16-bit depth PNG frames
+  std::string mask_dir;        // masks of depth PNG frames; overrides preprocess.mask_dir
 };
 
 struct FrameRow {
@@ -318,7 +320,8 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                      {"collision", tracker.collision() != nullptr}};
   }
   json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
-                {"threads", args.threads}};
+                {"threads", args.threads}, {"depth_scale", args.depth_scale},
+                {"mask_dir", args.mask_dir.empty() ? json(nullptr) : json(args.mask_dir)}};
   j["command_line"] = flags;
   j["provenance"] = ProvenanceJson(scene, o, args.sets, files, truth_files);
   // A file name or description that is not UTF-8 must not end the run: replace its bytes.
@@ -398,21 +401,26 @@ double MeshExtent(const Tracker& tracker) {
   return (hi - lo).norm();
 }
 
-// The units hint: warns once when the first cloud's extent and the meshes' differ by more
-// than 10 times (a cloud in mm against a mesh in m).
-void WarnUnits(const std::string& file, const PointCloud& cloud, double scale, double mesh_extent) {
-  const double extent =
-      scale * (cloud.points.colwise().maxCoeff() - cloud.points.colwise().minCoeff()).norm();
+// The units hint: warns once when the extent of the first frame's points as the tracker uses
+// them (`used`, PrepareCloudForTracking: after the mask, preprocess.scale and transform, the
+// crop, the plane removal and the outlier filter) and the meshes' differ by more than 10 times (a cloud in mm against
+// a mesh in m). Not the frame as read: a depth image of the whole room around a masked or
+// cropped object is no units mistake.
+void WarnUnits(const std::string& file, const PointCloud& used, double mesh_extent) {
+  const double extent = (used.points.colwise().maxCoeff() - used.points.colwise().minCoeff()).norm();
   if (!(mesh_extent > 0) || !(extent > 0)) return;
   const double ratio = extent / mesh_extent;
   if (ratio <= 10.0 && ratio >= 0.1) return;
   std::fprintf(stderr,
-               "femreg register: warning: the first cloud (%s) spans %.4g (bounding box diagonal%s) "
-               "and the meshes %.4g m: %.3g times %s. Different units? Scale the clouds with "
-               "registration.preprocess.scale (e.g. 0.001 for mm) or the meshes with "
-               "objects[].scale.\n",
-               file.c_str(), extent, scale != 1.0 ? ", after preprocess.scale" : "", mesh_extent,
-               ratio > 1 ? ratio : 1.0 / ratio, ratio > 1 ? "larger" : "smaller");
+               "femreg register: warning: the first cloud (%s) spans %.4g (bounding box diagonal "
+               "of the %d points used, after masks and preprocessing) and the meshes %.4g m: %.3g "
+               "times %s. Different units? Scale the clouds with registration.preprocess.scale "
+               "(e.g. 0.001 for mm) or the meshes with objects[].scale.%s\n",
+               file.c_str(), extent, used.size(), mesh_extent, ratio > 1 ? ratio : 1.0 / ratio,
+               ratio > 1 ? "larger" : "smaller",
+               ratio > 1 ? " If the cloud holds more than the objects, mask it (--mask-dir, "
+                           "registration.preprocess.mask_dir) or crop it (preprocess.crop)."
+                         : "");
 }
 
 int RunRegister(const RegisterArgs& args) {
@@ -454,6 +462,32 @@ int RunRegister(const RegisterArgs& args) {
   }
   if (args.max_frames > 0 && static_cast<int>(files.size()) > args.max_frames) {
     files.resize(static_cast<size_t>(args.max_frames));
+  }
+  // Masks of depth-image frames: --mask-dir, else the scene's preprocess.mask_dir.
+  if (!args.mask_dir.empty()) scene.registration.preprocess.mask_dir = args.mask_dir;
+  std::string& mask_dir = scene.registration.preprocess.mask_dir;
+  if (!mask_dir.empty()) {
+    const char* from = args.mask_dir.empty() ? "registration.preprocess.mask_dir" : "--mask-dir";
+    const auto cloud_frame = std::find_if(files.begin(), files.end(), [](const std::string& f) {
+      std::string ext = fs::path(f).extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      return ext != ".png";
+    });
+    std::error_code ec;
+    if (cloud_frame != files.end() && !args.mask_dir.empty()) {
+      std::cerr << "femreg register: --mask-dir: masks apply to depth-image (.png) frames; "
+                << *cloud_frame << " is a point cloud (crop it with registration.preprocess.crop)\n";
+      return 1;
+    }
+    if (cloud_frame != files.end()) {
+      std::fprintf(stderr, "femreg register: note: %s (%s) applies to depth-image (.png) frames; "
+                   "%s is a point cloud: no masks\n", from, mask_dir.c_str(), cloud_frame->c_str());
+      mask_dir.clear();
+    } else if (!fs::is_directory(mask_dir, ec)) {
+      std::cerr << "femreg register: " << from << ": " << mask_dir
+                << ": no such folder (it holds a mask per depth frame, named like the frame)\n";
+      return 1;
+    }
   }
   std::vector<std::string> truth_files;
   if (!args.ground_truth.empty()) {
@@ -547,6 +581,7 @@ int RunRegister(const RegisterArgs& args) {
     // A .png frame is a 16-bit depth image, back-projected with the scene's camera.
     DepthImageOptions depth;
     depth.depth_scale = args.depth_scale;
+    depth.mask_dir = scene.registration.preprocess.mask_dir;  // mask_dir/<frame name>.png
     Status read = ReadFrame(files[f], scene.registration.camera, depth, &cloud, &dropped, &sensor);
     if (!read.ok()) {
       if (!args.skip_bad_frames) {
@@ -567,9 +602,13 @@ int RunRegister(const RegisterArgs& args) {
       cloud.has_viewpoint = true;
       cloud.viewpoint = sensor.origin;
     }
-    if (!units_checked && cloud.size() > 0) {
+    // The cloud as the tracker uses it: after the mask (when read) and the scene's
+    // preprocessing. The units hint looks at it, and it is written beside the meshes.
+    PointCloud used = cloud;
+    PrepareCloudForTracking(tracker->options(), &used);
+    if (!units_checked && used.size() > 0) {
       units_checked = true;
-      WarnUnits(files[f], cloud, scene.registration.preprocess.scale, mesh_extent);
+      WarnUnits(files[f], used, mesh_extent);
     }
     tracker->Track(cloud, &row.summary);
     if (!read.ok()) row.summary.termination = TerminationType::kInvalidInput;
@@ -643,13 +682,9 @@ int RunRegister(const RegisterArgs& args) {
     }
 
     char name[64];
-    // The cloud the frame was fitted to, as the tracker used it (after the scene's
-    // preprocessing), beside the meshes: ParaView shows it over them.
+    // The cloud the frame was fitted to (`used`, above), beside the meshes: ParaView shows it
+    // over them.
     {
-      PointCloud used = cloud;
-      const RegistrationOptions& o = tracker->options();
-      PreprocessPointCloud(o.preprocess, &used, nullptr,
-                           o.camera.enabled ? o.camera.position : Eigen::Vector3d::Zero());
       std::snprintf(name, sizeof(name), "cloud_%04zu.vtp", f);
       const std::string rel = std::string("frames/") + name;
       status = WriteCloudVtp((fs::path(args.out) / rel).string(), used);
@@ -829,9 +864,13 @@ void AddRegisterCommand(CLI::App* app) {
                   "Metres per unit of 16-bit depth PNG frames (default 0.001: millimetres, the "
                   "common sensor convention); PNG frames need the scene's camera")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--mask-dir", args->mask_dir,
+                  "A folder of segmentation masks for depth PNG frames, DIR/<frame name>.png: 8- or "
+                  "16-bit PNGs of the depth image's size, nonzero = the object (overrides the "
+                  "scene's registration.preprocess.mask_dir); a frame without its mask is an error");
   cmd->add_flag("--skip-bad-frames", args->skip_bad_frames,
-                "Count a frame that cannot be read as unusable and go on (default: stop with the "
-                "file and the reason, exit code 1)");
+                "Count a frame that cannot be read (or whose mask is missing or of another size) "
+                "as unusable and go on (default: stop with the file and the reason, exit code 1)");
   cmd->add_flag("--no-collision", args->no_collision,
                 "Switch effects.collision off for this run, to compare with it on: the tracker adds "
                 "no contact term, and the scene's collision section only measures the contacts and "
