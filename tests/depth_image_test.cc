@@ -290,31 +290,9 @@ TEST(DepthMasks, SceneKeyIsRelativeToTheSceneFile) {
       << s.message();
 }
 
-struct CliRun {
-  int code = -1;
-  std::string out;  // stdout and stderr
-};
-
-CliRun Femreg(const std::string& args) {
-  testing_util::TempDir tmp("femreg_cli_out");
-  const std::string log = tmp.path() + "/log.txt";
-  const std::string cmd = std::string(FEMREG_CLI_PATH) + " " + args + " > " + log + " 2>&1";
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(log);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.out = ss.str();
-  return r;
-}
-
-std::string Slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_util::CliRun;
+using testing_util::Femreg;
+using testing_util::Slurp;
 
 // stats.csv's column `name`, one value per frame (the columns before the quoted message).
 std::vector<std::string> StatsColumn(const std::string& out, const std::string& name) {

@@ -4,10 +4,14 @@
 
 #include <unistd.h>
 
+#include <sys/wait.h>
+
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "femreg/ground_truth.h"
@@ -53,6 +57,33 @@ inline Status ReadDatasetFrame(const std::string& dir, int index, PointCloud* cl
   if (status.ok()) status = ReadGroundTruthFrame(dir + "/ground_truth/" + name + ".csv", truth);
   return status;
 }
+
+// A file's whole contents ("" if it cannot be read).
+inline std::string Slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+#ifdef FEMREG_CLI_PATH
+// The femreg command line run with `args` (after `prefix`, e.g. environment settings or
+// `timeout 5`): its exit code and what it printed on stdout and stderr.
+struct CliRun {
+  int code = -1;
+  std::string out;
+};
+inline CliRun Femreg(const std::string& args, const std::string& prefix = "") {
+  TempDir tmp("femreg_cli_out");
+  const std::string log = tmp.path() + "/log.txt";
+  const std::string cmd = prefix + std::string(FEMREG_CLI_PATH) + " " + args + " > " + log + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = Slurp(log);
+  return r;
+}
+#endif
 
 }  // namespace testing_util
 }  // namespace femreg
