@@ -16,6 +16,7 @@
 #include <tuple>
 #include <vector>
 
+#include "energy/assembler.h"
 #include "energy/problem.h"
 #include "femreg/fem.h"
 #include "solvers/ceres/ceres_backend.h"
@@ -524,6 +525,59 @@ TEST(ElasticElement, SmallStrainSecondOrderIsK) {
       EXPECT_LT((exact.hessian[i * 4 + j] - s.block.weight * s.rest.K.block<3, 3>(3 * i, 3 * j)).norm(),
                 1e-9 * s.block.weight * s.rest.K.norm());
     }
+  }
+}
+
+// The assembler's exact Hessian and gradient of a problem are the sum of its blocks' (placed
+// densely), the same on one and two threads; a pair outside the pattern is refused.
+TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
+  std::mt19937 rng(41);
+  std::vector<std::unique_ptr<Sample<energy::ElasticElement>>> elements;
+  const int count = 3000;  // past the parallel threshold
+  Vertices x(4 * count, 3);
+  energy::Problem problem;
+  problem.Reset(4 * count);
+  std::vector<std::array<int, 4>> cells;
+  auto& set = problem.AddSet<energy::ElasticElement>(energy::TermGroup::kElastic);
+  for (int i = 0; i < count; ++i) {
+    elements.push_back(std::make_unique<Sample<energy::ElasticElement>>(&rng));
+    energy::ElasticElement b = elements.back()->block;
+    for (int k = 0; k < 4; ++k) {
+      b.vertices[k] = 4 * i + k;
+      x.row(4 * i + k) = elements.back()->x.row(k);
+    }
+    cells.push_back(b.vertices);
+    set.Add(b);
+  }
+  problem.SetCoupling(cells);
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::VectorXd gradient = Eigen::VectorXd::Zero(12 * count);
+  for (const auto& b : set.blocks()) {
+    energy::Linearization<energy::ElasticElement> lin;
+    ASSERT_TRUE(energy::LinearizeSecondOrder(b, set.loss(), x, energy::Curvature::kExact, &lin));
+    for (int i = 0; i < 4; ++i) {
+      gradient.segment<3>(3 * b.vertices[i]) += lin.gradient[i];
+      for (int j = 0; j < 4; ++j)
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r)
+            entries.emplace_back(3 * b.vertices[i] + r, 3 * b.vertices[j] + c, lin.hessian[i * 4 + j](r, c));
+    }
+  }
+  Eigen::SparseMatrix<double> sum(12 * count, 12 * count);
+  sum.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SparseMatrix<double> first;
+  for (int threads : {1, 2}) {
+    energy::Assembler assembler(threads);
+    assembler.Prepare(problem, x);
+    Eigen::VectorXd g;
+    assembler.AssembleSecondOrder(problem, x, energy::Curvature::kExact, true, &g);
+    const Eigen::SparseMatrix<double> H = assembler.H();
+    EXPECT_LT((H - sum).norm(), 1e-12 * sum.norm()) << threads;
+    EXPECT_LT((g - gradient).norm(), 1e-12 * gradient.norm()) << threads;
+    if (threads == 1) first = H;
+    EXPECT_EQ((H - first).norm(), 0.0) << "the same on any thread count";
+    EXPECT_FALSE(assembler.AddBlock(0, 4, Eigen::Matrix3d::Identity()));  // two elements apart
+    EXPECT_TRUE(assembler.AddBlock(0, 1, Eigen::Matrix3d::Identity()));
   }
 }
 

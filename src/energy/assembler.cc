@@ -427,7 +427,8 @@ double Assembler::AssembleSecondOrder(const Problem& problem, const Vertices& x,
   return SumByGroup(problem, set_energy_).total();
 }
 
-void Assembler::AddBlock(int a, int b, const Eigen::Matrix3d& M) {
+bool Assembler::AddBlock(int a, int b, const Eigen::Matrix3d& M) {
+  if (Find(a, b).offset < 0) return false;  // not in the pattern: nothing written
   auto add = [this](int row, int column, const Eigen::Matrix3d& block) {
     const Slot s = Find(row, column);
     double* values = H_.valuePtr();
@@ -436,6 +437,7 @@ void Assembler::AddBlock(int a, int b, const Eigen::Matrix3d& M) {
   };
   add(a, b, M);
   if (a != b) add(b, a, M.transpose());
+  return true;
 }
 
 void Assembler::Finish(const Problem& problem, double whisper, Eigen::VectorXd* g) {

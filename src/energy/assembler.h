@@ -61,9 +61,9 @@ class Assembler {
   // to H, then Finish.
   double AssembleSecondOrder(const Problem& problem, const Vertices& x, Curvature curvature,
                              bool with_hessian, Eigen::VectorXd* g);
-  // Adds M to the block of vertices (a, b) and M^T to (b, a) when a != b; the pair must be
-  // in the pattern (Prepare's pairs). Not thread-safe.
-  void AddBlock(int a, int b, const Eigen::Matrix3d& M);
+  // Adds M to the block of vertices (a, b) and M^T to (b, a) when a != b; false (nothing
+  // added) when the pair is not in the pattern (give it to Prepare). Not thread-safe.
+  bool AddBlock(int a, int b, const Eigen::Matrix3d& M);
   // Identity rows and columns for the problem's fixed vertices, no gradient there; adds
   // `whisper` times the largest diagonal entry to the diagonal.
   void Finish(const Problem& problem, double whisper, Eigen::VectorXd* g);
