@@ -13,10 +13,14 @@ enum class RobustLoss { kNone, kHuber, kCauchy, kTukey };
 
 // The energy of one frame by term (J), robust losses applied. `load`: the external loads'
 // (gravity, nodal loads) potential about the outer iteration's start, plus a constant
-// (src/energy/load.h); 0 without loads.
+// (src/energy/load.h); 0 without loads. `equilibrium`: with the external forces estimated
+// (registration.forces), the penalty on the forces that the shape needs to be in equilibrium
+// (docs/theory/equilibrium.md); the elastic, load and collision energies are then not
+// minimized but balanced, and stay 0 here.
 struct EnergyTerms {
   double data = 0.0, elastic = 0.0, temporal = 0.0, anchor = 0.0, collision = 0.0, load = 0.0;
-  double total() const { return data + elastic + temporal + anchor + collision + load; }
+  double equilibrium = 0.0;
+  double total() const { return data + elastic + temporal + anchor + collision + load + equilibrium; }
 };
 
 }  // namespace femreg

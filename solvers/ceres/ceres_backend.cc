@@ -11,6 +11,13 @@ namespace femreg {
 namespace ceres_backend {
 
 SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
+  if (problem.equilibrium() != nullptr) {
+    SolveReport report;
+    report.stop = StopReason::kFailure;
+    report.message = "the Ceres back end does not solve equilibrium registration (registration.forces.estimate); "
+                     "use solver.backend: fast";
+    return report;
+  }
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

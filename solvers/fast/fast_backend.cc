@@ -40,6 +40,7 @@
 
 #include "energy/assembler.h"
 #include "parallel/signals.h"
+#include "solvers/fast/equilibrium_step.h"
 #include "parallel/threads.h"
 #include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
@@ -279,6 +280,8 @@ struct FastBackend::Impl {
   // the single-precision copy could not be made); counted as a linear solve.
   void Precondition(const Eigen::VectorXd& r, bool with_multigrid, Eigen::VectorXd* z, SolveReport* report);
   EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
+  // Problems with an equilibrium (energy/equilibrium.h) go to their own solve, made at the first.
+  std::unique_ptr<EquilibriumSolver> equilibrium;
 };
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
@@ -609,6 +612,10 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
                      " vertices, x has " + std::to_string(x->rows());
     report.stop = StopReason::kFailure;
     return report;
+  }
+  if (problem.equilibrium() != nullptr) {
+    if (!m.equilibrium) m.equilibrium = std::make_unique<EquilibriumSolver>(m.options, m.threads);
+    return m.equilibrium->Solve(problem, time_limit_s, x);
   }
   const ScopedThreads threads(m.threads);  // OpenMP here and the BLAS under CHOLMOD
   const int analyses_before = m.analyses;

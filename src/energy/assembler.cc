@@ -214,7 +214,7 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
   int ordinal = -1;
   problem.ForEachSet([&](const auto& set) {
     ++ordinal;
-    if (!take(set)) return;
+    if (!((groups_ >> static_cast<int>(set.group())) & 1u) || !take(set)) return;
     using T = BlockType<std::decay_t<decltype(set)>>;
     constexpr int n = T::kVertices;
     const bool with_hessian = hessian(set);

@@ -37,6 +37,9 @@ class Assembler {
   explicit Assembler(int threads = 1) : threads_(threads) {}
   void set_threads(int threads) { threads_ = threads; }
   int threads() const { return threads_; }
+  // Assemble only the sets of these groups (a mask of 1 << TermGroup; default all): equilibrium
+  // registration assembles its potential's Hessian and its objective's apart.
+  void set_groups(uint32_t mask) { groups_ = mask; }
 
   // Fits the pattern to the problem: built anew when its vertex count or coupling changed
   // (the thread regions from the positions x), widened by every block's stencil pairs and
@@ -108,6 +111,7 @@ class Assembler {
   EnergyTerms SumByGroup(const Problem& problem, const std::vector<double>& set_energy) const;
 
   int threads_ = 1;
+  uint32_t groups_ = ~0u;
   int num_vertices_ = -1;
   uint64_t coupling_revision_ = 0;
   uint64_t pattern_revision_ = 0;

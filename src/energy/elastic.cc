@@ -41,7 +41,10 @@ bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::
   if (hessian != nullptr) {  // one decomposition for R and the tangent
     K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R) : rest->K;
   } else if (corotational) {
-    R = PolarRotation(StencilF(x, rest->dm_inv));
+    // Newton from the held rotation (near R(x) between outer iterations) costs a fraction
+    // of the SVD: the force residual of equilibrium registration evaluates every element.
+    const Eigen::Matrix3d F = StencilF(x, rest->dm_inv);
+    R = rotation != nullptr ? PolarRotation(F, *rotation) : PolarRotation(F);
   }
   Vector12 force;
   *energy = ElementEnergyAndForce(*rest, R, xe, &force);

@@ -34,6 +34,7 @@ void Problem::Reset(int num_vertices) {
   num_vertices_ = num_vertices;
   std::apply([](auto&... vectors) { (vectors.clear(), ...); }, sets_);
   fixed_.clear();
+  equilibrium_.reset();
 }
 
 void Problem::Clear(TermGroup group) {
@@ -98,10 +99,17 @@ double Problem::SumBlockValues(const std::vector<double>& values) {
 EnergyTerms Problem::Evaluate(const Vertices& x, int threads) const {
   EnergyTerms terms;
   std::vector<double> values;
+  const uint32_t minimized = equilibrium_ ? ObjectiveGroups() : ~0u;
   ForEachSet([&](const auto& set) {
+    if (!InGroups(minimized, set.group())) return;
     BlockValues(set, x, threads, &values);
     GroupEnergy(set.group(), &terms) += SumBlockValues(values);
   });
+  if (equilibrium_) {
+    Eigen::VectorXd f;
+    ForceResidual(*this, x, &f);
+    terms.equilibrium = EquilibriumEnergy(*equilibrium_, f);
+  }
   return terms;
 }
 

@@ -9,12 +9,14 @@
 #define FEMREG_ENERGY_PROBLEM_H_
 
 #include <array>
+#include <memory>
 #include <tuple>
 #include <vector>
 
 #include "energy/contact.h"
 #include "energy/data.h"
 #include "energy/elastic.h"
+#include "energy/equilibrium.h"
 #include "energy/load.h"
 #include "energy/term.h"
 #include "femreg/energy.h"
@@ -70,6 +72,11 @@ class Problem {
   const std::vector<std::array<int, 4>>& coupling() const { return coupling_; }
   uint64_t coupling_revision() const { return coupling_revision_; }
 
+  // Equilibrium registration (energy/equilibrium.h): the physics groups' energy is then not
+  // minimized; its gradient's penalty is (EnergyTerms::equilibrium). Null: off.
+  void SetEquilibrium(std::shared_ptr<const Equilibrium> equilibrium) { equilibrium_ = std::move(equilibrium); }
+  const Equilibrium* equilibrium() const { return equilibrium_.get(); }
+
   // The energy at x by group, robust losses applied. Each set is summed in fixed chunks of
   // blocks, the chunks on up to `threads` threads, their sums added in chunk order: the
   // same additions in the same order on any thread count.
@@ -94,6 +101,7 @@ class Problem {
   std::vector<char> fixed_;
   std::vector<std::array<int, 4>> coupling_;
   uint64_t coupling_revision_ = 0;
+  std::shared_ptr<const Equilibrium> equilibrium_;
 };
 
 }  // namespace energy

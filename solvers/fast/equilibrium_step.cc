@@ -1,0 +1,375 @@
+#include "solvers/fast/equilibrium_step.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "energy/assembler.h"
+#include "energy/equilibrium.h"
+#include "parallel/signals.h"
+#include "parallel/threads.h"
+#include "solvers/fast/fast_backend.h"
+#include "solvers/fast/supernodal_solve.h"
+
+namespace femreg {
+namespace fast_backend {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// PCG's relative residual, as the fast back end's other steps (fast_backend.cc, kPcgTolerance).
+constexpr double kPcgTolerance = 1e-2;
+constexpr int kMaxPcgIterations = 200;
+// The shift of K~ = K + shift * mean(diag K): enough for a free body's rigid motions (K's null
+// space) to factorize; raised 100-fold while the factorization fails.
+constexpr double kFirstShift = 1e-8;
+
+}  // namespace
+
+struct EquilibriumSolver::Impl {
+  BackendOptions options;
+  int threads = 1;
+  energy::Assembler objective;  // E_obj's Gauss-Newton system: H, g
+  energy::Assembler physics;    // K = d2Pi/dx2 and f = dPi/dx
+  // Where K is not positive definite (compressed or turning elements): its projection
+  // (energy/term.h, Curvature) for the preconditioner's factor.
+  energy::Assembler projected;
+  uint64_t pattern_revision = 0;
+
+  // The preconditioner's factor of K~ (CHOLMOD's analysis; values in float here, CHOLMOD's
+  // double where float fails) and the per-vertex blocks Phi~^-1.
+  CholmodFactor factor;
+  SupernodalSolve<float> substitutions;
+  CholmodFactor ldlt;  // of an indefinite K
+  bool ldlt_analysed = false, use_ldlt = false;
+  bool analysed = false, structure_pending = false, factor_valid = false, factor_single = false;
+  int fresh_iterations = -1;  // PCG's iterations on the first step solved with the factor
+  std::vector<Eigen::Matrix3d> phi_inverse;
+
+  // The linearization at x: penalties, their gradients and curvatures; G the objective's gradient.
+  Eigen::VectorXd g, f, phi_gradient, G;
+  std::vector<Eigen::Matrix3d> phi;
+  double equilibrium_energy = 0.0;
+
+  void Analyse(const Eigen::SparseMatrix<double>& K) {
+    if (analysed) return;
+    factor.setMode(Eigen::CholmodSupernodalLLt);
+    factor.cholmod().print = 0;  // a matrix that is not positive definite is an answer here
+    {
+      const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
+      factor.analyzePattern(K);
+    }
+    analysed = true;
+    structure_pending = true;
+  }
+
+  // Factorizes K~ (K as linearized last at x). Where K is not positive definite (compressed
+  // or turning elements) K Phi K is still positive definite and K^-1 Phi^-1 K^-1 still its
+  // inverse: K is factorized as L D L^T (CHOLMOD's simplicial, without pivoting); if that
+  // fails too, its projection (energy/term.h, Curvature) with a shift. False if nothing factorizes.
+  bool Factorize(const energy::Problem& problem, const Vertices& x, SolveReport* report) {
+    use_ldlt = false;
+    if (FactorizeOf(&physics, kFirstShift, report)) return true;
+    const auto t0 = Clock::now();
+    if (!ldlt_analysed) {
+      ldlt.setMode(Eigen::CholmodLDLt);
+      ldlt.cholmod().print = 0;
+      const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
+      ldlt.analyzePattern(physics.H());
+      ldlt_analysed = true;
+    }
+    {
+      const ScopedThreads one_thread(1);
+      WithThreadLimit(1, [&] { ldlt.factorize(physics.H()); });
+    }
+    ++report->factorizations;
+    report->factorize_s += Seconds(t0);
+    if (ldlt.info() == Eigen::Success) {
+      use_ldlt = true;
+      factor_valid = true;
+      fresh_iterations = -1;
+      return true;
+    }
+    const auto t1 = Clock::now();
+    // The same blocks as `physics`: the same pattern, and the analysis holds for both.
+    projected.Prepare(problem, x);
+    Eigen::VectorXd unused;
+    projected.AssembleSecondOrder(problem, x, energy::Curvature::kProjected, true, &unused);
+    projected.Finish(problem, 0.0, &unused);
+    report->assemble_s += Seconds(t1);
+    return FactorizeOf(&projected, 1.0, report);
+  }
+
+  // Factorizes the matrix of `a` plus shifts from kFirstShift up to max_shift of its mean
+  // diagonal; false if none is positive definite.
+  bool FactorizeOf(energy::Assembler* a, double max_shift, SolveReport* report) {
+    const auto t0 = Clock::now();
+    Eigen::SparseMatrix<double>& K = a->H();
+    Analyse(K);
+    const std::vector<int>& diagonal_at = a->diagonal_at();
+    std::vector<double> diagonal(diagonal_at.size());
+    double mean = 0.0;
+    for (size_t c = 0; c < diagonal_at.size(); ++c) {
+      diagonal[c] = K.valuePtr()[diagonal_at[c]];
+      mean += std::abs(diagonal[c]);
+    }
+    mean /= std::max<size_t>(1, diagonal.size());
+    factor_valid = false;
+    for (double shift = kFirstShift; shift <= max_shift && !factor_valid; shift *= 100.0) {
+      for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c] + shift * mean;
+      ++report->factorizations;
+      {
+        const ScopedThreads one_thread(1);
+        // On one thread: the same factor (and so the same PCG iterates) on any thread count
+        // (the team's tiles round differently), and no team to wait for on a busy machine.
+        factor_single = substitutions.Factorize(*factor.raw(), K, structure_pending, 1);
+      }
+      if (factor_single) {
+        structure_pending = false;
+        factor_valid = true;
+        break;
+      }
+      const ScopedThreads one_thread(1);
+      WithThreadLimit(1, [&] { factor.factorize(K); });
+      factor_valid = factor.info() == Eigen::Success;
+    }
+    for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c];
+    fresh_iterations = -1;
+    report->factorize_s += Seconds(t0);
+    return factor_valid;
+  }
+
+  // The penalties at f (set by Linearize): value, gradients, curvatures, and Phi~^-1.
+  void Penalties(const energy::Equilibrium& eq) {
+    const int n = physics.num_vertices();
+    phi.resize(static_cast<size_t>(n));
+    phi_inverse.resize(static_cast<size_t>(n));
+    phi_gradient.setZero(3 * n);
+    equilibrium_energy = 0.0;
+    for (int v = 0; v < n; ++v) {
+      Eigen::Vector3d gradient;
+      Eigen::Matrix3d& c = phi[static_cast<size_t>(v)];
+      equilibrium_energy += eq.Penalty(v, f.segment<3>(3 * v), &gradient, &c);
+      phi_gradient.segment<3>(3 * v) = gradient;
+      // Phi~: a support's reaction is free (Phi = 0); the preconditioner takes its vertex as a
+      // free one's.
+      double floor = 1e-6 * eq.force_weight[static_cast<size_t>(v)];
+      if (eq.site[static_cast<size_t>(v)] == energy::ForceSite::kSupport) floor = eq.force_weight[static_cast<size_t>(v)];
+      floor = std::max(floor, 1e-300);
+      phi_inverse[static_cast<size_t>(v)] = Eigen::Matrix3d(c + floor * Eigen::Matrix3d::Identity()).inverse();
+    }
+  }
+
+  // H, g, K, f, the penalties and G at x; *terms (first only) the energy there.
+  void Linearize(const energy::Problem& problem, const Vertices& x, bool first, EnergyTerms* terms,
+                 SolveReport* report) {
+    const auto t0 = Clock::now();
+    objective.AssembleGaussNewton(problem, x, first, &g, terms);
+    physics.AssembleSecondOrder(problem, x, energy::Curvature::kExact, true, &f);
+    physics.Finish(problem, 0.0, &f);
+    Penalties(*problem.equilibrium());
+    Eigen::VectorXd k_phi;
+    BlockProduct(physics.H(), phi_gradient, threads, &k_phi);
+    G = g + k_phi;
+    if (terms != nullptr) terms->equilibrium = equilibrium_energy;
+    report->assemble_s += Seconds(t0);
+  }
+
+  // y = (H + K Phi K) p.
+  void Product(const Eigen::VectorXd& p, Eigen::VectorXd* y) {
+    Eigen::VectorXd kp, hp;
+    BlockProduct(physics.H(), p, threads, &kp);
+    for (size_t v = 0; v < phi.size(); ++v) kp.segment<3>(3 * v) = phi[v] * kp.segment<3>(3 * v).eval();
+    BlockProduct(physics.H(), kp, threads, y);
+    BlockProduct(objective.H(), p, threads, &hp);
+    *y += hp;
+  }
+
+  // z = K~^-1 Phi~^-1 K~^-1 r.
+  void Precondition(const Eigen::VectorXd& r, Eigen::VectorXd* z, SolveReport* report) {
+    Eigen::VectorXd u;
+    auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd* out) {
+      if (use_ldlt) {
+        *out = ldlt.solve(b);
+      } else if (factor_single) {
+        substitutions.Solve(b, out);
+      } else {
+        *out = factor.solve(b);
+      }
+      ++report->linear_solves;
+    };
+    solve(r, &u);
+    for (size_t v = 0; v < phi_inverse.size(); ++v) u.segment<3>(3 * v) = phi_inverse[v] * u.segment<3>(3 * v).eval();
+    solve(u, z);
+  }
+
+  // PCG on (H + K Phi K) dx = b; false if it did not converge in max_iterations.
+  bool Pcg(const Eigen::VectorXd& b, int max_iterations, Eigen::VectorXd* dx, int* iterations,
+           SolveReport* report) {
+    const ScopedThreads one_thread(1);
+    const auto t0 = Clock::now();
+    dx->setZero(b.size());
+    *iterations = 0;
+    const double b_norm = b.norm();
+    if (b_norm == 0.0) return true;
+    Eigen::VectorXd r = b, z, q;
+    Precondition(r, &z, report);
+    Eigen::VectorXd p = z;
+    double rz = r.dot(z);
+    bool converged = false;
+    for (int k = 0; k < max_iterations; ++k) {
+      Product(p, &q);
+      const double pq = p.dot(q);
+      if (!(pq > 0.0) || !(rz > 0.0) || !std::isfinite(rz)) break;
+      const double step = rz / pq;
+      *dx += step * p;
+      r -= step * q;
+      ++*iterations;
+      ++report->pcg_iterations;
+      if (r.norm() <= kPcgTolerance * b_norm) {
+        converged = true;
+        break;
+      }
+      Precondition(r, &z, report);
+      const double rz_next = r.dot(z);
+      p = z + (rz_next / rz) * p;
+      rz = rz_next;
+    }
+    report->linear_solve_s += Seconds(t0);
+    return converged && dx->allFinite();
+  }
+
+  // The step: PCG with the kept factor while it serves (at most twice, and 10 more than, the
+  // iterations of the first step after it was made), else with a new one.
+  bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, SolveReport* report) {
+    int iterations = 0;
+    if (factor_valid) {
+      const int limit = fresh_iterations < 0 ? kMaxPcgIterations
+                                             : std::max(2 * fresh_iterations, fresh_iterations + 10);
+      if (Pcg(-G, limit, dx, &iterations, report)) {
+        if (fresh_iterations < 0) fresh_iterations = iterations;
+        return true;
+      }
+    }
+    if (!Factorize(problem, x, report)) return false;
+    if (!Pcg(-G, kMaxPcgIterations, dx, &iterations, report)) return false;
+    fresh_iterations = iterations;
+    return true;
+  }
+};
+
+EquilibriumSolver::EquilibriumSolver(const BackendOptions& options, int threads) : impl_(new Impl) {
+  impl_->options = options;
+  impl_->threads = threads;
+  impl_->objective.set_threads(threads);
+  impl_->physics.set_threads(threads);
+  impl_->objective.set_groups(energy::ObjectiveGroups());
+  impl_->physics.set_groups(energy::PhysicsGroups());
+  impl_->projected.set_threads(threads);
+  impl_->projected.set_groups(energy::PhysicsGroups());
+}
+EquilibriumSolver::~EquilibriumSolver() = default;
+
+SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
+  const auto start = Clock::now();
+  Impl& m = *impl_;
+  SolveReport report;
+  const energy::Equilibrium* eq = problem.equilibrium();
+  if (eq == nullptr || !eq->IsValid(problem.num_vertices()) || x->rows() != problem.num_vertices()) {
+    report.message = "fast back end: the equilibrium problem is not set up for its vertices";
+    report.stop = StopReason::kFailure;
+    return report;
+  }
+  const ScopedThreads threads(m.threads);
+  auto t0 = Clock::now();
+  report.pattern_rebuilds += m.objective.Prepare(problem, *x);
+  report.pattern_rebuilds += m.physics.Prepare(problem, *x);
+  if (m.physics.pattern_revision() != m.pattern_revision) {
+    m.pattern_revision = m.physics.pattern_revision();
+    m.analysed = false;
+    m.ldlt_analysed = false;
+    m.factor_valid = false;
+    ++report.analyses;
+  }
+  report.assemble_s += Seconds(t0);
+  m.Linearize(problem, *x, /*first=*/true, &report.before, &report);
+  report.after = report.before;
+  double energy = report.before.total();
+  const double first_gradient = m.G.lpNorm<Eigen::Infinity>();
+  report.success = true;
+  report.stop = StopReason::kMaxIterations;
+  Eigen::VectorXd dx;
+  Vertices trial;
+  const int n = problem.num_vertices();
+  for (int step = 0; step < m.options.max_iterations; ++step) {
+    const double gradient = m.G.lpNorm<Eigen::Infinity>();
+    if (gradient == 0.0 || (step > 0 && gradient <= 1e-9 * first_gradient)) {
+      report.stop = StopReason::kGradient;
+      break;
+    }
+    if (!m.Step(problem, *x, &dx, &report)) {
+      report.success = false;
+      report.stop = StopReason::kFailure;
+      report.message = "fast back end: the equilibrium step did not converge";
+      break;
+    }
+    ++report.iterations;
+    double alpha = 1.0, trial_energy = energy;
+    bool accepted = false;
+    EnergyTerms trial_terms;
+    for (int halving = 0; halving < 10; ++halving, alpha *= 0.5) {
+      trial = *x;
+      for (int v = 0; v < n; ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
+      const auto t1 = Clock::now();
+      trial_terms = problem.Evaluate(trial, m.threads);
+      report.evaluate_s += Seconds(t1);
+      trial_energy = trial_terms.total();
+      if (std::isfinite(trial_energy) && trial_energy <= energy) {
+        accepted = true;
+        break;
+      }
+    }
+    if (!accepted) {
+      report.stop = StopReason::kNoDecrease;
+      break;
+    }
+    double largest = 0.0;
+    for (int v = 0; v < n; ++v) largest = std::max(largest, dx.segment<3>(3 * v).norm());
+    largest *= alpha;
+    const double decrease = (energy - trial_energy) / std::max(energy, 1e-300);
+    x->swap(trial);
+    energy = trial_energy;
+    report.after = trial_terms;
+    if (largest <= m.options.step_tolerance || largest == 0.0) {
+      report.stop = StopReason::kStep;
+      break;
+    }
+    if (decrease < m.options.relative_tolerance) {
+      report.stop = StopReason::kEnergy;
+      break;
+    }
+    if (time_limit_s > 0 && Seconds(start) >= time_limit_s) {
+      report.stop = StopReason::kTimeLimit;
+      break;
+    }
+    if (step + 1 == m.options.max_iterations) break;
+    m.Linearize(problem, *x, /*first=*/false, nullptr, &report);
+  }
+  if (report.success) report.message = std::string("fast back end (equilibrium): ") + ToString(report.stop);
+  if (!x->allFinite()) {
+    report.success = false;
+    report.stop = StopReason::kFailure;
+    report.message = "fast back end: the step made the positions non-finite";
+  }
+  return report;
+}
+
+}  // namespace fast_backend
+}  // namespace femreg

@@ -1,0 +1,42 @@
+// The fast back end's solve of an equilibrium registration problem (energy/equilibrium.h):
+// Gauss-Newton on
+//
+//   J(x) = E_obj(x) + sum_v phi_v(f_v(x)),   f = dPi/dx,
+//
+// E_obj the data, temporal and anchor terms. A step solves (H + K Phi K) dx = -(g + K phi'),
+// H and g E_obj's Gauss-Newton matrix and gradient, K = d2Pi/dx2 the potential's exact
+// Hessian, Phi and phi' the penalties' curvatures and gradients. K Phi K couples a vertex's
+// two-ring and fills in far more than K; it is never formed: conjugate gradients multiply
+// by it (two products with K), preconditioned by M = K~ Phi~ K~, whose inverse is two
+// solves with a Cholesky factor of K~ = K + a small shift (rigid motions of a free body)
+// and a 3x3 block per vertex. M^-1 (K Phi K) is the identity, so PCG's iterations go to the
+// few smooth modes the data H stiffens: the same spectrum as the reduced, force-space
+// problem's (docs/theory/equilibrium.md). The factor of K~ is kept across steps and frames
+// while PCG converges in few iterations with it.
+#ifndef FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
+#define FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
+
+#include <memory>
+
+#include "energy/problem.h"
+#include "solvers/backend.h"
+
+namespace femreg {
+namespace fast_backend {
+
+class EquilibriumSolver {
+ public:
+  EquilibriumSolver(const BackendOptions& options, int threads);
+  ~EquilibriumSolver();
+  // As Backend::Solve, for a problem with an equilibrium (problem.equilibrium() not null).
+  SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace fast_backend
+}  // namespace femreg
+
+#endif  // FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
