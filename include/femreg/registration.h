@@ -238,6 +238,33 @@ struct SolverOptions {
   bool IsValid(std::string* error) const;
 };
 
+// Equilibrium registration (docs/theory/equilibrium.md): the shape is held in equilibrium
+// under its elastic forces, gravity and loads, its clamps and anchors, its contacts, and
+// external forces estimated every frame, which act only on the free surface (or a region of
+// it: Tracker::SetForceRegion) and are penalized; the data pull it only through them. The
+// fast back end solves it.
+struct ForceOptions {
+  bool estimate = false;
+  // The penalty on the surface tractions, 1/2 weight * c * integral |t|^2 dA, with c the scale
+  // at which a traction costs about as much as the data misfit it removes (the data stiffness
+  // per area times (L / E)^2, L the body's size, E its Young's modulus): smaller lets larger
+  // forces act, larger holds the shape nearer its unforced equilibrium. > 0.
+  double weight = 1.0;
+  // A group-L1 term on the nodal forces, in the same scale times a traction of 1% of E:
+  // > 0 makes the forces localise to few vertices (the contact area finds itself). >= 0.
+  double sparsity = 0.0;
+  // Forces only push (point into the body): a hand cannot pull.
+  bool pushing_only = false;
+  // With pushing_only: the tangential force is at most friction times the normal one
+  // (Coulomb's cone); < 0: any tangential force.
+  double friction = -1.0;
+  // The weight where no force may act (inside the body, off the region) and on a pushing-only
+  // force's pulling part, over `weight`: large enough to hold equilibrium there to a fraction
+  // of the forces elsewhere. >= 1.
+  double balance = 1e4;
+  bool IsValid(std::string* error) const;
+};
+
 struct RegistrationOptions {
   Regularizer regularizer = Regularizer::kCorotational;
   CameraOptions camera;
@@ -245,6 +272,7 @@ struct RegistrationOptions {
   DataTermOptions data;
   WeightOptions weights;
   SolverOptions solver;
+  ForceOptions forces;
   // The scene's gravity (on the lumped masses) and nodal loads act in the registration
   // energy as they do in simulate (Tracker::Create(scene); Tracker::SetExternalLoads).
   bool loads = true;
@@ -306,6 +334,12 @@ struct FrameSummary {
   double trim_distance = 0.0;
   double coverage = 1.0;
   EnergyTerms initial, final;
+  // The resultant of the external forces on the objects (N) and its moment about their
+  // centroid (the mass-weighted mean of the vertices; N m): the forces estimated
+  // (registration.forces.estimate) and the contacts', without gravity, the loads and the
+  // clamps' and anchors' reactions; without forces.estimate, the data term's pull. Per
+  // vertex: Tracker::external_forces.
+  Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;
   // Fast back end: factorizations (or multigrid hierarchies built), preconditioner
   // applications, conjugate-gradient iterations.

@@ -94,6 +94,13 @@ struct LoadSpec {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();  // N, the total, spread evenly
 };
 
+// Where external forces may act in equilibrium registration (registration.forces.region):
+// the selected vertices of the object's free surface.
+struct ForceRegionSpec {
+  std::string object;
+  VertexSelection selection;
+};
+
 // Vertices held by a gripper or a support during registration.
 struct AnchorSpec {
   std::string name;
@@ -192,6 +199,7 @@ struct Scene {
   ElasticModelType forward_model = ElasticModelType::kCorotational;
   RegistrationOptions registration;
   std::vector<AnchorSpec> anchors;
+  std::vector<ForceRegionSpec> force_regions;  // registration.forces.region; empty: every free surface vertex
   EffectsSpec effects;
   // Pairs, penalty and obstacles; used when effects.collision is on (an empty pair list
   // then means every pair of objects).

@@ -91,6 +91,14 @@ class Tracker {
   Status SetExternalLoads(int object, const Eigen::Vector3d& gravity,
                           const std::vector<std::pair<int, Eigen::Vector3d>>& nodal_loads);
 
+  // Equilibrium registration (RegistrationOptions::forces): estimated external forces act only
+  // on these vertices of object i's free surface (indices into its mesh as created); by
+  // default on all of it. Replaces what was set before; an empty list restores the default.
+  Status SetForceRegion(int object, const std::vector<int>& vertices);
+  // #V by 3: the external forces on object i's vertices in the last frame (N; see
+  // FrameSummary::force), zero at clamps and anchors.
+  const Vertices& external_forces(int object) const;
+
   // Cloud points with this label (PointCloud::labels) belong to the object; -1: none.
   Status SetObjectLabel(int object, int label);
 

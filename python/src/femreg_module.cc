@@ -113,6 +113,7 @@ py::dict EnergyDict(const EnergyTerms& e) {
   d["anchor"] = e.anchor;
   d["collision"] = e.collision;
   d["load"] = e.load;
+  d["equilibrium"] = e.equilibrium;
   d["total"] = e.total();
   return d;
 }
@@ -139,6 +140,8 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["object_contacts"] = s.object_contacts;
   d["obstacle_contacts"] = s.obstacle_contacts;
   d["max_penetration"] = s.max_penetration;
+  d["force"] = Eigen::Vector3d(s.force);
+  d["torque"] = Eigen::Vector3d(s.torque);
   py::dict t;
   t["preprocess"] = s.time.preprocess;
   t["prealign"] = s.time.prealign;
@@ -429,6 +432,17 @@ PYBIND11_MODULE(_femreg, m) {
                {DataMetric::kPointToPoint, DataMetric::kPointToPlane},
                "point_to_point or point_to_plane");
 
+  py::class_<ForceOptions>(m, "ForceOptions",
+                           "Equilibrium registration: external forces estimated every frame "
+                           "(the scene's registration.forces).")
+      .def(py::init<>())
+      .def_readwrite("estimate", &ForceOptions::estimate)
+      .def_readwrite("weight", &ForceOptions::weight)
+      .def_readwrite("sparsity", &ForceOptions::sparsity)
+      .def_readwrite("pushing_only", &ForceOptions::pushing_only)
+      .def_readwrite("friction", &ForceOptions::friction)
+      .def_readwrite("balance", &ForceOptions::balance);
+
   py::class_<WeightOptions>(m, "WeightOptions")
       .def(py::init<>())
       .def_readwrite("data", &WeightOptions::data)
@@ -473,6 +487,7 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("data", &RegistrationOptions::data)
       .def_readwrite("weights", &RegistrationOptions::weights)
       .def_readwrite("solver", &RegistrationOptions::solver)
+      .def_readwrite("forces", &RegistrationOptions::forces)
       .def_readwrite("loads", &RegistrationOptions::loads,
                      "The scene's gravity and loads act in the registration energy.")
       .def("validate",
@@ -824,6 +839,15 @@ PYBIND11_MODULE(_femreg, m) {
              return ToArray(t.tracker().vertices(object));
            },
            py::arg("object") = 0, "(V, 3) current positions (a copy).")
+      .def("external_forces",
+           [](PyTracker& t, int object) {
+             t.CheckObject(object);
+             return ToArray(t.tracker().external_forces(object));
+           },
+           py::arg("object") = 0,
+           "(V, 3) the external force on each vertex in the last frame (N): the estimated ones "
+           "(registration.forces.estimate) and the contacts', zero at clamps and anchors; "
+           "without forces.estimate, the data term's pull.")
       .def("mesh",
            [](PyTracker& t, int object) {
              t.CheckObject(object);

@@ -180,6 +180,34 @@ def test_gravity_bends_what_the_camera_does_not_see():
         tracker.set_external_loads(0, [0, 0, -9.81], vertices=[0])
 
 
+def test_estimated_forces_hold_up_what_is_seen_at_rest():
+    # Equilibrium registration (docs/theory/equilibrium.md): a clamped bar under gravity seen
+    # whole and unbent needs external forces that carry its weight: their resultant is the
+    # weight, upwards, and each vertex's force is in external_forces.
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    options = femreg.RegistrationOptions()
+    options.forces.estimate = True
+    options.forces.weight = 0.01
+    options.solver.max_outer_iterations = 10
+    clamped = [int(v) for v in np.flatnonzero(mesh.rest[:, 0] < 1e-9)]
+    material = femreg.Material(youngs_modulus=2e5, density=1000)
+    tracker = femreg.Tracker([mesh], [material], options)
+    tracker.add_anchor("clamp", 0, clamped, hard=True)
+    tracker.set_external_loads(0, [0, 0, -9.81])
+    tracker.track(_surface_cloud(mesh, mesh.rest))
+    summary = tracker.summary
+    assert summary["usable"] and summary["final_energy"]["equilibrium"] > 0
+    weight = 1000 * 0.2 * 0.04 * 0.04 * 9.81
+    np.testing.assert_allclose(summary["force"], [0, 0, weight], atol=0.1 * weight)
+    forces = tracker.external_forces(0)
+    assert forces.shape == (mesh.num_vertices, 3)
+    np.testing.assert_allclose(forces.sum(axis=0), summary["force"], atol=1e-9)
+    assert np.all(forces[clamped] == 0)  # the clamp's reaction is not an external force
+    options.solver.backend = "ceres"
+    with pytest.raises(femreg.Error, match="forces.estimate needs solver.backend: fast"):
+        femreg.Tracker([mesh], [material], options)
+
+
 def test_tracker_reports_bad_frames_in_the_summary():
     mesh = femreg.make_box([0.1, 0.02, 0.02], [5, 1, 1])
     tracker = femreg.Tracker([mesh], [femreg.Material()])

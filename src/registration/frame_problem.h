@@ -39,6 +39,16 @@ class FrameProblem {
   // The contact penalty of the detected contacts (k and D from the world).
   void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world);
 
+  // Equilibrium registration (registration.forces, energy/equilibrium.h): where forces may
+  // act, their penalties, and the surface's normals at state.x. Every outer iteration, after
+  // SetLoads and SetContacts; off (no equilibrium) unless `on`.
+  void SetEquilibrium(const TrackerState& state, bool on);
+  // The external forces on the vertices at state.x (N, #V by 3): what the elastic forces,
+  // gravity and the loads leave unbalanced, the contacts' forces and the estimated ones
+  // (without forces.estimate: the data term's pull). Zero at clamps and anchors (their
+  // reactions are not reported).
+  Vertices ExternalForces(const TrackerState& state) const;
+
   const energy::Problem& problem() const { return problem_; }
 
  private:

@@ -321,10 +321,35 @@ bool SolverOptions::IsValid(std::string* error) const {
   return true;
 }
 
+bool ForceOptions::IsValid(std::string* error) const {
+  if (!(weight > 0) || !std::isfinite(weight)) return Fail(error, "forces.weight", "must be > 0", weight);
+  if (!(sparsity >= 0) || !std::isfinite(sparsity)) {
+    return Fail(error, "forces.sparsity", "must be >= 0", sparsity);
+  }
+  if (!std::isfinite(friction)) return Fail(error, "forces.friction", "must be finite (< 0: no bound)", friction);
+  if (friction >= 0 && !pushing_only) {
+    return Fail(error, "forces.friction", "bounds a pushing force's tangential part: set forces.pushing_only too",
+                friction);
+  }
+  if (!(balance >= 1) || !std::isfinite(balance)) return Fail(error, "forces.balance", "must be >= 1", balance);
+  return true;
+}
+
 bool RegistrationOptions::IsValid(std::string* error) const {
   // The sub-structs already name their fields with their own prefix (camera., data., ...).
   if (!(camera.IsValid(error) && preprocess.IsValid(error) && data.IsValid(error) &&
-        weights.IsValid(error) && solver.IsValid(error))) {
+        weights.IsValid(error) && solver.IsValid(error) && forces.IsValid(error))) {
+    return false;
+  }
+  if (forces.estimate && solver.backend != SolverBackend::kFast) {
+    if (error) {
+      *error = "forces.estimate needs solver.backend: fast (the Ceres back end does not solve "
+               "equilibrium registration)";
+    }
+    return false;
+  }
+  if (forces.estimate && regularizer == Regularizer::kNone) {
+    if (error) *error = "forces.estimate needs an elastic regularizer (regularizer: none has no forces)";
     return false;
   }
   if (solver.trust_region == TrustRegion::kDogleg &&

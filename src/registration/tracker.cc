@@ -99,6 +99,8 @@ struct Tracker::Impl {
                       FrameSummary* s);
   // The contacts the result keeps and the deepest penetration (collision on).
   void MeasureContacts(FrameSummary* s);
+  // The external forces on the result: per vertex (state.external_forces) and their resultant.
+  void MeasureForces(FrameSummary* s);
   const SurfaceIndex& Surface() { return model_index.Get(state, 0.1 * mean_edge); }
   // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
   std::vector<int> warm_triangles;
@@ -269,6 +271,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
   UpdateOutputs(fc.index.get(), pairs, &state, options.solver.num_threads);
+  MeasureForces(&s);
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();
@@ -328,6 +331,11 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     frame_problem.SetContacts(state.contacts, *state.collision);
     s->time.collision += Seconds(t_collision);
   }
+  // Equilibrium registration starts each frame with one outer iteration of the energy without
+  // it: Gauss-Newton on the force residual converges slowly from far away (its curvature
+  // grows with the residual), and that iteration brings the shape near (docs/theory/equilibrium.md).
+  const bool warm_start = options.forces.estimate && k == 0;
+  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start);
   const energy::Problem& problem = frame_problem.problem();
 
   t0 = Clock::now();
@@ -397,6 +405,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // set is held (rise_from: pairs still join as the surface reaches the cloud), during a move
   // of more than kRiseMoveLimit mean edges, or by more than kRiseEnergyLimit of the previous
   // energy (see there).
+  if (warm_start) {  // another energy: nothing to compare with
+    *previous_energy = std::numeric_limits<double>::infinity();
+    return k + 1 < options.solver.max_outer_iterations;
+  }
   const double e1 = row.after.total();
   const double e0 = *previous_energy;
   const double decrease = (e0 - e1) / std::max(e1, 1e-300);  // < 0: it rose
@@ -452,6 +464,27 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
   }
   return true;
+}
+
+void Tracker::Impl::MeasureForces(FrameSummary* s) {
+  const Vertices forces = frame_problem.ExternalForces(state);
+  double mass = 0.0;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int v = 0; v < state.num_vertices; ++v) {
+    mass += state.mass(v);
+    centroid += state.mass(v) * state.x.row(v).transpose();
+  }
+  if (mass > 0) centroid /= mass;
+  s->force.setZero();
+  s->torque.setZero();
+  for (int v = 0; v < state.num_vertices; ++v) {
+    const Eigen::Vector3d f = forces.row(v).transpose();
+    s->force += f;
+    s->torque += (state.x.row(v).transpose() - centroid).cross(f);
+  }
+  for (const ObjectState& o : state.objects) {
+    state.external_forces[static_cast<size_t>(&o - state.objects.data())] = forces.middleRows(o.offset, o.mesh.num_vertices());
+  }
 }
 
 void Tracker::Impl::MeasureContacts(FrameSummary* s) {
@@ -551,6 +584,28 @@ Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
   state.fracture = std::move(f);
   return Status::Ok();
 }
+
+Status Tracker::SetForceRegion(int object, const std::vector<int>& vertices) {
+  TrackerState& state = impl_->state;
+  if (object < 0 || object >= num_objects()) return Status::Error("force region: no object " + std::to_string(object));
+  const int nv = state.objects[object].mesh.num_vertices();
+  std::vector<char> region;
+  if (!vertices.empty()) {
+    region.assign(static_cast<size_t>(nv), 0);
+    for (int v : vertices) {
+      if (v < 0 || v >= nv) {
+        return Status::Error("force region: vertex " + std::to_string(v) + " is not one of object " +
+                             std::to_string(object) + "'s " + std::to_string(nv));
+      }
+      region[static_cast<size_t>(v)] = 1;
+    }
+  }
+  if (state.force_region.size() < state.objects.size()) state.force_region.resize(state.objects.size());
+  state.force_region[static_cast<size_t>(object)] = std::move(region);
+  return Status::Ok();
+}
+
+const Vertices& Tracker::external_forces(int object) const { return impl_->state.external_forces.at(object); }
 
 const Eigen::VectorXd& Tracker::fracture_measure(int object) const {
   static const Eigen::VectorXd kEmpty;

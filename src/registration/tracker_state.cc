@@ -24,6 +24,7 @@ void TrackerState::RebuildGlobalArrays() {
   vertex_object.resize(num_vertices);
   residuals.resize(objects.size());
   observed.resize(objects.size());
+  external_forces.resize(objects.size());
   surface.resize(num_triangles, 3);
   surface_vertices.clear();
   int row = 0;
@@ -34,6 +35,7 @@ void TrackerState::RebuildGlobalArrays() {
     for (int v = 0; v < nv; ++v) vertex_object[o.offset + v] = static_cast<int>(i);
     residuals[i] = Eigen::VectorXd::Constant(nv, std::numeric_limits<double>::quiet_NaN());
     observed[i].assign(nv, 0);
+    external_forces[i] = Vertices::Zero(nv, 3);
     surface.middleRows(row, o.mesh.num_surface_triangles()) = o.mesh.surface.array() + o.offset;
     row += o.mesh.num_surface_triangles();
     for (int v : o.mesh.surface_vertices) surface_vertices.push_back(v + o.offset);

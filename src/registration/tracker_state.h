@@ -85,6 +85,11 @@ struct TrackerState {
   // it had a data pair in the last frame.
   std::vector<Eigen::VectorXd> residuals;
   std::vector<std::vector<char>> observed;
+  // Per object: the external forces on its vertices in the last frame (N; FrameProblem::
+  // ExternalForces), and where estimated forces may act (Tracker::SetForceRegion; per vertex
+  // of the object as created, empty: its whole free surface).
+  std::vector<Vertices> external_forces;
+  std::vector<std::vector<char>> force_region;
 
   // The per-vertex arrays and the global surface from the objects (after Init and after a
   // topology change).

@@ -63,6 +63,21 @@ void SceneParser::ParseForward(const YamlValue& v) {
   }
 }
 
+void SceneParser::ParseForceRegion(const YamlValue& v) {
+  auto one = [this](const YamlValue& entry) {
+    entry.CheckKeys({"object", "select"});
+    ForceRegionSpec region;
+    region.object = ParseObjectName(entry);
+    region.selection = ParseSelection(entry);
+    scene_->force_regions.push_back(region);
+  };
+  if (v.IsSequence()) {
+    for (int i = 0; i < v.size(); ++i) one(v[i]);
+  } else {
+    one(v);
+  }
+}
+
 void SceneParser::ParseAnchors(const YamlValue& list) {
   list.RequireSequence();
   std::set<std::string> names;

@@ -9,8 +9,20 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseRegistration(const YamlValue& v) {
-  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads"});
+  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads", "forces"});
   RegistrationOptions& r = scene_->registration;
+  if (v.Has("forces")) {
+    const YamlValue f = v["forces"];
+    f.CheckKeys({"estimate", "region", "weight", "sparsity", "pushing_only", "friction", "balance"});
+    ForceOptions& o = r.forces;
+    if (f.Has("estimate")) o.estimate = f["estimate"].AsBool();
+    if (f.Has("weight")) o.weight = f["weight"].AsDouble();
+    if (f.Has("sparsity")) o.sparsity = f["sparsity"].AsDouble();
+    if (f.Has("pushing_only")) o.pushing_only = f["pushing_only"].AsBool();
+    if (f.Has("friction")) o.friction = f["friction"].AsDouble();
+    if (f.Has("balance")) o.balance = f["balance"].AsDouble();
+    if (f.Has("region")) ParseForceRegion(f["region"]);
+  }
   if (v.Has("loads")) r.loads = v["loads"].AsBool();
   if (v.Has("regularizer")) {
     r.regularizer = ParseEnum(v["regularizer"],

@@ -69,6 +69,8 @@ class SceneParser {
   void ParseLoads(const YamlValue& list);
   void ParseForward(const YamlValue& v);
   void ParseAnchors(const YamlValue& list);
+  // registration.forces.region: {object, select} or a list of them.
+  void ParseForceRegion(const YamlValue& v);
 
   // parse_registration.cc
   void ParseRegistration(const YamlValue& v);

@@ -67,6 +67,22 @@ Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
       if (!status.ok()) return status;
     }
   }
+  // Where estimated forces may act (registration.forces.region): the union of an object's selections.
+  {
+    std::vector<std::vector<int>> regions(scene.objects.size());
+    for (const ForceRegionSpec& r : scene.force_regions) {
+      const int object = ObjectIndex(scene, r.object);
+      std::vector<int> vertices;
+      status = SelectVertices(r.selection, t->mesh(object).rest, &vertices);
+      if (!status.ok()) return status;
+      regions[object].insert(regions[object].end(), vertices.begin(), vertices.end());
+    }
+    for (size_t i = 0; i < regions.size(); ++i) {
+      if (regions[i].empty()) continue;
+      status = t->SetForceRegion(static_cast<int>(i), regions[i]);
+      if (!status.ok()) return Status::Error(scene.path + ": registration.forces.region: " + status.message());
+    }
+  }
   // Clamps hold their vertices where the mesh starts, as simulate holds them at rest: hard
   // anchors named "boundary[i]". Prescribed displacements drive a simulation and are not
   // used here (femreg register refuses them; a support that moves is an anchor with

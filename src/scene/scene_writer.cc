@@ -244,7 +244,8 @@ YAML::Node ForwardNode(const Scene& scene) {
   return n;
 }
 
-YAML::Node RegistrationNode(const RegistrationOptions& r, const std::string& base_dir) {
+YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<ForceRegionSpec>& regions,
+                            const std::string& base_dir) {
   const RegistrationOptions d;
   YAML::Node n = Map();
   if (r.regularizer != d.regularizer) n["regularizer"] = ToString(r.regularizer);
@@ -335,6 +336,25 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::string& bas
   Put(weights, "temporal", r.weights.temporal, d.weights.temporal);
   Put(weights, "anchor", r.weights.anchor, d.weights.anchor);
   PutMap(n, "weights", weights);
+
+  YAML::Node forces = FlowMap();
+  Put(forces, "estimate", r.forces.estimate, d.forces.estimate);
+  Put(forces, "weight", r.forces.weight, d.forces.weight);
+  Put(forces, "sparsity", r.forces.sparsity, d.forces.sparsity);
+  Put(forces, "pushing_only", r.forces.pushing_only, d.forces.pushing_only);
+  Put(forces, "friction", r.forces.friction, d.forces.friction);
+  Put(forces, "balance", r.forces.balance, d.forces.balance);
+  if (!regions.empty()) {
+    YAML::Node list(YAML::NodeType::Sequence);
+    for (const ForceRegionSpec& region : regions) {
+      YAML::Node entry = FlowMap();
+      if (!region.object.empty()) entry["object"] = region.object;
+      entry["select"] = SelectionNode(region.selection);
+      list.push_back(entry);
+    }
+    forces["region"] = list;
+  }
+  PutMap(n, "forces", forces);
 
   const SolverOptions& s = r.solver;
   YAML::Node solver = FlowMap();
@@ -572,7 +592,7 @@ std::string SceneToYaml(const Scene& scene, const std::string& base_dir,
     root["loads"] = list;
   }
   PutMap(root, "forward", ForwardNode(scene));
-  PutMap(root, "registration", RegistrationNode(scene.registration, base_dir));
+  PutMap(root, "registration", RegistrationNode(scene.registration, scene.force_regions, base_dir));
   if (!scene.anchors.empty()) {
     YAML::Node list(YAML::NodeType::Sequence);
     for (const AnchorSpec& a : scene.anchors) list.push_back(AnchorNode(scene, a));

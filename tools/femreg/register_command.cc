@@ -90,7 +90,8 @@ const char kStatsHeader[] =
     "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
     "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,stopped_by,"
     "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
-    "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,message\n";
+    "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
+    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,message\n";
 
 // Row i of stats.csv.
 std::string StatsRow(size_t i, const FrameRow& row) {
@@ -131,7 +132,9 @@ std::string StatsRow(size_t i, const FrameRow& row) {
                 s.time.factorization * 1e3, s.time.linear_solve * 1e3, s.time.evaluation * 1e3,
                 s.time.fracture * 1e3);
   os << buf;
-  std::snprintf(buf, sizeof(buf), ",%.6g", s.final.load);
+  std::snprintf(buf, sizeof(buf), ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", s.final.load,
+                s.final.equilibrium, s.force.x(), s.force.y(), s.force.z(), s.torque.x(), s.torque.y(),
+                s.torque.z());
   os << buf;
   std::string msg = row.read_error.empty() ? s.message : row.read_error;
   std::replace(msg.begin(), msg.end(), '"', '\'');
@@ -307,6 +310,17 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                             {"seen_max", number(t.seen_max * 1e3)},
                             {"hidden_mean", number(t.hidden_mean * 1e3)},
                             {"hidden_max", number(t.hidden_max * 1e3)}};
+  }
+  {
+    // The external forces' resultant per frame (N): what the run estimated (or, without
+    // registration.forces.estimate, the data term's pull).
+    json forces = json::array();
+    for (const FrameRow& r : rows) {
+      const FrameSummary& s = r.summary;
+      forces.push_back({{"force_N", {number(s.force.x()), number(s.force.y()), number(s.force.z())}},
+                        {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}});
+    }
+    j["forces"] = {{"estimated", o.forces.estimate}, {"per_frame", forces}};
   }
   double deepest = 0.0;
   int contacts = 0;
@@ -726,6 +740,11 @@ int RunRegister(const RegisterArgs& args) {
         fields.emplace_back();
         fields.back().name = "error_vector";  // m, x - x_true
         fields.back().values = e;
+      }
+      if (tracker->external_forces(i).rows() == m.num_vertices()) {
+        fields.emplace_back();
+        fields.back().name = "force";  // N, the external force on each vertex (FrameSummary::force)
+        fields.back().values = tracker->external_forces(i);
       }
       vertex_offset += m.num_vertices();
       const std::string rel = std::string("frames/") + name;

@@ -1,0 +1,291 @@
+// Equilibrium registration (energy/equilibrium.h, solvers/fast/equilibrium_step.h): the
+// penalties' derivatives, the force residual's invariants (zero at rest and under rigid
+// motion, force balance), the fast back end's solve reaching a stationary point of the
+// energy, and the tracker recovering a known load from the shape it made.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <memory>
+#include <random>
+
+#include "energy/equilibrium.h"
+#include "energy/problem.h"
+#include "femreg/forward.h"
+#include "femreg/io.h"
+#include "femreg/tracker.h"
+#include "solvers/backend.h"
+
+namespace femreg {
+namespace {
+
+std::string Format(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "(%.4f, %.4f, %.4f)", v.x(), v.y(), v.z());
+  return buf;
+}
+
+// One vertex of each kind, the free one with every option.
+energy::Equilibrium Sites(bool pushing_only, double friction, double sparsity) {
+  energy::Equilibrium eq;
+  eq.site = {energy::ForceSite::kBalanced, energy::ForceSite::kFree, energy::ForceSite::kSupport};
+  eq.force_weight = {1.0, 0.7, 1.0};
+  eq.strong_weight = {50.0, 80.0, 50.0};
+  eq.sparsity = {0.0, sparsity, 0.0};
+  eq.sparsity_floor = 0.05;
+  eq.pushing_only = pushing_only;
+  eq.friction = friction;
+  eq.normal.assign(3, Eigen::Vector3d(1, 2, 2) / 3.0);
+  return eq;
+}
+
+TEST(EquilibriumPenalty, GradientMatchesCentralDifferencesAndCurvatureIsPositive) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (bool pushing : {false, true}) {
+    for (double friction : {-1.0, 0.0, 0.6}) {
+      if (friction >= 0 && !pushing) continue;
+      for (double sparsity : {0.0, 0.3}) {
+        const energy::Equilibrium eq = Sites(pushing, friction, sparsity);
+        ASSERT_TRUE(eq.IsValid(3));
+        for (int trial = 0; trial < 200; ++trial) {
+          for (int v = 0; v < 3; ++v) {
+            const Eigen::Vector3d f(normal(rng), normal(rng), normal(rng));
+            Eigen::Vector3d g;
+            Eigen::Matrix3d c;
+            const double value = eq.Penalty(v, f, &g, &c);
+            EXPECT_GE(value, 0.0);
+            const double h = 1e-6;
+            for (int k = 0; k < 3; ++k) {
+              Eigen::Vector3d fp = f, fm = f;
+              fp[k] += h;
+              fm[k] -= h;
+              const double slope = (eq.Penalty(v, fp, nullptr, nullptr) - eq.Penalty(v, fm, nullptr, nullptr)) / (2 * h);
+              EXPECT_NEAR(g[k], slope, 1e-5 * (1.0 + g.norm())) << "vertex " << v << " pushing " << pushing
+                                                                 << " friction " << friction;
+            }
+            EXPECT_LT((c - c.transpose()).norm(), 1e-12 * (1.0 + c.norm()));
+            EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().minCoeff(), -1e-12);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(EquilibriumPenalty, PushingOnlyCostsNothingMoreInsideTheConeAndTheSupportNothing) {
+  const energy::Equilibrium free = Sites(false, -1.0, 0.0);
+  const energy::Equilibrium cone = Sites(true, 0.5, 0.0);
+  const Eigen::Vector3d n = cone.normal[1];
+  const Eigen::Vector3d t = n.unitOrthogonal();
+  const Eigen::Vector3d push = -2.0 * n + 0.9 * t;  // |f_t| = 0.9 <= 0.5 * 2
+  EXPECT_DOUBLE_EQ(cone.Penalty(1, push, nullptr, nullptr), free.Penalty(1, push, nullptr, nullptr));
+  const Eigen::Vector3d slide = -2.0 * n + 1.5 * t;  // beyond the cone
+  EXPECT_GT(cone.Penalty(1, slide, nullptr, nullptr), free.Penalty(1, slide, nullptr, nullptr));
+  const Eigen::Vector3d pull = 2.0 * n;  // the whole pull is outside: 1/2 beta |f|^2 more
+  EXPECT_NEAR(cone.Penalty(1, pull, nullptr, nullptr) - free.Penalty(1, pull, nullptr, nullptr),
+              0.5 * cone.strong_weight[1] * pull.squaredNorm(), 1e-12);
+  EXPECT_EQ(cone.Penalty(2, pull, nullptr, nullptr), 0.0);
+  EXPECT_DOUBLE_EQ(cone.Penalty(0, pull, nullptr, nullptr), 0.5 * cone.strong_weight[0] * pull.squaredNorm());
+}
+
+// A 2 x 1 x 1 box of corotational elements, optionally under gravity on its lumped masses.
+struct BoxProblem {
+  TetMesh mesh;
+  ElasticModel model;
+  energy::Problem problem;
+  Material material;
+  explicit BoxProblem(int n = 2) {
+    mesh = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 2 * n, n, n);
+    material.youngs_modulus = 2e4;
+    material.poisson_ratio = 0.3;
+    material.density = 1000.0;
+    ComputeLumpedMasses(&mesh, material.density);
+    model.Build(mesh, ElasticModelType::kCorotational, material);
+    problem.Reset(mesh.num_vertices());
+    std::vector<std::array<int, 4>> cells;
+    auto& set = problem.AddSet<energy::ElasticElement>(energy::TermGroup::kElastic);
+    for (int e = 0; e < mesh.num_tets(); ++e) {
+      energy::ElasticElement b;
+      for (int k = 0; k < 4; ++k) b.vertices[k] = mesh.tets(e, k);
+      b.rest = &model.rest(e);
+      b.rotation = &model.rotation(e);
+      set.Add(b);
+      cells.push_back(b.vertices);
+    }
+    problem.SetCoupling(cells);
+  }
+  void AddGravity(const Vertices& origin) {
+    auto& loads = problem.AddSet<energy::ExternalLoad>(energy::TermGroup::kLoad);
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      energy::ExternalLoad block;
+      if (energy::MakeExternalLoad(v, mesh.mass(v) * Eigen::Vector3d(0, 0, -9.81), origin.row(v).transpose(), 0.05,
+                                   &block)) {
+        loads.Add(block);
+      }
+    }
+  }
+};
+
+TEST(ForceResidual, ZeroAtRestAndUnderRigidMotion) {
+  BoxProblem box;
+  Eigen::VectorXd f;
+  energy::ForceResidual(box.problem, box.mesh.rest, &f);
+  const double scale = box.material.youngs_modulus * 0.05 * 0.05;  // N: E times an element's face
+  EXPECT_LT(f.lpNorm<Eigen::Infinity>(), 1e-12 * scale);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.8, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const Vertices moved = (box.mesh.rest * R.transpose()).rowwise() + Eigen::RowVector3d(0.3, -0.1, 2.0);
+  energy::ForceResidual(box.problem, moved, &f);
+  EXPECT_LT(f.lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+}
+
+// The elastic forces are internal: the residuals of all vertices add up to minus the loads,
+// whatever the shape (with a clamp, its reactions close the balance).
+TEST(ForceResidual, ForcesBalanceTheLoads) {
+  BoxProblem box;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+  Vertices x = box.mesh.rest;
+  for (int v = 0; v < x.rows(); ++v) x.row(v) += Eigen::RowVector3d(jitter(rng), jitter(rng), jitter(rng));
+  box.AddGravity(x);
+  Eigen::VectorXd f;
+  energy::ForceResidual(box.problem, x, &f);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int v = 0; v < x.rows(); ++v) sum += f.segment<3>(3 * v);
+  const Eigen::Vector3d weight(0, 0, -9.81 * box.mesh.mass.sum());
+  EXPECT_LT((sum + weight).norm(), 1e-9 * weight.norm()) << sum.transpose();
+  // Clamp one end: the free residuals, the reactions and the weight still balance.
+  box.problem.fixed().assign(static_cast<size_t>(x.rows()), 0);
+  for (int v = 0; v < x.rows(); ++v) box.problem.fixed()[v] = box.mesh.rest(v, 0) < 1e-9;
+  Eigen::VectorXd free_f;
+  energy::ForceResidual(box.problem, x, &free_f);
+  Eigen::Vector3d free_sum = Eigen::Vector3d::Zero(), reactions = Eigen::Vector3d::Zero();
+  for (int v = 0; v < x.rows(); ++v) {
+    (box.problem.is_fixed(v) ? reactions : free_sum) += (box.problem.is_fixed(v) ? f : free_f).segment<3>(3 * v);
+  }
+  EXPECT_LT((free_sum + reactions + weight).norm(), 1e-9 * weight.norm());
+}
+
+// The fast back end stops where the energy is stationary: its gradient (central differences of
+// Problem::Evaluate) a small fraction of where it started.
+TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
+  BoxProblem box(1);
+  const int n = box.mesh.num_vertices();
+  box.problem.fixed().assign(static_cast<size_t>(n), 0);
+  for (int v = 0; v < n; ++v) box.problem.fixed()[v] = box.mesh.rest(v, 0) < 1e-9;
+  box.AddGravity(box.mesh.rest);
+  // Data: the far end's vertices pulled 1 cm down and sideways.
+  auto& data = box.problem.AddSet<energy::PointToPoint<1>>(energy::TermGroup::kData);
+  for (int v = 0; v < n; ++v) {
+    if (box.mesh.rest(v, 0) < 0.2 - 1e-9) continue;
+    energy::PointToPoint<1> b;
+    b.vertices = {{v}};
+    b.barycentric = {{1.0}};
+    b.weight = 500.0;
+    b.target = box.mesh.rest.row(v).transpose() + Eigen::Vector3d(0, 0.004, -0.01);
+    data.Add(b);
+  }
+  auto eq = std::make_shared<energy::Equilibrium>();
+  eq->site.assign(n, energy::ForceSite::kFree);
+  eq->force_weight.assign(n, 1e-2);
+  eq->strong_weight.assign(n, 1e2);
+  for (int v = 0; v < n; ++v) {
+    if (box.problem.is_fixed(v)) eq->site[v] = energy::ForceSite::kSupport;
+  }
+  box.problem.SetEquilibrium(eq);
+  auto gradient = [&](const Vertices& x) {
+    Eigen::VectorXd g(3 * n);
+    const double h = 1e-7;
+    for (int v = 0; v < n; ++v) {
+      for (int k = 0; k < 3; ++k) {
+        Vertices xp = x, xm = x;
+        xp(v, k) += h;
+        xm(v, k) -= h;
+        g[3 * v + k] = box.problem.is_fixed(v) ? 0.0
+                                               : (box.problem.Evaluate(xp).total() - box.problem.Evaluate(xm).total()) / (2 * h);
+      }
+    }
+    return g;
+  };
+  Vertices x = box.mesh.rest;
+  const double before = gradient(x).norm();
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.max_iterations = 50;
+  options.relative_tolerance = 1e-12;
+  auto backend = MakeBackend(options);
+  const SolveReport report = backend->Solve(box.problem, 0.0, &x);
+  ASSERT_TRUE(report.success) << report.message;
+  EXPECT_LT(report.after.total(), report.before.total());
+  EXPECT_GT(report.after.equilibrium, 0.0);
+  EXPECT_LT(gradient(x).norm(), 1e-3 * before) << report.message;
+  // The Ceres back end says it does not solve it.
+  options.type = SolverBackend::kCeres;
+  const SolveReport ceres = MakeBackend(options)->Solve(box.problem, 0.0, &x);
+  EXPECT_FALSE(ceres.success);
+  EXPECT_NE(ceres.message.find("equilibrium"), std::string::npos);
+}
+
+// A cantilever bent by a known load at its tip (the forward solve makes the shape); the tracker,
+// seeing the whole deformed surface, estimates the load: its resultant within 10 %, nearly
+// all of it on the loaded end.
+TEST(EquilibriumRegistration, RecoversTheLoadThatMadeTheShape) {
+  TetMesh mesh = MakeBox(Eigen::Vector3d(0.2, 0.05, 0.05), 8, 2, 2);
+  Material material;
+  material.youngs_modulus = 2e4;
+  material.poisson_ratio = 0.3;
+  material.density = 100.0;
+  ComputeLumpedMasses(&mesh, material.density);
+  ForwardProblem forward;
+  std::vector<int> tip;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (mesh.rest(v, 0) < 1e-9) forward.clamped.push_back(v);
+    if (mesh.rest(v, 0) > 0.2 - 1e-9) tip.push_back(v);
+  }
+  const Eigen::Vector3d load(0.0, 0.02, -0.06);  // N in total
+  for (int v : tip) forward.nodal_loads.emplace_back(v, load / static_cast<double>(tip.size()));
+  TetMesh truth = mesh;
+  ElasticModel model;
+  model.Build(truth, ElasticModelType::kCorotational, material);
+  ForwardSummary summary;
+  ASSERT_TRUE(SolveQuasiStatic(forward, ForwardOptions(), &model, &truth, &summary).ok());
+  ASSERT_TRUE(summary.IsSolutionUsable());
+  // The whole surface, seen: its vertices and its triangles' centroids.
+  PointCloud cloud;
+  const int nf = truth.num_surface_triangles();
+  const int ns = static_cast<int>(truth.surface_vertices.size());
+  cloud.points.resize(ns + nf, 3);
+  for (int i = 0; i < ns; ++i) cloud.points.row(i) = truth.x.row(truth.surface_vertices[i]);
+  for (int f = 0; f < nf; ++f) {
+    cloud.points.row(ns + f) = (truth.x.row(truth.surface(f, 0)) + truth.x.row(truth.surface(f, 1)) +
+                                truth.x.row(truth.surface(f, 2))) / 3.0;
+  }
+  RegistrationOptions options;
+  options.forces.estimate = true;
+  options.forces.weight = 0.01;
+  options.solver.max_outer_iterations = 20;
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create({mesh}, {ObjectMaterial(material)}, options, &tracker).ok());
+  ASSERT_TRUE(tracker->AddAnchor("clamp", 0, forward.clamped, /*hard=*/true).ok());
+  FrameSummary s;
+  ASSERT_TRUE(tracker->Track(cloud, &s).ok());
+  ASSERT_TRUE(s.IsSolutionUsable()) << s.message;
+  const double shape_error = (tracker->vertices(0) - truth.x).rowwise().norm().maxCoeff();
+  EXPECT_LT(shape_error, 2e-3);
+  EXPECT_LT((s.force - load).norm(), 0.1 * load.norm()) << "estimated " << s.force.transpose();
+  // Where it acts: the last two layers of vertices carry nearly all of it.
+  const Vertices& f = tracker->external_forces(0);
+  Eigen::Vector3d near_tip = Eigen::Vector3d::Zero();
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (mesh.rest(v, 0) > 0.2 - 0.04) near_tip += f.row(v).transpose();
+  }
+  EXPECT_LT((near_tip - load).norm(), 0.2 * load.norm()) << near_tip.transpose();
+  std::printf("load %s N, estimated %s N, on the last 4 cm %s N; shape error %.3f mm\n", Format(load).c_str(),
+              Format(s.force).c_str(), Format(near_tip).c_str(), shape_error * 1e3);
+}
+
+}  // namespace
+}  // namespace femreg
