@@ -65,8 +65,8 @@ void ExpectBalanced(const ForceRow& r, double weight) {
   SCOPED_TRACE("frame " + std::to_string(r.frame));
   EXPECT_LE((r.force - Eigen::Vector3d(0, 0, weight)).norm(), 1e-6 * weight);
   EXPECT_LE(r.torque.norm(), 1e-6 * weight * kRadius);
-  // The table's normal force is the resultant's z less the hand's (to the rounding of the
-  // file's 7 significant digits, of forces up to 20 times the weight).
+  // The table's normal force is the resultant's z less the hand's, to the rounding of the
+  // file's 7 significant digits.
   EXPECT_NEAR(r.table, r.force.z() - r.hand.z(), 1e-5 * std::max(1.0, std::abs(r.table)));
 }
 
@@ -120,8 +120,8 @@ TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
   EXPECT_GT(above, 100);
 
   // Against the bundled dataset (tools/make_datasets.sh), within what may vary from one CPU
-  // or BLAS build to another (tests/synth_test.cc argues these bounds for the synth
-  // datasets; here the solves stop at a force imbalance below 1e-10 N, truth_solve.csv).
+  // or BLAS build to another: the bounds tests/synth_test.cc argues for the synth datasets,
+  // whose solves stop at looser tolerances than these (truth_solve.csv).
   const fs::path bundled = fs::path(FEMREG_DATASETS_DIR) / "hand_press";
   const double kMaxShift = 20e-6;  // m
   EXPECT_TRUE(regen::ReadBytes((bundled / "scene.yaml").string()) ==

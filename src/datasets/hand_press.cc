@@ -40,7 +40,7 @@ constexpr double kGravity = 9.81;  // m/s^2, along -z
 // A vertex closer than this to the far side of a surface has crossed it (m).
 constexpr double kCrossing = 1e-6;
 // A held vertex whose reaction pulls on its surface by more than this is let go (N): well
-// below a vertex's share of the weight (about 1e-4 N on the ground truth's mesh).
+// below a vertex's share of the weight (the weight over the ground truth's vertices).
 constexpr double kPull = 1e-7;
 constexpr int kMaxRounds = 40;      // active-set rounds per substep
 constexpr double kMaxStep = 0.002;  // m: the hand's largest motion in one substep
