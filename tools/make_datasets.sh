@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the bundled datasets: `femreg synth datasets/<name>/synth.yaml` into
 # datasets/<name> for every dataset that has a synth.yaml, `femreg contact-data` for the
-# contact sequences and `femreg organ-data` for organ_patch (or only those named). The output is deterministic: rerunning rewrites
+# contact sequences, `femreg organ-data` for organ_patch and `femreg hand-press-data` for
+# hand_press (or only those named). The output is deterministic: rerunning rewrites
 # the same bytes.
 #   tools/make_datasets.sh                 # all
 #   tools/make_datasets.sh demo beam_bend  # some
@@ -18,7 +19,7 @@ fi
 names=("$@")
 if [[ ${#names[@]} -eq 0 ]]; then
   for f in datasets/*/synth.yaml; do names+=("$(basename "$(dirname "$f")")"); done
-  names+=(contact_pair tool_table organ_patch)
+  names+=(contact_pair tool_table organ_patch hand_press)
 fi
 for name in "${names[@]}"; do
   dir=datasets/$name
@@ -32,6 +33,11 @@ for name in "${names[@]}"; do
       echo "== $name"
       rm -rf "$dir"
       "$FEMREG" organ-data --out "$dir"
+      continue ;;
+    hand_press)  # the ball pressed and handled (issue 38), from its own generator
+      echo "== $name"
+      rm -rf "$dir"
+      "$FEMREG" hand-press-data --out "$dir"
       continue ;;
   esac
   [[ -f $dir/synth.yaml ]] || { echo "make_datasets: $dir/synth.yaml not found" >&2; exit 1; }

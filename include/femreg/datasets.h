@@ -91,6 +91,42 @@ Status GenerateOrganPatchSequence(const std::string& dir,
 // The organ_patch body's tracked mesh at `divisions` (above).
 TetMesh OrganPatchMesh(int divisions);
 
+// ---------------------------------------------------------------------------------------
+// femreg hand-press-data: the bundled hand_press sequence.
+
+// What GenerateHandPressSequence made, and the balance it checked.
+struct HandPressReport {
+  int frames = 0;
+  int tracked_vertices = 0, truth_vertices = 0;
+  double mass_kg = 0.0;                 // the ground truth mesh's lumped masses
+  int min_points = 0, max_points = 0;   // cloud sizes
+  double mean_seen_fraction = 0.0;      // tracked vertices the camera saw, mean over frames
+  // Largest |external forces + M g| (N) and |their torque about the centre of mass| (N m)
+  // over the frames: zero in equilibrium, up to the solve's tolerance.
+  double max_force_imbalance_N = 0.0, max_torque_imbalance_Nm = 0.0;
+  double max_hand_force_N = 0.0;        // largest |resultant of the hand's contacts|
+  double rest_top_m = 0.0, min_top_m = 0.0;  // the ball's top at frame 0 and its lowest
+  double max_lift_m = 0.0;              // the ball's bottom at its highest
+};
+
+// "hand_press" (issue 38): a soft foam ball (radius 5 cm; E 20 kPa, nu 0.4, 80 kg/m^3)
+// resting on a table under gravity, pressed 15 mm from above by a rigid palm, grasped from
+// two sides, lifted 4 cm, tilted 0.3 rad, set down 2 cm aside, let go; 30 frames from one
+// 320x240 depth camera above and in front of it. The hand's points are in the clouds, the
+// table's are not. Ground truth: corotational FEM on a finer sphere (4913 vertices) with
+// sticking unilateral contacts with the table and the hand (an active set of held
+// vertices; their reactions are the contact forces). Writes DIR/scene.yaml (the tracking
+// scene), DIR/clouds/frame_NNNN.pcd, DIR/ground_truth/frame_NNNN.csv (1331 tracked
+// vertices), DIR/truth/frame_NNNN.vtu, DIR/forces.csv (per frame: the resultant and torque
+// about the centre of mass of the external forces other than gravity, the table's normal
+// force and the hand's force), DIR/truth_solve.csv (the solve per frame) and
+// DIR/README.md. Fails when a frame's forces do not balance gravity. `frames` <= 0 makes all
+// 30; fewer makes the first frames of the same timeline (the same bytes as a full run's).
+// Deterministic.
+Status GenerateHandPressSequence(const std::string& dir, int frames = 0,
+                                 HandPressReport* report = nullptr,
+                                 void (*progress)(int done, int total) = nullptr);
+
 }  // namespace femreg
 
 #endif  // FEMREG_DATASETS_H_

@@ -20,6 +20,7 @@ void RegisterCommands(CLI::App* app) {
   AddFractureDataCommand(app);
   AddContactDataCommand(app);
   AddOrganDataCommand(app);
+  AddHandPressDataCommand(app);
   AddMeshCommand(app);
   AddCalibrateCommand(app);
 }

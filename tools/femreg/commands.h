@@ -18,6 +18,7 @@ void AddEvalCommand(CLI::App* app);
 void AddFractureDataCommand(CLI::App* app);
 void AddContactDataCommand(CLI::App* app);
 void AddOrganDataCommand(CLI::App* app);
+void AddHandPressDataCommand(CLI::App* app);
 void AddMeshCommand(CLI::App* app);
 void AddCalibrateCommand(CLI::App* app);
 

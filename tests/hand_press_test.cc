@@ -1,0 +1,187 @@
+// The hand_press generator (issue 38, femreg hand-press-data): its first frames are the same
+// bytes on every run and agree with the bundled dataset, and its forces balance gravity.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "femreg/datasets.h"
+#include "femreg_test_config.h"
+#include "regenerate_compare.h"
+#include "test_util.h"
+
+namespace femreg {
+namespace {
+
+namespace fs = std::filesystem;
+using testing_util::TempDir;
+
+constexpr double kGravity = 9.81;
+constexpr double kRadius = 0.05;  // m
+const char kForcesHeader[] =
+    "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,table_force_N,"
+    "hand_force_x_N,hand_force_y_N,hand_force_z_N";
+
+struct ForceRow {
+  int frame = 0;
+  Eigen::Vector3d force, torque, hand;
+  double table = 0.0;
+};
+
+// forces.csv: its header, then one row per frame.
+std::vector<ForceRow> ReadForces(const std::string& path, std::string* header) {
+  std::vector<ForceRow> rows;
+  std::ifstream in(path);
+  std::getline(in, *header);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<double> v;
+    std::stringstream ls(line);
+    for (std::string cell; std::getline(ls, cell, ',');) v.push_back(std::atof(cell.c_str()));
+    if (v.size() != 11) {
+      ADD_FAILURE() << path << ": a row of " << v.size() << " cells: " << line;
+      continue;
+    }
+    ForceRow r;
+    r.frame = static_cast<int>(v[0]);
+    r.force = Eigen::Vector3d(v[1], v[2], v[3]);
+    r.torque = Eigen::Vector3d(v[4], v[5], v[6]);
+    r.table = v[7];
+    r.hand = Eigen::Vector3d(v[8], v[9], v[10]);
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+// The external forces balance the weight, and their torque about the centre of mass (where
+// gravity has none) vanishes: to a millionth of the weight (and of its moment over the
+// radius), the bound the generator itself refuses a frame beyond. The resultant is the
+// table's and the hand's.
+void ExpectBalanced(const ForceRow& r, double weight) {
+  SCOPED_TRACE("frame " + std::to_string(r.frame));
+  EXPECT_LE((r.force - Eigen::Vector3d(0, 0, weight)).norm(), 1e-6 * weight);
+  EXPECT_LE(r.torque.norm(), 1e-6 * weight * kRadius);
+  // The table's normal force is the resultant's z less the hand's, to the rounding of the
+  // file's 7 significant digits.
+  EXPECT_NEAR(r.table, r.force.z() - r.hand.z(), 1e-5 * std::max(1.0, std::abs(r.table)));
+}
+
+// The first three frames (the ball at rest under its weight, the hand coming down) twice:
+// the same bytes both times (one thread, seeded noise), files like the bundled dataset's,
+// and the weight balanced by the table alone.
+TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
+  constexpr int kFrames = 3;
+  TempDir a("femreg_hand_press"), b("femreg_hand_press");
+  HandPressReport report, again;
+  Status status = GenerateHandPressSequence(a.path(), kFrames, &report);
+  ASSERT_TRUE(status.ok()) << status.message();
+  status = GenerateHandPressSequence(b.path(), kFrames, &again);
+  ASSERT_TRUE(status.ok()) << status.message();
+  int files = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(a.path())) {
+    if (!entry.is_regular_file()) continue;
+    const fs::path rel = fs::relative(entry.path(), a.path());
+    SCOPED_TRACE(rel.string());
+    EXPECT_TRUE(regen::ReadBytes(entry.path().string()) ==
+                regen::ReadBytes((fs::path(b.path()) / rel).string()))
+        << "differs between two runs";
+    ++files;
+  }
+  EXPECT_EQ(files, 3 * kFrames + 4);  // clouds, ground truth, truth; scene, README, forces, log
+
+  EXPECT_EQ(report.frames, kFrames);
+  EXPECT_EQ(report.tracked_vertices, 1331);
+  EXPECT_EQ(report.truth_vertices, 4913);
+  // The inscribed polyhedron holds a little less than the ball's 80 x 4/3 pi r^3.
+  const double ball = 80.0 * 4.0 / 3.0 * M_PI * std::pow(kRadius, 3);
+  EXPECT_GT(report.mass_kg, 0.95 * ball);
+  EXPECT_LE(report.mass_kg, ball);
+  const double weight = report.mass_kg * kGravity;
+  EXPECT_LE(report.max_force_imbalance_N, 1e-6 * weight);
+  EXPECT_LE(report.max_torque_imbalance_Nm, 1e-6 * weight * kRadius);
+  std::string header;
+  const std::vector<ForceRow> rows = ReadForces(a.File("forces.csv"), &header);
+  EXPECT_EQ(header, kForcesHeader);
+  ASSERT_EQ(rows.size(), static_cast<size_t>(kFrames));
+  for (const ForceRow& r : rows) {
+    ExpectBalanced(r, weight);
+    EXPECT_EQ(r.hand.norm(), 0.0);  // it has not come down yet
+    EXPECT_NEAR(r.table, weight, 1e-6 * weight);
+  }
+  // The hand's points are in the clouds (the palm above the ball's top, 0.1 m).
+  PointCloud cloud;
+  ASSERT_TRUE(ReadPointCloud(a.File("clouds/frame_0000.pcd"), &cloud).ok());
+  int above = 0;
+  for (int i = 0; i < cloud.size(); ++i) above += cloud.points(i, 2) > 0.15 ? 1 : 0;
+  EXPECT_GT(above, 100);
+
+  // Against the bundled dataset (tools/make_datasets.sh), within what may vary from one CPU
+  // or BLAS build to another: the bounds tests/synth_test.cc argues for the synth datasets,
+  // whose solves stop at looser tolerances than these (truth_solve.csv).
+  const fs::path bundled = fs::path(FEMREG_DATASETS_DIR) / "hand_press";
+  const double kMaxShift = 20e-6;  // m
+  EXPECT_TRUE(regen::ReadBytes((bundled / "scene.yaml").string()) ==
+              regen::ReadBytes(a.File("scene.yaml")))
+      << "scene.yaml differs from the bundled one (regenerate with tools/make_datasets.sh "
+         "hand_press)";
+  for (int f = 0; f < kFrames; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d", f);
+    SCOPED_TRACE(name);
+    const std::string n(name);
+    const regen::Deviation truth = regen::CompareGroundTruth(
+        (bundled / "ground_truth" / (n + ".csv")).string(), a.File("ground_truth/" + n + ".csv"));
+    ASSERT_TRUE(truth.ok) << truth.Report();
+    EXPECT_LE(truth.max, kMaxShift) << truth.Report();
+    EXPECT_LE(truth.flips, 2) << truth.Report();
+    const regen::Deviation surface = regen::CompareVtuSurfaces(
+        (bundled / "truth" / (n + ".vtu")).string(), a.File("truth/" + n + ".vtu"));
+    ASSERT_TRUE(surface.ok) << surface.Report();
+    EXPECT_LE(surface.max, kMaxShift) << surface.Report();
+    std::string why;
+    EXPECT_TRUE(regen::CloudsAgree((bundled / "clouds" / (n + ".pcd")).string(),
+                                   a.File("clouds/" + n + ".pcd"), &why))
+        << why;
+  }
+  std::string bundled_header;
+  const std::vector<ForceRow> bundled_rows =
+      ReadForces((bundled / "forces.csv").string(), &bundled_header);
+  ASSERT_GE(bundled_rows.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_LE((bundled_rows[i].force - rows[i].force).norm(), 1e-6 * weight);
+    EXPECT_LE((bundled_rows[i].hand - rows[i].hand).norm(), 1e-6 * weight);
+  }
+}
+
+// The bundled sequence's forces: every frame balances gravity, the table only pushes, the
+// palm pushes down while it presses, the table carries nothing while the ball is lifted
+// (the grasp holds the weight) and nothing touches the ball once the hand has left.
+TEST(HandPressData, BundledForcesBalanceGravity) {
+  const fs::path bundled = fs::path(FEMREG_DATASETS_DIR) / "hand_press";
+  std::string header;
+  const std::vector<ForceRow> rows = ReadForces((bundled / "forces.csv").string(), &header);
+  EXPECT_EQ(header, kForcesHeader);
+  ASSERT_EQ(rows.size(), 30u);
+  // The weight is the resultant at rest (frame 0: the table alone).
+  const double weight = rows[0].table;
+  const double ball = 80.0 * 4.0 / 3.0 * M_PI * std::pow(kRadius, 3) * kGravity;
+  EXPECT_GT(weight, 0.95 * ball);
+  EXPECT_LE(weight, ball);
+  for (const ForceRow& r : rows) {
+    ExpectBalanced(r, weight);
+    EXPECT_GE(r.table, 0.0) << "frame " << r.frame << ": the table pulls";
+  }
+  EXPECT_LT(rows[7].hand.z(), -5 * weight);  // the press (frames 3-8)
+  for (int f : {16, 17, 18, 19, 20}) {       // lifted
+    EXPECT_EQ(rows[static_cast<size_t>(f)].table, 0.0) << "frame " << f;
+    EXPECT_NEAR(rows[static_cast<size_t>(f)].hand.z(), weight, 1e-6 * weight) << "frame " << f;
+  }
+  EXPECT_EQ(rows[29].hand.norm(), 0.0);  // let go
+}
+
+}  // namespace
+}  // namespace femreg
