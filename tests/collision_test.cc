@@ -637,6 +637,26 @@ void CompareTruthContacts(const std::string& bundled, const std::string& regener
   }
 }
 
+// forces.csv rows: frame and the contact forces' resultant and torque. The resultant balances
+// the clamp's reaction, which follows the slab's deformation as a whole, not which pairs at
+// the pressed face's edge are active: `max_force` bounds it by the slab's axial stiffness
+// times the mean shift allowed, `max_torque` by that force times the slab's length.
+void CompareBundledForces(const std::string& bundled, const std::string& regenerated,
+                          double max_force, double max_torque) {
+  std::vector<ForceFrame> a, b;
+  bool columns_a = false, columns_b = false;
+  ASSERT_TRUE(ReadForces(bundled, &a, &columns_a).ok());
+  ASSERT_TRUE(ReadForces(regenerated, &b, &columns_b).ok());
+  ASSERT_TRUE(columns_a && columns_b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t r = 0; r < a.size(); ++r) {
+    SCOPED_TRACE("frame " + std::to_string(a[r].frame));
+    EXPECT_EQ(a[r].frame, b[r].frame);
+    EXPECT_LE((a[r].force - b[r].force).norm(), max_force);
+    EXPECT_LE((a[r].torque - b[r].torque).norm(), max_torque);
+  }
+}
+
 // The bundled contact sequences are what `femreg contact-data` writes today (one thread, as
 // tools/make_datasets.sh runs it), within tolerances that say what can vary from one CPU or
 // BLAS build to another:
@@ -659,6 +679,8 @@ void CompareTruthContacts(const std::string& bundled, const std::string& regener
 //   flips shifts the noise draws of the pixels after it).
 // - truth_contacts.csv: the same frames, terminations and (within 10%) contact counts; the
 //   deepest penetration within kMaxShift; the Newton iteration counts may differ.
+// - forces.csv (tool_table): as CompareBundledForces says, with the slab's E A / L and a tenth of
+//   kMaxShift, the bound on the mean shift.
 TEST(CollisionSequences, BundledSequencesRegenerateWithinTolerance) {
   namespace fs = std::filesystem;
   const double kMaxShift = 3e-4;  // m
@@ -687,6 +709,10 @@ TEST(CollisionSequences, BundledSequencesRegenerateWithinTolerance) {
         EXPECT_TRUE(regen::CloudsAgree(theirs, mine, &why)) << why;
       } else if (rel == "truth_contacts.csv") {
         CompareTruthContacts(theirs, mine, kMaxShift);
+      } else if (rel == "forces.csv") {
+        const double length = 0.12, axial = 5e4 * 0.04 * 0.01 / length;  // tool_table's slab, N/m
+        CompareBundledForces(theirs, mine, axial * 0.1 * kMaxShift,
+                             axial * 0.1 * kMaxShift * length);
       } else {
         EXPECT_TRUE(regen::ReadBytes(theirs) == regen::ReadBytes(mine)) << "differs";
       }

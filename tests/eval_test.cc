@@ -2,6 +2,7 @@
 // equal to the ground truth and offset from it.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -105,6 +106,107 @@ TEST(EvalTest, GroundTruthCsvRoundTripAndErrors) {
   EXPECT_FALSE(ReadGroundTruthFrame(dir.path() + "/missing.csv", &back).ok());
 }
 
+// forces.csv round trip; the same columns found by name among stats.csv's others, past a
+// quoted message with commas; a frame without an estimate left out; no columns, no error.
+TEST(EvalTest, ForcesCsvAndStatsColumns) {
+  TempDir dir;
+  std::vector<ForceFrame> frames(2);
+  frames[0].frame = 0;
+  frames[0].force = Eigen::Vector3d(0.125, -1e-17, -2.5);
+  frames[0].torque = Eigen::Vector3d(1e-3, 0.0, -4.5e-4);
+  frames[1].frame = 1;
+  frames[1].force = Eigen::Vector3d(-0.5, 0.25, -3.0);
+  const std::string path = dir.path() + "/forces.csv";
+  ASSERT_TRUE(WriteForces(path, frames).ok());
+  const std::string text = testing_util::Slurp(path);
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm");
+  EXPECT_EQ(text.find("-0.000000000"), std::string::npos) << text;  // round-off written as 0
+  std::vector<ForceFrame> back;
+  bool has_columns = false;
+  ASSERT_TRUE(ReadForces(path, &back, &has_columns).ok());
+  EXPECT_TRUE(has_columns);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].frame, 1);
+  EXPECT_LT((back[0].force - frames[0].force).norm(), 1e-9);
+  EXPECT_LT((back[0].torque - frames[0].torque).norm(), 1e-9);
+  EXPECT_LT((back[1].force - frames[1].force).norm(), 1e-9);
+
+  const std::string stats = dir.Write(
+      "stats.csv",
+      "frame,file,termination,torque_x_Nm,force_x_N,force_y_N,force_z_N,torque_y_Nm,torque_z_Nm,"
+      "message\n"
+      "0,frame_0000.pcd,CONVERGED,0.5,1,2,3,0.25,-1e-2,\"converged, 3 outer iterations\"\n"
+      "1,frame_0001.pcd,FAILED,,,,,,,\"no points, \"\"kept\"\"\"\r\n"
+      "2,frame_0002.pcd,CONVERGED,0,+4,5,6,0,0,\"\"\n");
+  ASSERT_TRUE(ReadForces(stats, &back, &has_columns).ok());
+  EXPECT_TRUE(has_columns);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[0].frame, 0);
+  EXPECT_EQ(back[0].force, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(back[0].torque, Eigen::Vector3d(0.5, 0.25, -1e-2));
+  EXPECT_EQ(back[1].frame, 2);
+  EXPECT_EQ(back[1].force, Eigen::Vector3d(4, 5, 6));
+
+  ASSERT_TRUE(
+      ReadForces(dir.Write("old.csv", "frame,file,message\n0,a.pcd,\"ok\"\n"), &back, &has_columns)
+          .ok());
+  EXPECT_FALSE(has_columns);
+  EXPECT_TRUE(back.empty());
+
+  const Status bad = ReadForces(
+      dir.Write("bad.csv",
+                "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm\n"
+                "0,1,2,3,4,5,6\n1,1,x,3,4,5,6\n"),
+      &back, &has_columns);
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find("bad.csv:3: force_y_N is not a number ('x')"), std::string::npos)
+      << bad.message();
+  const Status short_row = ReadForces(
+      dir.Write("short.csv",
+                "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm\n0,1,2\n"),
+      &back, &has_columns);
+  EXPECT_FALSE(short_row.ok());
+  EXPECT_NE(short_row.message().find("short.csv:2:"), std::string::npos) << short_row.message();
+  EXPECT_FALSE(ReadForces(dir.path() + "/missing.csv", &back, &has_columns).ok());
+}
+
+// Errors per frame matched by number, the relative error undefined for a true force of 0,
+// and the medians over the frames.
+TEST(EvalTest, ForceErrorsAndTheirMedians) {
+  auto frame = [](int f, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+    ForceFrame r;
+    r.frame = f;
+    r.force = force;
+    r.torque = torque;
+    return r;
+  };
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  const std::vector<ForceFrame> truth = {frame(0, {0, 0, -1}, zero), frame(1, {0, 0, -2}, zero),
+                                         frame(2, {0, 0, -4}, zero), frame(3, zero, zero),
+                                         frame(4, {1, 0, 0}, zero)};
+  const std::vector<ForceFrame> estimated = {
+      frame(3, {0, 0.05, 0}, zero), frame(0, {0, 0, -1.1}, zero),
+      frame(1, {0, 0.1, -2}, {0.01, 0, 0}), frame(2, {0, 0, -3.2}, zero),
+      frame(7, {1, 1, 1}, zero)};
+  const std::vector<ForceError> errors = CompareForces(estimated, truth);
+  ASSERT_EQ(errors.size(), 4u);  // frame 4 has no estimate, frame 7 no truth
+  for (int f = 0; f < 4; ++f) EXPECT_EQ(errors[f].frame, f);
+  EXPECT_NEAR(errors[0].error, 0.1, 1e-12);
+  EXPECT_NEAR(errors[0].relative, 0.1, 1e-12);
+  EXPECT_NEAR(errors[1].relative, 0.05, 1e-12);
+  EXPECT_NEAR(errors[1].torque_error, 0.01, 1e-12);
+  EXPECT_NEAR(errors[2].true_force, 4.0, 1e-12);
+  EXPECT_NEAR(errors[2].relative, 0.2, 1e-12);
+  EXPECT_NEAR(errors[3].error, 0.05, 1e-12);
+  EXPECT_TRUE(std::isnan(errors[3].relative));
+  const ForceErrorMedians m = MedianForceErrors(errors);
+  EXPECT_NEAR(m.relative, 0.1, 1e-12);  // of 0.1, 0.05, 0.2
+  EXPECT_NEAR(m.error, 0.1, 1e-12);     // of 0.1, 0.1, 0.8, 0.05
+  EXPECT_NEAR(m.torque_error, 0.0, 1e-12);
+  EXPECT_TRUE(std::isnan(MedianForceErrors({}).relative));
+}
+
 #ifdef FEMREG_CLI_PATH
 // A fake `femreg register` result and `femreg synth` ground truth for one frame.
 void WriteCase(const std::string& root, const Eigen::Vector3d& offset) {
@@ -169,6 +271,114 @@ TEST(EvalCliTest, ZeroErrorOnTheGroundTruthAndExactlyAnOffset) {
   EXPECT_NE(std::system((cli + " eval " + dir.path() + "/offset/result " + dir.path() +
                          "/offset/truth > /dev/null 2>&1").c_str()),
             0);
+}
+
+// A CSV file's cells, row by row (no quoting), a trailing empty cell kept.
+std::vector<std::vector<std::string>> CsvCells(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    rows.emplace_back();
+    std::stringstream ls(line);
+    for (std::string cell; std::getline(ls, cell, ',');) rows.back().push_back(cell);
+    if (!line.empty() && line.back() == ',') rows.back().push_back("");
+  }
+  return rows;
+}
+
+// A register result of four frames with force estimates in stats.csv, against a dataset
+// with forces.csv: eval adds the force columns to eval.csv (medians in the totals row) and
+// prints the median relative error. Without the columns in stats.csv, or without
+// forces.csv, its CSV is what it was before.
+TEST(EvalCliTest, ForceErrorsWhenTheDatasetHasForcesAndTheResultEstimates) {
+  TempDir dir;
+  const std::string root = dir.path() + "/forces";
+  WriteCase(root, Eigen::Vector3d(0.0, 0.0, 0.001));
+  for (int f = 1; f < 4; ++f) {
+    const std::string n = std::to_string(f);
+    fs::copy_file(root + "/result/frames/box_0000.vtu",
+                  root + "/result/frames/box_000" + n + ".vtu");
+    fs::copy_file(root + "/truth/ground_truth/frame_0000.csv",
+                  root + "/truth/ground_truth/frame_000" + n + ".csv");
+    fs::copy_file(root + "/truth/truth/frame_0000.vtu",
+                  root + "/truth/truth/frame_000" + n + ".vtu");
+  }
+  const std::string result = root + "/result", truth = root + "/truth";
+  const std::string plain_csv = dir.path() + "/plain.csv";
+  testing_util::CliRun run =
+      testing_util::Femreg("eval " + result + " " + truth + " --csv " + plain_csv);
+  ASSERT_EQ(run.code, 0) << run.out;
+  const std::string plain = testing_util::Slurp(plain_csv);
+
+  // True forces: 1, 2 and 4 N down, then none; the estimates are 10 %, 5 % and 20 % off,
+  // and 0.05 N where there is no force.
+  std::vector<ForceFrame> forces(4);
+  const double down[4] = {-1, -2, -4, 0};
+  for (int f = 0; f < 4; ++f) {
+    forces[f].frame = f;
+    forces[f].force = Eigen::Vector3d(0, 0, down[f]);
+  }
+  ASSERT_TRUE(WriteForces(truth + "/forces.csv", forces).ok());
+  std::ofstream(result + "/stats.csv")
+      << "frame,file,termination,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,"
+         "message\n"
+         "0,frame_0000.pcd,CONVERGED,0,0,-1.1,0,0,0,\"converged, 3 outer iterations\"\n"
+         "1,frame_0001.pcd,CONVERGED,0,0.1,-2,0.01,0,0,\"converged\"\n"
+         "2,frame_0002.pcd,CONVERGED,0,0,-3.2,0,0,0,\"converged\"\n"
+         "3,frame_0003.pcd,CONVERGED,0.05,0,0,0,0,0,\"converged\"\n";
+  const std::string csv = dir.path() + "/forces.csv";
+  run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_NE(run.out.find("Median resultant-force error: 10.00% of the true force over 3 frames (1 "
+                         "more with a true force of 0"),
+            std::string::npos)
+      << run.out;
+  const std::vector<std::vector<std::string>> rows = CsvCells(csv),
+                                              plain_rows = CsvCells(plain_csv);
+  ASSERT_EQ(rows.size(), 6u);  // header, 4 frames, totals
+  ASSERT_EQ(plain_rows.size(), rows.size());
+  const std::vector<std::string> tail(rows[0].end() - 4, rows[0].end());
+  EXPECT_EQ(tail, (std::vector<std::string>{"force_true_N", "force_error_N", "force_error_pct",
+                                            "torque_error_Nm"}));
+  const size_t at = rows[0].size() - 4;
+  auto cell = [&](size_t row, size_t k) { return std::atof(rows[row][at + k].c_str()); };
+  for (size_t r = 0; r < rows.size(); ++r) {  // the columns of the plain run, then the forces'
+    ASSERT_EQ(rows[r].size(), rows[0].size()) << "row " << r;
+    EXPECT_EQ(std::vector<std::string>(rows[r].begin(), rows[r].begin() + at), plain_rows[r])
+        << "row " << r;
+  }
+  EXPECT_NEAR(cell(1, 0), 1.0, 1e-6);
+  EXPECT_NEAR(cell(1, 1), 0.1, 1e-6);
+  EXPECT_NEAR(cell(1, 2), 10.0, 1e-3);
+  EXPECT_NEAR(cell(2, 2), 5.0, 1e-3);
+  EXPECT_NEAR(cell(2, 3), 0.01, 1e-6);
+  EXPECT_NEAR(cell(3, 2), 20.0, 1e-3);
+  EXPECT_NEAR(cell(4, 1), 0.05, 1e-6);
+  EXPECT_EQ(rows[4][at + 2], "");  // no relative error of a force of 0
+  EXPECT_EQ(rows[5][0], "total");
+  EXPECT_EQ(rows[5][at], "");
+  EXPECT_NEAR(cell(5, 1), 0.1, 1e-6);   // median of 0.1, 0.1, 0.8, 0.05
+  EXPECT_NEAR(cell(5, 2), 10.0, 1e-3);  // median of 10, 5, 20
+
+  // A result without force columns, or a dataset without forces.csv: as before.
+  std::ofstream(result + "/stats.csv")
+      << "frame,file,termination,message\n0,frame_0000.pcd,CONVERGED,\"ok\"\n";
+  run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(testing_util::Slurp(csv), plain);
+  EXPECT_EQ(run.out.find("resultant"), std::string::npos) << run.out;
+  fs::remove(truth + "/forces.csv");
+  fs::remove(result + "/stats.csv");
+  run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(testing_util::Slurp(csv), plain);
+
+  // A forces.csv that cannot be read is an error that names it.
+  std::ofstream(truth + "/forces.csv") << "frame,force\n0,1\n";
+  run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+  EXPECT_NE(run.code, 0);
+  EXPECT_NE(run.out.find("forces.csv: expected the header frame,force_x_N"), std::string::npos)
+      << run.out;
 }
 #endif  // FEMREG_CLI_PATH
 

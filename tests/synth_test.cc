@@ -393,5 +393,32 @@ TEST(OrganPatchData, DivisionsSetTheTrackedMeshAndAreChecked) {
   }
 }
 
+// The bundled organ_patch/forces.csv: a row per frame, the tool's force on the body pointing
+// down into it; while the tool only presses (frames 0-7) the body's mirror symmetry in y
+// leaves no y force and the force grows with the depth; the drag along +y (frames 8-11) adds
+// a +y force.
+TEST(OrganPatchData, BundledToolForcePushesIntoTheBody) {
+  std::vector<ForceFrame> forces;
+  bool has_columns = false;
+  const Status status = ReadForces(std::string(FEMREG_DATASETS_DIR) + "/organ_patch/forces.csv",
+                                   &forces, &has_columns);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(has_columns);
+  ASSERT_EQ(forces.size(), 12u);
+  for (int f = 0; f < 12; ++f) {
+    SCOPED_TRACE("frame " + std::to_string(f));
+    EXPECT_EQ(forces[f].frame, f);
+    EXPECT_LT(forces[f].force.z(), 0.0);
+    if (f < 8) {
+      EXPECT_EQ(forces[f].force.y(), 0.0);
+      if (f > 0) {
+        EXPECT_GT(forces[f].force.norm(), forces[f - 1].force.norm());
+      }
+    } else {
+      EXPECT_GT(forces[f].force.y(), forces[f - 1].force.y());
+    }
+  }
+}
+
 }  // namespace
 }  // namespace femreg

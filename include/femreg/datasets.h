@@ -59,7 +59,9 @@ Scene SynthTrackingScene(const Scene& scene, const std::string& dir);
 // DIR/ground_truth/frame_NNNN.csv (one row per tracked vertex of all objects in scene order)
 // and DIR/README.md; deterministic.
 // Also writes DIR/truth_contacts.csv: per frame, the ground-truth solve's Newton
-// iterations, active contacts and deepest penetration.
+// iterations, active contacts and deepest penetration; and for tool_table DIR/forces.csv:
+// per frame, the resultant of the contact forces on the slab (tool and table) and its torque
+// about the slab's centroid (femreg/ground_truth.h's ForceFrame).
 std::vector<std::string> ContactScenarios();
 Status GenerateContactSequence(const std::string& scenario, const std::string& dir,
                                void (*progress)(int done, int total) = nullptr);
@@ -81,10 +83,12 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
 // "organ_patch": an organ-like body clamped at one end and pushed by a tool, seen as
 // 500-point patches on ~15% of its surface, no camera and no viewpoint. Writes
 // DIR/organ.vtu (the tracked mesh), DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd,
-// DIR/ground_truth/frame_NNNN.csv (visible = in the patch) and DIR/README.md; deterministic.
+// DIR/ground_truth/frame_NNNN.csv (visible = in the patch), DIR/forces.csv (the tool's true
+// force per frame: the reaction at the vertices it moves, with its torque about the body's
+// centroid; femreg/ground_truth.h's ForceFrame) and DIR/README.md; deterministic.
 // `divisions` (2-7) divides the tracked mesh: (2 n + 1)^3 vertices, 48 n^3 tetrahedra (the
 // bundled sequence: 4, 729 / 3072; 7: 3375 / 16464). The clouds and the ground truth's solve
-// (4913 vertices) do not depend on it.
+// (4913 vertices), and so forces.csv, do not depend on it.
 Status GenerateOrganPatchSequence(const std::string& dir,
                                   void (*progress)(int done, int total) = nullptr,
                                   int divisions = 4);

@@ -155,6 +155,35 @@ Status EvaluateForwardSystem(const ForwardProblem& problem, const ForwardOptions
                              Eigen::VectorXd* residual, Eigen::SparseMatrix<double>* tangent,
                              std::vector<int>* free_dofs);
 
+// The external forces on the mesh at positions x under the full load of `problem` (each #V
+// by 3, N), from the terms of the solve's residual: e.g. the force a tool applies through its
+// prescribed vertices, or the contacts' push. At an equilibrium (a converged solve's mesh.x)
+// they sum to zero to within the solve's force imbalance, and so do their moments with the
+// corotational and neo-Hookean models (energies that a rotation leaves unchanged).
+struct ForwardForces {
+  // By the supports: at every held vertex (clamped, prescribed, or in no element) the force
+  // that holds it there, the gradient of the potential (elastic plus problem.potential) minus
+  // the load; zero at the free vertices.
+  Vertices reactions;
+  // By problem.potential (e.g. contacts): minus its gradient, refreshed at x; zero without one.
+  Vertices potential;
+  // The nodal loads and gravity on the lumped masses.
+  Vertices loads;
+};
+Status EvaluateForwardForces(const ForwardProblem& problem, const ForwardOptions& options,
+                             const ElasticModel& model, const TetMesh& mesh, const Vertices& x,
+                             ForwardForces* forces);
+
+// The resultant of nodal forces (#V by 3, N) and their torque (N m) about the body's
+// centroid: the mean of `positions` weighted by the lumped masses `mass` (#V). How the
+// datasets' forces.csv and the register results' force columns report a body's forces.
+struct ForceResultant {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+};
+ForceResultant ResultantAboutCentroid(const Vertices& forces, const Vertices& positions,
+                                      const Eigen::VectorXd& mass);
+
 }  // namespace femreg
 
 #endif  // FEMREG_FORWARD_H_

@@ -1,8 +1,9 @@
 // femreg/ground_truth.h - per-frame ground truth at the tracked mesh's vertices and the
-// vertex error against it.
+// vertex error against it; the true external force per frame and an estimate's error.
 #ifndef FEMREG_GROUND_TRUTH_H_
 #define FEMREG_GROUND_TRUTH_H_
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,45 @@ struct VertexErrors {
 // positions and truth must have the same number of rows.
 VertexErrors ComputeVertexErrors(const Vertices& positions, const GroundTruthFrame& truth);
 ErrorStats ComputeErrorStats(std::vector<double> errors);
+
+// The resultant of the external forces on the tracked body in one frame (N) and their torque
+// about its centroid (N m): gravity, the scene's loads and the clamp and anchor reactions left
+// out, contacts with obstacles counted. A dataset's forces.csv holds the true ones, a
+// `femreg register` result's stats.csv the estimated ones, in the columns of kForceColumns.
+struct ForceFrame {
+  int frame = 0;
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+};
+extern const char* const kForceColumns[6];  // force_x_N, ..., torque_z_Nm
+
+// forces.csv: the header "frame,force_x_N,...,torque_z_Nm" and a row per frame.
+Status WriteForces(const std::string& path, const std::vector<ForceFrame>& frames);
+// The columns frame and kForceColumns, found by name in the header of a CSV (forces.csv, or
+// stats.csv among its other columns and quoted text): a ForceFrame per row whose six cells
+// hold numbers; a row whose force cells are all empty (a frame without an estimate) is left
+// out. *has_columns tells whether the header has all seven; without them *frames is empty
+// and the status OK. A cell that is neither a number nor empty is an error naming it.
+Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool* has_columns);
+
+// An estimate against the truth in one frame.
+struct ForceError {
+  int frame = 0;
+  double true_force = 0.0;    // |true resultant| (N)
+  double error = 0.0;         // |estimated - true| (N)
+  double relative = 0.0;      // error / |true|; NaN when the true force is 0
+  double torque_error = 0.0;  // |estimated - true torque| (N m)
+};
+// For every frame of `truth` that `estimated` has too (matched by frame number), in the
+// order of `truth`.
+std::vector<ForceError> CompareForces(const std::vector<ForceFrame>& estimated,
+                                      const std::vector<ForceFrame>& truth);
+// Medians over the frames (of an even count, the mean of the middle two); relative leaves
+// out the frames without one. NaN where no frame is left.
+struct ForceErrorMedians {
+  double error = 0.0, relative = 0.0, torque_error = 0.0;
+};
+ForceErrorMedians MedianForceErrors(const std::vector<ForceError>& errors);
 
 }  // namespace femreg
 

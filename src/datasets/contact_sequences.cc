@@ -177,6 +177,9 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   // ground truth itself (the penalty lets it reach into the band D, never through).
   std::ostringstream log;
   log << "frame,newton_iterations,termination,final_residual_N,contacts,max_penetration_mm\n";
+  // tool_table: the contacts' resultant on the slab per frame (the tool's and the table's
+  // pushes; no gravity, and the clamp's reaction left out).
+  std::vector<ForceFrame> contact_forces;
   for (int f = 0; f < frames; ++f) {
     world.SetFrame(f);
     ForwardProblem step = problem;
@@ -188,6 +191,14 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
     if (!status.ok()) return status;
     if (!summary.IsSolutionUsable()) {
       return Status::Error(scenario + " frame " + std::to_string(f) + ": " + summary.message);
+    }
+    if (!pair) {
+      ForwardForces forces;
+      status = EvaluateForwardForces(step, forward, model, merged, merged.x, &forces);
+      if (!status.ok()) return status;
+      const ForceResultant contact =
+          ResultantAboutCentroid(forces.potential, merged.x, merged.mass);
+      contact_forces.push_back({f, contact.force, contact.torque});
     }
     {
       std::vector<Contact> contacts;
@@ -229,6 +240,9 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   }
 
   status = WriteFileAtomically((fs::path(dir) / "truth_contacts.csv").string(), log.str());
+  if (status.ok() && !pair) {
+    status = WriteForces((fs::path(dir) / "forces.csv").string(), contact_forces);
+  }
   if (!status.ok()) return status;
 
   // The tracking scene: the coarse blocks, the camera, the known support and gripper, and
@@ -301,7 +315,16 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
          << "order: true position and whether the camera saw it.\n"
          << "- `truth_contacts.csv`: per frame, the ground-truth solve's Newton iterations, its "
          << "termination and final force imbalance, its active contacts and its deepest penetration "
-         << "(mm; below D: the surfaces never cross).\n\n"
+         << "(mm; below D: the surfaces never cross).\n";
+  if (!pair) {
+    readme << "- `forces.csv`: per frame, the resultant of the contact forces on the slab (N; the "
+           << "tool's and the table's pushes, from the ground-truth solve's contact penalty) and "
+           << "their torque about the slab's centroid (N m; the lumped-mass-weighted mean of the "
+           << "true vertex positions). There is no gravity; the clamp's reaction, the only other "
+           << "force on the slab, is left out, as an estimate in `femreg register`'s stats.csv "
+           << "leaves it out (`femreg eval` compares the two).\n";
+  }
+  readme << "\n"
          << "Ground truth: corotational FEM with the same penalty contacts (refreshed per Newton "
          << "iteration) on meshes " << refinement << " times finer, interpolated at the tracked "
          << "vertices. Register with collision on, and with `femreg register --no-collision` to "

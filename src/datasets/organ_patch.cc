@@ -6,7 +6,8 @@
 // The body is a ball mapped to a flattened, bent ellipsoid (x, y, z) -> (a x, b y, c z +
 // d x^2), a map with a constant positive Jacobian, so every element stays positively
 // oriented. The ground truth is solved on the same shape twice as finely divided, with a
-// stiffer Poisson ratio than the tracker's, and interpolated at the tracked vertices.
+// stiffer Poisson ratio than the tracker's, and interpolated at the tracked vertices; the
+// tool's true force is the reaction at the vertices it moves in that solve.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -152,6 +153,7 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   forward.max_iterations = 40;
   forward.load_steps = 2;
   double mean_motion = 0.0;
+  std::vector<ForceFrame> tool_forces;
   for (int f = 0; f < kFrames; ++f) {
     ForwardProblem step = problem;
     for (int v : tool) step.prescribed.emplace_back(v, ToolPath(f));
@@ -162,6 +164,15 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
     if (!summary.IsSolutionUsable()) {
       return Status::Error("organ_patch frame " + std::to_string(f) + ": " + summary.message);
     }
+    // The tool's force on the body: the reactions at the vertices it moves (the clamp's, the
+    // only other external force, left out).
+    ForwardForces forces;
+    status = EvaluateForwardForces(step, forward, model, fine, fine.x, &forces);
+    if (!status.ok()) return status;
+    Vertices by_tool = Vertices::Zero(fine.num_vertices(), 3);
+    for (int v : tool) by_tool.row(v) = forces.reactions.row(v);
+    const ForceResultant resultant = ResultantAboutCentroid(by_tool, fine.x, fine.mass);
+    tool_forces.push_back({f, resultant.force, resultant.torque});
     // 500 points spread over the patch by area, with noise.
     std::vector<double> cumulative;
     double sum = 0.0;
@@ -200,6 +211,7 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
     if (progress) progress(f + 1, kFrames);
   }
   Status status = WriteVtu((fs::path(dir) / "organ.vtu").string(), coarse, coarse.rest);
+  if (status.ok()) status = WriteForces((fs::path(dir) / "forces.csv").string(), tool_forces);
   if (!status.ok()) return status;
 
   std::ostringstream scene;
@@ -239,7 +251,20 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
             "patch. ";
   std::snprintf(line, sizeof(line), "Mean vertex motion at the last frame: %.2f mm (the error of doing nothing).\n\n",
                 mean_motion * 1e3);
-  readme << line
+  readme << line;
+  double peak = 0.0;
+  for (const ForceFrame& t : tool_forces) peak = std::max(peak, t.force.norm());
+  std::snprintf(line, sizeof(line), "%.2f N", peak);
+  readme << "`forces.csv`: per frame, the tool's true force on the body (`force_x_N, force_y_N, "
+            "force_z_N`: the reaction at the ground truth's vertices the tool moves, pointing into "
+            "the body; up to "
+         << line
+         << ") and its torque about the body's centroid (`torque_x_Nm, torque_y_Nm, torque_z_Nm`; "
+            "the centroid is the lumped-mass-weighted mean of the true vertex positions). The tool "
+            "moves the vertices it touches without slip, so its force also has a part along the "
+            "surface. There is no gravity; the clamp's reaction, the only other force on the body, "
+            "balances it and is left out, as an estimate in `femreg register`'s stats.csv leaves "
+            "it out: `femreg eval` compares the two.\n\n"
          << (divisions == 4 ? std::string("Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ")
                             : "Made by `femreg organ-data --divisions " + std::to_string(divisions) + "`; ")
          << "deterministic.\n\n"

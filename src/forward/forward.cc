@@ -10,6 +10,7 @@
 // symbolic analysis is done once per solve.
 #include "femreg/forward.h"
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -381,6 +382,37 @@ Status EvaluateForwardSystem(const ForwardProblem& problem, const ForwardOptions
   }
   solver.EvaluateSystem(x, options.tangent, residual, tangent, free_dofs);
   return Status::Ok();
+}
+
+Status EvaluateForwardForces(const ForwardProblem& problem, const ForwardOptions& options,
+                             const ElasticModel& model, const TetMesh& mesh, const Vertices& x,
+                             ForwardForces* forces) {
+  if (x.rows() != mesh.num_vertices() || x.cols() != 3 || !x.allFinite()) {
+    return Status::Error("EvaluateForwardForces: x must be a finite #V by 3 matrix");
+  }
+  ForwardSummary summary;
+  TetMesh copy = mesh;  // the solver's mesh is writable; this one is not written
+  QuasiStaticSolver solver(problem, options, &model, &copy, &summary);
+  const ScopedThreads threads(summary.num_threads);
+  // No reduced system: only gradients are evaluated.
+  if (!solver.Validate() || !solver.Setup(/*reduced=*/false)) {
+    return Status::Error(std::string("EvaluateForwardForces: ") + ToString(summary.termination) +
+                         ": " + summary.message);
+  }
+  solver.EvaluateForces(x, forces);
+  return Status::Ok();
+}
+
+ForceResultant ResultantAboutCentroid(const Vertices& forces, const Vertices& positions,
+                                      const Eigen::VectorXd& mass) {
+  const Eigen::Vector3d centroid = (positions.transpose() * mass) / mass.sum();
+  ForceResultant r;
+  for (Eigen::Index v = 0; v < forces.rows(); ++v) {
+    const Eigen::Vector3d f = forces.row(v).transpose();
+    r.force += f;
+    r.torque += (positions.row(v).transpose() - centroid).cross(f);
+  }
+  return r;
 }
 
 }  // namespace femreg

@@ -90,7 +90,7 @@ bool QuasiStaticSolver::Validate() {
   return true;
 }
 
-bool QuasiStaticSolver::Setup() {
+bool QuasiStaticSolver::Setup(bool reduced) {
   const Tets& tets = model_.tets();
   // Vertex -> element adjacency of the model's elements.
   std::vector<int> element_offsets(nv() + 1, 0), element_slots;
@@ -181,7 +181,7 @@ bool QuasiStaticSolver::Setup() {
   }
   summary_.num_free_dofs = static_cast<int>(free_dofs_.size());
   BuildEnergy(held);
-  if (free_dofs_.empty()) return true;
+  if (free_dofs_.empty() || !reduced) return true;
   BuildReduced();
   const auto start = Clock::now();
   {
@@ -399,6 +399,24 @@ void QuasiStaticSolver::EvaluateSystem(const Vertices& x, ForwardTangent tangent
       if (it.row() == col) d.emplace_back(col, col, it.value());
   diagonal.setFromTriplets(d.begin(), d.end());
   *matrix = lower + SparseMatrix(lower.transpose()) - diagonal;
+}
+
+void QuasiStaticSolver::EvaluateForces(const Vertices& x, ForwardForces* forces) {
+  Eigen::VectorXd gradient;
+  Elastic(x, &gradient);
+  Eigen::VectorXd extra = Eigen::VectorXd::Zero(3 * nv());
+  if (problem_.potential != nullptr) {
+    problem_.potential->Refresh(x);
+    Extra(x, &extra);
+  }
+  forces->reactions = Vertices::Zero(nv(), 3);
+  forces->potential = -Eigen::Map<const Vertices>(extra.data(), nv(), 3);
+  forces->loads = Eigen::Map<const Vertices>(full_load_.data(), nv(), 3);
+  // A held vertex's row of the residual is what its support must supply.
+  const Eigen::VectorXd residual = gradient + extra - full_load_;
+  for (int v = 0; v < nv(); ++v) {
+    if (free_index_[3 * v] < 0) forces->reactions.row(v) = residual.segment<3>(3 * v).transpose();
+  }
 }
 
 double QuasiStaticSolver::Potential(double elastic, const Vertices& x,

@@ -81,14 +81,16 @@ class QuasiStaticSolver {
 
   // Checks the inputs; on error fills the summary and returns false.
   bool Validate();
-  // Numbers the free DOFs, checks that every connected piece is held, builds the energy and
-  // the reduced pattern.
-  bool Setup();
+  // Numbers the free DOFs, checks that every connected piece is held, builds the energy and,
+  // with `reduced`, the reduced pattern and its analysis (what the Newton steps factorize).
+  bool Setup(bool reduced = true);
   void Run();
   // For EvaluateForwardSystem (after Validate and Setup): the residual at x under the full
   // load and the reduced matrix of `tangent`, both triangles.
   void EvaluateSystem(const Vertices& x, ForwardTangent tangent, Eigen::VectorXd* residual,
                       Eigen::SparseMatrix<double>* matrix, std::vector<int>* free_dofs);
+  // For EvaluateForwardForces (after Validate and Setup, reduced or not).
+  void EvaluateForces(const Vertices& x, ForwardForces* forces);
 
  private:
   bool Fail(ForwardTermination termination, const std::string& message) {

@@ -30,7 +30,9 @@ void AddContactDataCommand(CLI::App* app) {
       "or tool_table (a soft slab pushed onto a table by a rigid tool), simulated with "
       "corotational FEM and penalty contacts on meshes twice as fine as the tracked ones, seen "
       "by a virtual depth camera. Writes OUT/scene.yaml, OUT/clouds/*.pcd, "
-      "OUT/ground_truth/*.csv and OUT/README.md.");
+      "OUT/ground_truth/*.csv, OUT/truth_contacts.csv, for tool_table OUT/forces.csv (per frame, "
+      "the contact forces' resultant on the slab and its torque about the slab's centroid, for "
+      "`femreg eval`) and OUT/README.md.");
   cmd->add_option("--scenario", *scenario, "contact_pair or tool_table")
       ->required()
       ->check(CLI::IsMember(ContactScenarios()));

@@ -4,7 +4,10 @@
 // camera saw in that frame and for the hidden ones, and the distance between the tracked
 // surface and the ground truth mesh's surface (symmetric mean and Hausdorff, sampled at the
 // vertices and triangle centroids of both). A CSV and a printed table, with a totals row.
+// When the dataset has forces.csv and the result's stats.csv the force columns, also the
+// error of the estimated resultant external force and of its torque, with their medians.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -72,6 +75,102 @@ std::string StatsCells(const ErrorStats& s) {
   std::snprintf(buf, sizeof(buf), "%d,%.4f,%.4f,%.4f,%.4f", s.count, s.mean * 1e3, s.rms * 1e3,
                 s.p95 * 1e3, s.max * 1e3);
   return buf;
+}
+
+// The estimated resultant force against the true one, frame by frame.
+struct ForceReport {
+  bool compared = false;          // both files there, and frames in common
+  std::string note;               // why not, when one file is there without the other
+  std::vector<ForceError> errors;
+  std::map<int, size_t> of_frame;  // frame -> its entry in errors
+  std::string truth_path;
+
+  // eval.csv's force cells of frame f: empty when that frame has no estimate.
+  std::string Cells(int f) const {
+    const auto it = of_frame.find(f);
+    if (it == of_frame.end()) return ",,,";
+    const ForceError& e = errors[it->second];
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%.6f,%.6f,%s,%.6f", e.true_force, e.error,
+                  Percent(e.relative, "%.3f").c_str(), e.torque_error);
+    return buf;
+  }
+  // The totals row: medians over the frames.
+  std::string MedianCells() const {
+    const ForceErrorMedians m = MedianForceErrors(errors);
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), ",%.6f,%s,%.6f", m.error, Percent(m.relative, "%.3f").c_str(),
+                  m.torque_error);
+    return buf;
+  }
+  // A ratio as a percentage; empty when it is undefined (a true force of 0).
+  static std::string Percent(double ratio, const char* format) {
+    if (std::isnan(ratio)) return "";
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), format, 100.0 * ratio);
+    return buf;
+  }
+  void Print() const {
+    std::printf("Resultant external force against %s (estimated in stats.csv):\n",
+                truth_path.c_str());
+    std::printf("%6s | %9s %9s %8s | %13s\n", "frame", "true N", "error N", "error %",
+                "torque err Nm");
+    for (const ForceError& e : errors) {
+      const std::string pct = Percent(e.relative, "%8.2f");
+      std::printf("%6d | %9.4f %9.4f %8s | %13.3e\n", e.frame, e.true_force, e.error,
+                  pct.empty() ? "-" : pct.c_str(), e.torque_error);
+    }
+    const ForceErrorMedians m = MedianForceErrors(errors);
+    const std::string median = Percent(m.relative, "%.2f");
+    std::printf("%s\n%6s | %9s %9.4f %8s | %13.3e\n", std::string(52, '-').c_str(), "median", "",
+                m.error, median.empty() ? "-" : median.c_str(), m.torque_error);
+    int undefined = 0;
+    for (const ForceError& e : errors) undefined += std::isnan(e.relative);
+    std::printf("Median resultant-force error: %s%% of the true force over %zu frames",
+                median.empty() ? "-" : median.c_str(), errors.size() - undefined);
+    if (undefined > 0) {
+      std::printf(" (%d more with a true force of 0: no relative error)", undefined);
+    }
+    std::printf(".\n");
+  }
+};
+
+// Reads RESULT/stats.csv's force columns and DATASET/forces.csv; compares the first
+// `num_frames` frames. Without either (or without the columns), *report says so and nothing
+// is compared; a forces.csv that cannot be read is an error.
+Status CompareForceFiles(const std::string& result, const std::string& truth_dir, size_t num_frames,
+                         ForceReport* report) {
+  const fs::path truth_path = fs::path(truth_dir) / "forces.csv";
+  const fs::path stats_path = fs::path(result) / "stats.csv";
+  report->truth_path = truth_path.string();
+  if (!fs::exists(truth_path)) return Status::Ok();
+  std::vector<ForceFrame> truth, estimated;
+  bool has_columns = false;
+  Status status = ReadForces(truth_path.string(), &truth, &has_columns);
+  if (!status.ok()) return status;
+  if (!has_columns) {
+    std::string header = "frame";
+    for (const char* c : kForceColumns) header += std::string(",") + c;
+    return Status::Error(truth_path.string() + ": expected the header " + header);
+  }
+  if (!fs::exists(stats_path)) {
+    report->note = "Forces: " + truth_path.string() + " is there, " + stats_path.string() +
+                   " is not: no force error.";
+    return Status::Ok();
+  }
+  status = ReadForces(stats_path.string(), &estimated, &has_columns);
+  if (!status.ok()) return status;
+  if (!has_columns) return Status::Ok();  // a result without force estimates
+  const auto beyond = [&](const ForceFrame& f) { return f.frame >= static_cast<int>(num_frames); };
+  truth.erase(std::remove_if(truth.begin(), truth.end(), beyond), truth.end());
+  report->errors = CompareForces(estimated, truth);
+  for (size_t i = 0; i < report->errors.size(); ++i) report->of_frame[report->errors[i].frame] = i;
+  report->compared = !report->errors.empty();
+  if (!report->compared) {
+    report->note = "Forces: no frame of " + stats_path.string() + " has an estimate that " +
+                   truth_path.string() + " has the truth of.";
+  }
+  return Status::Ok();
 }
 
 int RunEval(const std::string& result, const std::string& truth_dir, std::string csv) {
@@ -217,23 +316,36 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   total.surface.mean = num_frames ? surface_sum / num_frames : 0.0;
   total.surface.hausdorff = hausdorff;
 
+  // The estimated external force (stats.csv) against the true one (forces.csv), when both
+  // are there.
+  ForceReport forces;
+  status = CompareForceFiles(result, truth_dir, num_frames, &forces);
+  if (!status.ok()) return fail(status.message());
+
   std::ostringstream out;
   out << "frame,seen_count,seen_mean_mm,seen_rms_mm,seen_p95_mm,seen_max_mm,hidden_count,"
          "hidden_mean_mm,hidden_rms_mm,hidden_p95_mm,hidden_max_mm,all_count,all_mean_mm,"
-         "all_rms_mm,all_p95_mm,all_max_mm,surface_mean_mm,surface_hausdorff_mm\n";
+         "all_rms_mm,all_p95_mm,all_max_mm,surface_mean_mm,surface_hausdorff_mm";
+  if (forces.compared) out << ",force_true_N,force_error_N,force_error_pct,torque_error_Nm";
+  out << "\n";
   std::vector<const EvalRow*> all_rows;
   for (const EvalRow& r : rows) all_rows.push_back(&r);
   all_rows.push_back(&total);
-  for (const EvalRow* r : all_rows) {
+  for (size_t i = 0; i < all_rows.size(); ++i) {
+    const EvalRow* r = all_rows[i];
     out << r->label << "," << StatsCells(r->seen) << "," << StatsCells(r->hidden) << ","
         << StatsCells(r->all) << ",";
     if (r->have_surface) {
       char buf[64];
       std::snprintf(buf, sizeof(buf), "%.4f,%.4f", r->surface.mean * 1e3, r->surface.hausdorff * 1e3);
-      out << buf << "\n";
+      out << buf;
     } else {
-      out << ",\n";
+      out << ",";
     }
+    if (forces.compared) {
+      out << "," << (r == &total ? forces.MedianCells() : forces.Cells(static_cast<int>(i)));
+    }
+    out << "\n";
   }
   if (csv.empty()) csv = (fs::path(result) / "eval.csv").string();
   status = WriteFileAtomically(csv, out.str());
@@ -257,8 +369,10 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   }
   if (!fracture.empty()) PrintFractureReport(fracture, (fs::path(truth_dir) / "ground_truth").string(), true);
   std::printf("Totals pool every vertex of every frame; surf is the mean over frames of the "
-              "symmetric mean surface distance, hausd the largest Hausdorff distance.\nCSV: %s\n",
-              csv.c_str());
+              "symmetric mean surface distance, hausd the largest Hausdorff distance.\n");
+  if (forces.compared) forces.Print();
+  if (!forces.note.empty()) std::printf("%s\n", forces.note.c_str());
+  std::printf("CSV: %s\n", csv.c_str());
   return 0;
 }
 
@@ -272,15 +386,21 @@ void AddEvalCommand(CLI::App* app) {
       "eval",
       "Evaluate a `femreg register` result against a `femreg synth` ground truth: per frame the "
       "vertex error of seen and hidden vertices (mean, RMS, p95, max; mm) and the tracked-to-true "
-      "surface distance (symmetric mean, Hausdorff). Prints a table and writes a CSV.");
+      "surface distance (symmetric mean, Hausdorff). With the dataset's forces.csv and force "
+      "columns in the result's stats.csv (force_x_N, ..., torque_z_Nm), also the error of the "
+      "estimated resultant external force per frame (N, and % of the true force) and of its "
+      "torque (N m), and their medians over the frames. Prints a table and writes a CSV.");
   cmd->add_option("result", *result, "A `femreg register` output folder (frames/<object>_NNNN.vtu)")
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("ground_truth", *truth,
-                  "A `femreg synth` output folder (ground_truth/*.csv, truth/*.vtu)")
+                  "A `femreg synth` output folder (ground_truth/*.csv, truth/*.vtu; forces.csv)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--csv", *csv, "CSV file to write (default RESULT/eval.csv)");
+  cmd->add_option("--csv", *csv,
+                  "CSV file to write (default RESULT/eval.csv); with forces, the columns "
+                  "force_true_N, force_error_N, force_error_pct and torque_error_Nm, medians in "
+                  "the totals row");
   cmd->callback([=] { SetExitCode(RunEval(*result, *truth, *csv)); });
 }
 

@@ -18,12 +18,14 @@ void AddOrganDataCommand(CLI::App* app) {
       "Write the organ_patch sequence: an organ-like body clamped at one end and pushed by a "
       "tool, seen as 500-point patches on ~15% of its surface with no camera (corotational FEM "
       "on a finer mesh than the tracked one, 4913 vertices). Writes OUT/organ.vtu, OUT/scene.yaml, "
-      "OUT/clouds/*.pcd, OUT/ground_truth/*.csv and OUT/README.md.");
+      "OUT/clouds/*.pcd, OUT/ground_truth/*.csv, OUT/forces.csv (per frame, the tool's true force "
+      "on the body and its torque about the body's centroid, for `femreg eval`) and OUT/README.md.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
   cmd->add_flag("--force", *force, "Write into a non-empty folder");
   cmd->add_option("--divisions", *divisions,
                   "Divisions of the tracked mesh, 2-7: (2n+1)^3 vertices, 48 n^3 tetrahedra (4: the "
-                  "bundled 729 / 3072; 7: 3375 / 16464). The clouds and the ground truth do not change")
+                  "bundled 729 / 3072; 7: 3375 / 16464, the size of a benchmark organ). The clouds, "
+                  "the ground-truth solve and forces.csv do not change")
       ->capture_default_str()
       ->check(CLI::Range(2, 7));
   cmd->callback([out, force, divisions] {
