@@ -337,7 +337,8 @@ struct FrameSummary {
   // The resultant of the external forces on the objects (N) and its moment about their
   // centroid (the mass-weighted mean of the vertices; N m): the forces estimated
   // (registration.forces.estimate) and the contacts', without gravity, the loads and the
-  // clamps' and anchors' reactions; without forces.estimate, the data term's pull. Per
+  // clamps' and anchors' reactions; without forces.estimate, the data term's pull and the
+  // contacts' push. Per
   // vertex: Tracker::external_forces.
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;

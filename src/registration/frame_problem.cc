@@ -397,12 +397,18 @@ void FrameProblem::SetEquilibrium(const TrackerState& state, bool on) {
 }
 
 Vertices FrameProblem::ExternalForces(const TrackerState& state) const {
-  const uint32_t groups = (1u << static_cast<int>(TermGroup::kElastic)) | (1u << static_cast<int>(TermGroup::kLoad));
+  auto bit = [](TermGroup g) { return 1u << static_cast<int>(g); };
   Eigen::VectorXd f;
-  // Without the equilibrium term, with the held rotations (a frame ends on an outer
-  // iteration that hardly turned them): the exact ones' polar decompositions cost more.
-  energy::ForceResidual(problem_, state.x, &f, groups,
-                        problem_.equilibrium() != nullptr ? energy::Curvature::kExact : energy::Curvature::kGaussNewton);
+  if (problem_.equilibrium() != nullptr) {
+    // What the elastic forces and the loads leave unbalanced: the estimated forces and the contacts'.
+    energy::ForceResidual(problem_, state.x, &f, bit(TermGroup::kElastic) | bit(TermGroup::kLoad));
+  } else {
+    // The data term's pull and the contacts' push, from their blocks alone (the elastic
+    // elements' would cost a pass over the mesh every frame).
+    energy::ForceResidual(problem_, state.x, &f, bit(TermGroup::kData) | bit(TermGroup::kCollision),
+                          energy::Curvature::kGaussNewton);
+    f = -f;
+  }
   Vertices forces = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(f.data(), state.num_vertices, 3);
   for (const auto& kv : state.anchors) {
     for (int g : kv.second.vertices) forces.row(g).setZero();
