@@ -27,8 +27,6 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-// PCG's relative residual, as the fast back end's other steps (fast_backend.cc, kPcgTolerance).
-constexpr double kPcgTolerance = 1e-2;
 constexpr int kMaxPcgIterations = 200;
 // The shift of K~ = K + shift * mean(diag K): enough for a free body's rigid motions (K's null
 // space) to factorize; raised 100-fold while the factorization fails.

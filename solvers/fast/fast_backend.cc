@@ -58,12 +58,6 @@ double Seconds(Clock::time_point since) {
 // CHOLMOD's supernodal factorization is faster than its simplicial one on these systems at
 // every size measured, so it is always used (docs/notes/2026-11-28-figures-from-code-comments.md).
 
-// Conjugate gradients stop at this relative residual |H dx + g| / |g|: an inexact Newton step whose
-// error the next step removes; the line search and the stop criteria see the energy. The outer
-// iterations (new rotations and pairs) converge only linearly, so a residual far below their rate
-// is not seen in the result; looser was no better
-// (docs/notes/2026-11-28-figures-from-code-comments.md).
-constexpr double kPcgTolerance = 1e-2;
 
 // A step predicted to lower the energy by less than this fraction of the inner tolerance
 // (BackendOptions::relative_tolerance) is not taken: it re-solves the linearization the

@@ -17,6 +17,13 @@
 namespace femreg {
 namespace fast_backend {
 
+// Conjugate gradients stop at this relative residual |H dx + g| / |g|: an inexact Newton step whose
+// error the next step removes; the line search and the stop criteria see the energy. The outer
+// iterations (new rotations and pairs) converge only linearly, so a residual far below their rate
+// is not seen in the result; looser was no better
+// (docs/notes/2026-11-28-figures-from-code-comments.md).
+inline constexpr double kPcgTolerance = 1e-2;
+
 class FastBackend : public Backend {
  public:
   explicit FastBackend(const BackendOptions& options);

@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "femreg/forward.h"
 #include "femreg/point_cloud.h"
 #include "registration/correspondences.h"
 #include "registration/fracture_step.h"
@@ -468,22 +469,12 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {
   const Vertices forces = frame_problem.ExternalForces(state);
-  double mass = 0.0;
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (int v = 0; v < state.num_vertices; ++v) {
-    mass += state.mass(v);
-    centroid += state.mass(v) * state.x.row(v).transpose();
-  }
-  if (mass > 0) centroid /= mass;
-  s->force.setZero();
-  s->torque.setZero();
-  for (int v = 0; v < state.num_vertices; ++v) {
-    const Eigen::Vector3d f = forces.row(v).transpose();
-    s->force += f;
-    s->torque += (state.x.row(v).transpose() - centroid).cross(f);
-  }
-  for (const ObjectState& o : state.objects) {
-    state.external_forces[static_cast<size_t>(&o - state.objects.data())] = forces.middleRows(o.offset, o.mesh.num_vertices());
+  const ForceResultant resultant = ResultantAboutCentroid(forces, state.x, state.mass);
+  s->force = resultant.force;
+  s->torque = resultant.torque;
+  for (size_t i = 0; i < state.objects.size(); ++i) {
+    const ObjectState& o = state.objects[i];
+    state.external_forces[i] = forces.middleRows(o.offset, o.mesh.num_vertices());
   }
 }
 
