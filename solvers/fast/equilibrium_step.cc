@@ -404,7 +404,6 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   report.stop = StopReason::kMaxIterations;
   Eigen::VectorXd dx;
   Vertices trial;
-  const int n = problem.num_vertices();
   for (int step = 0; step < m.options.max_iterations; ++step) {
     const double gradient = m.G.lpNorm<Eigen::Infinity>();
     if (gradient == 0.0 || (step > 0 && gradient <= 1e-9 * first_gradient)) {
@@ -418,32 +417,15 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       break;
     }
     ++report.iterations;
-    double alpha = 1.0, trial_energy = energy;
-    bool accepted = false;
-    EnergyTerms trial_terms;
-    for (int halving = 0; halving < 10; ++halving, alpha *= 0.5) {
-      trial = *x;
-      for (int v = 0; v < n; ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
-      const auto t1 = Clock::now();
-      trial_terms = problem.Evaluate(trial, m.threads);
-      report.evaluate_s += Seconds(t1);
-      trial_energy = trial_terms.total();
-      if (std::isfinite(trial_energy) && trial_energy <= energy) {
-        accepted = true;
-        break;
-      }
-    }
-    if (!accepted) {
+    const Backtracked b = Backtrack(problem, dx, energy, 10, m.threads, &trial, x, &report);
+    if (!b.accepted) {
       report.stop = StopReason::kNoDecrease;
       break;
     }
-    double largest = 0.0;
-    for (int v = 0; v < n; ++v) largest = std::max(largest, dx.segment<3>(3 * v).norm());
-    largest *= alpha;
-    const double decrease = (energy - trial_energy) / std::max(energy, 1e-300);
-    x->swap(trial);
-    energy = trial_energy;
-    report.after = trial_terms;
+    const double largest = b.largest_move;
+    const double decrease = (energy - b.energy) / std::max(energy, 1e-300);
+    energy = b.energy;
+    report.after = b.terms;
     if (largest <= m.options.step_tolerance || largest == 0.0) {
       report.stop = StopReason::kStep;
       break;

@@ -273,7 +273,6 @@ struct FastBackend::Impl {
   // z = M^-1 r: the multigrid V-cycle, or the kept factor's substitutions (CHOLMOD's where
   // the single-precision copy could not be made); counted as a linear solve.
   void Precondition(const Eigen::VectorXd& r, bool with_multigrid, Eigen::VectorXd* z, SolveReport* report);
-  EnergyTerms Energy(const energy::Problem& problem, const Vertices& x, SolveReport* report) const;
   // Problems with an equilibrium (energy/equilibrium.h) go to their own solve, made at the first.
   std::unique_ptr<EquilibriumSolver> equilibrium;
 };
@@ -589,12 +588,29 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g
   return dx->allFinite() ? Outcome::kSolved : Outcome::kFailed;
 }
 
-EnergyTerms FastBackend::Impl::Energy(const energy::Problem& problem, const Vertices& x,
-                                      SolveReport* report) const {
-  const auto t0 = Clock::now();
-  const EnergyTerms e = problem.Evaluate(x, threads);
-  report->evaluate_s += Seconds(t0);
-  return e;
+Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx, double energy, int halvings,
+                      int threads, Vertices* trial, Vertices* x, SolveReport* report) {
+  Backtracked b;
+  const int n = static_cast<int>(x->rows());
+  double alpha = 1.0;
+  for (int halving = 0; halving < halvings; ++halving, alpha *= 0.5) {
+    *trial = *x;
+    for (int v = 0; v < n; ++v) trial->row(v) += alpha * dx.segment<3>(3 * v).transpose();
+    const auto t0 = Clock::now();
+    b.terms = problem.Evaluate(*trial, threads);
+    report->evaluate_s += Seconds(t0);
+    b.energy = b.terms.total();
+    if (std::isfinite(b.energy) && b.energy <= energy) {
+      b.accepted = true;
+      break;
+    }
+  }
+  if (!b.accepted) return b;
+  b.alpha = alpha;
+  for (int v = 0; v < n; ++v) b.largest_move = std::max(b.largest_move, dx.segment<3>(3 * v).norm());
+  b.largest_move *= alpha;
+  x->swap(*trial);
+  return b;
 }
 
 SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
@@ -656,32 +672,16 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     }
     ++report.iterations;
     // Backtracking on the energy along the step.
-    double alpha = 1.0;
-    bool accepted = false;
-    double trial_energy = energy;
-    EnergyTerms trial_terms;
-    for (int halving = 0; halving < 8; ++halving, alpha *= 0.5) {
-      trial = *x;
-      for (int v = 0; v < m.assembler.num_vertices(); ++v) trial.row(v) += alpha * dx.segment<3>(3 * v).transpose();
-      trial_terms = m.Energy(problem, trial, &report);
-      trial_energy = trial_terms.total();
-      if (std::isfinite(trial_energy) && trial_energy <= energy) {
-        accepted = true;
-        break;
-      }
-    }
-    if (!accepted) {
+    const Backtracked b = Backtrack(problem, dx, energy, 8, m.threads, &trial, x, &report);
+    if (!b.accepted) {
       report.stop = StopReason::kNoDecrease;
       break;
     }
-    double largest = 0.0;
-    for (int v = 0; v < m.assembler.num_vertices(); ++v) largest = std::max(largest, dx.segment<3>(3 * v).norm());
-    largest *= alpha;
-    const double gain = energy - trial_energy;
+    const double largest = b.largest_move, alpha = b.alpha;
+    const double gain = energy - b.energy;
     const double decrease = gain / std::max(energy, 1e-300);
-    x->swap(trial);
-    energy = trial_energy;
-    report.after = trial_terms;
+    energy = b.energy;
+    report.after = b.terms;
     if (largest <= m.options.step_tolerance || largest == 0.0) {
       report.stop = StopReason::kStep;
       break;

@@ -24,6 +24,18 @@ namespace fast_backend {
 // (docs/notes/2026-11-28-figures-from-code-comments.md).
 inline constexpr double kPcgTolerance = 1e-2;
 
+// Backtracking along dx from *x: alpha = 1, 1/2, ... (at most `halvings` tries) until the
+// problem's energy is finite and at most `energy`. Accepted: *x moved by alpha dx, and the
+// energy there, its terms and the largest vertex move returned. `trial`: scratch, kept by the
+// caller across steps. Both fast-back-end steps.
+struct Backtracked {
+  bool accepted = false;
+  double alpha = 0.0, energy = 0.0, largest_move = 0.0;
+  EnergyTerms terms;
+};
+Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx, double energy, int halvings,
+                      int threads, Vertices* trial, Vertices* x, SolveReport* report);
+
 class FastBackend : public Backend {
  public:
   explicit FastBackend(const BackendOptions& options);
