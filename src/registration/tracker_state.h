@@ -6,7 +6,7 @@
 //   registration/prealign         the rigid pre-alignment
 //   registration/frame_problem    the frame's energy from pairs, springs, anchors, contacts
 //   registration/fracture_step    detection and splits between outer iterations
-//   registration/tracker          the outer loop, the public API
+//   registration/tracker          the outer loop, the public API (set-up calls: tracker_setup)
 #ifndef FEMREG_REGISTRATION_TRACKER_STATE_H_
 #define FEMREG_REGISTRATION_TRACKER_STATE_H_
 

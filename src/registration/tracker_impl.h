@@ -1,0 +1,56 @@
+// The Tracker's state and parts behind its public face (femreg/tracker.h): the frame loop
+// lives in tracker.cc, the set-up calls (labels, effects, anchors, loads, force regions) in
+// tracker_setup.cc.
+#ifndef FEMREG_REGISTRATION_TRACKER_IMPL_H_
+#define FEMREG_REGISTRATION_TRACKER_IMPL_H_
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "femreg/tracker.h"
+#include "geometry/nearest.h"
+#include "registration/correspondences.h"
+#include "registration/frame_problem.h"
+#include "registration/tracker_state.h"
+#include "solvers/backend.h"
+
+namespace femreg {
+
+struct Tracker::Impl {
+  using Clock = std::chrono::steady_clock;
+
+  TrackerState state;
+  FrameProblem frame_problem;
+  std::unique_ptr<Backend> backend;
+  ModelIndex model_index;
+  double mean_edge = 0.0;  // m, at rest: the auto voxel and the model index's tolerance
+
+  Status Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials);
+  Status Track(const PointCloud& input, FrameSummary* summary);
+  // The frame's cloud: transformed, preprocessed and subsampled (s: counts, voxel, time).
+  void PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameSummary* s);
+  // A frame that cannot be solved: the shape stays at state.x (held or predicted).
+  void Hold(TerminationType t, const std::string& message, const PointIndex* index,
+            Clock::time_point t_frame, FrameSummary* s);
+  // One outer iteration k; false when the frame stops (the summary says why).
+  bool OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
+                      std::vector<DataPair>* pairs, double* previous_energy, Vertices* previous,
+                      FrameSummary* s);
+  // The contacts the result keeps and the deepest penetration (collision on).
+  void MeasureContacts(FrameSummary* s);
+  // The external forces on the result: per vertex (state.external_forces) and their resultant.
+  void MeasureForces(FrameSummary* s);
+  const SurfaceIndex& Surface() { return model_index.Get(state, 0.1 * mean_edge); }
+  // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
+  std::vector<int> warm_triangles;
+  std::vector<char> paired_vertices;
+  // The first outer iteration of this frame whose energy rise may stop it: where the pair
+  // set is held (data.hold_pairs_after), again after a fracture split.
+  int rise_from = 1;
+};
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_TRACKER_IMPL_H_
