@@ -1,0 +1,246 @@
+// femreg register's output files (register_outputs.h).
+#include "register_outputs.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli_util.h"
+#include "commands.h"
+#include "provenance.h"
+#include "femreg/collision.h"
+#include "femreg/eval.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
+#include "femreg/tracker.h"
+#include "femreg/version.h"
+#include "mesh_warnings.h"
+
+namespace fs = std::filesystem;
+
+namespace femreg {
+namespace cli {
+namespace register_outputs {
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+extern const char kStatsHeader[];
+const char kStatsHeader[] =
+    "frame,file,termination,outer_iterations,inner_iterations,cloud_points,nonfinite_dropped,"
+    "points_used,model_to_cloud,cloud_to_model,rejected,rms_residual_mm,e_data,e_elastic,"
+    "e_temporal,e_anchor,e_total,t_preprocess_ms,t_prealign_ms,t_rotations_ms,"
+    "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
+    "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
+    "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
+    "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,stopped_by,"
+    "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
+    "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
+    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,message\n";
+
+std::string StatsRow(size_t i, const FrameRow& row) {
+  std::ostringstream os;
+  char buf[1024];
+  const FrameSummary& s = row.summary;
+  std::snprintf(buf, sizeof(buf),
+                "%zu,%s,%s,%d,%d,%d,%d,%d,%d,%d,%d,%.4f,%.6g,%.6g,%.6g,%.6g,%.6g,%.3f,%.3f,%.3f,"
+                "%.3f,%.3f,%.3f,%.3f",
+                i, fs::path(row.file).filename().string().c_str(), ToString(s.termination),
+                s.outer_iterations, s.inner_iterations, s.cloud_points, s.nonfinite_dropped,
+                s.points_used, s.model_to_cloud, s.cloud_to_model, s.rejected,
+                s.rms_residual * 1e3, s.final.data, s.final.elastic, s.final.temporal,
+                s.final.anchor, s.final.total(), s.time.preprocess * 1e3, s.time.prealign * 1e3,
+                s.time.rotations * 1e3, s.time.correspondences * 1e3, s.time.build * 1e3,
+                s.time.solve * 1e3, s.time.total * 1e3);
+  os << buf;
+  if (row.have_errors) {
+    const VertexErrors& e = row.errors;
+    std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f", e.all.mean * 1e3,
+                  e.all.rms * 1e3, e.all.p95 * 1e3, e.all.max * 1e3, e.seen.mean * 1e3,
+                  e.seen.max * 1e3, e.hidden.mean * 1e3, e.hidden.max * 1e3);
+    os << buf;
+  } else {
+    os << ",,,,,,,,";
+  }
+  os << "," << s.fractures.size() << "," << row.pieces << ",";
+  for (size_t p = 0; p < row.piece_errors.size(); ++p) {
+    std::snprintf(buf, sizeof(buf), "%s%.4f", p ? ";" : "", row.piece_errors[p].mean * 1e3);
+    os << buf;
+  }
+  std::snprintf(buf, sizeof(buf), ",%.6g,%d,%d,%d,%.4f,%.3f", s.final.collision, s.contacts,
+                s.object_contacts, s.obstacle_contacts, s.max_penetration * 1e3,
+                s.time.collision * 1e3);
+  os << buf;
+  std::snprintf(buf, sizeof(buf), ",%s,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f", s.stopped_by.c_str(),
+                s.factorizations, s.linear_solves, s.pcg_iterations, s.time.assembly * 1e3,
+                s.time.factorization * 1e3, s.time.linear_solve * 1e3, s.time.evaluation * 1e3,
+                s.time.fracture * 1e3);
+  os << buf;
+  std::snprintf(buf, sizeof(buf), ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", s.final.load,
+                s.final.equilibrium, s.force.x(), s.force.y(), s.force.z(), s.torque.x(), s.torque.y(),
+                s.torque.z());
+  os << buf;
+  std::string msg = row.read_error.empty() ? s.message : row.read_error;
+  std::replace(msg.begin(), msg.end(), '"', '\'');
+  os << ",\"" << msg << "\"\n";
+  return os.str();
+}
+
+Totals ComputeTotals(const std::vector<FrameRow>& rows) {
+  Totals t;
+  t.frames = static_cast<int>(rows.size());
+  std::vector<double> ms;
+  double sum_all = 0, sum_seen = 0, sum_hidden = 0;
+  int n_err = 0, n_seen = 0, n_hidden = 0;
+  for (const FrameRow& r : rows) {
+    if (r.summary.IsSolutionUsable()) ++t.usable;
+    ms.push_back(r.summary.time.total * 1e3);
+    if (r.have_errors) {
+      t.have_errors = true;
+      sum_all += r.errors.all.mean * r.errors.all.count;
+      n_err += r.errors.all.count;
+      t.err_max = std::max(t.err_max, r.errors.all.max);
+      sum_seen += r.errors.seen.mean * r.errors.seen.count;
+      n_seen += r.errors.seen.count;
+      t.seen_max = std::max(t.seen_max, r.errors.seen.max);
+      sum_hidden += r.errors.hidden.mean * r.errors.hidden.count;
+      n_hidden += r.errors.hidden.count;
+      t.hidden_max = std::max(t.hidden_max, r.errors.hidden.max);
+    }
+  }
+  t.median_ms = Median(ms);
+  double total_ms = 0;
+  for (double m : ms) total_ms += m;
+  t.mean_ms = ms.empty() ? 0 : total_ms / ms.size();
+  t.fps = total_ms > 0 ? 1e3 * ms.size() / total_ms : 0;
+  t.err_mean = n_err ? sum_all / n_err : 0;
+  t.seen_mean = n_seen ? sum_seen / n_seen : 0;
+  t.hidden_mean = n_hidden ? sum_hidden / n_hidden : 0;
+  return t;
+}
+
+std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Tracker& tracker,
+                        const std::vector<FrameRow>& rows, const std::vector<std::string>& files,
+                        const std::vector<std::string>& truth_files, bool interrupted) {
+  using json = nlohmann::ordered_json;
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  const Totals t = ComputeTotals(rows);
+  int unreadable = 0;
+  double voxel = 0.0, coverage = 1.0;
+  std::string visibility = "none";
+  for (const FrameRow& r : rows) {
+    if (!r.read_error.empty()) {
+      ++unreadable;
+      continue;
+    }
+    voxel = std::max(voxel, r.summary.voxel_size);
+    if (r.summary.outer_iterations > 0) {
+      coverage = std::min(coverage, r.summary.coverage);
+      visibility = r.summary.visibility;
+    }
+  }
+  const RegistrationOptions& o = tracker.options();
+  json j;
+  j["femreg_version"] = Version();
+  j["scene"] = args.scene;
+  j["frames_source"] = args.frames;
+  j["frames_total"] = files.size();
+  j["frames_done"] = t.frames;
+  j["interrupted"] = interrupted;
+  if (interrupted) j["interrupted_by"] = InterruptName();
+  j["frames_usable"] = t.usable;
+  j["frames_unreadable"] = unreadable;
+  // How the clouds were used: the automatic subsampling's voxel (0: none), how visibility
+  // was decided (the last solved frame) and the smallest coverage of the surface.
+  j["clouds"] = {{"auto_voxel_m", number(voxel)},
+                 {"visibility", visibility},
+                 {"reciprocity", number(o.data.reciprocity)},
+                 {"min_coverage", number(coverage)}};
+  j["regularizer"] = ToString(o.regularizer);
+  j["backend"] = ToString(o.solver.backend);
+  // What solved the frames (a contact scene runs on Ceres whatever the option says).
+  json used = json::array();
+  for (const FrameRow& r : rows) {
+    const std::string b = ToString(r.summary.backend);
+    if (std::find(used.begin(), used.end(), b) == used.end()) used.push_back(b);
+  }
+  j["backends_used"] = used;
+  json objects = json::array();
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const TetMesh& m = tracker.mesh(static_cast<int>(i));
+    objects.push_back({{"name", scene.objects[i].name},
+                       {"vertices", m.num_vertices()},
+                       {"tetrahedra", m.num_tets()},
+                       {"youngs_modulus", number(scene.objects[i].material.youngs_modulus)},
+                       {"poisson_ratio", number(scene.objects[i].material.poisson_ratio)}});
+  }
+  j["objects"] = objects;
+  j["solver"] = {{"backend", ToString(o.solver.backend)},
+                 {"max_outer_iterations", o.solver.max_outer_iterations},
+                 {"max_inner_iterations", o.solver.max_inner_iterations},
+                 {"linear_solver", ToString(o.solver.linear_solver)},
+                 {"trust_region", ToString(o.solver.trust_region)},
+                 {"preconditioner", ToString(o.solver.preconditioner)},
+                 {"threads", o.solver.num_threads}};
+  j["ms_per_frame_median"] = number(t.median_ms);
+  j["ms_per_frame_mean"] = number(t.mean_ms);
+  j["frames_per_second"] = number(t.fps);
+  if (t.have_errors) {
+    j["vertex_error_mm"] = {{"mean", number(t.err_mean * 1e3)},
+                            {"max", number(t.err_max * 1e3)},
+                            {"seen_mean", number(t.seen_mean * 1e3)},
+                            {"seen_max", number(t.seen_max * 1e3)},
+                            {"hidden_mean", number(t.hidden_mean * 1e3)},
+                            {"hidden_max", number(t.hidden_max * 1e3)}};
+  }
+  {
+    // The external forces' resultant per frame (N): what the run estimated (or, without
+    // registration.forces.estimate, the data term's pull).
+    json forces = json::array();
+    for (const FrameRow& r : rows) {
+      const FrameSummary& s = r.summary;
+      forces.push_back({{"force_N", {number(s.force.x()), number(s.force.y()), number(s.force.z())}},
+                        {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}});
+    }
+    j["forces"] = {{"estimated", o.forces.estimate}, {"per_frame", forces}};
+  }
+  double deepest = 0.0;
+  int contacts = 0;
+  for (const FrameRow& r : rows) {
+    deepest = std::max(deepest, r.summary.max_penetration);
+    contacts = std::max(contacts, r.summary.contacts);
+  }
+  if (contacts > 0 || deepest > 0) {
+    j["contacts"] = {{"max_per_frame", contacts},
+                     {"max_penetration_mm", number(deepest * 1e3)},
+                     {"collision", tracker.collision() != nullptr}};
+  }
+  json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
+                {"threads", args.threads}, {"depth_scale", args.depth_scale},
+                {"mask_dir", args.mask_dir.empty() ? json(nullptr) : json(args.mask_dir)}};
+  j["command_line"] = flags;
+  j["provenance"] = ProvenanceJson(scene, o, args.sets, files, truth_files);
+  // A file name or description that is not UTF-8 must not end the run: replace its bytes.
+  return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
+}  // namespace register_outputs
+}  // namespace cli
+}  // namespace femreg
