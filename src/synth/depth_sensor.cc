@@ -7,8 +7,27 @@
 
 #include "femreg/point_cloud.h"  // CameraRotation
 #include "femreg/synth.h"
+#include "geometry/zbuffer.h"
 
 namespace femreg {
+
+namespace {
+
+PinholeCamera Pinhole(const DepthSensorOptions& options, const Eigen::Matrix3d& R) {
+  PinholeCamera p;
+  p.rotation = R;
+  p.position = options.camera.position;
+  p.fx = options.camera.fx;
+  p.fy = options.camera.fy;
+  p.cx = options.camera.cx;
+  p.cy = options.camera.cy;
+  p.width = options.camera.width;
+  p.height = options.camera.height;
+  p.near = options.near;
+  return p;
+}
+
+}  // namespace
 
 bool DepthSensorOptions::IsValid(std::string* error) const {
   std::ostringstream os;
@@ -35,61 +54,26 @@ DepthSensor::DepthSensor(const DepthSensorOptions& options) : options_(options) 
 }
 
 bool DepthSensor::Project(const Eigen::Vector3d& p, double* u, double* v, double* z) const {
-  const Eigen::Vector3d q = R_ * (p - options_.camera.position);
-  *z = q.z();
-  if (q.z() <= options_.near) return false;
-  *u = options_.camera.fx * q.x() / q.z() + options_.camera.cx;
-  *v = options_.camera.fy * q.y() / q.z() + options_.camera.cy;
-  return true;
+  return Pinhole(options_, R_).Project(p, u, v, z);
 }
 
 DepthImage DepthSensor::Render(const std::vector<RenderSurface>& surfaces) const {
   const CameraOptions& c = options_.camera;
+  const PinholeCamera pinhole = Pinhole(options_, R_);
+  ZBuffer zbuffer;
+  zbuffer.Reset(c.width, c.height);
+  for (size_t s = 0; s < surfaces.size(); ++s) {
+    Rasterize(pinhole, *surfaces[s].positions, *surfaces[s].triangles, static_cast<int>(s), &zbuffer);
+  }
   DepthImage img;
   img.width = c.width;
   img.height = c.height;
-  const size_t n = static_cast<size_t>(c.width) * static_cast<size_t>(c.height);
-  img.depth.assign(n, 0.0f);
-  img.surface.assign(n, -1);
-  img.triangle.assign(n, -1);
-  std::vector<double> zbuf(n, std::numeric_limits<double>::infinity());
-  for (size_t s = 0; s < surfaces.size(); ++s) {
-    const Vertices& P = *surfaces[s].positions;
-    const Triangles& T = *surfaces[s].triangles;
-    for (int f = 0; f < T.rows(); ++f) {
-      double u[3], v[3], z[3];
-      bool ok = true;
-      for (int k = 0; k < 3; ++k) ok = ok && Project(P.row(T(f, k)), &u[k], &v[k], &z[k]);
-      if (!ok) continue;
-      // Pixel centres at integer coordinates.
-      const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({u[0], u[1], u[2]}))));
-      const int u1 = std::min(c.width - 1, static_cast<int>(std::floor(std::max({u[0], u[1], u[2]}))));
-      const int v0 = std::max(0, static_cast<int>(std::ceil(std::min({v[0], v[1], v[2]}))));
-      const int v1 = std::min(c.height - 1, static_cast<int>(std::floor(std::max({v[0], v[1], v[2]}))));
-      if (u0 > u1 || v0 > v1) continue;
-      const double area = (u[1] - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (v[1] - v[0]);
-      if (std::abs(area) < 1e-12) continue;
-      for (int py = v0; py <= v1; ++py) {
-        for (int px = u0; px <= u1; ++px) {
-          // Screen-space barycentrics.
-          const double w0 = ((u[1] - px) * (v[2] - py) - (u[2] - px) * (v[1] - py)) / area;
-          const double w1 = ((u[2] - px) * (v[0] - py) - (u[0] - px) * (v[2] - py)) / area;
-          const double w2 = 1.0 - w0 - w1;
-          if (w0 < 0 || w1 < 0 || w2 < 0) continue;
-          // Perspective-correct depth: 1/z is linear in screen space.
-          const double inv_z = w0 / z[0] + w1 / z[1] + w2 / z[2];
-          const double depth = 1.0 / inv_z;
-          const size_t idx = static_cast<size_t>(py) * c.width + px;
-          if (depth < zbuf[idx]) {
-            zbuf[idx] = depth;
-            img.depth[idx] = static_cast<float>(depth);
-            img.surface[idx] = static_cast<int>(s);
-            img.triangle[idx] = f;
-          }
-        }
-      }
-    }
+  img.depth.resize(zbuffer.depth.size());
+  for (size_t i = 0; i < zbuffer.depth.size(); ++i) {
+    img.depth[i] = zbuffer.triangle[i] >= 0 ? static_cast<float>(zbuffer.depth[i]) : 0.0f;
   }
+  img.surface = std::move(zbuffer.surface);
+  img.triangle = std::move(zbuffer.triangle);
   return img;
 }
 
