@@ -111,6 +111,30 @@ struct Sample<energy::NeoHookeanElement> {
   Sample(const Sample&) = delete;
 };
 
+// Compressed below the threshold (J in 0.05-0.19 against 0.2), where the barrier acts.
+template <>
+struct Sample<energy::InversionBarrier> {
+  static constexpr const char* kName = "InversionBarrier";
+  ElementRest rest;
+  energy::InversionBarrier block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    rest = RandomRest(rng, 0.3);
+    const Eigen::Matrix3d Q = RandomRotation(rng);
+    std::uniform_real_distribution<double> flat(0.08, 0.16), side(0.8, 1.1);
+    const Eigen::Matrix3d A = Q * Eigen::Vector3d(flat(*rng), side(*rng), side(*rng)).asDiagonal() *
+                              RandomRotation(rng).transpose();
+    x.resize(4, 3);
+    const Eigen::Vector3d X0 = rest.X.segment<3>(0), shift = RandomPoint(rng, 0.1);
+    for (int c = 0; c < 4; ++c) x.row(c) = (A * (rest.X.segment<3>(3 * c) - X0) + X0 + shift).transpose();
+    block.vertices = {{0, 1, 2, 3}};
+    block.weight = 1.5;
+    block.rest = &rest;
+    block.threshold = 0.2;
+  }
+  Sample(const Sample&) = delete;
+};
+
 template <>
 struct Sample<energy::EdgeSpring> {
   static constexpr const char* kName = "EdgeSpring";

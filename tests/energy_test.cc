@@ -74,9 +74,11 @@ TYPED_TEST(EnergyBlockTest, LinearizationIsTheValuesGradientAndItsBlocksArePsd) 
   for (RobustLoss kind : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {
     for (int trial = 0; trial < kTrials; ++trial) {
       Sample<T> s(&rng);
-      // The loss bends near the residual's size, so both branches are exercised.
+      // The loss bends near the residual's size, so both branches are exercised; never at
+      // the bend itself, where central differences of a C1 loss err by h times the jump of
+      // its second derivative (visible on the stiff inversion barrier).
       const double size = Residual(s.block, s.x).norm();
-      const Loss loss{kind, kind == RobustLoss::kNone ? 1.0 : (0.4 + 0.1 * (trial % 12)) * std::max(size, 1e-9)};
+      const Loss loss{kind, kind == RobustLoss::kNone ? 1.0 : (0.45 + 0.1 * (trial % 12)) * std::max(size, 1e-9)};
       energy::Linearization<T> lin;
       ASSERT_TRUE(energy::Linearize(s.block, loss, s.x, &lin));
       // Round-off of |r|^2 (summed two ways), which includes the offset where there is one.

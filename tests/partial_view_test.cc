@@ -105,12 +105,12 @@ TEST(PartialView, OrganPatchWithoutTrimOrVisibilityPullsTheSurfaceOntoThePatch) 
     s->registration.data.hold_pairs_after = 0;
   });
   ASSERT_FALSE(frames.empty());
-  double mean = 0.0, nothing = 0.0;
-  for (const FrameErrors& e : frames) {
-    mean += e.hidden / frames.size();
-    nothing += e.nothing / frames.size();
-  }
-  EXPECT_GT(mean, nothing);
+  double mean = 0.0;
+  for (const FrameErrors& e : frames) mean += e.hidden / frames.size();
+  // Beyond the bound the defaults keep (above). (Worse than doing nothing, too, without the
+  // inversion barrier, which stops the surface's collapse onto the patch short:
+  // docs/notes/2026-11-29-occluders-and-inversion.md.)
+  EXPECT_GT(mean, 2e-3);
 }
 
 // data.hold_pairs_after: from the third outer iteration on, the vertices that pull are the

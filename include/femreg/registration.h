@@ -135,6 +135,14 @@ struct DataTermOptions {
   // A rise of the energy stops a frame only from here on (solver.relative_energy_tolerance). 0 =
   // never held (rises then count from the second).
   int hold_pairs_after = 2;
+  // Occluders (with a known camera): the cloud points of something in front of the model,
+  // a hand or a tool the mask kept, pull nothing. A point whose camera ray meets the model
+  // more than occluder_margin behind it, and that lies farther than that from the surface,
+  // starts an occluder; the occluder takes in the points connected to it that are off the
+  // model (docs/guide/partial-views.md#occluders). Each frame decides at its start. Not
+  // with fracture on (a piece coming apart is a displacement no strain bounds).
+  bool occluders = true;
+  double occluder_margin = 0.02;  // m, > 0
   // A cloud with fewer points (after preprocessing) than max(min_points,
   // min_points_per_surface_vertex * surface vertices) cannot constrain the object: the
   // frame keeps the prediction (TerminationType::kTooFewPoints).
@@ -179,6 +187,11 @@ struct WeightOptions {
   // with no cloud->model pair (data.cloud_to_model off).
   bool model_to_cloud_balance = true;
   double elastic = 1.0;    // w_elastic, multiplies the FEM energy (J)
+  // The inversion barrier (docs/theory/inversion.md): every element compressed below
+  // barrier_volume of its rest volume stores w_elastic barrier V mu (j - J)^2 log(j / J),
+  // which no step can cross to a flat or inverted element. 0 = off.
+  double barrier = 1.0;          // >= 0, in units of each element's shear modulus
+  double barrier_volume = 0.2;   // j, in (0, 1)
   double temporal = 1.0;   // w_temporal, multiplies 0.5 sum m_i |x_i - x_i^prev|^2 (kg m^2)
   double anchor = 1.0e4;   // soft anchors: 0.5 w |x_i - target_i|^2 per vertex (N/m)
   bool IsValid(std::string* error) const;
@@ -326,6 +339,7 @@ struct FrameSummary {
   int nonfinite_dropped = 0;      // NaN / inf points removed
   int points_used = 0;            // after preprocessing
   double voxel_size = 0.0;        // m: the automatic subsampling's voxel (0: not applied)
+  int occluded_points = 0;        // points of an occluder in front of the model (data.occluders)
   // How model->cloud pairs were restricted to what the sensor could see: "camera",
   // "viewpoint" (from the file), "direction (x, y, z)" (estimated), "none"; plus the
   // reciprocity trim's distance (m; 0 = off) and the fraction of the surface vertices

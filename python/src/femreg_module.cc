@@ -135,6 +135,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["model_to_cloud"] = s.model_to_cloud;
   d["cloud_to_model"] = s.cloud_to_model;
   d["rejected"] = s.rejected;
+  d["occluded_points"] = s.occluded_points;
   d["rms_residual"] = s.rms_residual;
   d["contacts"] = s.contacts;
   d["object_contacts"] = s.object_contacts;
@@ -424,7 +425,9 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("auto_visibility", &DataTermOptions::auto_visibility)
       .def_readwrite("reciprocity", &DataTermOptions::reciprocity)
       .def_readwrite("cloud_stride", &DataTermOptions::cloud_stride)
-      .def_readwrite("hold_pairs_after", &DataTermOptions::hold_pairs_after);
+      .def_readwrite("hold_pairs_after", &DataTermOptions::hold_pairs_after)
+      .def_readwrite("occluders", &DataTermOptions::occluders)
+      .def_readwrite("occluder_margin", &DataTermOptions::occluder_margin);
   EnumProperty(data, "loss", &DataTermOptions::loss, "data.loss",
                {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey},
                "robust loss: none, huber, cauchy, tukey");
@@ -451,6 +454,8 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("model_to_cloud_area_cap", &WeightOptions::model_to_cloud_area_cap)
       .def_readwrite("model_to_cloud_balance", &WeightOptions::model_to_cloud_balance)
       .def_readwrite("elastic", &WeightOptions::elastic)
+      .def_readwrite("barrier", &WeightOptions::barrier)
+      .def_readwrite("barrier_volume", &WeightOptions::barrier_volume)
       .def_readwrite("temporal", &WeightOptions::temporal)
       .def_readwrite("anchor", &WeightOptions::anchor);
 

@@ -26,6 +26,11 @@ class TermCost : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
     if (!block_->Evaluate(parameters, residuals, jacobians)) return false;
+    // An infinite energy (the inversion barrier's flat element): a failed evaluation, which
+    // Ceres answers by shrinking the step, without its warning for non-finite residuals.
+    for (int k = 0; k < T::kResiduals; ++k) {
+      if (!std::isfinite(residuals[k])) return false;
+    }
     if (sqrt_weight_ == 1.0) return true;
     for (int k = 0; k < T::kResiduals; ++k) residuals[k] *= sqrt_weight_;
     if (jacobians != nullptr) {

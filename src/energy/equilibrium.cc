@@ -80,10 +80,13 @@ bool Equilibrium::IsValid(int num_vertices) const {
 
 uint32_t PhysicsGroups() {
   return (1u << static_cast<int>(TermGroup::kElastic)) | (1u << static_cast<int>(TermGroup::kLoad)) |
-         (1u << static_cast<int>(TermGroup::kCollision));
+         (1u << static_cast<int>(TermGroup::kCollision)) | (1u << static_cast<int>(TermGroup::kBarrier));
 }
 
-uint32_t ObjectiveGroups() { return ((1u << kNumTermGroups) - 1u) & ~PhysicsGroups(); }
+// The barrier in both: its force is the body's, and its energy the wall no step may cross.
+uint32_t ObjectiveGroups() {
+  return (((1u << kNumTermGroups) - 1u) & ~PhysicsGroups()) | (1u << static_cast<int>(TermGroup::kBarrier));
+}
 
 void ForceResidual(const Problem& problem, const Vertices& x, Eigen::VectorXd* f, uint32_t groups,
                    Curvature curvature) {

@@ -56,7 +56,7 @@ struct Equilibrium {
 
 // The groups whose energy is the potential Pi, as a mask of 1 << TermGroup (Assembler::set_groups).
 uint32_t PhysicsGroups();
-// The others (data, temporal springs, anchors): minimized as they are.
+// The others (data, temporal springs, anchors) and the barrier, a wall: minimized as they are.
 uint32_t ObjectiveGroups();
 inline bool InGroups(uint32_t mask, TermGroup group) { return (mask >> static_cast<int>(group)) & 1u; }
 

@@ -15,6 +15,7 @@ uint64_t NextRevision() {
 double& GroupEnergy(TermGroup group, EnergyTerms* terms) {
   switch (group) {
     case TermGroup::kElastic:
+    case TermGroup::kBarrier:
       return terms->elastic;
     case TermGroup::kTemporal:
       return terms->temporal;

@@ -13,6 +13,7 @@
 #include <tuple>
 #include <vector>
 
+#include "energy/barrier.h"
 #include "energy/contact.h"
 #include "energy/data.h"
 #include "energy/elastic.h"
@@ -29,7 +30,7 @@ class Problem {
  public:
   // The registry: one vector of sets per block type.
   using Sets = std::tuple<std::vector<TermSet<ElasticElement>>, std::vector<TermSet<NeoHookeanElement>>,
-                          std::vector<TermSet<EdgeSpring>>,
+                          std::vector<TermSet<InversionBarrier>>, std::vector<TermSet<EdgeSpring>>,
                           std::vector<TermSet<PointToPoint<1>>>, std::vector<TermSet<PointToPoint<3>>>,
                           std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
                           std::vector<TermSet<ContactPenalty<3>>>,

@@ -60,8 +60,10 @@ namespace femreg {
 namespace energy {
 
 // Which line of EnergyTerms a set adds to.
-enum class TermGroup { kElastic, kTemporal, kAnchor, kData, kCollision, kLoad };
-constexpr int kNumTermGroups = 6;
+// kBarrier: the inversion barrier (energy/barrier.h), reported with the elastic energy; under
+// equilibrium registration both a force of the body and a wall the objective keeps.
+enum class TermGroup { kElastic, kTemporal, kAnchor, kData, kCollision, kLoad, kBarrier };
+constexpr int kNumTermGroups = 7;
 double& GroupEnergy(TermGroup group, EnergyTerms* terms);
 
 // A number not handed out before in this process (revisions of sets and couplings).

@@ -248,6 +248,8 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
                  ? std::max(options.data.reciprocity * fc->spacing, options.data.loss_scale)
                  : std::numeric_limits<double>::infinity();
 
+  UpdateOccluders(state, surface, fc);
+
   fc->view = FrameCloud::View::kNone;
   if (options.camera.enabled && (options.data.visibility || options.data.auto_visibility)) {
     fc->view = FrameCloud::View::kCamera;
@@ -289,6 +291,17 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
   if (count > 0 && sum.norm() / count >= kMinMeanNormal) {
     fc->view = FrameCloud::View::kDirection;
     fc->eye = sum.normalized();
+  }
+}
+
+void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc) {
+  const RegistrationOptions& options = state.options;
+  fc->occluder.clear();
+  fc->occluders = OccluderCounts();
+  // Not with fracture on: a piece that comes apart is a displacement no strain bounds.
+  if (options.camera.enabled && options.data.occluders && state.fracture == nullptr) {
+    fc->occluders = MarkOccluders(state, surface, fc->cloud.points, *fc->index, fc->spacing, &fc->occluder);
+    if (fc->occluders.occluders == 0) fc->occluder.clear();
   }
 }
 
@@ -399,7 +412,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
         ++counts->rejected;
         continue;
       }
-      if (mutual && foreign[static_cast<size_t>(i)]) {  // also from a held set: it leaves it
+      if ((mutual && foreign[static_cast<size_t>(i)]) || fc.Occluder(q)) {  // also from a held set
         ++counts->trimmed;
         continue;
       }
@@ -436,6 +449,10 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       const int i = j * data.cloud_stride;
       const SurfaceIndex::Hit& hit = hits[static_cast<size_t>(j)];
       if (hit.triangle < 0) continue;
+      if (fc.Occluder(i)) {
+        ++counts->occluded;
+        continue;
+      }
       if (hit.squared_distance > gate2) {
         ++counts->rejected;
         continue;

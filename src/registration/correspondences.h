@@ -14,6 +14,7 @@
 
 #include "femreg/registration.h"
 #include "geometry/nearest.h"
+#include "registration/occluders.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -35,6 +36,7 @@ struct PairCounts {
   int rejected = 0;                            // gated out by data.max_distance
   int trimmed = 0;   // model->cloud: beyond the reciprocity trim, or facing away
   int covered = 0;   // surface vertices with a cloud point within the trim (the coverage)
+  int occluded = 0;  // cloud points of an occluder (FrameCloud::occluder), paired with nothing
 };
 
 // One frame's cloud, prepared once per frame: scaled and transformed, preprocessed,
@@ -51,6 +53,11 @@ struct FrameCloud {
   View view = View::kNone;
   // kCamera, kViewpoint: the sensor's position; kDirection: the unit direction towards it.
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();
+  // #P, or empty: the points of an occluder (registration/occluders.h), which pull nothing
+  // and are no vertex's nearest point to pull to.
+  std::vector<char> occluder;
+  OccluderCounts occluders;
+  bool Occluder(int i) const { return !occluder.empty() && occluder[static_cast<size_t>(i)]; }
 
   // Whether a surface point p with outward normal n faces the sensor.
   bool Faces(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
@@ -99,8 +106,13 @@ class ModelIndex {
 // the camera when known (data.visibility or data.auto_visibility), else with
 // data.auto_visibility the cloud's viewpoint when usable, else the side of the model the
 // cloud lies on (the mean outward normal at the cloud points' closest surface points), else
-// none. fc->cloud and fc->weights must be set.
+// none. With a camera and data.occluders, also marks the occluders (MarkOccluders).
+// fc->cloud and fc->weights must be set.
 void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc);
+
+// The occluders at state.x (MarkOccluders): fc->occluder and fc->occluders. With a camera,
+// data.occluders and no fracture; else none. fc->index and fc->spacing must be set.
+void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc);
 
 // The pairs at state.x (#V by 3), with queries on num_threads OpenMP threads (0: the
 // machine's hardware threads, as solver.num_threads). A point

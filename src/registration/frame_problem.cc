@@ -62,6 +62,23 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
   problem_.SetCoupling(std::move(cells));
   const RegistrationOptions& options = state.options;
   const double w = options.weights.elastic;
+  barrier_ = nullptr;
+  barrier_blocks_.clear();
+  if (options.regularizer != Regularizer::kNone && options.weights.barrier > 0 && w > 0) {
+    barrier_ = &problem_.AddSet<energy::InversionBarrier>(TermGroup::kBarrier);
+    auto* barrier = &barrier_blocks_;
+    for (const ObjectState& o : state.objects) {
+      for (int e = 0; e < o.model.num_elements(); ++e) {
+        energy::InversionBarrier b;
+        for (int k = 0; k < 4; ++k) b.vertices[k] = o.model.tets()(e, k) + o.offset;
+        b.weight = w * options.weights.barrier;
+        b.rest = &o.model.rest(e);
+        b.threshold = options.weights.barrier_volume;
+        barrier->push_back(b);
+      }
+    }
+    *barrier_->mutable_blocks() = barrier_blocks_;
+  }
   switch (options.regularizer) {
     case Regularizer::kNone:
       return;
@@ -131,6 +148,17 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
   }
 }
 
+bool NoFlatElement(const TrackerState& state, const Vertices& x) {
+  for (const ObjectState& o : state.objects) {
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      const double* p[4];
+      for (int k = 0; k < 4; ++k) p[k] = x.data() + 3 * (o.model.tets()(e, k) + o.offset);
+      if (!(energy::VolumeRatio(o.model.rest(e), p) > 0.0)) return false;
+    }
+  }
+  return true;
+}
+
 void FrameProblem::BuildFrameTerms(TrackerState* state) {
   problem_.Clear(TermGroup::kTemporal);
   problem_.Clear(TermGroup::kAnchor);
@@ -165,6 +193,15 @@ void FrameProblem::BuildFrameTerms(TrackerState* state) {
       } else {
         anchors->push_back(energy::MakeVertexSpring(g, target, a.weight > 0 ? a.weight : options.weights.anchor));
       }
+    }
+  }
+  if (barrier_ != nullptr) {
+    // All or none: an element folded at the start unfolds only if its neighbours may pass
+    // through flat on the way, which the barrier forbids.
+    const bool unfolded = NoFlatElement(*state, state->x);
+    const size_t want = unfolded ? barrier_blocks_.size() : 0;
+    if (barrier_->blocks().size() != want) {
+      *barrier_->mutable_blocks() = unfolded ? barrier_blocks_ : std::vector<energy::InversionBarrier>();
     }
   }
 }
@@ -401,7 +438,8 @@ Vertices FrameProblem::ExternalForces(const TrackerState& state) const {
   Eigen::VectorXd f;
   if (problem_.equilibrium() != nullptr) {
     // What the elastic forces and the loads leave unbalanced: the estimated forces and the contacts'.
-    energy::ForceResidual(problem_, state.x, &f, bit(TermGroup::kElastic) | bit(TermGroup::kLoad));
+    energy::ForceResidual(problem_, state.x, &f,
+                          bit(TermGroup::kElastic) | bit(TermGroup::kBarrier) | bit(TermGroup::kLoad));
   } else {
     // The data term's pull and the contacts' push, from their blocks alone (the elastic
     // elements' would cost a pass over the mesh every frame).

@@ -16,6 +16,9 @@
 
 namespace femreg {
 
+// Whether every element of the objects has a positive volume at x.
+bool NoFlatElement(const TrackerState& state, const Vertices& x);
+
 class FrameProblem {
  public:
   // The elastic blocks of every object (its model's rest data and rotations, read through
@@ -23,7 +26,9 @@ class FrameProblem {
   // end's pattern starts from. After the tracker is made and after a topology change.
   void BuildElastic(const TrackerState& state);
   // The temporal springs (w_t m_i towards state.frame_start) and the anchors at this frame's
-  // targets: hard anchors move state->x onto their targets and hold them.
+  // targets: hard anchors move state->x onto their targets and hold them. Then the inversion
+  // barrier, unless an element is flat or inverted at state->x (a user's state, or a run with
+  // the barrier off before): that frame unfolds without it.
   void BuildFrameTerms(TrackerState* state);
   // The data blocks of this outer iteration's pairs with the data loss. Their weights: with
   // weights.data set (legacy), that per pair; else weights.data_per_area times the observed
@@ -54,6 +59,9 @@ class FrameProblem {
  private:
   void BuildAreas(const TrackerState& state);
   energy::Problem problem_;
+  // The inversion barrier's set (null: off) and its blocks on every element.
+  energy::TermSet<energy::InversionBarrier>* barrier_ = nullptr;
+  std::vector<energy::InversionBarrier> barrier_blocks_;
   // Rest areas (m^2), from BuildElastic: per global vertex, a third of the surface
   // triangles around it; per surface triangle, keyed by its sorted vertices.
   std::vector<double> vertex_area_;

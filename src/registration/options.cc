@@ -244,6 +244,9 @@ bool DataTermOptions::IsValid(std::string* error) const {
   if (hold_pairs_after < 0) {
     return Fail(error, "data.hold_pairs_after", "must be >= 0 (0 = never held)", hold_pairs_after);
   }
+  if (!(std::isfinite(occluder_margin) && occluder_margin > 0)) {
+    return Fail(error, "data.occluder_margin", "must be > 0", occluder_margin);
+  }
   if (min_points < 0) return Fail(error, "data.min_points", "must be >= 0", min_points);
   if (!(std::isfinite(min_points_per_surface_vertex) && min_points_per_surface_vertex >= 0)) {
     return Fail(error, "data.min_points_per_surface_vertex", "must be >= 0",
@@ -263,6 +266,12 @@ bool WeightOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(model_to_cloud_area_cap) && model_to_cloud_area_cap >= 0)) {
     return Fail(error, "weights.model_to_cloud_area_cap", "must be >= 0 (0: no cap)",
                 model_to_cloud_area_cap);
+  }
+  if (!(std::isfinite(barrier) && barrier >= 0)) {
+    return Fail(error, "weights.barrier", "must be >= 0 (0 = off)", barrier);
+  }
+  if (!(barrier_volume > 0 && barrier_volume < 1)) {
+    return Fail(error, "weights.barrier_volume", "must be in (0, 1)", barrier_volume);
   }
   if (!(std::isfinite(elastic) && elastic >= 0)) {
     return Fail(error, "weights.elastic", "must be >= 0", elastic);

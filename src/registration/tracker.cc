@@ -193,7 +193,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
     const Vertices predicted = 2.0 * state.x - state.x_before;
-    if (predicted.allFinite()) state.x = predicted;
+    // Not through a flat element: the inversion barrier's energy is infinite there.
+    if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted))) {
+      state.x = predicted;
+    }
   }
   const int min_points = std::max(
       options.data.min_points,
@@ -220,6 +223,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   PrepareFrameCloud(state, Surface(), &fc);
   s.time.correspondences += Seconds(t0);
   s.visibility = fc.Describe();
+  s.occluded_points = fc.occluders.occluders;
   s.trim_distance = std::isfinite(fc.trim) ? fc.trim : 0.0;
   // The temporal springs hold to where the frame starts (the prediction, moved by the rigid
   // pre-alignment, so that inertia does not fight the rigid step) and the anchors.
@@ -232,6 +236,14 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   rise_from = std::max(1, options.data.hold_pairs_after);
   double previous_energy = std::numeric_limits<double>::infinity();
   for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
+    // Until the pair set is held, the occluders are decided again where the model now is: a
+    // part that lagged behind a fast motion and looked like one has caught up.
+    if (k > 0 && k < options.data.hold_pairs_after && !fc.occluder.empty()) {
+      t0 = Clock::now();
+      fc.occluders.occluders = ReleaseReached(state, Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
+      s.time.correspondences += Seconds(t0);
+      s.occluded_points = fc.occluders.occluders;
+    }
     if (!OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s)) break;
   }
   if (s.termination == TerminationType::kNotRun) {

@@ -102,7 +102,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     const YamlValue d = v["data"];
     d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
                  "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity", "hold_pairs_after",
-                 "min_points", "min_points_per_surface_vertex"});
+                 "occluders", "occluder_margin", "min_points", "min_points_per_surface_vertex"});
     DataTermOptions& o = r.data;
     if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
     if (d.Has("cloud_to_model")) o.cloud_to_model = d["cloud_to_model"].AsBool();
@@ -129,6 +129,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (d.Has("reciprocity")) o.reciprocity = d["reciprocity"].AsDouble();
     if (d.Has("hold_pairs_after")) o.hold_pairs_after = IntAtLeast(d["hold_pairs_after"], 0);
+    if (d.Has("occluders")) o.occluders = d["occluders"].AsBool();
+    if (d.Has("occluder_margin")) o.occluder_margin = d["occluder_margin"].AsDouble();
     if (d.Has("min_points")) o.min_points = d["min_points"].AsInt();
     if (d.Has("min_points_per_surface_vertex")) {
       o.min_points_per_surface_vertex = d["min_points_per_surface_vertex"].AsDouble();
@@ -137,7 +139,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
     w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "model_to_cloud_area_cap",
-                 "model_to_cloud_balance", "elastic", "temporal", "anchor"});
+                 "model_to_cloud_balance", "elastic", "barrier", "barrier_volume", "temporal",
+                 "anchor"});
     if (w.Has("data") && w.Has("data_per_area")) {
       w["data"].Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
                      "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
@@ -160,6 +163,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       r.weights.model_to_cloud_balance = w["model_to_cloud_balance"].AsBool();
     }
     if (w.Has("elastic")) r.weights.elastic = w["elastic"].AsDouble();
+    if (w.Has("barrier")) r.weights.barrier = w["barrier"].AsDouble();
+    if (w.Has("barrier_volume")) r.weights.barrier_volume = w["barrier_volume"].AsDouble();
     if (w.Has("temporal")) r.weights.temporal = w["temporal"].AsDouble();
     if (w.Has("anchor")) r.weights.anchor = w["anchor"].AsDouble();
   }

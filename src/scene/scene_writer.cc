@@ -312,6 +312,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   Put(data, "auto_visibility", a.auto_visibility, d.data.auto_visibility);
   Put(data, "reciprocity", a.reciprocity, d.data.reciprocity);
   Put(data, "hold_pairs_after", a.hold_pairs_after, d.data.hold_pairs_after);
+  Put(data, "occluders", a.occluders, d.data.occluders);
+  Put(data, "occluder_margin", a.occluder_margin, d.data.occluder_margin);
   Put(data, "min_points", a.min_points, d.data.min_points);
   Put(data, "min_points_per_surface_vertex", a.min_points_per_surface_vertex,
       d.data.min_points_per_surface_vertex);
@@ -333,6 +335,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   Put(weights, "model_to_cloud_balance", r.weights.model_to_cloud_balance,
       d.weights.model_to_cloud_balance);
   Put(weights, "elastic", r.weights.elastic, d.weights.elastic);
+  Put(weights, "barrier", r.weights.barrier, d.weights.barrier);
+  Put(weights, "barrier_volume", r.weights.barrier_volume, d.weights.barrier_volume);
   Put(weights, "temporal", r.weights.temporal, d.weights.temporal);
   Put(weights, "anchor", r.weights.anchor, d.weights.anchor);
   PutMap(n, "weights", weights);

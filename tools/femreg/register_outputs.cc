@@ -53,7 +53,7 @@ const char kStatsHeader[] =
     "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,stopped_by,"
     "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
-    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,message\n";
+    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,message\n";
 
 std::string StatsRow(size_t i, const FrameRow& row) {
   std::ostringstream os;
@@ -96,7 +96,7 @@ std::string StatsRow(size_t i, const FrameRow& row) {
   std::snprintf(buf, sizeof(buf), ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", s.final.load,
                 s.final.equilibrium, s.force.x(), s.force.y(), s.force.z(), s.torque.x(), s.torque.y(),
                 s.torque.z());
-  os << buf;
+  os << buf << "," << s.occluded_points;
   std::string msg = row.read_error.empty() ? s.message : row.read_error;
   std::replace(msg.begin(), msg.end(), '"', '\'');
   os << ",\"" << msg << "\"\n";

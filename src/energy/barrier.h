@@ -1,0 +1,45 @@
+// The inversion barrier: an element compressed below a fraction j of its rest volume stores
+//   e = V mu (j - J)^2 log(j / J),   J = det F = v / V,
+// which is zero with its first two derivatives at J = j and grows without bound as J -> 0
+// (IPC's barrier, on the volume ratio instead of a distance). An element's volume then never
+// reaches zero: a step that would flatten or invert one has infinite energy, and the line
+// search (both back ends) refuses it. Added to any material's elements (the corotational one
+// has inverted states that cost little), in the elastic group: its force is part of the
+// body's internal force (docs/theory/inversion.md).
+#ifndef FEMREG_ENERGY_BARRIER_H_
+#define FEMREG_ENERGY_BARRIER_H_
+
+#include <Eigen/Core>
+#include <array>
+
+#include "femreg/fem.h"
+
+namespace femreg {
+namespace energy {
+
+// As least squares: r = sqrt(2 V mu) (j - J) sqrt(log(j / J)) for 0 < J < j, 0 for J >= j,
+// +inf for J <= 0 (the energy of an inverted element). J_i = dr/dJ cof(F) b_i.
+struct InversionBarrier {
+  static constexpr int kResiduals = 1;
+  static constexpr int kVertices = 4;
+  static constexpr bool kConstantJacobian = false;
+  std::array<int, 4> vertices = {{0, 0, 0, 0}};
+  double weight = 1.0;
+  const ElementRest* rest = nullptr;
+  double threshold = 0.2;  // j: the volume ratio below which the barrier acts, in (0, 1]
+
+  bool Evaluate(const double* const* x, double* r, double** J) const;
+  // e = V mu phi(J), phi = (j - J)^2 log(j / J); its Hessian V mu B^T (phi'' g g^T + phi' H_J) B
+  // (g = vec cof F, H_J the Hessian of det F, B = dvec F / dx); the projection clamps the
+  // negative eigenvalues of phi' H_J's 9 by 9 sum with the first term.
+  bool SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
+                   Eigen::Matrix3d* hessian, TangentProjection projection) const;
+};
+
+// The volume ratio det F of an element at positions x[0..3].
+double VolumeRatio(const ElementRest& rest, const double* const* x);
+
+}  // namespace energy
+}  // namespace femreg
+
+#endif  // FEMREG_ENERGY_BARRIER_H_

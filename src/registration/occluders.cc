@@ -1,0 +1,133 @@
+#include "registration/occluders.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "femreg/point_cloud.h"  // CameraRotation
+#include "geometry/zbuffer.h"
+
+namespace femreg {
+
+namespace {
+
+constexpr double kNear = 1e-4;          // m; the z-buffer's near plane
+constexpr int kMaxImageSide = 1024;     // pixels
+constexpr int kNeighbours = 12;         // the occluder grows through this many nearest points
+constexpr double kWholeView = 0.5;      // seeds beyond this share of the points on the model
+
+}  // namespace
+
+OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
+                             const Vertices& points, const PointIndex& cloud_index, double spacing,
+                             std::vector<char>* occluder) {
+  OccluderCounts counts;
+  const int n = static_cast<int>(points.rows());
+  occluder->assign(static_cast<size_t>(n), 0);
+  const RegistrationOptions& options = state.options;
+  if (n == 0 || state.surface.rows() == 0 || !options.camera.enabled) return counts;
+  const double margin = options.data.occluder_margin;
+  const double grow = std::max(options.data.loss_scale, 2.0 * spacing);
+
+  // A pinhole on the user's camera pose whose image just covers the model, with pixels a
+  // quarter of a surface edge wide at the model's depth: the model's depth along each ray.
+  const Eigen::Matrix3d R = CameraRotation(options.camera);
+  const Eigen::Vector3d eye = options.camera.position;
+  double lo_u = std::numeric_limits<double>::infinity(), hi_u = -lo_u, lo_v = lo_u, hi_v = -lo_u;
+  std::vector<double> depths;
+  for (int v : state.surface_vertices) {
+    const Eigen::Vector3d q = R * (state.x.row(v).transpose() - eye);
+    if (q.z() <= kNear) continue;
+    lo_u = std::min(lo_u, q.x() / q.z());
+    hi_u = std::max(hi_u, q.x() / q.z());
+    lo_v = std::min(lo_v, q.y() / q.z());
+    hi_v = std::max(hi_v, q.y() / q.z());
+    depths.push_back(q.z());
+  }
+  if (depths.empty()) return counts;
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  const double edge = state.mean_edge_length > 0 ? state.mean_edge_length : spacing;
+  double pixel = std::max(0.25 * edge / depths[depths.size() / 2], 1e-6);  // rad
+  pixel = std::max({pixel, (hi_u - lo_u) / (kMaxImageSide - 4), (hi_v - lo_v) / (kMaxImageSide - 4)});
+  PinholeCamera camera;
+  camera.rotation = R;
+  camera.position = eye;
+  camera.near = kNear;
+  camera.fx = camera.fy = 1.0 / pixel;
+  camera.cx = 1.0 - lo_u / pixel;
+  camera.cy = 1.0 - lo_v / pixel;
+  camera.width = static_cast<int>(std::ceil((hi_u - lo_u) / pixel)) + 3;
+  camera.height = static_cast<int>(std::ceil((hi_v - lo_v) / pixel)) + 3;
+  ZBuffer image;
+  image.Reset(camera.width, camera.height);
+  Rasterize(camera, state.x, state.surface, 0, &image);
+
+  // Per point: in front of the model (or beside it) and off its surface.
+  std::vector<char> off(static_cast<size_t>(n), 0), seed(static_cast<size_t>(n), 0);
+  int on_model = 0;
+  for (int i = 0; i < n; ++i) {
+    double u = 0, v = 0, z = 0;
+    if (!camera.Project(points.row(i), &u, &v, &z)) continue;
+    const int px = static_cast<int>(std::lround(u)), py = static_cast<int>(std::lround(v));
+    double model_z = std::numeric_limits<double>::infinity();
+    if (px >= 0 && py >= 0 && px < image.width && py < image.height) {
+      const size_t idx = static_cast<size_t>(py) * static_cast<size_t>(image.width) + static_cast<size_t>(px);
+      model_z = image.depth[idx];
+    }
+    const bool hit = std::isfinite(model_z);
+    on_model += hit;
+    if (!(z < model_z - grow)) continue;
+    const double d = std::sqrt(surface.Closest(points.row(i)).squared_distance);
+    if (d <= grow) continue;
+    off[static_cast<size_t>(i)] = 1;
+    if (hit && z < model_z - margin && d > margin) {
+      seed[static_cast<size_t>(i)] = 1;
+      ++counts.seeds;
+    }
+  }
+  if (counts.seeds == 0) return counts;
+  if (counts.seeds > kWholeView * on_model) {
+    counts.whole_view = true;
+    return counts;
+  }
+
+  // Grown from the seeds, in the points' order: the same set for any thread count.
+  const double radius2 = 9.0 * spacing * spacing;
+  std::vector<int> queue;
+  for (int i = 0; i < n; ++i) {
+    if (seed[static_cast<size_t>(i)]) {
+      (*occluder)[static_cast<size_t>(i)] = 1;
+      queue.push_back(i);
+    }
+  }
+  int indices[kNeighbours];
+  double squared[kNeighbours];
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int found = cloud_index.KNearest(points.row(queue[head]), kNeighbours, indices, squared);
+    for (int j = 0; j < found; ++j) {
+      const int k = indices[j];
+      if (squared[j] > radius2 || !off[static_cast<size_t>(k)] || (*occluder)[static_cast<size_t>(k)]) continue;
+      (*occluder)[static_cast<size_t>(k)] = 1;
+      queue.push_back(k);
+    }
+  }
+  counts.occluders = static_cast<int>(queue.size());
+  return counts;
+}
+
+OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& surface,
+                             const Vertices& points, double spacing, std::vector<char>* occluder) {
+  OccluderCounts counts;
+  const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
+  for (size_t i = 0; i < occluder->size(); ++i) {
+    if (!(*occluder)[i]) continue;
+    if (surface.Closest(points.row(static_cast<Eigen::Index>(i))).squared_distance <= grow * grow) {
+      (*occluder)[i] = 0;
+    } else {
+      ++counts.occluders;
+    }
+  }
+  return counts;
+}
+
+}  // namespace femreg

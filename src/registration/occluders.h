@@ -1,0 +1,42 @@
+// Occluders in the cloud: with a known camera, the cloud points of something in front of the
+// model (a hand, a gripper, a tool the segmentation kept). The camera saw them before the
+// model along their rays, so the model may hide behind them but is not pulled to them
+// (docs/guide/partial-views.md#occluders).
+#ifndef FEMREG_REGISTRATION_OCCLUDERS_H_
+#define FEMREG_REGISTRATION_OCCLUDERS_H_
+
+#include <vector>
+
+#include "geometry/nearest.h"
+#include "registration/tracker_state.h"
+
+namespace femreg {
+
+struct OccluderCounts {
+  int seeds = 0;      // points in front of the rendered model by more than data.occluder_margin
+  int occluders = 0;  // the seeds and the points connected to them off the model
+  bool whole_view = false;  // most points in front: the object moved, nothing is an occluder
+};
+
+// Marks (*occluder)[i] = 1 for the cloud points of an occluder, at the model's shape state.x
+// (the frame's start): the model's surface is rendered with a z-buffer from the camera
+// (state.options.camera, which must be enabled). Seeds are points whose ray meets the model
+// more than data.occluder_margin behind them and that lie farther than that from the
+// surface. From the seeds the occluder grows through the cloud (neighbours within three
+// point spacings) over points that are off the model: in front of it or beside its
+// silhouette, and farther from its surface than the loss scale (or two spacings). When the
+// seeds are most of the points in front of the model, the object itself came closer, and
+// nothing is marked. `cloud_index` indexes `points`; `spacing` is the cloud's point spacing.
+OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
+                             const Vertices& points, const PointIndex& cloud_index, double spacing,
+                             std::vector<char>* occluder);
+
+// After the model moved (an outer iteration): the marked points it now reaches (within the
+// loss scale, or two spacings) are released: a part that lagged behind a fast motion and
+// looked like an occluder has caught up. No point is marked anew. Returns the occluders left.
+OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& surface,
+                             const Vertices& points, double spacing, std::vector<char>* occluder);
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_OCCLUDERS_H_
