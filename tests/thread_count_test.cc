@@ -78,8 +78,8 @@ void ExpectTheSameOnOneAndTwoThreads(const std::string& name, int frames, bool w
 // A foam ball pressed by a hand: the frames where the hand comes down stop on the cap.
 TEST(ThreadCount, HandPressIsTheSameOnOneAndTwoThreads) { ExpectTheSameOnOneAndTwoThreads("hand_press", 6, true); }
 
-// A 3k-vertex liver patch with its forces estimated (equilibrium registration): its assembly
-// runs in per-thread regions of vertices (its frames converge; they were 0.1 mm apart).
+// The organ patch (729 vertices) with its forces estimated (equilibrium registration): its
+// assembly runs in per-thread regions of vertices (its frames converge; they were 0.1 mm apart).
 TEST(ThreadCount, OrganPatchWithForcesIsTheSameOnOneAndTwoThreads) {
   ExpectTheSameOnOneAndTwoThreads("organ_patch", 3, false,
                                   {{"registration.forces.estimate", "true"}, {"registration.forces.weight", "0.01"}});
