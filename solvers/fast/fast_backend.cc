@@ -632,6 +632,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   if (m.options.num_threads <= 0) m.SetThreads(ResolveThreadCount(0));  // the caller's, per solve
   if (problem.equilibrium() != nullptr) {
     if (!m.equilibrium) m.equilibrium = std::make_unique<EquilibriumSolver>(m.options, m.threads);
+    m.equilibrium->set_threads(m.threads);
     return m.equilibrium->Solve(problem, time_limit_s, x);
   }
   const ScopedThreads threads(m.threads);  // OpenMP here and the BLAS under CHOLMOD
