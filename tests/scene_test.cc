@@ -380,7 +380,7 @@ TEST_F(SceneTest, InvalidRegistrationOptions) {
               {"beam.yaml:12: registration.solver.bulk_step_tolerance: must be >= 0 (a fraction of "
                "the mean edge length; 0 = off) (got -1)"});
   ExpectError(std::string(kBaseScene) + "registration:\n  solver:\n    threads: -1\n",
-              {"beam.yaml:12: registration.solver.threads: must be >= 0 (0: the machine's hardware threads) (got -1)"});
+              {"beam.yaml:12: registration.solver.threads: must be >= 0 (0: the cores other processes leave free, per frame) (got -1)"});
 }
 
 TEST_F(SceneTest, SyntaxErrorNamesTheLine) {

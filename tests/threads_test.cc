@@ -6,8 +6,11 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iterator>
+#include <string>
 #include <vector>
 
 #include "femreg/io.h"
@@ -102,6 +105,61 @@ TEST(Threads, TeamThreadNumbersTheTeam) {
   EXPECT_EQ(team, 3);  // dynamic adjustment is off by default
 #endif
 }
+
+// A phase takes at most its threads, one per `per_thread` units of work, at least one.
+TEST(Threads, PhaseThreadsRunSmallPhasesSerially) {
+  EXPECT_EQ(PhaseThreads(2, 100, 64), 1);
+  EXPECT_EQ(PhaseThreads(2, 128, 64), 2);
+  EXPECT_EQ(PhaseThreads(4, 200, 64), 3);
+  EXPECT_EQ(PhaseThreads(4, 1 << 20, 64), 4);
+  EXPECT_EQ(PhaseThreads(1, 1 << 20, 64), 1);
+  EXPECT_EQ(PhaseThreads(2, 0, 64), 1);
+}
+
+// 0 threads: the innermost ScopedThreads' count (a frame's), else the machine's; the
+// adaptive count is within [1, the machine's].
+TEST(Threads, ZeroThreadsIsTheEnclosingCount) {
+  EXPECT_EQ(ResolveThreadCount(0), DefaultThreadCount());
+  EXPECT_EQ(ResolveThreadCount(3), 3);
+  {
+    const ScopedThreads frame(2);
+    EXPECT_EQ(ResolveThreadCount(0), 2);
+    {
+      const ScopedThreads inner(1);
+      EXPECT_EQ(ResolveThreadCount(0), 1);
+    }
+    EXPECT_EQ(ResolveThreadCount(0), 2);
+  }
+  EXPECT_EQ(ResolveThreadCount(0), DefaultThreadCount());
+  const int available = AvailableThreadCount();
+  EXPECT_GE(available, 1);
+  EXPECT_LE(available, DefaultThreadCount());
+  EXPECT_EQ(AdaptiveThreadCount(5), 5);
+}
+
+#ifdef FEMREG_CLI_PATH
+// The command line's OpenMP threads sleep between teams (OMP_WAIT_POLICY=passive, a spin
+// count of 0) unless the user chose a policy: libgomp's own report of its settings. Unset,
+// libgomp spins 300000 times before it sleeps.
+TEST(Threads, TheCommandLineWaitsPassively) {
+  testing_util::TempDir dir("femreg_threads");
+  auto spin_count = [&](const std::string& env) {
+    const std::string log = dir.path() + "/env.txt";
+    const std::string cmd = "env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT " + env + " OMP_DISPLAY_ENV=verbose " +
+                            FEMREG_CLI_PATH + " --version > " + log + " 2>&1";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    // The last report: the process that runs the command (it may have started itself again).
+    std::ifstream in(log);
+    std::string last = "(no GOMP_SPINCOUNT in libgomp's report)";
+    for (std::string line; std::getline(in, line);) {
+      if (line.find("GOMP_SPINCOUNT") != std::string::npos) last = line;
+    }
+    return last;
+  };
+  EXPECT_NE(spin_count("").find("'0'"), std::string::npos) << spin_count("");
+  EXPECT_EQ(spin_count("OMP_WAIT_POLICY=active").find("'0'"), std::string::npos) << spin_count("OMP_WAIT_POLICY=active");
+}
+#endif
 
 }  // namespace
 }  // namespace femreg

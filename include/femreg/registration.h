@@ -232,7 +232,8 @@ struct SolverOptions {
   TrustRegion trust_region = TrustRegion::kLevenbergMarquardt;
   LinearSolver linear_solver = LinearSolver::kSparseNormalCholesky;
   // Threads of every parallel part (element loops, correspondences, CHOLMOD's BLAS, Ceres);
-  // 0: the machine's hardware threads.
+  // 0: per frame, the hardware threads that other processes leave free (at least 1;
+  // docs/guide/busy-machines.md). The fast back end's results are the same on any count.
   int num_threads = 0;
   // Fast back end: conjugate-gradient iterations preconditioned by the kept factorization
   // before a step factorizes anew (0: factorize every step).

@@ -16,7 +16,13 @@ the library's message (which names the file, line or field); bad argument shapes
 option names raise ValueError.
 """
 
-from ._femreg import (  # noqa: F401  (the public API)
+import os as _os
+
+# OpenMP's threads sleep between teams instead of spinning on cores other processes need,
+# unless the user chose a policy (read once, when OpenMP loads: docs/guide/busy-machines.md).
+_os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+
+from ._femreg import (  # noqa: E402,F401  (the public API)
     __version__,
     CameraOptions,
     DataTermOptions,

@@ -374,6 +374,13 @@ EquilibriumSolver::EquilibriumSolver(const BackendOptions& options, int threads)
 }
 EquilibriumSolver::~EquilibriumSolver() = default;
 
+void EquilibriumSolver::set_threads(int threads) {
+  impl_->threads = threads;
+  impl_->objective.set_threads(threads);
+  impl_->physics.set_threads(threads);
+  impl_->projected.set_threads(threads);
+}
+
 SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
   const auto start = Clock::now();
   Impl& m = *impl_;

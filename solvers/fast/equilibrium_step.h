@@ -30,6 +30,8 @@ class EquilibriumSolver {
   ~EquilibriumSolver();
   // As Backend::Solve, for a problem with an equilibrium (problem.equilibrium() not null).
   SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x);
+  // The threads of the next solves (the results do not depend on them).
+  void set_threads(int threads);
 
  private:
   struct Impl;

@@ -275,6 +275,12 @@ struct FastBackend::Impl {
   void Precondition(const Eigen::VectorXd& r, bool with_multigrid, Eigen::VectorXd* z, SolveReport* report);
   // Problems with an equilibrium (energy/equilibrium.h) go to their own solve, made at the first.
   std::unique_ptr<EquilibriumSolver> equilibrium;
+  // Every part's threads (the results do not depend on them).
+  void SetThreads(int n) {
+    threads = n;
+    assembler.set_threads(n);
+    substitutions.set_threads(n);
+  }
 };
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
@@ -623,8 +629,10 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     report.stop = StopReason::kFailure;
     return report;
   }
+  if (m.options.num_threads <= 0) m.SetThreads(ResolveThreadCount(0));  // the caller's, per solve
   if (problem.equilibrium() != nullptr) {
     if (!m.equilibrium) m.equilibrium = std::make_unique<EquilibriumSolver>(m.options, m.threads);
+    m.equilibrium->set_threads(m.threads);
     return m.equilibrium->Solve(problem, time_limit_s, x);
   }
   const ScopedThreads threads(m.threads);  // OpenMP here and the BLAS under CHOLMOD

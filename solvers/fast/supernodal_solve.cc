@@ -85,8 +85,8 @@ inline void GemmNTSubtract(int m, int n, int k, const T* a, int lda, const T* b,
   }
 }
 
-// Cuts the supernodal elimination tree for `threads` threads: subtrees grouped into one
-// set per thread (owner[s] = its thread) and the rest, the top (owner -1), which runs after
+// Cuts the supernodal elimination tree for `threads` groups: subtrees grouped into one
+// set per group (owner[s] = its group) and the rest, the top (owner -1), which runs after
 // them: on one thread in the substitutions, and in the factorization its large supernodes
 // in tiles on the whole team, the others on one thread. (The cost below still counts the
 // top as serial, as it is for the substitutions the cut is made for.) Starting from the roots, the heaviest subtree is split (its root goes to the top,
@@ -157,7 +157,7 @@ std::vector<int> CutTree(const std::vector<int>& parent, const std::vector<doubl
 }  // namespace
 
 template <class Scalar>
-bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L, int threads) {
+bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L) {
   // (CHOLMOD's supernodal factors are always LL^T; a symbolic one need not say so yet.)
   if (!L.is_super || L.itype != CHOLMOD_INT || L.super == nullptr || L.pi == nullptr ||
       L.px == nullptr || L.s == nullptr) {
@@ -165,7 +165,6 @@ bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L, int threads
   }
   prepared_ = false;
   n_ = static_cast<int>(L.n);
-  threads_ = threads;
   const int nsuper = static_cast<int>(L.nsuper);
   const int* super = static_cast<const int*>(L.super);
   const int* pi = static_cast<const int*>(L.pi);
@@ -200,13 +199,16 @@ bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L, int threads
   groups_.assign(1, {});
   top_.clear();
   serial_fraction_ = 0.0;
-  const std::vector<int> owner = threads_ == 1 ? std::vector<int>() : CutTree(parent, work, threads_);
-  if (owner.empty()) {  // one thread, or no cut worth a team: the serial order
+  // The cut depends on L alone, never on the thread count: the same sums in the same order on
+  // any number of threads (docs/notes/2026-11-29-threads.md).
+  const std::vector<int> owner =
+      total < static_cast<double>(cut_from_) ? std::vector<int>() : CutTree(parent, work, kGroups);
+  if (owner.empty()) {  // too small to share, or no cut worth a team: the serial order
     groups_[0].resize(static_cast<size_t>(nsuper));
     std::iota(groups_[0].begin(), groups_[0].end(), 0);
-    serial_fraction_ = threads_ == 1 ? 0.0 : 1.0;
+    serial_fraction_ = 1.0;
   } else {
-    groups_.assign(static_cast<size_t>(threads_), {});
+    groups_.assign(static_cast<size_t>(kGroups), {});
     for (int k = 0; k < nsuper; ++k) {
       const int o = owner[static_cast<size_t>(k)];
       if (o < 0) {
@@ -233,11 +235,11 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
     loaded_ = false;
     return false;
   }
-  threads = std::max(1, threads);
-  if (new_structure || !loaded_ || n_ != static_cast<int>(L.n) || threads != threads_ ||
-      super_.size() != L.nsuper + 1 || values_.size() != L.xsize) {
+  threads_ = std::max(1, threads);
+  if (new_structure || !loaded_ || n_ != static_cast<int>(L.n) || super_.size() != L.nsuper + 1 ||
+      values_.size() != L.xsize) {
     loaded_ = false;  // until the structure is whole again
-    if (!TakeStructure(L, threads)) return false;
+    if (!TakeStructure(L)) return false;
   }
   const double* x = static_cast<const double*>(L.x);
   values_.resize(L.xsize);
@@ -494,11 +496,11 @@ bool SupernodalSolve<Scalar>::TiledTask(int s, int phase, int task, const double
 template <class Scalar>
 bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
                                         bool new_structure, int threads) {
-  threads = std::max(1, threads);
-  if (new_structure || n_ != static_cast<int>(L.n) || threads != threads_ ||
-      super_.size() != L.nsuper + 1 || px_.empty() || px_.back() != static_cast<int64_t>(L.xsize)) {
+  threads_ = std::max(1, threads);
+  if (new_structure || n_ != static_cast<int>(L.n) || super_.size() != L.nsuper + 1 || px_.empty() ||
+      px_.back() != static_cast<int64_t>(L.xsize)) {
     loaded_ = false;
-    if (!TakeStructure(L, threads)) return false;
+    if (!TakeStructure(L)) return false;
   }
   loaded_ = false;
   // The plan holds for the pattern it was made for (compared whole: a pass over A's
@@ -519,9 +521,31 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
     for (int s : groups_[0]) {
       if (!FactorizeSupernode(s, a, map_[0].data(), c_[0].data())) return false;
     }
+  } else if (threads_ == 1) {  // the same groups, top and tiles, one after the other
+    for (size_t g = 0; g < groups_.size() && ok; ++g) {
+      for (int s : groups_[g]) {
+        if (!FactorizeSupernode(s, a, map_[g].data(), c_[g].data())) {
+          ok = false;
+          break;
+        }
+      }
+    }
+    for (size_t k = 0; k < top_.size() && ok; ++k) {
+      const int s = top_[k];
+      if (!Tiled(s)) {
+        ok = FactorizeSupernode(s, a, map_[0].data(), c_[0].data());
+        continue;
+      }
+      const int phases = TiledPhases(s);
+      for (int phase = 0; phase < phases && ok; ++phase) {
+        const int tasks = TiledTasks(s, phase);
+        for (int task = 0; task < tasks && ok; ++task) ok = TiledTask(s, phase, task, a, map_[0].data(), c_[0].data());
+      }
+    }
   } else {
+    const int team = std::min(threads_, num_groups);
     std::vector<char> group_ok(static_cast<size_t>(num_groups), 1);
-#pragma omp parallel for schedule(static, 1) num_threads(num_groups)
+#pragma omp parallel for schedule(static, 1) num_threads(team)
     for (int g = 0; g < num_groups; ++g) {
       for (int s : groups_[static_cast<size_t>(g)]) {
         if (!FactorizeSupernode(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
@@ -536,7 +560,7 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
     // a failure the remaining tasks do nothing (every thread still meets every barrier).
     int failed = ok ? 0 : 1;
     if (ok && !top_.empty()) {
-#pragma omp parallel num_threads(num_groups)
+#pragma omp parallel num_threads(team)
       {
         const int t = TeamThread();
         Scalar* c = c_[static_cast<size_t>(t)].data();
@@ -736,6 +760,21 @@ void SupernodalSolve<Scalar>::Backward(int s, double* y, double* z) const {
   for (int j = 0; j < ncol; ++j) y[k0 + j] = z[j];
 }
 
+// The top: the groups' updates of its rows summed (in group order), then its forward and
+// backward substitutions.
+template <class Scalar>
+void SupernodalSolve<Scalar>::SolveTop(int num_groups, double* y) {
+  double* acc = acc_[0].data();
+  for (int s : top_) {
+    for (int c = super_[static_cast<size_t>(s)]; c < super_[static_cast<size_t>(s) + 1]; ++c) {
+      for (int g = 1; g < num_groups; ++g) acc[c] += acc_[static_cast<size_t>(g)][c];
+    }
+  }
+  double* z = z_[0].data();
+  for (int s : top_) Forward(s, b_.data(), acc, y, z);
+  for (auto it = top_.rbegin(); it != top_.rend(); ++it) Backward(*it, y, z);
+}
+
 template <class Scalar>
 void SupernodalSolve<Scalar>::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   const int* perm = perm_.data();
@@ -748,8 +787,20 @@ void SupernodalSolve<Scalar>::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x
     acc_[0].setZero();
     for (int s : groups_[0]) Forward(s, b_.data(), acc, y, z);
     for (auto it = groups_[0].rbegin(); it != groups_[0].rend(); ++it) Backward(*it, y, z);
+  } else if (threads_ == 1) {  // the team's steps below, one after the other
+    for (int g = 0; g < num_groups; ++g) {
+      acc_[static_cast<size_t>(g)].setZero();
+      for (int s : groups_[static_cast<size_t>(g)]) {
+        Forward(s, b_.data(), acc_[static_cast<size_t>(g)].data(), y, z_[static_cast<size_t>(g)].data());
+      }
+    }
+    SolveTop(num_groups, y);
+    for (int g = 0; g < num_groups; ++g) {
+      const std::vector<int>& group = groups_[static_cast<size_t>(g)];
+      for (auto it = group.rbegin(); it != group.rend(); ++it) Backward(*it, y, z_[static_cast<size_t>(g)].data());
+    }
   } else {
-#pragma omp parallel num_threads(num_groups)
+#pragma omp parallel num_threads(std::min(threads_, num_groups))
     {
       const int t = TeamThread(), team = TeamSize();
       for (int g = t; g < num_groups; g += team) {
@@ -760,19 +811,7 @@ void SupernodalSolve<Scalar>::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x
       }
 #pragma omp barrier
 #pragma omp single
-      {
-        // The top: the groups' updates of its rows summed (in group order), then its
-        // forward and backward substitutions.
-        double* acc = acc_[0].data();
-        for (int s : top_) {
-          for (int c = super_[static_cast<size_t>(s)]; c < super_[static_cast<size_t>(s) + 1]; ++c) {
-            for (int g = 1; g < num_groups; ++g) acc[c] += acc_[static_cast<size_t>(g)][c];
-          }
-        }
-        double* z = z_[0].data();
-        for (int s : top_) Forward(s, b_.data(), acc, y, z);
-        for (auto it = top_.rbegin(); it != top_.rend(); ++it) Backward(*it, y, z);
-      }  // a barrier
+      SolveTop(num_groups, y);  // a barrier
       for (int g = t; g < num_groups; g += team) {
         const std::vector<int>& group = groups_[static_cast<size_t>(g)];
         for (auto it = group.rbegin(); it != group.rend(); ++it) {

@@ -9,12 +9,14 @@
 // PCG corrects anyway.
 //
 // In parallel: the supernodal elimination tree is cut into disjoint subtrees, grouped into
-// one set per thread, and a "top" of the supernodes above them. The forward substitution
+// kGroups sets, and a "top" of the supernodes above them. The cut depends on L alone (not
+// on the thread count; none below cut_from entries): a team of up to kGroups threads runs
+// the groups, one thread runs the same steps one after the other. The forward substitution
 // runs the groups in parallel, each adding its updates of the top's rows into a vector of
 // its own, then the top on one thread; the backward substitution runs the top first, then
 // the groups in parallel (a supernode reads only its ancestors). No two threads write one
-// entry, and the order of every sum is fixed by the cut, so a thread count gives the same
-// result on every run.
+// entry, and the order of every sum is fixed by the cut, so every thread count gives the same
+// result, bit for bit.
 //
 // The values either come from a CHOLMOD factor (Load) or are computed here (Factorize): a
 // left-looking supernodal Cholesky factorization in `Scalar` on CHOLMOD's symbolic analysis
@@ -23,9 +25,8 @@
 // factorization's time on 2 threads, when it ran on one): those of many rows are factorized
 // in tiles, the tiles of each step on the whole team (TiledTask). Each supernode adds its
 // descendants' updates in ascending order of the descendant, and a tiled one's tiles depend
-// on its size alone, so a thread count gives the same factor on every run; the subtrees'
-// supernodes are the same on any thread count (one thread: no top, nothing tiled), the
-// top's tiled ones differ by float round-off. In float the dense
+// on its size alone, so every thread count gives the same factor (one thread runs the tiles
+// one after the other). In float the dense
 // kernels (the BLAS) do twice the flops per second, and the matrix goes into the factor
 // through a map made once per analysis, where CHOLMOD permutes and transposes it again at
 // every factorization.
@@ -67,23 +68,27 @@ class SupernodalSolve {
   bool Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A, bool new_structure,
                  int threads);
   bool loaded() const { return loaded_; }
+  // The threads of the next Solve (Load and Factorize set them too); any count, the same result.
+  void set_threads(int threads) { threads_ = std::max(1, threads); }
   // The rows of a tile in Factorize (tests: small tiles on small matrices). Takes effect at
   // the next Factorize.
   void set_tile_rows(int rows) { tile_rows_ = std::max(1, rows); }
+  // L's entries from which the tree is cut (tests: small matrices cut). Takes effect when the
+  // structure is taken again.
+  void set_cut_from(int64_t entries) { cut_from_ = entries; }
   // The supernodes Factorize takes in tiles: the top's large ones (with the structure taken).
   int tiled_supernodes() const;
   // x = A^-1 b for the factorized A = P^T L L^T P. x may not alias b.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
-  // The share of L's entries solved on one thread while the others wait: the top (0 on one
-  // thread; 1 when no cut of the tree beats one thread).
+  // The share of L's entries solved on one thread while the others wait: the top (1 when the
+  // tree is not cut). The same on any thread count.
   double serial_fraction() const { return serial_fraction_; }
   // L's values, supernode by supernode (CHOLMOD's layout).
   const std::vector<Scalar>& values() const { return values_; }
 
  private:
-  // Takes L's structure and cuts the tree for `threads`; false if L is not supernodal LL^T
-  // with int indices.
-  bool TakeStructure(const cholmod_factor& L, int threads);
+  // Takes L's structure and cuts the tree; false if L is not supernodal LL^T with int indices.
+  bool TakeStructure(const cholmod_factor& L);
   // For Factorize, once per structure and pattern of A: which descendants update each
   // supernode (and with which of their rows), where A's entries go.
   bool PrepareFactorization(const Eigen::SparseMatrix<double>& A);
@@ -108,12 +113,20 @@ class SupernodalSolve {
   bool TiledTask(int s, int phase, int task, const double* a, int* map, Scalar* c);
   void Forward(int s, const double* b, double* acc, double* y, double* z) const;
   void Backward(int s, double* y, double* z) const;
+  // Solve's top, after the groups' forward substitutions (y: the permuted solution so far).
+  void SolveTop(int num_groups, double* y);
 
   // Tiles of 64 rows, and at most 8 tiles per supernode: the best of the sizes tried on box
   // meshes (bench/linear_solver_bench.cc) (docs/notes/2026-11-28-figures-from-code-comments.md).
   static constexpr int kMaxTiles = 8;
+  // The groups of the cut, for teams of up to as many threads.
+  static constexpr int kGroups = 4;
+  // Below this many entries of L the tree is not cut: a team's start and barriers cost more
+  // than the substitutions (docs/notes/2026-11-29-threads.md).
+  static constexpr int64_t kCutFrom = 100000;
   bool loaded_ = false;
   int tile_rows_ = 64;
+  int64_t cut_from_ = kCutFrom;
   int n_ = 0;
   int threads_ = 1;
   std::vector<int> super_, pi_, rows_, perm_;
@@ -131,7 +144,7 @@ class SupernodalSolve {
   int64_t max_update_ = 0;
   std::vector<std::vector<int>> map_;
   std::vector<std::vector<Scalar>> c_;
-  // Per thread, its supernodes in ascending order (children before parents); the top.
+  // Per group, its supernodes in ascending order (children before parents); the top.
   std::vector<std::vector<int>> groups_;
   std::vector<int> top_;
   double serial_fraction_ = 0.0;

@@ -281,7 +281,17 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
         const int t = vertex_owner_[static_cast<size_t>(block.vertices[0])];
         bool interior = true;
         for (int i = 1; i < n; ++i) interior = interior && vertex_owner_[static_cast<size_t>(block.vertices[i])] == t;
-        (interior ? c.interior[static_cast<size_t>(t)] : c.straddling).push_back(b);
+        if (interior) {
+          c.interior[static_cast<size_t>(t)].push_back(b);
+        } else {
+          // Its place among the thread's blocks (ascending b): ~k for the k-th straddling one.
+          const int k = static_cast<int>(c.straddling.size());
+          c.straddling.push_back(b);
+          for (int i = 0; i < n; ++i) {
+            std::vector<int>& walk = c.interior[static_cast<size_t>(vertex_owner_[static_cast<size_t>(block.vertices[i])])];
+            if (walk.empty() || walk.back() != ~k) walk.push_back(~k);
+          }
+        }
       }
     }
     const std::vector<int>& straddling = c.straddling;
@@ -296,11 +306,6 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
     {
       const int t = TeamThread();
       Linearization<T> lin;
-      for (int b : c.interior[static_cast<size_t>(t)]) {
-        const bool linearized = linearize(blocks[static_cast<size_t>(b)], set.loss(), &lin, with_hessian);
-        if (value_of != nullptr) value_of[b] = lin.value;
-        if (linearized && lin.scale != 0.0) scatter(b, lin.gradient.data(), lin.hessian.data(), -1);
-      }
 #pragma omp for schedule(static)
       for (int k = 0; k < num_straddling; ++k) {
         double* out = buffer + kStride * static_cast<size_t>(k);
@@ -317,13 +322,19 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
           }
         }
       }  // a barrier: every straddling block is linearized
-      for (int k = 0; k < num_straddling; ++k) {
+      // The thread's blocks in ascending order, interior and straddling alike: every entry
+      // receives its terms in block order, as on one thread (docs/notes/2026-11-29-threads.md).
+      for (int e : c.interior[static_cast<size_t>(t)]) {
+        if (e >= 0) {
+          const bool linearized = linearize(blocks[static_cast<size_t>(e)], set.loss(), &lin, with_hessian);
+          if (value_of != nullptr) value_of[e] = lin.value;
+          if (linearized && lin.scale != 0.0) scatter(e, lin.gradient.data(), lin.hessian.data(), -1);
+          continue;
+        }
+        const int k = ~e;
         const double* in = buffer + kStride * static_cast<size_t>(k);
         if (in[0] == 0.0) continue;
         const int b = straddling[static_cast<size_t>(k)];
-        bool mine = false;
-        for (int i = 0; i < n; ++i) mine = mine || vertex_owner_[static_cast<size_t>(blocks[static_cast<size_t>(b)].vertices[i])] == t;
-        if (!mine) continue;
         for (int i = 0; i < n; ++i) lin.gradient[i] = Eigen::Map<const Eigen::Vector3d>(in + 1 + 3 * i);
         if (with_hessian) {
           for (int ij = 0; ij < n * n; ++ij) {

@@ -10,10 +10,11 @@
 // Fixed vertices (Problem::fixed) get identity rows and columns and no gradient.
 //
 // On several threads the vertices are split into one compact region per thread (runs of a
-// Morton curve through them): a thread linearizes and adds the blocks whose stencil lies in
-// its region; blocks that straddle two regions are linearized in parallel into a buffer, and
-// each thread then adds their parts that land in its region. Each entry receives its terms in
-// the same order on any thread count, so the result does not depend on it.
+// Morton curve through them): blocks that straddle two regions are linearized in parallel
+// into a buffer; then each thread goes through its blocks in ascending order, linearizing and
+// adding those whose stencil lies in its region and adding the parts of the straddling ones
+// that land in it. Each entry receives its terms in block order, as on one thread, so the
+// result does not depend on the thread count.
 #ifndef FEMREG_ENERGY_ASSEMBLER_H_
 #define FEMREG_ENERGY_ASSEMBLER_H_
 
@@ -86,8 +87,9 @@ class Assembler {
 
  private:
   // Per set revision: each block's slots (#blocks * n * n), and for the parallel assembly
-  // its blocks by the thread that owns every vertex of their stencil (interior[t]) and those
-  // whose vertices two threads own.
+  // those whose vertices two threads own (straddling), and per thread t its blocks in
+  // ascending order (interior[t]): b for one whose every vertex it owns, ~k for the k-th
+  // straddling one that has a vertex of its.
   struct SetCache {
     std::vector<Slot> slots;
     bool used = false;

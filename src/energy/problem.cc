@@ -4,6 +4,8 @@
 #include <atomic>
 #include <vector>
 
+#include "parallel/threads.h"
+
 namespace femreg {
 namespace energy {
 
@@ -75,8 +77,9 @@ void BlockValues(const TermSet<T>& set, const Vertices& x, int threads, std::vec
       (*values)[static_cast<size_t>(b)] = BlockValue(blocks[static_cast<size_t>(b)], set.loss(), x);
     }
   };
-  if (threads > 1 && chunks > 1) {
-#pragma omp parallel for schedule(static) num_threads(std::min(threads, chunks))
+  const int team = PhaseThreads(threads, chunks, 2);  // 2 chunks a thread at least
+  if (team > 1) {
+#pragma omp parallel for schedule(static) num_threads(team)
     for (int c = 0; c < chunks; ++c) chunk(c);
   } else {
     for (int c = 0; c < chunks; ++c) chunk(c);

@@ -3,6 +3,11 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
 #include <thread>
 
 #ifdef _OPENMP
@@ -37,9 +42,58 @@ int DefaultThreadCount() {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
-int ResolveThreadCount(int requested) { return requested > 0 ? requested : DefaultThreadCount(); }
+namespace {
+thread_local int scoped_threads = 0;  // the innermost ScopedThreads' count on this thread
+}  // namespace
+
+int ResolveThreadCount(int requested) {
+  if (requested > 0) return requested;
+  return scoped_threads > 0 ? scoped_threads : DefaultThreadCount();
+}
+
+namespace {
+// The kernel's count of running and runnable threads, system-wide (the fourth field of
+// /proc/loadavg, "running/total"); -1 where it cannot be read.
+int RunnableThreads() {
+  FILE* f = std::fopen("/proc/loadavg", "r");
+  if (f == nullptr) return -1;
+  double a = 0, b = 0, c = 0;
+  int running = -1, total = 0;
+  if (std::fscanf(f, "%lf %lf %lf %d/%d", &a, &b, &c, &running, &total) != 5) running = -1;
+  std::fclose(f);
+  return running;
+}
+}  // namespace
+
+int AvailableThreadCount() {
+  using Clock = std::chrono::steady_clock;
+  static std::atomic<int64_t> sampled_at{std::numeric_limits<int64_t>::min()};
+  static std::atomic<int> available{0};
+  const int64_t now = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now().time_since_epoch()).count();
+  const int64_t then = sampled_at.load(std::memory_order_relaxed);
+  const int known = available.load(std::memory_order_relaxed);
+  if (known > 0 && then != std::numeric_limits<int64_t>::min() && now - then < 50) return known;
+  const int cores = DefaultThreadCount();
+  const int running = RunnableThreads();
+  // The caller is one of the running threads (femreg's other threads sleep between teams:
+  // OMP_WAIT_POLICY=passive, docs/guide/busy-machines.md).
+  const int others = running > 0 ? running - 1 : 0;
+  const int n = std::clamp(cores - others, 1, cores);
+  available.store(n, std::memory_order_relaxed);
+  sampled_at.store(now, std::memory_order_relaxed);
+  return n;
+}
+
+int AdaptiveThreadCount(int requested) { return requested > 0 ? requested : AvailableThreadCount(); }
+
+int PhaseThreads(int threads, long long work, long long per_thread) {
+  if (threads <= 1 || per_thread <= 0) return std::max(1, threads);
+  return static_cast<int>(std::clamp<long long>(work / per_thread, 1, threads));
+}
 
 ScopedThreads::ScopedThreads(int threads) : threads_(ResolveThreadCount(threads)) {
+  previous_scoped_ = scoped_threads;
+  scoped_threads = threads_;
 #ifdef _OPENMP
   previous_omp_ = omp_get_max_threads();
   omp_set_num_threads(threads_);
@@ -55,6 +109,7 @@ ScopedThreads::ScopedThreads(int threads) : threads_(ResolveThreadCount(threads)
 }
 
 ScopedThreads::~ScopedThreads() {
+  scoped_threads = previous_scoped_;
 #ifdef _OPENMP
   if (previous_omp_ > 0) omp_set_num_threads(previous_omp_);
 #endif

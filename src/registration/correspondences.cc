@@ -26,6 +26,9 @@ namespace {
 // it: the direction to it is round-off, and the face normal is used.
 constexpr double kOnSurface = 1e-9;
 
+// Closest-point queries per thread from which a loop of them runs on a team (~1 us each).
+constexpr long long kQueriesPerThread = 64;
+
 // A labelled cloud split by object: per labelled object its points (k-d tree) and its
 // surface (closest-point index); the points no label claims ("free"), which pair only with
 // the objects without a label, and those objects' surfaces.
@@ -341,7 +344,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     // From the last outer iteration's triangles (each query always uses the same index: its
     // label's): faster, the same pairs (docs/notes/2026-11-28-figures-from-code-comments.md).
     const bool warm_start = warm != nullptr && static_cast<int>(warm->size()) == nq;
-#pragma omp parallel for num_threads(threads) schedule(static)
+#pragma omp parallel for num_threads(PhaseThreads(threads, nq, kQueriesPerThread)) schedule(static)
     for (int j = 0; j < nq; ++j) {
       const int i = j * data.cloud_stride;
       const SurfaceIndex* index = index_of(i);
@@ -370,7 +373,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     // rings lost most of the gain (docs/notes/2026-11-28-figures-from-code-comments.md).
     const bool mutual = std::isfinite(fc.trim);  // the frame's reciprocity is on
     std::vector<char> foreign(static_cast<size_t>(mutual ? ns : 0), 0);
-#pragma omp parallel for num_threads(threads) schedule(static)
+#pragma omp parallel for num_threads(PhaseThreads(threads, ns, kQueriesPerThread)) schedule(static)
     for (int i = 0; i < ns; ++i) {
       const int v = state.surface_vertices[static_cast<size_t>(i)];
       const Eigen::Vector3d p = x.row(v);
@@ -498,7 +501,7 @@ void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& p
     if (cloud_index != nullptr && cloud_index->size() > 0) {
       const int ns = static_cast<int>(o.mesh.surface_vertices.size());
       Eigen::VectorXd& residuals = state->residuals[i];
-#pragma omp parallel for num_threads(ResolveThreadCount(num_threads)) schedule(static)
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(num_threads), ns, kQueriesPerThread)) schedule(static)
       for (int j = 0; j < ns; ++j) {
         const int v = o.mesh.surface_vertices[static_cast<size_t>(j)];
         double d2 = 0.0;

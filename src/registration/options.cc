@@ -314,7 +314,7 @@ bool SolverOptions::IsValid(std::string* error) const {
                 "must be >= 0 (a fraction of the mean edge length; 0 = off)", bulk_step_tolerance);
   }
   if (num_threads < 0) {
-    return Fail(error, "solver.threads", "must be >= 0 (0: the machine's hardware threads)", num_threads);
+    return Fail(error, "solver.threads", "must be >= 0 (0: the cores other processes leave free, per frame)", num_threads);
   }
   if (max_pcg_iterations < 0) {
     return Fail(error, "solver.max_pcg_iterations", "must be >= 0 (0: factorize every step)",

@@ -57,7 +57,7 @@ BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_
   b.step_tolerance = 0.1 * solver.step_tolerance * mean_edge_length;
   b.max_pcg_iterations = solver.max_pcg_iterations;
   b.preconditioner = solver.preconditioner;
-  b.num_threads = ResolveThreadCount(solver.num_threads);
+  b.num_threads = solver.num_threads;  // 0: the frame's count (Track), chosen per frame
   b.trust_region = solver.trust_region;
   b.linear_solver = solver.linear_solver;
   return b;
@@ -163,8 +163,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   const auto t_frame = Clock::now();
   const RegistrationOptions& options = state.options;
   // Every parallel part of the frame (element loops, correspondences, the BLAS under
-  // CHOLMOD) on solver.num_threads threads, whatever the environment says.
-  const ScopedThreads threads(options.solver.num_threads);
+  // CHOLMOD) on solver.num_threads threads, whatever the environment says; 0: the cores
+  // other processes leave free now (docs/guide/busy-machines.md).
+  const ScopedThreads threads(AdaptiveThreadCount(options.solver.num_threads));
   FrameSummary& s = *summary;
   s = FrameSummary();
   s.frame = state.frame;

@@ -1,6 +1,9 @@
 // femreg: the command line. Each subcommand lives in its own file and registers itself
 // through the functions declared in commands.h.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <iostream>
 #include <new>
 #include <stdexcept>
@@ -21,6 +24,14 @@ std::string CommandName(const CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // OpenMP's threads sleep between teams instead of spinning for milliseconds on cores that
+  // other processes need. libgomp reads OMP_WAIT_POLICY once, as it loads (before main, and
+  // before glibc sets up the environment for a .preinit_array): unless the user chose a policy
+  // or a spin count, the command starts itself again with it set (docs/guide/busy-machines.md).
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr && std::getenv("GOMP_SPINCOUNT") == nullptr &&
+      setenv("OMP_WAIT_POLICY", "passive", 1) == 0) {
+    execv("/proc/self/exe", argv);  // returns only if it failed: then on as it is
+  }
   CLI::App app{
       "femreg - physics-regularized non-rigid registration of tetrahedral meshes to point "
       "clouds.\nRun 'femreg SUBCOMMAND --help' for the options of one subcommand."};
