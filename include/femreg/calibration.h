@@ -114,7 +114,8 @@ struct CalibrationSummary {
 
 // Fits `options.parameter` of scene.objects[options.object] to `observed` (each cloud a view
 // of the same equilibrium of the scene: its boundary conditions, loads and gravity, its
-// forward options and model), in the scene's frame and metres. Returns an error for input
+// forward options and model, nearly incompressible objects with the element
+// ChooseForwardElements picks), in the scene's frame and metres. Returns an error for input
 // that cannot be used (bad options, no clouds, an empty cloud, a mesh that does not load);
 // a search that ran reports how it ended in summary->termination and message. `names`
 // (optional, one per cloud) name the clouds in messages.
@@ -125,8 +126,8 @@ Status Calibrate(const Scene& scene, const std::vector<PointCloud>& observed,
 // The scene with the fitted value written into it (object material, or the region's).
 Scene ApplyCalibration(const Scene& scene, const CalibrationOptions& options, double value);
 
-// The equilibrium of scene.objects[object] (rest positions posed; x solved), for tools and
-// tests. forward_summary may be null.
+// The equilibrium of scene.objects[object] (rest positions posed; x solved; the element as
+// Calibrate chooses it), for tools and tests. forward_summary may be null.
 Status SolveSceneObject(const Scene& scene, int object, TetMesh* mesh,
                         ForwardSummary* forward_summary = nullptr);
 

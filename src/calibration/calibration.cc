@@ -315,7 +315,9 @@ std::vector<double> DistancesToSurface(const TetMesh& mesh, const Vertices& poin
   return d;
 }
 
-Status SolveSceneObject(const Scene& scene, int object, TetMesh* mesh, ForwardSummary* out) {
+Status SolveSceneObject(const Scene& given, int object, TetMesh* mesh, ForwardSummary* out) {
+  Scene scene = given;
+  ChooseForwardElements(&scene);  // as Calibrate does
   if (object < 0 || object >= static_cast<int>(scene.objects.size())) {
     return Status::Error("object " + std::to_string(object) + ": the scene has " +
                          std::to_string(scene.objects.size()) + " object(s)");
@@ -338,10 +340,12 @@ Status SolveSceneObject(const Scene& scene, int object, TetMesh* mesh, ForwardSu
   return Status::Ok();
 }
 
-Status Calibrate(const Scene& scene, const std::vector<PointCloud>& observed,
+Status Calibrate(const Scene& given, const std::vector<PointCloud>& observed,
                  const CalibrationOptions& options, CalibrationSummary* summary,
                  const std::vector<std::string>& names) {
   const auto start = Clock::now();
+  Scene scene = given;
+  ChooseForwardElements(&scene);  // the element simulate would use (the command logs it)
   *summary = CalibrationSummary();
   summary->parameter = options.parameter;
   auto invalid = [&](const std::string& message) {

@@ -181,6 +181,8 @@ void RunCalibrate(const CalibrateArgs& args) {
   std::cout << "calibrating " << ToString(options.parameter) << " of "
             << scene.objects[options.object].name << " against " << clouds.size()
             << " cloud(s)\n";
+  Scene chosen = scene;  // Calibrate makes the same choice; the written scene keeps the file's
+  for (const std::string& line : ChooseForwardElements(&chosen)) std::cout << line << "\n";
   CalibrationSummary summary;
   status = Calibrate(scene, clouds, options, &summary, args.observed);
   if (!status.ok()) return Fail(status.message());
