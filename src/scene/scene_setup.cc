@@ -252,7 +252,9 @@ std::vector<std::string> ChooseRegistrationElements(Scene* scene) {
     o.element_chosen = true;  // once: a second call changes nothing
     const double cap = kRegistrationPoissonRatio;
     o.material.poisson_ratio = std::min(o.material.poisson_ratio, cap);
-    for (auto& r : o.region_materials) r.second.poisson_ratio = std::min(r.second.poisson_ratio, cap);
+    for (auto& r : o.region_materials) {
+      r.second.poisson_ratio = std::min(r.second.poisson_ratio, cap);
+    }
     std::ostringstream line;
     line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
          << " (nearly incompressible), where linear tetrahedra lock: registering with the "
