@@ -164,6 +164,73 @@ TEST(Calibration, IntervalThatMissesTheValueStopsAtTheBound) {
   EXPECT_EQ(summary.evaluations, options.grid_samples);  // no golden section after
 }
 
+// Far from the fit the grid's misfit keeps growing: a point beyond max_distance adds the log
+// of its distance, where the cap makes it a constant (1.20x from 20 kPa down to 2 kPa capped,
+// 1.47x with the tail).
+TEST(Calibration, MisfitGrowsAwayFromTheFitOverFourDecades) {
+  const Scene scene = LoadCase();
+  CalibrationOptions options = FastOptions();
+  options.lower = kTrueE / 100;
+  options.upper = kTrueE * 100;
+  options.grid_samples = 21;  // a factor 1.58 apart
+  options.max_evaluations = 21;
+  CalibrationSummary summary;
+  ASSERT_TRUE(Calibrate(scene, {LoadCloud("camera.pcd")}, options, &summary).ok());
+  std::vector<CalibrationSample> grid;
+  for (const CalibrationSample& s : summary.samples) {
+    if (s.grid) grid.push_back(s);
+  }
+  ASSERT_EQ(grid.size(), 21u);
+  std::sort(grid.begin(), grid.end(), [](const CalibrationSample& a, const CalibrationSample& b) {
+    return a.value < b.value;
+  });
+  EXPECT_NEAR(grid[10].value / kTrueE, 1.0, 1e-9);
+  for (int i = 0; i < 10; ++i) {  // the soft side
+    EXPECT_GT(grid[i].far_objective, grid[i + 1].far_objective) << "E " << grid[i].value;
+  }
+  for (int i = 10; i < 20; ++i) {  // the stiff side
+    EXPECT_LT(grid[i].far_objective, grid[i + 1].far_objective) << "E " << grid[i].value;
+  }
+  EXPECT_GT(grid[0].far_objective, 1.35 * grid[5].far_objective);  // 2 kPa against 20 kPa
+}
+
+// Three grid samples over five decades still bracket the well.
+TEST(Calibration, CoarseGridFindsTheWell) {
+  const Scene scene = LoadCase();
+  CalibrationOptions options = FastOptions();
+  options.lower = 1e3;
+  options.upper = 1e8;
+  options.grid_samples = 3;
+  CalibrationSummary summary;
+  ASSERT_TRUE(Calibrate(scene, {LoadCloud("camera.pcd")}, options, &summary).ok());
+  ASSERT_EQ(summary.termination, CalibrationTermination::kConverged) << summary.message;
+  EXPECT_NEAR(summary.value / kTrueE, 1.0, 0.05) << summary.BriefReport();
+}
+
+// Another object in the cloud (a table 7 cm below the beam, 2100 points, a third of the
+// cloud) lies beyond max_distance at the fit: the grid's log tail feels it, the fit does not.
+TEST(Calibration, TableInTheCloudDoesNotMoveTheFit) {
+  const Scene scene = LoadCase();
+  PointCloud cloud = LoadCloud("camera.pcd");
+  const int n = cloud.size();
+  cloud.points.conservativeResize(n + 70 * 30, 3);
+  for (int a = 0; a < 70; ++a) {
+    for (int b = 0; b < 30; ++b) {
+      cloud.points.row(n + 30 * a + b) << -0.05 + 0.005 * a, -0.05 + 0.005 * b, -0.07;
+    }
+  }
+  cloud.normals.resize(0, 3);
+  CalibrationOptions options = FastOptions();
+  options.lower = 1e3;
+  options.upper = 1e8;
+  options.grid_samples = 4;
+  CalibrationSummary summary;
+  ASSERT_TRUE(Calibrate(scene, {cloud}, options, &summary).ok());
+  ASSERT_EQ(summary.termination, CalibrationTermination::kConverged) << summary.message;
+  // 0.973 if the golden section minimized the tailed misfit too.
+  EXPECT_NEAR(summary.value / kTrueE, 1.0, 0.02) << summary.BriefReport();
+}
+
 TEST(Calibration, OptionsNameTheBadField) {
   std::string error;
   CalibrationOptions o;

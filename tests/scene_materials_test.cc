@@ -146,5 +146,64 @@ TEST(SceneMaterials, ModelAndVolume) {
             "nodal volume is the neo-Hookean element's remedy for locking)");
 }
 
+// Nearly incompressible objects get the nodal-volume neo-Hookean element for forward solves
+// unless the scene chose an element; a chosen hooke survives being written and read back.
+TEST(SceneMaterials, NearlyIncompressibleChoosesTheNodalVolume) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene(kScene, "materials.yaml", ".", &scene).ok());
+  EXPECT_TRUE(ChooseForwardElements(&scene).empty());  // nu 0.3 and 0.4: unchanged
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+
+  const std::string soft = Replace(kScene, "        poisson_ratio: 0.4\n", "        poisson_ratio: 0.49\n");
+  ASSERT_TRUE(ParseScene(soft, "materials.yaml", ".", &scene).ok());
+  EXPECT_FALSE(scene.objects[0].element_chosen);
+  const std::vector<std::string> lines = ChooseForwardElements(&scene);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("block: nu 0.49 >= 0.45"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("model: hooke"), std::string::npos) << lines[0];
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
+  EXPECT_TRUE(scene.objects[0].nodal_volume);
+  EXPECT_TRUE(ChooseForwardElements(&scene).empty());  // already chosen: no second line
+
+  const std::string hooke = Replace(soft, "      density: 1000\n", "      density: 1000\n      model: hooke\n");
+  ASSERT_TRUE(ParseScene(hooke, "materials.yaml", ".", &scene).ok());
+  EXPECT_TRUE(scene.objects[0].element_chosen);
+  EXPECT_TRUE(ChooseForwardElements(&scene).empty());
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+  Scene again;
+  ASSERT_TRUE(ParseScene(SceneToYaml(scene), "again.yaml", ".", &again).ok());
+  EXPECT_TRUE(ChooseForwardElements(&again).empty()) << SceneToYaml(scene);
+
+  const std::string linear = soft + "forward: {model: linear}\n";
+  ASSERT_TRUE(ParseScene(linear, "materials.yaml", ".", &scene).ok());
+  EXPECT_TRUE(ChooseForwardElements(&scene).empty());
+  EXPECT_FALSE(scene.objects[0].nodal_volume);
+}
+
+// Registration has no nodal volume: the neo-Hookean element with nu capped in its elastic
+// term, unless the scene chose the element or a regularizer other than corotational.
+TEST(SceneMaterials, NearlyIncompressibleRegistrationCapsNu) {
+  const std::string soft = Replace(kScene, "      poisson_ratio: 0.3\n", "      poisson_ratio: 0.49\n");
+  Scene scene;
+  ASSERT_TRUE(ParseScene(soft, "materials.yaml", ".", &scene).ok());
+  const std::vector<std::string> lines = ChooseRegistrationElements(&scene);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("nu 0.35"), std::string::npos) << lines[0];
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
+  EXPECT_FALSE(scene.objects[0].nodal_volume);
+  EXPECT_EQ(scene.objects[0].material.poisson_ratio, kRegistrationPoissonRatio);
+  EXPECT_EQ(scene.objects[0].region_materials[0].second.poisson_ratio, kRegistrationPoissonRatio);
+  EXPECT_TRUE(ChooseRegistrationElements(&scene).empty());  // once
+
+  const std::string chosen = Replace(soft, "      density: 1000\n", "      density: 1000\n      model: neo_hookean\n");
+  ASSERT_TRUE(ParseScene(chosen, "materials.yaml", ".", &scene).ok());
+  EXPECT_TRUE(ChooseRegistrationElements(&scene).empty());
+  EXPECT_EQ(scene.objects[0].material.poisson_ratio, 0.49);
+
+  ASSERT_TRUE(ParseScene(soft + "registration: {regularizer: linear}\n", "materials.yaml", ".", &scene).ok());
+  EXPECT_TRUE(ChooseRegistrationElements(&scene).empty());
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+}
+
 }  // namespace
 }  // namespace femreg

@@ -4,7 +4,8 @@
 //
 // The misfit of a value is the mean over the observed points of a robust (Huber, truncated
 // at max_distance) function of each point's distance to the simulated surface. The search is
-// a bracketing grid over the interval (log-spaced for a modulus) followed by a golden-section
+// a bracketing grid (ranking by the same with a logarithmic tail beyond max_distance
+// instead of the cap) over the interval (log-spaced for a modulus) followed by a golden-section
 // search inside the bracket around the grid's best sample; every forward solve is warm-started
 // from the equilibrium of the nearest value evaluated before.
 #ifndef FEMREG_CALIBRATION_H_
@@ -45,7 +46,9 @@ struct CalibrationOptions {
   double tolerance = 1e-3;
   int max_evaluations = 40;  // forward solves in all (grid included)
   // Robust distance: Huber with this scale (m), each point's distance capped at
-  // max_distance (m): farther points (outliers, other objects) add a constant.
+  // max_distance (m): farther points (outliers, other objects) add a constant. The grid
+  // ranks values by the misfit with a logarithmic tail beyond max_distance instead, so
+  // that shapes far from the fit still differ (CalibrationSample::far_objective).
   double loss_scale = 0.002;
   double max_distance = 0.02;
   // At the fit, at least this fraction of the points of every cloud must lie within
@@ -61,6 +64,9 @@ struct CalibrationOptions {
 struct CalibrationSample {
   double value = 0.0;      // the parameter (Pa for a modulus)
   double objective = 0.0;  // mean robust loss (m^2): what the search minimizes
+  // The same with Huber(D) + min(D, scale) D ln(d / D) for a distance d beyond D =
+  // max_distance (m^2): what the bracketing grid ranks by.
+  double far_objective = 0.0;
   double mean_distance = 0.0;  // m, mean over the points within max_distance
   double rms_distance = 0.0;   // m, likewise
   double inlier_fraction = 0.0;  // points within max_distance, over all clouds
@@ -114,7 +120,8 @@ struct CalibrationSummary {
 
 // Fits `options.parameter` of scene.objects[options.object] to `observed` (each cloud a view
 // of the same equilibrium of the scene: its boundary conditions, loads and gravity, its
-// forward options and model), in the scene's frame and metres. Returns an error for input
+// forward options and model, nearly incompressible objects with the element
+// ChooseForwardElements picks), in the scene's frame and metres. Returns an error for input
 // that cannot be used (bad options, no clouds, an empty cloud, a mesh that does not load);
 // a search that ran reports how it ended in summary->termination and message. `names`
 // (optional, one per cloud) name the clouds in messages.
@@ -125,8 +132,8 @@ Status Calibrate(const Scene& scene, const std::vector<PointCloud>& observed,
 // The scene with the fitted value written into it (object material, or the region's).
 Scene ApplyCalibration(const Scene& scene, const CalibrationOptions& options, double value);
 
-// The equilibrium of scene.objects[object] (rest positions posed; x solved), for tools and
-// tests. forward_summary may be null.
+// The equilibrium of scene.objects[object] (rest positions posed; x solved; the element as
+// Calibrate chooses it), for tools and tests. forward_summary may be null.
 Status SolveSceneObject(const Scene& scene, int object, TetMesh* mesh,
                         ForwardSummary* forward_summary = nullptr);
 

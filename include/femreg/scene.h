@@ -68,9 +68,12 @@ struct ObjectSpec {
   Material material;
   std::vector<std::pair<int, Material>> region_materials;  // region id -> material
   // material.model: the constitutive law of all its elements; material.volume: nodal
-  // (neo-Hookean only, simulate only): the volumetric energy on the vertices (fem.h).
+  // (neo-Hookean only; simulate, calibrate): the volumetric energy on the vertices (fem.h).
   MaterialModel material_model = MaterialModel::kHooke;
   bool nodal_volume = false;
+  // material.model or material.volume was written (or simulate --model given): the scene
+  // chose the element, and no automatic choice replaces it (ChooseForwardElements).
+  bool element_chosen = false;
   // The above as the FEM layer takes them.
   ObjectMaterial Materials() const;
   // Fracture toughness (Pa): a node breaks when its fracture measure exceeds it; used when
@@ -197,6 +200,7 @@ struct Scene {
   std::vector<LoadSpec> loads;
   ForwardOptions forward;
   ElasticModelType forward_model = ElasticModelType::kCorotational;
+  bool forward_model_chosen = false;  // forward.model was written
   RegistrationOptions registration;
   std::vector<AnchorSpec> anchors;
   std::vector<ForceRegionSpec> force_regions;  // registration.forces.region; empty: every free surface vertex
@@ -236,6 +240,19 @@ std::string SceneToYaml(const Scene& scene, const std::string& base_dir = "",
 // name in `from`, e.g. the scene `femreg calibrate` wrote: a fitted material used to track.
 // Errors name an object `from` does not have.
 Status CopyMaterials(const Scene& from, Scene* scene);
+
+// Linear tetrahedra lock as nu -> 0.5 (one volume constraint per element is too many).
+// Objects with nu >= kNearlyIncompressibleNu (their own or a region's) whose scene chose no
+// element (no material.model, material.volume or forward.model) get the neo-Hookean element
+// with the nodal volume (fem.h) for the forward solves of simulate and calibrate. Returns
+// one line per object changed, saying so and how to override it; none when nothing changed.
+constexpr double kNearlyIncompressibleNu = 0.45;
+std::vector<std::string> ChooseForwardElements(Scene* scene);
+// The same objects, for registration with the corotational regularizer (the default), which
+// has no nodal volume: the neo-Hookean element with nu capped at kRegistrationPoissonRatio
+// in the elastic term (docs/guide/materials.md). Tracker::Create(scene) applies it.
+constexpr double kRegistrationPoissonRatio = 0.35;
+std::vector<std::string> ChooseRegistrationElements(Scene* scene);
 
 // Loads (or generates) object i's mesh, applies scale and pose to rest and x, and computes
 // the lumped masses from its density and region densities. Errors name the scene and the

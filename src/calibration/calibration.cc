@@ -52,6 +52,14 @@ double Huber(double d, double scale) {
   return d <= scale ? 0.5 * d * d : scale * (d - 0.5 * scale);
 }
 
+// Huber up to reach, then a logarithmic tail with the same slope there: a far point still
+// tells a nearer shape from a farther one, where the cap makes the misfit flat away from the
+// fit. The grid ranks by it; the fit itself ignores points beyond reach (other objects).
+double FarMisfit(double d, double scale, double reach) {
+  if (d <= reach) return Huber(d, scale);
+  return Huber(reach, scale) + std::min(reach, scale) * reach * std::log(d / reach);
+}
+
 // What one value scored, with the per-cloud inlier fractions for the overlap check.
 struct Score {
   CalibrationSample sample;
@@ -133,7 +141,7 @@ class Search {
   void Scoring(const TetMesh& mesh, Score* score) const {
     CalibrationSample& c = score->sample;
     const std::vector<double> none;
-    double objective = 0.0, sum = 0.0, sum2 = 0.0;
+    double objective = 0.0, far = 0.0, sum = 0.0, sum2 = 0.0;
     long inliers = 0, total = 0;
     SurfaceIndex surface(mesh.x, mesh.surface);
     for (const PointCloud& cloud : clouds_) {
@@ -141,6 +149,7 @@ class Search {
       for (int i = 0; i < cloud.size(); ++i) {
         const double d = std::sqrt(surface.Closest(cloud.points.row(i).transpose()).squared_distance);
         objective += Huber(std::min(d, options_.max_distance), options_.loss_scale);
+        far += FarMisfit(d, options_.loss_scale, options_.max_distance);
         if (d <= options_.max_distance) {
           ++cloud_in;
           sum += d;
@@ -152,6 +161,7 @@ class Search {
       score->cloud_inliers.push_back(cloud.size() ? double(cloud_in) / cloud.size() : 0.0);
     }
     c.objective = total ? objective / total : 0.0;
+    c.far_objective = total ? far / total : 0.0;
     c.mean_distance = inliers ? sum / inliers : 0.0;
     c.rms_distance = inliers ? std::sqrt(sum2 / inliers) : 0.0;
     c.inlier_fraction = total ? double(inliers) / total : 0.0;
@@ -315,7 +325,9 @@ std::vector<double> DistancesToSurface(const TetMesh& mesh, const Vertices& poin
   return d;
 }
 
-Status SolveSceneObject(const Scene& scene, int object, TetMesh* mesh, ForwardSummary* out) {
+Status SolveSceneObject(const Scene& given, int object, TetMesh* mesh, ForwardSummary* out) {
+  Scene scene = given;
+  ChooseForwardElements(&scene);  // as Calibrate does
   if (object < 0 || object >= static_cast<int>(scene.objects.size())) {
     return Status::Error("object " + std::to_string(object) + ": the scene has " +
                          std::to_string(scene.objects.size()) + " object(s)");
@@ -338,10 +350,12 @@ Status SolveSceneObject(const Scene& scene, int object, TetMesh* mesh, ForwardSu
   return Status::Ok();
 }
 
-Status Calibrate(const Scene& scene, const std::vector<PointCloud>& observed,
+Status Calibrate(const Scene& given, const std::vector<PointCloud>& observed,
                  const CalibrationOptions& options, CalibrationSummary* summary,
                  const std::vector<std::string>& names) {
   const auto start = Clock::now();
+  Scene scene = given;
+  ChooseForwardElements(&scene);  // the element simulate would use (the command logs it)
   *summary = CalibrationSummary();
   summary->parameter = options.parameter;
   auto invalid = [&](const std::string& message) {
@@ -454,7 +468,7 @@ Status Calibrate(const Scene& scene, const std::vector<PointCloud>& observed,
   int best = -1;
   for (int i = 0; i < n; ++i) {
     if (!grid[i].converged) continue;
-    if (best < 0 || grid[i].sample.objective < grid[best].sample.objective) best = i;
+    if (best < 0 || grid[i].sample.far_objective < grid[best].sample.far_objective) best = i;
   }
   if (best < 0) {
     return finish(CalibrationTermination::kForwardFailed,
@@ -520,8 +534,10 @@ Status Calibrate(const Scene& scene, const std::vector<PointCloud>& observed,
       f2 = search.Evaluate(x2, false);
     }
   }
-  const Score* fit = nullptr;
+  const Score* fit = nullptr;  // the best inside the grid's bracket
   for (const Score& s : search.done()) {
+    const double t = ToT(p, s.sample.value);
+    if (t < grid_t[best - 1] - 1e-12 || t > grid_t[best + 1] + 1e-12) continue;
     if (s.converged && (fit == nullptr || s.sample.objective < fit->sample.objective)) fit = &s;
   }
   set_best(*fit);

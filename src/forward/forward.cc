@@ -31,6 +31,12 @@ bool QuasiStaticSolver::LineSearch(const Vertices& x, const Eigen::VectorXd& ste
                                    bool* relaxed, Trial* trial) {
   *relaxed = false;
   Eigen::VectorXd trial_gradient;
+  // The neo-Hookean energy sums terms of about 4 mu V per element that cancel at small
+  // strain, so its round-off is that sum's, not a fraction of the (small) net energy.
+  double cancelling = 0.0;
+  if (neo_hookean()) {
+    for (int e = 0; e < nt(); ++e) cancelling += 4.0 * model_.rest(e).mu * model_.rest(e).volume;
+  }
   while (*alpha >= options_.min_step) {
     trial->x = x;
     ScatterFree(step, *alpha, &trial->x);
@@ -42,6 +48,7 @@ bool QuasiStaticSolver::LineSearch(const Vertices& x, const Eigen::VectorXd& ste
       // Near the solution the decrease drowns in round-off of the energy: accept a step
       // that does not raise the potential beyond that noise and reduces the force imbalance.
       const double noise = 1e-12 * (std::abs(trial->elastic) + std::abs(value)) +
+                           64 * std::numeric_limits<double>::epsilon() * cancelling +
                            std::numeric_limits<double>::min();
       if (value - potential <= noise) {
         trial_gradient = trial->gradient;

@@ -49,6 +49,7 @@ void SceneParser::ParseLoads(const YamlValue& list) {
 void SceneParser::ParseForward(const YamlValue& v) {
   v.CheckKeys({"model", "max_iterations", "load_steps", "tolerance", "absolute_tolerance"});
   if (v.Has("model")) {
+    scene_->forward_model_chosen = true;
     scene_->forward_model =
         ParseEnum(v["model"], std::vector<ElasticModelType>{ElasticModelType::kCorotational,
                                                             ElasticModelType::kLinear,

@@ -56,6 +56,7 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
   if (v.Has("material")) {
     const YamlValue material = v["material"];
     object.material = ParseMaterial(material, object.material);
+    object.element_chosen = material.Has("model") || material.Has("volume");
     if (material.Has("model")) {
       object.material_model = ParseEnum(
           material["model"], std::vector<MaterialModel>{MaterialModel::kHooke, MaterialModel::kNeoHookean});

@@ -212,8 +212,58 @@ Status CopyMaterials(const Scene& from, Scene* scene) {
     o.region_materials = it->region_materials;
     o.material_model = it->material_model;
     o.nodal_volume = it->nodal_volume;
+    o.element_chosen = it->element_chosen;
   }
   return Status::Ok();
+}
+
+std::vector<std::string> ChooseForwardElements(Scene* scene) {
+  std::vector<std::string> lines;
+  if (scene->forward_model_chosen) return lines;
+  for (ObjectSpec& o : scene->objects) {
+    if (o.element_chosen) continue;
+    double nu = o.material.poisson_ratio;
+    for (const auto& r : o.region_materials) nu = std::max(nu, r.second.poisson_ratio);
+    if (nu < kNearlyIncompressibleNu) continue;
+    const bool changed = o.material_model != MaterialModel::kNeoHookean || !o.nodal_volume;
+    o.material_model = MaterialModel::kNeoHookean;
+    o.nodal_volume = true;
+    if (!changed) continue;
+    std::ostringstream line;
+    line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
+         << " (nearly incompressible), where linear tetrahedra lock: using the neo-Hookean "
+            "element with nodal volume (material: {model: neo_hookean, volume: nodal}); "
+            "write material.model: hooke to keep the linear element";
+    lines.push_back(line.str());
+  }
+  return lines;
+}
+
+std::vector<std::string> ChooseRegistrationElements(Scene* scene) {
+  std::vector<std::string> lines;
+  if (scene->registration.regularizer != Regularizer::kCorotational) return lines;
+  for (ObjectSpec& o : scene->objects) {
+    if (o.element_chosen) continue;
+    double nu = o.material.poisson_ratio;
+    for (const auto& r : o.region_materials) nu = std::max(nu, r.second.poisson_ratio);
+    if (nu < kNearlyIncompressibleNu) continue;
+    o.material_model = MaterialModel::kNeoHookean;
+    o.nodal_volume = false;
+    o.element_chosen = true;  // once: a second call changes nothing
+    const double cap = kRegistrationPoissonRatio;
+    o.material.poisson_ratio = std::min(o.material.poisson_ratio, cap);
+    for (auto& r : o.region_materials) {
+      r.second.poisson_ratio = std::min(r.second.poisson_ratio, cap);
+    }
+    std::ostringstream line;
+    line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
+         << " (nearly incompressible), where linear tetrahedra lock: registering with the "
+            "neo-Hookean element and nu "
+         << cap << " in its elastic term; write material.model: hooke or neo_hookean to use "
+            "the element and nu as given";
+    lines.push_back(line.str());
+  }
+  return lines;
 }
 
 void InterpolateKeyframes(const std::vector<MotionKeyframe>& keyframes, int frame,

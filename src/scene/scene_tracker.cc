@@ -20,7 +20,9 @@ int ObjectIndex(const Scene& scene, const std::string& name) {
 
 }  // namespace
 
-Status Tracker::Create(const Scene& scene, std::unique_ptr<Tracker>* tracker) {
+Status Tracker::Create(const Scene& given, std::unique_ptr<Tracker>* tracker) {
+  Scene scene = given;
+  ChooseRegistrationElements(&scene);  // nearly incompressible objects (register logs it)
   std::vector<TetMesh> meshes(scene.objects.size());
   std::vector<ObjectMaterial> materials;
   for (size_t i = 0; i < scene.objects.size(); ++i) {

@@ -212,7 +212,9 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
   PutMap(n, "pose", pose);
   {
     YAML::Node material = MaterialNode(o.material, Material());
-    if (o.material_model != MaterialModel::kHooke) material["model"] = ToString(o.material_model);
+    if (o.material_model != MaterialModel::kHooke || o.element_chosen) {
+      material["model"] = ToString(o.material_model);  // a chosen hooke stays chosen
+    }
     if (o.nodal_volume) material["volume"] = "nodal";
     PutMap(n, "material", material);
   }
@@ -236,7 +238,9 @@ YAML::Node ForwardNode(const Scene& scene) {
   const ForwardOptions& f = scene.forward;
   const ForwardOptions d;
   YAML::Node n = FlowMap();
-  if (scene.forward_model != ElasticModelType::kCorotational) n["model"] = ToString(scene.forward_model);
+  if (scene.forward_model != ElasticModelType::kCorotational || scene.forward_model_chosen) {
+    n["model"] = ToString(scene.forward_model);
+  }
   Put(n, "max_iterations", f.max_iterations, d.max_iterations);
   Put(n, "load_steps", f.load_steps, d.load_steps);
   Put(n, "tolerance", f.relative_tolerance, d.relative_tolerance);

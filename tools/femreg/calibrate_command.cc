@@ -56,6 +56,7 @@ std::string SamplesJson(const CalibrationSummary& s) {
     const CalibrationSample& c = s.samples[i];
     os << (i ? "," : "") << "\n    {\"value\": " << JsonNumber(c.value)
        << ", \"objective\": " << JsonNumber(c.objective)
+       << ", \"far_objective\": " << JsonNumber(c.far_objective)
        << ", \"mean_mm\": " << JsonNumber(c.mean_distance * 1e3)
        << ", \"rms_mm\": " << JsonNumber(c.rms_distance * 1e3)
        << ", \"inlier_fraction\": " << JsonNumber(c.inlier_fraction)
@@ -181,6 +182,8 @@ void RunCalibrate(const CalibrateArgs& args) {
   std::cout << "calibrating " << ToString(options.parameter) << " of "
             << scene.objects[options.object].name << " against " << clouds.size()
             << " cloud(s)\n";
+  Scene chosen = scene;  // Calibrate makes the same choice; the written scene keeps the file's
+  for (const std::string& line : ChooseForwardElements(&chosen)) std::cout << line << "\n";
   CalibrationSummary summary;
   status = Calibrate(scene, clouds, options, &summary, args.observed);
   if (!status.ok()) return Fail(status.message());
@@ -232,7 +235,8 @@ void AddCalibrateCommand(CLI::App* app) {
       "registration.preprocess (crop, plane removal, ...) is applied to it. The misfit of a\n"
       "value is the mean robust (Huber, capped at --max-distance) distance of the points to\n"
       "the simulated surface; a grid over the interval (log-spaced for E) brackets the best\n"
-      "value and a golden-section search refines it.\n"
+      "value, ranking by the same misfit with a log tail beyond --max-distance instead of the\n"
+      "cap (informative far from the fit), and a golden-section search refines it.\n"
       "Writes DIR/calibration.json (value, misfit, uncertainty, every sample), DIR/scene.yaml\n"
       "(the scene with the fitted value: pass it to femreg register --scene) and\n"
       "DIR/misfit.png. Exit code 1 when the fit is not usable: no load (the parameter cannot\n"

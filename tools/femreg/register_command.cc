@@ -238,6 +238,8 @@ int RunRegister(const RegisterArgs& args) {
       return 1;
     }
   }
+  Scene chosen = scene;  // Tracker::Create makes the same choice
+  for (const std::string& line : ChooseRegistrationElements(&chosen)) std::cout << line << "\n";
   std::unique_ptr<Tracker> tracker;
   status = Tracker::Create(scene, &tracker);
   if (!status.ok()) {

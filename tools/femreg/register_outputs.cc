@@ -183,13 +183,17 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   }
   j["backends_used"] = used;
   json objects = json::array();
+  Scene chosen = scene;  // the element and nu the tracker used (Tracker::Create)
+  ChooseRegistrationElements(&chosen);
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const TetMesh& m = tracker.mesh(static_cast<int>(i));
     objects.push_back({{"name", scene.objects[i].name},
                        {"vertices", m.num_vertices()},
                        {"tetrahedra", m.num_tets()},
                        {"youngs_modulus", number(scene.objects[i].material.youngs_modulus)},
-                       {"poisson_ratio", number(scene.objects[i].material.poisson_ratio)}});
+                       {"poisson_ratio", number(scene.objects[i].material.poisson_ratio)},
+                       {"element", ToString(chosen.objects[i].material_model)},
+                       {"elastic_poisson_ratio", number(chosen.objects[i].material.poisson_ratio)}});
   }
   j["objects"] = objects;
   j["solver"] = {{"backend", ToString(o.solver.backend)},

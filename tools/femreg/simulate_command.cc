@@ -280,8 +280,10 @@ void RunSimulate(const SimulateOptions& options) {
       const bool neo_hookean = model_type == ElasticModelType::kNeoHookean;
       o.material_model = neo_hookean ? MaterialModel::kNeoHookean : MaterialModel::kHooke;
       o.nodal_volume = neo_hookean && o.nodal_volume;
+      o.element_chosen = true;
     }
   }
+  for (const std::string& line : ChooseForwardElements(&scene)) std::cout << line << "\n";
   ForwardOptions forward = scene.forward;
   if (options.load_steps > 0) forward.load_steps = options.load_steps;
   if (options.max_iterations > 0) forward.max_iterations = options.max_iterations;
