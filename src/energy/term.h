@@ -207,7 +207,12 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
   loss.Evaluate(SquaredSum<m>(r.data()), rho);
   out->value = 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
   out->scale = block.weight * rho[1];
-  if (out->scale == 0.0) {  // an outlier past Tukey's scale, an open contact
+  // A block with a zero residual and a zero Jacobian (an inactive barrier) adds nothing: a
+  // zero scale spares the back ends its products and its scatter.
+  bool inactive = r.isZero(0.0);
+  for (int i = 0; i < n && inactive; ++i) inactive = J[i].isZero(0.0);
+  if (inactive) out->scale = 0.0;
+  if (out->scale == 0.0) {  // an outlier past Tukey's scale, an open contact, an inactive block
     for (auto& g : out->gradient) g.setZero();
     if (with_hessian) {
       for (auto& h : out->hessian) h.setZero();
