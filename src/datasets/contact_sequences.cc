@@ -174,7 +174,7 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   Triangles tool_tris;
 
   // Per frame: the solve's iterations, the active contacts and the deepest penetration of the
-  // ground truth itself (the penalty lets it reach into the band D, never through).
+  // ground truth itself (the penalty, zero at contact, lets it in by force / k).
   std::ostringstream log;
   log << "frame,newton_iterations,termination,final_residual_N,contacts,max_penetration_mm\n";
   // tool_table: the contacts' resultant on the slab per frame (the tool's and the table's
