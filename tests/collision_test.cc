@@ -1,6 +1,6 @@
 // Collision: the contact cost functions' Jacobians, the forward solve resolving a
 // penetration, scenes (one object: nothing built, nothing added), surface readers, and
-// registered contact sequences keeping the penetration below D. (The exact closest points
+// registered contact sequences touching without crossing. (The exact closest points
 // and the AABB hierarchy it builds on are tested in geometry_test.cc.)
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>

@@ -314,8 +314,9 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
          << "- `ground_truth/frame_NNNN.csv`: one row per tracked vertex of all objects in scene "
          << "order: true position and whether the camera saw it.\n"
          << "- `truth_contacts.csv`: per frame, the ground-truth solve's Newton iterations, its "
-         << "termination and final force imbalance, its active contacts and its deepest penetration "
-         << "(mm; below D: the surfaces never cross).\n";
+         << "termination and final force imbalance, its touching contacts and its deepest penetration "
+         << "(mm, the most a vertex crossed the other surface: the penalty, zero at contact, lets a "
+         << "contact in by its force / k).\n";
   if (!pair) {
     readme << "- `forces.csv`: per frame, the resultant of the contact forces on the slab (N; the "
            << "tool's and the table's pushes, from the ground-truth solve's contact penalty) and "
