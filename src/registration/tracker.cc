@@ -269,9 +269,9 @@ namespace {
 // max(0, lambda + k (-g)), and a contact still deeper than the tolerance that did not at
 // least halve its penetration since the last update (or is new) gets 4 times its stiffness
 // (the data's pull can be far stiffer than k, and the inner solve is truncated), kept while
-// the contact is detected, so that one that
-// flickers open and shut does not leak again. Contacts no longer detected drop both. True
-// while a contact is deeper than the tolerance or held open wider than it: the frame goes on.
+// the contact is detected, so that one that flickers open and shut does not leak again.
+// Contacts no longer detected drop both. True while a contact is deeper than the tolerance
+// or held open wider than it: the frame goes on.
 bool UpdateContactMultipliers(TrackerState* state) {
   const CollisionWorld& world = *state->collision;
   const double k0 = world.stiffness(), tolerance = world.tolerance();
