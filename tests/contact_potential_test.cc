@@ -79,7 +79,7 @@ TEST(ContactPotential, ValueIsTheWorldsPenaltyOverObstacleAndPairContacts) {
   Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * p.x.rows());
   const double with_gradient = potential.Evaluate(p.x, &g);
   const double value_only = potential.Evaluate(p.x, nullptr);
-  // The same sum of 1/2 k delta^2 over ~100 contacts, delta computed as D - n . (p_a - p_b)
+  // The same sum of 1/2 k delta^2 over ~100 contacts, delta computed as -n . (p_a - p_b)
   // by the world and as offset - sum c_i n . x_i by the blocks: round-off alone, ~1e-16
   // relative per term; 1e-12 leaves room for the order of the sums.
   EXPECT_NEAR(with_gradient, stats.energy, 1e-12 * stats.energy);
@@ -89,10 +89,10 @@ TEST(ContactPotential, ValueIsTheWorldsPenaltyOverObstacleAndPairContacts) {
   for (const Contact& c : potential.contacts()) {
     const double delta = p.world.Penetration(c, p.x);
     if (c.obstacle()) {
-      const auto block = ObstaclePenaltyBlock(c, p.world.distance(), p.world.stiffness());
+      const auto block = ObstaclePenaltyBlock(c, 0.0, p.world.stiffness());
       EXPECT_NEAR(block.Penetration(energy::StencilPositions(block, p.x).data()), delta, 1e-15);
     } else {
-      const auto block = PairPenaltyBlock(c, p.world.distance(), p.world.stiffness());
+      const auto block = PairPenaltyBlock(c, 0.0, p.world.stiffness());
       EXPECT_NEAR(block.Penetration(energy::StencilPositions(block, p.x).data()), delta, 1e-15);
       EXPECT_EQ(block.vertices[3], c.vertices_b[0]);
       EXPECT_EQ(block.coefficients[3], -c.bary_b[0]);

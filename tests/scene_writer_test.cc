@@ -193,6 +193,8 @@ void ExpectSameScene(const Scene& a, const Scene& b) {
   EXPECT_EQ(c.pairs, d.pairs);
   EXPECT_EQ(c.stiffness, d.stiffness);
   EXPECT_EQ(c.distance, d.distance);
+  EXPECT_EQ(c.tolerance, d.tolerance);
+  EXPECT_EQ(c.augmented, d.augmented);
   ASSERT_EQ(c.obstacles.size(), d.obstacles.size());
   for (size_t i = 0; i < c.obstacles.size(); ++i) {
     SCOPED_TRACE("collision.obstacles[" + std::to_string(i) + "]");
@@ -317,6 +319,8 @@ const char kEverything[] =
     "  pairs: [[beam, ball], [ball, rod]]\n"
     "  stiffness: 5000\n"
     "  distance: 0.001\n"
+    "  tolerance: 0.0003\n"
+    "  augmented: false\n"
     "  obstacles:\n"
     "    - {name: table, plane: {point: [0, 0, -0.1], normal: [0, 0, 1]}, objects: [beam, ball]}\n"
     "    - {name: wall, box: {size: [0.1, 1, 1]}, pose: {translation: [1, 0, 0], rotation: [0, 0.1, 0]}}\n"

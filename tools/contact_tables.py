@@ -28,18 +28,18 @@ for name in ("contact_pair", "tool_table"):
 
 print("# Contacts: registered with collision on and off\n")
 print("Made by `tools/contacts.sh` (one thread). Vertex errors against the ground truth in mm, "
-      "mean over the vertices the camera saw / did not see; penetration: the deepest "
-      "delta = D - gap over the contacts of the result (D = proximity threshold; above D the "
-      "surfaces have crossed). With collision off it is measured, not prevented "
-      "(`femreg register --no-collision`).\n")
+      "mean over the vertices the camera saw / did not see; gap and penetration from the same "
+      "signed gaps of the contacts detected within D at the result: gap = the smallest "
+      "(D when none is within D), penetration = max(0, -gap) (docs/theory/contact.md). With "
+      "collision off it is measured, not prevented (`femreg register --no-collision`).\n")
 for name in ("contact_pair", "tool_table"):
     on, off = rows(f"{name}_ceres_on"), rows(f"{name}_ceres_off")
     print(f"## {name} (D = {D_MM[name]:g} mm, Ceres back end)\n")
-    print("| frame | on: seen / hidden (mm) | on: penetration (mm) | contacts | off: seen / hidden (mm) | off: penetration (mm) |")
-    print("|---:|---|---:|---:|---|---:|")
+    print("| frame | on: seen / hidden (mm) | on: gap (mm) | on: penetration (mm) | contacts | off: seen / hidden (mm) | off: penetration (mm) |")
+    print("|---:|---|---:|---:|---:|---|---:|")
     for a, b in zip(on, off):
         print(f"| {a['frame']} | {number(a, 'err_seen_mean_mm'):.2f} / {number(a, 'err_hidden_mean_mm'):.2f} "
-              f"| {number(a, 'max_penetration_mm'):.2f} | {a['contacts']} "
+              f"| {number(a, 'min_gap_mm'):.2f} | {number(a, 'max_penetration_mm'):.2f} | {a['contacts']} "
               f"| {number(b, 'err_seen_mean_mm'):.2f} / {number(b, 'err_hidden_mean_mm'):.2f} "
               f"| {number(b, 'max_penetration_mm'):.2f} |")
     print()

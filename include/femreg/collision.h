@@ -8,10 +8,12 @@
 // n is the unit contact normal, pointing from b towards a (the direction that separates
 // them), held fixed between detections. The signed gap is g = n . (p_a - p_b): it equals the
 // distance |p_a - p_b| while the surfaces have not crossed and is negative once they have
-// (p_a inside b). With D > 0 the proximity threshold, the penetration is delta = D - g; the
-// contact is active while delta > 0 and its energy is E = 1/2 k delta^2, whose force on p_a
-// is f_a = -dE/dp_a = k delta n (away from b): the penetration of docs/theory/contact.md.
-// "Deepest penetration" below is max delta; delta < D means the surfaces have not crossed.
+// (p_a inside b). D > 0 is the detection distance: contacts are found where g < D. The
+// penetration is delta = -g, the same signed gap with the other sign; the penalty block of
+// a contact is zero at a standoff s (E = 1/2 k max(0, s - g)^2, force k (s - g) n on p_a, away
+// from b): registration puts s = lambda / k with the contact's augmented-Lagrangian
+// multiplier lambda (0 for a new contact), the forward solve s = 0. "Deepest penetration"
+// below is max(0, -g).
 #ifndef FEMREG_COLLISION_H_
 #define FEMREG_COLLISION_H_
 
@@ -42,14 +44,19 @@ struct Contact {
   Eigen::Vector3d point_b = Eigen::Vector3d::Zero();  // obstacle point (scene frame)
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   // unit, from b towards a
   double gap = 0.0;                                    // signed n . (p_a - p_b) at detection
+  // The vertex the contact is about (its multiplier's key with object_b): side a's global
+  // vertex, or -1 - i for vertex i of an obstacle mesh pressing into a's triangle.
+  int source = 0;
   bool obstacle() const { return object_b < 0; }
 };
 
+// Penetration and gap come from the same signed gaps g of the contacts detected within D.
 struct ContactStats {
-  int contacts = 0;               // active contacts (delta > 0)
+  int contacts = 0;               // touching contacts: g < tolerance (crossed or within it)
   int object_contacts = 0, obstacle_contacts = 0;
-  double energy = 0.0;            // sum 1/2 k delta^2 (J)
-  double max_penetration = 0.0;   // max delta (m), 0 without contact
+  double energy = 0.0;            // sum 1/2 k max(0, -g)^2 (J), the bare penalty's
+  double max_penetration = 0.0;   // max(0, -min g) (m): how deep a vertex is in the other side
+  double min_gap = 0.0;           // min g (m), < 0 once crossed; D when no contact is within D
 };
 
 class CollisionWorld {
@@ -76,14 +83,18 @@ class CollisionWorld {
   // Planes are tested vertex by vertex without a tree.
   void Detect(const Vertices& x, double margin, std::vector<Contact>* contacts);
 
-  // Penetration delta = D - n . (p_a - p_b) of a contact at x.
-  double Penetration(const Contact& c, const Vertices& x) const;
+  // Signed gap g = n . (p_a - p_b) of a contact at x (normal and closest points held).
+  double Gap(const Contact& c, const Vertices& x) const;
+  // Penetration -g of a contact at x (> 0 once the surfaces crossed).
+  double Penetration(const Contact& c, const Vertices& x) const { return -Gap(c, x); }
   // Energy, active count and deepest penetration of `contacts` at x.
   ContactStats Evaluate(const std::vector<Contact>& contacts, const Vertices& x) const;
 
   bool enabled() const { return enabled_; }  // false when nothing can collide
   double stiffness() const { return spec_.stiffness; }
   double distance() const { return spec_.distance; }
+  double tolerance() const { return spec_.tolerance; }
+  bool augmented() const { return spec_.augmented; }
   int num_trees_built() const { return trees_built_; }
   const AabbTree& tree(int object) const { return trees_.at(object); }
   // Obstacle i's triangles in the scene frame (empty for planes).
@@ -134,7 +145,8 @@ class CollisionWorld {
 
 // The penalty as an energy of the forward solve (ForwardProblem::potential): each contact
 // becomes the energy layer's ContactPenalty block (the same one registration's frame problem
-// minimizes), whose value, gradient and k J^T J are evaluated here. The solver calls
+// minimizes), zero at contact (1/2 k max(0, -g)^2: no multipliers, the forward solve has no
+// outer iterations), whose value, gradient and k J^T J are evaluated here. The solver calls
 // Refresh at every Newton iteration; contacts are re-detected (with `margin`) only when a
 // vertex has moved more than margin / 2 since the last detection or the obstacles were posed
 // for another frame: the margin is a skin, so no pair left out can have come within D, and

@@ -41,7 +41,12 @@ struct ObstacleSpec {
 struct CollisionSpec {
   std::vector<std::pair<std::string, std::string>> pairs;  // object pairs; empty: every pair
   double stiffness = 1.0e4;  // k (N/m) per contact
-  double distance = 0.002;   // D (m), proximity threshold
+  double distance = 0.002;   // D (m): contacts are detected within it; not a standoff
+  // Registration: the penetration (m) a contact may keep. The contact multipliers are
+  // updated between outer iterations (augmented Lagrangian), and a frame does not stop while
+  // a contact is deeper than this, up to solver.max_outer_iterations.
+  double tolerance = 2.0e-4;
+  bool augmented = true;  // false: the bare penalty, zero at contact (penetration F / k)
   std::vector<ObstacleSpec> obstacles;
 };
 

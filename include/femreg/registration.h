@@ -367,11 +367,13 @@ struct FrameSummary {
   std::string stopped_by;
   int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
   double rms_residual = 0.0;      // m
-  // Collision (effects.collision): active contacts (penetration delta = D - gap > 0) at the
-  // result, split into object-object and object-obstacle, and the deepest delta (m; < D
-  // means no surfaces crossed). See femreg/collision.h.
+  // Collision (effects.collision), from the signed gaps g of the contacts detected within D
+  // at the result (femreg/collision.h): touching contacts (g < collision.tolerance), split
+  // into object-object and object-obstacle; the deepest penetration max(0, -min g) and the
+  // smallest gap min g (m; D when nothing is within D).
   int contacts = 0, object_contacts = 0, obstacle_contacts = 0;
   double max_penetration = 0.0;
+  double min_gap = 0.0;
   StageTimes time;
   std::vector<OuterIteration> iterations;
   std::vector<FractureEvent> fractures;  // node splits this frame (effects.fracture)

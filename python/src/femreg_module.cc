@@ -141,6 +141,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["object_contacts"] = s.object_contacts;
   d["obstacle_contacts"] = s.obstacle_contacts;
   d["max_penetration"] = s.max_penetration;
+  d["min_gap"] = s.min_gap;
   d["force"] = Eigen::Vector3d(s.force);
   d["torque"] = Eigen::Vector3d(s.torque);
   py::dict t;

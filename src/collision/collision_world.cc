@@ -32,6 +32,9 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
   if (!(spec.distance > 0) || !std::isfinite(spec.distance)) {
     return Status::Error("collision.distance must be > 0");
   }
+  if (!(spec.tolerance > 0) || !std::isfinite(spec.tolerance)) {
+    return Status::Error("collision.tolerance must be > 0");
+  }
   const int n = static_cast<int>(surfaces.size());
   surfaces_ = surfaces;
   auto find = [&](const std::string& name, int* index) {
@@ -321,6 +324,7 @@ void CollisionWorld::DetectPair(int a, int b, const Vertices& x, double limit,
       contact.bary_b = f.second.bary;
       contact.normal = f.second.normal;
       contact.gap = f.second.gap;
+      contact.source = f.first;
       out->push_back(contact);
     }
   }
@@ -350,6 +354,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
       c.point_b = Row(x, v) - gap * n;
       c.normal = n;
       c.gap = gap;
+      c.source = v;
       out->push_back(c);
     }
     return;
@@ -388,6 +393,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
     contact.point_b = f.second.point;
     contact.normal = f.second.normal;
     contact.gap = f.second.gap;
+    contact.source = f.first;
     out->push_back(contact);
   }
   found.clear();
@@ -401,6 +407,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
     contact.point_b = Row(o.world, f.first);
     contact.normal = -f.second.normal;  // from the obstacle towards the object
     contact.gap = f.second.gap;
+    contact.source = -1 - f.first;
     out->push_back(contact);
   }
 }
@@ -413,26 +420,28 @@ bool CollisionWorld::Corner(int object, int v, std::array<int, 2>* corner) const
   return true;
 }
 
-double CollisionWorld::Penetration(const Contact& c, const Vertices& x) const {
+double CollisionWorld::Gap(const Contact& c, const Vertices& x) const {
   Eigen::Vector3d pa = Eigen::Vector3d::Zero(), pb = c.point_b;
   for (int k = 0; k < 3; ++k) pa += c.bary_a[k] * Row(x, c.vertices_a[k]);
   if (!c.obstacle()) {
     pb.setZero();
     for (int k = 0; k < 3; ++k) pb += c.bary_b[k] * Row(x, c.vertices_b[k]);
   }
-  return spec_.distance - c.normal.dot(pa - pb);
+  return c.normal.dot(pa - pb);
 }
 
 ContactStats CollisionWorld::Evaluate(const std::vector<Contact>& contacts, const Vertices& x) const {
   ContactStats s;
+  s.min_gap = spec_.distance;
   for (const Contact& c : contacts) {
-    const double delta = Penetration(c, x);
-    if (!(delta > 0)) continue;
+    const double gap = Gap(c, x);
+    s.min_gap = std::min(s.min_gap, gap);
+    if (!(gap < spec_.tolerance)) continue;
     ++s.contacts;
     ++(c.obstacle() ? s.obstacle_contacts : s.object_contacts);
-    s.energy += 0.5 * spec_.stiffness * delta * delta;
-    s.max_penetration = std::max(s.max_penetration, delta);
+    if (gap < 0) s.energy += 0.5 * spec_.stiffness * gap * gap;
   }
+  s.max_penetration = std::max(0.0, -s.min_gap);
   return s;
 }
 

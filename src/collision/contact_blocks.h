@@ -11,12 +11,13 @@
 namespace femreg {
 
 // A contact against an obstacle (c.obstacle()): side a's 3 vertices with coefficients
-// bary_a; offset D + n . p_b (the obstacle point is fixed). distance: D (m); stiffness: k
-// (N/m), the block's weight.
-energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double distance, double stiffness);
+// bary_a; offset s + n . p_b (the obstacle point is fixed). standoff: s (m), the gap where
+// the penalty starts (registration: lambda / k; the forward solve: 0); stiffness: k (N/m),
+// the block's weight.
+energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double standoff, double stiffness);
 // A contact between two objects: side a's 3 vertices (coefficients bary_a), then side b's
-// (coefficients -bary_b); offset D.
-energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double distance, double stiffness);
+// (coefficients -bary_b); offset s.
+energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double standoff, double stiffness);
 
 }  // namespace femreg
 

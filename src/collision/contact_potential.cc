@@ -10,19 +10,19 @@
 
 namespace femreg {
 
-energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double distance, double stiffness) {
+energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double standoff, double stiffness) {
   energy::ContactPenalty<3> block;
   for (int k = 0; k < 3; ++k) {
     block.vertices[k] = c.vertices_a[k];
     block.coefficients[k] = c.bary_a[k];
   }
   block.normal = c.normal;
-  block.offset = distance + c.normal.dot(c.point_b);
+  block.offset = standoff + c.normal.dot(c.point_b);
   block.weight = stiffness;
   return block;
 }
 
-energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double distance, double stiffness) {
+energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double standoff, double stiffness) {
   energy::ContactPenalty<6> block;
   for (int k = 0; k < 3; ++k) {
     block.vertices[k] = c.vertices_a[k];
@@ -31,21 +31,22 @@ energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double distance, do
     block.coefficients[3 + k] = -c.bary_b[k];
   }
   block.normal = c.normal;
-  block.offset = distance;
+  block.offset = standoff;
   block.weight = stiffness;
   return block;
 }
 
 namespace {
 
-// Calls f(block) with the penalty block of every contact (3 or 6 vertices).
+// Calls f(block) with the penalty block of every contact (3 or 6 vertices), zero at contact:
+// D only detects.
 template <class F>
 void ForEachPenaltyBlock(const std::vector<Contact>& contacts, const CollisionWorld& world, F&& f) {
   for (const Contact& c : contacts) {
     if (c.obstacle()) {
-      f(ObstaclePenaltyBlock(c, world.distance(), world.stiffness()));
+      f(ObstaclePenaltyBlock(c, 0.0, world.stiffness()));
     } else {
-      f(PairPenaltyBlock(c, world.distance(), world.stiffness()));
+      f(PairPenaltyBlock(c, 0.0, world.stiffness()));
     }
   }
 }

@@ -174,7 +174,7 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
   Triangles tool_tris;
 
   // Per frame: the solve's iterations, the active contacts and the deepest penetration of the
-  // ground truth itself (the penalty lets it reach into the band D, never through).
+  // ground truth itself (the penalty, zero at contact, lets it in by force / k).
   std::ostringstream log;
   log << "frame,newton_iterations,termination,final_residual_N,contacts,max_penetration_mm\n";
   // tool_table: the contacts' resultant on the slab per frame (the tool's and the table's
@@ -314,8 +314,9 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
          << "- `ground_truth/frame_NNNN.csv`: one row per tracked vertex of all objects in scene "
          << "order: true position and whether the camera saw it.\n"
          << "- `truth_contacts.csv`: per frame, the ground-truth solve's Newton iterations, its "
-         << "termination and final force imbalance, its active contacts and its deepest penetration "
-         << "(mm; below D: the surfaces never cross).\n";
+         << "termination and final force imbalance, its touching contacts and its deepest penetration "
+         << "(mm, the most a vertex crossed the other surface: the penalty, zero at contact, lets a "
+         << "contact in by its force / k).\n";
   if (!pair) {
     readme << "- `forces.csv`: per frame, the resultant of the contact forces on the slab (N; the "
            << "tool's and the table's pushes, from the ground-truth solve's contact penalty) and "

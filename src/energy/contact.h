@@ -1,9 +1,10 @@
 // The contact penalty (docs/theory/contact.md#response; femreg/collision.h gives the sign
-// conventions): with the normal n held between detections, the penetration delta = D - n . (p_a -
-// p_b) is linear in the stencil's positions, delta = offset - sum_i c_i n . x_i (c_i: the
-// barycentrics of side a, minus those of side b; offset: D, plus n . p_b for a fixed obstacle
-// point), and the residual r = max(0, delta) is one-sided: 1/2 k r^2 with k the weight. N = 3
-// against an obstacle, 6 between two objects.
+// conventions): with the normal n held between detections, delta = s - n . (p_a - p_b), s the
+// standoff where the penalty starts (0, or an augmented-Lagrangian lambda / k), is linear in
+// the stencil's positions, delta = offset - sum_i c_i n . x_i (c_i: the barycentrics of side
+// a, minus those of side b; offset: s, plus n . p_b for a fixed obstacle point), and the
+// residual r = max(0, delta) is one-sided: 1/2 k r^2 with k the weight. N = 3 against an
+// obstacle, 6 between two objects.
 #ifndef FEMREG_ENERGY_CONTACT_H_
 #define FEMREG_ENERGY_CONTACT_H_
 

@@ -339,15 +339,24 @@ void FrameProblem::SetLoads(const TrackerState& state) {
   }
 }
 
-void FrameProblem::SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world) {
+void FrameProblem::SetContacts(
+    const std::vector<Contact>& contacts, const CollisionWorld& world,
+    const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers) {
   problem_.Clear(TermGroup::kCollision);
   auto& obstacle = *problem_.AddSet<energy::ContactPenalty<3>>(TermGroup::kCollision).mutable_blocks();
   auto& pair = *problem_.AddSet<energy::ContactPenalty<6>>(TermGroup::kCollision).mutable_blocks();
   for (const Contact& c : contacts) {
+    // 1/2 k max(0, lambda / k - g)^2: its force at g = 0 is the multiplier's lambda.
+    double k = world.stiffness(), standoff = 0.0;
+    const auto it = multipliers.find({c.source, c.object_b});
+    if (it != multipliers.end()) {
+      k = it->second.stiffness;
+      standoff = it->second.lambda / k;
+    }
     if (c.obstacle()) {
-      obstacle.push_back(ObstaclePenaltyBlock(c, world.distance(), world.stiffness()));
+      obstacle.push_back(ObstaclePenaltyBlock(c, standoff, k));
     } else {
-      pair.push_back(PairPenaltyBlock(c, world.distance(), world.stiffness()));
+      pair.push_back(PairPenaltyBlock(c, standoff, k));
     }
   }
 }

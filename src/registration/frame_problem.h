@@ -41,8 +41,10 @@ class FrameProblem {
   // The external loads (gravity, nodal forces) of the objects that have them, about the
   // positions at the start of this outer iteration (energy/load.h). Every outer iteration.
   void SetLoads(const TrackerState& state);
-  // The contact penalty of the detected contacts (k and D from the world).
-  void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world);
+  // The contact penalty of the detected contacts, zero at the gap lambda / k of each
+  // contact's multiplier (none yet: k from the world, zero at contact).
+  void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world,
+                   const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers);
 
   // Equilibrium registration (registration.forces, energy/equilibrium.h): where forces may
   // act, their penalties, and the surface's normals at state.x. Every outer iteration, after

@@ -21,8 +21,8 @@ std::string FrameSummary::BriefReport() const {
                 time.total * 1e3);
   std::string brief = buf;
   if (contacts > 0 || time.collision > 0) {
-    std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm", contacts,
-                  max_penetration * 1e3);
+    std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm, gap %.3f mm", contacts,
+                  max_penetration * 1e3, min_gap * 1e3);
     brief += buf;
   }
   return brief;
@@ -61,9 +61,9 @@ std::string FrameSummary::FullReport() const {
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf),
                   "  collision: E %.4g, %d contacts (%d object, %d obstacle), deepest penetration "
-                  "%.3f mm, detection %.2f ms\n",
+                  "%.3f mm, smallest gap %.3f mm, detection %.2f ms\n",
                   final.collision, contacts, object_contacts, obstacle_contacts,
-                  max_penetration * 1e3, time.collision * 1e3);
+                  max_penetration * 1e3, min_gap * 1e3, time.collision * 1e3);
     os << buf;
   }
   if (!fractures.empty() || time.fracture > 0) {

@@ -262,6 +262,42 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   return Status::Ok();
 }
 
+namespace {
+
+// The augmented-Lagrangian update after a solve (docs/theory/contact.md#response): each
+// contact's multiplier takes in the force its penetration still asks for, lambda <-
+// max(0, lambda + k (-g)), and a contact still deeper than the tolerance that did not at
+// least halve its penetration since the last update (or is new) gets 4 times its stiffness
+// (the data's pull can be far stiffer than k, and the inner solve is truncated), kept while
+// the contact is detected, so that one that flickers open and shut does not leak again.
+// Contacts no longer detected drop both. True while a contact is deeper than the tolerance
+// or held open wider than it: the frame goes on.
+bool UpdateContactMultipliers(TrackerState* state) {
+  const CollisionWorld& world = *state->collision;
+  const double k0 = world.stiffness(), tolerance = world.tolerance();
+  const double k_max = 1e3 * k0;  // keeps the stiffest contact within the solvers' reach
+  std::map<std::pair<int, int>, TrackerState::ContactMultiplier> next;
+  bool pending = false;
+  for (const Contact& c : state->contacts) {
+    const std::pair<int, int> key(c.source, c.object_b);
+    TrackerState::ContactMultiplier m;
+    m.stiffness = k0;
+    const auto it = state->contact_multipliers.find(key);
+    if (it != state->contact_multipliers.end()) m = it->second;
+    const double penetration = world.Penetration(c, state->x);
+    const bool stalled = penetration > tolerance && penetration > 0.5 * m.penetration;
+    m.lambda = std::max(0.0, m.lambda + m.stiffness * penetration);
+    if (stalled) m.stiffness = std::min(k_max, 4.0 * m.stiffness);
+    m.penetration = penetration;
+    if (penetration > tolerance || (m.lambda > 0 && -penetration > tolerance)) pending = true;
+    if (m.lambda > 0 || m.stiffness != k0) next[key] = m;
+  }
+  state->contact_multipliers.swap(next);
+  return pending;
+}
+
+}  // namespace
+
 bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
                                    std::vector<DataPair>* pairs, double* previous_energy,
                                    Vertices* previous, FrameSummary* s) {
@@ -313,7 +349,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     state.collision->SetFrame(state.frame);
     state.collision->Detect(state.x, state.collision->distance(), &state.contacts);
     row.contacts = static_cast<int>(state.contacts.size());
-    frame_problem.SetContacts(state.contacts, *state.collision);
+    frame_problem.SetContacts(state.contacts, *state.collision, state.contact_multipliers);
     s->time.collision += Seconds(t_collision);
   }
   // Equilibrium registration starts each frame with one outer iteration of the energy without
@@ -347,6 +383,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     return false;
   }
   row.after = report.after;
+  const bool contacts_pending =
+      state.collision && state.collision->augmented() && UpdateContactMultipliers(&state);
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices
   // stay within (compared below with the mesh's edge and the cloud's sampling distance).
   const Eigen::VectorXd moves = (state.x - before_solve).rowwise().norm();
@@ -372,6 +410,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       *previous = RemapRows(*previous, source);
       frame_problem.BuildElastic(state);
       frame_problem.BuildFrameTerms(&state);
+      state.contact_multipliers.clear();  // keyed by the old vertex numbering
       model_index.Reset();
       warm_triangles.clear();  // a new surface
       paired_vertices.clear();
@@ -413,8 +452,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const double bulk_reference = std::max(state.mean_edge_length, 2.0 * fc.spacing);
   const double bulk_limit = options.solver.bulk_step_tolerance * bulk_reference;
   const bool settled = bulk_limit > 0 && bulk <= bulk_limit;
-  if (k > 0 && (moved <= step_limit || settled ||
-                (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
+  if (k > 0 && !contacts_pending &&
+      (moved <= step_limit || settled || (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
     s->termination = TerminationType::kConverged;
     std::ostringstream os;
     if (moved <= step_limit) {
@@ -471,6 +510,7 @@ void Tracker::Impl::MeasureContacts(FrameSummary* s) {
   s->object_contacts = cs.object_contacts;
   s->obstacle_contacts = cs.obstacle_contacts;
   s->max_penetration = cs.max_penetration;
+  s->min_gap = cs.min_gap;
   s->time.collision += Seconds(t0);
 }
 

@@ -75,6 +75,14 @@ struct TrackerState {
   // and no contact term added).
   std::unique_ptr<CollisionWorld> collision;
   std::vector<Contact> contacts;
+  // Per contact (Contact::source, object_b): its augmented-Lagrangian multiplier and
+  // stiffness (docs/theory/contact.md#response), kept while it is detected, across frames.
+  struct ContactMultiplier {
+    double lambda = 0.0;       // N, the contact's force at zero penetration
+    double stiffness = 0.0;    // N/m
+    double penetration = 0.0;  // m, after the last solve
+  };
+  std::map<std::pair<int, int>, ContactMultiplier> contact_multipliers;
   std::unique_ptr<FractureState> fracture;
   // Mean length of the surface triangles' edges at rest (m): the length scale of the
   // step tolerances (solver.step_tolerance).

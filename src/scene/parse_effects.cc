@@ -39,7 +39,7 @@ void SceneParser::ParseFracture(const YamlValue& v) {
 
 // The collision section (pairs of object names, penalty, rigid obstacles).
 void SceneParser::ParseCollision(const YamlValue& v) {
-  v.CheckKeys({"pairs", "stiffness", "distance", "obstacles"});
+  v.CheckKeys({"pairs", "stiffness", "distance", "tolerance", "augmented", "obstacles"});
   CollisionSpec& c = scene_->collision;
   auto object_name = [&](const YamlValue& n) {
     const std::string name = n.AsString();
@@ -66,6 +66,8 @@ void SceneParser::ParseCollision(const YamlValue& v) {
   }
   if (v.Has("stiffness")) c.stiffness = PositiveDouble(v["stiffness"]);
   if (v.Has("distance")) c.distance = PositiveDouble(v["distance"]);
+  if (v.Has("tolerance")) c.tolerance = PositiveDouble(v["tolerance"]);
+  if (v.Has("augmented")) c.augmented = v["augmented"].AsBool();
   if (v.Has("obstacles")) {
     const YamlValue list = v["obstacles"];
     list.RequireSequence();

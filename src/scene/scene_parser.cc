@@ -51,7 +51,9 @@
 //   collision:                                 # used when effects.collision is true
 //     pairs: [[a, b]]                          # object pairs; default: every pair
 //     stiffness: 1e4                           # k (N/m) per contact
-//     distance: 0.002                          # D (m), proximity threshold
+//     distance: 0.002                          # D (m), detection distance (not a standoff)
+//     tolerance: 0.0002                        # m, the penetration a contact may keep
+//     augmented: true                          # multiplier updates between outer iterations
 //     obstacles:                               # rigid; objects: [..] (default: all)
 //       - {name: table, plane: {point: [0, 0, 0], normal: [0, 0, 1]}}
 //       - {name: block, box: {size: [x, y, z]}, pose: {translation: [..], rotation: [..]}}

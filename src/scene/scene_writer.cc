@@ -486,6 +486,8 @@ YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
   }
   Put(n, "stiffness", c.stiffness, d.stiffness);
   Put(n, "distance", c.distance, d.distance);
+  Put(n, "tolerance", c.tolerance, d.tolerance);
+  Put(n, "augmented", c.augmented, d.augmented);
   if (!c.obstacles.empty()) {
     YAML::Node obstacles(YAML::NodeType::Sequence);
     for (const ObstacleSpec& o : c.obstacles) obstacles.push_back(ObstacleNode(o, base_dir));

@@ -80,8 +80,10 @@ class ContactMeter {
     s->object_contacts = cs.object_contacts;
     s->obstacle_contacts = cs.obstacle_contacts;
     s->max_penetration = cs.max_penetration;
+    s->min_gap = cs.min_gap;
   }
   double distance() const { return world_.distance(); }
+  double tolerance() const { return world_.tolerance(); }
 
  private:
   // All objects' vertices and surfaces in one numbering, as the tracker's world has them.
@@ -533,10 +535,11 @@ int RunRegister(const RegisterArgs& args) {
       }
     }
     const double D = measure_contacts ? meter.distance() : tracker->collision()->distance();
+    const double T = measure_contacts ? meter.tolerance() : tracker->collision()->tolerance();
     std::printf("Contacts%s: deepest penetration %.3f mm (frame %d), mean over frames %.3f mm; D = %.3g mm%s\n",
                 measure_contacts ? " (collision off, measured only)" : "", deepest * 1e3, deepest_frame,
                 rows.empty() ? 0.0 : 1e3 * sum / rows.size(), D * 1e3,
-                deepest > D ? ": the surfaces crossed" : "");
+                deepest > T ? ": deeper than collision.tolerance" : "");
   }
   if (!tracker->original_vertices(0).empty()) {
     std::vector<FractureFrame> fracture(rows.size());

@@ -50,7 +50,7 @@ const char kStatsHeader[] =
     "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
     "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
     "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
-    "object_contacts,obstacle_contacts,max_penetration_mm,t_collision_ms,stopped_by,"
+    "object_contacts,obstacle_contacts,max_penetration_mm,min_gap_mm,t_collision_ms,stopped_by,"
     "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
     "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,message\n";
@@ -84,8 +84,8 @@ std::string StatsRow(size_t i, const FrameRow& row) {
     std::snprintf(buf, sizeof(buf), "%s%.4f", p ? ";" : "", row.piece_errors[p].mean * 1e3);
     os << buf;
   }
-  std::snprintf(buf, sizeof(buf), ",%.6g,%d,%d,%d,%.4f,%.3f", s.final.collision, s.contacts,
-                s.object_contacts, s.obstacle_contacts, s.max_penetration * 1e3,
+  std::snprintf(buf, sizeof(buf), ",%.6g,%d,%d,%d,%.4f,%.4f,%.3f", s.final.collision, s.contacts,
+                s.object_contacts, s.obstacle_contacts, s.max_penetration * 1e3, s.min_gap * 1e3,
                 s.time.collision * 1e3);
   os << buf;
   std::snprintf(buf, sizeof(buf), ",%s,%d,%d,%d,%.3f,%.3f,%.3f,%.3f,%.3f", s.stopped_by.c_str(),
@@ -227,13 +227,19 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   }
   double deepest = 0.0;
   int contacts = 0;
+  json gaps = json::array(), penetrations = json::array();
   for (const FrameRow& r : rows) {
     deepest = std::max(deepest, r.summary.max_penetration);
     contacts = std::max(contacts, r.summary.contacts);
+    gaps.push_back(number(r.summary.min_gap * 1e3));
+    penetrations.push_back(number(r.summary.max_penetration * 1e3));
   }
   if (contacts > 0 || deepest > 0) {
+    // Per frame from the same signed gaps: penetration_mm = max(0, -min_gap_mm).
     j["contacts"] = {{"max_per_frame", contacts},
                      {"max_penetration_mm", number(deepest * 1e3)},
+                     {"min_gap_mm", gaps},
+                     {"penetration_mm", penetrations},
                      {"collision", tracker.collision() != nullptr}};
   }
   json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
