@@ -92,7 +92,8 @@ TEST(HandPress, TheHandIsAnOccluderAndNoElementInverts) {
 TEST(HandPress, WithoutOccludersTheBallClimbsIntoTheHand) {
   const PressRun run = RunHandPress([](Scene* s) { s->registration.data.occluders = false; });
   EXPECT_EQ(run.occluded_from_press, 0);
-  // Where it ends is chaotic (the pull of a hand the body cannot follow): 27-31 mm measured.
+  // Where it ends is chaotic (the pull of a hand the body cannot follow)
+  // (docs/notes/2026-11-29-occluders-and-inversion.md).
   EXPECT_GT(run.worst_top, 0.020);
 }
 

@@ -360,7 +360,8 @@ Vector12 ElasticModel::Gather(const Vertices& x, int e) const {
 void ElasticModel::UpdateRotations(const Vertices& x) {
   if (type_ == ElasticModelType::kLinear) return;
   const int n = num_elements();
-  // A team from 1024 elements on (~0.1 ms of polar steps): below, its start costs more.
+  // A team only from 1024 elements on: below, its start costs more than the polar steps
+  // (docs/notes/2026-11-29-threads.md).
 #pragma omp parallel for schedule(static) if (n >= 1024)
   for (int e = 0; e < n; ++e) {
     Eigen::Matrix<double, 3, 4> xe;
