@@ -127,10 +127,7 @@ struct Sample<energy::InversionBarrier> {
     x.resize(4, 3);
     const Eigen::Vector3d X0 = rest.X.segment<3>(0), shift = RandomPoint(rng, 0.1);
     for (int c = 0; c < 4; ++c) x.row(c) = (A * (rest.X.segment<3>(3 * c) - X0) + X0 + shift).transpose();
-    block.vertices = {{0, 1, 2, 3}};
-    block.weight = 1.5;
-    block.rest = &rest;
-    block.threshold = 0.2;
+    block = energy::InversionBarrier({{0, 1, 2, 3}}, rest, 1.5, 0.2);
   }
   Sample(const Sample&) = delete;
 };

@@ -99,7 +99,7 @@ void ContactPotential::AddHessian(const Vertices& x,
     if (!Active(block, x)) return;
     // k J^T J: exact for the penalty while the normal is held (the residual is linear in x).
     energy::Linearization<Block> share;
-    energy::Linearize(block, none, x, &share);
+    if (!energy::Linearize(block, none, x, &share) || share.scale == 0.0) return;
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
         const Eigen::Matrix3d& h = share.hessian[i * n + j];

@@ -32,9 +32,13 @@ double VolumeRatio(const ElementRest& rest, const double* const* x) {
   return (x1 - x0).dot((x2 - x0).cross(x3 - x0)) * rest.dm_inv.determinant();
 }
 
+InversionBarrier::InversionBarrier(const std::array<int, 4>& vertices_in, const ElementRest& rest_in,
+                                   double weight_in, double threshold_in)
+    : vertices(vertices_in), weight(weight_in), rest(&rest_in), threshold(threshold_in),
+      wall(threshold_in / rest_in.dm_inv.determinant()) {}
+
 bool InversionBarrier::Evaluate(const double* const* x, double* r, double** J) const {
-  // Most elements are far from the wall: decided from the volume alone, without F.
-  if (VolumeRatio(*rest, x) >= threshold) {
+  if (Inactive(x)) {
     r[0] = 0.0;
     for (int i = 0; i < 4; ++i) {
       if (J != nullptr && J[i] != nullptr) std::fill(J[i], J[i] + 3, 0.0);
@@ -76,18 +80,19 @@ bool InversionBarrier::Evaluate(const double* const* x, double* r, double** J) c
 
 bool InversionBarrier::SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
                                    Eigen::Matrix3d* hessian, TangentProjection projection) const {
-  const Eigen::Matrix<double, 3, 4> B = ShapeGradients(*rest);
-  const Eigen::Matrix3d F = Deformation(B, x);
-  const double ratio = F.determinant();
   for (int i = 0; i < 4; ++i) gradient[i].setZero();
   if (hessian != nullptr) {
     for (int k = 0; k < 16; ++k) hessian[k].setZero();
   }
+  *energy = 0.0;
+  if (Inactive(x)) return true;
+  const Eigen::Matrix<double, 3, 4> B = ShapeGradients(*rest);
+  const Eigen::Matrix3d F = Deformation(B, x);
+  const double ratio = F.determinant();
   if (!(ratio > 0.0)) {
     *energy = std::numeric_limits<double>::infinity();
     return true;
   }
-  *energy = 0.0;
   if (ratio >= threshold) return true;
   const double c = rest->volume * rest->mu;
   double phi = 0, d1 = 0, d2 = 0;

@@ -27,7 +27,23 @@ struct InversionBarrier {
   double weight = 1.0;
   const ElementRest* rest = nullptr;
   double threshold = 0.2;  // j: the volume ratio below which the barrier acts, in (0, 1]
+  double wall = 0.0;       // j det D_m: the triple product det D_s below which it acts
 
+  InversionBarrier() = default;
+  InversionBarrier(const std::array<int, 4>& vertices, const ElementRest& rest, double weight, double threshold);
+
+  // Most elements are far from the wall: their residual and Jacobian are zero, which one
+  // triple product of the positions tells, without F or the rest state (energy/term.h).
+  bool Inactive(const double* const* x) const {
+    const double* a = x[0];
+    const double e[3][3] = {{x[1][0] - a[0], x[1][1] - a[1], x[1][2] - a[2]},
+                            {x[2][0] - a[0], x[2][1] - a[1], x[2][2] - a[2]},
+                            {x[3][0] - a[0], x[3][1] - a[1], x[3][2] - a[2]}};
+    const double triple = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                          e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                          e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    return triple >= wall;
+  }
   bool Evaluate(const double* const* x, double* r, double** J) const;
   // e = V mu phi(J), phi = (j - J)^2 log(j / J); its Hessian V mu B^T (phi'' g g^T + phi' H_J) B
   // (g = vec cof F, H_J the Hessian of det F, B = dvec F / dx); the projection clamps the

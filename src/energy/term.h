@@ -113,6 +113,14 @@ template <class T, class = void>
 struct HasOffset : std::false_type {};
 template <class T>
 struct HasOffset<T, std::void_t<decltype(std::declval<const T&>().Offset())>> : std::true_type {};
+// Whether T can tell cheaply that its residual and Jacobian are zero at x (Inactive(x)):
+// Linearize then skips the block's evaluation and leaves its Hessian unwritten.
+template <class T, class = void>
+struct HasInactive : std::false_type {};
+template <class T>
+struct HasInactive<T, std::void_t<decltype(std::declval<const T&>().Inactive(
+                          std::declval<const double* const*>()))>> : std::true_type {};
+
 template <class T>
 double OffsetValue(const T& block, const Loss& loss) {
   if constexpr (HasOffset<T>::value) {
@@ -132,6 +140,30 @@ std::array<const double*, T::kVertices> StencilPositions(const T& block, const V
   return p;
 }
 
+// The value of a block whose residual is zero (Inactive).
+template <class T>
+double InactiveValue(const T& block, const Loss& loss) {
+  double rho[3];
+  loss.Evaluate(0.0, rho);
+  return 0.5 * block.weight * rho[0] - OffsetValue(block, loss);
+}
+
+// An inactive block's linearization: its value, a zero scale and gradient, the Hessian left
+// unwritten (a zero scale says it adds nothing).
+template <class T, class Out>
+bool SkipInactive(const T& block, const Loss& loss, const std::array<const double*, T::kVertices>& p,
+                  Out* out) {
+  if constexpr (HasInactive<T>::value) {
+    if (block.Inactive(p.data())) {
+      out->value = InactiveValue(block, loss);
+      out->scale = 0.0;
+      for (auto& g : out->gradient) g.setZero();
+      return true;
+    }
+  }
+  return false;
+}
+
 // |r|^2 added in residual order: BlockValue and Linearize compute a block's value the same
 // way (a back end's energy from its linearization is Problem::Evaluate's).
 template <int m>
@@ -145,6 +177,9 @@ double SquaredSum(const double* r) {
 template <class T>
 double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
   const auto p = StencilPositions(block, x);
+  if constexpr (HasInactive<T>::value) {
+    if (block.Inactive(p.data())) return InactiveValue(block, loss);
+  }
   double s = 0.0;
   if constexpr (HasNormal<T>::value) {
     if (!block.Normal(p.data(), &s, nullptr, nullptr)) return 0.0;
@@ -160,8 +195,9 @@ double BlockValue(const T& block, const Loss& loss, const Vertices& x) {
 
 // A block's share of the gradient and of the Gauss-Newton Hessian at x: with the loss
 // reweighting the residual (iteratively reweighted least squares, as Ceres does for losses
-// that bend down), g_i = w rho' J_i^T r and H_ij = w rho' J_i^T J_j, i, j over the stencil. `scale` = w rho' (0: the block adds nothing,
-// and gradient and hessian are zero).
+// that bend down), g_i = w rho' J_i^T r and H_ij = w rho' J_i^T J_j, i, j over the stencil.
+// `scale` = w rho' (0: the block adds nothing; its gradient is zero and its Hessian is not to
+// be read).
 template <class T>
 struct Linearization {
   static constexpr int kN = T::kVertices;
@@ -194,12 +230,13 @@ bool Linearize(const T& block, const Loss& loss, const Vertices& x, Linearizatio
     }
     return true;
   }
+  const auto p = StencilPositions(block, x);
+  if (SkipInactive(block, loss, p, out)) return true;
   using Jacobian = Eigen::Matrix<double, m, 3, Eigen::RowMajor>;
   Eigen::Matrix<double, m, 1> r;
   std::array<Jacobian, n> J;
   std::array<double*, n> Jp;
   for (int i = 0; i < n; ++i) Jp[i] = J[i].data();
-  const auto p = StencilPositions(block, x);
   out->scale = 0.0;
   out->value = 0.0;
   if (!block.Evaluate(p.data(), r.data(), Jp.data())) return false;
@@ -264,6 +301,7 @@ bool LinearizeSecondOrder(const T& block, const Loss& loss, const Vertices& x, C
                 "a block type whose residual is not affine in x provides SecondOrder");
   if (curvature == Curvature::kGaussNewton) return Linearize(block, loss, x, out, with_hessian);
   const auto p = StencilPositions(block, x);
+  if (SkipInactive(block, loss, p, out)) return true;
   out->scale = 0.0;
   out->value = 0.0;
   double e = 0.0;

@@ -69,12 +69,9 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
     auto* barrier = &barrier_blocks_;
     for (const ObjectState& o : state.objects) {
       for (int e = 0; e < o.model.num_elements(); ++e) {
-        energy::InversionBarrier b;
-        for (int k = 0; k < 4; ++k) b.vertices[k] = o.model.tets()(e, k) + o.offset;
-        b.weight = w * options.weights.barrier;
-        b.rest = &o.model.rest(e);
-        b.threshold = options.weights.barrier_volume;
-        barrier->push_back(b);
+        std::array<int, 4> v;
+        for (int k = 0; k < 4; ++k) v[k] = o.model.tets()(e, k) + o.offset;
+        barrier->emplace_back(v, o.model.rest(e), w * options.weights.barrier, options.weights.barrier_volume);
       }
     }
     *barrier_->mutable_blocks() = barrier_blocks_;
