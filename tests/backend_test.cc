@@ -1282,10 +1282,6 @@ TEST(Backends, SameMinimumFromSoftToStiff) {
       solver.inner_tolerance = 1e-14;
       solver.step_tolerance = 0.0;  // only the energy criterion, as Ceres
       solver.predict_motion = false;
-      // Without the inversion barrier: at E = 100 Pa the data crush elements into it, and the
-      // fast back end's Gauss-Newton steps stall against the wall at several times Ceres'
-      // energy (docs/notes/2026-11-29-occluders-and-inversion.md).
-      scene.registration.weights.barrier = 0.0;
       ASSERT_TRUE(Tracker::Create(scene, &tracker[b]).ok());
     }
     double worst = 0.0, worst_energy = 0.0, worst_error = 0.0;
@@ -1302,12 +1298,17 @@ TEST(Backends, SameMinimumFromSoftToStiff) {
       worst = std::max(worst, (x1 - x0).rowwise().norm().maxCoeff());
       const double e0 = summary[0].final.total(), e1 = summary[1].final.total();
       worst_energy = std::max(worst_energy, std::abs(e1 - e0) / e0);
+      // At 100 Pa the data crush elements into the inversion barrier: Ceres' steps (Gauss-
+      // Newton on the barrier's residual) stall against it, the fast back end's (its projected
+      // Newton Hessian) do not. It must end no higher.
+      if (E < 1e3) EXPECT_LE(e1, e0 * (1.0 + 1e-6)) << "E = " << E << ", frame " << f;
       const double a0 = ComputeVertexErrors(x0, truth[f]).all.mean;
       const double a1 = ComputeVertexErrors(x1, truth[f]).all.mean;
       worst_error = std::max(worst_error, std::abs(a1 - a0) / a0);
     }
     std::printf("E = %.0e Pa: largest vertex difference %.2e m, energies %.1e and errors %.1e apart (relative)\n",
                 E, worst, worst_energy, worst_error);
+    if (E < 1e3) continue;
     // Each back end stops where a step changes the energy by less than 1e-14: the vertices
     // agree to well under a micrometre, the energies and errors to far below a percent.
     EXPECT_LT(worst, 1e-5) << "E = " << E;

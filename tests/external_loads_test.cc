@@ -70,6 +70,7 @@ TEST_P(ExternalLoadsBackend, UnseenHalfSagsAsTheForwardSolveSays) {
     FrameSummary summary;
     EXPECT_TRUE(tracker->Track(cloud, &summary).ok());
     EXPECT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+    std::printf("%s: %s\n", summary.stopped_by.c_str(), summary.message.c_str());
     EXPECT_EQ(summary.final.load != 0.0, loads) << "the load term is there exactly when on";
     double worst = 0.0;
     for (int v : unseen) worst = std::max(worst, (tracker->vertices(0).row(v) - equilibrium.x.row(v)).norm());

@@ -1,6 +1,7 @@
 // A hand in the cloud (issues 38 and 39), on the bundled hand_press sequence: the hand's points
-// are occluders and do not pull the ball into the hand, and the inversion barrier keeps every
-// element upright. Each switched off shows the failure it prevents.
+// are occluders and do not pull the ball into the hand, the inversion barrier keeps every
+// element upright, and backtracking between outer iterations lets the pressed frames stop on a
+// criterion rather than cycle to the cap. Each switched off shows the failure it prevents.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -30,6 +31,8 @@ struct PressRun {
   double mean_error = 0.0;  // m: mean over the frames of the mean vertex error
   int most_inverted = 0;    // elements with a negative volume, most in a frame
   int occluded_from_press = 1 << 30;  // occluder points, fewest in a pressed frame
+  int capped = 0;                     // frames at solver.max_outer_iterations
+  int backtracks = 0;                 // outer-iteration moves halved, over the frames
 };
 
 int InvertedElements(const TetMesh& mesh, const Vertices& x) {
@@ -69,8 +72,12 @@ PressRun RunHandPress(void (*edit)(Scene*)) {
     const double top = x.col(2).maxCoeff() - truth.positions.col(2).maxCoeff();
     const double error = ComputeVertexErrors(x, truth).all.mean;
     const int inverted = InvertedElements(tracker->mesh(0), x);
-    std::printf("frame %d: error %.2f mm, top above the truth's %.2f mm, %d inverted, %d occluder points\n", f,
-                error * 1e3, top * 1e3, inverted, s.occluded_points);
+    std::printf("frame %d: error %.2f mm, top above the truth's %.2f mm, %d inverted, %d occluder points, "
+                "stopped by %s after %d outer iterations (%d halvings)\n",
+                f, error * 1e3, top * 1e3, inverted, s.occluded_points, s.stopped_by.c_str(), s.outer_iterations,
+                s.backtracks);
+    run.capped += s.termination == TerminationType::kMaxIterations;
+    run.backtracks += s.backtracks;
     run.worst_top = std::max(run.worst_top, top);
     run.mean_error += error / kFrames;
     run.most_inverted = std::max(run.most_inverted, inverted);
@@ -87,6 +94,16 @@ TEST(HandPress, TheHandIsAnOccluderAndNoElementInverts) {
   // points instead of climbing into them.
   EXPECT_LT(run.worst_top, 0.015);
   EXPECT_LT(run.mean_error, 0.008);
+  // The press's outer iterations cycle between two shapes; halving their moves turns the
+  // cycle into a descent that stops.
+  EXPECT_GT(run.backtracks, 0);
+  EXPECT_LE(run.capped, 1);
+}
+
+TEST(HandPress, WithoutBacktrackingThePressedFramesCycleToTheCap) {
+  const PressRun run = RunHandPress([](Scene* s) { s->registration.solver.backtrack = false; });
+  EXPECT_EQ(run.backtracks, 0);
+  EXPECT_GE(run.capped, 3);
 }
 
 TEST(HandPress, WithoutOccludersTheBallClimbsIntoTheHand) {

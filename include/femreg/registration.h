@@ -247,6 +247,9 @@ struct SolverOptions {
   Preconditioner preconditioner = Preconditioner::kAuto;
   // Start each frame from a constant-velocity extrapolation of the last two frames.
   bool predict_motion = true;
+  // From the held pair set on, halve an outer iteration's move while the energy with the pairs
+  // it finds rose (docs/theory/stopping.md#backtracking). Not with fracture on.
+  bool backtrack = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
   int rigid_iterations = 30;
   bool IsValid(std::string* error) const;
@@ -357,13 +360,16 @@ struct FrameSummary {
   // vertex: Tracker::external_forces.
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;
+  int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
   // Fast back end: factorizations (or multigrid hierarchies built), preconditioner
   // applications, conjugate-gradient iterations.
   int factorizations = 0, linear_solves = 0, pcg_iterations = 0;
   // Which criterion ended the frame: "step" (solver.step_tolerance), "bulk_step"
   // (solver.bulk_step_tolerance), "energy" or
   // "energy_rise" (solver.relative_energy_tolerance: the energy changed by less than it, or
-  // rose by more without motion, see there), or the termination's name otherwise.
+  // rose by more without motion, see there), "backtrack" (the energy with the pairs found
+  // after an outer iteration rose, and so it did along an eighth of its move: the frame keeps
+  // that iteration's start; docs/theory/stopping.md), or the termination's name otherwise.
   std::string stopped_by;
   int model_to_cloud = 0, cloud_to_model = 0, rejected = 0;  // last outer iteration
   double rms_residual = 0.0;      // m

@@ -132,6 +132,8 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["final_energy"] = EnergyDict(s.final);
   d["outer_iterations"] = s.outer_iterations;
   d["inner_iterations"] = s.inner_iterations;
+  d["backtracks"] = s.backtracks;
+  d["stopped_by"] = s.stopped_by;
   d["model_to_cloud"] = s.model_to_cloud;
   d["cloud_to_model"] = s.cloud_to_model;
   d["rejected"] = s.rejected;
@@ -471,6 +473,7 @@ PYBIND11_MODULE(_femreg, m) {
       .def_readwrite("time_budget_s", &SolverOptions::time_budget_s)
       .def_readwrite("num_threads", &SolverOptions::num_threads)
       .def_readwrite("predict_motion", &SolverOptions::predict_motion)
+      .def_readwrite("backtrack", &SolverOptions::backtrack)
       .def_readwrite("rigid_prealign", &SolverOptions::rigid_prealign)
       .def_readwrite("rigid_iterations", &SolverOptions::rigid_iterations);
   EnumProperty(solver, "backend", &SolverOptions::backend, "solver.backend",

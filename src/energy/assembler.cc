@@ -403,7 +403,12 @@ void Assembler::AssembleGaussNewton(const Problem& problem, const Vertices& x, b
   auto varying = [&](const auto& set) { return !constant(set); };
   auto always = [](const auto&) { return true; };
   auto gauss_newton = [&x](const auto& block, const Loss& loss, auto* out, bool with_hessian) {
-    return Linearize(block, loss, x, out, with_hessian);
+    using T = std::decay_t<decltype(block)>;
+    if constexpr (HasNewtonCurvature<T>::value) {
+      return LinearizeSecondOrder(block, loss, x, Curvature::kProjected, out, with_hessian);
+    } else {
+      return Linearize(block, loss, x, out, with_hessian);
+    }
   };
   g->setZero(3 * num_vertices_);
   std::vector<double>* set_energy = first && energy != nullptr ? &set_energy_ : nullptr;

@@ -51,7 +51,8 @@ class Assembler {
   // Changes whenever the pattern is rebuilt (a factorization's analysis is then stale).
   uint64_t pattern_revision() const { return pattern_revision_; }
 
-  // The Gauss-Newton system (energy/term.h's Linearize) at x into H and g, the fixed rows
+  // The Gauss-Newton system (energy/term.h's Linearize; a kNewtonCurvature block type's
+  // projected Newton Hessian instead) at x into H and g, the fixed rows
   // applied and a whisper of Tikhonov (1e-12 of the largest diagonal entry) for degrees of
   // freedom no term references. first: the sets whose Jacobian is constant and that have
   // no robust loss are assembled anew and kept (later calls reuse their H part, within one

@@ -23,6 +23,9 @@ struct InversionBarrier {
   static constexpr int kResiduals = 1;
   static constexpr int kVertices = 4;
   static constexpr bool kConstantJacobian = false;
+  // Gauss-Newton's J^T J falls short of the curvature near the wall by a factor 2 log(j / J):
+  // its steps run into the wall and the line search cuts them. Newton's (projected) instead.
+  static constexpr bool kNewtonCurvature = true;
   std::array<int, 4> vertices = {{0, 0, 0, 0}};
   double weight = 1.0;
   const ElementRest* rest = nullptr;

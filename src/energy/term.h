@@ -113,6 +113,14 @@ template <class T, class = void>
 struct HasOffset : std::false_type {};
 template <class T>
 struct HasOffset<T, std::void_t<decltype(std::declval<const T&>().Offset())>> : std::true_type {};
+// Whether a Gauss-Newton system takes T's projected Newton Hessian instead of J^T J
+// (T::kNewtonCurvature).
+template <class T, class = void>
+struct HasNewtonCurvature : std::false_type {};
+template <class T>
+struct HasNewtonCurvature<T, std::void_t<decltype(T::kNewtonCurvature)>>
+    : std::bool_constant<T::kNewtonCurvature> {};
+
 // Whether T can tell cheaply that its residual and Jacobian are zero at x (Inactive(x)):
 // Linearize then skips the block's evaluation and leaves its Hessian unwritten.
 template <class T, class = void>

@@ -44,6 +44,9 @@ constexpr double kRiseMoveLimit = 1.0;
 // (docs/notes/2026-11-28-figures-from-code-comments.md). With solver.relative_energy_tolerance at
 // this limit or above, no rise stops a frame.
 constexpr double kRiseEnergyLimit = 0.1;
+// Halvings of an outer iteration's move tried when the energy it reached, with its new pairs,
+// is more than kRiseEnergyLimit above its start's (Backtrack): down to an eighth of the move.
+constexpr int kBacktrackHalvings = 3;
 
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
@@ -235,6 +238,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   warm_triangles.clear();  // a new cloud
   paired_vertices.clear();
   rise_from = std::max(1, options.data.hold_pairs_after);
+  merit = std::numeric_limits<double>::infinity();
   double previous_energy = std::numeric_limits<double>::infinity();
   for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
     // Until the pair set is held, the occluders are decided again where the model now is: a
@@ -298,26 +302,27 @@ bool UpdateContactMultipliers(TrackerState* state) {
 
 }  // namespace
 
-bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
-                                   std::vector<DataPair>* pairs, double* previous_energy,
-                                   Vertices* previous, FrameSummary* s) {
-  const RegistrationOptions& options = state.options;
-  const auto t_outer = Clock::now();
-  femreg::OuterIteration row;
-  row.iteration = k + 1;
-  auto t0 = Clock::now();
+void Tracker::Impl::UpdateElementRotations(FrameSummary* s) {
+  const auto t0 = Clock::now();
   // Only the corotational element reads rotations: what is off costs nothing (neo-Hookean
   // objects have none to hold; the fracture step refreshes its own).
-  if (options.regularizer == Regularizer::kCorotational) {
+  if (state.options.regularizer == Regularizer::kCorotational) {
     for (ObjectState& o : state.objects) {
       if (o.model.type() == ElasticModelType::kNeoHookean) continue;
       o.model.UpdateRotations(state.x.middleRows(o.offset, o.mesh.num_vertices()));
     }
   }
   s->time.rotations += Seconds(t0);
+}
 
-  t0 = Clock::now();
-  PairCounts counts;
+bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, std::vector<DataPair>* pairs,
+                                     PairCounts* counts_out, femreg::OuterIteration* row_out,
+                                     FrameSummary* s) {
+  const RegistrationOptions& options = state.options;
+  femreg::OuterIteration& row = *row_out;
+  PairCounts& counts = *counts_out;
+  counts = PairCounts();
+  auto t0 = Clock::now();
   const int hold = options.data.hold_pairs_after;
   FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
             &paired_vertices, hold > 0 && k >= hold);
@@ -357,9 +362,85 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // grows with the residual), and that iteration brings the shape near (docs/theory/equilibrium.md).
   const bool warm_start = options.forces.estimate && k == 0;
   frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start);
+  return true;
+}
+
+bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
+  // Not with fracture on: a piece coming apart raises the energy of the pairs it leaves, and
+  // its move is the progress (as for the occluders and the reciprocity trim).
+  return state.options.solver.backtrack && !warm_start && !state.fracture && k >= rise_from &&
+         std::isfinite(merit) && merit_x.rows() == state.x.rows();
+}
+
+bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, std::vector<DataPair>* pairs,
+                              PairCounts* counts, femreg::OuterIteration* row, double* previous_energy,
+                              FrameSummary* s) {
+  const RegistrationOptions& options = state.options;
+  auto t0 = Clock::now();
+  const double allowed = merit + options.solver.relative_energy_tolerance * std::abs(merit);
+  double at = frame_problem.problem().Evaluate(state.x).total();
+  s->time.evaluation += Seconds(t0);
+  if (at <= allowed) return true;
+  const double rose_to = at;
+  const Vertices reached = state.x;
+  for (int h = 1; h <= kBacktrackHalvings; ++h) {
+    state.x = merit_x + std::ldexp(1.0, -h) * (reached - merit_x);
+    UpdateElementRotations(s);
+    if (!PrepareIteration(k, fc, pairs, counts, row, s)) return false;
+    t0 = Clock::now();
+    at = frame_problem.problem().Evaluate(state.x).total();
+    s->time.evaluation += Seconds(t0);
+    ++s->backtracks;
+    if (at <= allowed) {
+      *previous_energy = std::numeric_limits<double>::infinity();  // that of another step
+      return true;
+    }
+  }
+  // No shorter step lowers it: the outer iterations cannot do better than that start (an
+  // energy criterion: with relative_energy_tolerance 0, none stops a frame), unless a contact
+  // there is deeper than the tolerance (its multiplier was lower). Else on from the move's
+  // end, held against nothing.
+  auto go_on = [&] {
+    state.x = reached;
+    merit = std::numeric_limits<double>::infinity();
+    UpdateElementRotations(s);
+    return PrepareIteration(k, fc, pairs, counts, row, s);
+  };
+  if (!(options.solver.relative_energy_tolerance > 0)) return go_on();
+  state.x = merit_x;
+  UpdateElementRotations(s);
+  if (!PrepareIteration(k, fc, pairs, counts, row, s)) return false;
+  double deepest = 0.0;
+  if (state.collision) {
+    for (const Contact& c : state.contacts) deepest = std::max(deepest, state.collision->Penetration(c, state.x));
+  }
+  if (state.collision && deepest > state.collision->tolerance()) return go_on();
+  s->final = frame_problem.problem().Evaluate(state.x);
+  s->termination = TerminationType::kConverged;
+  s->stopped_by = "backtrack";
+  std::ostringstream os;
+  os << "the energy with the pairs found after the last outer iteration rose from " << merit << " to "
+     << rose_to << ", and along 1/" << (1 << kBacktrackHalvings)
+     << " of its move it still rose: the frame keeps that iteration's start";
+  s->message = os.str();
+  return false;
+}
+
+bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
+                                   std::vector<DataPair>* pairs, double* previous_energy,
+                                   Vertices* previous, FrameSummary* s) {
+  const RegistrationOptions& options = state.options;
+  const auto t_outer = Clock::now();
+  femreg::OuterIteration row;
+  row.iteration = k + 1;
+  PairCounts counts;
+  const bool warm_start = options.forces.estimate && k == 0;
+  UpdateElementRotations(s);
+  if (!PrepareIteration(k, fc, pairs, &counts, &row, s)) return false;
+  if (Backtracks(k, warm_start) && !Backtrack(k, fc, pairs, &counts, &row, previous_energy, s)) return false;
   const energy::Problem& problem = frame_problem.problem();
 
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   const double time_left = options.solver.time_budget_s > 0
                                ? std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame))
                                : 0.0;
@@ -368,6 +449,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   s->time.solve += Seconds(t0);
   row.before = report.before;
   if (k == 0) s->initial = row.before;
+  // The next outer iteration's energy, with what it finds, is held against this start's.
+  merit = warm_start ? std::numeric_limits<double>::infinity() : report.before.total();
+  merit_x = before_solve;
   s->time.assembly += report.assemble_s;
   s->time.factorization += report.factorize_s;
   s->time.linear_solve += report.linear_solve_s;
@@ -385,6 +469,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   row.after = report.after;
   const bool contacts_pending =
       state.collision && state.collision->augmented() && UpdateContactMultipliers(&state);
+  // New multipliers change the energy: the next start is not held against this one.
+  if (contacts_pending) merit = std::numeric_limits<double>::infinity();
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices
   // stay within (compared below with the mesh's edge and the cloud's sampling distance).
   const Eigen::VectorXd moves = (state.x - before_solve).rowwise().norm();
@@ -411,6 +497,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       frame_problem.BuildElastic(state);
       frame_problem.BuildFrameTerms(&state);
       state.contact_multipliers.clear();  // keyed by the old vertex numbering
+      merit = std::numeric_limits<double>::infinity();  // another mesh
       model_index.Reset();
       warm_triangles.clear();  // a new surface
       paired_vertices.clear();

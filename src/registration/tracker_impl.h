@@ -34,6 +34,20 @@ struct Tracker::Impl {
   // A frame that cannot be solved: the shape stays at state.x (held or predicted).
   void Hold(TerminationType t, const std::string& message, const PointIndex* index,
             Clock::time_point t_frame, FrameSummary* s);
+  // The corotational elements' rotations at state.x.
+  void UpdateElementRotations(FrameSummary* s);
+  // Pairs, loads, contacts and the equilibrium terms at state.x for outer iteration k; false
+  // when no pair is left (at k = 0 the summary says so).
+  bool PrepareIteration(int k, const FrameCloud& fc, std::vector<DataPair>* pairs, PairCounts* counts,
+                        femreg::OuterIteration* row, FrameSummary* s);
+  // Whether outer iteration k holds its start against the last one's (Backtrack).
+  bool Backtracks(int k, bool warm_start) const;
+  // From the held pair set on, the energy at state.x with the rotations, pairs and contacts it
+  // finds must not rise above the last solve's start (merit): else the move is halved back
+  // towards that start (docs/theory/stopping.md#backtracking). False: the frame stops (the
+  // summary says why).
+  bool Backtrack(int k, const FrameCloud& fc, std::vector<DataPair>* pairs, PairCounts* counts,
+                 femreg::OuterIteration* row, double* previous_energy, FrameSummary* s);
   // One outer iteration k; false when the frame stops (the summary says why).
   bool OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
                       std::vector<DataPair>* pairs, double* previous_energy, Vertices* previous,
@@ -49,6 +63,9 @@ struct Tracker::Impl {
   // The first outer iteration of this frame whose energy rise may stop it: where the pair
   // set is held (data.hold_pairs_after), again after a fracture split.
   int rise_from = 1;
+  // The last outer iteration's start and its energy with what it found (Backtrack).
+  Vertices merit_x;
+  double merit = 0.0;
 };
 
 }  // namespace femreg

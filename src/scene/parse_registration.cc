@@ -173,7 +173,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
                  "inner_tolerance", "step_tolerance", "bulk_step_tolerance", "max_pcg_iterations",
                  "preconditioner", "time_budget_s", "trust_region", "linear_solver", "threads",
-                 "rigid_prealign", "rigid_iterations", "predict_motion", "backend"});
+                 "rigid_prealign", "rigid_iterations", "predict_motion", "backtrack", "backend"});
     SolverOptions& o = r.solver;
     if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
     if (s.Has("max_inner_iterations")) o.max_inner_iterations = s["max_inner_iterations"].AsInt();
@@ -202,6 +202,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (s.Has("threads")) o.num_threads = s["threads"].AsInt();
     if (s.Has("predict_motion")) o.predict_motion = s["predict_motion"].AsBool();
+    if (s.Has("backtrack")) o.backtrack = s["backtrack"].AsBool();
     if (s.Has("backend")) {
       o.backend = ParseEnum(s["backend"],
                             std::vector<SolverBackend>{SolverBackend::kCeres, SolverBackend::kFast});

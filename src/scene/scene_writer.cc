@@ -383,6 +383,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   }
   Put(solver, "threads", s.num_threads, d.solver.num_threads);
   Put(solver, "predict_motion", s.predict_motion, d.solver.predict_motion);
+  Put(solver, "backtrack", s.backtrack, d.solver.backtrack);
   Put(solver, "rigid_prealign", s.rigid_prealign, d.solver.rigid_prealign);
   Put(solver, "rigid_iterations", s.rigid_iterations, d.solver.rigid_iterations);
   PutMap(n, "solver", solver);

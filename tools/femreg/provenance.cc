@@ -70,6 +70,7 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                  {"preconditioner", ToString(s.preconditioner)},
                  {"threads", s.num_threads},
                  {"predict_motion", s.predict_motion},
+                 {"backtrack", s.backtrack},
                  {"rigid_prealign", s.rigid_prealign},
                  {"rigid_iterations", s.rigid_iterations}};
   return j;
