@@ -45,7 +45,7 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 // The V-cycle is an approximation of A^-1 to begin with, and PCG, in double with A itself,
 // corrects it (as mixed-precision AMG does, e.g. AmgX's float preconditioner for double
 // solves); what float sums cost is the V-cycle's symmetry beyond ~1e-8 relative
-// (tests/backend_test.cc), which PCG does not see at its tolerance; float sums made the product and
+// (tests/multigrid_test.cc), which PCG does not see at its tolerance; float sums made the product and
 // the V-cycle faster than double sums (docs/notes/2026-11-28-figures-from-code-comments.md).
 // Each column's sums run in a fixed order: the same result on any number of threads.
 void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorXd& v, int threads,
