@@ -25,6 +25,7 @@
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "io/io_internal.h"
+#include "registration/cloud_files.h"
 
 namespace femreg {
 namespace fuzz {

@@ -395,33 +395,6 @@ TEST_F(SceneTest, MissingSceneFile) {
   EXPECT_NE(status.message().find("nope.yaml"), std::string::npos);
 }
 
-TEST(RegistrationOptionsTest, NamesRoundTripAndValidation) {
-  for (RobustLoss v : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy,
-                       RobustLoss::kTukey}) {
-    RobustLoss parsed = RobustLoss::kNone;
-    ASSERT_TRUE(FromString(ToString(v), &parsed));
-    EXPECT_EQ(parsed, v);
-  }
-  LinearSolver solver;
-  EXPECT_FALSE(FromString("cholesky", &solver));
-  EXPECT_STREQ(ToString(TrustRegion::kLevenbergMarquardt), "levenberg_marquardt");
-
-  RegistrationOptions options;
-  std::string error;
-  EXPECT_TRUE(options.IsValid(&error)) << error;
-  options.data.loss_scale = -1;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_EQ(error, "data.loss_scale must be > 0 (got -1)");
-  options = RegistrationOptions();
-  options.solver.max_outer_iterations = 0;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_EQ(error.rfind("solver.max_outer_iterations", 0), 0u) << error;
-  options = RegistrationOptions();
-  options.data.model_to_cloud = options.data.cloud_to_model = false;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_EQ(error.rfind("data.model_to_cloud", 0), 0u) << error;
-}
-
 // A 3 x 3 x 3 grid of points with spacing 1: vertex (i, j, k) is 9 k + 3 j + i.
 Vertices Grid() {
   Vertices v(27, 3);

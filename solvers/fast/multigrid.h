@@ -122,7 +122,7 @@ class Multigrid {
   // rounded to float is still symmetric: what changes is the operator itself, by a
   // relative 6e-8 per entry, far less than what separates it from A^-1 (PCG in double
   // solves with A itself). The products also sum in float (with SSE 4 lanes at a time;
-  // FloatBlockProduct and GatherNodeFloat in the .cc), which leaves the V-cycle symmetric
+  // FloatBlockProduct and GatherNodeFloat in the .cc files), which leaves the V-cycle symmetric
   // to ~1e-8 relative rather than to double round-off: still positive definite, and far
   // inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g. AmgX's float
   // preconditioner for double solves, does the same). Level 0's system keeps the back

@@ -104,7 +104,7 @@ class SupernodalSolve {
   // updates a row tile at a time, its dense part by panels of as many columns (right-looking: the
   // panel's diagonal block, the rows below it, the columns right of it). The tasks of a phase are
   // independent and run on the whole team; the tiles depend on the supernode's size alone. Phases
-  // and tasks: TiledTasks (supernodal_solve.cc). In the subtrees, on one thread each, the whole
+  // and tasks: TiledTasks (supernodal_factorize.cc). In the subtrees, on one thread each, the whole
   // supernode's BLAS calls are faster (docs/notes/2026-11-28-figures-from-code-comments.md).
   bool Tiled(int s) const;
   int TileRows(int s) const;  // a multiple of tile_rows_: at most kMaxTiles row tiles

@@ -11,9 +11,6 @@
 
 namespace femreg {
 
-struct PointCloud;
-struct SensorPose;
-
 namespace internal {
 
 // A scalar type of a binary file (VTK legacy BINARY, PCD binary, PLY binary): its size in
@@ -81,10 +78,19 @@ Status ReadTetGenFiles(const std::string& path, RawTetMesh* raw);
 Status ReadMeditFile(const std::string& path, RawTetMesh* raw);
 Status ReadVtkLegacyFile(const std::string& path, RawTetMesh* raw);
 
-// Point clouds (cloud_readers.cc): PCD and PLY, every header count checked against the
-// file's length first. *sensor receives the PCD VIEWPOINT (may be null).
-Status ReadPcdFile(const std::string& path, PointCloud* cloud, SensorPose* sensor);
-Status ReadPlyFile(const std::string& path, PointCloud* cloud);
+// A point cloud as a file has it, before registration makes it a PointCloud
+// (registration/cloud_files.h).
+struct RawCloud {
+  std::vector<double> xyz;      // 3 per point
+  std::vector<double> normals;  // 3 per point, or empty
+  std::vector<int> labels;      // 1 per point, or empty
+  bool viewpoint_known = false;  // a PCD VIEWPOINT line
+  std::array<double, 3> origin = {0, 0, 0};
+  std::array<double, 4> orientation = {1, 0, 0, 0};  // w x y z, normalized
+};
+// PCD (pcd_reader.cc): ASCII, binary and binary_compressed, every header count checked
+// against the file's length first. PLY clouds: ReadPlyCloud (ply_reader.h).
+Status ReadPcdCloud(const std::string& path, RawCloud* cloud);
 
 // A fresh temporary file name in the folder of `path` (for write-and-rename).
 std::string TemporaryPathFor(const std::string& path);

@@ -1,4 +1,5 @@
-// Point clouds: the reader front end (PCD and PLY in io/cloud_readers.cc, text here), the
+// Point clouds: the reader front end (PCD and PLY read by io/pcd_reader.cc and
+// io/ply_reader.cc, converted here; text here), the
 // binary PCD writer (PCL) and the filters (PCL).
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>
@@ -20,7 +21,9 @@
 
 #include "femreg/point_cloud.h"
 #include "io/io_internal.h"
+#include "io/ply_reader.h"
 #include "io/text_tokens.h"
+#include "registration/cloud_files.h"
 
 namespace femreg {
 
@@ -63,6 +66,21 @@ PclCloud::Ptr ToPcl(const PointCloud& in) {
   out->height = 1;
   out->is_dense = true;
   return out;
+}
+
+// A cloud as io's readers found it, as a PointCloud.
+void Store(const internal::RawCloud& raw, PointCloud* cloud) {
+  const Eigen::Index n = static_cast<Eigen::Index>(raw.xyz.size() / 3);
+  cloud->points.resize(n, 3);
+  cloud->normals.resize(raw.normals.empty() ? 0 : n, 3);
+  cloud->labels.resize(raw.labels.empty() ? 0 : n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      cloud->points(i, k) = raw.xyz[3 * i + k];
+      if (!raw.normals.empty()) cloud->normals(i, k) = raw.normals[3 * i + k];
+    }
+    if (!raw.labels.empty()) cloud->labels(i) = raw.labels[i];
+  }
 }
 
 Status ReadText(const std::string& path, PointCloud* cloud) {
@@ -119,6 +137,32 @@ Status ReadText(const std::string& path, PointCloud* cloud) {
 }
 
 }  // namespace
+
+namespace internal {
+
+Status ReadPcdFile(const std::string& path, PointCloud* cloud, SensorPose* sensor) {
+  RawCloud raw;
+  const Status status = ReadPcdCloud(path, &raw);
+  if (!status.ok()) return status;
+  Store(raw, cloud);
+  if (sensor != nullptr) {
+    sensor->known = raw.viewpoint_known;
+    sensor->origin = Eigen::Vector3d(raw.origin[0], raw.origin[1], raw.origin[2]);
+    sensor->orientation = Eigen::Quaterniond(raw.orientation[0], raw.orientation[1],
+                                             raw.orientation[2], raw.orientation[3]);
+  }
+  return Status::Ok();
+}
+
+Status ReadPlyFile(const std::string& path, PointCloud* cloud) {
+  RawCloud raw;
+  const Status status = ReadPlyCloud(path, &raw);
+  if (!status.ok()) return status;
+  Store(raw, cloud);
+  return Status::Ok();
+}
+
+}  // namespace internal
 
 int DropNonFinite(PointCloud* cloud) {
   const bool normals = cloud->has_normals();

@@ -30,6 +30,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "provenance.h"
+#include "register_checks.h"
 #include "register_outputs.h"
 #include "femreg/collision.h"
 #include "femreg/eval.h"
@@ -55,103 +56,10 @@ using register_outputs::StatsRow;
 using register_outputs::SummaryJson;
 using register_outputs::ThrottledWrite;
 using register_outputs::Totals;
-
-// With --no-collision: the scene's collision section used only to measure, after each frame,
-// the contacts and the deepest penetration of the result (the tracker adds no contact term).
-class ContactMeter {
- public:
-  Status Init(const Scene& scene, const Tracker& tracker) {
-    std::vector<std::string> names;
-    for (const ObjectSpec& o : scene.objects) names.push_back(o.name);
-    Gather(tracker);
-    return world_.Init(scene.collision, names, surfaces_, x_);  // no pairs: every pair
-  }
-  void Measure(const Tracker& tracker, int frame, FrameSummary* s) {
-    const Eigen::Index before = x_.rows();
-    Gather(tracker);
-    if (x_.rows() != before) {  // fracture changed the topology
-      for (size_t i = 0; i < surfaces_.size(); ++i) world_.Rebuild(static_cast<int>(i), surfaces_[i], x_);
-    }
-    world_.SetFrame(frame);
-    std::vector<Contact> contacts;
-    world_.Detect(x_, 0.0, &contacts);
-    const ContactStats cs = world_.Evaluate(contacts, x_);
-    s->contacts = cs.contacts;
-    s->object_contacts = cs.object_contacts;
-    s->obstacle_contacts = cs.obstacle_contacts;
-    s->max_penetration = cs.max_penetration;
-    s->min_gap = cs.min_gap;
-  }
-  double distance() const { return world_.distance(); }
-  double tolerance() const { return world_.tolerance(); }
-
- private:
-  // All objects' vertices and surfaces in one numbering, as the tracker's world has them.
-  void Gather(const Tracker& tracker) {
-    int n = 0;
-    for (int i = 0; i < tracker.num_objects(); ++i) n += tracker.mesh(i).num_vertices();
-    x_.resize(n, 3);
-    surfaces_.clear();
-    int offset = 0;
-    for (int i = 0; i < tracker.num_objects(); ++i) {
-      const TetMesh& m = tracker.mesh(i);
-      x_.middleRows(offset, m.num_vertices()) = tracker.vertices(i);
-      surfaces_.push_back(m.surface.array() + offset);
-      offset += m.num_vertices();
-    }
-  }
-  CollisionWorld world_;
-  Vertices x_;
-  std::vector<Triangles> surfaces_;
-};
-
-// Scene keys that register would not use are refused, naming the key and what to use.
-// Clamps in `boundary` are used: Tracker::Create(scene) makes them hard anchors; gravity
-// and loads act in the registration energy (registration.loads).
-Status CheckRegisterKeys(const Scene& scene) {
-  const std::string file = scene.path.empty() ? "scene" : scene.path;
-  for (size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
-    const BoundaryConditionSpec& b = scene.boundary_conditions[i];
-    if (b.type == BoundaryConditionSpec::Type::kDisplacement) {
-      return Status::Error(b.selection.where + ": boundary[" + std::to_string(i) +
-                           "].displacement is not used by register (clamps are held as hard "
-                           "anchors); for a support that moves, use anchors with translations");
-    }
-  }
-  return Status::Ok();
-}
-
-// The diagonal of the meshes' rest bounding box (m).
-double MeshExtent(const Tracker& tracker) {
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  for (int i = 0; i < tracker.num_objects(); ++i) {
-    lo = lo.cwiseMin(tracker.mesh(i).rest.colwise().minCoeff().transpose());
-    hi = hi.cwiseMax(tracker.mesh(i).rest.colwise().maxCoeff().transpose());
-  }
-  return (hi - lo).norm();
-}
-
-// The units hint: warns once when the extent of the first frame's points as the tracker uses
-// them (`used`, PrepareCloudForTracking: after the mask, preprocess.scale and transform, the
-// crop, the plane removal and the outlier filter) and the meshes' differ by more than 10 times (a cloud in mm against
-// a mesh in m). Not the frame as read: a depth image of the whole room around a masked or
-// cropped object is no units mistake.
-void WarnUnits(const std::string& file, const PointCloud& used, double mesh_extent) {
-  const double extent = (used.points.colwise().maxCoeff() - used.points.colwise().minCoeff()).norm();
-  if (!(mesh_extent > 0) || !(extent > 0)) return;
-  const double ratio = extent / mesh_extent;
-  if (ratio <= 10.0 && ratio >= 0.1) return;
-  std::fprintf(stderr,
-               "femreg register: warning: the first cloud (%s) spans %.4g (bounding box diagonal "
-               "of the %d points used, after masks and preprocessing) and the meshes %.4g m: %.3g "
-               "times %s. Different units? Scale the clouds with registration.preprocess.scale "
-               "(e.g. 0.001 for mm) or the meshes with objects[].scale.%s\n",
-               file.c_str(), extent, used.size(), mesh_extent, ratio > 1 ? ratio : 1.0 / ratio,
-               ratio > 1 ? "larger" : "smaller",
-               ratio > 1 ? " If the cloud holds more than the objects, mask it (--mask-dir, "
-                           "registration.preprocess.mask_dir) or crop it (preprocess.crop)."
-                         : "");
-}
+using register_checks::CheckRegisterKeys;
+using register_checks::ContactMeter;
+using register_checks::MeshExtent;
+using register_checks::WarnUnits;
 
 int RunRegister(const RegisterArgs& args) {
   // From the start: a SIGTERM while the scene loads still ends with whole files and an

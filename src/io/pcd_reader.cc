@@ -1,4 +1,4 @@
-// PCD and PLY point clouds, read here rather than by PCL.
+// PCD point clouds (ASCII, binary, binary_compressed), read here rather than by PCL.
 //
 // PCL's PCDReader trusts the header: `FIELDS label x y z` against a SIZE/TYPE line of three
 // entries crashed it (SIGSEGV) in ASCII, binary and binary_compressed files alike, and a PCD
@@ -6,17 +6,19 @@
 // enough to make PCL safe means parsing all of it (field lists of one length, sizes and types
 // that agree, WIDTH x HEIGHT = POINTS, a data section long enough, a plausible compressed
 // size) and then the data section is a few lines more; reading it here also keeps the
-// VIEWPOINT and names the line or byte of every error. The same holds for PLY, whose element
-// counts PCL sizes buffers from.
+// VIEWPOINT and names the line or byte of every error. PLY clouds are read by the one PLY
+// reader (ply_reader.cc), whose element counts PCL would size buffers from.
+#include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <set>
 #include <sstream>
+#include <utility>
 #include <vector>
 
-#include "femreg/point_cloud.h"
 #include "io/io_internal.h"
 #include "io/text_tokens.h"
 
@@ -42,22 +44,6 @@ bool LabelFrom(double v, int* label) {
   }
   *label = static_cast<int>(v);
   return true;
-}
-
-// Fills *cloud from the collected coordinates.
-void Store(const std::vector<double>& xyz, const std::vector<double>& normals,
-           const std::vector<int>& labels, PointCloud* cloud) {
-  const Eigen::Index n = static_cast<Eigen::Index>(xyz.size() / 3);
-  cloud->points.resize(n, 3);
-  cloud->normals.resize(normals.empty() ? 0 : n, 3);
-  cloud->labels.resize(labels.empty() ? 0 : n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) {
-      cloud->points(i, k) = xyz[3 * i + k];
-      if (!normals.empty()) cloud->normals(i, k) = normals[3 * i + k];
-    }
-    if (!labels.empty()) cloud->labels(i) = labels[i];
-  }
 }
 
 // Decompresses LZF (the format of PCD binary_compressed) with every read and write bounds
@@ -103,7 +89,7 @@ class PcdReader {
  public:
   explicit PcdReader(const std::string& path) : path_(path) {}
 
-  Status Read(PointCloud* cloud, SensorPose* sensor) {
+  Status Read(RawCloud* cloud) {
     Status s = in_.Open(path_, '\0');
     if (!s.ok()) return s;
     if (!(s = ReadHeader()).ok()) return s;
@@ -116,8 +102,12 @@ class PcdReader {
       s = ReadBinary(data_ == "binary_compressed", &xyz, &normals, &labels);
     }
     if (!s.ok()) return s;
-    Store(xyz, normals, labels, cloud);
-    if (sensor != nullptr) *sensor = sensor_;
+    cloud->xyz = std::move(xyz);
+    cloud->normals = std::move(normals);
+    cloud->labels = std::move(labels);
+    cloud->viewpoint_known = viewpoint_known_;
+    cloud->origin = origin_;
+    cloud->orientation = orientation_;
     return Status::Ok();
   }
 
@@ -186,9 +176,10 @@ class PcdReader {
     }
     Eigen::Quaterniond q(v[3], v[4], v[5], v[6]);
     if (!(q.norm() > 1e-12)) return LineError("VIEWPOINT orientation is a zero quaternion");
-    sensor_.known = true;
-    sensor_.origin = Eigen::Vector3d(v[0], v[1], v[2]);
-    sensor_.orientation = q.normalized();
+    viewpoint_known_ = true;
+    origin_ = {v[0], v[1], v[2]};
+    q.normalize();
+    orientation_ = {q.w(), q.x(), q.y(), q.z()};
     return Status::Ok();
   }
 
@@ -435,238 +426,14 @@ class PcdReader {
   std::vector<PcdField> fields_;
   size_t point_size_ = 0;
   bool normals_ = false, labels_ = false;
-  SensorPose sensor_;
-};
-
-// ---------------------------------------------------------------------------------------
-// PLY
-
-struct PlyProperty {
-  std::string name;
-  Scalar type;
-  bool is_list = false;
-  Scalar count_type;  // lists only
-};
-
-struct PlyElement {
-  std::string name;
-  long long count = 0;
-  std::vector<PlyProperty> properties;
-};
-
-Scalar PlyScalar(const std::string& name) {
-  if (name == "char" || name == "int8") return {1, false, true};
-  if (name == "uchar" || name == "uint8") return {1, false, false};
-  if (name == "short" || name == "int16") return {2, false, true};
-  if (name == "ushort" || name == "uint16") return {2, false, false};
-  if (name == "int" || name == "int32") return {4, false, true};
-  if (name == "uint" || name == "uint32") return {4, false, false};
-  if (name == "float" || name == "float32") return {4, true, true};
-  if (name == "double" || name == "float64") return {8, true, true};
-  return {};
-}
-
-class PlyReader {
- public:
-  explicit PlyReader(const std::string& path) : path_(path) {}
-
-  Status Read(PointCloud* cloud) {
-    Status s = in_.Open(path_, '\0');
-    if (!s.ok()) return s;
-    if (!(s = ReadHeader()).ok()) return s;
-    std::vector<double> xyz, normals;
-    for (const PlyElement& element : elements_) {
-      const bool vertex = element.name == "vertex";
-      if (vertex) {
-        xyz.reserve(3 * static_cast<size_t>(element.count));
-        if (normals_) normals.reserve(3 * static_cast<size_t>(element.count));
-      }
-      std::vector<double> values(element.properties.size());
-      for (long long i = 0; i < element.count; ++i) {
-        for (size_t p = 0; p < element.properties.size(); ++p) {
-          if (!(s = ReadProperty(element, i, element.properties[p], &values[p])).ok()) return s;
-        }
-        if (!vertex) continue;
-        for (int k = 0; k < 3; ++k) xyz.push_back(values[xyz_[k]]);
-        if (normals_) {
-          for (int k = 0; k < 3; ++k) normals.push_back(values[normal_[k]]);
-        }
-      }
-    }
-    Store(xyz, normals, {}, cloud);
-    return Status::Ok();
-  }
-
- private:
-  Status LineError(int line, const std::string& message) const { return FileError(path_, line, message); }
-  Status ByteError(const std::string& message) const {
-    std::ostringstream os;
-    os << "byte " << pos_ << ": " << message;
-    return FileError(path_, 0, os.str());
-  }
-
-  Status ReadHeader() {
-    std::vector<std::string> lines = in_.TakeLines(1);
-    if (lines.empty() || lines[0] != "ply") return LineError(1, "not a PLY file (no 'ply' line)");
-    std::string format;
-    while (true) {
-      lines = in_.TakeLines(1);
-      const int line = in_.line();
-      if (lines.empty()) return LineError(line, "the header ends without end_header (truncated file?)");
-      const std::vector<std::string> w = Split(lines[0]);
-      if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
-      if (w[0] == "end_header") break;
-      if (w[0] == "format") {
-        if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" &&
-                              w[1] != "binary_big_endian")) {
-          return LineError(line, "format must be ascii, binary_little_endian or binary_big_endian, found " +
-                                     Quoted(lines[0]));
-        }
-        format = w[1];
-      } else if (w[0] == "element") {
-        PlyElement e;
-        if (w.size() != 3 || !ParseInt(w[2], &e.count) || e.count < 0 || e.count > kMaxPoints) {
-          return LineError(line, "expected 'element NAME COUNT' with a COUNT from 0 to " +
-                                     std::to_string(kMaxPoints) + ", found " + Quoted(lines[0]));
-        }
-        e.name = w[1];
-        for (const PlyElement& other : elements_) {
-          if (other.name == e.name) return LineError(line, "element " + Quoted(e.name, 40) + " given twice");
-        }
-        elements_.push_back(e);
-        element_lines_.push_back(line);
-      } else if (w[0] == "property") {
-        if (elements_.empty()) return LineError(line, "a property before any element");
-        PlyProperty p;
-        if (w.size() == 5 && w[1] == "list") {
-          p.is_list = true;
-          p.count_type = PlyScalar(w[2]);
-          p.type = PlyScalar(w[3]);
-          p.name = w[4];
-          if (p.count_type.size == 0 || p.count_type.is_float || p.type.size == 0) {
-            return LineError(line, "bad list property " + Quoted(lines[0]));
-          }
-        } else if (w.size() == 3) {
-          p.type = PlyScalar(w[1]);
-          p.name = w[2];
-          if (p.type.size == 0) return LineError(line, "unknown property type " + Quoted(w[1]));
-        } else {
-          return LineError(line, "expected 'property TYPE NAME', found " + Quoted(lines[0]));
-        }
-        elements_.back().properties.push_back(p);
-      } else {
-        return LineError(line, "unknown PLY header line " + Quoted(lines[0]));
-      }
-    }
-    const int end_line = in_.line();
-    if (format.empty()) return LineError(end_line, "no format line");
-    ascii_ = format == "ascii";
-    big_endian_ = format == "binary_big_endian";
-    pos_ = in_.offset();
-    // Every element instance takes at least a byte per scalar (binary) or a token per
-    // property (ASCII): the counts must fit in what is left of the file.
-    const long long left = static_cast<long long>(in_.data().size() - pos_);
-    long long need = 0;
-    for (size_t e = 0; e < elements_.size(); ++e) {
-      const PlyElement& el = elements_[e];
-      long long each = 0;
-      for (const PlyProperty& p : el.properties) each += ascii_ ? 2 : (p.is_list ? p.count_type.size : p.type.size);
-      if (el.count > 0 && each == 0) return LineError(element_lines_[e], "element " + Quoted(el.name, 40) + " has no properties");
-      if (el.count > 0 && (el.count > (left + 1) / each || need + el.count * each > left + 1)) {
-        std::ostringstream os;
-        os << "element " << Quoted(el.name, 40) << " count " << el.count
-           << " is more than the " << left << " bytes after the header can hold";
-        return LineError(element_lines_[e], os.str());
-      }
-      need += el.count * each;
-    }
-    const PlyElement* vertex = nullptr;
-    for (const PlyElement& el : elements_) {
-      if (el.name == "vertex") vertex = &el;
-    }
-    if (vertex == nullptr) return LineError(end_line, "no vertex element");
-    auto find = [&](const char* name) {
-      for (size_t p = 0; p < vertex->properties.size(); ++p) {
-        if (vertex->properties[p].name == name && !vertex->properties[p].is_list) return static_cast<int>(p);
-      }
-      return -1;
-    };
-    const char* axes[3] = {"x", "y", "z"};
-    for (int k = 0; k < 3; ++k) {
-      xyz_[k] = find(axes[k]);
-      if (xyz_[k] < 0) return LineError(end_line, std::string("the vertex element has no scalar property ") + axes[k]);
-    }
-    const char* n1[3] = {"nx", "ny", "nz"};
-    const char* n2[3] = {"normal_x", "normal_y", "normal_z"};
-    normals_ = true;
-    for (int k = 0; k < 3; ++k) {
-      normal_[k] = find(n1[k]) >= 0 ? find(n1[k]) : find(n2[k]);
-      normals_ = normals_ && normal_[k] >= 0;
-    }
-    return Status::Ok();
-  }
-
-  // One scalar (or, for a list, its length; items are skipped) of element instance i.
-  Status ReadProperty(const PlyElement& element, long long i, const PlyProperty& p, double* value) {
-    Status s;
-    if (!(s = ReadScalar(element, i, p.is_list ? p.count_type : p.type, value)).ok()) return s;
-    if (!p.is_list) return Status::Ok();
-    const double n = *value;
-    const long long left = ascii_ ? MaxItemsIn(in_.remaining(), 1)
-                                  : static_cast<long long>((in_.data().size() - pos_) / p.type.size);
-    if (!(n >= 0) || n > static_cast<double>(left)) {
-      std::ostringstream os;
-      os << element.name << " " << i << ": list " << Quoted(p.name, 40) << " of " << n
-         << " items, more than the rest of the file holds";
-      return ascii_ ? in_.Error(os.str()) : ByteError(os.str());
-    }
-    double item;
-    for (long long k = 0; k < static_cast<long long>(n); ++k) {
-      if (!(s = ReadScalar(element, i, p.type, &item)).ok()) return s;
-    }
-    return Status::Ok();
-  }
-
-  Status ReadScalar(const PlyElement& element, long long i, const Scalar& type, double* value) {
-    if (ascii_) {
-      Token t;
-      if (!in_.Next(&t)) {
-        std::ostringstream os;
-        os << "the file ends inside " << element.name << " " << i << " of " << element.count
-           << " (truncated file?)";
-        return in_.Error(os.str());
-      }
-      if (!ParseDouble(t.text, value)) return in_.Error("not a number: " + Quoted(t.text));
-      return Status::Ok();
-    }
-    const std::string& data = in_.data();
-    if (static_cast<size_t>(type.size) > data.size() - pos_) {
-      std::ostringstream os;
-      os << "the file ends inside " << element.name << " " << i << " of " << element.count
-         << " (truncated file?)";
-      return ByteError(os.str());
-    }
-    *value = DecodeBinaryScalar(data.data() + pos_, type, big_endian_);
-    pos_ += static_cast<size_t>(type.size);
-    return Status::Ok();
-  }
-
-  const std::string path_;
-  TokenStream in_;
-  std::vector<PlyElement> elements_;
-  std::vector<int> element_lines_;
-  bool ascii_ = true, big_endian_ = false, normals_ = false;
-  int xyz_[3] = {-1, -1, -1}, normal_[3] = {-1, -1, -1};
-  size_t pos_ = 0;  // binary: the next byte
+  bool viewpoint_known_ = false;
+  std::array<double, 3> origin_ = {0, 0, 0};
+  std::array<double, 4> orientation_ = {1, 0, 0, 0};  // w x y z
 };
 
 }  // namespace
 
-Status ReadPcdFile(const std::string& path, PointCloud* cloud, SensorPose* sensor) {
-  return PcdReader(path).Read(cloud, sensor);
-}
-
-Status ReadPlyFile(const std::string& path, PointCloud* cloud) { return PlyReader(path).Read(cloud); }
+Status ReadPcdCloud(const std::string& path, RawCloud* cloud) { return PcdReader(path).Read(cloud); }
 
 }  // namespace internal
 }  // namespace femreg

@@ -1,0 +1,83 @@
+// What the femreg Python module's translation units share: femreg.Error and Check, numpy
+// (N, 3) arrays in and out, enum fields as string properties, depth images from numpy, and
+// the Bind* functions that femreg_module.cc's module init calls in order (a class is bound
+// before the functions whose signatures name it).
+#pragma once
+
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "femreg/mesh.h"
+#include "femreg/point_cloud.h"
+#include "femreg/registration.h"
+
+namespace py = pybind11;
+
+namespace femreg {
+namespace python {
+
+// Raised for every femreg::Status error (registered as femreg.Error, a RuntimeError).
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+void Check(const Status& status);
+
+using DoubleArray = py::array_t<double, py::array::forcecast>;
+
+// An (N, 3) float array as Vertices; `what` names the argument in the ValueError.
+void CopyRows3(const DoubleArray& array, const char* what, Vertices* out);
+
+py::array_t<double> ToArray(const Vertices& v);
+
+template <typename Enum>
+Enum EnumFromString(const std::string& s, const char* field, const std::vector<Enum>& all) {
+  Enum v;
+  if (!FromString(s, &v)) {
+    std::string names;
+    for (Enum e : all) names += (names.empty() ? "" : ", ") + std::string(ToString(e));
+    throw py::value_error(std::string(field) + ": unknown value '" + s + "' (use " + names + ")");
+  }
+  return v;
+}
+
+// Binds an enum field of a struct as a string property.
+template <typename Class, typename Struct, typename Enum>
+void EnumProperty(Class& cls, const char* name, Enum Struct::*field, const char* qualified,
+                  std::vector<Enum> all, const char* doc) {
+  cls.def_property(
+      name, [field](const Struct& s) { return std::string(ToString(s.*field)); },
+      [field, qualified, all](Struct& s, const std::string& v) {
+        s.*field = EnumFromString(v, qualified, all);
+      },
+      doc);
+}
+
+// An (H, W) integer array as a RawDepthImage (values in depth units, 0 = no return).
+void ToRawDepth(const py::array_t<uint16_t, py::array::forcecast>& depth, RawDepthImage* image);
+
+// An optional (H, W) mask (non-zero = keep) as flags.
+bool ToKeep(const py::object& mask, const RawDepthImage& image, std::vector<uint8_t>* keep);
+
+DepthImageOptions MakeDepthOptions(double depth_scale, double min_depth, double max_depth,
+                                   int pixel_stride);
+
+// The bindings, by file, in the order the module init calls them.
+void BindOptions(py::module_& m);      // options_bindings.cc: Material and the options structs
+void BindMeshes(py::module_& m);       // io_bindings.cc: Mesh, mesh readers and writers
+void BindPointClouds(py::module_& m);  // io_bindings.cc: PointCloud, cloud readers and writers
+void BindDepthImages(py::module_& m);  // io_bindings.cc: depth PNGs, back-projection
+void BindScene(py::module_& m);        // scene_bindings.cc: Scene, load_scene, parse_scene
+void BindTracker(py::module_& m);      // tracker_bindings.cc: Tracker and its summaries
+void BindSimulate(py::module_& m);     // scene_bindings.cc: the forward solve
+
+}  // namespace python
+}  // namespace femreg

@@ -1,0 +1,149 @@
+// Python bindings: scene files (Scene, load_scene, parse_scene) and the forward solve of one
+// scene object (simulate).
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bindings.h"
+#include "femreg/fem.h"
+#include "femreg/forward.h"
+#include "femreg/scene.h"
+
+namespace femreg {
+namespace python {
+namespace {
+
+py::dict ForwardSummaryDict(const ForwardSummary& s) {
+  py::dict d;
+  d["termination"] = ToString(s.termination);
+  d["converged"] = s.termination == ForwardTermination::kConverged;
+  d["message"] = s.message;
+  d["iterations"] = s.NumNewtonIterations();
+  d["load_steps"] = static_cast<int>(s.load_steps.size());
+  d["free_dofs"] = s.num_free_dofs;
+  d["initial_residual"] = s.initial_residual_norm;
+  d["final_residual"] = s.final_residual_norm;
+  d["final_energy"] = s.final_energy;
+  d["max_displacement"] = s.max_displacement;
+  d["inverted_elements"] = s.inverted_elements;
+  d["time_s"] = s.total_time_s;
+  d["report"] = s.BriefReport();
+  return d;
+}
+
+int ObjectIndex(const Scene& scene, const py::object& object) {
+  const int n = static_cast<int>(scene.objects.size());
+  if (py::isinstance<py::str>(object)) {
+    const std::string name = object.cast<std::string>();
+    for (int i = 0; i < n; ++i) {
+      if (scene.objects[i].name == name) return i;
+    }
+    std::string names;
+    for (const ObjectSpec& o : scene.objects) names += (names.empty() ? "" : ", ") + o.name;
+    throw py::value_error("object '" + name + "': the scene has no such object (objects: " +
+                          names + ")");
+  }
+  const int i = object.cast<int>();
+  if (i < 0 || i >= n) {
+    throw py::index_error("object " + std::to_string(i) + ": the scene has " + std::to_string(n) +
+                          " object(s)");
+  }
+  return i;
+}
+
+}  // namespace
+
+void BindScene(py::module_& m) {
+  // ---- scenes ---------------------------------------------------------------------------
+  py::class_<Scene>(m, "Scene", "A scene file: objects, materials, camera, registration settings.")
+      .def_readonly("path", &Scene::path)
+      .def_readonly("description", &Scene::description)
+      .def_readwrite("registration", &Scene::registration,
+                     "RegistrationOptions, changed in place (scene.registration.solver.backend = \"fast\")")
+      .def_property_readonly("object_names",
+                             [](const Scene& s) {
+                               std::vector<std::string> names;
+                               for (const ObjectSpec& o : s.objects) names.push_back(o.name);
+                               return names;
+                             })
+      .def("material",
+           [](const Scene& s, const py::object& object) {
+             return s.objects[ObjectIndex(s, object)].material;
+           },
+           py::arg("object") = 0, "The object's material (by index or name).")
+      .def("load_mesh",
+           [](const Scene& s, const py::object& object) {
+             TetMesh mesh;
+             Check(LoadObjectMesh(s, ObjectIndex(s, object), &mesh));
+             return mesh;
+           },
+           py::arg("object") = 0,
+           "The object's mesh with the scene's scale and pose applied, and its masses.")
+      .def("to_yaml", [](const Scene& s) { return SceneToYaml(s); })
+      .def("__repr__", [](const Scene& s) {
+        return "<femreg.Scene '" + s.path + "', " + std::to_string(s.objects.size()) + " object(s)>";
+      });
+  m.def("load_scene",
+        [](const std::string& path) {
+          Scene scene;
+          Check(LoadScene(path, &scene));
+          return scene;
+        },
+        py::arg("path"), "Reads and validates a scene file (YAML).");
+  m.def("parse_scene",
+        [](const std::string& text, const std::string& base_dir) {
+          Scene scene;
+          Check(ParseScene(text, "<string>", base_dir, &scene));
+          return scene;
+        },
+        py::arg("text"), py::arg("base_dir") = ".",
+        "A scene from YAML text; relative mesh paths resolve against base_dir.");
+}
+
+void BindSimulate(py::module_& m) {
+  // ---- forward simulation ---------------------------------------------------------------
+  m.def("simulate",
+        [](const Scene& scene, const py::object& object, const std::string& model,
+           int load_steps, int max_iterations, const std::string& tangent, int threads) {
+          const int index = ObjectIndex(scene, object);
+          ElasticModelType model_type = scene.forward_model;
+          if (!model.empty() && !FromString(model, &model_type)) {
+            throw py::value_error("model: use corotational or linear (got '" + model + "')");
+          }
+          ForwardOptions forward = scene.forward;
+          if (load_steps > 0) forward.load_steps = load_steps;
+          if (max_iterations > 0) forward.max_iterations = max_iterations;
+          if (!tangent.empty() && !FromString(tangent, &forward.tangent)) {
+            throw py::value_error("tangent: use full, projected or warped (got '" + tangent + "')");
+          }
+          forward.num_threads = threads;
+          TetMesh mesh;
+          Check(LoadObjectMesh(scene, index, &mesh));
+          ForwardProblem problem;
+          Check(BuildForwardProblem(scene, index, mesh, &problem));
+          ForwardSummary summary;
+          Status status;
+          {
+            py::gil_scoped_release release;
+            ElasticModel elastic;
+            elastic.Build(mesh, model_type, scene.objects[index].Materials());
+            status = SolveQuasiStatic(problem, forward, &elastic, &mesh, &summary);
+          }
+          Check(status);
+          py::dict result = ForwardSummaryDict(summary);
+          result["object"] = scene.objects[index].name;
+          result["vertices"] = ToArray(mesh.x);
+          result["mesh"] = std::move(mesh);
+          return result;
+        },
+        py::arg("scene"), py::arg("object") = 0, py::arg("model") = "",
+        py::arg("load_steps") = 0, py::arg("max_iterations") = 0, py::arg("tangent") = "",
+        py::arg("threads") = 0,
+        "The quasi-static equilibrium of one object under the scene's clamps, prescribed "
+        "displacements, loads and gravity (femreg simulate). Returns a dict: vertices (V, 3), "
+        "mesh (at the result), converged, termination, message, iterations, residuals, ... "
+        "A solve that does not converge is reported there (converged False), not raised.");
+}
+
+}  // namespace python
+}  // namespace femreg

@@ -1,0 +1,24 @@
+// What the multigrid's files share (multigrid.h's Multigrid is split by seam:
+// multigrid_blocks.cc, the block-sparse storage and its products; multigrid_build.cc, the
+// hierarchy's construction; multigrid.cc, the smoothers and the V-cycle).
+#ifndef FEMREG_SOLVERS_FAST_MULTIGRID_INTERNAL_H_
+#define FEMREG_SOLVERS_FAST_MULTIGRID_INTERNAL_H_
+
+#include <cstdint>
+
+namespace femreg {
+namespace fast_backend {
+namespace multigrid_internal {
+
+// Products and block Jacobi run in parallel from this many unknowns on: a V-cycle has ~15 of them,
+// each worth a team's start from here (docs/notes/2026-11-28-figures-from-code-comments.md).
+constexpr int kParallelUnknowns = 4096;
+// ... or this many stored entries: a coarse level has few unknowns, but many entries per
+// column (docs/notes/2026-11-28-figures-from-code-comments.md).
+constexpr int64_t kParallelNonzeros = 65536;
+
+}  // namespace multigrid_internal
+}  // namespace fast_backend
+}  // namespace femreg
+
+#endif  // FEMREG_SOLVERS_FAST_MULTIGRID_INTERNAL_H_

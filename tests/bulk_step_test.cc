@@ -1,0 +1,182 @@
+// The bulk step (solver.bulk_step_tolerance): per object, over its free vertices, and its
+// length the coarser of a mean edge and the cloud's sampling distance; frames stop on it
+// once the bulk of the mesh settles.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "femreg/forward.h"
+#include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/synth.h"
+#include "femreg/tracker.h"
+#include "geometry/nearest.h"
+#include "registration/correspondences.h"
+#include "registration/tracker_state.h"
+
+namespace femreg {
+namespace {
+
+// The bulk move (solver.bulk_step_tolerance) is per object, over its free vertices: two
+// boxes, a large still one and a small one of 216 vertices. 3 of the small one's vertices
+// moving (its ceil(0.99 * 216) = 214th smallest move is theirs) make the bulk move theirs,
+// although they are 0.03 % of all vertices; 2 do not. Moving vertices that a hard anchor
+// holds (fixed) do not count, however many.
+TEST(Tracker, BulkMoveIsPerObjectOverItsFreeVertices) {
+  TrackerState state;
+  state.objects.resize(2);
+  state.objects[0].mesh = MakeBox(Eigen::Vector3d(0.2, 0.2, 0.2), 20, 20, 20);  // 9261 vertices
+  state.objects[1].mesh = MakeBox(Eigen::Vector3d(0.05, 0.05, 0.05), 5, 5, 5);  // 216
+  state.objects[0].offset = 0;
+  state.objects[1].offset = state.objects[0].mesh.num_vertices();
+  const int n0 = state.objects[0].mesh.num_vertices(), n1 = state.objects[1].mesh.num_vertices();
+  ASSERT_EQ(n1, 216);
+  const double still = 1e-5, moving = 1e-2;
+  Eigen::VectorXd moves = Eigen::VectorXd::Constant(n0 + n1, still);
+  std::vector<char> fixed;  // none
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still);
+  moves.segment(n0, 2).setConstant(moving);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still) << "2 of 216 vertices are within the 1 %";
+  moves(n0 + 100) = moving;
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), moving) << "3 of 216 are not, beside a still object";
+  // The large object: 5 % of it moving counts, unless a hard anchor holds those vertices.
+  moves.segment(n0, n1).setConstant(still);
+  moves.head(n0 / 20).setConstant(moving);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), moving);
+  fixed.assign(static_cast<size_t>(n0 + n1), 0);
+  std::fill(fixed.begin(), fixed.begin() + n0 / 20, 1);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still) << "the moving vertices are anchored";
+  // An object with every vertex fixed has no bulk move.
+  std::fill(fixed.begin(), fixed.begin() + n0, 1);
+  moves.head(n0).setConstant(1.0);
+  EXPECT_DOUBLE_EQ(BulkMove(state, moves, fixed), still);
+}
+
+// A 5049-vertex box (20 x 10 x 5 cm) bent by a growing z += b (x / L)^2, b = 4 mm per
+// frame, and clouds of `points` points uniform by area over the bent surfaces, with 0.5 mm
+// noise: the scaling benchmark's setting, smaller.
+struct SparseBoxSequence {
+  static constexpr int kFrames = 5;
+  Eigen::Vector3d size = Eigen::Vector3d(0.2, 0.1, 0.05);
+  TetMesh mesh = MakeBox(size, 32, 16, 8);
+  std::vector<PointCloud> clouds;
+  Vertices Bent(int f) const {
+    Vertices x = mesh.rest;
+    for (Eigen::Index v = 0; v < x.rows(); ++v) x(v, 2) += 0.004 * (f + 1) * std::pow(x(v, 0) / size.x(), 2);
+    return x;
+  }
+  explicit SparseBoxSequence(int points) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 5e-4);
+    for (int f = 0; f < kFrames; ++f) {
+      const Vertices x = Bent(f);
+      std::vector<double> cumulative;
+      double total = 0.0;
+      for (int t = 0; t < mesh.num_surface_triangles(); ++t) {
+        const Eigen::Vector3d a = x.row(mesh.surface(t, 0)), b = x.row(mesh.surface(t, 1)), c = x.row(mesh.surface(t, 2));
+        cumulative.push_back(total += 0.5 * (b - a).cross(c - a).norm());
+      }
+      PointCloud cloud;
+      cloud.points.resize(points, 3);
+      for (int i = 0; i < points; ++i) {
+        const int t = static_cast<int>(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) -
+                                       cumulative.begin());
+        double r1 = u(rng), r2 = u(rng);
+        if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
+        const Eigen::Vector3d a = x.row(mesh.surface(t, 0)), b = x.row(mesh.surface(t, 1)), c = x.row(mesh.surface(t, 2));
+        cloud.points.row(i) = (a + r1 * (b - a) + r2 * (c - a) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))).transpose();
+      }
+      clouds.push_back(cloud);
+    }
+  }
+};
+
+// A cloud sparser than a fine mesh: a few vertices keep hopping between nearly equal pairings long
+// after the rest has settled, so the largest move never gets below solver.step_tolerance and the
+// energy creeps down per outer iteration. The bulk step (99 % of the free vertices within
+// solver.bulk_step_tolerance of the coarser of a mean edge and the cloud's sampling distance) ends
+// such frames sooner at the same error (docs/notes/2026-11-28-figures-from-code-comments.md).
+TEST(Tracker, OuterIterationsStopWhenTheBulkOfTheMeshSettles) {
+  const SparseBoxSequence seq(1000);
+  const TetMesh& mesh = seq.mesh;
+  constexpr int kFrames = SparseBoxSequence::kFrames;
+  const auto& clouds = seq.clouds;
+  ObjectMaterial material;
+  material.material.youngs_modulus = 5e4;
+  material.material.poisson_ratio = 0.4;
+  int outer[2] = {0, 0}, bulk_stops[2] = {0, 0};
+  double error[2] = {0.0, 0.0};
+  for (int with = 0; with < 2; ++with) {
+    RegistrationOptions options;
+    options.solver.num_threads = 2;
+    if (with == 0) options.solver.bulk_step_tolerance = 0.0;
+    std::unique_ptr<Tracker> tracker;
+    ASSERT_TRUE(Tracker::Create({mesh}, {material}, options, &tracker).ok());
+    for (int f = 0; f < kFrames; ++f) {
+      FrameSummary s;
+      ASSERT_TRUE(tracker->Track(clouds[f], &s).ok());
+      outer[with] += s.outer_iterations;
+      error[with] += (tracker->vertices(0) - seq.Bent(f)).rowwise().norm().mean() / kFrames;
+      if (s.stopped_by != "bulk_step") continue;
+      ++bulk_stops[with];
+      // The largest move alone would not have stopped it (its limit here: 0.01 of a ~7 mm
+      // mean edge).
+      EXPECT_GT(s.iterations.back().max_move, 1e-4) << "frame " << f << ": " << s.message;
+    }
+  }
+  std::printf("outer iterations %d -> %d, mean vertex error %.3f -> %.3f mm, %d frames stopped by the bulk step\n",
+              outer[0], outer[1], 1e3 * error[0], 1e3 * error[1], bulk_stops[1]);
+  EXPECT_EQ(bulk_stops[0], 0);
+  EXPECT_GT(bulk_stops[1], 0);
+  EXPECT_LT(outer[1], outer[0]);
+  EXPECT_LE(error[1], 1.02 * error[0]);
+}
+
+// Where the cloud is coarser than the mesh, the bulk step's length is the cloud's sampling
+// distance (twice its median point spacing), not the mean edge: 300 points over the box's
+// 0.07 m^2 are ~15 mm apart against its ~7 mm edges. The frames that stop on it say so, with
+// twice the cloud's median nearest-neighbour distance as the length.
+TEST(Tracker, TheBulkStepTakesTheCloudsSamplingDistanceWhereItIsCoarser) {
+  const SparseBoxSequence seq(300);
+  ObjectMaterial material;
+  material.material.youngs_modulus = 5e4;
+  material.material.poisson_ratio = 0.4;
+  RegistrationOptions options;
+  options.solver.num_threads = 2;
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create({seq.mesh}, {material}, options, &tracker).ok());
+  int bulk_stops = 0;
+  for (int f = 0; f < SparseBoxSequence::kFrames; ++f) {
+    FrameSummary s;
+    ASSERT_TRUE(tracker->Track(seq.clouds[f], &s).ok());
+    EXPECT_LT((tracker->vertices(0) - seq.Bent(f)).rowwise().norm().mean(), 2e-3) << "frame " << f;
+    if (s.stopped_by != "bulk_step") continue;
+    ++bulk_stops;
+    const std::string tag = " x the cloud's sampling distance ";
+    const size_t at = s.message.find(tag);
+    ASSERT_NE(at, std::string::npos) << s.message;
+    const double reference_mm = std::stod(s.message.substr(at + tag.size()));
+    const PointIndex index(seq.clouds[f].points);
+    std::vector<double> nearest;
+    for (int i = 0; i < index.size(); ++i) {
+      int ids[2];
+      double d2[2];
+      ASSERT_EQ(index.KNearest(seq.clouds[f].points.row(i), 2, ids, d2), 2);
+      nearest.push_back(std::sqrt(d2[1]));
+    }
+    std::nth_element(nearest.begin(), nearest.begin() + nearest.size() / 2, nearest.end());
+    EXPECT_NEAR(reference_mm, 2e3 * nearest[nearest.size() / 2], 0.05 * reference_mm) << s.message;
+  }
+  EXPECT_GT(bulk_stops, 0);
+}
+
+}  // namespace
+}  // namespace femreg

@@ -1,0 +1,92 @@
+// The femreg mesh command: refuses to overwrite, reports errors.
+
+#include "meshing_surfaces.h"
+
+namespace femreg {
+namespace {
+
+using namespace meshing_testing;  // NOLINT: the shared surfaces and checks
+
+
+#ifdef FEMREG_CLI_PATH
+// Runs the command line; returns its exit code and what it printed.
+int RunCli(const std::string& args, std::string* out, std::string* err) {
+  TempDir dir("femreg_meshing_cli");
+  const std::string o = dir.path() + "/stdout", e = dir.path() + "/stderr";
+  const int rc =
+      std::system((std::string(FEMREG_CLI_PATH) + " " + args + " > " + o + " 2> " + e).c_str());
+  if (out != nullptr) *out = ReadAll(o);
+  if (err != nullptr) *err = ReadAll(e);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+TEST(MeshCliTest, MeshesRefusesToOverwriteAndReportsErrors) {
+  TempDir dir;
+  const std::string cube = dir.path() + "/cube.obj";
+  WriteObj(cube, Cube());
+  const std::string out_path = dir.path() + "/cube.msh";
+  std::string out, err;
+  ASSERT_EQ(RunCli("mesh " + cube + " --out " + out_path + " --edge-length 0.25", &out, &err), 0)
+      << err;
+  EXPECT_NE(out.find("8 vertices, 12 triangles"), std::string::npos) << out;
+  EXPECT_NE(out.find("tetrahedra"), std::string::npos) << out;
+  EXPECT_NE(out.find("dihedral angles"), std::string::npos) << out;
+  TetMesh mesh;
+  ASSERT_TRUE(ReadTetMesh(out_path, &mesh).ok());
+  EXPECT_NEAR(RestVolume(mesh), 1.0, 1e-12);
+
+  // A second run refuses to overwrite, and the file stays as it was.
+  const std::string before = ReadAll(out_path);
+  EXPECT_EQ(RunCli("mesh " + cube + " --out " + out_path + " --edge-length 0.5", &out, &err), 1);
+  EXPECT_NE(err.find("exists; pass --force"), std::string::npos) << err;
+  EXPECT_EQ(ReadAll(out_path), before);
+  // --force overwrites (a coarser mesh now).
+  EXPECT_EQ(
+      RunCli("mesh " + cube + " --out " + out_path + " --edge-length 0.5 --force", &out, &err), 0)
+      << err;
+  TetMesh coarser;
+  ASSERT_TRUE(ReadTetMesh(out_path, &coarser).ok());
+  EXPECT_LT(coarser.num_tets(), mesh.num_tets());
+
+  // --json: one object with the counts; --scale multiplies the coordinates.
+  const std::string json_path = dir.path() + "/cube.vtu";
+  ASSERT_EQ(RunCli("mesh " + cube + " --out " + json_path + " --scale 0.001 --json", &out, &err), 0)
+      << err;
+  EXPECT_EQ(out.rfind("{", 0), 0u) << out;
+  EXPECT_NE(out.find("\"ok\": true"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"tetrahedra\": "), std::string::npos) << out;
+  ASSERT_TRUE(ReadTetMesh(json_path, &mesh).ok());
+  EXPECT_NEAR(RestVolume(mesh), 1e-9, 1e-21);
+
+  // An open surface: exit 1, the reason on stderr, nothing written.
+  Surface open = Cube();
+  open.F.conservativeResize(11, 3);
+  const std::string open_path = dir.path() + "/open.obj";
+  WriteObj(open_path, open);
+  const std::string not_written = dir.path() + "/open.vtk";
+  EXPECT_EQ(RunCli("mesh " + open_path + " --out " + not_written, &out, &err), 1);
+  EXPECT_NE(err.find(open_path), std::string::npos) << err;
+  EXPECT_NE(err.find("boundary edges"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(not_written));
+  EXPECT_EQ(RunCli("mesh " + open_path + " --out " + not_written + " --json", &out, &err), 1);
+  EXPECT_NE(out.find("\"ok\": false"), std::string::npos) << out;
+
+  // An unknown output format is refused before any work; bad option values by CLI11.
+  EXPECT_EQ(RunCli("mesh " + cube + " --out " + dir.path() + "/cube.stl", &out, &err), 1);
+  EXPECT_NE(err.find("unknown mesh format"), std::string::npos) << err;
+  EXPECT_NE(RunCli("mesh " + cube + " --out " + dir.path() + "/x.vtu --quality 0.5", &out, &err),
+            0);
+  EXPECT_NE(RunCli("mesh " + cube + " --out " + dir.path() + "/x.vtu --edge-length -1", &out, &err),
+            0);
+  EXPECT_FALSE(fs::exists(dir.path() + "/x.vtu"));
+  // --help explains the options and their units.
+  ASSERT_EQ(RunCli("mesh --help", &out, &err), 0);
+  for (const char* option : {"--edge-length", "--quality", "--max-volume", "--scale", "--force",
+                             "--json", "--keep-surface", "millimetres"}) {
+    EXPECT_NE(out.find(option), std::string::npos) << option;
+  }
+}
+#endif  // FEMREG_CLI_PATH
+
+}  // namespace
+}  // namespace femreg

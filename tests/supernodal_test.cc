@@ -1,0 +1,273 @@
+// The fast back end's own supernodal factorization and substitutions on CHOLMOD's analysis
+// (solvers/fast/supernodal_solve.h), against CHOLMOD's own solves.
+
+#include "backend_setup.h"
+
+namespace femreg {
+namespace {
+
+using backend_testing::BeamsSystem;
+
+
+// PCG's preconditioner, the back end's own substitutions with CHOLMOD's supernodal factor,
+// solve the factorized system: in double to round-off, in float to float's precision, on
+// 1, 2 and 3 threads (the elimination tree cut into groups of subtrees, the same cut on any
+// thread count), the same result, bit for bit, on every run and every thread count. The
+// matrix: two beams' stiffness (a forest of two trees) plus a diagonal.
+TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{12, 5e4}, {7, 5e4}}, 1e-2);
+  const int offset = static_cast<int>(H.rows());
+  fast_backend::CholmodFactor llt;
+  llt.setMode(Eigen::CholmodSupernodalLLt);
+  llt.compute(H);
+  ASSERT_EQ(llt.info(), Eigen::Success);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd b(offset);
+  for (int i = 0; i < offset; ++i) b[i] = u(rng);
+  const Eigen::VectorXd expected = llt.solve(b);
+  const double scale = expected.lpNorm<Eigen::Infinity>();
+  Eigen::VectorXd first_x, first_y;
+  for (int threads : {1, 2, 3}) {
+    fast_backend::SupernodalSolve<double> exact;
+    exact.set_cut_from(0);  // cut however small
+    ASSERT_TRUE(exact.Load(*llt.raw(), true, threads));
+    Eigen::VectorXd x;
+    exact.Solve(b, &x);
+    EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-10 * scale) << threads << " threads";
+    EXPECT_GT(exact.serial_fraction(), 0.0);
+    EXPECT_LT(exact.serial_fraction(), 1.0);
+    fast_backend::SupernodalSolve<float> single;
+    single.set_cut_from(0);
+    ASSERT_TRUE(single.Load(*llt.raw(), true, threads));
+    Eigen::VectorXd y, again;
+    single.Solve(b, &y);
+    EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 1e-3 * scale) << threads << " threads";
+    EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);  // float values, not a copy
+    single.Solve(b, &again);
+    EXPECT_EQ(y, again);
+    if (threads == 1) {
+      first_x = x;
+      first_y = y;
+    } else {  // the same bits on every thread count
+      EXPECT_EQ(x, first_x) << threads << " threads";
+      EXPECT_EQ(y, first_y) << threads << " threads";
+    }
+    // Uncut (the default below 100k entries of L): the serial order.
+    fast_backend::SupernodalSolve<float> uncut;
+    ASSERT_TRUE(uncut.Load(*llt.raw(), true, threads));
+    EXPECT_EQ(uncut.serial_fraction(), 1.0);
+    // New values on the same structure: the copy follows them.
+    Eigen::SparseMatrix<double> H2 = 2.0 * H;
+    llt.factorize(H2);
+    ASSERT_TRUE(exact.Load(*llt.raw(), false, threads));
+    exact.Solve(b, &x);
+    EXPECT_LE((x - 0.5 * expected).lpNorm<Eigen::Infinity>(), 1e-10 * scale) << threads << " threads";
+    llt.factorize(H);
+  }
+  // A failed factorization (not positive definite): refused.
+  Eigen::SparseMatrix<double> indefinite = -H;
+  llt.factorize(indefinite);
+  ASSERT_NE(llt.info(), Eigen::Success);
+  fast_backend::SupernodalSolve<float> failed;
+  EXPECT_FALSE(failed.Load(*llt.raw(), false, 2));
+  EXPECT_FALSE(failed.loaded());
+  // Not a supernodal LL^T factor: refused.
+  fast_backend::CholmodFactor simplicial;
+  simplicial.setMode(Eigen::CholmodSimplicialLLt);
+  simplicial.compute(H);
+  fast_backend::SupernodalSolve<float> refused;
+  EXPECT_FALSE(refused.Load(*simplicial.raw(), true, 1));
+  EXPECT_FALSE(refused.loaded());
+}
+
+// The back end's own factorization, on CHOLMOD's symbolic analysis alone: its solves match
+// CHOLMOD's double ones (in double to round-off, in float to float's precision), on 1, 2
+// and 3 threads (the subtrees of one cut in parallel) with the same factor on each; new values on the
+// same structure; a matrix that is not positive definite refused. The structure may also
+// come from a numeric factor. The matrix: two beams' stiffness (a forest of two trees), one
+// four times stiffer, plus a diagonal (a data term's share).
+// CHOLMOD's factor of H (numeric and symbolic) and its solve of a random b: what the own
+// factorization is checked against.
+struct CholmodReference {
+  fast_backend::CholmodFactor exact, symbolic;
+  Eigen::VectorXd b, expected;
+  double scale = 0.0;
+  bool ok = false;
+  CholmodReference(const Eigen::SparseMatrix<double>& H, unsigned seed) {
+    exact.setMode(Eigen::CholmodSupernodalLLt);
+    exact.compute(H);
+    symbolic.setMode(Eigen::CholmodSupernodalLLt);
+    symbolic.analyzePattern(H);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    b.resize(H.rows());
+    for (Eigen::Index i = 0; i < H.rows(); ++i) b[i] = u(rng);
+    ok = exact.info() == Eigen::Success && symbolic.raw() != nullptr;
+    if (!ok) return;
+    expected = exact.solve(b);
+    scale = expected.lpNorm<Eigen::Infinity>();
+  }
+};
+
+TEST(FastBackend, OwnFactorizationSolvesLikeCholmod) {
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{14, 5e4}, {9, 2e5}}, 1.0);
+  const int offset = static_cast<int>(H.rows());
+  const CholmodReference reference(H, 5);
+  ASSERT_TRUE(reference.ok);
+  const fast_backend::CholmodFactor& exact = reference.exact;
+  const fast_backend::CholmodFactor& symbolic = reference.symbolic;
+  const Eigen::VectorXd& b = reference.b;
+  const Eigen::VectorXd& expected = reference.expected;
+  const double scale = reference.scale;
+  std::vector<float> first;
+  for (int threads : {1, 2, 3}) {
+    const ScopedThreads one_blas_thread(1);
+    fast_backend::SupernodalSolve<double> in_double;
+    in_double.set_cut_from(0);  // cut however small
+    ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, true, threads)) << threads << " threads";
+    ASSERT_TRUE(in_double.loaded());
+    Eigen::VectorXd x;
+    in_double.Solve(b, &x);
+    EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << threads << " threads";
+    // In float: the error of a float factorization, its relative round-off times the
+    // condition number (the PCG it preconditions corrects it).
+    fast_backend::SupernodalSolve<float> in_float;
+    in_float.set_cut_from(0);
+    ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, true, threads)) << threads << " threads";
+    Eigen::VectorXd y;
+    in_float.Solve(b, &y);
+    EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 3e-3 * scale) << threads << " threads";
+    EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);  // float, not CHOLMOD's values
+    // The same factor on every thread count, with the subtrees in parallel on more than one
+    // (no supernode large enough for tiles: TiledFactorizationSolvesLikeCholmod).
+    EXPECT_EQ(in_float.tiled_supernodes(), 0);
+    EXPECT_LT(in_float.serial_fraction(), 1.0) << threads << " threads";
+    if (threads == 1) {
+      first = in_float.values();
+    } else {
+      EXPECT_TRUE(in_float.values() == first) << threads << " threads: another factor";
+    }
+    // New values on the same structure.
+    const Eigen::SparseMatrix<double> H2 = 4.0 * H;
+    ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H2, false, threads));
+    in_double.Solve(b, &x);
+    EXPECT_LE((x - 0.25 * expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale) << threads << " threads";
+    // Not positive definite: refused, nothing kept; and back.
+    const Eigen::SparseMatrix<double> indefinite = -H;
+    EXPECT_FALSE(in_float.Factorize(*symbolic.raw(), indefinite, false, threads));
+    EXPECT_FALSE(in_float.loaded());
+    ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, false, threads));
+    EXPECT_TRUE(in_float.values() == first) << threads << " threads";
+  }
+  // Another pattern with as many entries, without a new structure: planned again, not
+  // scattered through the old plan (entry (0, 1) dropped, (0, n - 1) added, both triangles).
+  {
+    const ScopedThreads one_blas_thread(1);
+    fast_backend::SupernodalSolve<double> reused;
+    ASSERT_TRUE(reused.Factorize(*exact.raw(), H, true, 1));
+    std::vector<Eigen::Triplet<double>> u;
+    for (int c = 0; c < H.outerSize(); ++c) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(H, c); it; ++it) {
+        if ((it.row() == 0 && it.col() == 1) || (it.row() == 1 && it.col() == 0)) continue;
+        u.emplace_back(it.row(), it.col(), it.value());
+      }
+    }
+    ASSERT_EQ(H.coeff(0, offset - 1), 0.0);
+    u.emplace_back(0, offset - 1, 0.0);
+    u.emplace_back(offset - 1, 0, 0.0);
+    Eigen::SparseMatrix<double> moved(offset, offset);
+    moved.setFromTriplets(u.begin(), u.end());
+    moved.makeCompressed();
+    ASSERT_EQ(moved.nonZeros(), H.nonZeros());
+    // (0, n - 1) joins the two beams, outside L's pattern: refused rather than written
+    // through the old plan.
+    EXPECT_FALSE(reused.Factorize(*exact.raw(), moved, false, 1));
+  }
+  // The structure of a numeric factor serves as well.
+  {
+    const ScopedThreads one_blas_thread(1);
+    fast_backend::SupernodalSolve<double> from_numeric;
+    ASSERT_TRUE(from_numeric.Factorize(*exact.raw(), H, true, 2));
+    Eigen::VectorXd x;
+    from_numeric.Solve(b, &x);
+    EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+  }
+  // A matrix with entries outside the analysed pattern: refused.
+  {
+    Eigen::SparseMatrix<double> wider = H;
+    wider.coeffRef(0, offset - 1) = 1e-3;
+    wider.coeffRef(offset - 1, 0) = 1e-3;
+    wider.makeCompressed();
+    fast_backend::SupernodalSolve<float> refused;
+    EXPECT_FALSE(refused.Factorize(*symbolic.raw(), wider, true, 1));
+    EXPECT_FALSE(refused.loaded());
+  }
+}
+
+// The top's supernodes of many rows are factorized in tiles on the whole team. With tiles
+// of 4 and 7 rows on a beam (every supernode of the top tiled, panels of several widths,
+// their tasks shared among 2 and 3 threads, one after the other on 1), and of 44 (a top of
+// tiled and untiled supernodes; the root, 87 rows, untiled): the solves match CHOLMOD's,
+// every thread count gives the same factor, and a matrix that fails in the last supernode
+// (the root, in the top) is refused.
+TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{20, 5e4}}, 1.0);
+  const int n = static_cast<int>(H.rows());
+  const CholmodReference reference(H, 11);
+  ASSERT_TRUE(reference.ok);
+  const fast_backend::CholmodFactor& symbolic = reference.symbolic;
+  const Eigen::VectorXd& b = reference.b;
+  const Eigen::VectorXd& expected = reference.expected;
+  const double scale = reference.scale;
+  // Not positive definite in its last pivot: the variable eliminated last, made negative.
+  const int last = static_cast<const int*>(symbolic.raw()->Perm)[n - 1];
+  Eigen::SparseMatrix<double> indefinite = H;
+  indefinite.coeffRef(last, last) = -1e9;
+  const ScopedThreads one_blas_thread(1);
+  std::map<int, int> all_tiled;  // threads -> the top's supernodes with tiles of 4 rows
+  for (int tile : {4, 7, 44}) {
+    std::vector<float> on_one_thread;
+    for (int threads : {1, 2, 3}) {
+      SCOPED_TRACE(::testing::Message() << "tiles of " << tile << " rows, " << threads << " threads");
+      fast_backend::SupernodalSolve<double> in_double;
+      in_double.set_tile_rows(tile);
+      in_double.set_cut_from(0);  // cut however small
+      ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, true, threads));
+      EXPECT_GT(in_double.tiled_supernodes(), 0);
+      if (tile == 4) all_tiled[threads] = in_double.tiled_supernodes();
+      if (tile == 44) {  // a mixed top
+        EXPECT_LT(in_double.tiled_supernodes(), all_tiled[threads]);
+      }
+      Eigen::VectorXd x;
+      in_double.Solve(b, &x);
+      EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+      fast_backend::SupernodalSolve<float> in_float;
+      in_float.set_tile_rows(tile);
+      in_float.set_cut_from(0);
+      ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, true, threads));
+      Eigen::VectorXd y;
+      in_float.Solve(b, &y);
+      EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 3e-3 * scale);
+      EXPECT_GT(in_float.serial_fraction(), 0.0);  // a top, run by the team
+      EXPECT_LT(in_float.serial_fraction(), 1.0);
+      const std::vector<float> first = in_float.values();
+      if (threads == 1) {
+        on_one_thread = first;
+      } else {
+        EXPECT_TRUE(first == on_one_thread) << "another factor than on one thread";
+      }
+      ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), 2.0 * H, false, threads));
+      ASSERT_TRUE(in_float.Factorize(*symbolic.raw(), H, false, threads));
+      EXPECT_TRUE(in_float.values() == first) << "another factor on the same threads";
+      EXPECT_FALSE(in_double.Factorize(*symbolic.raw(), indefinite, false, threads));
+      EXPECT_FALSE(in_double.loaded());
+      ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, false, threads));
+      in_double.Solve(b, &x);
+      EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace femreg
