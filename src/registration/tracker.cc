@@ -350,6 +350,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     state.collision->Detect(state.x, state.collision->distance(), &state.contacts);
     row.contacts = static_cast<int>(state.contacts.size());
     frame_problem.SetContacts(state.contacts, *state.collision, state.contact_multipliers);
+    // Friction's slip is from the previous frame's result, where the contacts last rested.
+    frame_problem.SetFriction(state.contacts, *state.collision, state.contact_multipliers, state.x,
+                              *previous, std::max(0, state.frame - 1));
     s->time.collision += Seconds(t_collision);
   }
   // Equilibrium registration starts each frame with one outer iteration of the energy without
@@ -511,6 +514,7 @@ void Tracker::Impl::MeasureContacts(FrameSummary* s) {
   s->obstacle_contacts = cs.obstacle_contacts;
   s->max_penetration = cs.max_penetration;
   s->min_gap = cs.min_gap;
+  s->contact_forces = frame_problem.ContactForces(state.x);
   s->time.collision += Seconds(t0);
 }
 
