@@ -62,9 +62,11 @@ struct Dragged {
   Vertices reactions, loads;
   std::vector<int> bottom;
   bool converged = false;
+  int iterations = 0;  // Newton iterations of both frames
 };
 
-Dragged Drag(double mu) {
+// top_dx: the top's move along x in frame 1; table_dx: the table's (keyframed).
+Dragged Drag(double mu, double top_dx = 0.003, double table_dx = 0.0) {
   Dragged d;
   TetMesh mesh = MakeBox(V3(0.04, 0.04, 0.02), 4, 4, 2);
   Material soft;
@@ -83,6 +85,9 @@ Dragged Drag(double mu) {
   spec.friction = mu;
   ObstacleSpec table;
   table.name = "table";
+  table.keyframes.resize(2);
+  table.keyframes[1].frame = 1;
+  table.keyframes[1].translation = V3(table_dx, 0, 0);
   spec.obstacles.push_back(table);
   CollisionWorld world;
   EXPECT_TRUE(world.Init(spec, {"block"}, {mesh.surface}, mesh.x).ok());
@@ -97,10 +102,11 @@ Dragged Drag(double mu) {
     // Prescribed moves are stepped from rest: the drag in one step, not through a lifted top.
     options.load_steps = f == 0 ? 2 : 1;
     problem.prescribed.clear();
-    for (int v : top) problem.prescribed.emplace_back(v, V3(f == 0 ? 0.0 : 0.003, 0, -0.002));
+    for (int v : top) problem.prescribed.emplace_back(v, V3(f == 0 ? 0.0 : top_dx, 0, -0.002));
     ForwardSummary summary;
     EXPECT_TRUE(SolveQuasiStatic(problem, options, &model, &mesh, &summary).ok());
     d.converged = d.converged && summary.termination == ForwardTermination::kConverged;
+    d.iterations += summary.NumNewtonIterations();
     EXPECT_EQ(summary.termination, ForwardTermination::kConverged) << summary.FullReport();
     (f == 0 ? d.pressed : d.dragged) = mesh.x;
   }
@@ -126,6 +132,14 @@ TEST(ForwardFriction, ABlockDraggedOnATableSticksBelowMuAndSlidesAboveIt) {
   ASSERT_TRUE(stick.converged && slide.converged && free.converged);
   ASSERT_EQ(stick.forces.size(), 1u);
   ASSERT_EQ(slide.forces.size(), 1u);
+  RecordProperty("newton_iterations_mu2_mu01_mu0", std::to_string(stick.iterations) + " " +
+                                                       std::to_string(slide.iterations) + " " +
+                                                       std::to_string(free.iterations));
+  RecordProperty("slide_um_mu2", std::to_string(MeanSlideX(stick) * 1e6));
+  RecordProperty("slide_um_mu01", std::to_string(MeanSlideX(slide) * 1e6));
+  RecordProperty("slide_um_mu0", std::to_string(MeanSlideX(free) * 1e6));
+  RecordProperty("friction_over_normal_mu2", std::to_string(stick.forces[0].friction.norm() / stick.forces[0].force.z()));
+  RecordProperty("friction_over_normal_mu01", std::to_string(slide.forces[0].friction.norm() / slide.forces[0].force.z()));
   // Sticking: the bottom stays where it was pressed (within the slip eps), the block shears.
   EXPECT_LT(std::abs(MeanSlideX(stick)), 1.5e-4);
   const ContactForce& fs = stick.forces[0];
@@ -150,6 +164,18 @@ TEST(ForwardFriction, ABlockDraggedOnATableSticksBelowMuAndSlidesAboveIt) {
     const V3 balance = reported + d->reactions.colwise().sum().transpose() + d->loads.colwise().sum().transpose();
     EXPECT_LT(balance.norm(), 1e-3 * potential.norm()) << balance.transpose();
   }
+}
+
+// The table slides 2 mm under the pressed block whose top is held: sticking, the bottom goes
+// along (the slip is relative to the obstacle's motion); frictionless, it stays.
+TEST(ForwardFriction, AMovingObstacleDragsWhatSticksToIt) {
+  const Dragged stick = Drag(2.0, 0.0, 0.002), free = Drag(0.0, 0.0, 0.002);
+  ASSERT_TRUE(stick.converged && free.converged);
+  RecordProperty("slide_um_mu2", std::to_string(MeanSlideX(stick) * 1e6));
+  EXPECT_NEAR(MeanSlideX(stick), 0.002, 1.5e-4);
+  EXPECT_LT(std::abs(MeanSlideX(free)), 1e-5);
+  ASSERT_EQ(stick.forces.size(), 1u);
+  EXPECT_GT(stick.forces[0].friction.x(), 0.0);  // the table pulls the bottom along +x
 }
 
 // A stiff block (its own weight squeezes it by far less than a micrometre, which the data would
@@ -240,6 +266,13 @@ TEST(RegistrationFriction, ABlockPushedOnATableSticksBelowMuAndSlidesAboveIt) {
   EXPECT_GT(free.slide, slide.slide + 5e-4);
   ASSERT_EQ(stick.pushed.contact_forces.size(), 1u);
   ASSERT_EQ(slide.pushed.contact_forces.size(), 1u);
+  ASSERT_EQ(free.pushed.contact_forces.size(), 1u);
+  RecordProperty("slide_um_mu05", std::to_string(stick.slide * 1e6));
+  RecordProperty("slide_um_mu01", std::to_string(slide.slide * 1e6));
+  RecordProperty("slide_um_mu0", std::to_string(free.slide * 1e6));
+  RecordProperty("friction_over_weight_mu05", std::to_string(stick.pushed.contact_forces[0].friction.norm() / stick.weight));
+  RecordProperty("friction_over_normal_mu01", std::to_string(slide.pushed.contact_forces[0].friction.norm() /
+                                                             slide.pushed.contact_forces[0].force.z()));
   // Sticking: friction holds the push; sliding: it is mu times the normal force, against the
   // motion.
   const ContactForce& s = stick.pushed.contact_forces[0];

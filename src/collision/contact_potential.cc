@@ -147,14 +147,19 @@ void ContactPotential::AddHessian(const Vertices& x,
     ContactPotential* self = const_cast<ContactPotential*>(this);  // not a const object
     StartSlip(x, world_->frame(), &self->reference_, &self->reference_frame_, &self->motion_from_);
   }
-  ForEachBlock([&](const auto& block, const Contact&, const energy::Loss& loss, bool) {
+  ForEachBlock([&](const auto& block, const Contact&, const energy::Loss& loss, bool friction) {
     using Block = std::decay_t<decltype(block)>;
     constexpr int n = Block::kVertices;
     if (!Active(block, x)) return;
-    // k J^T J: exact for the penalty while the normal is held (the residual is linear in x);
-    // for friction the reweighted w rho' J^T J, positive semi-definite.
+    // The exact Hessian: k J^T J for the penalty while the normal is held (the residual is
+    // linear in x); for friction the Huber loss' own, positive semi-definite (no stiffness
+    // along a sliding contact's slip), which Newton converges on where the reweighted one crawls.
     energy::Linearization<Block> share;
-    energy::Linearize(block, loss, x, &share);
+    if (friction) {
+      energy::LinearizeSecondOrder(block, loss, x, energy::Curvature::kExact, &share);
+    } else {
+      energy::Linearize(block, loss, x, &share);
+    }
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
         const Eigen::Matrix3d& h = share.hessian[i * n + j];
