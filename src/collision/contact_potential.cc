@@ -72,10 +72,6 @@ bool Active(const Block& block, const Vertices& x) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The friction reference of a frame: the positions its solve starts from, taken at the first
 // call after the obstacles were posed for another frame (`frame`); the obstacles' motion is
 // from the frame before.
