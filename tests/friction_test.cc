@@ -178,6 +178,89 @@ TEST(ForwardFriction, AMovingObstacleDragsWhatSticksToIt) {
   EXPECT_GT(stick.forces[0].friction.x(), 0.0);  // the table pulls the bottom along +x
 }
 
+// Two blocks, the lower clamped at its bottom, the upper 0.5 mm above it, pressed 2 mm down by
+// its top (frame 0), then dragged 2 mm along x (frame 1): sticking, the faces move together and
+// the pair's force on the lower block pulls it forward; frictionless, they slide.
+struct PairDrag {
+  double lower_top_slide = 0.0;  // m, frame 1
+  double interface_slip = 0.0;   // m, frame 1: the upper's bottom against the lower's top
+  std::vector<ContactForce> forces;
+  bool converged = true;
+};
+
+PairDrag DragPair(double mu) {
+  PairDrag d;
+  const TetMesh lower = MakeBox(V3(0.04, 0.04, 0.02), 4, 4, 2);
+  const TetMesh upper = MakeBox(V3(0.04, 0.04, 0.02), 3, 3, 2, V3(0, 0, 0.0205));
+  std::vector<int> offsets;
+  TetMesh mesh = MergeMeshes({lower, upper}, &offsets);
+  Material soft;
+  soft.youngs_modulus = 5e4;
+  soft.poisson_ratio = 0.3;
+  ElasticModel model;
+  model.Build(mesh, ElasticModelType::kCorotational, soft);
+  ForwardProblem problem;
+  std::vector<int> top, lower_top, upper_bottom;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    const double z = mesh.rest(v, 2);
+    if (v < offsets[1] && z < 1e-9) problem.clamped.push_back(v);
+    if (v < offsets[1] && z > 0.02 - 1e-9) lower_top.push_back(v);
+    if (v >= offsets[1] && z > 0.0405 - 1e-9) top.push_back(v);
+    if (v >= offsets[1] && z < 0.0205 + 1e-9) upper_bottom.push_back(v);
+  }
+  CollisionSpec spec;
+  spec.pairs = {{"lower", "upper"}};
+  spec.pair_friction = {mu};
+  spec.distance = 0.001;
+  spec.stiffness = 2e4;
+  const std::vector<Triangles> surfaces = {lower.surface, (upper.surface.array() + offsets[1]).matrix()};
+  CollisionWorld world;
+  EXPECT_TRUE(world.Init(spec, {"lower", "upper"}, surfaces, mesh.x).ok());
+  ContactPotential potential(&world, 0.001);
+  problem.potential = &potential;
+  ForwardOptions options;
+  options.num_threads = 1;
+  Vertices pressed;
+  for (int f = 0; f < 2; ++f) {
+    world.SetFrame(f);
+    options.load_steps = f == 0 ? 2 : 1;
+    problem.prescribed.clear();
+    for (int v : top) problem.prescribed.emplace_back(v, V3(f == 0 ? 0.0 : 0.002, 0, -0.002));
+    ForwardSummary summary;
+    EXPECT_TRUE(SolveQuasiStatic(problem, options, &model, &mesh, &summary).ok());
+    EXPECT_EQ(summary.termination, ForwardTermination::kConverged) << summary.FullReport();
+    d.converged = d.converged && summary.termination == ForwardTermination::kConverged;
+    if (f == 0) pressed = mesh.x;
+  }
+  for (int v : lower_top) d.lower_top_slide += (mesh.x(v, 0) - pressed(v, 0)) / lower_top.size();
+  d.interface_slip = -d.lower_top_slide;
+  for (int v : upper_bottom) d.interface_slip += (mesh.x(v, 0) - pressed(v, 0)) / upper_bottom.size();
+  potential.Refresh(mesh.x);
+  d.forces = potential.Forces(mesh.x);
+  return d;
+}
+
+TEST(ForwardFriction, APairSticksBelowMuAndSlidesFrictionless) {
+  const PairDrag stick = DragPair(1.0), free = DragPair(0.0);
+  ASSERT_TRUE(stick.converged && free.converged);
+  RecordProperty("lower_top_slide_um_mu1", std::to_string(stick.lower_top_slide * 1e6));
+  RecordProperty("lower_top_slide_um_mu0", std::to_string(free.lower_top_slide * 1e6));
+  RecordProperty("interface_slip_um_mu1", std::to_string(stick.interface_slip * 1e6));
+  RecordProperty("interface_slip_um_mu0", std::to_string(free.interface_slip * 1e6));
+  // Sticking, the faces move together (within the slip eps); frictionless they slide (the
+  // upper block's indent still carries the lower one's top part of the way).
+  EXPECT_LT(std::abs(stick.interface_slip), 1e-4);
+  EXPECT_GT(free.interface_slip, 3e-4);
+  EXPECT_GT(stick.lower_top_slide, free.lower_top_slide + 1e-4);
+  ASSERT_EQ(stick.forces.size(), 1u);
+  EXPECT_EQ(stick.forces[0].object, 0);
+  EXPECT_EQ(stick.forces[0].other, 1);
+  EXPECT_GT(stick.forces[0].friction.x(), 0.0);  // the upper block pulls the lower one along
+  EXPECT_LT(stick.forces[0].force.z(), 0.0);     // and presses it down
+  ASSERT_EQ(free.forces.size(), 1u);
+  EXPECT_EQ(free.forces[0].friction.norm(), 0.0);
+}
+
 // A stiff block (its own weight squeezes it by far less than a micrometre, which the data would
 // pull back) resting on a table, seen from above (its top face only, which leaves it free
 // to slide: point-to-plane pairs), under gravity and then pushed along x by 0.3 of its weight.

@@ -100,16 +100,21 @@ void ContactPotential::Refresh(const Vertices& x) {
     detected_frame_ = world_->frame();
     ++detections_;
   }
+  const std::vector<double> previous = friction_weight_;
   friction_weight_.clear();
   friction_motion_.clear();
   if (!world_->has_friction()) return;
-  // The normal forces of this iteration's x, held for its step (lagged friction).
+  const bool relax = !stale && previous.size() == contacts_.size();
+  // The normal forces of this iteration's x, held for its step (lagged friction); between
+  // detections half way from the last ones, which settles the fixed point where a deformable
+  // partner's gaps answer to the friction (two bodies pressed and dragged), and cycles without.
   friction_weight_.assign(contacts_.size(), 0.0);
   friction_motion_.assign(contacts_.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < contacts_.size(); ++i) {
     const Contact& c = contacts_[i];
     const double normal = world_->stiffness() * std::max(0.0, -world_->Gap(c, x));
     friction_weight_[i] = FrictionWeight(world_->Friction(c), normal, world_->friction_slip());
+    if (relax && !c.obstacle()) friction_weight_[i] = 0.5 * (previous[i] + friction_weight_[i]);
     if (c.obstacle() && friction_weight_[i] > 0) {
       friction_motion_[i] = world_->ObstacleMotion(-1 - c.object_b, c.point_b, motion_from_);
     }
