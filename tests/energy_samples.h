@@ -224,6 +224,29 @@ struct Sample<energy::ContactPenalty<N>> {
   }
 };
 
+// Friction: a slip of a few eps (m) at a random normal, either side of the Huber loss' bend
+// when the test gives it a scale near the residual's size.
+template <int N>
+struct Sample<energy::Friction<N>> {
+  static constexpr const char* kName = N == 3 ? "Friction<3>" : "Friction<6>";
+  energy::Friction<N> block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    block.tangent = energy::TangentBasis(Eigen::Vector3d(RandomPoint(rng, 0.3).x(), RandomPoint(rng, 0.3).y(), 1).normalized());
+    const auto a = RandomBarycentric<3>(rng);
+    x.resize(N, 3);
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int i = 0; i < N; ++i) {
+      x.row(i) = (Eigen::Vector3d(0.3, 0.2, 0.5) + RandomPoint(rng, 0.01)).transpose();
+      block.vertices[i] = i;
+      block.coefficients[i] = i < 3 ? a[i] : -RandomBarycentric<3>(rng)[i - 3];
+      p += block.coefficients[i] * x.row(i).transpose();
+    }
+    block.offset = block.tangent * p + RandomPoint(rng, 4e-4).head<2>();
+    block.weight = 2e3;
+  }
+};
+
 template <>
 struct Sample<energy::ExternalLoad> {
   static constexpr const char* kName = "ExternalLoad";

@@ -95,6 +95,15 @@ class CollisionWorld {
   double distance() const { return spec_.distance; }
   double tolerance() const { return spec_.tolerance; }
   bool augmented() const { return spec_.augmented; }
+  // Coulomb friction (docs/theory/contact.md#friction): a contact's coefficient (its pair's,
+  // its obstacle's, else collision.friction), whether any is > 0, and the slip eps (m).
+  double Friction(const Contact& c) const;
+  bool has_friction() const { return has_friction_; }
+  double friction_slip() const { return spec_.friction_slip; }
+  // How far obstacle i's material point now at p moved since the pose of `since_frame` (m).
+  Eigen::Vector3d ObstacleMotion(int i, const Eigen::Vector3d& p, double since_frame) const;
+  int num_obstacles() const { return static_cast<int>(obstacles_.size()); }
+  const std::string& obstacle_name(int i) const { return obstacles_.at(i).spec.name; }
   int num_trees_built() const { return trees_built_; }
   const AabbTree& tree(int object) const { return trees_.at(object); }
   // Obstacle i's triangles in the scene frame (empty for planes).
@@ -141,6 +150,8 @@ class CollisionWorld {
   std::vector<Obstacle> obstacles_;
   int trees_built_ = 0;
   double frame_ = 0.0;
+  std::vector<std::pair<std::pair<int, int>, double>> pair_friction_;  // (a < b) -> mu
+  bool has_friction_ = false;
 };
 
 // The penalty as an energy of the forward solve (ForwardProblem::potential): each contact
@@ -166,14 +177,33 @@ class ContactPotential : public ForwardPotential {
   void AddHessian(const Vertices& x, std::vector<Eigen::Triplet<double>>* triplets) const override;
   const std::vector<Contact>& contacts() const { return contacts_; }
   int detections() const { return detections_; }
+  // Friction (the world's coefficients): each contact's slip is measured from the positions
+  // of the first call (Refresh, or AddHessian for the solver's move of prescribed vertices)
+  // after the obstacles were posed for another frame (or after ResetFriction), relative to the
+  // obstacles' motion since the frame before; its normal force is the penalty's at the last
+  // Refresh, held within a Newton iteration.
+  void ResetFriction() { reference_.resize(0, 3); }
+  // The contact forces at x per object pair and obstacle (N), normal and friction parts.
+  std::vector<ContactForce> Forces(const Vertices& x) const;
 
  private:
+  // Calls f(block, contact, friction) for each contact's penalty and friction blocks.
+  template <class F>
+  void ForEachBlock(F&& f) const;
   CollisionWorld* world_;
   double margin_;
   std::vector<Contact> contacts_;
   Vertices detected_at_;     // x at the last detection
   double detected_frame_ = 0.0;
   int detections_ = 0;
+  // Friction: the positions the slip is measured from, the frame they were solved for and the
+  // obstacles' frame the slip is relative to. Mutable: AddHessian may be asked first in a frame
+  // (the predictor of moved prescribed vertices) and starts the frame's slip itself.
+  mutable Vertices reference_;
+  mutable double reference_frame_ = 0.0;
+  mutable double motion_from_ = 0.0;
+  std::vector<double> friction_weight_;           // per contact: mu lambda / eps (0: none)
+  std::vector<Eigen::Vector3d> friction_motion_;  // per contact: the obstacle's motion
 };
 
 // Concatenates meshes into one (for a forward solve of several objects): mesh i's vertices

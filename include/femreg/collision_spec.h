@@ -36,6 +36,7 @@ struct ObstacleSpec {
   double scale = 1.0;     // applied to the mesh file's coordinates
   std::vector<std::string> objects;  // objects it collides with; empty = all
   std::vector<ObstacleKeyframe> keyframes;  // empty = identity pose
+  double friction = -1.0;  // Coulomb coefficient against it; < 0: CollisionSpec::friction
 };
 
 struct CollisionSpec {
@@ -48,6 +49,24 @@ struct CollisionSpec {
   double tolerance = 2.0e-4;
   bool augmented = true;  // false: the bare penalty, zero at contact (penetration F / k)
   std::vector<ObstacleSpec> obstacles;
+  // Coulomb friction (docs/theory/contact.md#friction): the coefficient mu of every pair and
+  // obstacle (0: frictionless), per pair (parallel to `pairs`; < 0 or missing: `friction`),
+  // and the slip (m) below which a contact sticks, where the friction force ramps up to
+  // mu times the normal force.
+  double friction = 0.0;
+  std::vector<double> pair_friction;
+  double friction_slip = 1.0e-4;
+};
+
+// The resultant of the contact forces (N) between an object and another object or an obstacle,
+// normal and friction parts together.
+struct ContactForce {
+  int object = 0;   // the object it acts on
+  int other = 0;    // the other object (> object), or -1 - i for obstacle i
+  int contacts = 0; // contacts carrying a normal force
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d friction = Eigen::Vector3d::Zero();  // the friction part of `force`
+  bool obstacle() const { return other < 0; }
 };
 
 // Reads a triangle surface: OBJ (v / f lines, polygons fanned) or STL (ASCII or binary).

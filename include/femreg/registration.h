@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/collision_spec.h"  // ContactForce, for FrameSummary::contact_forces
 #include "femreg/energy.h"
 #include "femreg/fem.h"
 #include "femreg/fracture.h"  // FractureEvent, for FrameSummary::fractures
@@ -380,6 +381,10 @@ struct FrameSummary {
   int contacts = 0, object_contacts = 0, obstacle_contacts = 0;
   double max_penetration = 0.0;
   double min_gap = 0.0;
+  // The contact forces at the result per object pair and obstacle (N; normal and friction
+  // parts; a pair's on its lower-numbered object), from the penalty and friction blocks the
+  // last solve minimized (docs/theory/contact.md#what-is-reported).
+  std::vector<ContactForce> contact_forces;
   StageTimes time;
   std::vector<OuterIteration> iterations;
   std::vector<FractureEvent> fractures;  // node splits this frame (effects.fracture)

@@ -60,6 +60,12 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["obstacle_contacts"] = s.obstacle_contacts;
   d["max_penetration"] = s.max_penetration;
   d["min_gap"] = s.min_gap;
+  py::list forces;  // per object pair and obstacle: other = -1 - i for obstacle i
+  for (const ContactForce& f : s.contact_forces) {
+    forces.append(py::dict(py::arg("object") = f.object, py::arg("other") = f.other, py::arg("contacts") = f.contacts,
+                           py::arg("force") = Eigen::Vector3d(f.force), py::arg("friction") = Eigen::Vector3d(f.friction)));
+  }
+  d["contact_forces"] = forces;
   d["force"] = Eigen::Vector3d(s.force);
   d["torque"] = Eigen::Vector3d(s.torque);
   py::dict t;

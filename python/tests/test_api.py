@@ -208,6 +208,33 @@ def test_estimated_forces_hold_up_what_is_seen_at_rest():
         femreg.Tracker([mesh], [material], options)
 
 
+def test_contact_forces_carry_a_resting_block():
+    # A stiff block on a table under gravity, seen from above: the table's force per frame
+    # (summary["contact_forces"], docs/theory/contact.md#what-is-reported) is its weight.
+    scene = femreg.parse_scene("""
+objects:
+  - {name: block, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]},
+     material: {youngs_modulus: 1.0e8, poisson_ratio: 0.3, density: 1000}}
+gravity: [0, 0, -9.81]
+effects: {collision: true}
+collision:
+  friction: 0.5
+  obstacles:
+    - {name: table, plane: {point: [0, 0, 0], normal: [0, 0, 1]}}
+""")
+    tracker = femreg.Tracker(scene)
+    g = np.linspace(0.004, 0.036, 17)
+    points = np.array([[x, y, 0.02] for x in g for y in g])
+    normals = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    for _ in range(5):
+        tracker.track(points, normals)
+    forces = tracker.summary["contact_forces"]
+    assert len(forces) == 1 and forces[0]["object"] == 0 and forces[0]["other"] == -1
+    weight = 1000 * 0.04 * 0.04 * 0.02 * 9.81
+    np.testing.assert_allclose(forces[0]["force"], [0, 0, weight], atol=0.01 * weight)
+    np.testing.assert_allclose(forces[0]["friction"], [0, 0, 0], atol=0.01 * weight)
+
+
 def test_tracker_reports_bad_frames_in_the_summary():
     mesh = femreg.make_box([0.1, 0.02, 0.02], [5, 1, 1])
     tracker = femreg.Tracker([mesh], [femreg.Material()])

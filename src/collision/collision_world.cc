@@ -35,6 +35,12 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
   if (!(spec.tolerance > 0) || !std::isfinite(spec.tolerance)) {
     return Status::Error("collision.tolerance must be > 0");
   }
+  if (!(spec.friction >= 0) || !std::isfinite(spec.friction)) {
+    return Status::Error("collision.friction must be >= 0");
+  }
+  if (!(spec.friction_slip > 0) || !std::isfinite(spec.friction_slip)) {
+    return Status::Error("collision.friction_slip must be > 0");
+  }
   const int n = static_cast<int>(surfaces.size());
   surfaces_ = surfaces;
   auto find = [&](const std::string& name, int* index) {
@@ -60,6 +66,16 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
   }
   std::sort(pairs_.begin(), pairs_.end());
   pairs_.erase(std::unique(pairs_.begin(), pairs_.end()), pairs_.end());
+  // Friction per pair where the spec gives one (a coefficient < 0 falls back to the default).
+  pair_friction_.clear();
+  has_friction_ = spec.friction > 0;
+  for (size_t i = 0; i < spec.pairs.size() && i < spec.pair_friction.size(); ++i) {
+    int a = -1, b = -1;
+    if (spec.pair_friction[i] < 0 || !find(spec.pairs[i].first, &a) || !find(spec.pairs[i].second, &b)) continue;
+    pair_friction_.push_back({{std::min(a, b), std::max(a, b)}, spec.pair_friction[i]});
+    has_friction_ = has_friction_ || spec.pair_friction[i] > 0;
+  }
+  for (const ObstacleSpec& os : spec.obstacles) has_friction_ = has_friction_ || os.friction > 0;
 
   needs_tree_.assign(n, 0);
   for (const auto& p : pairs_) needs_tree_[p.first] = needs_tree_[p.second] = 1;

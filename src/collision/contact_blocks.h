@@ -5,7 +5,13 @@
 #ifndef FEMREG_COLLISION_CONTACT_BLOCKS_H_
 #define FEMREG_COLLISION_CONTACT_BLOCKS_H_
 
+#include <map>
+#include <utility>
+#include <vector>
+
 #include "energy/contact.h"
+#include "energy/friction.h"
+#include "energy/term.h"
 #include "femreg/collision.h"
 
 namespace femreg {
@@ -18,6 +24,36 @@ energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double standoff
 // A contact between two objects: side a's 3 vertices (coefficients bary_a), then side b's
 // (coefficients -bary_b); offset s.
 energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double standoff, double stiffness);
+
+// Friction (energy/friction.h): the block's weight mu lambda / eps, 0 unless all are > 0.
+double FrictionWeight(double mu, double normal_force, double slip);
+// A contact against an obstacle: the slip of side a's point since `reference` (#V by 3),
+// relative to the obstacle's surface, which moved by obstacle_motion (m) since then.
+energy::Friction<3> ObstacleFrictionBlock(const Contact& c, const Vertices& reference,
+                                          const Eigen::Vector3d& obstacle_motion, double weight);
+// Between two objects: side a's point relative to side b's.
+energy::Friction<6> PairFrictionBlock(const Contact& c, const Vertices& reference, double weight);
+
+// The contact blocks' forces summed per object pair and obstacle (femreg/collision_spec.h's
+// ContactForce; a pair on its lower-numbered object).
+class ContactForceSum {
+ public:
+  // Adds the force a contact's penalty or friction block exerts at x on side a (its first 3
+  // vertices); a block that adds nothing (an open contact) is not counted.
+  template <class Block>
+  void Add(const Contact& c, const Block& block, const energy::Loss& loss, const Vertices& x, bool friction) {
+    energy::Linearization<Block> share;
+    if (!energy::Linearize(block, loss, x, &share, false) || share.scale == 0.0) return;
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 3; ++i) f -= share.gradient[i];
+    AddSideA(c, f, friction);
+  }
+  void AddSideA(const Contact& c, const Eigen::Vector3d& force_on_a, bool friction);
+  std::vector<ContactForce> Result() const;
+
+ private:
+  std::map<std::pair<int, int>, ContactForce> sums_;
+};
 
 }  // namespace femreg
 

@@ -2,6 +2,7 @@
 // The penalty itself (value, gradient, Gauss-Newton Hessian) is energy::ContactPenalty's,
 // evaluated through the generic block functions of energy/term.h; this file only turns
 // contacts into blocks and scatters the blocks' shares into the solver's global arrays.
+#include <algorithm>
 #include <type_traits>
 
 #include "collision/contact_blocks.h"
@@ -36,52 +37,101 @@ energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double standoff, do
   return block;
 }
 
-namespace {
-
-// Calls f(block) with the penalty block of every contact (3 or 6 vertices), zero at contact:
-// D only detects.
+// Calls f(block, contact, loss, friction) with each contact's penalty block (3 or 6 vertices),
+// zero at contact (D only detects), and its friction block where it has one.
 template <class F>
-void ForEachPenaltyBlock(const std::vector<Contact>& contacts, const CollisionWorld& world, F&& f) {
-  for (const Contact& c : contacts) {
+void ContactPotential::ForEachBlock(F&& f) const {
+  const energy::Loss none;  // 1/2 k delta^2 as it is
+  const energy::Loss huber{RobustLoss::kHuber, world_->friction_slip()};
+  const bool friction = friction_weight_.size() == contacts_.size();
+  for (size_t i = 0; i < contacts_.size(); ++i) {
+    const Contact& c = contacts_[i];
     if (c.obstacle()) {
-      f(ObstaclePenaltyBlock(c, 0.0, world.stiffness()));
+      f(ObstaclePenaltyBlock(c, 0.0, world_->stiffness()), c, none, false);
     } else {
-      f(PairPenaltyBlock(c, 0.0, world.stiffness()));
+      f(PairPenaltyBlock(c, 0.0, world_->stiffness()), c, none, false);
+    }
+    if (!friction || !(friction_weight_[i] > 0)) continue;
+    if (c.obstacle()) {
+      f(ObstacleFrictionBlock(c, reference_, friction_motion_[i], friction_weight_[i]), c, huber, true);
+    } else {
+      f(PairFrictionBlock(c, reference_, friction_weight_[i]), c, huber, true);
     }
   }
 }
 
-// Whether the block's contact is active (delta > 0) at x: an open contact adds nothing.
+namespace {
+
+// Whether the block adds to the energy at x: an open contact's penalty does not.
 template <class Block>
 bool Active(const Block& block, const Vertices& x) {
-  return block.Penetration(energy::StencilPositions(block, x).data()) > 0;
+  if constexpr (std::is_same_v<Block, energy::ContactPenalty<3>> || std::is_same_v<Block, energy::ContactPenalty<6>>) {
+    return block.Penetration(energy::StencilPositions(block, x).data()) > 0;
+  } else {
+    return true;
+  }
+}
+
+// The friction reference of a frame: the positions its solve starts from, taken at the first
+// call after the obstacles were posed for another frame (`frame`); the obstacles' motion is
+// from the frame before.
+void StartSlip(const Vertices& x, double frame, Vertices* reference, double* reference_frame,
+               double* motion_from) {
+  if (reference->rows() != x.rows()) {
+    *reference = x;
+    *reference_frame = *motion_from = frame;
+  } else if (frame != *reference_frame) {
+    *motion_from = *reference_frame;
+    *reference = x;
+    *reference_frame = frame;
+  }
 }
 
 }  // namespace
 
 void ContactPotential::Refresh(const Vertices& x) {
+  StartSlip(x, world_->frame(), &reference_, &reference_frame_, &motion_from_);
   const bool stale = detections_ == 0 || detected_at_.rows() != x.rows() ||
                      world_->frame() != detected_frame_ ||
                      (x - detected_at_).rowwise().norm().maxCoeff() > 0.5 * margin_;
-  if (!stale) return;
-  world_->Detect(x, margin_, &contacts_);
-  detected_at_ = x;
-  detected_frame_ = world_->frame();
-  ++detections_;
+  if (stale) {
+    world_->Detect(x, margin_, &contacts_);
+    detected_at_ = x;
+    detected_frame_ = world_->frame();
+    ++detections_;
+  }
+  const std::vector<double> previous = friction_weight_;
+  friction_weight_.clear();
+  friction_motion_.clear();
+  if (!world_->has_friction()) return;
+  const bool relax = !stale && previous.size() == contacts_.size();
+  // The normal forces of this iteration's x, held for its step (lagged friction); between
+  // detections half way from the last ones, which settles the fixed point where a deformable
+  // partner's gaps answer to the friction (two bodies pressed and dragged), and cycles without.
+  friction_weight_.assign(contacts_.size(), 0.0);
+  friction_motion_.assign(contacts_.size(), Eigen::Vector3d::Zero());
+  for (size_t i = 0; i < contacts_.size(); ++i) {
+    const Contact& c = contacts_[i];
+    const double normal = world_->stiffness() * std::max(0.0, -world_->Gap(c, x));
+    friction_weight_[i] = FrictionWeight(world_->Friction(c), normal, world_->friction_slip());
+    if (relax && !c.obstacle()) friction_weight_[i] = 0.5 * (previous[i] + friction_weight_[i]);
+    if (c.obstacle() && friction_weight_[i] > 0) {
+      friction_motion_[i] = world_->ObstacleMotion(-1 - c.object_b, c.point_b, motion_from_);
+    }
+  }
 }
 
 double ContactPotential::Evaluate(const Vertices& x, Eigen::VectorXd* gradient) const {
-  const energy::Loss none;  // 1/2 k delta^2 as it is
   double value = 0.0;
-  ForEachPenaltyBlock(contacts_, *world_, [&](const auto& block) {
+  ForEachBlock([&](const auto& block, const Contact&, const energy::Loss& loss, bool) {
     using Block = std::decay_t<decltype(block)>;
     if (!Active(block, x)) return;
     if (gradient == nullptr) {
-      value += energy::BlockValue(block, none, x);
+      value += energy::BlockValue(block, loss, x);
       return;
     }
     energy::Linearization<Block> share;
-    energy::Linearize(block, none, x, &share, /*with_hessian=*/false);
+    energy::Linearize(block, loss, x, &share, /*with_hessian=*/false);
     value += share.value;
     for (int i = 0; i < Block::kVertices; ++i) {
       gradient->segment<3>(3 * block.vertices[i]) += share.gradient[i];
@@ -92,14 +142,21 @@ double ContactPotential::Evaluate(const Vertices& x, Eigen::VectorXd* gradient) 
 
 void ContactPotential::AddHessian(const Vertices& x,
                                   std::vector<Eigen::Triplet<double>>* triplets) const {
-  const energy::Loss none;
-  ForEachPenaltyBlock(contacts_, *world_, [&](const auto& block) {
+  // The solver's predictor for moved prescribed vertices asks for the Hessian before the
+  // frame's first Refresh: the frame's slip starts before that move.
+  if (world_->has_friction()) StartSlip(x, world_->frame(), &reference_, &reference_frame_, &motion_from_);
+  ForEachBlock([&](const auto& block, const Contact&, const energy::Loss& loss, bool friction) {
     using Block = std::decay_t<decltype(block)>;
     constexpr int n = Block::kVertices;
     if (!Active(block, x)) return;
-    // k J^T J: exact for the penalty while the normal is held (the residual is linear in x).
+    // The exact Hessian: k J^T J for the penalty while the normal is held (the residual is
+    // linear in x); for friction the Huber loss' own, positive semi-definite (no stiffness
+    // along a sliding contact's slip), which Newton converges on where the reweighted one crawls.
     energy::Linearization<Block> share;
-    if (!energy::Linearize(block, none, x, &share) || share.scale == 0.0) return;
+    const bool linearized = friction
+                                ? energy::LinearizeSecondOrder(block, loss, x, energy::Curvature::kExact, &share)
+                                : energy::Linearize(block, loss, x, &share);
+    if (!linearized || share.scale == 0.0) return;
     for (int i = 0; i < n; ++i) {
       for (int j = 0; j < n; ++j) {
         const Eigen::Matrix3d& h = share.hessian[i * n + j];
@@ -111,6 +168,14 @@ void ContactPotential::AddHessian(const Vertices& x,
       }
     }
   });
+}
+
+std::vector<ContactForce> ContactPotential::Forces(const Vertices& x) const {
+  ContactForceSum sum;
+  ForEachBlock([&](const auto& block, const Contact& c, const energy::Loss& loss, bool friction) {
+    sum.Add(c, block, loss, x, friction);
+  });
+  return sum.Result();
 }
 
 TetMesh MergeMeshes(const std::vector<TetMesh>& meshes, std::vector<int>* offsets) {

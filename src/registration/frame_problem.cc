@@ -49,6 +49,10 @@ void FrameProblem::BuildAreas(const TrackerState& state) {
 
 void FrameProblem::BuildElastic(const TrackerState& state) {
   BuildAreas(state);
+  force_contacts_.clear();  // their vertex numbering may be gone
+  force_penalty_.clear();
+  force_friction_obstacle_.clear();
+  force_friction_pair_.clear();
   problem_.Clear(TermGroup::kElastic);
   problem_.Reset(state.num_vertices);
   std::vector<std::array<int, 4>> cells;
@@ -340,6 +344,10 @@ void FrameProblem::SetContacts(
     const std::vector<Contact>& contacts, const CollisionWorld& world,
     const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers) {
   problem_.Clear(TermGroup::kCollision);
+  force_contacts_ = contacts;
+  force_penalty_.clear();
+  force_friction_obstacle_.clear();
+  force_friction_pair_.clear();
   auto& obstacle = *problem_.AddSet<energy::ContactPenalty<3>>(TermGroup::kCollision).mutable_blocks();
   auto& pair = *problem_.AddSet<energy::ContactPenalty<6>>(TermGroup::kCollision).mutable_blocks();
   for (const Contact& c : contacts) {
@@ -350,6 +358,7 @@ void FrameProblem::SetContacts(
       k = it->second.stiffness;
       standoff = it->second.lambda / k;
     }
+    force_penalty_.emplace_back(standoff, k);
     if (c.obstacle()) {
       obstacle.push_back(ObstaclePenaltyBlock(c, standoff, k));
     } else {

@@ -45,6 +45,16 @@ class FrameProblem {
   // contact's multiplier (none yet: k from the world, zero at contact).
   void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world,
                    const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers);
+  // Coulomb friction of those contacts (docs/theory/contact.md#friction; frame_friction.cc): for
+  // each with a coefficient > 0, a block on its slip since `reference` (the previous frame's
+  // result) relative to the obstacle's motion since `reference_frame`, with the normal force
+  // max(0, lambda - k g) of its penalty at x held for the solve. After SetContacts.
+  void SetFriction(const std::vector<Contact>& contacts, const CollisionWorld& world,
+                   const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers,
+                   const Vertices& x, const Vertices& reference, double reference_frame);
+  // The forces of the last SetContacts' and SetFriction's blocks at x, per object pair and
+  // obstacle; empty after a topology change.
+  std::vector<ContactForce> ContactForces(const Vertices& x) const;
 
   // Equilibrium registration (registration.forces, energy/equilibrium.h): where forces may
   // act, their penalties, and the surface's normals at state.x. Every outer iteration, after
@@ -70,6 +80,14 @@ class FrameProblem {
   std::unordered_map<uint64_t, double> triangle_area_;
   std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
   int num_objects_ = 0;
+  // For ContactForces: the contacts of the collision set, each penalty's (standoff, k), the
+  // friction blocks and their contacts.
+  std::vector<Contact> force_contacts_;
+  std::vector<std::pair<double, double>> force_penalty_;
+  std::vector<energy::Friction<3>> force_friction_obstacle_;
+  std::vector<energy::Friction<6>> force_friction_pair_;
+  std::vector<int> force_friction_obstacle_contact_, force_friction_pair_contact_;
+  double friction_slip_ = 1.0;
 };
 
 }  // namespace femreg

@@ -1,6 +1,7 @@
 // The Tracker: one frame is a few outer iterations of (rotations, correspondences, contacts,
 // solve, fracture); see docs/theory/energy.md#one-frame. The parts live beside this file
-// (registration/tracker_state.h lists them); this file holds the outer loop and the API.
+// (registration/tracker_state.h lists them); this file holds the outer loop and the API, and
+// outer_iteration.cc the set-up of an outer iteration and its backtracking.
 #include "femreg/tracker.h"
 
 #include <algorithm>
@@ -44,13 +45,6 @@ constexpr double kRiseMoveLimit = 1.0;
 // (docs/notes/2026-11-28-figures-from-code-comments.md). With solver.relative_energy_tolerance at
 // this limit or above, no rise stops a frame.
 constexpr double kRiseEnergyLimit = 0.1;
-// Halvings of an outer iteration's move tried when the energy it reached, with its new pairs,
-// is more than kRiseEnergyLimit above its start's (Backtrack): down to an eighth of the move.
-constexpr int kBacktrackHalvings = 3;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
@@ -302,130 +296,6 @@ bool UpdateContactMultipliers(TrackerState* state) {
 
 }  // namespace
 
-void Tracker::Impl::UpdateElementRotations(FrameSummary* s) {
-  const auto t0 = Clock::now();
-  // Only the corotational element reads rotations: what is off costs nothing (neo-Hookean
-  // objects have none to hold; the fracture step refreshes its own).
-  if (state.options.regularizer == Regularizer::kCorotational) {
-    for (ObjectState& o : state.objects) {
-      if (o.model.type() == ElasticModelType::kNeoHookean) continue;
-      o.model.UpdateRotations(state.x.middleRows(o.offset, o.mesh.num_vertices()));
-    }
-  }
-  s->time.rotations += Seconds(t0);
-}
-
-bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, std::vector<DataPair>* pairs,
-                                     PairCounts* counts_out, femreg::OuterIteration* row_out,
-                                     FrameSummary* s) {
-  const RegistrationOptions& options = state.options;
-  femreg::OuterIteration& row = *row_out;
-  PairCounts& counts = *counts_out;
-  counts = PairCounts();
-  auto t0 = Clock::now();
-  const int hold = options.data.hold_pairs_after;
-  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
-            &paired_vertices, hold > 0 && k >= hold);
-  s->time.correspondences += Seconds(t0);
-  row.model_to_cloud = counts.model_to_cloud;
-  row.cloud_to_model = counts.cloud_to_model;
-  row.rejected = counts.rejected;
-  if (!state.surface_vertices.empty()) {
-    s->coverage = static_cast<double>(counts.covered) / static_cast<double>(state.surface_vertices.size());
-  }
-  if (pairs->empty()) {
-    s->rejected = counts.rejected;
-    if (k == 0) {
-      s->termination = TerminationType::kNoCorrespondences;
-      s->message = "no correspondence within data.max_distance (" + std::to_string(counts.rejected) +
-                   " rejected); the shape was held at the previous frame";
-    }
-    return false;
-  }
-
-  // Contacts at the current x, normals held for the solve; the margin D keeps pairs that
-  // the solve may bring within D.
-  t0 = Clock::now();
-  frame_problem.SetData(*pairs, options);
-  frame_problem.SetLoads(state);
-  s->time.build += Seconds(t0);
-  if (state.collision) {
-    const auto t_collision = Clock::now();
-    state.collision->SetFrame(state.frame);
-    state.collision->Detect(state.x, state.collision->distance(), &state.contacts);
-    row.contacts = static_cast<int>(state.contacts.size());
-    frame_problem.SetContacts(state.contacts, *state.collision, state.contact_multipliers);
-    s->time.collision += Seconds(t_collision);
-  }
-  // Equilibrium registration starts each frame with one outer iteration of the energy without
-  // it: Gauss-Newton on the force residual converges slowly from far away (its curvature
-  // grows with the residual), and that iteration brings the shape near (docs/theory/equilibrium.md).
-  const bool warm_start = options.forces.estimate && k == 0;
-  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start);
-  return true;
-}
-
-bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
-  // Not with fracture on: a piece coming apart raises the energy of the pairs it leaves, and
-  // its move is the progress (as for the occluders and the reciprocity trim).
-  return state.options.solver.backtrack && !warm_start && !state.fracture && k >= rise_from &&
-         std::isfinite(merit) && merit_x.rows() == state.x.rows();
-}
-
-bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, std::vector<DataPair>* pairs,
-                              PairCounts* counts, femreg::OuterIteration* row, double* previous_energy,
-                              FrameSummary* s) {
-  const RegistrationOptions& options = state.options;
-  auto t0 = Clock::now();
-  const double allowed = merit + options.solver.relative_energy_tolerance * std::abs(merit);
-  double at = frame_problem.problem().Evaluate(state.x).total();
-  s->time.evaluation += Seconds(t0);
-  if (at <= allowed) return true;
-  const double rose_to = at;
-  const Vertices reached = state.x;
-  for (int h = 1; h <= kBacktrackHalvings; ++h) {
-    state.x = merit_x + std::ldexp(1.0, -h) * (reached - merit_x);
-    UpdateElementRotations(s);
-    if (!PrepareIteration(k, fc, pairs, counts, row, s)) return false;
-    t0 = Clock::now();
-    at = frame_problem.problem().Evaluate(state.x).total();
-    s->time.evaluation += Seconds(t0);
-    ++s->backtracks;
-    if (at <= allowed) {
-      *previous_energy = std::numeric_limits<double>::infinity();  // that of another step
-      return true;
-    }
-  }
-  // No shorter step lowers it: the outer iterations cannot do better than that start (an
-  // energy criterion: with relative_energy_tolerance 0, none stops a frame), unless a contact
-  // there is deeper than the tolerance (its multiplier was lower). Else on from the move's
-  // end, held against nothing.
-  auto go_on = [&] {
-    state.x = reached;
-    merit = std::numeric_limits<double>::infinity();
-    UpdateElementRotations(s);
-    return PrepareIteration(k, fc, pairs, counts, row, s);
-  };
-  if (!(options.solver.relative_energy_tolerance > 0)) return go_on();
-  state.x = merit_x;
-  UpdateElementRotations(s);
-  if (!PrepareIteration(k, fc, pairs, counts, row, s)) return false;
-  double deepest = 0.0;
-  if (state.collision) {
-    for (const Contact& c : state.contacts) deepest = std::max(deepest, state.collision->Penetration(c, state.x));
-  }
-  if (state.collision && deepest > state.collision->tolerance()) return go_on();
-  s->final = frame_problem.problem().Evaluate(state.x);
-  s->termination = TerminationType::kConverged;
-  s->stopped_by = "backtrack";
-  std::ostringstream os;
-  os << "the energy with the pairs found after the last outer iteration rose from " << merit << " to "
-     << rose_to << ", and along 1/" << (1 << kBacktrackHalvings)
-     << " of its move it still rose: the frame keeps that iteration's start";
-  s->message = os.str();
-  return false;
-}
-
 bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
                                    std::vector<DataPair>* pairs, double* previous_energy,
                                    Vertices* previous, FrameSummary* s) {
@@ -436,8 +306,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   PairCounts counts;
   const bool warm_start = options.forces.estimate && k == 0;
   UpdateElementRotations(s);
-  if (!PrepareIteration(k, fc, pairs, &counts, &row, s)) return false;
-  if (Backtracks(k, warm_start) && !Backtrack(k, fc, pairs, &counts, &row, previous_energy, s)) return false;
+  if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
+  if (Backtracks(k, warm_start) && !Backtrack(k, fc, *previous, pairs, &counts, &row, previous_energy, s)) {
+    return false;
+  }
   const energy::Problem& problem = frame_problem.problem();
 
   auto t0 = Clock::now();
@@ -598,6 +470,7 @@ void Tracker::Impl::MeasureContacts(FrameSummary* s) {
   s->obstacle_contacts = cs.obstacle_contacts;
   s->max_penetration = cs.max_penetration;
   s->min_gap = cs.min_gap;
+  s->contact_forces = frame_problem.ContactForces(state.x);
   s->time.collision += Seconds(t0);
 }
 

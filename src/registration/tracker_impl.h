@@ -18,6 +18,11 @@
 
 namespace femreg {
 
+// Seconds since `since` (the frame's stage times).
+inline double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
 struct Tracker::Impl {
   using Clock = std::chrono::steady_clock;
 
@@ -38,16 +43,17 @@ struct Tracker::Impl {
   void UpdateElementRotations(FrameSummary* s);
   // Pairs, loads, contacts and the equilibrium terms at state.x for outer iteration k; false
   // when no pair is left (at k = 0 the summary says so).
-  bool PrepareIteration(int k, const FrameCloud& fc, std::vector<DataPair>* pairs, PairCounts* counts,
-                        femreg::OuterIteration* row, FrameSummary* s);
+  // `previous`: the last frame's result (friction's slip is from there).
+  bool PrepareIteration(int k, const FrameCloud& fc, const Vertices& previous, std::vector<DataPair>* pairs,
+                        PairCounts* counts, femreg::OuterIteration* row, FrameSummary* s);
   // Whether outer iteration k holds its start against the last one's (Backtrack).
   bool Backtracks(int k, bool warm_start) const;
   // From the held pair set on, the energy at state.x with the rotations, pairs and contacts it
   // finds must not rise above the last solve's start (merit): else the move is halved back
   // towards that start (docs/theory/stopping.md#backtracking). False: the frame stops (the
   // summary says why).
-  bool Backtrack(int k, const FrameCloud& fc, std::vector<DataPair>* pairs, PairCounts* counts,
-                 femreg::OuterIteration* row, double* previous_energy, FrameSummary* s);
+  bool Backtrack(int k, const FrameCloud& fc, const Vertices& previous, std::vector<DataPair>* pairs,
+                 PairCounts* counts, femreg::OuterIteration* row, double* previous_energy, FrameSummary* s);
   // One outer iteration k; false when the frame stops (the summary says why).
   bool OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
                       std::vector<DataPair>* pairs, double* previous_energy, Vertices* previous,

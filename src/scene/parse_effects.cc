@@ -39,7 +39,8 @@ void SceneParser::ParseFracture(const YamlValue& v) {
 
 // The collision section (pairs of object names, penalty, rigid obstacles).
 void SceneParser::ParseCollision(const YamlValue& v) {
-  v.CheckKeys({"pairs", "stiffness", "distance", "tolerance", "augmented", "obstacles"});
+  v.CheckKeys({"pairs", "stiffness", "distance", "tolerance", "augmented", "obstacles", "friction",
+               "friction_slip"});
   CollisionSpec& c = scene_->collision;
   auto object_name = [&](const YamlValue& n) {
     const std::string name = n.AsString();
@@ -57,24 +58,34 @@ void SceneParser::ParseCollision(const YamlValue& v) {
     const YamlValue pairs = v["pairs"];
     pairs.RequireSequence();
     for (int i = 0; i < pairs.size(); ++i) {
-      const YamlValue p = pairs[i];
+      const YamlValue entry = pairs[i];
+      double mu = -1.0;  // a pair with its own friction: {objects: [a, b], friction: mu}
+      if (entry.IsMap()) {
+        entry.CheckKeys({"objects", "friction"});
+        if (!entry.Has("objects")) entry.Fail("needs 'objects' (a pair of object names [a, b])");
+        if (entry.Has("friction")) mu = NonNegativeDouble(entry["friction"]);
+      }
+      const YamlValue p = entry.IsMap() ? entry["objects"] : entry;
       if (!p.IsSequence() || p.size() != 2) p.Fail("must be a pair of object names [a, b]");
       const std::string a = object_name(p[0]), b = object_name(p[1]);
       if (a == b) p.Fail("an object cannot be paired with itself (" + Quote(a) + ")");
       c.pairs.emplace_back(a, b);
+      c.pair_friction.push_back(mu);
     }
   }
   if (v.Has("stiffness")) c.stiffness = PositiveDouble(v["stiffness"]);
   if (v.Has("distance")) c.distance = PositiveDouble(v["distance"]);
   if (v.Has("tolerance")) c.tolerance = PositiveDouble(v["tolerance"]);
   if (v.Has("augmented")) c.augmented = v["augmented"].AsBool();
+  if (v.Has("friction")) c.friction = NonNegativeDouble(v["friction"]);
+  if (v.Has("friction_slip")) c.friction_slip = PositiveDouble(v["friction_slip"]);
   if (v.Has("obstacles")) {
     const YamlValue list = v["obstacles"];
     list.RequireSequence();
     std::set<std::string> names;
     for (int i = 0; i < list.size(); ++i) {
       const YamlValue o = list[i];
-      o.CheckKeys({"name", "plane", "box", "mesh", "scale", "objects", "pose", "keyframes"});
+      o.CheckKeys({"name", "plane", "box", "mesh", "scale", "objects", "pose", "keyframes", "friction"});
       ObstacleSpec spec;
       spec.name = o.Has("name") ? o["name"].AsString() : "obstacle" + std::to_string(i);
       if (!names.insert(spec.name).second) o["name"].Fail("duplicate obstacle name " + Quote(spec.name));
@@ -108,6 +119,7 @@ void SceneParser::ParseCollision(const YamlValue& v) {
         if (!status.ok()) mesh.Fail(status.message());
       }
       if (o.Has("scale")) spec.scale = PositiveDouble(o["scale"]);
+      if (o.Has("friction")) spec.friction = NonNegativeDouble(o["friction"]);
       if (o.Has("objects")) {
         const YamlValue objects = o["objects"];
         objects.RequireSequence();

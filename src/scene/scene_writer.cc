@@ -454,6 +454,7 @@ YAML::Node ObstacleNode(const ObstacleSpec& o, const std::string& base_dir) {
       break;
   }
   Put(n, "scale", o.scale, 1.0);
+  if (o.friction >= 0) Put(n, "friction", o.friction, -1.0);
   if (!o.objects.empty()) {
     YAML::Node objects = FlowSeq();
     for (const std::string& name : o.objects) objects.push_back(name);
@@ -477,10 +478,17 @@ YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
   YAML::Node n = Map();
   if (!c.pairs.empty()) {
     YAML::Node pairs = FlowSeq();
-    for (const auto& [a, b] : c.pairs) {
+    for (size_t i = 0; i < c.pairs.size(); ++i) {
       YAML::Node pair = FlowSeq();
-      pair.push_back(a);
-      pair.push_back(b);
+      pair.push_back(c.pairs[i].first);
+      pair.push_back(c.pairs[i].second);
+      if (i < c.pair_friction.size() && c.pair_friction[i] >= 0) {  // {objects: [a, b], friction: mu}
+        YAML::Node entry = FlowMap();
+        entry["objects"] = pair;
+        Put(entry, "friction", c.pair_friction[i], -1.0);
+        pairs.push_back(entry);
+        continue;
+      }
       pairs.push_back(pair);
     }
     n["pairs"] = pairs;
@@ -489,6 +497,8 @@ YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
   Put(n, "distance", c.distance, d.distance);
   Put(n, "tolerance", c.tolerance, d.tolerance);
   Put(n, "augmented", c.augmented, d.augmented);
+  Put(n, "friction", c.friction, d.friction);
+  Put(n, "friction_slip", c.friction_slip, d.friction_slip);
   if (!c.obstacles.empty()) {
     YAML::Node obstacles(YAML::NodeType::Sequence);
     for (const ObstacleSpec& o : c.obstacles) obstacles.push_back(ObstacleNode(o, base_dir));

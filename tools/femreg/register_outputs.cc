@@ -53,7 +53,9 @@ const char kStatsHeader[] =
     "object_contacts,obstacle_contacts,max_penetration_mm,min_gap_mm,t_collision_ms,stopped_by,"
     "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
-    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,message\n";
+    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,contact_force_x_N,"
+    "contact_force_y_N,contact_force_z_N,friction_force_x_N,friction_force_y_N,friction_force_z_N,"
+    "message\n";
 
 std::string StatsRow(size_t i, const FrameRow& row) {
   std::ostringstream os;
@@ -97,6 +99,16 @@ std::string StatsRow(size_t i, const FrameRow& row) {
                 s.final.equilibrium, s.force.x(), s.force.y(), s.force.z(), s.torque.x(), s.torque.y(),
                 s.torque.z());
   os << buf << "," << s.occluded_points;
+  // The obstacles' force on the objects, and its friction part (pairs' forces cancel).
+  Eigen::Vector3d obstacle = Eigen::Vector3d::Zero(), friction = Eigen::Vector3d::Zero();
+  for (const ContactForce& f : s.contact_forces) {
+    if (!f.obstacle()) continue;
+    obstacle += f.force;
+    friction += f.friction;
+  }
+  std::snprintf(buf, sizeof(buf), ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", obstacle.x(), obstacle.y(),
+                obstacle.z(), friction.x(), friction.y(), friction.z());
+  os << buf;
   std::string msg = row.read_error.empty() ? s.message : row.read_error;
   std::replace(msg.begin(), msg.end(), '"', '\'');
   os << ",\"" << msg << "\"\n";
@@ -134,6 +146,35 @@ Totals ComputeTotals(const std::vector<FrameRow>& rows) {
   t.seen_mean = n_seen ? sum_seen / n_seen : 0;
   t.hidden_mean = n_hidden ? sum_hidden / n_hidden : 0;
   return t;
+}
+
+// Per frame, the contact forces per object pair and obstacle (N): on `object` by `by`.
+nlohmann::ordered_json ContactForcesJson(const Scene& scene, const Tracker& tracker,
+                                         const std::vector<FrameRow>& rows) {
+  using json = nlohmann::ordered_json;
+  auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
+  auto object_name = [&](int i) {
+    return i >= 0 && i < static_cast<int>(scene.objects.size()) ? scene.objects[i].name : std::to_string(i);
+  };
+  const CollisionWorld* world = tracker.collision();
+  json frames = json::array();
+  for (const FrameRow& r : rows) {
+    json list = json::array();
+    for (const ContactForce& f : r.summary.contact_forces) {
+      const int o = -1 - f.other;
+      const std::string by = !f.obstacle() ? object_name(f.other)
+                             : world != nullptr && o < world->num_obstacles() ? world->obstacle_name(o)
+                                                                              : "obstacle " + std::to_string(o);
+      list.push_back({{"object", object_name(f.object)},
+                      {"by", by},
+                      {"obstacle", f.obstacle()},
+                      {"contacts", f.contacts},
+                      {"force_N", {number(f.force.x()), number(f.force.y()), number(f.force.z())}},
+                      {"friction_N", {number(f.friction.x()), number(f.friction.y()), number(f.friction.z())}}});
+    }
+    frames.push_back(list);
+  }
+  return frames;
 }
 
 std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Tracker& tracker,
@@ -240,7 +281,8 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                      {"max_penetration_mm", number(deepest * 1e3)},
                      {"min_gap_mm", gaps},
                      {"penetration_mm", penetrations},
-                     {"collision", tracker.collision() != nullptr}};
+                     {"collision", tracker.collision() != nullptr},
+                     {"forces_per_frame", ContactForcesJson(scene, tracker, rows)}};
   }
   json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
                 {"threads", args.threads}, {"depth_scale", args.depth_scale},
