@@ -1,5 +1,5 @@
 // Comparing a regenerated dataset file with the bundled one by what it means rather than by
-// its bytes (tests that bundled datasets regenerate: collision_test.cc, synth_test.cc).
+// its bytes (tests that bundled datasets regenerate: collision_sequences_test.cc, synth_test.cc).
 //
 // Floating-point results differ across CPUs and BLAS builds in their last digits (OpenBLAS
 // picks its kernels by CPU at run time, and CHOLMOD factorizes through it), and a solve

@@ -21,6 +21,9 @@
 // double, and retried with Marquardt damping if H is not positive definite there either.
 //
 // H and g come from the energy layer's assembler (energy/assembler.h).
+//
+// The back end's state is declared in fast_backend_internal.h; the factor's management
+// (analysis, fill estimate, factorizations) is in fast_backend_factor.cc.
 #include "solvers/fast/fast_backend.h"
 
 #include <Eigen/CholmodSupport>
@@ -41,6 +44,7 @@
 #include "energy/assembler.h"
 #include "parallel/signals.h"
 #include "solvers/fast/equilibrium_step.h"
+#include "solvers/fast/fast_backend_internal.h"
 #include "parallel/threads.h"
 #include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
@@ -49,15 +53,6 @@ namespace femreg {
 namespace fast_backend {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-// CHOLMOD's supernodal factorization is faster than its simplicial one on these systems at
-// every size measured, so it is always used (docs/notes/2026-11-28-figures-from-code-comments.md).
-
 
 // A step predicted to lower the energy by less than this fraction of the inner tolerance
 // (BackendOptions::relative_tolerance) is not taken: it re-solves the linearization the
@@ -76,59 +71,11 @@ constexpr double kNegligibleGain = 1e-2;
 // (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr double kQuadraticAgreement = 1e-6;
 
-// The single-precision factorization (SupernodalSolve::Factorize) does its flops about this many
-// times faster than PCG's iterations do theirs (memory-bound substitutions and products), so the
-// factorization's flop count divided by an iteration's, over this, is the PCG iterations a
-// factorization costs; 3 did better per frame than 1 and 2
-// (docs/notes/2026-11-28-figures-from-code-comments.md).
-constexpr double kSingleFactorizationSpeed = 3.0;
-
-// After a single-precision factorization failed (or PCG did not converge with it), this many
-// factorizations are CHOLMOD's in double before single precision is tried again: a matrix
-// too ill-conditioned for float (the 1:1000 flat plate of tests/hard_cases_test.cc) stays so
-// for a while, and each try costs a factorization and PCG iterations; a frame or two later
-// the next try is cheap.
-constexpr int kSingleBackoff = 8;
-
 // With the multigrid preconditioner (large meshes, BackendOptions::preconditioner), a step's
 // PCG runs up to this many iterations with the kept hierarchy (again after refreshing its
 // smoother, if PCG found it indefinite), then as many with a new one; if that does not
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
-
-// kAuto decides without analysing H itself (AMD and METIS on every unknown, and the factor's
-// workspace: a large share of the first frame on large meshes) where the vertex graph's estimate of
-// the fill (EstimateFill) is this far above multigrid_fill. The estimate matched the analysis's
-// fill closely on every mesh tried (docs/notes/2026-11-28-figures-from-code-comments.md), so only
-// meshes that clearly take multigrid skip the analysis, and the choice is the one the analysis
-// would make.
-constexpr double kFillEstimateMargin = 1.5;
-// ... and only from this many vertices: below, the estimate (METIS's fixed costs) takes about as
-// long as the analysis it could save, and it would be done on top of it
-// (docs/notes/2026-11-28-figures-from-code-comments.md).
-constexpr int kFillEstimateFrom = 8192;
-
-
-// Every factorization allocates and frees CHOLMOD's workspace: a permuted copy of H and the largest
-// update matrix. Above glibc's mmap threshold (128 KiB until a larger mapped block has been freed)
-// each is a fresh mapping, faulted in page by page on every factorization, which slowed
-// factorizations markedly (docs/notes/2026-11-28-figures-from-code-comments.md). glibc raises the
-// threshold when a mapped block of up to 32 MiB is freed (and then keeps up to twice that much
-// freed heap before trimming): one block of the workspace's size, allocated and freed once per
-// analysis, lets it do so. (Until this was written the same had happened by accident, through the
-// triplets of the pattern's build.) Elsewhere than glibc: an allocation and a free, nothing more.
-void PrimeAllocator(const cholmod_factor& L, const Eigen::SparseMatrix<double>& H) {
-  const size_t copy = static_cast<size_t>(H.nonZeros()) * (sizeof(double) + sizeof(int)) +
-                      static_cast<size_t>(H.cols() + 1) * sizeof(int);
-  const size_t update = L.is_super ? L.maxcsize * sizeof(double) : 0;
-  // glibc raises the threshold only for a freed mapping of at most 32 MiB, header included.
-  const size_t bytes = std::min<size_t>(std::max(copy, update), (size_t{32} << 20) - (size_t{64} << 10));
-  if (bytes == 0) return;
-  void* block = std::malloc(bytes);
-  if (block == nullptr) return;
-  static_cast<volatile char*>(block)[0] = 0;  // not optimized away
-  std::free(block);
-}
 
 }  // namespace
 
@@ -157,260 +104,12 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
   }
 }
 
-struct FastBackend::Impl {
-  BackendOptions options;
-  int threads = 1;
-
-  // The system's pattern and values (energy/assembler.h), and the pattern's revision that
-  // the state below was made for.
-  energy::Assembler assembler;
-  Eigen::SparseMatrix<double>& H = assembler.H();
-  const std::vector<int>& diagonal_at = assembler.diagonal_at();  // per column
-  uint64_t pattern_revision = 0;
-  // After the pattern changed: no analysis, factor or hierarchy of the old one is kept.
-  void PatternChanged() {
-    pattern_revision = assembler.pattern_revision();
-    analysed = false;
-    fill_estimate = -1.0;
-    factor_valid = false;
-    single_backoff = 0;
-    multigrid = Multigrid();
-  }
-
-  // CHOLMOD's analysis of the pattern (and its double factor, where single precision
-  // failed); the kept factor of the matrix at some earlier step (factor_valid), in single
-  // precision, factorized there or copied from CHOLMOD's, for PCG's substitutions
-  // (solvers/fast/supernodal_solve.h).
-  CholmodFactor factor;
-  SupernodalSolve<float> substitutions;
-  bool analysed = false;
-  bool factor_valid = false;
-  // The analysis changed since `substitutions` last took L's structure.
-  bool structure_pending = false;
-  // Factorizations left to CHOLMOD in double before single precision is tried again: set
-  // to kSingleBackoff when a single-precision factorization failed, or PCG did not converge
-  // with a new one (H too ill-conditioned for float, or not positive definite at all).
-  int single_backoff = 0;
-  // The kept factor is a single-precision one (else CHOLMOD's).
-  bool factor_single = false;
-  // PCG iterations that cost as much as a factorization (CHOLMOD's flop counts, from the
-  // analysis; for the single-precision one over kSingleFactorizationSpeed): beyond them a
-  // new factor is cheaper.
-  int pcg_budget_double = 0, pcg_budget_single = 0;
-  int PcgBudget() const { return factor_single ? pcg_budget_single : pcg_budget_double; }
-  // PCG iterations run with the kept factor since it was made. Once they have cost as much as a
-  // factorization, the next step factorizes anew (the ski-rental rule: never more than twice the
-  // cost of the better choice in hindsight) (docs/notes/2026-11-28-figures-from-code-comments.md).
-  int pcg_since_factor = 0;
-
-  // The multigrid preconditioner (solvers/fast/multigrid.h), where the factor would fill in
-  // (options.multigrid_fill): a hierarchy of an earlier step's H, kept while the PCG solves
-  // with it take few iterations more than the first one after it was built.
-  Multigrid multigrid;
-  int multigrid_fresh_iterations = -1;  // the first solved step's after the build (-1: none yet)
-  int multigrid_last_iterations = 0;   // the last solve's
-  const Vertices* positions = nullptr;  // the rigid motions' centre: the current iterate
-  // PCG did not converge even with a new hierarchy: the factor for the rest of the Solve.
-  bool multigrid_failed = false;
-  // The last Pcg failed because r.z <= 0: the preconditioner is not positive definite.
-  bool pcg_indefinite = false;
-  // nnz(L) / nnz(H) from the analysis of the pattern.
-  double fill = 0.0;
-  int analyses = 0;  // Analyse's, over the back end's life (SolveReport::analyses per solve)
-  // Before that analysis, for kAuto: an estimate of it from the vertex graph (-1: not yet
-  // made for this pattern), see EstimateFill.
-  double fill_estimate = -1.0;
-  double EstimateFill() const;
-  bool UseMultigrid() {
-    if (options.max_pcg_iterations <= 0 || multigrid_failed) return false;
-    switch (options.preconditioner) {
-      case Preconditioner::kFactor:
-        return false;
-      case Preconditioner::kMultigrid:
-        return true;
-      case Preconditioner::kAuto:
-        if (!analysed && assembler.num_vertices() >= kFillEstimateFrom) {
-          if (fill_estimate < 0.0) fill_estimate = EstimateFill();
-          if (fill_estimate >= kFillEstimateMargin * options.multigrid_fill) return true;
-        }
-        Analyse();  // once per pattern (the factor path needs it anyway)
-        return fill >= options.multigrid_fill;
-    }
-    return false;
-  }
-
-  // CHOLMOD's symbolic analysis of the pattern, unless done; the PCG budget from its counts.
-  void Analyse();
-  // Factorizes H in double with CHOLMOD (its values also copied to `substitutions` for
-  // PCG); false if H is not positive definite.
-  bool Factorize(SolveReport* report);
-  // Factorizes H in single precision into `substitutions` (the preconditioner, and the
-  // first PCG iteration after it the step); false if that fails (not positive definite in
-  // float), and nothing is kept.
-  bool FactorizeSingle(SolveReport* report);
-  // dx = -H^-1 g: by PCG with the kept factor, else with a new factorization. kNegligible:
-  // PCG's first iteration gained less than `negligible` (the Gauss-Newton model's decrease;
-  // <= 0: never), and no step was made.
-  enum class Outcome { kSolved, kNegligible, kFailed };
-  Outcome SolveStep(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
-                    SolveReport* report);
-  // The step by PCG with the multigrid hierarchy (built anew when stale); kFailed: leave
-  // the step to the factorization.
-  Outcome SolveStepMultigrid(const Eigen::VectorXd& g, double negligible, Eigen::VectorXd* dx,
-                             SolveReport* report);
-  // PCG on H x = b, preconditioned by the kept factor, or the multigrid hierarchy.
-  Outcome Pcg(const Eigen::VectorXd& b, double negligible, int max_iterations, Eigen::VectorXd* x,
-              SolveReport* report, bool with_multigrid = false);
-  // The last step PCG solved (kSolved): the Gauss-Newton model's decrease along it,
-  // 1/2 x.(b + r) = b.x - 1/2 x^T H x with r = b - H x (-1: no such step, e.g. a direct
-  // solve), its residual r and whether multigrid preconditioned it.
-  double pcg_model_gain = -1.0;
-  Eigen::VectorXd pcg_residual;
-  bool pcg_with_multigrid = false;
-  // What a further step on the same model would gain: 1/2 r^T M^-1 r, with the
-  // preconditioner M of that PCG (H, or an earlier H, approximately).
-  double ResidualGain(SolveReport* report);
-  // z = M^-1 r: the multigrid V-cycle, or the kept factor's substitutions (CHOLMOD's where
-  // the single-precision copy could not be made); counted as a linear solve.
-  void Precondition(const Eigen::VectorXd& r, bool with_multigrid, Eigen::VectorXd* z, SolveReport* report);
-  // Problems with an equilibrium (energy/equilibrium.h) go to their own solve, made at the first.
-  std::unique_ptr<EquilibriumSolver> equilibrium;
-  // Every part's threads (the results do not depend on them).
-  void SetThreads(int n) {
-    threads = n;
-    assembler.set_threads(n);
-    substitutions.set_threads(n);
-  }
-};
-
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
   impl_->options = options;
   impl_->threads = ResolveThreadCount(options.num_threads);
   impl_->assembler.set_threads(impl_->threads);
 }
 FastBackend::~FastBackend() = default;
-
-namespace {
-// The fill-reducing ordering: AMD and METIS both, CHOLMOD keeps the one with the smaller
-// nnz(L). Neither wins everywhere (AMD on slender beams, METIS on compact bodies), and
-// CHOLMOD's default tries METIS only past a flops-per-entry threshold that compact bodies
-// can miss (docs/notes/2026-11-28-figures-from-code-comments.md).
-void OrderWithAmdAndMetis(cholmod_common* common) {
-  common->nmethods = 2;
-  common->method[0].ordering = CHOLMOD_AMD;
-  common->method[1].ordering = CHOLMOD_METIS;
-}
-}  // namespace
-
-void FastBackend::Impl::Analyse() {
-  if (analysed) return;
-  factor.setMode(Eigen::CholmodSupernodalLLt);
-  cholmod_common& common = factor.cholmod();
-  OrderWithAmdAndMetis(&common);
-  // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with {0.8, 0.1,
-  // 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold merges little more
-  // than one vertex, which leaves many small supernodes, each a BLAS call too small to run at
-  // speed; larger settings slowed the substitutions
-  // (docs/notes/2026-11-28-figures-from-code-comments.md).
-  common.nrelax[0] = 6;
-  common.nrelax[1] = 24;
-  common.nrelax[2] = 64;
-  common.zrelax[0] = 0.8;
-  common.zrelax[1] = 0.15;
-  common.zrelax[2] = 0.06;
-  {
-    const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
-    factor.analyzePattern(H);
-  }
-  analysed = true;
-  ++analyses;
-  // A PCG iteration: two triangular solves (2 x 2 nnz(L) flops) and a product with H
-  // (2 nnz(H)); the factorization: CHOLMOD's count, at kSingleFactorizationSpeed times
-  // the substitutions' rate.
-  if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
-  fill = H.nonZeros() > 0 ? common.lnz / static_cast<double>(H.nonZeros()) : 0.0;
-  const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
-  pcg_budget_double = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
-  pcg_budget_single = iteration_flops > 0
-                          ? static_cast<int>(common.fl / iteration_flops / kSingleFactorizationSpeed)
-                          : 0;
-  structure_pending = true;
-}
-
-double FastBackend::Impl::EstimateFill() const {
-  // H's vertex graph (its 3x3 blocks are whole, their rows sorted: every third row of a
-  // vertex's first column), its lower triangle, analysed with the same two orderings
-  // without supernodes: nnz(L) of the vertex graph, each entry below the diagonal a 3x3
-  // block of H's L and each diagonal one its lower triangle (6). Supernodal padding and the
-  // orderings' ties make the analysis of H itself give a little more.
-  const int vertices = static_cast<int>(H.cols()) / 3;
-  if (vertices == 0 || H.nonZeros() == 0) return 0.0;
-  const int* outer = H.outerIndexPtr();
-  const int* inner = H.innerIndexPtr();
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(H.nonZeros() / 18 + vertices));
-  for (int v = 0; v < vertices; ++v) {
-    for (int p = outer[3 * v]; p < outer[3 * v + 1]; p += 3) {
-      const int w = inner[p] / 3;
-      if (w >= v) entries.emplace_back(w, v, w == v ? 1.0 : 0.0);
-    }
-  }
-  Eigen::SparseMatrix<double> graph(vertices, vertices);
-  graph.setFromTriplets(entries.begin(), entries.end());
-  CholmodFactor estimate;
-  estimate.setMode(Eigen::CholmodSimplicialLLt);
-  cholmod_common& common = estimate.cholmod();
-  OrderWithAmdAndMetis(&common);
-  {
-    const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
-    estimate.analyzePattern(graph);
-  }
-  const double lnz = 9.0 * (common.lnz - vertices) + 6.0 * vertices;
-  return lnz / static_cast<double>(H.nonZeros());
-}
-
-bool FastBackend::Impl::Factorize(SolveReport* report) {
-  const auto t0 = Clock::now();
-  Analyse();
-  // On one thread, the BLAS under CHOLMOD as its own OpenMP teams (copies into the supernodes), as
-  // the triangular solves in Pcg: the supernodes of these systems are too small to share, and both
-  // on several threads fought over the cores (docs/notes/2026-11-28-figures-from-code-comments.md).
-  {
-    const ScopedThreads one_thread(1);
-    WithThreadLimit(1, [&] { factor.factorize(H); });
-  }
-  pcg_since_factor = 0;
-  factor_single = false;
-  ++report->factorizations;
-  report->factorize_s += Seconds(t0);
-  factor_valid = factor.info() == Eigen::Success;
-  // PCG's substitutions: the factor's values in single precision, on the back end's threads (half
-  // the bytes to stream: solvers/fast/supernodal_solve.h)
-  // (docs/notes/2026-11-28-figures-from-code-comments.md).
-  if (factor_valid && substitutions.Load(*factor.raw(), structure_pending, threads)) {
-    structure_pending = false;
-  } else {
-    substitutions = SupernodalSolve<float>();
-  }
-  return factor_valid;
-}
-
-bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
-  const auto t0 = Clock::now();
-  Analyse();
-  pcg_since_factor = 0;
-  factor_single = true;
-  ++report->factorizations;
-  // Its BLAS calls on one thread; its own team of `threads`.
-  {
-    const ScopedThreads one_thread(1);
-    factor_valid = factor.raw() != nullptr &&
-                   substitutions.Factorize(*factor.raw(), H, structure_pending, threads);
-  }
-  if (factor_valid) structure_pending = false;
-  report->factorize_s += Seconds(t0);
-  return factor_valid;
-}
 
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
                                                   int max_iterations, Eigen::VectorXd* x,

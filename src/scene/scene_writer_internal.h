@@ -1,0 +1,119 @@
+// The YAML helpers shared by scene_writer.cc (objects, conditions, anchors, effects, collision,
+// synth; SceneToYaml) and scene_writer_options.cc (the forward and registration options):
+// numbers that read back exactly, flow maps and sequences, and Put, which writes a key only
+// where its value differs from the default.
+#ifndef FEMREG_SCENE_SCENE_WRITER_INTERNAL_H_
+#define FEMREG_SCENE_SCENE_WRITER_INTERNAL_H_
+
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "femreg/scene.h"
+
+namespace femreg {
+namespace internal {
+namespace scene_writer {
+
+// The shortest decimal that reads back to the same double: fixed notation for magnitudes
+// in [1e-4, 1e7), else "d.ddde-N" (with a '.' and a signed exponent, which every YAML
+// reader takes for a number).
+inline std::string Number(double x) {
+  char buf[64];
+  const std::to_chars_result r =
+      std::to_chars(buf, buf + sizeof(buf), x, std::chars_format::scientific);
+  std::string sci(buf, r.ptr);  // "-1.2345e-05": shortest round-trip digits
+  std::string sign;
+  if (!sci.empty() && sci[0] == '-') {
+    sign = "-";
+    sci.erase(0, 1);
+  }
+  if (sci == "inf" || sci == "nan") return sign + "." + sci;  // YAML's .inf / .nan
+  const size_t e = sci.find('e');
+  std::string digits = sci.substr(0, e);
+  const int exponent = std::atoi(sci.c_str() + e + 1);
+  if (digits.size() > 1) digits.erase(1, 1);  // drop the '.'
+  const double magnitude = std::abs(x);
+  if (magnitude == 0.0 || (magnitude >= 1e-4 && magnitude < 1e7)) {
+    std::string fixed;
+    if (exponent < 0) {
+      fixed = "0." + std::string(static_cast<size_t>(-exponent - 1), '0') + digits;
+    } else if (static_cast<int>(digits.size()) <= exponent + 1) {
+      fixed = digits + std::string(static_cast<size_t>(exponent + 1) - digits.size(), '0');
+    } else {
+      fixed = digits.substr(0, exponent + 1) + "." + digits.substr(exponent + 1);
+    }
+    return sign + fixed;
+  }
+  const std::string mantissa = digits.substr(0, 1) + "." + (digits.size() > 1 ? digits.substr(1) : "0");
+  return sign + mantissa + "e" + (exponent < 0 ? "-" : "+") + std::to_string(std::abs(exponent));
+}
+
+inline YAML::Node Flow(YAML::Node node) {
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  return node;
+}
+
+inline YAML::Node Map() { return YAML::Node(YAML::NodeType::Map); }
+inline YAML::Node FlowMap() { return Flow(Map()); }
+inline YAML::Node FlowSeq() { return Flow(YAML::Node(YAML::NodeType::Sequence)); }
+
+inline YAML::Node Vec(const Eigen::Vector3d& v) {
+  YAML::Node n = FlowSeq();
+  for (int k = 0; k < 3; ++k) n.push_back(Number(v[k]));
+  return n;
+}
+
+inline YAML::Node Vec(const Eigen::Vector3i& v) {
+  YAML::Node n = FlowSeq();
+  for (int k = 0; k < 3; ++k) n.push_back(v[k]);
+  return n;
+}
+
+// map[key] = value where it differs from the default.
+inline void Put(YAML::Node map, const char* key, double value, double default_value) {
+  if (value != default_value) map[key] = Number(value);
+}
+inline void Put(YAML::Node map, const char* key, int value, int default_value) {
+  if (value != default_value) map[key] = value;
+}
+inline void Put(YAML::Node map, const char* key, bool value, bool default_value) {
+  if (value != default_value) map[key] = value;
+}
+inline void Put(YAML::Node map, const char* key, const Eigen::Vector3d& value,
+         const Eigen::Vector3d& default_value) {
+  if (value != default_value) map[key] = Vec(value);
+}
+// map[key] = child when the child has entries.
+inline void PutMap(YAML::Node map, const char* key, const YAML::Node& child) {
+  if (child.size() > 0) map[key] = child;
+}
+
+// A file path as the scene file's reader resolves it: relative to base_dir.
+inline std::string FilePath(const std::string& path, const std::string& base_dir) {
+  if (base_dir.empty() || path.empty()) return path;
+  std::error_code ec;
+  std::filesystem::path base = std::filesystem::absolute(base_dir, ec).lexically_normal();
+  if (base.has_parent_path() && base.filename().empty()) base = base.parent_path();  // "dir/"
+  const std::filesystem::path file = std::filesystem::absolute(path, ec).lexically_normal();
+  const std::filesystem::path relative = file.lexically_relative(base);
+  return relative.empty() ? file.string() : relative.generic_string();
+}
+
+// Defined in scene_writer.cc: a vertex selection (box, plane, indices or all).
+YAML::Node SelectionNode(const VertexSelection& s);
+
+// Defined in scene_writer_options.cc: the forward and registration sections.
+YAML::Node ForwardNode(const Scene& scene);
+YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<ForceRegionSpec>& regions,
+                            const std::string& base_dir);
+
+}  // namespace scene_writer
+}  // namespace internal
+}  // namespace femreg
+
+#endif  // FEMREG_SCENE_SCENE_WRITER_INTERNAL_H_
