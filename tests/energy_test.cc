@@ -239,6 +239,10 @@ TEST(RobustLoss, DerivativesMatchCentralDifferencesAndCeres) {
   const double a = 0.005;
   for (RobustLoss kind : {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey}) {
     const Loss loss{kind, a};
+    // rho(0) = 0: an inactive block's value is its offset alone (energy/term.h InactiveValue).
+    double at_zero[3];
+    loss.Evaluate(0.0, at_zero);
+    EXPECT_EQ(at_zero[0], 0.0) << static_cast<int>(kind);
     std::unique_ptr<ceres::LossFunction> reference;
     if (kind == RobustLoss::kHuber) reference = std::make_unique<ceres::HuberLoss>(a);
     if (kind == RobustLoss::kCauchy) reference = std::make_unique<ceres::CauchyLoss>(a);

@@ -98,8 +98,8 @@ bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
 }
 
 bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previous,
-                              std::vector<DataPair>* pairs, PairCounts* counts, femreg::OuterIteration* row, double* previous_energy,
-                              FrameSummary* s) {
+                              std::vector<DataPair>* pairs, PairCounts* counts,
+                              femreg::OuterIteration* row, double* previous_energy, FrameSummary* s) {
   const RegistrationOptions& options = state.options;
   auto t0 = Clock::now();
   const double allowed = merit + options.solver.relative_energy_tolerance * std::abs(merit);
@@ -135,11 +135,10 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
   state.x = merit_x;
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, previous, pairs, counts, row, s)) return false;
-  double deepest = 0.0;
-  if (state.collision) {
-    for (const Contact& c : state.contacts) deepest = std::max(deepest, state.collision->Penetration(c, state.x));
+  if (state.collision &&
+      state.collision->Evaluate(state.contacts, state.x).max_penetration > state.collision->tolerance()) {
+    return go_on();
   }
-  if (state.collision && deepest > state.collision->tolerance()) return go_on();
   s->final = frame_problem.problem().Evaluate(state.x);
   s->termination = TerminationType::kConverged;
   s->stopped_by = "backtrack";
