@@ -180,8 +180,9 @@ TEST(SceneMaterials, NearlyIncompressibleChoosesTheNodalVolume) {
   EXPECT_FALSE(scene.objects[0].nodal_volume);
 }
 
-// Registration has no nodal volume: the neo-Hookean element with nu capped in its elastic
-// term, unless the scene chose the element or a regularizer other than corotational.
+// Registration's default is the neo-Hookean element with nu capped in its elastic term (the
+// nodal volume is 3-5x the time there and no more accurate), unless the scene chose the
+// element or a regularizer other than corotational, or estimates forces (nu as given).
 TEST(SceneMaterials, NearlyIncompressibleRegistrationCapsNu) {
   const std::string soft = Replace(kScene, "      poisson_ratio: 0.3\n", "      poisson_ratio: 0.49\n");
   Scene scene;
@@ -203,6 +204,14 @@ TEST(SceneMaterials, NearlyIncompressibleRegistrationCapsNu) {
   ASSERT_TRUE(ParseScene(soft + "registration: {regularizer: linear}\n", "materials.yaml", ".", &scene).ok());
   EXPECT_TRUE(ChooseRegistrationElements(&scene).empty());
   EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+
+  const std::string forces = soft + "registration: {solver: {backend: fast}, forces: {estimate: true}}\n";
+  ASSERT_TRUE(ParseScene(forces, "materials.yaml", ".", &scene).ok());
+  const std::vector<std::string> given = ChooseRegistrationElements(&scene);
+  ASSERT_EQ(given.size(), 1u);
+  EXPECT_NE(given[0].find("as given"), std::string::npos) << given[0];
+  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
+  EXPECT_EQ(scene.objects[0].material.poisson_ratio, 0.49);
 }
 
 }  // namespace

@@ -248,9 +248,11 @@ Status CopyMaterials(const Scene& from, Scene* scene);
 // one line per object changed, saying so and how to override it; none when nothing changed.
 constexpr double kNearlyIncompressibleNu = 0.45;
 std::vector<std::string> ChooseForwardElements(Scene* scene);
-// The same objects, for registration with the corotational regularizer (the default), which
-// has no nodal volume: the neo-Hookean element with nu capped at kRegistrationPoissonRatio
-// in the elastic term (docs/guide/materials.md). Tracker::Create(scene) applies it.
+// The same objects, for registration with the corotational regularizer (the default): the
+// neo-Hookean element with nu capped at kRegistrationPoissonRatio in the elastic term, or
+// with nu as given when registration.forces.estimate is on (the forces are the element's;
+// docs/guide/materials.md). Registration takes the nodal volume only when a scene asks (it
+// costs 3-5x the time there). Tracker::Create(scene) applies it.
 constexpr double kRegistrationPoissonRatio = 0.35;
 std::vector<std::string> ChooseRegistrationElements(Scene* scene);
 

@@ -18,6 +18,13 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
                      "use solver.backend: fast";
     return report;
   }
+  if (problem.nodal_volume() != nullptr) {
+    SolveReport report;
+    report.stop = StopReason::kFailure;
+    report.message = "the Ceres back end has no nodal-volume element (material.volume: nodal); "
+                     "use solver.backend: fast";
+    return report;
+  }
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "energy/nodal_volume.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -362,11 +363,15 @@ int Assembler::Prepare(const Problem& problem, const Vertices& x,
   for (auto& c : cache_) c.second.used = false;
   std::vector<std::pair<int, int>> missing;
   problem.ForEachSet([&](const auto& set) { CacheOf(set, &missing); });
-  for (const auto& p : pairs) {
-    if (p.first != p.second && Find(p.first, p.second).offset < 0) {
-      missing.emplace_back(std::min(p.first, p.second), std::max(p.first, p.second));
+  auto widen = [&](const std::vector<std::pair<int, int>>& list) {
+    for (const auto& p : list) {
+      if (p.first != p.second && Find(p.first, p.second).offset < 0) {
+        missing.emplace_back(std::min(p.first, p.second), std::max(p.first, p.second));
+      }
     }
-  }
+  };
+  widen(pairs);
+  if (problem.nodal_volume() != nullptr) widen(problem.nodal_volume()->Pairs());
   missing.erase(std::remove_if(missing.begin(), missing.end(),
                                [](const std::pair<int, int>& p) { return p.first == p.second; }),
                 missing.end());
@@ -426,6 +431,8 @@ void Assembler::AssembleGaussNewton(const Problem& problem, const Vertices& x, b
   }
   Accumulate(problem, x, varying, always, gauss_newton, g, set_energy);
   if (set_energy != nullptr) *energy = SumByGroup(problem, *set_energy);
+  const double nodal = AddNodalVolume(problem, x, Curvature::kGaussNewton, true, g);
+  if (set_energy != nullptr) energy->elastic += nodal;
   Finish(problem, 1e-12, g);
 }
 
@@ -440,7 +447,17 @@ double Assembler::AssembleSecondOrder(const Problem& problem, const Vertices& x,
   if (with_hessian) std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
   set_energy_.clear();
   Accumulate(problem, x, always, hessian, second_order, g, &set_energy_);
-  return SumByGroup(problem, set_energy_).total();
+  const double nodal = AddNodalVolume(problem, x, curvature, with_hessian, g);
+  return SumByGroup(problem, set_energy_).total() + nodal;
+}
+
+double Assembler::AddNodalVolume(const Problem& problem, const Vertices& x, Curvature curvature,
+                                 bool with_hessian, Eigen::VectorXd* g) {
+  const NodalVolume* nodal = problem.nodal_volume();
+  if (nodal == nullptr || !InGroups(groups_, TermGroup::kElastic)) return 0.0;
+  const double energy = nodal->Evaluate(x, g);
+  if (with_hessian) nodal->AddHessian(x, curvature, this);
+  return energy;
 }
 
 bool Assembler::AddBlock(int a, int b, const Eigen::Matrix3d& M) {

@@ -110,6 +110,10 @@ class Assembler {
   template <class Take, class WithHessian, class Linearizer>
   void Accumulate(const Problem& problem, const Vertices& x, Take take, WithHessian hessian,
                   Linearizer linearize, Eigen::VectorXd* g, std::vector<double>* set_energy);
+  // The problem's nodal volume (if any, and if the elastic group is assembled): adds its
+  // gradient to *g and its Hessian to H; returns its energy.
+  double AddNodalVolume(const Problem& problem, const Vertices& x, Curvature curvature,
+                        bool with_hessian, Eigen::VectorXd* g);
   // The per-set energies of Accumulate added up by group, as Problem::Evaluate does.
   EnergyTerms SumByGroup(const Problem& problem, const std::vector<double>& set_energy) const;
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "energy/nodal_volume.h"
 #include "energy/problem.h"
 
 namespace femreg {
@@ -103,6 +104,9 @@ void ForceResidual(const Problem& problem, const Vertices& x, Eigen::VectorXd* f
       for (int i = 0; i < T::kVertices; ++i) f->segment<3>(3 * block.vertices[i]) += lin.gradient[i];
     }
   });
+  if (problem.nodal_volume() != nullptr && InGroups(groups, TermGroup::kElastic)) {
+    problem.nodal_volume()->Evaluate(x, f);
+  }
   for (int v = 0; v < problem.num_vertices(); ++v) {
     if (problem.is_fixed(v)) f->segment<3>(3 * v).setZero();
   }

@@ -14,7 +14,7 @@ Vector12 ElementPositions(const Tets& tets, int e, const Vertices& x) {
 }  // namespace
 
 void NodalVolume::Build(const Tets& tets, const std::vector<const ElementRest*>& rests,
-                        int num_vertices, int threads) {
+                        int num_vertices, int threads, double scale) {
   tets_ = tets;
   rests_ = rests;
   num_vertices_ = num_vertices;
@@ -27,7 +27,7 @@ void NodalVolume::Build(const Tets& tets, const std::vector<const ElementRest*>&
     for (int k = 0; k < 4; ++k) {
       const int v = tets(e, k);
       rest_volume_[v] += 0.25 * rests[e]->volume;
-      stiffness_[v] += 0.25 * rests[e]->volume * BulkModulus(*rests[e]);
+      stiffness_[v] += 0.25 * scale * rests[e]->volume * BulkModulus(*rests[e]);
       ++element_offsets_[v + 1];
     }
   }
@@ -36,10 +36,8 @@ void NodalVolume::Build(const Tets& tets, const std::vector<const ElementRest*>&
   std::vector<int> fill(element_offsets_.begin(), element_offsets_.end() - 1);
   for (int e = 0; e < nt; ++e)
     for (int k = 0; k < 4; ++k) element_slots_[fill[tets(e, k)]++] = 4 * e + k;
-}
-
-std::vector<std::pair<int, int>> NodalVolume::Pairs() const {
-  std::vector<std::pair<int, int>> pairs;
+  std::vector<std::pair<int, int>>& pairs = pairs_;
+  pairs.clear();
   std::vector<int> star;
   for (int v = 0; v < num_vertices_; ++v) {
     star.clear();
@@ -52,7 +50,6 @@ std::vector<std::pair<int, int>> NodalVolume::Pairs() const {
   }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  return pairs;
 }
 
 double NodalVolume::Pressures(const Vertices& x, std::vector<double>* pressure,
@@ -113,24 +110,18 @@ void NodalVolume::AddHessian(const Vertices& x, Curvature curvature, Assembler* 
   std::vector<Vector12> volume_gradient;
   Pressures(x, &pressure, &volume_gradient);
   // Per element: p_e d2v_e/dx2 = V_e B^T (p_e H_J) B, the pressure times the Hessian of the
-  // element's volume (NeoHookeanTangent with mu = kappa = 0 is exactly that).
+  // element's volume (NeoHookeanTangent with mu = kappa = 0 is exactly that). Not in
+  // Gauss-Newton's matrix.
   const int nt = static_cast<int>(tets_.rows());
   const TangentProjection projection = curvature == Curvature::kExact
                                            ? TangentProjection::kNone
                                            : TangentProjection::kPositiveSemiDefinite;
-  for (int e = 0; e < nt; ++e) {
+  for (int e = 0; curvature != Curvature::kGaussNewton && e < nt; ++e) {
     ElementRest rest = *rests_[e];
     rest.mu = 0.0;
     const Matrix12 K = NeoHookeanTangent(rest, 0.0, pressure[e], ElementPositions(tets_, e, x), projection);
     for (int i = 0; i < 4; ++i) {
-      for (int j = i; j < 4; ++j) {
-        const Eigen::Matrix3d M = K.block<3, 3>(3 * i, 3 * j);
-        if (i == j) {
-          assembler->AddBlock(tets_(e, i), tets_(e, i), M);
-        } else {
-          assembler->AddBlock(tets_(e, i), tets_(e, j), M);
-        }
-      }
+      for (int j = i; j < 4; ++j) assembler->AddBlock(tets_(e, i), tets_(e, j), K.block<3, 3>(3 * i, 3 * j));
     }
   }
   // Per vertex: K_a / V_a (dv_a/dx)(dv_a/dx)^T over its star.

@@ -11,7 +11,8 @@
 //   d2N/dx2 = sum_a K_a / V_a (dv_a/dx)(dv_a/dx)^T + sum_e p_e d2v_e/dx2.
 // The first sum is positive semi-definite; the second, V_e B^T (p_e H_J) B per element (H_J
 // the Hessian of det F), is indefinite, and its projection clamps the negative eigenvalues
-// of p_e H_J.
+// of p_e H_J; Gauss-Newton's matrix (registration's, where N is a sum of squares of the
+// residuals sqrt(K_a / V_a) (v_a - V_a)) is the first sum alone.
 #ifndef FEMREG_ENERGY_NODAL_VOLUME_H_
 #define FEMREG_ENERGY_NODAL_VOLUME_H_
 
@@ -30,11 +31,11 @@ namespace energy {
 class NodalVolume {
  public:
   // The elements (vertex indices into the positions) and their rest data, which must
-  // outlive this term.
+  // outlive this term; `scale` multiplies the energy (registration's elastic weight).
   void Build(const Tets& tets, const std::vector<const ElementRest*>& rests, int num_vertices,
-             int threads);
-  // The vertex pairs the Hessian couples (for Assembler::Prepare).
-  std::vector<std::pair<int, int>> Pairs() const;
+             int threads, double scale = 1.0);
+  // The vertex pairs the Hessian couples (for Assembler::Prepare), a < b, sorted.
+  const std::vector<std::pair<int, int>>& Pairs() const { return pairs_; }
   // N(x); adds dN/dx to *gradient (3 #V) when not null.
   double Evaluate(const Vertices& x, Eigen::VectorXd* gradient) const;
   // Adds d2N/dx2 at x (or its projection) into the assembler's H.
@@ -50,6 +51,7 @@ class NodalVolume {
   int threads_ = 1;
   std::vector<double> rest_volume_, stiffness_;  // per vertex: V_a, K_a V_a
   std::vector<int> element_offsets_, element_slots_;  // vertex -> 4 e + k of its elements
+  std::vector<std::pair<int, int>> pairs_;
 };
 
 }  // namespace energy

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <vector>
 
+#include "energy/nodal_volume.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -38,6 +39,7 @@ void Problem::Reset(int num_vertices) {
   std::apply([](auto&... vectors) { (vectors.clear(), ...); }, sets_);
   fixed_.clear();
   equilibrium_.reset();
+  nodal_volume_.reset();
 }
 
 void Problem::Clear(TermGroup group) {
@@ -50,6 +52,7 @@ void Problem::Clear(TermGroup group) {
         (erase(vectors), ...);
       },
       sets_);
+  if (group == TermGroup::kElastic) nodal_volume_.reset();
 }
 
 void Problem::SetCoupling(std::vector<std::array<int, 4>> cells) {
@@ -109,6 +112,7 @@ EnergyTerms Problem::Evaluate(const Vertices& x, int threads) const {
     BlockValues(set, x, threads, &values);
     GroupEnergy(set.group(), &terms) += SumBlockValues(values);
   });
+  if (nodal_volume_ && InGroups(minimized, TermGroup::kElastic)) terms.elastic += nodal_volume_->Evaluate(x, nullptr);
   if (equilibrium_) {
     Eigen::VectorXd f;
     ForceResidual(*this, x, &f);

@@ -27,6 +27,8 @@
 namespace femreg {
 namespace energy {
 
+class NodalVolume;
+
 class Problem {
  public:
   // The registry: one vector of sets per block type.
@@ -80,6 +82,12 @@ class Problem {
   void SetEquilibrium(std::shared_ptr<const Equilibrium> equilibrium) { equilibrium_ = std::move(equilibrium); }
   const Equilibrium* equilibrium() const { return equilibrium_.get(); }
 
+  // The nodal-volume energy of nearly incompressible neo-Hookean objects (energy/nodal_volume.h),
+  // part of the elastic group beside its blocks: Evaluate, the assembler and ForceResidual add
+  // it. Not a block type: the Ceres back end refuses a problem with it. Null: none.
+  void SetNodalVolume(std::shared_ptr<const NodalVolume> nodal) { nodal_volume_ = std::move(nodal); }
+  const NodalVolume* nodal_volume() const { return nodal_volume_.get(); }
+
   // The energy at x by group, robust losses applied. Each set is summed in fixed chunks of
   // blocks, the chunks on up to `threads` threads, their sums added in chunk order: the
   // same additions in the same order on any thread count.
@@ -105,6 +113,7 @@ class Problem {
   std::vector<std::array<int, 4>> coupling_;
   uint64_t coupling_revision_ = 0;
   std::shared_ptr<const Equilibrium> equilibrium_;
+  std::shared_ptr<const NodalVolume> nodal_volume_;
 };
 
 }  // namespace energy

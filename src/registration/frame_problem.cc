@@ -7,6 +7,7 @@
 
 #include "collision/contact_blocks.h"
 #include "energy/equilibrium.h"
+#include "energy/nodal_volume.h"
 #include "femreg/geometry.h"
 
 namespace femreg {
@@ -45,6 +46,25 @@ void FrameProblem::BuildAreas(const TrackerState& state) {
       for (int v : {a, b, c}) vertex_area_[v + o.offset] += area / 3.0;
     }
   }
+}
+
+void FrameProblem::BuildNodalVolume(const TrackerState& state, double weight) {
+  int nt = 0;
+  for (const ObjectState& o : state.objects) nt += o.model.nodal_volume() ? o.model.num_elements() : 0;
+  if (nt == 0) return;
+  Tets tets(nt, 4);
+  std::vector<const ElementRest*> rests;
+  rests.reserve(static_cast<size_t>(nt));
+  for (const ObjectState& o : state.objects) {
+    if (!o.model.nodal_volume()) continue;
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      for (int k = 0; k < 4; ++k) tets(static_cast<int>(rests.size()), k) = o.model.tets()(e, k) + o.offset;
+      rests.push_back(&o.model.rest(e));
+    }
+  }
+  auto nodal = std::make_shared<energy::NodalVolume>();
+  nodal->Build(tets, rests, state.num_vertices, /*threads=*/1, weight);
+  problem_.SetNodalVolume(std::move(nodal));
 }
 
 void FrameProblem::BuildElastic(const TrackerState& state) {
@@ -97,9 +117,11 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
           for (int k = 0; k < 4; ++k) b.vertices[k] = o.model.tets()(e, k) + o.offset;
           b.weight = w;
           b.rest = &o.model.rest(e);
+          b.deviatoric = o.model.nodal_volume();
           neo_hookean->push_back(b);
         }
       }
+      BuildNodalVolume(state, w);
       auto& set = problem_.AddSet<energy::ElasticElement>(TermGroup::kElastic);
       auto* blocks = set.mutable_blocks();
       for (const ObjectState& o : state.objects) {

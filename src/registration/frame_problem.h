@@ -69,6 +69,9 @@ class FrameProblem {
   const energy::Problem& problem() const { return problem_; }
 
  private:
+  // The nodal-volume energy of the objects whose neo-Hookean element has it (material.volume:
+  // nodal), times the elastic weight; none if no object has.
+  void BuildNodalVolume(const TrackerState& state, double weight);
   void BuildAreas(const TrackerState& state);
   energy::Problem problem_;
   // The inversion barrier's set (null: off) and its blocks on every element.

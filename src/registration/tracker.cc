@@ -98,9 +98,9 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
                              "corotational (the FEM regularizer; got " +
                              std::string(ToString(options.regularizer)) + ")");
       }
-      if (materials[i].nodal_volume) {
-        return Status::Error(name + ": material.volume nodal is for simulate only; register uses "
-                             "each element's volume (write volume: element, or leave it out)");
+      if (materials[i].nodal_volume && options.solver.backend != SolverBackend::kFast) {
+        return Status::Error(name + ": material.volume nodal needs solver.backend: fast (the Ceres "
+                             "back end has no nodal-volume element; write volume: element)");
       }
     }
     ObjectState& o = state.objects[i];

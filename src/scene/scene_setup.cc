@@ -250,16 +250,23 @@ std::vector<std::string> ChooseRegistrationElements(Scene* scene) {
     o.material_model = MaterialModel::kNeoHookean;
     o.nodal_volume = false;
     o.element_chosen = true;  // once: a second call changes nothing
+    std::ostringstream line;
+    line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
+         << " (nearly incompressible), where linear tetrahedra lock: registering with the "
+            "neo-Hookean element and nu ";
+    if (scene->registration.forces.estimate) {
+      // The estimated forces are the elements' own: a softer nu would shrink them
+      // (docs/notes/2026-11-29-forces-and-the-element.md).
+      line << "as given (forces are estimated); write material.model: hooke to use the linear element";
+      lines.push_back(line.str());
+      continue;
+    }
     const double cap = kRegistrationPoissonRatio;
     o.material.poisson_ratio = std::min(o.material.poisson_ratio, cap);
     for (auto& r : o.region_materials) {
       r.second.poisson_ratio = std::min(r.second.poisson_ratio, cap);
     }
-    std::ostringstream line;
-    line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
-         << " (nearly incompressible), where linear tetrahedra lock: registering with the "
-            "neo-Hookean element and nu "
-         << cap << " in its elastic term; write material.model: hooke or neo_hookean to use "
+    line << cap << " in its elastic term; write material.model: hooke or neo_hookean to use "
             "the element and nu as given";
     lines.push_back(line.str());
   }
