@@ -144,6 +144,11 @@ struct DataTermOptions {
   // with fracture on (a piece coming apart is a displacement no strain bounds).
   bool occluders = true;
   double occluder_margin = 0.02;  // m, > 0
+  // Lost (FrameSummary::lost): a frame whose surface facing the sensor has cloud points near
+  // on less than this share of what the sequence's trusted frames reach (FrameConfidence's
+  // coverage), or that could not be solved, keeps the last good shape and is flagged
+  // (docs/guide/tracking-loss.md). In [0, 1]; 0 = never lost.
+  double lost_coverage = 0.3;
   // A cloud with fewer points (after preprocessing) than max(min_points,
   // min_points_per_surface_vertex * surface vertices) cannot constrain the object: the
   // frame keeps the prediction (TerminationType::kTooFewPoints).
@@ -335,6 +340,20 @@ struct StageTimes {
   double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
 };
 
+// How far a frame's result can be trusted, from what the frame has (no ground truth;
+// docs/guide/tracking-loss.md): `confidence` = fit x coverage score x residual score x
+// 1 / (1 + strain^4), in [0, 1]; 0 when the frame could not be solved (held or predicted).
+// The coverage score is min(1, coverage / what the sequence's trusted frames reach), the
+// residual score min(1, 2 x their residual / residual); the first solved frame sets both.
+struct FrameConfidence {
+  double confidence = 0.0;
+  double fit = 0.0;       // share of the cloud's points near the model (within data.max_distance,
+                          // occluders left out) within the tolerance of its surface
+  double coverage = 0.0;  // share of the sensor-facing surface vertices with a cloud point within it
+  double residual = 0.0;  // m: rms distance of the fit's points from the surface
+  double strain = 0.0;    // 95th percentile over the elements of max |principal stretch - 1|
+};
+
 struct FrameSummary {
   int frame = -1;
   SolverBackend backend = SolverBackend::kCeres;  // the back end that solved the frame
@@ -362,6 +381,9 @@ struct FrameSummary {
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
+  FrameConfidence confidence;
+  // The object was not found (data.lost_coverage): the result is the last good frame's shape.
+  bool lost = false;
   // Fast back end: factorizations (or multigrid hierarchies built), preconditioner
   // applications, conjugate-gradient iterations.
   int factorizations = 0, linear_solves = 0, pcg_iterations = 0;

@@ -72,6 +72,7 @@ void BindOptions(py::module_& m) {
       .def_readwrite("reciprocity", &DataTermOptions::reciprocity)
       .def_readwrite("cloud_stride", &DataTermOptions::cloud_stride)
       .def_readwrite("hold_pairs_after", &DataTermOptions::hold_pairs_after)
+      .def_readwrite("lost_coverage", &DataTermOptions::lost_coverage)
       .def_readwrite("occluders", &DataTermOptions::occluders)
       .def_readwrite("occluder_margin", &DataTermOptions::occluder_margin);
   EnumProperty(data, "loss", &DataTermOptions::loss, "data.loss",

@@ -49,6 +49,11 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["outer_iterations"] = s.outer_iterations;
   d["inner_iterations"] = s.inner_iterations;
   d["backtracks"] = s.backtracks;
+  d["confidence"] = s.confidence.confidence;
+  d["lost"] = s.lost;
+  d["confidence_parts"] = py::dict(py::arg("fit") = s.confidence.fit, py::arg("coverage") = s.confidence.coverage,
+                                   py::arg("residual") = s.confidence.residual,
+                                   py::arg("strain") = s.confidence.strain);
   d["stopped_by"] = s.stopped_by;
   d["model_to_cloud"] = s.model_to_cloud;
   d["cloud_to_model"] = s.cloud_to_model;

@@ -248,6 +248,9 @@ bool DataTermOptions::IsValid(std::string* error) const {
     return Fail(error, "data.occluder_margin", "must be > 0", occluder_margin);
   }
   if (min_points < 0) return Fail(error, "data.min_points", "must be >= 0", min_points);
+  if (!(lost_coverage >= 0 && lost_coverage <= 1)) {
+    return Fail(error, "data.lost_coverage", "must be in [0, 1] (0 = never lost)", lost_coverage);
+  }
   if (!(std::isfinite(min_points_per_surface_vertex) && min_points_per_surface_vertex >= 0)) {
     return Fail(error, "data.min_points_per_surface_vertex", "must be >= 0",
                 min_points_per_surface_vertex);

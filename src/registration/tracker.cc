@@ -13,6 +13,7 @@
 #include "femreg/forward.h"
 #include "femreg/point_cloud.h"
 #include "registration/correspondences.h"
+#include "registration/confidence.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
 #include "geometry/nearest.h"
@@ -150,6 +151,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
                          Clock::time_point t_frame, FrameSummary* s) {
   s->termination = t;
   s->message = message;
+  s->lost = state.options.data.lost_coverage > 0.0;  // nothing found to track
   state.x_before = state.x;  // held: no velocity to carry on
   UpdateOutputs(index, {}, &state, state.options.solver.num_threads);
   s->time.total = Seconds(t_frame);
@@ -254,6 +256,23 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
   UpdateOutputs(fc.index.get(), pairs, &state, options.solver.num_threads);
+  if (s.IsSolutionUsable()) {
+    const double tolerance = std::max(options.data.loss_scale, 2.0 * fc.spacing);
+    s.confidence = MeasureConfidence(state, fc, pairs, tolerance);
+    s.lost = state.coverage_reference > 0.0 &&
+             s.confidence.coverage < options.data.lost_coverage * state.coverage_reference;
+    if (!s.lost) UpdateReferences(s.confidence, &state);
+  } else {
+    s.lost = options.data.lost_coverage > 0.0;
+  }
+  if (s.lost && state.last_good.rows() == state.x.rows()) {
+    // Lost: back to the last good shape, with no velocity to carry on.
+    state.x = state.last_good;
+    state.x_before = state.x;
+    UpdateOutputs(fc.index.get(), {}, &state, options.solver.num_threads);
+  } else if (!s.lost) {
+    state.last_good = state.x;
+  }
   MeasureForces(&s);
   s.time.total = Seconds(t_frame);
   ++state.frame;

@@ -66,6 +66,11 @@ struct TrackerState {
   int num_vertices = 0;
   Vertices x;         // #V by 3, all objects
   Vertices x_before;  // the result of the frame before the last (for the prediction)
+  // The coverage and the residual (m) this sequence's trusted frames usually reach (running
+  // means; 0: none yet): the confidence's scores are relative to them (registration/confidence.h).
+  double coverage_reference = 0.0, residual_reference = 0.0;
+  // The last frame's result that was not lost (empty before the first): a lost frame keeps it.
+  Vertices last_good;
   Eigen::VectorXd mass;             // #V lumped masses
   Triangles surface;                // #F by 3, global indices
   std::vector<int> surface_vertices;

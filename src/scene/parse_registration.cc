@@ -102,7 +102,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     const YamlValue d = v["data"];
     d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
                  "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity", "hold_pairs_after",
-                 "occluders", "occluder_margin", "min_points", "min_points_per_surface_vertex"});
+                 "occluders", "occluder_margin", "min_points", "min_points_per_surface_vertex",
+                 "lost_coverage"});
     DataTermOptions& o = r.data;
     if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
     if (d.Has("cloud_to_model")) o.cloud_to_model = d["cloud_to_model"].AsBool();
@@ -135,6 +136,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     if (d.Has("min_points_per_surface_vertex")) {
       o.min_points_per_surface_vertex = d["min_points_per_surface_vertex"].AsDouble();
     }
+    if (d.Has("lost_coverage")) o.lost_coverage = d["lost_coverage"].AsDouble();
   }
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];

@@ -98,6 +98,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   Put(data, "min_points", a.min_points, d.data.min_points);
   Put(data, "min_points_per_surface_vertex", a.min_points_per_surface_vertex,
       d.data.min_points_per_surface_vertex);
+  Put(data, "lost_coverage", a.lost_coverage, d.data.lost_coverage);
   PutMap(n, "data", data);
 
   YAML::Node weights = FlowMap();

@@ -55,7 +55,7 @@ const char kStatsHeader[] =
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
     "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,contact_force_x_N,"
     "contact_force_y_N,contact_force_z_N,friction_force_x_N,friction_force_y_N,friction_force_z_N,"
-    "message\n";
+    "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,lost,message\n";
 
 std::string StatsRow(size_t i, const FrameRow& row) {
   std::ostringstream os;
@@ -108,6 +108,10 @@ std::string StatsRow(size_t i, const FrameRow& row) {
   }
   std::snprintf(buf, sizeof(buf), ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", obstacle.x(), obstacle.y(),
                 obstacle.z(), friction.x(), friction.y(), friction.z());
+  os << buf;
+  const FrameConfidence& c = s.confidence;
+  std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f,%.4g,%d", c.confidence, c.fit, c.coverage,
+                c.residual * 1e3, c.strain, s.lost ? 1 : 0);
   os << buf;
   std::string msg = row.read_error.empty() ? s.message : row.read_error;
   std::replace(msg.begin(), msg.end(), '"', '\'');
@@ -265,6 +269,15 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                         {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}});
     }
     j["forces"] = {{"estimated", o.forces.estimate}, {"per_frame", forces}};
+  }
+  {
+    // How far each frame can be trusted, and the frames where the object was lost.
+    json confidence = json::array(), lost = json::array();
+    for (size_t i = 0; i < rows.size(); ++i) {
+      confidence.push_back(number(rows[i].summary.confidence.confidence));
+      if (rows[i].summary.lost) lost.push_back(i);
+    }
+    j["tracking"] = {{"confidence_per_frame", confidence}, {"lost_frames", lost}};
   }
   double deepest = 0.0;
   int contacts = 0;

@@ -1,0 +1,95 @@
+#include "registration/confidence.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "femreg/fem.h"
+
+namespace femreg {
+namespace {
+
+// The largest distance of a principal stretch of F from 1 (infinite when inverted or flat).
+double StretchDeviation(const Eigen::Matrix3d& F) {
+  if (!(F.determinant() > 0.0)) return std::numeric_limits<double>::infinity();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(F.transpose() * F, Eigen::EigenvaluesOnly);
+  const Eigen::Vector3d l = eig.eigenvalues().cwiseMax(0.0);
+  return std::max(std::sqrt(l(2)) - 1.0, 1.0 - std::sqrt(l(0)));
+}
+
+// A trusted frame's coverage enters the reference (a running mean over such frames).
+constexpr double kTrusted = 0.5;
+constexpr double kReferenceRate = 0.1;
+
+}  // namespace
+
+FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
+                                  const std::vector<DataPair>& pairs, double tolerance) {
+  FrameConfidence c;
+  // Fit: the cloud->model pairs (three vertices) within the tolerance at the result.
+  double within = 0.0, all = 0.0, squares = 0.0;
+  for (const DataPair& p : pairs) {
+    if (p.num_vertices != 3) continue;
+    const double d = (p.Point(state.x) - p.target).norm();
+    all += p.weight;
+    squares += p.weight * d * d;
+    if (d <= tolerance) within += p.weight;
+  }
+  c.fit = all > 0.0 ? within / all : 0.0;
+  c.residual = all > 0.0 ? std::sqrt(squares / all) : 0.0;
+
+  // Coverage: the surface vertices facing the sensor with a cloud point near.
+  const Eigen::MatrixXd normals = state.VertexNormals();
+  int facing = 0, covered = 0;
+  for (size_t i = 0; i < state.objects.size(); ++i) {
+    const ObjectState& o = state.objects[i];
+    for (int v : o.mesh.surface_vertices) {
+      const int g = o.offset + v;
+      if (!fc.Faces(state.x.row(g).transpose(), normals.row(g).transpose())) continue;
+      ++facing;
+      const double d = state.residuals[i](v);
+      if (std::isfinite(d) && d <= tolerance) ++covered;
+    }
+  }
+  c.coverage = facing > 0 ? static_cast<double>(covered) / facing : 0.0;
+
+  // Strain: the 95th percentile of the elements' stretch deviations.
+  std::vector<double> deviation;
+  for (const ObjectState& o : state.objects) {
+    const ElasticModel& model = o.model;
+    for (int e = 0; e < model.num_elements(); ++e) {
+      Eigen::Matrix3d Ds;
+      const auto& t = model.tets();
+      const Eigen::Vector3d x0 = o.mesh.x.row(t(e, 0)).transpose();
+      for (int k = 0; k < 3; ++k) Ds.col(k) = o.mesh.x.row(t(e, k + 1)).transpose() - x0;
+      deviation.push_back(StretchDeviation(Ds * model.rest(e).dm_inv));
+    }
+  }
+  if (!deviation.empty()) {
+    const size_t at = std::min(deviation.size() - 1, static_cast<size_t>(0.95 * deviation.size()));
+    std::nth_element(deviation.begin(), deviation.begin() + static_cast<std::ptrdiff_t>(at), deviation.end());
+    c.strain = deviation[at];
+  }
+  const bool first = state.coverage_reference <= 0.0;  // the first solved frame sets the levels
+  const double coverage_score = first ? 1.0 : std::min(1.0, c.coverage / state.coverage_reference);
+  const double residual_score =
+      first || c.residual <= 0.0 ? 1.0 : std::min(1.0, 2.0 * state.residual_reference / c.residual);
+  const double s = c.strain;
+  const double strain_score = std::isfinite(s) ? 1.0 / (1.0 + s * s * s * s) : 0.0;
+  c.confidence = c.fit * coverage_score * residual_score * strain_score;
+  return c;
+}
+
+void UpdateReferences(const FrameConfidence& confidence, TrackerState* state) {
+  const bool first = state->coverage_reference <= 0.0;
+  if (!first && confidence.confidence < kTrusted) return;
+  auto update = [first](double value, double* reference) {
+    *reference = first ? value : (1.0 - kReferenceRate) * *reference + kReferenceRate * value;
+  };
+  update(std::max(confidence.coverage, 1e-3), &state->coverage_reference);
+  update(confidence.residual, &state->residual_reference);
+}
+
+}  // namespace femreg

@@ -1,0 +1,39 @@
+// How far a frame's result can be trusted (FrameSummary::confidence; docs/guide/tracking-loss.md):
+// the product of four scores in [0, 1], each from what the frame has, no ground truth:
+//   fit       the share of the cloud's points (occluders left out) within `tolerance` of the
+//             model's surface: the points the result explains;
+//   coverage  the share of the surface vertices facing the sensor that have a cloud point
+//             within `tolerance`, against what the sequence's trusted frames reach
+//             (state.coverage_reference; a partial view covers little of what faces the
+//             sensor in every frame, a lost object nothing): the result is where the cloud is;
+//   residual  the rms distance of those points from the surface, against twice what the
+//             trusted frames reach (state.residual_reference): a fit pulled by what is not
+//             the object;
+//   strain    1 / (1 + s^4), s the 95th percentile over the elements of the largest
+//             principal stretch's distance from 1 (infinite if inverted): a shape no
+//             material takes.
+// The fit leaves out the points gated by data.max_distance: another object's, or the
+// background's; where the object went missing, the coverage says so.
+#ifndef FEMREG_REGISTRATION_CONFIDENCE_H_
+#define FEMREG_REGISTRATION_CONFIDENCE_H_
+
+#include <vector>
+
+#include "femreg/registration.h"
+#include "registration/correspondences.h"
+#include "registration/tracker_state.h"
+
+namespace femreg {
+
+// The scores of state.x against the frame's cloud: `pairs` are the last outer iteration's
+// (their cloud->model pairs stand for the points they were made from), and state.residuals
+// hold each surface vertex's distance to the nearest cloud point (UpdateOutputs).
+FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
+                                  const std::vector<DataPair>& pairs, double tolerance);
+// Takes a trusted frame's coverage and residual into the references (running means); the
+// first solved frame sets them.
+void UpdateReferences(const FrameConfidence& confidence, TrackerState* state);
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_CONFIDENCE_H_

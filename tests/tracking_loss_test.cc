@@ -1,0 +1,105 @@
+// The per-frame confidence and the lost state (FrameSummary::confidence, lost;
+// registration/confidence.h): high where the cloud is the object, low where the object went
+// away or junk pulls the fit; a lost frame keeps the last good shape and tracking resumes
+// when the object comes back.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <random>
+
+#include "femreg/io.h"
+#include "femreg/tracker.h"
+
+namespace femreg {
+namespace {
+
+TetMesh Box() { return MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 5, 2, 2); }
+
+// Points on the box's surface (its surface vertices and triangle centres), moved by `shift`.
+PointCloud SurfaceCloud(const TetMesh& mesh, const Eigen::Vector3d& shift) {
+  PointCloud cloud;
+  const int nv = static_cast<int>(mesh.surface_vertices.size()), nf = mesh.num_surface_triangles();
+  cloud.points.resize(nv + nf, 3);
+  for (int i = 0; i < nv; ++i) cloud.points.row(i) = mesh.rest.row(mesh.surface_vertices[i]) + shift.transpose();
+  for (int f = 0; f < nf; ++f) {
+    Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
+    for (int k = 0; k < 3; ++k) c += mesh.rest.row(mesh.surface(f, k)) / 3.0;
+    cloud.points.row(nv + f) = c + shift.transpose();
+  }
+  return cloud;
+}
+
+std::unique_ptr<Tracker> MakeTracker(double lost_coverage) {
+  RegistrationOptions options;
+  options.data.lost_coverage = lost_coverage;
+  std::unique_ptr<Tracker> tracker;
+  EXPECT_TRUE(Tracker::Create({Box()}, {ObjectMaterial()}, options, &tracker).ok());
+  return tracker;
+}
+
+TEST(TrackingLoss, LostWhileTheObjectIsAwayAndFoundWhenItComesBack) {
+  const TetMesh mesh = Box();
+  auto tracker = MakeTracker(0.3);
+  FrameSummary s;
+  const Eigen::Vector3d here(0.002, 0.0, 0.0);
+  for (int f = 0; f < 2; ++f) {
+    ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, here), &s).ok());
+    EXPECT_FALSE(s.lost);
+    EXPECT_GT(s.confidence.confidence, 0.9) << s.confidence.fit << " " << s.confidence.coverage;
+    EXPECT_GT(s.confidence.coverage, 0.9);
+  }
+  const Vertices good = tracker->vertices(0);
+  // The object is gone: the cloud holds something else half a metre away.
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d(0.5, 0.0, 0.0)), &s).ok());
+  EXPECT_TRUE(s.lost) << s.BriefReport();
+  EXPECT_LT(s.confidence.confidence, 0.3);
+  EXPECT_LT((tracker->vertices(0) - good).cwiseAbs().maxCoeff(), 1e-12);  // the last good shape
+  // An empty frame: lost too.
+  ASSERT_TRUE(tracker->Track(PointCloud(), &s).ok());
+  EXPECT_TRUE(s.lost);
+  EXPECT_EQ(s.confidence.confidence, 0.0);
+  // Back, 3 mm further: found and followed.
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d(0.005, 0.0, 0.0)), &s).ok());
+  EXPECT_FALSE(s.lost);
+  EXPECT_GT(s.confidence.confidence, 0.9);
+  const double shift = (tracker->vertices(0) - mesh.rest).col(0).mean();
+  EXPECT_NEAR(shift, 0.005, 1e-3);
+}
+
+TEST(TrackingLoss, NeverLostWhenSwitchedOff) {
+  const TetMesh mesh = Box();
+  auto tracker = MakeTracker(0.0);
+  FrameSummary s;
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d::Zero()), &s).ok());
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d(0.5, 0.0, 0.0)), &s).ok());
+  EXPECT_FALSE(s.lost);
+  EXPECT_LT(s.confidence.confidence, 0.3);
+}
+
+// Junk near the object pulls the fit: the residual score drops the confidence, while the
+// object is still there (not lost).
+TEST(TrackingLoss, OutliersLowerTheConfidenceButDoNotLoseTheObject) {
+  const TetMesh mesh = Box();
+  auto tracker = MakeTracker(0.3);
+  FrameSummary s;
+  const PointCloud clean = SurfaceCloud(mesh, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(tracker->Track(clean, &s).ok());
+  const double before = s.confidence.confidence;
+  PointCloud noisy = clean;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.02, 0.02);
+  const int n = static_cast<int>(clean.points.rows());
+  noisy.points.conservativeResize(2 * n, 3);
+  for (int i = 0; i < n; ++i) {
+    noisy.points.row(n + i) = clean.points.row(i) + Eigen::RowVector3d(u(rng), u(rng), u(rng));
+  }
+  ASSERT_TRUE(tracker->Track(noisy, &s).ok());
+  EXPECT_FALSE(s.lost);
+  EXPECT_LT(s.confidence.confidence, 0.6 * before) << s.confidence.residual << " " << s.confidence.fit;
+  EXPECT_GE(s.confidence.confidence, 0.0);
+  EXPECT_LE(s.confidence.fit, 1.0);
+}
+
+}  // namespace
+}  // namespace femreg
