@@ -56,11 +56,17 @@ for sequence in "${SEQUENCES[@]}"; do
       ROWS+=("$sequence $artefact $strength ${artefact}_$strength")
     done
   done
-  # Every artefact at its realistic strength, and every one but the object leaving the view.
+  # Every artefact at its realistic strength; then without the object leaving the view, without
+  # the flying pixels, and without both the flying pixels and the flicker.
   run "$sequence" all --artefact all
   ROWS+=("$sequence all realistic all")
   run "$sequence" all_but_leave_view --artefact all --artefact leave_view=0
   ROWS+=("$sequence all_but_leave_view realistic all_but_leave_view")
+  run "$sequence" all_but_flying --artefact all --artefact flying_pixels=0
+  ROWS+=("$sequence all_but_flying_pixels realistic all_but_flying")
+  run "$sequence" all_but_flying_flicker --artefact all --artefact flying_pixels=0 \
+    --artefact flicker=0
+  ROWS+=("$sequence all_but_flying_pixels_flicker realistic all_but_flying_flicker")
 done
 printf '%s\n' "${ROWS[@]}" > "$OUT/rows.txt"
 /usr/bin/python3 - "$OUT" <<'PY'
