@@ -1,7 +1,8 @@
 // femreg/synth.h - the parts synthetic data is made of: a virtual depth camera (pinhole,
 // z-buffer, depth noise growing with the square of the depth, dropped pixels at grazing
-// angles, outliers, and optional artefacts of real sensors) and the embedding that carries a finer mesh's ground truth to the
-// tracked mesh's vertices. The sequence generators that use them are in femreg/datasets.h.
+// angles, outliers, and optional artefacts of real sensors) and the embedding that carries a
+// finer mesh's ground truth to the tracked mesh's vertices. The sequence generators that use
+// them are in femreg/datasets.h.
 #ifndef FEMREG_SYNTH_H_
 #define FEMREG_SYNTH_H_
 

@@ -122,7 +122,8 @@ PointCloud DepthSensor::Sample(const DepthImage& image, const std::vector<Render
   std::uniform_real_distribution<double> uni(0.0, 1.0);
   // A distribution of its own too: a normal distribution keeps the second value of a pair.
   std::normal_distribution<double> artefact_gauss(0.0, 1.0);
-  const double flicker = a.flicker_offset > 0 ? a.flicker_offset * artefact_gauss(artefact_rng) : 0.0;
+  const double flicker =
+      a.flicker_offset > 0 ? a.flicker_offset * artefact_gauss(artefact_rng) : 0.0;
   const double cos_grazing = std::cos(options_.grazing_angle_deg * M_PI / 180.0);
   const double cos_specular = std::cos(a.specular_angle_deg * M_PI / 180.0);
   si::ImageGeometry geometry;
@@ -172,12 +173,14 @@ PointCloud DepthSensor::Sample(const DepthImage& image, const std::vector<Render
       }
       if (a.flying_fraction > 0) {
         const double other = si::EdgeNeighbourDepth(image, px, py, a.flying_jump);
-        // Two draws for every edge pixel, kept or not: the stream does not depend on them.
+        // Two draws per pixel, edge or not: which pixels fly does not shift later draws.
         const double u = uni(artefact_rng), t = uni(artefact_rng);
         if (other > 0 && u < a.flying_fraction) z += t * (other - z);
       }
       double depth = z + noise + flicker;
-      if (a.disparity_step > 0) depth = si::QuantiseDepth(depth, c.fx, a.baseline, a.disparity_step);
+      if (a.disparity_step > 0) {
+        depth = si::QuantiseDepth(depth, c.fx, a.baseline, a.disparity_step);
+      }
       pts.push_back(c.position + R_.transpose() * (depth * ray_c));
     }
   }

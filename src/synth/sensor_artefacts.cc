@@ -18,7 +18,8 @@ uint64_t Mix(uint64_t x) {
 }
 
 double LatticeValue(int64_t i, int64_t j) {
-  const uint64_t h = Mix(static_cast<uint64_t>(i) * 0x100000001b3ull ^ Mix(static_cast<uint64_t>(j)));
+  const uint64_t h =
+      Mix(static_cast<uint64_t>(i) * 0x100000001b3ull ^ Mix(static_cast<uint64_t>(j)));
   return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0);  // 53 bits in [0, 1)
 }
 
@@ -67,7 +68,8 @@ std::vector<Eigen::Vector3d> DarkCentres(const Vertices& positions, const Triang
     std::mt19937_64 rng(Mix(salt ^ Mix(static_cast<uint64_t>(f))));
     const double expected = fraction * 0.5 * (b - a).cross(c - a).norm() / disc;
     const double u = uni(rng);
-    const int count = static_cast<int>(std::floor(expected)) + (u < expected - std::floor(expected));
+    const double whole = std::floor(expected);
+    const int count = static_cast<int>(whole) + (u < expected - whole ? 1 : 0);
     for (int k = 0; k < count; ++k) {
       const double r = std::sqrt(uni(rng)), t = uni(rng);  // uniform on the triangle
       centres.push_back((1 - r) * a + r * (1 - t) * b + r * t * c);
