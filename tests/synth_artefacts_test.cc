@@ -178,5 +178,31 @@ TEST(SynthArtefactsTest, AnOccluderCrossesInFrontAndItsPointsAreKept) {
   EXPECT_NE(message.find("does not fit"), std::string::npos) << message;
 }
 
+#ifdef FEMREG_CLI_PATH
+TEST(SynthArtefactsTest, TheCommandLineSwitchesThemOn) {
+  TempDir dir;
+  const std::string scene = dir.path() + "/bar.yaml";
+  std::ofstream(scene) << BarScene("");
+  using testing_util::Femreg;
+  const testing_util::CliRun bad =
+      Femreg("synth " + scene + " --out " + dir.path() + "/bad --artefact sparkles=1");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.out.find("--artefact: unknown artefact 'sparkles'"), std::string::npos) << bad.out;
+  // Repeated, and before the scene: each --artefact takes one value.
+  const std::string out = dir.path() + "/away";
+  const testing_util::CliRun run = Femreg("synth --artefact leave_view=2 --artefact "
+                                          "leave_view.start=0 " + scene + " --out " + out +
+                                          " --frames 3 --no-progress");
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_NE(run.out.find("artefacts: leave_view frames 2 start 0"), std::string::npos) << run.out;
+  for (int f = 0; f < 3; ++f) {
+    PointCloud cloud;
+    const std::string path = out + "/clouds/frame_000" + std::to_string(f) + ".pcd";
+    ASSERT_TRUE(ReadPointCloud(path, &cloud).ok());
+    EXPECT_EQ(cloud.size() == 0, f < 2) << path;
+  }
+}
+#endif
+
 }  // namespace
 }  // namespace femreg

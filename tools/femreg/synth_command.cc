@@ -115,8 +115,9 @@ void AddSynthCommand(CLI::App* app) {
                   "NAME (its realistic strength), NAME=STRENGTH, NAME.KEY=VALUE or all. Names: "
                   "flying_pixels, quantisation, dark_holes, specular_holes, grazing_holes, "
                   "multipath, flicker, flicker_dropout, occluder, leave_view "
-                  "(docs/guide/synth.md)")
-      ->take_all();
+                  "(datasets/README.md, Sensor artefacts)")
+      ->take_all()
+      ->allow_extra_args(false);
   cmd->callback([=] {
     SetExitCode(RunSynth(*scene, *out, *frames, *force, *progress,
                          *depth_png ? *depth_scale : 0.0, *artefacts));
