@@ -232,6 +232,9 @@ void ExpectSameScene(const Scene& a, const Scene& b) {
   EXPECT_EQ(m.pixel_stride, n.pixel_stride);
   EXPECT_EQ(m.outlier_fraction, n.outlier_fraction);
   EXPECT_EQ(m.outlier_margin, n.outlier_margin);
+  for (const SynthArtefactKey& k : SynthArtefactKeys()) {
+    EXPECT_EQ(k.get(s), k.get(t)) << "synth.artefacts." << k.artefact << "." << k.key;
+  }
   EXPECT_EQ(s.background, t.background);
   EXPECT_EQ(s.background_point, t.background_point);
   EXPECT_EQ(s.background_normal, t.background_normal);
@@ -408,7 +411,10 @@ TEST_F(SceneWriterTest, SynthSectionReadsBackTheSame) {
       "  bodies:\n"
       "    - {name: hand, box: {min: [0, -0.1, 0], max: [0.02, -0.05, 0.05]}, in_cloud: true,\n"
       "       keyframes: [{frame: 0}, {frame: 4, translation: [0.01, 0, 0]}], press: true,\n"
-      "       contact_tolerance: 0.002}\n";
+      "       contact_tolerance: 0.002}\n"
+      "  artefacts: {flying_pixels: 0.3, multipath: {bias: 0.004, radius: 0.025},\n"
+      "              grazing_holes: {blob_px: 4}, leave_view: {frames: 3, start: 2},\n"
+      "              occluder: 0.015}\n";
   const std::string path = (fs::path(dir_.path()) / "synth.yaml").string();
   std::ofstream(path) << text;
   Scene scene;
@@ -416,6 +422,13 @@ TEST_F(SceneWriterTest, SynthSectionReadsBackTheSame) {
   ASSERT_TRUE(status.ok()) << status.message();
   ASSERT_TRUE(scene.synth.enabled);
   ASSERT_EQ(scene.synth.motion.size(), 2u);
+  EXPECT_EQ(scene.synth.sensor.artefacts.hole_blob_px, 4);
+  EXPECT_EQ(scene.synth.leave_start, 2);
+  RoundTrip(scene, dir_.path());
+  // Every artefact on, at values that are not round.
+  for (const SynthArtefactKey& k : SynthArtefactKeys()) {
+    k.set(&scene.synth, k.integer ? k.realistic + 1 : k.realistic * 0.7);
+  }
   RoundTrip(scene, dir_.path());
 
   // The other two ways to give the ground truth mesh.

@@ -188,8 +188,42 @@ struct SynthSpec {
   double background_size = 1.0;    // m, edge length
   std::vector<MotionTrackSpec> motion;
   std::vector<SynthBodySpec> bodies;
+  // Artefacts of the sequence (the sensor's own are in sensor.artefacts). Occluder: a
+  // sphere of this radius (m; 0 = none) between the camera and the object, standoff (m)
+  // nearer than the object's nearest vertex, crossing the object's view from left to right
+  // once over the sequence; its points are in the clouds (a hand in the mask).
+  double occluder_radius = 0.0;
+  double occluder_standoff = 0.03;
+  // The object leaves the view: for leave_frames frames from leave_start (-1: a third of
+  // the way in) the camera returns none of its points; the ground truth keeps its shape,
+  // every vertex unseen.
+  int leave_frames = 0;
+  int leave_start = -1;
   std::string source_name;         // the scene file's name, for the outputs
 };
+
+// The artefacts of synth by name, as the scene's `synth.artefacts` map and `femreg synth
+// --artefact` write them: NAME: {KEY: value, ...}. An artefact's first key is its strength
+// and switches it on (0 = off; for grazing_holes a lower angle is stronger).
+struct SynthArtefactKey {
+  const char* artefact;  // "flying_pixels"
+  const char* key;       // "fraction"
+  double realistic;      // what `--artefact NAME` and `--artefact all` set
+  double min, max;       // the valid range
+  bool integer;
+  double (*get)(const SynthSpec&);
+  void (*set)(SynthSpec*, double);
+};
+const std::vector<SynthArtefactKey>& SynthArtefactKeys();
+// Applies "NAME" (every key of NAME at its realistic value), "NAME=STRENGTH" (the first
+// key), "NAME.KEY=VALUE" or "all" (every artefact at its realistic values).
+Status SetSynthArtefact(const std::string& spec, SynthSpec* synth);
+// One key of one artefact ("" = its strength), range-checked.
+Status SetSynthArtefactValue(const std::string& artefact, const std::string& key, double value,
+                             SynthSpec* synth);
+// The switched-on artefacts with their values ("flying_pixels fraction 0.5 jump 0.02;
+// ..."); "" when none is on.
+std::string SynthArtefactSummary(const SynthSpec& synth);
 
 struct Scene {
   std::string path;  // the file it was read from ("" when built in code)

@@ -1,7 +1,8 @@
 // femreg/synth.h - the parts synthetic data is made of: a virtual depth camera (pinhole,
 // z-buffer, depth noise growing with the square of the depth, dropped pixels at grazing
-// angles, outliers) and the embedding that carries a finer mesh's ground truth to the
-// tracked mesh's vertices. The sequence generators that use them are in femreg/datasets.h.
+// angles, outliers, and optional artefacts of real sensors) and the embedding that carries a
+// finer mesh's ground truth to the tracked mesh's vertices. The sequence generators that use
+// them are in femreg/datasets.h.
 #ifndef FEMREG_SYNTH_H_
 #define FEMREG_SYNTH_H_
 
@@ -16,6 +17,43 @@
 
 namespace femreg {
 
+// Artefacts of real depth sensors. Each is off at its default and switched on by its
+// strength (the first field of each group). Deterministic from the frame's seed, except the
+// dark patches and the grazing hole field, which are fixed on the surfaces and the image.
+struct SensorArtefacts {
+  // Flying pixels: a pixel whose 8 neighbours include one nearer or farther by more than
+  // flying_jump returns, with probability flying_fraction, a depth drawn uniformly between
+  // its own and that neighbour's, on its own ray.
+  double flying_fraction = 0.0;
+  double flying_jump = 0.02;  // m
+  // Structured-light quantisation: the disparity fx * baseline / z is rounded to a multiple
+  // of disparity_step (px), so the depth step grows as z^2 / (fx * baseline).
+  double disparity_step = 0.0;  // px; 0 = off
+  double baseline = 0.075;      // m, projector to camera
+  // Dark surfaces: discs of radius dark_radius fixed on each surface, covering about
+  // dark_fraction of its area, return nothing.
+  double dark_fraction = 0.0;
+  double dark_radius = 0.01;  // m
+  // Specular surfaces: no return where the ray meets the surface within specular_angle_deg
+  // of its normal (the projector's mirror reflection saturates the pixel).
+  double specular_angle_deg = 0.0;  // 0 = off
+  // Grazing holes: from grazing_holes_deg of incidence on, pixels drop in blobs: where a
+  // smooth image noise field (cells of hole_blob_px pixels, values in [0, 1)) lies below a
+  // ramp from 0 at grazing_holes_deg to 1 at grazing_angle_deg.
+  double grazing_holes_deg = 0.0;  // 0 = off; lower is stronger
+  double hole_blob_px = 6.0;
+  // Multipath: depth lengthened by multipath_bias times the fraction of the seen points
+  // within multipath_radius that lie in front of the point's tangent plane and face it
+  // (0 on a plane or a convex surface, up to 1 deep in a concave corner).
+  double multipath_bias = 0.0;  // m
+  double multipath_radius = 0.03;  // m
+  // Temporal flicker: per frame one depth offset for every pixel (Gaussian, sigma
+  // flicker_offset), and a fraction flicker_dropout of the pixels dropped at random.
+  double flicker_offset = 0.0;  // m
+  double flicker_dropout = 0.0;
+  bool IsValid(std::string* error) const;
+};
+
 struct DepthSensorOptions {
   CameraOptions camera;                 // position, target, up and intrinsics
   double near = 0.05;                   // m; closer surfaces are not seen
@@ -24,6 +62,7 @@ struct DepthSensorOptions {
   int pixel_stride = 1;                 // sample every k-th pixel in u and v
   double outlier_fraction = 0.0;        // extra uniform outliers, as a fraction of the points
   double outlier_margin = 0.05;         // m around the seen points' bounding box
+  SensorArtefacts artefacts;            // all off by default
   bool IsValid(std::string* error) const;
 };
 
@@ -48,7 +87,9 @@ class DepthSensor {
   // Rasterizes the surfaces with a z-buffer (exact, perspective-correct depth).
   DepthImage Render(const std::vector<RenderSurface>& surfaces) const;
   // The cloud the sensor returns for that image: back-projected pixels with noise,
-  // grazing-angle drop-outs and outliers, deterministic from `seed`.
+  // grazing-angle drop-outs, outliers and the switched-on artefacts, deterministic from
+  // `seed`. The artefacts draw from a generator of their own, after the clean noise is
+  // drawn, so switching one on leaves the clean noise of every pixel it keeps unchanged.
   PointCloud Sample(const DepthImage& image, const std::vector<RenderSurface>& surfaces,
                     uint64_t seed) const;
   // Whether each point is seen: in front of the camera, inside the image, and no more

@@ -59,6 +59,59 @@ void Quad(const Eigen::Vector3d& point, const Eigen::Vector3d& normal, double si
   *triangles << 0, 1, 2, 0, 2, 3;
 }
 
+// A sphere of unit radius at the origin (a UV sphere, 16 slices, 8 stacks).
+void UnitSphere(Vertices* points, Triangles* triangles) {
+  const int slices = 16, stacks = 8;
+  points->resize(2 + slices * (stacks - 1), 3);
+  points->row(0) << 0, 0, 1;
+  points->row(1) << 0, 0, -1;
+  for (int i = 1; i < stacks; ++i) {
+    const double theta = M_PI * i / stacks;
+    for (int j = 0; j < slices; ++j) {
+      const double phi = 2 * M_PI * j / slices;
+      points->row(2 + (i - 1) * slices + j) << std::sin(theta) * std::cos(phi),
+          std::sin(theta) * std::sin(phi), std::cos(theta);
+    }
+  }
+  const auto ring = [&](int i, int j) { return 2 + (i - 1) * slices + (j % slices); };
+  triangles->resize(2 * slices * (stacks - 1), 3);
+  int t = 0;
+  for (int j = 0; j < slices; ++j) {
+    triangles->row(t++) << 0, ring(1, j), ring(1, j + 1);
+    triangles->row(t++) << 1, ring(stacks - 1, j + 1), ring(stacks - 1, j);
+    for (int i = 1; i + 1 < stacks; ++i) {
+      triangles->row(t++) << ring(i, j), ring(i + 1, j), ring(i + 1, j + 1);
+      triangles->row(t++) << ring(i, j), ring(i + 1, j + 1), ring(i, j + 1);
+    }
+  }
+}
+
+// The occluder's centre at frame f: `standoff` nearer the camera than the object's nearest
+// vertex, level with the object's middle, crossing its view from left to right over the
+// sequence's timeline. False when it would not fit in front of the camera.
+bool OccluderCentre(const DepthSensor& sensor, const Vertices& object, double radius,
+                    double standoff, int f, int frames, Eigen::Vector3d* centre) {
+  const Eigen::Matrix3d& R = sensor.rotation();
+  const Eigen::Vector3d position = sensor.options().camera.position;
+  double z_min = 1e300, tx_min = 1e300, tx_max = -1e300, ty_sum = 0.0;
+  int count = 0;
+  for (int v = 0; v < object.rows(); ++v) {
+    const Eigen::Vector3d p = R * (object.row(v).transpose() - position);
+    if (!(p.z() > 0)) continue;
+    z_min = std::min(z_min, p.z());
+    tx_min = std::min(tx_min, p.x() / p.z());
+    tx_max = std::max(tx_max, p.x() / p.z());
+    ty_sum += p.y() / p.z();
+    ++count;
+  }
+  const double z = z_min - standoff - radius;
+  if (count == 0 || z - radius <= sensor.options().near) return false;
+  const double alpha = frames > 1 ? static_cast<double>(f) / (frames - 1) : 0.5;
+  const double x = (z * tx_min - radius) + alpha * (z * (tx_max - tx_min) + 2 * radius);
+  *centre = position + R.transpose() * Eigen::Vector3d(x, z * ty_sum / count, z);
+  return true;
+}
+
 std::string FrameName(int f) {
   char name[32];
   std::snprintf(name, sizeof(name), "frame_%04d", f);
@@ -212,8 +265,11 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
 
   const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
   const DepthSensor sensor(s.sensor);
-  Vertices table_points, surface_points;
-  Triangles table_triangles, surface_triangles;
+  Vertices table_points, surface_points, sphere, occluder_points;
+  Triangles table_triangles, surface_triangles, occluder_triangles;
+  UnitSphere(&sphere, &occluder_triangles);
+  // The timeline's third unless given, so a shorter run (--frames) keeps the same frames.
+  const int leave_start = s.leave_start >= 0 ? s.leave_start : s.frames / 3;
   if (s.background) {
     Quad(s.background_point, s.background_normal, s.background_size, &table_points, &table_triangles);
   }
@@ -299,7 +355,20 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
                            ": the forward solve failed: " + summary.message);
     }
 
-    std::vector<RenderSurface> surfaces = {{&fine.x, &fine.surface, true}};
+    const bool left = f >= leave_start && f < leave_start + s.leave_frames;
+    std::vector<RenderSurface> surfaces;
+    if (!left) surfaces.push_back({&fine.x, &fine.surface, true});
+    if (s.occluder_radius > 0) {
+      Eigen::Vector3d centre;
+      if (!OccluderCentre(sensor, fine.x, s.occluder_radius, s.occluder_standoff, f, s.frames,
+                          &centre)) {
+        return Status::Error(scene.path + ": frame " + std::to_string(f) +
+                             ": the occluder does not fit between the camera and the object "
+                             "(a smaller radius or standoff)");
+      }
+      occluder_points = (sphere * s.occluder_radius).rowwise() + centre.transpose();
+      surfaces.push_back({&occluder_points, &occluder_triangles, true});
+    }
     if (s.background) surfaces.push_back({&table_points, &table_triangles, true});
     for (size_t b = 0; b < s.bodies.size(); ++b) {
       surfaces.push_back({&body_points[b], &body_triangles[b], s.bodies[b].in_cloud});
@@ -309,6 +378,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     GroundTruthFrame truth;
     truth.positions = InterpolateEmbedded(fine, fine.x, embedded);
     truth.visible = sensor.Visible(image, truth.positions, 2e-3);
+    if (left) std::fill(truth.visible.begin(), truth.visible.end(), 0);
 
     const std::string name = FrameName(f);
     status = WritePointCloud((fs::path(dir) / "clouds" / (name + ".pcd")).string(), cloud);
@@ -355,6 +425,8 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
      << " z^2, no returns beyond " << s.sensor.grazing_angle_deg << " deg incidence, "
      << s.sensor.outlier_fraction * 100 << "% outliers)";
   if (s.background) md << ", with a " << s.background_size << " m table quad in view";
+  const std::string artefacts = SynthArtefactSummary(s);
+  if (!artefacts.empty()) md << "; artefacts (femreg synth's `artefacts`): " << artefacts;
   md << ".\n"
      << "- `ground_truth/frame_NNNN.csv`: per tracked vertex, its true position (x,y,z in m) "
      << "and whether the camera saw it (on average " << Fixed(100 * r.mean_seen_fraction, 1)

@@ -11,7 +11,7 @@ namespace scene_internal {
 
 void SceneParser::ParseSynth(const YamlValue& v) {
   v.CheckKeys({"frames", "seed", "sanity_check", "ground_truth", "sensor", "background",
-               "motion", "bodies"});
+               "motion", "bodies", "artefacts"});
   SynthSpec& s = scene_->synth;
   s.enabled = true;
   s.source_name = std::filesystem::path(source_).filename().string();
@@ -69,6 +69,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
   }
   s.sensor.camera = scene_->registration.camera;
   if (v.Has("sensor")) ParseSensor(v["sensor"], &s.sensor);
+  if (v.Has("artefacts")) ParseArtefacts(v["artefacts"], &s);
   if (v.Has("background")) {
     const YamlValue b = v["background"];
     b.CheckKeys({"point", "normal", "size"});
@@ -159,6 +160,36 @@ void SceneParser::ParseSensor(const YamlValue& v, DepthSensorOptions* sensor) {
         dot != std::string::npos && dot < space ? error.substr(dot + 1, space - dot - 1) : "";
     const YamlValue node = !key.empty() && v.Has(key) ? v[key] : v;
     node.Fail(space == std::string::npos ? error : error.substr(space + 1));
+  }
+}
+
+// artefacts: {NAME: STRENGTH} or {NAME: {KEY: value, ...}}, names and keys from
+// SynthArtefactKeys (shared with the writer and femreg synth --artefact).
+void SceneParser::ParseArtefacts(const YamlValue& v, SynthSpec* synth) {
+  v.RequireMap();
+  std::vector<std::string> names;
+  for (const SynthArtefactKey& k : SynthArtefactKeys()) {
+    if (names.empty() || names.back() != k.artefact) names.push_back(k.artefact);
+  }
+  v.CheckKeys(names);
+  for (const std::string& name : names) {
+    if (!v.Has(name)) continue;
+    const YamlValue a = v[name];
+    if (!a.IsMap()) {
+      const Status status = SetSynthArtefactValue(name, "", a.AsDouble(), synth);
+      if (!status.ok()) a.Fail(status.message());
+      continue;
+    }
+    std::vector<std::string> keys;
+    for (const SynthArtefactKey& k : SynthArtefactKeys()) {
+      if (name == k.artefact) keys.push_back(k.key);
+    }
+    a.CheckKeys(keys);
+    for (const std::string& key : keys) {
+      if (!a.Has(key)) continue;
+      const Status status = SetSynthArtefactValue(name, key, a[key].AsDouble(), synth);
+      if (!status.ok()) a[key].Fail(status.message());
+    }
   }
 }
 

@@ -72,6 +72,8 @@
 //     sensor: {noise_coefficient: 2.85e-3, grazing_angle_deg: 80, pixel_stride: 1,
 //              outlier_fraction: 0, outlier_margin: 0.05, near: 0.05}  # camera: registration.camera
 //     background: {point: [0, 0, 0], normal: [0, 0, 1], size: 1}   # a square table in view
+//     artefacts: {flying_pixels: 0.5,          # NAME: strength, or NAME: {KEY: value, ..};
+//                 multipath: {bias: 0.003, radius: 0.03}}   # names, keys: SynthArtefactKeys
 //     motion:                                  # vertex sets of the ground truth mesh moved rigidly
 //       - {name: grip, select: SELECTION, centre: [x, y, z],   # centre default: the centroid
 //          keyframes: [{frame: 0}, {frame: 9, translation: [..], rotation: [..]}],

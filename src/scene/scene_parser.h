@@ -83,6 +83,7 @@ class SceneParser {
   // parse_synth.cc
   void ParseSynth(const YamlValue& v);
   void ParseSensor(const YamlValue& v, DepthSensorOptions* sensor);
+  void ParseArtefacts(const YamlValue& v, SynthSpec* synth);
   std::vector<MotionKeyframe> ParseKeyframes(const YamlValue& entry, bool rotations);
 
   std::string source_;

@@ -341,6 +341,14 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
     }
     n["bodies"] = bodies;
   }
+  YAML::Node artefacts = Map();
+  for (const SynthArtefactKey& k : SynthArtefactKeys()) {
+    if (k.get(s) == k.get(d)) continue;
+    if (!artefacts[k.artefact]) artefacts[k.artefact] = FlowMap();
+    YAML::Node artefact = artefacts[k.artefact];
+    artefact[k.key] = Number(k.get(s));
+  }
+  PutMap(n, "artefacts", artefacts);
   return n;
 }
 

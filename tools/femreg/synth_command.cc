@@ -2,6 +2,8 @@
 // simulated with FEM on a finer mesh, seen by a virtual depth camera).
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cli_util.h"
 #include "commands.h"
@@ -21,11 +23,19 @@ void Progress(int done, int total) {
 }
 
 int RunSynth(const std::string& scene_path, const std::string& out, int frames, bool force,
-             bool progress, double depth_scale) {
+             bool progress, double depth_scale, const std::vector<std::string>& artefacts) {
   Scene scene;
   Status status = LoadScene(scene_path, &scene);
   if (status.ok() && !scene.synth.enabled) {
     status = Status::Error(scene_path + ": has no 'synth:' section (see datasets/README.md)");
+  }
+  for (size_t i = 0; i < artefacts.size() && status.ok(); ++i) {
+    status = SetSynthArtefact(artefacts[i], &scene.synth);
+    if (!status.ok()) status = Status::Error("--artefact: " + status.message());
+  }
+  if (status.ok()) {
+    std::string why;
+    if (!scene.synth.sensor.IsValid(&why)) status = Status::Error("--artefact: " + why);
   }
   if (status.ok()) status = PrepareOutputDir(out, force);
   if (!status.ok()) {
@@ -47,7 +57,11 @@ int RunSynth(const std::string& scene_path, const std::string& out, int frames, 
             << report.tracked_vertices << " vertices, ground truth mesh " << report.truth_vertices
             << " vertices" << (scene.synth.sanity_check ? " (SANITY CHECK: the same mesh and material)" : "")
             << ", " << report.min_points << "-" << report.max_points << " points per cloud, "
-            << static_cast<int>(100 * report.mean_seen_fraction + 0.5) << "% of the vertices seen.\n"
+            << static_cast<int>(100 * report.mean_seen_fraction + 0.5) << "% of the vertices seen"
+            << (SynthArtefactSummary(scene.synth).empty()
+                    ? ""
+                    : "; artefacts: " + SynthArtefactSummary(scene.synth))
+            << ".\n"
             << "Track it with: femreg register --scene " << out << "/scene.yaml --frames " << out
             << "/clouds --ground-truth " << out << "/ground_truth --out OUT\n";
   if (depth_scale > 0) {
@@ -75,6 +89,7 @@ void AddSynthCommand(CLI::App* app) {
   auto progress = std::make_shared<bool>(true);
   auto depth_png = std::make_shared<bool>(false);
   auto depth_scale = std::make_shared<double>(0.001);
+  auto artefacts = std::make_shared<std::vector<std::string>>();
   CLI::App* cmd = app->add_subcommand(
       "synth",
       "Make a synthetic sequence with ground truth from a scene's 'synth:' section: the motion "
@@ -95,8 +110,17 @@ void AddSynthCommand(CLI::App* app) {
   cmd->add_option("--depth-scale", *depth_scale, "Metres per depth unit of --depth-png")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--artefact", *artefacts,
+                  "Switch on a sensor artefact over the scene's synth.artefacts (repeatable): "
+                  "NAME (its realistic strength), NAME=STRENGTH, NAME.KEY=VALUE or all. Names: "
+                  "flying_pixels, quantisation, dark_holes, specular_holes, grazing_holes, "
+                  "multipath, flicker, flicker_dropout, occluder, leave_view "
+                  "(datasets/README.md, Sensor artefacts)")
+      ->take_all()
+      ->allow_extra_args(false);
   cmd->callback([=] {
-    SetExitCode(RunSynth(*scene, *out, *frames, *force, *progress, *depth_png ? *depth_scale : 0.0));
+    SetExitCode(RunSynth(*scene, *out, *frames, *force, *progress,
+                         *depth_png ? *depth_scale : 0.0, *artefacts));
   });
 }
 
