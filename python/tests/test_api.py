@@ -113,6 +113,19 @@ def test_tracker_follows_a_rigid_translation():
     # the 4.9 mm shift (0.1 mm: the data term's gating and temporal pull leave micrometres).
     assert np.abs(x - (mesh.rest + shift)).max() < 1e-4
     np.testing.assert_array_equal(tracker.vertices(0), x)
+    assert summary["confidence"] > 0.9 and not summary["lost"]
+    assert set(summary["confidence_parts"]) == {"fit", "coverage", "residual", "strain"}
+
+
+def test_a_frame_without_the_object_is_lost_and_keeps_the_last_good_shape():
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    options = femreg.RegistrationOptions()
+    assert options.data.lost_coverage == 0.3
+    tracker = femreg.Tracker([mesh], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+    good = tracker.track(_surface_cloud(mesh, mesh.rest)).copy()
+    x = tracker.track(_surface_cloud(mesh, mesh.rest + [0.5, 0.0, 0.0]))
+    assert tracker.summary["lost"] and tracker.summary["confidence"] < 0.3
+    np.testing.assert_array_equal(x, good)
 
 
 def test_per_area_weights_are_reachable():

@@ -153,6 +153,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   s->message = message;
   s->lost = state.options.data.lost_coverage > 0.0;  // nothing found to track
   state.x_before = state.x;  // held: no velocity to carry on
+  state.held_before = true;
   UpdateOutputs(index, {}, &state, state.options.solver.num_threads);
   s->time.total = Seconds(t_frame);
   ++state.frame;
@@ -272,7 +273,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     UpdateOutputs(fc.index.get(), {}, &state, options.solver.num_threads);
   } else if (!s.lost) {
     state.last_good = state.x;
+    // The first frame after a held or lost one caught up with a motion it did not see: that
+    // jump is no velocity to carry on.
+    if (state.held_before) state.x_before = state.x;
   }
+  state.held_before = s.lost || !s.IsSolutionUsable();
   MeasureForces(&s);
   s.time.total = Seconds(t_frame);
   ++state.frame;

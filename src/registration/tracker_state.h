@@ -71,6 +71,7 @@ struct TrackerState {
   double coverage_reference = 0.0, residual_reference = 0.0;
   // The last frame's result that was not lost (empty before the first): a lost frame keeps it.
   Vertices last_good;
+  bool held_before = false;  // the last frame was held or lost (its successor's move is no velocity)
   Eigen::VectorXd mass;             // #V lumped masses
   Triangles surface;                // #F by 3, global indices
   std::vector<int> surface_vertices;
