@@ -13,6 +13,7 @@
 #include "energy/equilibrium.h"
 #include "mesh/disjoint_sets.h"
 #include "parallel/signals.h"
+#include "parallel/stopwatch.h"
 #include "parallel/threads.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/supernodal_solve.h"
@@ -23,10 +24,6 @@ namespace fast_backend {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
 constexpr int kMaxPcgIterations = 200;
 // The shift of K~ = K + shift * mean(diag K): enough for a free body's rigid motions (K's null
 // space) to factorize; raised 100-fold while the factorization fails.

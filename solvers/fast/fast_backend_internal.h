@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "energy/assembler.h"
+#include "parallel/stopwatch.h"
 #include "solvers/fast/equilibrium_step.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/multigrid.h"
@@ -22,10 +23,6 @@ namespace femreg {
 namespace fast_backend {
 
 using Clock = std::chrono::steady_clock;
-inline double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
 // The single-precision factorization (SupernodalSolve::Factorize) does its flops about this many
 // times faster than PCG's iterations do theirs (memory-bound substitutions and products), so the
 // factorization's flop count divided by an iteration's, over this, is the PCG iterations a

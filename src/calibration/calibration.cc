@@ -15,15 +15,12 @@
 
 #include "femreg/fem.h"
 #include "geometry/nearest.h"
+#include "parallel/stopwatch.h"
 
 namespace femreg {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 bool IsModulus(CalibrationParameter p) { return p != CalibrationParameter::kPoissonRatio; }
 

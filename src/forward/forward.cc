@@ -350,7 +350,6 @@ void QuasiStaticSolver::Run() {
 
 using forward_internal::QuasiStaticSolver;
 using forward_internal::Clock;
-using forward_internal::Seconds;
 
 Status SolveQuasiStatic(const ForwardProblem& problem, const ForwardOptions& options,
                         ElasticModel* model, TetMesh* mesh, ForwardSummary* summary) {

@@ -14,6 +14,7 @@
 #include "energy/nodal_volume.h"
 #include "energy/problem.h"
 #include "femreg/forward.h"
+#include "parallel/stopwatch.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -25,10 +26,6 @@ std::string IterationsPerStep(const std::vector<ForwardLoadStep>& steps);
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 using Clock = std::chrono::steady_clock;
-
-inline double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 // CHOLMOD's supernodal LL^T with access to its rough reciprocal condition number
 // min(diag L) / max(diag L), to tell a singular stiffness from an ill-conditioned one.

@@ -34,15 +34,12 @@
 
 #include "femreg/meshing.h"
 #include "meshing/surface_check.h"
+#include "parallel/stopwatch.h"
 
 namespace femreg {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 std::string Fmt(double v) {
   char buf[32];

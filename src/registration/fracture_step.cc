@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "parallel/stopwatch.h"
 #include "registration/correspondences.h"
 
 namespace femreg {
@@ -11,10 +12,6 @@ namespace {
 
 // FractureOptions::data_gap: the data's evidence at most triples the measure.
 constexpr double kMaxDataGapWeight = 3.0;
-
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 // Object i's detection, and the weights of the data's evidence where a node could break.
 void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {

@@ -11,17 +11,13 @@
 
 #include "femreg/tracker.h"
 #include "geometry/nearest.h"
+#include "parallel/stopwatch.h"
 #include "registration/correspondences.h"
 #include "registration/frame_problem.h"
 #include "registration/tracker_state.h"
 #include "solvers/backend.h"
 
 namespace femreg {
-
-// Seconds since `since` (the frame's stage times).
-inline double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
 
 struct Tracker::Impl {
   using Clock = std::chrono::steady_clock;
