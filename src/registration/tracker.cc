@@ -15,6 +15,7 @@
 #include "registration/correspondences.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
+#include "registration/global_pose.h"
 #include "geometry/nearest.h"
 #include "registration/prealign.h"
 #include "registration/tracker_impl.h"
@@ -187,6 +188,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     return Status::Ok();
   }
 
+  if (state.frame == 0 && options.initial_pose == InitialPose::kAuto && fc.cloud.size() >= 3) {
+    const auto t_pose = Clock::now();
+    ChooseInitialPose(fc.cloud, &state, &s);
+    s.time.prealign += Seconds(t_pose);
+  }
   // Constant-velocity prediction from the last two results.
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
@@ -215,7 +221,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   if (options.solver.rigid_prealign) {
     t0 = Clock::now();
     RigidPrealign(fc.cloud, &state);
-    s.time.prealign = Seconds(t0);
+    s.time.prealign += Seconds(t0);
   }
   t0 = Clock::now();
   PrepareFrameCloud(state, Surface(), &fc);

@@ -4,6 +4,7 @@
 // The parts of a frame (docs/theory/energy.md#one-frame):
 //   registration/correspondences  data pairs (model->cloud, cloud->model), normals, data gap
 //   registration/prealign         the rigid pre-alignment
+//   registration/global_pose      the global initial pose (registration.initial_pose auto)
 //   registration/frame_problem    the frame's energy from pairs, springs, anchors, contacts
 //   registration/fracture_step    detection and splits between outer iterations
 //   registration/tracker          the outer loop, the public API (set-up calls: tracker_setup)
