@@ -41,8 +41,7 @@ enum class Regularizer {
   kNone,          // no elastic term: temporal (and anchors) only
 };
 // Where the first frame starts (registration.initial_pose). kGiven: the meshes as given.
-// kAuto: the given pose unless it explains the first cloud badly; then a global search
-// (docs/guide/scene-files.md#initial-pose).
+// kAuto: the given pose unless it explains the first cloud badly; then a global search.
 enum class InitialPose { kGiven, kAuto };
 const char* ToString(RobustLoss v);
 const char* ToString(DataMetric v);
@@ -303,7 +302,8 @@ struct RegistrationOptions {
   // auto: on the first frame, an object without anchors whose given pose leaves the cloud
   // farther from its surface than data.loss_scale (the trimmed mean of the cloud->surface
   // distances) is posed by a global search (FPFH features, RANSAC from fixed seeds, every
-  // hypothesis refined by rigid ICP), if that explains the cloud at least twice as well.
+  // hypothesis refined by rigid ICP), if that explains the cloud at least twice as well
+  // (docs/guide/scene-files.md#initial-pose).
   // A pose that explains it well is kept, so that aligned scenes run as with given.
   InitialPose initial_pose = InitialPose::kAuto;
   bool IsValid(std::string* error) const;  // names the first bad field, e.g. "data.loss_scale"

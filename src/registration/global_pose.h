@@ -32,11 +32,13 @@ struct GlobalPoseResult {
 };
 
 // The search for object `object` of *state against `points` (its cloud points, #P by 3, in
-// the scene frame; eye: where the sensor was, or null when unknown): FPFH features of the surface and of the cloud, SampleConsensusPrerejective
-// from fixed seeds, each hypothesis refined by a trimmed rigid ICP and scored by the trimmed
-// mean distance of the cloud to the surface (a point whose closest surface point faces away
-// from the eye counts as unexplained). Moves the object's vertices in state->x when
-// a global pose wins. The same result on any thread count and every run.
+// the scene frame; eye: where the sensor was, or null when unknown): FPFH features of the
+// surface and of the cloud, SampleConsensusPrerejective from fixed seeds, each hypothesis
+// (and the given pose, and the best one's half-turns about the body's principal axes) refined
+// by a trimmed point-to-plane ICP and scored as PoseHypothesis::fit says (a point whose
+// closest surface point faces away from the eye counts as unexplained). Moves the object's
+// vertices in state->x when a global pose wins. The same result on any thread count and
+// every run (std::rand is seeded before each RANSAC run: PCL draws from it).
 GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, int object,
                             TrackerState* state);
 
