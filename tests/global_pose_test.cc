@@ -65,7 +65,8 @@ struct FirstFrame {
 // The body given rotated by `angle` about (1, 2, 0.5) and, when turned, shifted by (2, 1, -2) cm,
 // registered to View(body).
 FirstFrame Register(bool symmetric, InitialPose pose, double angle, int threads = 1) {
-  const Eigen::Vector3d shift = angle > 0 ? Eigen::Vector3d(0.02, 0.01, -0.02) : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d shift =
+      angle > 0 ? Eigen::Vector3d(0.02, 0.01, -0.02) : Eigen::Vector3d::Zero();
   const TetMesh truth = Body(symmetric);
   TetMesh given = truth;
   const Eigen::Matrix3d R = RotationFromVector(angle * Eigen::Vector3d(1.0, 2.0, 0.5).normalized());

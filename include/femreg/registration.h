@@ -367,9 +367,9 @@ struct FrameSummary {
   double coverage = 1.0;
   // The first frame with registration.initial_pose auto: "given" (the given pose explained
   // the cloud), "given, searched" (it did not, and no global pose did better), "global" (a
-  // global pose replaced it); empty otherwise. pose_ambiguous: the two best distinct global
-  // poses (rotations more than 20 deg apart) explained the cloud about equally well, as a
-  // symmetric object's do.
+  // global pose replaced it); empty otherwise. pose_ambiguous: a global pose replaced the
+  // given one, and the two best distinct poses (rotations more than 20 deg apart) explained
+  // the cloud about equally well, as a symmetric object's do.
   std::string initial_pose;
   bool pose_ambiguous = false;
   EnergyTerms initial, final;

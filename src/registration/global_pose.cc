@@ -40,7 +40,7 @@ constexpr int kIterations = 2500;  // per run
 // of the surface's, the one with the smallest error over those: a low bar lets a pose that
 // fits a quarter of the cloud closely win over the one that explains all of it.
 constexpr double kInlierFraction = 0.6;
-constexpr double kKeep = 0.8;       // the trimmed fit keeps the closest 80 % of the points
+constexpr double kKeep = 0.8;  // the trimmed fit keeps the closest 80 % of the points
 constexpr int kMaxScoredPoints = 2000;
 constexpr int kIcpIterations = 50;
 // A global pose replaces the given one only if it explains the cloud this much better.
@@ -116,15 +116,18 @@ PclCloud::Ptr ModelSamples(const Vertices& y, const Triangles& tris, double voxe
     const int m = std::max(1, static_cast<int>(std::ceil(longest / (0.5 * voxel))));
     for (int i = 0; i <= m; ++i) {
       for (int j = 0; i + j <= m; ++j) {
-        points.push_back(a + (b - a) * (static_cast<double>(i) / m) + (c - a) * (static_cast<double>(j) / m));
+        points.push_back(a + (b - a) * (static_cast<double>(i) / m) +
+                         (c - a) * (static_cast<double>(j) / m));
         normals.push_back(n);
       }
     }
   }
   Vertices all(static_cast<Eigen::Index>(points.size()), 3);
-  for (size_t i = 0; i < points.size(); ++i) all.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  for (size_t i = 0; i < points.size(); ++i)
+    all.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
   PclCloud::Ptr out(new PclCloud);
-  for (int i : VoxelPick(all, voxel)) out->push_back(MakePoint(points[static_cast<size_t>(i)], normals[static_cast<size_t>(i)]));
+  for (int i : VoxelPick(all, voxel))
+    out->push_back(MakePoint(points[static_cast<size_t>(i)], normals[static_cast<size_t>(i)]));
   return out;
 }
 
@@ -152,7 +155,8 @@ PclCloud::Ptr CloudSamples(const Vertices& points, const Eigen::Vector3d* eye, d
     const Eigen::Vector3d p(q.x, q.y, q.z);
     Eigen::Vector3d n(normals[i].normal_x, normals[i].normal_y, normals[i].normal_z);
     if (!n.allFinite() || n.norm() == 0) continue;
-    const Eigen::Vector3d out_dir = eye != nullptr ? Eigen::Vector3d(*eye - p) : Eigen::Vector3d(p - centroid);
+    const Eigen::Vector3d out_dir =
+        eye != nullptr ? Eigen::Vector3d(*eye - p) : Eigen::Vector3d(p - centroid);
     if (n.dot(out_dir) < 0) n = -n;
     out->push_back(MakePoint(p, n));
   }
@@ -172,7 +176,8 @@ class Verifier {
       face_normals_.row(f) = (b - a).cross(c - a).normalized().transpose();
     }
     const int stride = std::max<int>(1, static_cast<int>(points.rows()) / kMaxScoredPoints);
-    for (Eigen::Index i = 0; i < points.rows(); i += stride) points_.push_back(points.row(i).transpose());
+    for (Eigen::Index i = 0; i < points.rows(); i += stride)
+      points_.push_back(points.row(i).transpose());
   }
 
   // The trimmed mean distance of the cloud, mapped by h, to the surface (m).
@@ -190,7 +195,8 @@ class Verifier {
       sample_normals_.emplace_back(q.normal_x, q.normal_y, q.normal_z);
     }
     Vertices cloud(static_cast<Eigen::Index>(points_.size()), 3);
-    for (size_t i = 0; i < points_.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = points_[i].transpose();
+    for (size_t i = 0; i < points_.size(); ++i)
+      cloud.row(static_cast<Eigen::Index>(i)) = points_[i].transpose();
     cloud_index_ = std::make_unique<PointIndex>(cloud);
   }
 
@@ -211,7 +217,8 @@ class Verifier {
     }
     if (d.empty()) return score;
     std::sort(d.begin(), d.end());
-    const size_t keep = std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
+    const size_t keep =
+        std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
     double sum = 0.0;
     for (size_t j = 0; j < keep; ++j) sum += d[j];
     return score + sum / static_cast<double>(keep);
@@ -277,7 +284,8 @@ class Verifier {
     }
     if (dist.empty()) return std::numeric_limits<double>::infinity();
     std::sort(dist.begin(), dist.end());
-    const size_t keep = std::max<size_t>(1, static_cast<size_t>(kKeep * static_cast<double>(dist.size())));
+    const size_t keep =
+        std::max<size_t>(1, static_cast<size_t>(kKeep * static_cast<double>(dist.size())));
     double sum = 0.0;
     for (size_t j = 0; j < keep; ++j) {
       sum += dist[j].first;
@@ -316,7 +324,8 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   const Vertices y = state->x.middleRows(o.offset, nv);
   const Triangles& tris = o.mesh.surface;
   if (points.rows() < 3 || tris.rows() == 0) return result;
-  const double radius = std::sqrt((y.rowwise() - y.colwise().mean()).rowwise().squaredNorm().mean());
+  const double radius =
+      std::sqrt((y.rowwise() - y.colwise().mean()).rowwise().squaredNorm().mean());
   const double voxel = kVoxelPerRadius * radius;
   Verifier verifier(y, tris, points, eye, 2.0 * voxel);
   result.given_fit = verifier.Fit(PoseHypothesis());
@@ -336,7 +345,8 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   if (model->size() >= 3 && cloud->size() >= 3) {
     // The cloud is the source: a view covers part of the object, and nearly all of its points
     // lie on the surface (the inlier fraction is the source's).
-    pcl::SampleConsensusPrerejective<pcl::PointNormal, pcl::PointNormal, pcl::FPFHSignature33> ransac;
+    pcl::SampleConsensusPrerejective<pcl::PointNormal, pcl::PointNormal, pcl::FPFHSignature33>
+        ransac;
     ransac.setInputSource(cloud);
     ransac.setSourceFeatures(cloud_features);
     ransac.setInputTarget(model);
@@ -374,7 +384,8 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);
   const PoseHypothesis first = hypotheses.front();
   for (int k = 0; k < 3; ++k) {
-    const Eigen::Matrix3d half = Eigen::AngleAxisd(M_PI, axes.eigenvectors().col(k)).toRotationMatrix();
+    const Eigen::Matrix3d half =
+        Eigen::AngleAxisd(M_PI, axes.eigenvectors().col(k)).toRotationMatrix();
     PoseHypothesis h;
     h.R = half * first.R;
     h.t = half * (first.t - centre) + centre;
@@ -390,7 +401,10 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
     }
   }
   result.hypotheses = hypotheses;
-  if (!(best.fit < kWinRatio * given_score)) return result;
+  if (!(best.fit < kWinRatio * given_score)) {
+    result.ambiguous = false;  // the given pose stands: which other pose fits does not matter
+    return result;
+  }
   // q = R p + t maps the cloud onto the surface as given: the surface goes by the inverse.
   result.moved = true;
   for (int v = 0; v < nv; ++v) {
@@ -415,7 +429,8 @@ void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummar
   for (size_t i = 0; i < state->objects.size(); ++i) {
     const ObjectState& o = state->objects[i];
     bool anchored = false;
-    for (const auto& a : state->anchors) anchored = anchored || a.second.object == static_cast<int>(i);
+    for (const auto& a : state->anchors)
+      anchored = anchored || a.second.object == static_cast<int>(i);
     if (anchored) continue;  // anchors hold the object where it is given
     Vertices points;
     if (state->objects.size() == 1) {
@@ -426,7 +441,8 @@ void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummar
         if (cloud.labels(p) == o.label) mine.push_back(p);
       }
       points.resize(static_cast<Eigen::Index>(mine.size()), 3);
-      for (size_t k = 0; k < mine.size(); ++k) points.row(static_cast<Eigen::Index>(k)) = cloud.points.row(mine[k]);
+      for (size_t k = 0; k < mine.size(); ++k)
+        points.row(static_cast<Eigen::Index>(k)) = cloud.points.row(mine[k]);
     } else {
       continue;  // which points are this object's is not known
     }

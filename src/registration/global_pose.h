@@ -26,8 +26,10 @@ struct PoseHypothesis {
 struct GlobalPoseResult {
   bool searched = false;  // the given pose explained the cloud badly
   bool moved = false;     // a global pose replaced it
-  bool ambiguous = false;  // two distinct poses explain the cloud about equally well
-  double given_fit = 0.0;  // m
+  // A global pose replaced the given one, and another pose rotated more than 20 deg from it
+  // explains the cloud about equally well.
+  bool ambiguous = false;
+  double given_fit = 0.0;                  // m
   std::vector<PoseHypothesis> hypotheses;  // refined, best first (searched only)
 };
 
