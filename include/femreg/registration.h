@@ -301,10 +301,11 @@ struct RegistrationOptions {
   bool loads = true;
   // auto: on the first frame, an object without anchors whose given pose leaves the cloud
   // farther from its surface than data.loss_scale (the trimmed mean of the cloud->surface
-  // distances) is posed by a global search (FPFH features, RANSAC from fixed seeds, every
-  // hypothesis refined by rigid ICP), if that explains the cloud at least twice as well
-  // (docs/guide/scene-files.md#initial-pose).
-  // A pose that explains it well is kept, so that aligned scenes run as with given.
+  // distances, plus with a sensor position that of the surface facing it to the cloud) is
+  // posed by a global search (FPFH features, RANSAC from fixed seeds, every hypothesis refined
+  // by rigid ICP), if that explains the cloud at least twice as well
+  // (docs/guide/scene-files.md#initial-pose). A pose that explains it well is kept, so that
+  // aligned scenes run as with given.
   InitialPose initial_pose = InitialPose::kAuto;
   bool IsValid(std::string* error) const;  // names the first bad field, e.g. "data.loss_scale"
 };

@@ -328,13 +328,15 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
       std::sqrt((y.rowwise() - y.colwise().mean()).rowwise().squaredNorm().mean());
   const double voxel = kVoxelPerRadius * radius;
   Verifier verifier(y, tris, points, eye, 2.0 * voxel);
-  result.given_fit = verifier.Fit(PoseHypothesis());
-  if (!(result.given_fit > state->options.data.loss_scale)) return result;
-  result.searched = true;
-
+  // The check counts the surface facing the eye too: a pose turned by a fraction of a radian
+  // can leave a partial view within loss_scale of some part of a large body's surface.
   PclCloud::Ptr model = ModelSamples(y, tris, voxel);
   verifier.SetSurfaceSamples(*model);
   const double given_score = verifier.Score(PoseHypothesis());
+  result.given_fit = given_score;
+  if (!(given_score > state->options.data.loss_scale)) return result;
+  result.searched = true;
+
   // The given pose refined locally is a hypothesis like the global ones.
   std::vector<PoseHypothesis> hypotheses(1);
   verifier.Refine(&hypotheses[0]);

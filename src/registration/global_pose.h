@@ -29,7 +29,7 @@ struct GlobalPoseResult {
   // A global pose replaced the given one, and another pose rotated more than 20 deg from it
   // explains the cloud about equally well.
   bool ambiguous = false;
-  double given_fit = 0.0;                  // m
+  double given_fit = 0.0;                  // m, the given pose's PoseHypothesis::fit
   std::vector<PoseHypothesis> hypotheses;  // refined, best first (searched only)
 };
 
