@@ -372,6 +372,9 @@ TEST_F(SceneTest, InvalidRegistrationOptions) {
   ExpectError(std::string(kBaseScene) + "registration:\n  data: {loss: hubber}\n",
               {"beam.yaml:11: registration.data.loss: unknown value 'hubber' (did you mean "
                "'huber'?"});
+  ExpectError(std::string(kBaseScene) + "registration:\n  initial_pose: global\n",
+              {"beam.yaml:11: registration.initial_pose: unknown value 'global'",
+               "one of: given, auto"});
   ExpectError(std::string(kBaseScene) + "registration:\n  data:\n    loss_scale: -1\n",
               {"beam.yaml:12: registration.data.loss_scale: must be > 0 (got -1)"});
   ExpectError(std::string(kBaseScene) + "registration:\n  camera:\n    position: [0, 0, 1]\n",

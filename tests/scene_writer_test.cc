@@ -69,6 +69,7 @@ void ExpectSameKeyframes(const std::vector<MotionKeyframe>& a, const std::vector
 
 void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOptions& b) {
   EXPECT_EQ(a.regularizer, b.regularizer);
+  EXPECT_EQ(a.initial_pose, b.initial_pose);
   const CameraOptions &c = a.camera, &d = b.camera;
   EXPECT_EQ(c.enabled, d.enabled);
   EXPECT_EQ(c.position, d.position);
@@ -301,6 +302,7 @@ const char kEverything[] =
     "forward: {model: linear, max_iterations: 40, load_steps: 3, tolerance: 1e-9, absolute_tolerance: 0}\n"
     "registration:\n"
     "  regularizer: mass_spring\n"
+    "  initial_pose: given\n"
     "  camera: {position: [0.1, -0.5, 0.3], target: [0.1, 0, 0], up: [0, 0, 1], fx: 300, fy: 301,\n"
     "           cx: 159.5, cy: 119.5, width: 320, height: 240}\n"
     "  preprocess: {mask_dir: masks, crop: {min: [-1, -1, -0.01], max: [1, 1, 1]}, plane: {distance: 0.004, iterations: 50},\n"

@@ -40,6 +40,9 @@ enum class Regularizer {
   kMassSpring,    // springs on the mesh edges, k = E V_edge / L^2 (for comparison)
   kNone,          // no elastic term: temporal (and anchors) only
 };
+// Where the first frame starts (registration.initial_pose). kGiven: the meshes as given.
+// kAuto: the given pose unless it explains the first cloud badly; then a global search.
+enum class InitialPose { kGiven, kAuto };
 const char* ToString(RobustLoss v);
 const char* ToString(DataMetric v);
 const char* ToString(Regularizer v);
@@ -47,6 +50,7 @@ const char* ToString(TrustRegion v);
 const char* ToString(SolverBackend v);
 const char* ToString(LinearSolver v);
 const char* ToString(Preconditioner v);
+const char* ToString(InitialPose v);
 bool FromString(const std::string& s, RobustLoss* v);
 bool FromString(const std::string& s, DataMetric* v);
 bool FromString(const std::string& s, Regularizer* v);
@@ -54,6 +58,7 @@ bool FromString(const std::string& s, TrustRegion* v);
 bool FromString(const std::string& s, SolverBackend* v);
 bool FromString(const std::string& s, LinearSolver* v);
 bool FromString(const std::string& s, Preconditioner* v);
+bool FromString(const std::string& s, InitialPose* v);
 
 struct CameraOptions {
   bool enabled = false;                                 // known camera: enables visibility
@@ -299,6 +304,15 @@ struct RegistrationOptions {
   // The scene's gravity (on the lumped masses) and nodal loads act in the registration
   // energy as they do in simulate (Tracker::Create(scene); Tracker::SetExternalLoads).
   bool loads = true;
+  // auto: on the first frame (and the first after a lost one: data.lost_coverage, the last good
+  // shape standing for the given pose), an object without anchors whose given pose leaves the cloud
+  // farther from its surface than data.loss_scale (the trimmed mean of the cloud->surface
+  // distances, plus with a sensor position that of the surface facing it to the cloud) is
+  // posed by a global search (FPFH features, RANSAC from fixed seeds, every hypothesis refined
+  // by rigid ICP), if that explains the cloud at least twice as well
+  // (docs/guide/scene-files.md#initial-pose). A pose that explains it well is kept, so that
+  // aligned scenes run as with given.
+  InitialPose initial_pose = InitialPose::kAuto;
   bool IsValid(std::string* error) const;  // names the first bad field, e.g. "data.loss_scale"
 };
 
@@ -327,7 +341,8 @@ struct OuterIteration {
   double time_s = 0.0;
 };
 
-// Wall time per stage of one frame (s).
+// Wall time per stage of one frame (s). prealign: solver.rigid_prealign and, on the first
+// frame, registration.initial_pose auto's check and search.
 struct StageTimes {
   double preprocess = 0.0, prealign = 0.0, rotations = 0.0, correspondences = 0.0,
          build = 0.0, solve = 0.0, total = 0.0;
@@ -371,6 +386,14 @@ struct FrameSummary {
   std::string visibility = "none";
   double trim_distance = 0.0;
   double coverage = 1.0;
+  // The first frame with registration.initial_pose auto, and the first after a lost one (the
+  // last good pose is then the given one): "given" (the given pose explained
+  // the cloud), "given, searched" (it did not, and no global pose did better), "global" (a
+  // global pose replaced it); empty otherwise. pose_ambiguous: a global pose replaced the
+  // given one, and the two best distinct poses (rotations more than 20 deg apart) explained
+  // the cloud about equally well, as a symmetric object's do.
+  std::string initial_pose;
+  bool pose_ambiguous = false;
   EnergyTerms initial, final;
   // The resultant of the external forces on the objects (N) and its moment about their
   // centroid (the mass-weighted mean of the vertices; N m): the forces estimated

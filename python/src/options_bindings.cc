@@ -153,6 +153,10 @@ void BindOptions(py::module_& m) {
                {Regularizer::kCorotational, Regularizer::kLinear, Regularizer::kMassSpring,
                 Regularizer::kNone},
                "corotational, linear, mass_spring or none");
+  EnumProperty(options, "initial_pose", &RegistrationOptions::initial_pose, "initial_pose",
+               {InitialPose::kGiven, InitialPose::kAuto},
+               "given (the meshes as given) or auto (a global search on the first frame when the "
+               "given pose explains the cloud badly)");
 }
 
 }  // namespace python

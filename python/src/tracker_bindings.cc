@@ -60,6 +60,8 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["rejected"] = s.rejected;
   d["occluded_points"] = s.occluded_points;
   d["rms_residual"] = s.rms_residual;
+  d["initial_pose"] = s.initial_pose;
+  d["pose_ambiguous"] = s.pose_ambiguous;
   d["contacts"] = s.contacts;
   d["object_contacts"] = s.object_contacts;
   d["obstacle_contacts"] = s.obstacle_contacts;

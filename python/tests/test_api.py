@@ -41,6 +41,12 @@ def test_bad_shapes_and_names_raise_value_error():
     assert options.solver.preconditioner == "multigrid"
     with pytest.raises(ValueError, match="solver.preconditioner: unknown value 'amg'"):
         options.solver.preconditioner = "amg"
+    # The first frame's pose (docs/guide/scene-files.md#initial-pose).
+    assert options.initial_pose == "auto"
+    options.initial_pose = "given"
+    assert options.initial_pose == "given"
+    with pytest.raises(ValueError, match="initial_pose: unknown value 'global'"):
+        options.initial_pose = "global"
     # The model->cloud tests of partial views (docs/guide/partial-views.md).
     assert options.data.auto_visibility and options.data.reciprocity == 5.0
     options.data.reciprocity = 0.0
@@ -109,6 +115,7 @@ def test_tracker_follows_a_rigid_translation():
     assert summary["usable"] and summary["frame"] == 3
     assert summary["termination"] in ("converged", "max_iterations")
     assert summary["points_used"] > 0 and summary["iterations"]
+    assert summary["initial_pose"] == "" and not summary["pose_ambiguous"]  # the first frame's
     # A rigid motion costs no elastic energy: the fit reaches the shifted mesh to well below
     # the 4.9 mm shift (0.1 mm: the data term's gating and temporal pull leave micrometres).
     assert np.abs(x - (mesh.rest + shift)).max() < 1e-4

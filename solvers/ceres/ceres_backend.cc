@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "parallel/threads.h"
@@ -11,18 +12,17 @@ namespace femreg {
 namespace ceres_backend {
 
 SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
-  if (problem.equilibrium() != nullptr) {
+  // What only the fast back end solves.
+  const char* unsupported =
+      problem.equilibrium() != nullptr
+          ? "the Ceres back end does not solve equilibrium registration (registration.forces.estimate)"
+      : problem.nodal_volume() != nullptr
+          ? "the Ceres back end has no nodal-volume element (material.volume: nodal)"
+          : nullptr;
+  if (unsupported != nullptr) {
     SolveReport report;
     report.stop = StopReason::kFailure;
-    report.message = "the Ceres back end does not solve equilibrium registration (registration.forces.estimate); "
-                     "use solver.backend: fast";
-    return report;
-  }
-  if (problem.nodal_volume() != nullptr) {
-    SolveReport report;
-    report.stop = StopReason::kFailure;
-    report.message = "the Ceres back end has no nodal-volume element (material.volume: nodal); "
-                     "use solver.backend: fast";
+    report.message = std::string(unsupported) + "; use solver.backend: fast";
     return report;
   }
   ceres::Problem::Options problem_options;

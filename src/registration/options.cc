@@ -132,6 +132,16 @@ const char* ToString(TerminationType t) {
 }
 
 // Each FromString accepts exactly the names ToString prints.
+const char* ToString(InitialPose v) {
+  switch (v) {
+    case InitialPose::kGiven:
+      return "given";
+    case InitialPose::kAuto:
+      return "auto";
+  }
+  return "unknown";
+}
+
 #define FEMREG_FROM_STRING(Type, ...)                        \
   bool FromString(const std::string& s, Type* v) {           \
     for (Type candidate : {__VA_ARGS__}) {                   \
@@ -154,6 +164,7 @@ FEMREG_FROM_STRING(LinearSolver, LinearSolver::kSparseNormalCholesky,
                    LinearSolver::kConjugateGradients)
 FEMREG_FROM_STRING(Preconditioner, Preconditioner::kAuto, Preconditioner::kFactor,
                    Preconditioner::kMultigrid)
+FEMREG_FROM_STRING(InitialPose, InitialPose::kGiven, InitialPose::kAuto)
 #undef FEMREG_FROM_STRING
 
 bool CameraOptions::IsValid(std::string* error) const {

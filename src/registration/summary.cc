@@ -20,6 +20,9 @@ std::string FrameSummary::BriefReport() const {
                 final.total(), rms_residual * 1e3, model_to_cloud, cloud_to_model, rejected,
                 time.total * 1e3);
   std::string brief = buf;
+  if (!initial_pose.empty() && initial_pose != "given") {
+    brief += ", initial pose " + initial_pose + (pose_ambiguous ? " (ambiguous)" : "");
+  }
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm, gap %.3f mm", contacts,
                   max_penetration * 1e3, min_gap * 1e3);
@@ -32,6 +35,9 @@ std::string FrameSummary::FullReport() const {
   std::ostringstream os;
   char buf[512];
   os << "Frame " << frame << "\n";
+  if (!initial_pose.empty()) {
+    os << "  initial pose: " << initial_pose << (pose_ambiguous ? " (ambiguous)" : "") << "\n";
+  }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
      << points_used << " used\n";
   os << "  iter   E_data      E_elastic   E_temporal  E_anchor    E_total     m2c    c2m    rej  "

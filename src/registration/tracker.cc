@@ -16,6 +16,7 @@
 #include "registration/confidence.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
+#include "registration/global_pose.h"
 #include "geometry/nearest.h"
 #include "registration/prealign.h"
 #include "registration/tracker_impl.h"
@@ -154,6 +155,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   s->lost = state.options.data.lost_coverage > 0.0;  // nothing found to track
   state.x_before = state.x;  // held: no velocity to carry on
   state.held_before = true;
+  state.lost_before = s->lost;
   UpdateOutputs(index, {}, &state, state.options.solver.num_threads);
   s->time.total = Seconds(t_frame);
   ++state.frame;
@@ -190,6 +192,17 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     return Status::Ok();
   }
 
+  // The first frame, and the first after a lost one (the object may be back anywhere): there
+  // the local rigid pre-alignment has its go first, and the search runs only if the pose it
+  // leaves explains the cloud badly (a symmetric body's global poses are as good as the
+  // right one, and only continuity tells them apart).
+  const bool reacquire = state.frame > 0 && state.lost_before;
+  if ((state.frame == 0 || reacquire) && options.initial_pose == InitialPose::kAuto && fc.cloud.size() >= 3) {
+    const auto t_pose = Clock::now();
+    if (reacquire && options.solver.rigid_prealign) RigidPrealign(fc.cloud, &state);
+    ChooseInitialPose(fc.cloud, &state, &s);
+    s.time.prealign += Seconds(t_pose);
+  }
   // Constant-velocity prediction from the last two results.
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
@@ -218,7 +231,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   if (options.solver.rigid_prealign) {
     t0 = Clock::now();
     RigidPrealign(fc.cloud, &state);
-    s.time.prealign = Seconds(t0);
+    s.time.prealign += Seconds(t0);
   }
   t0 = Clock::now();
   PrepareFrameCloud(state, Surface(), &fc);
@@ -278,6 +291,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     if (state.held_before) state.x_before = state.x;
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
+  state.lost_before = s.lost;
   MeasureForces(&s);
   s.time.total = Seconds(t_frame);
   ++state.frame;

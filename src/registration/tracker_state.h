@@ -4,6 +4,7 @@
 // The parts of a frame (docs/theory/energy.md#one-frame):
 //   registration/correspondences  data pairs (model->cloud, cloud->model), normals, data gap
 //   registration/prealign         the rigid pre-alignment
+//   registration/global_pose      the global initial pose (registration.initial_pose auto)
 //   registration/frame_problem    the frame's energy from pairs, springs, anchors, contacts
 //   registration/fracture_step    detection and splits between outer iterations
 //   registration/tracker          the outer loop, the public API (set-up calls: tracker_setup)
@@ -72,6 +73,7 @@ struct TrackerState {
   // The last frame's result that was not lost (empty before the first): a lost frame keeps it.
   Vertices last_good;
   bool held_before = false;  // the last frame was held or lost (its successor's move is no velocity)
+  bool lost_before = false;  // the last frame was lost: initial_pose auto searches again
   Eigen::VectorXd mass;             // #V lumped masses
   Triangles surface;                // #F by 3, global indices
   std::vector<int> surface_vertices;

@@ -9,7 +9,8 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseRegistration(const YamlValue& v) {
-  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads", "forces"});
+  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads", "forces",
+               "initial_pose"});
   RegistrationOptions& r = scene_->registration;
   if (v.Has("forces")) {
     const YamlValue f = v["forces"];
@@ -24,6 +25,10 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     if (f.Has("region")) ParseForceRegion(f["region"]);
   }
   if (v.Has("loads")) r.loads = v["loads"].AsBool();
+  if (v.Has("initial_pose")) {
+    r.initial_pose = ParseEnum(v["initial_pose"],
+                               std::vector<InitialPose>{InitialPose::kGiven, InitialPose::kAuto});
+  }
   if (v.Has("regularizer")) {
     r.regularizer = ParseEnum(v["regularizer"],
                               std::vector<Regularizer>{Regularizer::kCorotational,

@@ -31,6 +31,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   YAML::Node n = Map();
   if (r.regularizer != d.regularizer) n["regularizer"] = ToString(r.regularizer);
   if (r.loads != d.loads) n["loads"] = r.loads;
+  if (r.initial_pose != d.initial_pose) n["initial_pose"] = ToString(r.initial_pose);
   if (r.camera.enabled) {
     const CameraOptions& c = r.camera;
     YAML::Node camera = FlowMap();

@@ -55,6 +55,7 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                   {"model_to_cloud_area_cap", w.model_to_cloud_area_cap},
                   {"model_to_cloud_balance", w.model_to_cloud_balance}};
   j["loads"] = o.loads;
+  j["initial_pose"] = ToString(o.initial_pose);
   const SolverOptions& s = o.solver;
   j["solver"] = {{"backend", ToString(s.backend)},
                  {"max_outer_iterations", s.max_outer_iterations},

@@ -252,6 +252,13 @@ int RunRegister(const RegisterArgs& args) {
     }
     tracker->Track(cloud, &row.summary);
     if (!read.ok()) row.summary.termination = TerminationType::kInvalidInput;
+    if (row.summary.pose_ambiguous) {
+      bar.Finish();
+      std::fprintf(stderr,
+                   "femreg register: warning: frame %zu: two initial poses rotated apart explain "
+                   "the cloud about equally well (a symmetric object?); the pose found may be "
+                   "the other one (summary.json initial_pose)\n", f);
+    }
     if (!coverage_warned && row.summary.outer_iterations > 0 && row.summary.coverage < 0.25) {
       coverage_warned = true;
       bar.Finish();

@@ -248,6 +248,14 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                  {"trust_region", ToString(o.solver.trust_region)},
                  {"preconditioner", ToString(o.solver.preconditioner)},
                  {"threads", o.solver.num_threads}};
+  // How the first frame was posed (registration.initial_pose; FrameSummary::initial_pose).
+  if (!rows.empty()) {
+    const FrameSummary& first = rows.front().summary;
+    j["initial_pose"] = {{"option", ToString(o.initial_pose)},
+                         {"chosen", first.initial_pose.empty() ? "given" : first.initial_pose},
+                         {"ambiguous", first.pose_ambiguous},
+                         {"first_frame_ms", number(first.time.total * 1e3)}};
+  }
   j["ms_per_frame_median"] = number(t.median_ms);
   j["ms_per_frame_mean"] = number(t.mean_ms);
   j["frames_per_second"] = number(t.fps);

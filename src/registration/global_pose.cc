@@ -1,0 +1,469 @@
+#include "registration/global_pose.h"
+
+#include <pcl/features/fpfh.h>
+#include <pcl/features/normal_3d.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/registration/sample_consensus_prerejective.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <memory>
+#include <unordered_map>
+#include <utility>
+
+#include "geometry/nearest.h"
+
+namespace femreg {
+namespace {
+
+using PclCloud = pcl::PointCloud<pcl::PointNormal>;
+using Features = pcl::PointCloud<pcl::FPFHSignature33>;
+
+// The sampling voxel of the features, in RMS distances of the object's vertices from their
+// centroid (a size that does not change with the pose): fine enough for FPFH to tell the
+// parts of a bunny apart, coarse enough for a RANSAC run of well under a second.
+constexpr double kVoxelPerRadius = 0.1;
+constexpr double kNormalRadius = 2.0;   // voxels
+constexpr double kFeatureRadius = 5.0;  // voxels
+// RANSAC runs (std::rand seeded 1, 2, ...: PCL draws its samples from it), each keeping its
+// best pose; more runs give more distinct hypotheses to verify.
+constexpr int kSeeds = 16;
+constexpr int kIterations = 2500;  // per run
+// PCL keeps, of the poses that bring this fraction of the cloud's samples within 1.5 voxels
+// of the surface's, the one with the smallest error over those: a low bar lets a pose that
+// fits a quarter of the cloud closely win over the one that explains all of it.
+constexpr double kInlierFraction = 0.6;
+constexpr double kKeep = 0.8;  // the trimmed fit keeps the closest 80 % of the points
+constexpr int kMaxScoredPoints = 2000;
+constexpr int kIcpIterations = 50;
+// A global pose replaces the given one only if it explains the cloud this much better.
+constexpr double kWinRatio = 0.5;
+// Two poses whose rotations differ by more than this, with fits within this ratio, are an
+// ambiguity (a symmetric object).
+constexpr double kDistinctAngle = 20.0 * M_PI / 180.0;
+constexpr double kAmbiguousRatio = 1.25;
+
+struct VoxelKey {
+  size_t operator()(const std::array<long long, 3>& k) const {
+    return static_cast<size_t>(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
+  }
+};
+
+// The first point (in their order) of every voxel of side v the points occupy.
+std::vector<int> VoxelPick(const Vertices& p, double v) {
+  std::unordered_map<std::array<long long, 3>, int, VoxelKey> seen;
+  std::vector<int> kept;
+  for (Eigen::Index i = 0; i < p.rows(); ++i) {
+    const std::array<long long, 3> key = {static_cast<long long>(std::floor(p(i, 0) / v)),
+                                          static_cast<long long>(std::floor(p(i, 1) / v)),
+                                          static_cast<long long>(std::floor(p(i, 2) / v))};
+    if (seen.emplace(key, static_cast<int>(i)).second) kept.push_back(static_cast<int>(i));
+  }
+  return kept;
+}
+
+// FPFH features of c (its normals set); points without enough neighbours for a feature are
+// dropped from both.
+void Describe(double radius, PclCloud::Ptr* c, Features::Ptr* f) {
+  pcl::FPFHEstimation<pcl::PointNormal, pcl::PointNormal, pcl::FPFHSignature33> fpfh;
+  fpfh.setInputCloud(*c);
+  fpfh.setInputNormals(*c);
+  fpfh.setRadiusSearch(radius);
+  Features all;
+  fpfh.compute(all);
+  PclCloud::Ptr kept(new PclCloud);
+  Features::Ptr features(new Features);
+  for (size_t i = 0; i < all.size(); ++i) {
+    bool finite = true;
+    for (float h : all[i].histogram) finite = finite && std::isfinite(h);
+    if (!finite) continue;
+    kept->push_back((**c)[i]);
+    features->push_back(all[i]);
+  }
+  *c = kept;
+  *f = features;
+}
+
+pcl::PointNormal MakePoint(const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+  pcl::PointNormal q;
+  q.x = static_cast<float>(p.x());
+  q.y = static_cast<float>(p.y());
+  q.z = static_cast<float>(p.z());
+  q.normal_x = static_cast<float>(n.x());
+  q.normal_y = static_cast<float>(n.y());
+  q.normal_z = static_cast<float>(n.z());
+  q.curvature = 0.0f;
+  return q;
+}
+
+// The surface sampled for its features: a barycentric grid on every triangle, half a voxel
+// apart or finer (a coarse mesh's vertices alone describe its shape worse than the cloud
+// does), with the triangle's normal, one per voxel.
+PclCloud::Ptr ModelSamples(const Vertices& y, const Triangles& tris, double voxel) {
+  std::vector<Eigen::Vector3d> points, normals;
+  for (Eigen::Index f = 0; f < tris.rows(); ++f) {
+    const Eigen::Vector3d a = y.row(tris(f, 0)), b = y.row(tris(f, 1)), c = y.row(tris(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    if (!n.allFinite()) continue;
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    const int m = std::max(1, static_cast<int>(std::ceil(longest / (0.5 * voxel))));
+    for (int i = 0; i <= m; ++i) {
+      for (int j = 0; i + j <= m; ++j) {
+        points.push_back(a + (b - a) * (static_cast<double>(i) / m) +
+                         (c - a) * (static_cast<double>(j) / m));
+        normals.push_back(n);
+      }
+    }
+  }
+  Vertices all(static_cast<Eigen::Index>(points.size()), 3);
+  for (size_t i = 0; i < points.size(); ++i)
+    all.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  PclCloud::Ptr out(new PclCloud);
+  for (int i : VoxelPick(all, voxel))
+    out->push_back(MakePoint(points[static_cast<size_t>(i)], normals[static_cast<size_t>(i)]));
+  return out;
+}
+
+// The cloud sampled one point per voxel, with normals from its neighbours within
+// kNormalRadius voxels in the whole cloud, turned towards the eye (or away from the cloud's
+// centroid without one).
+PclCloud::Ptr CloudSamples(const Vertices& points, const Eigen::Vector3d* eye, double voxel) {
+  pcl::PointCloud<pcl::PointXYZ>::Ptr all(new pcl::PointCloud<pcl::PointXYZ>);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    all->push_back(pcl::PointXYZ(static_cast<float>(points(i, 0)), static_cast<float>(points(i, 1)),
+                                 static_cast<float>(points(i, 2))));
+  }
+  pcl::PointCloud<pcl::PointXYZ>::Ptr picked(new pcl::PointCloud<pcl::PointXYZ>);
+  for (int i : VoxelPick(points, voxel)) picked->push_back((*all)[static_cast<size_t>(i)]);
+  pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> estimate;
+  estimate.setInputCloud(picked);
+  estimate.setSearchSurface(all);
+  estimate.setRadiusSearch(kNormalRadius * voxel);
+  pcl::PointCloud<pcl::Normal> normals;
+  estimate.compute(normals);
+  const Eigen::Vector3d centroid = points.colwise().mean().transpose();
+  PclCloud::Ptr out(new PclCloud);
+  for (size_t i = 0; i < picked->size(); ++i) {
+    const pcl::PointXYZ& q = (*picked)[i];
+    const Eigen::Vector3d p(q.x, q.y, q.z);
+    Eigen::Vector3d n(normals[i].normal_x, normals[i].normal_y, normals[i].normal_z);
+    if (!n.allFinite() || n.norm() == 0) continue;
+    const Eigen::Vector3d out_dir =
+        eye != nullptr ? Eigen::Vector3d(*eye - p) : Eigen::Vector3d(p - centroid);
+    if (n.dot(out_dir) < 0) n = -n;
+    out->push_back(MakePoint(p, n));
+  }
+  return out;
+}
+
+// Scores and refines hypotheses against the object's surface in its given pose.
+class Verifier {
+ public:
+  Verifier(const Vertices& y, const Triangles& tris, const Vertices& points,
+           const Eigen::Vector3d* eye, double penalty)
+      : y_(y), tris_(tris), index_(y_, tris_), has_eye_(eye != nullptr), penalty_(penalty) {
+    if (has_eye_) eye_ = *eye;
+    face_normals_.resize(tris.rows(), 3);
+    for (Eigen::Index f = 0; f < tris.rows(); ++f) {
+      const Eigen::Vector3d a = y.row(tris(f, 0)), b = y.row(tris(f, 1)), c = y.row(tris(f, 2));
+      face_normals_.row(f) = (b - a).cross(c - a).normalized().transpose();
+    }
+    const int stride = std::max<int>(1, static_cast<int>(points.rows()) / kMaxScoredPoints);
+    for (Eigen::Index i = 0; i < points.rows(); i += stride)
+      points_.push_back(points.row(i).transpose());
+  }
+
+  // The trimmed mean distance of the cloud, mapped by h, to the surface (m).
+  double Fit(const PoseHypothesis& h) const {
+    std::vector<Eigen::Vector3d> a, b, n;
+    return Pairs(h, &a, &b, &n);
+  }
+
+  // With an eye: the surface samples (model, in the given pose) that free space is checked
+  // at.
+  void SetSurfaceSamples(const PclCloud& model) {
+    if (!has_eye_ || points_.empty()) return;
+    for (const pcl::PointNormal& q : model) {
+      samples_.emplace_back(q.x, q.y, q.z);
+      sample_normals_.emplace_back(q.normal_x, q.normal_y, q.normal_z);
+    }
+    Vertices cloud(static_cast<Eigen::Index>(points_.size()), 3);
+    for (size_t i = 0; i < points_.size(); ++i)
+      cloud.row(static_cast<Eigen::Index>(i)) = points_[i].transpose();
+    cloud_index_ = std::make_unique<PointIndex>(cloud);
+  }
+
+  // Fit plus, with surface samples, the trimmed mean distance from the surface facing the eye
+  // to the cloud (the closest 70 %: self-occlusion hides some of it): a pose that puts the
+  // view on the wrong part of a smooth body explains the cloud, but not where nothing was seen.
+  double Score(const PoseHypothesis& h) const {
+    double score = Fit(h);
+    if (!cloud_index_) return score;
+    const Eigen::Vector3d eye = h.R * eye_ + h.t;
+    std::vector<double> d;
+    for (size_t i = 0; i < samples_.size(); ++i) {
+      const Eigen::Vector3d to_eye = eye - samples_[i];
+      if (sample_normals_[i].dot(to_eye) <= 0.2 * to_eye.norm()) continue;
+      double squared = 0.0;
+      cloud_index_->Nearest(h.R.transpose() * (samples_[i] - h.t), &squared);
+      d.push_back(std::sqrt(squared));
+    }
+    if (d.empty()) return score;
+    std::sort(d.begin(), d.end());
+    const size_t keep =
+        std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
+    double sum = 0.0;
+    for (size_t j = 0; j < keep; ++j) sum += d[j];
+    return score + sum / static_cast<double>(keep);
+  }
+
+  // Trimmed point-to-plane ICP from h (it slides along flat parts, where point-to-point
+  // crawls); h->fit set.
+  void Refine(PoseHypothesis* h) const {
+    for (int it = 0; it < kIcpIterations; ++it) {
+      std::vector<Eigen::Vector3d> a, b, n;
+      Pairs(*h, &a, &b, &n);
+      if (a.size() < 6) break;
+      // Linearized about the mapped points: (a + w x a + dt - b) . n = 0 in least squares.
+      Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
+      for (size_t i = 0; i < a.size(); ++i) {
+        Eigen::Matrix<double, 6, 1> J;
+        J << a[i].cross(n[i]), n[i];
+        JtJ += J * J.transpose();
+        Jtr += J * (b[i] - a[i]).dot(n[i]);
+      }
+      JtJ.diagonal().array() += 1e-12 * JtJ.trace() + 1e-30;
+      const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(Jtr);
+      if (!x.allFinite()) break;
+      const Eigen::Vector3d w = x.head<3>(), dt = x.tail<3>();
+      const Eigen::Matrix3d dR =
+          w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                       : Eigen::Matrix3d::Identity();
+      h->R = dR * h->R;
+      h->t = dR * h->t + dt;
+      if (w.norm() < 1e-7 && dt.norm() < 1e-9) break;
+    }
+    h->fit = Score(*h);
+  }
+
+ private:
+  // The kept (trimmed) pairs: the mapped cloud points, their closest surface points and those
+  // points' triangle normals. A
+  // point whose closest surface point faces away from the eye counts at least `penalty_` away
+  // (a pose that explains a view by the far side of the object) and pairs with nothing.
+  double Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a,
+               std::vector<Eigen::Vector3d>* b, std::vector<Eigen::Vector3d>* n) const {
+    const Eigen::Vector3d eye = h.R * eye_ + h.t;
+    std::vector<std::pair<double, int>> dist;
+    std::vector<Eigen::Vector3d> mapped(points_.size()), closest(points_.size());
+    std::vector<int> triangle(points_.size(), -1);
+    std::vector<char> back(points_.size(), 0);
+    for (size_t i = 0; i < points_.size(); ++i) {
+      mapped[i] = h.R * points_[i] + h.t;
+      const SurfaceIndex::Hit hit = index_.Closest(mapped[i]);
+      if (hit.triangle < 0) continue;
+      double d = std::sqrt(hit.squared_distance);
+      closest[i] = hit.point;
+      triangle[i] = hit.triangle;
+      if (has_eye_) {
+        const Eigen::Vector3d to_eye = eye - hit.point;
+        if (face_normals_.row(hit.triangle).dot(to_eye) < -0.2 * to_eye.norm()) {
+          back[i] = 1;
+          d = std::max(d, penalty_);
+        }
+      }
+      dist.emplace_back(d, static_cast<int>(i));
+    }
+    if (dist.empty()) return std::numeric_limits<double>::infinity();
+    std::sort(dist.begin(), dist.end());
+    const size_t keep =
+        std::max<size_t>(1, static_cast<size_t>(kKeep * static_cast<double>(dist.size())));
+    double sum = 0.0;
+    for (size_t j = 0; j < keep; ++j) {
+      sum += dist[j].first;
+      const size_t i = static_cast<size_t>(dist[j].second);
+      if (back[i]) continue;
+      a->push_back(mapped[i]);
+      b->push_back(closest[i]);
+      n->push_back(face_normals_.row(triangle[i]).transpose());
+    }
+    return sum / static_cast<double>(keep);
+  }
+
+  const Vertices& y_;
+  const Triangles& tris_;
+  SurfaceIndex index_;
+  Eigen::MatrixXd face_normals_;
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<Eigen::Vector3d> samples_, sample_normals_;
+  std::unique_ptr<PointIndex> cloud_index_;
+  bool has_eye_;
+  Eigen::Vector3d eye_ = Eigen::Vector3d::Zero();
+  double penalty_;
+};
+
+double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return Eigen::AngleAxisd(a * b.transpose()).angle();
+}
+
+}  // namespace
+
+GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, int object,
+                            TrackerState* state) {
+  GlobalPoseResult result;
+  const ObjectState& o = state->objects[static_cast<size_t>(object)];
+  const int nv = o.mesh.num_vertices();
+  const Vertices y = state->x.middleRows(o.offset, nv);
+  const Triangles& tris = o.mesh.surface;
+  if (points.rows() < 3 || tris.rows() == 0) return result;
+  const double radius =
+      std::sqrt((y.rowwise() - y.colwise().mean()).rowwise().squaredNorm().mean());
+  const double voxel = kVoxelPerRadius * radius;
+  Verifier verifier(y, tris, points, eye, 2.0 * voxel);
+  // The check counts the surface facing the eye too: a pose turned by a fraction of a radian
+  // can leave a partial view within loss_scale of some part of a large body's surface.
+  PclCloud::Ptr model = ModelSamples(y, tris, voxel);
+  verifier.SetSurfaceSamples(*model);
+  const double given_score = verifier.Score(PoseHypothesis());
+  result.given_fit = given_score;
+  if (!(given_score > state->options.data.loss_scale)) return result;
+  result.searched = true;
+
+  // The given pose refined locally is a hypothesis like the global ones.
+  std::vector<PoseHypothesis> hypotheses(1);
+  verifier.Refine(&hypotheses[0]);
+  PclCloud::Ptr cloud = CloudSamples(points, eye, voxel);
+  Features::Ptr model_features, cloud_features;
+  Describe(kFeatureRadius * voxel, &model, &model_features);
+  Describe(kFeatureRadius * voxel, &cloud, &cloud_features);
+  if (model->size() >= 3 && cloud->size() >= 3) {
+    // The cloud is the source: a view covers part of the object, and nearly all of its points
+    // lie on the surface (the inlier fraction is the source's).
+    pcl::SampleConsensusPrerejective<pcl::PointNormal, pcl::PointNormal, pcl::FPFHSignature33>
+        ransac;
+    ransac.setInputSource(cloud);
+    ransac.setSourceFeatures(cloud_features);
+    ransac.setInputTarget(model);
+    ransac.setTargetFeatures(model_features);
+    ransac.setMaximumIterations(kIterations);
+    ransac.setNumberOfSamples(3);
+    ransac.setCorrespondenceRandomness(3);
+    ransac.setSimilarityThreshold(0.9f);
+    ransac.setMaxCorrespondenceDistance(1.5 * voxel);
+    ransac.setInlierFraction(static_cast<float>(kInlierFraction));
+    for (int seed = 1; seed <= kSeeds; ++seed) {
+      std::srand(static_cast<unsigned>(seed));
+      PclCloud aligned;
+      ransac.align(aligned);
+      if (!ransac.hasConverged()) continue;
+      const Eigen::Matrix4d T = ransac.getFinalTransformation().cast<double>();
+      PoseHypothesis h;
+      h.R = T.topLeftCorner<3, 3>();
+      h.t = T.topRightCorner<3, 1>();
+      // Orthonormal again after the float transform.
+      Eigen::JacobiSVD<Eigen::Matrix3d> svd(h.R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      h.R = svd.matrixU() * svd.matrixV().transpose();
+      verifier.Refine(&h);
+      hypotheses.push_back(h);
+    }
+  }
+  auto by_fit = [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.fit < b.fit; };
+  std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
+  // A symmetric body's other poses are the best one turned by half a turn about one of its
+  // principal axes: tried as hypotheses too, so that the ambiguity shows whether or not RANSAC
+  // happened to find them.
+  const Eigen::Vector3d centre = y.colwise().mean().transpose();
+  const Eigen::Matrix3d covariance =
+      (y.rowwise() - centre.transpose()).transpose() * (y.rowwise() - centre.transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);
+  const PoseHypothesis first = hypotheses.front();
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Matrix3d half =
+        Eigen::AngleAxisd(M_PI, axes.eigenvectors().col(k)).toRotationMatrix();
+    PoseHypothesis h;
+    h.R = half * first.R;
+    h.t = half * (first.t - centre) + centre;
+    verifier.Refine(&h);
+    hypotheses.push_back(h);
+  }
+  std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
+  const PoseHypothesis& best = hypotheses.front();
+  for (size_t i = 1; i < hypotheses.size(); ++i) {
+    if (RotationAngle(hypotheses[i].R, best.R) > kDistinctAngle) {
+      result.ambiguous = hypotheses[i].fit < kAmbiguousRatio * best.fit;
+      break;
+    }
+  }
+  result.hypotheses = hypotheses;
+  // Of the poses that explain the cloud about as well as the best (a symmetric body's), the
+  // one turned least from the given pose: after a loss the given pose is the last good one,
+  // and its turned copies would put every vertex elsewhere on the same surface.
+  const PoseHypothesis* chosen = &best;
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  for (const PoseHypothesis& h : hypotheses) {
+    if (h.fit < kAmbiguousRatio * best.fit && RotationAngle(h.R, identity) < RotationAngle(chosen->R, identity)) {
+      chosen = &h;
+    }
+  }
+  if (!(chosen->fit < kWinRatio * given_score)) {
+    result.ambiguous = false;  // the given pose stands: which other pose fits does not matter
+    return result;
+  }
+  // q = R p + t maps the cloud onto the surface as given: the surface goes by the inverse.
+  result.moved = true;
+  for (int v = 0; v < nv; ++v) {
+    const Eigen::Vector3d p = y.row(v).transpose();
+    state->x.row(o.offset + v) = (chosen->R.transpose() * (p - chosen->t)).transpose();
+  }
+  return result;
+}
+
+void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummary* summary) {
+  const RegistrationOptions& options = state->options;
+  Eigen::Vector3d eye = Eigen::Vector3d::Zero();
+  const Eigen::Vector3d* eye_ptr = nullptr;
+  if (options.camera.enabled) {
+    eye = options.camera.position;
+    eye_ptr = &eye;
+  } else if (cloud.has_viewpoint) {
+    eye = cloud.viewpoint;
+    eye_ptr = &eye;
+  }
+  bool searched = false, moved = false;
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    const ObjectState& o = state->objects[i];
+    bool anchored = false;
+    for (const auto& a : state->anchors)
+      anchored = anchored || a.second.object == static_cast<int>(i);
+    if (anchored) continue;  // anchors hold the object where it is given
+    Vertices points;
+    if (state->objects.size() == 1) {
+      points = cloud.points;
+    } else if (o.label >= 0 && cloud.has_labels()) {
+      std::vector<int> mine;
+      for (int p = 0; p < cloud.size(); ++p) {
+        if (cloud.labels(p) == o.label) mine.push_back(p);
+      }
+      points.resize(static_cast<Eigen::Index>(mine.size()), 3);
+      for (size_t k = 0; k < mine.size(); ++k)
+        points.row(static_cast<Eigen::Index>(k)) = cloud.points.row(mine[k]);
+    } else {
+      continue;  // which points are this object's is not known
+    }
+    const GlobalPoseResult r = GlobalPose(points, eye_ptr, static_cast<int>(i), state);
+    searched = searched || r.searched;
+    moved = moved || r.moved;
+    summary->pose_ambiguous = summary->pose_ambiguous || r.ambiguous;
+  }
+  summary->initial_pose = moved ? "global" : searched ? "given, searched" : "given";
+}
+
+}  // namespace femreg
