@@ -3,7 +3,6 @@
 // (collision_test.cc has the contact terms and the forward solve).
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
-#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -32,13 +31,8 @@ namespace {
 
 using V3 = Eigen::Vector3d;
 
-// The forward solver's OpenMP loops spin-wait on a loaded machine; these small problems run
-// faster on one thread (libgomp comes in through libfemreg, hence the look-up).
-const bool kOneThread = [] {
-  using SetThreads = void (*)(int);
-  if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) f(1);
-  return true;
-}();
+// These small problems run faster on one thread (testing_util::UseOneOpenMpThread).
+const bool kOneThread = testing_util::UseOneOpenMpThread();
 
 // The bundled contact sequences registered end to end, with collision on and off: per frame
 // the deepest penetration (measured with the scene's collision section also when the tracker

@@ -5,7 +5,6 @@
 // collision_sequences_test.cc.
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
-#include <dlfcn.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -34,13 +33,8 @@ namespace {
 
 using V3 = Eigen::Vector3d;
 
-// The forward solver's OpenMP loops spin-wait on a loaded machine; these small problems run
-// faster on one thread (libgomp comes in through libfemreg, hence the look-up).
-const bool kOneThread = [] {
-  using SetThreads = void (*)(int);
-  if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) f(1);
-  return true;
-}();
+// These small problems run faster on one thread (testing_util::UseOneOpenMpThread).
+const bool kOneThread = testing_util::UseOneOpenMpThread();
 
 // --- detection and the forward solve ---------------------------------------------------
 

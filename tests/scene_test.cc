@@ -11,6 +11,7 @@
 #include "femreg/io.h"
 #include "femreg/scene.h"
 #include "femreg_test_config.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -398,71 +399,6 @@ TEST_F(SceneTest, MissingSceneFile) {
   EXPECT_NE(status.message().find("nope.yaml"), std::string::npos);
 }
 
-// A 3 x 3 x 3 grid of points with spacing 1: vertex (i, j, k) is 9 k + 3 j + i.
-Vertices Grid() {
-  Vertices v(27, 3);
-  for (int k = 0; k < 3; ++k) {
-    for (int j = 0; j < 3; ++j) {
-      for (int i = 0; i < 3; ++i) v.row(9 * k + 3 * j + i) << i, j, k;
-    }
-  }
-  return v;
-}
-
-TEST(SelectVerticesTest, Box) {
-  VertexSelection s;
-  s.kind = VertexSelection::Kind::kBox;
-  s.box_min = Eigen::Vector3d(0, 0, 0);
-  s.box_max = Eigen::Vector3d(0, 2, 2);  // the face x = 0, boundaries included
-  std::vector<int> v;
-  ASSERT_TRUE(SelectVertices(s, Grid(), &v).ok());
-  EXPECT_EQ(v, (std::vector<int>{0, 3, 6, 9, 12, 15, 18, 21, 24}));
-  s.box_min = Eigen::Vector3d(0.5, 0.5, 0.5);
-  s.box_max = Eigen::Vector3d(1.5, 1.5, 1.5);
-  ASSERT_TRUE(SelectVertices(s, Grid(), &v).ok());
-  EXPECT_EQ(v, (std::vector<int>{13}));
-}
-
-TEST(SelectVerticesTest, Plane) {
-  VertexSelection s;
-  s.kind = VertexSelection::Kind::kPlane;
-  s.plane_point = Eigen::Vector3d(0, 0, 2);
-  s.plane_normal = Eigen::Vector3d(0, 0, 3);  // not unit: normalized by SelectVertices
-  std::vector<int> v;
-  ASSERT_TRUE(SelectVertices(s, Grid(), &v).ok());
-  EXPECT_EQ(v, (std::vector<int>{18, 19, 20, 21, 22, 23, 24, 25, 26}));
-  s.plane_normal = Eigen::Vector3d(-1, 0, 0);
-  s.plane_point = Eigen::Vector3d(0.5, 0, 0);
-  ASSERT_TRUE(SelectVertices(s, Grid(), &v).ok());
-  EXPECT_EQ(v.size(), 9u);
-  for (int i : v) EXPECT_EQ(i % 3, 0);
-}
-
-TEST(SelectVerticesTest, IndicesAllAndErrors) {
-  VertexSelection s;
-  s.where = "beam.yaml:3 (loads[0].select)";
-  std::vector<int> v;
-  ASSERT_TRUE(SelectVertices(s, Grid(), &v).ok());  // kAll
-  EXPECT_EQ(v.size(), 27u);
-  s.kind = VertexSelection::Kind::kIndices;
-  s.indices = {5, 1, 5};
-  ASSERT_TRUE(SelectVertices(s, Grid(), &v).ok());
-  EXPECT_EQ(v, (std::vector<int>{1, 5}));
-  s.indices = {1, 27};
-  Status status = SelectVertices(s, Grid(), &v);
-  ASSERT_FALSE(status.ok());
-  EXPECT_NE(status.message().find("beam.yaml:3 (loads[0].select): vertex index 27 is out of range"),
-            std::string::npos)
-      << status.message();
-  s.kind = VertexSelection::Kind::kBox;
-  s.box_min = s.box_max = Eigen::Vector3d(9, 9, 9);
-  status = SelectVertices(s, Grid(), &v);
-  ASSERT_FALSE(status.ok());
-  EXPECT_NE(status.message().find("beam.yaml:3 (loads[0].select): the selection picks no vertex"),
-            std::string::npos)
-      << status.message();
-}
-
 TEST_F(SceneTest, ForwardProblemSpreadsLoadsAndRejectsConflicts) {
   const std::string text = std::string(kBaseScene) +
                            "  - {select: {indices: [2]}, displacement: [0, 0, 0.5]}\n"  // 10
@@ -473,7 +409,7 @@ TEST_F(SceneTest, ForwardProblemSpreadsLoadsAndRejectsConflicts) {
   Scene scene;
   ASSERT_TRUE(Load(text, &scene).ok());
   TetMesh mesh;
-  mesh.rest = Grid();
+  mesh.rest = testing_util::Grid();
   ForwardProblem problem;
   Status status = BuildForwardProblem(scene, 0, mesh, &problem);
   ASSERT_TRUE(status.ok()) << status.message();

@@ -14,6 +14,7 @@
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/synth.h"
+#include "synth_samples.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -23,18 +24,9 @@ namespace {
 
 const double kDeg = M_PI / 180.0;
 
-// A camera at the origin looking along +z (image y down = world +y).
+// The shared axis camera without noise: what each artefact does is all that changes.
 DepthSensorOptions AxisSensor() {
-  DepthSensorOptions s;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d::Zero();
-  s.camera.target = Eigen::Vector3d::UnitZ();
-  s.camera.up = -Eigen::Vector3d::UnitY();
-  s.camera.width = 120;
-  s.camera.height = 90;
-  s.camera.fx = s.camera.fy = 100.0;
-  s.camera.cx = 59.5;
-  s.camera.cy = 44.5;
+  DepthSensorOptions s = testing_util::AxisSensor();
   s.noise_coefficient = 0.0;
   return s;
 }

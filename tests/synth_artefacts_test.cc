@@ -13,6 +13,7 @@
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
+#include "synth_samples.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -27,23 +28,14 @@ class TempDir : public testing_util::TempDir {
 
 // A clamped bar whose free end moves down, seen from in front and above.
 std::string BarScene(const std::string& synth_extra) {
-  return "objects:\n"
-         "  - name: bar\n"
-         "    generate: {shape: box, size: [0.1, 0.02, 0.02], cells: [5, 1, 1]}\n"
-         "    material: {youngs_modulus: 1e5, poisson_ratio: 0.3}\n"
-         "boundary:\n"
-         "  - {select: {box: {min: [-1, -1, -1], max: [0.0001, 1, 1]}}, clamp: true}\n"
-         "registration:\n"
-         "  camera: {position: [0.05, -0.2, 0.1], target: [0.05, 0, 0], up: [0, 0, 1],\n"
-         "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-         "synth:\n"
-         "  frames: 6\n"
-         "  sanity_check: true\n"
-         "  sensor: {noise_coefficient: 0}\n"
-         "  motion:\n"
-         "    - {name: end, select: {box: {min: [0.0999, -1, -1], max: [1, 1, 1]}},\n"
-         "       keyframes: [{frame: 0}, {frame: 5, translation: [0, 0, -0.01]}]}\n" +
-         synth_extra;
+  return testing_util::BarSynthScene(
+      "  frames: 6\n"
+      "  sanity_check: true\n"
+      "  sensor: {noise_coefficient: 0}\n"
+      "  motion:\n"
+      "    - {name: end, select: {box: {min: [0.0999, -1, -1], max: [1, 1, 1]}},\n"
+      "       keyframes: [{frame: 0}, {frame: 5, translation: [0, 0, -0.01]}]}\n" +
+      synth_extra);
 }
 
 std::string ReadFile(const std::string& path) {

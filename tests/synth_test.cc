@@ -17,6 +17,7 @@
 #include "femreg/synth.h"
 #include "femreg_test_config.h"
 #include "regenerate_compare.h"
+#include "synth_samples.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -24,25 +25,13 @@ namespace fs = std::filesystem;
 namespace femreg {
 namespace {
 
+using testing_util::AxisSensor;
+using testing_util::BarSynthScene;
+
 class TempDir : public testing_util::TempDir {
  public:
   TempDir() : testing_util::TempDir("femreg_synth_test") {}
 };
-
-// A camera at the origin looking along +z (image y down = world -y up).
-DepthSensorOptions AxisSensor() {
-  DepthSensorOptions s;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d::Zero();
-  s.camera.target = Eigen::Vector3d::UnitZ();
-  s.camera.up = -Eigen::Vector3d::UnitY();
-  s.camera.width = 120;
-  s.camera.height = 90;
-  s.camera.fx = s.camera.fy = 100.0;
-  s.camera.cx = 59.5;
-  s.camera.cy = 44.5;
-  return s;
-}
 
 // A square of edge `size` at depth z facing the camera, tilted by `tilt` about the y axis.
 void Square(double z, double size, double tilt, Vertices* points, Triangles* triangles) {
@@ -148,20 +137,6 @@ TEST(DepthSensorTest, GrazingSurfacesDropOut) {
   EXPECT_EQ(sensor.Sample(facing, surfaces, 1).size(), facing_hit);
 }
 
-// A small synth scene (one object, a clamp, a moved end, a camera).
-std::string SynthScene(const std::string& synth) {
-  return "objects:\n"
-         "  - name: bar\n"
-         "    generate: {shape: box, size: [0.1, 0.02, 0.02], cells: [5, 1, 1]}\n"
-         "    material: {youngs_modulus: 1e5, poisson_ratio: 0.3}\n"
-         "boundary:\n"
-         "  - {select: {box: {min: [-1, -1, -1], max: [0.0001, 1, 1]}}, clamp: true}\n"
-         "registration:\n"
-         "  camera: {position: [0.05, -0.2, 0.1], target: [0.05, 0, 0], up: [0, 0, 1],\n"
-         "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-         "synth:\n" +
-         synth;
-}
 
 std::string ParseError(const std::string& text) {
   Scene scene;
@@ -172,7 +147,7 @@ std::string ParseError(const std::string& text) {
 TEST(SynthSceneTest, ParsesTheSection) {
   Scene scene;
   const Status status = ParseScene(
-      SynthScene("  frames: 7\n"
+      BarSynthScene("  frames: 7\n"
                  "  seed: 3\n"
                  "  ground_truth: {refinement: 2, material: {poisson_ratio: 0.4}}\n"
                  "  sensor: {pixel_stride: 2, noise_coefficient: 0.001}\n"
@@ -218,42 +193,42 @@ TEST(SynthSceneTest, ParsesTheSection) {
 }
 
 TEST(SynthSceneTest, ErrorsNameTheFileLineAndKey) {
-  EXPECT_EQ(ParseError(SynthScene("  frames: 5\n  ground_truth: {refinement: 2}\n  sede: 3\n")),
+  EXPECT_EQ(ParseError(BarSynthScene("  frames: 5\n  ground_truth: {refinement: 2}\n  sede: 3\n")),
             "synth.yaml:13: synth.sede: unknown key (did you mean 'seed'?)");
-  EXPECT_EQ(ParseError(SynthScene("  frames: 0\n  ground_truth: {refinement: 2}\n")),
+  EXPECT_EQ(ParseError(BarSynthScene("  frames: 0\n  ground_truth: {refinement: 2}\n")),
             "synth.yaml:11: synth.frames: must be >= 1 (got 0)");
-  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n  sensor: {pixel_stride: 0}\n")),
+  EXPECT_EQ(ParseError(BarSynthScene("  ground_truth: {refinement: 2}\n  sensor: {pixel_stride: 0}\n")),
             "synth.yaml:12: synth.sensor.pixel_stride: must be >= 1 (got 0)");
-  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+  EXPECT_EQ(ParseError(BarSynthScene("  ground_truth: {refinement: 2}\n"
                                   "  sensor: {grazing_angle_deg: 95}\n")),
             "synth.yaml:12: synth.sensor.grazing_angle_deg: must be in (0, 90] (got 95)");
   // The tracked mesh and material: an inverse crime unless labelled.
-  EXPECT_NE(ParseError(SynthScene("  frames: 3\n")).find("synth.yaml:11: synth: the ground truth "
+  EXPECT_NE(ParseError(BarSynthScene("  frames: 3\n")).find("synth.yaml:11: synth: the ground truth "
                                                         "would come from the tracked mesh"),
             std::string::npos);
-  EXPECT_EQ(ParseError(SynthScene("  frames: 3\n  sanity_check: true\n")), "(no error)");
-  EXPECT_NE(ParseError(SynthScene("  sanity_check: true\n  ground_truth: {refinement: 2}\n"))
+  EXPECT_EQ(ParseError(BarSynthScene("  frames: 3\n  sanity_check: true\n")), "(no error)");
+  EXPECT_NE(ParseError(BarSynthScene("  sanity_check: true\n  ground_truth: {refinement: 2}\n"))
                 .find("synth.yaml:12: synth.ground_truth: a sanity check"),
             std::string::npos);
-  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+  EXPECT_EQ(ParseError(BarSynthScene("  ground_truth: {refinement: 2}\n"
                                   "  motion:\n"
                                   "    - select: {all: true}\n"
                                   "      anchor: hard\n"
                                   "      keyframes: [{frame: 0}, {frame: 4, rotation: [0, 0, 1]}]\n")),
             "synth.yaml:14: synth.motion[0].anchor: this track rotates: its anchor turns about the "
             "track's centre, so give centre: [x, y, z]");
-  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+  EXPECT_EQ(ParseError(BarSynthScene("  ground_truth: {refinement: 2}\n"
                                   "  motion:\n"
                                   "    - select: {all: true}\n"
                                   "      keyframes: [{frame: 3}, {frame: 3}]\n")),
             "synth.yaml:14: synth.motion[0].keyframes[1].frame: must be greater than the "
             "previous keyframe's (3)");
-  EXPECT_EQ(ParseError(SynthScene("  ground_truth: {refinement: 2}\n"
+  EXPECT_EQ(ParseError(BarSynthScene("  ground_truth: {refinement: 2}\n"
                                   "  bodies:\n"
                                   "    - {box: {min: [0, 0, 0], max: [0, 1, 1]}}\n")),
             "synth.yaml:13: synth.bodies[0].box.max: must be > min in every coordinate");
   // No camera.
-  std::string no_camera = SynthScene("  ground_truth: {refinement: 2}\n");
+  std::string no_camera = BarSynthScene("  ground_truth: {refinement: 2}\n");
   no_camera.erase(no_camera.find("registration:"), no_camera.find("synth:") - no_camera.find("registration:"));
   EXPECT_EQ(ParseError(no_camera),
             "synth.yaml:8: synth: needs registration.camera: the virtual depth camera renders from it");

@@ -2,6 +2,7 @@
 #ifndef FEMREG_TESTS_TEST_UTIL_H_
 #define FEMREG_TESTS_TEST_UTIL_H_
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include <sys/wait.h>
@@ -84,6 +85,26 @@ inline CliRun Femreg(const std::string& args, const std::string& prefix = "") {
   return r;
 }
 #endif
+
+// Sets OpenMP's thread count to 1 for the rest of the process and returns true: the forward
+// solver's OpenMP loops spin-wait on a loaded machine, and small problems run faster on one
+// thread. libgomp comes in through libfemreg, hence the look-up.
+inline bool UseOneOpenMpThread() {
+  using SetThreads = void (*)(int);
+  if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "omp_set_num_threads"))) f(1);
+  return true;
+}
+
+// A 3 x 3 x 3 grid of points with spacing 1: vertex (i, j, k) is 9 k + 3 j + i.
+inline Vertices Grid() {
+  Vertices v(27, 3);
+  for (int k = 0; k < 3; ++k) {
+    for (int j = 0; j < 3; ++j) {
+      for (int i = 0; i < 3; ++i) v.row(9 * k + 3 * j + i) << i, j, k;
+    }
+  }
+  return v;
+}
 
 }  // namespace testing_util
 }  // namespace femreg
