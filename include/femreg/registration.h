@@ -404,6 +404,10 @@ struct FrameSummary {
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
+  // 1 when the first outer iteration moved the bulk of the vertices (99 %) more than 3 mean
+  // edges and the frame
+  // started again, stiff and stepping down (docs/theory/stopping.md#large-motions).
+  int large_motion_restarts = 0;
   FrameConfidence confidence;
   // The object was not found (data.lost_coverage): the result is the last good frame's shape.
   bool lost = false;

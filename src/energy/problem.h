@@ -52,6 +52,11 @@ class Problem {
     sets.emplace_back(group, loss);
     return sets.back();
   }
+  // Every set of block type T, to change blocks in place (their weights).
+  template <class T>
+  std::vector<TermSet<T>>& SetsOf() {
+    return std::get<std::vector<TermSet<T>>>(sets_);
+  }
   // Removes every set of the group (the blocks that change per frame or per iteration).
   void Clear(TermGroup group);
 

@@ -69,10 +69,25 @@ int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,
 SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
                            int candidate_vertices)
     : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices) {
+  Build(nullptr);
+}
+
+SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
+                           const std::vector<char>& keep, int candidate_vertices)
+    : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices), keep_(keep) {
+  keep_.resize(static_cast<size_t>(triangles.rows()), 0);
+  Build(&keep_);
+}
+
+void SurfaceIndex::Build(const std::vector<char>* keep) {
+  const Vertices& positions = positions_;
+  const Triangles& triangles = triangles_;
+  auto kept = [&](int f) { return keep == nullptr || (*keep)[static_cast<size_t>(f)] != 0; };
   const int nv = static_cast<int>(positions.rows());
   std::vector<char> used(nv, 0);
   tri_offsets_.assign(nv + 1, 0);
   for (int f = 0; f < triangles.rows(); ++f) {
+    if (!kept(f)) continue;
     for (int k = 0; k < 3; ++k) {
       used[triangles(f, k)] = 1;
       ++tri_offsets_[triangles(f, k) + 1];
@@ -82,6 +97,7 @@ SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles
   tri_list_.assign(tri_offsets_[nv], 0);
   std::vector<int> fill(tri_offsets_.begin(), tri_offsets_.end() - 1);
   for (int f = 0; f < triangles.rows(); ++f) {
+    if (!kept(f)) continue;
     for (int k = 0; k < 3; ++k) tri_list_[fill[triangles(f, k)]++] = f;
   }
   for (int v = 0; v < nv; ++v) {
@@ -143,7 +159,9 @@ bool SurfaceIndex::TouchesRing(int v, int triangle) const {
 }
 
 SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int start) const {
-  if (start < 0 || start >= triangles_.rows()) return Closest(query);
+  if (start < 0 || start >= triangles_.rows() || (!keep_.empty() && !keep_[static_cast<size_t>(start)])) {
+    return Closest(query);
+  }
   Hit best;
   best.squared_distance = std::numeric_limits<double>::infinity();
   Tested tested;

@@ -41,6 +41,10 @@ class SurfaceIndex {
  public:
   // positions: #V by 3 (all vertices); triangles: #F by 3 indices into positions.
   SurfaceIndex(const Vertices& positions, const Triangles& triangles, int candidate_vertices = 4);
+  // Only the triangles f with keep[f] != 0 (#F entries, copied) are searched; hits keep
+  // their index in `triangles`.
+  SurfaceIndex(const Vertices& positions, const Triangles& triangles, const std::vector<char>& keep,
+               int candidate_vertices = 4);
 
   struct Hit {
     int triangle = -1;
@@ -61,6 +65,7 @@ class SurfaceIndex {
 
  private:
   struct Tested;
+  void Build(const std::vector<char>* keep);
   // Tests the triangles around vertex v not yet in *tested; *best keeps the closest.
   void TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const;
   const Vertices& positions_;
@@ -68,6 +73,7 @@ class SurfaceIndex {
   int candidate_vertices_;
   std::vector<int> surface_vertex_ids_;  // index in the tree -> vertex id
   std::vector<int> tri_offsets_, tri_list_;  // vertex id -> incident triangles (CSR)
+  std::vector<char> keep_;                    // empty: every triangle
   std::unique_ptr<PointIndex> index_;
 };
 

@@ -95,6 +95,24 @@ struct LabelSplit {
   }
 };
 
+// A face turned up to this angle away from the sensor can still hold a cloud point: a
+// grazing face of a model a little off its pose, a silhouette, the sensor's noise.
+constexpr double kMaxFacingAngleCos = -0.3;  // cos(107 deg)
+
+// The closest-point index over the triangles of `surface` that face fc's sensor.
+std::unique_ptr<SurfaceIndex> FacingIndex(const Vertices& x, const Triangles& surface, const FrameCloud& fc) {
+  std::vector<char> keep(static_cast<size_t>(surface.rows()), 0);
+  for (int f = 0; f < surface.rows(); ++f) {
+    const Eigen::Vector3d a = x.row(surface(f, 0)), b = x.row(surface(f, 1)), c = x.row(surface(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    const Eigen::Vector3d to_eye =
+        fc.view == FrameCloud::View::kDirection ? fc.eye : Eigen::Vector3d(fc.eye - (a + b + c) / 3.0);
+    const double scale = n.norm() * to_eye.norm();
+    keep[static_cast<size_t>(f)] = scale == 0.0 || n.dot(to_eye) > kMaxFacingAngleCos * scale;
+  }
+  return std::make_unique<SurfaceIndex>(x, surface, keep);
+}
+
 }  // namespace
 
 std::string FrameCloud::Describe() const {
@@ -334,9 +352,23 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
   const bool cloud_to_model = data.cloud_to_model && state.surface.rows() > 0;
   const Triangles& other_surface = labels.active() ? labels.free_surface : state.surface;
   const SurfaceIndex* other_index = labels.active() ? labels.free_surface_index.get() : &surface;
+  // Seen from a sensor, a cloud point lies on surface that faces it: in a large motion's
+  // frame its closest point is searched among the triangles turned less than
+  // kMaxFacingAngleCos away from the sensor, so that a model far from its cloud is not
+  // fitted back side first (docs/theory/stopping.md#large-motions).
+  std::unique_ptr<SurfaceIndex> facing_index;
+  if (fc.facing_only && view && cloud_to_model && !labels.active()) {
+    facing_index = FacingIndex(x, state.surface, fc);
+    other_index = facing_index.get();
+  }
   auto index_of = [&](int i) {  // the closest-point index cloud point i searches
     const int labelled = labels.active() ? labels.point_object[i] : -1;
     return labelled >= 0 ? labels.object_surface_index[labelled].get() : other_index;
+  };
+  auto ring_index_of = [&](int i) {  // the same surface, every triangle: the one-ring test
+    const int labelled = labels.active() ? labels.point_object[i] : -1;
+    return labelled >= 0 ? labels.object_surface_index[labelled].get()
+                         : (labels.active() ? labels.free_surface_index.get() : &surface);
   };
   const int nq = cloud_to_model ? (cloud.size() + data.cloud_stride - 1) / data.cloud_stride : 0;
   std::vector<SurfaceIndex::Hit> hits(static_cast<size_t>(nq));
@@ -390,13 +422,14 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       }
       if (mutual && q >= 0) {
         const SurfaceIndex* index = index_of(q);
+        const SurfaceIndex* ring = ring_index_of(q);
         int triangle = -1;
         if (cloud_to_model && q % data.cloud_stride == 0) {
           triangle = hits[static_cast<size_t>(q / data.cloud_stride)].triangle;
         } else if (index != nullptr) {
           triangle = index->Closest(cloud.points.row(q)).triangle;
         }
-        foreign[static_cast<size_t>(i)] = triangle >= 0 && index != nullptr && !index->TouchesRing(v, triangle);
+        foreign[static_cast<size_t>(i)] = triangle >= 0 && ring != nullptr && !ring->TouchesRing(v, triangle);
       }
       nearest[static_cast<size_t>(i)] = q;
       dist2[static_cast<size_t>(i)] = d2;

@@ -51,6 +51,9 @@ struct FrameCloud {
   // its one-ring test (FindPairs).
   double trim = std::numeric_limits<double>::infinity();
   View view = View::kNone;
+  // Cloud->model pairs only with surface facing the sensor (a large motion's frame;
+  // docs/theory/stopping.md#large-motions). No effect without a view or with labels.
+  bool facing_only = false;
   // kCamera, kViewpoint: the sensor's position; kDirection: the unit direction towards it.
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();
   // #P, or empty: the points of an occluder (registration/occluders.h), which pull nothing

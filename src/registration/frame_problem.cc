@@ -67,6 +67,19 @@ void FrameProblem::BuildNodalVolume(const TrackerState& state, double weight) {
   problem_.SetNodalVolume(std::move(nodal));
 }
 
+void FrameProblem::SetElasticScale(const TrackerState& state, double scale) {
+  const double w = state.options.weights.elastic * scale;
+  for (auto& set : problem_.SetsOf<energy::ElasticElement>()) {
+    for (energy::ElasticElement& b : *set.mutable_blocks()) b.weight = w;
+  }
+  for (auto& set : problem_.SetsOf<energy::NeoHookeanElement>()) {
+    for (energy::NeoHookeanElement& b : *set.mutable_blocks()) b.weight = w;
+  }
+  bool nodal = false;
+  for (const ObjectState& o : state.objects) nodal = nodal || o.model.nodal_volume();
+  if (nodal) BuildNodalVolume(state, w);
+}
+
 void FrameProblem::BuildElastic(const TrackerState& state) {
   BuildAreas(state);
   force_contacts_.clear();  // their vertex numbering may be gone

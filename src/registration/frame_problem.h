@@ -25,6 +25,9 @@ class FrameProblem {
   // pointers, so refreshing the rotations needs no rebuild) and the coupling the fast back
   // end's pattern starts from. After the tracker is made and after a topology change.
   void BuildElastic(const TrackerState& state);
+  // The elastic blocks' weight becomes scale x weights.elastic (the inversion barrier keeps
+  // its own): the stiff start of a large motion (docs/theory/stopping.md#large-motions).
+  void SetElasticScale(const TrackerState& state, double scale);
   // The temporal springs (w_t m_i towards state.frame_start) and the anchors at this frame's
   // targets: hard anchors move state->x onto their targets and hold them. Then the inversion
   // barrier, unless an element is flat or inverted at state->x (a user's state, or a run with

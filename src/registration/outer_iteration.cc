@@ -47,7 +47,7 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   auto t0 = Clock::now();
   const int hold = options.data.hold_pairs_after;
   FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
-            &paired_vertices, hold > 0 && k >= hold);
+            &paired_vertices, hold > 0 && k - iteration_base >= hold);
   s->time.correspondences += Seconds(t0);
   row.model_to_cloud = counts.model_to_cloud;
   row.cloud_to_model = counts.cloud_to_model;

@@ -23,6 +23,7 @@ std::string FrameSummary::BriefReport() const {
   if (!initial_pose.empty() && initial_pose != "given") {
     brief += ", initial pose " + initial_pose + (pose_ambiguous ? " (ambiguous)" : "");
   }
+  if (large_motion_restarts > 0) brief += ", large motion: started again stiff";
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm, gap %.3f mm", contacts,
                   max_penetration * 1e3, min_gap * 1e3);
@@ -37,6 +38,11 @@ std::string FrameSummary::FullReport() const {
   os << "Frame " << frame << "\n";
   if (!initial_pose.empty()) {
     os << "  initial pose: " << initial_pose << (pose_ambiguous ? " (ambiguous)" : "") << "\n";
+  }
+  if (large_motion_restarts > 0) {
+    os << "  large motion: iteration 1 moved the bulk of the vertices more than 3 mean edges; the frame "
+          "started again from iteration 2, the elastic weight x100, x30, x10, x3, then x1, pairing only "
+          "surface that faces the sensor\n";
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
      << points_used << " used\n";

@@ -40,6 +40,14 @@ using Clock = std::chrono::steady_clock;
 // docs/notes/2026-11-28-figures-from-code-comments.md). A frame that stops on a rise keeps its last
 // iterate, with the pairs and rotations it was solved with.
 constexpr double kRiseMoveLimit = 1.0;
+// A large motion: the first outer iteration moved the bulk of the free vertices (all but the 1 %
+// that moved most) farther than this many mean edges.
+// The nearest-point pairs of a surface that far from its cloud mislead (back faces, a twist
+// by a symmetry of the cross-section), so the frame starts again with the elastic weight
+// scaled by each of kStiffScales for one outer iteration (the smooth part of the motion
+// first), then the ordinary schedule (docs/theory/stopping.md#large-motions).
+constexpr double kLargeMotionEdges = 3.0;
+constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 // ... and by no more than this fraction of the previous energy: a larger rise is a change of the
 // problem (the rotations of nearly flat elements turning over, a new contact set), not a cycle
 // among nearly equal pairings, and the next solve may use it (the 1:1000 flat plate of
@@ -250,7 +258,20 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   rise_from = std::max(1, options.data.hold_pairs_after);
   merit = std::numeric_limits<double>::infinity();
   double previous_energy = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < options.solver.max_outer_iterations; ++k) {
+  iteration_base = 0;
+  iteration_limit = options.solver.max_outer_iterations;
+  stepping_in = false;
+  fc.facing_only = false;
+  const Vertices start = state.x;
+  int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
+  for (int k = 0; k < iteration_limit; ++k) {
+    if (stepping_in) {
+      const int stage = k - 1;
+      stepping_in = stage < stiff_stages;
+      frame_problem.SetElasticScale(state, stepping_in ? kStiffScales[stage] : 1.0);
+      merit = std::numeric_limits<double>::infinity();  // another energy
+      previous_energy = merit;
+    }
     // Until the pair set is held, the occluders are decided again where the model now is: a
     // part that lagged behind a fast motion and looked like one has caught up.
     if (k > 0 && k < options.data.hold_pairs_after && !fc.occluder.empty()) {
@@ -260,7 +281,24 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.occluded_points = fc.occluders.occluders;
     }
     if (!OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s)) break;
+    if (k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
+        options.weights.elastic > 0 && !options.forces.estimate && !state.fracture &&
+        first_bulk_move > kLargeMotionEdges * state.mean_edge_length) {
+      // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
+      // the sensor (docs/theory/stopping.md#large-motions).
+      state.x = start;
+      stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
+      stepping_in = true;
+      fc.facing_only = true;
+      iteration_base = 1 + stiff_stages;
+      iteration_limit = iteration_base + options.solver.max_outer_iterations;
+      rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
+      warm_triangles.clear();
+      paired_vertices.clear();
+      ++s.large_motion_restarts;
+    }
   }
+  if (iteration_base > 0) frame_problem.SetElasticScale(state, 1.0);  // a frame stopped while stiff
   if (s.termination == TerminationType::kNotRun) {
     s.termination = TerminationType::kMaxIterations;
     s.message = "no outer iteration ran";
@@ -286,9 +324,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     UpdateOutputs(fc.index.get(), {}, &state, options.solver.num_threads);
   } else if (!s.lost) {
     state.last_good = state.x;
-    // The first frame after a held or lost one caught up with a motion it did not see: that
-    // jump is no velocity to carry on.
-    if (state.held_before) state.x_before = state.x;
+    // The first frame after a held or lost one caught up with a motion it did not see, and a
+    // large motion's frame jumped: neither is a velocity to carry on.
+    if (state.held_before || s.large_motion_restarts > 0) state.x_before = state.x;
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   state.lost_before = s.lost;
@@ -387,6 +425,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   double moved = moves.size() > 0 ? moves.maxCoeff() : 0.0;
   double bulk = BulkMove(state, moves, frame_problem.problem().fixed());
   row.max_move = moved;
+  first_bulk_move = k == 0 ? bulk : first_bulk_move;
   double sum2 = 0.0;
   for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();
   row.rms_residual = std::sqrt(sum2 / static_cast<double>(pairs->size()));
@@ -428,7 +467,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // energy (see there).
   if (warm_start) {  // another energy: nothing to compare with
     *previous_energy = std::numeric_limits<double>::infinity();
-    return k + 1 < options.solver.max_outer_iterations;
+    return k + 1 < iteration_limit;
   }
   const double e1 = row.after.total();
   const double e0 = *previous_energy;
@@ -449,7 +488,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const double bulk_reference = std::max(state.mean_edge_length, 2.0 * fc.spacing);
   const double bulk_limit = options.solver.bulk_step_tolerance * bulk_reference;
   const bool settled = bulk_limit > 0 && bulk <= bulk_limit;
-  if (k > 0 && !contacts_pending &&
+  if (k > iteration_base && !stepping_in && !contacts_pending &&
       (moved <= step_limit || settled || (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
     s->termination = TerminationType::kConverged;
     std::ostringstream os;
@@ -480,9 +519,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->message = "time budget of " + std::to_string(options.solver.time_budget_s) + " s used";
     return false;
   }
-  if (k + 1 == options.solver.max_outer_iterations) {
+  if (k + 1 == iteration_limit) {
     s->termination = TerminationType::kMaxIterations;
     s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
+    if (iteration_base > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
   }
   return true;
 }

@@ -65,6 +65,13 @@ struct Tracker::Impl {
   // The first outer iteration of this frame whose energy rise may stop it: where the pair
   // set is held (data.hold_pairs_after), again after a fracture split.
   int rise_from = 1;
+  // The frame's outer iterations: the ordinary schedule's first (after a large motion's stiff
+  // start), the cap, and whether the elastic weight is still stepping down
+  // (docs/theory/stopping.md#large-motions).
+  int iteration_base = 0;
+  int iteration_limit = 0;
+  bool stepping_in = false;
+  double first_bulk_move = 0.0;  // m, of the frame's first outer iteration (BulkMove)
   // The last outer iteration's start and its energy with what it found (Backtrack).
   Vertices merit_x;
   double merit = 0.0;
