@@ -119,11 +119,39 @@ Status RemeshCheckedSurface(const CheckedSurface& surface, const MeshingOptions&
   settings.edge_length = options.edge_length;
   settings.feature_angle_deg = options.feature_angle_deg;
   settings.iterations = options.remesh_iterations;
+  // Shell by shell, in the input's order: the remeshed shells come out in the same order, so
+  // that region ids (by shell) mean the same pieces with and without remeshing.
   RemeshResult remeshed;
-  Status status =
-      RemeshSurface(surface.vertices, surface.triangles, settings, source, &remeshed);
-  report->sharp_edges = remeshed.sharp_edges;
-  report->corner_vertices = remeshed.corner_vertices;
+  Status status = Status::Ok();
+  report->sharp_edges = report->corner_vertices = 0;
+  for (const SurfaceShell& shell : surface.shells) {
+    std::vector<int> index(static_cast<size_t>(surface.vertices.rows()), -1);
+    Vertices V(0, 3);
+    Triangles F(static_cast<Eigen::Index>(shell.triangles.size()), 3);
+    int count = 0;
+    for (size_t t = 0; t < shell.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) {
+        int& i = index[static_cast<size_t>(surface.triangles(shell.triangles[t], k))];
+        if (i < 0) i = count++;
+        F(static_cast<Eigen::Index>(t), k) = i;
+      }
+    }
+    V.resize(count, 3);
+    for (size_t v = 0; v < index.size(); ++v) {
+      if (index[v] >= 0) V.row(index[v]) = surface.vertices.row(static_cast<Eigen::Index>(v));
+    }
+    RemeshResult piece;
+    status = RemeshSurface(V, F, settings, source, &piece);
+    if (!status.ok()) break;
+    report->sharp_edges += piece.sharp_edges;
+    report->corner_vertices += piece.corner_vertices;
+    const Eigen::Index v0 = remeshed.vertices.rows(), f0 = remeshed.triangles.rows();
+    remeshed.vertices.conservativeResize(v0 + piece.vertices.rows(), 3);
+    remeshed.vertices.bottomRows(piece.vertices.rows()) = piece.vertices;
+    remeshed.triangles.conservativeResize(f0 + piece.triangles.rows(), 3);
+    remeshed.triangles.bottomRows(piece.triangles.rows()) =
+        piece.triangles.array() + static_cast<int>(v0);
+  }
   if (status.ok()) {
     // Merge nothing (0: exact copies only): the remeshed vertices are distinct by construction.
     status = CheckSurface(remeshed.vertices, remeshed.triangles, 0.0,
