@@ -36,7 +36,8 @@ struct MeshingOptions {
   bool remesh = true;
   // Edges where the normals of the two triangles differ by more than this (degrees) are
   // feature lines the remeshed surface keeps (a box's edges; a dome's rim); where three or
-  // more meet, the vertex stays. 180: none. In (0, 180].
+  // more meet, the vertex stays. A connected set of such edges shorter than 2 edge_length in
+  // all is not kept (a scan's noise). 180: none. In (0, 180].
   double feature_angle_deg = 60.0;
   // Rounds of the remeshing (each splits, collapses, flips and smooths once). 1 to 100.
   int remesh_iterations = 5;
@@ -96,8 +97,9 @@ struct MeshingReport {
   bool remeshed = false;
   int remeshed_vertices = 0;
   int remeshed_triangles = 0;
-  int sharp_edges = 0;      // input edges kept as feature lines
-  int corner_vertices = 0;  // input vertices kept in place (where feature lines meet)
+  int sharp_edges = 0;          // input edges kept as feature lines
+  int dropped_sharp_edges = 0;  // sharp, but in a connected set shorter than 2 L in all: noise
+  int corner_vertices = 0;      // input vertices kept in place (where 3+ feature lines meet)
   double remeshed_volume = 0.0;
   double remeshed_mean_edge_length = 0.0;
   // The settings passed to TetGen.

@@ -14,6 +14,7 @@
 #include <exception>
 #include <vector>
 
+#include "mesh/disjoint_sets.h"
 #include "parallel/stopwatch.h"
 
 namespace femreg {
@@ -67,12 +68,42 @@ Status RemeshSurface(const Vertices& V, const Triangles& F, const RemeshSettings
       pmp::detect_sharp_edges(mesh, settings.feature_angle_deg, is_feature,
                               CGAL::parameters::vertex_feature_degree_map(feature_degree));
     }
-    for (EdgeIndex e : mesh.edges()) out->sharp_edges += is_feature[e] ? 1 : 0;
-    // Where feature lines end or meet (a box's corner), the vertex stays: moving it along
-    // one line would cut the others.
+    // A connected set of sharp edges shorter than 2 L in all is a scan's noise or a detail
+    // below the target size, not a feature: kept, its vertices could not be collapsed, and
+    // edges of almost no length would make flat tetrahedra.
+    DisjointSets lines(static_cast<int>(mesh.number_of_vertices()));
+    for (EdgeIndex e : mesh.edges()) {
+      if (is_feature[e]) {
+        lines.Unite(static_cast<int>(static_cast<size_t>(mesh.vertex(e, 0))),
+                    static_cast<int>(static_cast<size_t>(mesh.vertex(e, 1))));
+      }
+    }
+    std::vector<double> line_length(mesh.number_of_vertices(), 0.0);
+    auto line_of = [&](EdgeIndex e) {
+      return static_cast<size_t>(lines.Find(static_cast<int>(static_cast<size_t>(mesh.vertex(e, 0)))));
+    };
+    for (EdgeIndex e : mesh.edges()) {
+      if (is_feature[e]) {
+        line_length[line_of(e)] += std::sqrt(CGAL::to_double(
+            CGAL::squared_distance(mesh.point(mesh.vertex(e, 0)), mesh.point(mesh.vertex(e, 1)))));
+      }
+    }
+    for (VertexIndex v : mesh.vertices()) feature_degree[v] = 0;
+    for (EdgeIndex e : mesh.edges()) {
+      if (is_feature[e] && line_length[line_of(e)] < 2.0 * settings.edge_length) {
+        is_feature[e] = false;
+        ++out->dropped_sharp_edges;
+      }
+      if (is_feature[e]) {
+        ++out->sharp_edges;
+        ++feature_degree[mesh.vertex(e, 0)];
+        ++feature_degree[mesh.vertex(e, 1)];
+      }
+    }
+    // Where three or more feature lines meet (a box's corner), the vertex stays: moving it
+    // along one line would cut the others.
     for (VertexIndex v : mesh.vertices()) {
-      const int degree = feature_degree[v];
-      is_corner[v] = degree != 0 && degree != 2;
+      is_corner[v] = feature_degree[v] >= 3;
       out->corner_vertices += is_corner[v] ? 1 : 0;
     }
     pmp::isotropic_remeshing(faces(mesh), settings.edge_length, mesh,
@@ -123,7 +154,7 @@ Status RemeshCheckedSurface(const CheckedSurface& surface, const MeshingOptions&
   // that region ids (by shell) mean the same pieces with and without remeshing.
   RemeshResult remeshed;
   Status status = Status::Ok();
-  report->sharp_edges = report->corner_vertices = 0;
+  report->sharp_edges = report->dropped_sharp_edges = report->corner_vertices = 0;
   for (const SurfaceShell& shell : surface.shells) {
     std::vector<int> index(static_cast<size_t>(surface.vertices.rows()), -1);
     Vertices V(0, 3);
@@ -144,6 +175,7 @@ Status RemeshCheckedSurface(const CheckedSurface& surface, const MeshingOptions&
     status = RemeshSurface(V, F, settings, source, &piece);
     if (!status.ok()) break;
     report->sharp_edges += piece.sharp_edges;
+    report->dropped_sharp_edges += piece.dropped_sharp_edges;
     report->corner_vertices += piece.corner_vertices;
     const Eigen::Index v0 = remeshed.vertices.rows(), f0 = remeshed.triangles.rows();
     remeshed.vertices.conservativeResize(v0 + piece.vertices.rows(), 3);

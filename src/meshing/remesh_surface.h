@@ -24,14 +24,16 @@ struct RemeshSettings {
 struct RemeshResult {
   Vertices vertices;
   Triangles triangles;  // oriented as the input's
-  int sharp_edges = 0;     // input edges kept as feature lines
-  int corner_vertices = 0;  // input vertices that do not move (three or more feature lines)
+  int sharp_edges = 0;          // input edges kept as feature lines
+  int dropped_sharp_edges = 0;  // sharp, but in a set of sharp edges shorter than 2 L in all
+  int corner_vertices = 0;      // input vertices that do not move (three or more lines meet)
 };
 
 // Remeshes the closed, consistently oriented, manifold surface (V, F) so that its edges are
 // about settings.edge_length: edges are split, collapsed and flipped, vertices smoothed
 // tangentially and projected back onto the input. Edges sharper than the feature angle stay
-// on their polylines (split and collapsed along them only); corners stay where they are.
+// on their polylines (split and collapsed along them only), unless a connected set of them is
+// shorter than 2 L in all (noise, or a detail below the target); corners stay where they are.
 // Errors start with `source`.
 Status RemeshSurface(const Vertices& V, const Triangles& F, const RemeshSettings& settings,
                      const std::string& source, RemeshResult* out);

@@ -79,7 +79,9 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << "  \"remeshed\": ";
   if (r.remeshed) {
     os << "{\"vertices\": " << r.remeshed_vertices << ", \"triangles\": " << r.remeshed_triangles
-       << ", \"sharp_edges\": " << r.sharp_edges << ", \"corner_vertices\": " << r.corner_vertices
+       << ", \"sharp_edges\": " << r.sharp_edges
+       << ", \"dropped_sharp_edges\": " << r.dropped_sharp_edges
+       << ", \"corner_vertices\": " << r.corner_vertices
        << ", \"volume\": " << JsonNumber(r.remeshed_volume)
        << ", \"mean_edge_length\": " << JsonNumber(r.remeshed_mean_edge_length) << "},\n";
   } else {
@@ -138,8 +140,9 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
     os << "remeshed:  " << r.remeshed_vertices << " vertices, " << r.remeshed_triangles
        << " triangles, mean edge " << G(r.remeshed_mean_edge_length) << ", volume "
        << G(r.remeshed_volume) << "; " << r.sharp_edges << " sharp edges (over "
-       << G(args.options.feature_angle_deg) << " deg) kept as feature lines, "
-       << r.corner_vertices << " corners fixed\n";
+       << G(args.options.feature_angle_deg) << " deg) kept as feature lines ("
+       << r.dropped_sharp_edges << " more in lines shorter than 2 L not), " << r.corner_vertices
+       << " corners fixed\n";
   }
   os << "settings:  edge length " << G(r.edge_length)
      << (args.options.edge_length > 0 ? "" : " (the surface's mean edge)") << ", max volume "
