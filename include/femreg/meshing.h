@@ -100,6 +100,7 @@ struct MeshingReport {
   int sharp_edges = 0;          // input edges kept as feature lines
   int dropped_sharp_edges = 0;  // sharp, but in a connected set shorter than 2 L in all: noise
   int corner_vertices = 0;      // input vertices kept in place (where 3+ feature lines meet)
+  int short_edges = 0;  // edges below L / 10 left between feature lines, remeshed around again
   double remeshed_volume = 0.0;
   double remeshed_mean_edge_length = 0.0;
   // The settings passed to TetGen.

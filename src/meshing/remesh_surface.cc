@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <set>
 #include <vector>
 
 #include "mesh/disjoint_sets.h"
@@ -113,6 +114,36 @@ Status RemeshSurface(const Vertices& V, const Triangles& F, const RemeshSettings
                                  .vertex_is_constrained_map(is_corner)
                                  .protect_constraints(false)
                                  .relax_constraints(true));
+    // Where two feature lines come close (a crease's sides), their vertices can end up a
+    // hair apart with the edge between them not collapsible (it joins two lines): remesh the
+    // two rings of faces around such edges once more without feature lines; the faces
+    // around that patch keep its border.
+    std::set<Mesh::Face_index> patch;
+    for (EdgeIndex e : mesh.edges()) {
+      const double length = std::sqrt(CGAL::to_double(
+          CGAL::squared_distance(mesh.point(mesh.vertex(e, 0)), mesh.point(mesh.vertex(e, 1)))));
+      if (length >= 0.1 * settings.edge_length) continue;
+      ++out->short_edges;
+      for (int k = 0; k < 2; ++k) {
+        for (auto f : faces_around_target(mesh.halfedge(mesh.vertex(e, k)), mesh)) {
+          if (f != Mesh::null_face()) patch.insert(f);
+        }
+      }
+    }
+    if (!patch.empty()) {
+      std::set<Mesh::Face_index> ring = patch;
+      for (auto f : ring) {
+        for (VertexIndex v : vertices_around_face(mesh.halfedge(f), mesh)) {
+          for (auto g : faces_around_target(mesh.halfedge(v), mesh)) {
+            if (g != Mesh::null_face()) patch.insert(g);
+          }
+        }
+      }
+      const std::vector<Mesh::Face_index> range(patch.begin(), patch.end());
+      pmp::isotropic_remeshing(range, settings.edge_length, mesh,
+                               CGAL::parameters::number_of_iterations(
+                                   static_cast<unsigned int>(settings.iterations)));
+    }
   } catch (const std::exception& e) {
     return Status::Error(source + ": remeshing to edge length " + Fmt(settings.edge_length) +
                          " failed (CGAL: " + e.what() + ")");
@@ -155,6 +186,7 @@ Status RemeshCheckedSurface(const CheckedSurface& surface, const MeshingOptions&
   RemeshResult remeshed;
   Status status = Status::Ok();
   report->sharp_edges = report->dropped_sharp_edges = report->corner_vertices = 0;
+  report->short_edges = 0;
   for (const SurfaceShell& shell : surface.shells) {
     std::vector<int> index(static_cast<size_t>(surface.vertices.rows()), -1);
     Vertices V(0, 3);
@@ -176,6 +208,7 @@ Status RemeshCheckedSurface(const CheckedSurface& surface, const MeshingOptions&
     if (!status.ok()) break;
     report->sharp_edges += piece.sharp_edges;
     report->dropped_sharp_edges += piece.dropped_sharp_edges;
+    report->short_edges += piece.short_edges;
     report->corner_vertices += piece.corner_vertices;
     const Eigen::Index v0 = remeshed.vertices.rows(), f0 = remeshed.triangles.rows();
     remeshed.vertices.conservativeResize(v0 + piece.vertices.rows(), 3);

@@ -27,6 +27,7 @@ struct RemeshResult {
   int sharp_edges = 0;          // input edges kept as feature lines
   int dropped_sharp_edges = 0;  // sharp, but in a set of sharp edges shorter than 2 L in all
   int corner_vertices = 0;      // input vertices that do not move (three or more lines meet)
+  int short_edges = 0;          // edges below L / 10 after remeshing, remeshed again around
 };
 
 // Remeshes the closed, consistently oriented, manifold surface (V, F) so that its edges are

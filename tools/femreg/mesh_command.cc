@@ -81,7 +81,7 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
     os << "{\"vertices\": " << r.remeshed_vertices << ", \"triangles\": " << r.remeshed_triangles
        << ", \"sharp_edges\": " << r.sharp_edges
        << ", \"dropped_sharp_edges\": " << r.dropped_sharp_edges
-       << ", \"corner_vertices\": " << r.corner_vertices
+       << ", \"corner_vertices\": " << r.corner_vertices << ", \"short_edges\": " << r.short_edges
        << ", \"volume\": " << JsonNumber(r.remeshed_volume)
        << ", \"mean_edge_length\": " << JsonNumber(r.remeshed_mean_edge_length) << "},\n";
   } else {
@@ -142,7 +142,12 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
        << G(r.remeshed_volume) << "; " << r.sharp_edges << " sharp edges (over "
        << G(args.options.feature_angle_deg) << " deg) kept as feature lines ("
        << r.dropped_sharp_edges << " more in lines shorter than 2 L not), " << r.corner_vertices
-       << " corners fixed\n";
+       << " corners fixed";
+    if (r.short_edges > 0) {
+      os << "; " << r.short_edges << " edges below L/10 between feature lines remeshed around "
+         << "without them";
+    }
+    os << "\n";
   }
   os << "settings:  edge length " << G(r.edge_length)
      << (args.options.edge_length > 0 ? "" : " (the surface's mean edge)") << ", max volume "
