@@ -290,6 +290,7 @@ TEST(MeshingTest, SelfIntersectionCheckAgreesWithTetGen) {
       s.V.row(pick(rng)) += Eigen::RowVector3d(push(rng), push(rng), push(rng));
     MeshingOptions checked, unchecked;
     checked.edge_length = unchecked.edge_length = 0.5;
+    checked.remesh = unchecked.remesh = false;  // TetGen judges the input itself
     unchecked.check_self_intersections = false;
     TetMesh mesh;
     const Status with_check = TetrahedralizeSurface(s.V, s.F, checked, &mesh, nullptr, "sphere");
