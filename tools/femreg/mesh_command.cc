@@ -27,6 +27,7 @@ struct MeshArgs {
   MeshingOptions options;
   double scale = 1.0;
   bool single_region = false;
+  bool no_remesh = false;
   bool force = false;
   bool json = false;
 };
@@ -196,6 +197,7 @@ int RunMesh(MeshArgs args) {
     return fail(args.out + ": exists; pass --force to overwrite it");
   }
   args.options.region_per_shell = !args.single_region;
+  args.options.remesh = !args.no_remesh;
   std::string error;
   if (!args.options.IsValid(&error)) return fail("bad option: " + error);
 
@@ -227,7 +229,8 @@ void AddMeshCommand(CLI::App* app) {
   CLI::App* cmd = app->add_subcommand(
       "mesh",
       "Tetrahedralize the solid bounded by a closed triangle surface (a scan, a CAD export) "
-      "with TetGen and write the tetrahedral mesh.\n"
+      "with TetGen, after remeshing the surface to --edge-length with CGAL, and write the "
+      "tetrahedral mesh.\n"
       "The surface is checked first: duplicate vertices are merged; an open surface (boundary "
       "edges), edges in more than two triangles, vertices where sheets meet, inconsistently "
       "oriented neighbours, zero-area triangles, triangles that cross or touch, or a shell "
@@ -242,8 +245,9 @@ void AddMeshCommand(CLI::App* app) {
       "on the input surface; edges sharper than --feature-angle stay as feature lines, their "
       "corners in place), checked again, and TetGen fills it without changing it: the mean "
       "edge comes out near L and the vertex count follows L, on a scan finer or coarser than L. "
-      "The remeshed surface is within about L of the input, not on it: the volume changes a "
-      "little (reported). With --no-remesh, or without --edge-length, TetGen gets the input "
+      "The remeshed surface's vertices are on the input, its triangles cut chords across "
+      "its curvature: the volume changes a little (reported; more where L is large against "
+      "the curvature). With --no-remesh, or without --edge-length, TetGen gets the input "
       "surface: it does not coarsen it (near a surface finer than L the elements are as fine "
       "as it) and, without --keep-surface, may split its triangles for quality and size.\n"
       "Prints the input and output counts, merged duplicate vertices, the volume of the surface "
@@ -300,7 +304,7 @@ void AddMeshCommand(CLI::App* app) {
   cmd->add_flag("--keep-surface", args->options.keep_surface,
                 "Keep the surface triangles as they are (no remeshing, no point added on the "
                 "surface): the mesh's boundary is the input surface");
-  cmd->add_flag("--no-remesh{false}", args->options.remesh,
+  cmd->add_flag("--no-remesh", args->no_remesh,
                 "Give TetGen the input surface, not one remeshed to --edge-length (the "
                 "behaviour before remeshing: a surface finer than L stays as fine)");
   cmd->add_option("--feature-angle", args->options.feature_angle_deg,
