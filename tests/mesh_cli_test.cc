@@ -86,6 +86,39 @@ TEST(MeshCliTest, MeshesRefusesToOverwriteAndReportsErrors) {
     EXPECT_NE(out.find(option), std::string::npos) << option;
   }
 }
+
+// --edge-length remeshes the surface first and says so; --no-remesh gives TetGen the input.
+TEST(MeshCliTest, EdgeLengthRemeshesUnlessTold) {
+  TempDir dir;
+  const std::string sphere = dir.path() + "/sphere.obj";
+  WriteObj(sphere, Icosphere(0.075, 4));  // edges of about 3 mm
+  const std::string out_path = dir.path() + "/sphere.vtu";
+  std::string out, err;
+  ASSERT_EQ(RunCli("mesh " + sphere + " --out " + out_path + " --edge-length 0.015", &out, &err), 0)
+      << err;
+  EXPECT_NE(out.find("remeshed:"), std::string::npos) << out;
+  EXPECT_NE(out.find("remeshed surface kept"), std::string::npos) << out;
+  EXPECT_NE(out.find("% of the tetrahedra below 10 deg"), std::string::npos) << out;
+  TetMesh remeshed;
+  ASSERT_TRUE(ReadTetMesh(out_path, &remeshed).ok());
+  ASSERT_EQ(RunCli("mesh " + sphere + " --out " + out_path + " --edge-length 0.015 --force " +
+                       "--no-remesh --json",
+                   &out, &err),
+            0)
+      << err;
+  EXPECT_NE(out.find("\"remeshed\": null"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"remesh\": false"), std::string::npos) << out;
+  TetMesh as_is;
+  ASSERT_TRUE(ReadTetMesh(out_path, &as_is).ok());
+  EXPECT_GT(as_is.num_vertices(), 3 * remeshed.num_vertices());  // the 3 mm surface stays
+  EXPECT_NE(RunCli("mesh " + sphere + " --out " + out_path + " --force --feature-angle 0", &out,
+                   &err),
+            0);
+  ASSERT_EQ(RunCli("mesh --help", &out, &err), 0);
+  for (const char* option : {"--no-remesh", "--feature-angle", "--remesh-iterations"}) {
+    EXPECT_NE(out.find(option), std::string::npos) << option;
+  }
+}
 #endif  // FEMREG_CLI_PATH
 
 }  // namespace

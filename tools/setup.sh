@@ -19,6 +19,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev
   libtet1.5-dev
+  libcgal-dev libgmp-dev libmpfr-dev
   libpng-dev zlib1g-dev
   python3 python3-dev python3-matplotlib python3-numpy python3-pytest pybind11-dev python3-venv
   python3-sphinx python3-myst-parser python3-sphinx-rtd-theme

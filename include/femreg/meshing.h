@@ -6,7 +6,7 @@
 //   Triangles F;  // #F by 3
 //   Status s = ReadSurface("scan.stl", &V, &F);
 //   MeshingOptions options;           // edge length from the surface, TetGen's quality
-//   options.edge_length = 0.005;      // 5 mm
+//   options.edge_length = 0.005;      // 5 mm: the surface is remeshed to 5 mm first
 //   TetMesh mesh;
 //   MeshingReport report;
 //   if (s.ok()) s = TetrahedralizeSurface(V, F, options, &mesh, &report, "scan.stl");
@@ -24,11 +24,23 @@ namespace femreg {
 // How to tetrahedralize. Lengths in metres (or whatever unit the surface is in: nothing
 // here assumes metres except the names).
 struct MeshingOptions {
-  // Target edge length of the tetrahedra. 0: the surface's mean edge length. It sets the
-  // volume bound (below), so it is met inside a large solid (mean edge 0.97 L in a unit cube
-  // at L = 0.05); TetGen does not coarsen the surface, and the quality bound refines around
-  // small features: near a surface finer than L, the elements are as fine as it.
+  // Target edge length of the tetrahedra. 0: the surface's mean edge length (the surface is
+  // then meshed as it is). It sets the volume bound (below), and, with `remesh`, the length the
+  // surface is remeshed to first, so that the mean edge comes out near L on and inside the
+  // solid. Without remeshing TetGen does not coarsen the surface: near a surface finer than L,
+  // the elements are as fine as it.
   double edge_length = 0.0;
+  // With edge_length > 0 and not keep_surface: remesh the surface to edge_length first
+  // (CGAL's isotropic remeshing: split, collapse, flip, smooth, project back onto the input),
+  // then let TetGen keep that surface (-Y). Off: TetGen gets the input surface.
+  bool remesh = true;
+  // Edges where the normals of the two triangles differ by more than this (degrees) are
+  // feature lines the remeshed surface keeps (a box's edges; a dome's rim); where three or
+  // more meet, the vertex stays. A connected set of such edges shorter than 2 edge_length in
+  // all is not kept (a scan's noise). 180: none. In (0, 180].
+  double feature_angle_deg = 60.0;
+  // Rounds of the remeshing (each splits, collapses, flips and smooths once). 1 to 100.
+  int remesh_iterations = 5;
   // Largest tetrahedron volume. 0: from edge_length, L^3 / (4 sqrt 2), 1.5 times the regular
   // tetrahedron's (refinement makes elements smaller than the bound). When both are set, the
   // smaller bound applies.
@@ -40,10 +52,11 @@ struct MeshingOptions {
   // Smallest dihedral angle TetGen aims for (degrees; TetGen's -q ratio/angle). 0: no
   // bound beyond the ratio's. At most 18 (above that TetGen may not terminate).
   double min_dihedral_deg = 0.0;
-  // Keep the surface triangles as they are (TetGen's -Y: no point added on the surface): the
-  // mesh's boundary is the input's, triangle for triangle. Off: TetGen may split surface
-  // triangles (in their plane) for quality and size. Either way the mesh fills exactly the
-  // solid the triangles bound (nearly coplanar triangles are never merged, TetGen's -M).
+  // Keep the surface triangles as they are (TetGen's -Y: no point added on the surface; no
+  // remeshing): the mesh's boundary is the input's, triangle for triangle. Off: TetGen may
+  // split surface triangles (in their plane) for quality and size. Either way the mesh fills
+  // exactly the solid the triangles it gets bound (nearly coplanar triangles are never merged,
+  // TetGen's -M).
   bool keep_surface = false;
   // Vertices closer than this are merged before anything else (STL stores every corner
   // of every triangle). Negative: 1e-9 times the bounding box diagonal. 0: only exact
@@ -80,6 +93,16 @@ struct MeshingReport {
   double surface_area = 0.0;
   double surface_volume = 0.0;  // enclosed: solids minus cavities
   double surface_mean_edge_length = 0.0;
+  // The remeshed surface, when it was remeshed (MeshingOptions::remesh): TetGen's input.
+  bool remeshed = false;
+  int remeshed_vertices = 0;
+  int remeshed_triangles = 0;
+  int sharp_edges = 0;          // input edges kept as feature lines
+  int dropped_sharp_edges = 0;  // sharp, but in a connected set shorter than 2 L in all: noise
+  int corner_vertices = 0;      // input vertices kept in place (where 3+ feature lines meet)
+  int short_edges = 0;  // edges below L / 10 left between feature lines, remeshed around again
+  double remeshed_volume = 0.0;
+  double remeshed_mean_edge_length = 0.0;
   // The settings passed to TetGen.
   double edge_length = 0.0;  // the target used
   double max_volume = 0.0;   // the volume bound used
@@ -98,8 +121,12 @@ struct MeshingReport {
   double mean_edge_length = 0.0;
   double max_edge_length = 0.0;
   MeshQuality quality;
+  // Share of the tetrahedra with a dihedral angle below 10 degrees or above 170 (slivers).
+  double small_dihedral_share = 0.0;
+  double large_dihedral_share = 0.0;
   // Wall-clock seconds.
   double check_seconds = 0.0;   // reading excluded: merging, checks, shells
+  double remesh_seconds = 0.0;  // remeshing and checking the remeshed surface
   double tetgen_seconds = 0.0;  // TetGen in its child process, the mesh sent back
   double finish_seconds = 0.0;  // FinalizeMesh, quality and edge statistics
   double total_seconds = 0.0;
@@ -109,7 +136,7 @@ struct MeshingReport {
 //   V  #V by 3 vertex positions
 //   F  #F by 3 triangles, rows of V (either orientation, consistent across the surface)
 // First merges duplicate vertices and drops unused ones, then checks that the surface
-// bounds a volume, and refuses with a message (starting with `source`) that says what is
+// bounds a volume (and remeshes it to options.edge_length, checked again), and refuses with a message (starting with `source`) that says what is
 // wrong and where: boundary edges (an open surface), edges with more than two triangles,
 // vertices where two sheets meet, inconsistently oriented neighbours, zero-area
 // triangles, triangles that cross or touch each other, a shell with no volume. Several

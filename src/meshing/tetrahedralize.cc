@@ -1,11 +1,12 @@
-// TetrahedralizeSurface: checks (surface_check.cc), then TetGen 1.5 as a library.
+// TetrahedralizeSurface: checks (surface_check.cc), the surface remeshed to the edge length
+// (remesh_surface.cc) and checked again, then TetGen 1.5 as a library.
 //
 // TetGen is told: p (the input is a piecewise linear complex), q<ratio>/<angle> (quality),
 // a<volume> (largest volume), M (never merge nearly coplanar triangles: by default TetGen
 // merges neighbours within 0.1 degree of flat and re-triangulates them, which moves the
 // boundary off the input, by 1e-7 of the Bunny's volume; with M the mesh fills the surface to
 // rounding, 1e-14), A (a region attribute per solid, from region points), Y (keep the
-// surface: no Steiner point on it) when asked. Cavities go in as hole points. Not Q: what TetGen
+// surface: no Steiner point on it) when asked or when the surface was remeshed. Cavities go in as hole points. Not Q: what TetGen
 // prints (stages, warnings, statistics) is its log in the report. TetGen built with TETLIBRARY
 // reports a failure by throwing an int (terminatetetgen): 1 out of memory, 2 internal error, 3
 // self-intersection, 4 a very small input feature, 5 two very close facets, 10 input error.
@@ -33,6 +34,8 @@
 #include <vector>
 
 #include "femreg/meshing.h"
+#include "meshing/mesh_measures.h"
+#include "meshing/remesh_surface.h"
 #include "meshing/surface_check.h"
 #include "parallel/stopwatch.h"
 
@@ -316,35 +319,6 @@ std::string TetGenFailure(int code) {
 
 }  // namespace
 
-bool MeshingOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& message) {
-    if (error != nullptr) *error = message;
-    return false;
-  };
-  if (!(std::isfinite(edge_length) && edge_length >= 0.0)) {
-    return fail("edge_length must be >= 0 (0: the surface's mean edge length), got " +
-                Fmt(edge_length));
-  }
-  if (!(std::isfinite(max_volume) && max_volume >= 0.0)) {
-    return fail("max_volume must be >= 0 (0: from edge_length), got " + Fmt(max_volume));
-  }
-  if (!(std::isfinite(radius_edge_ratio) && radius_edge_ratio >= 1.1)) {
-    return fail("radius_edge_ratio must be >= 1.1 (TetGen may not terminate below), got " +
-                Fmt(radius_edge_ratio));
-  }
-  if (!(std::isfinite(min_dihedral_deg) && min_dihedral_deg >= 0.0 && min_dihedral_deg <= 18.0)) {
-    return fail("min_dihedral_deg must be in [0, 18] degrees, got " + Fmt(min_dihedral_deg));
-  }
-  if (!std::isfinite(merge_distance)) {
-    return fail("merge_distance must be finite (negative: automatic), got " + Fmt(merge_distance));
-  }
-  if (max_tets < 1) return fail("max_tets must be >= 1, got " + std::to_string(max_tets));
-  if (!(std::isfinite(time_limit_seconds) && time_limit_seconds >= 0.0)) {
-    return fail("time_limit_seconds must be >= 0 (0: no limit), got " + Fmt(time_limit_seconds));
-  }
-  return true;
-}
-
 Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const MeshingOptions& options,
                              TetMesh* mesh, MeshingReport* report_out, const std::string& source) {
   const Clock::time_point start = Clock::now();
@@ -372,13 +346,13 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
     report.total_seconds = Seconds(start);
     return status;
   }
-  std::vector<const internal::SurfaceShell*> solids, cavities;
+  int cavity_count = 0;
   for (const internal::SurfaceShell& shell : surface.shells) {
     const double volume = std::abs(shell.signed_volume);
     report.surface_volume += shell.depth % 2 == 0 ? volume : -volume;
-    (shell.depth % 2 == 0 ? solids : cavities).push_back(&shell);
+    cavity_count += shell.depth % 2;
   }
-  report.cavities = static_cast<int>(cavities.size());
+  report.cavities = cavity_count;
 
   // Sizes.
   report.edge_length = options.edge_length > 0.0 ? options.edge_length : surface.mean_edge_length;
@@ -401,15 +375,32 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
                          ": choose a larger edge length or max volume");
   }
 
+  // Remesh to the target edge length; TetGen then keeps that surface.
+  internal::CheckedSurface remeshed;
+  const internal::CheckedSurface& tetgen_surface =
+      options.remesh && options.edge_length > 0.0 && !options.keep_surface ? remeshed : surface;
+  if (&tetgen_surface == &remeshed) {
+    status = internal::RemeshCheckedSurface(surface, options, source, &remeshed, &report);
+    if (!status.ok()) {
+      report.total_seconds = Seconds(start);
+      return status;
+    }
+  }
+  std::vector<const internal::SurfaceShell*> solids, cavities;
+  for (const internal::SurfaceShell& shell : tetgen_surface.shells) {
+    (shell.depth % 2 == 0 ? solids : cavities).push_back(&shell);
+  }
+  const double used_volume = report.remeshed ? report.remeshed_volume : report.surface_volume;
+
   // TetGen's input: the points, one facet per triangle, a point per solid and per cavity.
   char switches[256];
   std::snprintf(switches, sizeof(switches), "pq%.10g/%.10ga%.10gM%s%s", options.radius_edge_ratio,
                 options.min_dihedral_deg, report.max_volume, options.region_per_shell ? "A" : "",
-                options.keep_surface ? "Y" : "");
+                options.keep_surface || report.remeshed ? "Y" : "");
   report.tetgen_switches = switches;
   tetgenio in;
-  const Vertices& W = surface.vertices;
-  const Triangles& T = surface.triangles;
+  const Vertices& W = tetgen_surface.vertices;
+  const Triangles& T = tetgen_surface.triangles;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(W.rows());
   in.pointlist = new REAL[3 * static_cast<size_t>(W.rows())];
@@ -537,48 +528,16 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   status = FinalizeMesh(&result, source + " (TetGen's mesh)");
   if (!status.ok()) return status;
 
-  // Measure it.
-  report.vertices = result.num_vertices();
-  report.tets = result.num_tets();
-  report.boundary_triangles = result.num_surface_triangles();
-  report.regions = result.num_tets() > 0 ? result.region.maxCoeff() + 1 : 0;
-  report.mesh_volume = RestVolume(result);
-  report.quality = ComputeQuality(result, result.rest);
-  std::vector<uint64_t> edges;
-  edges.reserve(6 * static_cast<size_t>(nt));
-  for (int t = 0; t < nt; ++t) {
-    for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) {
-        uint64_t a = static_cast<uint32_t>(result.tets(t, i)),
-                 b = static_cast<uint32_t>(result.tets(t, j));
-        if (a > b) std::swap(a, b);
-        edges.push_back(a << 32 | b);
-      }
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  double sum = 0.0;
-  report.min_edge_length = std::numeric_limits<double>::infinity();
-  for (uint64_t e : edges) {
-    const double l = (result.rest.row(static_cast<int>(e >> 32)) -
-                      result.rest.row(static_cast<int>(e & 0xffffffffu)))
-                         .norm();
-    sum += l;
-    report.min_edge_length = std::min(report.min_edge_length, l);
-    report.max_edge_length = std::max(report.max_edge_length, l);
-  }
-  report.mean_edge_length = sum / static_cast<double>(edges.size());
+  internal::MeasureMesh(result, &report);
   report.finish_seconds = Seconds(finish_start);
   report.total_seconds = Seconds(start);
 
   // The tetrahedra fill exactly the solid the surface bounds (TetGen splits triangles in
   // their plane, merges none, moves nothing; 1e-14 relative measured on the Bunny): a
   // different volume means a solid or a cavity was taken wrongly.
-  if (std::abs(report.mesh_volume - report.surface_volume) >
-      1e-9 * std::abs(report.surface_volume)) {
+  if (std::abs(report.mesh_volume - used_volume) > 1e-9 * std::abs(used_volume)) {
     return Status::Error(source + ": TetGen's mesh has volume " + Fmt(report.mesh_volume) +
-                         " but the surface encloses " + Fmt(report.surface_volume));
+                         " but the surface it got encloses " + Fmt(used_volume));
   }
   *mesh = std::move(result);
   return Status::Ok();

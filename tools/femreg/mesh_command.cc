@@ -27,6 +27,7 @@ struct MeshArgs {
   MeshingOptions options;
   double scale = 1.0;
   bool single_region = false;
+  bool no_remesh = false;
   bool force = false;
   bool json = false;
 };
@@ -76,11 +77,25 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << ", \"cavities\": " << r.cavities << ", \"area\": " << JsonNumber(r.surface_area)
      << ", \"volume\": " << JsonNumber(r.surface_volume)
      << ", \"mean_edge_length\": " << JsonNumber(r.surface_mean_edge_length) << "},\n"
-     << "  \"settings\": {\"edge_length\": " << JsonNumber(r.edge_length)
+     << "  \"remeshed\": ";
+  if (r.remeshed) {
+    os << "{\"vertices\": " << r.remeshed_vertices << ", \"triangles\": " << r.remeshed_triangles
+       << ", \"sharp_edges\": " << r.sharp_edges
+       << ", \"dropped_sharp_edges\": " << r.dropped_sharp_edges
+       << ", \"corner_vertices\": " << r.corner_vertices << ", \"short_edges\": " << r.short_edges
+       << ", \"volume\": " << JsonNumber(r.remeshed_volume)
+       << ", \"mean_edge_length\": " << JsonNumber(r.remeshed_mean_edge_length) << "},\n";
+  } else {
+    os << "null,\n";
+  }
+  os << "  \"settings\": {\"edge_length\": " << JsonNumber(r.edge_length)
      << ", \"max_volume\": " << JsonNumber(r.max_volume)
      << ", \"radius_edge_ratio\": " << JsonNumber(r.radius_edge_ratio)
      << ", \"min_dihedral_deg\": " << JsonNumber(r.min_dihedral_deg)
      << ", \"keep_surface\": " << (args.options.keep_surface ? "true" : "false")
+     << ", \"remesh\": " << (args.options.remesh ? "true" : "false")
+     << ", \"feature_angle_deg\": " << JsonNumber(args.options.feature_angle_deg)
+     << ", \"remesh_iterations\": " << args.options.remesh_iterations
      << ", \"tetgen_switches\": " << JsonString(r.tetgen_switches) << "},\n";
   if (error.empty()) {
     const MeshQuality& q = r.quality;
@@ -93,12 +108,15 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
        << "           \"quality\": {\"min_dihedral_deg\": " << JsonNumber(q.min_dihedral_deg)
        << ", \"max_dihedral_deg\": " << JsonNumber(q.max_dihedral_deg)
        << ", \"max_aspect_ratio\": " << JsonNumber(q.max_aspect_ratio)
-       << ", \"mean_aspect_ratio\": " << JsonNumber(q.mean_aspect_ratio) << "}},\n";
+       << ", \"mean_aspect_ratio\": " << JsonNumber(q.mean_aspect_ratio)
+       << ", \"share_below_10_deg\": " << JsonNumber(r.small_dihedral_share)
+       << ", \"share_above_170_deg\": " << JsonNumber(r.large_dihedral_share) << "}},\n";
   }
   os << "  \"tetgen_warnings\": " << JsonString(r.tetgen_warnings) << ",\n"
      << "  \"tetgen_log\": " << JsonString(r.tetgen_log) << ",\n"
      << "  \"seconds\": {\"read\": " << JsonNumber(t.read)
      << ", \"checks\": " << JsonNumber(r.check_seconds)
+     << ", \"remesh\": " << JsonNumber(r.remesh_seconds)
      << ", \"tetgen\": " << JsonNumber(r.tetgen_seconds)
      << ", \"finish\": " << JsonNumber(r.finish_seconds) << ", \"write\": " << JsonNumber(t.write)
      << ", \"total\": " << JsonNumber(t.total) << "}\n}\n";
@@ -118,12 +136,26 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << "surface:   " << r.shells << " closed shell" << (r.shells == 1 ? "" : "s") << " ("
      << r.cavities << " cavit" << (r.cavities == 1 ? "y" : "ies") << "), area " << G(r.surface_area)
      << ", volume " << G(r.surface_volume) << ", mean edge " << G(r.surface_mean_edge_length)
-     << "\n"
-     << "settings:  edge length " << G(r.edge_length)
+     << "\n";
+  if (r.remeshed) {
+    os << "remeshed:  " << r.remeshed_vertices << " vertices, " << r.remeshed_triangles
+       << " triangles, mean edge " << G(r.remeshed_mean_edge_length) << ", volume "
+       << G(r.remeshed_volume) << "; " << r.sharp_edges << " sharp edges (over "
+       << G(args.options.feature_angle_deg) << " deg) kept as feature lines ("
+       << r.dropped_sharp_edges << " more in lines shorter than 2 L not), " << r.corner_vertices
+       << " corners fixed";
+    if (r.short_edges > 0) {
+      os << "; " << r.short_edges << " edges below L/10 between feature lines remeshed around "
+         << "without them";
+    }
+    os << "\n";
+  }
+  os << "settings:  edge length " << G(r.edge_length)
      << (args.options.edge_length > 0 ? "" : " (the surface's mean edge)") << ", max volume "
      << G(r.max_volume) << ", radius-edge ratio <= " << G(r.radius_edge_ratio);
   if (r.min_dihedral_deg > 0) os << ", dihedral >= " << G(r.min_dihedral_deg) << " deg";
-  os << (args.options.keep_surface ? ", surface kept" : "") << "  (TetGen -" << r.tetgen_switches
+  os << (args.options.keep_surface ? ", surface kept" : r.remeshed ? ", remeshed surface kept" : "")
+     << "  (TetGen -" << r.tetgen_switches
      << ")\n"
      << "mesh:      " << r.vertices << " vertices, " << r.tets << " tetrahedra, " << r.regions
      << " region" << (r.regions == 1 ? "" : "s") << ", " << r.boundary_triangles
@@ -135,8 +167,10 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << G(r.max_edge_length) << " (target " << G(r.edge_length) << ")\n"
      << "quality:   dihedral angles " << G(q.min_dihedral_deg) << " .. " << G(q.max_dihedral_deg)
      << " deg, aspect ratio max " << G(q.max_aspect_ratio) << ", mean " << G(q.mean_aspect_ratio)
-     << " (1 = regular)\n"
+     << " (1 = regular); " << G(100.0 * r.small_dihedral_share) << "% of the tetrahedra below "
+     << "10 deg, " << G(100.0 * r.large_dihedral_share) << "% above 170\n"
      << "time:      " << G(t.total) << " s (read " << G(t.read) << ", checks " << G(r.check_seconds)
+     << ", remesh " << G(r.remesh_seconds)
      << ", TetGen " << G(r.tetgen_seconds) << ", finish " << G(r.finish_seconds) << ", write "
      << G(t.write) << ")\n";
   if (!r.tetgen_warnings.empty()) os << "TetGen warns:\n" << r.tetgen_warnings;
@@ -163,6 +197,7 @@ int RunMesh(MeshArgs args) {
     return fail(args.out + ": exists; pass --force to overwrite it");
   }
   args.options.region_per_shell = !args.single_region;
+  args.options.remesh = !args.no_remesh;
   std::string error;
   if (!args.options.IsValid(&error)) return fail("bad option: " + error);
 
@@ -194,7 +229,8 @@ void AddMeshCommand(CLI::App* app) {
   CLI::App* cmd = app->add_subcommand(
       "mesh",
       "Tetrahedralize the solid bounded by a closed triangle surface (a scan, a CAD export) "
-      "with TetGen and write the tetrahedral mesh.\n"
+      "with TetGen, after remeshing the surface to --edge-length with CGAL, and write the "
+      "tetrahedral mesh.\n"
       "The surface is checked first: duplicate vertices are merged; an open surface (boundary "
       "edges), edges in more than two triangles, vertices where sheets meet, inconsistently "
       "oriented neighbours, zero-area triangles, triangles that cross or touch, or a shell "
@@ -204,9 +240,16 @@ void AddMeshCommand(CLI::App* app) {
       "Units: whatever the surface file uses, times --scale (femreg works in metres: a scan "
       "in millimetres wants --scale 0.001). The lengths and volumes of the options are in those "
       "units.\n"
-      "TetGen does not coarsen the surface: near a surface finer than --edge-length the "
-      "elements are as fine as the surface. Without --keep-surface it may split surface "
-      "triangles for quality and size.\n"
+      "With --edge-length L the surface is first remeshed to edges of about L (CGAL's "
+      "isotropic remeshing: edges split, collapsed and flipped, vertices smoothed and put back "
+      "on the input surface; edges sharper than --feature-angle stay as feature lines, their "
+      "corners in place), checked again, and TetGen fills it without changing it: the mean "
+      "edge comes out near L and the vertex count follows L, on a scan finer or coarser than L. "
+      "The remeshed surface's vertices are on the input, its triangles cut chords across "
+      "its curvature: the volume changes a little (reported; more where L is large against "
+      "the curvature). With --no-remesh, or without --edge-length, TetGen gets the input "
+      "surface: it does not coarsen it (near a surface finer than L the elements are as fine "
+      "as it) and, without --keep-surface, may split its triangles for quality and size.\n"
       "Prints the input and output counts, merged duplicate vertices, the volume of the surface "
       "and "
       "of the mesh, edge lengths, element quality (dihedral angles, aspect ratio) and times.\n"
@@ -214,6 +257,9 @@ void AddMeshCommand(CLI::App* app) {
       "exists (without --force) or cannot be written (the reason goes to stderr; nothing is "
       "written then). The output is written to a temporary file and renamed.\n"
       "Example: femreg mesh scan.stl --out scan.vtu --scale 0.001 --edge-length 0.004");
+  cmd->footer(cmd->get_footer() +
+              "\nThe report's quality line gives the dihedral angles' range and the share of "
+              "tetrahedra with an angle below 10 or above 170 degrees (slivers).");
   cmd->add_option("surface", args->surface,
                   "Closed triangle surface: .ply (ASCII or binary), "
                   ".obj or .stl (ASCII or binary)")
@@ -224,8 +270,9 @@ void AddMeshCommand(CLI::App* app) {
                   "(Gmsh 2.2), .mesh (MEDIT) or .vtk (VTK legacy)")
       ->required();
   cmd->add_option("--edge-length,-l", args->options.edge_length,
-                  "Target edge length of the tetrahedra, in the scaled units (default: the "
-                  "surface's mean edge length)")
+                  "Target edge length of the tetrahedra, in the scaled units; the surface is "
+                  "remeshed to it first unless --no-remesh or --keep-surface (default: the "
+                  "surface's mean edge length, surface as it is)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--quality,-q", args->options.radius_edge_ratio,
                   "Largest circumradius-to-shortest-edge ratio of a tetrahedron (>= 1.1; smaller "
@@ -255,8 +302,21 @@ void AddMeshCommand(CLI::App* app) {
                   "Stop TetGen after this many seconds (default: no limit)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--keep-surface", args->options.keep_surface,
-                "Keep the surface triangles as they are (no point added on the surface): the "
-                "mesh's boundary is the input surface");
+                "Keep the surface triangles as they are (no remeshing, no point added on the "
+                "surface): the mesh's boundary is the input surface");
+  cmd->add_flag("--no-remesh", args->no_remesh,
+                "Give TetGen the input surface, not one remeshed to --edge-length (the "
+                "behaviour before remeshing: a surface finer than L stays as fine)");
+  cmd->add_option("--feature-angle", args->options.feature_angle_deg,
+                  "When remeshing, edges where the surface's normal turns by more than this "
+                  "(degrees) are kept as feature lines (a box's edges, a flat base's rim); "
+                  "180: none")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 180.0));
+  cmd->add_option("--remesh-iterations", args->options.remesh_iterations,
+                  "Rounds of remeshing (split, collapse, flip, smooth)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
   cmd->add_flag("--single-region", args->single_region,
                 "Put every element in region 0 (default: one region per closed shell)");
   cmd->add_flag("--force", args->force, "Overwrite MESH if it exists");

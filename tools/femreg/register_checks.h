@@ -74,12 +74,22 @@ Status CheckRegisterKeys(const Scene& scene);
 // The diagonal of the meshes' rest bounding box (m).
 double MeshExtent(const Tracker& tracker);
 
-// The units hint: warns once when the extent of the first frame's points as the tracker uses
-// them (`used`, PrepareCloudForTracking: after the mask, preprocess.scale and transform, the
-// crop, the plane removal and the outlier filter) and the meshes' differ by more than 10 times (a cloud in mm against
-// a mesh in m). Not the frame as read: a depth image of the whole room around a masked or
-// cropped object is no units mistake.
-void WarnUnits(const std::string& file, const PointCloud& used, double mesh_extent);
+// The mean length of the meshes' surface edges (m).
+double MeshMeanEdge(const Tracker& tracker);
+
+// The median distance from a point of `cloud` to its nearest other point, over up to 200
+// points spread over the cloud; 0 with fewer than two distinct points.
+double MedianSpacing(const PointCloud& cloud);
+
+// The units hint, once, on the first frame's points as the tracker uses them (`used`,
+// PrepareCloudForTracking: after the mask, preprocess.scale and transform, the crop, the plane
+// removal and the outlier filter), not the frame as read: a depth image of the whole room
+// around a masked or cropped object is no units mistake. When their extent and the meshes'
+// differ by more than 10 times, it says what it compared (the bounding box diagonals, the
+// points' median spacing and the meshes' mean edge) and which it suspects: a cloud larger than
+// the meshes whose points are closer than 10 mesh edges holds more than the objects (a note:
+// mask or crop it); otherwise the units differ (a warning: "Different units?").
+void WarnUnits(const std::string& file, const PointCloud& used, const Tracker& tracker);
 
 }  // namespace register_checks
 }  // namespace cli

@@ -58,7 +58,6 @@ using register_outputs::ThrottledWrite;
 using register_outputs::Totals;
 using register_checks::CheckRegisterKeys;
 using register_checks::ContactMeter;
-using register_checks::MeshExtent;
 using register_checks::WarnUnits;
 
 int RunRegister(const RegisterArgs& args) {
@@ -206,7 +205,6 @@ int RunRegister(const RegisterArgs& args) {
     return s;
   });
   bool units_checked = false, coverage_warned = false;
-  const double mesh_extent = MeshExtent(*tracker);
   std::vector<std::string> unreadable;
   for (size_t f = 0; f < files.size(); ++f) {
     if (Interrupted()) {
@@ -248,7 +246,7 @@ int RunRegister(const RegisterArgs& args) {
     PrepareCloudForTracking(tracker->options(), &used);
     if (!units_checked && used.size() > 0) {
       units_checked = true;
-      WarnUnits(files[f], used, mesh_extent);
+      WarnUnits(files[f], used, *tracker);
     }
     tracker->Track(cloud, &row.summary);
     if (!read.ok()) row.summary.termination = TerminationType::kInvalidInput;
