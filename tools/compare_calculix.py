@@ -6,8 +6,17 @@ with the element or the nodal volume) and writes the displacements and a Calculi
 (*ELASTIC or *HYPERELASTIC, NEO HOOKE with the same small-strain moduli; C3D4 on femreg's
 mesh, or C3D10 with a node added at every edge's midpoint); ccx solves the deck (linear, or
 with NLGEOM); the displacements of femreg's vertices (C3D10's corner nodes) are compared.
+Contact (tools/press_case.h): a soft block pressed onto a clamped soft block or onto a rigid
+plane (in ccx: the same block with every node held), frictionless and with Coulomb friction,
+pressed and then slid; ccx solves *CONTACT PAIR, surface to surface, with a linear penalty and
+NLGEOM on the same C3D4 meshes. Compared: the total contact force on the pressed block (femreg's
+ContactPotential::Forces; ccx's: minus the reaction at the pressed face) and the displacements
+of the pressed block's free surface (its sides).
 Usage:
-    compare_calculix.py PROBE [--ccx ccx] [--keep DIR]
+    compare_calculix.py PROBE [--ccx ccx] [--keep DIR] [--only single|contact]
+                        [--markdown FILE] [--fixture DIR]
+--markdown writes the contact table, --fixture ccx's forces and displacements for
+tests/contact_press_test.cc (tests/fixtures/calculix_contact).
 """
 import argparse
 import csv
@@ -17,6 +26,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import time
 
 # The comparisons of a case: femreg model, volume, ccx material, ccx element, NLGEOM, label.
 HOOKE_RUNS = [
@@ -56,6 +66,26 @@ CASES = [
      "shape=cylinder n=3 radius=0.05 length=0.5 axial=20 E=3e5 nu=0.49 gravity=9.81", 4, LOCKING_RUNS),
 ]
 
+# Contact: name, probe arguments (shape=press). The pressed block's top face moves 1.5 mm down
+# (the gap is 0.5 mm), then 3 mm along x.
+CONTACT_CASES = [
+    ("block on block, frictionless", "support=block"),
+    ("block on block, mu 0.3, pressed", "support=block mu=0.3"),
+    ("block on block, mu 0.3, slid 3 mm", "support=block mu=0.3 slide=0.003"),
+    ("block on rigid plane, frictionless", "support=plane"),
+    ("block on rigid plane, mu 0.3, slid 3 mm", "support=plane mu=0.3 slide=0.003"),
+]
+# Against the plane the pressed block is compressed 1 mm of its 2 cm (5 %) above. Pressed
+# 3 mm (15 %), the two neo-Hookean laws (femreg's stable one, ccx's with J^(-2/3)) part, and the
+# corotational element against *ELASTIC, which NLGEOM makes St. Venant-Kirchhoff (softer in
+# compression), parts further.
+CONTACT_LAW_CASES = [
+    ("block on rigid plane, corotational", "support=plane model=corotational"),
+    ("block on block, pressed 3 mm", "support=block press=0.0035"),
+    ("block on rigid plane, pressed 3 mm", "support=plane press=0.0035"),
+    ("block on rigid plane, 3 mm, corotational", "support=plane press=0.0035 model=corotational"),
+]
+
 
 def read_probe_csv(path):
     ids, rest, u, tip = [], [], [], []
@@ -90,6 +120,104 @@ def read_ccx_dat(path):
     return blocks[-1]
 
 
+def read_ccx_totals(path, node_set):
+    """The last 'total force' line of node_set in a .dat file: (fx, fy, fz)."""
+    found, want = None, False
+    with open(path) as f:
+        for line in f:
+            if "total force" in line:
+                want = f"SET {node_set.upper()} " in line.upper()
+                continue
+            parts = line.split()
+            if want and len(parts) == 3:
+                found = tuple(float(p) for p in parts)
+                want = False
+    if found is None:
+        raise RuntimeError(f"no total force of {node_set} in {path}")
+    return found
+
+
+def read_press_csv(path):
+    rows = {}
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            rows[int(row["id"])] = ((float(row["ux"]), float(row["uy"]), float(row["uz"])), row["free"] == "1")
+    return rows
+
+
+def read_forces(path):
+    with open(path) as f:
+        return {row["quantity"]: (float(row["fx"]), float(row["fy"]), float(row["fz"]))
+                for row in csv.DictReader(f)}
+
+
+def contact_cases(args, work):
+    """Runs the contact cases; returns the table's rows."""
+    header = (f"{'case':42s} {'F femreg (x, z) N':>20s} {'F ccx (x, z) N':>20s} {'|dF|/|F|':>9s}"
+              f" {'u rms rel':>9s} {'u max rel':>9s} {'pen. mm':>8s} {'its':>5s} {'ccx s':>6s}")
+    print(header)
+    print("-" * len(header))
+    rows = []
+    for index, (name, probe_args) in enumerate(CONTACT_CASES + CONTACT_LAW_CASES):
+        stem = f"press{index}"
+        csv_path, forces_path = os.path.join(work, stem + ".csv"), os.path.join(work, stem + "_forces.csv")
+        cmd = [args.probe, "shape=press"] + probe_args.split() + [
+            f"csv={csv_path}", f"forces={forces_path}", f"inp={os.path.join(work, stem + '.inp')}"]
+        probe_log = os.path.join(work, stem + ".probe.log")
+        run(cmd, work, probe_log)
+        log = open(probe_log).read()
+        found = re.search(r"press: .*?(\d+) Newton iterations", log)
+        iterations = found.group(1) if found else "?"
+        found = re.search(r"deepest penetration ([-0-9.e+]+) mm", log)
+        penetration = float(found.group(1)) if found else float("nan")
+        start = time.time()
+        run([args.ccx, "-i", stem], work, os.path.join(work, stem + ".ccx.log"))
+        ccx_seconds = time.time() - start
+        femreg_u = read_press_csv(csv_path)
+        dat = os.path.join(work, stem + ".dat")
+        ccx_u = read_ccx_dat(dat)
+        # The support's force on the pressed block: minus the reaction at its pressed face.
+        ccx_force = tuple(-c for c in read_ccx_totals(dat, "Ntop"))
+        femreg_force = read_forces(forces_path)["contact"]
+        force_rel = norm([a - b for a, b in zip(femreg_force, ccx_force)]) / norm(ccx_force)
+        free = [i for i, (_, is_free) in femreg_u.items() if is_free]
+        diff = [norm([a - b for a, b in zip(femreg_u[i][0], ccx_u[i])]) for i in free]
+        size = [norm(ccx_u[i]) for i in free]
+        rms_rel = math.sqrt(sum(d * d for d in diff) / sum(c * c for c in size))
+        max_rel = max(diff) / max(size)
+        print(f"{name:42s} {femreg_force[0]:9.4f} {femreg_force[2]:10.4f} {ccx_force[0]:9.4f}"
+              f" {ccx_force[2]:10.4f} {force_rel:9.2%} {rms_rel:9.2%} {max_rel:9.2%}"
+              f" {penetration:8.4f} {iterations:>5s} {ccx_seconds:6.1f}")
+        sys.stdout.flush()
+        rows.append((name, probe_args, femreg_force, ccx_force, force_rel, rms_rel, max_rel, penetration,
+                     iterations, ccx_seconds, ccx_u))
+    return rows
+
+
+def write_markdown(path, rows):
+    with open(path, "w") as out:
+        out.write("| case | contact force femreg (x, z) N | ccx (x, z) N | force error | displacement"
+                  " error, rms / max | femreg penetration (mm) | Newton its | ccx (s) |\n")
+        out.write("|---|---|---|---|---|---|---|---|\n")
+        for name, _, f, c, force_rel, rms_rel, max_rel, pen, its, seconds, _ in rows:
+            out.write(f"| {name} | {f[0]:.4f}, {f[2]:.4f} | {c[0]:.4f}, {c[2]:.4f} | {force_rel:.2%} |"
+                      f" {rms_rel:.2%} / {max_rel:.2%} | {pen:.4f} | {its} | {seconds:.0f} |\n")
+
+
+def write_fixture(directory, rows):
+    """ccx's results for tests/contact_press_test.cc: the cases' forces, each case's displacements."""
+    os.makedirs(directory, exist_ok=True)
+    with open(os.path.join(directory, "cases.csv"), "w") as out:
+        out.write("case,args,fx,fy,fz\n")
+        for index, (_, probe_args, _, c, *_rest) in enumerate(rows[:len(CONTACT_CASES)]):
+            out.write(f"press{index},{probe_args},{c[0]:.7g},{c[1]:.7g},{c[2]:.7g}\n")
+    for index, row in enumerate(rows[:len(CONTACT_CASES)]):
+        with open(os.path.join(directory, f"press{index}_u.csv"), "w") as out:
+            out.write("id,ux,uy,uz\n")
+            for node, u in sorted(row[-1].items()):
+                out.write(f"{node},{u[0]:.7g},{u[1]:.7g},{u[2]:.7g}\n")
+
+
 def norm(v):
     return math.sqrt(sum(c * c for c in v))
 
@@ -104,10 +232,24 @@ def main():
     parser.add_argument("probe")
     parser.add_argument("--ccx", default="ccx")
     parser.add_argument("--keep", default=None, help="keep the decks and results in DIR")
+    parser.add_argument("--only", choices=["single", "contact"], default=None)
+    parser.add_argument("--markdown", default=None, help="write the contact table to FILE")
+    parser.add_argument("--fixture", default=None, help="write ccx's contact results to DIR")
     args = parser.parse_args()
     args.probe = os.path.abspath(args.probe)  # the probe runs in the work folder
     work = args.keep or tempfile.mkdtemp(prefix="femreg_ccx_")
     os.makedirs(work, exist_ok=True)
+
+    if args.only != "single":
+        rows = contact_cases(args, work)
+        if args.markdown:
+            write_markdown(args.markdown, rows)
+        if args.fixture:
+            write_fixture(args.fixture, rows)
+        if args.only == "contact":
+            print(f"\n(decks and results in {work})")
+            return
+        print()
 
     header = (f"{'case':40s} {'model':30s} {'nodes':>6s} {'max|u| femreg':>14s} {'max|u| ccx':>12s}"
               f" {'tip femreg':>12s} {'tip ccx':>12s} {'tip rel':>9s} {'max|du|/max|u|':>15s}"

@@ -17,6 +17,13 @@
 //     numbered as femreg's vertices; the loads stay on the corner nodes, gravity on all)
 //
 // The box lies along +x and is clamped at x = 0; the cylinder along +z, clamped at z = 0.
+//
+//   femreg_forward_probe shape=press key=value ...   (contact: tools/press_case.h)
+//     support=block|plane  E=3e4 (pressed block)  E_base=6e4  nu=0.3  gap=5e-4  press=1.5e-3
+//     slide=0 (m, along x)  slide_frames=12  load_steps=8  stiffness=1e5 (k, N/m)  distance=1e-3
+//     mu=0  slip=2e-5 (eps, m)  max_iterations=100 (per load step)  ccx_stiffness=1e9 (Pa/m)
+//     ccx_stick=5e7 (Pa/m)  model=neo_hookean|corotational
+//     csv=out.csv (the pressed block: id,X,Y,Z,ux,uy,uz,free)  forces=forces.csv  inp=out.inp
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -32,6 +39,7 @@
 #include "femreg/forward.h"
 #include "femreg/io.h"
 #include "femreg/mesh.h"
+#include "tools/press_case.h"
 
 namespace {
 
@@ -61,12 +69,60 @@ std::string Text(const std::map<std::string, std::string>& args, const std::stri
   return it == args.end() ? fallback : it->second;
 }
 
+// shape=press: the contact case of tools/press_case.h.
+int Press(const std::map<std::string, std::string>& args) {
+  using namespace femreg;
+  PressOptions o;
+  const Status parsed = ParsePressOptions(args, &o);
+  if (!parsed.ok()) {
+    std::cerr << "femreg_forward_probe: " << parsed.message() << "\n";
+    return 2;
+  }
+  PressResult r;
+  const Status status = SolvePressCase(o, &r);
+  if (!status.ok()) {
+    std::cerr << "femreg_forward_probe: " << status.message() << "\n";
+    return 1;
+  }
+  std::cerr << r.report << "press: " << (r.converged ? "converged" : "NOT converged") << ", "
+            << r.newton_iterations << " Newton iterations in " << r.frames
+            << " frames, deepest penetration " << r.max_penetration * 1e3 << " mm\n";
+  const std::string csv = Text(args, "csv", "");
+  if (!csv.empty()) {
+    std::ofstream out(csv);
+    out.precision(12);
+    out << "id,X,Y,Z,ux,uy,uz,free\n";
+    for (int v = 0; v < r.top_rest.rows(); ++v) {
+      const Eigen::RowVector3d u = r.top_x.row(v) - r.top_rest.row(v);
+      out << r.top_offset + v + 1 << "," << r.top_rest(v, 0) << "," << r.top_rest(v, 1) << ","
+          << r.top_rest(v, 2) << "," << u(0) << "," << u(1) << "," << u(2) << ","
+          << int(r.free_surface[v]) << "\n";
+    }
+  }
+  const std::string forces = Text(args, "forces", "");
+  if (!forces.empty()) {
+    std::ofstream out(forces);
+    out.precision(12);
+    out << "quantity,fx,fy,fz\n";
+    const std::pair<const char*, Eigen::Vector3d> rows[] = {
+        {"contact", r.contact_force}, {"friction", r.friction_force}, {"top_reaction", r.top_reaction}};
+    for (const auto& [name, f] : rows) out << name << "," << f(0) << "," << f(1) << "," << f(2) << "\n";
+  }
+  const std::string inp = Text(args, "inp", "");
+  if (!inp.empty()) {
+    std::ofstream out(inp);
+    WritePressDeck(o, r, out);
+  }
+  return r.converged ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace femreg;
   const auto args = ParseArgs(argc, argv);
   const std::string shape = Text(args, "shape", "box");
+  if (shape == "press") return Press(args);
   const double length = Number(args, "length", 1.0);
   const int n = static_cast<int>(Number(args, "n", 4));
   int axial = static_cast<int>(Number(args, "axial", 0));

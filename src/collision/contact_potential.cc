@@ -106,15 +106,15 @@ void ContactPotential::Refresh(const Vertices& x) {
   if (!world_->has_friction()) return;
   const bool relax = !stale && previous.size() == contacts_.size();
   // The normal forces of this iteration's x, held for its step (lagged friction); between
-  // detections half way from the last ones, which settles the fixed point where a deformable
-  // partner's gaps answer to the friction (two bodies pressed and dragged), and cycles without.
+  // detections half way from the last ones, which settles the fixed point where the gaps answer
+  // to the friction (two bodies pressed and dragged, a block slid on a plane), and cycles without.
   friction_weight_.assign(contacts_.size(), 0.0);
   friction_motion_.assign(contacts_.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < contacts_.size(); ++i) {
     const Contact& c = contacts_[i];
     const double normal = world_->stiffness() * std::max(0.0, -world_->Gap(c, x));
     friction_weight_[i] = FrictionWeight(world_->Friction(c), normal, world_->friction_slip());
-    if (relax && !c.obstacle()) friction_weight_[i] = 0.5 * (previous[i] + friction_weight_[i]);
+    if (relax) friction_weight_[i] = 0.5 * (previous[i] + friction_weight_[i]);
     if (c.obstacle() && friction_weight_[i] > 0) {
       friction_motion_[i] = world_->ObstacleMotion(-1 - c.object_b, c.point_b, motion_from_);
     }
