@@ -6,8 +6,10 @@ deformed mesh out.
         --ground-truth datasets/demo/ground_truth --out /tmp/track_py
     python3 examples/track.py datasets/demo/scene.yaml datasets/demo/depth   # 16-bit PNGs
 
-Frames are read in name order: .pcd / .ply / .xyz / .txt clouds, or .png depth images
-(millimetres; --depth-scale to change) back-projected through the scene's camera. With
+Frames are listed as `femreg register --frames` lists them (femreg.list_frames): a folder's
+.pcd / .ply / .xyz / .txt clouds and .png / .npy depth images in name order, or a TUM RGB-D
+sequence in its list's order. Depth images are back-projected through the scene's camera
+(PNG: millimetres, or TUM's 1/5000 m, unless --depth-scale; a float .npy: metres). With
 --out, writes OUT/<object>_NNNN.vtu per frame (open in ParaView) and OUT/summary.csv.
 """
 import argparse
@@ -19,29 +21,24 @@ import numpy as np
 
 import femreg
 
-CLOUD_SUFFIXES = {".pcd", ".ply", ".xyz", ".txt"}
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("scene", help="scene file (YAML)")
-    parser.add_argument("frames", help="folder of clouds or 16-bit depth PNGs")
+    parser.add_argument("frames", help="folder of clouds or depth images, or a TUM RGB-D sequence")
     parser.add_argument("--ground-truth", help="folder of frame_NNNN.csv (x,y,z,visible)")
-    parser.add_argument("--depth-scale", type=float, default=0.001,
-                        help="metres per depth unit of PNG frames (default 0.001)")
+    parser.add_argument("--depth-scale", type=float,
+                        help="metres per depth unit of PNG frames (default 0.001; TUM: 1/5000)")
     parser.add_argument("--out", help="folder for VTU files and summary.csv")
     args = parser.parse_args()
 
     try:
         scene = femreg.load_scene(args.scene)
         tracker = femreg.Tracker(scene)
+        files, info = femreg.list_frames(args.frames)  # a TUM sequence in its list's order
     except femreg.Error as error:  # the message names the file, line and key
         sys.exit(f"track.py: {error}")
-
-    frames = sorted(p for p in pathlib.Path(args.frames).iterdir()
-                    if p.suffix.lower() in CLOUD_SUFFIXES | {".png"})
-    if not frames:
-        sys.exit(f"track.py: {args.frames}: no clouds or depth PNGs")
+    frames = [pathlib.Path(f) for f in files]
+    depth_scale = args.depth_scale or info["depth_scale"] or 0.001
     truth = sorted(pathlib.Path(args.ground_truth).glob("frame_*.csv")) if args.ground_truth else []
     out = pathlib.Path(args.out) if args.out else None
     if out:
@@ -51,7 +48,10 @@ def main():
     for f, path in enumerate(frames):
         if path.suffix.lower() == ".png":
             depth = femreg.read_depth_png(str(path))         # (H, W) uint16
-            x = tracker.track_depth(depth, depth_scale=args.depth_scale)
+            x = tracker.track_depth(depth, depth_scale=depth_scale)
+        elif path.suffix.lower() == ".npy":
+            depth = femreg.read_depth_npy(str(path))         # float32 metres or uint16 units
+            x = tracker.track_depth(depth, depth_scale=depth_scale)
         else:
             cloud, _ = femreg.read_point_cloud(str(path))
             x = tracker.track(cloud.points, cloud.normals)   # (V, 3) numpy array

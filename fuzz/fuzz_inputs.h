@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -21,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/camera_io.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
@@ -32,8 +34,8 @@ namespace fuzz {
 
 // The fuzz targets, one per format; each name is also a folder of fuzz/regressions/.
 inline const std::vector<std::string>& TargetNames() {
-  static const std::vector<std::string> names = {"gmsh", "tetgen", "medit", "vtk_legacy", "vtu",
-                                                 "pcd",  "ply",    "xyz",   "scene"};
+  static const std::vector<std::string> names = {"gmsh", "tetgen", "medit", "vtk_legacy", "vtu",  "pcd",
+                                                 "ply",  "xyz",    "npy",   "intrinsics", "tum",  "scene"};
   return names;
 }
 
@@ -158,6 +160,42 @@ inline Status RunCloud(const std::string& format, const uint8_t* data, size_t si
   return status;
 }
 
+// The files of depth cameras: a .npy depth image, an Open3D intrinsics JSON, a TUM list
+// (in a folder that holds depth/1.png, so that a line naming it is read to the end).
+inline Status RunCameraFile(const std::string& format, const uint8_t* data, size_t size) {
+  Status status;
+  std::string path;
+  if (format == "npy") {
+    path = WriteInput("input.npy", data, size);
+    RawDepthImage image;
+    status = ReadDepthNpy(path, &image);
+    const size_t n = static_cast<size_t>(image.width) * static_cast<size_t>(image.height);
+    if (status.ok() && (image.width < 1 || image.height < 1 ||
+                        (image.in_metres() ? image.metres.size() : image.values.size()) != n ||
+                        (image.in_metres() && !image.values.empty()))) {
+      Broken("a depth image whose values do not match its size", "");
+    }
+  } else if (format == "intrinsics") {
+    path = WriteInput("input.json", data, size);
+    PinholeIntrinsics k;
+    status = ReadOpen3dIntrinsics(path, &k);
+    if (status.ok() && (k.width < 1 || k.height < 1 || !(k.fx > 0) || !(k.fy > 0) ||
+                        !std::isfinite(k.fx) || !std::isfinite(k.fy) || !std::isfinite(k.cx) ||
+                        !std::isfinite(k.cy))) {
+      Broken("intrinsics that are not positive and finite", "");
+    }
+  } else {
+    std::filesystem::create_directories(ScratchDir() + "/tum/depth");
+    WriteInput("tum/depth/1.png", data, 0);
+    path = WriteInput("tum/associations.txt", data, size);
+    TumSequence sequence;
+    status = ReadTumSequence(path, &sequence);
+    if (status.ok() && sequence.frames.empty()) Broken("a TUM sequence without frames", "");
+  }
+  CheckError(status, path);
+  return status;
+}
+
 #ifndef FEMREG_FUZZ_READERS_ONLY  // the reader targets link without the scene parser
 inline Status RunScene(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
@@ -176,6 +214,7 @@ inline Status RunScene(const uint8_t*, size_t) { std::abort(); }  // not linked 
 // Runs one input through target `name` (one of TargetNames()).
 inline Status RunInput(const std::string& name, const uint8_t* data, size_t size) {
   if (name == "pcd" || name == "ply" || name == "xyz") return RunCloud(name, data, size);
+  if (name == "npy" || name == "intrinsics" || name == "tum") return RunCameraFile(name, data, size);
   if (name == "scene") return RunScene(data, size);
   return RunMesh(name, data, size);
 }

@@ -293,29 +293,7 @@ TEST(DepthMasks, SceneKeyIsRelativeToTheSceneFile) {
 using testing_util::CliRun;
 using testing_util::Femreg;
 using testing_util::Slurp;
-
-// stats.csv's column `name`, one value per frame (the columns before the quoted message).
-std::vector<std::string> StatsColumn(const std::string& out, const std::string& name) {
-  std::ifstream in(out + "/stats.csv");
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  std::stringstream hs(line);
-  for (std::string cell; std::getline(hs, cell, ',');) header.push_back(cell);
-  size_t column = header.size();
-  for (size_t i = 0; i < header.size(); ++i) {
-    if (header[i] == name) column = i;
-  }
-  std::vector<std::string> values;
-  while (std::getline(in, line)) {
-    std::stringstream ls(line);
-    std::string cell;
-    for (size_t i = 0; i <= column && std::getline(ls, cell, ','); ++i) {
-    }
-    values.push_back(cell);
-  }
-  return values;
-}
+using testing_util::StatsColumn;
 
 constexpr int kMaskFrames = 3;
 
@@ -481,7 +459,7 @@ TEST(DepthMasks, MissingOrWrongSizedMaskNamesTheFile) {
   const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
   run = Femreg(RegisterArgs(demo + "/clouds", tmp.File("out")) + " --mask-dir " + tmp.File("masks"));
   EXPECT_EQ(run.code, 1) << run.out;
-  EXPECT_NE(run.out.find("masks apply to depth-image (.png) frames"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("masks apply to depth-image (.png, .npy) frames"), std::string::npos) << run.out;
 }
 
 }  // namespace

@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 const std::map<std::string, int> kRank = {
     {"mesh", 0},          // tetrahedral meshes, topology, Status
     {"parallel", 0},      // the thread count every parallel part follows
-    {"io", 1},            // mesh files and generators
+    {"io", 1},            // every file format: meshes, clouds, depth images, intrinsics, TUM lists
     {"geometry", 1},      // closest points, AABB tree, nearest-point search
     {"fem", 2},           // materials, element rest data, the elastic models
     {"energy", 3},        // the energy terms: per block residuals and Jacobians, losses
@@ -49,7 +49,8 @@ const std::map<std::string, int> kRank = {
 const std::map<std::string, std::string> kHeaderModule = {
     {"status.h", "mesh"},           {"mesh.h", "mesh"},
     {"version.h", "mesh"},
-    {"io.h", "io"},                 {"geometry.h", "geometry"},
+    {"io.h", "io"},                 {"camera_io.h", "io"},
+    {"geometry.h", "geometry"},
     {"fem.h", "fem"},               {"forward.h", "forward"},
     {"energy.h", "energy"},         {"solver.h", "solvers"},
     {"meshing.h", "meshing"},

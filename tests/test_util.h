@@ -14,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "femreg/ground_truth.h"
 #include "femreg/point_cloud.h"
@@ -85,6 +86,30 @@ inline CliRun Femreg(const std::string& args, const std::string& prefix = "") {
   return r;
 }
 #endif
+
+// The column `name` of OUT/stats.csv (femreg register's), one value per frame (the columns
+// before the quoted message).
+inline std::vector<std::string> StatsColumn(const std::string& out, const std::string& name) {
+  std::ifstream in(out + "/stats.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::stringstream hs(line);
+  for (std::string cell; std::getline(hs, cell, ',');) header.push_back(cell);
+  size_t column = header.size();
+  for (size_t i = 0; i < header.size(); ++i) {
+    if (header[i] == name) column = i;
+  }
+  std::vector<std::string> values;
+  while (std::getline(in, line)) {
+    std::stringstream ls(line);
+    std::string cell;
+    for (size_t i = 0; i <= column && std::getline(ls, cell, ','); ++i) {
+    }
+    values.push_back(cell);
+  }
+  return values;
+}
 
 // Sets OpenMP's thread count to 1 for the rest of the process and returns true: the forward
 // solver's OpenMP loops spin-wait on a loaded machine, and small problems run faster on one

@@ -4,7 +4,8 @@
 #   tools/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]
 #
 # SECONDS_PER_TARGET defaults to 60 (the short run); the full campaign is 600 or more per
-# target. TARGETs default to all: gmsh tetgen medit vtk_legacy vtu pcd ply xyz scene.
+# target. TARGETs default to all: gmsh tetgen medit vtk_legacy vtu pcd ply xyz npy intrinsics
+# tum scene.
 # Environment: BUILD_DIR (default build-fuzz), JOBS (targets run side by side, default 1),
 # FUZZ_ARGS (more libFuzzer flags). Seed corpora are made from datasets/ and tests/fixtures/;
 # each target's corpus grows in BUILD_DIR/corpus/TARGET and is reused by the next run.
@@ -15,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_PER_TARGET="${1:-60}"
 shift || true
-ALL_TARGETS=(gmsh tetgen medit vtk_legacy vtu pcd ply xyz scene)
+ALL_TARGETS=(gmsh tetgen medit vtk_legacy vtu pcd ply xyz npy intrinsics tum scene)
 TARGETS=("$@")
 if [ $# -eq 0 ]; then TARGETS=("${ALL_TARGETS[@]}"); fi
 BUILD_DIR="${BUILD_DIR:-build-fuzz}"
@@ -61,6 +62,9 @@ mapfile -t pcd < <(sample -name '*.pcd'; find tests/fixtures -name '*.pcd' -type
 mapfile -t ply < <(find tests/fixtures datasets -name '*.ply' -type f)
 mapfile -t xyz < <(find tests/fixtures datasets \( -name '*.xyz' -o -name '*.txt' \) -type f)
 mapfile -t yaml < <(find datasets tests/fixtures -name '*.yaml' -type f)
+mapfile -t npy < <(find tests/fixtures -name '*.npy' -type f)
+mapfile -t json < <(find tests/fixtures -name '*.json' -type f)
+mapfile -t tum < <(find tests/fixtures/camera/tum -name '*.txt' -type f)
 seed gmsh "${msh[@]}"
 seed medit "${mesh[@]}"
 seed vtk_legacy "${vtk[@]}"
@@ -69,6 +73,9 @@ seed pcd "${pcd[@]}"
 seed ply "${ply[@]}"
 seed xyz "${xyz[@]}"
 seed scene "${yaml[@]}"
+seed npy "${npy[@]}"
+seed intrinsics "${json[@]}"
+seed tum "${tum[@]}"
 mkdir -p "$BUILD_DIR/corpus/tetgen"
 for node in $(find tests/fixtures datasets -name '*.node' -type f); do  # .node NUL .ele
   { cat "$node"; printf '\0'; cat "${node%.node}.ele"; } > "$BUILD_DIR/corpus/tetgen/seed_$(basename "$node")"

@@ -4,8 +4,8 @@
 # for Debian's python3 and installs it into its site directory
 # (/usr/local/lib/python3.11/dist-packages), so that
 # `python3 -c "import femreg"` works. Run as root (or with sudo) on Debian 12.
-# FEMREG_SETUP_PYTHON=0 skips the Python package; BUILD_DIR (default build) and JOBS as in
-# tools/build.sh.
+# FEMREG_SETUP_PYTHON=0 skips the Python package; FEMREG_WITH_OPEN3D=1 adds python3-open3d
+# (optional); BUILD_DIR (default build) and JOBS as in tools/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,6 +29,10 @@ OPTIONAL=(calculix-ccx)
 
 want=("${PACKAGES[@]}")
 if [ "${FEMREG_WITH_CALCULIX:-1}" = 1 ]; then want+=("${OPTIONAL[@]}"); fi
+# Open3D, only on request (FEMREG_WITH_OPEN3D=1): femreg does not need it; with it, the Python
+# package takes Open3D's clouds and images, examples/open3d_view.py runs, and
+# python/tests/test_open3d.py stops skipping.
+if [ "${FEMREG_WITH_OPEN3D:-0}" = 1 ]; then want+=(python3-open3d); fi
 
 missing=()
 for p in "${want[@]}"; do

@@ -1,4 +1,6 @@
-// femreg/io.h - reading and writing meshes: tetrahedral meshes in, VTU/PVD/PLY/OBJ out.
+// femreg/io.h - reading and writing meshes: tetrahedral meshes in, VTU/PVD/PLY/OBJ out;
+// atomic writes and file lists. Depth images, masks, intrinsics and recordings:
+// femreg/camera_io.h.
 #ifndef FEMREG_IO_H_
 #define FEMREG_IO_H_
 
@@ -58,6 +60,13 @@ Status WriteObjSurface(const std::string& path, const TetMesh& mesh, const Verti
 
 // Writes `contents` to `path` through a temporary file in the same folder and a rename.
 Status WriteFileAtomically(const std::string& path, const std::string& contents);
+
+// The files of folder `dir_or_glob` with one of `extensions` (lower case, with the dot;
+// matched in any case), or, when it is not a folder, the matches of it as a glob pattern;
+// sorted by name in natural order ("frame_10" after "frame_9"). None is an error naming
+// the folder or the pattern.
+Status ListFiles(const std::string& dir_or_glob, const std::vector<std::string>& extensions,
+                 std::vector<std::string>* files);
 
 // Generators (for tests and data), finalized, with rest = x and zero masses.
 // A box [origin, origin + size] of nx * ny * nz cubes, each split into 6 tetrahedra

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/camera_io.h"
 #include "femreg/registration.h"
 #include "femreg/status.h"
 
@@ -54,27 +55,23 @@ void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* clo
 int DropNonFinite(PointCloud* cloud);
 
 // ---------------------------------------------------------------------------------------
-// Depth images (depth_image.cc): a frame from a depth camera as a 16-bit PNG whose pixels
-// are depths along the optical axis in units of depth_scale (millimetres by default, the
-// common sensor convention), 0 where the sensor saw nothing. The camera's intrinsics and
-// pose are the scene's (CameraOptions: pixel centres at integer coordinates, x right,
-// y down, z forward, as the virtual camera of femreg/synth.h).
+// Depth images (depth_image.cc): a frame from a depth camera whose pixels are depths along
+// the optical axis, as a 16-bit PNG or a uint16 .npy in units of depth_scale (millimetres
+// by default, the common sensor convention; TUM RGB-D's 5000 per metre), or a float .npy in
+// metres; 0 where the sensor saw nothing. The files are femreg/camera_io.h's. The camera's
+// intrinsics and pose are the scene's (CameraOptions: pixel centres at integer coordinates,
+// x right, y down, z forward, as the virtual camera of femreg/synth.h).
 
 struct DepthImageOptions {
-  double depth_scale = 0.001;  // metres per depth unit (> 0); 0.001: millimetres
+  double depth_scale = 0.001;  // metres per depth unit (> 0); 0.001: millimetres. Images in metres ignore it
   double min_depth = 0.0;      // m; pixels closer are dropped
   double max_depth = 0.0;      // m; pixels farther are dropped; 0 = no limit
   int pixel_stride = 1;        // back-project every k-th pixel in u and v (>= 1)
   // A folder of masks (PNG, any bit depth or colour; non-zero = keep the pixel) named like
-  // the depth frames; empty: no masks. A frame whose mask is missing is an error.
+  // the depth frames (MaskPathFor); empty: no masks. A frame whose mask is missing is an
+  // error.
   std::string mask_dir;
   bool IsValid(std::string* error) const;  // names the field
-};
-
-// A 16-bit depth image as stored: row-major depth units, 0 = no return.
-struct RawDepthImage {
-  int width = 0, height = 0;
-  std::vector<uint16_t> values;  // width * height
 };
 
 // The camera's rotation, world to camera (rows: the image's x, y and optical axes):
@@ -82,31 +79,30 @@ struct RawDepthImage {
 // images are back-projected and the virtual camera (DepthSensor) renders through it.
 Eigen::Matrix3d CameraRotation(const CameraOptions& camera);
 
-// Reads a 16-bit single-channel (greyscale) PNG. Other bit depths or colour types are
-// refused naming the file and what it holds; so are images over 2^28 pixels.
-Status ReadDepthPng(const std::string& path, RawDepthImage* image);
-// Reads a mask of width by height pixels (any PNG, 8- or 16-bit, grey or colour; non-zero
-// in any colour channel = keep). Errors name the file (and both sizes when they differ).
-Status ReadMaskPng(const std::string& path, int width, int height, std::vector<uint8_t>* keep);
-// Writes a 16-bit greyscale PNG, atomically (a temporary file renamed into place).
-Status WriteDepthPng(const std::string& path, const RawDepthImage& image);
-// Writes width * height keep flags as an 8-bit greyscale PNG (255 keep, 0 drop), atomically.
-Status WriteMaskPng(const std::string& path, int width, int height, const std::vector<uint8_t>& keep);
+// Sets the camera's intrinsics (fx, fy, cx, cy, width, height) from an Open3D
+// PinholeCameraIntrinsic JSON file (ReadOpen3dIntrinsics); its pose and `enabled` stay as
+// they are. Errors name the file and the field.
+Status ReadCameraIntrinsics(const std::string& path, CameraOptions* camera);
 
 // Back-projects every pixel with a depth (inside [min_depth, max_depth], kept by `keep`
 // when given: width * height flags) through the camera into the scene frame:
-// p = position + R^T z ((u - cx) / fx, (v - cy) / fy, 1). The image must be the camera's
-// width by height. *sensor (may be null) receives the camera centre and orientation, the
-// viewpoint for visibility and normal orientation.
+// p = position + R^T z ((u - cx) / fx, (v - cy) / fy, 1), z = units * depth_scale, or the
+// image's metres. The image must be the camera's width by height. *sensor (may be null)
+// receives the camera centre and orientation, the viewpoint for visibility and normal
+// orientation.
 Status BackProjectDepth(const RawDepthImage& image, const CameraOptions& camera,
                         const DepthImageOptions& options, const std::vector<uint8_t>* keep,
                         PointCloud* cloud, SensorPose* sensor = nullptr);
 
-// ReadDepthPng, the frame's mask (options.mask_dir), BackProjectDepth. Errors name the
-// file.
+// A depth frame from its file: a .npy (ReadDepthNpy), else a PNG (ReadDepthPng); its mask
+// (options.mask_dir, MaskPathFor); BackProjectDepth. Errors name the file.
 Status ReadDepthFrame(const std::string& path, const CameraOptions& camera,
                       const DepthImageOptions& options, PointCloud* cloud,
                       SensorPose* sensor = nullptr);
+
+// The mask of depth frame `frame` in `mask_dir`: the frame's file name for a PNG
+// (masks/frame_0007.png for depth/frame_0007.png), its stem and .png for a .npy.
+std::string MaskPathFor(const std::string& mask_dir, const std::string& frame);
 
 // The depth image a camera would store for these points: each point in front of the
 // camera is projected to its nearest pixel centre and the nearest point per pixel kept,
@@ -117,11 +113,31 @@ Status ReadDepthFrame(const std::string& path, const CameraOptions& camera,
 RawDepthImage CloudToDepthImage(const PointCloud& cloud, const CameraOptions& camera,
                                 double depth_scale, int* dropped = nullptr);
 
-// Reads a frame by its extension: .png as a depth image (ReadDepthFrame, with the
+// True for a depth-image frame's extension (.png, .npy; any case).
+bool IsDepthImageFile(const std::string& path);
+
+// Reads a frame by its extension: .png and .npy as depth images (ReadDepthFrame, with the
 // camera), anything else with ReadPointCloud. The frame front end of `femreg register`.
 Status ReadFrame(const std::string& path, const CameraOptions& camera,
                  const DepthImageOptions& depth, PointCloud* cloud,
                  int* nonfinite_dropped = nullptr, SensorPose* sensor = nullptr);
+
+// The frames of a recording, in order.
+struct FrameFiles {
+  std::vector<std::string> files;
+  std::string tum_list;      // the TUM RGB-D list they come from; "" otherwise
+  double depth_scale = 0.0;  // metres per depth unit the layout prescribes (TUM: 1/5000); 0: none
+  std::vector<double> times;  // each frame's timestamp (s) from a TUM list; empty otherwise
+};
+
+// What `femreg register --frames PATH` reads. PATH is one of:
+//  - a TUM RGB-D sequence: a folder with an associations file or depth.txt (FindTumList),
+//    or such a list itself: its depth images in the list's order (ReadTumSequence), with
+//    depth_scale kTumDepthScale;
+//  - a folder: its frames (.pcd, .ply, .xyz, .txt, .png, .npy) in natural order of names;
+//  - a glob pattern: its matches in natural order.
+// Errors name the folder, the pattern, or the list and its line.
+Status ListFrameFiles(const std::string& path, FrameFiles* frames);
 
 }  // namespace femreg
 

@@ -14,6 +14,10 @@ through pybind11). Units are SI: metres, pascals, seconds.
 Every error of the C++ library (a bad file, a bad scene) is raised as femreg.Error with
 the library's message (which names the file, line or field); bad argument shapes and
 option names raise ValueError.
+
+Open3D is optional: where a cloud is taken, an open3d.geometry.PointCloud is too, and where
+a depth image is taken, an open3d.geometry.Image or RGBDImage (femreg never imports Open3D
+unless it is handed one of its objects).
 """
 
 import os as _os
@@ -24,6 +28,7 @@ _os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 from ._femreg import (  # noqa: E402,F401  (the public API)
     __version__,
+    TUM_DEPTH_SCALE,
     CameraOptions,
     DataTermOptions,
     Error,
@@ -35,18 +40,27 @@ from ._femreg import (  # noqa: E402,F401  (the public API)
     Scene,
     SolverOptions,
     Tracker,
+    TumFrame,
+    TumSequence,
     WeightOptions,
+    camera_from_open3d,
+    list_frames,
     load_scene,
     make_box,
     depth_to_points,
     mesh_from_arrays,
     parse_scene,
     read_depth_frame,
+    read_depth_npy,
     read_depth_png,
+    read_frame,
+    read_intrinsics,
     read_mesh,
     read_point_cloud,
+    read_tum_sequence,
     simulate,
     write_depth_png,
+    write_intrinsics,
     write_obj_surface,
     write_ply_surface,
     write_point_cloud,

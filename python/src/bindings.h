@@ -61,8 +61,20 @@ void EnumProperty(Class& cls, const char* name, Enum Struct::*field, const char*
       doc);
 }
 
-// An (H, W) integer array as a RawDepthImage (values in depth units, 0 = no return).
-void ToRawDepth(const py::array_t<uint16_t, py::array::forcecast>& depth, RawDepthImage* image);
+// Open3D's objects, accepted without depending on Open3D: true when `obj` is an instance
+// of open3d.geometry.<name> (or open3d.camera.<name> for "PinholeCameraIntrinsic"). Open3D
+// is imported only to check an object whose type comes from it, so a caller without Open3D
+// never loads it.
+bool IsOpen3d(const py::handle& obj, const char* name);
+
+// The points of an (N, 3) array or of an open3d.geometry.PointCloud (whose normals fill
+// *normals when it has them and *normals is None).
+DoubleArray PointsArg(const py::object& points, py::object* normals);
+
+// A depth image as a RawDepthImage: an (H, W) integer array of depth units (0 = no
+// return), an (H, W) float array of metres (0 or NaN = no return), an open3d.geometry.Image
+// of either, or an open3d.geometry.RGBDImage (its depth, float metres).
+void ToRawDepth(const py::object& depth, RawDepthImage* image);
 
 // An optional (H, W) mask (non-zero = keep) as flags.
 bool ToKeep(const py::object& mask, const RawDepthImage& image, std::vector<uint8_t>* keep);
@@ -75,6 +87,7 @@ void BindOptions(py::module_& m);      // options_bindings.cc: Material and the 
 void BindMeshes(py::module_& m);       // io_bindings.cc: Mesh, mesh readers and writers
 void BindPointClouds(py::module_& m);  // io_bindings.cc: PointCloud, cloud readers and writers
 void BindDepthImages(py::module_& m);  // io_bindings.cc: depth PNGs, back-projection
+void BindCameraFiles(py::module_& m);  // camera_bindings.cc: .npy, intrinsics, TUM, frame lists
 void BindScene(py::module_& m);        // scene_bindings.cc: Scene, load_scene, parse_scene
 void BindTracker(py::module_& m);      // tracker_bindings.cc: Tracker and its summaries
 void BindSimulate(py::module_& m);     // scene_bindings.cc: the forward solve

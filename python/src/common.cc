@@ -1,5 +1,6 @@
 // The helpers the binding files share (bindings.h): Status to femreg.Error, numpy arrays to
 // and from Vertices, depth images and masks from numpy.
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -45,16 +46,78 @@ py::array_t<double> ToArray(const Vertices& v) {
   return out;
 }
 
-// An (H, W) integer array as a RawDepthImage (values in depth units, 0 = no return).
-void ToRawDepth(const py::array_t<uint16_t, py::array::forcecast>& depth, RawDepthImage* image) {
-  if (depth.ndim() != 2) throw py::value_error("depth: expected an (H, W) array of depth units");
-  image->height = static_cast<int>(depth.shape(0));
-  image->width = static_cast<int>(depth.shape(1));
-  image->values.resize(static_cast<size_t>(depth.size()));
-  auto d = depth.unchecked<2>();
+bool IsOpen3d(const py::handle& obj, const char* name) {
+  const py::handle type = reinterpret_cast<PyObject*>(Py_TYPE(obj.ptr()));
+  if (!py::hasattr(type, "__module__")) return false;
+  const std::string module = py::str(type.attr("__module__"));
+  if (module.rfind("open3d", 0) != 0) return false;
+  const py::module_ open3d = py::module_::import("open3d");
+  const char* part = std::string(name) == "PinholeCameraIntrinsic" ? "camera" : "geometry";
+  return py::isinstance(obj, open3d.attr(part).attr(name));
+}
+
+DoubleArray PointsArg(const py::object& points, py::object* normals) {
+  if (IsOpen3d(points, "PointCloud")) {
+    const py::module_ numpy = py::module_::import("numpy");
+    if (normals != nullptr && normals->is_none() && points.attr("has_normals")().cast<bool>()) {
+      *normals = numpy.attr("asarray")(points.attr("normals"));
+    }
+    return numpy.attr("asarray")(points.attr("points")).cast<DoubleArray>();
+  }
+  DoubleArray array = DoubleArray::ensure(points);  // null (the error cleared) when not numbers
+  if (!array) {
+    throw py::type_error("points: expected an (N, 3) array of numbers or an "
+                         "open3d.geometry.PointCloud (got " +
+                         py::str(py::type::handle_of(points).attr("__name__")).cast<std::string>() + ")");
+  }
+  return array;
+}
+
+// Float depths beyond this are not metres of a depth camera: most likely depth units (a
+// float array of millimetres), which would put every point kilometres away.
+constexpr double kMaxMetres = 100.0;
+
+void ToRawDepth(const py::object& depth, RawDepthImage* image) {
+  py::object array = depth;
+  if (IsOpen3d(depth, "RGBDImage")) {
+    array = depth.attr("depth");  // an open3d.geometry.Image of float metres
+  }
+  if (IsOpen3d(array, "Image")) array = py::module_::import("numpy").attr("asarray")(array);
+  const py::array a = py::array::ensure(array);
+  if (!a || a.ndim() != 2) {
+    throw py::value_error("depth: expected an (H, W) array of depth units (integers) or metres "
+                          "(floats), or an Open3D Image or RGBDImage");
+  }
+  image->height = static_cast<int>(a.shape(0));
+  image->width = static_cast<int>(a.shape(1));
+  image->values.clear();
+  image->metres.clear();
+  if (a.dtype().kind() == 'f') {
+    const auto m = a.cast<py::array_t<float, py::array::forcecast>>();
+    auto d = m.unchecked<2>();
+    image->metres.resize(static_cast<size_t>(m.size()));
+    size_t i = 0;
+    float largest = 0;
+    for (py::ssize_t v = 0; v < m.shape(0); ++v) {
+      for (py::ssize_t u = 0; u < m.shape(1); ++u) {
+        const float z = d(v, u);
+        image->metres[i++] = z;
+        if (std::isfinite(z) && z > largest) largest = z;
+      }
+    }
+    if (largest > kMaxMetres) {
+      throw py::value_error("depth: a float array holds metres, and this one reaches " +
+                            std::to_string(largest) + " m; for depth units (millimetres, say) pass "
+                            "integers (e.g. depth.astype(numpy.uint16)) with depth_scale");
+    }
+    return;
+  }
+  const auto units = a.cast<py::array_t<uint16_t, py::array::forcecast>>();
+  auto d = units.unchecked<2>();
+  image->values.resize(static_cast<size_t>(units.size()));
   size_t i = 0;
-  for (py::ssize_t v = 0; v < depth.shape(0); ++v) {
-    for (py::ssize_t u = 0; u < depth.shape(1); ++u) image->values[i++] = d(v, u);
+  for (py::ssize_t v = 0; v < units.shape(0); ++v) {
+    for (py::ssize_t u = 0; u < units.shape(1); ++u) image->values[i++] = d(v, u);
   }
 }
 

@@ -1,6 +1,6 @@
 // The femreg Python module (pybind11): scenes, meshes, materials and options; the Tracker
 // with numpy in and out; the forward solve; the mesh, cloud and depth-image readers and
-// writers. Every femreg::Status error becomes femreg.Error with the C++ message; a wrong
+// writers; the files of depth cameras (NumPy frames, intrinsics, TUM RGB-D sequences). Every femreg::Status error becomes femreg.Error with the C++ message; a wrong
 // array shape or an unknown option name is a ValueError.
 //
 // The bindings live by subject in the Bind* files (bindings.h); this file is the module
@@ -31,6 +31,7 @@ PYBIND11_MODULE(_femreg, m) {
   BindMeshes(m);
   BindPointClouds(m);
   BindDepthImages(m);
+  BindCameraFiles(m);
   BindScene(m);
   BindTracker(m);
   BindSimulate(m);

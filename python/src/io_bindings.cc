@@ -1,5 +1,6 @@
 // Python bindings: meshes (read, from arrays, boxes; VTU, PLY and OBJ writers), point clouds
 // (PCD, PLY, text) and depth images (16-bit PNGs, back-projection through a camera).
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -145,9 +146,9 @@ void BindMeshes(py::module_& m) {
 void BindPointClouds(py::module_& m) {
   // ---- point clouds ---------------------------------------------------------------------
   py::class_<PointCloud>(m, "PointCloud", "Points (metres, scene frame), optional normals and labels.")
-      .def(py::init([](const DoubleArray& points, const py::object& normals) {
+      .def(py::init([](const py::object& points_arg, py::object normals) {
              PointCloud c;
-             CopyRows3(points, "points", &c.points);
+             CopyRows3(PointsArg(points_arg, &normals), "points", &c.points);
              if (!normals.is_none()) {
                CopyRows3(normals.cast<DoubleArray>(), "normals", &c.normals);
                if (c.normals.rows() != c.points.rows()) {
@@ -156,7 +157,9 @@ void BindPointClouds(py::module_& m) {
              }
              return c;
            }),
-           py::arg("points"), py::arg("normals") = py::none())
+           py::arg("points"), py::arg("normals") = py::none(),
+           "From (N, 3) points (and normals), or from an open3d.geometry.PointCloud (with its "
+           "normals when it has them).")
       .def_property_readonly("points", [](const PointCloud& c) -> const Vertices& { return c.points; },
                              py::return_value_policy::reference_internal)
       .def_property_readonly("normals",
@@ -193,9 +196,9 @@ void BindPointClouds(py::module_& m) {
         "Reads a PCD, PLY or x y z [nx ny nz] text cloud. Returns (PointCloud, info) where "
         "info has nonfinite_dropped, viewpoint_known and viewpoint (the PCD VIEWPOINT origin).");
   m.def("write_point_cloud",
-        [](const std::string& path, const DoubleArray& points, const py::object& normals) {
+        [](const std::string& path, const py::object& points_arg, py::object normals) {
           PointCloud c;
-          CopyRows3(points, "points", &c.points);
+          CopyRows3(PointsArg(points_arg, &normals), "points", &c.points);
           if (!normals.is_none()) {
             CopyRows3(normals.cast<DoubleArray>(), "normals", &c.normals);
             if (c.normals.rows() != c.points.rows()) {
@@ -205,7 +208,8 @@ void BindPointClouds(py::module_& m) {
           Check(WritePointCloud(path, c));
         },
         py::arg("path"), py::arg("points"), py::arg("normals") = py::none(),
-        "Writes a binary PCD (with normals when given); atomic.");
+        "Writes a binary PCD of (N, 3) points or an open3d.geometry.PointCloud (with normals "
+        "when given or when it has them); atomic.");
 }
 
 void BindDepthImages(py::module_& m) {
@@ -221,14 +225,30 @@ void BindDepthImages(py::module_& m) {
         },
         py::arg("path"), "A 16-bit greyscale PNG as an (H, W) uint16 array.");
   m.def("write_depth_png",
-        [](const std::string& path, const py::array_t<uint16_t, py::array::forcecast>& depth) {
+        [](const std::string& path, const py::object& depth, double depth_scale) {
           RawDepthImage image;
           ToRawDepth(depth, &image);
+          if (image.in_metres()) {  // metres to units of depth_scale, rounded
+            if (!(depth_scale > 0) || !std::isfinite(depth_scale)) throw py::value_error("depth_scale must be > 0");
+            image.values.resize(image.metres.size());
+            for (size_t i = 0; i < image.metres.size(); ++i) {
+              const float z = image.metres[i];
+              const double units = std::isfinite(z) && z > 0 ? std::round(z / depth_scale) : 0.0;
+              if (units > 65535) {
+                throw py::value_error("depth: " + std::to_string(z) + " m is " + std::to_string(units) +
+                                      " units of depth_scale, beyond a 16-bit PNG's 65535");
+              }
+              image.values[i] = static_cast<uint16_t>(units);
+            }
+            image.metres.clear();
+          }
           Check(WriteDepthPng(path, image));
         },
-        py::arg("path"), py::arg("depth"), "Writes an (H, W) array as a 16-bit PNG; atomic.");
+        py::arg("path"), py::arg("depth"), py::arg("depth_scale") = 0.001,
+        "Writes a depth image as a 16-bit PNG, atomically: an (H, W) integer array as it is, "
+        "float metres (an array, an Open3D Image or RGBDImage) rounded to units of depth_scale.");
   m.def("depth_to_points",
-        [](const py::array_t<uint16_t, py::array::forcecast>& depth, const CameraOptions& camera,
+        [](const py::object& depth, const CameraOptions& camera,
            const py::object& mask, double depth_scale, double min_depth, double max_depth,
            int pixel_stride) {
           RawDepthImage image;
@@ -244,8 +264,9 @@ void BindDepthImages(py::module_& m) {
         py::arg("depth"), py::arg("camera"), py::arg("mask") = py::none(),
         py::arg("depth_scale") = 0.001, py::arg("min_depth") = 0.0, py::arg("max_depth") = 0.0,
         py::arg("pixel_stride") = 1,
-        "Back-projects an (H, W) depth image (depth units, 0 = no return) through the camera: "
-        "(N, 3) points in the scene frame.");
+        "Back-projects a depth image through the camera: (N, 3) points in the scene frame. "
+        "depth: (H, W) integer depth units (times depth_scale; 0 = no return) or float metres, "
+        "or an open3d.geometry.Image or RGBDImage.");
   m.def("read_depth_frame",
         [](const std::string& path, const CameraOptions& camera, double depth_scale,
            double min_depth, double max_depth, int pixel_stride, const std::string& mask_dir) {
@@ -258,8 +279,9 @@ void BindDepthImages(py::module_& m) {
         py::arg("path"), py::arg("camera"), py::arg("depth_scale") = 0.001,
         py::arg("min_depth") = 0.0, py::arg("max_depth") = 0.0, py::arg("pixel_stride") = 1,
         py::arg("mask_dir") = "",
-        "A depth PNG frame back-projected through the camera (and masked by mask_dir/NAME.png "
-        "when mask_dir is given): a PointCloud.");
+        "A depth frame (a 16-bit .png, or a .npy: float metres or uint16 units) back-projected "
+        "through the camera (and masked by mask_dir/NAME.png when mask_dir is given): a "
+        "PointCloud.");
 }
 
 }  // namespace python

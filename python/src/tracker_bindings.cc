@@ -127,9 +127,10 @@ class PyTracker {
  public:
   explicit PyTracker(std::unique_ptr<Tracker> tracker) : tracker_(std::move(tracker)) {}
 
-  py::array_t<double> Track(const DoubleArray& points, const py::object& normals,
+  py::array_t<double> Track(const py::object& points_arg, py::object normals,
                             const py::object& labels, int object) {
     CheckObject(object);
+    const DoubleArray points = PointsArg(points_arg, &normals);  // an array or an Open3D PointCloud
     CopyRows3(points, "points", &cloud_.points);
     if (normals.is_none()) {
       cloud_.normals.resize(0, 3);
@@ -172,8 +173,7 @@ class PyTracker {
   }
 
   // A depth image through the tracker's camera (options().camera).
-  py::array_t<double> TrackDepth(const py::array_t<uint16_t, py::array::forcecast>& depth,
-                                 const py::object& mask, double depth_scale, double min_depth,
+  py::array_t<double> TrackDepth(const py::object& depth, const py::object& mask, double depth_scale, double min_depth,
                                  double max_depth, int pixel_stride, int object) {
     CheckObject(object);
     const DepthImageOptions options = MakeDepthOptions(depth_scale, min_depth, max_depth, pixel_stride);
@@ -223,15 +223,18 @@ void BindTracker(py::module_& m) {
            "per mesh.")
       .def("track", &PyTracker::Track, py::arg("points"), py::arg("normals") = py::none(),
            py::arg("labels") = py::none(), py::arg("object") = 0,
-           "Registers to one cloud: points (N, 3) in metres, scene frame; optional normals "
+           "Registers to one cloud: points (N, 3) in metres, scene frame, or an "
+           "open3d.geometry.PointCloud (its normals used when it has them); optional normals "
            "(N, 3) and labels (N,). Returns object `object`'s (V, 3) vertices (a copy); the "
            "frame summary is in `summary`. Bad data is reported there, never raised.")
       .def("track_depth", &PyTracker::TrackDepth, py::arg("depth"), py::arg("mask") = py::none(),
            py::arg("depth_scale") = 0.001, py::arg("min_depth") = 0.0, py::arg("max_depth") = 0.0,
            py::arg("pixel_stride") = 1, py::arg("object") = 0,
-           "Registers to a depth image: depth (H, W) integer depth units (0 = no return), "
-           "back-projected through the scene's camera (registration.camera); optional mask "
-           "(H, W), non-zero = keep. Returns the (V, 3) vertices like track().")
+           "Registers to a depth image: depth (H, W) integer depth units (times depth_scale; "
+           "0 = no return) or float metres (0 or NaN = no return), or an open3d.geometry.Image "
+           "or RGBDImage (float metres), back-projected through the scene's camera "
+           "(registration.camera); optional mask (H, W), non-zero = keep. Returns the (V, 3) "
+           "vertices like track().")
       .def("track_cloud", &PyTracker::TrackCloud, py::arg("cloud"), py::arg("object") = 0,
            "track() for a femreg.PointCloud (e.g. from read_point_cloud or a depth image).")
       .def_property_readonly("summary",

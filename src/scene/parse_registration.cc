@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <string>
 
+#include "femreg/point_cloud.h"
 #include "scene/scene_parser.h"
 
 namespace femreg {
@@ -38,8 +39,24 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("camera")) {
     const YamlValue c = v["camera"];
-    c.CheckKeys({"position", "target", "up", "fx", "fy", "cx", "cy", "width", "height"});
+    c.CheckKeys({"position", "target", "up", "intrinsics", "fx", "fy", "cx", "cy", "width", "height"});
     r.camera.enabled = true;
+    if (c.Has("intrinsics")) {
+      // An Open3D PinholeCameraIntrinsic JSON, relative to the scene's folder; instead of
+      // the keys it sets, never beside them (which would win is a guess).
+      for (const char* key : {"fx", "fy", "cx", "cy", "width", "height"}) {
+        if (c.Has(key)) {
+          c[key].Fail(std::string("given beside camera.intrinsics, which sets it: give the "
+                                  "intrinsics either in the file or as fx, fy, cx, cy, width, height"));
+        }
+      }
+      const YamlValue file = c["intrinsics"];
+      std::filesystem::path path(file.AsString());
+      if (path.empty()) file.Fail("must name an intrinsics file (Open3D's PinholeCameraIntrinsic JSON)");
+      if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+      const Status read = ReadCameraIntrinsics(path.lexically_normal().string(), &r.camera);
+      if (!read.ok()) file.Fail(read.message());
+    }
     if (c.Has("position")) r.camera.position = c["position"].AsVector3();
     if (c.Has("target")) r.camera.target = c["target"].AsVector3();
     if (c.Has("up")) r.camera.up = c["up"].AsVector3();

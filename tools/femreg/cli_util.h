@@ -27,11 +27,6 @@ std::string CapForMessage(const std::string& text, size_t max_chars = 80);
 // Makes `dir` (and parents). A non-empty existing folder is refused unless `force`.
 Status PrepareOutputDir(const std::string& dir, bool force);
 
-// Files of a folder with one of `extensions` (lower case, with dot), or the matches of a
-// glob pattern; sorted by name (natural order of embedded numbers).
-Status ListFrames(const std::string& dir_or_glob, const std::vector<std::string>& extensions,
-                  std::vector<std::string>* files);
-
 // A one-line progress bar on stderr when it is a terminal; a line every 10% otherwise.
 class ProgressBar {
  public:

@@ -179,9 +179,9 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
     return 1;
   };
   std::vector<std::string> result_files, truth_csvs, truth_vtus;
-  Status status = ListFrames((fs::path(result) / "frames").string(), {".vtu"}, &result_files);
+  Status status = ListFiles((fs::path(result) / "frames").string(), {".vtu"}, &result_files);
   if (!status.ok()) return fail(status.message() + " (RESULT must be a `femreg register` output folder)");
-  status = ListFrames((fs::path(truth_dir) / "ground_truth").string(), {".csv"}, &truth_csvs);
+  status = ListFiles((fs::path(truth_dir) / "ground_truth").string(), {".csv"}, &truth_csvs);
   if (!status.ok()) return fail(status.message() + " (GROUND_TRUTH must be a `femreg synth` output folder)");
   // Fracture sequences keep the events and per-piece positions beside the frames.
   truth_csvs.erase(std::remove_if(truth_csvs.begin(), truth_csvs.end(),
@@ -193,7 +193,7 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
                    truth_csvs.end());
   const bool have_truth_surface = fs::is_directory(fs::path(truth_dir) / "truth");
   if (have_truth_surface) {
-    status = ListFrames((fs::path(truth_dir) / "truth").string(), {".vtu"}, &truth_vtus);
+    status = ListFiles((fs::path(truth_dir) / "truth").string(), {".vtu"}, &truth_vtus);
     if (!status.ok()) return fail(status.message());
   }
   std::vector<std::string> objects;

@@ -103,7 +103,7 @@ json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
   json masks = json::array();
   for (const std::string& f : frame_files) {
     if (mask_dir.empty()) break;
-    masks.push_back(Absolute((std::filesystem::path(mask_dir) / std::filesystem::path(f).filename()).string()));
+    masks.push_back(Absolute(MaskPathFor(mask_dir, f)));
   }
   j["mask_files"] = mask_dir.empty() ? json(nullptr) : masks;
   json truth = json::array();

@@ -91,11 +91,38 @@ int RunRegister(const RegisterArgs& args) {
   if (args.threads > 0) scene.registration.solver.num_threads = args.threads;
   const bool measure_contacts = args.no_collision && scene.effects.collision;
   if (args.no_collision) scene.effects.collision = false;
-  std::vector<std::string> files;
-  status = ListFrames(args.frames, {".pcd", ".ply", ".xyz", ".txt", ".png"}, &files);
+  FrameFiles frame_list;
+  status = ListFrameFiles(args.frames, &frame_list);
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
     return 1;
+  }
+  std::vector<std::string>& files = frame_list.files;
+  // --intrinsics: the camera's intrinsics from an Open3D PinholeCameraIntrinsic JSON, for
+  // depth images; its pose stays the scene's, or, without a camera in the scene, is the
+  // scene frame itself (depth images back-project into camera coordinates).
+  if (!args.intrinsics.empty()) {
+    if (std::none_of(files.begin(), files.end(), [](const std::string& f) { return IsDepthImageFile(f); })) {
+      std::cerr << "femreg register: --intrinsics: the frames are point clouds (" << files[0]
+                << "); intrinsics apply to depth images (.png, .npy)\n";
+      return 1;
+    }
+    status = ReadCameraIntrinsics(args.intrinsics, &scene.registration.camera);
+    if (!status.ok()) {
+      std::cerr << "femreg register: --intrinsics: " << status.message() << "\n";
+      return 1;
+    }
+    scene.registration.camera.enabled = true;
+  }
+  // The depth scale: --depth-scale, else the layout's (TUM RGB-D: 5000 units per metre),
+  // else millimetres.
+  RegisterArgs resolved = args;
+  if (!frame_list.tum_list.empty()) {
+    if (!args.depth_scale_given) resolved.depth_scale = frame_list.depth_scale;
+    resolved.tum_list = frame_list.tum_list;
+    std::printf("TUM RGB-D sequence: %zu depth frames in the order of %s; depth scale %g m per unit%s\n",
+                files.size(), frame_list.tum_list.c_str(), resolved.depth_scale,
+                args.depth_scale_given ? " (--depth-scale)" : " (5000 per metre, TUM's)");
   }
   if (args.max_frames > 0 && static_cast<int>(files.size()) > args.max_frames) {
     files.resize(static_cast<size_t>(args.max_frames));
@@ -105,19 +132,16 @@ int RunRegister(const RegisterArgs& args) {
   std::string& mask_dir = scene.registration.preprocess.mask_dir;
   if (!mask_dir.empty()) {
     const char* from = args.mask_dir.empty() ? "registration.preprocess.mask_dir" : "--mask-dir";
-    const auto cloud_frame = std::find_if(files.begin(), files.end(), [](const std::string& f) {
-      std::string ext = fs::path(f).extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      return ext != ".png";
-    });
+    const auto cloud_frame = std::find_if(files.begin(), files.end(),
+                                          [](const std::string& f) { return !IsDepthImageFile(f); });
     std::error_code ec;
     if (cloud_frame != files.end() && !args.mask_dir.empty()) {
-      std::cerr << "femreg register: --mask-dir: masks apply to depth-image (.png) frames; "
+      std::cerr << "femreg register: --mask-dir: masks apply to depth-image (.png, .npy) frames; "
                 << *cloud_frame << " is a point cloud (crop it with registration.preprocess.crop)\n";
       return 1;
     }
     if (cloud_frame != files.end()) {
-      std::fprintf(stderr, "femreg register: note: %s (%s) applies to depth-image (.png) frames; "
+      std::fprintf(stderr, "femreg register: note: %s (%s) applies to depth-image (.png, .npy) frames; "
                    "%s is a point cloud: no masks\n", from, mask_dir.c_str(), cloud_frame->c_str());
       mask_dir.clear();
     } else if (!fs::is_directory(mask_dir, ec)) {
@@ -128,7 +152,7 @@ int RunRegister(const RegisterArgs& args) {
   }
   std::vector<std::string> truth_files;
   if (!args.ground_truth.empty()) {
-    status = ListFrames(args.ground_truth, {".csv"}, &truth_files);
+    status = ListFiles(args.ground_truth, {".csv"}, &truth_files);
     if (!status.ok()) {
       std::cerr << "femreg register: --ground-truth: " << status.message() << "\n";
       return 1;
@@ -200,7 +224,7 @@ int RunRegister(const RegisterArgs& args) {
     }
     if (s.ok()) {
       s = WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
-                              SummaryJson(args, scene, *tracker, rows, files, truth_files, interrupted));
+                              SummaryJson(resolved, scene, *tracker, rows, files, truth_files, interrupted));
     }
     return s;
   });
@@ -216,9 +240,9 @@ int RunRegister(const RegisterArgs& args) {
     PointCloud cloud;
     int dropped = 0;
     SensorPose sensor;
-    // A .png frame is a 16-bit depth image, back-projected with the scene's camera.
+    // A .png or .npy frame is a depth image, back-projected with the scene's camera.
     DepthImageOptions depth;
-    depth.depth_scale = args.depth_scale;
+    depth.depth_scale = resolved.depth_scale;
     depth.mask_dir = scene.registration.preprocess.mask_dir;  // mask_dir/<frame name>.png
     Status read = ReadFrame(files[f], scene.registration.camera, depth, &cloud, &dropped, &sensor);
     if (!read.ok()) {
@@ -493,8 +517,10 @@ void AddRegisterCommand(CLI::App* app) {
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--frames,-f", args->frames,
-                  "A folder of clouds (.pcd, .ply, .xyz, .txt) or 16-bit depth PNGs (natural order) or a quoted glob "
-                  "pattern such as 'scans/*.pcd'")
+                  "A folder of clouds (.pcd, .ply, .xyz, .txt) or depth images (16-bit .png, .npy) in "
+                  "natural order, a quoted glob pattern such as 'scans/*.pcd', or a TUM RGB-D sequence "
+                  "(a folder with associations.txt or depth.txt, or such a list): its depth images in "
+                  "the list's order, 5000 units per metre")
       ->required();
   cmd->add_option("--out,-o", args->out, "Output folder (refused if not empty, unless --force)")
       ->required();
@@ -512,9 +538,16 @@ void AddRegisterCommand(CLI::App* app) {
   cmd->add_option("--threads", args->threads, "Solver threads (overrides the scene)");
   cmd->add_flag("!--no-progress", args->progress, "No progress bar (print a line per frame)");
   cmd->add_option("--depth-scale", args->depth_scale,
-                  "Metres per unit of 16-bit depth PNG frames (default 0.001: millimetres, the "
-                  "common sensor convention); PNG frames need the scene's camera")
-      ->check(CLI::PositiveNumber);
+                  "Metres per unit of 16-bit depth frames (.png, uint16 .npy; default 0.001: "
+                  "millimetres, the common sensor convention; a TUM RGB-D sequence's 0.0002); "
+                  "depth frames need the scene's camera (or --intrinsics)")
+      ->check(CLI::PositiveNumber)
+      ->each([args](const std::string&) { args->depth_scale_given = true; });
+  cmd->add_option("--intrinsics", args->intrinsics,
+                  "The camera's intrinsics from an Open3D PinholeCameraIntrinsic JSON (width, height, "
+                  "intrinsic_matrix), replacing the scene's fx, fy, cx, cy, width and height; the pose "
+                  "stays the scene's camera's (without one, the scene frame is the camera's)")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--mask-dir", args->mask_dir,
                   "A folder of segmentation masks for depth PNG frames, DIR/<frame name>.png: 8- or "
                   "16-bit PNGs of the depth image's size, nonzero = the object (overrides the "

@@ -307,9 +307,13 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
   }
   json flags = {{"no_collision", args.no_collision}, {"max_frames", args.max_frames},
                 {"threads", args.threads}, {"depth_scale", args.depth_scale},
-                {"mask_dir", args.mask_dir.empty() ? json(nullptr) : json(args.mask_dir)}};
+                {"mask_dir", args.mask_dir.empty() ? json(nullptr) : json(args.mask_dir)},
+                {"intrinsics", args.intrinsics.empty() ? json(nullptr) : json(args.intrinsics)}};
   j["command_line"] = flags;
   j["provenance"] = ProvenanceJson(scene, o, args.sets, files, truth_files);
+  std::error_code ec;
+  const fs::path tum_list = args.tum_list.empty() ? fs::path() : fs::absolute(args.tum_list, ec).lexically_normal();
+  j["provenance"]["tum_list"] = args.tum_list.empty() ? json(nullptr) : json(ec ? args.tum_list : tum_list.string());
   // A file name or description that is not UTF-8 must not end the run: replace its bytes.
   return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }

@@ -37,8 +37,11 @@ struct RegisterArgs {
   bool no_collision = false;
   std::vector<std::string> sets;  // --set key.path=value
   bool skip_bad_frames = false;
-  double depth_scale = 0.001;  // m per unit of 16-bit depth PNG frames
-  std::string mask_dir;        // masks of depth PNG frames; overrides preprocess.mask_dir
+  double depth_scale = 0.001;  // m per unit of 16-bit depth frames (the one used, once resolved)
+  bool depth_scale_given = false;  // --depth-scale was given (else a TUM sequence's 5000 per metre)
+  std::string mask_dir;        // masks of depth frames; overrides preprocess.mask_dir
+  std::string intrinsics;      // an Open3D intrinsics JSON; overrides the scene camera's intrinsics
+  std::string tum_list;        // resolved: the TUM RGB-D list the frames come from, if any
 };
 
 struct FrameRow {
