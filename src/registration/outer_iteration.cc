@@ -1,15 +1,18 @@
-// An outer iteration's set-up at the current shape (rotations, pairs, loads, contacts, the
-// equilibrium terms) and the backtracking that holds its start against the last one's
-// (docs/theory/stopping.md#backtracking). The loop that runs them is in tracker.cc.
+// An outer iteration: its set-up at the current shape (rotations, pairs, loads, contacts, the
+// equilibrium terms), the backtracking that holds its start against the last one's
+// (docs/theory/stopping.md#backtracking), the solve and the stopping rules, and the contacts'
+// multipliers. The frame loop that runs them is in tracker.cc.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "registration/correspondences.h"
+#include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
 #include "registration/tracker_impl.h"
 #include "registration/tracker_state.h"
@@ -18,6 +21,24 @@ namespace femreg {
 
 namespace {
 
+// The outer iterations stop when the energy rose from one to the next (by more than
+// solver.relative_energy_tolerance) while no vertex moved farther than this many mean surface
+// edges, once the pair set is held: new rotations and pairs no longer lower it. They cycle among
+// nearly equal pairings (a vertex between two sparse cloud points, a cloud point between two
+// faces), or the held rotations of the corotational step stop being a descent; going on costs time
+// and does not help (docs/theory/stopping.md). A rise during a larger move is progress, not a cycle
+// (tests/hard_cases_test.cc): the inverted neo-Hookean start would stop while unfolding
+// (docs/notes/2026-11-27-stopping-on-a-rise.md,
+// docs/notes/2026-11-28-figures-from-code-comments.md). A frame that stops on a rise keeps its last
+// iterate, with the pairs and rotations it was solved with.
+constexpr double kRiseMoveLimit = 1.0;
+// ... and by no more than this fraction of the previous energy: a larger rise is a change of the
+// problem (the rotations of nearly flat elements turning over, a new contact set), not a cycle
+// among nearly equal pairings, and the next solve may use it (the 1:1000 flat plate of
+// tests/hard_cases_test.cc gains by going on)
+// (docs/notes/2026-11-28-figures-from-code-comments.md). With solver.relative_energy_tolerance at
+// this limit or above, no rise stops a frame.
+constexpr double kRiseEnergyLimit = 0.1;
 // Halvings of an outer iteration's move tried when the energy it reached, with its new pairs,
 // is more than kRiseEnergyLimit above its start's (Backtrack): down to an eighth of the move.
 constexpr int kBacktrackHalvings = 3;
@@ -148,6 +169,211 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
      << " of its move it still rose: the frame keeps that iteration's start";
   s->message = os.str();
   return false;
+}
+
+namespace {
+
+// The augmented-Lagrangian update after a solve (docs/theory/contact.md#response): each
+// contact's multiplier takes in the force its penetration still asks for, lambda <-
+// max(0, lambda + k (-g)), and a contact still deeper than the tolerance that did not at
+// least halve its penetration since the last update (or is new) gets 4 times its stiffness
+// (the data's pull can be far stiffer than k, and the inner solve is truncated), kept while
+// the contact is detected, so that one that flickers open and shut does not leak again.
+// Contacts no longer detected drop both. True while a contact is deeper than the tolerance
+// or held open wider than it: the frame goes on.
+bool UpdateContactMultipliers(TrackerState* state) {
+  const CollisionWorld& world = *state->collision;
+  const double k0 = world.stiffness(), tolerance = world.tolerance();
+  const double k_max = 1e3 * k0;  // keeps the stiffest contact within the solvers' reach
+  std::map<std::pair<int, int>, TrackerState::ContactMultiplier> next;
+  bool pending = false;
+  for (const Contact& c : state->contacts) {
+    const std::pair<int, int> key(c.source, c.object_b);
+    TrackerState::ContactMultiplier m;
+    m.stiffness = k0;
+    const auto it = state->contact_multipliers.find(key);
+    if (it != state->contact_multipliers.end()) m = it->second;
+    const double penetration = world.Penetration(c, state->x);
+    const bool stalled = penetration > tolerance && penetration > 0.5 * m.penetration;
+    m.lambda = std::max(0.0, m.lambda + m.stiffness * penetration);
+    if (stalled) m.stiffness = std::min(k_max, 4.0 * m.stiffness);
+    m.penetration = penetration;
+    if (penetration > tolerance || (m.lambda > 0 && -penetration > tolerance)) pending = true;
+    if (m.lambda > 0 || m.stiffness != k0) next[key] = m;
+  }
+  state->contact_multipliers.swap(next);
+  return pending;
+}
+
+}  // namespace
+
+bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
+                                   std::vector<DataPair>* pairs, double* previous_energy,
+                                   Vertices* previous, FrameSummary* s) {
+  const RegistrationOptions& options = state.options;
+  const auto t_outer = Clock::now();
+  femreg::OuterIteration row;
+  row.iteration = k + 1;
+  PairCounts counts;
+  const bool warm_start = options.forces.estimate && k == 0;
+  UpdateElementRotations(s);
+  if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
+  if (Backtracks(k, warm_start) && !Backtrack(k, fc, *previous, pairs, &counts, &row, previous_energy, s)) {
+    return false;
+  }
+  const energy::Problem& problem = frame_problem.problem();
+
+  auto t0 = Clock::now();
+  const double time_left = options.solver.time_budget_s > 0
+                               ? std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame))
+                               : 0.0;
+  const Vertices before_solve = state.x;
+  const SolveReport report = backend->Solve(problem, time_left, &state.x);
+  s->time.solve += Seconds(t0);
+  row.before = report.before;
+  if (k == 0) s->initial = row.before;
+  // The next outer iteration's energy, with what it finds, is held against this start's.
+  merit = warm_start ? std::numeric_limits<double>::infinity() : report.before.total();
+  merit_x = before_solve;
+  s->time.assembly += report.assemble_s;
+  s->time.factorization += report.factorize_s;
+  s->time.linear_solve += report.linear_solve_s;
+  s->time.evaluation += report.evaluate_s;
+  s->factorizations += report.factorizations + report.hierarchies;
+  s->linear_solves += report.linear_solves;
+  s->pcg_iterations += report.pcg_iterations;
+  row.inner_iterations = report.iterations;
+  if (!report.success) {
+    s->termination = TerminationType::kSolverFailure;
+    s->message = report.message + "; the shape before this iteration was kept";
+    s->iterations.push_back(row);
+    return false;
+  }
+  row.after = report.after;
+  const bool contacts_pending =
+      state.collision && state.collision->augmented() && UpdateContactMultipliers(&state);
+  // New multipliers change the energy: the next start is not held against this one.
+  if (contacts_pending) merit = std::numeric_limits<double>::infinity();
+  // The largest vertex move of this outer iteration and the one 99 % of the free vertices
+  // stay within (compared below with the mesh's edge and the cloud's sampling distance).
+  const Eigen::VectorXd moves = (state.x - before_solve).rowwise().norm();
+  double moved = moves.size() > 0 ? moves.maxCoeff() : 0.0;
+  double bulk = BulkMove(state, moves, frame_problem.problem().fixed());
+  row.max_move = moved;
+  first_bulk_move = k == 0 ? bulk : first_bulk_move;
+  double sum2 = 0.0;
+  for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();
+  row.rms_residual = std::sqrt(sum2 / static_cast<double>(pairs->size()));
+  row.time_s = Seconds(t_outer);
+  s->iterations.push_back(row);
+  s->inner_iterations += row.inner_iterations;
+  s->outer_iterations = k + 1;
+  s->final = row.after;
+  s->model_to_cloud = counts.model_to_cloud;
+  s->cloud_to_model = counts.cloud_to_model;
+  s->rejected = counts.rejected;
+  s->rms_residual = row.rms_residual;
+
+  if (state.fracture) {  // docs/theory/fracture.md: between outer iterations
+    const std::vector<int> source = FractureStep(k, *fc.index, &state, s);
+    if (!source.empty()) {
+      *previous = RemapRows(*previous, source);
+      frame_problem.BuildElastic(state);
+      frame_problem.BuildFrameTerms(&state);
+      state.contact_multipliers.clear();  // keyed by the old vertex numbering
+      merit = std::numeric_limits<double>::infinity();  // another mesh
+      model_index.Reset();
+      warm_triangles.clear();  // a new surface
+      paired_vertices.clear();
+      FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
+      moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
+      bulk = moved;
+      // The next outer iteration forms a new pair set, held from the one after.
+      rise_from = std::max(k + 2, std::max(1, options.data.hold_pairs_after));
+    }
+  }
+
+  // Compare with the previous outer iteration's result (its pairs were different, so the
+  // energy before this iteration's solve is not comparable; after a split, with nothing).
+  // The frame stops when the outer iteration changed the energy by less than the tolerance,
+  // or raised it by more (stopped_by "energy_rise") unless the rise goes on: before the pair
+  // set is held (rise_from: pairs still join as the surface reaches the cloud), during a move
+  // of more than kRiseMoveLimit mean edges, or by more than kRiseEnergyLimit of the previous
+  // energy (see there).
+  if (warm_start) {  // another energy: nothing to compare with
+    *previous_energy = std::numeric_limits<double>::infinity();
+    return k + 1 < iteration_limit;
+  }
+  const double e1 = row.after.total();
+  const double e0 = *previous_energy;
+  const double decrease = (e0 - e1) / std::max(e1, 1e-300);  // < 0: it rose
+  const double rise = (e1 - e0) / std::max(e0, 1e-300);      // > 0: it rose, of the previous
+  *previous_energy = std::isfinite(moved) ? e1 : std::numeric_limits<double>::infinity();
+  const double step_limit = options.solver.step_tolerance * state.mean_edge_length;
+  const double tolerance = options.solver.relative_energy_tolerance;
+  const bool rise_goes_on = decrease <= -tolerance &&
+                            (k < rise_from || moved > kRiseMoveLimit * state.mean_edge_length ||
+                             rise > kRiseEnergyLimit);
+  // Against the coarser of the mesh's and the cloud's resolutions: the cloud's sampling
+  // distance is twice its median point spacing (for points scattered at random over a
+  // surface, about the square root of the area per point; for a depth image's grid, two
+  // pixels' pitch). On the bundled datasets the mesh is the coarser; on a fine mesh under a
+  // sparse cloud the fit cannot resolve moves of a twentieth of an edge anyway. One length
+  // for the whole cloud: with several objects, the densest part of a labelled cloud sets it.
+  const double bulk_reference = std::max(state.mean_edge_length, 2.0 * fc.spacing);
+  const double bulk_limit = options.solver.bulk_step_tolerance * bulk_reference;
+  const bool settled = bulk_limit > 0 && bulk <= bulk_limit;
+  if (k > iteration_base && !stepping_in && !contacts_pending &&
+      (moved <= step_limit || settled || (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
+    s->termination = TerminationType::kConverged;
+    std::ostringstream os;
+    if (moved <= step_limit) {
+      s->stopped_by = "step";
+      os << "largest vertex move " << moved * 1e3 << " mm <= " << options.solver.step_tolerance
+         << " x mean edge " << state.mean_edge_length * 1e3 << " mm";
+    } else if (settled) {
+      s->stopped_by = "bulk_step";
+      os << "99 % of each object's free vertices moved at most " << bulk * 1e3 << " mm <= "
+         << options.solver.bulk_step_tolerance
+         << (bulk_reference > state.mean_edge_length ? " x the cloud's sampling distance " : " x mean edge ")
+         << bulk_reference * 1e3 << " mm (the largest move " << moved * 1e3 << " mm)";
+    } else if (decrease > -tolerance) {
+      s->stopped_by = "energy";
+      os << "relative energy change " << std::abs(decrease) << " < " << tolerance;
+    } else {
+      s->stopped_by = "energy_rise";
+      os << "energy rose by " << rise * 100 << " % with the largest vertex move "
+         << moved / state.mean_edge_length << " mean edges (relative_energy_tolerance " << tolerance
+         << "): new rotations and pairs no longer lower it";
+    }
+    s->message = os.str();
+    return false;
+  }
+  if (options.solver.time_budget_s > 0 && Seconds(t_frame) >= options.solver.time_budget_s) {
+    s->termination = TerminationType::kTimeBudget;
+    s->message = "time budget of " + std::to_string(options.solver.time_budget_s) + " s used";
+    return false;
+  }
+  if (k + 1 == iteration_limit) {
+    s->termination = TerminationType::kMaxIterations;
+    s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
+    if (iteration_base > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
+  }
+  return true;
+}
+
+void Tracker::Impl::MeasureContacts(FrameSummary* s) {
+  const auto t0 = Clock::now();
+  state.collision->SetFrame(state.frame);
+  state.collision->Detect(state.x, 0.0, &state.contacts);
+  const ContactStats cs = state.collision->Evaluate(state.contacts, state.x);
+  s->contacts = cs.contacts;
+  s->object_contacts = cs.object_contacts;
+  s->obstacle_contacts = cs.obstacle_contacts;
+  s->max_penetration = cs.max_penetration;
+  s->min_gap = cs.min_gap;
+  s->contact_forces = frame_problem.ContactForces(state.x);
+  s->time.collision += Seconds(t0);
 }
 
 }  // namespace femreg
