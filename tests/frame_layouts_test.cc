@@ -120,15 +120,7 @@ TEST(FrameLayouts, RegisterReadsNpyFramesThroughOpen3dIntrinsics) {
   const std::vector<std::string> plain = PlainErrors(tmp);
   Scene scene;
   ASSERT_TRUE(LoadScene(Demo() + "/scene.yaml", &scene).ok());
-  const CameraOptions& c = scene.registration.camera;
-  PinholeIntrinsics k;
-  k.fx = c.fx;
-  k.fy = c.fy;
-  k.cx = c.cx;
-  k.cy = c.cy;
-  k.width = c.width;
-  k.height = c.height;
-  ASSERT_TRUE(WriteOpen3dIntrinsics(tmp.File("camera.json"), k).ok());
+  ASSERT_TRUE(WriteCameraIntrinsics(tmp.File("camera.json"), scene.registration.camera).ok());
   fs::create_directories(tmp.File("npy"));
   fs::create_directories(tmp.File("masks"));
   for (int f = 0; f < kFrames; ++f) {

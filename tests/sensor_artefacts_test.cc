@@ -96,7 +96,7 @@ TEST(SensorArtefactsTest, QuantisationPutsDepthsOnTheDisparityGrid) {
     const double z = clean.points(i, 2);
     EXPECT_LE(std::abs(quantised.points(i, 2) - z), z * z * step / (2 * fb) * 1.05 + 1e-9);
   }
-  // The step between neighbouring levels grows as z^2: 10.6 mm at 1 m, 42 mm at 2 m.
+  // The step between neighbouring levels grows as z^2 (docs/notes/2026-11-29-sensor-artefacts.md).
   const auto level_gap = [&](double z) {
     const double d = std::round(fb / z / step) * step;
     return fb / (d - step) - fb / d;

@@ -83,6 +83,11 @@ Eigen::Matrix3d CameraRotation(const CameraOptions& camera);
 // PinholeCameraIntrinsic JSON file (ReadOpen3dIntrinsics); its pose and `enabled` stay as
 // they are. Errors name the file and the field.
 Status ReadCameraIntrinsics(const std::string& path, CameraOptions* camera);
+// Writes the camera's intrinsics as that JSON (WriteOpen3dIntrinsics).
+Status WriteCameraIntrinsics(const std::string& path, const CameraOptions& camera);
+// The camera's intrinsics, and a camera given them (its pose and `enabled` kept).
+PinholeIntrinsics IntrinsicsOf(const CameraOptions& camera);
+void SetIntrinsics(const PinholeIntrinsics& intrinsics, CameraOptions* camera);
 
 // Back-projects every pixel with a depth (inside [min_depth, max_depth], kept by `keep`
 // when given: width * height flags) through the camera into the scene frame:

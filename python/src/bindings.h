@@ -82,6 +82,14 @@ bool ToKeep(const py::object& mask, const RawDepthImage& image, std::vector<uint
 DepthImageOptions MakeDepthOptions(double depth_scale, double min_depth, double max_depth,
                                    int pixel_stride);
 
+// One frame file read through the camera by `read` (ReadFrame, ReadDepthFrame) with a
+// binding's depth arguments (MakeDepthOptions, mask_dir).
+using FrameReader = Status (*)(const std::string& path, const CameraOptions& camera,
+                               const DepthImageOptions& options, PointCloud* cloud);
+PointCloud ReadFrameWith(FrameReader read, const std::string& path, const CameraOptions& camera,
+                         double depth_scale, double min_depth, double max_depth, int pixel_stride,
+                         const std::string& mask_dir);
+
 // The bindings, by file, in the order the module init calls them.
 void BindOptions(py::module_& m);      // options_bindings.cc: Material and the options structs
 void BindMeshes(py::module_& m);       // io_bindings.cc: Mesh, mesh readers and writers

@@ -17,12 +17,7 @@ namespace {
 // `camera`'s pose (or the default camera's) with these intrinsics.
 CameraOptions WithIntrinsics(const py::object& camera, const PinholeIntrinsics& k) {
   CameraOptions c = camera.is_none() ? CameraOptions() : camera.cast<CameraOptions>();
-  c.fx = k.fx;
-  c.fy = k.fy;
-  c.cx = k.cx;
-  c.cy = k.cy;
-  c.width = k.width;
-  c.height = k.height;
+  SetIntrinsics(k, &c);
   return c;
 }
 
@@ -59,16 +54,7 @@ void BindCameraFiles(py::module_& m) {
         "PinholeCameraIntrinsic JSON file and the pose of `camera` (default: the camera "
         "frame is the scene frame). femreg.Error names the file and the field.");
   m.def("write_intrinsics",
-        [](const std::string& path, const CameraOptions& c) {
-          PinholeIntrinsics k;
-          k.fx = c.fx;
-          k.fy = c.fy;
-          k.cx = c.cx;
-          k.cy = c.cy;
-          k.width = c.width;
-          k.height = c.height;
-          Check(WriteOpen3dIntrinsics(path, k));
-        },
+        [](const std::string& path, const CameraOptions& c) { Check(WriteCameraIntrinsics(path, c)); },
         py::arg("path"), py::arg("camera"),
         "Writes the camera's intrinsics as Open3D's PinholeCameraIntrinsic JSON "
         "(open3d.io.read_pinhole_camera_intrinsic reads it); atomic.");
@@ -152,11 +138,9 @@ void BindCameraFiles(py::module_& m) {
   m.def("read_frame",
         [](const std::string& path, const CameraOptions& camera, double depth_scale,
            double min_depth, double max_depth, int pixel_stride, const std::string& mask_dir) {
-          DepthImageOptions options = MakeDepthOptions(depth_scale, min_depth, max_depth, pixel_stride);
-          options.mask_dir = mask_dir;
-          PointCloud cloud;
-          Check(ReadFrame(path, camera, options, &cloud));
-          return cloud;
+          return ReadFrameWith([](const std::string& p, const CameraOptions& c, const DepthImageOptions& o,
+                                  PointCloud* cloud) { return ReadFrame(p, c, o, cloud); },
+                               path, camera, depth_scale, min_depth, max_depth, pixel_stride, mask_dir);
         },
         py::arg("path"), py::arg("camera"), py::arg("depth_scale") = 0.001,
         py::arg("min_depth") = 0.0, py::arg("max_depth") = 0.0, py::arg("pixel_stride") = 1,

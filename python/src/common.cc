@@ -138,6 +138,16 @@ bool ToKeep(const py::object& mask, const RawDepthImage& image, std::vector<uint
   return true;
 }
 
+PointCloud ReadFrameWith(FrameReader read, const std::string& path, const CameraOptions& camera,
+                         double depth_scale, double min_depth, double max_depth, int pixel_stride,
+                         const std::string& mask_dir) {
+  DepthImageOptions options = MakeDepthOptions(depth_scale, min_depth, max_depth, pixel_stride);
+  options.mask_dir = mask_dir;
+  PointCloud cloud;
+  Check(read(path, camera, options, &cloud));
+  return cloud;
+}
+
 DepthImageOptions MakeDepthOptions(double depth_scale, double min_depth, double max_depth,
                                    int pixel_stride) {
   DepthImageOptions o;

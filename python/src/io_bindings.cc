@@ -270,11 +270,9 @@ void BindDepthImages(py::module_& m) {
   m.def("read_depth_frame",
         [](const std::string& path, const CameraOptions& camera, double depth_scale,
            double min_depth, double max_depth, int pixel_stride, const std::string& mask_dir) {
-          DepthImageOptions options = MakeDepthOptions(depth_scale, min_depth, max_depth, pixel_stride);
-          options.mask_dir = mask_dir;
-          PointCloud cloud;
-          Check(ReadDepthFrame(path, camera, options, &cloud));
-          return cloud;
+          return ReadFrameWith([](const std::string& p, const CameraOptions& c, const DepthImageOptions& o,
+                                  PointCloud* cloud) { return ReadDepthFrame(p, c, o, cloud); },
+                               path, camera, depth_scale, min_depth, max_depth, pixel_stride, mask_dir);
         },
         py::arg("path"), py::arg("camera"), py::arg("depth_scale") = 0.001,
         py::arg("min_depth") = 0.0, py::arg("max_depth") = 0.0, py::arg("pixel_stride") = 1,

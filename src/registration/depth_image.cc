@@ -191,17 +191,35 @@ std::string MaskPathFor(const std::string& mask_dir, const std::string& frame) {
   return (std::filesystem::path(mask_dir) / mask).string();
 }
 
-Status ReadCameraIntrinsics(const std::string& path, CameraOptions* camera) {
+PinholeIntrinsics IntrinsicsOf(const CameraOptions& camera) {
   PinholeIntrinsics k;
-  Status status = ReadOpen3dIntrinsics(path, &k);
-  if (!status.ok()) return status;
+  k.fx = camera.fx;
+  k.fy = camera.fy;
+  k.cx = camera.cx;
+  k.cy = camera.cy;
+  k.width = camera.width;
+  k.height = camera.height;
+  return k;
+}
+
+void SetIntrinsics(const PinholeIntrinsics& k, CameraOptions* camera) {
   camera->fx = k.fx;
   camera->fy = k.fy;
   camera->cx = k.cx;
   camera->cy = k.cy;
   camera->width = k.width;
   camera->height = k.height;
-  return Status::Ok();
+}
+
+Status ReadCameraIntrinsics(const std::string& path, CameraOptions* camera) {
+  PinholeIntrinsics k;
+  Status status = ReadOpen3dIntrinsics(path, &k);
+  if (status.ok()) SetIntrinsics(k, camera);
+  return status;
+}
+
+Status WriteCameraIntrinsics(const std::string& path, const CameraOptions& camera) {
+  return WriteOpen3dIntrinsics(path, IntrinsicsOf(camera));
 }
 
 Status ListFrameFiles(const std::string& path, FrameFiles* frames) {
