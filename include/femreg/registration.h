@@ -149,6 +149,13 @@ struct DataTermOptions {
   // with fracture on (a piece coming apart is a displacement no strain bounds).
   bool occluders = true;
   double occluder_margin = 0.02;  // m, > 0
+  // Points the body cannot explain at a plausible strain: after an outer iteration, an
+  // element stretched or compressed by more than this (the largest principal stretch's
+  // distance from 1) against the frame's start marks the cloud points that pull on it and
+  // lay off the model at the frame's start (a hand's fingers beside the object); they pull
+  // nothing for the rest of the frame, which starts again without them
+  // (docs/guide/partial-views.md#implausible-points). Not with fracture on. 0 = off.
+  double max_strain_step = 1.0;
   // Lost (FrameSummary::lost): a frame whose surface facing the sensor has cloud points near
   // on less than this share of what the sequence's trusted frames reach (FrameConfidence's
   // coverage), or that could not be solved, keeps the last good shape and is flagged
@@ -408,6 +415,8 @@ struct FrameSummary {
   // edges and the frame
   // started again, stiff and stepping down (docs/theory/stopping.md#large-motions).
   int large_motion_restarts = 0;
+  // Cloud points found implausible (data.max_strain_step) and the frame's restarts for them.
+  int implausible_points = 0, implausible_restarts = 0;
   FrameConfidence confidence;
   // The object was not found (data.lost_coverage): the result is the last good frame's shape.
   bool lost = false;

@@ -74,7 +74,8 @@ void BindOptions(py::module_& m) {
       .def_readwrite("hold_pairs_after", &DataTermOptions::hold_pairs_after)
       .def_readwrite("lost_coverage", &DataTermOptions::lost_coverage)
       .def_readwrite("occluders", &DataTermOptions::occluders)
-      .def_readwrite("occluder_margin", &DataTermOptions::occluder_margin);
+      .def_readwrite("occluder_margin", &DataTermOptions::occluder_margin)
+      .def_readwrite("max_strain_step", &DataTermOptions::max_strain_step);
   EnumProperty(data, "loss", &DataTermOptions::loss, "data.loss",
                {RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy, RobustLoss::kTukey},
                "robust loss: none, huber, cauchy, tukey");

@@ -10,7 +10,12 @@
 namespace femreg {
 namespace {
 
-// The largest distance of a principal stretch of F from 1 (infinite when inverted or flat).
+// A trusted frame's coverage enters the reference (a running mean over such frames).
+constexpr double kTrusted = 0.5;
+constexpr double kReferenceRate = 0.1;
+
+}  // namespace
+
 double StretchDeviation(const Eigen::Matrix3d& F) {
   if (!(F.determinant() > 0.0)) return std::numeric_limits<double>::infinity();
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
@@ -18,12 +23,6 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
   const Eigen::Vector3d l = eig.eigenvalues().cwiseMax(0.0);
   return std::max(std::sqrt(l(2)) - 1.0, 1.0 - std::sqrt(l(0)));
 }
-
-// A trusted frame's coverage enters the reference (a running mean over such frames).
-constexpr double kTrusted = 0.5;
-constexpr double kReferenceRate = 0.1;
-
-}  // namespace
 
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
                                   const std::vector<DataPair>& pairs, double tolerance) {

@@ -17,6 +17,7 @@
 #ifndef FEMREG_REGISTRATION_CONFIDENCE_H_
 #define FEMREG_REGISTRATION_CONFIDENCE_H_
 
+#include <Eigen/Core>
 #include <vector>
 
 #include "femreg/registration.h"
@@ -24,6 +25,10 @@
 #include "registration/tracker_state.h"
 
 namespace femreg {
+
+// The largest principal stretch's distance from 1 of the deformation gradient F (infinite
+// when F is inverted or flat).
+double StretchDeviation(const Eigen::Matrix3d& F);
 
 // The scores of state.x against the frame's cloud: `pairs` are the last outer iteration's
 // (their cloud->model pairs stand for the points they were made from), and state.residuals

@@ -6,6 +6,7 @@
 
 #include "femreg/point_cloud.h"  // CameraRotation
 #include "geometry/zbuffer.h"
+#include "registration/confidence.h"  // StretchDeviation
 
 namespace femreg {
 
@@ -120,7 +121,10 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
   OccluderCounts counts;
   const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
   for (size_t i = 0; i < occluder->size(); ++i) {
-    if (!(*occluder)[i]) continue;
+    if ((*occluder)[i] != 1) {
+      counts.occluders += (*occluder)[i] != 0;
+      continue;
+    }
     if (surface.Closest(points.row(static_cast<Eigen::Index>(i))).squared_distance <= grow * grow) {
       (*occluder)[i] = 0;
     } else {
@@ -128,6 +132,69 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
     }
   }
   return counts;
+}
+
+int MarkImplausible(const TrackerState& state, const Vertices& start, const SurfaceIndex& surface,
+                    const Vertices& points, const PointIndex& cloud_index, double spacing,
+                    std::vector<char>* marks) {
+  const double limit = state.options.data.max_strain_step;
+  const int n = static_cast<int>(points.rows());
+  if (!(limit > 0) || n == 0 || start.rows() != state.x.rows() || state.surface.rows() == 0) return 0;
+  std::vector<char> strained(static_cast<size_t>(state.x.rows()), 0);
+  bool any = false;
+  for (const ObjectState& o : state.objects) {
+    const auto& tets = o.model.tets();
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      Eigen::Matrix3d Dm, Ds;
+      const int a = o.offset + tets(e, 0);
+      for (int k = 0; k < 3; ++k) {
+        const int b = o.offset + tets(e, k + 1);
+        Dm.col(k) = (start.row(b) - start.row(a)).transpose();
+        Ds.col(k) = (state.x.row(b) - state.x.row(a)).transpose();
+      }
+      const double det = Dm.determinant();
+      if (!(std::abs(det) > 0.0)) continue;  // flat at the start: no strain to measure from
+      if (!(StretchDeviation(Ds * Dm.inverse()) > limit)) continue;
+      for (int k = 0; k < 4; ++k) strained[static_cast<size_t>(o.offset + tets(e, k))] = 1;
+      any = true;
+    }
+  }
+  if (!any) return 0;
+  if (marks->size() != static_cast<size_t>(n)) marks->assign(static_cast<size_t>(n), 0);
+  const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
+  const SurfaceIndex at_start(start, state.surface);
+  // -1 unknown, 0 on the model at the start, 1 off it.
+  std::vector<signed char> off(static_cast<size_t>(n), -1);
+  auto Off = [&](int i) {
+    signed char& o = off[static_cast<size_t>(i)];
+    if (o < 0) o = at_start.Closest(points.row(i)).squared_distance > grow * grow ? 1 : 0;
+    return o == 1;
+  };
+  // Seeds in the points' order, grown breadth first: the same set for any thread count.
+  std::vector<int> queue;
+  for (int i = 0; i < n; ++i) {
+    if ((*marks)[static_cast<size_t>(i)]) continue;
+    const SurfaceIndex::Hit hit = surface.Closest(points.row(i));
+    if (hit.triangle < 0) continue;
+    bool touches = false;
+    for (int k = 0; k < 3; ++k) touches |= strained[static_cast<size_t>(state.surface(hit.triangle, k))] != 0;
+    if (!touches || !Off(i)) continue;
+    (*marks)[static_cast<size_t>(i)] = 2;
+    queue.push_back(i);
+  }
+  const double radius2 = 9.0 * spacing * spacing;
+  int indices[kNeighbours];
+  double squared[kNeighbours];
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int found = cloud_index.KNearest(points.row(queue[head]), kNeighbours, indices, squared);
+    for (int j = 0; j < found; ++j) {
+      const int k = indices[j];
+      if (squared[j] > radius2 || (*marks)[static_cast<size_t>(k)] || !Off(k)) continue;
+      (*marks)[static_cast<size_t>(k)] = 2;
+      queue.push_back(k);
+    }
+  }
+  return static_cast<int>(queue.size());
 }
 
 }  // namespace femreg

@@ -258,6 +258,9 @@ bool DataTermOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(occluder_margin) && occluder_margin > 0)) {
     return Fail(error, "data.occluder_margin", "must be > 0", occluder_margin);
   }
+  if (!(std::isfinite(max_strain_step) && max_strain_step >= 0)) {
+    return Fail(error, "data.max_strain_step", "must be >= 0 (0 = off)", max_strain_step);
+  }
   if (min_points < 0) return Fail(error, "data.min_points", "must be >= 0", min_points);
   if (!(lost_coverage >= 0 && lost_coverage <= 1)) {
     return Fail(error, "data.lost_coverage", "must be in [0, 1] (0 = never lost)", lost_coverage);

@@ -357,7 +357,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (k + 1 == iteration_limit) {
     s->termination = TerminationType::kMaxIterations;
     s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
-    if (iteration_base > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
+    if (s->large_motion_restarts > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
   }
   return true;
 }

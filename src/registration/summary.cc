@@ -24,6 +24,9 @@ std::string FrameSummary::BriefReport() const {
     brief += ", initial pose " + initial_pose + (pose_ambiguous ? " (ambiguous)" : "");
   }
   if (large_motion_restarts > 0) brief += ", large motion: started again stiff";
+  if (implausible_restarts > 0) {
+    brief += ", " + std::to_string(implausible_points) + " implausible points: started again without them";
+  }
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm, gap %.3f mm", contacts,
                   max_penetration * 1e3, min_gap * 1e3);
@@ -43,6 +46,10 @@ std::string FrameSummary::FullReport() const {
     os << "  large motion: iteration 1 moved the bulk of the vertices more than 3 mean edges; the frame "
           "started again from iteration 2, the elastic weight x100, x30, x10, x3, then x1, pairing only "
           "surface that faces the sensor\n";
+  }
+  if (implausible_restarts > 0) {
+    os << "  implausible points: " << implausible_points << " cloud points pulled elements beyond "
+          "data.max_strain_step; the frame started again without them (" << implausible_restarts << "x)\n";
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
      << points_used << " used\n";

@@ -36,6 +36,8 @@ using Clock = std::chrono::steady_clock;
 // scaled by each of kStiffScales for one outer iteration (the smooth part of the motion
 // first), then the ordinary schedule (docs/theory/stopping.md#large-motions).
 constexpr double kLargeMotionEdges = 3.0;
+// Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
+constexpr int kMaxImplausibleRestarts = 2;
 constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
@@ -278,6 +280,26 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       warm_triangles.clear();
       paired_vertices.clear();
       ++s.large_motion_restarts;
+    } else if (!stepping_in && !state.fracture && s.implausible_restarts < kMaxImplausibleRestarts &&
+               k + 1 < iteration_limit && options.data.max_strain_step > 0) {
+      t0 = Clock::now();
+      const int marked = MarkImplausible(state, start, Surface(), fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
+      s.time.correspondences += Seconds(t0);
+      if (marked > 0) {
+        // Back to the start without them: the shape they pulled into is no starting point.
+        state.x = start;
+        fc.occluders.occluders += marked;
+        s.occluded_points = fc.occluders.occluders;
+        s.implausible_points += marked;
+        ++s.implausible_restarts;
+        iteration_base = k + 1;
+        iteration_limit = iteration_base + options.solver.max_outer_iterations;
+        rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
+        merit = std::numeric_limits<double>::infinity();
+        previous_energy = merit;
+        warm_triangles.clear();
+        paired_vertices.clear();
+      }
     }
   }
   if (iteration_base > 0) frame_problem.SetElasticScale(state, 1.0);  // a frame stopped while stiff

@@ -124,7 +124,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     const YamlValue d = v["data"];
     d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
                  "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity", "hold_pairs_after",
-                 "occluders", "occluder_margin", "min_points", "min_points_per_surface_vertex",
+                 "occluders", "occluder_margin", "max_strain_step", "min_points", "min_points_per_surface_vertex",
                  "lost_coverage"});
     DataTermOptions& o = r.data;
     if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
@@ -154,6 +154,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     if (d.Has("hold_pairs_after")) o.hold_pairs_after = IntAtLeast(d["hold_pairs_after"], 0);
     if (d.Has("occluders")) o.occluders = d["occluders"].AsBool();
     if (d.Has("occluder_margin")) o.occluder_margin = d["occluder_margin"].AsDouble();
+    if (d.Has("max_strain_step")) o.max_strain_step = d["max_strain_step"].AsDouble();
     if (d.Has("min_points")) o.min_points = d["min_points"].AsInt();
     if (d.Has("min_points_per_surface_vertex")) {
       o.min_points_per_surface_vertex = d["min_points_per_surface_vertex"].AsDouble();

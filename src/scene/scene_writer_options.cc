@@ -96,6 +96,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   Put(data, "hold_pairs_after", a.hold_pairs_after, d.data.hold_pairs_after);
   Put(data, "occluders", a.occluders, d.data.occluders);
   Put(data, "occluder_margin", a.occluder_margin, d.data.occluder_margin);
+  Put(data, "max_strain_step", a.max_strain_step, d.data.max_strain_step);
   Put(data, "min_points", a.min_points, d.data.min_points);
   Put(data, "min_points_per_surface_vertex", a.min_points_per_surface_vertex,
       d.data.min_points_per_surface_vertex);
