@@ -16,7 +16,9 @@
 
 #include "energy/free_space.h"
 #include "energy/term.h"
+#include "femreg/camera_io.h"
 #include "femreg/io.h"
+#include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "registration/free_space.h"
@@ -150,22 +152,66 @@ TEST(FreeSpaceOptions, ParsedCheckedAndWrittenBack) {
 }
 
 // A slab 20 x 20 x 2 cm whose rest shape has a dome 4 cm high in its middle (towards a camera
-// above), clamped at its bottom, registered to its flat top seen by the camera: the truth is
-// the slab pressed flat. The data pull the dome down only as far as the body lets them (its
-// rest shape resists); free space holds it behind the observed top.
-struct Dome {
-  double apex = 0.0;      // m: the top surface's highest point above the observed top
-  int held = 0;           // free_space_vertices of the last frame
+// above), clamped at its bottom, registered to its flat top as the camera sees it: the truth
+// is the slab pressed flat. The dome is beyond the data's reach (data.max_distance) and its
+// rest shape holds it up; free space pushes it back behind the observed top.
+enum class Input {
+  kCloud,       // points on a 4 mm grid, the camera known
+  kDepthImage,  // the camera's depth image of the top, back-projected (as `femreg register` reads one)
+  kNoCamera,    // the grid without a camera: the view is the direction estimated for visibility
 };
 
-Dome RegisterDome(bool free_space, SolverBackend backend) {
-  const double size = 0.2, thick = 0.02, radius = 0.07, height = 0.04;
-  TetMesh mesh = MakeBox(Eigen::Vector3d(size, size, thick), 14, 14, 2);
+struct Dome {
+  double apex = 0.0;  // m: the top surface's highest point above the observed top
+  int held = 0;       // free_space_vertices, most in a frame
+};
+
+constexpr double kSize = 0.2, kThick = 0.02;
+
+PointCloud DomeCloud(const RegistrationOptions& options, Input input) {
+  PointCloud cloud;
+  if (input == Input::kDepthImage) {
+    // Per pixel, the ray's hit on the plane of the top, where it lies on the slab.
+    const CameraOptions& camera = options.camera;
+    const Eigen::Matrix3d R = CameraRotation(camera);
+    RawDepthImage image;
+    image.width = camera.width;
+    image.height = camera.height;
+    image.metres.assign(static_cast<size_t>(camera.width * camera.height), 0.0f);
+    std::vector<uint8_t> keep(image.metres.size(), 0);
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const Eigen::Vector3d d = R.transpose() * Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+        const double t = (kThick - camera.position.z()) / d.z();
+        const Eigen::Vector3d p = camera.position + t * d;
+        if (t > 0 && p.x() >= 0 && p.x() <= kSize && p.y() >= 0 && p.y() <= kSize) {
+          image.metres[static_cast<size_t>(v * camera.width + u)] = static_cast<float>(t);
+          keep[static_cast<size_t>(v * camera.width + u)] = 1;
+        }
+      }
+    }
+    const Status status = BackProjectDepth(image, camera, DepthImageOptions(), &keep, &cloud);
+    EXPECT_TRUE(status.ok()) << status.message();
+    EXPECT_GT(cloud.size(), 2000);
+    return cloud;
+  }
+  std::vector<Eigen::Vector3d> pts;
+  for (double x = 0.002; x < kSize; x += 0.004) {
+    for (double y = 0.002; y < kSize; y += 0.004) pts.emplace_back(x, y, kThick);
+  }
+  cloud.points.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) cloud.points.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  return cloud;
+}
+
+Dome RegisterDome(bool free_space, SolverBackend backend, Input input) {
+  const double radius = 0.07, height = 0.04;
+  TetMesh mesh = MakeBox(Eigen::Vector3d(kSize, kSize, kThick), 14, 14, 2);
   std::vector<int> bottom;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
-    const Eigen::Vector2d d = mesh.rest.row(v).head<2>().transpose() - Eigen::Vector2d(size / 2, size / 2);
+    const Eigen::Vector2d d = mesh.rest.row(v).head<2>().transpose() - Eigen::Vector2d(kSize / 2, kSize / 2);
     const double bump = std::max(0.0, 1.0 - d.squaredNorm() / (radius * radius));
-    mesh.rest(v, 2) += height * bump * bump * mesh.rest(v, 2) / thick;
+    mesh.rest(v, 2) += height * bump * bump * mesh.rest(v, 2) / kThick;
     if (mesh.rest(v, 2) < 1e-9) bottom.push_back(v);
   }
   mesh.x = mesh.rest;
@@ -174,10 +220,15 @@ Dome RegisterDome(bool free_space, SolverBackend backend) {
   material.material.poisson_ratio = 0.3;
   material.material.density = 1000;
   RegistrationOptions options;
-  options.camera.enabled = true;
-  options.camera.position = Eigen::Vector3d(size / 2, size / 2, 0.45);
-  options.camera.target = Eigen::Vector3d(size / 2, size / 2, 0.0);
+  options.camera.enabled = input != Input::kNoCamera;
+  options.camera.position = Eigen::Vector3d(kSize / 2, kSize / 2, 0.45);
+  options.camera.target = Eigen::Vector3d(kSize / 2, kSize / 2, 0.0);
   options.camera.up = Eigen::Vector3d(0, 1, 0);
+  options.camera.fx = options.camera.fy = 150.0;
+  options.camera.width = 160;
+  options.camera.height = 120;
+  options.camera.cx = 79.5;
+  options.camera.cy = 59.5;
   options.solver.num_threads = 1;
   options.solver.backend = backend;
   options.free_space.enabled = free_space;
@@ -187,39 +238,42 @@ Dome RegisterDome(bool free_space, SolverBackend backend) {
   Dome dome;
   if (!status.ok()) return dome;
   EXPECT_TRUE(tracker->AddAnchor("bottom", 0, bottom, true).ok());
-  PointCloud cloud;
-  std::vector<Eigen::Vector3d> pts;
-  for (double x = 0.002; x < size; x += 0.004) {
-    for (double y = 0.002; y < size; y += 0.004) pts.emplace_back(x, y, thick);
-  }
-  cloud.points.resize(static_cast<Eigen::Index>(pts.size()), 3);
-  for (size_t i = 0; i < pts.size(); ++i) cloud.points.row(static_cast<Eigen::Index>(i)) = pts[i].transpose();
+  const PointCloud cloud = DomeCloud(options, input);
   for (int f = 0; f < 3; ++f) {
     FrameSummary s;
     EXPECT_TRUE(tracker->Track(cloud, &s).ok());
     EXPECT_TRUE(s.IsSolutionUsable()) << s.FullReport();
     const Vertices& x = tracker->vertices(0);
-    dome.apex = x.col(2).maxCoeff() - thick;
-    dome.held = s.free_space_vertices;
-    std::printf("free space %s, %s, frame %d: apex %.2f mm above the observed top, %d vertices held, %s\n",
-                free_space ? "on" : "off", ToString(backend), f, dome.apex * 1e3, dome.held,
-                s.BriefReport().c_str());
+    dome.apex = x.col(2).maxCoeff() - kThick;
+    dome.held = std::max(dome.held, s.free_space_vertices);
+    std::printf("free space %s, %s, input %d, frame %d: apex %.2f mm above the observed top, %d held, "
+                "visibility %s, %s\n",
+                free_space ? "on" : "off", ToString(backend), static_cast<int>(input), f, dome.apex * 1e3,
+                dome.held, s.visibility.c_str(), s.BriefReport().c_str());
   }
   return dome;
 }
 
-TEST(FreeSpace, ADomeInFrontOfTheObservedSurfaceIsHeldBehindIt) {
+void ExpectHeldBehind(SolverBackend backend, Input input) {
   const double tolerance = FreeSpaceOptions().tolerance;
-  for (SolverBackend backend : {SolverBackend::kFast, SolverBackend::kCeres}) {
-    const Dome without = RegisterDome(false, backend);
-    const Dome with = RegisterDome(true, backend);
-    // Without: the dome stands in the space the camera saw through, beyond the tolerance.
-    EXPECT_GT(without.apex, 2.0 * tolerance) << ToString(backend);
-    EXPECT_EQ(without.held, 0);
-    // With: no farther in front of the observed top than the tolerance and the penalty's give.
-    EXPECT_LT(with.apex, tolerance + 0.003) << ToString(backend);
-    EXPECT_GT(with.held, 0) << ToString(backend);
-  }
+  const Dome without = RegisterDome(false, backend, input);
+  const Dome with = RegisterDome(true, backend, input);
+  // Without: the dome stands in the space the camera saw through, beyond the tolerance.
+  EXPECT_GT(without.apex, 2.0 * tolerance);
+  EXPECT_EQ(without.held, 0);
+  // With: no farther in front of the observed top than the tolerance and the penalty's give.
+  EXPECT_LT(with.apex, tolerance + 0.003);
+  EXPECT_GT(with.held, 0);
+}
+
+TEST(FreeSpace, ADomeInFrontOfTheObservedSurfaceIsHeldBehindItByBothBackEnds) {
+  ExpectHeldBehind(SolverBackend::kFast, Input::kCloud);
+  ExpectHeldBehind(SolverBackend::kCeres, Input::kCloud);
+}
+
+TEST(FreeSpace, FromADepthImageAndWithoutACamera) {
+  ExpectHeldBehind(SolverBackend::kFast, Input::kDepthImage);
+  ExpectHeldBehind(SolverBackend::kFast, Input::kNoCamera);
 }
 
 }  // namespace
