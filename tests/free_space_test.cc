@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "registration/free_space.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -204,17 +206,23 @@ PointCloud DomeCloud(const RegistrationOptions& options, Input input) {
   return cloud;
 }
 
-Dome RegisterDome(bool free_space, SolverBackend backend, Input input) {
+// The slab with its dome, and its bottom's vertices.
+TetMesh DomeMesh(std::vector<int>* bottom) {
   const double radius = 0.07, height = 0.04;
   TetMesh mesh = MakeBox(Eigen::Vector3d(kSize, kSize, kThick), 14, 14, 2);
-  std::vector<int> bottom;
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const Eigen::Vector2d d = mesh.rest.row(v).head<2>().transpose() - Eigen::Vector2d(kSize / 2, kSize / 2);
     const double bump = std::max(0.0, 1.0 - d.squaredNorm() / (radius * radius));
     mesh.rest(v, 2) += height * bump * bump * mesh.rest(v, 2) / kThick;
-    if (mesh.rest(v, 2) < 1e-9) bottom.push_back(v);
+    if (mesh.rest(v, 2) < 1e-9) bottom->push_back(v);
   }
   mesh.x = mesh.rest;
+  return mesh;
+}
+
+Dome RegisterDome(bool free_space, SolverBackend backend, Input input) {
+  std::vector<int> bottom;
+  const TetMesh mesh = DomeMesh(&bottom);
   ObjectMaterial material;
   material.material.youngs_modulus = 2e5;
   material.material.poisson_ratio = 0.3;
@@ -275,6 +283,55 @@ TEST(FreeSpace, FromADepthImageAndWithoutACamera) {
   ExpectHeldBehind(SolverBackend::kFast, Input::kDepthImage);
   ExpectHeldBehind(SolverBackend::kFast, Input::kNoCamera);
 }
+
+#ifdef FEMREG_CLI_PATH
+// `femreg register` on the dome: stats.csv's free_space_vertices, summary.json's free_space,
+// and --set reaching the option.
+TEST(FreeSpace, RegisterReportsTheHeldVertices) {
+  using testing_util::CliRun;
+  using testing_util::Femreg;
+  using testing_util::Slurp;
+  using testing_util::StatsColumn;
+  using testing_util::TempDir;
+  TempDir tmp("femreg_free_space");
+  std::vector<int> bottom;
+  const TetMesh mesh = DomeMesh(&bottom);
+  ASSERT_TRUE(WriteVtu(tmp.File("dome.vtu"), mesh, mesh.rest).ok());
+  std::filesystem::create_directories(tmp.File("clouds"));
+  RegistrationOptions options;
+  options.camera.enabled = true;
+  const PointCloud cloud = DomeCloud(options, Input::kCloud);
+  for (const char* name : {"clouds/frame_0000.pcd", "clouds/frame_0001.pcd"}) {
+    ASSERT_TRUE(WritePointCloud(tmp.File(name), cloud).ok());
+  }
+  const std::string scene = tmp.Write(
+      "scene.yaml",
+      "objects:\n"
+      "  - name: slab\n"
+      "    mesh: dome.vtu\n"
+      "    material: {youngs_modulus: 200000, poisson_ratio: 0.3, density: 1000}\n"
+      "registration:\n"
+      "  camera: {position: [0.1, 0.1, 0.45], target: [0.1, 0.1, 0], up: [0, 1, 0]}\n"
+      "anchors:\n"
+      "  - {name: bottom, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.000001]}}, hard: true}\n");
+  const std::string common = "register --scene " + scene + " --frames " + tmp.File("clouds") + " --threads 1 --out ";
+  const CliRun on = Femreg(common + tmp.File("on"));
+  ASSERT_EQ(on.code, 0) << on.out;
+  const CliRun off = Femreg(common + tmp.File("off") + " --set registration.free_space.enabled=false");
+  ASSERT_EQ(off.code, 0) << off.out;
+  const std::vector<std::string> held_on = StatsColumn(tmp.File("on"), "free_space_vertices");
+  const std::vector<std::string> held_off = StatsColumn(tmp.File("off"), "free_space_vertices");
+  ASSERT_EQ(held_on.size(), 2u);
+  ASSERT_EQ(held_off.size(), 2u);
+  int most = 0;
+  for (const std::string& v : held_on) most = std::max(most, std::stoi(v));
+  EXPECT_GT(most, 0);
+  for (const std::string& v : held_off) EXPECT_EQ(v, "0");
+  const std::string summary = Slurp(tmp.File("on") + "/summary.json");
+  EXPECT_NE(summary.find("\"free_space\""), std::string::npos);
+  EXPECT_NE(summary.find("vertices_per_frame"), std::string::npos);
+}
+#endif
 
 }  // namespace
 }  // namespace femreg
