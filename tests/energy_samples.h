@@ -260,6 +260,23 @@ struct Sample<energy::ExternalLoad> {
   }
 };
 
+// Free space: the vertex a little in front of the allowed depth along a random ray (away from
+// the hinge at zero, where numeric differences would straddle it).
+template <>
+struct Sample<energy::FreeSpacePenalty> {
+  static constexpr const char* kName = "FreeSpacePenalty";
+  energy::FreeSpacePenalty block;
+  Vertices x;
+  explicit Sample(std::mt19937* rng) {
+    block.origin = RandomPoint(rng, 0.5);
+    block.ray = RandomPoint(rng, 1).normalized();
+    x.resize(1, 3);
+    x.row(0) = (block.origin + 0.4 * block.ray + RandomPoint(rng, 0.01)).transpose();
+    block.depth = block.ray.dot(x.row(0).transpose() - block.origin) + 0.003;
+    block.weight = 1e4;
+  }
+};
+
 // The registry's block types, as a gtest type list.
 template <class Tuple>
 struct BlockTypesOf;

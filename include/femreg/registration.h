@@ -300,6 +300,19 @@ struct ForceOptions {
   bool IsValid(std::string* error) const;
 };
 
+// Free space (docs/theory/data-terms.md#free-space): with a sensor position or direction (the
+// camera, a file's viewpoint, or the direction estimated for visibility), the rays to the
+// cloud's points passed through empty space. A surface vertex nearer to the sensor than the
+// observed depth at its pixel by more than `tolerance` is pushed back along its ray by a
+// one-sided penalty of stiffness `weight` (N/m per vertex). Pixels where nothing was observed
+// hold nothing. Re-decided every outer iteration, with the pairs.
+struct FreeSpaceOptions {
+  bool enabled = true;
+  double tolerance = 0.01;  // m, > 0
+  double weight = 1.0e4;    // N/m per vertex, > 0 (as a contact's penalty)
+  bool IsValid(std::string* error) const;
+};
+
 struct RegistrationOptions {
   Regularizer regularizer = Regularizer::kCorotational;
   CameraOptions camera;
@@ -308,6 +321,7 @@ struct RegistrationOptions {
   WeightOptions weights;
   SolverOptions solver;
   ForceOptions forces;
+  FreeSpaceOptions free_space;
   // The scene's gravity (on the lumped masses) and nodal loads act in the registration
   // energy as they do in simulate (Tracker::Create(scene); Tracker::SetExternalLoads).
   bool loads = true;
@@ -386,6 +400,9 @@ struct FrameSummary {
   int points_used = 0;            // after preprocessing
   double voxel_size = 0.0;        // m: the automatic subsampling's voxel (0: not applied)
   int occluded_points = 0;        // points of an occluder in front of the model (data.occluders)
+  // Surface vertices held back by free space at the result (registration.free_space): in
+  // front of the observed depth by more than its tolerance.
+  int free_space_vertices = 0;
   // How model->cloud pairs were restricted to what the sensor could see: "camera",
   // "viewpoint" (from the file), "direction (x, y, z)" (estimated), "none"; plus the
   // reciprocity trim's distance (m; 0 = off) and the fraction of the surface vertices

@@ -94,6 +94,14 @@ void BindOptions(py::module_& m) {
       .def_readwrite("friction", &ForceOptions::friction)
       .def_readwrite("balance", &ForceOptions::balance);
 
+  py::class_<FreeSpaceOptions>(m, "FreeSpaceOptions",
+                               "Free space: surface vertices in front of the observed depth "
+                               "(the scene's registration.free_space).")
+      .def(py::init<>())
+      .def_readwrite("enabled", &FreeSpaceOptions::enabled)
+      .def_readwrite("tolerance", &FreeSpaceOptions::tolerance)
+      .def_readwrite("weight", &FreeSpaceOptions::weight);
+
   py::class_<WeightOptions>(m, "WeightOptions")
       .def(py::init<>())
       .def_readwrite("data", &WeightOptions::data)
@@ -142,6 +150,7 @@ void BindOptions(py::module_& m) {
       .def_readwrite("weights", &RegistrationOptions::weights)
       .def_readwrite("solver", &RegistrationOptions::solver)
       .def_readwrite("forces", &RegistrationOptions::forces)
+      .def_readwrite("free_space", &RegistrationOptions::free_space)
       .def_readwrite("loads", &RegistrationOptions::loads,
                      "The scene's gravity and loads act in the registration energy.")
       .def("validate",

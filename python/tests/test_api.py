@@ -135,6 +135,27 @@ def test_a_frame_without_the_object_is_lost_and_keeps_the_last_good_shape():
     np.testing.assert_array_equal(x, good)
 
 
+def test_free_space_is_reachable():
+    # registration.free_space (docs/guide/partial-views.md#free-space) from Python: its options,
+    # their checks, and the vertices it held in the summary (none: the model matches the cloud).
+    options = femreg.RegistrationOptions()
+    assert options.free_space.enabled and options.free_space.tolerance == 0.01
+    assert options.free_space.weight == 1e4
+    options.free_space.tolerance = 0.02
+    options.free_space.weight = 5e3
+    options.validate()
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    tracker = femreg.Tracker([mesh], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+    tracker.track(_surface_cloud(mesh, mesh.rest))
+    assert tracker.summary["usable"] and tracker.summary["free_space_vertices"] == 0
+    options.free_space.tolerance = 0.0
+    with pytest.raises(ValueError, match="free_space.tolerance"):
+        options.validate()
+    options.free_space.tolerance = 0.01
+    options.free_space.enabled = False
+    options.validate()
+
+
 def test_per_area_weights_are_reachable():
     # The per-area data weight (docs/theory/data-weight.md#per-area) from Python: weights.data < 0
     # selects it; the fit follows the same rigid translation.

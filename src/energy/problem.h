@@ -18,6 +18,7 @@
 #include "energy/data.h"
 #include "energy/elastic.h"
 #include "energy/equilibrium.h"
+#include "energy/free_space.h"
 #include "energy/friction.h"
 #include "energy/load.h"
 #include "energy/term.h"
@@ -38,7 +39,8 @@ class Problem {
                           std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
                           std::vector<TermSet<ContactPenalty<3>>>,
                           std::vector<TermSet<ContactPenalty<6>>>, std::vector<TermSet<Friction<3>>>,
-                          std::vector<TermSet<Friction<6>>>, std::vector<TermSet<ExternalLoad>>>;
+                          std::vector<TermSet<Friction<6>>>, std::vector<TermSet<ExternalLoad>>,
+                          std::vector<TermSet<FreeSpacePenalty>>>;
 
   // Sets the number of vertices and empties the problem.
   void Reset(int num_vertices);

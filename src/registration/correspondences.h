@@ -14,6 +14,7 @@
 
 #include "femreg/registration.h"
 #include "geometry/nearest.h"
+#include "registration/free_space.h"
 #include "registration/occluders.h"
 #include "registration/tracker_state.h"
 
@@ -60,6 +61,9 @@ struct FrameCloud {
   // and are no vertex's nearest point to pull to.
   std::vector<char> occluder;
   OccluderCounts occluders;
+  // The depth the sensor observed along its rays (registration.free_space): empty without a
+  // view, or with free space off.
+  ObservedDepth observed;
   bool Occluder(int i) const { return !occluder.empty() && occluder[static_cast<size_t>(i)]; }
 
   // Whether a surface point p with outward normal n faces the sensor.
@@ -116,6 +120,11 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
 // The occluders at state.x (MarkOccluders): fc->occluder and fc->occluders. With a camera,
 // data.occluders and no fracture; else none. fc->index and fc->spacing must be set.
 void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc);
+
+// The observed depth (fc->observed) of registration.free_space: from the camera's position
+// when it is known, else from the view PrepareFrameCloud decided (a viewpoint: perspective; a
+// direction: orthographic); empty with free space off or no view. After PrepareFrameCloud.
+void BuildObservedDepth(const TrackerState& state, FrameCloud* fc);
 
 // The pairs at state.x (#V by 3), with queries on num_threads OpenMP threads (0: the
 // machine's hardware threads, as solver.num_threads). A point

@@ -1,5 +1,6 @@
 // The frame's cloud before any pair is made: transformed into the scene's frame, subsampled,
-// its point spacing and reciprocity trim, the view it was seen from and its occluders; and the
+// its point spacing and reciprocity trim, the view it was seen from, its occluders and the
+// depth it shows along the sensor's rays (free space); and the
 // model's closest-point index, rebuilt when the surface moved (correspondences.h).
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <memory>
 #include <unordered_map>
 
+#include "femreg/point_cloud.h"  // CameraRotation
 #include "registration/correspondences.h"
 #include "registration/occluders.h"
 
@@ -223,6 +225,23 @@ void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, Fra
   if (options.camera.enabled && options.data.occluders && state.fracture == nullptr) {
     fc->occluders = MarkOccluders(state, surface, fc->cloud.points, *fc->index, fc->spacing, &fc->occluder);
     if (fc->occluders.occluders == 0) fc->occluder.clear();
+  }
+}
+
+void BuildObservedDepth(const TrackerState& state, FrameCloud* fc) {
+  const RegistrationOptions& options = state.options;
+  fc->observed.Clear();
+  if (!options.free_space.enabled || fc->cloud.size() == 0) return;
+  const Vertices& points = fc->cloud.points;
+  if (options.camera.enabled) {
+    const Eigen::Vector3d axis = CameraRotation(options.camera).row(2).transpose();
+    fc->observed.Build(points, true, options.camera.position, axis, fc->spacing);
+  } else if (fc->view == FrameCloud::View::kViewpoint) {
+    const Eigen::Vector3d centroid = points.colwise().mean().transpose();
+    const Eigen::Vector3d axis = centroid - fc->eye;
+    if (axis.norm() > 0) fc->observed.Build(points, true, fc->eye, axis.normalized(), fc->spacing);
+  } else if (fc->view == FrameCloud::View::kDirection) {
+    fc->observed.Build(points, false, fc->eye, -fc->eye, fc->spacing);
   }
 }
 

@@ -88,6 +88,7 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
   force_friction_pair_.clear();
   problem_.Clear(TermGroup::kElastic);
   problem_.Reset(state.num_vertices);
+  free_space_.clear();  // numbered by the old vertices
   std::vector<std::array<int, 4>> cells;
   for (const ObjectState& o : state.objects) {
     for (int e = 0; e < o.mesh.num_tets(); ++e) {
@@ -348,6 +349,42 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
       case kPlane3: add(p, &plane3); break;
     }
   }
+}
+
+void FrameProblem::SetFreeSpace(const TrackerState& state, const ObservedDepth& observed) {
+  free_space_.clear();
+  const FreeSpaceOptions& options = state.options.free_space;
+  if (!options.enabled || observed.empty()) return;
+  for (int v : state.surface_vertices) {
+    if (problem_.is_fixed(v)) continue;
+    energy::FreeSpacePenalty b;
+    double depth = 0.0;
+    if (!observed.Observed(state.x.row(v).transpose(), &b.ray, &b.origin, &depth)) continue;
+    b.vertices = {{v}};
+    b.weight = options.weight;
+    b.depth = depth - options.tolerance;
+    // Only the vertices in the seen-through space at the outer iteration's start, like the
+    // pairs: where there are none, the problem is the one without free space, to the last bit
+    // (the surface the data hold lies within the tolerance of the observed depth).
+    const double violation = b.Violation(state.x.data() + 3 * v);
+    if (!(violation > 0)) continue;
+    // A vertex whose way out across the rays is shorter than back along its ray (within a
+    // tolerance: the image resolves sideways distances only to a pixel) is a surface off
+    // sideways, lagging behind a motion across the rays: the pairs move it, not free space.
+    const double reach = violation + options.tolerance;
+    if (observed.SidewaysExit(state.x.row(v).transpose(), options.tolerance, reach) < reach) continue;
+    free_space_.push_back(b);
+  }
+  if (free_space_.empty()) return;
+  *problem_.AddSet<energy::FreeSpacePenalty>(TermGroup::kData).mutable_blocks() = free_space_;
+}
+
+int FrameProblem::FreeSpaceHeld(const Vertices& x) const {
+  int held = 0;
+  for (const energy::FreeSpacePenalty& b : free_space_) {
+    if (b.vertices[0] < x.rows() && b.Violation(x.data() + 3 * b.vertices[0]) > 0) ++held;
+  }
+  return held;
 }
 
 void FrameProblem::SetLoads(const TrackerState& state) {

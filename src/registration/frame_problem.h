@@ -12,6 +12,7 @@
 #include "femreg/collision.h"
 #include "femreg/registration.h"
 #include "registration/correspondences.h"
+#include "registration/free_space.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -41,6 +42,15 @@ class FrameProblem {
   // the touched triangles of rest area / pairs on it). Per pair, an object's model->cloud
   // pairs weigh less where they outnumber its cloud->model pairs (model_to_cloud_balance).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
+  // Free space (registration/free_space.h, energy/free_space.h): for each free surface vertex
+  // nearer to the sensor at state.x than the observed depth at its pixel minus
+  // free_space.tolerance, unless its way out sideways is shorter (ObservedDepth::SidewaysExit),
+  // a one-sided penalty of free_space.weight that pushes it back along its ray (held for the
+  // solve) to that depth. In the data group: after SetData, every outer iteration. None when
+  // free_space is off, nothing was observed (an empty `observed`) or no vertex is in front.
+  void SetFreeSpace(const TrackerState& state, const ObservedDepth& observed);
+  // The vertices of the last SetFreeSpace's blocks that are in front of their allowed depth at x.
+  int FreeSpaceHeld(const Vertices& x) const;
   // The external loads (gravity, nodal forces) of the objects that have them, about the
   // positions at the start of this outer iteration (energy/load.h). Every outer iteration.
   void SetLoads(const TrackerState& state);
@@ -86,6 +96,7 @@ class FrameProblem {
   std::unordered_map<uint64_t, double> triangle_area_;
   std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
   int num_objects_ = 0;
+  std::vector<energy::FreeSpacePenalty> free_space_;  // the last SetFreeSpace's blocks
   // For ContactForces: the contacts of the collision set, each penalty's (standoff, k), the
   // friction blocks and their contacts.
   std::vector<Contact> force_contacts_;

@@ -361,10 +361,21 @@ bool ForceOptions::IsValid(std::string* error) const {
   return true;
 }
 
+bool FreeSpaceOptions::IsValid(std::string* error) const {
+  if (!(tolerance > 0) || !std::isfinite(tolerance)) {
+    return Fail(error, "free_space.tolerance", "must be > 0 (m)", tolerance);
+  }
+  if (!(weight > 0) || !std::isfinite(weight)) {
+    return Fail(error, "free_space.weight", "must be > 0 (N/m per vertex; enabled: false turns it off)", weight);
+  }
+  return true;
+}
+
 bool RegistrationOptions::IsValid(std::string* error) const {
   // The sub-structs already name their fields with their own prefix (camera., data., ...).
   if (!(camera.IsValid(error) && preprocess.IsValid(error) && data.IsValid(error) &&
-        weights.IsValid(error) && solver.IsValid(error) && forces.IsValid(error))) {
+        weights.IsValid(error) && solver.IsValid(error) && forces.IsValid(error) &&
+        free_space.IsValid(error))) {
     return false;
   }
   if (forces.estimate && solver.backend != SolverBackend::kFast) {

@@ -90,6 +90,11 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   // the solve may bring within D.
   t0 = Clock::now();
   frame_problem.SetData(*pairs, options);
+  // Free space from the second outer iteration on (of the frame, or after a large motion's
+  // stiff start): the first starts from the prediction, which may be off sideways, and the
+  // pairs bring it near before the rays can tell which way is out.
+  static const ObservedDepth kNothing;
+  frame_problem.SetFreeSpace(state, k - iteration_base >= 1 ? fc.observed : kNothing);
   frame_problem.SetLoads(state);
   s->time.build += Seconds(t0);
   if (state.collision) {
@@ -218,6 +223,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const bool warm_start = options.forces.estimate && k == 0;
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
+  // Vertices in the seen-through space: free space pushes them out, a change of the problem
+  // like new contact multipliers, which the last start's energy is not to undo.
+  if (frame_problem.FreeSpaceHeld(state.x) > 0) merit = std::numeric_limits<double>::infinity();
   if (Backtracks(k, warm_start) && !Backtrack(k, fc, *previous, pairs, &counts, &row, previous_energy, s)) {
     return false;
   }

@@ -227,6 +227,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   t0 = Clock::now();
   PrepareFrameCloud(state, Surface(), &fc);
+  BuildObservedDepth(state, &fc);
   s.time.correspondences += Seconds(t0);
   s.visibility = fc.Describe();
   s.occluded_points = fc.occluders.occluders;
@@ -309,6 +310,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   if (s.termination == TerminationType::kNoCorrespondences) state.x = previous;
   if (state.collision) MeasureContacts(&s);
+  s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
   UpdateOutputs(fc.index.get(), pairs, &state, options.solver.num_threads);

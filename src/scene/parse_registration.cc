@@ -11,8 +11,16 @@ namespace scene_internal {
 
 void SceneParser::ParseRegistration(const YamlValue& v) {
   v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads", "forces",
-               "initial_pose"});
+               "initial_pose", "free_space"});
   RegistrationOptions& r = scene_->registration;
+  if (v.Has("free_space")) {
+    const YamlValue f = v["free_space"];
+    f.CheckKeys({"enabled", "tolerance", "weight"});
+    FreeSpaceOptions& o = r.free_space;
+    if (f.Has("enabled")) o.enabled = f["enabled"].AsBool();
+    if (f.Has("tolerance")) o.tolerance = f["tolerance"].AsDouble();
+    if (f.Has("weight")) o.weight = f["weight"].AsDouble();
+  }
   if (v.Has("forces")) {
     const YamlValue f = v["forces"];
     f.CheckKeys({"estimate", "region", "weight", "sparsity", "pushing_only", "friction", "balance"});

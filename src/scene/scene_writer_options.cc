@@ -144,6 +144,12 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   }
   PutMap(n, "forces", forces);
 
+  YAML::Node free_space = FlowMap();
+  Put(free_space, "enabled", r.free_space.enabled, d.free_space.enabled);
+  Put(free_space, "tolerance", r.free_space.tolerance, d.free_space.tolerance);
+  Put(free_space, "weight", r.free_space.weight, d.free_space.weight);
+  PutMap(n, "free_space", free_space);
+
   const SolverOptions& s = r.solver;
   YAML::Node solver = FlowMap();
   if (s.backend != d.solver.backend) solver["backend"] = ToString(s.backend);

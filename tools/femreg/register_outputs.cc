@@ -55,7 +55,7 @@ const char kStatsHeader[] =
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
     "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,implausible_points,contact_force_x_N,"
     "contact_force_y_N,contact_force_z_N,friction_force_x_N,friction_force_y_N,friction_force_z_N,"
-    "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,lost,message\n";
+    "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,lost,free_space_vertices,message\n";
 
 std::string StatsRow(size_t i, const FrameRow& row) {
   std::ostringstream os;
@@ -112,7 +112,7 @@ std::string StatsRow(size_t i, const FrameRow& row) {
   const FrameConfidence& c = s.confidence;
   std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f,%.4g,%d", c.confidence, c.fit, c.coverage,
                 c.residual * 1e3, c.strain, s.lost ? 1 : 0);
-  os << buf;
+  os << buf << "," << s.free_space_vertices;
   std::string msg = row.read_error.empty() ? s.message : row.read_error;
   std::replace(msg.begin(), msg.end(), '"', '\'');
   os << ",\"" << msg << "\"\n";
@@ -286,6 +286,15 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
       if (rows[i].summary.lost) lost.push_back(i);
     }
     j["tracking"] = {{"confidence_per_frame", confidence}, {"lost_frames", lost}};
+  }
+  {
+    // Surface vertices held back by free space per frame (registration.free_space).
+    json held = json::array();
+    for (const FrameRow& r : rows) held.push_back(r.summary.free_space_vertices);
+    j["free_space"] = {{"enabled", o.free_space.enabled},
+                       {"tolerance_m", number(o.free_space.tolerance)},
+                       {"weight_N_per_m", number(o.free_space.weight)},
+                       {"vertices_per_frame", held}};
   }
   double deepest = 0.0;
   int contacts = 0;
