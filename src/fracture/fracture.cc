@@ -88,7 +88,8 @@ std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const Elasti
     const Eigen::Matrix3d& R = model.rotation(e);
     const Eigen::Matrix3d sigma = VoigtToTensor(ElementStress(rest, R, model.Gather(x, e)));
     // Eqs. 8-9: the tensile and compressive parts by the eigen-decomposition.
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(sigma);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(sigma);  // closed form: the detection runs every outer iteration
     const Eigen::Vector3d nu = eig.eigenvalues();
     const Eigen::Matrix3d& n = eig.eigenvectors();
     const Eigen::Matrix3d sp = n * nu.cwiseMax(0.0).asDiagonal() * n.transpose();
@@ -113,7 +114,8 @@ std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const Elasti
     const Eigen::Matrix3d compressive = 0.5 * (OuterOverNorm(f_minus[j]) - m_minus[j]);
     Eigen::Matrix3d held = compressive;
     if (compressive.squaredNorm() > 0) {
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(compressive);
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(compressive);
       held = eig.eigenvectors() * eig.eigenvalues().cwiseMin(0.0).asDiagonal() *
              eig.eigenvectors().transpose();
     }
@@ -139,7 +141,8 @@ void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertic
   out->measure.resize(nv);
   out->normal.resize(nv, 3);
   for (int j = 0; j < nv; ++j) {
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(zeta[j]);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(zeta[j]);
     const double area = std::pow(node_volume(j), 2.0 / 3.0);
     const double top = eig.eigenvalues()(2);
     out->measure(j) = area > 0 && top > 0 ? top / area : 0.0;
