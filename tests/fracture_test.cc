@@ -620,6 +620,40 @@ TEST(FractureTracking, OffComputesNothing) {
 }
 
 #ifdef FEMREG_CLI_PATH
+// `femreg register` on beam_cut reports the break: stats.csv's pieces and break_frame (-1
+// before frame 7, 7 from it), the error per piece seen and hidden after it, and summary.json's
+// fracture section.
+TEST(FractureCli, RegisterReportsTheBreakFrameAndThePieces) {
+  testing_util::TempDir dir("femreg_fracture_break");
+  const std::string data = std::string(FEMREG_DATASETS_DIR) + "/beam_cut";
+  ASSERT_EQ(std::system((std::string(FEMREG_CLI_PATH) + " register --scene " + data + "/scene.yaml --frames " +
+                         data + "/clouds --ground-truth " + data + "/ground_truth --no-progress --report none "
+                         "--threads 1 --out " + dir.path() + "/run > " + dir.path() + "/register.txt").c_str()),
+            0);
+  const std::string out = dir.path() + "/run";
+  const std::vector<std::string> pieces = testing_util::StatsColumn(out, "pieces");
+  const std::vector<std::string> breaks = testing_util::StatsColumn(out, "break_frame");
+  const std::vector<std::string> seen = testing_util::StatsColumn(out, "err_piece_seen_mm");
+  const std::vector<std::string> hidden = testing_util::StatsColumn(out, "err_piece_hidden_mm");
+  ASSERT_EQ(pieces.size(), 12u);
+  ASSERT_EQ(breaks.size(), 12u);
+  for (size_t f = 0; f < 12; ++f) {
+    EXPECT_EQ(pieces[f], f < 7 ? "1" : "2") << "frame " << f;
+    EXPECT_EQ(breaks[f], f < 7 ? "-1" : "7") << "frame " << f;
+    // One entry per piece, ';' between them.
+    EXPECT_EQ(std::count(seen[f].begin(), seen[f].end(), ';'), f < 7 ? 0 : 1) << seen[f];
+    EXPECT_EQ(std::count(hidden[f].begin(), hidden[f].end(), ';'), f < 7 ? 0 : 1) << hidden[f];
+  }
+  std::ifstream in(out + "/summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = summary.find("\"fracture\"");
+  ASSERT_NE(at, std::string::npos) << summary;
+  const std::string section = summary.substr(at, 400);
+  EXPECT_NE(section.find("\"pieces\": 2"), std::string::npos) << section;
+  EXPECT_NE(section.find("\"break_frame\": 7"), std::string::npos) << section;
+  EXPECT_NE(section.find("\"piece_error_after_break_mm\""), std::string::npos) << section;
+}
+
 // `femreg eval` on a fracture result matches vertices through the VTU's original_vertex
 // field, piece by piece, and gives the same errors as `femreg register --ground-truth`.
 TEST(FractureCli, EvalMatchesRegisterOnTheBrokenBeam) {
