@@ -122,9 +122,10 @@ TEST(SeparationTensor, NoSeparationUnderPureCompression) {
   const double stress = 1.03e-2 * 5e4 * 0.7 / (1.3 * 0.4) * 3;  // ~ (lambda + 2 mu) * strain
   EXPECT_GT(sep.measure.maxCoeff(), 0.1 * stress);
   EXPECT_LT(sep.measure.maxCoeff(), 20 * stress);
-  // Zero up to roundoff in both compressions.
-  EXPECT_LT(confined, 1e-12 * sep.measure.maxCoeff());
-  EXPECT_LT(uniaxial, 1e-12 * sep.measure.maxCoeff());
+  // Zero up to roundoff in both compressions (that of the closed-form 3x3 eigen-solver, some
+  // 1e-9 of the stress).
+  EXPECT_LT(confined, 1e-8 * sep.measure.maxCoeff());
+  EXPECT_LT(uniaxial, 1e-8 * sep.measure.maxCoeff());
 }
 
 TEST(SeparationTensor, IndependentOfVertexAndElementNumbering) {
@@ -322,6 +323,73 @@ TEST(SplitNodes, OneCrackGrowsAlongItsPlane) {
               SplitSections(events, initial)[0]);
 }
 
+// The cut through (FractureOptions::cut_through): one node over its toughness in a bent beam
+// whose faces do not lie on the crack's plane; with the cut the beam is in two valid pieces
+// at once, parted along the node's own face loop; without, one node splits and it stays
+// whole; with data that shows no gap near the crack, no cut.
+TEST(SplitNodes, CutThroughPartsTheSectionInOneStep) {
+  auto split = [](bool cut, double gap, TetMesh* mesh, TopologyChange* change) {
+    *mesh = MakeBox(Eigen::Vector3d(0.2, 0.03, 0.03), 12, 2, 2);
+    ComputeLumpedMasses(mesh, 200);
+    ElasticModel model;
+    model.Build(*mesh, ElasticModelType::kCorotational, Soft());
+    // A node on the top edge of the section at x = 1/3 of the beam, its plane tilted from
+    // the section's by 10 degrees (the cut must snap to the section's faces).
+    int j = -1;
+    for (int v = 0; v < mesh->num_vertices(); ++v) {
+      const Eigen::Vector3d X = mesh->rest.row(v);
+      if (std::abs(X.x() - 0.2 * 4 / 12) < 1e-9 && std::abs(X.y() - 0.015) < 1e-9 && std::abs(X.z() - 0.03) < 1e-9) j = v;
+    }
+    NodeSeparation sep;
+    sep.measure = Eigen::VectorXd::Zero(mesh->num_vertices());
+    sep.toughness = Eigen::VectorXd::Constant(mesh->num_vertices(), 1000.0);
+    sep.normal = Vertices::Zero(mesh->num_vertices(), 3);
+    sep.normal.col(0).setOnes();
+    const double a = 10.0 * 3.14159265358979 / 180.0;
+    sep.normal.row(j) << std::cos(a), 0, std::sin(a);
+    sep.measure(j) = 5000.0;
+    // The section's other top nodes over the toughness too: a surface node whose split alone
+    // would pinch the surface is undone, and the crack starts at one of them.
+    for (int v = 0; v < mesh->num_vertices(); ++v) {
+      if (v != j && std::abs(mesh->rest(v, 0) - mesh->rest(j, 0)) < 1e-9 && mesh->rest(v, 2) > 0.02) sep.measure(v) = 1200.0;
+    }
+    if (gap >= 0) sep.gap = Eigen::VectorXd::Constant(mesh->num_vertices(), gap);
+    FractureOptions options;
+    options.max_cracks = 1;
+    options.cut_through = cut;
+    model.UpdateRotations(mesh->x);
+    SplitNodes(sep, options, 8, mesh, &model, change);
+    return j;
+  };
+  std::vector<int> piece;
+  TetMesh mesh;
+  TopologyChange change;
+  const int j = split(true, -1, &mesh, &change);
+  std::printf("cut: %zu events, %d pieces\n", change.events.size(), ConnectedPieces(mesh, &piece));
+  ASSERT_GE(j, 0);
+  EXPECT_TRUE(CheckMesh(mesh).ok()) << CheckMesh(mesh).ToString();
+  EXPECT_EQ(ConnectedPieces(mesh, &piece), 2);
+  // Every vertex of the section's face loop (3 x 3 nodes) has a copy; the pieces hold 5 and
+  // 8 cells of the 12.
+  int cut = 0;
+  for (const FractureEvent& e : change.events) cut += e.cut;
+  EXPECT_EQ(static_cast<int>(change.events.size()), 9);
+  EXPECT_EQ(cut, 8);
+  std::vector<int> vertices(2, 0);
+  for (int p : piece) ++vertices[p];
+  EXPECT_EQ(std::min(vertices[0], vertices[1]), 5 * 9);
+  EXPECT_EQ(change.removed_elements, 0);
+
+  split(false, -1, &mesh, &change);
+  EXPECT_EQ(ConnectedPieces(mesh, &piece), 1);
+  EXPECT_EQ(change.events.size(), 1u);
+
+  split(true, 0.0, &mesh, &change);  // the data shows the body whole
+  EXPECT_EQ(ConnectedPieces(mesh, &piece), 1);
+  split(true, 2.0, &mesh, &change);  // ... or open
+  EXPECT_EQ(ConnectedPieces(mesh, &piece), 2);
+}
+
 // Tracks a bundled fracture sequence with `femreg register`'s matching of pieces.
 struct SequenceResult {
   int first_split = -1, first_break = -1, truth_split = -1, truth_break = -1;
@@ -392,6 +460,12 @@ SequenceResult TrackSequence(const std::string& name, int frames = -1,
     if (r.truth_split < 0) r.truth_split = frame;
     if (r.truth_break < 0 && pieces >= 2) r.truth_break = frame;
   }
+  // A cut (no splits in the ground truth): the first frame with a pieces file.
+  for (int f = 0; r.truth_break < 0 && f < n; ++f) {
+    char file[64];
+    std::snprintf(file, sizeof(file), "frame_%04d_pieces.csv", f);
+    if (fs::exists(dir / "ground_truth" / file)) r.truth_break = f;
+  }
   return r;
 }
 
@@ -448,6 +522,44 @@ TEST(FractureTracking, BeamBreakSequence) {
   }
   // Held where it was, up to the constant-velocity prediction of one frame.
   EXPECT_LT(free_motion, 0.05);
+}
+
+// The beam bent, then cut (datasets/beam_cut, a slab of the ground truth's elements removed
+// at frame 7, 70-75 mm from the clamp, where the tracked mesh has no face): with cut_through
+// the crack opened by the criterion goes through the section in that frame, so the beam is in
+// two pieces from the true frame on and stays in two; the clamped piece is tracked within
+// 1.5 mm on average after the break, the free piece within 6 mm (it slides along its axis by
+// the cut's distance from the nearest face loop: docs/notes/2026-11-29-fracture.md).
+TEST(FractureTracking, BeamCutComesApartInTheTrueFrame) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene(std::string(FEMREG_DATASETS_DIR) + "/beam_cut/scene.yaml", &scene).ok());
+  EXPECT_TRUE(scene.effects.fracture_options.cut_through);
+  SequenceResult r = TrackSequence("beam_cut", 12);
+  EXPECT_TRUE(r.finite);
+  EXPECT_TRUE(r.usable);
+  EXPECT_EQ(r.truth_break, 7);
+  EXPECT_EQ(r.first_break, r.truth_break);
+  EXPECT_EQ(r.final_pieces, 2);
+  ASSERT_EQ(r.piece_mean.size(), 2u);
+  EXPECT_LT(r.piece_mean[0], 0.0015);
+  EXPECT_LT(r.piece_mean[1], 0.006);
+  for (size_t p = 0; p < r.piece_mean.size(); ++p) {
+    std::printf("beam_cut piece %zu: mean error %.2f mm\n", p, 1e3 * r.piece_mean[p]);
+  }
+  // Without the cut the crack stalls: the beam is not in two pieces in the true frame.
+  scene.effects.fracture_options.cut_through = false;
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  std::vector<int> piece;
+  for (int f = 0; f <= 7; ++f) {
+    char file[96];
+    std::snprintf(file, sizeof(file), "%s/beam_cut/clouds/frame_%04d.pcd", FEMREG_DATASETS_DIR, f);
+    PointCloud cloud;
+    ASSERT_TRUE(ReadPointCloud(file, &cloud).ok());
+    FrameSummary summary;
+    ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
+  }
+  EXPECT_EQ(ConnectedPieces(tracker->mesh(0), &piece), 1);
 }
 
 // The slab tears into two pieces, as the ground truth does. Pulled evenly, the tracked
@@ -508,6 +620,40 @@ TEST(FractureTracking, OffComputesNothing) {
 }
 
 #ifdef FEMREG_CLI_PATH
+// `femreg register` on beam_cut reports the break: stats.csv's pieces and break_frame (-1
+// before frame 7, 7 from it), the error per piece seen and hidden after it, and summary.json's
+// fracture section.
+TEST(FractureCli, RegisterReportsTheBreakFrameAndThePieces) {
+  testing_util::TempDir dir("femreg_fracture_break");
+  const std::string data = std::string(FEMREG_DATASETS_DIR) + "/beam_cut";
+  ASSERT_EQ(std::system((std::string(FEMREG_CLI_PATH) + " register --scene " + data + "/scene.yaml --frames " +
+                         data + "/clouds --ground-truth " + data + "/ground_truth --no-progress --report none "
+                         "--threads 1 --out " + dir.path() + "/run > " + dir.path() + "/register.txt").c_str()),
+            0);
+  const std::string out = dir.path() + "/run";
+  const std::vector<std::string> pieces = testing_util::StatsColumn(out, "pieces");
+  const std::vector<std::string> breaks = testing_util::StatsColumn(out, "break_frame");
+  const std::vector<std::string> seen = testing_util::StatsColumn(out, "err_piece_seen_mm");
+  const std::vector<std::string> hidden = testing_util::StatsColumn(out, "err_piece_hidden_mm");
+  ASSERT_EQ(pieces.size(), 12u);
+  ASSERT_EQ(breaks.size(), 12u);
+  for (size_t f = 0; f < 12; ++f) {
+    EXPECT_EQ(pieces[f], f < 7 ? "1" : "2") << "frame " << f;
+    EXPECT_EQ(breaks[f], f < 7 ? "-1" : "7") << "frame " << f;
+    // One entry per piece, ';' between them.
+    EXPECT_EQ(std::count(seen[f].begin(), seen[f].end(), ';'), f < 7 ? 0 : 1) << seen[f];
+    EXPECT_EQ(std::count(hidden[f].begin(), hidden[f].end(), ';'), f < 7 ? 0 : 1) << hidden[f];
+  }
+  std::ifstream in(out + "/summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = summary.find("\"fracture\"");
+  ASSERT_NE(at, std::string::npos) << summary;
+  const std::string section = summary.substr(at, 400);
+  EXPECT_NE(section.find("\"pieces\": 2"), std::string::npos) << section;
+  EXPECT_NE(section.find("\"break_frame\": 7"), std::string::npos) << section;
+  EXPECT_NE(section.find("\"piece_error_after_break_mm\""), std::string::npos) << section;
+}
+
 // `femreg eval` on a fracture result matches vertices through the VTU's original_vertex
 // field, piece by piece, and gives the same errors as `femreg register --ground-truth`.
 TEST(FractureCli, EvalMatchesRegisterOnTheBrokenBeam) {

@@ -362,6 +362,10 @@ TEST_F(SceneTest, UnknownOrMissingObjectName) {
 TEST_F(SceneTest, InvalidFractureAndCollisionSettings) {
   ExpectError(std::string(kBaseScene) + "effects: {fracture: {max_splits_per_frame: 0}}\n",
               {"beam.yaml:10: effects.fracture.max_splits_per_frame: must be >= 1"});
+  ExpectError(std::string(kBaseScene) + "effects: {fracture: {cut_through: 2}}\n",
+              {"beam.yaml:10: effects.fracture.cut_through: must be true or false"});
+  ExpectError(std::string(kBaseScene) + "effects: {fracture: {relax_piece: true}}\n",
+              {"relax_piece", "relax_pieces"});
   ExpectError(std::string(kBaseScene) + "collision: {distance: 0}\n",
               {"beam.yaml:10: collision.distance: must be > 0 (got 0)"});
 }

@@ -190,6 +190,9 @@ void ExpectSameScene(const Scene& a, const Scene& b) {
   EXPECT_EQ(f.max_splits_per_frame, g.max_splits_per_frame);
   EXPECT_EQ(f.max_cracks, g.max_cracks);
   EXPECT_EQ(f.data_gap, g.data_gap);
+  EXPECT_EQ(f.cut_through, g.cut_through);
+  EXPECT_EQ(f.piece_prealign, g.piece_prealign);
+  EXPECT_EQ(f.relax_pieces, g.relax_pieces);
   const CollisionSpec &c = a.collision, &d = b.collision;
   EXPECT_EQ(c.pairs, d.pairs);
   EXPECT_EQ(c.stiffness, d.stiffness);
@@ -319,7 +322,8 @@ const char kEverything[] =
     "     translations: [[0, 0, 0], [0, 0, 0.1], [0, 0.0001, 0.30000000000000004]]}\n"
     "  - {name: hold, object: ball, select: {all: true}, hard: true}\n"
     "effects: {fracture: {max_splits_per_iteration: 4, max_splits_per_frame: 20,\n"
-    "          crossing_tolerance: 0.3, max_cracks: 2, data_gap: true}, collision: true}\n"
+    "          crossing_tolerance: 0.3, max_cracks: 2, data_gap: true, cut_through: true,\n"
+    "          piece_prealign: true, relax_pieces: false}, collision: true}\n"
     "collision:\n"
     "  pairs: [[beam, ball], [ball, rod]]\n"
     "  stiffness: 5000\n"

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Regenerates the bundled datasets: `femreg synth datasets/<name>/synth.yaml` into
 # datasets/<name> for every dataset that has a synth.yaml, `femreg contact-data` for the
-# contact sequences, `femreg organ-data` for organ_patch and `femreg hand-press-data` for
-# hand_press (or only those named). The output is deterministic: rerunning rewrites
+# contact sequences, `femreg organ-data` for organ_patch, `femreg hand-press-data` for
+# hand_press and `femreg fracture-data` for beam_cut (beam_break and slab_tear when named;
+# or only those named). The output is deterministic: rerunning rewrites
 # the same bytes.
 #   tools/make_datasets.sh                 # all
 #   tools/make_datasets.sh demo beam_bend  # some
@@ -19,7 +20,7 @@ fi
 names=("$@")
 if [[ ${#names[@]} -eq 0 ]]; then
   for f in datasets/*/synth.yaml; do names+=("$(basename "$(dirname "$f")")"); done
-  names+=(contact_pair tool_table organ_patch hand_press)
+  names+=(contact_pair tool_table organ_patch hand_press beam_cut)
 fi
 for name in "${names[@]}"; do
   dir=datasets/$name
@@ -33,6 +34,11 @@ for name in "${names[@]}"; do
       echo "== $name"
       rm -rf "$dir"
       "$FEMREG" organ-data --out "$dir"
+      continue ;;
+    beam_cut|beam_break|slab_tear)  # fracture sequences, from their own generator
+      echo "== $name"
+      rm -rf "$dir"
+      "$FEMREG" fracture-data --scenario "$name" --out "$dir"
       continue ;;
     hand_press)  # the ball pressed and handled (issue 38), from its own generator
       echo "== $name"

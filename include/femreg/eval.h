@@ -65,6 +65,7 @@ Status WritePieceTruth(const std::string& path, const std::vector<PieceTruthRow>
 struct PieceErrors {
   VertexErrors all;                 // over every tracked vertex
   std::vector<ErrorStats> pieces;   // per tracked piece (ConnectedPieces order)
+  std::vector<ErrorStats> pieces_seen, pieces_hidden;  // the same, seen / hidden vertices
   std::vector<int> piece_vertices;  // tracked vertices per piece
   GroundTruthFrame matched;         // per tracked vertex: the truth it was compared with
 };

@@ -57,6 +57,24 @@ struct FractureOptions {
   // data.loss_scale) times, g: by how much the distance from the seen surface vertices at
   // the node to their nearest cloud point exceeds twice its median over the seen surface.
   bool data_gap = false;
+  // Once a split opens a crack, complete it across the section in the same step: the crack's
+  // plane (its first node's, in the rest frame) separates the elements near it by the side
+  // their centroid is on, and every vertex with elements on both sides is replicated, so the
+  // cut runs along the element faces nearest the plane and leaves no half-crack. Not done
+  // (the crack stays as the splits left it) when the cut would leave a piece smaller than
+  // min_piece_fraction, would not separate the body, or (tracker with a camera) the data
+  // shows no gap near it (NodeSeparation::gap).
+  bool cut_through = false;
+  // Tracker only: each frame after the object came apart, each piece is first moved rigidly
+  // onto the cloud points nearest it (its own ICP), so that a piece carried away is not held
+  // back by a fit made for the others. Off by default: on the bundled sequences the pieces
+  // move little from frame to frame, and it cost time without lowering the error.
+  bool piece_prealign = false;
+  // Tracker only: when a split parts the body, each new piece is put back in its rest shape
+  // at the rigid pose that best fits where it was (its hard anchors' pose, if any), and the
+  // frame's remaining outer iterations fit the data from there: the break releases the
+  // strain the whole body held, and the pieces spring back.
+  bool relax_pieces = true;
   bool IsValid(std::string* error) const;
 };
 
@@ -69,6 +87,10 @@ struct NodeSeparation {
   // Optional, #V, >= 1: a factor on the measure in SplitNodes' test and order (the
   // tracker's evidence from the data, FractureOptions::data_gap); empty: 1.
   Eigen::VectorXd weight;
+  // Optional, #V: the data's gap at each vertex in units of the data's loss scale (the
+  // tracker's evidence that the body opened there; FractureOptions::cut_through cuts only
+  // where some vertex near the crack has a gap of at least 0.5). Empty: no evidence needed.
+  Eigen::VectorXd gap;
 };
 
 // The separation tensor of every node (3 by 3, newtons) at positions x. model's rotations
@@ -91,6 +113,7 @@ struct FractureEvent {
   double measure = 0.0;    // largest eigenvalue of the separation tensor / node area (Pa)
   double toughness = 0.0;  // the node's toughness (Pa)
   int removed_elements = 0;  // elements crossed by the plane and removed
+  bool cut = false;          // a vertex replicated by the cut through (cut_through)
 };
 
 // What a batch of splits did to the mesh. Per-vertex arrays of the old mesh are carried to

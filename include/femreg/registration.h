@@ -154,7 +154,7 @@ struct DataTermOptions {
   // distance from 1) against the frame's start marks the cloud points that pull on it and
   // lay off the model at the frame's start (a hand's fingers beside the object); they pull
   // nothing for the rest of the frame, which starts again without them
-  // (docs/guide/partial-views.md#implausible-points). Not with fracture on. 0 = off.
+  // (docs/guide/partial-views.md#implausible-points). Not once fracture is live. 0 = off.
   double max_strain_step = 1.0;
   // Lost (FrameSummary::lost): a frame whose surface facing the sensor has cloud points near
   // on less than this share of what the sequence's trusted frames reach (FrameConfidence's

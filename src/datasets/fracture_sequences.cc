@@ -56,6 +56,14 @@ struct Scenario {
   double left_x = 0.0, right_x = 0.0;
   std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)> left, right;
   bool left_anchor_tracked = true, right_anchor_tracked = false;  // tracker knows them
+  // The ground truth's mesh (0: `refinement` times the tracked one's cells).
+  Eigen::Vector3i fine_cells = Eigen::Vector3i::Zero();
+  // A cut instead of a weak band: at frame cut_frame the ground truth's elements whose rest
+  // centroid has cut_lo < x < cut_hi are removed (the body comes apart there, whatever its
+  // stress), and its toughness is off.
+  int cut_frame = -1;
+  double cut_lo = 0.0, cut_hi = 0.0;
+  bool cut_through = false;  // the tracking scene's effects.fracture.cut_through
 };
 
 constexpr double kPi = 3.14159265358979323846;
@@ -162,6 +170,97 @@ Scenario SlabTear() {
   return s;
 }
 
+Scenario BeamCut() {
+  Scenario s;
+  s.name = "beam_cut";
+  s.title = "a soft beam bent, then cut";
+  s.size = Eigen::Vector3d(0.2, 0.03, 0.03);
+  // Cells of 16.7 mm along the beam: no face of the tracked mesh lies in the cut (70-75 mm).
+  s.cells = Eigen::Vector3i(12, 2, 2);
+  s.fine_cells = Eigen::Vector3i(40, 6, 6);  // 5 mm: faces at 70 and 75 mm
+  s.material.youngs_modulus = 5e4;
+  s.material.poisson_ratio = 0.35;
+  s.material.density = 200;
+  s.tracked_toughness = 6000;
+  s.tracked_max_cracks = 1;
+  s.cut_through = true;
+  s.cut_frame = 7;
+  s.cut_lo = 0.070;
+  s.cut_hi = 0.075;
+  s.frames = 12;
+  s.camera.enabled = true;
+  s.camera.position = Eigen::Vector3d(0.11, -0.26, 0.20);
+  s.camera.target = Eigen::Vector3d(0.11, 0.01, -0.02);
+  s.camera.up = Eigen::Vector3d::UnitZ();
+  s.camera.width = 320;
+  s.camera.height = 240;
+  s.camera.fx = s.camera.fy = 262.5;
+  s.camera.cx = 159.5;
+  s.camera.cy = 119.5;
+  s.left_x = 1e-9;
+  s.right_x = 0.2 - 0.015 - 1e-9;
+  s.description =
+      "clamped at x = 0; the free end, held by a gripper, is bent down along a circular arc "
+      "for 6 frames; at frame 7 a 5 mm slab 70 mm from the clamp is cut out (the elements "
+      "removed), and the gripper then carries the free piece away";
+  s.left = [](int, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    R->setIdentity();
+    t->setZero();
+  };
+  const Eigen::Vector3d size = s.size;
+  s.right = [size](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    const double L = size.x() - 0.0075;  // the gripper's centre
+    const double kappa = 2.5 * std::min(f, 6) / 6.0 + 1e-9;
+    const double theta = kappa * L;
+    *R = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Vector3d end(std::sin(theta) / kappa, 0, -(1 - std::cos(theta)) / kappa);
+    *t = end - Eigen::Vector3d(L, 0, 0);
+    if (f > 7) *t += Eigen::Vector3d(0.008, 0, 0.006) * (f - 7);
+  };
+  s.left_anchor_tracked = true;
+  s.right_anchor_tracked = false;
+  return s;
+}
+
+// Removes the elements of `mesh` for which drop(e) is true and the vertices left without
+// one; `original` follows the kept vertices. The model is rebuilt on the new mesh.
+void RemoveElements(const std::function<bool(int)>& drop, const Material& material,
+                    TetMesh* mesh, ElasticModel* model, std::vector<int>* original) {
+  std::vector<int> kept_tets;
+  std::vector<int> index(mesh->num_vertices(), -1);
+  for (int e = 0; e < mesh->num_tets(); ++e) {
+    if (drop(e)) continue;
+    kept_tets.push_back(e);
+    for (int k = 0; k < 4; ++k) index[mesh->tets(e, k)] = 0;
+  }
+  std::vector<int> kept_vertices;
+  for (int v = 0; v < mesh->num_vertices(); ++v) {
+    if (index[v] < 0) continue;
+    index[v] = static_cast<int>(kept_vertices.size());
+    kept_vertices.push_back(v);
+  }
+  TetMesh out;
+  out.rest = RemapRows(mesh->rest, kept_vertices);
+  out.x = RemapRows(mesh->x, kept_vertices);
+  out.tets.resize(static_cast<Eigen::Index>(kept_tets.size()), 4);
+  out.region.resize(static_cast<Eigen::Index>(kept_tets.size()));
+  for (size_t i = 0; i < kept_tets.size(); ++i) {
+    for (int k = 0; k < 4; ++k) out.tets(static_cast<Eigen::Index>(i), k) = index[mesh->tets(kept_tets[i], k)];
+    out.region(static_cast<Eigen::Index>(i)) = mesh->region(kept_tets[i]);
+  }
+  BuildTopology(&out);
+  ComputeLumpedMasses(&out, material.density);
+  std::vector<int> carried(kept_vertices.size());
+  if (original->empty()) {
+    carried = kept_vertices;
+  } else {
+    for (size_t v = 0; v < kept_vertices.size(); ++v) carried[v] = (*original)[kept_vertices[v]];
+  }
+  *original = std::move(carried);
+  *mesh = std::move(out);
+  model->Build(*mesh, ElasticModelType::kCorotational, material);
+}
+
 // The tracking scene: the coarse box with the tracked toughness, the camera, the fracture
 // limits and the grippers the robot knows as hard anchors. Computed numbers (the boxes just
 // past the grippers' faces, their paths) keep the 10 significant digits the scene has
@@ -171,7 +270,7 @@ Scene TrackingScene(const Scenario& s) {
   Scene scene;
   scene.description = s.name + ", " + std::to_string(s.frames) + " frames";
   ObjectSpec object;
-  object.name = s.name == "beam_break" ? "beam" : "slab";
+  object.name = s.name == "slab_tear" ? "slab" : "beam";
   object.generate.shape = MeshGeneratorSpec::Shape::kBox;
   object.generate.size = s.size;
   object.generate.cells = s.cells;
@@ -192,6 +291,7 @@ Scene TrackingScene(const Scenario& s) {
   f.crossing_tolerance = 0.2;
   f.max_cracks = s.tracked_max_cracks;
   f.data_gap = s.tracked_data_gap;
+  f.cut_through = s.cut_through;
   auto anchor = [&](const std::string& name, bool left,
                     const std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)>& motion) {
     AnchorSpec a;
@@ -220,7 +320,7 @@ Scene TrackingScene(const Scenario& s) {
 
 }  // namespace
 
-std::vector<std::string> FractureScenarios() { return {"beam_break", "slab_tear"}; }
+std::vector<std::string> FractureScenarios() { return {"beam_break", "slab_tear", "beam_cut"}; }
 
 Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
                                 void (*progress)(int done, int total)) {
@@ -229,8 +329,10 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
     s = BeamBreak();
   } else if (scenario == "slab_tear") {
     s = SlabTear();
+  } else if (scenario == "beam_cut") {
+    s = BeamCut();
   } else {
-    return Status::Error("unknown scenario '" + scenario + "' (beam_break or slab_tear)");
+    return Status::Error("unknown scenario '" + scenario + "' (beam_break, slab_tear or beam_cut)");
   }
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "clouds", ec);
@@ -239,13 +341,13 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
 
   const int refinement = 2;
   TetMesh coarse = MakeBox(s.size, s.cells.x(), s.cells.y(), s.cells.z());
-  TetMesh fine = MakeBox(s.size, s.cells.x() * refinement, s.cells.y() * refinement,
-                         s.cells.z() * refinement);
+  const Eigen::Vector3i fine_cells = s.fine_cells.x() > 0 ? s.fine_cells : Eigen::Vector3i(s.cells * refinement);
+  TetMesh fine = MakeBox(s.size, fine_cells.x(), fine_cells.y(), fine_cells.z());
   const double mid = 0.5 * s.size.x();
   for (int e = 0; e < fine.num_tets(); ++e) {
     double cx = 0;
     for (int k = 0; k < 4; ++k) cx += 0.25 * fine.rest(fine.tets(e, k), 0);
-    if (std::abs(cx - mid) < s.weak_half_width) fine.region(e) = 1;
+    if (s.cut_frame < 0 && std::abs(cx - mid) < s.weak_half_width) fine.region(e) = 1;
   }
   ComputeLumpedMasses(&fine, s.material.density);
   ElasticModel model;
@@ -274,8 +376,8 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   }
 
   FractureOptions fracture;
-  fracture.toughness = s.toughness;
-  fracture.region_toughness = {{1, s.weak_toughness}};
+  fracture.toughness = s.cut_frame >= 0 ? 0.0 : s.toughness;  // a cut: nothing breaks by itself
+  if (s.cut_frame < 0) fracture.region_toughness = {{1, s.weak_toughness}};
   fracture.max_splits_per_iteration = 16;
   fracture.max_splits_per_frame = 400;
   ForwardOptions forward;
@@ -314,6 +416,25 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
       const Eigen::Vector3d X = fine.rest.row(v);
       if (X.x() <= s.left_x) problem.prescribed.emplace_back(v, cl + Rl * (X - cl) + tl - X);
       if (X.x() >= s.right_x) problem.prescribed.emplace_back(v, cr + Rr * (X - cr) + tr - X);
+    }
+    if (f == s.cut_frame) {
+      RemoveElements(
+          [&](int e) {
+            double cx = 0;
+            for (int k = 0; k < 4; ++k) cx += 0.25 * fine.rest(fine.tets(e, k), 0);
+            return cx > s.cut_lo && cx < s.cut_hi;
+          },
+          s.material, &fine, &model, &original);
+      first_event = f;
+      // The cut as one event (node -1: no node split; the plane's normal, no measure).
+      events_csv << f << ",-1,1,0,0,0,2\n";
+      // The conditions again, on the cut mesh's vertices.
+      problem = ForwardProblem();
+      for (int v = 0; v < fine.num_vertices(); ++v) {
+        const Eigen::Vector3d X = fine.rest.row(v);
+        if (X.x() <= s.left_x) problem.prescribed.emplace_back(v, cl + Rl * (X - cl) + tl - X);
+        if (X.x() >= s.right_x) problem.prescribed.emplace_back(v, cr + Rr * (X - cr) + tr - X);
+      }
     }
     ForwardSummary summary;
     const size_t before = events.size();
@@ -385,6 +506,35 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
           const int p = fine_piece[fine.tets(ce, 0)];
           if (!on_piece.count(p)) on_piece[p] = interpolate(c.first, ce, c.second);
         }
+        if (s.cut_frame >= 0) {
+          // Near a cut, a vertex that a tracked mesh splits on its nodes (not on the cut) may
+          // end up on the piece it is not in: there it moves with that piece's nearest element
+          // (the affine map of its rest to its current shape, extrapolated), within one tracked
+          // cell of the piece.
+          const double reach = s.size.x() / s.cells.x();
+          const Eigen::Vector3d X = coarse.rest.row(v);
+          std::map<int, std::pair<double, int>> nearest;  // piece -> (distance, element)
+          for (int e = 0; e < fine.num_tets(); ++e) {
+            const int p = fine_piece[fine.tets(e, 0)];
+            if (on_piece.count(p)) continue;
+            Eigen::Vector3d c = Eigen::Vector3d::Zero();
+            for (int k = 0; k < 4; ++k) c += 0.25 * fine.rest.row(fine.tets(e, k)).transpose();
+            const double d = (c - X).norm();
+            auto it = nearest.find(p);
+            if (it == nearest.end() || d < it->second.first) nearest[p] = {d, e};
+          }
+          for (const auto& kv : nearest) {
+            if (kv.second.first > reach) continue;
+            const int e = kv.second.second;
+            Eigen::Matrix3d D, Dx;
+            const Eigen::Vector3d a = fine.rest.row(fine.tets(e, 0)), ax = fine.x.row(fine.tets(e, 0));
+            for (int k = 0; k < 3; ++k) {
+              D.col(k) = fine.rest.row(fine.tets(e, k + 1)).transpose() - a;
+              Dx.col(k) = fine.x.row(fine.tets(e, k + 1)).transpose() - ax;
+            }
+            on_piece[kv.first] = ax + Dx * (D.inverse() * (X - a));
+          }
+        }
         for (const auto& kv : on_piece) piece_rows.push_back({v, kv.first, kv.second});
       }
     }
@@ -409,6 +559,26 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   status = WriteFileAtomically((fs::path(dir) / "ground_truth" / "events.csv").string(), events_csv.str());
   if (!status.ok()) return status;
 
+  std::ostringstream truth_text;
+  if (s.cut_frame >= 0) {
+    truth_text << "The ground truth is a corotational FEM simulation (quasi-static, one solve per "
+               << "frame) on a " << fine_cells.x() << " x " << fine_cells.y() << " x " << fine_cells.z()
+               << " box mesh (" << fine0.num_vertices() << " vertices, faces at x = " << s.cut_lo
+               << " and " << s.cut_hi << " m). At frame " << s.cut_frame << " its elements between them "
+               << "are removed: the beam is in two pieces from frame " << first_break << ". A tracked "
+               << "vertex within one tracked cell of a piece it is not in also has a row on that piece: "
+               << "the piece's nearest element's motion, extrapolated to it (a tracked mesh that "
+               << "splits on its own nodes puts it there).\n";
+  } else {
+    truth_text << "The ground truth is a corotational FEM simulation on a mesh " << refinement
+               << " times finer (" << fine0.num_vertices() << " vertices) with the fracture model: "
+               << "per frame a quasi-static solve, then detection and up to "
+               << fracture.max_splits_per_iteration << " splits, repeated (at most 12 rounds) until "
+               << "no node breaks. Its middle band (|x - " << mid << "| < " << s.weak_half_width
+               << " m) has toughness " << s.weak_toughness << " Pa, the rest does not break. "
+               << "First split at frame " << first_event << ", in two pieces from frame "
+               << first_break << " (" << events.size() << " splits in all).\n";
+  }
   std::ostringstream readme;
   readme << "# " << s.name << ": " << s.title << "\n\n"
          << "Made by `femreg fracture-data --scenario " << s.name << " --out DIR` (deterministic).\n\n"
@@ -422,6 +592,9 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
              : s.tracked_data_gap
                  ? " (one crack, placed where the data shows the slab open: `max_cracks: " +
                        std::to_string(s.tracked_max_cracks) + ", data_gap: true`)"
+                 : s.cut_through
+                 ? " (one crack, cut through the section once it opens: `max_cracks: " +
+                       std::to_string(s.tracked_max_cracks) + ", cut_through: true`)"
                  : " (one crack that grows from its front: `max_cracks: " +
                        std::to_string(s.tracked_max_cracks) + "`)")
          << (s.tracked_visibility ? std::string()
@@ -439,14 +612,7 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
          << "piece with it (femreg/eval.h, ComputePieceErrors).\n"
          << "- `ground_truth/events.csv`: the ground truth's node splits (frame, node, plane "
          << "normal, measure, pieces).\n\n"
-         << "The ground truth is a corotational FEM simulation on a mesh " << refinement
-         << " times finer (" << fine0.num_vertices() << " vertices) with the fracture model: "
-         << "per frame a quasi-static solve, then detection and up to "
-         << fracture.max_splits_per_iteration << " splits, repeated (at most 12 rounds) until "
-         << "no node breaks. Its middle band (|x - " << mid << "| < " << s.weak_half_width
-         << " m) has toughness " << s.weak_toughness << " Pa, the rest does not break. "
-         << "First split at frame " << first_event << ", in two pieces from frame "
-         << first_break << " (" << events.size() << " splits in all).\n";
+         << truth_text.str();
   return WriteFileAtomically((fs::path(dir) / "README.md").string(), readme.str());
 }
 

@@ -73,7 +73,7 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
   Vertices truth_positions(mesh.num_vertices(), 3);
   GroundTruthFrame matched;
   matched.visible.resize(mesh.num_vertices());
-  std::vector<std::vector<double>> per_piece(num_pieces);
+  std::vector<std::vector<double>> per_piece(num_pieces), seen(num_pieces), hidden(num_pieces);
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     const int o = original[v];
     Eigen::Vector3d p = truth.positions.row(o).transpose();
@@ -84,7 +84,9 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
     }
     truth_positions.row(v) = p.transpose();
     matched.visible[v] = o < static_cast<int>(truth.visible.size()) ? truth.visible[o] : 0;
-    per_piece[piece[v]].push_back((positions.row(v).transpose() - p).norm());
+    const double error = (positions.row(v).transpose() - p).norm();
+    per_piece[piece[v]].push_back(error);
+    (matched.visible[v] ? seen : hidden)[piece[v]].push_back(error);
   }
   matched.positions = truth_positions;
   out.all = ComputeVertexErrors(positions, matched);
@@ -92,6 +94,8 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
   for (int p = 0; p < num_pieces; ++p) {
     out.piece_vertices.push_back(static_cast<int>(per_piece[p].size()));
     out.pieces.push_back(ComputeErrorStats(per_piece[p]));
+    out.pieces_seen.push_back(ComputeErrorStats(seen[p]));
+    out.pieces_hidden.push_back(ComputeErrorStats(hidden[p]));
   }
   return out;
 }
@@ -124,6 +128,8 @@ Status ComputePieceErrors(const std::vector<TrackedObject>& objects, const Groun
     }
     const PieceErrors pe = ComputePieceErrors(*o.mesh, *o.positions, *o.original, object_truth, object_pieces);
     out->pieces.insert(out->pieces.end(), pe.pieces.begin(), pe.pieces.end());
+    out->pieces_seen.insert(out->pieces_seen.end(), pe.pieces_seen.begin(), pe.pieces_seen.end());
+    out->pieces_hidden.insert(out->pieces_hidden.end(), pe.pieces_hidden.begin(), pe.pieces_hidden.end());
     out->piece_vertices.insert(out->piece_vertices.end(), pe.piece_vertices.begin(), pe.piece_vertices.end());
     const Eigen::Index n = o.positions->rows();
     positions.middleRows(row, n) = *o.positions;

@@ -37,6 +37,11 @@ bool FractureOptions::IsValid(std::string* error) const {
 
 namespace {
 
+// The cut through's evidence: a gap of half the data's loss scale beyond the noise level
+// near the crack (the tracker's fit of a still whole mesh to a cloud in two pieces leaves
+// less than the whole gap at any one vertex).
+constexpr double kCutEvidence = 0.5;
+
 // m(a) = a a^T / |a|, 0 for a = 0.
 Eigen::Matrix3d OuterOverNorm(const Eigen::Vector3d& a) {
   const double n = a.norm();
@@ -83,7 +88,8 @@ std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const Elasti
     const Eigen::Matrix3d& R = model.rotation(e);
     const Eigen::Matrix3d sigma = VoigtToTensor(ElementStress(rest, R, model.Gather(x, e)));
     // Eqs. 8-9: the tensile and compressive parts by the eigen-decomposition.
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(sigma);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(sigma);  // closed form: the detection runs every outer iteration
     const Eigen::Vector3d nu = eig.eigenvalues();
     const Eigen::Matrix3d& n = eig.eigenvectors();
     const Eigen::Matrix3d sp = n * nu.cwiseMax(0.0).asDiagonal() * n.transpose();
@@ -108,7 +114,8 @@ std::vector<Eigen::Matrix3d> SeparationTensors(const TetMesh& mesh, const Elasti
     const Eigen::Matrix3d compressive = 0.5 * (OuterOverNorm(f_minus[j]) - m_minus[j]);
     Eigen::Matrix3d held = compressive;
     if (compressive.squaredNorm() > 0) {
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(compressive);
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(compressive);
       held = eig.eigenvectors() * eig.eigenvalues().cwiseMin(0.0).asDiagonal() *
              eig.eigenvectors().transpose();
     }
@@ -134,7 +141,8 @@ void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertic
   out->measure.resize(nv);
   out->normal.resize(nv, 3);
   for (int j = 0; j < nv; ++j) {
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(zeta[j]);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(zeta[j]);
     const double area = std::pow(node_volume(j), 2.0 / 3.0);
     const double top = eig.eigenvalues()(2);
     out->measure(j) = area > 0 && top > 0 ? top / area : 0.0;
@@ -327,6 +335,95 @@ struct SplitState {
     int smallest = std::numeric_limits<int>::max();
     for (const auto& kv : size) smallest = std::min(smallest, kv.second);
     return smallest;
+  }
+
+  // Connected pieces (elements sharing a vertex).
+  int CountPieces() const {
+    DisjointSets sets(static_cast<int>(rest.size()));
+    for (size_t e = 0; e < tets.size(); ++e) {
+      if (removed[e]) continue;
+      for (int k = 1; k < 4; ++k) sets.Unite(tets[e][0], tets[e][k]);
+    }
+    std::vector<char> root(rest.size(), 0);
+    int count = 0;
+    for (size_t e = 0; e < tets.size(); ++e) {
+      if (removed[e]) continue;
+      const int r = sets.Find(tets[e][0]);
+      if (!root[r]) ++count;
+      root[r] = 1;
+    }
+    return count;
+  }
+
+  Eigen::Vector3d RestCentroid(int e) const {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v : tets[e]) c += 0.25 * rest[v];
+    return c;
+  }
+
+  // The cut through (FractureOptions::cut_through) from crack node j with rest-frame plane
+  // normal m: the live elements reachable from j's through shared vertices whose rest
+  // centroid lies within one mean edge of the plane through j are parted by the side of
+  // their centroid, and every vertex with elements on both sides gets a replica for the
+  // positive side. Returns the replicated vertices (empty: nothing done).
+  std::vector<int> CutThrough(int j, const Eigen::Vector3d& m) {
+    double h = 0.0;
+    int edges = 0;
+    for (int e : star[j]) {
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b, ++edges) h += (rest[tets[e][a]] - rest[tets[e][b]]).norm();
+    }
+    if (edges == 0) return {};
+    h /= edges;
+    const Eigen::Vector3d q = rest[j];
+    auto side = [&](int e) { return m.dot(RestCentroid(e) - q); };
+    // The band: grown from j's elements (and the crack's copies of j) through shared vertices.
+    std::vector<char> in_band(tets.size(), 0), visited(rest.size(), 0);
+    std::vector<int> queue;
+    for (size_t v = 0; v < rest.size(); ++v) {
+      if (rest[v] == q && !star[v].empty()) {
+        queue.push_back(static_cast<int>(v));
+        visited[v] = 1;
+      }
+    }
+    std::vector<int> band_vertices;
+    for (size_t i = 0; i < queue.size(); ++i) {
+      const int v = queue[i];
+      band_vertices.push_back(v);
+      for (int e : star[v]) {
+        if (in_band[e] || std::abs(side(e)) > h) continue;
+        in_band[e] = 1;
+        for (int u : tets[e]) {
+          if (!visited[u]) {
+            visited[u] = 1;
+            queue.push_back(u);
+          }
+        }
+      }
+    }
+    std::sort(band_vertices.begin(), band_vertices.end());
+    std::vector<int> replicated;
+    for (int v : band_vertices) {
+      std::vector<int> positive, negative;
+      for (int e : star[v]) (side(e) > 0 ? positive : negative).push_back(e);
+      if (positive.empty() || negative.empty()) continue;
+      const int r = AddReplica(v);
+      for (int e : positive) {
+        Reassign(e, v, r);
+        star[r].push_back(e);
+      }
+      star[v] = negative;
+      replicated.push_back(v);
+    }
+    std::vector<int> local = replicated;
+    for (int v : replicated) {
+      for (int e : star[v])
+        for (int u : tets[e]) local.push_back(u);
+    }
+    std::sort(local.begin(), local.end());
+    local.erase(std::unique(local.begin(), local.end()), local.end());
+    for (int v : local) SplitPinched(v);
+    return replicated;
   }
 
   int SplitPinched(int v) {
@@ -541,6 +638,49 @@ void SplitNodes(const NodeSeparation& sep, const FractureOptions& options, int m
     }
   }
   if (splits == 0) return;
+
+  if (options.cut_through && !change->events.empty()) {
+    // The crack's first node, whose plane the splits followed, taken to the rest frame by
+    // one of its elements' rotations.
+    const FractureEvent& first = change->events.front();
+    const int j = first.node;
+    bool evidence = sep.gap.size() != nv;
+    if (!evidence) {
+      // The data's gap anywhere within two mean edges of the crack's node (rest frame): a
+      // snapped cut runs along the nearest face loop, where the gap itself need not be.
+      double h = 0.0;
+      for (int e : st.star[j])
+        for (int a = 0; a < 4; ++a) h += (st.rest[st.tets[e][a]] - st.rest[j]).norm();
+      h /= std::max<size_t>(1, 3 * st.star[j].size());
+      for (int v = 0; v < nv && !evidence; ++v) {
+        evidence = sep.gap(v) >= kCutEvidence && (st.rest[v] - st.rest[j]).norm() <= 2.0 * h;
+      }
+    }
+    if (evidence && !st.star[j].empty()) {
+      const int before = st.CountPieces();
+      SplitState saved = st;
+      const Eigen::Vector3d m = CanonicalSign(model->rotation(st.star[j][0]).transpose() * first.normal);
+      const std::vector<int> replicated = st.CutThrough(j, m.normalized());
+      bool valid = !replicated.empty() && st.CountPieces() > before &&
+                   (options.min_piece_fraction <= 0 || st.SmallestPiece() >= options.min_piece_fraction * nt);
+      for (size_t v = 0; valid && v < st.rest.size(); ++v) {
+        if (!st.star[v].empty() && !st.ManifoldAt(static_cast<int>(v))) valid = false;
+      }
+      if (!valid) {
+        st = std::move(saved);
+      } else {
+        for (int u : replicated) {
+          FractureEvent event;
+          event.node = u < nv ? u : st.source[u];
+          event.normal = first.normal;
+          event.measure = sep.measure(event.node);
+          event.toughness = sep.toughness(event.node);
+          event.cut = true;
+          change->events.push_back(event);
+        }
+      }
+    }
+  }
 
   // Compaction: drop removed elements and vertices without elements.
   const int nv_work = static_cast<int>(st.rest.size());

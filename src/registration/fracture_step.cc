@@ -5,6 +5,7 @@
 
 #include "parallel/stopwatch.h"
 #include "registration/correspondences.h"
+#include "registration/prealign.h"
 
 namespace femreg {
 
@@ -22,15 +23,18 @@ void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
   NodeSeparation& sep = f.separation[i];
   DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &sep);
   sep.weight.resize(0);
-  if (!f.options[i].data_gap || !state->options.camera.enabled || cloud_index.size() == 0) return;
+  sep.gap.resize(0);
+  const bool weigh = f.options[i].data_gap, confirm = f.options[i].cut_through;
+  if (!(weigh || confirm) || !state->options.camera.enabled || cloud_index.size() == 0) return;
   double top = 0.0;
   for (int v = 0; v < sep.measure.size(); ++v) {
     if (sep.toughness(v) > 0) top = std::max(top, sep.measure(v) / sep.toughness(v));
   }
-  if (top * kMaxDataGapWeight <= 1.0) return;
-  const Eigen::VectorXd gap = DataGap(*state, i, cloud_index);
+  // Only where a node could break (the data's gap costs a search per surface vertex).
+  if (top * (weigh ? kMaxDataGapWeight : 1.0) <= 1.0) return;
   const double scale = state->options.data.loss_scale > 0 ? state->options.data.loss_scale : 0.005;
-  sep.weight = (Eigen::VectorXd::Ones(gap.size()) + gap / scale).cwiseMin(kMaxDataGapWeight);
+  sep.gap = DataGap(*state, i, cloud_index) / scale;
+  if (weigh) sep.weight = (Eigen::VectorXd::Ones(sep.gap.size()) + sep.gap).cwiseMin(kMaxDataGapWeight);
 }
 
 // Carries the state's global arrays to the new numbering: new global vertex v comes from
@@ -64,14 +68,61 @@ void Renumber(const std::vector<int>& source, TrackerState* state) {
   }
 }
 
+// The pieces of object i just parted, each back in its rest shape (the strain the whole body
+// held is released by the break) at the rigid pose that best fits where it is: the pose of
+// its hard-anchored vertices if it has three or more, else of all its vertices. Anchored
+// vertices stay on their targets.
+void RelaxPieces(int i, TrackerState* state) {
+  const ObjectState& o = state->objects[i];
+  const int nv = o.mesh.num_vertices();
+  std::vector<int> piece;
+  const int pieces = ConnectedPieces(o.mesh, &piece);
+  std::vector<char> anchored(static_cast<size_t>(nv), 0);
+  for (const auto& kv : state->anchors) {
+    if (!kv.second.hard || kv.second.object != i) continue;
+    for (int g : kv.second.vertices) {
+      if (g >= o.offset && g < o.offset + nv) anchored[static_cast<size_t>(g - o.offset)] = 1;
+    }
+  }
+  for (int p = 0; p < pieces; ++p) {
+    std::vector<Eigen::Vector3d> all_rest, all_x, held_rest, held_x;
+    for (int v = 0; v < nv; ++v) {
+      if (piece[v] != p) continue;
+      all_rest.push_back(o.mesh.rest.row(v).transpose());
+      all_x.push_back(state->x.row(o.offset + v).transpose());
+      if (anchored[static_cast<size_t>(v)]) {
+        held_rest.push_back(all_rest.back());
+        held_x.push_back(all_x.back());
+      }
+    }
+    if (all_rest.size() < 4) continue;
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    if (held_rest.size() >= 3) {
+      Kabsch(held_rest, held_x, &R, &t);
+    } else {
+      Kabsch(all_rest, all_x, &R, &t);
+    }
+    for (int v = 0; v < nv; ++v) {
+      if (piece[v] != p || anchored[static_cast<size_t>(v)]) continue;
+      state->x.row(o.offset + v) = (R * o.mesh.rest.row(v).transpose() + t).transpose();
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState* state,
                               FrameSummary* summary) {
   const auto t0 = std::chrono::steady_clock::now();
   FractureState& f = *state->fracture;
-  if (k == 0) f.frame_splits = 0;
+  if (k == 0) {
+    f.frame_splits = 0;
+    f.frame_separated = false;
+  }
+  f.separated = false;
   std::vector<std::vector<int>> sources(state->objects.size());
+  std::vector<char> parted(state->objects.size(), 0);
   bool changed = false;
   for (size_t i = 0; i < state->objects.size(); ++i) {
     ObjectState& o = state->objects[i];
@@ -84,10 +135,23 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
       continue;
     }
     Detect(static_cast<int>(i), cloud_index, state);
+    if (!f.live) {
+      const NodeSeparation& sep = f.separation[i];
+      for (int v = 0; v < sep.measure.size() && !f.live; ++v) {
+        const double m = sep.weight.size() == sep.measure.size() ? sep.weight(v) * sep.measure(v) : sep.measure(v);
+        f.live = sep.toughness(v) > 0 && m >= kFractureLiveRatio * sep.toughness(v);
+      }
+    }
     TopologyChange change;
+    std::vector<int> piece;
+    const int pieces_before = f.live ? ConnectedPieces(o.mesh, &piece) : 1;
     SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
     if (!change.changed()) continue;
     changed = true;
+    if (ConnectedPieces(o.mesh, &piece) > pieces_before) {
+      f.separated = f.frame_separated = true;
+      parted[i] = 1;
+    }
     f.frame_splits += static_cast<int>(change.events.size());
     for (FractureEvent e : change.events) {
       e.frame = state->frame;
@@ -105,6 +169,7 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
     f.original[i] = std::move(original);
     f.separation[i].measure = std::move(measure);
     f.separation[i].weight.resize(0);
+    f.separation[i].gap.resize(0);
     if (o.loads.rows() > 0) {  // a split node's load, shared evenly among its copies
       std::vector<int> copies(static_cast<size_t>(o.loads.rows()), 0);
       for (int src : change.source) ++copies[static_cast<size_t>(src)];
@@ -129,6 +194,9 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
     for (int v = 0; v < nv; ++v) source.push_back(old_offset + (sources[i].empty() ? v : sources[i][v]));
   }
   Renumber(source, state);
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    if (parted[i] && f.options[i].relax_pieces) RelaxPieces(static_cast<int>(i), state);
+  }
   return source;
 }
 

@@ -164,10 +164,10 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
     fc->spacing = nearest[nearest.size() / 2];
   }
   // The trim never goes below the robust loss's scale: the distance the user calls noise.
-  // With fracture on, no trim: an opening crack shows exactly as model vertices with no cloud
+  // With fracture live, no trim: an opening crack shows exactly as model vertices with no cloud
   // point near, and their pull is what separates the pieces (beam_break: the break is found
   // 14 frames late with the trim, on time without).
-  fc->trim = options.data.reciprocity > 0 && state.fracture == nullptr
+  fc->trim = options.data.reciprocity > 0 && !FractureLive(state)
                  ? std::max(options.data.reciprocity * fc->spacing, options.data.loss_scale)
                  : std::numeric_limits<double>::infinity();
 
@@ -221,8 +221,8 @@ void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, Fra
   const RegistrationOptions& options = state.options;
   fc->occluder.clear();
   fc->occluders = OccluderCounts();
-  // Not with fracture on: a piece that comes apart is a displacement no strain bounds.
-  if (options.camera.enabled && options.data.occluders && state.fracture == nullptr) {
+  // Not with fracture live: a piece that comes apart is a displacement no strain bounds.
+  if (options.camera.enabled && options.data.occluders && !FractureLive(state)) {
     fc->occluders = MarkOccluders(state, surface, fc->cloud.points, *fc->index, fc->spacing, &fc->occluder);
     if (fc->occluders.occluders == 0) fc->occluder.clear();
   }

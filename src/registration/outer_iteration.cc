@@ -117,9 +117,9 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
 }
 
 bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
-  // Not with fracture on: a piece coming apart raises the energy of the pairs it leaves, and
+  // Not with fracture live: a piece coming apart raises the energy of the pairs it leaves, and
   // its move is the progress (as for the occluders and the reciprocity trim).
-  return state.options.solver.backtrack && !warm_start && !state.fracture && k >= rise_from &&
+  return state.options.solver.backtrack && !warm_start && !FractureLive(state) && k >= rise_from &&
          std::isfinite(merit) && merit_x.rows() == state.x.rows();
 }
 
@@ -286,6 +286,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     const std::vector<int> source = FractureStep(k, *fc.index, &state, s);
     if (!source.empty()) {
       *previous = RemapRows(*previous, source);
+      // A piece just freed is not held to where the whole body started the frame: its
+      // temporal springs start from here.
+      if (state.fracture->separated) state.frame_start = state.x;
       frame_problem.BuildElastic(state);
       frame_problem.BuildFrameTerms(&state);
       state.contact_multipliers.clear();  // keyed by the old vertex numbering

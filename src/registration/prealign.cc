@@ -6,6 +6,7 @@
 #include <limits>
 #include <utility>
 
+#include "femreg/mesh.h"
 #include "geometry/nearest.h"
 
 namespace femreg {
@@ -87,6 +88,103 @@ void RigidPrealign(const PointCloud& cloud, TrackerState* state) {
       if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-7 && t.norm() < 1e-7) break;
     }
     if (trimmed_mean(y, nullptr, nullptr) < before) x.middleRows(o.offset, nv) = y;
+  }
+}
+
+void PiecePrealign(const PointCloud& cloud, TrackerState* state) {
+  if (!state->fracture || cloud.size() < 3) return;
+  const double reach = state->options.data.max_distance > 0 ? state->options.data.max_distance
+                                                            : std::numeric_limits<double>::infinity();
+  const int stride = std::max(1, cloud.size() / 1000);
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    const ObjectState& o = state->objects[i];
+    if (!state->fracture->options[i].piece_prealign) continue;
+    std::vector<int> piece;
+    const int pieces = ConnectedPieces(o.mesh, &piece);
+    if (pieces < 2) continue;
+    const int nv = o.mesh.num_vertices();
+    std::vector<char> held(static_cast<size_t>(pieces), 0);
+    for (const auto& kv : state->anchors) {
+      if (!kv.second.hard || kv.second.object != static_cast<int>(i)) continue;
+      for (int g : kv.second.vertices) {
+        const int v = g - o.offset;
+        if (v >= 0 && v < nv) held[static_cast<size_t>(piece[v])] = 1;
+      }
+    }
+    Vertices y = state->x.middleRows(o.offset, nv);
+    const Triangles& tris = o.mesh.surface;
+    // Per piece: its pairs (surface point, cloud point) at positions pos, sorted by distance.
+    auto associate = [&](const Vertices& pos, std::vector<std::vector<std::pair<double, int>>>* dist,
+                         std::vector<Eigen::Vector3d>* model_points) {
+      SurfaceIndex index(pos, tris);
+      dist->assign(static_cast<size_t>(pieces), {});
+      model_points->assign(static_cast<size_t>(cloud.size()), Eigen::Vector3d::Zero());
+      for (int c = 0; c < cloud.size(); c += stride) {
+        const SurfaceIndex::Hit hit = index.Closest(cloud.points.row(c));
+        if (hit.triangle < 0 || hit.squared_distance > reach * reach) continue;
+        (*model_points)[static_cast<size_t>(c)] = hit.point;
+        (*dist)[static_cast<size_t>(piece[tris(hit.triangle, 0)])].emplace_back(hit.squared_distance, c);
+      }
+      for (auto& d : *dist) std::sort(d.begin(), d.end());
+    };
+    auto trimmed = [](const std::vector<std::pair<double, int>>& d) {
+      return d.size() * 4 / 5;
+    };
+    std::vector<std::vector<std::pair<double, int>>> dist;
+    std::vector<Eigen::Vector3d> model_points;
+    associate(y, &dist, &model_points);
+    // Trimmed mean distance per piece at the start, to keep only moves that help.
+    std::vector<double> before(static_cast<size_t>(pieces), std::numeric_limits<double>::infinity());
+    for (int p = 0; p < pieces; ++p) {
+      const auto& d = dist[static_cast<size_t>(p)];
+      const size_t keep = trimmed(d);
+      if (keep < 3) continue;
+      double sum = 0.0;
+      for (size_t j = 0; j < keep; ++j) sum += std::sqrt(d[j].first);
+      before[static_cast<size_t>(p)] = sum / static_cast<double>(keep);
+    }
+    const Vertices start = y;
+    // A piece is near its pose (it was tracked in the last frame): a few iterations do.
+    constexpr int kPieceIterations = 8;
+    for (int it = 0; it < std::min(kPieceIterations, state->options.solver.rigid_iterations); ++it) {
+      bool moved = false;
+      for (int p = 0; p < pieces; ++p) {
+        const auto& d = dist[static_cast<size_t>(p)];
+        const size_t keep = trimmed(d);
+        if (held[static_cast<size_t>(p)] || keep < 3) continue;
+        std::vector<Eigen::Vector3d> a, b;
+        for (size_t j = 0; j < keep; ++j) {
+          a.push_back(model_points[static_cast<size_t>(d[j].second)]);
+          b.push_back(cloud.points.row(d[j].second).transpose());
+        }
+        Eigen::Matrix3d R;
+        Eigen::Vector3d t;
+        Kabsch(a, b, &R, &t);
+        if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-7 && t.norm() < 1e-7) continue;
+        moved = true;
+        for (int v = 0; v < nv; ++v) {
+          if (piece[v] == p) y.row(v) = (R * y.row(v).transpose() + t).transpose();
+        }
+      }
+      if (!moved) break;
+      associate(y, &dist, &model_points);
+    }
+    // Each piece keeps its move only if its points came closer.
+    for (int p = 0; p < pieces; ++p) {
+      const auto& d = dist[static_cast<size_t>(p)];
+      const size_t keep = trimmed(d);
+      double after = std::numeric_limits<double>::infinity();
+      if (keep >= 3) {
+        double sum = 0.0;
+        for (size_t j = 0; j < keep; ++j) sum += std::sqrt(d[j].first);
+        after = sum / static_cast<double>(keep);
+      }
+      const bool better = after < before[static_cast<size_t>(p)];
+      for (int v = 0; v < nv; ++v) {
+        if (piece[v] == p && !better) y.row(v) = start.row(v);
+      }
+    }
+    state->x.middleRows(o.offset, nv) = y;
   }
 }
 

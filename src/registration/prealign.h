@@ -20,6 +20,13 @@ void Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vect
 // the closest 80%. Kept only if it brings the surface closer to the cloud.
 void RigidPrealign(const PointCloud& cloud, TrackerState* state);
 
+// After a break (FractureOptions::piece_prealign): rigid ICP per piece of each object in more
+// than one piece, from where the piece is. Each cloud point (within data.max_distance) goes to
+// the piece whose surface is nearest it, pairs trimmed to the closest 80%, the association
+// renewed every iteration. A piece with hard anchors is left to them. A piece's move is kept
+// only if it brings its surface closer to its points.
+void PiecePrealign(const PointCloud& cloud, TrackerState* state);
+
 }  // namespace femreg
 
 #endif  // FEMREG_REGISTRATION_PREALIGN_H_

@@ -225,6 +225,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     RigidPrealign(fc.cloud, &state);
     s.time.prealign += Seconds(t0);
   }
+  if (state.fracture) {  // after a break: each piece its own rigid step
+    t0 = Clock::now();
+    PiecePrealign(fc.cloud, &state);
+    s.time.prealign += Seconds(t0);
+  }
   t0 = Clock::now();
   PrepareFrameCloud(state, Surface(), &fc);
   BuildObservedDepth(state, &fc);
@@ -265,9 +270,19 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
-    if (!OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s)) break;
+    const bool was_live = FractureLive(state);
+    const bool go_on = OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s);
+    if (FractureLive(state) && !was_live) {
+      // Fracture has its say from here: what it turns off goes off for the rest of the frame.
+      fc.trim = std::numeric_limits<double>::infinity();
+      fc.occluder.clear();
+      fc.occluders = OccluderCounts();
+      s.occluded_points = 0;
+      s.trim_distance = 0.0;
+    }
+    if (!go_on) break;
     if (k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
-        options.weights.elastic > 0 && !options.forces.estimate && !state.fracture &&
+        options.weights.elastic > 0 && !options.forces.estimate && !FractureLive(state) &&
         first_bulk_move > kLargeMotionEdges * state.mean_edge_length) {
       // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
       // the sensor (docs/theory/stopping.md#large-motions).
@@ -281,7 +296,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       warm_triangles.clear();
       paired_vertices.clear();
       ++s.large_motion_restarts;
-    } else if (!stepping_in && !state.fracture && s.implausible_restarts < kMaxImplausibleRestarts &&
+    } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
       const int marked = MarkImplausible(state, start, Surface(), fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
@@ -332,7 +347,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     state.last_good = state.x;
     // The first frame after a held or lost one caught up with a motion it did not see, and a
     // large motion's frame jumped: neither is a velocity to carry on.
-    if (state.held_before || s.large_motion_restarts > 0) state.x_before = state.x;
+    // Nor is the jump of pieces that came apart in this frame.
+    if (state.held_before || s.large_motion_restarts > 0 || (state.fracture && state.fracture->frame_separated)) {
+      state.x_before = state.x;
+    }
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   state.lost_before = s.lost;

@@ -59,7 +59,17 @@ struct FractureState {
   std::vector<std::vector<int>> original;    // per object: vertex -> vertex at creation
   std::vector<NodeSeparation> separation;    // per object: the last detection
   int frame_splits = 0;
+  // Whether fracture has a say yet: a node split, or a detection's measure reached
+  // kFractureLiveRatio of its toughness (then it stays so). Until then the frame runs as
+  // with fracture off (the reciprocity trim, the occluders, the backtracking and the
+  // large-motion restart, which fracture turns off).
+  bool live = false;
+  bool separated = false;  // the last fracture step parted an object into more pieces
+  bool frame_separated = false;  // one of this frame's did
 };
+// Low enough that what fracture turns off is off for the frames that lead up to a break (with
+// half the toughness, beam_break's trimmed fits kept its crack from going through).
+constexpr double kFractureLiveRatio = 0.3;
 
 struct TrackerState {
   RegistrationOptions options;
@@ -115,6 +125,8 @@ struct TrackerState {
   // Object i's surface in the global numbering.
   Triangles ObjectSurface(int i) const;
 };
+
+inline bool FractureLive(const TrackerState& state) { return state.fracture && state.fracture->live; }
 
 // The vertex move (m) that 99 % of each object's free vertices (those not `fixed`, by a hard
 // anchor; empty: none) stay within, the largest over the objects; moves: per global vertex.

@@ -24,13 +24,16 @@ void SceneParser::ParseFracture(const YamlValue& v) {
     return;
   }
   v.CheckKeys({"enabled", "max_splits_per_iteration", "max_splits_per_frame",
-               "crossing_tolerance", "max_cracks", "data_gap"});
+               "crossing_tolerance", "max_cracks", "data_gap", "cut_through", "piece_prealign", "relax_pieces"});
   e.fracture = v.Has("enabled") ? v["enabled"].AsBool() : true;
   FractureOptions& f = e.fracture_options;
   if (v.Has("max_splits_per_iteration")) f.max_splits_per_iteration = IntAtLeast(v["max_splits_per_iteration"], 1);
   if (v.Has("max_splits_per_frame")) f.max_splits_per_frame = IntAtLeast(v["max_splits_per_frame"], 1);
   if (v.Has("max_cracks")) f.max_cracks = IntAtLeast(v["max_cracks"], 0);
   if (v.Has("data_gap")) f.data_gap = v["data_gap"].AsBool();
+  if (v.Has("cut_through")) f.cut_through = v["cut_through"].AsBool();
+  if (v.Has("piece_prealign")) f.piece_prealign = v["piece_prealign"].AsBool();
+  if (v.Has("relax_pieces")) f.relax_pieces = v["relax_pieces"].AsBool();
   if (v.Has("crossing_tolerance")) {
     f.crossing_tolerance = NonNegativeDouble(v["crossing_tolerance"]);
     if (f.crossing_tolerance >= 1) v["crossing_tolerance"].Fail("must be < 1");

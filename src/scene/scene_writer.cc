@@ -189,6 +189,9 @@ YAML::Node EffectsNode(const EffectsSpec& e) {
   Put(fracture, "crossing_tolerance", f.crossing_tolerance, d.crossing_tolerance);
   Put(fracture, "max_cracks", f.max_cracks, d.max_cracks);
   Put(fracture, "data_gap", f.data_gap, d.data_gap);
+  Put(fracture, "cut_through", f.cut_through, d.cut_through);
+  Put(fracture, "piece_prealign", f.piece_prealign, d.piece_prealign);
+  Put(fracture, "relax_pieces", f.relax_pieces, d.relax_pieces);
   YAML::Node n = FlowMap();
   if (fracture.size() > 0) {
     if (!e.fracture) fracture["enabled"] = false;

@@ -23,11 +23,12 @@ void AddFractureDataCommand(CLI::App* app) {
   auto force = std::make_shared<bool>(false);
   CLI::App* cmd = app->add_subcommand(
       "fracture-data",
-      "Write a fracture sequence: beam_break (a beam bent until it breaks) or slab_tear (a "
+      "Write a fracture sequence: beam_break (a beam bent until it breaks), slab_tear (a "
       "slab torn by two grippers), simulated with corotational FEM and the fracture model on "
-      "a mesh twice as fine as the tracked one, seen by a virtual depth camera. Writes "
+      "a mesh twice as fine as the tracked one, or beam_cut (a beam bent, then cut by "
+      "removing a slab of elements of a finer mesh), seen by a virtual depth camera. Writes "
       "OUT/scene.yaml, OUT/clouds/*.pcd, OUT/ground_truth/*.csv and OUT/README.md.");
-  cmd->add_option("--scenario", *scenario, "beam_break or slab_tear")
+  cmd->add_option("--scenario", *scenario, "beam_break, slab_tear or beam_cut")
       ->required()
       ->check(CLI::IsMember(FractureScenarios()));
   cmd->add_option("--out,-o", *out, "Output folder")->required();

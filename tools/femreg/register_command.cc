@@ -228,6 +228,11 @@ int RunRegister(const RegisterArgs& args) {
     }
     return s;
   });
+  int start_pieces = 0;  // the objects' pieces before any frame (a break adds to them)
+  {
+    std::vector<int> piece;
+    for (int i = 0; i < tracker->num_objects(); ++i) start_pieces += ConnectedPieces(tracker->mesh(i), &piece);
+  }
   bool units_checked = false, coverage_warned = false;
   std::vector<std::string> unreadable;
   for (size_t f = 0; f < files.size(); ++f) {
@@ -299,6 +304,9 @@ int RunRegister(const RegisterArgs& args) {
       row.pieces = 0;
       std::vector<int> piece;
       for (int i = 0; i < tracker->num_objects(); ++i) row.pieces += ConnectedPieces(tracker->mesh(i), &piece);
+      // The break: the first frame in more pieces than the objects started in.
+      row.break_frame = rows.empty() ? -1 : rows.back().break_frame;
+      if (row.break_frame < 0 && row.pieces > start_pieces) row.break_frame = static_cast<int>(f);
     }
 
     // Ground truth covers all objects' vertices in scene order.
@@ -329,6 +337,8 @@ int RunRegister(const RegisterArgs& args) {
         PieceErrors pe;
         if (gt.ok()) gt = ComputePieceErrors(tracked, truth, piece_truth, &pe);
         row.piece_errors = pe.pieces;
+        row.piece_seen = pe.pieces_seen;
+        row.piece_hidden = pe.pieces_hidden;
         row.errors = pe.all;  // every object's vertices
         if (!gt.ok()) {
           std::cerr << "\nfemreg register: ground truth " << truth_files[f] << ": " << gt.message() << "\n";

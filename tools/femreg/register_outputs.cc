@@ -49,7 +49,8 @@ const char kStatsHeader[] =
     "e_temporal,e_anchor,e_total,t_preprocess_ms,t_prealign_ms,t_rotations_ms,"
     "t_correspondences_ms,t_build_ms,t_solve_ms,t_total_ms,err_mean_mm,err_rms_mm,"
     "err_p95_mm,err_max_mm,err_seen_mean_mm,err_seen_max_mm,err_hidden_mean_mm,"
-    "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,e_collision,contacts,"
+    "err_hidden_max_mm,fractures,pieces,err_piece_mean_mm,err_piece_seen_mm,err_piece_hidden_mm,"
+    "break_frame,e_collision,contacts,"
     "object_contacts,obstacle_contacts,max_penetration_mm,min_gap_mm,t_collision_ms,stopped_by,"
     "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
@@ -82,10 +83,21 @@ std::string StatsRow(size_t i, const FrameRow& row) {
     os << ",,,,,,,,";
   }
   os << "," << s.fractures.size() << "," << row.pieces << ",";
-  for (size_t p = 0; p < row.piece_errors.size(); ++p) {
-    std::snprintf(buf, sizeof(buf), "%s%.4f", p ? ";" : "", row.piece_errors[p].mean * 1e3);
-    os << buf;
-  }
+  // Per piece, ';' between pieces; a piece with no seen (hidden) vertex has an empty entry.
+  auto per_piece = [&](const std::vector<ErrorStats>& stats) {
+    for (size_t p = 0; p < stats.size(); ++p) {
+      if (p) os << ";";
+      if (stats[p].count == 0) continue;
+      std::snprintf(buf, sizeof(buf), "%.4f", stats[p].mean * 1e3);
+      os << buf;
+    }
+  };
+  per_piece(row.piece_errors);
+  os << ",";
+  per_piece(row.piece_seen);
+  os << ",";
+  per_piece(row.piece_hidden);
+  os << "," << row.break_frame;
   std::snprintf(buf, sizeof(buf), ",%.6g,%d,%d,%d,%.4f,%.4f,%.3f", s.final.collision, s.contacts,
                 s.object_contacts, s.obstacle_contacts, s.max_penetration * 1e3, s.min_gap * 1e3,
                 s.time.collision * 1e3);
@@ -255,6 +267,43 @@ std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Trac
                          {"chosen", first.initial_pose.empty() ? "given" : first.initial_pose},
                          {"ambiguous", first.pose_ambiguous},
                          {"first_frame_ms", number(first.time.total * 1e3)}};
+  }
+  if (!tracker.original_vertices(0).empty()) {
+    // Fracture: the pieces at the end, the frame the body first came apart in (null: never),
+    // the node splits, and after the break the mean error per piece over the frames.
+    int splits = 0, break_frame = -1, pieces = 1;
+    std::vector<double> sum, sum_seen, sum_hidden;
+    std::vector<int> n, n_seen, n_hidden;
+    for (const FrameRow& r : rows) {
+      splits += static_cast<int>(r.summary.fractures.size());
+      pieces = r.pieces;
+      if (break_frame < 0) break_frame = r.break_frame;
+      if (r.break_frame < 0) continue;
+      auto add = [](const std::vector<ErrorStats>& stats, std::vector<double>* s, std::vector<int>* c) {
+        if (s->size() < stats.size()) {
+          s->resize(stats.size(), 0.0);
+          c->resize(stats.size(), 0);
+        }
+        for (size_t p = 0; p < stats.size(); ++p) {
+          (*s)[p] += stats[p].mean * stats[p].count;
+          (*c)[p] += stats[p].count;
+        }
+      };
+      add(r.piece_errors, &sum, &n);
+      add(r.piece_seen, &sum_seen, &n_seen);
+      add(r.piece_hidden, &sum_hidden, &n_hidden);
+    }
+    auto means = [&](const std::vector<double>& s, const std::vector<int>& c) {
+      json list = json::array();
+      for (size_t p = 0; p < s.size(); ++p) list.push_back(c[p] > 0 ? number(1e3 * s[p] / c[p]) : json(nullptr));
+      return list;
+    };
+    j["fracture"] = {{"pieces", pieces},
+                     {"break_frame", break_frame >= 0 ? json(break_frame) : json(nullptr)},
+                     {"splits", splits},
+                     // Pieces in ConnectedPieces order (by their lowest vertex).
+                     {"piece_error_after_break_mm",
+                      {{"mean", means(sum, n)}, {"seen", means(sum_seen, n_seen)}, {"hidden", means(sum_hidden, n_hidden)}}}};
   }
   j["ms_per_frame_median"] = number(t.median_ms);
   j["ms_per_frame_mean"] = number(t.mean_ms);

@@ -52,6 +52,8 @@ struct FrameRow {
   std::string read_error;
   int pieces = 1;                  // connected pieces of all objects (fracture)
   std::vector<ErrorStats> piece_errors;  // per piece, with ground truth and fracture on
+  std::vector<ErrorStats> piece_seen, piece_hidden;  // the same, seen / hidden vertices
+  int break_frame = -1;  // the first frame in more pieces than the run started with (-1: none yet)
 };
 
 double Median(std::vector<double> v);
