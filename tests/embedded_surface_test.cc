@@ -3,16 +3,23 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
 #include <memory>
 #include <random>
 #include <vector>
 
+#include "femreg/experiment.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
+#include "femreg/scene.h"
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
 #include "registration/embedded_surface.h"
@@ -80,7 +87,7 @@ TEST(EmbeddedSurfaceTest, RefusesBadSurfaces) {
 // triangle as the data blocks see it, by the same affine map: exactly, inside or not.
 TEST(EmbeddedSurfaceTest, DataSurfaceFollowsAnAffineMotionExactly) {
   const TetMesh cage = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 4, 2, 2);
-  const TetMesh fine = MakeBox(Eigen::Vector3d(0.204, 0.104, 0.104), 10, 5, 5, Eigen::Vector3d(-2e-3, -2e-3, -2e-3));
+  const TetMesh fine = MakeBox(Eigen::Vector3d(0.204, 0.104, 0.104), 20, 10, 10, Eigen::Vector3d(-2e-3, -2e-3, -2e-3));
   Vertices rest;
   Triangles triangles;
   SurfaceOf(fine, fine.rest, &rest, &triangles);
@@ -93,7 +100,16 @@ TEST(EmbeddedSurfaceTest, DataSurfaceFollowsAnAffineMotionExactly) {
   data.Build(state, {&surface});
   ASSERT_TRUE(data.embedded(0));
   EXPECT_EQ(data.view().num_vertices, rest.rows());
-  EXPECT_EQ(data.view().surface_vertices.size(), static_cast<size_t>(rest.rows()));
+  // The model->cloud vertices: one per voxel of a third of the cage's mean edge (about 20 mm
+  // here, against the fine surface's 10 mm), standing for all the surface's area.
+  EXPECT_LT(data.view().surface_vertices.size(), static_cast<size_t>(rest.rows()) / 2);
+  double area = 0.0, picked = 0.0;
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) {
+    const Eigen::Vector3d a = rest.row(triangles(f, 0)), b = rest.row(triangles(f, 1)), c = rest.row(triangles(f, 2));
+    area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  for (int v : data.view().surface_vertices) picked += data.pair_area()[static_cast<size_t>(v)];
+  EXPECT_NEAR(picked, area, 1e-12 * area);
   Eigen::Matrix3d A;
   A << 1.1, 0.05, 0.0, -0.02, 0.95, 0.1, 0.03, 0.0, 1.02;
   const Eigen::Vector3d t(0.01, -0.02, 0.005);
@@ -298,6 +314,60 @@ TEST(EmbeddedSurfaceTrackingTest, RefusesLabelsAndFracture) {
   EXPECT_FALSE(tracker->SetObjectLabel(0, 3).ok());
   EXPECT_FALSE(tracker->EnableFracture({FractureOptions()}).ok());
   EXPECT_FALSE(tracker->SetEmbeddedSurface(1, Vertices(0, 3), Triangles(0, 3)).ok());
+}
+
+// objects[i].surface in a scene file: read, posed with the object, handed to the tracker,
+// written back, overridable with --set; a missing file or another format is refused with the
+// field's name.
+TEST(EmbeddedSurfaceSceneTest, TheSceneKeyIsParsedWrittenAndOverridden) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("femreg_embedded_scene_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const TetMesh fine = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 10, 4, 4);
+  ASSERT_TRUE(WriteObjSurface((dir / "scan.obj").string(), fine, fine.rest).ok());
+  const std::string text =
+      "objects:\n"
+      "  - name: body\n"
+      "    generate: {shape: box, size: [0.102, 0.042, 0.042], cells: [4, 2, 2], origin: [-0.001, -0.001, -0.001]}\n"
+      "    surface: scan.obj\n"
+      "    pose: {translation: [0, 0, 0.5]}\n"
+      "    material: {youngs_modulus: 50000, poisson_ratio: 0.35, density: 200}\n";
+  Scene scene;
+  Status status = ParseScene(text, "scene.yaml", dir.string(), &scene);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(fs::path(scene.objects[0].surface_path).filename(), "scan.obj");
+  std::unique_ptr<Tracker> tracker;
+  status = Tracker::Create(scene, &tracker);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(tracker->has_embedded_surface(0));
+  const Vertices at = tracker->surface_vertices(0);
+  EXPECT_NEAR(at.col(2).minCoeff(), 0.5, 1e-12);  // the object's pose applies to the surface too
+  EXPECT_EQ(tracker->surface_outside(0), 0.0);
+  // Written back and read again.
+  const std::string yaml = SceneToYaml(scene, dir.string());
+  EXPECT_NE(yaml.find("surface: scan.obj"), std::string::npos) << yaml;
+  Scene again;
+  ASSERT_TRUE(ParseScene(yaml, "again.yaml", dir.string(), &again).ok());
+  EXPECT_EQ(again.objects[0].surface_path, scene.objects[0].surface_path);
+  // --set reaches it.
+  {
+    std::ofstream(dir / "scene.yaml") << text;
+    SceneOverride o;
+    ASSERT_TRUE(ParseSceneOverride("objects[0].surface=missing.ply", &o).ok());
+    Scene overridden;
+    status = LoadSceneWithOverrides((dir / "scene.yaml").string(), {o}, &overridden);
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("objects[0].surface"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("not found"), std::string::npos) << status.message();
+  }
+  // Another format.
+  std::ofstream(dir / "scan.vtu") << "not a surface";
+  std::string bad = text;
+  bad.replace(bad.find("scan.obj"), 8, "scan.vtu");
+  status = ParseScene(bad, "scene.yaml", dir.string(), &again);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find(".ply, .obj or .stl"), std::string::npos) << status.message();
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <string>
 
 namespace femreg {
@@ -61,6 +62,7 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
     triangles += num_triangles_[i];
   }
   rest_.resize(rows, 3);
+  pair_area_.assign(static_cast<size_t>(rows), 0.0);
   vertex_.resize(static_cast<size_t>(rows));
   element_.assign(static_cast<size_t>(rows), -1);
   view_.options = state.options;
@@ -86,6 +88,11 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
       view_.surface.middleRows(row, nf) = o.mesh.surface.array() + base;
       row += nf;
       for (int v : o.mesh.surface_vertices) view_.surface_vertices.push_back(base + v);
+      for (int f = 0; f < nf; ++f) {
+        const int a = o.mesh.surface(f, 0), b = o.mesh.surface(f, 1), c = o.mesh.surface(f, 2);
+        const Eigen::Vector3d ab = o.mesh.rest.row(b) - o.mesh.rest.row(a), ac = o.mesh.rest.row(c) - o.mesh.rest.row(a);
+        for (int v : {a, b, c}) pair_area_[static_cast<size_t>(base + v)] += ab.cross(ac).norm() / 6.0;
+      }
       continue;
     }
     rest_.middleRows(base, count_[i]) = s->rest;
@@ -114,13 +121,53 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
     const int nf = static_cast<int>(s->triangles.rows());
     view_.surface.middleRows(row, nf) = s->triangles.array() + base;
     row += nf;
-    std::vector<char> on(static_cast<size_t>(count_[i]), 0);
+    // The vertices that pair with the cloud (model->cloud): one per voxel of a third of the
+    // mesh's mean surface edge, each standing for the area of the vertices in its voxel. The
+    // mesh cannot deform at a finer scale than its elements, and the cloud->model pairs, on
+    // every embedded triangle, keep the surface's detail; so the model->cloud pairs, the search
+    // and its cost do not grow with the embedded surface's resolution.
+    std::vector<double> area(static_cast<size_t>(count_[i]), 0.0);
     for (int f = 0; f < nf; ++f) {
-      for (int k = 0; k < 3; ++k) on[static_cast<size_t>(s->triangles(f, k))] = 1;
+      const int a = s->triangles(f, 0), b = s->triangles(f, 1), c = s->triangles(f, 2);
+      const Eigen::Vector3d ab = s->rest.row(b) - s->rest.row(a), ac = s->rest.row(c) - s->rest.row(a);
+      for (int v : {a, b, c}) area[static_cast<size_t>(v)] += ab.cross(ac).norm() / 6.0;
     }
+    double mesh_edge = 0.0;
+    for (int f = 0; f < o.mesh.num_surface_triangles(); ++f) {
+      for (int k = 0; k < 3; ++k) {
+        mesh_edge += (o.mesh.rest.row(o.mesh.surface(f, k)) - o.mesh.rest.row(o.mesh.surface(f, (k + 1) % 3))).norm();
+      }
+    }
+    mesh_edge /= std::max(1, 3 * o.mesh.num_surface_triangles());
+    const double voxel = mesh_edge / 3.0;
+    std::map<std::array<long long, 3>, std::vector<int>> voxels;  // ordered: the same pick on every run
     for (int v = 0; v < count_[i]; ++v) {
-      if (on[static_cast<size_t>(v)]) view_.surface_vertices.push_back(base + v);
+      if (!(area[static_cast<size_t>(v)] > 0.0)) continue;  // on no triangle
+      std::array<long long, 3> key;
+      for (int k = 0; k < 3; ++k) key[static_cast<size_t>(k)] = static_cast<long long>(std::floor(s->rest(v, k) / voxel));
+      voxels[key].push_back(v);
     }
+    std::vector<int> picked;
+    for (const auto& [key, members] : voxels) {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      double total = 0.0;
+      for (int v : members) {
+        centroid += s->rest.row(v).transpose();
+        total += area[static_cast<size_t>(v)];
+      }
+      centroid /= static_cast<double>(members.size());
+      int best = members.front();
+      for (int v : members) {
+        if ((s->rest.row(v).transpose() - centroid).squaredNorm() <
+            (s->rest.row(best).transpose() - centroid).squaredNorm()) {
+          best = v;
+        }
+      }
+      pair_area_[static_cast<size_t>(base + best)] = total;
+      picked.push_back(best);
+    }
+    std::sort(picked.begin(), picked.end());
+    for (int v : picked) view_.surface_vertices.push_back(base + v);
   }
   double length = 0.0;
   for (Eigen::Index f = 0; f < view_.surface.rows(); ++f) {

@@ -41,7 +41,9 @@ class DataSurface {
 
   // The data surface at the coarse positions x: a TrackerState holding what the pair search,
   // the visibility and the occluders read (x, surface, surface_vertices, vertex_object,
-  // num_vertices, mean_edge_length, options); no objects. Its x is updated in place.
+  // num_vertices, mean_edge_length, options); no objects. Its x is updated in place. Its
+  // surface_vertices, those that pair with the cloud (model->cloud), are for an embedded
+  // surface one per voxel of a third of its mesh's mean surface edge (pair_area).
   const TrackerState& Update(const Vertices& x);
   const TrackerState& view() const { return view_; }
   const Vertices& rest() const { return rest_; }
@@ -69,6 +71,10 @@ class DataSurface {
   // across an element's face it differs by at most the triangle's size times the jump of the
   // deformation gradient there.
   Stencil Map(const DataPair& pair) const;
+  // Per data-surface vertex, the rest area (m^2) its model->cloud pair stands for: a third of
+  // its triangles' for a mesh's own surface; for an embedded surface the area of the vertices in
+  // its voxel (zero for the vertices not picked).
+  const std::vector<double>& pair_area() const { return pair_area_; }
   // A data-surface vertex's coarse vertex with the largest weight (the per-vertex outputs).
   int Dominant(int vertex) const;
 
@@ -79,6 +85,7 @@ class DataSurface {
  private:
   TrackerState view_;
   Vertices rest_;
+  std::vector<double> pair_area_;
   std::vector<int> offset_, count_;
   std::vector<int> first_triangle_, num_triangles_;  // per object, its rows of view_.surface
   std::vector<char> embedded_;

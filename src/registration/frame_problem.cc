@@ -249,13 +249,11 @@ void FrameProblem::SetDataSurface(const DataSurface* surface) {
   if (surface == nullptr) return;
   const TrackerState& view = surface->view();
   const Vertices& rest = surface->rest();
-  surface_vertex_area_.assign(static_cast<size_t>(view.num_vertices), 0.0);
+  surface_vertex_area_ = surface->pair_area();
   for (Eigen::Index f = 0; f < view.surface.rows(); ++f) {
     const int a = view.surface(f, 0), b = view.surface(f, 1), c = view.surface(f, 2);
     const Eigen::Vector3d ab = rest.row(b) - rest.row(a), ac = rest.row(c) - rest.row(a);
-    const double area = 0.5 * ab.cross(ac).norm();
-    surface_triangle_area_[TriangleKey(a, b, c)] = area;
-    for (int v : {a, b, c}) surface_vertex_area_[static_cast<size_t>(v)] += area / 3.0;
+    surface_triangle_area_[TriangleKey(a, b, c)] = 0.5 * ab.cross(ac).norm();
   }
 }
 
