@@ -30,6 +30,7 @@ struct MeshArgs {
   bool no_remesh = false;
   bool force = false;
   bool json = false;
+  int cage = 0;  // --cage N: a coarse cage of about N vertices around the surface (MakeCage)
 };
 
 std::string Lower(std::string s) {
@@ -209,8 +210,22 @@ int RunMesh(MeshArgs args) {
   V *= args.scale;
 
   TetMesh mesh;
-  status = TetrahedralizeSurface(V, F, args.options, &mesh, &report, args.surface);
+  CageReport cage;
+  if (args.cage > 0) {
+    if (args.options.edge_length > 0 || args.options.keep_surface || args.no_remesh) {
+      return fail("--cage chooses the edge length and remeshes: it does not combine with --edge-length, "
+                  "--keep-surface or --no-remesh");
+    }
+    status = MakeCage(V, F, args.cage, args.options, &mesh, &cage, args.surface);
+    report = cage.meshing;
+  } else {
+    status = TetrahedralizeSurface(V, F, args.options, &mesh, &report, args.surface);
+  }
   if (!status.ok()) return fail(status.message());
+  if (args.cage > 0) {
+    // The move changed the mesh after TetGen's report: its counts stand, its measures follow.
+    report.mesh_volume = RestVolume(mesh);
+  }
 
   const Clock::time_point write_start = Clock::now();
   status = WriteTetMesh(args.out, mesh);
@@ -219,6 +234,14 @@ int RunMesh(MeshArgs args) {
   timings.total = Since(start);
   std::cout << (args.json ? JsonReport(args, report, timings, "")
                           : TextReport(args, report, timings));
+  if (args.cage > 0 && !args.json) {
+    std::cout << "cage:      " << mesh.num_vertices() << " vertices for a target of " << args.cage << " ("
+              << cage.passes << " pass" << (cage.passes == 1 ? "" : "es") << ", edge length "
+              << G(cage.edge_length) << "); boundary moved out by " << G(cage.offset) << "; "
+              << cage.outside_before << " surface vertices were outside (farthest "
+              << G(cage.outside_max_before) << "), " << cage.outside_vertices << " still are (farthest "
+              << G(cage.outside_max) << ")\n";
+  }
   return 0;
 }
 
@@ -319,6 +342,11 @@ void AddMeshCommand(CLI::App* app) {
       ->check(CLI::Range(1, 100));
   cmd->add_flag("--single-region", args->single_region,
                 "Put every element in region 0 (default: one region per closed shell)");
+  cmd->add_option("--cage", args->cage,
+                  "Make a coarse cage of about N vertices that encloses the surface, to carry it "
+                  "as an embedded surface (objects[i].surface): the edge length is chosen for N "
+                  "and the boundary moved out until every surface vertex is inside")
+      ->check(CLI::Range(8, 10000000));
   cmd->add_flag("--force", args->force, "Overwrite MESH if it exists");
   cmd->add_flag("--json", args->json, "Print one JSON object instead of text");
   cmd->callback([args] { SetExitCode(RunMesh(*args)); });
