@@ -30,6 +30,7 @@ struct RegisterArgs {
   std::string ground_truth;
   std::string material;  // a scene whose objects' materials replace the scene's
   bool force = false;
+  bool surface_ply = false;  // --surface-ply: the embedded surfaces as PLY too
   int max_frames = 0;
   std::string report = "brief";
   bool progress = true;
@@ -52,6 +53,10 @@ struct FrameRow {
   std::string read_error;
   int pieces = 1;                  // connected pieces of all objects (fracture)
   std::vector<ErrorStats> piece_errors;  // per piece, with ground truth and fracture on
+  // The embedded surfaces' vertices (objects[i].surface, in scene order) against
+  // GROUND_TRUTH/surface/NAME.csv, when both are there.
+  bool have_surface_errors = false;
+  VertexErrors surface_errors;
 };
 
 double Median(std::vector<double> v);
