@@ -19,6 +19,7 @@
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
+#include "femreg/meshing.h"
 #include "femreg/scene.h"
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
@@ -314,6 +315,28 @@ TEST(EmbeddedSurfaceTrackingTest, RefusesLabelsAndFracture) {
   EXPECT_FALSE(tracker->SetObjectLabel(0, 3).ok());
   EXPECT_FALSE(tracker->EnableFracture({FractureOptions()}).ok());
   EXPECT_FALSE(tracker->SetEmbeddedSurface(1, Vertices(0, 3), Triangles(0, 3)).ok());
+}
+
+// femreg mesh --cage: about the vertex count asked for, every surface vertex inside.
+TEST(CageTest, EnclosesTheSurfaceWithAboutTheVerticesAsked) {
+  const TetMesh sphere = MakeSphere(0.05, 10);
+  Vertices surface;
+  Triangles triangles;
+  SurfaceOf(sphere, sphere.rest, &surface, &triangles);
+  TetMesh cage;
+  CageReport report;
+  const Status status = MakeCage(surface, triangles, 150, MeshingOptions(), &cage, &report, "sphere");
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_NEAR(cage.num_vertices(), 150, 0.3 * 150);
+  EXPECT_LT(cage.num_vertices(), surface.rows() / 2);
+  // The coarse remesh cuts chords: most of the sphere is outside it before the move.
+  EXPECT_GT(report.outside_before, surface.rows() / 4);
+  EXPECT_EQ(report.outside_vertices, 0);
+  EmbeddedSurface embedded;
+  ASSERT_TRUE(MakeEmbeddedSurface(cage, surface, triangles, &embedded).ok());
+  EXPECT_LT(embedded.outside, 1e-9);
+  // The move is local and small: the cage's volume stays within 15 % of the sphere's.
+  EXPECT_LT(RestVolume(cage), 1.15 * RestVolume(sphere));
 }
 
 // objects[i].surface in a scene file: read, posed with the object, handed to the tracker,
