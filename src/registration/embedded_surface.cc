@@ -200,17 +200,26 @@ DataSurface::Stencil DataSurface::Map(const DataPair& pair) const {
     }
     return out;
   }
-  int corner = 0;
-  for (int k = 1; k < 3; ++k) {
-    if (pair.barycentric[k] > pair.barycentric[corner]) corner = k;
-  }
-  const int e = element_[static_cast<size_t>(pair.vertices[corner])];
+  // The corners by weight, largest first: the element of the first whose coordinates of the
+  // point are least outside it wins (a sliver's element extrapolates far).
+  std::array<int, 3> corners = {{0, 1, 2}};
+  std::stable_sort(corners.begin(), corners.end(),
+                   [&](int a, int b) { return pair.barycentric[a] > pair.barycentric[b]; });
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) p += pair.barycentric[k] * rest_.row(pair.vertices[k]).transpose();
-  const Eigen::Vector3d l = inverse_[static_cast<size_t>(e)] * (p - origin_[static_cast<size_t>(e)]);
+  double best = -std::numeric_limits<double>::infinity();
+  for (int corner : corners) {
+    const int e = element_[static_cast<size_t>(pair.vertices[corner])];
+    const Eigen::Vector3d l = inverse_[static_cast<size_t>(e)] * (p - origin_[static_cast<size_t>(e)]);
+    const std::array<double, 4> w = {{1.0 - l.sum(), l.x(), l.y(), l.z()}};
+    const double least = std::min(std::min(w[0], w[1]), std::min(w[2], w[3]));
+    if (least > best) {
+      best = least;
+      out.vertices = elements_[static_cast<size_t>(e)];
+      out.weights = w;
+    }
+  }
   out.n = 4;
-  out.vertices = elements_[static_cast<size_t>(e)];
-  out.weights = {{1.0 - l.sum(), l.x(), l.y(), l.z()}};
   return out;
 }
 

@@ -64,12 +64,12 @@ class DataSurface {
     std::array<double, 4> weights{};
   };
   // The model point of a pair found on the data surface. A point on an embedded triangle
-  // is its rest position's coordinates in the element of the triangle's corner nearest to it
-  // (largest barycentric weight): four vertices of one element, so that the data term
-  // couples no vertices the elastic term does not (the sparsity pattern and its factor's
-  // analysis hold). It is the triangle's own point where the triangle lies in that element;
-  // across an element's face it differs by at most the triangle's size times the jump of the
-  // deformation gradient there.
+  // is its rest position's coordinates in one of the elements of the triangle's corners, the
+  // one it is least outside of (ties: the corner with the largest barycentric weight): four
+  // vertices of one element, so that the data term couples no vertices the elastic term does
+  // not (the sparsity pattern and its factor's analysis hold). It is the triangle's own point
+  // where the triangle lies in that element; across an element's face it differs by at most
+  // the triangle's size times the jump of the deformation gradient there.
   Stencil Map(const DataPair& pair) const;
   // Per data-surface vertex, the rest area (m^2) its model->cloud pair stands for: a third of
   // its triangles' for a mesh's own surface; for an embedded surface the area of the vertices in
