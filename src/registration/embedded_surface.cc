@@ -173,7 +173,11 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
   for (Eigen::Index f = 0; f < view_.surface.rows(); ++f) {
     for (int k = 0; k < 3; ++k) length += (rest_.row(view_.surface(f, k)) - rest_.row(view_.surface(f, (k + 1) % 3))).norm();
   }
-  view_.mean_edge_length = view_.surface.rows() > 0 ? length / (3.0 * static_cast<double>(view_.surface.rows())) : 0.0;
+  surface_edge_ = view_.surface.rows() > 0 ? length / (3.0 * static_cast<double>(view_.surface.rows())) : 0.0;
+  // The view's length scale is the meshes' (the state's): the scale the surface deforms on,
+  // which the occluders' depth image and the closest-point index's refit follow; a fine
+  // surface would make them cost as much as it is fine.
+  view_.mean_edge_length = state.mean_edge_length;
   view_.x.resize(rows, 3);
   residuals = Eigen::VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN());
   Update(state.x);

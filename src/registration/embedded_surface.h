@@ -41,11 +41,14 @@ class DataSurface {
 
   // The data surface at the coarse positions x: a TrackerState holding what the pair search,
   // the visibility and the occluders read (x, surface, surface_vertices, vertex_object,
-  // num_vertices, mean_edge_length, options); no objects. Its x is updated in place. Its
+  // num_vertices, mean_edge_length: the meshes', options); no objects. Its x is updated in place. Its
   // surface_vertices, those that pair with the cloud (model->cloud), are for an embedded
   // surface one per voxel of a third of its mesh's mean surface edge (pair_area).
   const TrackerState& Update(const Vertices& x);
   const TrackerState& view() const { return view_; }
+  // The mean edge (m) of the data surface's triangles at rest (the view's mean_edge_length is
+  // the meshes').
+  double surface_edge() const { return surface_edge_; }
   const Vertices& rest() const { return rest_; }
   int offset(int object) const { return offset_[static_cast<size_t>(object)]; }
   int count(int object) const { return count_[static_cast<size_t>(object)]; }
@@ -85,6 +88,7 @@ class DataSurface {
  private:
   TrackerState view_;
   Vertices rest_;
+  double surface_edge_ = 0.0;
   std::vector<double> pair_area_;
   std::vector<int> offset_, count_;
   std::vector<int> first_triangle_, num_triangles_;  // per object, its rows of view_.surface

@@ -131,7 +131,7 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   const TrackerState& pair_state = PairState();
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());
   if (pre.voxel_size == 0 && pre.auto_voxel > 0 && fc->cloud.size() > dense) {
-    s->voxel_size = pre.auto_voxel * (data_surface ? data_surface->view().mean_edge_length : mean_edge);
+    s->voxel_size = pre.auto_voxel * (data_surface ? data_surface->surface_edge() : mean_edge);
     SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights);
   } else {
     fc->weights.setOnes(fc->cloud.size());
