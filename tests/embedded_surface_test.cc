@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <memory>
 #include <random>
@@ -20,6 +22,7 @@
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/meshing.h"
+#include "femreg/point_cloud.h"
 #include "femreg/scene.h"
 #include "femreg/synth.h"
 #include "femreg/tracker.h"
@@ -410,6 +413,75 @@ TEST(EmbeddedSurfaceSceneTest, TheSceneKeyIsParsedWrittenAndOverridden) {
   EXPECT_NE(status.message().find(".ply, .obj or .stl"), std::string::npos) << status.message();
   fs::remove_all(dir);
 }
+
+#ifdef FEMREG_CLI_PATH
+// femreg register with an embedded surface: its VTP (and PLY) per frame, and its errors
+// against GROUND_TRUTH/surface/ while the vertex truth is another mesh's.
+TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("femreg_embedded_cli_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "clouds");
+  fs::create_directories(dir / "truth" / "surface");
+  const TetMesh fine = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 10, 4, 4);
+  ASSERT_TRUE(WriteObjSurface((dir / "scan.obj").string(), fine, fine.rest).ok());
+  Vertices scan;  // as the scene will read it (the writer's vertex order)
+  Triangles faces;
+  ASSERT_TRUE(ReadSurface((dir / "scan.obj").string(), &scan, &faces).ok());
+  const Eigen::RowVector3d shift(0.002, -0.001, 0.0);
+  for (int f = 0; f < 2; ++f) {
+    PointCloud cloud;
+    cloud.points = (scan.rowwise() + shift).eval();
+    const std::string name = "frame_000" + std::to_string(f);
+    ASSERT_TRUE(WritePointCloud((dir / "clouds" / (name + ".pcd")).string(), cloud).ok());
+    GroundTruthFrame surface_truth, other;
+    surface_truth.positions = cloud.points;
+    surface_truth.visible.assign(static_cast<size_t>(scan.rows()), 1);
+    other.positions = Vertices::Zero(3, 3);  // another mesh's vertices: skipped
+    other.visible.assign(3, 1);
+    ASSERT_TRUE(WriteGroundTruthFrame((dir / "truth" / "surface" / (name + ".csv")).string(), surface_truth).ok());
+    ASSERT_TRUE(WriteGroundTruthFrame((dir / "truth" / (name + ".csv")).string(), other).ok());
+  }
+  std::ofstream(dir / "scene.yaml") << "objects:\n"
+                                       "  - name: body\n"
+                                       "    generate: {shape: box, size: [0.102, 0.042, 0.042], cells: [4, 2, 2], origin: [-0.001, -0.001, -0.001]}\n"
+                                       "    surface: scan.obj\n"
+                                       "    material: {youngs_modulus: 50000, poisson_ratio: 0.35, density: 200}\n"
+                                       "registration:\n"
+                                       "  solver: {max_outer_iterations: 10}\n";
+  const std::string command = std::string(FEMREG_CLI_PATH) + " register --scene " + (dir / "scene.yaml").string() +
+                              " --frames " + (dir / "clouds").string() + " --ground-truth " + (dir / "truth").string() +
+                              " --out " + (dir / "out").string() + " --surface-ply --no-progress --threads 1 > " +
+                              (dir / "log").string() + " 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << std::ifstream(dir / "log").rdbuf();
+  EXPECT_TRUE(fs::exists(dir / "out" / "frames" / "body_surface_0001.vtp"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "body_surface.pvd"));
+  Vertices ply;
+  Triangles ply_faces;
+  ASSERT_TRUE(ReadSurface((dir / "out" / "frames" / "body_surface_0001.ply").string(), &ply, &ply_faces).ok());
+  EXPECT_EQ(ply_faces.rows(), faces.rows());
+  EXPECT_LT((ply.colwise().mean() - (scan.colwise().mean() + shift)).norm(), 2e-4);
+  std::ifstream stats(dir / "out" / "stats.csv");
+  std::string header, row;
+  std::getline(stats, header);
+  std::getline(stats, row);
+  std::getline(stats, row);  // the second frame
+  const auto column = [&](const std::string& name) {
+    std::vector<std::string> names, values;
+    std::stringstream h(header), r(row);
+    for (std::string c; std::getline(h, c, ',');) names.push_back(c);
+    for (std::string c; std::getline(r, c, ',');) values.push_back(c);
+    for (size_t i = 0; i < names.size() && i < values.size(); ++i) {
+      if (names[i] == name) return values[i];
+    }
+    return std::string("missing");
+  };
+  EXPECT_EQ(column("err_mean_mm"), "");  // the vertex truth was another mesh's
+  const std::string error = column("err_surface_mean_mm");
+  ASSERT_FALSE(error.empty());
+  EXPECT_LT(std::stod(error), 0.2);  // mm: the scan follows the 2.2 mm shift
+  fs::remove_all(dir);
+}
+#endif  // FEMREG_CLI_PATH
 
 }  // namespace
 }  // namespace femreg

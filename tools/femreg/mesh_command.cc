@@ -62,7 +62,7 @@ struct Timings {
 };
 
 std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timings& t,
-                       const std::string& error) {
+                       const std::string& error, const CageReport* cage = nullptr) {
   std::ostringstream os;
   os << "{\n  \"ok\": " << (error.empty() ? "true" : "false") << ",\n";
   if (!error.empty()) os << "  \"error\": " << JsonString(error) << ",\n";
@@ -112,6 +112,14 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
        << ", \"mean_aspect_ratio\": " << JsonNumber(q.mean_aspect_ratio)
        << ", \"share_below_10_deg\": " << JsonNumber(r.small_dihedral_share)
        << ", \"share_above_170_deg\": " << JsonNumber(r.large_dihedral_share) << "}},\n";
+  }
+  if (cage != nullptr && error.empty()) {
+    os << "  \"cage\": {\"target_vertices\": " << args.cage << ", \"passes\": " << cage->passes
+       << ", \"edge_length\": " << JsonNumber(cage->edge_length) << ", \"offset\": " << JsonNumber(cage->offset)
+       << ", \"outside_before\": " << cage->outside_before
+       << ", \"outside_max_before\": " << JsonNumber(cage->outside_max_before)
+       << ", \"outside\": " << cage->outside_vertices << ", \"outside_max\": " << JsonNumber(cage->outside_max)
+       << "},\n";
   }
   os << "  \"tetgen_warnings\": " << JsonString(r.tetgen_warnings) << ",\n"
      << "  \"tetgen_log\": " << JsonString(r.tetgen_log) << ",\n"
@@ -232,7 +240,7 @@ int RunMesh(MeshArgs args) {
   timings.write = Since(write_start);
   if (!status.ok()) return fail(status.message());
   timings.total = Since(start);
-  std::cout << (args.json ? JsonReport(args, report, timings, "")
+  std::cout << (args.json ? JsonReport(args, report, timings, "", args.cage > 0 ? &cage : nullptr)
                           : TextReport(args, report, timings));
   if (args.cage > 0 && !args.json) {
     std::cout << "cage:      " << mesh.num_vertices() << " vertices for a target of " << args.cage << " ("
