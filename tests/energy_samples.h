@@ -149,7 +149,7 @@ struct Sample<energy::EdgeSpring> {
 
 template <int N>
 struct Sample<energy::PointToPoint<N>> {
-  static constexpr const char* kName = N == 1 ? "PointToPoint<1>" : "PointToPoint<3>";
+  static constexpr const char* kName = N == 1 ? "PointToPoint<1>" : N == 3 ? "PointToPoint<3>" : "PointToPoint<4>";
   energy::PointToPoint<N> block;
   Vertices x;
   explicit Sample(std::mt19937* rng) {
@@ -167,7 +167,7 @@ struct Sample<energy::PointToPoint<N>> {
 
 template <int N>
 struct Sample<energy::PointToPlane<N>> {
-  static constexpr const char* kName = N == 1 ? "PointToPlane<1>" : "PointToPlane<3>";
+  static constexpr const char* kName = N == 1 ? "PointToPlane<1>" : N == 3 ? "PointToPlane<3>" : "PointToPlane<4>";
   energy::PointToPlane<N> block;
   Vertices x;
   explicit Sample(std::mt19937* rng) {

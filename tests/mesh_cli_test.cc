@@ -119,6 +119,27 @@ TEST(MeshCliTest, EdgeLengthRemeshesUnlessTold) {
     EXPECT_NE(out.find(option), std::string::npos) << option;
   }
 }
+// --cage N: about N vertices, every surface vertex inside, said in the report (text and JSON);
+// refused with --edge-length.
+TEST(MeshCliTest, MakesACageAroundTheSurface) {
+  TempDir dir;
+  const std::string sphere = dir.path() + "/sphere.obj";
+  WriteObj(sphere, Icosphere(0.05, 4));
+  const std::string out_path = dir.path() + "/cage.vtu";
+  std::string out, err;
+  ASSERT_EQ(RunCli("mesh " + sphere + " --out " + out_path + " --cage 120", &out, &err), 0) << err;
+  EXPECT_NE(out.find("cage:"), std::string::npos) << out;
+  EXPECT_NE(out.find(", 0 still are"), std::string::npos) << out;
+  TetMesh cage;
+  ASSERT_TRUE(ReadTetMesh(out_path, &cage).ok());
+  EXPECT_NEAR(cage.num_vertices(), 120, 0.3 * 120);
+  ASSERT_EQ(RunCli("mesh " + sphere + " --out " + out_path + " --cage 120 --force --json", &out, &err), 0) << err;
+  EXPECT_NE(out.find("\"cage\": {\"target_vertices\": 120"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"outside\": 0,"), std::string::npos) << out;
+  EXPECT_EQ(RunCli("mesh " + sphere + " --out " + out_path + " --cage 120 --edge-length 0.01 --force", &out, &err), 1);
+  EXPECT_NE(err.find("--cage chooses the edge length"), std::string::npos) << err;
+}
+
 #endif  // FEMREG_CLI_PATH
 
 }  // namespace

@@ -83,6 +83,20 @@ class AabbTree {
   Triangles triangles_;
 };
 
+// Locates points (given in a mesh's rest frame) in its tetrahedra: for each point, the
+// element and barycentric coordinates. A point outside goes to the nearest element (the one
+// whose smallest coordinate is largest): with `clamp`, onto that element (coordinates clipped
+// to >= 0 and renormalised: the generators' ground truth, a point always in the body); without,
+// its coordinates are extrapolated, so that the rest position is reproduced exactly (an
+// embedded surface a little outside its cage keeps its shape).
+struct EmbeddedPoints {
+  std::vector<int> element;
+  std::vector<Eigen::Vector4d> barycentric;
+};
+EmbeddedPoints EmbedPoints(const TetMesh& mesh, const Vertices& points, bool clamp = true);
+// The embedded points at the mesh's vertex positions `positions` (#V by 3).
+Vertices InterpolateEmbedded(const TetMesh& mesh, const Vertices& positions, const EmbeddedPoints& embedded);
+
 }  // namespace femreg
 
 #endif  // FEMREG_GEOMETRY_H_

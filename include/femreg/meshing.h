@@ -150,6 +150,26 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
                              TetMesh* mesh, MeshingReport* report,
                              const std::string& source = "surface");
 
+// A coarse tetrahedral cage around the solid bounded by (V, F), for carrying that surface as
+// an embedded one (objects[i].surface; femreg mesh --cage N): TetrahedralizeSurface with the
+// surface remeshed to an edge length chosen, over a few passes, so that the mesh has about
+// `target_vertices` vertices; then the mesh's boundary vertices moved out along their normals
+// until every vertex of (V, F) is inside it (a few rounds; each corner by as much as the input
+// sticks out over its triangles; a move is halved until no element turns over). The remeshed surface's vertices lie on the input and its triangles cut chords
+// across it, so without the move parts of the input stick out by up to the chords' sagitta.
+struct CageReport {
+  MeshingReport meshing;       // the last pass's
+  int passes = 0;              // meshing passes run
+  double edge_length = 0.0;    // the last pass's target edge length
+  double offset = 0.0;         // the largest move of a boundary vertex
+  int outside_vertices = 0;    // vertices of (V, F) still outside the cage
+  double outside_max = 0.0;    // the farthest of them from it (0 when all are inside)
+  int outside_before = 0;      // the same before the move
+  double outside_max_before = 0.0;
+};
+Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, const MeshingOptions& options,
+                TetMesh* mesh, CageReport* report, const std::string& source = "surface");
+
 // Reads a triangle surface by its extension: .ply (ASCII or binary, faces with 3 or more
 // corners fanned into triangles), .obj, .stl (ASCII or binary; corners welded by exact
 // position). Errors name the file and the line (or byte offset).

@@ -81,6 +81,10 @@ struct ObjectSpec {
   double toughness = 0.0;
   std::vector<std::pair<int, double>> region_toughness;  // region id -> toughness (Pa)
   int label = -1;          // cloud points with this label belong to it; -1 = none
+  // A fine triangle surface (.ply, .obj, .stl; resolved against the scene file's folder)
+  // carried by the mesh's tetrahedra, in the mesh file's coordinates (the object's scale and
+  // pose apply): the data terms act on it (Tracker::SetEmbeddedSurface). Empty: none.
+  std::string surface_path;
 };
 
 struct BoundaryConditionSpec {
@@ -294,6 +298,9 @@ std::vector<std::string> ChooseRegistrationElements(Scene* scene);
 // the lumped masses from its density and region densities. Errors name the scene and the
 // mesh file.
 Status LoadObjectMesh(const Scene& scene, int object, TetMesh* mesh);
+// Reads object `object`'s embedded surface (objects[i].surface) and poses it as its mesh
+// (scale, rotation, translation). An object without one gets no rows.
+Status LoadObjectSurface(const Scene& scene, int object, Vertices* vertices, Triangles* triangles);
 
 // The forward problem of object i: boundary conditions, loads and gravity resolved to
 // vertex indices on `mesh` (from LoadObjectMesh).

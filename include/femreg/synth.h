@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/geometry.h"
 #include "femreg/mesh.h"
 #include "femreg/registration.h"
 #include "femreg/status.h"
@@ -107,17 +108,6 @@ class DepthSensor {
   DepthSensorOptions options_;
   Eigen::Matrix3d R_;
 };
-
-// Locates points (given in a fine mesh's rest frame) in the fine mesh: for each point,
-// the element and barycentric coordinates; points outside go to the nearest element
-// (clamped barycentrics). Used to carry a fine ground truth to a coarse tracked mesh.
-struct EmbeddedPoints {
-  std::vector<int> element;
-  std::vector<Eigen::Vector4d> barycentric;
-};
-EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points);
-Vertices InterpolateEmbedded(const TetMesh& fine, const Vertices& fine_positions,
-                             const EmbeddedPoints& embedded);
 
 // femreg synth --depth-png: every clouds_dir/NAME.pcd (points on the camera's pixel rays,
 // as the virtual camera returns them) written as depth_dir/NAME.png, the 16-bit depth image

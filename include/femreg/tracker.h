@@ -99,6 +99,22 @@ class Tracker {
   // FrameSummary::force), zero at clamps and anchors.
   const Vertices& external_forces(int object) const;
 
+  // An embedded surface (docs/theory/embedded-surfaces.md): a fine triangle surface, its
+  // vertices (#S by 3) in object i's rest frame, carried by the object's tetrahedra (each
+  // vertex a fixed combination of the four vertices of the element it lies in, or of the
+  // nearest element for one a little outside). The data terms, the visibility and the
+  // occluders then act on it; the elastic energy and the contacts stay on the mesh. Not with
+  // labels or fracture. Replaces what was set before.
+  Status SetEmbeddedSurface(int object, const Vertices& rest, const Triangles& triangles);
+  bool has_embedded_surface(int object) const;
+  // Object i's embedded surface at the current positions (#S by 3; no rows without one) and
+  // its triangles.
+  Vertices surface_vertices(int object) const;
+  const Triangles& surface_triangles(int object) const;
+  // The largest distance (m) at rest from a vertex of object i's embedded surface outside the
+  // mesh to its element (0 when all are inside).
+  double surface_outside(int object) const;
+
   // Cloud points with this label (PointCloud::labels) belong to the object; -1: none.
   Status SetObjectLabel(int object, int label);
 

@@ -253,6 +253,31 @@ void BindTracker(py::module_& m) {
              return ToArray(t.tracker().vertices(object));
            },
            py::arg("object") = 0, "(V, 3) current positions (a copy).")
+      .def("set_embedded_surface",
+           [](PyTracker& t, int object, const DoubleArray& vertices, const Triangles& triangles) {
+             t.CheckObject(object);
+             Vertices v;
+             CopyRows3(vertices, "vertices", &v);
+             Check(t.tracker().SetEmbeddedSurface(object, v, triangles));
+           },
+           py::arg("object"), py::arg("vertices"), py::arg("triangles"),
+           "Carries a fine triangle surface (vertices (S, 3) in the object's rest frame, "
+           "triangles (F, 3)) by the object's tetrahedra: the data terms act on it "
+           "(objects[i].surface in a scene).")
+      .def("surface_vertices",
+           [](PyTracker& t, int object) {
+             t.CheckObject(object);
+             return ToArray(t.tracker().surface_vertices(object));
+           },
+           py::arg("object") = 0,
+           "(S, 3) the object's embedded surface at the current positions (a copy); (0, 3) "
+           "without one.")
+      .def("surface_triangles",
+           [](PyTracker& t, int object) {
+             t.CheckObject(object);
+             return Triangles(t.tracker().surface_triangles(object));
+           },
+           py::arg("object") = 0, "(F, 3) the embedded surface's triangles; (0, 3) without one.")
       .def("external_forces",
            [](PyTracker& t, int object) {
              t.CheckObject(object);

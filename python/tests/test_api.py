@@ -309,3 +309,29 @@ def test_simulate_beam(datasets):
                                rtol=1e-12)
     with pytest.raises(ValueError, match="no such object"):
         femreg.simulate(scene, object="nope")
+
+
+def test_an_embedded_surface_is_tracked_and_returned():
+    # A coarse cage carries a finer box's surface: the data act on the fine surface, and
+    # surface_vertices returns it.
+    cage = femreg.make_box([0.202, 0.042, 0.042], [5, 1, 1], origin=[-0.001, -0.001, -0.001])
+    fine = femreg.make_box([0.2, 0.04, 0.04], [20, 4, 4])
+    used = np.unique(fine.surface)
+    index = -np.ones(fine.num_vertices, dtype=int)
+    index[used] = np.arange(len(used))
+    scan, faces = fine.rest[used], index[fine.surface]
+    options = femreg.RegistrationOptions()
+    options.solver.max_outer_iterations = 10
+    tracker = femreg.Tracker([cage], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+    assert tracker.surface_vertices(0).shape == (0, 3)
+    tracker.set_embedded_surface(0, scan, faces)
+    np.testing.assert_allclose(tracker.surface_vertices(0), scan, atol=1e-12)
+    np.testing.assert_array_equal(tracker.surface_triangles(0), faces)
+    shift = np.array([0.004, -0.002, 0.001])
+    for _ in range(4):
+        tracker.track(_surface_cloud(fine, fine.rest + shift))
+    assert tracker.summary["usable"]
+    # The fine surface reaches the shifted scan, although the cage is 1 mm larger than it.
+    assert np.abs(tracker.surface_vertices(0) - (scan + shift)).max() < 2e-4
+    with pytest.raises(femreg.Error, match="out of range"):
+        tracker.set_embedded_surface(0, scan, faces + len(scan))

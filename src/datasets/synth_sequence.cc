@@ -145,6 +145,9 @@ Scene SynthTrackingScene(const Scene& scene, const std::string& dir) {
     if (!object.mesh_path.empty()) {
       object.mesh_path = (fs::path(dir) / fs::path(object.mesh_path).filename()).string();
     }
+    if (!object.surface_path.empty()) {
+      object.surface_path = (fs::path(dir) / fs::path(object.surface_path).filename()).string();
+    }
   }
   tracking.registration = scene.registration;
   // Gravity is a fact of the world the robot knows; loads, clamps and prescribed motion
@@ -264,6 +267,15 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   }
 
   const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
+  // The tracked object's embedded surface (objects[0].surface), if any: its vertices' ground
+  // truth is where the truth mesh carries them (extrapolated like the tracker's, not clamped:
+  // a scan vertex a little outside the truth mesh moves with the element next to it).
+  Vertices embedded_rest;
+  Triangles embedded_triangles;
+  status = LoadObjectSurface(scene, 0, &embedded_rest, &embedded_triangles);
+  if (!status.ok()) return status;
+  const EmbeddedPoints surface_embedded =
+      embedded_rest.rows() > 0 ? EmbedPoints(fine, embedded_rest, /*clamp=*/false) : EmbeddedPoints();
   const DepthSensor sensor(s.sensor);
   Vertices table_points, surface_points, sphere, occluder_points;
   Triangles table_triangles, surface_triangles, occluder_triangles;
@@ -288,10 +300,19 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) return Status::Error(dir + "/" + sub + ": cannot create: " + ec.message());
   }
+  if (embedded_rest.rows() > 0) {
+    fs::create_directories(fs::path(dir) / "ground_truth" / "surface", ec);
+    if (ec) return Status::Error(dir + "/ground_truth/surface: cannot create: " + ec.message());
+  }
   if (!scene.objects[0].mesh_path.empty()) {
     const fs::path target = fs::path(dir) / fs::path(scene.objects[0].mesh_path).filename();
     fs::copy_file(scene.objects[0].mesh_path, target, fs::copy_options::overwrite_existing, ec);
     if (ec) return Status::Error(target.string() + ": cannot copy the mesh: " + ec.message());
+  }
+  if (!scene.objects[0].surface_path.empty()) {
+    const fs::path target = fs::path(dir) / fs::path(scene.objects[0].surface_path).filename();
+    fs::copy_file(scene.objects[0].surface_path, target, fs::copy_options::overwrite_existing, ec);
+    if (ec) return Status::Error(target.string() + ": cannot copy the surface: " + ec.message());
   }
   std::string comment =
       "Tracking scene written by `femreg synth " + s.source_name + "`: the tracked mesh, the\n"
@@ -384,6 +405,15 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     status = WritePointCloud((fs::path(dir) / "clouds" / (name + ".pcd")).string(), cloud);
     if (status.ok()) {
       status = WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / (name + ".csv")).string(), truth);
+    }
+    if (status.ok() && embedded_rest.rows() > 0) {
+      // One row per vertex of the embedded surface (ground_truth/surface/NAME.csv).
+      GroundTruthFrame surface_truth;
+      surface_truth.positions = InterpolateEmbedded(fine, fine.x, surface_embedded);
+      surface_truth.visible = left ? std::vector<char>(static_cast<size_t>(surface_truth.positions.rows()), 0)
+                                   : sensor.Visible(image, surface_truth.positions, 2e-3);
+      status = WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / "surface" / (name + ".csv")).string(),
+                                     surface_truth);
     }
     if (status.ok()) {
       surface_points.resize(static_cast<Eigen::Index>(fine.surface_vertices.size()), 3);

@@ -1,5 +1,7 @@
 // The data terms: a point on the model — a surface vertex (N = 1) or a point on a surface
-// triangle (N = 3, barycentric weights b) — tied to a cloud point q, point to point
+// triangle (N = 3, barycentric weights b), or a point of an embedded surface (N = 4: the
+// coordinates of its rest position in one tetrahedron of the mesh, extrapolated a little
+// outside it) — tied to a cloud point q, point to point
 // (r = p - q, 3 residuals) or point to plane (r = n . (p - q), 1 residual, n unit). The
 // temporal and anchor springs are point-to-point blocks on one vertex with their own weight.
 #ifndef FEMREG_ENERGY_DATA_H_

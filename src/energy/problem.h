@@ -37,6 +37,7 @@ class Problem {
                           std::vector<TermSet<InversionBarrier>>, std::vector<TermSet<EdgeSpring>>,
                           std::vector<TermSet<PointToPoint<1>>>, std::vector<TermSet<PointToPoint<3>>>,
                           std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
+                          std::vector<TermSet<PointToPoint<4>>>, std::vector<TermSet<PointToPlane<4>>>,
                           std::vector<TermSet<ContactPenalty<3>>>,
                           std::vector<TermSet<ContactPenalty<6>>>, std::vector<TermSet<Friction<3>>>,
                           std::vector<TermSet<Friction<6>>>, std::vector<TermSet<ExternalLoad>>,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace femreg {
 
@@ -27,10 +28,24 @@ void ZBuffer::Reset(int w, int h) {
 void Rasterize(const PinholeCamera& camera, const Vertices& positions, const Triangles& triangles,
                int surface_id, ZBuffer* zbuffer) {
   const int width = zbuffer->width, height = zbuffer->height;
+  // Each vertex projected once, when a triangle first needs it (a fine surface has about six
+  // triangles per vertex, each smaller than a pixel).
+  struct Projected {
+    double u = 0.0, v = 0.0, z = 0.0;
+    signed char ok = -1;  // -1: not yet projected
+  };
+  std::vector<Projected> projected(static_cast<size_t>(positions.rows()));
   for (int f = 0; f < triangles.rows(); ++f) {
     double u[3], v[3], z[3];
     bool ok = true;
-    for (int k = 0; k < 3; ++k) ok = ok && camera.Project(positions.row(triangles(f, k)), &u[k], &v[k], &z[k]);
+    for (int k = 0; k < 3 && ok; ++k) {
+      Projected& p = projected[static_cast<size_t>(triangles(f, k))];
+      if (p.ok < 0) p.ok = camera.Project(positions.row(triangles(f, k)), &p.u, &p.v, &p.z) ? 1 : 0;
+      ok = p.ok == 1;
+      u[k] = p.u;
+      v[k] = p.v;
+      z[k] = p.z;
+    }
     if (!ok) continue;
     // Pixel centres at integer coordinates.
     const int u0 = std::max(0, static_cast<int>(std::ceil(std::min({u[0], u[1], u[2]}))));

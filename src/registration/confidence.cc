@@ -25,13 +25,15 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
 }
 
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
-                                  const std::vector<DataPair>& pairs, double tolerance) {
+                                  const std::vector<DataPair>& pairs, double tolerance,
+                                  const DataSurface* surface) {
   FrameConfidence c;
+  const Vertices& pair_x = surface != nullptr ? surface->view().x : state.x;
   // Fit: the cloud->model pairs (three vertices) within the tolerance at the result.
   double within = 0.0, all = 0.0, squares = 0.0;
   for (const DataPair& p : pairs) {
     if (p.num_vertices != 3) continue;
-    const double d = (p.Point(state.x) - p.target).norm();
+    const double d = (p.Point(pair_x) - p.target).norm();
     all += p.weight;
     squares += p.weight * d * d;
     if (d <= tolerance) within += p.weight;
@@ -40,9 +42,19 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   c.residual = all > 0.0 ? std::sqrt(squares / all) : 0.0;
 
   // Coverage: the surface vertices facing the sensor with a cloud point near.
-  const Eigen::MatrixXd normals = state.VertexNormals();
   int facing = 0, covered = 0;
-  for (size_t i = 0; i < state.objects.size(); ++i) {
+  if (surface != nullptr) {
+    const TrackerState& view = surface->view();
+    const Eigen::MatrixXd normals = view.VertexNormals();
+    for (int v : view.surface_vertices) {
+      if (!fc.Faces(view.x.row(v).transpose(), normals.row(v).transpose())) continue;
+      ++facing;
+      const double d = surface->residuals(v);
+      if (std::isfinite(d) && d <= tolerance) ++covered;
+    }
+  }
+  const Eigen::MatrixXd normals = surface != nullptr ? Eigen::MatrixXd() : state.VertexNormals();
+  for (size_t i = 0; i < state.objects.size() && surface == nullptr; ++i) {
     const ObjectState& o = state.objects[i];
     for (int v : o.mesh.surface_vertices) {
       const int g = o.offset + v;

@@ -22,6 +22,7 @@
 
 #include "femreg/registration.h"
 #include "registration/correspondences.h"
+#include "registration/embedded_surface.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -32,9 +33,11 @@ double StretchDeviation(const Eigen::Matrix3d& F);
 
 // The scores of state.x against the frame's cloud: `pairs` are the last outer iteration's
 // (their cloud->model pairs stand for the points they were made from), and state.residuals
-// hold each surface vertex's distance to the nearest cloud point (UpdateOutputs).
+// hold each surface vertex's distance to the nearest cloud point (UpdateOutputs). With a data
+// surface, the pairs are on it, and its fit and coverage are that surface's (its residuals).
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
-                                  const std::vector<DataPair>& pairs, double tolerance);
+                                  const std::vector<DataPair>& pairs, double tolerance,
+                                  const DataSurface* surface = nullptr);
 // Takes a trusted frame's coverage and residual into the references (running means); the
 // first solved frame sets them.
 void UpdateReferences(const FrameConfidence& confidence, TrackerState* state);

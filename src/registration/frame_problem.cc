@@ -243,6 +243,21 @@ void FrameProblem::BuildFrameTerms(TrackerState* state) {
   }
 }
 
+void FrameProblem::SetDataSurface(const DataSurface* surface) {
+  data_surface_ = surface;
+  surface_vertex_area_.clear();
+  surface_triangle_area_.clear();
+  if (surface == nullptr) return;
+  const TrackerState& view = surface->view();
+  const Vertices& rest = surface->rest();
+  surface_vertex_area_ = surface->pair_area();
+  for (Eigen::Index f = 0; f < view.surface.rows(); ++f) {
+    const int a = view.surface(f, 0), b = view.surface(f, 1), c = view.surface(f, 2);
+    const Eigen::Vector3d ab = rest.row(b) - rest.row(a), ac = rest.row(c) - rest.row(a);
+    surface_triangle_area_[TriangleKey(a, b, c)] = 0.5 * ab.cross(ac).norm();
+  }
+}
+
 void FrameProblem::SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options) {
   problem_.Clear(TermGroup::kData);
   const energy::Loss loss{options.data.loss, options.data.loss_scale};
@@ -250,6 +265,20 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
   auto& point3 = *problem_.AddSet<energy::PointToPoint<3>>(TermGroup::kData, loss).mutable_blocks();
   auto& plane1 = *problem_.AddSet<energy::PointToPlane<1>>(TermGroup::kData, loss).mutable_blocks();
   auto& plane3 = *problem_.AddSet<energy::PointToPlane<3>>(TermGroup::kData, loss).mutable_blocks();
+  // Points of an embedded surface (four coarse vertices); only with a data surface, so that
+  // a problem without one has the same sets as before.
+  std::vector<energy::PointToPoint<4>>* point4 = nullptr;
+  std::vector<energy::PointToPlane<4>>* plane4 = nullptr;
+  if (data_surface_ != nullptr) {
+    point4 = problem_.AddSet<energy::PointToPoint<4>>(TermGroup::kData, loss).mutable_blocks();
+    plane4 = problem_.AddSet<energy::PointToPlane<4>>(TermGroup::kData, loss).mutable_blocks();
+  }
+  // The areas and objects of the surface the pairs are on.
+  const std::vector<double>& vertex_area = data_surface_ != nullptr ? surface_vertex_area_ : vertex_area_;
+  const std::unordered_map<uint64_t, double>& triangle_area =
+      data_surface_ != nullptr ? surface_triangle_area_ : triangle_area_;
+  const std::vector<int>& vertex_object =
+      data_surface_ != nullptr ? data_surface_->view().vertex_object : vertex_object_;
   // Per pair: the legacy weight, or data_per_area times the area the pair stands for. The
   // area of a cloud point is the median over the touched surface triangles of (triangle's
   // rest area / its cloud->model pairs): the cloud's spacing, measured where it covers the
@@ -265,8 +294,8 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     std::vector<double> shares;
     shares.reserve(triangle_pairs.size());
     for (const auto& [key, count] : triangle_pairs) {
-      const auto it = triangle_area_.find(key);
-      if (it != triangle_area_.end()) shares.push_back(it->second / count);
+      const auto it = triangle_area.find(key);
+      if (it != triangle_area.end()) shares.push_back(it->second / count);
     }
     if (!shares.empty()) {
       std::nth_element(shares.begin(), shares.begin() + shares.size() / 2, shares.end());
@@ -277,8 +306,8 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     if (per_pair) return options.weights.data;
     const double k = options.weights.data_per_area;
     if (p.num_vertices == 1) {
-      if (p.vertices[0] >= static_cast<int>(vertex_area_.size())) return 0.0;
-      double area = vertex_area_[p.vertices[0]];
+      if (p.vertices[0] >= static_cast<int>(vertex_area.size())) return 0.0;
+      double area = vertex_area[p.vertices[0]];
       const double cap = options.weights.model_to_cloud_area_cap;
       if (cap > 0 && point_area > 0) area = std::min(area, cap * point_area);
       return k * options.weights.model_to_cloud_share * area;
@@ -296,8 +325,8 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     const auto objects = static_cast<size_t>(num_objects_);
     std::vector<double> m2c(objects, 0.0), c2m(objects, 0.0);
     for (const DataPair& p : pairs) {
-      if (p.vertices[0] >= static_cast<int>(vertex_object_.size())) continue;
-      const auto o = static_cast<size_t>(vertex_object_[static_cast<size_t>(p.vertices[0])]);
+      if (p.vertices[0] >= static_cast<int>(vertex_object.size())) continue;
+      const auto o = static_cast<size_t>(vertex_object[static_cast<size_t>(p.vertices[0])]);
       if (p.num_vertices == 1) {
         m2c[o] += 1.0;
       } else {
@@ -310,32 +339,48 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
     }
   }
   auto fill = [&](const DataPair& p, auto* b) {
-    for (size_t k = 0; k < b->vertices.size(); ++k) {
-      b->vertices[k] = p.vertices[k];
-      b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];
+    if (data_surface_ != nullptr) {
+      const DataSurface::Stencil st = data_surface_->Map(p);
+      for (size_t k = 0; k < b->vertices.size(); ++k) {
+        b->vertices[k] = st.vertices[k];
+        b->barycentric[k] = st.weights[k];
+      }
+    } else {
+      for (size_t k = 0; k < b->vertices.size(); ++k) {
+        b->vertices[k] = p.vertices[k];
+        b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];
+      }
     }
     b->target = p.target;
     if constexpr (HasNormal<std::remove_pointer_t<decltype(b)>>::value) b->normal = p.normal;
     // A legacy per-pair weight counts the points a voxel stands for (p.weight); a weight per
     // unit area already divides the area among the points that are there.
     b->weight = per_pair ? weight_of(p) * p.weight : weight_of(p);
-    if (p.num_vertices == 1 && !balance.empty() && p.vertices[0] < static_cast<int>(vertex_object_.size())) {
-      b->weight *= balance[static_cast<size_t>(vertex_object_[static_cast<size_t>(p.vertices[0])])];
+    if (p.num_vertices == 1 && !balance.empty() && p.vertices[0] < static_cast<int>(vertex_object.size())) {
+      b->weight *= balance[static_cast<size_t>(vertex_object[static_cast<size_t>(p.vertices[0])])];
     }
   };
   // Which set a pair goes to; each set sized once (they are made anew every outer iteration).
-  enum Kind { kPoint1, kPoint3, kPlane1, kPlane3 };
-  auto kind_of = [](const DataPair& p) {
+  enum Kind { kPoint1, kPoint3, kPlane1, kPlane3, kPoint4, kPlane4 };
+  auto kind_of = [&](const DataPair& p) {
     const bool plane = p.normal.squaredNorm() > 0;
+    // On an embedded surface (a data-surface vertex carried by four coarse ones).
+    if (data_surface_ != nullptr && data_surface_->embedded(data_surface_->view().vertex_object[static_cast<size_t>(p.vertices[0])])) {
+      return plane ? kPlane4 : kPoint4;
+    }
     if (p.num_vertices == 1) return plane ? kPlane1 : kPoint1;
     return plane ? kPlane3 : kPoint3;
   };
-  size_t counts[4] = {0, 0, 0, 0};
+  size_t counts[6] = {0, 0, 0, 0, 0, 0};
   for (const DataPair& p : pairs) ++counts[kind_of(p)];
   point1.reserve(counts[kPoint1]);
   point3.reserve(counts[kPoint3]);
   plane1.reserve(counts[kPlane1]);
   plane3.reserve(counts[kPlane3]);
+  if (point4 != nullptr) {
+    point4->reserve(counts[kPoint4]);
+    plane4->reserve(counts[kPlane4]);
+  }
   auto add = [&](const DataPair& p, auto* set) {
     typename std::remove_pointer_t<decltype(set)>::value_type b;
     fill(p, &b);
@@ -347,6 +392,8 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
       case kPoint3: add(p, &point3); break;
       case kPlane1: add(p, &plane1); break;
       case kPlane3: add(p, &plane3); break;
+      case kPoint4: add(p, point4); break;
+      case kPlane4: add(p, plane4); break;
     }
   }
 }

@@ -13,6 +13,7 @@
 #include "femreg/registration.h"
 #include "registration/correspondences.h"
 #include "registration/free_space.h"
+#include "registration/embedded_surface.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -41,6 +42,8 @@ class FrameProblem {
   // cloud's area per point; a cloud->model pair the cloud's area per point (the median over
   // the touched triangles of rest area / pairs on it). Per pair, an object's model->cloud
   // pairs weigh less where they outnumber its cloud->model pairs (model_to_cloud_balance).
+  // With a data surface (SetDataSurface), the pairs are on it: their areas are its, and
+  // each becomes a block on the coarse vertices that carry its point (DataSurface::Map).
   void SetData(const std::vector<DataPair>& pairs, const RegistrationOptions& options);
   // Free space (registration/free_space.h, energy/free_space.h): for each free surface vertex
   // nearer to the sensor at state.x than the observed depth at its pixel minus
@@ -51,6 +54,9 @@ class FrameProblem {
   void SetFreeSpace(const TrackerState& state, const ObservedDepth& observed);
   // The vertices of the last SetFreeSpace's blocks that are in front of their allowed depth at x.
   int FreeSpaceHeld(const Vertices& x) const;
+  // The surface the pairs of SetData are found on (registration/embedded_surface.h); null:
+  // the meshes' own. Kept by pointer; its rest areas are computed here.
+  void SetDataSurface(const DataSurface* surface);
   // The external loads (gravity, nodal forces) of the objects that have them, about the
   // positions at the start of this outer iteration (energy/load.h). Every outer iteration.
   void SetLoads(const TrackerState& state);
@@ -95,6 +101,10 @@ class FrameProblem {
   std::vector<double> vertex_area_;
   std::unordered_map<uint64_t, double> triangle_area_;
   std::vector<int> vertex_object_;  // per global vertex, its object (weights.model_to_cloud_balance)
+  // The data surface (null: none) and its rest areas, as above in its numbering.
+  const DataSurface* data_surface_ = nullptr;
+  std::vector<double> surface_vertex_area_;
+  std::unordered_map<uint64_t, double> surface_triangle_area_;
   int num_objects_ = 0;
   std::vector<energy::FreeSpacePenalty> free_space_;  // the last SetFreeSpace's blocks
   // For ContactForces: the contacts of the collision set, each penalty's (standoff, k), the

@@ -317,12 +317,15 @@ double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 }  // namespace
 
 GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, int object,
-                            TrackerState* state) {
+                            TrackerState* state, const DataSurface* surface) {
   GlobalPoseResult result;
   const ObjectState& o = state->objects[static_cast<size_t>(object)];
   const int nv = o.mesh.num_vertices();
-  const Vertices y = state->x.middleRows(o.offset, nv);
-  const Triangles& tris = o.mesh.surface;
+  const Vertices mesh_y = state->x.middleRows(o.offset, nv);
+  // The surface the pose is fitted with: the embedded one if the object has it.
+  const bool embedded = surface != nullptr && surface->embedded(object);
+  const Vertices y = embedded ? surface->ObjectPositions(object) : mesh_y;
+  const Triangles tris = embedded ? surface->ObjectSurface(object) : o.mesh.surface;
   if (points.rows() < 3 || tris.rows() == 0) return result;
   const double radius =
       std::sqrt((y.rowwise() - y.colwise().mean()).rowwise().squaredNorm().mean());
@@ -420,13 +423,14 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   // q = R p + t maps the cloud onto the surface as given: the surface goes by the inverse.
   result.moved = true;
   for (int v = 0; v < nv; ++v) {
-    const Eigen::Vector3d p = y.row(v).transpose();
+    const Eigen::Vector3d p = mesh_y.row(v).transpose();
     state->x.row(o.offset + v) = (chosen->R.transpose() * (p - chosen->t)).transpose();
   }
   return result;
 }
 
-void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummary* summary) {
+void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummary* summary,
+                       DataSurface* surface) {
   const RegistrationOptions& options = state->options;
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();
   const Eigen::Vector3d* eye_ptr = nullptr;
@@ -458,7 +462,8 @@ void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummar
     } else {
       continue;  // which points are this object's is not known
     }
-    const GlobalPoseResult r = GlobalPose(points, eye_ptr, static_cast<int>(i), state);
+    if (surface != nullptr) surface->Update(state->x);
+    const GlobalPoseResult r = GlobalPose(points, eye_ptr, static_cast<int>(i), state, surface);
     searched = searched || r.searched;
     moved = moved || r.moved;
     summary->pose_ambiguous = summary->pose_ambiguous || r.ambiguous;

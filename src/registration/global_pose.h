@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "femreg/registration.h"
+#include "registration/embedded_surface.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -40,14 +41,17 @@ struct GlobalPoseResult {
 // by a trimmed point-to-plane ICP and scored as PoseHypothesis::fit says (a point whose
 // closest surface point faces away from the eye counts as unexplained). Moves the object's
 // vertices in state->x when a global pose wins. The same result on any thread count and
-// every run (std::rand is seeded before each RANSAC run: PCL draws from it).
+// every run (std::rand is seeded before each RANSAC run: PCL draws from it). With a data
+// surface (updated at state->x) that embeds a surface in the object, the pose is that of its
+// embedded surface, the one the cloud shows; the mesh moves with it.
 GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, int object,
-                            TrackerState* state);
+                            TrackerState* state, const DataSurface* surface = nullptr);
 
 // registration.initial_pose auto on the first frame: GlobalPose for every object that has no
 // anchor and whose cloud points are known (the only object, or a labelled one); fills
 // summary->initial_pose and pose_ambiguous.
-void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummary* summary);
+void ChooseInitialPose(const PointCloud& cloud, TrackerState* state, FrameSummary* summary,
+                       DataSurface* surface = nullptr);
 
 }  // namespace femreg
 

@@ -134,8 +134,7 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
   return counts;
 }
 
-int MarkImplausible(const TrackerState& state, const Vertices& start, const SurfaceIndex& surface,
-                    const Vertices& points, const PointIndex& cloud_index, double spacing,
+int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points, const PointIndex& cloud_index, double spacing,
                     std::vector<char>* marks) {
   const double limit = state.options.data.max_strain_step;
   const int n = static_cast<int>(points.rows());
@@ -162,7 +161,8 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Surf
   if (!any) return 0;
   if (marks->size() != static_cast<size_t>(n)) marks->assign(static_cast<size_t>(n), 0);
   const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
-  const SurfaceIndex at_start(start, state.surface);
+  // The meshes' own surfaces (an embedded surface's pairs act through the same elements).
+  const SurfaceIndex surface(state.x, state.surface), at_start(start, state.surface);
   // -1 unknown, 0 on the model at the start, 1 off it.
   std::vector<signed char> off(static_cast<size_t>(n), -1);
   auto Off = [&](int i) {

@@ -67,14 +67,15 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   counts = PairCounts();
   auto t0 = Clock::now();
   const int hold = options.data.hold_pairs_after;
-  FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
+  FindPairs(PairState(), fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
             &paired_vertices, hold > 0 && k - iteration_base >= hold);
   s->time.correspondences += Seconds(t0);
   row.model_to_cloud = counts.model_to_cloud;
   row.cloud_to_model = counts.cloud_to_model;
   row.rejected = counts.rejected;
-  if (!state.surface_vertices.empty()) {
-    s->coverage = static_cast<double>(counts.covered) / static_cast<double>(state.surface_vertices.size());
+  const std::vector<int>& surface_vertices = PairState().surface_vertices;
+  if (!surface_vertices.empty()) {
+    s->coverage = static_cast<double>(counts.covered) / static_cast<double>(surface_vertices.size());
   }
   if (pairs->empty()) {
     s->rejected = counts.rejected;
@@ -296,7 +297,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       model_index.Reset();
       warm_triangles.clear();  // a new surface
       paired_vertices.clear();
-      FindPairs(state, fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
+      FindPairs(PairState(), fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
       moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
       bulk = moved;
       // The next outer iteration forms a new pair set, held from the one after.

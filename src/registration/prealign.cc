@@ -29,13 +29,89 @@ void Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vect
   *t = cb - *R * ca;
 }
 
-void RigidPrealign(const PointCloud& cloud, TrackerState* state) {
+namespace {
+
+// RigidPrealign for an object with an embedded surface: fitted by that surface (positions f,
+// triangles tris), the same rigid motion applied to its mesh.
+void EmbeddedPrealign(const PointCloud& cloud, int stride, int object, const Eigen::MatrixXd& normals,
+                      const DataSurface& surface, TrackerState* state) {
+  const CameraOptions& camera = state->options.camera;
+  const ObjectState& o = state->objects[static_cast<size_t>(object)];
+  const int base = surface.offset(object), ns = surface.count(object), nv = o.mesh.num_vertices();
+  Vertices f = surface.ObjectPositions(object);
+  Vertices y = state->x.middleRows(o.offset, nv);
+  const Triangles tris = surface.ObjectSurface(object);
+  std::vector<char> on(static_cast<size_t>(ns), 0);
+  for (Eigen::Index t = 0; t < tris.rows(); ++t) {
+    for (int k = 0; k < 3; ++k) on[static_cast<size_t>(tris(t, k))] = 1;
+  }
+  Eigen::Vector3d cm = Eigen::Vector3d::Zero();
+  int facing = 0;
+  for (int v = 0; v < ns; ++v) {
+    if (!on[static_cast<size_t>(v)]) continue;
+    if (camera.enabled) {
+      const Eigen::Vector3d n = normals.row(base + v);
+      if (n.dot(camera.position - Eigen::Vector3d(f.row(v))) <= 0.0) continue;
+    }
+    cm += f.row(v).transpose();
+    ++facing;
+  }
+  if (facing < 3 || cloud.size() < 3) return;
+  cm /= static_cast<double>(facing);
+  auto trimmed_mean = [&](const Vertices& pos, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+    SurfaceIndex surface_index(pos, tris);
+    std::vector<std::pair<double, int>> dist;
+    std::vector<Eigen::Vector3d> model_points;
+    for (int i = 0; i < cloud.size(); i += stride) {
+      const SurfaceIndex::Hit hit = surface_index.Closest(cloud.points.row(i));
+      if (hit.triangle < 0) continue;
+      dist.emplace_back(hit.squared_distance, static_cast<int>(model_points.size()));
+      model_points.push_back(hit.point);
+    }
+    std::sort(dist.begin(), dist.end());
+    const size_t keep = std::max<size_t>(std::min<size_t>(3, dist.size()), dist.size() * 4 / 5);
+    std::vector<Eigen::Vector3d> a, b;
+    double sum = 0.0;
+    for (size_t j = 0; j < keep; ++j) {
+      const int m = dist[j].second;
+      a.push_back(model_points[m]);
+      b.push_back(cloud.points.row(m * stride).transpose());
+      sum += std::sqrt(dist[j].first);
+    }
+    if (R != nullptr && a.size() >= 3) Kabsch(a, b, R, t);
+    return keep > 0 ? sum / keep : std::numeric_limits<double>::infinity();
+  };
+  const double before = trimmed_mean(f, nullptr, nullptr);
+  const Eigen::RowVector3d shift = (cloud.points.colwise().mean().transpose() - cm).transpose();
+  f.rowwise() += shift;
+  y.rowwise() += shift;
+  for (int it = 0; it < state->options.solver.rigid_iterations; ++it) {
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d t = Eigen::Vector3d::Zero();
+    trimmed_mean(f, &R, &t);
+    f = ((f * R.transpose()).rowwise() + t.transpose()).eval();
+    y = ((y * R.transpose()).rowwise() + t.transpose()).eval();
+    if ((R - Eigen::Matrix3d::Identity()).norm() < 1e-7 && t.norm() < 1e-7) break;
+  }
+  if (trimmed_mean(f, nullptr, nullptr) < before) state->x.middleRows(o.offset, nv) = y;
+}
+
+}  // namespace
+
+void RigidPrealign(const PointCloud& cloud, TrackerState* state, DataSurface* surface) {
   // Cloud->surface pairs: every seen point has a partner, hidden parts do not bias.
   const CameraOptions& camera = state->options.camera;
   Vertices& x = state->x;
   const Eigen::MatrixXd normals = state->VertexNormals();
   const int stride = std::max(1, cloud.size() / 2000);
-  for (const ObjectState& o : state->objects) {
+  if (surface != nullptr) surface->Update(x);
+  const Eigen::MatrixXd surface_normals = surface != nullptr ? surface->view().VertexNormals() : Eigen::MatrixXd();
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    const ObjectState& o = state->objects[i];
+    if (surface != nullptr && surface->embedded(static_cast<int>(i))) {
+      EmbeddedPrealign(cloud, stride, static_cast<int>(i), surface_normals, *surface, state);
+      continue;
+    }
     std::vector<int> facing;
     for (int v : o.mesh.surface_vertices) {
       const int g = v + o.offset;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "femreg/registration.h"
+#include "registration/embedded_surface.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -17,8 +18,9 @@ void Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vect
 
 // Rigid ICP per object on state->x, from the translation that matches the centroid of the
 // cloud with that of the surface facing the camera, then cloud->surface pairs trimmed to
-// the closest 80%. Kept only if it brings the surface closer to the cloud.
-void RigidPrealign(const PointCloud& cloud, TrackerState* state);
+// the closest 80%. Kept only if it brings the surface closer to the cloud. An object with an
+// embedded surface in `surface` is fitted by that surface (the mesh moves with it).
+void RigidPrealign(const PointCloud& cloud, TrackerState* state, DataSurface* surface = nullptr);
 
 // After a break (FractureOptions::piece_prealign): rigid ICP per piece of each object in more
 // than one piece, from where the piece is. Each cloud point (within data.max_distance) goes to

@@ -129,9 +129,11 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   const auto t0 = Clock::now();
   fc->cloud = input;
   PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped);
-  const double dense = pre.auto_voxel_min_ratio * static_cast<double>(state.surface_vertices.size());
+  // The cloud is thinned to the surface the data terms see (an embedded one's).
+  const TrackerState& pair_state = PairState();
+  const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());
   if (pre.voxel_size == 0 && pre.auto_voxel > 0 && fc->cloud.size() > dense) {
-    s->voxel_size = pre.auto_voxel * mean_edge;
+    s->voxel_size = pre.auto_voxel * (data_surface ? data_surface->surface_edge() : mean_edge);
     SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights);
   } else {
     fc->weights.setOnes(fc->cloud.size());
@@ -148,7 +150,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   state.x_before = state.x;  // held: no velocity to carry on
   state.held_before = true;
   state.lost_before = s->lost;
-  UpdateOutputs(index, {}, &state, state.options.solver.num_threads);
+  Outputs(index, {});
   s->time.total = Seconds(t_frame);
   ++state.frame;
 }
@@ -191,8 +193,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   const bool reacquire = state.frame > 0 && state.lost_before;
   if ((state.frame == 0 || reacquire) && options.initial_pose == InitialPose::kAuto && fc.cloud.size() >= 3) {
     const auto t_pose = Clock::now();
-    if (reacquire && options.solver.rigid_prealign) RigidPrealign(fc.cloud, &state);
-    ChooseInitialPose(fc.cloud, &state, &s);
+    if (reacquire && options.solver.rigid_prealign) RigidPrealign(fc.cloud, &state, data_surface.get());
+    ChooseInitialPose(fc.cloud, &state, &s, data_surface.get());
     s.time.prealign += Seconds(t_pose);
   }
   // Constant-velocity prediction from the last two results.
@@ -222,7 +224,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   if (options.solver.rigid_prealign) {
     t0 = Clock::now();
-    RigidPrealign(fc.cloud, &state);
+    RigidPrealign(fc.cloud, &state, data_surface.get());
     s.time.prealign += Seconds(t0);
   }
   if (state.fracture) {  // after a break: each piece its own rigid step
@@ -231,7 +233,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.time.prealign += Seconds(t0);
   }
   t0 = Clock::now();
-  PrepareFrameCloud(state, Surface(), &fc);
+  PrepareFrameCloud(PairState(), Surface(), &fc);
   BuildObservedDepth(state, &fc);
   s.time.correspondences += Seconds(t0);
   s.visibility = fc.Describe();
@@ -266,7 +268,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     // part that lagged behind a fast motion and looked like one has caught up.
     if (k > 0 && k < options.data.hold_pairs_after && !fc.occluder.empty()) {
       t0 = Clock::now();
-      fc.occluders.occluders = ReleaseReached(state, Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
+      fc.occluders.occluders = ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
@@ -299,7 +301,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
-      const int marked = MarkImplausible(state, start, Surface(), fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
+      const int marked = MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
       s.time.correspondences += Seconds(t0);
       if (marked > 0) {
         // Back to the start without them: the shape they pulled into is no starting point.
@@ -328,10 +330,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
-  UpdateOutputs(fc.index.get(), pairs, &state, options.solver.num_threads);
+  Outputs(fc.index.get(), pairs);
   if (s.IsSolutionUsable()) {
     const double tolerance = std::max(options.data.loss_scale, 2.0 * fc.spacing);
-    s.confidence = MeasureConfidence(state, fc, pairs, tolerance);
+    s.confidence = MeasureConfidence(state, fc, pairs, tolerance, data_surface.get());
     s.lost = state.coverage_reference > 0.0 &&
              s.confidence.coverage < options.data.lost_coverage * state.coverage_reference;
     if (!s.lost) UpdateReferences(s.confidence, &state);
@@ -342,7 +344,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     // Lost: back to the last good shape, with no velocity to carry on.
     state.x = state.last_good;
     state.x_before = state.x;
-    UpdateOutputs(fc.index.get(), {}, &state, options.solver.num_threads);
+    Outputs(fc.index.get(), {});
   } else if (!s.lost) {
     state.last_good = state.x;
     // The first frame after a held or lost one caught up with a motion it did not see, and a
@@ -358,6 +360,38 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();
+}
+
+void Tracker::Impl::Outputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs) {
+  const int threads = state.options.solver.num_threads;
+  if (!data_surface) {
+    UpdateOutputs(cloud_index, pairs, &state, threads);
+    return;
+  }
+  // The coarse vertices observed: those that carry most of a paired data-surface vertex.
+  std::vector<DataPair> coarse;
+  coarse.reserve(pairs.size());
+  for (const DataPair& p : pairs) {
+    for (int k = 0; k < p.num_vertices; ++k) {
+      if (p.num_vertices == 3 && p.barycentric[k] < 0.2) continue;
+      DataPair c;
+      c.vertices[0] = data_surface->Dominant(p.vertices[k]);
+      coarse.push_back(c);
+    }
+  }
+  UpdateOutputs(cloud_index, coarse, &state, threads);
+  const TrackerState& view = PairState();
+  Eigen::VectorXd& residuals = data_surface->residuals;
+  residuals.setConstant(std::numeric_limits<double>::quiet_NaN());
+  if (cloud_index == nullptr || cloud_index->size() == 0) return;
+  const int ns = static_cast<int>(view.surface_vertices.size());
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(threads), ns, 64)) schedule(static)
+  for (int j = 0; j < ns; ++j) {
+    const int v = view.surface_vertices[static_cast<size_t>(j)];
+    double d2 = 0.0;
+    cloud_index->Nearest(view.x.row(v), &d2);
+    residuals(v) = std::sqrt(d2);
+  }
 }
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {

@@ -13,6 +13,7 @@
 #include "geometry/nearest.h"
 #include "parallel/stopwatch.h"
 #include "registration/correspondences.h"
+#include "registration/embedded_surface.h"
 #include "registration/frame_problem.h"
 #include "registration/tracker_state.h"
 #include "solvers/backend.h"
@@ -58,7 +59,21 @@ struct Tracker::Impl {
   void MeasureContacts(FrameSummary* s);
   // The external forces on the result: per vertex (state.external_forces) and their resultant.
   void MeasureForces(FrameSummary* s);
-  const SurfaceIndex& Surface() { return model_index.Get(state, 0.1 * mean_edge); }
+  // Embedded surfaces (SetEmbeddedSurface): per object, none while its rest has no rows; the
+  // data surface made of them (null: none) and its closest-point index.
+  std::vector<EmbeddedSurface> embedded;
+  std::unique_ptr<DataSurface> data_surface;
+  ModelIndex data_index;
+  // The surface the pairs, the visibility and the occluders are found on: the data surface at
+  // state.x, or the meshes' own (state).
+  const TrackerState& PairState() { return data_surface ? data_surface->Update(state.x) : state; }
+  const SurfaceIndex& Surface() {
+    if (data_surface) return data_index.Get(PairState(), 0.1 * data_surface->view().mean_edge_length);
+    return model_index.Get(state, 0.1 * mean_edge);
+  }
+  // UpdateOutputs with the frame's pairs (on the data surface if there is one; its vertices'
+  // residuals too).
+  void Outputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs);
   // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
   std::vector<int> warm_triangles;
   std::vector<char> paired_vertices;

@@ -11,8 +11,56 @@ namespace femreg {
 
 Status Tracker::SetObjectLabel(int object, int label) {
   if (object < 0 || object >= num_objects()) return Status::Error("no object " + std::to_string(object));
+  if (label >= 0 && impl_->data_surface) {
+    return Status::Error("object " + std::to_string(object) +
+                         ": labels do not combine with embedded surfaces (objects[i].surface) yet");
+  }
   impl_->state.objects[object].label = label;
   return Status::Ok();
+}
+
+Status Tracker::SetEmbeddedSurface(int object, const Vertices& rest, const Triangles& triangles) {
+  TrackerState& state = impl_->state;
+  const std::string name = "object " + std::to_string(object);
+  if (object < 0 || object >= num_objects()) return Status::Error("embedded surface: no " + name);
+  if (state.fracture) return Status::Error(name + ": an embedded surface does not combine with fracture");
+  for (const ObjectState& o : state.objects) {
+    if (o.label >= 0) return Status::Error(name + ": an embedded surface does not combine with labels yet");
+  }
+  EmbeddedSurface surface;
+  const Status status = MakeEmbeddedSurface(state.objects[object].mesh, rest, triangles, &surface);
+  if (!status.ok()) return Status::Error(name + ": embedded surface: " + status.message());
+  impl_->embedded.resize(state.objects.size());
+  impl_->embedded[static_cast<size_t>(object)] = std::move(surface);
+  std::vector<const EmbeddedSurface*> surfaces;
+  for (const EmbeddedSurface& e : impl_->embedded) surfaces.push_back(e.rest.rows() > 0 ? &e : nullptr);
+  impl_->data_surface = std::make_unique<DataSurface>();
+  impl_->data_surface->Build(state, surfaces);
+  impl_->data_index.Reset();
+  impl_->frame_problem.SetDataSurface(impl_->data_surface.get());
+  return Status::Ok();
+}
+
+bool Tracker::has_embedded_surface(int object) const {
+  const auto i = static_cast<size_t>(object);
+  return object >= 0 && i < impl_->embedded.size() && impl_->embedded[i].rest.rows() > 0;
+}
+
+Vertices Tracker::surface_vertices(int object) const {
+  if (!has_embedded_surface(object)) return Vertices(0, 3);
+  const EmbeddedSurface& e = impl_->embedded[static_cast<size_t>(object)];
+  const ObjectState& o = impl_->state.objects[static_cast<size_t>(object)];
+  return InterpolateEmbedded(o.mesh, impl_->state.x.middleRows(o.offset, o.mesh.num_vertices()), e.embedding);
+}
+
+const Triangles& Tracker::surface_triangles(int object) const {
+  static const Triangles kNone(0, 3);
+  if (!has_embedded_surface(object)) return kNone;
+  return impl_->embedded[static_cast<size_t>(object)].triangles;
+}
+
+double Tracker::surface_outside(int object) const {
+  return has_embedded_surface(object) ? impl_->embedded[static_cast<size_t>(object)].outside : 0.0;
 }
 
 Status Tracker::EnableCollision(const CollisionSpec& spec, const std::vector<std::string>& names) {
@@ -35,6 +83,10 @@ Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
   std::string error;
   for (size_t i = 0; i < options.size(); ++i) {
     if (!options[i].IsValid(&error)) return Status::Error("object " + std::to_string(i) + ": " + error);
+  }
+  if (impl_->data_surface) {
+    return Status::Error("fracture does not combine with embedded surfaces (objects[i].surface): a split "
+                         "would leave the surface's vertices in elements that no longer exist");
   }
   auto f = std::make_unique<FractureState>();
   f->options = options;

@@ -1,4 +1,5 @@
 // Scene sections: objects (mesh file or generator, scale, pose), materials and regions.
+#include <cctype>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -27,7 +28,7 @@ void SceneParser::ParseObjects(const YamlValue& v) {
 
 ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
   v.CheckKeys({"name", "mesh", "generate", "scale", "pose", "material", "regions",
-               "toughness", "label"});
+               "toughness", "label", "surface"});
   ObjectSpec object;
   object.name = v.Has("name") ? v["name"].AsString() : "object" + std::to_string(index);
   if (object.name.empty()) v["name"].Fail("must not be empty");
@@ -45,6 +46,19 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
     }
   } else {
     object.generate = ParseGenerator(v["generate"]);
+  }
+  if (v.Has("surface")) {
+    const YamlValue surface = v["surface"];
+    std::filesystem::path path(surface.AsString());
+    if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+    object.surface_path = path.lexically_normal().string();
+    std::string ext = path.extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".ply" && ext != ".obj" && ext != ".stl") {
+      surface.Fail("an embedded surface is a .ply, .obj or .stl file (got " + object.surface_path + ")");
+    }
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) surface.Fail("surface file not found: " + object.surface_path);
   }
   if (v.Has("scale")) object.scale = PositiveDouble(v["scale"]);
   if (v.Has("pose")) {

@@ -7,6 +7,7 @@
 
 #include "femreg/geometry.h"
 #include "femreg/io.h"
+#include "femreg/meshing.h"
 #include "femreg/scene.h"
 
 namespace femreg {
@@ -83,6 +84,23 @@ Status SelectVertices(const VertexSelection& selection, const Vertices& position
       os << " (the mesh has no vertices)";
     }
     return Status::Error(os.str());
+  }
+  return Status::Ok();
+}
+
+Status LoadObjectSurface(const Scene& scene, int object, Vertices* vertices, Triangles* triangles) {
+  if (object < 0 || object >= static_cast<int>(scene.objects.size())) {
+    return Status::Error("scene has no object " + std::to_string(object));
+  }
+  const ObjectSpec& spec = scene.objects[static_cast<size_t>(object)];
+  vertices->resize(0, 3);
+  triangles->resize(0, 3);
+  if (spec.surface_path.empty()) return Status::Ok();
+  const Status status = ReadSurface(spec.surface_path, vertices, triangles);
+  if (!status.ok()) return Status::Error(ObjectLabel(scene, object) + ".surface: " + status.message());
+  const Eigen::Matrix3d A = spec.scale * RotationFromVector(spec.rotation);
+  for (Eigen::Index i = 0; i < vertices->rows(); ++i) {
+    vertices->row(i) = (A * vertices->row(i).transpose() + spec.translation).transpose();
   }
   return Status::Ok();
 }

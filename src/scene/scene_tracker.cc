@@ -37,6 +37,15 @@ Status Tracker::Create(const Scene& given, std::unique_ptr<Tracker>* tracker) {
     status = t->SetObjectLabel(static_cast<int>(i), scene.objects[i].label);
     if (!status.ok()) return status;
   }
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    if (scene.objects[i].surface_path.empty()) continue;
+    Vertices vertices;
+    Triangles triangles;
+    status = LoadObjectSurface(scene, static_cast<int>(i), &vertices, &triangles);
+    if (!status.ok()) return Status::Error(scene.path + ": " + status.message());
+    status = t->SetEmbeddedSurface(static_cast<int>(i), vertices, triangles);
+    if (!status.ok()) return Status::Error(scene.path + ": objects[" + std::to_string(i) + "].surface: " + status.message());
+  }
   if (scene.effects.fracture) {
     std::vector<FractureOptions> fracture;
     for (const ObjectSpec& o : scene.objects) {

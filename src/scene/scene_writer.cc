@@ -155,6 +155,7 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
   }
   Put(n, "toughness", o.toughness, 0.0);
   Put(n, "label", o.label, -1);
+  if (!o.surface_path.empty()) n["surface"] = FilePath(o.surface_path, base_dir);
   return n;
 }
 

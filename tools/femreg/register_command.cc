@@ -4,6 +4,8 @@
 //   frames/<object>_NNNN.vtu   the deformed mesh per frame (displacement, residual, observed;
 //                              error and error_vector with ground truth)
 //   frames/cloud_NNNN.vtp      the cloud the frame was fitted to, after preprocessing
+//   frames/<object>_surface_NNNN.vtp  an embedded surface (objects[i].surface) per frame
+//                              (error with ground truth; .ply too with --surface-ply)
 //   <object>.pvd, cloud.pvd    the ParaView collections of the sequence
 //   stats.csv                  one row per frame: termination, iterations, pairs, energies,
 //                              time per stage, and vertex errors when ground truth is given
@@ -208,6 +210,7 @@ int RunRegister(const RegisterArgs& args) {
   std::vector<FrameRow> rows;
   std::vector<std::vector<PvdEntry>> pvd(static_cast<size_t>(tracker->num_objects()));
   std::vector<PvdEntry> cloud_pvd;
+  std::vector<std::vector<PvdEntry>> surface_pvd(static_cast<size_t>(tracker->num_objects()));
   ProgressBar bar("register", static_cast<int>(files.size()), args.progress);
   bool interrupted = false;
   StatsFile stats;
@@ -221,6 +224,10 @@ int RunRegister(const RegisterArgs& args) {
     for (int i = 0; i < tracker->num_objects() && s.ok(); ++i) {
       s = WritePvd((fs::path(args.out) / (scene.objects[static_cast<size_t>(i)].name + ".pvd")).string(),
                    pvd[static_cast<size_t>(i)]);
+      if (s.ok() && !surface_pvd[static_cast<size_t>(i)].empty()) {
+        s = WritePvd((fs::path(args.out) / (scene.objects[static_cast<size_t>(i)].name + "_surface.pvd")).string(),
+                     surface_pvd[static_cast<size_t>(i)]);
+      }
     }
     if (s.ok()) {
       s = WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
@@ -311,6 +318,12 @@ int RunRegister(const RegisterArgs& args) {
 
     // Ground truth covers all objects' vertices in scene order.
     Vertices vertex_error;  // #V (all objects) by 3: result - truth, when known per vertex
+    bool surface_truth = false;  // GROUND_TRUTH/surface/NAME.csv is there, for embedded surfaces
+    for (int i = 0; i < tracker->num_objects() && !truth_files.empty(); ++i) {
+      surface_truth = surface_truth ||
+                      (tracker->has_embedded_surface(i) &&
+                       fs::exists(fs::path(truth_files[f]).parent_path() / "surface" / fs::path(truth_files[f]).filename()));
+    }
     if (!truth_files.empty()) {
       GroundTruthFrame truth;
       Status gt = ReadGroundTruthFrame(truth_files[f], &truth);
@@ -345,6 +358,9 @@ int RunRegister(const RegisterArgs& args) {
           return 1;
         }
         row.have_errors = true;
+      } else if (gt.ok() && truth.positions.rows() != total_vertices && surface_truth) {
+        // The scan's ground truth serves any mesh that carries the scan: the vertices' truth is
+        // another mesh's (the one the sequence was made for), and only the surface is compared.
       } else if (!gt.ok() || truth.positions.rows() != total_vertices) {
         std::cerr << "\nfemreg register: ground truth " << truth_files[f] << ": "
                   << (gt.ok() ? "has " + std::to_string(truth.positions.rows()) +
@@ -353,10 +369,42 @@ int RunRegister(const RegisterArgs& args) {
                   << "\n";
         return 1;
       }
-      if (!row.have_errors) {
+      if (!row.have_errors && gt.ok() && truth.positions.rows() == total_vertices) {
         row.errors = ComputeVertexErrors(all, truth);
         row.have_errors = true;
         vertex_error = all - truth.positions;
+      }
+    }
+
+    // The embedded surfaces (objects[i].surface), all objects' in scene order, against
+    // GROUND_TRUTH/surface/NAME.csv when the ground truth has them.
+    int surface_rows = 0;
+    for (int i = 0; i < tracker->num_objects(); ++i) surface_rows += static_cast<int>(tracker->surface_triangles(i).rows() > 0 ? tracker->surface_vertices(i).rows() : 0);
+    Vertices surface_error;  // result - truth per embedded-surface vertex, when known
+    if (!truth_files.empty() && surface_rows > 0) {
+      const fs::path side = fs::path(truth_files[f]).parent_path() / "surface" / fs::path(truth_files[f]).filename();
+      if (fs::exists(side)) {
+        GroundTruthFrame truth;
+        Status gt = ReadGroundTruthFrame(side.string(), &truth);
+        if (gt.ok() && truth.positions.rows() != surface_rows) {
+          gt = Status::Error("has " + std::to_string(truth.positions.rows()) + " rows, the embedded surfaces " +
+                             std::to_string(surface_rows) + " vertices");
+        }
+        if (!gt.ok()) {
+          std::cerr << "\nfemreg register: ground truth " << side.string() << ": " << gt.message() << "\n";
+          return 1;
+        }
+        Vertices all(surface_rows, 3);
+        int at = 0;
+        for (int i = 0; i < tracker->num_objects(); ++i) {
+          if (!tracker->has_embedded_surface(i)) continue;
+          const Vertices v = tracker->surface_vertices(i);
+          all.middleRows(at, v.rows()) = v;
+          at += static_cast<int>(v.rows());
+        }
+        row.surface_errors = ComputeVertexErrors(all, truth);
+        row.have_surface_errors = true;
+        surface_error = all - truth.positions;
       }
     }
 
@@ -419,6 +467,30 @@ int RunRegister(const RegisterArgs& args) {
         return 1;
       }
       pvd[static_cast<size_t>(i)].push_back({static_cast<double>(f), rel});
+    }
+    // Each embedded surface beside its mesh: NAME_surface_NNNN.vtp (and .ply on request).
+    int surface_offset = 0;
+    for (int i = 0; i < tracker->num_objects(); ++i) {
+      if (!tracker->has_embedded_surface(i)) continue;
+      const Vertices v = tracker->surface_vertices(i);
+      std::vector<std::pair<std::string, Eigen::VectorXd>> fields;
+      if (surface_error.rows() >= surface_offset + v.rows()) {
+        fields.emplace_back("error", surface_error.middleRows(surface_offset, v.rows()).rowwise().norm());
+      }
+      surface_offset += static_cast<int>(v.rows());
+      const std::string object_name = scene.objects[static_cast<size_t>(i)].name;
+      std::snprintf(name, sizeof(name), "_surface_%04zu", f);
+      const std::string rel = "frames/" + object_name + name + ".vtp";
+      status = WriteSurfaceVtp((fs::path(args.out) / rel).string(), v, tracker->surface_triangles(i), fields);
+      if (status.ok() && args.surface_ply) {
+        status = WriteSurfacePly((fs::path(args.out) / ("frames/" + object_name + name + ".ply")).string(), v,
+                                 tracker->surface_triangles(i));
+      }
+      if (!status.ok()) {
+        std::cerr << "\nfemreg register: " << status.message() << "\n";
+        return 1;
+      }
+      surface_pvd[static_cast<size_t>(i)].push_back({static_cast<double>(f), rel});
     }
     rows.push_back(row);
     status = stats.Append(StatsRow(rows.size() - 1, rows.back()));
@@ -536,12 +608,16 @@ void AddRegisterCommand(CLI::App* app) {
       ->required();
   cmd->add_option("--ground-truth", args->ground_truth,
                   "Folder of per-frame ground truth CSVs (x,y,z,visible per vertex): adds vertex "
-                  "errors (mm) for seen and hidden vertices");
+                  "errors (mm) for seen and hidden vertices; its surface/ folder (a row per vertex "
+                  "of the embedded surfaces) adds their errors, and then the vertex CSVs may be "
+                  "another mesh's (they are skipped)");
   cmd->add_option("--material", args->material,
                   "Take each object's material from this scene (matched by object name), e.g. "
                   "the scene.yaml `femreg calibrate` wrote: track with the identified material")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--force", args->force, "Write into a non-empty output folder");
+  cmd->add_flag("--surface-ply", args->surface_ply,
+                "Also write each frame's embedded surfaces (objects[i].surface) as PLY beside their VTP");
   cmd->add_option("--max-frames", args->max_frames, "Register only the first N frames");
   cmd->add_option("--report", args->report, "Per-frame report: brief, full or none")
       ->check(CLI::IsMember({"brief", "full", "none"}));

@@ -30,6 +30,7 @@ struct RegisterArgs {
   std::string ground_truth;
   std::string material;  // a scene whose objects' materials replace the scene's
   bool force = false;
+  bool surface_ply = false;  // --surface-ply: the embedded surfaces as PLY too
   int max_frames = 0;
   std::string report = "brief";
   bool progress = true;
@@ -54,6 +55,10 @@ struct FrameRow {
   std::vector<ErrorStats> piece_errors;  // per piece, with ground truth and fracture on
   std::vector<ErrorStats> piece_seen, piece_hidden;  // the same, seen / hidden vertices
   int break_frame = -1;  // the first frame in more pieces than the run started with (-1: none yet)
+  // The embedded surfaces' vertices (objects[i].surface, in scene order) against
+  // GROUND_TRUTH/surface/NAME.csv, when both are there.
+  bool have_surface_errors = false;
+  VertexErrors surface_errors;
 };
 
 double Median(std::vector<double> v);

@@ -2,7 +2,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "femreg/synth.h"
+#include "femreg/geometry.h"
 #include "geometry/nearest.h"
 
 namespace femreg {
@@ -19,7 +19,7 @@ Eigen::Vector4d Barycentric(const TetMesh& mesh, const Vertices& positions, int 
 }
 }  // namespace
 
-EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points) {
+EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points, bool clamp) {
   EmbeddedPoints out;
   out.element.assign(static_cast<size_t>(points.rows()), -1);
   out.barycentric.assign(static_cast<size_t>(points.rows()), Eigen::Vector4d::Zero());
@@ -47,11 +47,13 @@ EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points) {
       }
     };
     for (int j = 0; j < n; ++j) consider(ids[j]);
-    if (best_min < -1e-9) {
-      // Not inside any nearby element: search them all (rare; points outside the mesh).
+    // Not inside any nearby element: search them all (rare; points outside the mesh). An
+    // embedded surface has thousands of points just outside its cage, and for those the
+    // nearby elements hold the nearest one; only one far outside searches them all.
+    if (best_min < (clamp ? -1e-9 : -1.0)) {
       for (int t = 0; t < fine.num_tets(); ++t) consider(t);
     }
-    if (best_min < 0) {
+    if (clamp && best_min < 0) {
       best_bary = best_bary.cwiseMax(0.0);
       best_bary /= best_bary.sum();
     }

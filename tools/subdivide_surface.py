@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Loop subdivision of a closed triangle surface, for making fine "scan" surfaces of a known
+shape (the embedded-surface benchmark, tools/embedded_bench.sh).
+
+usage: subdivide_surface.py IN OUT.ply [--levels N] [--scale S]
+
+IN: .stl (binary or ASCII; corners welded by exact position), or an ASCII .ply with triangle
+faces. Each level splits every triangle in four and smooths with Loop's weights, so the
+triangle count grows 4x per level. OUT is a binary little-endian PLY (double coordinates).
+Needs numpy only.
+"""
+import argparse
+import struct
+import sys
+
+import numpy as np
+
+
+def read_stl(path):
+    data = open(path, "rb").read()
+    if data[:5] == b"solid" and b"facet" in data[:400]:
+        corners = [list(map(float, line.split()[1:4]))
+                   for line in data.decode("ascii", "replace").splitlines()
+                   if line.strip().startswith("vertex")]
+        corners = np.array(corners, dtype=float)
+    else:
+        n = struct.unpack("<I", data[80:84])[0]
+        record = np.dtype([("n", "<3f4"), ("v", "<9f4"), ("a", "<u2")])
+        corners = np.frombuffer(data[84:84 + 50 * n], dtype=record)["v"].reshape(-1, 3).astype(float)
+    vertices, index = np.unique(corners, axis=0, return_inverse=True)
+    return vertices, index.reshape(-1, 3)
+
+
+def read_ascii_ply(path):
+    lines = open(path).read().splitlines()
+    nv = nf = 0
+    i = 0
+    while lines[i].strip() != "end_header":
+        parts = lines[i].split()
+        if parts[:2] == ["element", "vertex"]:
+            nv = int(parts[2])
+        if parts[:2] == ["element", "face"]:
+            nf = int(parts[2])
+        i += 1
+    body = lines[i + 1:]
+    vertices = np.array([list(map(float, l.split()[:3])) for l in body[:nv]])
+    faces = np.array([list(map(int, l.split()[1:4])) for l in body[nv:nv + nf]])
+    return vertices, faces
+
+
+def loop(vertices, faces):
+    nv = len(vertices)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    unique, edge_of = np.unique(edges, axis=0, return_inverse=True)
+    nf = len(faces)
+    edge_of = edge_of.reshape(3, nf).T  # per face: edges (0,1), (1,2), (2,0)
+    # Each edge's two opposite vertices.
+    opposite = np.full((len(unique), 2), -1)
+    count = np.zeros(len(unique), dtype=int)
+    for k, opp in ((0, 2), (1, 0), (2, 1)):
+        e = edge_of[:, k]
+        for f in range(nf):
+            opposite[e[f], count[e[f]]] = faces[f, opp]
+            count[e[f]] += 1
+    if (count != 2).any():
+        sys.exit("the surface is not closed and manifold")
+    a, b = unique[:, 0], unique[:, 1]
+    edge_points = 0.375 * (vertices[a] + vertices[b]) + 0.125 * (vertices[opposite[:, 0]] + vertices[opposite[:, 1]])
+    # Vertex points: Loop's beta over the one-ring.
+    ring_sum = np.zeros_like(vertices)
+    valence = np.zeros(nv)
+    np.add.at(ring_sum, a, vertices[b])
+    np.add.at(ring_sum, b, vertices[a])
+    np.add.at(valence, a, 1)
+    np.add.at(valence, b, 1)
+    beta = np.where(valence == 3, 3.0 / 16.0, 3.0 / (8.0 * valence))
+    vertex_points = (1 - valence * beta)[:, None] * vertices + beta[:, None] * ring_sum
+    out_vertices = np.vstack([vertex_points, edge_points])
+    m = nv + edge_of  # per face, the new vertices on its edges
+    v0, v1, v2 = faces[:, 0], faces[:, 1], faces[:, 2]
+    e01, e12, e20 = m[:, 0], m[:, 1], m[:, 2]
+    out_faces = np.vstack([np.stack([v0, e01, e20], 1), np.stack([v1, e12, e01], 1),
+                           np.stack([v2, e20, e12], 1), np.stack([e01, e12, e20], 1)])
+    return out_vertices, out_faces
+
+
+def write_ply(path, vertices, faces):
+    header = ("ply\nformat binary_little_endian 1.0\ncomment Loop-subdivided surface\n"
+              f"element vertex {len(vertices)}\nproperty double x\nproperty double y\nproperty double z\n"
+              f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    face_record = np.zeros(len(faces), dtype=np.dtype([("n", "u1"), ("v", "<3i4")]))
+    face_record["n"] = 3
+    face_record["v"] = faces
+    with open(path, "wb") as out:
+        out.write(header.encode())
+        out.write(np.ascontiguousarray(vertices, dtype="<f8").tobytes())
+        out.write(face_record.tobytes())
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("input")
+    p.add_argument("output")
+    p.add_argument("--levels", type=int, default=2)
+    p.add_argument("--scale", type=float, default=1.0)
+    args = p.parse_args()
+    if args.input.lower().endswith(".stl"):
+        vertices, faces = read_stl(args.input)
+    else:
+        vertices, faces = read_ascii_ply(args.input)
+    for _ in range(args.levels):
+        vertices, faces = loop(vertices, faces)
+    write_ply(args.output, vertices * args.scale, faces)
+    print(f"{args.output}: {len(vertices)} vertices, {len(faces)} triangles")
+
+
+if __name__ == "__main__":
+    main()
