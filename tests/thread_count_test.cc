@@ -75,11 +75,13 @@ void ExpectTheSameOnOneAndTwoThreads(const std::string& name, int frames, bool w
   }
 }
 
-// A foam ball pressed by a hand: without backtracking the frames where the hand comes down
-// stop on the cap, after the longest runs of outer iterations; with it (the default) they stop
-// after halved moves.
+// A foam ball pressed by a hand: without backtracking and without the implausible-point test
+// (the fingers' pull is what made them cycle) the frames where the hand comes down stop on the
+// cap, after the longest runs of outer iterations; with them (the default) they stop.
 TEST(ThreadCount, HandPressIsTheSameOnOneAndTwoThreads) {
-  ExpectTheSameOnOneAndTwoThreads("hand_press", 6, true, {{"registration.solver.backtrack", "false"}});
+  ExpectTheSameOnOneAndTwoThreads("hand_press", 6, true,
+                                  {{"registration.solver.backtrack", "false"},
+                                   {"registration.data.max_strain_step", "0"}});
   ExpectTheSameOnOneAndTwoThreads("hand_press", 6, false);
 }
 

@@ -17,6 +17,26 @@ constexpr int kMaxImageSide = 1024;     // pixels
 constexpr int kNeighbours = 12;         // the occluder grows through this many nearest points
 constexpr double kWholeView = 0.5;      // seeds beyond this share of the points on the model
 
+// Grows the marked points in `queue` (already set to `value` in *marks) through the cloud,
+// breadth first in the points' order (the same set for any thread count): each point's
+// kNeighbours nearest within three spacings that are unmarked and off(k).
+template <typename Off>
+void Grow(const Vertices& points, const PointIndex& cloud_index, double spacing, char value, Off off,
+          std::vector<int>* queue, std::vector<char>* marks) {
+  const double radius2 = 9.0 * spacing * spacing;
+  int indices[kNeighbours];
+  double squared[kNeighbours];
+  for (size_t head = 0; head < queue->size(); ++head) {
+    const int found = cloud_index.KNearest(points.row((*queue)[head]), kNeighbours, indices, squared);
+    for (int j = 0; j < found; ++j) {
+      const int k = indices[j];
+      if (squared[j] > radius2 || (*marks)[static_cast<size_t>(k)] || !off(k)) continue;
+      (*marks)[static_cast<size_t>(k)] = value;
+      queue->push_back(k);
+    }
+  }
+}
+
 }  // namespace
 
 OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
@@ -93,7 +113,6 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
   }
 
   // Grown from the seeds, in the points' order: the same set for any thread count.
-  const double radius2 = 9.0 * spacing * spacing;
   std::vector<int> queue;
   for (int i = 0; i < n; ++i) {
     if (seed[static_cast<size_t>(i)]) {
@@ -101,17 +120,8 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
       queue.push_back(i);
     }
   }
-  int indices[kNeighbours];
-  double squared[kNeighbours];
-  for (size_t head = 0; head < queue.size(); ++head) {
-    const int found = cloud_index.KNearest(points.row(queue[head]), kNeighbours, indices, squared);
-    for (int j = 0; j < found; ++j) {
-      const int k = indices[j];
-      if (squared[j] > radius2 || !off[static_cast<size_t>(k)] || (*occluder)[static_cast<size_t>(k)]) continue;
-      (*occluder)[static_cast<size_t>(k)] = 1;
-      queue.push_back(k);
-    }
-  }
+  const auto is_off = [&](int k) { return off[static_cast<size_t>(k)] != 0; };
+  Grow(points, cloud_index, spacing, 1, is_off, &queue, occluder);
   counts.occluders = static_cast<int>(queue.size());
   return counts;
 }
@@ -134,8 +144,8 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
   return counts;
 }
 
-int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points, const PointIndex& cloud_index, double spacing,
-                    std::vector<char>* marks) {
+int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
+                    const PointIndex& cloud_index, double spacing, std::vector<char>* marks) {
   const double limit = state.options.data.max_strain_step;
   const int n = static_cast<int>(points.rows());
   if (!(limit > 0) || n == 0 || start.rows() != state.x.rows() || state.surface.rows() == 0) return 0;
@@ -170,7 +180,6 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     if (o < 0) o = at_start.Closest(points.row(i)).squared_distance > grow * grow ? 1 : 0;
     return o == 1;
   };
-  // Seeds in the points' order, grown breadth first: the same set for any thread count.
   std::vector<int> queue;
   for (int i = 0; i < n; ++i) {
     if ((*marks)[static_cast<size_t>(i)]) continue;
@@ -182,18 +191,7 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     (*marks)[static_cast<size_t>(i)] = 2;
     queue.push_back(i);
   }
-  const double radius2 = 9.0 * spacing * spacing;
-  int indices[kNeighbours];
-  double squared[kNeighbours];
-  for (size_t head = 0; head < queue.size(); ++head) {
-    const int found = cloud_index.KNearest(points.row(queue[head]), kNeighbours, indices, squared);
-    for (int j = 0; j < found; ++j) {
-      const int k = indices[j];
-      if (squared[j] > radius2 || (*marks)[static_cast<size_t>(k)] || !Off(k)) continue;
-      (*marks)[static_cast<size_t>(k)] = 2;
-      queue.push_back(k);
-    }
-  }
+  Grow(points, cloud_index, spacing, 2, Off, &queue, marks);
   return static_cast<int>(queue.size());
 }
 

@@ -32,20 +32,21 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
                              std::vector<char>* occluder);
 
 // After the model moved (an outer iteration): the occluder points it now reaches (within the
-// loss scale, or two spacings) are released (not the implausible ones, MarkImplausible): a part that lagged behind a fast motion and
-// looked like an occluder has caught up. No point is marked anew. Returns the occluders left.
+// loss scale, or two spacings) are released, not the implausible ones (MarkImplausible): a
+// part that lagged behind a fast motion and looked like an occluder has caught up. No point
+// is marked anew. Returns the occluders and implausible points left.
 OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& surface,
                              const Vertices& points, double spacing, std::vector<char>* occluder);
 
 // Points the body cannot explain at a plausible strain (data.max_strain_step > 0): the
 // elements stretched or compressed from `start` (the frame's start) to state.x by more than
 // data.max_strain_step mark the cloud points whose closest point on the meshes' surface at
-// state.x is on a triangle touching them and that lay off the model at `start` (farther than the loss scale,
-// or two spacings, from its surface); the marks grow through the cloud (neighbours within
+// state.x is on a triangle touching them and that lay off the model at `start` (farther than
+// the loss scale, or two spacings, from its surface); the marks grow through the cloud (neighbours within
 // three spacings) over points off the model at `start`. Marked points get 2 in *marks
 // (#P; assigned zeros when empty), which ReleaseReached keeps. Returns how many were marked.
-int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points, const PointIndex& cloud_index, double spacing,
-                    std::vector<char>* marks);
+int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
+                    const PointIndex& cloud_index, double spacing, std::vector<char>* marks);
 
 }  // namespace femreg
 

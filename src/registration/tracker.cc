@@ -268,7 +268,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     // part that lagged behind a fast motion and looked like one has caught up.
     if (k > 0 && k < options.data.hold_pairs_after && !fc.occluder.empty()) {
       t0 = Clock::now();
-      fc.occluders.occluders = ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
+      fc.occluders.occluders =
+          ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
@@ -301,7 +302,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
-      const int marked = MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
+      const int marked =
+          MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
       s.time.correspondences += Seconds(t0);
       if (marked > 0) {
         // Back to the start without them: the shape they pulled into is no starting point.
