@@ -345,7 +345,7 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
         b->vertices[k] = st.vertices[k];
         b->barycentric[k] = st.weights[k];
       }
-    } else {
+    } else if constexpr (std::remove_pointer_t<decltype(b)>::kVertices <= 3) {  // 4: embedded only
       for (size_t k = 0; k < b->vertices.size(); ++k) {
         b->vertices[k] = p.vertices[k];
         b->barycentric[k] = p.barycentric[static_cast<Eigen::Index>(k)];

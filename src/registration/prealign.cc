@@ -31,6 +31,34 @@ void Kabsch(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vect
 
 namespace {
 
+// The trimmed mean distance (the nearest 80 %) of every stride-th cloud point to the surface
+// `tris` at pos, and optionally the rigid transform that best moves those closest surface
+// points onto their cloud points.
+double TrimmedFit(const PointCloud& cloud, int stride, const Vertices& pos, const Triangles& tris,
+                  Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  SurfaceIndex surface_index(pos, tris);
+  std::vector<std::pair<double, int>> dist;
+  std::vector<Eigen::Vector3d> model_points;
+  for (int i = 0; i < cloud.size(); i += stride) {
+    const SurfaceIndex::Hit hit = surface_index.Closest(cloud.points.row(i));
+    if (hit.triangle < 0) continue;
+    dist.emplace_back(hit.squared_distance, static_cast<int>(model_points.size()));
+    model_points.push_back(hit.point);
+  }
+  std::sort(dist.begin(), dist.end());
+  const size_t keep = std::max<size_t>(std::min<size_t>(3, dist.size()), dist.size() * 4 / 5);
+  std::vector<Eigen::Vector3d> a, b;
+  double sum = 0.0;
+  for (size_t j = 0; j < keep; ++j) {
+    const int m = dist[j].second;
+    a.push_back(model_points[m]);
+    b.push_back(cloud.points.row(m * stride).transpose());
+    sum += std::sqrt(dist[j].first);
+  }
+  if (R != nullptr && a.size() >= 3) Kabsch(a, b, R, t);
+  return keep > 0 ? sum / keep : std::numeric_limits<double>::infinity();
+}
+
 // RigidPrealign for an object with an embedded surface: fitted by that surface (positions f,
 // triangles tris), the same rigid motion applied to its mesh.
 void EmbeddedPrealign(const PointCloud& cloud, int stride, int object, const Eigen::MatrixXd& normals,
@@ -59,27 +87,7 @@ void EmbeddedPrealign(const PointCloud& cloud, int stride, int object, const Eig
   if (facing < 3 || cloud.size() < 3) return;
   cm /= static_cast<double>(facing);
   auto trimmed_mean = [&](const Vertices& pos, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    SurfaceIndex surface_index(pos, tris);
-    std::vector<std::pair<double, int>> dist;
-    std::vector<Eigen::Vector3d> model_points;
-    for (int i = 0; i < cloud.size(); i += stride) {
-      const SurfaceIndex::Hit hit = surface_index.Closest(cloud.points.row(i));
-      if (hit.triangle < 0) continue;
-      dist.emplace_back(hit.squared_distance, static_cast<int>(model_points.size()));
-      model_points.push_back(hit.point);
-    }
-    std::sort(dist.begin(), dist.end());
-    const size_t keep = std::max<size_t>(std::min<size_t>(3, dist.size()), dist.size() * 4 / 5);
-    std::vector<Eigen::Vector3d> a, b;
-    double sum = 0.0;
-    for (size_t j = 0; j < keep; ++j) {
-      const int m = dist[j].second;
-      a.push_back(model_points[m]);
-      b.push_back(cloud.points.row(m * stride).transpose());
-      sum += std::sqrt(dist[j].first);
-    }
-    if (R != nullptr && a.size() >= 3) Kabsch(a, b, R, t);
-    return keep > 0 ? sum / keep : std::numeric_limits<double>::infinity();
+    return TrimmedFit(cloud, stride, pos, tris, R, t);
   };
   const double before = trimmed_mean(f, nullptr, nullptr);
   const Eigen::RowVector3d shift = (cloud.points.colwise().mean().transpose() - cm).transpose();
@@ -125,30 +133,8 @@ void RigidPrealign(const PointCloud& cloud, TrackerState* state, DataSurface* su
     const int nv = o.mesh.num_vertices();
     Vertices y = x.middleRows(o.offset, nv);
     const Triangles& tris = o.mesh.surface;
-    // The trimmed mean distance of the cloud to the surface at pos, and optionally the
-    // rigid transform that best moves the surface points onto their cloud points.
     auto trimmed_mean = [&](const Vertices& pos, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-      SurfaceIndex surface_index(pos, tris);
-      std::vector<std::pair<double, int>> dist;
-      std::vector<Eigen::Vector3d> model_points;
-      for (int i = 0; i < cloud.size(); i += stride) {
-        const SurfaceIndex::Hit hit = surface_index.Closest(cloud.points.row(i));
-        if (hit.triangle < 0) continue;
-        dist.emplace_back(hit.squared_distance, static_cast<int>(model_points.size()));
-        model_points.push_back(hit.point);
-      }
-      std::sort(dist.begin(), dist.end());
-      const size_t keep = std::max<size_t>(std::min<size_t>(3, dist.size()), dist.size() * 4 / 5);
-      std::vector<Eigen::Vector3d> a, b;
-      double sum = 0.0;
-      for (size_t j = 0; j < keep; ++j) {
-        const int m = dist[j].second;
-        a.push_back(model_points[m]);
-        b.push_back(cloud.points.row(m * stride).transpose());
-        sum += std::sqrt(dist[j].first);
-      }
-      if (R != nullptr && a.size() >= 3) Kabsch(a, b, R, t);
-      return keep > 0 ? sum / keep : std::numeric_limits<double>::infinity();
+      return TrimmedFit(cloud, stride, pos, tris, R, t);
     };
     const double before = trimmed_mean(y, nullptr, nullptr);
     Eigen::Vector3d cm = Eigen::Vector3d::Zero();
