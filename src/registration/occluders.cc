@@ -149,6 +149,10 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   const double limit = state.options.data.max_strain_step;
   const int n = static_cast<int>(points.rows());
   if (!(limit > 0) || n == 0 || start.rows() != state.x.rows() || state.surface.rows() == 0) return 0;
+  // |sigma^2 - 1| <= |F^T F - I|_2 <= its Frobenius norm, for every singular value sigma of F.
+  const double stretch_bound = (1.0 + limit) * (1.0 + limit) - 1.0;
+  const double bound =
+      limit >= 1.0 ? stretch_bound : std::min(stretch_bound, 1.0 - (1.0 - limit) * (1.0 - limit));
   std::vector<char> strained(static_cast<size_t>(state.x.rows()), 0);
   bool any = false;
   for (const ObjectState& o : state.objects) {
@@ -163,7 +167,11 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
       }
       const double det = Dm.determinant();
       if (!(std::abs(det) > 0.0)) continue;  // flat at the start: no strain to measure from
-      if (!(StretchDeviation(Ds * Dm.inverse()) > limit)) continue;
+      const Eigen::Matrix3d F = Ds * Dm.inverse();
+      // Upright with |F^T F - I| below `bound`: every principal stretch is within `limit` of 1.
+      const double strain = (F.transpose() * F - Eigen::Matrix3d::Identity()).norm();
+      if (F.determinant() > 0.0 && strain < bound) continue;
+      if (!(StretchDeviation(F) > limit)) continue;
       for (int k = 0; k < 4; ++k) strained[static_cast<size_t>(o.offset + tets(e, k))] = 1;
       any = true;
     }
@@ -186,7 +194,9 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     const SurfaceIndex::Hit hit = surface.Closest(points.row(i));
     if (hit.triangle < 0) continue;
     bool touches = false;
-    for (int k = 0; k < 3; ++k) touches |= strained[static_cast<size_t>(state.surface(hit.triangle, k))] != 0;
+    for (int k = 0; k < 3; ++k) {
+      touches |= strained[static_cast<size_t>(state.surface(hit.triangle, k))] != 0;
+    }
     if (!touches || !Off(i)) continue;
     (*marks)[static_cast<size_t>(i)] = 2;
     queue.push_back(i);
