@@ -175,9 +175,9 @@ Scenario BeamCut() {
   s.name = "beam_cut";
   s.title = "a soft beam bent, then cut";
   s.size = Eigen::Vector3d(0.2, 0.03, 0.03);
-  // Cells of 16.7 mm along the beam: no face of the tracked mesh lies in the cut (70-75 mm).
+  // The tracked cells straddle the cut, so no face lies in it (docs/notes/2026-11-29-fracture.md).
   s.cells = Eigen::Vector3i(12, 2, 2);
-  s.fine_cells = Eigen::Vector3i(40, 6, 6);  // 5 mm: faces at 70 and 75 mm
+  s.fine_cells = Eigen::Vector3i(40, 6, 6);  // the truth has faces on both sides of the cut
   s.material.youngs_modulus = 5e4;
   s.material.poisson_ratio = 0.35;
   s.material.density = 200;
