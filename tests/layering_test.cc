@@ -41,6 +41,7 @@ const std::map<std::string, int> kRank = {
     {"datasets", 11},     // the sequence generators
     {"experiments", 11},  // the bench / compare sweep
     {"calibration", 11},  // material from data: forward solves against observed clouds
+    {"results", 11},      // a registration run's stats.csv and summary.json
     {"tools", 12},        // the femreg command line
     {"python", 12},       // the Python module (python/src)
 };
@@ -60,7 +61,7 @@ const std::map<std::string, std::string> kHeaderModule = {
     {"ground_truth.h", "eval"},     {"eval.h", "eval"},
     {"synth.h", "synth"},           {"scene.h", "scene"},
     {"datasets.h", "datasets"},     {"experiment.h", "experiments"},
-    {"calibration.h", "calibration"},
+    {"calibration.h", "calibration"}, {"results.h", "results"},
 };
 
 // Arrows that point up today, each with the change that removes it. Keep this list short.

@@ -31,7 +31,6 @@
 
 #include "cli_util.h"
 #include "commands.h"
-#include "provenance.h"
 #include "register_checks.h"
 #include "register_outputs.h"
 #include "femreg/collision.h"
@@ -39,6 +38,7 @@
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
+#include "femreg/results.h"
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg/version.h"
@@ -50,14 +50,9 @@ namespace femreg {
 namespace cli {
 namespace {
 
-using register_outputs::ComputeTotals;
-using register_outputs::FrameRow;
+using register_outputs::MakeRunInputs;
 using register_outputs::RegisterArgs;
-using register_outputs::StatsFile;
-using register_outputs::StatsRow;
-using register_outputs::SummaryJson;
 using register_outputs::ThrottledWrite;
-using register_outputs::Totals;
 using register_checks::CheckRegisterKeys;
 using register_checks::ContactMeter;
 using register_checks::WarnUnits;
@@ -207,7 +202,7 @@ int RunRegister(const RegisterArgs& args) {
             << ToString(scene.registration.regularizer) << ", "
             << ToString(scene.registration.solver.backend) << " back end" << std::endl;
 
-  std::vector<FrameRow> rows;
+  std::vector<FrameRecord> rows;
   std::vector<std::vector<PvdEntry>> pvd(static_cast<size_t>(tracker->num_objects()));
   std::vector<PvdEntry> cloud_pvd;
   std::vector<std::vector<PvdEntry>> surface_pvd(static_cast<size_t>(tracker->num_objects()));
@@ -231,7 +226,7 @@ int RunRegister(const RegisterArgs& args) {
     }
     if (s.ok()) {
       s = WriteFileAtomically((fs::path(args.out) / "summary.json").string(),
-                              SummaryJson(resolved, scene, *tracker, rows, files, truth_files, interrupted));
+                              SummaryJson(MakeRunInputs(resolved, files, truth_files, interrupted), scene, *tracker, rows));
     }
     return s;
   });
@@ -247,7 +242,7 @@ int RunRegister(const RegisterArgs& args) {
       interrupted = true;
       break;
     }
-    FrameRow row;
+    FrameRecord row;
     row.file = files[f];
     PointCloud cloud;
     int dropped = 0;
@@ -408,89 +403,11 @@ int RunRegister(const RegisterArgs& args) {
       }
     }
 
-    char name[64];
-    // The cloud the frame was fitted to (`used`, above), beside the meshes: ParaView shows it
-    // over them.
-    {
-      std::snprintf(name, sizeof(name), "cloud_%04zu.vtp", f);
-      const std::string rel = std::string("frames/") + name;
-      status = WriteCloudVtp((fs::path(args.out) / rel).string(), used);
-      if (status.ok()) cloud_pvd.push_back({static_cast<double>(f), rel});
-      if (!status.ok()) {
-        std::cerr << "\nfemreg register: " << status.message() << "\n";
-        return 1;
-      }
-    }
-    int vertex_offset = 0;
-    for (int i = 0; i < tracker->num_objects(); ++i) {
-      const TetMesh& m = tracker->mesh(i);
-      std::snprintf(name, sizeof(name), "%s_%04zu.vtu", scene.objects[static_cast<size_t>(i)].name.c_str(), f);
-      std::vector<MeshField> fields(3);
-      if (tracker->fracture_measure(i).size() == m.num_vertices()) {
-        fields.emplace_back();
-        fields.back().name = "fracture_measure";  // largest eigenvalue of zeta / area (Pa)
-        fields.back().values = tracker->fracture_measure(i);
-      }
-      const std::vector<int>& original = tracker->original_vertices(i);
-      if (static_cast<int>(original.size()) == m.num_vertices()) {
-        fields.emplace_back();  // the vertex of the first mesh each vertex comes from
-        fields.back().name = "original_vertex";
-        fields.back().values.resize(m.num_vertices(), 1);
-        for (int v = 0; v < m.num_vertices(); ++v) fields.back().values(v, 0) = original[v];
-      }
-      fields[0].name = "displacement";
-      fields[0].values = m.x - m.rest;
-      fields[1].name = "residual";
-      fields[1].values = tracker->vertex_residuals(i);
-      fields[2].name = "observed";
-      fields[2].values.resize(m.num_vertices(), 1);
-      for (int v = 0; v < m.num_vertices(); ++v) fields[2].values(v, 0) = tracker->vertex_observed(i)[v];
-      if (vertex_error.rows() >= vertex_offset + m.num_vertices()) {
-        const Vertices e = vertex_error.middleRows(vertex_offset, m.num_vertices());
-        fields.emplace_back();
-        fields.back().name = "error";  // m, |x - x_true| against the ground truth
-        fields.back().values = e.rowwise().norm();
-        fields.emplace_back();
-        fields.back().name = "error_vector";  // m, x - x_true
-        fields.back().values = e;
-      }
-      if (tracker->external_forces(i).rows() == m.num_vertices()) {
-        fields.emplace_back();
-        fields.back().name = "force";  // N, the external force on each vertex (FrameSummary::force)
-        fields.back().values = tracker->external_forces(i);
-      }
-      vertex_offset += m.num_vertices();
-      const std::string rel = std::string("frames/") + name;
-      status = WriteVtu((fs::path(args.out) / rel).string(), m, m.x, fields);
-      if (!status.ok()) {
-        std::cerr << "\nfemreg register: " << status.message() << "\n";
-        return 1;
-      }
-      pvd[static_cast<size_t>(i)].push_back({static_cast<double>(f), rel});
-    }
-    // Each embedded surface beside its mesh: NAME_surface_NNNN.vtp (and .ply on request).
-    int surface_offset = 0;
-    for (int i = 0; i < tracker->num_objects(); ++i) {
-      if (!tracker->has_embedded_surface(i)) continue;
-      const Vertices v = tracker->surface_vertices(i);
-      std::vector<std::pair<std::string, Eigen::VectorXd>> fields;
-      if (surface_error.rows() >= surface_offset + v.rows()) {
-        fields.emplace_back("error", surface_error.middleRows(surface_offset, v.rows()).rowwise().norm());
-      }
-      surface_offset += static_cast<int>(v.rows());
-      const std::string object_name = scene.objects[static_cast<size_t>(i)].name;
-      std::snprintf(name, sizeof(name), "_surface_%04zu", f);
-      const std::string rel = "frames/" + object_name + name + ".vtp";
-      status = WriteSurfaceVtp((fs::path(args.out) / rel).string(), v, tracker->surface_triangles(i), fields);
-      if (status.ok() && args.surface_ply) {
-        status = WriteSurfacePly((fs::path(args.out) / ("frames/" + object_name + name + ".ply")).string(), v,
-                                 tracker->surface_triangles(i));
-      }
-      if (!status.ok()) {
-        std::cerr << "\nfemreg register: " << status.message() << "\n";
-        return 1;
-      }
-      surface_pvd[static_cast<size_t>(i)].push_back({static_cast<double>(f), rel});
+    status = register_outputs::WriteFrameFiles(args, f, scene, *tracker, used, vertex_error, surface_error,
+                                               &cloud_pvd, &pvd, &surface_pvd);
+    if (!status.ok()) {
+      std::cerr << "\nfemreg register: " << status.message() << "\n";
+      return 1;
     }
     rows.push_back(row);
     status = stats.Append(StatsRow(rows.size() - 1, rows.back()));
@@ -522,7 +439,7 @@ int RunRegister(const RegisterArgs& args) {
     return 1;
   }
 
-  const Totals t = ComputeTotals(rows);
+  const RunTotals t = ComputeRunTotals(rows);
   // Both rates: the median frame's (what a camera loop sustains) and the run's (the mean,
   // which the first frame's set-up and any slow frame pull down).
   std::printf("\nRegistered %d/%zu frames (%d usable): median %.1f ms/frame (%.1f frames/s), "
@@ -531,7 +448,7 @@ int RunRegister(const RegisterArgs& args) {
               t.mean_ms, t.fps);
   constexpr int kTerminations = static_cast<int>(TerminationType::kTooFewPoints) + 1;
   int counts[kTerminations] = {0};
-  for (const FrameRow& r : rows) ++counts[static_cast<int>(r.summary.termination)];
+  for (const FrameRecord& r : rows) ++counts[static_cast<int>(r.summary.termination)];
   std::printf("Terminations:");
   for (int k = 0; k < kTerminations; ++k) {
     if (counts[k]) std::printf(" %s %d", ToString(static_cast<TerminationType>(k)), counts[k]);

@@ -1,20 +1,19 @@
-// femreg register's output files: the command's arguments, a frame's row, stats.csv (its header,
-// rows and the appending file), the files rewritten at most once a second, and summary.json.
+// femreg register's output files: the command's arguments, the files rewritten at most once a
+// second, summary.json's record of the run, and each frame's meshes, cloud and surfaces (stats.csv
+// and summary.json themselves are written by the library: femreg/results.h).
 #ifndef FEMREG_TOOLS_REGISTER_OUTPUTS_H_
 #define FEMREG_TOOLS_REGISTER_OUTPUTS_H_
 
-#include <cerrno>
 #include <chrono>
-#include <cstdio>
-#include <cstring>
 #include <functional>
-#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "femreg/eval.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
 #include "femreg/registration.h"
+#include "femreg/results.h"
 #include "femreg/scene.h"
 #include "femreg/status.h"
 #include "femreg/tracker.h"
@@ -43,50 +42,6 @@ struct RegisterArgs {
   std::string mask_dir;        // masks of depth frames; overrides preprocess.mask_dir
   std::string intrinsics;      // an Open3D intrinsics JSON; overrides the scene camera's intrinsics
   std::string tum_list;        // resolved: the TUM RGB-D list the frames come from, if any
-};
-
-struct FrameRow {
-  std::string file;
-  FrameSummary summary;
-  bool have_errors = false;
-  VertexErrors errors;
-  std::string read_error;
-  int pieces = 1;                  // connected pieces of all objects (fracture)
-  std::vector<ErrorStats> piece_errors;  // per piece, with ground truth and fracture on
-  std::vector<ErrorStats> piece_seen, piece_hidden;  // the same, seen / hidden vertices
-  int break_frame = -1;  // the first frame in more pieces than the run started with (-1: none yet)
-  // The embedded surfaces' vertices (objects[i].surface, in scene order) against
-  // GROUND_TRUTH/surface/NAME.csv, when both are there.
-  bool have_surface_errors = false;
-  VertexErrors surface_errors;
-};
-
-double Median(std::vector<double> v);
-
-// stats.csv's header line.
-extern const char kStatsHeader[];
-// Row i of stats.csv.
-std::string StatsRow(size_t i, const FrameRow& row);
-
-// stats.csv, a row appended (and flushed) per frame: every finished frame's row is on disk.
-class StatsFile {
- public:
-  Status Open(const std::string& path) {
-    path_ = path;
-    file_.reset(std::fopen(path.c_str(), "wb"));
-    if (!file_) return Status::Error(path + ": cannot create file: " + std::strerror(errno));
-    return Append(kStatsHeader);
-  }
-  Status Append(const std::string& text) {
-    if (std::fwrite(text.data(), 1, text.size(), file_.get()) != text.size() || std::fflush(file_.get()) != 0) {
-      return Status::Error(path_ + ": write failed: " + std::strerror(errno));
-    }
-    return Status::Ok();
-  }
-
- private:
-  std::string path_;
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_{nullptr, &std::fclose};
 };
 
 // Files that are rewritten whole (the .pvd collections, summary.json): after every frame that cost
@@ -121,20 +76,20 @@ class ThrottledWrite {
   std::chrono::steady_clock::time_point last_;
 };
 
-struct Totals {
-  int frames = 0, usable = 0;
-  double median_ms = 0, mean_ms = 0, fps = 0;
-  bool have_errors = false;
-  double err_mean = 0, err_max = 0, seen_mean = 0, seen_max = 0, hidden_mean = 0, hidden_max = 0;
-};
-
-Totals ComputeTotals(const std::vector<FrameRow>& rows);
-
-// summary.json: the run's totals (fields read by scripts and tests), and what it ran: the
-// version, the back end, the resolved options, the --set overrides and the input files.
-std::string SummaryJson(const RegisterArgs& args, const Scene& scene, const Tracker& tracker,
-                        const std::vector<FrameRow>& rows, const std::vector<std::string>& files,
+// summary.json's record of the run: the command's arguments (as resolved), its frames and
+// ground truth, and whether it was interrupted (and by what).
+RunInputs MakeRunInputs(const RegisterArgs& args, const std::vector<std::string>& files,
                         const std::vector<std::string>& truth_files, bool interrupted);
+
+// Frame f's files in args.out/frames: the cloud it was fitted to (`used`), each object's mesh
+// (VTU: displacement, residual, observed; fracture_measure and original_vertex with fracture;
+// error and error_vector where vertex_error has rows; force) and each embedded surface (VTP,
+// error where surface_error has rows; PLY too with --surface-ply), each added to its
+// collection.
+Status WriteFrameFiles(const RegisterArgs& args, size_t f, const Scene& scene, const Tracker& tracker,
+                       const PointCloud& used, const Vertices& vertex_error, const Vertices& surface_error,
+                       std::vector<PvdEntry>* cloud_pvd, std::vector<std::vector<PvdEntry>>* pvd,
+                       std::vector<std::vector<PvdEntry>>* surface_pvd);
 
 }  // namespace register_outputs
 }  // namespace cli

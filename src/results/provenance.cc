@@ -1,13 +1,13 @@
-#include "provenance.h"
+#include "results/provenance.h"
 
 #include <cmath>
 #include <filesystem>
 
-#include "cli_util.h"
+#include "femreg/point_cloud.h"
 #include "femreg/version.h"
 
 namespace femreg {
-namespace cli {
+namespace results_internal {
 namespace {
 
 using json = nlohmann::ordered_json;
@@ -114,5 +114,5 @@ json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
   return j;
 }
 
-}  // namespace cli
+}  // namespace results_internal
 }  // namespace femreg

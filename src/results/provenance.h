@@ -1,7 +1,7 @@
 // What a run's summary.json records so that the run can be told apart and repeated: the
 // version, the resolved options, the inputs.
-#ifndef FEMREG_TOOLS_PROVENANCE_H_
-#define FEMREG_TOOLS_PROVENANCE_H_
+#ifndef FEMREG_RESULTS_PROVENANCE_H_
+#define FEMREG_RESULTS_PROVENANCE_H_
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -11,7 +11,7 @@
 #include "femreg/scene.h"
 
 namespace femreg {
-namespace cli {
+namespace results_internal {
 
 // Every field of the options, as the scene file names them (registration.*), after the
 // scene, --set and command-line flags were applied.
@@ -26,7 +26,7 @@ nlohmann::ordered_json ProvenanceJson(const Scene& scene, const RegistrationOpti
                               const std::vector<std::string>& frame_files,
                               const std::vector<std::string>& truth_files);
 
-}  // namespace cli
+}  // namespace results_internal
 }  // namespace femreg
 
-#endif  // FEMREG_TOOLS_PROVENANCE_H_
+#endif  // FEMREG_RESULTS_PROVENANCE_H_
