@@ -1,7 +1,8 @@
-// The bundled fracture sequences (datasets/beam_break, datasets/slab_tear): ground truth
-// from the forward simulator with fracture on a mesh twice as fine as the tracked one
-// (detection and splits between quasi-static solves, SolveQuasiStaticWithFracture), seen
-// by the virtual depth camera. Deterministic.
+// The bundled fracture sequences' generator (datasets/beam_break, datasets/slab_tear,
+// datasets/beam_cut; their settings: fracture_scenarios.cc): ground truth from the forward
+// simulator with fracture on a mesh twice as fine as the tracked one (detection and splits
+// between quasi-static solves, SolveQuasiStaticWithFracture), seen by the virtual depth
+// camera. Deterministic.
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
@@ -13,7 +14,7 @@
 #include <map>
 #include <sstream>
 
-#include "datasets/scene_numbers.h"
+#include "datasets/fracture_scenarios.h"
 #include "femreg/datasets.h"
 #include "femreg/eval.h"
 #include "femreg/forward.h"
@@ -30,197 +31,8 @@ namespace femreg {
 
 namespace {
 
-struct Scenario {
-  std::string name, title, description;
-  Eigen::Vector3d size;
-  Eigen::Vector3i cells;  // tracked mesh
-  Material material;
-  double toughness = 0.0;       // tracked scene and the ground truth's strong part (Pa)
-  double weak_toughness = 0.0;  // the ground truth's weak band (Pa)
-  double tracked_toughness = 0.0;
-  // The tracking scene's effects.fracture.max_cracks and data_gap (FractureOptions).
-  int tracked_max_cracks = 0;
-  bool tracked_data_gap = false;
-  // Whether the tracking scene lets the camera decide which surface vertices pull
-  // (registration.data.visibility and auto_visibility: with a camera in the scene,
-  // auto_visibility alone turns the camera's test on). Off, every surface vertex is pulled
-  // to its nearest point, so the silhouette's end edges pin the sliding along a box's axis
-  // that point-to-plane pairs on the faces the camera sees leave free.
-  bool tracked_visibility = true;
-  double weak_half_width = 0.0;  // |x - x_mid| below this (centroid) is weak
-  int frames = 0;
-  CameraOptions camera;
-  int pixel_stride = 2;
-  // Rigid motions of the grippers: the set of vertices with rest x <= left_x follows
-  // left(f); x >= right_x follows right(f). Rotation about the set's centre, then shift.
-  double left_x = 0.0, right_x = 0.0;
-  std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)> left, right;
-  bool left_anchor_tracked = true, right_anchor_tracked = false;  // tracker knows them
-  // The ground truth's mesh (0: `refinement` times the tracked one's cells).
-  Eigen::Vector3i fine_cells = Eigen::Vector3i::Zero();
-  // A cut instead of a weak band: at frame cut_frame the ground truth's elements whose rest
-  // centroid has cut_lo < x < cut_hi are removed (the body comes apart there, whatever its
-  // stress), and its toughness is off.
-  int cut_frame = -1;
-  double cut_lo = 0.0, cut_hi = 0.0;
-  bool cut_through = false;  // the tracking scene's effects.fracture.cut_through
-};
-
-constexpr double kPi = 3.14159265358979323846;
-
-Scenario BeamBreak() {
-  Scenario s;
-  s.name = "beam_break";
-  s.title = "a foam beam bent until it breaks";
-  s.size = Eigen::Vector3d(0.3, 0.045, 0.045);
-  s.cells = Eigen::Vector3i(20, 3, 3);
-  s.material.youngs_modulus = 5e4;
-  s.material.poisson_ratio = 0.35;
-  s.material.density = 200;
-  s.toughness = 1e9;  // the ground truth breaks only in its weak band
-  s.weak_toughness = 2500;
-  s.tracked_toughness = 6000;
-  s.weak_half_width = 0.008;
-  s.frames = 24;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d(0.15, -0.36, 0.30);
-  s.camera.target = Eigen::Vector3d(0.15, 0.02, -0.02);
-  s.camera.up = Eigen::Vector3d::UnitZ();
-  s.camera.width = 320;
-  s.camera.height = 240;
-  s.camera.fx = s.camera.fy = 262.5;
-  s.camera.cx = 159.5;
-  s.camera.cy = 119.5;
-  s.left_x = 1e-9;
-  s.right_x = 0.3 - 0.0225 - 1e-9;
-  s.description =
-      "clamped at x = 0; the free end, held by a gripper, is bent down along a circular "
-      "arc (pure bending) until the beam breaks in its weaker middle, then lifted and "
-      "pulled away";
-  s.left = [](int, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    R->setIdentity();
-    t->setZero();
-  };
-  const Eigen::Vector3d size = s.size;
-  s.right = [size](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    // Curvature ramps up over the first 16 frames (pure bending: the end follows the arc
-    // of the centre line, rotated by kappa L), then the gripper rises and pulls away.
-    const double L = size.x() - 0.01125;  // the gripper's centre
-    const double kappa = 3.2 * std::min(f, 16) / 16.0 + 1e-9;
-    const double theta = kappa * L;
-    *R = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).toRotationMatrix();
-    const Eigen::Vector3d end(std::sin(theta) / kappa, 0, -(1 - std::cos(theta)) / kappa);
-    *t = end - Eigen::Vector3d(L, 0, 0);
-    if (f > 16) *t += Eigen::Vector3d(0.004, 0, 0.004) * (f - 16);
-  };
-  s.left_anchor_tracked = true;
-  s.right_anchor_tracked = false;
-  // The free piece, seen only on its side and top, slid along its axis with visibility on
-  // (docs/notes/2026-11-28-figures-from-code-comments.md).
-  s.tracked_visibility = false;
-  // One crack that grows from its front: with every node free to split, a change in the last
-  // bit of the solve (another thread count, another CPU) could break the tracked beam into
-  // more pieces (docs/notes/2026-11-28-figures-from-code-comments.md).
-  s.tracked_max_cracks = 1;
-  return s;
-}
-
-Scenario SlabTear() {
-  Scenario s;
-  s.name = "slab_tear";
-  s.title = "a soft slab torn by two grippers";
-  s.size = Eigen::Vector3d(0.2, 0.1, 0.012);
-  s.cells = Eigen::Vector3i(20, 10, 1);
-  s.material.youngs_modulus = 3e4;
-  s.material.poisson_ratio = 0.3;
-  s.material.density = 300;
-  s.toughness = 1e9;
-  s.weak_toughness = 1500;
-  s.tracked_toughness = 4000;
-  // Pulled evenly, the tracked slab's measure is nearly uniform and exceeds the toughness
-  // everywhere at once: one crack, placed where the camera sees the slab open.
-  s.tracked_max_cracks = 1;
-  s.tracked_data_gap = true;
-  s.weak_half_width = 0.004;
-  s.frames = 24;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d(0.1, -0.12, 0.3);
-  s.camera.target = Eigen::Vector3d(0.1, 0.05, 0.0);
-  s.camera.up = Eigen::Vector3d::UnitY();
-  s.camera.width = 320;
-  s.camera.height = 240;
-  s.camera.fx = s.camera.fy = 300;
-  s.camera.cx = 159.5;
-  s.camera.cy = 119.5;
-  s.left_x = 0.02 + 1e-9;
-  s.right_x = 0.18 - 1e-9;
-  s.description =
-      "the left and right strips (2 cm) are held by grippers that pull apart along x, the "
-      "right one also sliding along +y, so the slab tears along its weaker middle";
-  s.left = [](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    R->setIdentity();
-    *t = Eigen::Vector3d(-0.0015 * f, 0, 0);
-  };
-  s.right = [](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    R->setIdentity();
-    *t = Eigen::Vector3d(0.0015 * f, 0.001 * f, 0.0);
-  };
-  s.left_anchor_tracked = true;
-  s.right_anchor_tracked = true;
-  return s;
-}
-
-Scenario BeamCut() {
-  Scenario s;
-  s.name = "beam_cut";
-  s.title = "a soft beam bent, then cut";
-  s.size = Eigen::Vector3d(0.2, 0.03, 0.03);
-  // The tracked cells straddle the cut, so no face lies in it (docs/notes/2026-11-29-fracture.md).
-  s.cells = Eigen::Vector3i(12, 2, 2);
-  s.fine_cells = Eigen::Vector3i(40, 6, 6);  // the truth has faces on both sides of the cut
-  s.material.youngs_modulus = 5e4;
-  s.material.poisson_ratio = 0.35;
-  s.material.density = 200;
-  s.tracked_toughness = 6000;
-  s.tracked_max_cracks = 1;
-  s.cut_through = true;
-  s.cut_frame = 7;
-  s.cut_lo = 0.070;
-  s.cut_hi = 0.075;
-  s.frames = 12;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d(0.11, -0.26, 0.20);
-  s.camera.target = Eigen::Vector3d(0.11, 0.01, -0.02);
-  s.camera.up = Eigen::Vector3d::UnitZ();
-  s.camera.width = 320;
-  s.camera.height = 240;
-  s.camera.fx = s.camera.fy = 262.5;
-  s.camera.cx = 159.5;
-  s.camera.cy = 119.5;
-  s.left_x = 1e-9;
-  s.right_x = 0.2 - 0.015 - 1e-9;
-  s.description =
-      "clamped at x = 0; the free end, held by a gripper, is bent down along a circular arc "
-      "for 6 frames; at frame 7 a 5 mm slab 70 mm from the clamp is cut out (the elements "
-      "removed), and the gripper then carries the free piece away";
-  s.left = [](int, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    R->setIdentity();
-    t->setZero();
-  };
-  const Eigen::Vector3d size = s.size;
-  s.right = [size](int f, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
-    const double L = size.x() - 0.0075;  // the gripper's centre
-    const double kappa = 2.5 * std::min(f, 6) / 6.0 + 1e-9;
-    const double theta = kappa * L;
-    *R = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitY()).toRotationMatrix();
-    const Eigen::Vector3d end(std::sin(theta) / kappa, 0, -(1 - std::cos(theta)) / kappa);
-    *t = end - Eigen::Vector3d(L, 0, 0);
-    if (f > 7) *t += Eigen::Vector3d(0.008, 0, 0.006) * (f - 7);
-  };
-  s.left_anchor_tracked = true;
-  s.right_anchor_tracked = false;
-  return s;
-}
+using fracture_scenarios::Scenario;
+using fracture_scenarios::TrackingScene;
 
 // Removes the elements of `mesh` for which drop(e) is true and the vertices left without
 // one; `original` follows the kept vertices. The model is rebuilt on the new mesh.
@@ -261,63 +73,6 @@ void RemoveElements(const std::function<bool(int)>& drop, const Material& materi
   model->Build(*mesh, ElasticModelType::kCorotational, material);
 }
 
-// The tracking scene: the coarse box with the tracked toughness, the camera, the fracture
-// limits and the grippers the robot knows as hard anchors. Computed numbers (the boxes just
-// past the grippers' faces, their paths) keep the 10 significant digits the scene has
-// always been written with; a path's repeated last frames are dropped (a frame past the
-// list holds the last entry).
-Scene TrackingScene(const Scenario& s) {
-  Scene scene;
-  scene.description = s.name + ", " + std::to_string(s.frames) + " frames";
-  ObjectSpec object;
-  object.name = s.name == "slab_tear" ? "slab" : "beam";
-  object.generate.shape = MeshGeneratorSpec::Shape::kBox;
-  object.generate.size = s.size;
-  object.generate.cells = s.cells;
-  object.material = s.material;
-  object.toughness = s.tracked_toughness;
-  scene.objects.push_back(object);
-  RegistrationOptions& r = scene.registration;
-  r.camera = s.camera;
-  r.data.max_distance = 0.03;
-  r.data.visibility = s.tracked_visibility;
-  r.data.auto_visibility = s.tracked_visibility;
-  r.weights.data = 200;  // the tracked toughness was tuned with the per-pair data weight
-  r.solver.max_inner_iterations = 10;
-  scene.effects.fracture = true;
-  FractureOptions& f = scene.effects.fracture_options;
-  f.max_splits_per_iteration = 8;
-  f.max_splits_per_frame = 48;
-  f.crossing_tolerance = 0.2;
-  f.max_cracks = s.tracked_max_cracks;
-  f.data_gap = s.tracked_data_gap;
-  f.cut_through = s.cut_through;
-  auto anchor = [&](const std::string& name, bool left,
-                    const std::function<void(int, Eigen::Matrix3d*, Eigen::Vector3d*)>& motion) {
-    AnchorSpec a;
-    a.name = name;
-    a.object = object.name;
-    a.hard = true;
-    a.selection.kind = VertexSelection::Kind::kBox;
-    const double x = datasets_internal::RoundSignificant(left ? s.left_x : s.right_x, 10);
-    a.selection.box_min = left ? Eigen::Vector3d(-1, -1, -1) : Eigen::Vector3d(x, -1, -1);
-    a.selection.box_max = left ? Eigen::Vector3d(x, 1, 1) : Eigen::Vector3d(1, 1, 1);
-    for (int frame = 0; frame < s.frames; ++frame) {
-      Eigen::Matrix3d R;
-      Eigen::Vector3d t;
-      motion(frame, &R, &t);
-      a.translations.push_back(datasets_internal::RoundSignificant(t, 10));
-    }
-    while (a.translations.size() > 1 && a.translations.back() == a.translations[a.translations.size() - 2]) {
-      a.translations.pop_back();
-    }
-    scene.anchors.push_back(a);
-  };
-  if (s.left_anchor_tracked) anchor("left_gripper", true, s.left);
-  if (s.right_anchor_tracked) anchor("right_gripper", false, s.right);
-  return scene;
-}
-
 }  // namespace
 
 std::vector<std::string> FractureScenarios() { return {"beam_break", "slab_tear", "beam_cut"}; }
@@ -326,11 +81,11 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
                                 void (*progress)(int done, int total)) {
   Scenario s;
   if (scenario == "beam_break") {
-    s = BeamBreak();
+    s = fracture_scenarios::BeamBreak();
   } else if (scenario == "slab_tear") {
-    s = SlabTear();
+    s = fracture_scenarios::SlabTear();
   } else if (scenario == "beam_cut") {
-    s = BeamCut();
+    s = fracture_scenarios::BeamCut();
   } else {
     return Status::Error("unknown scenario '" + scenario + "' (beam_break, slab_tear or beam_cut)");
   }
