@@ -17,6 +17,7 @@
 #include <random>
 #include <vector>
 
+#include "bending_beam.h"
 #include "femreg/experiment.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
@@ -32,7 +33,10 @@
 namespace femreg {
 namespace {
 
-constexpr double kLength = 0.2, kWidth = 0.04;
+using bending_beam::Foam;
+using bending_beam::kLength;
+using bending_beam::kWidth;
+using bending_beam::Sensor;
 
 // The surface of a mesh, compacted to its surface vertices.
 void SurfaceOf(const TetMesh& mesh, const Vertices& x, Vertices* vertices, Triangles* triangles) {
@@ -148,76 +152,28 @@ TEST(EmbeddedSurfaceTest, DataSurfaceFollowsAnAffineMotionExactly) {
   }
 }
 
-// A beam clamped at x = 0, its free end bent down and twisted: ground truth from a forward
-// simulation on a mesh twice as fine, clouds from the virtual depth camera (tracker_test.cc's
-// sequence). Tracked by a coarse cage that carries the fine mesh's surface.
+// The bending beam (bending_beam.h, tracker_test.cc's sequence), tracked by a coarse cage that
+// carries the fine mesh's surface; the ground truth is that surface's vertices.
 struct Sequence {
-  TetMesh fine;
   Vertices surface_rest;
   Triangles surface_triangles;
   std::vector<PointCloud> clouds;
   std::vector<GroundTruthFrame> surface_truth;
 };
 
-DepthSensorOptions Sensor() {
-  DepthSensorOptions s;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d(0.1, -0.25, 0.2);
-  s.camera.target = Eigen::Vector3d(0.1, 0.02, 0.0);
-  s.camera.up = Eigen::Vector3d::UnitZ();
-  s.camera.width = 160;
-  s.camera.height = 120;
-  s.camera.fx = s.camera.fy = 140.0;
-  s.camera.cx = 79.5;
-  s.camera.cy = 59.5;
-  return s;
-}
-
-Material Foam() {
-  Material m;
-  m.youngs_modulus = 5e4;
-  m.poisson_ratio = 0.35;
-  m.density = 200;
-  return m;
-}
-
 const Sequence& BendingSequence() {
   static const Sequence* seq = [] {
     auto* s = new Sequence;
-    s->fine = MakeBox(Eigen::Vector3d(kLength, kWidth, kWidth), 20, 4, 4);
-    TetMesh& fine = s->fine;
-    ComputeLumpedMasses(&fine, 200);
+    const TetMesh fine = bending_beam::FineBeam();
     SurfaceOf(fine, fine.rest, &s->surface_rest, &s->surface_triangles);
-    ElasticModel model;
-    model.Build(fine, ElasticModelType::kCorotational, Foam());
-    DepthSensor sensor(Sensor());
-    ForwardProblem problem;
-    for (int v = 0; v < fine.num_vertices(); ++v) {
-      if (fine.rest(v, 0) < 1e-9) problem.clamped.push_back(v);
-    }
-    const int frames = 8;
-    for (int f = 0; f < frames; ++f) {
-      const double a = double(f) / (frames - 1);
-      const Eigen::Vector3d centre(kLength, kWidth / 2, kWidth / 2);
-      const Eigen::Matrix3d twist = Eigen::AngleAxisd(0.3 * a, Eigen::Vector3d::UnitX()).toRotationMatrix();
-      problem.prescribed.clear();
-      for (int v = 0; v < fine.num_vertices(); ++v) {
-        if (fine.rest(v, 0) > kLength - 1e-9) {
-          const Eigen::Vector3d X = fine.rest.row(v);
-          problem.prescribed.emplace_back(v, centre + twist * (X - centre) + Eigen::Vector3d(0, 0, -0.04 * a) - X);
-        }
-      }
-      ForwardSummary summary;
-      EXPECT_TRUE(SolveQuasiStatic(problem, ForwardOptions(), &model, &fine, &summary).ok());
-      const std::vector<RenderSurface> surfaces = {{&fine.x, &fine.surface}};
-      const DepthImage image = sensor.Render(surfaces);
-      s->clouds.push_back(sensor.Sample(image, surfaces, 100 + f));
+    bending_beam::BendFineBeam(8, 0.04, 100, [&](const bending_beam::BeamFrame& frame) {
+      s->clouds.push_back(frame.cloud);
       GroundTruthFrame gt;
       Triangles unused;
-      SurfaceOf(fine, fine.x, &gt.positions, &unused);
-      gt.visible = sensor.Visible(image, gt.positions, 2e-3);
+      SurfaceOf(frame.fine, frame.fine.x, &gt.positions, &unused);
+      gt.visible = frame.sensor.Visible(frame.image, gt.positions, 2e-3);
       s->surface_truth.push_back(gt);
-    }
+    });
     return s;
   }();
   return *seq;

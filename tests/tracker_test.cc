@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "bending_beam.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
@@ -23,21 +24,10 @@
 namespace femreg {
 namespace {
 
-constexpr double kLength = 0.2, kWidth = 0.04;
-
-DepthSensorOptions Sensor() {
-  DepthSensorOptions s;
-  s.camera.enabled = true;
-  s.camera.position = Eigen::Vector3d(0.1, -0.25, 0.2);
-  s.camera.target = Eigen::Vector3d(0.1, 0.02, 0.0);
-  s.camera.up = Eigen::Vector3d::UnitZ();
-  s.camera.width = 160;
-  s.camera.height = 120;
-  s.camera.fx = s.camera.fy = 140.0;
-  s.camera.cx = 79.5;
-  s.camera.cy = 59.5;
-  return s;
-}
+using bending_beam::Foam;
+using bending_beam::kLength;
+using bending_beam::kWidth;
+using bending_beam::Sensor;
 
 RegistrationOptions Options() {
   RegistrationOptions o;
@@ -47,15 +37,8 @@ RegistrationOptions Options() {
   return o;
 }
 
-Material Foam() {
-  Material m;
-  m.youngs_modulus = 5e4;
-  m.poisson_ratio = 0.35;
-  m.density = 200;
-  return m;
-}
-
-// A sequence of a beam clamped at x = 0 whose free end is bent down and twisted.
+// The bending beam (bending_beam.h) seen by the camera, with the ground truth at the vertices
+// of a tracked mesh of 10 by 2 by 2 cells.
 struct Sequence {
   std::vector<PointCloud> clouds;
   std::vector<GroundTruthFrame> truth;
@@ -63,40 +46,16 @@ struct Sequence {
 
 Sequence MakeBendingSequence(int frames, double drop, uint64_t seed) {
   Sequence seq;
-  TetMesh coarse = MakeBox(Eigen::Vector3d(kLength, kWidth, kWidth), 10, 2, 2);
-  TetMesh fine = MakeBox(Eigen::Vector3d(kLength, kWidth, kWidth), 20, 4, 4);
-  ComputeLumpedMasses(&fine, 200);
-  ElasticModel model;
-  model.Build(fine, ElasticModelType::kCorotational, Foam());
-  const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
-  DepthSensor sensor(Sensor());
-  ForwardProblem problem;
-  for (int v = 0; v < fine.num_vertices(); ++v) {
-    if (fine.rest(v, 0) < 1e-9) problem.clamped.push_back(v);
-  }
-  for (int f = 0; f < frames; ++f) {
-    const double s = frames > 1 ? double(f) / (frames - 1) : 0.0;
-    const Eigen::Vector3d centre(kLength, kWidth / 2, kWidth / 2);
-    const Eigen::Matrix3d twist = Eigen::AngleAxisd(0.3 * s, Eigen::Vector3d::UnitX()).toRotationMatrix();
-    problem.prescribed.clear();
-    for (int v = 0; v < fine.num_vertices(); ++v) {
-      if (fine.rest(v, 0) > kLength - 1e-9) {
-        const Eigen::Vector3d X = fine.rest.row(v);
-        const Eigen::Vector3d moved = centre + twist * (X - centre) + Eigen::Vector3d(0, 0, -drop * s);
-        problem.prescribed.emplace_back(v, moved - X);
-      }
-    }
-    ForwardSummary summary;
-    EXPECT_TRUE(SolveQuasiStatic(problem, ForwardOptions(), &model, &fine, &summary).ok());
-    EXPECT_TRUE(summary.IsSolutionUsable()) << summary.message;
-    const std::vector<RenderSurface> surfaces = {{&fine.x, &fine.surface}};
-    const DepthImage image = sensor.Render(surfaces);
-    seq.clouds.push_back(sensor.Sample(image, surfaces, seed + f));
+  const TetMesh coarse = MakeBox(Eigen::Vector3d(kLength, kWidth, kWidth), 10, 2, 2);
+  const EmbeddedPoints embedded = EmbedPoints(bending_beam::FineBeam(), coarse.rest);
+  bending_beam::BendFineBeam(frames, drop, seed, [&](const bending_beam::BeamFrame& frame) {
+    EXPECT_TRUE(frame.summary.IsSolutionUsable()) << frame.summary.message;
+    seq.clouds.push_back(frame.cloud);
     GroundTruthFrame gt;
-    gt.positions = InterpolateEmbedded(fine, fine.x, embedded);
-    gt.visible = sensor.Visible(image, gt.positions, 2e-3);
+    gt.positions = InterpolateEmbedded(frame.fine, frame.fine.x, embedded);
+    gt.visible = frame.sensor.Visible(frame.image, gt.positions, 2e-3);
     seq.truth.push_back(gt);
-  }
+  });
   return seq;
 }
 
