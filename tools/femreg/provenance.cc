@@ -2,8 +2,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <type_traits>
 
 #include "cli_util.h"
+#include "femreg/option_fields.h"
 #include "femreg/version.h"
 
 namespace femreg {
@@ -20,6 +22,20 @@ std::string Absolute(const std::string& path) {
   std::error_code ec;
   const std::filesystem::path p = std::filesystem::absolute(path, ec);
   return ec ? path : p.lexically_normal().string();
+}
+
+// Every field of an options table (femreg/option_fields.h) by its scene key; enums by name.
+template <class Options>
+json FieldsJson(const Options& o) {
+  json j = json::object();
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    if constexpr (std::is_enum_v<std::decay_t<decltype(o.*member)>>) {
+      j[f.key] = ToString(o.*member);
+    } else {
+      j[f.key] = o.*member;
+    }
+  });
+  return j;
 }
 
 }  // namespace
@@ -43,37 +59,13 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                      {"normal_neighbors", p.normal_neighbors},
                      {"plane_distance", p.plane_distance},
                      {"plane_iterations", p.plane_iterations}};
-  const DataTermOptions& d = o.data;
-  j["data"] = {{"model_to_cloud", d.model_to_cloud}, {"cloud_to_model", d.cloud_to_model},
-               {"max_distance", d.max_distance},     {"loss", ToString(d.loss)},
-               {"loss_scale", d.loss_scale},         {"metric", ToString(d.metric)},
-               {"visibility", d.visibility},         {"cloud_stride", d.cloud_stride}};
-  const WeightOptions& w = o.weights;
-  j["weights"] = {{"data", w.data}, {"elastic", w.elastic}, {"temporal", w.temporal},
-                  {"anchor", w.anchor}, {"data_per_area", w.data_per_area},
-                  {"model_to_cloud_share", w.model_to_cloud_share},
-                  {"model_to_cloud_area_cap", w.model_to_cloud_area_cap},
-                  {"model_to_cloud_balance", w.model_to_cloud_balance}};
+  j["data"] = FieldsJson(o.data);
+  j["weights"] = FieldsJson(o.weights);
   j["loads"] = o.loads;
   j["initial_pose"] = ToString(o.initial_pose);
-  const SolverOptions& s = o.solver;
-  j["solver"] = {{"backend", ToString(s.backend)},
-                 {"max_outer_iterations", s.max_outer_iterations},
-                 {"max_inner_iterations", s.max_inner_iterations},
-                 {"inner_tolerance", s.inner_tolerance},
-                 {"relative_energy_tolerance", s.relative_energy_tolerance},
-                 {"step_tolerance", s.step_tolerance},
-                 {"bulk_step_tolerance", s.bulk_step_tolerance},
-                 {"time_budget_s", s.time_budget_s},
-                 {"trust_region", ToString(s.trust_region)},
-                 {"linear_solver", ToString(s.linear_solver)},
-                 {"max_pcg_iterations", s.max_pcg_iterations},
-                 {"preconditioner", ToString(s.preconditioner)},
-                 {"threads", s.num_threads},
-                 {"predict_motion", s.predict_motion},
-                 {"backtrack", s.backtrack},
-                 {"rigid_prealign", s.rigid_prealign},
-                 {"rigid_iterations", s.rigid_iterations}};
+  j["solver"] = FieldsJson(o.solver);
+  j["forces"] = FieldsJson(o.forces);
+  j["free_space"] = FieldsJson(o.free_space);
   return j;
 }
 
