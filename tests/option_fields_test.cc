@@ -1,4 +1,5 @@
-// The options tables (femreg/option_fields.h): each covers every member of its struct; every
+// The options tables (femreg/option_fields.h): each covers every member of its struct (the
+// top level's, every member but its sections); every
 // field, set alone to a value other than its default, is written by the scene writer and
 // read back by the parser unchanged; and a value out of a field's range fails, both in
 // IsValid and in a scene file, with the field's name (and there the file and line).
@@ -50,6 +51,8 @@ TEST(OptionFields, EveryMemberHasARow) {
   EXPECT_EQ(FieldCount<SolverOptions>(), MemberCount<SolverOptions>());
   EXPECT_EQ(FieldCount<ForceOptions>(), MemberCount<ForceOptions>());
   EXPECT_EQ(FieldCount<FreeSpaceOptions>(), MemberCount<FreeSpaceOptions>());
+  // The top level: its own values, and its seven sections (camera ... free_space).
+  EXPECT_EQ(FieldCount<RegistrationOptions>() + 7, MemberCount<RegistrationOptions>());
 }
 
 // A value other than `d` that the field's range allows: a flag flipped, the next enum value,
@@ -95,16 +98,16 @@ void ExpectSameFields(const Options& a, const Options& b, const std::string& whe
 
 const char kObject[] = "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n";
 
-template <class Options>
-void ExpectEachFieldRoundTrips(Options RegistrationOptions::*section) {
-  const std::string prefix = std::string(OptionFields<Options>::kSection) + ".";
+// `section` gives the options struct within RegistrationOptions.
+template <class Options, class Section>
+void ExpectEachFieldRoundTrips(Section section) {
   int fields = 0;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     ++fields;
-    const std::string field = prefix + f.key;
+    const std::string field = FieldName<Options>(f);
     Scene scene;
     ASSERT_TRUE(ParseScene(kObject, "box.yaml", ".", &scene).ok());
-    Options& o = scene.registration.*section;
+    Options& o = section(scene.registration);
     const auto d = o.*member;
     o.*member = OtherValue(f, d);
     ASSERT_NE(o.*member, d) << field;
@@ -118,17 +121,18 @@ void ExpectEachFieldRoundTrips(Options RegistrationOptions::*section) {
     Scene read;
     const Status status = ParseScene(yaml, "written.yaml", ".", &read);
     ASSERT_TRUE(status.ok()) << field << ": " << status.message() << "\n" << yaml;
-    ExpectSameFields(o, read.registration.*section, field);
+    ExpectSameFields(o, section(read.registration), field);
   });
   EXPECT_EQ(fields, static_cast<int>(FieldCount<Options>()));
 }
 
 TEST(OptionFields, EachFieldRoundTripsThroughTheSceneFile) {
-  ExpectEachFieldRoundTrips(&RegistrationOptions::data);
-  ExpectEachFieldRoundTrips(&RegistrationOptions::weights);
-  ExpectEachFieldRoundTrips(&RegistrationOptions::solver);
-  ExpectEachFieldRoundTrips(&RegistrationOptions::forces);
-  ExpectEachFieldRoundTrips(&RegistrationOptions::free_space);
+  ExpectEachFieldRoundTrips<DataTermOptions>([](RegistrationOptions& r) -> auto& { return r.data; });
+  ExpectEachFieldRoundTrips<WeightOptions>([](RegistrationOptions& r) -> auto& { return r.weights; });
+  ExpectEachFieldRoundTrips<SolverOptions>([](RegistrationOptions& r) -> auto& { return r.solver; });
+  ExpectEachFieldRoundTrips<ForceOptions>([](RegistrationOptions& r) -> auto& { return r.forces; });
+  ExpectEachFieldRoundTrips<FreeSpaceOptions>([](RegistrationOptions& r) -> auto& { return r.free_space; });
+  ExpectEachFieldRoundTrips<RegistrationOptions>([](RegistrationOptions& r) -> auto& { return r; });
 }
 
 // A value the field's range refuses, as a number and as YAML: below a lower bound, above an
@@ -148,7 +152,7 @@ void ExpectRangesNamed(Options RegistrationOptions::*section) {
     ++checked;
     const double bad = OutOfRange(f);
     ASSERT_FALSE(f.InRange(bad)) << f.key;
-    const std::string field = name + "." + f.key;
+    const std::string field = FieldName<Options>(f);
 
     RegistrationOptions o;
     using T = std::decay_t<decltype(o.*section.*member)>;

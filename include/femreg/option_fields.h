@@ -230,6 +230,29 @@ struct OptionFields<SolverOptions> {
   }
 };
 
+// The top level's own values; each section (camera, preprocess, data, weights, solver,
+// forces, free_space) is a struct of its own, with its own table where it has one.
+template <>
+struct OptionFields<RegistrationOptions> {
+  static constexpr const char* kSection = "";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = RegistrationOptions;
+    v(&S::regularizer, FieldInfo("regularizer").Doc("corotational, linear, mass_spring or none"));
+    v(&S::loads, FieldInfo("loads").Doc("The scene's gravity and loads act in the registration energy."));
+    v(&S::initial_pose, FieldInfo("initial_pose")
+                            .Doc("given (the meshes as given) or auto (a global search on the first frame "
+                                 "when the given pose explains the cloud badly)"));
+  }
+};
+
+// A field as messages name it: "weights.elastic"; "loads" at the top level.
+template <class Options>
+std::string FieldName(const FieldInfo& f) {
+  const std::string section = OptionFields<Options>::kSection;
+  return section.empty() ? std::string(f.key) : section + "." + f.key;
+}
+
 // The first number of `o` out of its table row's range, as "section.key message (got
 // value)" in *error (IsValid's form); true when every field is in range.
 template <class Options>
@@ -243,7 +266,7 @@ bool CheckFieldRanges(const Options& o, std::string* error) {
       ok = false;
       if (error != nullptr) {
         std::ostringstream os;
-        os << OptionFields<Options>::kSection << "." << f.key << " " << f.RangeMessage() << " (got "
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got "
            << value << ")";
         *error = os.str();
       }

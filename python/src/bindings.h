@@ -72,8 +72,7 @@ void DefFields(Class& cls) {
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using T = std::decay_t<decltype(std::declval<Options&>().*member)>;
     if constexpr (std::is_enum_v<T>) {
-      EnumProperty(cls, f.python_name(), member,
-                   std::string(OptionFields<Options>::kSection) + "." + f.key, f.doc);
+      EnumProperty(cls, f.python_name(), member, FieldName<Options>(f), f.doc);
     } else {
       cls.def_readwrite(f.python_name(), member, f.doc);
     }

@@ -97,19 +97,13 @@ void BindOptions(py::module_& m) {
       .def_readwrite("solver", &RegistrationOptions::solver)
       .def_readwrite("forces", &RegistrationOptions::forces)
       .def_readwrite("free_space", &RegistrationOptions::free_space)
-      .def_readwrite("loads", &RegistrationOptions::loads,
-                     "The scene's gravity and loads act in the registration energy.")
       .def("validate",
            [](const RegistrationOptions& o) {
              std::string why;
              if (!o.IsValid(&why)) throw py::value_error("RegistrationOptions: " + why);
            },
            "Raises ValueError naming the first bad field.");
-  EnumProperty(options, "regularizer", &RegistrationOptions::regularizer, "regularizer",
-               "corotational, linear, mass_spring or none");
-  EnumProperty(options, "initial_pose", &RegistrationOptions::initial_pose, "initial_pose",
-               "given (the meshes as given) or auto (a global search on the first frame when the "
-               "given pose explains the cloud badly)");
+  DefFields(options);
 }
 
 }  // namespace python

@@ -10,9 +10,10 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseRegistration(const YamlValue& v) {
-  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads", "forces",
-               "initial_pose", "free_space"});
+  v.CheckKeys(FieldKeys<RegistrationOptions>(
+      {"camera", "preprocess", "data", "weights", "solver", "forces", "free_space"}));
   RegistrationOptions& r = scene_->registration;
+  ParseFields(v, &r);
   if (v.Has("free_space")) {
     const YamlValue f = v["free_space"];
     f.CheckKeys(FieldKeys<FreeSpaceOptions>());
@@ -23,13 +24,6 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     f.CheckKeys(FieldKeys<ForceOptions>({"region"}));
     ParseFields(f, &r.forces);
     if (f.Has("region")) ParseForceRegion(f["region"]);
-  }
-  if (v.Has("loads")) r.loads = v["loads"].AsBool();
-  if (v.Has("initial_pose")) {
-    r.initial_pose = ParseEnum<InitialPose>(v["initial_pose"]);
-  }
-  if (v.Has("regularizer")) {
-    r.regularizer = ParseEnum<Regularizer>(v["regularizer"]);
   }
   if (v.Has("camera")) {
     const YamlValue c = v["camera"];

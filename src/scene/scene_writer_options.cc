@@ -29,9 +29,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
                             const std::string& base_dir) {
   const RegistrationOptions d;
   YAML::Node n = Map();
-  if (r.regularizer != d.regularizer) n["regularizer"] = ToString(r.regularizer);
-  if (r.loads != d.loads) n["loads"] = r.loads;
-  if (r.initial_pose != d.initial_pose) n["initial_pose"] = ToString(r.initial_pose);
+  PutFields(n, r);  // regularizer, loads, initial_pose
   if (r.camera.enabled) {
     const CameraOptions& c = r.camera;
     YAML::Node camera = FlowMap();

@@ -41,8 +41,7 @@ json FieldsJson(const Options& o) {
 }  // namespace
 
 json RegistrationOptionsJson(const RegistrationOptions& o) {
-  json j;
-  j["regularizer"] = ToString(o.regularizer);
+  json j = FieldsJson(o);  // regularizer, loads, initial_pose
   const CameraOptions& c = o.camera;
   j["camera"] = {{"enabled", c.enabled},  {"position", Vector(c.position)},
                  {"target", Vector(c.target)}, {"up", Vector(c.up)},
@@ -61,8 +60,6 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                      {"plane_iterations", p.plane_iterations}};
   j["data"] = FieldsJson(o.data);
   j["weights"] = FieldsJson(o.weights);
-  j["loads"] = o.loads;
-  j["initial_pose"] = ToString(o.initial_pose);
   j["solver"] = FieldsJson(o.solver);
   j["forces"] = FieldsJson(o.forces);
   j["free_space"] = FieldsJson(o.free_space);
