@@ -51,12 +51,13 @@ TEST(OptionFields, EveryMemberHasARow) {
   EXPECT_EQ(FieldCount<SolverOptions>(), MemberCount<SolverOptions>());
   EXPECT_EQ(FieldCount<ForceOptions>(), MemberCount<ForceOptions>());
   EXPECT_EQ(FieldCount<FreeSpaceOptions>(), MemberCount<FreeSpaceOptions>());
+  EXPECT_EQ(FieldCount<CameraOptions>() + 1, MemberCount<CameraOptions>());  // + enabled
   // The top level: its own values, and its seven sections (camera ... free_space).
   EXPECT_EQ(FieldCount<RegistrationOptions>() + 7, MemberCount<RegistrationOptions>());
 }
 
 // A value other than `d` that the field's range allows: a flag flipped, the next enum value,
-// a number one larger (or halfway to an upper bound that one larger would pass).
+// a vector or number one larger (or halfway to an upper bound that one larger would pass).
 template <class T>
 T OtherValue(const FieldInfo& f, T d) {
   if constexpr (std::is_same_v<T, bool>) {
@@ -67,6 +68,8 @@ T OtherValue(const FieldInfo& f, T d) {
       if (all[i] == d) return all[(i + 1) % all.size()];
     }
     return d;
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    return d + Eigen::Vector3d::Ones();
   } else {
     T v = d + 1;
     if (!f.InRange(v)) v = std::is_same_v<T, int> ? d - 1 : static_cast<T>((d + f.max) / 2);
@@ -82,6 +85,7 @@ void AllowAlone(const std::string& field, RegistrationOptions* o) {
     o->solver.backend = SolverBackend::kCeres;  // Ceres' settings
   }
   if (field == "forces.friction") o->forces.pushing_only = true;
+  if (field.rfind("camera.", 0) == 0) o->camera.enabled = true;  // a scene's camera is on
 }
 
 template <class Options>
@@ -132,6 +136,7 @@ TEST(OptionFields, EachFieldRoundTripsThroughTheSceneFile) {
   ExpectEachFieldRoundTrips<SolverOptions>([](RegistrationOptions& r) -> auto& { return r.solver; });
   ExpectEachFieldRoundTrips<ForceOptions>([](RegistrationOptions& r) -> auto& { return r.forces; });
   ExpectEachFieldRoundTrips<FreeSpaceOptions>([](RegistrationOptions& r) -> auto& { return r.free_space; });
+  ExpectEachFieldRoundTrips<CameraOptions>([](RegistrationOptions& r) -> auto& { return r.camera; });
   ExpectEachFieldRoundTrips<RegistrationOptions>([](RegistrationOptions& r) -> auto& { return r; });
 }
 
@@ -156,20 +161,27 @@ void ExpectRangesNamed(Options RegistrationOptions::*section) {
 
     RegistrationOptions o;
     using T = std::decay_t<decltype(o.*section.*member)>;
-    (o.*section).*member = static_cast<T>(bad);
+    constexpr bool kVector = std::is_same_v<T, Eigen::Vector3d>;
+    if constexpr (kVector) {
+      (o.*section).*member = Eigen::Vector3d::Constant(bad);
+    } else {
+      (o.*section).*member = static_cast<T>(bad);
+    }
     std::string error;
     EXPECT_FALSE(o.IsValid(&error)) << field;
     EXPECT_EQ(error.rfind(field + " must be ", 0), 0u) << error;
 
     std::string text = std::isnan(bad) ? ".nan" : std::to_string(bad);
     if (std::is_same_v<T, int>) text = std::to_string(static_cast<int>(bad));
+    if (kVector) text = "[" + text + ", 0, 0]";
     Scene scene;
     const Status status = ParseScene(std::string(kObject) + "registration:\n  " + name + ": {" +
                                          f.key + ": " + text + "}\n",
                                      "bad.yaml", ".", &scene);
     ASSERT_FALSE(status.ok()) << field << " = " << text;
-    EXPECT_EQ(status.message().rfind("bad.yaml:3: registration." + field + ": must be ", 0), 0u)
-        << status.message();
+    // A vector's bad number is named by its index: "registration.camera.up[0]: must be ...".
+    const std::string named = "bad.yaml:3: registration." + field + (kVector ? "" : ": must be ");
+    EXPECT_EQ(status.message().rfind(named, 0), 0u) << status.message();
   });
   EXPECT_GT(checked, 0);
 }
@@ -180,6 +192,7 @@ TEST(OptionFields, OutOfRangeValuesNameTheField) {
   ExpectRangesNamed(&RegistrationOptions::solver);
   ExpectRangesNamed(&RegistrationOptions::forces);
   ExpectRangesNamed(&RegistrationOptions::free_space);
+  ExpectRangesNamed(&RegistrationOptions::camera);
 }
 
 // The messages as IsValid wrote them before the tables, word for word.
@@ -209,6 +222,14 @@ TEST(OptionFields, MessagesKeepTheirWording) {
   o.weights.data = o.weights.elastic = o.weights.temporal = 0;  // a rule across fields
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_EQ(error, "weights data, elastic and temporal must not all be 0 (got 0, 0, 0)");
+  o = RegistrationOptions();
+  o.camera.up = Eigen::Vector3d(0, std::nan(""), 0);
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error, "camera.up must be finite (got [0, nan, 0])");
+  o = RegistrationOptions();
+  o.camera.height = 0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error, "camera.height must be > 0 (got 0)");
 }
 
 }  // namespace

@@ -5,7 +5,8 @@
 // checks of S::IsValid, the Python module and a run's provenance all walk this table, so an
 // option is named in its struct and in its table row and nowhere else
 // (docs/dev/adding-an-option.md). A field's type says how it is read and written: bool, int,
-// double, or an enum with EnumValues (written as ToString's names).
+// double, Eigen::Vector3d (a list of 3), or an enum with EnumValues (written as ToString's
+// names).
 #ifndef FEMREG_OPTION_FIELDS_H_
 #define FEMREG_OPTION_FIELDS_H_
 
@@ -121,6 +122,26 @@ struct EnumValues<Preconditioner> {
 // The tables. kSection is the struct's key under `registration:` (and in provenance).
 template <class Options>
 struct OptionFields;
+
+// `enabled` has no row: a scene enables the camera by having the section, and a camera is
+// written in full (the parser and writer say so by hand; Python and provenance add it).
+template <>
+struct OptionFields<CameraOptions> {
+  static constexpr const char* kSection = "camera";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = CameraOptions;
+    v(&S::position, FieldInfo("position").Finite());
+    v(&S::target, FieldInfo("target").Finite());
+    v(&S::up, FieldInfo("up").Finite());
+    v(&S::fx, FieldInfo("fx").Above(0));
+    v(&S::fy, FieldInfo("fy").Above(0));
+    v(&S::cx, FieldInfo("cx").Finite());
+    v(&S::cy, FieldInfo("cy").Finite());
+    v(&S::width, FieldInfo("width").Above(0));
+    v(&S::height, FieldInfo("height").Above(0));
+  }
+};
 
 template <>
 struct OptionFields<DataTermOptions> {
@@ -260,7 +281,17 @@ bool CheckFieldRanges(const Options& o, std::string* error) {
   bool ok = true;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using T = std::decay_t<decltype(o.*member)>;
-    if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+    if constexpr (std::is_same_v<T, Eigen::Vector3d>) {  // finite only
+      const Eigen::Vector3d& value = o.*member;
+      if (!ok || !f.checked() || value.allFinite()) return;
+      ok = false;
+      if (error != nullptr) {
+        std::ostringstream os;
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got [" << value.x() << ", "
+           << value.y() << ", " << value.z() << "])";
+        *error = os.str();
+      }
+    } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
       const T value = o.*member;
       if (!ok || !f.checked() || f.InRange(static_cast<double>(value))) return;
       ok = false;

@@ -33,19 +33,10 @@ void BindOptions(py::module_& m) {
                ", density=" + py::repr(py::float_(mat.density)).cast<std::string>() + ")";
       });
 
-  py::class_<CameraOptions>(m, "CameraOptions",
-                            "The camera: pose (position, target, up) and pinhole intrinsics.")
-      .def(py::init<>())
-      .def_readwrite("enabled", &CameraOptions::enabled)
-      .def_readwrite("position", &CameraOptions::position)
-      .def_readwrite("target", &CameraOptions::target)
-      .def_readwrite("up", &CameraOptions::up)
-      .def_readwrite("fx", &CameraOptions::fx)
-      .def_readwrite("fy", &CameraOptions::fy)
-      .def_readwrite("cx", &CameraOptions::cx)
-      .def_readwrite("cy", &CameraOptions::cy)
-      .def_readwrite("width", &CameraOptions::width)
-      .def_readwrite("height", &CameraOptions::height);
+  auto camera = py::class_<CameraOptions>(m, "CameraOptions",
+                                          "The camera: pose (position, target, up) and pinhole intrinsics.");
+  camera.def(py::init<>()).def_readwrite("enabled", &CameraOptions::enabled);
+  DefFields(camera);
 
   py::class_<PreprocessOptions>(m, "PreprocessOptions")
       .def(py::init<>())

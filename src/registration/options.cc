@@ -189,21 +189,13 @@ std::string FieldInfo::RangeMessage() const {
 }
 
 bool CameraOptions::IsValid(std::string* error) const {
-  if (!Finite(position)) return Fail(error, "camera.position", "must be finite", VectorString(position));
-  if (!Finite(target)) return Fail(error, "camera.target", "must be finite", VectorString(target));
-  if (!Finite(up)) return Fail(error, "camera.up", "must be finite", VectorString(up));
+  if (!CheckFieldRanges(*this, error)) return false;
   if ((target - position).norm() <= 0) {
     return Fail(error, "camera.target", "must differ from camera.position", VectorString(target));
   }
   if ((target - position).normalized().cross(up).norm() < 1e-6) {
     return Fail(error, "camera.up", "must not be parallel to the viewing direction", VectorString(up));
   }
-  if (!(std::isfinite(fx) && fx > 0)) return Fail(error, "camera.fx", "must be > 0", fx);
-  if (!(std::isfinite(fy) && fy > 0)) return Fail(error, "camera.fy", "must be > 0", fy);
-  if (!std::isfinite(cx)) return Fail(error, "camera.cx", "must be finite", cx);
-  if (!std::isfinite(cy)) return Fail(error, "camera.cy", "must be finite", cy);
-  if (width <= 0) return Fail(error, "camera.width", "must be > 0", width);
-  if (height <= 0) return Fail(error, "camera.height", "must be > 0", height);
   return true;
 }
 

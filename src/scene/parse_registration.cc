@@ -27,7 +27,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("camera")) {
     const YamlValue c = v["camera"];
-    c.CheckKeys({"position", "target", "up", "intrinsics", "fx", "fy", "cx", "cy", "width", "height"});
+    c.CheckKeys(FieldKeys<CameraOptions>({"intrinsics"}));
     r.camera.enabled = true;
     if (c.Has("intrinsics")) {
       // An Open3D PinholeCameraIntrinsic JSON, relative to the scene's folder; instead of
@@ -45,15 +45,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       const Status read = ReadCameraIntrinsics(path.lexically_normal().string(), &r.camera);
       if (!read.ok()) file.Fail(read.message());
     }
-    if (c.Has("position")) r.camera.position = c["position"].AsVector3();
-    if (c.Has("target")) r.camera.target = c["target"].AsVector3();
-    if (c.Has("up")) r.camera.up = c["up"].AsVector3();
-    if (c.Has("fx")) r.camera.fx = c["fx"].AsDouble();
-    if (c.Has("fy")) r.camera.fy = c["fy"].AsDouble();
-    if (c.Has("cx")) r.camera.cx = c["cx"].AsDouble();
-    if (c.Has("cy")) r.camera.cy = c["cy"].AsDouble();
-    if (c.Has("width")) r.camera.width = c["width"].AsInt();
-    if (c.Has("height")) r.camera.height = c["height"].AsInt();
+    ParseFields(c, &r.camera);
   }
   if (v.Has("preprocess")) {
     const YamlValue p = v["preprocess"];

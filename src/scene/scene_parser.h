@@ -74,8 +74,10 @@ void ParseFields(const YamlValue& v, Options* o) {
       field = x.AsInt();
     } else if constexpr (std::is_same_v<T, double>) {
       field = x.AsDouble();
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      field = x.AsVector3();
     } else {
-      static_assert(std::is_enum_v<T>, "an options table holds bool, int, double and enums");
+      static_assert(std::is_enum_v<T>, "an options table holds bool, int, double, Vector3d and enums");
       field = ParseEnum<T>(x);
     }
   });

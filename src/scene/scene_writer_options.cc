@@ -31,17 +31,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   YAML::Node n = Map();
   PutFields(n, r);  // regularizer, loads, initial_pose
   if (r.camera.enabled) {
-    const CameraOptions& c = r.camera;
     YAML::Node camera = FlowMap();
-    camera["position"] = Vec(c.position);
-    camera["target"] = Vec(c.target);
-    camera["up"] = Vec(c.up);
-    camera["fx"] = Number(c.fx);
-    camera["fy"] = Number(c.fy);
-    camera["cx"] = Number(c.cx);
-    camera["cy"] = Number(c.cy);
-    camera["width"] = c.width;
-    camera["height"] = c.height;
+    PutFields(camera, r.camera, {}, /*all=*/true);  // a camera is written in full
     n["camera"] = camera;
   }
   const PreprocessOptions& p = r.preprocess;

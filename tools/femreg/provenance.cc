@@ -29,8 +29,11 @@ template <class Options>
 json FieldsJson(const Options& o) {
   json j = json::object();
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    if constexpr (std::is_enum_v<std::decay_t<decltype(o.*member)>>) {
+    using T = std::decay_t<decltype(o.*member)>;
+    if constexpr (std::is_enum_v<T>) {
       j[f.key] = ToString(o.*member);
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      j[f.key] = Vector(o.*member);
     } else {
       j[f.key] = o.*member;
     }
@@ -42,11 +45,8 @@ json FieldsJson(const Options& o) {
 
 json RegistrationOptionsJson(const RegistrationOptions& o) {
   json j = FieldsJson(o);  // regularizer, loads, initial_pose
-  const CameraOptions& c = o.camera;
-  j["camera"] = {{"enabled", c.enabled},  {"position", Vector(c.position)},
-                 {"target", Vector(c.target)}, {"up", Vector(c.up)},
-                 {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-                 {"width", c.width}, {"height", c.height}};
+  j["camera"] = {{"enabled", o.camera.enabled}};
+  j["camera"].update(FieldsJson(o.camera));
   const PreprocessOptions& p = o.preprocess;
   j["preprocess"] = {{"mask_dir", p.mask_dir.empty() ? json(nullptr) : json(Absolute(p.mask_dir))},
                      {"crop", p.crop},
