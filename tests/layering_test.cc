@@ -58,6 +58,7 @@ const std::map<std::string, std::string> kHeaderModule = {
     {"collision_spec.h", "collision"}, {"collision.h", "collision"},
     {"fracture.h", "fracture"},     {"registration.h", "registration"},
     {"point_cloud.h", "registration"}, {"tracker.h", "registration"},
+    {"option_fields.h", "registration"},
     {"ground_truth.h", "eval"},     {"eval.h", "eval"},
     {"synth.h", "synth"},           {"scene.h", "scene"},
     {"datasets.h", "datasets"},     {"experiment.h", "experiments"},

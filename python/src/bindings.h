@@ -12,9 +12,12 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "femreg/mesh.h"
+#include "femreg/option_fields.h"
 #include "femreg/point_cloud.h"
 #include "femreg/registration.h"
 
@@ -39,26 +42,41 @@ void CopyRows3(const DoubleArray& array, const char* what, Vertices* out);
 py::array_t<double> ToArray(const Vertices& v);
 
 template <typename Enum>
-Enum EnumFromString(const std::string& s, const char* field, const std::vector<Enum>& all) {
+Enum EnumFromString(const std::string& s, const std::string& field) {
   Enum v;
   if (!FromString(s, &v)) {
     std::string names;
-    for (Enum e : all) names += (names.empty() ? "" : ", ") + std::string(ToString(e));
-    throw py::value_error(std::string(field) + ": unknown value '" + s + "' (use " + names + ")");
+    for (Enum e : EnumValues<Enum>::kAll) names += (names.empty() ? "" : ", ") + std::string(ToString(e));
+    throw py::value_error(field + ": unknown value '" + s + "' (use " + names + ")");
   }
   return v;
 }
 
-// Binds an enum field of a struct as a string property.
+// Binds an enum field of a struct as a string property; `qualified` names it in messages.
 template <typename Class, typename Struct, typename Enum>
-void EnumProperty(Class& cls, const char* name, Enum Struct::*field, const char* qualified,
-                  std::vector<Enum> all, const char* doc) {
+void EnumProperty(Class& cls, const char* name, Enum Struct::*field, std::string qualified,
+                  const char* doc) {
   cls.def_property(
       name, [field](const Struct& s) { return std::string(ToString(s.*field)); },
-      [field, qualified, all](Struct& s, const std::string& v) {
-        s.*field = EnumFromString(v, qualified, all);
+      [field, qualified](Struct& s, const std::string& v) {
+        s.*field = EnumFromString<Enum>(v, qualified);
       },
       doc);
+}
+
+// Binds every field of an options table (femreg/option_fields.h) under its Python name:
+// flags and numbers as attributes, enums as string properties ("data.loss" in messages).
+template <typename Class>
+void DefFields(Class& cls) {
+  using Options = typename Class::type;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    using T = std::decay_t<decltype(std::declval<Options&>().*member)>;
+    if constexpr (std::is_enum_v<T>) {
+      EnumProperty(cls, f.python_name(), member, FieldName<Options>(f), f.doc);
+    } else {
+      cls.def_readwrite(f.python_name(), member, f.doc);
+    }
+  });
 }
 
 // Open3D's objects, accepted without depending on Open3D: true when `obj` is an instance

@@ -19,6 +19,23 @@ def test_error_is_raised_with_the_library_message(tmp_path):
     assert isinstance(info.value, RuntimeError)
 
 
+def test_options_attributes_follow_the_tables():
+    # Every field of a table-driven options struct is an attribute (three had none before the
+    # tables), named as the scene file names it but solver.threads (num_threads), and
+    # validate() names a bad one as the scene parser does.
+    options = femreg.RegistrationOptions()
+    assert options.data.min_points == 10
+    assert options.data.min_points_per_surface_vertex == pytest.approx(0.01)
+    assert options.solver.max_pcg_iterations == 20
+    assert options.camera.width == 640 and not options.camera.enabled
+    assert options.data.loss == "huber" and options.regularizer == "corotational"
+    with pytest.raises(ValueError, match="data.loss: unknown value 'l1'"):
+        options.data.loss = "l1"
+    options.solver.num_threads = -1
+    with pytest.raises(ValueError, match=r"solver.threads must be >= 0 .* \(got -1\)"):
+        options.validate()
+
+
 def test_missing_files_raise():
     with pytest.raises(femreg.Error, match="no_such_mesh.vtu"):
         femreg.read_mesh("no_such_mesh.vtu")

@@ -3,6 +3,7 @@
 #include <sstream>
 #include <string>
 
+#include "femreg/option_fields.h"
 #include "femreg/registration.h"
 
 namespace femreg {
@@ -142,47 +143,59 @@ const char* ToString(InitialPose v) {
   return "unknown";
 }
 
-#define FEMREG_FROM_STRING(Type, ...)                        \
-  bool FromString(const std::string& s, Type* v) {           \
-    for (Type candidate : {__VA_ARGS__}) {                   \
-      if (s == ToString(candidate)) {                        \
-        *v = candidate;                                      \
-        return true;                                         \
-      }                                                      \
-    }                                                        \
-    return false;                                            \
+namespace {
+template <class Enum>
+bool EnumFromString(const std::string& s, Enum* v) {
+  for (Enum candidate : EnumValues<Enum>::kAll) {
+    if (s == ToString(candidate)) {
+      *v = candidate;
+      return true;
+    }
   }
+  return false;
+}
+}  // namespace
 
-FEMREG_FROM_STRING(RobustLoss, RobustLoss::kNone, RobustLoss::kHuber, RobustLoss::kCauchy,
-                   RobustLoss::kTukey)
-FEMREG_FROM_STRING(DataMetric, DataMetric::kPointToPoint, DataMetric::kPointToPlane)
-FEMREG_FROM_STRING(Regularizer, Regularizer::kCorotational, Regularizer::kLinear,
-                   Regularizer::kMassSpring, Regularizer::kNone)
-FEMREG_FROM_STRING(SolverBackend, SolverBackend::kCeres, SolverBackend::kFast)
-FEMREG_FROM_STRING(TrustRegion, TrustRegion::kLevenbergMarquardt, TrustRegion::kDogleg)
-FEMREG_FROM_STRING(LinearSolver, LinearSolver::kSparseNormalCholesky,
-                   LinearSolver::kConjugateGradients)
-FEMREG_FROM_STRING(Preconditioner, Preconditioner::kAuto, Preconditioner::kFactor,
-                   Preconditioner::kMultigrid)
-FEMREG_FROM_STRING(InitialPose, InitialPose::kGiven, InitialPose::kAuto)
-#undef FEMREG_FROM_STRING
+bool FromString(const std::string& s, RobustLoss* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, DataMetric* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, Regularizer* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, SolverBackend* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, TrustRegion* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, LinearSolver* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, Preconditioner* v) { return EnumFromString(s, v); }
+bool FromString(const std::string& s, InitialPose* v) { return EnumFromString(s, v); }
+
+bool FieldInfo::InRange(double v) const {
+  if (std::isnan(v) || (finite && !std::isfinite(v))) return false;
+  if (has_min && (min_open ? !(v > min) : !(v >= min))) return false;
+  if (has_max && (max_open ? !(v < max) : !(v <= max))) return false;
+  return true;
+}
+
+std::string FieldInfo::RangeMessage() const {
+  std::ostringstream os;
+  os << "must be ";
+  if (has_min && has_max) {
+    os << "in " << (min_open ? "(" : "[") << min << ", " << max << (max_open ? ")" : "]");
+  } else if (has_min) {
+    os << (min_open ? "> " : ">= ") << min;
+  } else if (has_max) {
+    os << (max_open ? "< " : "<= ") << max;
+  } else {
+    os << "finite";
+  }
+  if (note != nullptr) os << " " << note;
+  return os.str();
+}
 
 bool CameraOptions::IsValid(std::string* error) const {
-  if (!Finite(position)) return Fail(error, "camera.position", "must be finite", VectorString(position));
-  if (!Finite(target)) return Fail(error, "camera.target", "must be finite", VectorString(target));
-  if (!Finite(up)) return Fail(error, "camera.up", "must be finite", VectorString(up));
+  if (!CheckFieldRanges(*this, error)) return false;
   if ((target - position).norm() <= 0) {
     return Fail(error, "camera.target", "must differ from camera.position", VectorString(target));
   }
   if ((target - position).normalized().cross(up).norm() < 1e-6) {
     return Fail(error, "camera.up", "must not be parallel to the viewing direction", VectorString(up));
   }
-  if (!(std::isfinite(fx) && fx > 0)) return Fail(error, "camera.fx", "must be > 0", fx);
-  if (!(std::isfinite(fy) && fy > 0)) return Fail(error, "camera.fy", "must be > 0", fy);
-  if (!std::isfinite(cx)) return Fail(error, "camera.cx", "must be finite", cx);
-  if (!std::isfinite(cy)) return Fail(error, "camera.cy", "must be finite", cy);
-  if (width <= 0) return Fail(error, "camera.width", "must be > 0", width);
-  if (height <= 0) return Fail(error, "camera.height", "must be > 0", height);
   return true;
 }
 
@@ -242,63 +255,11 @@ bool DataTermOptions::IsValid(std::string* error) const {
     return Fail(error, "data.model_to_cloud", "or data.cloud_to_model must be true",
                 "both false");
   }
-  if (!std::isfinite(max_distance)) {
-    return Fail(error, "data.max_distance", "must be finite", max_distance);
-  }
-  if (!(std::isfinite(loss_scale) && loss_scale > 0)) {
-    return Fail(error, "data.loss_scale", "must be > 0", loss_scale);
-  }
-  if (cloud_stride < 1) return Fail(error, "data.cloud_stride", "must be >= 1", cloud_stride);
-  if (!(std::isfinite(reciprocity) && reciprocity >= 0)) {
-    return Fail(error, "data.reciprocity", "must be >= 0 (0 = off)", reciprocity);
-  }
-  if (hold_pairs_after < 0) {
-    return Fail(error, "data.hold_pairs_after", "must be >= 0 (0 = never held)", hold_pairs_after);
-  }
-  if (!(std::isfinite(occluder_margin) && occluder_margin > 0)) {
-    return Fail(error, "data.occluder_margin", "must be > 0", occluder_margin);
-  }
-  if (!(std::isfinite(max_strain_step) && max_strain_step >= 0)) {
-    return Fail(error, "data.max_strain_step", "must be >= 0 (0 = off)", max_strain_step);
-  }
-  if (min_points < 0) return Fail(error, "data.min_points", "must be >= 0", min_points);
-  if (!(lost_coverage >= 0 && lost_coverage <= 1)) {
-    return Fail(error, "data.lost_coverage", "must be in [0, 1] (0 = never lost)", lost_coverage);
-  }
-  if (!(std::isfinite(min_points_per_surface_vertex) && min_points_per_surface_vertex >= 0)) {
-    return Fail(error, "data.min_points_per_surface_vertex", "must be >= 0",
-                min_points_per_surface_vertex);
-  }
-  return true;
+  return CheckFieldRanges(*this, error);
 }
 
 bool WeightOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(data_per_area) && data_per_area >= 0)) {
-    return Fail(error, "weights.data_per_area", "must be >= 0", data_per_area);
-  }
-  if (!std::isfinite(data)) return Fail(error, "weights.data", "must be finite", data);
-  if (!(std::isfinite(model_to_cloud_share) && model_to_cloud_share >= 0)) {
-    return Fail(error, "weights.model_to_cloud_share", "must be >= 0", model_to_cloud_share);
-  }
-  if (!(std::isfinite(model_to_cloud_area_cap) && model_to_cloud_area_cap >= 0)) {
-    return Fail(error, "weights.model_to_cloud_area_cap", "must be >= 0 (0: no cap)",
-                model_to_cloud_area_cap);
-  }
-  if (!(std::isfinite(barrier) && barrier >= 0)) {
-    return Fail(error, "weights.barrier", "must be >= 0 (0 = off)", barrier);
-  }
-  if (!(barrier_volume > 0 && barrier_volume < 1)) {
-    return Fail(error, "weights.barrier_volume", "must be in (0, 1)", barrier_volume);
-  }
-  if (!(std::isfinite(elastic) && elastic >= 0)) {
-    return Fail(error, "weights.elastic", "must be >= 0", elastic);
-  }
-  if (!(std::isfinite(temporal) && temporal >= 0)) {
-    return Fail(error, "weights.temporal", "must be >= 0", temporal);
-  }
-  if (!(std::isfinite(anchor) && anchor >= 0)) {
-    return Fail(error, "weights.anchor", "must be >= 0", anchor);
-  }
+  if (!CheckFieldRanges(*this, error)) return false;
   if (data == 0 && elastic == 0 && temporal == 0) {
     return Fail(error, "weights", "data, elastic and temporal must not all be 0", "0, 0, 0");
   }
@@ -306,40 +267,7 @@ bool WeightOptions::IsValid(std::string* error) const {
 }
 
 bool SolverOptions::IsValid(std::string* error) const {
-  if (max_outer_iterations < 1) {
-    return Fail(error, "solver.max_outer_iterations", "must be >= 1", max_outer_iterations);
-  }
-  if (max_inner_iterations < 1) {
-    return Fail(error, "solver.max_inner_iterations", "must be >= 1", max_inner_iterations);
-  }
-  if (!(std::isfinite(inner_tolerance) && inner_tolerance >= 0)) {
-    return Fail(error, "solver.inner_tolerance", "must be >= 0", inner_tolerance);
-  }
-  if (!(std::isfinite(relative_energy_tolerance) && relative_energy_tolerance >= 0)) {
-    return Fail(error, "solver.relative_energy_tolerance", "must be >= 0",
-                relative_energy_tolerance);
-  }
-  if (!(std::isfinite(time_budget_s) && time_budget_s >= 0)) {
-    return Fail(error, "solver.time_budget_s", "must be >= 0 (0 = none)", time_budget_s);
-  }
-  if (!(std::isfinite(step_tolerance) && step_tolerance >= 0)) {
-    return Fail(error, "solver.step_tolerance", "must be >= 0 (a fraction of the mean edge length)",
-                step_tolerance);
-  }
-  if (!(std::isfinite(bulk_step_tolerance) && bulk_step_tolerance >= 0)) {
-    return Fail(error, "solver.bulk_step_tolerance",
-                "must be >= 0 (a fraction of the mean edge length; 0 = off)", bulk_step_tolerance);
-  }
-  if (num_threads < 0) {
-    return Fail(error, "solver.threads", "must be >= 0 (0: the cores other processes leave free, per frame)", num_threads);
-  }
-  if (max_pcg_iterations < 0) {
-    return Fail(error, "solver.max_pcg_iterations", "must be >= 0 (0: factorize every step)",
-                max_pcg_iterations);
-  }
-  if (rigid_iterations < 0) {
-    return Fail(error, "solver.rigid_iterations", "must be >= 0", rigid_iterations);
-  }
+  if (!CheckFieldRanges(*this, error)) return false;
   if (rigid_prealign && rigid_iterations < 1) {
     return Fail(error, "solver.rigid_iterations", "must be >= 1 when rigid_prealign is on",
                 rigid_iterations);
@@ -348,27 +276,16 @@ bool SolverOptions::IsValid(std::string* error) const {
 }
 
 bool ForceOptions::IsValid(std::string* error) const {
-  if (!(weight > 0) || !std::isfinite(weight)) return Fail(error, "forces.weight", "must be > 0", weight);
-  if (!(sparsity >= 0) || !std::isfinite(sparsity)) {
-    return Fail(error, "forces.sparsity", "must be >= 0", sparsity);
-  }
-  if (!std::isfinite(friction)) return Fail(error, "forces.friction", "must be finite (< 0: no bound)", friction);
+  if (!CheckFieldRanges(*this, error)) return false;
   if (friction >= 0 && !pushing_only) {
     return Fail(error, "forces.friction", "bounds a pushing force's tangential part: set forces.pushing_only too",
                 friction);
   }
-  if (!(balance >= 1) || !std::isfinite(balance)) return Fail(error, "forces.balance", "must be >= 1", balance);
   return true;
 }
 
 bool FreeSpaceOptions::IsValid(std::string* error) const {
-  if (!(tolerance > 0) || !std::isfinite(tolerance)) {
-    return Fail(error, "free_space.tolerance", "must be > 0 (m)", tolerance);
-  }
-  if (!(weight > 0) || !std::isfinite(weight)) {
-    return Fail(error, "free_space.weight", "must be > 0 (N/m per vertex; enabled: false turns it off)", weight);
-  }
-  return true;
+  return CheckFieldRanges(*this, error);
 }
 
 bool RegistrationOptions::IsValid(std::string* error) const {

@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <filesystem>
+#include <type_traits>
 
+#include "femreg/option_fields.h"
 #include "femreg/point_cloud.h"
 #include "femreg/version.h"
 
@@ -22,16 +24,29 @@ std::string Absolute(const std::string& path) {
   return ec ? path : p.lexically_normal().string();
 }
 
+// Every field of an options table (femreg/option_fields.h) by its scene key; enums by name.
+template <class Options>
+json FieldsJson(const Options& o) {
+  json j = json::object();
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    using T = std::decay_t<decltype(o.*member)>;
+    if constexpr (std::is_enum_v<T>) {
+      j[f.key] = ToString(o.*member);
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      j[f.key] = Vector(o.*member);
+    } else {
+      j[f.key] = o.*member;
+    }
+  });
+  return j;
+}
+
 }  // namespace
 
 json RegistrationOptionsJson(const RegistrationOptions& o) {
-  json j;
-  j["regularizer"] = ToString(o.regularizer);
-  const CameraOptions& c = o.camera;
-  j["camera"] = {{"enabled", c.enabled},  {"position", Vector(c.position)},
-                 {"target", Vector(c.target)}, {"up", Vector(c.up)},
-                 {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-                 {"width", c.width}, {"height", c.height}};
+  json j = FieldsJson(o);  // regularizer, loads, initial_pose
+  j["camera"] = {{"enabled", o.camera.enabled}};
+  j["camera"].update(FieldsJson(o.camera));
   const PreprocessOptions& p = o.preprocess;
   j["preprocess"] = {{"mask_dir", p.mask_dir.empty() ? json(nullptr) : json(Absolute(p.mask_dir))},
                      {"crop", p.crop},
@@ -43,37 +58,11 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                      {"normal_neighbors", p.normal_neighbors},
                      {"plane_distance", p.plane_distance},
                      {"plane_iterations", p.plane_iterations}};
-  const DataTermOptions& d = o.data;
-  j["data"] = {{"model_to_cloud", d.model_to_cloud}, {"cloud_to_model", d.cloud_to_model},
-               {"max_distance", d.max_distance},     {"loss", ToString(d.loss)},
-               {"loss_scale", d.loss_scale},         {"metric", ToString(d.metric)},
-               {"visibility", d.visibility},         {"cloud_stride", d.cloud_stride}};
-  const WeightOptions& w = o.weights;
-  j["weights"] = {{"data", w.data}, {"elastic", w.elastic}, {"temporal", w.temporal},
-                  {"anchor", w.anchor}, {"data_per_area", w.data_per_area},
-                  {"model_to_cloud_share", w.model_to_cloud_share},
-                  {"model_to_cloud_area_cap", w.model_to_cloud_area_cap},
-                  {"model_to_cloud_balance", w.model_to_cloud_balance}};
-  j["loads"] = o.loads;
-  j["initial_pose"] = ToString(o.initial_pose);
-  const SolverOptions& s = o.solver;
-  j["solver"] = {{"backend", ToString(s.backend)},
-                 {"max_outer_iterations", s.max_outer_iterations},
-                 {"max_inner_iterations", s.max_inner_iterations},
-                 {"inner_tolerance", s.inner_tolerance},
-                 {"relative_energy_tolerance", s.relative_energy_tolerance},
-                 {"step_tolerance", s.step_tolerance},
-                 {"bulk_step_tolerance", s.bulk_step_tolerance},
-                 {"time_budget_s", s.time_budget_s},
-                 {"trust_region", ToString(s.trust_region)},
-                 {"linear_solver", ToString(s.linear_solver)},
-                 {"max_pcg_iterations", s.max_pcg_iterations},
-                 {"preconditioner", ToString(s.preconditioner)},
-                 {"threads", s.num_threads},
-                 {"predict_motion", s.predict_motion},
-                 {"backtrack", s.backtrack},
-                 {"rigid_prealign", s.rigid_prealign},
-                 {"rigid_iterations", s.rigid_iterations}};
+  j["data"] = FieldsJson(o.data);
+  j["weights"] = FieldsJson(o.weights);
+  j["solver"] = FieldsJson(o.solver);
+  j["forces"] = FieldsJson(o.forces);
+  j["free_space"] = FieldsJson(o.free_space);
   return j;
 }
 

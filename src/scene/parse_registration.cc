@@ -10,44 +10,24 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseRegistration(const YamlValue& v) {
-  v.CheckKeys({"regularizer", "camera", "preprocess", "data", "weights", "solver", "loads", "forces",
-               "initial_pose", "free_space"});
+  v.CheckKeys(FieldKeys<RegistrationOptions>(
+      {"camera", "preprocess", "data", "weights", "solver", "forces", "free_space"}));
   RegistrationOptions& r = scene_->registration;
+  ParseFields(v, &r);
   if (v.Has("free_space")) {
     const YamlValue f = v["free_space"];
-    f.CheckKeys({"enabled", "tolerance", "weight"});
-    FreeSpaceOptions& o = r.free_space;
-    if (f.Has("enabled")) o.enabled = f["enabled"].AsBool();
-    if (f.Has("tolerance")) o.tolerance = f["tolerance"].AsDouble();
-    if (f.Has("weight")) o.weight = f["weight"].AsDouble();
+    f.CheckKeys(FieldKeys<FreeSpaceOptions>());
+    ParseFields(f, &r.free_space);
   }
   if (v.Has("forces")) {
     const YamlValue f = v["forces"];
-    f.CheckKeys({"estimate", "region", "weight", "sparsity", "pushing_only", "friction", "balance"});
-    ForceOptions& o = r.forces;
-    if (f.Has("estimate")) o.estimate = f["estimate"].AsBool();
-    if (f.Has("weight")) o.weight = f["weight"].AsDouble();
-    if (f.Has("sparsity")) o.sparsity = f["sparsity"].AsDouble();
-    if (f.Has("pushing_only")) o.pushing_only = f["pushing_only"].AsBool();
-    if (f.Has("friction")) o.friction = f["friction"].AsDouble();
-    if (f.Has("balance")) o.balance = f["balance"].AsDouble();
+    f.CheckKeys(FieldKeys<ForceOptions>({"region"}));
+    ParseFields(f, &r.forces);
     if (f.Has("region")) ParseForceRegion(f["region"]);
-  }
-  if (v.Has("loads")) r.loads = v["loads"].AsBool();
-  if (v.Has("initial_pose")) {
-    r.initial_pose = ParseEnum(v["initial_pose"],
-                               std::vector<InitialPose>{InitialPose::kGiven, InitialPose::kAuto});
-  }
-  if (v.Has("regularizer")) {
-    r.regularizer = ParseEnum(v["regularizer"],
-                              std::vector<Regularizer>{Regularizer::kCorotational,
-                                                       Regularizer::kLinear,
-                                                       Regularizer::kMassSpring,
-                                                       Regularizer::kNone});
   }
   if (v.Has("camera")) {
     const YamlValue c = v["camera"];
-    c.CheckKeys({"position", "target", "up", "intrinsics", "fx", "fy", "cx", "cy", "width", "height"});
+    c.CheckKeys(FieldKeys<CameraOptions>({"intrinsics"}));
     r.camera.enabled = true;
     if (c.Has("intrinsics")) {
       // An Open3D PinholeCameraIntrinsic JSON, relative to the scene's folder; instead of
@@ -65,15 +45,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       const Status read = ReadCameraIntrinsics(path.lexically_normal().string(), &r.camera);
       if (!read.ok()) file.Fail(read.message());
     }
-    if (c.Has("position")) r.camera.position = c["position"].AsVector3();
-    if (c.Has("target")) r.camera.target = c["target"].AsVector3();
-    if (c.Has("up")) r.camera.up = c["up"].AsVector3();
-    if (c.Has("fx")) r.camera.fx = c["fx"].AsDouble();
-    if (c.Has("fy")) r.camera.fy = c["fy"].AsDouble();
-    if (c.Has("cx")) r.camera.cx = c["cx"].AsDouble();
-    if (c.Has("cy")) r.camera.cy = c["cy"].AsDouble();
-    if (c.Has("width")) r.camera.width = c["width"].AsInt();
-    if (c.Has("height")) r.camera.height = c["height"].AsInt();
+    ParseFields(c, &r.camera);
   }
   if (v.Has("preprocess")) {
     const YamlValue p = v["preprocess"];
@@ -130,116 +102,32 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("data")) {
     const YamlValue d = v["data"];
-    d.CheckKeys({"model_to_cloud", "cloud_to_model", "max_distance", "loss", "loss_scale",
-                 "metric", "visibility", "cloud_stride", "auto_visibility", "reciprocity", "hold_pairs_after",
-                 "occluders", "occluder_margin", "max_strain_step", "min_points", "min_points_per_surface_vertex",
-                 "lost_coverage"});
+    d.CheckKeys(FieldKeys<DataTermOptions>());
     DataTermOptions& o = r.data;
-    if (d.Has("model_to_cloud")) o.model_to_cloud = d["model_to_cloud"].AsBool();
-    if (d.Has("cloud_to_model")) o.cloud_to_model = d["cloud_to_model"].AsBool();
-    if (d.Has("max_distance")) o.max_distance = d["max_distance"].AsDouble();
-    if (d.Has("loss")) {
-      o.loss = ParseEnum(d["loss"], std::vector<RobustLoss>{RobustLoss::kHuber,
-                                                            RobustLoss::kCauchy,
-                                                            RobustLoss::kTukey,
-                                                            RobustLoss::kNone});
-    }
-    if (d.Has("loss_scale")) o.loss_scale = d["loss_scale"].AsDouble();
-    if (d.Has("metric")) {
-      o.metric = ParseEnum(d["metric"], std::vector<DataMetric>{DataMetric::kPointToPoint,
-                                                                DataMetric::kPointToPlane});
-    }
-    if (d.Has("visibility")) o.visibility = d["visibility"].AsBool();
-    if (d.Has("cloud_stride")) o.cloud_stride = d["cloud_stride"].AsInt();
-    if (d.Has("auto_visibility")) {
-      o.auto_visibility = d["auto_visibility"].AsBool();
-    } else if (d.Has("visibility") && !o.visibility) {
+    ParseFields(d, &o);
+    if (!d.Has("auto_visibility") && d.Has("visibility") && !o.visibility) {
       // `visibility: false` written out means every surface vertex pulls: without this, a
       // scene with a camera would still get the camera's test from auto_visibility.
       o.auto_visibility = false;
     }
-    if (d.Has("reciprocity")) o.reciprocity = d["reciprocity"].AsDouble();
-    if (d.Has("hold_pairs_after")) o.hold_pairs_after = IntAtLeast(d["hold_pairs_after"], 0);
-    if (d.Has("occluders")) o.occluders = d["occluders"].AsBool();
-    if (d.Has("occluder_margin")) o.occluder_margin = d["occluder_margin"].AsDouble();
-    if (d.Has("max_strain_step")) o.max_strain_step = d["max_strain_step"].AsDouble();
-    if (d.Has("min_points")) o.min_points = d["min_points"].AsInt();
-    if (d.Has("min_points_per_surface_vertex")) {
-      o.min_points_per_surface_vertex = d["min_points_per_surface_vertex"].AsDouble();
-    }
-    if (d.Has("lost_coverage")) o.lost_coverage = d["lost_coverage"].AsDouble();
   }
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
-    w.CheckKeys({"data", "data_per_area", "model_to_cloud_share", "model_to_cloud_area_cap",
-                 "model_to_cloud_balance", "elastic", "barrier", "barrier_volume", "temporal",
-                 "anchor"});
+    w.CheckKeys(FieldKeys<WeightOptions>());
     if (w.Has("data") && w.Has("data_per_area")) {
       w["data"].Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
                      "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
     }
-    if (w.Has("data")) {
-      r.weights.data = w["data"].AsDouble();
-      if (!(r.weights.data >= 0)) w["data"].Fail("must be >= 0 (N/m per correspondence)");
-    }
-    if (w.Has("data_per_area")) {
-      r.weights.data_per_area = w["data_per_area"].AsDouble();
-      r.weights.data = -1.0;  // per unit area instead of per correspondence
-    }
-    if (w.Has("model_to_cloud_share")) {
-      r.weights.model_to_cloud_share = w["model_to_cloud_share"].AsDouble();
-    }
-    if (w.Has("model_to_cloud_area_cap")) {
-      r.weights.model_to_cloud_area_cap = w["model_to_cloud_area_cap"].AsDouble();
-    }
-    if (w.Has("model_to_cloud_balance")) {
-      r.weights.model_to_cloud_balance = w["model_to_cloud_balance"].AsBool();
-    }
-    if (w.Has("elastic")) r.weights.elastic = w["elastic"].AsDouble();
-    if (w.Has("barrier")) r.weights.barrier = w["barrier"].AsDouble();
-    if (w.Has("barrier_volume")) r.weights.barrier_volume = w["barrier_volume"].AsDouble();
-    if (w.Has("temporal")) r.weights.temporal = w["temporal"].AsDouble();
-    if (w.Has("anchor")) r.weights.anchor = w["anchor"].AsDouble();
+    ParseFields(w, &r.weights);
+    if (w.Has("data") && !(r.weights.data >= 0)) w["data"].Fail("must be >= 0 (N/m per correspondence)");
+    if (w.Has("data_per_area")) r.weights.data = -1.0;  // per unit area instead of per correspondence
   }
   if (v.Has("solver")) {
     const YamlValue s = v["solver"];
-    s.CheckKeys({"max_outer_iterations", "max_inner_iterations", "relative_energy_tolerance",
-                 "inner_tolerance", "step_tolerance", "bulk_step_tolerance", "max_pcg_iterations",
-                 "preconditioner", "time_budget_s", "trust_region", "linear_solver", "threads",
-                 "rigid_prealign", "rigid_iterations", "predict_motion", "backtrack", "backend"});
+    s.CheckKeys(FieldKeys<SolverOptions>());
     SolverOptions& o = r.solver;
-    if (s.Has("max_outer_iterations")) o.max_outer_iterations = s["max_outer_iterations"].AsInt();
-    if (s.Has("max_inner_iterations")) o.max_inner_iterations = s["max_inner_iterations"].AsInt();
-    if (s.Has("relative_energy_tolerance")) {
-      o.relative_energy_tolerance = s["relative_energy_tolerance"].AsDouble();
-    }
-    if (s.Has("inner_tolerance")) o.inner_tolerance = s["inner_tolerance"].AsDouble();
-    if (s.Has("step_tolerance")) o.step_tolerance = s["step_tolerance"].AsDouble();
-    if (s.Has("bulk_step_tolerance")) o.bulk_step_tolerance = s["bulk_step_tolerance"].AsDouble();
-    if (s.Has("max_pcg_iterations")) o.max_pcg_iterations = s["max_pcg_iterations"].AsInt();
-    if (s.Has("preconditioner")) {
-      o.preconditioner = ParseEnum(s["preconditioner"],
-                                   std::vector<Preconditioner>{Preconditioner::kAuto, Preconditioner::kFactor,
-                                                               Preconditioner::kMultigrid});
-    }
-    if (s.Has("time_budget_s")) o.time_budget_s = s["time_budget_s"].AsDouble();
-    if (s.Has("trust_region")) {
-      o.trust_region = ParseEnum(s["trust_region"],
-                                 std::vector<TrustRegion>{TrustRegion::kLevenbergMarquardt,
-                                                          TrustRegion::kDogleg});
-    }
-    if (s.Has("linear_solver")) {
-      o.linear_solver = ParseEnum(
-          s["linear_solver"], std::vector<LinearSolver>{LinearSolver::kSparseNormalCholesky,
-                                                        LinearSolver::kConjugateGradients});
-    }
-    if (s.Has("threads")) o.num_threads = s["threads"].AsInt();
-    if (s.Has("predict_motion")) o.predict_motion = s["predict_motion"].AsBool();
-    if (s.Has("backtrack")) o.backtrack = s["backtrack"].AsBool();
-    if (s.Has("backend")) {
-      o.backend = ParseEnum(s["backend"],
-                            std::vector<SolverBackend>{SolverBackend::kCeres, SolverBackend::kFast});
-    } else if (s.Has("trust_region") || s.Has("linear_solver")) {
+    ParseFields(s, &o);
+    if (!s.Has("backend") && (s.Has("trust_region") || s.Has("linear_solver"))) {
       o.backend = SolverBackend::kCeres;  // only Ceres has them: applied, not ignored
     }
     if (o.backend == SolverBackend::kFast) {
@@ -247,8 +135,6 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
         if (s.Has(key)) s[key].Fail("is a setting of the Ceres back end (solver.backend: ceres); the fast back end has none");
       }
     }
-    if (s.Has("rigid_prealign")) o.rigid_prealign = s["rigid_prealign"].AsBool();
-    if (s.Has("rigid_iterations")) o.rigid_iterations = s["rigid_iterations"].AsInt();
   }
   // Range checks live in RegistrationOptions::IsValid; its message starts with the field
   // ("data.loss_scale must be > 0 (got -1)"), which locates the offending node.

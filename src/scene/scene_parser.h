@@ -13,8 +13,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "femreg/option_fields.h"
 #include "femreg/scene.h"
 #include "scene/yaml_reader.h"
 
@@ -40,6 +42,45 @@ Enum ParseEnum(const YamlValue& v, const std::vector<Enum>& values) {
   v.Fail("unknown value " + Quote(name) + " (" +
          (suggestion.empty() ? std::string() : "did you mean " + Quote(suggestion) + "? ") +
          "one of: " + JoinNames(names) + ")");
+}
+
+// An enum of the options' tables (femreg/option_fields.h), any of its EnumValues.
+template <typename Enum>
+Enum ParseEnum(const YamlValue& v) {
+  return ParseEnum(v, std::vector<Enum>(EnumValues<Enum>::kAll.begin(), EnumValues<Enum>::kAll.end()));
+}
+
+// The keys of an options table, then `extra` (keys its section reads itself).
+template <class Options>
+std::vector<std::string> FieldKeys(std::vector<std::string> extra = {}) {
+  std::vector<std::string> keys;
+  OptionFields<Options>::Visit([&](auto, const FieldInfo& f) { keys.push_back(f.key); });
+  keys.insert(keys.end(), extra.begin(), extra.end());
+  return keys;
+}
+
+// Reads the fields of an options table that the section `v` sets, each by its type. The
+// ranges are checked afterwards, by IsValid, which names the field.
+template <class Options>
+void ParseFields(const YamlValue& v, Options* o) {
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    if (!v.Has(f.key)) return;
+    const YamlValue x = v[f.key];
+    auto& field = o->*member;
+    using T = std::decay_t<decltype(field)>;
+    if constexpr (std::is_same_v<T, bool>) {
+      field = x.AsBool();
+    } else if constexpr (std::is_same_v<T, int>) {
+      field = x.AsInt();
+    } else if constexpr (std::is_same_v<T, double>) {
+      field = x.AsDouble();
+    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+      field = x.AsVector3();
+    } else {
+      static_assert(std::is_enum_v<T>, "an options table holds bool, int, double, Vector3d and enums");
+      field = ParseEnum<T>(x);
+    }
+  });
 }
 
 class SceneParser {

@@ -11,8 +11,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "femreg/option_fields.h"
 #include "femreg/scene.h"
 
 namespace femreg {
@@ -88,6 +90,35 @@ inline void Put(YAML::Node map, const char* key, const Eigen::Vector3d& value,
          const Eigen::Vector3d& default_value) {
   if (value != default_value) map[key] = Vec(value);
 }
+// A field's value as the scene file writes it.
+template <class T>
+YAML::Node FieldNode(const T& value) {
+  if constexpr (std::is_enum_v<T>) {
+    return YAML::Node(ToString(value));
+  } else if constexpr (std::is_same_v<T, double>) {
+    return YAML::Node(Number(value));
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    return Vec(value);
+  } else {
+    return YAML::Node(value);
+  }
+}
+
+// Every field of an options table (femreg/option_fields.h) that differs from the default
+// (every field with `all`), in the table's order, but those in `skip` (which the section
+// writes itself).
+template <class Options>
+void PutFields(YAML::Node map, const Options& value, const std::vector<std::string>& skip = {},
+               bool all = false) {
+  const Options d;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    for (const std::string& key : skip) {
+      if (key == f.key) return;
+    }
+    if (all || value.*member != d.*member) map[f.key] = FieldNode(value.*member);
+  });
+}
+
 // map[key] = child when the child has entries.
 inline void PutMap(YAML::Node map, const char* key, const YAML::Node& child) {
   if (child.size() > 0) map[key] = child;

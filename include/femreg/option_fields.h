@@ -1,0 +1,311 @@
+// femreg/option_fields.h - the registration options' fields, each described once.
+//
+// OptionFields<S>::Visit(v) calls v(&S::member, FieldInfo) for every member of the options
+// struct S, in the order the scene file writes them. The scene parser and writer, the range
+// checks of S::IsValid, the Python module and a run's provenance all walk this table, so an
+// option is named in its struct and in its table row and nowhere else
+// (docs/dev/adding-an-option.md). A field's type says how it is read and written: bool, int,
+// double, Eigen::Vector3d (a list of 3), or an enum with EnumValues (written as ToString's
+// names).
+#ifndef FEMREG_OPTION_FIELDS_H_
+#define FEMREG_OPTION_FIELDS_H_
+
+#include <array>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+#include "femreg/registration.h"
+
+namespace femreg {
+
+// One field: its scene key (also the key in provenance and in messages, "weights.elastic"),
+// its Python attribute where that differs, a docstring for Python, and the range IsValid
+// holds a number to. A number with a bound must also be finite.
+struct FieldInfo {
+  const char* key = "";
+  const char* python = nullptr;  // nullptr: the Python attribute is the key
+  const char* doc = "";
+  bool finite = false;
+  bool has_min = false, min_open = false, has_max = false, max_open = false;
+  double min = 0.0, max = 0.0;
+  const char* note = nullptr;  // follows the range in the message: "must be >= 0 (0 = off)"
+
+  constexpr explicit FieldInfo(const char* k) : key(k) {}
+  constexpr FieldInfo AtLeast(double v) const { return Bound(true, v, false); }
+  constexpr FieldInfo Above(double v) const { return Bound(true, v, true); }
+  constexpr FieldInfo AtMost(double v) const { return Bound(false, v, false); }
+  constexpr FieldInfo Below(double v) const { return Bound(false, v, true); }
+  constexpr FieldInfo Finite() const {
+    FieldInfo f = *this;
+    f.finite = true;
+    return f;
+  }
+  constexpr FieldInfo Note(const char* n) const {
+    FieldInfo f = *this;
+    f.note = n;
+    return f;
+  }
+  constexpr FieldInfo Python(const char* name) const {
+    FieldInfo f = *this;
+    f.python = name;
+    return f;
+  }
+  constexpr FieldInfo Doc(const char* d) const {
+    FieldInfo f = *this;
+    f.doc = d;
+    return f;
+  }
+  const char* python_name() const { return python != nullptr ? python : key; }
+  bool checked() const { return finite || has_min || has_max; }
+  // Whether a number lies in the range (NaN never does; nor infinity when checked).
+  bool InRange(double v) const;
+  // "must be >= 0 (0 = off)", "must be in (0, 1)", "must be finite".
+  std::string RangeMessage() const;
+
+ private:
+  constexpr FieldInfo Bound(bool lower, double v, bool open) const {
+    FieldInfo f = *this;
+    f.finite = true;
+    if (lower) {
+      f.has_min = true, f.min = v, f.min_open = open;
+    } else {
+      f.has_max = true, f.max = v, f.max_open = open;
+    }
+    return f;
+  }
+};
+
+// An enum's values in the order messages list them; FromString accepts exactly their
+// ToString names.
+template <class Enum>
+struct EnumValues;
+template <>
+struct EnumValues<RobustLoss> {
+  static constexpr std::array<RobustLoss, 4> kAll = {RobustLoss::kHuber, RobustLoss::kCauchy,
+                                                     RobustLoss::kTukey, RobustLoss::kNone};
+};
+template <>
+struct EnumValues<DataMetric> {
+  static constexpr std::array<DataMetric, 2> kAll = {DataMetric::kPointToPoint,
+                                                     DataMetric::kPointToPlane};
+};
+template <>
+struct EnumValues<Regularizer> {
+  static constexpr std::array<Regularizer, 4> kAll = {Regularizer::kCorotational, Regularizer::kLinear,
+                                                      Regularizer::kMassSpring, Regularizer::kNone};
+};
+template <>
+struct EnumValues<InitialPose> {
+  static constexpr std::array<InitialPose, 2> kAll = {InitialPose::kGiven, InitialPose::kAuto};
+};
+template <>
+struct EnumValues<SolverBackend> {
+  static constexpr std::array<SolverBackend, 2> kAll = {SolverBackend::kCeres, SolverBackend::kFast};
+};
+template <>
+struct EnumValues<TrustRegion> {
+  static constexpr std::array<TrustRegion, 2> kAll = {TrustRegion::kLevenbergMarquardt,
+                                                      TrustRegion::kDogleg};
+};
+template <>
+struct EnumValues<LinearSolver> {
+  static constexpr std::array<LinearSolver, 2> kAll = {LinearSolver::kSparseNormalCholesky,
+                                                       LinearSolver::kConjugateGradients};
+};
+template <>
+struct EnumValues<Preconditioner> {
+  static constexpr std::array<Preconditioner, 3> kAll = {Preconditioner::kAuto, Preconditioner::kFactor,
+                                                         Preconditioner::kMultigrid};
+};
+
+// The tables. kSection is the struct's key under `registration:` (and in provenance).
+template <class Options>
+struct OptionFields;
+
+// `enabled` has no row: a scene enables the camera by having the section, and a camera is
+// written in full (the parser and writer say so by hand; Python and provenance add it).
+template <>
+struct OptionFields<CameraOptions> {
+  static constexpr const char* kSection = "camera";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = CameraOptions;
+    v(&S::position, FieldInfo("position").Finite());
+    v(&S::target, FieldInfo("target").Finite());
+    v(&S::up, FieldInfo("up").Finite());
+    v(&S::fx, FieldInfo("fx").Above(0));
+    v(&S::fy, FieldInfo("fy").Above(0));
+    v(&S::cx, FieldInfo("cx").Finite());
+    v(&S::cy, FieldInfo("cy").Finite());
+    v(&S::width, FieldInfo("width").Above(0));
+    v(&S::height, FieldInfo("height").Above(0));
+  }
+};
+
+template <>
+struct OptionFields<DataTermOptions> {
+  static constexpr const char* kSection = "data";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = DataTermOptions;
+    v(&S::model_to_cloud, FieldInfo("model_to_cloud"));
+    v(&S::cloud_to_model, FieldInfo("cloud_to_model"));
+    v(&S::max_distance, FieldInfo("max_distance").Finite());
+    v(&S::loss, FieldInfo("loss").Doc("robust loss: huber, cauchy, tukey or none"));
+    v(&S::loss_scale, FieldInfo("loss_scale").Above(0));
+    v(&S::metric, FieldInfo("metric").Doc("point_to_point or point_to_plane"));
+    v(&S::visibility, FieldInfo("visibility"));
+    v(&S::cloud_stride, FieldInfo("cloud_stride").AtLeast(1));
+    v(&S::auto_visibility, FieldInfo("auto_visibility"));
+    v(&S::reciprocity, FieldInfo("reciprocity").AtLeast(0).Note("(0 = off)"));
+    v(&S::hold_pairs_after, FieldInfo("hold_pairs_after").AtLeast(0).Note("(0 = never held)"));
+    v(&S::occluders, FieldInfo("occluders"));
+    v(&S::occluder_margin, FieldInfo("occluder_margin").Above(0));
+    v(&S::max_strain_step, FieldInfo("max_strain_step").AtLeast(0).Note("(0 = off)"));
+    v(&S::min_points, FieldInfo("min_points").AtLeast(0));
+    v(&S::min_points_per_surface_vertex, FieldInfo("min_points_per_surface_vertex").AtLeast(0));
+    v(&S::lost_coverage, FieldInfo("lost_coverage").AtLeast(0).AtMost(1).Note("(0 = never lost)"));
+  }
+};
+
+template <>
+struct OptionFields<WeightOptions> {
+  static constexpr const char* kSection = "weights";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = WeightOptions;
+    // data and data_per_area: which one a scene sets selects the weighting (the parser and
+    // writer handle the pair; < 0 data means per area).
+    v(&S::data, FieldInfo("data").Finite());
+    v(&S::data_per_area, FieldInfo("data_per_area").AtLeast(0));
+    v(&S::model_to_cloud_share, FieldInfo("model_to_cloud_share").AtLeast(0));
+    v(&S::model_to_cloud_area_cap, FieldInfo("model_to_cloud_area_cap").AtLeast(0).Note("(0: no cap)"));
+    v(&S::model_to_cloud_balance, FieldInfo("model_to_cloud_balance"));
+    v(&S::elastic, FieldInfo("elastic").AtLeast(0));
+    v(&S::barrier, FieldInfo("barrier").AtLeast(0).Note("(0 = off)"));
+    v(&S::barrier_volume, FieldInfo("barrier_volume").Above(0).Below(1));
+    v(&S::temporal, FieldInfo("temporal").AtLeast(0));
+    v(&S::anchor, FieldInfo("anchor").AtLeast(0));
+  }
+};
+
+template <>
+struct OptionFields<ForceOptions> {
+  static constexpr const char* kSection = "forces";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = ForceOptions;
+    v(&S::estimate, FieldInfo("estimate"));
+    v(&S::weight, FieldInfo("weight").Above(0));
+    v(&S::sparsity, FieldInfo("sparsity").AtLeast(0));
+    v(&S::pushing_only, FieldInfo("pushing_only"));
+    v(&S::friction, FieldInfo("friction").Finite().Note("(< 0: no bound)"));
+    v(&S::balance, FieldInfo("balance").AtLeast(1));
+  }
+};
+
+template <>
+struct OptionFields<FreeSpaceOptions> {
+  static constexpr const char* kSection = "free_space";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = FreeSpaceOptions;
+    v(&S::enabled, FieldInfo("enabled"));
+    v(&S::tolerance, FieldInfo("tolerance").Above(0).Note("(m)"));
+    v(&S::weight, FieldInfo("weight").Above(0).Note("(N/m per vertex; enabled: false turns it off)"));
+  }
+};
+
+template <>
+struct OptionFields<SolverOptions> {
+  static constexpr const char* kSection = "solver";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = SolverOptions;
+    v(&S::backend, FieldInfo("backend").Doc("ceres or fast"));
+    v(&S::max_outer_iterations, FieldInfo("max_outer_iterations").AtLeast(1));
+    v(&S::max_inner_iterations, FieldInfo("max_inner_iterations").AtLeast(1));
+    v(&S::relative_energy_tolerance, FieldInfo("relative_energy_tolerance").AtLeast(0));
+    v(&S::inner_tolerance, FieldInfo("inner_tolerance").AtLeast(0));
+    v(&S::step_tolerance,
+      FieldInfo("step_tolerance").AtLeast(0).Note("(a fraction of the mean edge length)"));
+    v(&S::bulk_step_tolerance,
+      FieldInfo("bulk_step_tolerance").AtLeast(0).Note("(a fraction of the mean edge length; 0 = off)"));
+    v(&S::max_pcg_iterations, FieldInfo("max_pcg_iterations").AtLeast(0).Note("(0: factorize every step)"));
+    v(&S::preconditioner,
+      FieldInfo("preconditioner")
+          .Doc("fast back end: auto (multigrid where the sparse factor would fill in), factor or multigrid"));
+    v(&S::time_budget_s, FieldInfo("time_budget_s").AtLeast(0).Note("(0 = none)"));
+    // Ceres' own settings: written only with backend ceres, refused beside backend fast.
+    v(&S::trust_region, FieldInfo("trust_region").Doc("Ceres only"));
+    v(&S::linear_solver, FieldInfo("linear_solver").Doc("Ceres only"));
+    v(&S::num_threads, FieldInfo("threads")
+                           .Python("num_threads")
+                           .AtLeast(0)
+                           .Note("(0: the cores other processes leave free, per frame)"));
+    v(&S::predict_motion, FieldInfo("predict_motion"));
+    v(&S::backtrack, FieldInfo("backtrack"));
+    v(&S::rigid_prealign, FieldInfo("rigid_prealign"));
+    v(&S::rigid_iterations, FieldInfo("rigid_iterations").AtLeast(0));
+  }
+};
+
+// The top level's own values; each section (camera, preprocess, data, weights, solver,
+// forces, free_space) is a struct of its own, with its own table where it has one.
+template <>
+struct OptionFields<RegistrationOptions> {
+  static constexpr const char* kSection = "";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = RegistrationOptions;
+    v(&S::regularizer, FieldInfo("regularizer").Doc("corotational, linear, mass_spring or none"));
+    v(&S::loads, FieldInfo("loads").Doc("The scene's gravity and loads act in the registration energy."));
+    v(&S::initial_pose, FieldInfo("initial_pose")
+                            .Doc("given (the meshes as given) or auto (a global search on the first frame "
+                                 "when the given pose explains the cloud badly)"));
+  }
+};
+
+// A field as messages name it: "weights.elastic"; "loads" at the top level.
+template <class Options>
+std::string FieldName(const FieldInfo& f) {
+  const std::string section = OptionFields<Options>::kSection;
+  return section.empty() ? std::string(f.key) : section + "." + f.key;
+}
+
+// The first number of `o` out of its table row's range, as "section.key message (got
+// value)" in *error (IsValid's form); true when every field is in range.
+template <class Options>
+bool CheckFieldRanges(const Options& o, std::string* error) {
+  bool ok = true;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    using T = std::decay_t<decltype(o.*member)>;
+    if constexpr (std::is_same_v<T, Eigen::Vector3d>) {  // finite only
+      const Eigen::Vector3d& value = o.*member;
+      if (!ok || !f.checked() || value.allFinite()) return;
+      ok = false;
+      if (error != nullptr) {
+        std::ostringstream os;
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got [" << value.x() << ", "
+           << value.y() << ", " << value.z() << "])";
+        *error = os.str();
+      }
+    } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+      const T value = o.*member;
+      if (!ok || !f.checked() || f.InRange(static_cast<double>(value))) return;
+      ok = false;
+      if (error != nullptr) {
+        std::ostringstream os;
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got "
+           << value << ")";
+        *error = os.str();
+      }
+    }
+  });
+  return ok;
+}
+
+}  // namespace femreg
+
+#endif  // FEMREG_OPTION_FIELDS_H_
