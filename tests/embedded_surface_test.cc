@@ -526,7 +526,7 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("femreg_embedded_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir / "clouds");
-  fs::create_directories(dir / "truth" / "surface");
+  fs::create_directories(dir / "data" / "ground_truth" / "surface");
   const TetMesh fine = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 10, 4, 4);
   ASSERT_TRUE(WriteObjSurface((dir / "scan.obj").string(), fine, fine.rest).ok());
   Vertices scan;  // as the scene will read it (the writer's vertex order)
@@ -543,8 +543,8 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
     surface_truth.visible.assign(static_cast<size_t>(scan.rows()), 1);
     other.positions = Vertices::Zero(3, 3);  // another mesh's vertices: skipped
     other.visible.assign(3, 1);
-    ASSERT_TRUE(WriteGroundTruthFrame((dir / "truth" / "surface" / (name + ".csv")).string(), surface_truth).ok());
-    ASSERT_TRUE(WriteGroundTruthFrame((dir / "truth" / (name + ".csv")).string(), other).ok());
+    ASSERT_TRUE(WriteGroundTruthFrame((dir / "data" / "ground_truth" / "surface" / (name + ".csv")).string(), surface_truth).ok());
+    ASSERT_TRUE(WriteGroundTruthFrame((dir / "data" / "ground_truth" / (name + ".csv")).string(), other).ok());
   }
   std::ofstream(dir / "scene.yaml") << "objects:\n"
                                        "  - name: body\n"
@@ -554,7 +554,7 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
                                        "registration:\n"
                                        "  solver: {max_outer_iterations: 10}\n";
   const std::string command = std::string(FEMREG_CLI_PATH) + " register --scene " + (dir / "scene.yaml").string() +
-                              " --frames " + (dir / "clouds").string() + " --ground-truth " + (dir / "truth").string() +
+                              " --frames " + (dir / "clouds").string() + " --ground-truth " + (dir / "data" / "ground_truth").string() +
                               " --out " + (dir / "out").string() + " --surface-ply --no-progress --threads 1 > " +
                               (dir / "log").string() + " 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << std::ifstream(dir / "log").rdbuf();
@@ -584,6 +584,24 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
   const std::string error = column("err_surface_mean_mm");
   ASSERT_FALSE(error.empty());
   EXPECT_LT(std::stod(error), 0.2);  // mm: the scan follows the 2.2 mm shift
+  // femreg eval reads the surfaces' VTPs and gives the same errors.
+  const std::string eval = std::string(FEMREG_CLI_PATH) + " eval " + (dir / "out").string() + " " +
+                           (dir / "data").string() + " --csv " + (dir / "eval.csv").string() + " > " +
+                           (dir / "eval_log").string() + " 2>&1";
+  ASSERT_EQ(std::system(eval.c_str()), 0) << std::ifstream(dir / "eval_log").rdbuf();
+  std::ifstream eval_csv(dir / "eval.csv");
+  std::getline(eval_csv, header);
+  std::getline(eval_csv, row);
+  std::getline(eval_csv, row);  // the second frame
+  ASSERT_NE(column("err_surface_mean_mm"), "missing") << header;
+  EXPECT_NEAR(std::stod(column("err_surface_mean_mm")), std::stod(error), 1e-3);
+  EXPECT_EQ(column("all_mean_mm"), "");  // the vertex truth was another mesh's
+  // A VTP that is not the register's own is refused with its name.
+  std::ofstream(dir / "out" / "frames" / "body_surface_0001.vtp") << "<VTKFile type=\"UnstructuredGrid\"/>\n";
+  EXPECT_NE(std::system(eval.c_str()), 0);
+  std::stringstream log;
+  log << std::ifstream(dir / "eval_log").rdbuf();
+  EXPECT_NE(log.str().find("body_surface_0001.vtp"), std::string::npos) << log.str();
   fs::remove_all(dir);
 }
 #endif  // FEMREG_CLI_PATH
