@@ -313,6 +313,10 @@ TEST(EmbeddedSurfaceTrackingTest, TheSameAnswerOnOneAndTwoThreads) {
     ASSERT_TRUE(two->Track(seq.clouds[f], &b).ok());
     const Vertices pa = one->surface_vertices(0), pb = two->surface_vertices(0);
     EXPECT_LT((pa - pb).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + pa.cwiseAbs().maxCoeff())) << "frame " << f;
+    // The pairs' residual is measured on the fine surface they were found on.
+    EXPECT_TRUE(std::isfinite(a.rms_residual)) << "frame " << f;
+    EXPECT_LT(a.rms_residual, 5e-3) << "frame " << f;
+    EXPECT_NEAR(a.rms_residual, b.rms_residual, 1e-9) << "frame " << f;
   }
 }
 

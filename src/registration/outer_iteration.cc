@@ -272,7 +272,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   row.max_move = moved;
   first_bulk_move = k == 0 ? bulk : first_bulk_move;
   double sum2 = 0.0;
-  for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();
+  // The pairs index the surface they were found on: the data surface's vertices if there is one.
+  const Vertices& paired = data_surface ? PairState().x : state.x;
+  for (const DataPair& p : *pairs) sum2 += (p.Point(paired) - p.target).squaredNorm();
   row.rms_residual = std::sqrt(sum2 / static_cast<double>(pairs->size()));
   row.time_s = Seconds(t_outer);
   s->iterations.push_back(row);
