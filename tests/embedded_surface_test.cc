@@ -434,6 +434,8 @@ TEST(EmbeddedSurfaceContactTest, TheScanRestsOnTheTableWhereTheCageDoesNotTouchI
   ASSERT_TRUE(run.pulled.IsSolutionUsable()) << run.pulled.FullReport();
   EXPECT_GE(run.lowest_pulled, -0.25e-3) << run.pulled.FullReport();
   EXPECT_NEAR(-std::min(0.0, run.lowest_pulled), run.pulled.max_penetration, 1e-9);
+  std::printf("scan lowest at rest %.4f mm (cage %.4f mm), pulled %.4f mm; table force / weight %.4f\n",
+              1e3 * run.lowest_rest, 1e3 * run.cage_lowest, 1e3 * run.lowest_pulled, f.force.z() / run.weight);
 }
 
 TEST(EmbeddedSurfaceContactTest, FrictionOnTheScanAndTheSameAnswerOnOneAndTwoThreads) {
