@@ -371,7 +371,8 @@ PointCloud TopOfTheScan(double drop) {
   return cloud;
 }
 
-TableRun RestOnATable(int threads, double mu = 0.0) {
+// collision_first: contacts enabled before the surface is set (the world is then rebuilt).
+TableRun RestOnATable(int threads, double mu = 0.0, bool collision_first = false) {
   TableRun run;
   run.mu = mu;
   Material stiff;
@@ -391,16 +392,19 @@ TableRun RestOnATable(int threads, double mu = 0.0) {
   Status status = Tracker::Create({cage}, {stiff}, o, &tracker);
   EXPECT_TRUE(status.ok()) << status.message();
   if (!tracker) return run;
-  status = tracker->SetEmbeddedSurface(0, scan, triangles);
-  EXPECT_TRUE(status.ok()) << status.message();
-  EXPECT_NEAR(tracker->surface_outside(0), 1e-3, 1e-9);
   CollisionSpec spec;
   spec.friction = mu;
   ObstacleSpec table;
   table.name = "table";
   spec.obstacles.push_back(table);  // the plane z = 0
-  status = tracker->EnableCollision(spec, {"block"});
+  if (collision_first) EXPECT_TRUE(tracker->EnableCollision(spec, {"block"}).ok());
+  status = tracker->SetEmbeddedSurface(0, scan, triangles);
   EXPECT_TRUE(status.ok()) << status.message();
+  EXPECT_NEAR(tracker->surface_outside(0), 1e-3, 1e-9);
+  if (!collision_first) {
+    status = tracker->EnableCollision(spec, {"block"});
+    EXPECT_TRUE(status.ok()) << status.message();
+  }
   EXPECT_TRUE(tracker->SetExternalLoads(0, Eigen::Vector3d(0, 0, -9.81), {}).ok());
   run.weight = tracker->mesh(0).mass.sum() * 9.81;
   for (int f = 0; f < 4; ++f) EXPECT_TRUE(tracker->Track(TopOfTheScan(0.0), &run.rest).ok());
@@ -436,6 +440,10 @@ TEST(EmbeddedSurfaceContactTest, TheScanRestsOnTheTableWhereTheCageDoesNotTouchI
   EXPECT_NEAR(-std::min(0.0, run.lowest_pulled), run.pulled.max_penetration, 1e-9);
   std::printf("scan lowest at rest %.4f mm (cage %.4f mm), pulled %.4f mm; table force / weight %.4f\n",
               1e3 * run.lowest_rest, 1e3 * run.cage_lowest, 1e3 * run.lowest_pulled, f.force.z() / run.weight);
+  // The same with contacts enabled before the surface was set.
+  const TableRun first = RestOnATable(1, 0.0, true);
+  EXPECT_NEAR(first.lowest_pulled, run.lowest_pulled, 1e-12);
+  EXPECT_NEAR(first.lowest_rest, run.lowest_rest, 1e-12);
 }
 
 TEST(EmbeddedSurfaceContactTest, FrictionOnTheScanAndTheSameAnswerOnOneAndTwoThreads) {
