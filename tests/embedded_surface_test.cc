@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "bending_beam.h"
+#include "femreg/collision_spec.h"
 #include "femreg/experiment.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
@@ -268,6 +269,10 @@ TEST(EmbeddedSurfaceTrackingTest, TheSameAnswerOnOneAndTwoThreads) {
     ASSERT_TRUE(two->Track(seq.clouds[f], &b).ok());
     const Vertices pa = one->surface_vertices(0), pb = two->surface_vertices(0);
     EXPECT_LT((pa - pb).cwiseAbs().maxCoeff(), 1e-9 * (1.0 + pa.cwiseAbs().maxCoeff())) << "frame " << f;
+    // The pairs' residual is measured on the fine surface they were found on.
+    EXPECT_TRUE(std::isfinite(a.rms_residual)) << "frame " << f;
+    EXPECT_LT(a.rms_residual, 5e-3) << "frame " << f;
+    EXPECT_NEAR(a.rms_residual, b.rms_residual, 1e-9) << "frame " << f;
   }
 }
 
@@ -295,6 +300,120 @@ TEST(EmbeddedSurfaceTrackingTest, RefusesLabelsAndFracture) {
 }
 
 // femreg mesh --cage: about the vertex count asked for, every surface vertex inside.
+// Contacts on the fine surface: a stiff block's scan rests on a table plane while its cage
+// stops 1 mm above the table (the scan's bottom sticks out of the cage, its coordinates
+// extrapolated). Contacts on the cage's surface would let the scan sink 1 mm into the table
+// under its weight; on the scan they hold it there and carry the weight.
+struct TableRun {
+  FrameSummary rest, pulled;
+  double weight = 0.0;                          // N
+  double lowest_rest = 0.0, lowest_pulled = 0.0;  // the scan's lowest z (m)
+  double cage_lowest = 0.0;                     // the cage's lowest z at rest (m)
+  double mu = 0.0;
+};
+
+// Points every 2 mm on the top face of the scan (z = 21 mm), 4 mm in from its edges, with
+// its normal; `drop` moves them down.
+PointCloud TopOfTheScan(double drop) {
+  PointCloud cloud;
+  const int n = 17;
+  cloud.points.resize(n * n, 3);
+  cloud.normals.resize(n * n, 3);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      cloud.points.row(i * n + j) << 0.004 + 0.002 * i, 0.004 + 0.002 * j, 0.021 - drop;
+      cloud.normals.row(i * n + j) << 0, 0, 1;
+    }
+  return cloud;
+}
+
+// collision_first: contacts enabled before the surface is set (the world is then rebuilt).
+TableRun RestOnATable(int threads, double mu = 0.0, bool collision_first = false) {
+  TableRun run;
+  run.mu = mu;
+  Material stiff;
+  stiff.youngs_modulus = 1e8;
+  stiff.poisson_ratio = 0.3;
+  stiff.density = 1000;
+  RegistrationOptions o;
+  o.weights.temporal = 1000;
+  o.solver.num_threads = threads;
+  o.solver.max_outer_iterations = 20;
+  const TetMesh cage = MakeBox(Eigen::Vector3d(0.04, 0.04, 0.02), 4, 4, 2, Eigen::Vector3d(0, 0, 0.001));
+  const TetMesh fine = MakeBox(Eigen::Vector3d(0.04, 0.04, 0.021), 16, 16, 7);
+  Vertices scan;
+  Triangles triangles;
+  SurfaceOf(fine, fine.rest, &scan, &triangles);
+  std::unique_ptr<Tracker> tracker;
+  Status status = Tracker::Create({cage}, {stiff}, o, &tracker);
+  EXPECT_TRUE(status.ok()) << status.message();
+  if (!tracker) return run;
+  CollisionSpec spec;
+  spec.friction = mu;
+  ObstacleSpec table;
+  table.name = "table";
+  spec.obstacles.push_back(table);  // the plane z = 0
+  if (collision_first) EXPECT_TRUE(tracker->EnableCollision(spec, {"block"}).ok());
+  status = tracker->SetEmbeddedSurface(0, scan, triangles);
+  EXPECT_TRUE(status.ok()) << status.message();
+  EXPECT_NEAR(tracker->surface_outside(0), 1e-3, 1e-9);
+  if (!collision_first) {
+    status = tracker->EnableCollision(spec, {"block"});
+    EXPECT_TRUE(status.ok()) << status.message();
+  }
+  EXPECT_TRUE(tracker->SetExternalLoads(0, Eigen::Vector3d(0, 0, -9.81), {}).ok());
+  run.weight = tracker->mesh(0).mass.sum() * 9.81;
+  for (int f = 0; f < 4; ++f) EXPECT_TRUE(tracker->Track(TopOfTheScan(0.0), &run.rest).ok());
+  run.lowest_rest = tracker->surface_vertices(0).col(2).minCoeff();
+  run.cage_lowest = tracker->vertices(0).col(2).minCoeff();
+  // A cloud 5 mm lower pulls the block into the table.
+  for (int f = 0; f < 3; ++f) EXPECT_TRUE(tracker->Track(TopOfTheScan(0.005), &run.pulled).ok());
+  run.lowest_pulled = tracker->surface_vertices(0).col(2).minCoeff();
+  return run;
+}
+
+TEST(EmbeddedSurfaceContactTest, TheScanRestsOnTheTableWhereTheCageDoesNotTouchIt) {
+  const TableRun run = RestOnATable(1);
+  ASSERT_TRUE(run.rest.IsSolutionUsable()) << run.rest.FullReport();
+  // The scan touches the table (gap within the tolerance, 0.2 mm) and does not sink into it;
+  // the cage stays about 1 mm above it.
+  EXPECT_GE(run.lowest_rest, -0.25e-3) << run.rest.FullReport();
+  EXPECT_LE(run.lowest_rest, 0.25e-3) << run.rest.FullReport();
+  EXPECT_LE(run.rest.max_penetration, 0.25e-3);
+  EXPECT_NEAR(run.cage_lowest, 1e-3, 0.3e-3);
+  EXPECT_GT(run.rest.contacts, 0);
+  // The table carries the weight: its force balances the load (the data's pull is small).
+  ASSERT_EQ(run.rest.contact_forces.size(), 1u);
+  const ContactForce& f = run.rest.contact_forces[0];
+  EXPECT_EQ(f.object, 0);
+  EXPECT_EQ(f.other, -1);
+  EXPECT_NEAR(f.force.z(), run.weight, 0.01 * run.weight) << run.rest.FullReport();
+  EXPECT_LT(f.force.head<2>().norm(), 0.01 * run.weight);
+  EXPECT_NEAR(run.rest.force.z(), run.weight, 0.01 * run.weight);
+  // Pulled 5 mm into the table by the cloud: the scan holds within the tolerance.
+  ASSERT_TRUE(run.pulled.IsSolutionUsable()) << run.pulled.FullReport();
+  EXPECT_GE(run.lowest_pulled, -0.25e-3) << run.pulled.FullReport();
+  EXPECT_NEAR(-std::min(0.0, run.lowest_pulled), run.pulled.max_penetration, 1e-9);
+  std::printf("scan lowest at rest %.4f mm (cage %.4f mm), pulled %.4f mm; table force / weight %.4f\n",
+              1e3 * run.lowest_rest, 1e3 * run.cage_lowest, 1e3 * run.lowest_pulled, f.force.z() / run.weight);
+  // The same with contacts enabled before the surface was set.
+  const TableRun first = RestOnATable(1, 0.0, true);
+  EXPECT_NEAR(first.lowest_pulled, run.lowest_pulled, 1e-12);
+  EXPECT_NEAR(first.lowest_rest, run.lowest_rest, 1e-12);
+}
+
+TEST(EmbeddedSurfaceContactTest, FrictionOnTheScanAndTheSameAnswerOnOneAndTwoThreads) {
+  const TableRun one = RestOnATable(1, 0.5), two = RestOnATable(2, 0.5);
+  ASSERT_TRUE(one.pulled.IsSolutionUsable()) << one.pulled.FullReport();
+  EXPECT_GE(one.lowest_pulled, -0.25e-3);
+  ASSERT_EQ(one.rest.contact_forces.size(), 1u);
+  EXPECT_NEAR(one.rest.contact_forces[0].force.z(), one.weight, 0.01 * one.weight);
+  EXPECT_NEAR(one.lowest_pulled, two.lowest_pulled, 1e-9);
+  EXPECT_NEAR(one.lowest_rest, two.lowest_rest, 1e-9);
+  ASSERT_EQ(two.rest.contact_forces.size(), 1u);
+  EXPECT_NEAR(one.rest.contact_forces[0].force.z(), two.rest.contact_forces[0].force.z(), 1e-6 * one.weight);
+}
+
 TEST(CageTest, EnclosesTheSurfaceWithAboutTheVerticesAsked) {
   const TetMesh sphere = MakeSphere(0.05, 10);
   Vertices surface;
@@ -377,7 +496,7 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("femreg_embedded_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir / "clouds");
-  fs::create_directories(dir / "truth" / "surface");
+  fs::create_directories(dir / "data" / "ground_truth" / "surface");
   const TetMesh fine = MakeBox(Eigen::Vector3d(0.1, 0.04, 0.04), 10, 4, 4);
   ASSERT_TRUE(WriteObjSurface((dir / "scan.obj").string(), fine, fine.rest).ok());
   Vertices scan;  // as the scene will read it (the writer's vertex order)
@@ -394,8 +513,8 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
     surface_truth.visible.assign(static_cast<size_t>(scan.rows()), 1);
     other.positions = Vertices::Zero(3, 3);  // another mesh's vertices: skipped
     other.visible.assign(3, 1);
-    ASSERT_TRUE(WriteGroundTruthFrame((dir / "truth" / "surface" / (name + ".csv")).string(), surface_truth).ok());
-    ASSERT_TRUE(WriteGroundTruthFrame((dir / "truth" / (name + ".csv")).string(), other).ok());
+    ASSERT_TRUE(WriteGroundTruthFrame((dir / "data" / "ground_truth" / "surface" / (name + ".csv")).string(), surface_truth).ok());
+    ASSERT_TRUE(WriteGroundTruthFrame((dir / "data" / "ground_truth" / (name + ".csv")).string(), other).ok());
   }
   std::ofstream(dir / "scene.yaml") << "objects:\n"
                                        "  - name: body\n"
@@ -405,7 +524,7 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
                                        "registration:\n"
                                        "  solver: {max_outer_iterations: 10}\n";
   const std::string command = std::string(FEMREG_CLI_PATH) + " register --scene " + (dir / "scene.yaml").string() +
-                              " --frames " + (dir / "clouds").string() + " --ground-truth " + (dir / "truth").string() +
+                              " --frames " + (dir / "clouds").string() + " --ground-truth " + (dir / "data" / "ground_truth").string() +
                               " --out " + (dir / "out").string() + " --surface-ply --no-progress --threads 1 > " +
                               (dir / "log").string() + " 2>&1";
   ASSERT_EQ(std::system(command.c_str()), 0) << std::ifstream(dir / "log").rdbuf();
@@ -435,6 +554,24 @@ TEST(EmbeddedSurfaceCliTest, RegisterWritesTheSurfaceAndItsErrors) {
   const std::string error = column("err_surface_mean_mm");
   ASSERT_FALSE(error.empty());
   EXPECT_LT(std::stod(error), 0.2);  // mm: the scan follows the 2.2 mm shift
+  // femreg eval reads the surfaces' VTPs and gives the same errors.
+  const std::string eval = std::string(FEMREG_CLI_PATH) + " eval " + (dir / "out").string() + " " +
+                           (dir / "data").string() + " --csv " + (dir / "eval.csv").string() + " > " +
+                           (dir / "eval_log").string() + " 2>&1";
+  ASSERT_EQ(std::system(eval.c_str()), 0) << std::ifstream(dir / "eval_log").rdbuf();
+  std::ifstream eval_csv(dir / "eval.csv");
+  std::getline(eval_csv, header);
+  std::getline(eval_csv, row);
+  std::getline(eval_csv, row);  // the second frame
+  ASSERT_NE(column("err_surface_mean_mm"), "missing") << header;
+  EXPECT_NEAR(std::stod(column("err_surface_mean_mm")), std::stod(error), 1e-3);
+  EXPECT_EQ(column("all_mean_mm"), "");  // the vertex truth was another mesh's
+  // A VTP that is not the register's own is refused with its name.
+  std::ofstream(dir / "out" / "frames" / "body_surface_0001.vtp") << "<VTKFile type=\"UnstructuredGrid\"/>\n";
+  EXPECT_NE(std::system(eval.c_str()), 0);
+  std::stringstream log;
+  log << std::ifstream(dir / "eval_log").rdbuf();
+  EXPECT_NE(log.str().find("body_surface_0001.vtp"), std::string::npos) << log.str();
   fs::remove_all(dir);
 }
 #endif  // FEMREG_CLI_PATH

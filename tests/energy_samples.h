@@ -186,7 +186,8 @@ struct Sample<energy::PointToPlane<N>> {
 
 template <int N>
 struct Sample<energy::ContactPenalty<N>> {
-  static constexpr const char* kName = N == 3 ? "ContactPenalty<3>" : "ContactPenalty<6>";
+  static constexpr const char* kName = N == 3 ? "ContactPenalty<3>" : N == 4 ? "ContactPenalty<4>" : "ContactPenalty<6>";
+  static constexpr int kSideA = N == 6 ? 3 : N;  // 4: an embedded surface's point, its weights may be < 0
   energy::ContactPenalty<N> block;
   Vertices x;
   // Active: side a a little above side b along n, closer than D; away from the hinge at
@@ -194,10 +195,10 @@ struct Sample<energy::ContactPenalty<N>> {
   explicit Sample(std::mt19937* rng) {
     const double D = 0.004;
     block.normal = Eigen::Vector3d(RandomPoint(rng, 0.01).x(), RandomPoint(rng, 0.01).y(), 1).normalized();
-    const auto a = RandomBarycentric<3>(rng);
+    const auto a = RandomBarycentric<kSideA>(rng);
     x.resize(N, 3);
     Eigen::Vector3d pa = Eigen::Vector3d::Zero();
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < kSideA; ++i) {
       x.row(i) = (Eigen::Vector3d(0.3, 0.2, 0.5) + RandomPoint(rng, 0.01)).transpose();
       block.vertices[i] = i;
       block.coefficients[i] = a[i];
@@ -228,18 +229,19 @@ struct Sample<energy::ContactPenalty<N>> {
 // when the test gives it a scale near the residual's size.
 template <int N>
 struct Sample<energy::Friction<N>> {
-  static constexpr const char* kName = N == 3 ? "Friction<3>" : "Friction<6>";
+  static constexpr const char* kName = N == 3 ? "Friction<3>" : N == 4 ? "Friction<4>" : "Friction<6>";
+  static constexpr int kSideA = N == 6 ? 3 : N;
   energy::Friction<N> block;
   Vertices x;
   explicit Sample(std::mt19937* rng) {
     block.tangent = energy::TangentBasis(Eigen::Vector3d(RandomPoint(rng, 0.3).x(), RandomPoint(rng, 0.3).y(), 1).normalized());
-    const auto a = RandomBarycentric<3>(rng);
+    const auto a = RandomBarycentric<kSideA>(rng);
     x.resize(N, 3);
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     for (int i = 0; i < N; ++i) {
       x.row(i) = (Eigen::Vector3d(0.3, 0.2, 0.5) + RandomPoint(rng, 0.01)).transpose();
       block.vertices[i] = i;
-      block.coefficients[i] = i < 3 ? a[i] : -RandomBarycentric<3>(rng)[i - 3];
+      block.coefficients[i] = i < kSideA ? a[i] : -RandomBarycentric<3>(rng)[i - 3];
       p += block.coefficients[i] * x.row(i).transpose();
     }
     block.offset = block.tangent * p + RandomPoint(rng, 4e-4).head<2>();

@@ -12,15 +12,20 @@
 #   for the scan (x4 triangles each). The scan tracked by the cage may be finer than the one
 #   tetrahedralized: FINE_LEVELS (default LEVELS) sets the latter.
 # The scene (camera, motion, clamp) is the bunny's: the input's +y is up, the base at its
-# smallest y is clamped and the top (y > 0.05 m) pushed and turned.
+# smallest y is clamped and the top (y > 0.05 m) pushed and turned. CLAMP_Y (-0.072 m): the
+# clamp holds y below it (the armadillo at SCALE 0.01: -0.045). SPLIT=1 splits non-manifold
+# vertices of the input first (subdivide_surface.py --split-nonmanifold). THREADS ("1 2"):
+# the thread counts of the tracking runs.
 set -euo pipefail
 FEMREG=$(realpath "$1"); INPUT=$(realpath "$2"); OUT=$3
 SCALE=${4:-0.015}; CAGE=${5:-1500}; LEVELS=${6:-2}; FINE_LEVELS=${FINE_LEVELS:-$LEVELS}
+CLAMP_Y=${CLAMP_Y:--0.072}; THREADS=${THREADS:-1 2}
+SPLIT_ARG=""; [ "${SPLIT:-0}" = 1 ] && SPLIT_ARG="--split-nonmanifold"
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY=${PYTHON:-python3}
 mkdir -p "$OUT"; cd "$OUT"
-[ -f scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" scan.ply --levels "$LEVELS" --scale "$SCALE"
-[ -f fine_scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" fine_scan.ply --levels "$FINE_LEVELS" --scale "$SCALE"
+[ -f scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" scan.ply --levels "$LEVELS" --scale "$SCALE" $SPLIT_ARG
+[ -f fine_scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" fine_scan.ply --levels "$FINE_LEVELS" --scale "$SCALE" $SPLIT_ARG
 [ -f cage.vtu ] || "$FEMREG" mesh scan.ply --cage "$CAGE" --out cage.vtu > cage.log
 [ -f fine.vtu ] || "$FEMREG" mesh fine_scan.ply --keep-surface --edge-length 0.006 --out fine.vtu > fine.log
 
@@ -35,7 +40,7 @@ objects:
     $surface
     material: {youngs_modulus: 50000, poisson_ratio: 0.35, density: 200}
 boundary:
-  - {select: {box: {min: [-1, -1, -1], max: [1, -0.072, 1]}}, clamp: true}
+  - {select: {box: {min: [-1, -1, -1], max: [1, $CLAMP_Y, 1]}}, clamp: true}
 forward: {max_iterations: 50}
 registration:
   regularizer: corotational
@@ -45,7 +50,7 @@ registration:
   weights: {elastic: 1, temporal: 1}
   solver: {backend: fast}
 anchors:
-  - {name: clamp, select: {box: {min: [-1, -1, -1], max: [1, -0.072, 1]}}, hard: true}
+  - {name: clamp, select: {box: {min: [-1, -1, -1], max: [1, $CLAMP_Y, 1]}}, hard: true}
 synth:
   frames: 20
   seed: 1
@@ -85,7 +90,7 @@ print(f"{sys.argv[2]:14s} threads {sys.argv[3]}  median {st.median(t):7.1f} ms  
       f"outer {mean('outer_iterations'):.1f}")
 PY
 }
-for threads in 1 2; do
+for threads in $THREADS; do
   row cage cage.yaml "$threads"
   row fine_embedded fine_embedded.yaml "$threads"
   row fine fine.yaml "$threads"

@@ -2,11 +2,14 @@
 """Loop subdivision of a closed triangle surface, for making fine "scan" surfaces of a known
 shape (the embedded-surface benchmark, tools/embedded_bench.sh).
 
-usage: subdivide_surface.py IN OUT.ply [--levels N] [--scale S]
+usage: subdivide_surface.py IN OUT.ply [--levels N] [--scale S] [--split-nonmanifold]
 
 IN: .stl (binary or ASCII; corners welded by exact position), or an ASCII .ply with triangle
 faces. Each level splits every triangle in four and smooths with Loop's weights, so the
 triangle count grows 4x per level. OUT is a binary little-endian PLY (double coordinates).
+--split-nonmanifold: a vertex where separate fans of triangles meet (the boundary of SOFA's
+Armadillo_Tetra_4406.vtu has one) becomes one vertex per fan, each moved a twentieth of the way
+into its own fan, so that the surface is manifold and bounds a volume.
 Needs numpy only.
 """
 import argparse
@@ -46,6 +49,51 @@ def read_ascii_ply(path):
     vertices = np.array([list(map(float, l.split()[:3])) for l in body[:nv]])
     faces = np.array([list(map(int, l.split()[1:4])) for l in body[nv:nv + nf]])
     return vertices, faces
+
+
+def split_nonmanifold(vertices, faces):
+    """One vertex per fan of triangles around each vertex (fans: triangles joined through an
+    edge at the vertex); returns the new arrays and the number of vertices added."""
+    faces = faces.copy()
+    around = {}
+    for f, tri in enumerate(faces):
+        for v in tri:
+            around.setdefault(int(v), []).append(f)
+    out = list(vertices)
+    added = 0
+    for v, fs in sorted(around.items()):
+        parent = {f: f for f in fs}
+
+        def root(f):
+            while parent[f] != f:
+                parent[f] = parent[parent[f]]
+                f = parent[f]
+            return f
+
+        by_edge = {}
+        for f in fs:
+            for w in faces[f]:
+                if w != v:
+                    by_edge.setdefault(int(w), []).append(f)
+        for shared in by_edge.values():
+            for f in shared[1:]:
+                parent[root(f)] = root(shared[0])
+        fans = {}
+        for f in fs:
+            fans.setdefault(root(f), []).append(f)
+        if len(fans) < 2:
+            continue
+        for k, fan in enumerate(sorted(fans.values())):
+            ring = np.array([vertices[w] for f in fan for w in faces[f] if w != v])
+            moved = vertices[v] + 0.05 * (ring.mean(axis=0) - vertices[v])
+            if k == 0:
+                out[v] = moved
+                continue
+            out.append(moved)
+            added += 1
+            for f in fan:
+                faces[f] = [len(out) - 1 if w == v else w for w in faces[f]]
+    return np.array(out), faces, added
 
 
 def loop(vertices, faces):
@@ -103,11 +151,15 @@ def main():
     p.add_argument("output")
     p.add_argument("--levels", type=int, default=2)
     p.add_argument("--scale", type=float, default=1.0)
+    p.add_argument("--split-nonmanifold", action="store_true")
     args = p.parse_args()
     if args.input.lower().endswith(".stl"):
         vertices, faces = read_stl(args.input)
     else:
         vertices, faces = read_ascii_ply(args.input)
+    if args.split_nonmanifold:
+        vertices, faces, added = split_nonmanifold(vertices, faces)
+        print(f"{args.input}: {added} non-manifold vertices split")
     for _ in range(args.levels):
         vertices, faces = loop(vertices, faces)
     write_ply(args.output, vertices * args.scale, faces)

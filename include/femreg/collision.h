@@ -63,8 +63,11 @@ class CollisionWorld {
  public:
   // Objects are surfaces in the global numbering of x; names match the spec's pairs (an
   // empty pair list with collision on means every pair). Obstacle meshes are read here.
+  // obstacle_surfaces[i], where given with rows, is the surface object i meets the obstacles
+  // with instead (an embedded surface, its vertices also in x); its contacts are object i's.
   Status Init(const CollisionSpec& spec, const std::vector<std::string>& object_names,
-              const std::vector<Triangles>& surfaces, const Vertices& x);
+              const std::vector<Triangles>& surfaces, const Vertices& x,
+              const std::vector<Triangles>& obstacle_surfaces = {});
   // After a topology change of object i (fracture): new surface triangles, new tree.
   void Rebuild(int object, const Triangles& surface, const Vertices& x);
   // Poses the obstacles for a frame (fractional frames interpolate).
@@ -147,6 +150,8 @@ class CollisionWorld {
   std::vector<std::vector<int>> surface_vertices_;        // per object, global
   std::vector<std::vector<std::array<int, 2>>> vertex_triangle_;  // per object: (tri, corner)
   std::vector<std::pair<int, int>> pairs_;                // object pairs to test
+  // Per surface of the world (the objects', then their obstacle surfaces): its object.
+  std::vector<int> owner_;
   std::vector<Obstacle> obstacles_;
   int trees_built_ = 0;
   double frame_ = 0.0;

@@ -119,7 +119,8 @@ class Tracker {
   Status SetObjectLabel(int object, int label);
 
   // Contacts (docs/theory/contact.md; femreg/collision.h): the penalty between the spec's object
-  // pairs (named by `names`, one per object; no pairs: every pair) and with its obstacles.
+  // pairs (named by `names`, one per object; no pairs: every pair) and with its obstacles, which
+  // an object with an embedded surface meets with that surface (before or after this call).
   // Nothing is built when nothing can collide.
   Status EnableCollision(const CollisionSpec& spec, const std::vector<std::string>& names);
 
@@ -137,7 +138,8 @@ class Tracker {
 
   const RegistrationOptions& options() const;
   // The contact detector, or null when collision is off or nothing can collide (then no
-  // hierarchy is built and no contact residual is added).
+  // hierarchy is built and no contact residual is added). With an embedded surface it detects
+  // on the meshes' vertices followed by the embedded surfaces' (the obstacles meet those).
   const CollisionWorld* collision() const;
 
  private:

@@ -24,7 +24,8 @@ Eigen::Vector3d UnitNormal(const Vertices& x, const Triangles& t, int f) {
 }  // namespace
 
 Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::string>& names,
-                            const std::vector<Triangles>& surfaces, const Vertices& x) {
+                            const std::vector<Triangles>& surfaces, const Vertices& x,
+                            const std::vector<Triangles>& obstacle_surfaces) {
   spec_ = spec;
   if (!(spec.stiffness > 0) || !std::isfinite(spec.stiffness)) {
     return Status::Error("collision.stiffness must be > 0");
@@ -77,8 +78,6 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
   }
   for (const ObstacleSpec& os : spec.obstacles) has_friction_ = has_friction_ || os.friction > 0;
 
-  needs_tree_.assign(n, 0);
-  for (const auto& p : pairs_) needs_tree_[p.first] = needs_tree_[p.second] = 1;
   obstacles_.clear();
   for (const ObstacleSpec& os : spec.obstacles) {
     Obstacle o;
@@ -111,16 +110,34 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
     } else if (!(os.plane_normal.norm() > 0)) {
       return Status::Error("collision.obstacles '" + os.name + "': the plane normal is zero");
     }
-    for (int i = 0; i < n; ++i)
-      if (o.hits[i] && os.kind != ObstacleSpec::Kind::kPlane) needs_tree_[i] = 1;
     obstacles_.push_back(std::move(o));
   }
+  // An object with a surface of its own for the obstacles (an embedded one) meets them there:
+  // one more slot of the world, whose contacts are reported as the object's.
+  owner_.resize(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) owner_[static_cast<size_t>(i)] = i;
+  for (int i = 0; i < n && i < static_cast<int>(obstacle_surfaces.size()); ++i) {
+    if (obstacle_surfaces[static_cast<size_t>(i)].rows() == 0) continue;
+    surfaces_.push_back(obstacle_surfaces[static_cast<size_t>(i)]);
+    owner_.push_back(i);
+    for (Obstacle& o : obstacles_) {
+      o.hits.push_back(o.hits[static_cast<size_t>(i)]);
+      o.hits[static_cast<size_t>(i)] = 0;
+    }
+  }
+  const int slots = static_cast<int>(surfaces_.size());
+  needs_tree_.assign(static_cast<size_t>(slots), 0);
+  for (const auto& p : pairs_) needs_tree_[p.first] = needs_tree_[p.second] = 1;
+  for (const Obstacle& o : obstacles_)
+    for (int i = 0; i < slots; ++i)
+      if (o.hits[static_cast<size_t>(i)] && o.spec.kind != ObstacleSpec::Kind::kPlane) needs_tree_[i] = 1;
   enabled_ = !pairs_.empty() || !obstacles_.empty();
-  trees_.assign(n, AabbTree());
-  surface_vertices_.assign(n, {});
-  vertex_triangle_.assign(n, {});
+  trees_.assign(static_cast<size_t>(slots), AabbTree());
+  surface_vertices_.assign(static_cast<size_t>(slots), {});
+  vertex_triangle_.assign(static_cast<size_t>(slots), {});
   trees_built_ = 0;
-  for (int i = 0; i < n; ++i) Rebuild(i, surfaces[i], x);
+  const std::vector<Triangles> all = surfaces_;
+  for (int i = 0; i < slots; ++i) Rebuild(i, all[static_cast<size_t>(i)], x);
   SetFrame(0);
   return Status::Ok();
 }
@@ -362,7 +379,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
       const double gap = n.dot(Row(x, v) - p0);
       if (gap >= limit) continue;
       Contact c;
-      c.object_a = i;
+      c.object_a = owner_[static_cast<size_t>(i)];
       c.object_b = -1 - oi;
       const auto& ft = vertex_triangle_[i][s];
       for (int k = 0; k < 3; ++k) c.vertices_a[k] = ta(ft[0], k);
@@ -402,7 +419,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
     std::array<int, 2> corner;
     if (!Corner(i, f.first, &corner)) continue;
     Contact contact;
-    contact.object_a = i;
+    contact.object_a = owner_[static_cast<size_t>(i)];
     contact.object_b = -1 - oi;
     for (int k = 0; k < 3; ++k) contact.vertices_a[k] = ta(corner[0], k);
     contact.bary_a = Eigen::Vector3d::Unit(corner[1]);
@@ -416,7 +433,7 @@ void CollisionWorld::DetectObstacle(int oi, int i, const Vertices& x, double lim
   VertexContacts(o.world, obstacle_side, x, ta, trees_[i], limit, &found);
   for (const auto& f : found) {  // obstacle vertices against the object
     Contact contact;
-    contact.object_a = i;
+    contact.object_a = owner_[static_cast<size_t>(i)];
     contact.object_b = -1 - oi;
     for (int k = 0; k < 3; ++k) contact.vertices_a[k] = ta(f.second.triangle, k);
     contact.bary_a = f.second.bary;

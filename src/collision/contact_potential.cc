@@ -23,6 +23,18 @@ energy::ContactPenalty<3> ObstaclePenaltyBlock(const Contact& c, double standoff
   return block;
 }
 
+energy::ContactPenalty<4> EmbeddedPenaltyBlock(const Contact& c, const std::array<int, 4>& vertices,
+                                               const std::array<double, 4>& weights, double standoff,
+                                               double stiffness) {
+  energy::ContactPenalty<4> block;
+  block.vertices = vertices;
+  block.coefficients = weights;
+  block.normal = c.normal;
+  block.offset = standoff + c.normal.dot(c.point_b);
+  block.weight = stiffness;
+  return block;
+}
+
 energy::ContactPenalty<6> PairPenaltyBlock(const Contact& c, double standoff, double stiffness) {
   energy::ContactPenalty<6> block;
   for (int k = 0; k < 3; ++k) {

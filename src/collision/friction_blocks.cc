@@ -48,6 +48,20 @@ energy::Friction<3> ObstacleFrictionBlock(const Contact& c, const Vertices& refe
   return block;
 }
 
+energy::Friction<4> EmbeddedFrictionBlock(const Contact& c, const std::array<int, 4>& vertices,
+                                          const std::array<double, 4>& weights, const Vertices& reference,
+                                          const Eigen::Vector3d& obstacle_motion, double weight) {
+  energy::Friction<4> block;
+  block.tangent = energy::TangentBasis(c.normal);
+  Eigen::Vector3d p0 = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 4; ++k) p0 += weights[static_cast<size_t>(k)] * reference.row(vertices[static_cast<size_t>(k)]).transpose();
+  block.vertices = vertices;
+  block.coefficients = weights;
+  block.offset = block.tangent * (p0 + obstacle_motion);
+  block.weight = weight;
+  return block;
+}
+
 energy::Friction<6> PairFrictionBlock(const Contact& c, const Vertices& reference, double weight) {
   energy::Friction<6> block;
   block.tangent = energy::TangentBasis(c.normal);

@@ -4,7 +4,8 @@
 // the stencil's positions, delta = offset - sum_i c_i n . x_i (c_i: the barycentrics of side
 // a, minus those of side b; offset: s, plus n . p_b for a fixed obstacle point), and the
 // residual r = max(0, delta) is one-sided: 1/2 k r^2 with k the weight. N = 3 against an
-// obstacle, 6 between two objects.
+// obstacle, 6 between two objects, 4 for an embedded surface's point (carried by 4 cage
+// vertices) against an obstacle.
 #ifndef FEMREG_ENERGY_CONTACT_H_
 #define FEMREG_ENERGY_CONTACT_H_
 

@@ -39,8 +39,9 @@ class Problem {
                           std::vector<TermSet<PointToPlane<1>>>, std::vector<TermSet<PointToPlane<3>>>,
                           std::vector<TermSet<PointToPoint<4>>>, std::vector<TermSet<PointToPlane<4>>>,
                           std::vector<TermSet<ContactPenalty<3>>>,
-                          std::vector<TermSet<ContactPenalty<6>>>, std::vector<TermSet<Friction<3>>>,
-                          std::vector<TermSet<Friction<6>>>, std::vector<TermSet<ExternalLoad>>,
+                          std::vector<TermSet<ContactPenalty<6>>>, std::vector<TermSet<ContactPenalty<4>>>,
+                          std::vector<TermSet<Friction<3>>>, std::vector<TermSet<Friction<6>>>,
+                          std::vector<TermSet<Friction<4>>>, std::vector<TermSet<ExternalLoad>>,
                           std::vector<TermSet<FreeSpacePenalty>>>;
 
   // Sets the number of vertices and empties the problem.

@@ -7,6 +7,8 @@
 #include <map>
 #include <string>
 
+#include "parallel/threads.h"
+
 namespace femreg {
 
 Status MakeEmbeddedSurface(const TetMesh& mesh, const Vertices& rest, const Triangles& triangles,
@@ -184,11 +186,13 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
 }
 
 const TrackerState& DataSurface::Update(const Vertices& x) {
-  for (size_t v = 0; v < vertex_.size(); ++v) {
-    const Stencil& st = vertex_[v];
+  const int n = static_cast<int>(vertex_.size());
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), n, 4096)) schedule(static)
+  for (int v = 0; v < n; ++v) {  // each row on its own: the same on any thread count
+    const Stencil& st = vertex_[static_cast<size_t>(v)];
     Eigen::RowVector3d p = st.weights[0] * x.row(st.vertices[0]);
     for (int k = 1; k < st.n; ++k) p += st.weights[static_cast<size_t>(k)] * x.row(st.vertices[static_cast<size_t>(k)]);
-    view_.x.row(static_cast<Eigen::Index>(v)) = p;
+    view_.x.row(v) = p;
   }
   return view_;
 }

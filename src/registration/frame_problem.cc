@@ -467,8 +467,10 @@ void FrameProblem::SetContacts(
   force_penalty_.clear();
   force_friction_obstacle_.clear();
   force_friction_pair_.clear();
+  force_friction_embedded_.clear();
   auto& obstacle = *problem_.AddSet<energy::ContactPenalty<3>>(TermGroup::kCollision).mutable_blocks();
   auto& pair = *problem_.AddSet<energy::ContactPenalty<6>>(TermGroup::kCollision).mutable_blocks();
+  std::vector<energy::ContactPenalty<4>> embedded;
   for (const Contact& c : contacts) {
     // 1/2 k max(0, lambda / k - g)^2: its force at g = 0 is the multiplier's lambda.
     double k = world.stiffness(), standoff = 0.0;
@@ -478,12 +480,42 @@ void FrameProblem::SetContacts(
       standoff = it->second.lambda / k;
     }
     force_penalty_.emplace_back(standoff, k);
-    if (c.obstacle()) {
+    const DataSurface::Stencil st = ContactStencil(c);
+    if (st.n == 4) {
+      embedded.push_back(EmbeddedPenaltyBlock(c, st.vertices, st.weights, standoff, k));
+    } else if (c.obstacle()) {
       obstacle.push_back(ObstaclePenaltyBlock(c, standoff, k));
     } else {
       pair.push_back(PairPenaltyBlock(c, standoff, k));
     }
   }
+  // Only with a data surface, so that a scene without one keeps its sets as they were.
+  if (!embedded.empty()) {
+    *problem_.AddSet<energy::ContactPenalty<4>>(TermGroup::kCollision).mutable_blocks() = std::move(embedded);
+  }
+}
+
+DataSurface::Stencil FrameProblem::ContactStencil(const Contact& c) const {
+  DataSurface::Stencil none;
+  none.n = 0;
+  const int meshes = problem_.num_vertices();
+  if (data_surface_ == nullptr || c.vertices_a[0] < meshes) return none;
+  // A vertex of the surface (the contact's corner, a unit barycentric) is carried by its own
+  // embedding, exactly; a point inside a triangle as the data terms' cloud->model pairs are.
+  DataPair p;
+  int corner = -1;
+  for (int k = 0; k < 3; ++k) {
+    if (c.bary_a[k] == 1.0) corner = k;
+  }
+  if (corner >= 0) {
+    p.num_vertices = 1;
+    p.vertices[0] = c.vertices_a[corner] - meshes;
+  } else {
+    p.num_vertices = 3;
+    for (int k = 0; k < 3; ++k) p.vertices[k] = c.vertices_a[k] - meshes;
+    p.barycentric = c.bary_a;
+  }
+  return data_surface_->Map(p);
 }
 
 }  // namespace femreg

@@ -61,16 +61,20 @@ class FrameProblem {
   // positions at the start of this outer iteration (energy/load.h). Every outer iteration.
   void SetLoads(const TrackerState& state);
   // The contact penalty of the detected contacts, zero at the gap lambda / k of each
-  // contact's multiplier (none yet: k from the world, zero at contact).
+  // contact's multiplier (none yet: k from the world, zero at contact). The contacts may be
+  // detected on the collision positions (Tracker::Impl::CollisionPositions): a contact whose
+  // side a lies past the meshes' vertices is on the data surface's (an embedded surface's)
+  // vertices there, and acts on the 4 cage vertices that carry its point.
   void SetContacts(const std::vector<Contact>& contacts, const CollisionWorld& world,
                    const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers);
   // Coulomb friction of those contacts (docs/theory/contact.md#friction; frame_friction.cc): for
   // each with a coefficient > 0, a block on its slip since `reference` (the previous frame's
   // result) relative to the obstacle's motion since `reference_frame`, with the normal force
-  // max(0, lambda - k g) of its penalty at x held for the solve. After SetContacts.
+  // max(0, lambda - k g) of its penalty at the collision positions y held for the solve
+  // (reference: the meshes' vertices). After SetContacts.
   void SetFriction(const std::vector<Contact>& contacts, const CollisionWorld& world,
                    const std::map<std::pair<int, int>, TrackerState::ContactMultiplier>& multipliers,
-                   const Vertices& x, const Vertices& reference, double reference_frame);
+                   const Vertices& y, const Vertices& reference, double reference_frame);
   // The forces of the last SetContacts' and SetFriction's blocks at x, per object pair and
   // obstacle; empty after a topology change.
   std::vector<ContactForce> ContactForces(const Vertices& x) const;
@@ -111,7 +115,12 @@ class FrameProblem {
   // friction blocks and their contacts.
   std::vector<Contact> force_contacts_;
   std::vector<std::pair<double, double>> force_penalty_;
+  // A contact's side a on the data surface as cage vertices: n 0 for a point of a mesh's own
+  // surface (the contact's vertices are the meshes'), else the 4 that carry it.
+  DataSurface::Stencil ContactStencil(const Contact& c) const;
   std::vector<energy::Friction<3>> force_friction_obstacle_;
+  std::vector<energy::Friction<4>> force_friction_embedded_;
+  std::vector<int> force_friction_embedded_contact_;
   std::vector<energy::Friction<6>> force_friction_pair_;
   std::vector<int> force_friction_obstacle_contact_, force_friction_pair_contact_;
   double friction_slip_ = 1.0;

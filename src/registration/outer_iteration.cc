@@ -101,11 +101,12 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   if (state.collision) {
     const auto t_collision = Clock::now();
     state.collision->SetFrame(state.frame);
-    state.collision->Detect(state.x, state.collision->distance(), &state.contacts);
+    const Vertices& y = CollisionPositions();
+    state.collision->Detect(y, state.collision->distance(), &state.contacts);
     row.contacts = static_cast<int>(state.contacts.size());
     frame_problem.SetContacts(state.contacts, *state.collision, state.contact_multipliers);
     // Friction's slip is from the previous frame's result, where the contacts last rested.
-    frame_problem.SetFriction(state.contacts, *state.collision, state.contact_multipliers, state.x,
+    frame_problem.SetFriction(state.contacts, *state.collision, state.contact_multipliers, y,
                               previous, std::max(0, state.frame - 1));
     s->time.collision += Seconds(t_collision);
   }
@@ -163,7 +164,7 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, previous, pairs, counts, row, s)) return false;
   if (state.collision &&
-      state.collision->Evaluate(state.contacts, state.x).max_penetration > state.collision->tolerance()) {
+      state.collision->Evaluate(state.contacts, CollisionPositions()).max_penetration > state.collision->tolerance()) {
     return go_on();
   }
   s->final = frame_problem.problem().Evaluate(state.x);
@@ -187,7 +188,7 @@ namespace {
 // the contact is detected, so that one that flickers open and shut does not leak again.
 // Contacts no longer detected drop both. True while a contact is deeper than the tolerance
 // or held open wider than it: the frame goes on.
-bool UpdateContactMultipliers(TrackerState* state) {
+bool UpdateContactMultipliers(TrackerState* state, const Vertices& y) {
   const CollisionWorld& world = *state->collision;
   const double k0 = world.stiffness(), tolerance = world.tolerance();
   const double k_max = 1e3 * k0;  // keeps the stiffest contact within the solvers' reach
@@ -199,7 +200,7 @@ bool UpdateContactMultipliers(TrackerState* state) {
     m.stiffness = k0;
     const auto it = state->contact_multipliers.find(key);
     if (it != state->contact_multipliers.end()) m = it->second;
-    const double penetration = world.Penetration(c, state->x);
+    const double penetration = world.Penetration(c, y);
     const bool stalled = penetration > tolerance && penetration > 0.5 * m.penetration;
     m.lambda = std::max(0.0, m.lambda + m.stiffness * penetration);
     if (stalled) m.stiffness = std::min(k_max, 4.0 * m.stiffness);
@@ -260,7 +261,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   }
   row.after = report.after;
   const bool contacts_pending =
-      state.collision && state.collision->augmented() && UpdateContactMultipliers(&state);
+      state.collision && state.collision->augmented() && UpdateContactMultipliers(&state, CollisionPositions());
   // New multipliers change the energy: the next start is not held against this one.
   if (contacts_pending) merit = std::numeric_limits<double>::infinity();
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices
@@ -271,7 +272,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   row.max_move = moved;
   first_bulk_move = k == 0 ? bulk : first_bulk_move;
   double sum2 = 0.0;
-  for (const DataPair& p : *pairs) sum2 += (p.Point(state.x) - p.target).squaredNorm();
+  // The pairs index the surface they were found on: the data surface's vertices if there is one.
+  const Vertices& paired = data_surface ? PairState().x : state.x;
+  for (const DataPair& p : *pairs) sum2 += (p.Point(paired) - p.target).squaredNorm();
   row.rms_residual = std::sqrt(sum2 / static_cast<double>(pairs->size()));
   row.time_s = Seconds(t_outer);
   s->iterations.push_back(row);
@@ -377,8 +380,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
 void Tracker::Impl::MeasureContacts(FrameSummary* s) {
   const auto t0 = Clock::now();
   state.collision->SetFrame(state.frame);
-  state.collision->Detect(state.x, 0.0, &state.contacts);
-  const ContactStats cs = state.collision->Evaluate(state.contacts, state.x);
+  const Vertices& y = CollisionPositions();
+  state.collision->Detect(y, 0.0, &state.contacts);
+  const ContactStats cs = state.collision->Evaluate(state.contacts, y);
   s->contacts = cs.contacts;
   s->object_contacts = cs.object_contacts;
   s->obstacle_contacts = cs.obstacle_contacts;

@@ -71,6 +71,15 @@ struct Tracker::Impl {
     if (data_surface) return data_index.Get(PairState(), 0.1 * data_surface->view().mean_edge_length);
     return model_index.Get(state, 0.1 * mean_edge);
   }
+  // Contacts: the spec and names EnableCollision was given (an embedded surface set later
+  // builds the world again), and the positions the world detects on: the meshes' vertices,
+  // then the data surface's when there is one (an embedded surface meets the obstacles there;
+  // docs/theory/embedded-surfaces.md#contacts).
+  CollisionSpec collision_spec;
+  std::vector<std::string> collision_names;
+  Vertices collision_x;
+  Status BuildCollision();
+  const Vertices& CollisionPositions();
   // UpdateOutputs with the frame's pairs (on the data surface if there is one; its vertices'
   // residuals too).
   void Outputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs);

@@ -38,6 +38,8 @@ Status Tracker::SetEmbeddedSurface(int object, const Vertices& rest, const Trian
   impl_->data_surface->Build(state, surfaces);
   impl_->data_index.Reset();
   impl_->frame_problem.SetDataSurface(impl_->data_surface.get());
+  // Contacts enabled before: the world takes the embedded surface for the obstacles.
+  if (!impl_->collision_names.empty()) return impl_->BuildCollision();
   return Status::Ok();
 }
 
@@ -66,13 +68,42 @@ double Tracker::surface_outside(int object) const {
 Status Tracker::EnableCollision(const CollisionSpec& spec, const std::vector<std::string>& names) {
   TrackerState& state = impl_->state;
   if (names.size() != state.objects.size()) return Status::Error("one name per object is needed");
-  std::vector<Triangles> surfaces;
-  for (int i = 0; i < num_objects(); ++i) surfaces.push_back(state.ObjectSurface(i));
+  impl_->collision_spec = spec;
+  impl_->collision_names = names;
+  const Status status = impl_->BuildCollision();
+  if (!status.ok()) impl_->collision_names.clear();
+  return status;
+}
+
+Status Tracker::Impl::BuildCollision() {
+  std::vector<Triangles> surfaces, obstacle_surfaces;
+  for (int i = 0; i < static_cast<int>(state.objects.size()); ++i) surfaces.push_back(state.ObjectSurface(i));
+  // Body-body contacts stay on the meshes' surfaces; an embedded surface meets the obstacles,
+  // its vertices numbered after the meshes' in CollisionPositions.
+  if (data_surface) {
+    obstacle_surfaces.resize(state.objects.size());
+    for (int i = 0; i < static_cast<int>(state.objects.size()); ++i) {
+      if (!data_surface->embedded(i)) continue;
+      obstacle_surfaces[static_cast<size_t>(i)] =
+          data_surface->ObjectSurface(i).array() + static_cast<int>(state.x.rows()) + data_surface->offset(i);
+    }
+  }
   auto world = std::make_unique<CollisionWorld>();
-  Status status = world->Init(spec, names, surfaces, state.x);  // no pairs: every pair
+  Status status = world->Init(collision_spec, collision_names, surfaces, CollisionPositions(),  // no pairs: every pair
+                              obstacle_surfaces);
   if (!status.ok()) return status;
   state.collision = world->enabled() ? std::move(world) : nullptr;
+  state.contacts.clear();
   return Status::Ok();
+}
+
+const Vertices& Tracker::Impl::CollisionPositions() {
+  if (!data_surface) return state.x;
+  const Vertices& y = data_surface->Update(state.x).x;
+  collision_x.resize(state.x.rows() + y.rows(), 3);
+  collision_x.topRows(state.x.rows()) = state.x;
+  collision_x.bottomRows(y.rows()) = y;
+  return collision_x;
 }
 
 Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {

@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <limits>
 
+#include "parallel/threads.h"
+
 namespace femreg {
 
 std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material) {
@@ -54,12 +56,21 @@ void TrackerState::RebuildGlobalArrays() {
 }
 
 Eigen::MatrixXd TrackerState::VertexNormals() const {
-  Eigen::MatrixXd n = Eigen::MatrixXd::Zero(num_vertices, 3);
-  for (int f = 0; f < surface.rows(); ++f) {
+  // The face normals and the normalization in parallel; the sums per vertex in face order on
+  // one thread, so that the result is the same on any thread count.
+  const int nf = static_cast<int>(surface.rows());
+  const int threads = ResolveThreadCount(0);
+  Eigen::MatrixXd face(nf, 3);
+#pragma omp parallel for num_threads(PhaseThreads(threads, nf, 4096)) schedule(static)
+  for (int f = 0; f < nf; ++f) {
     const Eigen::Vector3d a = x.row(surface(f, 0)), b = x.row(surface(f, 1)), c = x.row(surface(f, 2));
-    const Eigen::Vector3d fn = (b - a).cross(c - a);  // area weighted
-    for (int k = 0; k < 3; ++k) n.row(surface(f, k)) += fn.transpose();
+    face.row(f) = (b - a).cross(c - a).transpose();  // area weighted
   }
+  Eigen::MatrixXd n = Eigen::MatrixXd::Zero(num_vertices, 3);
+  for (int f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) n.row(surface(f, k)) += face.row(f);
+  }
+#pragma omp parallel for num_threads(PhaseThreads(threads, num_vertices, 4096)) schedule(static)
   for (int v = 0; v < num_vertices; ++v) {
     const double len = n.row(v).norm();
     if (len > 0) n.row(v) /= len;

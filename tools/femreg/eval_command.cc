@@ -9,9 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <memory>
@@ -32,10 +34,64 @@ namespace {
 
 struct EvalRow {
   std::string label;
+  bool have_mesh = true;  // false: the vertex truth was another mesh's (an embedded surface's run)
   ErrorStats seen, hidden, all;
   bool have_surface = false;
   SurfaceDistance surface;
+  bool have_embedded = false;  // the embedded surfaces' vertices against ground_truth/surface
+  ErrorStats embedded_all, embedded_seen;
 };
+
+// The points of an embedded surface's frame as `femreg register` writes it (WriteSurfaceVtp:
+// PolyData, raw appended data with UInt64 headers, Float64 points); other VTPs are refused.
+Status ReadRegisterSurfaceVtp(const std::string& path, Vertices* points) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Error(path + ": cannot open");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto fail = [&](const std::string& why) {
+    return Status::Error(path + ": " + why + " (not an embedded surface written by femreg register)");
+  };
+  const auto attribute = [&](size_t from, const std::string& name, std::string* value) {
+    const size_t at = text.find(name + "=\"", from);
+    if (at == std::string::npos) return false;
+    const size_t begin = at + name.size() + 2, end = text.find('"', begin);
+    if (end == std::string::npos) return false;
+    *value = text.substr(begin, end - begin);
+    return true;
+  };
+  std::string value;
+  if (text.find("<VTKFile type=\"PolyData\"") == std::string::npos) return fail("no PolyData");
+  if (!attribute(0, "header_type", &value) || value != "UInt64") return fail("its header_type is not UInt64");
+  if (!attribute(0, "NumberOfPoints", &value)) return fail("no NumberOfPoints");
+  long long n = -1;
+  try {
+    n = std::stoll(value);
+  } catch (...) {
+  }
+  if (n < 0 || n > (1LL << 31)) return fail("NumberOfPoints \"" + value + "\"");
+  const size_t tag = text.find("Name=\"Points\"");
+  const size_t tag_start = tag == std::string::npos ? tag : text.rfind("<DataArray", tag);
+  if (tag_start == std::string::npos) return fail("no Points array");
+  if (!attribute(tag_start, "type", &value) || value != "Float64") return fail("its points are not Float64");
+  if (!attribute(tag_start, "offset", &value)) return fail("its points are not appended");
+  const long long offset = std::stoll(value);
+  const size_t appended = text.find("<AppendedData encoding=\"raw\">");
+  const size_t mark = appended == std::string::npos ? appended : text.find('_', appended);
+  if (mark == std::string::npos) return fail("no raw appended data");
+  const size_t begin = mark + 1 + static_cast<size_t>(offset);
+  const size_t bytes = static_cast<size_t>(n) * 3 * sizeof(double);
+  if (offset < 0 || begin + sizeof(uint64_t) + bytes > text.size()) return fail("its points run past the end");
+  uint64_t count = 0;
+  std::memcpy(&count, text.data() + begin, sizeof(count));
+  if (count != bytes) return fail("its points' block has " + std::to_string(count) + " bytes, not " + std::to_string(bytes));
+  points->resize(n, 3);
+  std::vector<double> xyz(static_cast<size_t>(3 * n));
+  std::memcpy(xyz.data(), text.data() + begin + sizeof(uint64_t), bytes);
+  for (long long i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) (*points)(i, k) = xyz[static_cast<size_t>(3 * i + k)];
+  }
+  return Status::Ok();
+}
 
 // Object names of a register result, in scene order (from summary.json when present).
 Status ResultObjects(const std::string& result, const std::vector<std::string>& files,
@@ -202,6 +258,24 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   if (!status.ok()) return fail(status.message());
   size_t num_frames = frames[objects[0]].size();
   for (const std::string& o : objects) num_frames = std::min(num_frames, frames[o].size());
+  // Embedded surfaces (frames/<object>_surface_NNNN.vtp), in the objects' order, and their
+  // truth (ground_truth/surface/, a row per vertex of every embedded surface in scene order).
+  std::vector<std::string> surface_files;
+  ListFiles((fs::path(result) / "frames").string(), {".vtp"}, &surface_files);  // none: no surfaces
+  std::map<std::string, std::vector<std::string>> surface_frames;
+  const std::regex surface_name(R"((.+)_surface_(\d+)\.vtp)");
+  for (const std::string& file : surface_files) {
+    std::smatch m;
+    const std::string base = fs::path(file).filename().string();
+    if (std::regex_match(base, m, surface_name) && frames.count(m[1].str())) surface_frames[m[1].str()].push_back(file);
+  }
+  std::vector<std::string> surface_objects;
+  for (const std::string& o : objects) {
+    if (surface_frames.count(o)) surface_objects.push_back(o);
+  }
+  const fs::path surface_truth_dir = fs::path(truth_dir) / "ground_truth" / "surface";
+  const bool have_embedded = !surface_objects.empty() && fs::is_directory(surface_truth_dir);
+  std::vector<double> pooled_embedded, pooled_embedded_seen;
   if (truth_csvs.size() < num_frames) {
     return fail(truth_dir + "/ground_truth has " + std::to_string(truth_csvs.size()) +
                 " frames for " + std::to_string(num_frames) + " result frames");
@@ -214,6 +288,7 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   std::vector<EvalRow> rows;
   std::vector<double> pooled_seen, pooled_hidden, pooled_all;
   double surface_sum = 0.0, hausdorff = 0.0;
+  size_t surface_count = 0;
   // Fracture results (an original_vertex field): vertices are matched through their
   // original vertex, piece by piece, as `femreg register --ground-truth` does.
   std::vector<FractureFrame> fracture;
@@ -278,12 +353,49 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
       fracture.push_back(frame);
       truth = std::move(pe.matched);  // the truth each tracked vertex was compared with
     }
-    if (truth.positions.rows() != positions.rows()) {
-      return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) +
-                  " vertices, the result " + std::to_string(positions.rows()) + " (" + frames[objects[0]][f] + ")");
-    }
     EvalRow row;
     row.label = std::to_string(f);
+    const fs::path surface_truth_path = surface_truth_dir / fs::path(truth_csvs[f]).filename();
+    if (have_embedded && fs::exists(surface_truth_path)) {
+      Vertices embedded(0, 3);
+      for (const std::string& o : surface_objects) {
+        if (surface_frames[o].size() <= f) return fail(result + "/frames: no frame " + std::to_string(f) + " of " + o + "'s surface");
+        Vertices v;
+        status = ReadRegisterSurfaceVtp(surface_frames[o][f], &v);
+        if (!status.ok()) return fail(status.message());
+        embedded.conservativeResize(embedded.rows() + v.rows(), 3);
+        embedded.bottomRows(v.rows()) = v;
+      }
+      GroundTruthFrame surface_truth;
+      status = ReadGroundTruthFrame(surface_truth_path.string(), &surface_truth);
+      if (!status.ok()) return fail(status.message());
+      if (surface_truth.positions.rows() != embedded.rows()) {
+        return fail(surface_truth_path.string() + ": " + std::to_string(surface_truth.positions.rows()) +
+                    " rows, the embedded surfaces " + std::to_string(embedded.rows()) + " vertices");
+      }
+      std::vector<double> all, seen;
+      for (Eigen::Index i = 0; i < embedded.rows(); ++i) {
+        const double e = (embedded.row(i) - surface_truth.positions.row(i)).norm();
+        all.push_back(e);
+        if (surface_truth.visible[static_cast<size_t>(i)]) seen.push_back(e);
+      }
+      pooled_embedded.insert(pooled_embedded.end(), all.begin(), all.end());
+      pooled_embedded_seen.insert(pooled_embedded_seen.end(), seen.begin(), seen.end());
+      row.embedded_all = ComputeErrorStats(all);
+      row.embedded_seen = ComputeErrorStats(seen);
+      row.have_embedded = true;
+    }
+    if (truth.positions.rows() != positions.rows()) {
+      // With the embedded surfaces compared, the vertex truth may be another mesh's (the
+      // sequence's ground truth mesh), as `femreg register --ground-truth` takes it.
+      if (!row.have_embedded) {
+        return fail(truth_csvs[f] + ": " + std::to_string(truth.positions.rows()) + " vertices, the result " +
+                    std::to_string(positions.rows()) + " (" + frames[objects[0]][f] + ")");
+      }
+      row.have_mesh = false;
+      rows.push_back(row);
+      continue;
+    }
     std::vector<double> seen, hidden, all;
     for (Eigen::Index i = 0; i < positions.rows(); ++i) {
       const double e = (positions.row(i) - truth.positions.row(i)).norm();
@@ -303,6 +415,7 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
       row.surface = ComputeSurfaceDistance(positions, surface, t.points, t.surface);
       row.have_surface = true;
       surface_sum += row.surface.mean;
+      ++surface_count;
       hausdorff = std::max(hausdorff, row.surface.hausdorff);
     }
     rows.push_back(row);
@@ -312,9 +425,15 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   total.seen = ComputeErrorStats(pooled_seen);
   total.hidden = ComputeErrorStats(pooled_hidden);
   total.all = ComputeErrorStats(pooled_all);
-  total.have_surface = have_truth_surface;
-  total.surface.mean = num_frames ? surface_sum / num_frames : 0.0;
+  total.have_surface = surface_count > 0;
+  total.surface.mean = surface_count ? surface_sum / static_cast<double>(surface_count) : 0.0;
   total.surface.hausdorff = hausdorff;
+  total.have_mesh = !pooled_all.empty();
+  total.have_embedded = !pooled_embedded.empty();
+  total.embedded_all = ComputeErrorStats(pooled_embedded);
+  total.embedded_seen = ComputeErrorStats(pooled_embedded_seen);
+  bool any_embedded = false;
+  for (const EvalRow& r : rows) any_embedded = any_embedded || r.have_embedded;
 
   // The estimated external force (stats.csv) against the true one (forces.csv), when both
   // are there.
@@ -326,6 +445,7 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   out << "frame,seen_count,seen_mean_mm,seen_rms_mm,seen_p95_mm,seen_max_mm,hidden_count,"
          "hidden_mean_mm,hidden_rms_mm,hidden_p95_mm,hidden_max_mm,all_count,all_mean_mm,"
          "all_rms_mm,all_p95_mm,all_max_mm,surface_mean_mm,surface_hausdorff_mm";
+  if (any_embedded) out << ",err_surface_mean_mm,err_surface_p95_mm,err_surface_max_mm,err_surface_seen_mean_mm";
   if (forces.compared) out << ",force_true_N,force_error_N,force_error_pct,torque_error_Nm";
   out << "\n";
   std::vector<const EvalRow*> all_rows;
@@ -333,14 +453,26 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
   all_rows.push_back(&total);
   for (size_t i = 0; i < all_rows.size(); ++i) {
     const EvalRow* r = all_rows[i];
-    out << r->label << "," << StatsCells(r->seen) << "," << StatsCells(r->hidden) << ","
-        << StatsCells(r->all) << ",";
+    out << r->label << ",";
+    if (r->have_mesh) {
+      out << StatsCells(r->seen) << "," << StatsCells(r->hidden) << "," << StatsCells(r->all) << ",";
+    } else {
+      out << std::string(15, ',');
+    }
     if (r->have_surface) {
       char buf[64];
       std::snprintf(buf, sizeof(buf), "%.4f,%.4f", r->surface.mean * 1e3, r->surface.hausdorff * 1e3);
       out << buf;
     } else {
       out << ",";
+    }
+    if (any_embedded) {
+      char buf[128] = ",,,,";
+      if (r->have_embedded) {
+        std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f", r->embedded_all.mean * 1e3, r->embedded_all.p95 * 1e3,
+                      r->embedded_all.max * 1e3, r->embedded_seen.mean * 1e3);
+      }
+      out << buf;
     }
     if (forces.compared) {
       out << "," << (r == &total ? forces.MedianCells() : forces.Cells(static_cast<int>(i)));
@@ -357,6 +489,10 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
               "mean", "rms", "p95", "max", "hidden", "mean", "rms", "p95", "max", "surf", "hausd");
   for (const EvalRow* r : all_rows) {
     if (r == &total) std::printf("%s\n", std::string(100, '-').c_str());
+    if (!r->have_mesh) {
+      std::printf("%6s | %s\n", r->label.c_str(), "the vertex truth is another mesh's: see the embedded surfaces");
+      continue;
+    }
     std::printf("%6s | %5d %7.2f %7.2f %7.2f %7.2f | %5d %7.2f %7.2f %7.2f %7.2f | ", r->label.c_str(),
                 r->seen.count, r->seen.mean * 1e3, r->seen.rms * 1e3, r->seen.p95 * 1e3,
                 r->seen.max * 1e3, r->hidden.count, r->hidden.mean * 1e3, r->hidden.rms * 1e3,
@@ -365,6 +501,16 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
       std::printf("%7.2f %7.2f\n", r->surface.mean * 1e3, r->surface.hausdorff * 1e3);
     } else {
       std::printf("%7s %7s\n", "-", "-");
+    }
+  }
+  if (any_embedded) {
+    std::printf("Embedded surfaces (%s) against %s, per vertex (mm):\n", result.c_str(), surface_truth_dir.string().c_str());
+    std::printf("%6s | %8s %7s %7s %7s\n", "frame", "vertices", "mean", "p95", "max");
+    for (const EvalRow* r : all_rows) {
+      if (!r->have_embedded) continue;
+      std::printf("%6s | %8d %7.3f %7.3f %7.3f   seen %7.3f\n", r->label.c_str(), r->embedded_all.count,
+                  r->embedded_all.mean * 1e3, r->embedded_all.p95 * 1e3, r->embedded_all.max * 1e3,
+                  r->embedded_seen.mean * 1e3);
     }
   }
   if (!fracture.empty()) PrintFractureReport(fracture, (fs::path(truth_dir) / "ground_truth").string(), true);
@@ -389,7 +535,10 @@ void AddEvalCommand(CLI::App* app) {
       "surface distance (symmetric mean, Hausdorff). With the dataset's forces.csv and force "
       "columns in the result's stats.csv (force_x_N, ..., torque_z_Nm), also the error of the "
       "estimated resultant external force per frame (N, and % of the true force) and of its "
-      "torque (N m), and their medians over the frames. Prints a table and writes a CSV.");
+      "torque (N m), and their medians over the frames. With embedded surfaces "
+      "(frames/<object>_surface_NNNN.vtp) and the dataset's ground_truth/surface/, also their "
+      "vertices' errors (err_surface_mean_mm, _p95_mm, _max_mm, _seen_mean_mm, as femreg register's "
+      "stats.csv); the vertex truth may then be another mesh's. Prints a table and writes a CSV.");
   cmd->add_option("result", *result, "A `femreg register` output folder (frames/<object>_NNNN.vtu)")
       ->required()
       ->check(CLI::ExistingDirectory);
