@@ -19,6 +19,7 @@
 #include "registration/global_pose.h"
 #include "geometry/nearest.h"
 #include "registration/prealign.h"
+#include "registration/prediction.h"
 #include "registration/tracker_impl.h"
 #include "registration/tracker_state.h"
 #include "parallel/threads.h"
@@ -197,10 +198,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     ChooseInitialPose(fc.cloud, &state, &s, data_surface.get());
     s.time.prealign += Seconds(t_pose);
   }
-  // Constant-velocity prediction from the last two results.
+  // Constant-velocity prediction from the last two results, without the turns the surface
+  // does not show.
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
-    const Vertices predicted = 2.0 * state.x - state.x_before;
+    const Vertices predicted = PredictMotion(state);
     // Not through a flat element: the inversion barrier's energy is infinite there.
     if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted))) {
       state.x = predicted;
