@@ -44,12 +44,12 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
                           const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero());
 
 // The cloud as Tracker::Track fits it, before its automatic subsampling (auto_voxel): the
-// input transform of options.preprocess (scale, rotation, translation), then
-// PreprocessPointCloud oriented towards the camera centre (registration.camera), else the
+// input transform of options.preprocess (scale, rotation, translation), the flying pixels
+// removed (preprocess.flying_pixels, counted in *flying_pixels), then PreprocessPointCloud oriented towards the camera centre (registration.camera), else the
 // cloud's VIEWPOINT. The tracker's own path; `femreg register` writes the result beside the
 // meshes and checks its units on it.
 void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud,
-                             int* nonfinite_dropped = nullptr);
+                             int* nonfinite_dropped = nullptr, int* flying_pixels = nullptr);
 
 // Removes points with a non-finite coordinate (or normal); returns how many.
 int DropNonFinite(PointCloud* cloud);

@@ -91,6 +91,11 @@ struct PreprocessOptions {
   // on the bundled datasets (docs/notes/2026-11-28-figures-from-code-comments.md).)
   double auto_voxel = 0.25;                             // >= 0, in mean surface edges
   double auto_voxel_min_ratio = 20.0;                   // >= 0
+  // Flying pixels (docs/guide/depth-images.md#flying-pixels): with a camera
+  // (registration.camera), the points of a depth image that no surface around them supports
+  // within this many pixel footprints (z / fx) of depth are removed, before everything below.
+  // 0 = off. Clouds that are not one depth image of the camera are left as they are.
+  double flying_pixels = 4.0;                           // >= 0
   int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
   double outlier_stddev = 1.0;                          // ... threshold in standard deviations
   int normal_neighbors = 0;                             // estimate normals from k neighbours; 0 = off
@@ -397,6 +402,7 @@ struct FrameSummary {
   std::string message = "Tracker::Track was not called.";
   int cloud_points = 0;           // as given
   int nonfinite_dropped = 0;      // NaN / inf points removed
+  int flying_pixels = 0;          // removed as flying pixels (preprocess.flying_pixels)
   int points_used = 0;            // after preprocessing
   double voxel_size = 0.0;        // m: the automatic subsampling's voxel (0: not applied)
   int occluded_points = 0;        // points of an occluder in front of the model (data.occluders)

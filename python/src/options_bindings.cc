@@ -44,6 +44,9 @@ void BindOptions(py::module_& m) {
       .def_readwrite("crop_min", &PreprocessOptions::crop_min)
       .def_readwrite("crop_max", &PreprocessOptions::crop_max)
       .def_readwrite("voxel_size", &PreprocessOptions::voxel_size)
+      .def_readwrite("flying_pixels", &PreprocessOptions::flying_pixels,
+                     "Flying pixels removed within this many pixel footprints, with a camera "
+                     "(registration.preprocess.flying_pixels; 0 = off)")
       .def_readwrite("outlier_neighbors", &PreprocessOptions::outlier_neighbors)
       .def_readwrite("outlier_stddev", &PreprocessOptions::outlier_stddev)
       .def_readwrite("normal_neighbors", &PreprocessOptions::normal_neighbors)

@@ -210,6 +210,9 @@ bool PreprocessOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(auto_voxel) && auto_voxel >= 0)) {
     return Fail(error, "preprocess.auto_voxel", "must be >= 0 (0 = off)", auto_voxel);
   }
+  if (!(std::isfinite(flying_pixels) && flying_pixels >= 0)) {
+    return Fail(error, "preprocess.flying_pixels", "must be >= 0 (pixel footprints; 0 = off)", flying_pixels);
+  }
   if (!(std::isfinite(auto_voxel_min_ratio) && auto_voxel_min_ratio >= 0)) {
     return Fail(error, "preprocess.auto_voxel_min_ratio", "must be >= 0", auto_voxel_min_ratio);
   }

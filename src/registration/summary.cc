@@ -52,7 +52,7 @@ std::string FrameSummary::FullReport() const {
           "data.max_strain_step; the frame started again without them (" << implausible_restarts << "x)\n";
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
-     << points_used << " used\n";
+     << flying_pixels << " flying pixels, " << points_used << " used\n";
   os << "  iter   E_data      E_elastic   E_temporal  E_anchor    E_total     m2c    c2m    rej  "
         "inner  rms(mm)  move(mm)  ms\n";
   for (const OuterIteration& it : iterations) {

@@ -15,10 +15,12 @@
 #include "registration/correspondences.h"
 #include "registration/confidence.h"
 #include "registration/fracture_step.h"
+#include "registration/flying_pixels.h"
 #include "registration/frame_problem.h"
 #include "registration/global_pose.h"
 #include "geometry/nearest.h"
 #include "registration/prealign.h"
+#include "registration/prediction.h"
 #include "registration/tracker_impl.h"
 #include "registration/tracker_state.h"
 #include "parallel/threads.h"
@@ -116,8 +118,14 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
   return Status::Ok();
 }
 
-void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud, int* nonfinite_dropped) {
+void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud, int* nonfinite_dropped,
+                             int* flying_pixels) {
   TransformCloud(options.preprocess, cloud);
+  // Before the plane and the outliers: a depth edge's mixed pixels are judged in the image.
+  const int flying = options.camera.enabled && options.preprocess.flying_pixels > 0
+                         ? RemoveFlyingPixels(options.camera, options.preprocess.flying_pixels, cloud)
+                         : 0;
+  if (flying_pixels != nullptr) *flying_pixels = std::max(0, flying);
   PreprocessPointCloud(options.preprocess, cloud, nonfinite_dropped,
                        options.camera.enabled ? options.camera.position
                        : cloud->has_viewpoint ? cloud->viewpoint
@@ -128,7 +136,7 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   const PreprocessOptions& pre = state.options.preprocess;
   const auto t0 = Clock::now();
   fc->cloud = input;
-  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped);
+  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels);
   // The cloud is thinned to the surface the data terms see (an embedded one's).
   const TrackerState& pair_state = PairState();
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());
@@ -197,10 +205,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     ChooseInitialPose(fc.cloud, &state, &s, data_surface.get());
     s.time.prealign += Seconds(t_pose);
   }
-  // Constant-velocity prediction from the last two results.
+  // Constant-velocity prediction from the last two results, without the turns the surface
+  // does not show.
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
-    const Vertices predicted = 2.0 * state.x - state.x_before;
+    const Vertices predicted = PredictMotion(state);
     // Not through a flat element: the inversion barrier's energy is infinite there.
     if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted))) {
       state.x = predicted;

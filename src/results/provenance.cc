@@ -52,6 +52,7 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                      {"crop", p.crop},
                      {"crop_min", Vector(p.crop_min)},
                      {"crop_max", Vector(p.crop_max)},
+                     {"flying_pixels", p.flying_pixels},
                      {"voxel_size", p.voxel_size},
                      {"outlier_neighbors", p.outlier_neighbors},
                      {"outlier_stddev", p.outlier_stddev},

@@ -61,6 +61,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   Put(preprocess, "voxel_size", p.voxel_size, d.preprocess.voxel_size);
   Put(preprocess, "auto_voxel", p.auto_voxel, d.preprocess.auto_voxel);
   Put(preprocess, "auto_voxel_min_ratio", p.auto_voxel_min_ratio, d.preprocess.auto_voxel_min_ratio);
+  Put(preprocess, "flying_pixels", p.flying_pixels, d.preprocess.flying_pixels);
   YAML::Node outliers = FlowMap();
   Put(outliers, "neighbors", p.outlier_neighbors, d.preprocess.outlier_neighbors);
   Put(outliers, "stddev", p.outlier_stddev, d.preprocess.outlier_stddev);

@@ -1,0 +1,33 @@
+// The frame's starting shape: the last result carried on at constant velocity
+// (solver.predict_motion), without the turns the data cannot see.
+#ifndef FEMREG_REGISTRATION_PREDICTION_H_
+#define FEMREG_REGISTRATION_PREDICTION_H_
+
+#include <Eigen/Core>
+
+#include "registration/tracker_state.h"
+
+namespace femreg {
+
+// How much of a turn about each axis shows in the data: for the surface tris (rows of
+// vertex indices into x) about the point c, the generalised eigenvalues lambda of
+//   M v = lambda N v,  M = sum A g g^T,  g = (p - c) x n,  N = sum A (|r|^2 I - r r^T),  r = p - c,
+// over the triangles (area A, unit normal n, centroid p). lambda in [0, 1] is the share of the
+// surface's squared motion under a turn about v that is along its normals, the only part a
+// point-to-plane fit sees: 0 about a sphere's centre or a cylinder's axis, 0.2 for a cube.
+// Eigenvalues ascending, the axes (N-orthonormal) in the columns of *axes.
+Eigen::Vector3d TurnVisibility(const Vertices& x, const Triangles& tris, const Eigen::Vector3d& c,
+                               Eigen::Matrix3d* axes);
+
+// 2 x - x_before, except that for each object that nothing holds (no anchor), the predicted
+// turn about an axis of visibility lambda < kVisibleTurn is scaled by lambda / kVisibleTurn:
+// a turn the surface does not show is not carried on, since no later data will correct it
+// (docs/theory/energy.md#the-prediction).
+Vertices PredictMotion(const TrackerState& state);
+
+// A cube's faces show a fifth of its turns; a faceted sphere, a hundredth.
+constexpr double kVisibleTurn = 0.1;
+
+}  // namespace femreg
+
+#endif  // FEMREG_REGISTRATION_PREDICTION_H_

@@ -1,0 +1,107 @@
+// Flying pixels: a depth edge's mixed pixels go, the surfaces on either side stay
+// (registration/flying_pixels.h).
+#include "registration/flying_pixels.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "femreg/point_cloud.h"
+
+namespace femreg {
+namespace {
+
+CameraOptions Camera() {
+  CameraOptions c;
+  c.enabled = true;
+  c.position = Eigen::Vector3d(0, 0, 0);
+  c.target = Eigen::Vector3d(0, 0, 1);
+  c.up = Eigen::Vector3d(0, -1, 0);
+  c.fx = c.fy = 150;
+  c.width = 160;
+  c.height = 120;
+  c.cx = 79.5;
+  c.cy = 59.5;
+  return c;
+}
+
+// One point per pixel (every step-th pixel) at the depth depth(u, v) (<= 0: no point), on
+// the pixel's ray.
+PointCloud Render(const CameraOptions& c, const std::function<double(int, int)>& depth, int step = 1) {
+  const Eigen::Matrix3d R = CameraRotation(c);
+  std::vector<Eigen::Vector3d> pts;
+  for (int v = 0; v < c.height; v += step) {
+    for (int u = 0; u < c.width; u += step) {
+      const double z = depth(u, v);
+      if (!(z > 0)) continue;
+      pts.push_back(c.position + R.transpose() * (z * Eigen::Vector3d((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1)));
+    }
+  }
+  PointCloud cloud;
+  cloud.points.resize(static_cast<int>(pts.size()), 3);
+  for (size_t i = 0; i < pts.size(); ++i) cloud.points.row(static_cast<int>(i)) = pts[i].transpose();
+  return cloud;
+}
+
+TEST(FlyingPixels, MixedPixelsOnADepthEdgeGoAndBothSurfacesStay) {
+  const CameraOptions c = Camera();
+  // A near wall (0.5 m) left of column 80, a far one (0.6 m) right of it; column 80 mixes
+  // them, smoothly along the edge (a curtain whose pixels support each other up and down).
+  const auto depth = [&](int u, int v) {
+    if (u < 80) return 0.5;
+    if (u > 80) return 0.6 + 0.0005 * (u - 80);  // a little slanted
+    return 0.5 + (0.3 + 0.4 * v / c.height) * 0.1;
+  };
+  PointCloud cloud = Render(c, depth);
+  const int before = cloud.size();
+  EXPECT_EQ(RemoveFlyingPixels(c, 3.0, &cloud), c.height);
+  EXPECT_EQ(cloud.size(), before - c.height);
+  const Eigen::Matrix3d R = CameraRotation(c);
+  for (int i = 0; i < cloud.size(); ++i) {
+    const double z = (R * cloud.points.row(i).transpose()).z();
+    EXPECT_TRUE(std::abs(z - 0.5) < 1e-9 || z >= 0.6 - 1e-9) << "a mixed pixel at depth " << z << " stayed";
+  }
+  // The same image sampled at every other pixel (a sensor's pixel stride): the same judgement.
+  PointCloud sampled = Render(c, depth, 2);
+  EXPECT_EQ(RemoveFlyingPixels(c, 3.0, &sampled), c.height / 2);
+}
+
+// A plane seen at up to 68 degrees of incidence changes its depth by less than 2.5 footprints
+// a pixel: it is supported, and nothing of it goes.
+TEST(FlyingPixels, ObliqueSurfacesStay) {
+  const CameraOptions c = Camera();
+  const double slope = std::tan(60.0 * M_PI / 180.0);  // the plane z = 0.5 + slope X
+  const Eigen::Vector3d normal = Eigen::Vector3d(-slope, 0, 1).normalized();
+  const auto depth = [&](int u, int v) {
+    const Eigen::Vector3d ray((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1);
+    const double incidence = std::acos(std::abs(normal.dot(ray.normalized())));
+    if (incidence > 68.0 * M_PI / 180.0) return 0.0;
+    return 0.5 / (1.0 - slope * ray.x());
+  };
+  PointCloud cloud = Render(c, depth);
+  const int before = cloud.size();
+  ASSERT_GT(before, 1000);
+  EXPECT_EQ(RemoveFlyingPixels(c, 3.0, &cloud), 0);
+  EXPECT_EQ(cloud.size(), before);
+}
+
+// A cloud that is not one depth image of the camera (fused from two views: two points on
+// many pixels) is left as it is.
+TEST(FlyingPixels, OtherCloudsAreLeftAlone) {
+  const CameraOptions c = Camera();
+  PointCloud a = Render(c, [](int, int) { return 0.5; });
+  PointCloud b = Render(c, [](int u, int) { return u % 2 ? 0.55 : 0.0; });
+  PointCloud both;
+  both.points.resize(a.size() + b.size(), 3);
+  both.points << a.points, b.points;
+  const int before = both.size();
+  EXPECT_EQ(RemoveFlyingPixels(c, 3.0, &both), -1);
+  EXPECT_EQ(both.size(), before);
+  // Off: nothing judged.
+  PointCloud edge = Render(c, [](int u, int) { return u == 80 ? 0.55 : u < 80 ? 0.5 : 0.6; });
+  EXPECT_EQ(RemoveFlyingPixels(c, 0.0, &edge), 0);
+}
+
+}  // namespace
+}  // namespace femreg

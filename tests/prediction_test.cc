@@ -1,0 +1,98 @@
+// The prediction leaves out the turns a body's surface does not show (registration/prediction.h).
+#include "registration/prediction.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "femreg/io.h"
+#include "femreg/mesh.h"
+
+namespace femreg {
+namespace {
+
+Eigen::Vector3d Centre(const TetMesh& m) { return m.rest.colwise().mean().transpose(); }
+
+TEST(TurnVisibility, SphereShowsNoTurnCubeShowsAFifth) {
+  const TetMesh sphere = MakeSphere(0.05, 6);
+  Eigen::Matrix3d axes;
+  const Eigen::Vector3d s = TurnVisibility(sphere.rest, sphere.surface, Centre(sphere), &axes);
+  EXPECT_LT(s.maxCoeff(), 0.2 * kVisibleTurn) << s.transpose();
+
+  const TetMesh cube = MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 4, 4, 4);
+  const Eigen::Vector3d b = TurnVisibility(cube.rest, cube.surface, Centre(cube), &axes);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(b(k), 0.2, 0.02) << b.transpose();
+}
+
+TEST(TurnVisibility, CylinderHidesOnlyItsAxis) {
+  const TetMesh cyl = MakeCylinder(0.02, 0.2, 16, 10);
+  Eigen::Matrix3d axes;
+  const Eigen::Vector3d c = Centre(cyl);
+  const Eigen::Vector3d s = TurnVisibility(cyl.rest, cyl.surface, c, &axes);
+  EXPECT_LT(s(0), 0.2 * kVisibleTurn) << s.transpose();
+  EXPECT_GT(s(1), kVisibleTurn) << s.transpose();
+  // The hidden axis is the cylinder's: the direction of its largest extent.
+  const Eigen::Vector3d extent = cyl.rest.colwise().maxCoeff() - cyl.rest.colwise().minCoeff();
+  Eigen::Index along;
+  extent.maxCoeff(&along);
+  EXPECT_GT(std::abs(axes.col(0).normalized()(along)), 0.999) << axes;
+}
+
+// A turn is invariant under a rigid motion of the surface: the visibilities do not change.
+TEST(TurnVisibility, IndependentOfPose) {
+  const TetMesh box = MakeBox(Eigen::Vector3d(0.2, 0.05, 0.03), 8, 3, 2);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::RowVector3d t(0.3, -0.1, 0.5);
+  Vertices moved = (box.rest * R.transpose()).rowwise() + t;
+  const Eigen::Vector3d a = TurnVisibility(box.rest, box.surface, Centre(box), nullptr);
+  const Eigen::Vector3d b = TurnVisibility(moved, box.surface, R * Centre(box) + t.transpose(), nullptr);
+  EXPECT_LT((a - b).norm(), 1e-9) << a.transpose() << " / " << b.transpose();
+}
+
+// One object's state after two frames: x_before, then x turned by `angle` about `axis` through
+// its centre and shifted by `shift`.
+TrackerState Turned(const TetMesh& mesh, const Eigen::Vector3d& axis, double angle,
+                    const Eigen::Vector3d& shift) {
+  TrackerState state;
+  ObjectState object;
+  object.mesh = mesh;
+  state.objects.push_back(object);
+  state.num_vertices = mesh.num_vertices();
+  state.mass = Eigen::VectorXd::Ones(state.num_vertices);
+  state.x_before = mesh.rest;
+  const Eigen::Vector3d c = state.x_before.colwise().mean().transpose();
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  state.x = ((state.x_before.rowwise() - c.transpose()) * R.transpose()).rowwise() +
+            (c + shift).transpose();
+  return state;
+}
+
+TEST(PredictMotion, CarriesASpheresShiftButNotItsTurn) {
+  const Eigen::Vector3d shift(0.004, -0.002, 0.001);
+  const TrackerState state = Turned(MakeSphere(0.05, 5), Eigen::Vector3d(1, 1, 0), 0.05, shift);
+  const Vertices predicted = PredictMotion(state);
+  // Where it is now, moved on by the shift: every vertex within a faceted sphere's share.
+  const Vertices expected = state.x.rowwise() + shift.transpose();
+  const double full_turn = (2.0 * state.x - state.x_before - expected).rowwise().norm().maxCoeff();
+  EXPECT_LT((predicted - expected).rowwise().norm().maxCoeff(), 0.15 * full_turn);
+}
+
+TEST(PredictMotion, CarriesABoxsTurn) {
+  const TrackerState state = Turned(MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 3, 3, 3),
+                                    Eigen::Vector3d(0, 0, 1), 0.05, Eigen::Vector3d(0.001, 0, 0));
+  const Vertices predicted = PredictMotion(state);
+  EXPECT_LT((predicted - (2.0 * state.x - state.x_before)).norm(), 1e-12);
+}
+
+TEST(PredictMotion, AnchoredBodiesKeepTheirTurn) {
+  TrackerState state = Turned(MakeSphere(0.05, 5), Eigen::Vector3d(0, 0, 1), 0.05, Eigen::Vector3d::Zero());
+  Anchor anchor;
+  anchor.object = 0;
+  anchor.vertices = {0};
+  state.anchors["clamp"] = anchor;
+  EXPECT_LT((PredictMotion(state) - (2.0 * state.x - state.x_before)).norm(), 1e-12);
+}
+
+}  // namespace
+}  // namespace femreg
