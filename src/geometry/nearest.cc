@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <utility>
 
 #include "femreg/geometry.h"
 
@@ -107,7 +108,15 @@ void SurfaceIndex::Build(const std::vector<char>* keep) {
   for (size_t i = 0; i < surface_vertex_ids_.size(); ++i) {
     pts.row(static_cast<Eigen::Index>(i)) = positions.row(surface_vertex_ids_[i]);
   }
-  index_ = std::make_unique<PointIndex>(pts);
+  tree_points_ = std::move(pts);
+}
+
+const PointIndex& SurfaceIndex::Tree() const {
+  std::call_once(tree_once_, [this] {
+    index_ = std::make_unique<PointIndex>(tree_points_);
+    tree_points_.resize(0, 3);
+  });
+  return *index_;
 }
 
 // The triangles already tested for one query (neighbouring vertices share most of theirs:
@@ -181,7 +190,7 @@ SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
   int idx[16];
   double d2[16];
   const int k = std::min(candidate_vertices_, 16);
-  const int n = index_->KNearest(query, k, idx, d2);
+  const int n = Tree().KNearest(query, k, idx, d2);
   // The candidates' triangles, each once, in the order first met.
   Tested tested;
   for (int i = 0; i < n; ++i) TestAround(surface_vertex_ids_[idx[i]], query, &tested, &best);

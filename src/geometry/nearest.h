@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "femreg/mesh.h"
@@ -74,7 +75,12 @@ class SurfaceIndex {
   std::vector<int> surface_vertex_ids_;  // index in the tree -> vertex id
   std::vector<int> tri_offsets_, tri_list_;  // vertex id -> incident triangles (CSR)
   std::vector<char> keep_;                    // empty: every triangle
-  std::unique_ptr<PointIndex> index_;
+  // The k-d tree over the surface vertices where they were when the index was made, built by
+  // the first Closest: warm-started queries (ClosestFrom) never need it.
+  const PointIndex& Tree() const;
+  mutable Vertices tree_points_;  // freed once the tree is built
+  mutable std::once_flag tree_once_;
+  mutable std::unique_ptr<PointIndex> index_;
 };
 
 }  // namespace femreg
