@@ -43,7 +43,8 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
            pixel_point[static_cast<size_t>(v) * w + static_cast<size_t>(u)] >= 0;
   };
   // The image's sampling step (a sensor or a writer may keep every k-th pixel): the smallest
-  // k at which a quarter of the points have a neighbour k pixels right or down.
+  // k at which half of the points have a neighbour k pixels right or down (a depth image's
+  // interior points all have one; a cloud projected with the wrong intrinsics is irregular).
   long step = 0;
   for (long k = 1; k <= kMaxPixelStep && step == 0; ++k) {
     int paired = 0;
@@ -53,7 +54,7 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
       const long u = p % static_cast<long>(w), v = p / static_cast<long>(w);
       if (occupied(u + k, v) || occupied(u, v + k)) ++paired;
     }
-    if (4 * paired >= n - misplaced) step = k;
+    if (2 * paired >= n - misplaced) step = k;
   }
   if (step == 0) return 0;  // no image structure to judge by
 
