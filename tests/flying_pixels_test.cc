@@ -98,6 +98,13 @@ TEST(FlyingPixels, OtherCloudsAreLeftAlone) {
   const int before = both.size();
   EXPECT_EQ(RemoveFlyingPixels(c, 3.0, &both), -1);
   EXPECT_EQ(both.size(), before);
+  // An object sampled at every other pixel in front of a wall seen at every pixel (a depth
+  // image whose holes were filled): its samples are in front of all their neighbours, not
+  // between surfaces, and stay.
+  PointCloud interleaved = Render(c, [](int u, int v) { return u % 2 == 0 && v % 2 == 0 && u < 80 ? 0.5 : 2.5; });
+  const int samples = interleaved.size();
+  EXPECT_EQ(RemoveFlyingPixels(c, 4.0, &interleaved), 0);
+  EXPECT_EQ(interleaved.size(), samples);
   // Off: nothing judged.
   PointCloud edge = Render(c, [](int u, int) { return u == 80 ? 0.55 : u < 80 ? 0.5 : 0.6; });
   EXPECT_EQ(RemoveFlyingPixels(c, 0.0, &edge), 0);

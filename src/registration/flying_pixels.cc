@@ -69,13 +69,17 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
     int neighbours = 0, support = 0;
     long su = 0, sv = 0;  // the first supporting neighbour's offset
     bool spread = false;  // two supporting neighbours off one line through the pixel
+    bool nearer = false, farther = false;  // a neighbour in front of it, and one behind
     for (long dv = -1; dv <= 1; ++dv) {
       for (long du = -1; du <= 1; ++du) {
         const long uu = u + step * du, vv = v + step * dv;
         if ((du == 0 && dv == 0) || !occupied(uu, vv)) continue;
         const int j = pixel_point[static_cast<size_t>(vv) * w + static_cast<size_t>(uu)];
         ++neighbours;
-        if (std::abs(depth[static_cast<size_t>(j)] - z) > within) continue;
+        const double dz = depth[static_cast<size_t>(j)] - z;
+        nearer |= dz < -within;
+        farther |= dz > within;
+        if (std::abs(dz) > within) continue;
         if (support++ == 0) {
           su = du;
           sv = dv;
@@ -84,7 +88,9 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
         }
       }
     }
-    if (neighbours >= 2 && !spread) {
+    // A mixed pixel lies between the surfaces around it; a sample in front of all its
+    // neighbours (an object sampled more sparsely than its background) is not one.
+    if (neighbours >= 2 && !spread && nearer && farther) {
       drop[static_cast<size_t>(i)] = 1;
       ++removed;
     }

@@ -12,7 +12,8 @@ namespace femreg {
 // samples (pixels, or every k-th pixel when the image was sampled so, k <= 4 found from the
 // cloud) that lie within tolerance * k * z / fx (that many sample footprints) of its depth z are
 // off one line through it (a surface, not the one-pixel curtain of mixed pixels along an
-// edge), or if fewer than two neighbouring pixels hold a point (nothing to judge by).
+// edge), if fewer than two neighbouring pixels hold a point (nothing to judge by), or if it
+// is not between surfaces (no neighbour both nearer and one farther by more than that).
 // Returns how many were removed; -1 when the cloud is not one depth image of this camera
 // (more than a tenth of its points outside the image, behind the camera or sharing a
 // pixel), and then it is left as it is.
