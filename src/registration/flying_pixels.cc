@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "femreg/point_cloud.h"
+#include "registration/cloud_subset.h"
 
 namespace femreg {
 namespace {
@@ -96,20 +97,7 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
     }
   }
   if (removed == 0) return 0;
-  const bool normals = cloud->has_normals(), labels = cloud->has_labels();
-  int kept = 0;
-  for (int i = 0; i < n; ++i) {
-    if (drop[static_cast<size_t>(i)]) continue;
-    if (kept != i) {
-      cloud->points.row(kept) = cloud->points.row(i);
-      if (normals) cloud->normals.row(kept) = cloud->normals.row(i);
-      if (labels) cloud->labels(kept) = cloud->labels(i);
-    }
-    ++kept;
-  }
-  cloud->points.conservativeResize(kept, 3);
-  if (normals) cloud->normals.conservativeResize(kept, 3);
-  if (labels) cloud->labels.conservativeResize(kept);
+  KeepPoints([&](int i) { return !drop[static_cast<size_t>(i)]; }, cloud);
   return removed;
 }
 

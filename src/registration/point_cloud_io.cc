@@ -24,6 +24,7 @@
 #include "io/ply_reader.h"
 #include "io/text_tokens.h"
 #include "registration/cloud_files.h"
+#include "registration/cloud_subset.h"
 
 namespace femreg {
 
@@ -164,14 +165,12 @@ Status ReadPlyFile(const std::string& path, PointCloud* cloud) {
 
 }  // namespace internal
 
-int DropNonFinite(PointCloud* cloud) {
+int KeepPoints(const std::function<bool(int)>& keep, PointCloud* cloud) {
   const bool normals = cloud->has_normals();
   const bool labels = cloud->has_labels();
   int kept = 0;
   for (int i = 0; i < cloud->size(); ++i) {
-    bool ok = cloud->points.row(i).allFinite();
-    if (normals) ok = ok && cloud->normals.row(i).allFinite();
-    if (!ok) continue;
+    if (!keep(i)) continue;
     if (kept != i) {
       cloud->points.row(kept) = cloud->points.row(i);
       if (normals) cloud->normals.row(kept) = cloud->normals.row(i);
@@ -184,6 +183,13 @@ int DropNonFinite(PointCloud* cloud) {
   if (normals) cloud->normals.conservativeResize(kept, 3);
   if (labels) cloud->labels.conservativeResize(kept);
   return dropped;
+}
+
+int DropNonFinite(PointCloud* cloud) {
+  const bool normals = cloud->has_normals();
+  return KeepPoints([&](int i) {
+    return cloud->points.row(i).allFinite() && (!normals || cloud->normals.row(i).allFinite());
+  }, cloud);
 }
 
 namespace {
