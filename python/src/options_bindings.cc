@@ -52,6 +52,9 @@ void BindOptions(py::module_& m) {
       .def_readwrite("normal_neighbors", &PreprocessOptions::normal_neighbors)
       .def_readwrite("plane_distance", &PreprocessOptions::plane_distance)
       .def_readwrite("plane_iterations", &PreprocessOptions::plane_iterations)
+      .def_readwrite("depth_offset", &PreprocessOptions::depth_offset,
+                     "Take off each frame's common depth offset (flicker), measured on the static "
+                     "plane preprocess.plane removes, with a camera (registration.preprocess.depth_offset)")
       .def_readwrite("mask_dir", &PreprocessOptions::mask_dir,
                      "Depth frames' masks, mask_dir/<frame name>.png (registration.preprocess."
                      "mask_dir; read_depth_frame(..., mask_dir=...) applies them)");

@@ -14,6 +14,7 @@
 #include "femreg/point_cloud.h"
 #include "registration/correspondences.h"
 #include "registration/confidence.h"
+#include "registration/depth_offset.h"
 #include "registration/fracture_step.h"
 #include "registration/flying_pixels.h"
 #include "registration/frame_problem.h"
@@ -119,7 +120,7 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
 }
 
 void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud, int* nonfinite_dropped,
-                             int* flying_pixels) {
+                             int* flying_pixels, RemovedPlane* plane) {
   TransformCloud(options.preprocess, cloud);
   // Before the plane and the outliers: a depth edge's mixed pixels are judged in the image.
   const int flying = options.camera.enabled && options.preprocess.flying_pixels > 0
@@ -129,14 +130,20 @@ void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* clo
   PreprocessPointCloud(options.preprocess, cloud, nonfinite_dropped,
                        options.camera.enabled ? options.camera.position
                        : cloud->has_viewpoint ? cloud->viewpoint
-                                              : Eigen::Vector3d::Zero());
+                                              : Eigen::Vector3d::Zero(),
+                       plane);
 }
 
 void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameSummary* s) {
   const PreprocessOptions& pre = state.options.preprocess;
   const auto t0 = Clock::now();
   fc->cloud = input;
-  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels);
+  const CameraOptions& camera = state.options.camera;
+  const bool offset = pre.depth_offset && camera.enabled && pre.plane_distance > 0;
+  RemovedPlane plane;
+  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels,
+                          offset ? &plane : nullptr);
+  if (offset) s->depth_offset = depth_offset.Correct(camera, pre.plane_distance, plane, &fc->cloud);
   // The cloud is thinned to the surface the data terms see (an embedded one's).
   const TrackerState& pair_state = PairState();
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());

@@ -13,6 +13,7 @@
 #include "geometry/nearest.h"
 #include "parallel/stopwatch.h"
 #include "registration/correspondences.h"
+#include "registration/depth_offset.h"
 #include "registration/embedded_surface.h"
 #include "registration/frame_problem.h"
 #include "registration/tracker_state.h"
@@ -28,6 +29,7 @@ struct Tracker::Impl {
   std::unique_ptr<Backend> backend;
   ModelIndex model_index;
   double mean_edge = 0.0;  // m, at rest: the auto voxel and the model index's tolerance
+  DepthOffset depth_offset;  // preprocess.depth_offset, over the frames tracked
 
   Status Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials);
   Status Track(const PointCloud& input, FrameSummary* summary);

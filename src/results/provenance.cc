@@ -58,7 +58,8 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
                      {"outlier_stddev", p.outlier_stddev},
                      {"normal_neighbors", p.normal_neighbors},
                      {"plane_distance", p.plane_distance},
-                     {"plane_iterations", p.plane_iterations}};
+                     {"plane_iterations", p.plane_iterations},
+                     {"depth_offset", p.depth_offset}};
   j["data"] = FieldsJson(o.data);
   j["weights"] = FieldsJson(o.weights);
   j["solver"] = FieldsJson(o.solver);

@@ -50,7 +50,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("preprocess")) {
     const YamlValue p = v["preprocess"];
     p.CheckKeys({"mask_dir", "scale", "transform", "crop", "plane", "voxel_size", "auto_voxel",
-                 "auto_voxel_min_ratio", "flying_pixels", "outliers", "normals"});
+                 "auto_voxel_min_ratio", "flying_pixels", "depth_offset", "outliers", "normals"});
     if (p.Has("mask_dir")) {
       // Depth-image frames' masks (mask_dir/<frame name>.png), relative to the scene's folder
       // like mesh files. Whether it exists is the frame reader's concern: the scene may be
@@ -70,6 +70,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     }
     if (p.Has("auto_voxel")) r.preprocess.auto_voxel = p["auto_voxel"].AsDouble();
     if (p.Has("flying_pixels")) r.preprocess.flying_pixels = p["flying_pixels"].AsDouble();
+    if (p.Has("depth_offset")) r.preprocess.depth_offset = p["depth_offset"].AsBool();
     if (p.Has("auto_voxel_min_ratio")) {
       r.preprocess.auto_voxel_min_ratio = p["auto_voxel_min_ratio"].AsDouble();
     }

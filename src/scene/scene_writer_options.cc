@@ -62,6 +62,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   Put(preprocess, "auto_voxel", p.auto_voxel, d.preprocess.auto_voxel);
   Put(preprocess, "auto_voxel_min_ratio", p.auto_voxel_min_ratio, d.preprocess.auto_voxel_min_ratio);
   Put(preprocess, "flying_pixels", p.flying_pixels, d.preprocess.flying_pixels);
+  Put(preprocess, "depth_offset", p.depth_offset, d.preprocess.depth_offset);
   YAML::Node outliers = FlowMap();
   Put(outliers, "neighbors", p.outlier_neighbors, d.preprocess.outlier_neighbors);
   Put(outliers, "stddev", p.outlier_stddev, d.preprocess.outlier_stddev);
