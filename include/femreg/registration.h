@@ -442,8 +442,8 @@ struct FrameSummary {
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
   // 1 when the first outer iteration moved the bulk of the vertices (99 %) more than 3 mean
-  // edges and the frame
-  // started again, stiff and stepping down (docs/theory/stopping.md#large-motions).
+  // edges, or the frame came after held or lost ones, and the frame started again, stiff and
+  // stepping down (docs/theory/stopping.md#large-motions).
   int large_motion_restarts = 0;
   // Cloud points found implausible (data.max_strain_step) and the frame's restarts for them.
   int implausible_points = 0, implausible_restarts = 0;

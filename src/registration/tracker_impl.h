@@ -96,6 +96,12 @@ struct Tracker::Impl {
   // (docs/theory/stopping.md#large-motions).
   int iteration_base = 0;
   int iteration_limit = 0;
+  // Frames held or lost since the last one solved: the next solved frame catches up with
+  // their motion too, and has iteration_budget outer iterations from each start (a restart
+  // counts again): solver.max_outer_iterations per frame it makes up for, up to
+  // kMaxCatchUpFrames (docs/guide/tracking-loss.md#coming-back).
+  int missed_frames = 0;
+  int iteration_budget = 0;
   bool stepping_in = false;
   double first_bulk_move = 0.0;  // m, of the frame's first outer iteration (BulkMove)
   // The last outer iteration's start and its energy with what it found (Backtrack).
