@@ -54,8 +54,8 @@ namespace {
 // tracked mesh that splits on its own nodes, not on the truth's crack, can leave a copy of a
 // split vertex on a piece whose material does not reach it. It is compared with the rigid motion
 // of the nearest vertices of its tracked piece that have a row on that piece (the best fit of
-// their rest to their true positions), not with another piece's position; `fallback` when
-// fewer than 4 have one.
+// their rest to their true positions; the 12 nearest, ties included), not with another piece's
+// position; `fallback` when fewer than 4 have one.
 Eigen::Vector3d Extrapolated(const TetMesh& mesh, const std::vector<int>& original, const std::vector<int>& piece,
                              const std::map<int, std::map<int, Eigen::Vector3d>>& sided, int v, int on,
                              const Eigen::Vector3d& fallback) {
@@ -69,8 +69,12 @@ Eigen::Vector3d Extrapolated(const TetMesh& mesh, const std::vector<int>& origin
     near.emplace_back((mesh.rest.row(u).transpose() - X).squaredNorm(), u);
   }
   if (near.size() < 4) return fallback;
-  const size_t n = std::min(kNeighbours, near.size());
-  std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(n), near.end());
+  // The 12 nearest and every vertex as near as the 12th: on a regular mesh many are equally
+  // near, and rest positions read back from a file must pick the same set.
+  std::sort(near.begin(), near.end());
+  size_t n = std::min(kNeighbours, near.size());
+  const double reach = near[n - 1].first * (1.0 + 1e-6) + 1e-18;
+  while (n < near.size() && near[n].first <= reach) ++n;
   Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
   std::vector<Eigen::Vector3d> a(n), b(n);
   for (size_t k = 0; k < n; ++k) {
