@@ -2,6 +2,7 @@
 // equal to the ground truth and offset from it.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -205,6 +206,91 @@ TEST(EvalTest, ForceErrorsAndTheirMedians) {
   EXPECT_NEAR(m.error, 0.1, 1e-12);     // of 0.1, 0.1, 0.8, 0.05
   EXPECT_NEAR(m.torque_error, 0.0, 1e-12);
   EXPECT_TRUE(std::isnan(MedianForceErrors({}).relative));
+}
+
+// A tracked beam split on its own nodes a cell before the ground truth's crack: the copies
+// of the split vertices on the free piece have a truth row only on the clamped piece. They
+// are compared with the free piece's motion carried to them (here a rigid motion, so a
+// tracked result equal to the truth has no error), not with the clamped piece's position;
+// and a tracked beam still whole keeps each vertex's own row.
+TEST(EvalTest, PieceErrorsCarryTheMatchedPiecesMotionToASplitVertexItDoesNotReach) {
+  TetMesh whole = MakeBox(Eigen::Vector3d(0.2, 0.03, 0.03), 12, 2, 2);
+  const double cell = 0.2 / 12, tracked_cut = 4 * cell, truth_cut = 5 * cell;
+  // The tracked split at x = 4 cells: the elements beyond it take copies of its 9 vertices.
+  TetMesh mesh = whole;
+  std::vector<int> original(static_cast<size_t>(whole.num_vertices()));
+  for (int v = 0; v < whole.num_vertices(); ++v) original[static_cast<size_t>(v)] = v;
+  std::vector<int> copy_of(static_cast<size_t>(whole.num_vertices()), -1);
+  std::vector<Eigen::RowVector3d> added;
+  for (int e = 0; e < mesh.num_tets(); ++e) {
+    double cx = 0.0;
+    for (int k = 0; k < 4; ++k) cx += 0.25 * whole.rest(whole.tets(e, k), 0);
+    if (cx < tracked_cut) continue;
+    for (int k = 0; k < 4; ++k) {
+      const int v = whole.tets(e, k);
+      if (std::abs(whole.rest(v, 0) - tracked_cut) > 1e-9) continue;
+      if (copy_of[static_cast<size_t>(v)] < 0) {
+        copy_of[static_cast<size_t>(v)] = whole.num_vertices() + static_cast<int>(added.size());
+        added.push_back(whole.rest.row(v));
+        original.push_back(v);
+      }
+      mesh.tets(e, k) = copy_of[static_cast<size_t>(v)];
+    }
+  }
+  ASSERT_EQ(added.size(), 9u);
+  mesh.rest.conservativeResize(whole.num_vertices() + 9, 3);
+  for (size_t i = 0; i < added.size(); ++i) mesh.rest.row(whole.num_vertices() + static_cast<int>(i)) = added[i];
+  mesh.x = mesh.rest;
+  BuildTopology(&mesh);
+  std::vector<int> piece;
+  ASSERT_EQ(ConnectedPieces(mesh, &piece), 2);
+
+  // The truth: the clamped piece (x <= 5 cells) at rest, the free one (x >= 5 cells) turned
+  // and carried away; side rows for every vertex on each piece its material reaches.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Vector3d t(0.03, 0.01, -0.02);
+  auto moved = [&](const Eigen::Vector3d& X) { return Eigen::Vector3d(R * X + t); };
+  GroundTruthFrame truth;
+  truth.positions = whole.rest;
+  truth.visible.assign(static_cast<size_t>(whole.num_vertices()), 1);
+  std::vector<PieceTruthRow> rows;
+  for (int v = 0; v < whole.num_vertices(); ++v) {
+    const Eigen::Vector3d X = whole.rest.row(v);
+    if (X.x() <= truth_cut + 1e-9) rows.push_back({v, 0, X});
+    if (X.x() >= truth_cut - 1e-9) rows.push_back({v, 1, moved(X)});
+    if (X.x() > truth_cut + 1e-9) truth.positions.row(v) = moved(X).transpose();
+  }
+  // The tracked result is the truth: each piece where its material is.
+  const int free_piece = piece[mesh.num_vertices() - 1];
+  Vertices positions = mesh.rest;
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (piece[static_cast<size_t>(v)] == free_piece) positions.row(v) = moved(mesh.rest.row(v)).transpose();
+  }
+  PieceErrors pe = ComputePieceErrors(mesh, positions, original, truth, rows);
+  ASSERT_EQ(pe.pieces.size(), 2u);
+  EXPECT_NEAR(pe.pieces[0].max, 0.0, 1e-9);
+  EXPECT_NEAR(pe.pieces[1].max, 0.0, 1e-9);
+  // A copy is compared with where the free piece's motion puts it; its only row (the clamped
+  // piece's, at rest) is more than 1 cm from there.
+  for (int c = whole.num_vertices(); c < mesh.num_vertices(); ++c) {
+    const Eigen::Vector3d X = mesh.rest.row(c);
+    EXPECT_NEAR((Eigen::Vector3d(pe.matched.positions.row(c)) - moved(X)).norm(), 0.0, 1e-9);
+    EXPECT_GT((moved(X) - X).norm(), 0.01);
+  }
+
+  // The whole tracked beam beside the broken truth: a vertex keeps the truth of the piece it
+  // is on (its only row), whatever piece the whole beam is matched to.
+  Vertices whole_positions = truth.positions;
+  std::vector<int> identity(static_cast<size_t>(whole.num_vertices()));
+  for (int v = 0; v < whole.num_vertices(); ++v) identity[static_cast<size_t>(v)] = v;
+  pe = ComputePieceErrors(whole, whole_positions, identity, truth, rows);
+  ASSERT_EQ(pe.pieces.size(), 1u);
+  int far_off = 0;
+  for (int v = 0; v < whole.num_vertices(); ++v) {
+    if ((pe.matched.positions.row(v) - truth.positions.row(v)).norm() > 1e-12) ++far_off;
+  }
+  // Only the vertices of the truth's crack (rows on both pieces) take the matched piece's.
+  EXPECT_LE(far_off, 9);
 }
 
 #ifdef FEMREG_CLI_PATH

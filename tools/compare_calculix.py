@@ -12,8 +12,12 @@ pressed and then slid; ccx solves *CONTACT PAIR, surface to surface, with a line
 NLGEOM on the same C3D4 meshes. Compared: the total contact force on the pressed block (femreg's
 ContactPotential::Forces; ccx's: minus the reaction at the pressed face) and the displacements
 of the pressed block's free surface (its sides).
+Separation (tools/cut_case.h): a soft beam bent by a gripper, then a 5 mm slab of its elements
+removed (ccx: *MODEL CHANGE, TYPE=ELEMENT, REMOVE in a second NLGEOM step; femreg: the elements
+dropped from the mesh) while the gripper carries the free end on. Compared: every node's
+displacement after each step, per piece after the cut.
 Usage:
-    compare_calculix.py PROBE [--ccx ccx] [--keep DIR] [--only single|contact]
+    compare_calculix.py PROBE [--ccx ccx] [--keep DIR] [--only single|contact|cut]
                         [--markdown FILE] [--fixture DIR]
 --markdown writes the contact table, --fixture ccx's forces and displacements for
 tests/contact_press_test.cc (tests/fixtures/calculix_contact).
@@ -84,6 +88,15 @@ CONTACT_LAW_CASES = [
     ("block on block, pressed 3 mm", "support=block press=0.0035"),
     ("block on rigid plane, pressed 3 mm", "support=plane press=0.0035"),
     ("block on rigid plane, 3 mm, corotational", "support=plane press=0.0035 model=corotational"),
+]
+
+
+# The cut (issue 43): name, probe arguments (shape=cut; tools/cut_case.h). The beam (200 x 30 x
+# 30 mm, 40 x 6 x 6 cells, E 50 kPa) is bent by its gripper, then the 70-75 mm slab's elements
+# are removed while the gripper carries the free end on by (16, 0, 12) mm.
+CUT_CASES = [
+    ("beam bent 0.2 rad, then cut", "bend=0.2"),
+    ("beam bent 0.4 rad, then cut", "bend=0.4"),
 ]
 
 
@@ -194,6 +207,93 @@ def contact_cases(args, work):
     return rows
 
 
+def fortran_float(text):
+    """A number as ccx prints it: a three-digit exponent loses its E (-1.016177-120)."""
+    try:
+        return float(text)
+    except ValueError:
+        return float(re.sub(r"(?<=[0-9.])([-+])(\d{3})$", r"E\1\2", text))
+
+
+def read_ccx_steps(path):
+    """The last 'displacements' block of each step of a .dat file, by the time it prints
+    (step 1 ends at time 1, step 2 at 2): [{node: (ux, uy, uz)}, ...]."""
+    blocks, current = {}, None
+    with open(path) as f:
+        for line in f:
+            if "displacements" in line:
+                found = re.search(r"time\s+([-0-9.E+]+)", line)
+                current = {}
+                blocks[float(found.group(1)) if found else len(blocks)] = current
+                continue
+            parts = line.split()
+            if current is not None and len(parts) == 4:
+                try:
+                    current[int(parts[0])] = tuple(fortran_float(p) for p in parts[1:])
+                except ValueError:
+                    current = None
+            elif current is not None and parts:
+                current = None
+    ends = []
+    for step in (1.0, 2.0):
+        at = [t for t in blocks if abs(t - step) < 1e-6]
+        if not at:
+            raise RuntimeError(f"no displacements at the end of step {step:g} in {path}")
+        ends.append(blocks[at[0]])
+    return ends
+
+
+def read_cut_csv(path):
+    rows = {}
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            rows[int(row["id"])] = ((float(row["ux1"]), float(row["uy1"]), float(row["uz1"])),
+                                    (float(row["ux2"]), float(row["uy2"]), float(row["uz2"])),
+                                    int(row["piece"]))
+    return rows
+
+
+def cut_cases(args, work):
+    """The beam bent, then a slab of its elements removed (*MODEL CHANGE, TYPE=ELEMENT,
+    REMOVE): the displacements after each step, per piece after the cut."""
+    header = (f"{'case':34s} {'step':16s} {'nodes':>6s} {'max|u| femreg':>14s} {'max|u| ccx':>12s}"
+              f" {'rms|du|/max|u|':>9s} {'max|du|/max|u|':>9s} {'its':>5s} {'ccx s':>6s}")
+    print(header)
+    print("-" * len(header))
+    rows = []
+    for index, (name, probe_args) in enumerate(CUT_CASES):
+        stem = f"cut{index}"
+        csv_path = os.path.join(work, stem + ".csv")
+        cmd = [args.probe, "shape=cut"] + probe_args.split() + [
+            f"csv={csv_path}", f"inp={os.path.join(work, stem + '.inp')}"]
+        probe_log = os.path.join(work, stem + ".probe.log")
+        run(cmd, work, probe_log)
+        found = re.search(r"cut: .*?(\d+) Newton iterations", open(probe_log).read())
+        iterations = found.group(1) if found else "?"
+        start = time.time()
+        run([args.ccx, "-i", stem], work, os.path.join(work, stem + ".ccx.log"))
+        ccx_seconds = time.time() - start
+        femreg_u = read_cut_csv(csv_path)
+        ccx_steps = read_ccx_steps(os.path.join(work, stem + ".dat"))
+        # Relative to the step's largest ccx displacement (the clamped piece is back at rest
+        # after the cut: its own displacements are ~0).
+        step_max = [max(norm(u) for u in ccx_steps[k].values()) for k in range(2)]
+        for step, label, nodes in ((0, "bent (intact)", [i for i in femreg_u]),
+                                   (1, "cut, clamped", [i for i, r in femreg_u.items() if r[2] == 0]),
+                                   (1, "cut, free", [i for i, r in femreg_u.items() if r[2] == 1])):
+            uf = [femreg_u[i][step] for i in nodes]
+            uc = [ccx_steps[step][i] for i in nodes]
+            diff = [norm([a - b for a, b in zip(p, q)]) for p, q in zip(uf, uc)]
+            rms_rel = math.sqrt(sum(d * d for d in diff) / len(diff)) / step_max[step]
+            max_rel = max(diff) / step_max[step]
+            print(f"{name:34s} {label:16s} {len(nodes):6d} {max(norm(u) for u in uf):14.6e}"
+                  f" {max(norm(u) for u in uc):12.6e} {rms_rel:9.2%} {max_rel:9.2%} {iterations:>5s}"
+                  f" {ccx_seconds:6.1f}")
+            rows.append((name, label, len(nodes), max(diff), step_max[step], rms_rel, max_rel))
+        sys.stdout.flush()
+    return rows
+
+
 def write_markdown(path, rows):
     with open(path, "w") as out:
         out.write("| case | contact force femreg (x, z) N | ccx (x, z) N | force error | displacement"
@@ -232,13 +332,20 @@ def main():
     parser.add_argument("probe")
     parser.add_argument("--ccx", default="ccx")
     parser.add_argument("--keep", default=None, help="keep the decks and results in DIR")
-    parser.add_argument("--only", choices=["single", "contact"], default=None)
+    parser.add_argument("--only", choices=["single", "contact", "cut"], default=None)
     parser.add_argument("--markdown", default=None, help="write the contact table to FILE")
     parser.add_argument("--fixture", default=None, help="write ccx's contact results to DIR")
     args = parser.parse_args()
     args.probe = os.path.abspath(args.probe)  # the probe runs in the work folder
     work = args.keep or tempfile.mkdtemp(prefix="femreg_ccx_")
     os.makedirs(work, exist_ok=True)
+
+    if args.only in (None, "cut"):
+        cut_cases(args, work)
+        if args.only == "cut":
+            print(f"\n(decks and results in {work})")
+            return
+        print()
 
     if args.only != "single":
         rows = contact_cases(args, work)

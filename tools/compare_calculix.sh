@@ -1,8 +1,9 @@
 #!/bin/sh
 # Compares femreg's forward solve with CalculiX on the same C3D4 meshes and loads:
 # femreg linear vs ccx linear (should agree to ~1e-6), femreg corotational vs ccx NLGEOM, and
-# contact: a block pressed onto a block or a rigid plane, with and without friction (*CONTACT PAIR).
-#   tools/compare_calculix.sh [BUILD_DIR] [--keep DIR] [--only single|contact] [--markdown FILE]
+# contact: a block pressed onto a block or a rigid plane, with and without friction (*CONTACT PAIR),
+# and separation: a bent beam cut by removing a slab of its elements (*MODEL CHANGE).
+#   tools/compare_calculix.sh [BUILD_DIR] [--keep DIR] [--only single|contact|cut] [--markdown FILE]
 #                             [--fixture DIR]
 # BUILD_DIR (default: build) must hold femreg_forward_probe (FEMREG_BUILD_TOOLS=ON):
 #   cmake -S . -B build && make -C build -j2 femreg_forward_probe

@@ -18,6 +18,10 @@
 //
 // The box lies along +x and is clamped at x = 0; the cylinder along +z, clamped at z = 0.
 //
+//   femreg_forward_probe shape=cut key=value ...   (separation: tools/cut_case.h)
+//     E=5e4 nu=0.35 bend=0.4 (rad) carry_x=0.016 carry_z=0.012 (m) load_steps=8 max_iterations=100
+//     csv=out.csv (id,X,Y,Z,ux1,uy1,uz1,ux2,uy2,uz2,piece: after each step)  inp=out.inp
+//
 //   femreg_forward_probe shape=press key=value ...   (contact: tools/press_case.h)
 //     support=block|plane  E=3e4 (pressed block)  E_base=6e4  nu=0.3  gap=5e-4  press=1.5e-3
 //     slide=0 (m, along x)  slide_frames=12  load_steps=8  stiffness=1e5 (k, N/m)  distance=1e-3
@@ -39,6 +43,7 @@
 #include "femreg/forward.h"
 #include "femreg/io.h"
 #include "femreg/mesh.h"
+#include "tools/cut_case.h"
 #include "tools/press_case.h"
 
 namespace {
@@ -116,6 +121,44 @@ int Press(const std::map<std::string, std::string>& args) {
   return r.converged ? 0 : 1;
 }
 
+// shape=cut: the separation case of tools/cut_case.h.
+int Cut(const std::map<std::string, std::string>& args) {
+  using namespace femreg;
+  CutOptions o;
+  const Status parsed = ParseCutOptions(args, &o);
+  if (!parsed.ok()) {
+    std::cerr << "femreg_forward_probe: " << parsed.message() << "\n";
+    return 2;
+  }
+  CutResult r;
+  const Status status = SolveCutCase(o, &r);
+  if (!status.ok()) {
+    std::cerr << "femreg_forward_probe: " << status.message() << "\n";
+    return 1;
+  }
+  std::cerr << r.report << "cut: " << (r.converged ? "converged" : "NOT converged") << ", "
+            << r.newton_iterations << " Newton iterations, " << r.slab.size() << " elements removed\n";
+  const std::string csv = Text(args, "csv", "");
+  if (!csv.empty()) {
+    std::ofstream out(csv);
+    out.precision(12);
+    out << "id,X,Y,Z,ux1,uy1,uz1,ux2,uy2,uz2,piece\n";
+    for (int v = 0; v < r.mesh.num_vertices(); ++v) {
+      out << v + 1 << "," << r.mesh.rest(v, 0) << "," << r.mesh.rest(v, 1) << "," << r.mesh.rest(v, 2);
+      for (const Vertices* u : {&r.u_bent, &r.u_cut}) {
+        out << "," << (*u)(v, 0) << "," << (*u)(v, 1) << "," << (*u)(v, 2);
+      }
+      out << "," << r.piece[static_cast<size_t>(v)] << "\n";
+    }
+  }
+  const std::string inp = Text(args, "inp", "");
+  if (!inp.empty()) {
+    std::ofstream out(inp);
+    WriteCutDeck(o, r, out);
+  }
+  return r.converged ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -123,6 +166,7 @@ int main(int argc, char** argv) {
   const auto args = ParseArgs(argc, argv);
   const std::string shape = Text(args, "shape", "box");
   if (shape == "press") return Press(args);
+  if (shape == "cut") return Cut(args);
   const double length = Number(args, "length", 1.0);
   const int n = static_cast<int>(Number(args, "n", 4));
   int axial = static_cast<int>(Number(args, "axial", 0));

@@ -25,6 +25,9 @@ struct VtuGeometry {
   // The point field "original_vertex" (`femreg register` with fracture: the vertex of the
   // first mesh each vertex comes from); empty when the file has none.
   std::vector<int> original;
+  // The rest positions, points minus the point field "displacement" (`femreg register`'s);
+  // empty when the file has none.
+  Vertices rest;
 };
 Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry);
 
@@ -53,7 +56,11 @@ SurfaceDistance ComputeSurfaceDistance(const Vertices& points_a, const Triangles
 // every ground-truth piece it touches. Matching: every tracked vertex maps to its original
 // vertex; each tracked piece is matched to the ground-truth piece that most of its
 // unambiguous vertices lie on, and a vertex takes its original's position on that piece
-// (the CSV row when the side file has none).
+// (the CSV row when the side file has none). A vertex the tracker split whose original has
+// rows, but none on its piece's match (a tracked crack on the tracked mesh's own nodes, a cell
+// from the truth's), takes the rigid motion of its piece's 12 nearest vertices that have one
+// (ties included; the best fit of their rest to their true positions), not another piece's
+// position.
 struct PieceTruthRow {
   int vertex = 0;  // original vertex id
   int piece = 0;   // ground-truth piece

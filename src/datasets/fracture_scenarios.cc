@@ -90,9 +90,9 @@ Scenario BeamBreak() {
   s.right = ArcGripper(s.size.x() - 0.01125, 3.2, 16, 16, Eigen::Vector3d(0.004, 0, 0.004));
   s.left_anchor_tracked = true;
   s.right_anchor_tracked = false;
-  // The free piece, seen only on its side and top, slid along its axis with visibility on
-  // (docs/notes/2026-11-28-figures-from-code-comments.md).
-  s.tracked_visibility = false;
+  // The camera's visibility test on (the default): the free piece, seen only on its side and
+  // top, slid along its axis while the data at its crack pulled it (before the crack's surface
+  // paired with nothing: docs/notes/2026-11-29-fracture-pieces.md).
   // One crack that grows from its front: with every node free to split, a change in the last
   // bit of the solve (another thread count, another CPU) could break the tracked beam into
   // more pieces (docs/notes/2026-11-28-figures-from-code-comments.md).

@@ -1,4 +1,7 @@
 // Ground truth for meshes that split: the per-piece side file and the piece matching.
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -45,6 +48,53 @@ Status WritePieceTruth(const std::string& path, const std::vector<PieceTruthRow>
   return WriteFileAtomically(path, os.str());
 }
 
+namespace {
+
+// Where a tracked vertex v lies on truth piece `on` when the truth has no row for it there: a
+// tracked mesh that splits on its own nodes, not on the truth's crack, can leave a copy of a
+// split vertex on a piece whose material does not reach it. It is compared with the rigid motion
+// of the nearest vertices of its tracked piece that have a row on that piece (the best fit of
+// their rest to their true positions; the 12 nearest, ties included), not with another piece's
+// position; `fallback` when fewer than 4 have one.
+Eigen::Vector3d Extrapolated(const TetMesh& mesh, const std::vector<int>& original, const std::vector<int>& piece,
+                             const std::map<int, std::map<int, Eigen::Vector3d>>& sided, int v, int on,
+                             const Eigen::Vector3d& fallback) {
+  constexpr size_t kNeighbours = 12;
+  const Eigen::Vector3d X = mesh.rest.row(v).transpose();
+  std::vector<std::pair<double, int>> near;
+  for (int u = 0; u < mesh.num_vertices(); ++u) {
+    if (piece[u] != piece[v]) continue;
+    auto it = sided.find(original[u]);
+    if (it == sided.end() || !it->second.count(on)) continue;
+    near.emplace_back((mesh.rest.row(u).transpose() - X).squaredNorm(), u);
+  }
+  if (near.size() < 4) return fallback;
+  // The 12 nearest and every vertex as near as the 12th: on a regular mesh many are equally
+  // near, and rest positions read back from a file must pick the same set.
+  std::sort(near.begin(), near.end());
+  size_t n = std::min(kNeighbours, near.size());
+  const double reach = near[n - 1].first * (1.0 + 1e-6) + 1e-18;
+  while (n < near.size() && near[n].first <= reach) ++n;
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> a(n), b(n);
+  for (size_t k = 0; k < n; ++k) {
+    const int u = near[k].second;
+    a[k] = mesh.rest.row(u).transpose();
+    b[k] = sided.at(original[u]).at(on);
+    ca += a[k] / static_cast<double>(n);
+    cb += b[k] / static_cast<double>(n);
+  }
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (size_t k = 0; k < n; ++k) H += (a[k] - ca) * (b[k] - cb).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d R = svd.matrixV() * D * svd.matrixU().transpose();
+  return R * (X - ca) + cb;
+}
+
+}  // namespace
+
 PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
                                const std::vector<int>& original, const GroundTruthFrame& truth,
                                const std::vector<PieceTruthRow>& piece_truth) {
@@ -70,6 +120,13 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
       }
     }
   }
+  // Tracked copies per original vertex: only a vertex the tracker split can be on a piece
+  // its truth is not on (an intact tracked body beside a broken truth keeps its rows).
+  std::vector<int> copies(truth.positions.rows() > 0 ? static_cast<size_t>(truth.positions.rows()) : 0, 0);
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (original[v] >= static_cast<int>(copies.size())) copies.resize(static_cast<size_t>(original[v]) + 1, 0);
+    ++copies[static_cast<size_t>(original[v])];
+  }
   Vertices truth_positions(mesh.num_vertices(), 3);
   GroundTruthFrame matched;
   matched.visible.resize(mesh.num_vertices());
@@ -80,7 +137,11 @@ PieceErrors ComputePieceErrors(const TetMesh& mesh, const Vertices& positions,
     auto it = sided.find(o);
     if (it != sided.end()) {
       auto jt = it->second.find(match[piece[v]]);
-      if (jt != it->second.end()) p = jt->second;
+      if (jt != it->second.end()) {
+        p = jt->second;
+      } else if (match[piece[v]] >= 0 && copies[static_cast<size_t>(o)] > 1) {
+        p = Extrapolated(mesh, original, piece, sided, v, match[piece[v]], p);
+      }
     }
     truth_positions.row(v) = p.transpose();
     matched.visible[v] = o < static_cast<int>(truth.visible.size()) ? truth.visible[o] : 0;

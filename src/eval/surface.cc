@@ -97,6 +97,18 @@ Status ReadVtuGeometry(const std::string& path, VtuGeometry* geometry) {
     }
     break;
   }
+  geometry->rest.resize(0, 3);
+  for (const internal::VtuArray& array : piece.point_data) {
+    if (array.name != "displacement" || array.components != 3 ||
+        array.values.size() != static_cast<size_t>(3 * n)) {
+      continue;
+    }
+    geometry->rest = geometry->points;
+    for (long long i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) geometry->rest(i, k) -= array.values[static_cast<size_t>(3 * i + k)];
+    }
+    break;
+  }
   std::vector<std::array<int, 4>> tets;
   std::vector<std::array<int, 3>> tris;
   for (size_t c = 0; c < piece.types.size(); ++c) {

@@ -133,6 +133,9 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
   const Eigen::MatrixXd normals = (view || plane) ? state.VertexNormals() : Eigen::MatrixXd();
   const LabelSplit labels(state, cloud);
   const int threads = ResolveThreadCount(num_threads);
+  // After a break, the surface at a crack pairs with nothing (docs/theory/fracture.md#pieces).
+  const std::vector<char>* crack =
+      state.fracture && static_cast<int>(state.fracture->crack.size()) == state.num_vertices ? &state.fracture->crack : nullptr;
 
   // Each cloud point's closest surface point (every cloud_stride-th point), first: the
   // cloud->model pairs, and the model->cloud pairs' reciprocity. Points without an
@@ -237,6 +240,10 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
         ++counts->rejected;
         continue;
       }
+      if (crack != nullptr && (*crack)[static_cast<size_t>(v)]) {
+        ++counts->crack;
+        continue;
+      }
       if ((mutual && foreign[static_cast<size_t>(i)]) || fc.Occluder(q)) {  // also from a held set
         ++counts->trimmed;
         continue;
@@ -284,6 +291,12 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       }
       const int labelled = labels.active() ? labels.point_object[i] : -1;
       const Triangles& tris = labelled >= 0 ? labels.object_surface[labelled] : other_surface;
+      if (crack != nullptr && ((*crack)[static_cast<size_t>(tris(hit.triangle, 0))] ||
+                               (*crack)[static_cast<size_t>(tris(hit.triangle, 1))] ||
+                               (*crack)[static_cast<size_t>(tris(hit.triangle, 2))])) {
+        ++counts->crack;
+        continue;
+      }
       DataPair pair;
       pair.num_vertices = 3;
       for (int k = 0; k < 3; ++k) pair.vertices[k] = tris(hit.triangle, k);

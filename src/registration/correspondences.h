@@ -38,6 +38,7 @@ struct PairCounts {
   int trimmed = 0;   // model->cloud: beyond the reciprocity trim, or facing away
   int covered = 0;   // surface vertices with a cloud point within the trim (the coverage)
   int occluded = 0;  // cloud points of an occluder (FrameCloud::occluder), paired with nothing
+  int crack = 0;     // pairs dropped at the crack of an object in pieces (FractureState::crack)
 };
 
 // One frame's cloud, prepared once per frame: scaled and transformed, preprocessed,

@@ -110,6 +110,34 @@ void RelaxPieces(int i, TrackerState* state) {
   }
 }
 
+// FractureState::crack, for the objects in pieces. The tracked mesh parts along its own nodes
+// and faces, up to a cell away from where the body really broke, so each piece may lack or
+// carry material at its crack end that the data does not show: pulled to the data's end, a
+// soft piece stretches or slides along its axis. Its pose comes from the rest of its surface.
+void MarkCracks(TrackerState* state) {
+  FractureState& f = *state->fracture;
+  f.crack.clear();
+  std::vector<char> crack;
+  for (size_t i = 0; i < state->objects.size(); ++i) {
+    const ObjectState& o = state->objects[i];
+    std::vector<int> piece;
+    if (ConnectedPieces(o.mesh, &piece) < 2) continue;
+    const std::vector<int>& original = f.original[i];
+    const std::vector<char>& was_surface = f.initial_surface[i];
+    std::vector<int> copies(was_surface.size(), 0);
+    for (int id : original) ++copies[static_cast<size_t>(id)];
+    if (crack.empty()) crack.assign(static_cast<size_t>(state->num_vertices), 0);
+    for (int v = 0; v < o.mesh.num_vertices(); ++v) {
+      const int id = original[static_cast<size_t>(v)];
+      if (copies[static_cast<size_t>(id)] > 1) crack[static_cast<size_t>(o.offset + v)] = 1;
+    }
+    for (int v : o.mesh.surface_vertices) {
+      if (!was_surface[static_cast<size_t>(original[static_cast<size_t>(v)])]) crack[static_cast<size_t>(o.offset + v)] = 1;
+    }
+  }
+  f.crack = std::move(crack);
+}
+
 }  // namespace
 
 std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState* state,
@@ -197,6 +225,7 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
   for (size_t i = 0; i < state->objects.size(); ++i) {
     if (parted[i] && f.options[i].relax_pieces) RelaxPieces(static_cast<int>(i), state);
   }
+  MarkCracks(state);
   return source;
 }
 

@@ -125,6 +125,9 @@ Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
     std::vector<int> ids(o.mesh.num_vertices());
     for (int v = 0; v < o.mesh.num_vertices(); ++v) ids[v] = v;
     f->original.push_back(std::move(ids));
+    std::vector<char> on_surface(static_cast<size_t>(o.mesh.num_vertices()), 0);
+    for (int v : o.mesh.surface_vertices) on_surface[static_cast<size_t>(v)] = 1;
+    f->initial_surface.push_back(std::move(on_surface));
     NodeSeparation sep;
     sep.measure = Eigen::VectorXd::Zero(o.mesh.num_vertices());
     f->separation.push_back(std::move(sep));

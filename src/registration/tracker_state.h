@@ -66,6 +66,12 @@ struct FractureState {
   bool live = false;
   bool separated = false;  // the last fracture step parted an object into more pieces
   bool frame_separated = false;  // one of this frame's did
+  // Per object, per vertex as created: on the surface then.
+  std::vector<std::vector<char>> initial_surface;
+  // #V global, or empty: the vertices on the crack of an object already in pieces (the
+  // copies of split vertices, and vertices the split left on the surface that were inside),
+  // which pair with no data (docs/theory/fracture.md#pieces).
+  std::vector<char> crack;
 };
 // Low enough that what fracture turns off is off for the frames that lead up to a break (with
 // half the toughness, beam_break's trimmed fits kept its crack from going through).

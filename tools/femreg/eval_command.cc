@@ -336,7 +336,9 @@ int RunEval(const std::string& result, const std::string& truth_dir, std::string
           initial_vertices[i] = *std::max_element(g.original.begin(), g.original.end()) + 1;
         }
         frame.splits += static_cast<int>(g.points.rows()) - initial_vertices[i];  // net new vertices
-        meshes[i].rest = g.points;
+        // The rest positions place a split vertex on a piece its truth does not reach
+        // (ComputePieceErrors).
+        meshes[i].rest = g.rest.rows() == g.points.rows() ? g.rest : g.points;
         meshes[i].x = g.points;
         meshes[i].tets = g.tets;
         tracked[i] = {&meshes[i], &g.points, &g.original, initial_vertices[i]};
