@@ -125,5 +125,22 @@ TEST(HoldHiddenTurns, KeepsVisibleAndAnchoredTurns) {
   EXPECT_LT((x - held.x).norm(), 1e-12);
 }
 
+// With an embedded surface, its visibility decides: a box scanned inside a round cage keeps
+// its turn, which the cage alone would hide.
+TEST(HoldHiddenTurns, TheEmbeddedSurfaceDecides) {
+  const TetMesh sphere = MakeSphere(0.05, 5);
+  const TrackerState state = Turned(sphere, Eigen::Vector3d(0, 0, 1), 0.05, Eigen::Vector3d::Zero());
+  const TetMesh box = MakeBox(Eigen::Vector3d(0.05, 0.03, 0.02), 3, 2, 2);
+  const Vertices rest = (box.rest.rowwise() - box.rest.colwise().mean()).rowwise() + sphere.rest.colwise().mean();
+  EmbeddedSurface surface;
+  ASSERT_TRUE(MakeEmbeddedSurface(sphere, rest, box.surface, &surface).ok());
+  DataSurface data;
+  data.Build(state, {&surface});
+  Vertices x = state.x;
+  EXPECT_FALSE(HoldHiddenTurns(state, state.x_before, &x, &data));
+  EXPECT_LT((x - state.x).norm(), 1e-12);
+  EXPECT_TRUE(HoldHiddenTurns(state, state.x_before, &x));
+}
+
 }  // namespace
 }  // namespace femreg

@@ -261,7 +261,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     return false;
   }
   row.after = report.after;
-  if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x)) {
+  if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
     row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
   }
   const bool contacts_pending =

@@ -56,7 +56,8 @@ bool TurnBack(const TrackerState& state, int o, const Eigen::Vector3d& turn, con
 
 }  // namespace
 
-HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from, const Vertices& to) {
+HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from, const Vertices& to,
+                          DataSurface* data) {
   HiddenTurn out;
   const ObjectState& object = state.objects[static_cast<size_t>(o)];
   const int begin = object.offset, n = object.mesh.num_vertices();
@@ -86,8 +87,13 @@ HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from
   if (!w.allFinite() || w.isZero(0.0)) return out;
 
   Eigen::Matrix3d axes;
-  const Triangles tris = state.ObjectSurface(o);
-  const Eigen::Vector3d visibility = TurnVisibility(to, tris, c, &axes);
+  Eigen::Vector3d visibility;
+  if (data != nullptr && data->embedded(o)) {
+    data->Update(to);
+    visibility = TurnVisibility(data->ObjectPositions(o), data->ObjectSurface(o), c, &axes);
+  } else {
+    visibility = TurnVisibility(to, state.ObjectSurface(o), c, &axes);
+  }
   // w = sum_k a_k axes_k with a = axes^-1 w; the hidden part of each a_k is kept.
   const Eigen::Vector3d a = axes.partialPivLu().solve(w);
   for (int k = 0; k < 3; ++k) {
@@ -98,23 +104,23 @@ HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from
   return out;
 }
 
-bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* x) {
+bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* x, DataSurface* data) {
   if (FractureLive(state)) return false;
   bool turned = false;
   for (size_t o = 0; o < state.objects.size(); ++o) {
     if (Held(state, static_cast<int>(o))) continue;
-    const HiddenTurn h = FindHiddenTurn(state, static_cast<int>(o), from, *x);
+    const HiddenTurn h = FindHiddenTurn(state, static_cast<int>(o), from, *x, data);
     turned = TurnBack(state, static_cast<int>(o), h.turn, h.centre, x) || turned;
   }
   return turned;
 }
 
-Vertices PredictMotion(const TrackerState& state) {
+Vertices PredictMotion(const TrackerState& state, DataSurface* data) {
   Vertices predicted = 2.0 * state.x - state.x_before;
   if (FractureLive(state)) return predicted;  // pieces turn as they part: their own pre-alignment
   for (size_t o = 0; o < state.objects.size(); ++o) {
     if (Held(state, static_cast<int>(o))) continue;
-    const HiddenTurn h = FindHiddenTurn(state, static_cast<int>(o), state.x_before, state.x);
+    const HiddenTurn h = FindHiddenTurn(state, static_cast<int>(o), state.x_before, state.x, data);
     TurnBack(state, static_cast<int>(o), h.turn, h.centre + h.velocity, &predicted);  // the predicted centre
   }
   return predicted;

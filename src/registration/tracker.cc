@@ -209,7 +209,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // does not show.
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
-    const Vertices predicted = PredictMotion(state);
+    const Vertices predicted = PredictMotion(state, data_surface.get());
     // Not through a flat element: the inversion barrier's energy is infinite there.
     if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted))) {
       state.x = predicted;
