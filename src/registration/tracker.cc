@@ -137,6 +137,7 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   const auto t0 = Clock::now();
   fc->cloud = input;
   PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels);
+  prepared_cloud = fc->cloud;
   // The cloud is thinned to the surface the data terms see (an embedded one's).
   const TrackerState& pair_state = PairState();
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());
@@ -175,6 +176,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.frame = state.frame;
   s.backend = backend->type();
   s.cloud_points = input.size();
+  prepared_cloud = PointCloud();  // this frame's, once prepared
   if (input.points.cols() != 3 ||
       (input.normals.rows() != 0 && input.normals.rows() != input.points.rows())) {
     s.termination = TerminationType::kInvalidInput;
@@ -459,6 +461,7 @@ Status Tracker::SetVertices(int object, const Vertices& x) {
   return Status::Ok();
 }
 const RegistrationOptions& Tracker::options() const { return impl_->state.options; }
+const PointCloud& Tracker::prepared_cloud() const { return impl_->prepared_cloud; }
 const CollisionWorld* Tracker::collision() const { return impl_->state.collision.get(); }
 
 }  // namespace femreg
