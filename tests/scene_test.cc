@@ -296,6 +296,8 @@ TEST_F(SceneTest, WrongTypes) {
                "(got a list of 2)"});
   ExpectError(Replace(kBaseScene, "clamp: true", "clamp: maybe"),
               {"beam.yaml:9: boundary[0].clamp: must be true or false (got 'maybe')"});
+  ExpectError(std::string(kBaseScene) + "registration:\n  preprocess: {depth_offset: 2}\n",
+              {"beam.yaml:11: registration.preprocess.depth_offset: must be true or false (got '2')"});
   ExpectError(Replace(kBaseScene, "cells: [10, 1, 1]", "cells: [10, 1.5, 1]"),
               {"beam.yaml:3: objects[0].generate.cells[1]: must be an integer (got '1.5')"});
   ExpectError(Replace(kBaseScene, "boundary:\n  - {", "boundary:\n    {"),

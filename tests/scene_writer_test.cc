@@ -91,6 +91,8 @@ void ExpectSameRegistration(const RegistrationOptions& a, const RegistrationOpti
   EXPECT_EQ(p.normal_neighbors, q.normal_neighbors);
   EXPECT_EQ(p.plane_distance, q.plane_distance);
   EXPECT_EQ(p.plane_iterations, q.plane_iterations);
+  EXPECT_EQ(p.flying_pixels, q.flying_pixels);
+  EXPECT_EQ(p.depth_offset, q.depth_offset);
   EXPECT_EQ(p.mask_dir, q.mask_dir);
   const DataTermOptions &e = a.data, &f = b.data;
   EXPECT_EQ(e.model_to_cloud, f.model_to_cloud);
@@ -309,7 +311,8 @@ const char kEverything[] =
     "  camera: {position: [0.1, -0.5, 0.3], target: [0.1, 0, 0], up: [0, 0, 1], fx: 300, fy: 301,\n"
     "           cx: 159.5, cy: 119.5, width: 320, height: 240}\n"
     "  preprocess: {mask_dir: masks, crop: {min: [-1, -1, -0.01], max: [1, 1, 1]}, plane: {distance: 0.004, iterations: 50},\n"
-    "               voxel_size: 0.002, outliers: {neighbors: 8, stddev: 2.5}, normals: {neighbors: 12}}\n"
+    "               voxel_size: 0.002, outliers: {neighbors: 8, stddev: 2.5}, normals: {neighbors: 12},\n"
+    "               flying_pixels: 3, depth_offset: false}\n"
     "  data: {model_to_cloud: false, max_distance: 0.02, loss: cauchy, loss_scale: 0.003,\n"
     "         metric: point_to_point, visibility: true, cloud_stride: 2}\n"
     "  weights: {data: 150, model_to_cloud_balance: false, elastic: 2, temporal: 0.5, anchor: 2e4}\n"
@@ -364,6 +367,8 @@ TEST_F(SceneWriterTest, EverySectionReadsBackTheSame) {
   EXPECT_TRUE(scene.effects.fracture);
   EXPECT_EQ(scene.registration.solver.backend, SolverBackend::kFast);
   EXPECT_EQ(scene.anchors[0].translations[2].z(), 0.30000000000000004);
+  EXPECT_EQ(scene.registration.preprocess.flying_pixels, 3.0);
+  EXPECT_FALSE(scene.registration.preprocess.depth_offset);
 
   RoundTrip(scene, dir_.path());
 

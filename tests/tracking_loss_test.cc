@@ -67,6 +67,37 @@ TEST(TrackingLoss, LostWhileTheObjectIsAwayAndFoundWhenItComesBack) {
   EXPECT_NEAR(shift, 0.005, 1e-3);
 }
 
+// The first frame after held ones makes up for their motion: it starts stiff, as a large
+// motion does, and has max_outer_iterations for each frame it makes up for (at most four).
+TEST(TrackingLoss, TheFrameAfterAnAbsenceCatchesUpWithMoreIterations) {
+  const TetMesh mesh = Box();
+  RegistrationOptions options;
+  options.solver.max_outer_iterations = 2;
+  // No stopping rule but the budget: every frame runs its outer iterations to the end.
+  options.solver.relative_energy_tolerance = 0.0;
+  options.solver.step_tolerance = 0.0;
+  options.solver.bulk_step_tolerance = 0.0;
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create({Box()}, {ObjectMaterial()}, options, &tracker).ok());
+  FrameSummary s;
+  for (int f = 0; f < 2; ++f) {
+    ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d(0.001 * f, 0, 0)), &s).ok());
+    EXPECT_EQ(s.outer_iterations, 2);
+    EXPECT_EQ(s.large_motion_restarts, 0);
+  }
+  for (int f = 0; f < 3; ++f) ASSERT_TRUE(tracker->Track(PointCloud(), &s).ok());
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d(0.006, 0, 0)), &s).ok());
+  EXPECT_EQ(s.large_motion_restarts, 1);
+  // The stiff start (1 + 4 stages), then 2 x (1 + 3) iterations.
+  EXPECT_EQ(s.outer_iterations, 5 + 8) << s.message;
+  EXPECT_NE(s.message.find("catching up after 3 held or lost frames"), std::string::npos) << s.message;
+  EXPECT_NEAR((tracker->vertices(0) - mesh.rest).col(0).mean(), 0.006, 1e-3);
+  // The next frame is an ordinary one again.
+  ASSERT_TRUE(tracker->Track(SurfaceCloud(mesh, Eigen::Vector3d(0.007, 0, 0)), &s).ok());
+  EXPECT_EQ(s.outer_iterations, 2);
+  EXPECT_EQ(s.large_motion_restarts, 0);
+}
+
 TEST(TrackingLoss, NeverLostWhenSwitchedOff) {
   const TetMesh mesh = Box();
   auto tracker = MakeTracker(0.0);

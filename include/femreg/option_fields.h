@@ -178,6 +178,9 @@ struct OptionFields<PreprocessOptions> {
                              .Note("(pixel footprints; 0 = off)")
                              .Doc("Flying pixels removed within this many pixel footprints, with a camera "
                                   "(registration.preprocess.flying_pixels; 0 = off)"));
+    v(&S::depth_offset, FieldInfo("depth_offset")
+                            .Doc("Take off each frame's common depth offset (flicker), measured on the static "
+                                 "plane preprocess.plane removes, with a camera (registration.preprocess.depth_offset)"));
     v(&S::outlier_neighbors, FieldInfo("neighbors").In("outliers").Python("outlier_neighbors").AtLeast(0));
     v(&S::outlier_stddev, FieldInfo("stddev").In("outliers").Python("outlier_stddev").Above(0));
     v(&S::normal_neighbors, FieldInfo("neighbors").In("normals").Python("normal_neighbors").AtLeast(0));

@@ -36,12 +36,21 @@ Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite
 // Writes a binary PCD (with normals when the cloud has them), atomically.
 Status WritePointCloud(const std::string& path, const PointCloud& cloud);
 
-// Drops non-finite points (counted), then crops, voxel-downsamples, removes statistical
-// outliers and estimates normals as the options ask (oriented towards `viewpoint`, the
-// camera centre).
+// The plane preprocess.plane removed from a cloud: normal . x = offset (|normal| = 1), and
+// the points it removed. Empty (no points) when no plane was removed.
+struct RemovedPlane {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double offset = 0.0;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> points;
+};
+
+// Drops non-finite points (counted), then crops, removes the dominant plane (into *plane
+// when given), voxel-downsamples, removes statistical outliers and estimates normals as the
+// options ask (oriented towards `viewpoint`, the camera centre).
 void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
                           int* nonfinite_dropped = nullptr,
-                          const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero());
+                          const Eigen::Vector3d& viewpoint = Eigen::Vector3d::Zero(),
+                          RemovedPlane* plane = nullptr);
 
 // The cloud as Tracker::Track fits it, before its automatic subsampling (auto_voxel): the
 // input transform of options.preprocess (scale, rotation, translation), the flying pixels
@@ -49,7 +58,8 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
 // cloud's VIEWPOINT. The tracker's own path; `femreg register` writes the result beside the
 // meshes and checks its units on it.
 void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud,
-                             int* nonfinite_dropped = nullptr, int* flying_pixels = nullptr);
+                             int* nonfinite_dropped = nullptr, int* flying_pixels = nullptr,
+                             RemovedPlane* plane = nullptr);
 
 // Removes points with a non-finite coordinate (or normal); returns how many.
 int DropNonFinite(PointCloud* cloud);

@@ -103,6 +103,12 @@ struct PreprocessOptions {
   // of it are dropped, after cropping and before downsampling. 0 = off.
   double plane_distance = 0.0;
   int plane_iterations = 200;                           // RANSAC iterations (>= 1)
+  // A depth offset common to a frame's pixels (a sensor's temporal flicker or drift;
+  // docs/guide/depth-images.md#depth-offset): with a camera and the plane above, the plane is
+  // taken as static, each frame's offset along the camera's rays is measured on the points it
+  // removed, against its mean over the frames so far, and taken off every point left. Frames
+  // whose plane turned or moved by more than plane_distance are not corrected.
+  bool depth_offset = true;
   // A folder of segmentation masks for depth-image frames, one per frame named like it
   // (mask_dir/<frame name>.png; nonzero = the object): applied when a frame is read, before
   // everything above (ReadFrame with DepthImageOptions::mask_dir; `femreg register`).
@@ -407,6 +413,7 @@ struct FrameSummary {
   int cloud_points = 0;           // as given
   int nonfinite_dropped = 0;      // NaN / inf points removed
   int flying_pixels = 0;          // removed as flying pixels (preprocess.flying_pixels)
+  double depth_offset = 0.0;      // m taken off every point's depth (preprocess.depth_offset)
   int points_used = 0;            // after preprocessing
   double voxel_size = 0.0;        // m: the automatic subsampling's voxel (0: not applied)
   int occluded_points = 0;        // points of an occluder in front of the model (data.occluders)
@@ -439,8 +446,8 @@ struct FrameSummary {
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
   // 1 when the first outer iteration moved the bulk of the vertices (99 %) more than 3 mean
-  // edges and the frame
-  // started again, stiff and stepping down (docs/theory/stopping.md#large-motions).
+  // edges, or the frame came after held or lost ones, and the frame started again, stiff and
+  // stepping down (docs/theory/stopping.md#large-motions).
   int large_motion_restarts = 0;
   // Cloud points found implausible (data.max_strain_step) and the frame's restarts for them.
   int implausible_points = 0, implausible_restarts = 0;

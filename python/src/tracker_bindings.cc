@@ -44,6 +44,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["cloud_points"] = s.cloud_points;
   d["nonfinite_dropped"] = s.nonfinite_dropped;
   d["flying_pixels"] = s.flying_pixels;
+  d["depth_offset"] = s.depth_offset;
   d["points_used"] = s.points_used;
   d["initial_energy"] = EnergyDict(s.initial);
   d["final_energy"] = EnergyDict(s.final);

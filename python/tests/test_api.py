@@ -152,6 +152,20 @@ def test_a_frame_without_the_object_is_lost_and_keeps_the_last_good_shape():
     np.testing.assert_array_equal(x, good)
 
 
+def test_depth_offset_is_reachable():
+    # registration.preprocess.depth_offset (docs/guide/depth-images.md#depth-offset): on by
+    # default; without a camera and a plane it takes nothing off, and the summary says so.
+    options = femreg.RegistrationOptions()
+    assert options.preprocess.depth_offset
+    options.preprocess.depth_offset = False
+    assert not options.preprocess.depth_offset
+    options.preprocess.depth_offset = True
+    mesh = femreg.make_box([0.2, 0.04, 0.04], [10, 2, 2])
+    tracker = femreg.Tracker([mesh], [femreg.Material(youngs_modulus=5e4, density=200)], options)
+    tracker.track(_surface_cloud(mesh, mesh.rest))
+    assert tracker.summary["depth_offset"] == 0.0
+
+
 def test_free_space_is_reachable():
     # registration.free_space (docs/guide/partial-views.md#free-space) from Python: its options,
     # their checks, and the vertices it held in the summary (none: the model matches the cloud).

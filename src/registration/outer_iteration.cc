@@ -376,6 +376,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (k + 1 == iteration_limit) {
     s->termination = TerminationType::kMaxIterations;
     s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
+    if (iteration_budget != options.solver.max_outer_iterations) {
+      s->message += " x " + std::to_string(iteration_budget / options.solver.max_outer_iterations) +
+                    " (catching up after " + std::to_string(missed_frames) + " held or lost frames)";
+    }
     if (s->large_motion_restarts > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
   }
   return true;

@@ -272,7 +272,9 @@ Status WritePointCloud(const std::string& path, const PointCloud& cloud) {
 }
 
 void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
-                          int* nonfinite_dropped, const Eigen::Vector3d& viewpoint) {
+                          int* nonfinite_dropped, const Eigen::Vector3d& viewpoint,
+                          RemovedPlane* plane) {
+  if (plane != nullptr) *plane = RemovedPlane();
   const int dropped = DropNonFinite(cloud);
   if (nonfinite_dropped) *nonfinite_dropped = dropped;
   const bool any = options.crop || options.plane_distance > 0 || options.voxel_size > 0 ||
@@ -305,6 +307,19 @@ void PreprocessPointCloud(const PreprocessOptions& options, PointCloud* cloud,
     if (!inliers.indices.empty()) {
       std::vector<char> drop(pc->size(), 0);
       for (int i : inliers.indices) drop[static_cast<size_t>(i)] = 1;
+      const Eigen::Vector3d n = coefficients.values.size() == 4
+                                    ? Eigen::Vector3d(coefficients.values[0], coefficients.values[1],
+                                                      coefficients.values[2])
+                                    : Eigen::Vector3d::Zero();
+      if (plane != nullptr && n.norm() > 0) {
+        plane->normal = n / n.norm();
+        plane->offset = -coefficients.values[3] / n.norm();
+        plane->points.resize(static_cast<Eigen::Index>(inliers.indices.size()), 3);
+        for (size_t k = 0; k < inliers.indices.size(); ++k) {
+          const pcl::PointNormal& q = (*pc)[static_cast<size_t>(inliers.indices[k])];
+          plane->points.row(static_cast<Eigen::Index>(k)) << q.x, q.y, q.z;
+        }
+      }
       PclCloud::Ptr out(new PclCloud);
       for (size_t i = 0; i < pc->size(); ++i) {
         if (!drop[i]) out->push_back((*pc)[i]);

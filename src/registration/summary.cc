@@ -52,7 +52,9 @@ std::string FrameSummary::FullReport() const {
           "data.max_strain_step; the frame started again without them (" << implausible_restarts << "x)\n";
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
-     << flying_pixels << " flying pixels, " << points_used << " used\n";
+     << flying_pixels << " flying pixels, " << points_used << " used";
+  if (depth_offset != 0.0) os << ", depth offset " << depth_offset * 1e3 << " mm taken off";
+  os << "\n";
   os << "  iter   E_data      E_elastic   E_temporal  E_anchor    E_total     m2c    c2m    rej  "
         "inner  rms(mm)  move(mm)  ms\n";
   for (const OuterIteration& it : iterations) {

@@ -14,6 +14,7 @@
 #include "femreg/point_cloud.h"
 #include "registration/correspondences.h"
 #include "registration/confidence.h"
+#include "registration/depth_offset.h"
 #include "registration/fracture_step.h"
 #include "registration/flying_pixels.h"
 #include "registration/frame_problem.h"
@@ -41,6 +42,9 @@ constexpr double kLargeMotionEdges = 3.0;
 // Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
 constexpr int kMaxImplausibleRestarts = 2;
 constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
+// A frame after held or lost ones makes up for at most this many frames' motion in its
+// budget of outer iterations: the cost of one catch-up frame stays bounded.
+constexpr int kMaxCatchUpFrames = 4;
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
@@ -119,7 +123,7 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
 }
 
 void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* cloud, int* nonfinite_dropped,
-                             int* flying_pixels) {
+                             int* flying_pixels, RemovedPlane* plane) {
   TransformCloud(options.preprocess, cloud);
   // Before the plane and the outliers: a depth edge's mixed pixels are judged in the image.
   const int flying = options.camera.enabled && options.preprocess.flying_pixels > 0
@@ -129,14 +133,20 @@ void PrepareCloudForTracking(const RegistrationOptions& options, PointCloud* clo
   PreprocessPointCloud(options.preprocess, cloud, nonfinite_dropped,
                        options.camera.enabled ? options.camera.position
                        : cloud->has_viewpoint ? cloud->viewpoint
-                                              : Eigen::Vector3d::Zero());
+                                              : Eigen::Vector3d::Zero(),
+                       plane);
 }
 
 void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameSummary* s) {
   const PreprocessOptions& pre = state.options.preprocess;
   const auto t0 = Clock::now();
   fc->cloud = input;
-  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels);
+  const CameraOptions& camera = state.options.camera;
+  const bool offset = pre.depth_offset && camera.enabled && pre.plane_distance > 0;
+  RemovedPlane plane;
+  PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels,
+                          offset ? &plane : nullptr);
+  if (offset) s->depth_offset = depth_offset.Correct(camera, pre.plane_distance, plane, &fc->cloud);
   prepared_cloud = fc->cloud;
   // The cloud is thinned to the surface the data terms see (an embedded one's).
   const TrackerState& pair_state = PairState();
@@ -159,6 +169,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   state.x_before = state.x;  // held: no velocity to carry on
   state.held_before = true;
   state.lost_before = s->lost;
+  ++missed_frames;
   Outputs(index, {});
   s->time.total = Seconds(t_frame);
   ++state.frame;
@@ -262,7 +273,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   merit = std::numeric_limits<double>::infinity();
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
-  iteration_limit = options.solver.max_outer_iterations;
+  iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
+  iteration_limit = iteration_budget;
   stepping_in = false;
   fc.facing_only = false;
   const Vertices start = state.x;
@@ -297,15 +309,17 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     if (!go_on) break;
     if (k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
         options.weights.elastic > 0 && !options.forces.estimate && !FractureLive(state) &&
-        first_bulk_move > kLargeMotionEdges * state.mean_edge_length) {
+        (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0)) {
       // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
-      // the sensor (docs/theory/stopping.md#large-motions).
+      // the sensor (docs/theory/stopping.md#large-motions). A frame catching up after held or
+      // lost ones starts so too: its held shape is several frames' motion away, and its
+      // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
       state.x = start;
       stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
       stepping_in = true;
       fc.facing_only = true;
       iteration_base = 1 + stiff_stages;
-      iteration_limit = iteration_base + options.solver.max_outer_iterations;
+      iteration_limit = iteration_base + iteration_budget;
       rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
       warm_triangles.clear();
       paired_vertices.clear();
@@ -324,7 +338,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         s.implausible_points += marked;
         ++s.implausible_restarts;
         iteration_base = k + 1;
-        iteration_limit = iteration_base + options.solver.max_outer_iterations;
+        iteration_limit = iteration_base + iteration_budget;
         rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
         merit = std::numeric_limits<double>::infinity();
         previous_energy = merit;
@@ -369,6 +383,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   state.lost_before = s.lost;
+  missed_frames = state.held_before ? missed_frames + 1 : 0;
   MeasureForces(&s);
   s.time.total = Seconds(t_frame);
   ++state.frame;

@@ -13,6 +13,7 @@
 #include "geometry/nearest.h"
 #include "parallel/stopwatch.h"
 #include "registration/correspondences.h"
+#include "registration/depth_offset.h"
 #include "registration/embedded_surface.h"
 #include "registration/frame_problem.h"
 #include "registration/tracker_state.h"
@@ -28,6 +29,7 @@ struct Tracker::Impl {
   std::unique_ptr<Backend> backend;
   ModelIndex model_index;
   double mean_edge = 0.0;  // m, at rest: the auto voxel and the model index's tolerance
+  DepthOffset depth_offset;  // preprocess.depth_offset, over the frames tracked
 
   Status Init(std::vector<TetMesh> meshes, const std::vector<ObjectMaterial>& materials);
   Status Track(const PointCloud& input, FrameSummary* summary);
@@ -94,6 +96,12 @@ struct Tracker::Impl {
   // (docs/theory/stopping.md#large-motions).
   int iteration_base = 0;
   int iteration_limit = 0;
+  // Frames held or lost since the last one solved: the next solved frame catches up with
+  // their motion too, and has iteration_budget outer iterations from each start (a restart
+  // counts again): solver.max_outer_iterations per frame it makes up for, up to
+  // kMaxCatchUpFrames (docs/guide/tracking-loss.md#coming-back).
+  int missed_frames = 0;
+  int iteration_budget = 0;
   bool stepping_in = false;
   double first_bulk_move = 0.0;  // m, of the frame's first outer iteration (BulkMove)
   // The last outer iteration's start and its energy with what it found (Backtrack).
