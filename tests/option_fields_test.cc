@@ -52,6 +52,7 @@ TEST(OptionFields, EveryMemberHasARow) {
   EXPECT_EQ(FieldCount<ForceOptions>(), MemberCount<ForceOptions>());
   EXPECT_EQ(FieldCount<FreeSpaceOptions>(), MemberCount<FreeSpaceOptions>());
   EXPECT_EQ(FieldCount<CameraOptions>() + 1, MemberCount<CameraOptions>());  // + enabled
+  EXPECT_EQ(FieldCount<PreprocessOptions>() + 2, MemberCount<PreprocessOptions>());  // + crop, mask_dir
   // The top level: its own values, and its seven sections (camera ... free_space).
   EXPECT_EQ(FieldCount<RegistrationOptions>() + 7, MemberCount<RegistrationOptions>());
 }
@@ -69,7 +70,8 @@ T OtherValue(const FieldInfo& f, T d) {
     }
     return d;
   } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-    return d + Eigen::Vector3d::Ones();
+    const Eigen::Vector3d v = d + Eigen::Vector3d::Ones();
+    return v != d ? v : Eigen::Vector3d::Zero();  // an unbounded default (a crop's +-1e30)
   } else {
     T v = d + 1;
     if (!f.InRange(v)) v = std::is_same_v<T, int> ? d - 1 : static_cast<T>((d + f.max) / 2);
@@ -86,6 +88,8 @@ void AllowAlone(const std::string& field, RegistrationOptions* o) {
   }
   if (field == "forces.friction") o->forces.pushing_only = true;
   if (field.rfind("camera.", 0) == 0) o->camera.enabled = true;  // a scene's camera is on
+  if (field.rfind("preprocess.crop.", 0) == 0) o->preprocess.crop = true;  // the group is the switch
+  if (field == "preprocess.normals.neighbors") o->preprocess.normal_neighbors = 8;  // 0 or >= 3
 }
 
 template <class Options>
@@ -137,6 +141,7 @@ TEST(OptionFields, EachFieldRoundTripsThroughTheSceneFile) {
   ExpectEachFieldRoundTrips<ForceOptions>([](RegistrationOptions& r) -> auto& { return r.forces; });
   ExpectEachFieldRoundTrips<FreeSpaceOptions>([](RegistrationOptions& r) -> auto& { return r.free_space; });
   ExpectEachFieldRoundTrips<CameraOptions>([](RegistrationOptions& r) -> auto& { return r.camera; });
+  ExpectEachFieldRoundTrips<PreprocessOptions>([](RegistrationOptions& r) -> auto& { return r.preprocess; });
   ExpectEachFieldRoundTrips<RegistrationOptions>([](RegistrationOptions& r) -> auto& { return r; });
 }
 
@@ -174,9 +179,16 @@ void ExpectRangesNamed(Options RegistrationOptions::*section) {
     std::string text = std::isnan(bad) ? ".nan" : std::to_string(bad);
     if (std::is_same_v<T, int>) text = std::to_string(static_cast<int>(bad));
     if (kVector) text = "[" + text + ", 0, 0]";
+    // A grouped field inside its group, beside what the group needs (a crop's other bound).
+    std::string entry = std::string(f.key) + ": " + text;
+    if (f.group != nullptr) {
+      std::string beside;
+      if (std::string(f.group) == "crop") beside = std::string(", ") + (std::string(f.key) == "min" ? "max" : "min") + ": [1, 1, 1]";
+      if (std::string(f.group) == "plane" && std::string(f.key) != "distance") beside = ", distance: 0.01";
+      entry = std::string(f.group) + ": {" + entry + beside + "}";
+    }
     Scene scene;
-    const Status status = ParseScene(std::string(kObject) + "registration:\n  " + name + ": {" +
-                                         f.key + ": " + text + "}\n",
+    const Status status = ParseScene(std::string(kObject) + "registration:\n  " + name + ": {" + entry + "}\n",
                                      "bad.yaml", ".", &scene);
     ASSERT_FALSE(status.ok()) << field << " = " << text;
     // A vector's bad number is named by its index: "registration.camera.up[0]: must be ...".
@@ -193,6 +205,7 @@ TEST(OptionFields, OutOfRangeValuesNameTheField) {
   ExpectRangesNamed(&RegistrationOptions::forces);
   ExpectRangesNamed(&RegistrationOptions::free_space);
   ExpectRangesNamed(&RegistrationOptions::camera);
+  ExpectRangesNamed(&RegistrationOptions::preprocess);
 }
 
 // The messages as IsValid wrote them before the tables, word for word.
@@ -230,6 +243,14 @@ TEST(OptionFields, MessagesKeepTheirWording) {
   o.camera.height = 0;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_EQ(error, "camera.height must be > 0 (got 0)");
+  o = RegistrationOptions();
+  o.preprocess.flying_pixels = -1;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error, "preprocess.flying_pixels must be >= 0 (pixel footprints; 0 = off) (got -1)");
+  o = RegistrationOptions();
+  o.preprocess.outlier_neighbors = -1;  // a grouped field: its group in the name
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error, "preprocess.outliers.neighbors must be >= 0 (got -1)");
 }
 
 }  // namespace

@@ -94,5 +94,53 @@ TEST(PredictMotion, AnchoredBodiesKeepTheirTurn) {
   EXPECT_LT((PredictMotion(state) - (2.0 * state.x - state.x_before)).norm(), 1e-12);
 }
 
+// An outer iteration's move (x_before -> x here) keeps a sphere's shift and loses its turn,
+// keeps a box's turn, and leaves an anchored sphere alone.
+TEST(HoldHiddenTurns, TakesASpheresTurnOutOfAMove) {
+  const Eigen::Vector3d shift(0.003, 0.001, -0.002);
+  const TrackerState state = Turned(MakeSphere(0.05, 5), Eigen::Vector3d(1, -1, 2), 0.04, shift);
+  Vertices x = state.x;
+  EXPECT_TRUE(HoldHiddenTurns(state, state.x_before, &x));
+  const Vertices expected = state.x_before.rowwise() + shift.transpose();
+  const double turn = (state.x - expected).rowwise().norm().maxCoeff();
+  EXPECT_LT((x - expected).rowwise().norm().maxCoeff(), 0.15 * turn);
+  // The move's shift is kept: the mass centre does not move.
+  EXPECT_LT((x.colwise().mean() - state.x.colwise().mean()).norm(), 1e-12);
+}
+
+TEST(HoldHiddenTurns, KeepsVisibleAndAnchoredTurns) {
+  const TrackerState box = Turned(MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 3, 3, 3),
+                                  Eigen::Vector3d(0, 1, 1), 0.05, Eigen::Vector3d(0, 0.001, 0));
+  Vertices x = box.x;
+  HoldHiddenTurns(box, box.x_before, &x);
+  EXPECT_LT((x - box.x).norm(), 1e-12);
+
+  TrackerState held = Turned(MakeSphere(0.05, 5), Eigen::Vector3d(0, 0, 1), 0.05, Eigen::Vector3d::Zero());
+  Anchor anchor;
+  anchor.object = 0;
+  anchor.vertices = {0};
+  held.anchors["clamp"] = anchor;
+  x = held.x;
+  EXPECT_FALSE(HoldHiddenTurns(held, held.x_before, &x));
+  EXPECT_LT((x - held.x).norm(), 1e-12);
+}
+
+// With an embedded surface, its visibility decides: a box scanned inside a round cage keeps
+// its turn, which the cage alone would hide.
+TEST(HoldHiddenTurns, TheEmbeddedSurfaceDecides) {
+  const TetMesh sphere = MakeSphere(0.05, 5);
+  const TrackerState state = Turned(sphere, Eigen::Vector3d(0, 0, 1), 0.05, Eigen::Vector3d::Zero());
+  const TetMesh box = MakeBox(Eigen::Vector3d(0.05, 0.03, 0.02), 3, 2, 2);
+  const Vertices rest = (box.rest.rowwise() - box.rest.colwise().mean()).rowwise() + sphere.rest.colwise().mean();
+  EmbeddedSurface surface;
+  ASSERT_TRUE(MakeEmbeddedSurface(sphere, rest, box.surface, &surface).ok());
+  DataSurface data;
+  data.Build(state, {&surface});
+  Vertices x = state.x;
+  EXPECT_FALSE(HoldHiddenTurns(state, state.x_before, &x, &data));
+  EXPECT_LT((x - state.x).norm(), 1e-12);
+  EXPECT_TRUE(HoldHiddenTurns(state, state.x_before, &x));
+}
+
 }  // namespace
 }  // namespace femreg

@@ -262,6 +262,32 @@ TEST(Tracker, EmptyCloudHoldsTheShapeAndSaysWhy) {
   EXPECT_TRUE(summary.IsSolutionUsable());
 }
 
+// The cloud a frame used is the input after the scene's transform and preprocessing (here a
+// scale and a crop), and an empty frame leaves none from the frame before.
+TEST(Tracker, PreparedCloudIsTheCloudAsUsed) {
+  RegistrationOptions options = Options();
+  options.preprocess.scale = 2.0;
+  options.preprocess.crop = true;
+  options.preprocess.crop_min = Eigen::Vector3d(-1.0, -1.0, -1.0);
+  options.preprocess.crop_max = Eigen::Vector3d(0.5 * kLength, 1.0, 1.0);
+  auto tracker = MakeTracker(options);
+  EXPECT_EQ(tracker->prepared_cloud().size(), 0);
+  const Sequence seq = MakeBendingSequence(1, 0.0, 5);
+  PointCloud half = seq.clouds[0];
+  half.points *= 0.5;  // the scale makes it whole again
+  FrameSummary summary;
+  ASSERT_TRUE(tracker->Track(half, &summary).ok());
+  const PointCloud& used = tracker->prepared_cloud();
+  int inside = 0;
+  for (int i = 0; i < seq.clouds[0].size(); ++i) inside += seq.clouds[0].points(i, 0) <= 0.5 * kLength;
+  ASSERT_GT(inside, 0);
+  ASSERT_LT(inside, seq.clouds[0].size());
+  EXPECT_EQ(used.size(), inside);
+  EXPECT_LE(used.points.col(0).maxCoeff(), 0.5 * kLength);
+  ASSERT_TRUE(tracker->Track(PointCloud(), &summary).ok());
+  EXPECT_EQ(tracker->prepared_cloud().size(), 0);
+}
+
 TEST(Tracker, AllNaNCloudIsInvalidInputAndHoldsTheShape) {
   auto tracker = MakeTracker(Options());
   PointCloud cloud;

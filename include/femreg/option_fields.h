@@ -30,6 +30,9 @@ struct FieldInfo {
   bool has_min = false, min_open = false, has_max = false, max_open = false;
   double min = 0.0, max = 0.0;
   const char* note = nullptr;  // follows the range in the message: "must be >= 0 (0 = off)"
+  // A field nested one level down in its section (`outliers: {neighbors: 8}`): the group's
+  // key; its own key is then the one inside the group. Null: directly in the section.
+  const char* group = nullptr;
 
   constexpr explicit FieldInfo(const char* k) : key(k) {}
   constexpr FieldInfo AtLeast(double v) const { return Bound(true, v, false); }
@@ -46,6 +49,11 @@ struct FieldInfo {
     f.note = n;
     return f;
   }
+  constexpr FieldInfo In(const char* g) const {
+    FieldInfo f = *this;
+    f.group = g;
+    return f;
+  }
   constexpr FieldInfo Python(const char* name) const {
     FieldInfo f = *this;
     f.python = name;
@@ -57,6 +65,8 @@ struct FieldInfo {
     return f;
   }
   const char* python_name() const { return python != nullptr ? python : key; }
+  // The key within the section: "outliers.neighbors", or the key.
+  std::string path() const { return group != nullptr ? std::string(group) + "." + key : std::string(key); }
   bool checked() const { return finite || has_min || has_max; }
   // Whether a number lies in the range (NaN never does; nor infinity when checked).
   bool InRange(double v) const;
@@ -140,6 +150,40 @@ struct OptionFields<CameraOptions> {
     v(&S::cy, FieldInfo("cy").Finite());
     v(&S::width, FieldInfo("width").Above(0));
     v(&S::height, FieldInfo("height").Above(0));
+  }
+};
+
+// `crop` and `mask_dir` have no rows: a scene crops by having the `crop` group (with both
+// bounds), and the masks' folder is a path relative to the scene file (the parser, writer,
+// Python and provenance say so by hand).
+template <>
+struct OptionFields<PreprocessOptions> {
+  static constexpr const char* kSection = "preprocess";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = PreprocessOptions;
+    v(&S::scale, FieldInfo("scale").Above(0).Doc("Points (and normals, viewpoint) scaled first: 0.001 for mm."));
+    v(&S::translation, FieldInfo("translation").In("transform").Finite().Doc("m, after the rotation"));
+    v(&S::rotation, FieldInfo("rotation").In("transform").Finite().Doc("axis * angle (rad)"));
+    v(&S::crop_min, FieldInfo("min").In("crop").Python("crop_min").Finite());
+    v(&S::crop_max, FieldInfo("max").In("crop").Python("crop_max").Finite());
+    v(&S::plane_distance,
+      FieldInfo("distance").In("plane").Python("plane_distance").AtLeast(0).Doc("m; the dominant plane's points removed; 0 = off"));
+    v(&S::plane_iterations, FieldInfo("iterations").In("plane").Python("plane_iterations").AtLeast(1));
+    v(&S::voxel_size, FieldInfo("voxel_size").AtLeast(0).Doc("m; 0 = no downsampling"));
+    v(&S::auto_voxel, FieldInfo("auto_voxel").AtLeast(0).Note("(0 = off)").Doc("in mean surface edges; 0 = off"));
+    v(&S::auto_voxel_min_ratio, FieldInfo("auto_voxel_min_ratio").AtLeast(0));
+    v(&S::flying_pixels, FieldInfo("flying_pixels")
+                             .AtLeast(0)
+                             .Note("(pixel footprints; 0 = off)")
+                             .Doc("Flying pixels removed within this many pixel footprints, with a camera "
+                                  "(registration.preprocess.flying_pixels; 0 = off)"));
+    v(&S::depth_offset, FieldInfo("depth_offset")
+                            .Doc("Take off each frame's common depth offset (flicker), measured on the static "
+                                 "plane preprocess.plane removes, with a camera (registration.preprocess.depth_offset)"));
+    v(&S::outlier_neighbors, FieldInfo("neighbors").In("outliers").Python("outlier_neighbors").AtLeast(0));
+    v(&S::outlier_stddev, FieldInfo("stddev").In("outliers").Python("outlier_stddev").Above(0));
+    v(&S::normal_neighbors, FieldInfo("neighbors").In("normals").Python("normal_neighbors").AtLeast(0));
   }
 };
 
@@ -246,6 +290,8 @@ struct OptionFields<SolverOptions> {
                            .Note("(0: the cores other processes leave free, per frame)"));
     v(&S::predict_motion, FieldInfo("predict_motion"));
     v(&S::backtrack, FieldInfo("backtrack"));
+    v(&S::hold_hidden_turns,
+      FieldInfo("hold_hidden_turns").Doc("Outer iterations leave out turns of free objects that their surface does not show."));
     v(&S::rigid_prealign, FieldInfo("rigid_prealign"));
     v(&S::rigid_iterations, FieldInfo("rigid_iterations").AtLeast(0));
   }
@@ -271,7 +317,7 @@ struct OptionFields<RegistrationOptions> {
 template <class Options>
 std::string FieldName(const FieldInfo& f) {
   const std::string section = OptionFields<Options>::kSection;
-  return section.empty() ? std::string(f.key) : section + "." + f.key;
+  return section.empty() ? f.path() : section + "." + f.path();
 }
 
 // The first number of `o` out of its table row's range, as "section.key message (got

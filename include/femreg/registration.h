@@ -279,6 +279,10 @@ struct SolverOptions {
   // From the held pair set on, halve an outer iteration's move while the energy with the pairs
   // it finds rose (docs/theory/stopping.md#backtracking). Not with fracture on.
   bool backtrack = true;
+  // Each outer iteration's move leaves out the turn of an object nothing holds about the axes
+  // its surface does not show (a ball's about its centre, a cylinder's about its axis): no
+  // data decides it, so the registration does not make it (docs/theory/stopping.md#hidden-turns).
+  bool hold_hidden_turns = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
   int rigid_iterations = 30;
   bool IsValid(std::string* error) const;

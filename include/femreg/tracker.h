@@ -137,6 +137,10 @@ class Tracker {
   const std::vector<int>& original_vertices(int object) const;
 
   const RegistrationOptions& options() const;
+  // The last frame's cloud as the registration used it: after the scene's transform, the
+  // flying-pixel filter and the preprocessing (PrepareCloudForTracking), before the
+  // automatic voxel thinning, in the scene's frame. Empty before the first frame.
+  const PointCloud& prepared_cloud() const;
   // The contact detector, or null when collision is off or nothing can collide (then no
   // hierarchy is built and no contact residual is added). With an embedded surface it detects
   // on the meshes' vertices followed by the embedded surfaces' (the obstacles meet those).

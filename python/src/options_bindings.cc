@@ -38,26 +38,13 @@ void BindOptions(py::module_& m) {
   camera.def(py::init<>()).def_readwrite("enabled", &CameraOptions::enabled);
   DefFields(camera);
 
-  py::class_<PreprocessOptions>(m, "PreprocessOptions")
-      .def(py::init<>())
-      .def_readwrite("crop", &PreprocessOptions::crop)
-      .def_readwrite("crop_min", &PreprocessOptions::crop_min)
-      .def_readwrite("crop_max", &PreprocessOptions::crop_max)
-      .def_readwrite("voxel_size", &PreprocessOptions::voxel_size)
-      .def_readwrite("flying_pixels", &PreprocessOptions::flying_pixels,
-                     "Flying pixels removed within this many pixel footprints, with a camera "
-                     "(registration.preprocess.flying_pixels; 0 = off)")
-      .def_readwrite("outlier_neighbors", &PreprocessOptions::outlier_neighbors)
-      .def_readwrite("outlier_stddev", &PreprocessOptions::outlier_stddev)
-      .def_readwrite("normal_neighbors", &PreprocessOptions::normal_neighbors)
-      .def_readwrite("plane_distance", &PreprocessOptions::plane_distance)
-      .def_readwrite("plane_iterations", &PreprocessOptions::plane_iterations)
-      .def_readwrite("depth_offset", &PreprocessOptions::depth_offset,
-                     "Take off each frame's common depth offset (flicker), measured on the static "
-                     "plane preprocess.plane removes, with a camera (registration.preprocess.depth_offset)")
+  auto preprocess = py::class_<PreprocessOptions>(m, "PreprocessOptions");
+  preprocess.def(py::init<>())
+      .def_readwrite("crop", &PreprocessOptions::crop, "Keep the points within [crop_min, crop_max] only.")
       .def_readwrite("mask_dir", &PreprocessOptions::mask_dir,
                      "Depth frames' masks, mask_dir/<frame name>.png (registration.preprocess."
                      "mask_dir; read_depth_frame(..., mask_dir=...) applies them)");
+  DefFields(preprocess);
 
   auto data = py::class_<DataTermOptions>(m, "DataTermOptions");
   data.def(py::init<>());

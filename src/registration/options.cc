@@ -20,8 +20,6 @@ bool Fail(std::string* error, const char* field, const char* message, const T& v
   return false;
 }
 
-bool Finite(const Eigen::Vector3d& v) { return v.allFinite(); }
-
 std::string VectorString(const Eigen::Vector3d& v) {
   std::ostringstream os;
   os << "[" << v.x() << ", " << v.y() << ", " << v.z() << "]";
@@ -200,55 +198,14 @@ bool CameraOptions::IsValid(std::string* error) const {
 }
 
 bool PreprocessOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(scale) && scale > 0)) return Fail(error, "preprocess.scale", "must be > 0", scale);
-  if (!Finite(translation)) {
-    return Fail(error, "preprocess.transform.translation", "must be finite", VectorString(translation));
-  }
-  if (!Finite(rotation)) {
-    return Fail(error, "preprocess.transform.rotation", "must be finite", VectorString(rotation));
-  }
-  if (!(std::isfinite(auto_voxel) && auto_voxel >= 0)) {
-    return Fail(error, "preprocess.auto_voxel", "must be >= 0 (0 = off)", auto_voxel);
-  }
-  if (!(std::isfinite(flying_pixels) && flying_pixels >= 0)) {
-    return Fail(error, "preprocess.flying_pixels", "must be >= 0 (pixel footprints; 0 = off)", flying_pixels);
-  }
-  if (!(std::isfinite(auto_voxel_min_ratio) && auto_voxel_min_ratio >= 0)) {
-    return Fail(error, "preprocess.auto_voxel_min_ratio", "must be >= 0", auto_voxel_min_ratio);
-  }
-  if (crop) {
-    if (!Finite(crop_min)) {
-      return Fail(error, "preprocess.crop.min", "must be finite", VectorString(crop_min));
-    }
-    if (!Finite(crop_max)) {
-      return Fail(error, "preprocess.crop.max", "must be finite", VectorString(crop_max));
-    }
-    if ((crop_min.array() > crop_max.array()).any()) {
-      return Fail(error, "preprocess.crop.min", "must be <= crop.max in every coordinate",
-                  VectorString(crop_min) + " and " + VectorString(crop_max));
-    }
-  }
-  if (!(std::isfinite(voxel_size) && voxel_size >= 0)) {
-    return Fail(error, "preprocess.voxel_size", "must be >= 0", voxel_size);
-  }
-  if (outlier_neighbors < 0) {
-    return Fail(error, "preprocess.outliers.neighbors", "must be >= 0", outlier_neighbors);
-  }
-  if (!(std::isfinite(outlier_stddev) && outlier_stddev > 0)) {
-    return Fail(error, "preprocess.outliers.stddev", "must be > 0", outlier_stddev);
-  }
-  if (normal_neighbors < 0) {
-    return Fail(error, "preprocess.normals.neighbors", "must be >= 0", normal_neighbors);
+  if (!CheckFieldRanges(*this, error)) return false;
+  if (crop && (crop_min.array() > crop_max.array()).any()) {
+    return Fail(error, "preprocess.crop.min", "must be <= crop.max in every coordinate",
+                VectorString(crop_min) + " and " + VectorString(crop_max));
   }
   if (normal_neighbors > 0 && normal_neighbors < 3) {
     return Fail(error, "preprocess.normals.neighbors", "must be 0 (off) or >= 3",
                 normal_neighbors);
-  }
-  if (!(std::isfinite(plane_distance) && plane_distance >= 0)) {
-    return Fail(error, "preprocess.plane.distance", "must be >= 0", plane_distance);
-  }
-  if (plane_iterations < 1) {
-    return Fail(error, "preprocess.plane.iterations", "must be >= 1", plane_iterations);
   }
   return true;
 }

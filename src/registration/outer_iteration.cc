@@ -14,6 +14,7 @@
 #include "registration/correspondences.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
+#include "registration/prediction.h"
 #include "registration/tracker_impl.h"
 #include "registration/tracker_state.h"
 
@@ -260,6 +261,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     return false;
   }
   row.after = report.after;
+  if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
+    row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
+  }
   const bool contacts_pending =
       state.collision && state.collision->augmented() && UpdateContactMultipliers(&state, CollisionPositions());
   // New multipliers change the energy: the next start is not held against this one.

@@ -32,11 +32,33 @@ Eigen::Vector3d TurnVisibility(const Vertices& x, const Triangles& tris, const E
 
 namespace {
 
-// The predicted turn of object o's vertices [begin, end) that its surface does not show,
-// taken out of *predicted: the least-squares rigid velocity (v, w) of the step d = x -
-// x_before about the mass centre c; w's component along each hidden axis (in N's metric)
-// is turned back about the predicted centre.
-void TakeOutHiddenTurn(const TrackerState& state, int o, Vertices* predicted) {
+bool Held(const TrackerState& state, int o) {
+  for (const auto& [name, anchor] : state.anchors) {
+    if (anchor.object == o) return true;
+  }
+  return false;
+}
+
+// Object o's vertices of *x turned by -turn (a rotation vector) about centre; false when the
+// turn is zero.
+bool TurnBack(const TrackerState& state, int o, const Eigen::Vector3d& turn, const Eigen::Vector3d& centre,
+              Vertices* x) {
+  const double angle = turn.norm();
+  if (!(angle > 0) || !std::isfinite(angle)) return false;
+  const Eigen::Matrix3d undo = Eigen::AngleAxisd(-angle, turn / angle).toRotationMatrix();
+  const ObjectState& object = state.objects[static_cast<size_t>(o)];
+  for (int i = object.offset; i < object.offset + object.mesh.num_vertices(); ++i) {
+    const Eigen::Vector3d p = x->row(i).transpose() - centre;
+    x->row(i) = (centre + undo * p).transpose();
+  }
+  return true;
+}
+
+}  // namespace
+
+HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from, const Vertices& to,
+                          DataSurface* data) {
+  HiddenTurn out;
   const ObjectState& object = state.objects[static_cast<size_t>(o)];
   const int begin = object.offset, n = object.mesh.num_vertices();
   double mass = 0.0;
@@ -44,53 +66,62 @@ void TakeOutHiddenTurn(const TrackerState& state, int o, Vertices* predicted) {
   for (int i = begin; i < begin + n; ++i) {
     const double m = state.mass(i);
     mass += m;
-    c += m * state.x.row(i).transpose();
-    v += m * (state.x.row(i) - state.x_before.row(i)).transpose();
+    c += m * to.row(i).transpose();
+    v += m * (to.row(i) - from.row(i)).transpose();
   }
-  if (!(mass > 0)) return;
+  if (!(mass > 0)) return out;
   c /= mass;
   v /= mass;
+  out.centre = c;
+  out.velocity = v;
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
   for (int i = begin; i < begin + n; ++i) {
     const double m = state.mass(i);
-    const Eigen::Vector3d r = state.x.row(i).transpose() - c;
-    const Eigen::Vector3d d = (state.x.row(i) - state.x_before.row(i)).transpose() - v;
+    const Eigen::Vector3d r = to.row(i).transpose() - c;
+    const Eigen::Vector3d d = (to.row(i) - from.row(i)).transpose() - v;
     inertia += m * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
     moment += m * r.cross(d);
   }
   const Eigen::Vector3d w = inertia.ldlt().solve(moment);
-  if (!w.allFinite() || w.isZero(0.0)) return;
+  if (!w.allFinite() || w.isZero(0.0)) return out;
 
   Eigen::Matrix3d axes;
-  const Triangles tris = state.ObjectSurface(o);
-  const Eigen::Vector3d visibility = TurnVisibility(state.x, tris, c, &axes);
-  // w = sum_k a_k axes_k with a = axes^-1 w; the hidden part of each a_k is dropped.
+  Eigen::Vector3d visibility;
+  if (data != nullptr && data->embedded(o)) {
+    data->Update(to);
+    visibility = TurnVisibility(data->ObjectPositions(o), data->ObjectSurface(o), c, &axes);
+  } else {
+    visibility = TurnVisibility(to, state.ObjectSurface(o), c, &axes);
+  }
+  // w = sum_k a_k axes_k with a = axes^-1 w; the hidden part of each a_k is kept.
   const Eigen::Vector3d a = axes.partialPivLu().solve(w);
-  Eigen::Vector3d hidden = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) {
     const double keep = std::min(1.0, visibility(k) / kVisibleTurn);
-    hidden += (1.0 - keep) * a(k) * axes.col(k);
+    out.turn += (1.0 - keep) * a(k) * axes.col(k);
   }
-  const double angle = hidden.norm();
-  if (!(angle > 0) || !std::isfinite(angle)) return;
-  const Eigen::Matrix3d undo = Eigen::AngleAxisd(-angle, hidden / angle).toRotationMatrix();
-  const Eigen::Vector3d centre = c + v;  // where the prediction puts the mass centre
-  for (int i = begin; i < begin + n; ++i) {
-    const Eigen::Vector3d p = predicted->row(i).transpose() - centre;
-    predicted->row(i) = (centre + undo * p).transpose();
-  }
+  if (!out.turn.allFinite()) out.turn.setZero();
+  return out;
 }
 
-}  // namespace
+bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* x, DataSurface* data) {
+  if (FractureLive(state)) return false;
+  bool turned = false;
+  for (size_t o = 0; o < state.objects.size(); ++o) {
+    if (Held(state, static_cast<int>(o))) continue;
+    const HiddenTurn h = FindHiddenTurn(state, static_cast<int>(o), from, *x, data);
+    turned = TurnBack(state, static_cast<int>(o), h.turn, h.centre, x) || turned;
+  }
+  return turned;
+}
 
-Vertices PredictMotion(const TrackerState& state) {
+Vertices PredictMotion(const TrackerState& state, DataSurface* data) {
   Vertices predicted = 2.0 * state.x - state.x_before;
   if (FractureLive(state)) return predicted;  // pieces turn as they part: their own pre-alignment
   for (size_t o = 0; o < state.objects.size(); ++o) {
-    bool held = false;
-    for (const auto& [name, anchor] : state.anchors) held = held || anchor.object == static_cast<int>(o);
-    if (!held) TakeOutHiddenTurn(state, static_cast<int>(o), &predicted);
+    if (Held(state, static_cast<int>(o))) continue;
+    const HiddenTurn h = FindHiddenTurn(state, static_cast<int>(o), state.x_before, state.x, data);
+    TurnBack(state, static_cast<int>(o), h.turn, h.centre + h.velocity, &predicted);  // the predicted centre
   }
   return predicted;
 }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include "registration/embedded_surface.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -19,11 +20,31 @@ namespace femreg {
 Eigen::Vector3d TurnVisibility(const Vertices& x, const Triangles& tris, const Eigen::Vector3d& c,
                                Eigen::Matrix3d* axes);
 
+// The part of object o's move from `from` to `to` that is a turn its surface does not show:
+// the least-squares rigid velocity (velocity, and the rotation vector w about the mass centre
+// of `to`), and w's components along the axes of TurnVisibility at `to`, each scaled by
+// 1 - min(1, lambda / kVisibleTurn), in `turn` (rad). Zero when the object has no mass. With
+// `data` (may be null), an object's embedded surface is the one whose visibility counts: it is
+// what the data see, and a coarse cage may be rounder than its scan.
+struct HiddenTurn {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d turn = Eigen::Vector3d::Zero();
+};
+HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from, const Vertices& to,
+                          DataSurface* data = nullptr);
+
+// Turns each object that nothing holds back by the hidden turn of its move from `from` to
+// *x, about its mass centre at *x, as PredictMotion does with the prediction: each outer
+// iteration's move keeps only the turns the data can see (docs/theory/stopping.md#hidden-turns).
+// Nothing with fracture live. True when some object was turned.
+bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* x, DataSurface* data = nullptr);
+
 // 2 x - x_before, except that for each object that nothing holds (no anchor), the predicted
 // turn about an axis of visibility lambda < kVisibleTurn is scaled by lambda / kVisibleTurn:
 // a turn the surface does not show is not carried on, since no later data will correct it
 // (docs/theory/energy.md#the-prediction).
-Vertices PredictMotion(const TrackerState& state);
+Vertices PredictMotion(const TrackerState& state, DataSurface* data = nullptr);
 
 // A cube's faces show a fifth of its turns; a faceted sphere, a hundredth.
 constexpr double kVisibleTurn = 0.1;

@@ -147,6 +147,7 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels,
                           offset ? &plane : nullptr);
   if (offset) s->depth_offset = depth_offset.Correct(camera, pre.plane_distance, plane, &fc->cloud);
+  prepared_cloud = fc->cloud;
   // The cloud is thinned to the surface the data terms see (an embedded one's).
   const TrackerState& pair_state = PairState();
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());
@@ -186,6 +187,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.frame = state.frame;
   s.backend = backend->type();
   s.cloud_points = input.size();
+  prepared_cloud = PointCloud();  // this frame's, once prepared
   if (input.points.cols() != 3 ||
       (input.normals.rows() != 0 && input.normals.rows() != input.points.rows())) {
     s.termination = TerminationType::kInvalidInput;
@@ -220,7 +222,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // does not show.
   Vertices previous = state.x;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
-    const Vertices predicted = PredictMotion(state);
+    const Vertices predicted = PredictMotion(state, data_surface.get());
     // Not through a flat element: the inversion barrier's energy is infinite there.
     if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted))) {
       state.x = predicted;
@@ -474,6 +476,7 @@ Status Tracker::SetVertices(int object, const Vertices& x) {
   return Status::Ok();
 }
 const RegistrationOptions& Tracker::options() const { return impl_->state.options; }
+const PointCloud& Tracker::prepared_cloud() const { return impl_->prepared_cloud; }
 const CollisionWorld* Tracker::collision() const { return impl_->state.collision.get(); }
 
 }  // namespace femreg

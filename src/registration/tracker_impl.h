@@ -106,6 +106,7 @@ struct Tracker::Impl {
   double first_bulk_move = 0.0;  // m, of the frame's first outer iteration (BulkMove)
   // The last outer iteration's start and its energy with what it found (Backtrack).
   Vertices merit_x;
+  PointCloud prepared_cloud;  // Tracker::prepared_cloud
   double merit = 0.0;
 };
 

@@ -24,18 +24,20 @@ std::string Absolute(const std::string& path) {
   return ec ? path : p.lexically_normal().string();
 }
 
-// Every field of an options table (femreg/option_fields.h) by its scene key; enums by name.
+// Every field of an options table (femreg/option_fields.h) by its scene key (a grouped one
+// by its Python name, "outlier_neighbors": one flat object per section); enums by name.
 template <class Options>
 json FieldsJson(const Options& o) {
   json j = json::object();
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using T = std::decay_t<decltype(o.*member)>;
+    const char* key = f.group != nullptr ? f.python_name() : f.key;
     if constexpr (std::is_enum_v<T>) {
-      j[f.key] = ToString(o.*member);
+      j[key] = ToString(o.*member);
     } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-      j[f.key] = Vector(o.*member);
+      j[key] = Vector(o.*member);
     } else {
-      j[f.key] = o.*member;
+      j[key] = o.*member;
     }
   });
   return j;
@@ -49,17 +51,8 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
   j["camera"].update(FieldsJson(o.camera));
   const PreprocessOptions& p = o.preprocess;
   j["preprocess"] = {{"mask_dir", p.mask_dir.empty() ? json(nullptr) : json(Absolute(p.mask_dir))},
-                     {"crop", p.crop},
-                     {"crop_min", Vector(p.crop_min)},
-                     {"crop_max", Vector(p.crop_max)},
-                     {"flying_pixels", p.flying_pixels},
-                     {"voxel_size", p.voxel_size},
-                     {"outlier_neighbors", p.outlier_neighbors},
-                     {"outlier_stddev", p.outlier_stddev},
-                     {"normal_neighbors", p.normal_neighbors},
-                     {"plane_distance", p.plane_distance},
-                     {"plane_iterations", p.plane_iterations},
-                     {"depth_offset", p.depth_offset}};
+                     {"crop", p.crop}};
+  j["preprocess"].update(FieldsJson(p));
   j["data"] = FieldsJson(o.data);
   j["weights"] = FieldsJson(o.weights);
   j["solver"] = FieldsJson(o.solver);

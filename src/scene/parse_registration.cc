@@ -49,8 +49,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   }
   if (v.Has("preprocess")) {
     const YamlValue p = v["preprocess"];
-    p.CheckKeys({"mask_dir", "scale", "transform", "crop", "plane", "voxel_size", "auto_voxel",
-                 "auto_voxel_min_ratio", "flying_pixels", "depth_offset", "outliers", "normals"});
+    p.CheckKeys(FieldKeys<PreprocessOptions>({"mask_dir"}));
     if (p.Has("mask_dir")) {
       // Depth-image frames' masks (mask_dir/<frame name>.png), relative to the scene's folder
       // like mesh files. Whether it exists is the frame reader's concern: the scene may be
@@ -61,46 +60,11 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
       r.preprocess.mask_dir = path.lexically_normal().string();
     }
-    if (p.Has("scale")) r.preprocess.scale = p["scale"].AsDouble();
-    if (p.Has("transform")) {
-      const YamlValue t = p["transform"];
-      t.CheckKeys({"translation", "rotation"});
-      if (t.Has("translation")) r.preprocess.translation = t["translation"].AsVector3();
-      if (t.Has("rotation")) r.preprocess.rotation = t["rotation"].AsVector3();
-    }
-    if (p.Has("auto_voxel")) r.preprocess.auto_voxel = p["auto_voxel"].AsDouble();
-    if (p.Has("flying_pixels")) r.preprocess.flying_pixels = p["flying_pixels"].AsDouble();
-    if (p.Has("depth_offset")) r.preprocess.depth_offset = p["depth_offset"].AsBool();
-    if (p.Has("auto_voxel_min_ratio")) {
-      r.preprocess.auto_voxel_min_ratio = p["auto_voxel_min_ratio"].AsDouble();
-    }
-    if (p.Has("crop")) {
-      const YamlValue crop = p["crop"];
-      crop.CheckKeys({"min", "max"});
-      if (!crop.Has("min") || !crop.Has("max")) crop.Fail("needs 'min' and 'max'");
-      r.preprocess.crop = true;
-      r.preprocess.crop_min = crop["min"].AsVector3();
-      r.preprocess.crop_max = crop["max"].AsVector3();
-    }
-    if (p.Has("plane")) {
-      const YamlValue plane = p["plane"];
-      plane.CheckKeys({"distance", "iterations"});
-      if (!plane.Has("distance")) plane.Fail("needs 'distance' (m)");
-      r.preprocess.plane_distance = plane["distance"].AsDouble();
-      if (plane.Has("iterations")) r.preprocess.plane_iterations = plane["iterations"].AsInt();
-    }
-    if (p.Has("voxel_size")) r.preprocess.voxel_size = p["voxel_size"].AsDouble();
-    if (p.Has("outliers")) {
-      const YamlValue o = p["outliers"];
-      o.CheckKeys({"neighbors", "stddev"});
-      if (o.Has("neighbors")) r.preprocess.outlier_neighbors = o["neighbors"].AsInt();
-      if (o.Has("stddev")) r.preprocess.outlier_stddev = o["stddev"].AsDouble();
-    }
-    if (p.Has("normals")) {
-      const YamlValue n = p["normals"];
-      n.CheckKeys({"neighbors"});
-      if (n.Has("neighbors")) r.preprocess.normal_neighbors = n["neighbors"].AsInt();
-    }
+    // A scene crops by giving the box, and removes a plane by giving its distance.
+    if (p.Has("crop") && (!p["crop"].Has("min") || !p["crop"].Has("max"))) p["crop"].Fail("needs 'min' and 'max'");
+    if (p.Has("plane") && !p["plane"].Has("distance")) p["plane"].Fail("needs 'distance' (m)");
+    r.preprocess.crop = p.Has("crop");
+    ParseFields(p, &r.preprocess);
   }
   if (v.Has("data")) {
     const YamlValue d = v["data"];

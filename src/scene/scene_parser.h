@@ -12,6 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -54,8 +55,21 @@ Enum ParseEnum(const YamlValue& v) {
 template <class Options>
 std::vector<std::string> FieldKeys(std::vector<std::string> extra = {}) {
   std::vector<std::string> keys;
-  OptionFields<Options>::Visit([&](auto, const FieldInfo& f) { keys.push_back(f.key); });
+  OptionFields<Options>::Visit([&](auto, const FieldInfo& f) {
+    const std::string key = f.group != nullptr ? f.group : f.key;  // a group's key once
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+  });
   keys.insert(keys.end(), extra.begin(), extra.end());
+  return keys;
+}
+
+// The keys of an options table's group (FieldInfo::group).
+template <class Options>
+std::vector<std::string> GroupKeys(const std::string& group) {
+  std::vector<std::string> keys;
+  OptionFields<Options>::Visit([&](auto, const FieldInfo& f) {
+    if (f.group != nullptr && group == f.group) keys.push_back(f.key);
+  });
   return keys;
 }
 
@@ -63,9 +77,20 @@ std::vector<std::string> FieldKeys(std::vector<std::string> extra = {}) {
 // ranges are checked afterwards, by IsValid, which names the field.
 template <class Options>
 void ParseFields(const YamlValue& v, Options* o) {
+  std::vector<std::string> checked;  // the groups whose keys were checked
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    if (!v.Has(f.key)) return;
-    const YamlValue x = v[f.key];
+    if (f.group != nullptr) {
+      if (!v.Has(f.group)) return;
+      const YamlValue g = v[f.group];
+      if (std::find(checked.begin(), checked.end(), f.group) == checked.end()) {
+        g.CheckKeys(GroupKeys<Options>(f.group));
+        checked.push_back(f.group);
+      }
+      if (!g.Has(f.key)) return;
+    } else if (!v.Has(f.key)) {
+      return;
+    }
+    const YamlValue x = f.group != nullptr ? v[f.group][f.key] : v[f.key];
     auto& field = o->*member;
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_same_v<T, bool>) {

@@ -7,6 +7,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdlib>
 #include <filesystem>
@@ -107,15 +108,28 @@ YAML::Node FieldNode(const T& value) {
 // Every field of an options table (femreg/option_fields.h) that differs from the default
 // (every field with `all`), in the table's order, but those in `skip` (which the section
 // writes itself).
+// A group (FieldInfo::group) is written whole, as a flow map, when any of its fields
+// differs: its fields may need each other (a plane's distance beside its iterations).
+// `skip` names fields by their path in the section ("crop.min").
 template <class Options>
 void PutFields(YAML::Node map, const Options& value, const std::vector<std::string>& skip = {},
                bool all = false) {
   const Options d;
+  std::vector<std::string> changed_groups;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    if (f.group != nullptr && value.*member != d.*member) changed_groups.push_back(f.group);
+  });
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     for (const std::string& key : skip) {
-      if (key == f.key) return;
+      if (key == f.path()) return;
     }
-    if (all || value.*member != d.*member) map[f.key] = FieldNode(value.*member);
+    if (f.group == nullptr) {
+      if (all || value.*member != d.*member) map[f.key] = FieldNode(value.*member);
+      return;
+    }
+    if (!all && std::find(changed_groups.begin(), changed_groups.end(), f.group) == changed_groups.end()) return;
+    if (!map[f.group].IsDefined() || map[f.group].IsNull()) map[f.group] = FlowMap();
+    map[f.group][f.key] = FieldNode(value.*member);
   });
 }
 

@@ -38,38 +38,13 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   const PreprocessOptions& p = r.preprocess;
   YAML::Node preprocess = FlowMap();
   if (!p.mask_dir.empty()) preprocess["mask_dir"] = FilePath(p.mask_dir, base_dir);
-  Put(preprocess, "scale", p.scale, d.preprocess.scale);
-  if (!p.translation.isZero(0) || !p.rotation.isZero(0)) {
-    YAML::Node transform = FlowMap();
-    transform["translation"] = Vec(p.translation);
-    transform["rotation"] = Vec(p.rotation);
-    preprocess["transform"] = transform;
-  }
-  if (p.crop) {
+  PutFields(preprocess, p, {"crop.min", "crop.max"});
+  if (p.crop) {  // the group is the switch
     YAML::Node crop = FlowMap();
     crop["min"] = Vec(p.crop_min);
     crop["max"] = Vec(p.crop_max);
     preprocess["crop"] = crop;
   }
-  if (p.plane_distance != d.preprocess.plane_distance ||
-      p.plane_iterations != d.preprocess.plane_iterations) {
-    YAML::Node plane = FlowMap();
-    plane["distance"] = Number(p.plane_distance);
-    Put(plane, "iterations", p.plane_iterations, d.preprocess.plane_iterations);
-    preprocess["plane"] = plane;
-  }
-  Put(preprocess, "voxel_size", p.voxel_size, d.preprocess.voxel_size);
-  Put(preprocess, "auto_voxel", p.auto_voxel, d.preprocess.auto_voxel);
-  Put(preprocess, "auto_voxel_min_ratio", p.auto_voxel_min_ratio, d.preprocess.auto_voxel_min_ratio);
-  Put(preprocess, "flying_pixels", p.flying_pixels, d.preprocess.flying_pixels);
-  Put(preprocess, "depth_offset", p.depth_offset, d.preprocess.depth_offset);
-  YAML::Node outliers = FlowMap();
-  Put(outliers, "neighbors", p.outlier_neighbors, d.preprocess.outlier_neighbors);
-  Put(outliers, "stddev", p.outlier_stddev, d.preprocess.outlier_stddev);
-  PutMap(preprocess, "outliers", outliers);
-  YAML::Node normals = FlowMap();
-  Put(normals, "neighbors", p.normal_neighbors, d.preprocess.normal_neighbors);
-  PutMap(preprocess, "normals", normals);
   PutMap(n, "preprocess", preprocess);
 
   YAML::Node data = FlowMap();

@@ -271,15 +271,14 @@ int RunRegister(const RegisterArgs& args) {
       cloud.has_viewpoint = true;
       cloud.viewpoint = sensor.origin;
     }
-    // The cloud as the tracker uses it: after the mask (when read) and the scene's
+    tracker->Track(cloud, &row.summary);
+    // The cloud as the tracker used it: after the mask (when read) and the scene's
     // preprocessing. The units hint looks at it, and it is written beside the meshes.
-    PointCloud used = cloud;
-    PrepareCloudForTracking(tracker->options(), &used);
+    const PointCloud& used = tracker->prepared_cloud();
     if (!units_checked && used.size() > 0) {
       units_checked = true;
       WarnUnits(files[f], used, *tracker);
     }
-    tracker->Track(cloud, &row.summary);
     if (!read.ok()) row.summary.termination = TerminationType::kInvalidInput;
     if (row.summary.pose_ambiguous) {
       bar.Finish();
