@@ -11,12 +11,14 @@
 #   seq/ground_truth; e.g. LEVELS=1 SQRT3=2 for the 98k-triangle bunny scan); INPUT: the surface
 #   it was made from (the other scans are made from it the same way); OUT_MD (default
 #   docs/scaling/embedded.md). SCALE (0.015) as for embedded_bench.sh; CAGE (1500): the cage
-#   of the surface sweep; THREADS ("1 2"). Run on a quiet machine: a few minutes.
+#   of the surface sweep; THREADS ("1 2"); ROUNDS (3): each row is run so many times, each
+#   frame's time the least over them (another process's load only adds to a time). Run on a
+#   quiet machine: about ten minutes; the table notes the load average before and after.
 set -euo pipefail
 FEMREG=$(realpath "$1"); BENCH=$(realpath "$2"); INPUT=$(realpath "$3")
 HERE=$(cd "$(dirname "$0")" && pwd)
 OUT_MD=$(realpath -m "${4:-$HERE/../docs/scaling/embedded.md}")
-SCALE=${SCALE:-0.015}; CAGE=${CAGE:-1500}; THREADS=${THREADS:-1 2}
+SCALE=${SCALE:-0.015}; CAGE=${CAGE:-1500}; THREADS=${THREADS:-1 2}; ROUNDS=${ROUNDS:-3}
 PY=${PYTHON:-python3}
 WORK="$BENCH/scaling"
 mkdir -p "$WORK"; cd "$WORK"
@@ -34,7 +36,7 @@ done
 
 # The bench's scene with another cage and scan.
 scene() {  # scene CAGE.vtu SCAN.ply > file
-  sed -e "s|^    mesh: .*|    mesh: $1|" -e "s|^    surface: .*|    surface: $2|" "$BENCH/cage.yaml"
+  sed -e "s|^    mesh: .*|    mesh: $1|" -e "s|^    surface: .*|    surface: $2|" -e "/^synth:/,$ d" "$BENCH/cage.yaml"
 }
 rows=rows.tsv
 : > "$rows"
@@ -43,31 +45,41 @@ run() {  # run SWEEP CAGE_N SCAN_NAME THREADS
   scene "cage_$2.vtu" "scan_$3.ply" > "$name.yaml"
   local truth=""
   [ "$3" = bench ] && truth="--ground-truth $BENCH/seq/ground_truth"
-  rm -rf "run_$name"
-  "$FEMREG" register --scene "$name.yaml" --frames "$BENCH/seq/clouds" $truth --out "run_$name" \
-    --threads "$4" --no-progress > "run_$name.log" 2>&1
-  "$PY" - "run_$name/stats.csv" "$1" "$2" "$3" "$4" "cage_$2.vtu" "scan_$3.ply" >> "$rows" <<'PY'
-import csv, statistics as st, struct, sys
-rows = list(csv.DictReader(open(sys.argv[1])))
+  local r stats=()
+  for r in $(seq 1 "$ROUNDS"); do
+    rm -rf "run_${name}_$r"
+    "$FEMREG" register --scene "$name.yaml" --frames "$BENCH/seq/clouds" $truth --out "run_${name}_$r" \
+      --threads "$4" --no-progress > "run_${name}_$r.log" 2>&1
+    stats+=("run_${name}_$r/stats.csv")
+  done
+  "$PY" - "$1" "$2" "$3" "$4" "cage_$2.vtu" "scan_$3.ply" "${stats[@]}" >> "$rows" <<'PY'
+import csv, statistics as st, sys
+runs = [list(csv.DictReader(open(p))) for p in sys.argv[7:]]
+rows = runs[0]
 def count(path, word):  # vertices of a VTU ("NumberOfPoints") or triangles of a PLY
     head = open(path, "rb").read(4096).decode("latin-1")
     if word == "ply":
         return int(head.split("element face ")[1].split()[0])
     return int(head.split('NumberOfPoints="')[1].split('"')[0])
 mean = lambda k: st.mean(float(r[k]) for r in rows if r.get(k) not in (None, ""))
-t = [float(r["t_total_ms"]) for r in rows]
-err = mean("err_surface_mean_mm") if sys.argv[4] == "bench" else float("nan")
-print("\t".join(str(v) for v in [sys.argv[2], count(sys.argv[6], "vtu"), count(sys.argv[7], "ply"), sys.argv[5],
-      f"{st.median(t):.1f}", f"{st.mean(t):.1f}", f"{mean('t_correspondences_ms'):.1f}", f"{mean('t_solve_ms'):.1f}",
-      f"{mean('outer_iterations'):.2f}", f"{mean('model_to_cloud'):.0f}", f"{mean('cloud_to_model'):.0f}", f"{err:.3f}"]))
+least = lambda k: [min(float(run[f][k]) for run in runs) for f in range(len(rows))]
+t = least("t_total_ms")
+err = mean("err_surface_mean_mm") if sys.argv[3] == "bench" else float("nan")
+print("\t".join(str(v) for v in [sys.argv[1], count(sys.argv[5], "vtu"), count(sys.argv[6], "ply"), sys.argv[4],
+      f"{st.median(t):.1f}", f"{st.mean(t):.1f}", f"{st.mean(least('t_correspondences_ms')):.1f}",
+      f"{st.mean(least('t_solve_ms')):.1f}", f"{mean('outer_iterations'):.2f}", f"{mean('model_to_cloud'):.0f}",
+      f"{mean('cloud_to_model'):.0f}", f"{err:.3f}"]))
 PY
 }
+load_before=$(cut -d" " -f1-3 /proc/loadavg)
 for threads in $THREADS; do
   for scan in L0 L1 L2 bench L3; do run surface "$CAGE" "$scan" "$threads"; done
   for n in 250 500 1000 "$CAGE" 2000 4000; do run cage "$n" bench "$threads"; done
 done
 
-"$PY" - "$rows" "$OUT_MD" "$(basename "$BENCH")" "$("$FEMREG" --version 2>/dev/null | head -1)" <<'PY'
+load_after=$(cut -d" " -f1-3 /proc/loadavg)
+"$PY" - "$rows" "$OUT_MD" "$(basename "$BENCH")" "$("$FEMREG" --version 2>/dev/null | head -1)" \
+  "$ROUNDS" "$(nproc)" "$load_before" "$load_after" <<'PY'
 import sys
 rows = [l.rstrip("\n").split("\t") for l in open(sys.argv[1]) if l.strip()]
 head = ("| cage vertices | scan triangles | threads | median ms | mean ms | correspondences ms | solve ms "
@@ -83,8 +95,10 @@ def table(sweep):
 md = ("<!-- written by tools/embedded_scaling.sh; do not edit -->\n\n"
       "**Surface size at a fixed cage**\n\n" + table("surface") +
       "\n**Cage size at a fixed scan**\n\n" + table("cage") +
-      f"\nTimes per frame over the sequence `{sys.argv[3]}/seq` ({sys.argv[4] or 'femreg'}); the scan error "
-      "(mean over frames of the scan vertices' mean error) only where the scan is the sequence's own.\n")
+      f"\nTimes per frame over the sequence `{sys.argv[3]}/seq` ({sys.argv[4] or 'femreg'}), each frame's "
+      f"the least of {sys.argv[5]} runs; {sys.argv[6]} cores, load average {sys.argv[7]} before and "
+      f"{sys.argv[8]} after. The scan error (mean over frames of the scan vertices' mean error) only where "
+      "the scan is the sequence's own.\n")
 open(sys.argv[2], "w").write(md)
 print(md)
 PY
