@@ -11,8 +11,8 @@
 #   seq/ground_truth; e.g. LEVELS=1 SQRT3=2 for the 98k-triangle bunny scan); INPUT: the surface
 #   it was made from (the other scans are made from it the same way); OUT_MD (default
 #   docs/scaling/embedded.md). SCALE (0.015) as for embedded_bench.sh; CAGE (1500): the cage
-#   of the surface sweep; THREADS ("1 2"); ROUNDS (3): each row is run so many times, each
-#   frame's time the least over them (another process's load only adds to a time). Run on a
+#   of the surface sweep; THREADS ("1 2"); ROUNDS (3): every row is run once per round, each
+#   frame's time the least over the rounds (another process's load only adds to a time). Run on a
 #   quiet machine: about ten minutes; the table notes the load average before and after.
 set -euo pipefail
 FEMREG=$(realpath "$1"); BENCH=$(realpath "$2"); INPUT=$(realpath "$3")
@@ -40,18 +40,25 @@ scene() {  # scene CAGE.vtu SCAN.ply > file
 }
 rows=rows.tsv
 : > "$rows"
-run() {  # run SWEEP CAGE_N SCAN_NAME THREADS
-  local name="$1_$2_$3_$4"
+configs=()
+for threads in $THREADS; do
+  for scan in L0 L1 L2 bench L3; do configs+=("surface $CAGE $scan $threads"); done
+  for n in 250 500 1000 "$CAGE" 2000 4000; do configs+=("cage $n bench $threads"); done
+done
+name_of() { echo "$1_$2_$3_$4"; }
+run() {  # run SWEEP CAGE_N SCAN_NAME THREADS ROUND
+  local name; name=$(name_of "$1" "$2" "$3" "$4")
   scene "cage_$2.vtu" "scan_$3.ply" > "$name.yaml"
   local truth=""
   [ "$3" = bench ] && truth="--ground-truth $BENCH/seq/ground_truth"
-  local r stats=()
-  for r in $(seq 1 "$ROUNDS"); do
-    rm -rf "run_${name}_$r"
-    "$FEMREG" register --scene "$name.yaml" --frames "$BENCH/seq/clouds" $truth --out "run_${name}_$r" \
-      --threads "$4" --no-progress > "run_${name}_$r.log" 2>&1
-    stats+=("run_${name}_$r/stats.csv")
-  done
+  rm -rf "run_${name}_$5"
+  "$FEMREG" register --scene "$name.yaml" --frames "$BENCH/seq/clouds" $truth --out "run_${name}_$5" \
+    --threads "$4" --no-progress > "run_${name}_$5.log" 2>&1
+}
+row() {  # row SWEEP CAGE_N SCAN_NAME THREADS: the table's row from the rounds' stats
+  local name r stats=()
+  name=$(name_of "$1" "$2" "$3" "$4")
+  for r in $(seq 1 "$ROUNDS"); do stats+=("run_${name}_$r/stats.csv"); done
   "$PY" - "$1" "$2" "$3" "$4" "cage_$2.vtu" "scan_$3.ply" "${stats[@]}" >> "$rows" <<'PY'
 import csv, statistics as st, sys
 runs = [list(csv.DictReader(open(p))) for p in sys.argv[7:]]
@@ -72,11 +79,11 @@ print("\t".join(str(v) for v in [sys.argv[1], count(sys.argv[5], "vtu"), count(s
 PY
 }
 load_before=$(cut -d" " -f1-3 /proc/loadavg)
-for threads in $THREADS; do
-  for scan in L0 L1 L2 bench L3; do run surface "$CAGE" "$scan" "$threads"; done
-  for n in 250 500 1000 "$CAGE" 2000 4000; do run cage "$n" bench "$threads"; done
+# Round by round over every row: a change of the machine's load falls on all rows alike.
+for r in $(seq 1 "$ROUNDS"); do
+  for c in "${configs[@]}"; do run $c "$r"; done
 done
-
+for c in "${configs[@]}"; do row $c; done
 load_after=$(cut -d" " -f1-3 /proc/loadavg)
 "$PY" - "$rows" "$OUT_MD" "$(basename "$BENCH")" "$("$FEMREG" --version 2>/dev/null | head -1)" \
   "$ROUNDS" "$(nproc)" "$load_before" "$load_after" <<'PY'
