@@ -10,7 +10,9 @@
 # usage: tools/embedded_bench.sh FEMREG SURFACE.stl|.ply OUT [SCALE] [CAGE_VERTICES] [LEVELS]
 #   SCALE (0.015): to metres; CAGE_VERTICES (1500); LEVELS (2): Loop subdivisions of the input
 #   for the scan (x4 triangles each). The scan tracked by the cage may be finer than the one
-#   tetrahedralized: FINE_LEVELS (default LEVELS) sets the latter.
+#   tetrahedralized: FINE_LEVELS (default LEVELS) sets the latter. SQRT3 (0) and FINE_SQRT3
+#   (default SQRT3): sqrt(3) subdivisions after the Loop levels (x3 triangles each; Bunny.stl
+#   at LEVELS=1 SQRT3=2: 98,208 triangles). FRAMES (20): the synth sequence's length.
 # The scene (camera, motion, clamp) is the bunny's: the input's +y is up, the base at its
 # smallest y is clamped and the top (y > 0.05 m) pushed and turned. CLAMP_Y (-0.072 m): the
 # clamp holds y below it (the armadillo at SCALE 0.01: -0.045). SPLIT=1 splits non-manifold
@@ -19,13 +21,14 @@
 set -euo pipefail
 FEMREG=$(realpath "$1"); INPUT=$(realpath "$2"); OUT=$3
 SCALE=${4:-0.015}; CAGE=${5:-1500}; LEVELS=${6:-2}; FINE_LEVELS=${FINE_LEVELS:-$LEVELS}
+SQRT3=${SQRT3:-0}; FINE_SQRT3=${FINE_SQRT3:-$SQRT3}; FRAMES=${FRAMES:-20}
 CLAMP_Y=${CLAMP_Y:--0.072}; THREADS=${THREADS:-1 2}
 SPLIT_ARG=""; [ "${SPLIT:-0}" = 1 ] && SPLIT_ARG="--split-nonmanifold"
 HERE=$(cd "$(dirname "$0")" && pwd)
 PY=${PYTHON:-python3}
 mkdir -p "$OUT"; cd "$OUT"
-[ -f scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" scan.ply --levels "$LEVELS" --scale "$SCALE" $SPLIT_ARG
-[ -f fine_scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" fine_scan.ply --levels "$FINE_LEVELS" --scale "$SCALE" $SPLIT_ARG
+[ -f scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" scan.ply --levels "$LEVELS" --sqrt3 "$SQRT3" --scale "$SCALE" $SPLIT_ARG
+[ -f fine_scan.ply ] || "$PY" "$HERE/subdivide_surface.py" "$INPUT" fine_scan.ply --levels "$FINE_LEVELS" --sqrt3 "$FINE_SQRT3" --scale "$SCALE" $SPLIT_ARG
 [ -f cage.vtu ] || "$FEMREG" mesh scan.ply --cage "$CAGE" --out cage.vtu > cage.log
 [ -f fine.vtu ] || "$FEMREG" mesh fine_scan.ply --keep-surface --edge-length 0.006 --out fine.vtu > fine.log
 
@@ -52,7 +55,7 @@ registration:
 anchors:
   - {name: clamp, select: {box: {min: [-1, -1, -1], max: [1, $CLAMP_Y, 1]}}, hard: true}
 synth:
-  frames: 20
+  frames: $FRAMES
   seed: 1
   ground_truth: {mesh: fine.vtu}
   sensor: {noise_coefficient: 2.85e-3, grazing_angle_deg: 80, pixel_stride: 2}

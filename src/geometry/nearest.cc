@@ -67,46 +67,75 @@ int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,
   return n;
 }
 
+SurfaceRings::SurfaceRings(int num_vertices, const Triangles& triangles, const std::vector<char>* keep) {
+  auto kept = [&](int f) { return keep == nullptr || (*keep)[static_cast<size_t>(f)] != 0; };
+  const int nv = num_vertices;
+  offsets.assign(static_cast<size_t>(nv) + 1, 0);
+  for (int f = 0; f < triangles.rows(); ++f) {
+    if (!kept(f)) continue;
+    for (int k = 0; k < 3; ++k) ++offsets[static_cast<size_t>(triangles(f, k)) + 1];
+  }
+  for (int v = 0; v < nv; ++v) offsets[static_cast<size_t>(v) + 1] += offsets[static_cast<size_t>(v)];
+  list.assign(static_cast<size_t>(offsets[static_cast<size_t>(nv)]), 0);
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+  for (int f = 0; f < triangles.rows(); ++f) {
+    if (!kept(f)) continue;
+    for (int k = 0; k < 3; ++k) list[static_cast<size_t>(fill[static_cast<size_t>(triangles(f, k))]++)] = f;
+  }
+}
+
+Eigen::MatrixXd VertexNormalsAt(const Vertices& x, const Triangles& triangles, const SurfaceRings& rings,
+                                const std::vector<int>& vertices) {
+  const int n = static_cast<int>(vertices.size());
+  Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const int v = vertices[static_cast<size_t>(i)];
+    if (v < 0 || v >= rings.num_vertices()) continue;
+    // As TrackerState::VertexNormals: from zero, each face's (b - a) x (c - a) in face order
+    // (a face that lists v twice counts twice), then normalized.
+    Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
+    for (int j = rings.offsets[static_cast<size_t>(v)]; j < rings.offsets[static_cast<size_t>(v) + 1]; ++j) {
+      const int f = rings.list[static_cast<size_t>(j)];
+      const Eigen::Vector3d a = x.row(triangles(f, 0)), b = x.row(triangles(f, 1)), c = x.row(triangles(f, 2));
+      sum += (b - a).cross(c - a).transpose();
+    }
+    const double len = sum.norm();
+    if (len > 0) sum /= len;
+    normals.row(i) = sum;
+  }
+  return normals;
+}
+
 SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
                            int candidate_vertices)
-    : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices) {
-  Build(nullptr);
+    : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices),
+      rings_(std::make_shared<SurfaceRings>(static_cast<int>(positions.rows()), triangles)) {
+  Build();
 }
 
 SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
                            const std::vector<char>& keep, int candidate_vertices)
     : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices), keep_(keep) {
   keep_.resize(static_cast<size_t>(triangles.rows()), 0);
-  Build(&keep_);
+  rings_ = std::make_shared<SurfaceRings>(static_cast<int>(positions.rows()), triangles, &keep_);
+  Build();
 }
 
-void SurfaceIndex::Build(const std::vector<char>* keep) {
-  const Vertices& positions = positions_;
-  const Triangles& triangles = triangles_;
-  auto kept = [&](int f) { return keep == nullptr || (*keep)[static_cast<size_t>(f)] != 0; };
-  const int nv = static_cast<int>(positions.rows());
-  std::vector<char> used(nv, 0);
-  tri_offsets_.assign(nv + 1, 0);
-  for (int f = 0; f < triangles.rows(); ++f) {
-    if (!kept(f)) continue;
-    for (int k = 0; k < 3; ++k) {
-      used[triangles(f, k)] = 1;
-      ++tri_offsets_[triangles(f, k) + 1];
-    }
-  }
-  for (int v = 0; v < nv; ++v) tri_offsets_[v + 1] += tri_offsets_[v];
-  tri_list_.assign(tri_offsets_[nv], 0);
-  std::vector<int> fill(tri_offsets_.begin(), tri_offsets_.end() - 1);
-  for (int f = 0; f < triangles.rows(); ++f) {
-    if (!kept(f)) continue;
-    for (int k = 0; k < 3; ++k) tri_list_[fill[triangles(f, k)]++] = f;
-  }
+SurfaceIndex::SurfaceIndex(const Vertices& positions, const Triangles& triangles,
+                           std::shared_ptr<const SurfaceRings> rings, int candidate_vertices)
+    : positions_(positions), triangles_(triangles), candidate_vertices_(candidate_vertices),
+      rings_(std::move(rings)) {
+  Build();
+}
+
+void SurfaceIndex::Build() {
+  const int nv = rings_->num_vertices();
   for (int v = 0; v < nv; ++v) {
-    if (used[v]) surface_vertex_ids_.push_back(v);
+    if (rings_->has(v)) surface_vertex_ids_.push_back(v);
   }
   Vertices pts(static_cast<Eigen::Index>(surface_vertex_ids_.size()), 3);
   for (size_t i = 0; i < surface_vertex_ids_.size(); ++i) {
-    pts.row(static_cast<Eigen::Index>(i)) = positions.row(surface_vertex_ids_[i]);
+    pts.row(static_cast<Eigen::Index>(i)) = positions_.row(surface_vertex_ids_[i]);
   }
   tree_points_ = std::move(pts);
 }
@@ -134,8 +163,9 @@ struct SurfaceIndex::Tested {
 };
 
 void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const {
-  for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
-    const int f = tri_list_[j];
+  const std::vector<int>& offsets = rings_->offsets;
+  for (int j = offsets[static_cast<size_t>(v)]; j < offsets[static_cast<size_t>(v) + 1]; ++j) {
+    const int f = rings_->list[static_cast<size_t>(j)];
     if (!tested->Add(f)) continue;
     Eigen::Vector3d bary;
     const Eigen::Vector3d point =
@@ -152,12 +182,11 @@ void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, Tested* teste
 }
 
 bool SurfaceIndex::TouchesRing(int v, int triangle) const {
-  if (v < 0 || v + 1 >= static_cast<int>(tri_offsets_.size()) || triangle < 0 ||
-      triangle >= triangles_.rows()) {
+  if (v < 0 || v >= rings_->num_vertices() || triangle < 0 || triangle >= triangles_.rows()) {
     return false;
   }
-  for (int j = tri_offsets_[v]; j < tri_offsets_[v + 1]; ++j) {
-    const int f = tri_list_[j];
+  for (int j = rings_->offsets[static_cast<size_t>(v)]; j < rings_->offsets[static_cast<size_t>(v) + 1]; ++j) {
+    const int f = rings_->list[static_cast<size_t>(j)];
     for (int a = 0; a < 3; ++a) {
       for (int b = 0; b < 3; ++b) {
         if (triangles_(f, a) == triangles_(triangle, b)) return true;

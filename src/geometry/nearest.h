@@ -35,6 +35,24 @@ class PointIndex {
   std::unique_ptr<Tree> tree_;
 };
 
+// Per vertex, the triangles around it (those of `triangles` with keep[f] != 0, or all), each
+// vertex's list in the triangles' order: a surface's topology, which does not change when its
+// vertices move (SurfaceIndex shares it between rebuilds).
+struct SurfaceRings {
+  SurfaceRings(int num_vertices, const Triangles& triangles, const std::vector<char>* keep = nullptr);
+  std::vector<int> offsets;  // #V + 1: vertex v's triangles are list[offsets[v] .. offsets[v + 1])
+  std::vector<int> list;
+  int num_vertices() const { return static_cast<int>(offsets.size()) - 1; }
+  bool has(int v) const { return offsets[static_cast<size_t>(v) + 1] > offsets[static_cast<size_t>(v)]; }
+};
+
+// Area-weighted unit normals at `vertices` of the surface (x, triangles) whose rings are
+// `rings`: row i is vertices[i]'s (zero for a vertex on no triangle). The same numbers as
+// TrackerState::VertexNormals there (the face normals summed per vertex in face order), at the
+// cost of the vertices' rings instead of the whole surface.
+Eigen::MatrixXd VertexNormalsAt(const Vertices& x, const Triangles& triangles, const SurfaceRings& rings,
+                                const std::vector<int>& vertices);
+
 // Closest points on a triangle surface: candidates are the triangles around the k surface
 // vertices nearest to the query, which finds the true closest triangle whenever it has a
 // vertex among them (always for reasonably shaped surface triangles).
@@ -45,6 +63,10 @@ class SurfaceIndex {
   // Only the triangles f with keep[f] != 0 (#F entries, copied) are searched; hits keep
   // their index in `triangles`.
   SurfaceIndex(const Vertices& positions, const Triangles& triangles, const std::vector<char>& keep,
+               int candidate_vertices = 4);
+  // Every triangle, with `rings` made for them (SurfaceRings(positions.rows(), triangles)): an
+  // index rebuilt where the surface moved reuses its topology.
+  SurfaceIndex(const Vertices& positions, const Triangles& triangles, std::shared_ptr<const SurfaceRings> rings,
                int candidate_vertices = 4);
 
   struct Hit {
@@ -63,18 +85,19 @@ class SurfaceIndex {
   // Whether `triangle` touches vertex v's closed one-ring: one of its corners is v or shares
   // a triangle with v. v must be a vertex of `positions` (false for one on no triangle).
   bool TouchesRing(int v, int triangle) const;
+  const SurfaceRings& rings() const { return *rings_; }
 
  private:
   struct Tested;
-  void Build(const std::vector<char>* keep);
+  void Build();
   // Tests the triangles around vertex v not yet in *tested; *best keeps the closest.
   void TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const;
   const Vertices& positions_;
   const Triangles& triangles_;
   int candidate_vertices_;
   std::vector<int> surface_vertex_ids_;  // index in the tree -> vertex id
-  std::vector<int> tri_offsets_, tri_list_;  // vertex id -> incident triangles (CSR)
-  std::vector<char> keep_;                    // empty: every triangle
+  std::shared_ptr<const SurfaceRings> rings_;  // vertex id -> incident (kept) triangles
+  std::vector<char> keep_;                      // empty: every triangle
   // The k-d tree over the surface vertices where they were when the index was made, built by
   // the first Closest: warm-started queries (ClosestFrom) never need it.
   const PointIndex& Tree() const;

@@ -26,7 +26,7 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
 
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
                                   const std::vector<DataPair>& pairs, double tolerance,
-                                  const DataSurface* surface) {
+                                  const DataSurface* surface, const SurfaceRings* rings) {
   FrameConfidence c;
   const Vertices& pair_x = surface != nullptr ? surface->view().x : state.x;
   // Fit: the cloud->model pairs (three vertices) within the tolerance at the result.
@@ -42,27 +42,31 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   c.residual = all > 0.0 ? std::sqrt(squares / all) : 0.0;
 
   // Coverage: the surface vertices facing the sensor with a cloud point near.
-  int facing = 0, covered = 0;
-  if (surface != nullptr) {
-    const TrackerState& view = surface->view();
-    const Eigen::MatrixXd normals = view.VertexNormals();
-    for (int v : view.surface_vertices) {
-      if (!fc.Faces(view.x.row(v).transpose(), normals.row(v).transpose())) continue;
-      ++facing;
-      const double d = surface->residuals(v);
-      if (std::isfinite(d) && d <= tolerance) ++covered;
-    }
+  const TrackerState& covered_state = surface != nullptr ? surface->view() : state;
+  const std::vector<int>& vertices = covered_state.surface_vertices;
+  // Row i: vertices[i]'s normal (the same numbers either way).
+  Eigen::MatrixXd normals;
+  if (rings != nullptr && rings->num_vertices() == covered_state.x.rows()) {
+    normals = VertexNormalsAt(covered_state.x, covered_state.surface, *rings, vertices);
+  } else {
+    const Eigen::MatrixXd all_normals = covered_state.VertexNormals();
+    normals.resize(static_cast<Eigen::Index>(vertices.size()), 3);
+    for (size_t i = 0; i < vertices.size(); ++i) normals.row(static_cast<Eigen::Index>(i)) = all_normals.row(vertices[i]);
   }
-  const Eigen::MatrixXd normals = surface != nullptr ? Eigen::MatrixXd() : state.VertexNormals();
-  for (size_t i = 0; i < state.objects.size() && surface == nullptr; ++i) {
-    const ObjectState& o = state.objects[i];
-    for (int v : o.mesh.surface_vertices) {
-      const int g = o.offset + v;
-      if (!fc.Faces(state.x.row(g).transpose(), normals.row(g).transpose())) continue;
-      ++facing;
-      const double d = state.residuals[i](v);
-      if (std::isfinite(d) && d <= tolerance) ++covered;
-    }
+  // The residual of vertices[i]: the data surface's, or its object's.
+  auto residual = [&](size_t i) {
+    const int v = vertices[i];
+    if (surface != nullptr) return surface->residuals(v);
+    const int o = state.vertex_object[static_cast<size_t>(v)];
+    return state.residuals[static_cast<size_t>(o)](v - state.objects[static_cast<size_t>(o)].offset);
+  };
+  int facing = 0, covered = 0;
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const int v = vertices[i];
+    if (!fc.Faces(covered_state.x.row(v).transpose(), normals.row(static_cast<Eigen::Index>(i)).transpose())) continue;
+    ++facing;
+    const double d = residual(i);
+    if (std::isfinite(d) && d <= tolerance) ++covered;
   }
   c.coverage = facing > 0 ? static_cast<double>(covered) / facing : 0.0;
 

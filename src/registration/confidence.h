@@ -35,9 +35,11 @@ double StretchDeviation(const Eigen::Matrix3d& F);
 // (their cloud->model pairs stand for the points they were made from), and state.residuals
 // hold each surface vertex's distance to the nearest cloud point (UpdateOutputs). With a data
 // surface, the pairs are on it, and its fit and coverage are that surface's (its residuals).
+// `rings`, if not null, are the rings of the surface the coverage is on (the data surface's,
+// else state.surface's): the normals are then found over the covered vertices' rings only.
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
                                   const std::vector<DataPair>& pairs, double tolerance,
-                                  const DataSurface* surface = nullptr);
+                                  const DataSurface* surface = nullptr, const SurfaceRings* rings = nullptr);
 // Takes a trusted frame's coverage and residual into the references (running means); the
 // first solved frame sets them.
 void UpdateReferences(const FrameConfidence& confidence, TrackerState* state);

@@ -130,7 +130,12 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
   const double trim2 = std::isfinite(fc.trim) ? fc.trim * fc.trim : std::numeric_limits<double>::infinity();
   const bool plane = data.metric == DataMetric::kPointToPlane;
   const bool view = fc.view != FrameCloud::View::kNone;
-  const Eigen::MatrixXd normals = (view || plane) ? state.VertexNormals() : Eigen::MatrixXd();
+  // The normals of the vertices that may pair with the cloud (model->cloud), row i for
+  // state.surface_vertices[i]: over their rings, not the whole surface (an embedded scan's
+  // subsample is a few percent of its vertices).
+  const Eigen::MatrixXd normals = (view || plane) && data.model_to_cloud
+                                      ? VertexNormalsAt(x, state.surface, surface.rings(), state.surface_vertices)
+                                      : Eigen::MatrixXd();
   const LabelSplit labels(state, cloud);
   const int threads = ResolveThreadCount(num_threads);
   // After a break, the surface at a crack pairs with nothing (docs/theory/fracture.md#pieces).
@@ -254,7 +259,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
           ++counts->trimmed;
           continue;
         }
-      } else if (d2 > trim2 || (view && !fc.Faces(x.row(v), normals.row(v)))) {
+      } else if (d2 > trim2 || (view && !fc.Faces(x.row(v), normals.row(i)))) {
         // Reciprocity: a vertex with no cloud point near it was not seen (or not yet
         // reached); the cloud->model pairs bring it closer, and it pulls once within the trim.
         ++counts->trimmed;
@@ -270,7 +275,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       // surface towards the inside of its silhouette).
       if (plane) {
         pair.normal = cloud.has_normals() ? Eigen::Vector3d(cloud.normals.row(q).normalized())
-                                          : Eigen::Vector3d(normals.row(v));
+                                          : Eigen::Vector3d(normals.row(i));
       }
       pairs->push_back(pair);
       ++counts->model_to_cloud;

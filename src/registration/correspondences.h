@@ -93,17 +93,26 @@ void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights);
 
 // A closest-point index over the whole surface at state.x, kept across outer iterations
 // and frames and rebuilt only when a surface vertex moved more than `tolerance` (m) from
-// where it was at the last build, or the topology changed.
+// where it was at the last build, or the topology changed. A rebuild that only follows the
+// motion keeps the surface's rings (its topology): it copies the positions for the k-d tree,
+// which the first query that needs it builds.
 class ModelIndex {
  public:
   const SurfaceIndex& Get(const TrackerState& state, double tolerance);
-  void Reset() { index_.reset(); }
+  // The rings of state's surface (no rebuild of the index, whatever moved).
+  const SurfaceRings& Rings(const TrackerState& state);
+  void Reset() {
+    index_.reset();
+    rings_.reset();
+  }
   int builds() const { return builds_; }
 
  private:
+  bool SameSurface(const TrackerState& state) const;
   std::unique_ptr<SurfaceIndex> index_;
-  const double* x_data_ = nullptr;   // the positions and triangles the index refers to
-  const int* surface_data_ = nullptr;
+  std::shared_ptr<const SurfaceRings> rings_;
+  const double* x_data_ = nullptr;     // the positions the index refers to
+  const int* surface_data_ = nullptr;  // the triangles the rings (and the index) are of
   Eigen::Index x_rows_ = 0, surface_rows_ = 0;
   Vertices built_at_;  // state.x when built
   int builds_ = 0;

@@ -63,6 +63,7 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
     num_triangles_[i] = s != nullptr ? static_cast<int>(s->triangles.rows()) : state.objects[i].mesh.num_surface_triangles();
     triangles += num_triangles_[i];
   }
+  updated_at_.resize(0, 3);
   rest_.resize(rows, 3);
   pair_area_.assign(static_cast<size_t>(rows), 0.0);
   vertex_.resize(static_cast<size_t>(rows));
@@ -186,6 +187,9 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
 }
 
 const TrackerState& DataSurface::Update(const Vertices& x) {
+  // The tracker asks for the data surface several times per outer iteration at the same x:
+  // computed once (the whole scan: the cost grows with it).
+  if (updated_at_.rows() == x.rows() && updated_at_.cols() == x.cols() && updated_at_ == x) return view_;
   const int n = static_cast<int>(vertex_.size());
 #pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), n, 4096)) schedule(static)
   for (int v = 0; v < n; ++v) {  // each row on its own: the same on any thread count
@@ -194,6 +198,7 @@ const TrackerState& DataSurface::Update(const Vertices& x) {
     for (int k = 1; k < st.n; ++k) p += st.weights[static_cast<size_t>(k)] * x.row(st.vertices[static_cast<size_t>(k)]);
     view_.x.row(v) = p;
   }
+  updated_at_ = x;
   return view_;
 }
 

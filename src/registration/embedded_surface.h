@@ -87,6 +87,7 @@ class DataSurface {
 
  private:
   TrackerState view_;
+  Vertices updated_at_;  // the coarse positions view_.x was last computed at
   Vertices rest_;
   double surface_edge_ = 0.0;
   std::vector<double> pair_area_;

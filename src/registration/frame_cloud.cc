@@ -115,9 +115,26 @@ void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights) {
   *weights = count;
 }
 
+bool ModelIndex::SameSurface(const TrackerState& state) const {
+  return rings_ != nullptr && x_rows_ == state.x.rows() && surface_data_ == state.surface.data() &&
+         surface_rows_ == state.surface.rows();
+}
+
+const SurfaceRings& ModelIndex::Rings(const TrackerState& state) {
+  if (!SameSurface(state)) {
+    index_.reset();  // of another surface: Get builds it again
+    rings_ = std::make_shared<SurfaceRings>(static_cast<int>(state.x.rows()), state.surface);
+    x_rows_ = state.x.rows();
+    surface_data_ = state.surface.data();
+    surface_rows_ = state.surface.rows();
+  }
+  return *rings_;
+}
+
 const SurfaceIndex& ModelIndex::Get(const TrackerState& state, double tolerance) {
-  bool rebuild = index_ == nullptr || x_data_ != state.x.data() || x_rows_ != state.x.rows() ||
-                 surface_data_ != state.surface.data() || surface_rows_ != state.surface.rows();
+  Rings(state);
+  // The index reads the positions where they are: moved elsewhere, it is made again.
+  bool rebuild = index_ == nullptr || x_data_ != state.x.data();
   if (!rebuild) {
     const double tol2 = tolerance * tolerance;
     for (int v : state.surface_vertices) {
@@ -128,11 +145,8 @@ const SurfaceIndex& ModelIndex::Get(const TrackerState& state, double tolerance)
     }
   }
   if (rebuild) {
-    index_ = std::make_unique<SurfaceIndex>(state.x, state.surface);
+    index_ = std::make_unique<SurfaceIndex>(state.x, state.surface, rings_);
     x_data_ = state.x.data();
-    x_rows_ = state.x.rows();
-    surface_data_ = state.surface.data();
-    surface_rows_ = state.surface.rows();
     built_at_ = state.x;
     ++builds_;
   }

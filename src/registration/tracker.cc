@@ -360,7 +360,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   Outputs(fc.index.get(), pairs);
   if (s.IsSolutionUsable()) {
     const double tolerance = std::max(options.data.loss_scale, 2.0 * fc.spacing);
-    s.confidence = MeasureConfidence(state, fc, pairs, tolerance, data_surface.get());
+    const SurfaceRings& rings = data_surface ? data_index.Rings(data_surface->view()) : model_index.Rings(state);
+    s.confidence = MeasureConfidence(state, fc, pairs, tolerance, data_surface.get(), &rings);
     s.lost = state.coverage_reference > 0.0 &&
              s.confidence.coverage < options.data.lost_coverage * state.coverage_reference;
     if (!s.lost) UpdateReferences(s.confidence, &state);
