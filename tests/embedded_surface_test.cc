@@ -592,6 +592,21 @@ Vertices BentBox(const TetMesh& box) {
   return x;
 }
 
+// A 12 x 6 x 6 box's surface embedded in a 4 x 2 x 2 cage of the same box, one object.
+struct ScanOnCage {
+  TetMesh cage = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 4, 2, 2);
+  Vertices rest;
+  Triangles triangles;
+  EmbeddedSurface surface;
+  TrackerState state;
+  ScanOnCage() {
+    const TetMesh fine = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 12, 6, 6);
+    SurfaceOf(fine, fine.rest, &rest, &triangles);
+    EXPECT_TRUE(MakeEmbeddedSurface(cage, rest, triangles, &surface).ok());
+    OneObject(cage, &state);
+  }
+};
+
 TEST(FineScanTest, NormalsOverTheRingsAreTheWholeSurfacesNormals) {
   const TetMesh box = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.05), 8, 5, 3);
   TrackerState state;
@@ -655,15 +670,11 @@ TEST(FineScanTest, AnIndexRebuiltWithTheSameRingsFindsTheSameClosestPoints) {
 }
 
 TEST(FineScanTest, TheDataSurfaceFollowsEveryChangeOfTheCageAndOnlyThose) {
-  const TetMesh cage = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 4, 2, 2);
-  const TetMesh fine = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 12, 6, 6);
-  Vertices rest;
-  Triangles triangles;
-  SurfaceOf(fine, fine.rest, &rest, &triangles);
-  EmbeddedSurface surface;
-  ASSERT_TRUE(MakeEmbeddedSurface(cage, rest, triangles, &surface).ok());
-  TrackerState state;
-  OneObject(cage, &state);
+  ScanOnCage scan;
+  const TetMesh& cage = scan.cage;
+  const Vertices& rest = scan.rest;
+  const EmbeddedSurface& surface = scan.surface;
+  const TrackerState& state = scan.state;
   DataSurface data;
   data.Build(state, {&surface});
   const Vertices bent = BentBox(cage);
@@ -689,16 +700,10 @@ TEST(FineScanTest, TheDataSurfaceFollowsEveryChangeOfTheCageAndOnlyThose) {
 }
 
 TEST(FineScanTest, TheCoverageOverTheRingsIsTheWholeSurfaces) {
-  const TetMesh cage = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 4, 2, 2);
-  const TetMesh fine = MakeBox(Eigen::Vector3d(0.2, 0.1, 0.1), 12, 6, 6);
-  Vertices rest;
-  Triangles triangles;
-  SurfaceOf(fine, fine.rest, &rest, &triangles);
-  EmbeddedSurface surface;
-  ASSERT_TRUE(MakeEmbeddedSurface(cage, rest, triangles, &surface).ok());
-  TrackerState state;
-  OneObject(cage, &state);
-  state.x = BentBox(cage);
+  ScanOnCage scan;
+  const EmbeddedSurface& surface = scan.surface;
+  TrackerState& state = scan.state;
+  state.x = BentBox(scan.cage);
   FrameCloud fc;
   fc.view = FrameCloud::View::kCamera;
   fc.eye = Eigen::Vector3d(0.1, 0.3, 0.4);  // sees some faces, not others

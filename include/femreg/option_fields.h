@@ -33,6 +33,7 @@ struct FieldInfo {
   // A field nested one level down in its section (`outliers: {neighbors: 8}`): the group's
   // key; its own key is then the one inside the group. Null: directly in the section.
   const char* group = nullptr;
+  bool required = false;  // in a group: written whenever the group is (a plane's distance)
 
   constexpr explicit FieldInfo(const char* k) : key(k) {}
   constexpr FieldInfo AtLeast(double v) const { return Bound(true, v, false); }
@@ -52,6 +53,11 @@ struct FieldInfo {
   constexpr FieldInfo In(const char* g) const {
     FieldInfo f = *this;
     f.group = g;
+    return f;
+  }
+  constexpr FieldInfo Required() const {
+    FieldInfo f = *this;
+    f.required = true;
     return f;
   }
   constexpr FieldInfo Python(const char* name) const {
@@ -168,7 +174,7 @@ struct OptionFields<PreprocessOptions> {
     v(&S::crop_min, FieldInfo("min").In("crop").Python("crop_min").Finite());
     v(&S::crop_max, FieldInfo("max").In("crop").Python("crop_max").Finite());
     v(&S::plane_distance,
-      FieldInfo("distance").In("plane").Python("plane_distance").AtLeast(0).Doc("m; the dominant plane's points removed; 0 = off"));
+      FieldInfo("distance").In("plane").Required().Python("plane_distance").AtLeast(0).Doc("m; the dominant plane's points removed; 0 = off"));
     v(&S::plane_iterations, FieldInfo("iterations").In("plane").Python("plane_iterations").AtLeast(1));
     v(&S::voxel_size, FieldInfo("voxel_size").AtLeast(0).Doc("m; 0 = no downsampling"));
     v(&S::auto_voxel, FieldInfo("auto_voxel").AtLeast(0).Note("(0 = off)").Doc("in mean surface edges; 0 = off"));

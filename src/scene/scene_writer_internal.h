@@ -108,8 +108,8 @@ YAML::Node FieldNode(const T& value) {
 // Every field of an options table (femreg/option_fields.h) that differs from the default
 // (every field with `all`), in the table's order, but those in `skip` (which the section
 // writes itself).
-// A group (FieldInfo::group) is written whole, as a flow map, when any of its fields
-// differs: its fields may need each other (a plane's distance beside its iterations).
+// A group (FieldInfo::group) is written, as a flow map, when any of its fields differs: the
+// fields that differ and those the group needs (FieldInfo::required: a plane's distance).
 // `skip` names fields by their path in the section ("crop.min").
 template <class Options>
 void PutFields(YAML::Node map, const Options& value, const std::vector<std::string>& skip = {},
@@ -128,6 +128,7 @@ void PutFields(YAML::Node map, const Options& value, const std::vector<std::stri
       return;
     }
     if (!all && std::find(changed_groups.begin(), changed_groups.end(), f.group) == changed_groups.end()) return;
+    if (!all && !f.required && value.*member == d.*member) return;
     if (!map[f.group].IsDefined() || map[f.group].IsNull()) map[f.group] = FlowMap();
     map[f.group][f.key] = FieldNode(value.*member);
   });
