@@ -334,7 +334,9 @@ TableRun RestOnATable(int threads, double mu = 0.0, bool collision_first = false
   ObstacleSpec table;
   table.name = "table";
   spec.obstacles.push_back(table);  // the plane z = 0
-  if (collision_first) EXPECT_TRUE(tracker->EnableCollision(spec, {"block"}).ok());
+  if (collision_first) {
+    EXPECT_TRUE(tracker->EnableCollision(spec, {"block"}).ok());
+  }
   status = tracker->SetEmbeddedSurface(0, scan, triangles);
   EXPECT_TRUE(status.ok()) << status.message();
   EXPECT_NEAR(tracker->surface_outside(0), 1e-3, 1e-9);

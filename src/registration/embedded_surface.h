@@ -57,6 +57,11 @@ class DataSurface {
   // positions in the view.
   Triangles ObjectSurface(int object) const;
   Vertices ObjectPositions(int object) const { return view_.x.middleRows(offset(object), count(object)); }
+  // Its rows of view().surface, indices into view().x (no copy).
+  Eigen::Ref<const Triangles> ObjectTriangles(int object) const {
+    const auto i = static_cast<size_t>(object);
+    return view_.surface.middleRows(first_triangle_[i], num_triangles_[i]);
+  }
 
   // A point of the data surface as a combination of coarse vertices: n = 1 (a vertex of an
   // object without an embedded surface), 3 (a point on such an object's triangle) or 4 (a

@@ -7,11 +7,12 @@
 
 namespace femreg {
 
-Eigen::Vector3d TurnVisibility(const Vertices& x, const Triangles& tris, const Eigen::Vector3d& c,
-                               Eigen::Matrix3d* axes) {
+Eigen::Vector3d TurnVisibility(const Vertices& x, const Eigen::Ref<const Triangles>& tris, const Eigen::Vector3d& c,
+                               Eigen::Matrix3d* axes, int offset) {
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero(), N = Eigen::Matrix3d::Zero();
   for (int f = 0; f < tris.rows(); ++f) {
-    const Eigen::Vector3d a = x.row(tris(f, 0)), b = x.row(tris(f, 1)), d = x.row(tris(f, 2));
+    const Eigen::Vector3d a = x.row(offset + tris(f, 0)), b = x.row(offset + tris(f, 1)),
+                          d = x.row(offset + tris(f, 2));
     const Eigen::Vector3d an = (b - a).cross(d - a);  // twice the area times the normal
     const double area2 = an.norm();
     if (!(area2 > 0)) continue;
@@ -89,10 +90,9 @@ HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from
   Eigen::Matrix3d axes;
   Eigen::Vector3d visibility;
   if (data != nullptr && data->embedded(o)) {
-    data->Update(to);
-    visibility = TurnVisibility(data->ObjectPositions(o), data->ObjectSurface(o), c, &axes);
+    visibility = TurnVisibility(data->Update(to).x, data->ObjectTriangles(o), c, &axes);
   } else {
-    visibility = TurnVisibility(to, state.ObjectSurface(o), c, &axes);
+    visibility = TurnVisibility(to, object.mesh.surface, c, &axes, object.offset);
   }
   // w = sum_k a_k axes_k with a = axes^-1 w; the hidden part of each a_k is kept.
   const Eigen::Vector3d a = axes.partialPivLu().solve(w);

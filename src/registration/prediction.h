@@ -16,9 +16,10 @@ namespace femreg {
 // over the triangles (area A, unit normal n, centroid p). lambda in [0, 1] is the share of the
 // surface's squared motion under a turn about v that is along its normals, the only part a
 // point-to-plane fit sees: 0 about a sphere's centre or a cylinder's axis, 0.2 for a cube.
-// Eigenvalues ascending, the axes (N-orthonormal) in the columns of *axes.
-Eigen::Vector3d TurnVisibility(const Vertices& x, const Triangles& tris, const Eigen::Vector3d& c,
-                               Eigen::Matrix3d* axes);
+// Eigenvalues ascending, the axes (N-orthonormal) in the columns of *axes. `offset` is added to
+// each index: an object's own triangles on the positions of all objects, with no copy.
+Eigen::Vector3d TurnVisibility(const Vertices& x, const Eigen::Ref<const Triangles>& tris, const Eigen::Vector3d& c,
+                               Eigen::Matrix3d* axes, int offset = 0);
 
 // The part of object o's move from `from` to `to` that is a turn its surface does not show:
 // the least-squares rigid velocity (velocity, and the rotation vector w about the mass centre
