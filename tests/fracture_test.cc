@@ -232,9 +232,9 @@ TEST(MeasureBound, NeverBelowTheMeasure) {
   // exceptions).
   std::sort(ratios.begin(), ratios.end());
   EXPECT_LT(ratios[ratios.size() / 2], 4.0);
-  // At rest and under a rigid motion it is 0 (up to round-off), as the measure.
-  states.model.UpdateRotations(states.mesh.rest);
-  EXPECT_LT(fracture_internal::MeasureBound(states.mesh, states.model, states.mesh.rest).maxCoeff(), 1e-6);
+  // At rest it is 0 up to its margin for round-off (a millionth of the modulus), as the
+  // measure.
+  EXPECT_LT(fracture_internal::MeasureBound(states.mesh, states.model, states.mesh.rest).maxCoeff(), 1.0);
 }
 
 // The detection that evaluates only where the bound reaches a fraction of the toughness finds
@@ -243,7 +243,9 @@ TEST(MeasureBound, DetectionAboveAFloorMissesNoNodeAboveIt) {
   RandomStates states;
   std::mt19937 rng(5);
   int skipped = 0, evaluated = 0, above = 0;
+  ElasticModel stale = states.model;  // rotations of the state before
   for (int trial = 0; trial < 200; ++trial) {
+    if (trial > 0) stale = states.model;
     const Vertices x = states.Draw(&rng);
     FractureOptions options;
     NodeSeparation full;
@@ -255,14 +257,17 @@ TEST(MeasureBound, DetectionAboveAFloorMissesNoNodeAboveIt) {
     options.region_toughness = {{1, 0.5 * options.toughness}};
     DetectFracture(states.mesh, states.model, x, options, &full);
     for (double floor : {0.1, 0.3, 1.0}) {
+      // With the model's rotations current for x, or found from those of another state.
+      const bool current = trial % 2 == 0;
       NodeSeparation some;
-      const int n = fracture_internal::DetectFractureAbove(states.mesh, states.model, x, options, floor, &some);
+      const int n = fracture_internal::DetectFractureAbove(states.mesh, current ? states.model : stale, x, options,
+                                                           floor, current, &some);
       ASSERT_EQ(some.measure.size(), full.measure.size());
       evaluated += n;
       skipped += static_cast<int>(full.measure.size()) - n;
       for (int j = 0; j < full.measure.size(); ++j) {
         EXPECT_EQ(some.toughness(j), full.toughness(j));
-        const double scale = 1e-12 * full.measure.maxCoeff();
+        const double scale = 1e-9 * full.measure.maxCoeff();
         if (full.measure(j) >= floor * full.toughness(j)) {
           ++above;
           EXPECT_NEAR(some.measure(j), full.measure(j), scale) << "trial " << trial << " node " << j;

@@ -68,6 +68,14 @@ const Eigen::Matrix3d& RotationOf(const ElasticModel& model, const std::vector<E
   return rotations ? (*rotations)[static_cast<size_t>(e)] : model.rotation(e);
 }
 
+// Element e's rotation at x as ElasticModel::UpdateRotations finds it, from the model's.
+Eigen::Matrix3d RotationAt(const ElasticModel& model, const Vertices& x, int e) {
+  if (model.type() == ElasticModelType::kLinear) return model.rotation(e);
+  Eigen::Matrix<double, 3, 4> xe;
+  for (int k = 0; k < 4; ++k) xe.col(k) = x.row(model.tets()(e, k)).transpose();
+  return PolarRotation(DeformationGradient(xe, model.rest(e).dm_inv), model.rotation(e));
+}
+
 // The per-node sums the separation tensor is made of.
 struct NodeSums {
   explicit NodeSums(int nv)
@@ -180,46 +188,87 @@ void Detect(const TetMesh& mesh, const ElasticModel& model, const std::vector<Ei
   for (int j = 0; j < nv; ++j) NodeMeasure(zeta[j], area(j), j, out);
 }
 
-// Bounds of the stress s's (Voigt) extreme eigenvalues without its eigen-decomposition: the
+// Bounds of a symmetric matrix's extreme eigenvalues without its eigen-decomposition: the
 // tighter of Gershgorin's and the deviatoric ones (the deviator's eigenvalues sum to 0, so none
-// is farther from 0 than sqrt(2/3) of its norm). top >= the largest, bottom <= the smallest.
-void StressEigenvalueBounds(const Vector6& s, double* top, double* bottom, double* norm) {
-  const double mean = (s(0) + s(1) + s(2)) / 3.0;
-  const double shear2 = s(3) * s(3) + s(4) * s(4) + s(5) * s(5);
-  const double dev2 = (s(0) - mean) * (s(0) - mean) + (s(1) - mean) * (s(1) - mean) +
-                      (s(2) - mean) * (s(2) - mean) + 2.0 * shear2;
-  const double spread = std::sqrt(2.0 / 3.0 * dev2);
-  const double r0 = std::abs(s(5)) + std::abs(s(4)), r1 = std::abs(s(5)) + std::abs(s(3)),
-               r2 = std::abs(s(4)) + std::abs(s(3));
-  *top = std::min(mean + spread, std::max({s(0) + r0, s(1) + r1, s(2) + r2}));
-  *bottom = std::max(mean - spread, std::min({s(0) - r0, s(1) - r1, s(2) - r2}));
-  *norm = std::sqrt(s(0) * s(0) + s(1) * s(1) + s(2) * s(2) + 2.0 * shear2);
+// is farther from the mean than sqrt(2/3) of its norm).
+void EigenvalueBounds(const Eigen::Matrix3d& a, double* top, double* bottom) {
+  const double mean = a.trace() / 3.0;
+  const double spread = std::sqrt(2.0 / 3.0 * (a - mean * Eigen::Matrix3d::Identity()).squaredNorm());
+  const double r0 = std::abs(a(0, 1)) + std::abs(a(0, 2)), r1 = std::abs(a(0, 1)) + std::abs(a(1, 2)),
+               r2 = std::abs(a(0, 2)) + std::abs(a(1, 2));
+  *top = std::min(mean + spread, std::max({a(0, 0) + r0, a(1, 1) + r1, a(2, 2) + r2}));
+  *bottom = std::max(mean - spread, std::min({a(0, 0) - r0, a(1, 1) - r1, a(2, 2) - r2}));
 }
 
-// MeasureBound's sums (N) before the division by the area.
-Eigen::VectorXd BoundSums(const ElasticModel& model, const std::vector<Eigen::Matrix3d>* rotations,
-                          const Vertices& x, int nv) {
+// MeasureBound's sums (N) before the division by the area. The tensile part's force on node k
+// is V sigma+ g (g = grad N_k); the largest eigenvalue of zeta is at most half the sum of their
+// norms (m(a) has the one eigenvalue |a|, and the other terms are negative semi-definite). With
+// 0 <= sigma+ <= plus I and sigma+ <= sigma + minus I (plus, minus: bounds of the largest
+// principal stress and of minus the smallest, clamped at 0),
+//   |sigma+ g|^2 <= plus g^T sigma+ g <= plus (g^T sigma g + minus |g|^2),
+// which is |sigma+ g|^2 itself for a uniaxial tension. The corotational stress needs no
+// rotation: with F = R S, R^T x - X has the gradient S - I, so sigma = lambda tr(S - I) I +
+// 2 mu (S - I), and S's eigenvalues are those of C = F^T F's square roots (one of them
+// negative for an inverted element), and g^T S g <= |g| |S g| = |g| sqrt(g^T C g). The linear
+// element's stress (no rotation) is taken as it is.
+Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(nv);
+  const bool corotated = model.type() != ElasticModelType::kLinear;
   for (int e = 0; e < model.num_elements(); ++e) {
     const ElementRest& rest = model.rest(e);
-    const Vector6 s = ElementStress(rest, RotationOf(model, rotations, e), model.Gather(x, e));
-    double top, bottom, norm;
-    StressEigenvalueBounds(s, &top, &bottom, &norm);
-    // A margin for the round-off of the full evaluation's closed-form eigen-solvers (a
-    // compressed node's measure is 0 up to some 1e-9 of the stress, not exactly).
-    const double slack = 1e-7 * norm;
-    const double plus = std::max(0.0, top) + slack, minus = std::max(0.0, -bottom) + slack;
-    // The tensile part's force on node k is V sigma+ g (g = grad N_k); the largest eigenvalue
-    // of zeta is at most half the sum of their norms (m(a) has the one eigenvalue |a|, and the
-    // other terms are negative semi-definite). With 0 <= sigma+ <= plus I and
-    // sigma+ <= sigma + minus I: |sigma+ g|^2 <= plus g^T sigma+ g <= plus (g^T sigma g + minus |g|^2),
-    // which is |sigma+ g| itself for a uniaxial tension.
-    const Eigen::Matrix3d sigma = VoigtToTensor(s);
+    double plus = 0.0, minus = 0.0, slack = 0.0;
+    Eigen::Matrix3d quadratic;  // g^T quadratic g bounds g^T sigma g (corotated: with the root)
+    double root_scale = 0.0;    // 2 mu: the weight of |g| sqrt(g^T C g)
+    double diagonal = 0.0;      // and the weight of |g|^2
+    if (corotated) {
+      Eigen::Matrix<double, 3, 4> xe;
+      for (int k = 0; k < 4; ++k) xe.col(k) = x.row(model.tets()(e, k)).transpose();
+      const Eigen::Matrix3d F = DeformationGradient(xe, rest.dm_inv);
+      const Eigen::Matrix3d C = F.transpose() * F;
+      double c_top, c_bottom;
+      EigenvalueBounds(C, &c_top, &c_bottom);
+      const double trace = C.trace();
+      const double s_top = std::sqrt(std::max(0.0, std::min(c_top, trace)));
+      // tr S: at most sum |s_i| <= sqrt(3 tr C); at least sqrt(tr C) when no s_i is negative.
+      const bool inverted = !(F.determinant() > 0.0);
+      const double tr_high = std::sqrt(3.0 * trace), tr_low = inverted ? -tr_high : std::sqrt(trace);
+      const double s_bottom = inverted ? -s_top : std::sqrt(std::max(0.0, c_bottom));
+      const double lambda = rest.lambda, mu = rest.mu;
+      const double volumetric_high = lambda * ((lambda >= 0 ? tr_high : tr_low) - 3.0);
+      const double volumetric_low = lambda * ((lambda >= 0 ? tr_low : tr_high) - 3.0);
+      // Round-off of the full evaluation (the rotation, the closed-form eigen-solvers): a
+      // compressed node's measure is 0 only to some 1e-9 of the stress.
+      slack = 1e-7 * (3.0 * std::abs(lambda) + 2.0 * mu) * (1.0 + s_top);
+      plus = std::max(0.0, volumetric_high + 2.0 * mu * (s_top - 1.0)) + slack;
+      minus = std::max(0.0, -(volumetric_low + 2.0 * mu * (s_bottom - 1.0))) + slack;
+      if (plus <= slack) {  // no tensile part beyond round-off
+        for (int k = 0; k < 4; ++k) {
+          const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+          sum(model.tets()(e, k)) += 0.5 * rest.volume * plus * g.norm();
+        }
+        continue;
+      }
+      quadratic = C;
+      root_scale = 2.0 * mu;
+      diagonal = volumetric_high - 2.0 * mu;
+    } else {
+      const Vector6 s = ElementStress(rest, model.rotation(e), model.Gather(x, e));
+      const Eigen::Matrix3d sigma = VoigtToTensor(s);
+      double top, bottom;
+      EigenvalueBounds(sigma, &top, &bottom);
+      slack = 1e-7 * sigma.norm();
+      plus = std::max(0.0, top) + slack;
+      minus = std::max(0.0, -bottom) + slack;
+      quadratic = sigma;
+    }
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
-      const double g2 = g.squaredNorm();
-      const double along = std::sqrt(std::max(0.0, plus * (g.dot(sigma * g) + minus * g2)));
-      sum(model.tets()(e, k)) += 0.5 * rest.volume * std::min(plus * std::sqrt(g2), along + slack * std::sqrt(g2));
+      const double g2 = g.squaredNorm(), g1 = std::sqrt(g2);
+      const double q = g.dot(quadratic * g);
+      // g^T sigma g, from above.
+      const double along_g = corotated ? root_scale * g1 * std::sqrt(std::max(0.0, q)) + diagonal * g2 : q;
+      const double along = std::sqrt(std::max(0.0, plus * (along_g + minus * g2)));
+      sum(model.tets()(e, k)) += 0.5 * rest.volume * (std::min(plus * g1, along) + slack * g1);
     }
   }
   return sum * (1.0 + 1e-9);
@@ -239,10 +288,9 @@ void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertic
 
 namespace fracture_internal {
 
-Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
-                             const std::vector<Eigen::Matrix3d>* rotations) {
+Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, const Vertices& x) {
   const int nv = mesh.num_vertices();
-  Eigen::VectorXd bound = BoundSums(model, rotations, x, nv);
+  Eigen::VectorXd bound = BoundSums(model, x, nv);
   Eigen::VectorXd area, toughness;
   NodeAreas(mesh, model, FractureOptions(), &area, &toughness);
   for (int j = 0; j < nv; ++j) bound(j) = area(j) > 0 ? bound(j) / area(j) : 0.0;
@@ -250,11 +298,12 @@ Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, con
 }
 
 int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
-                        const FractureOptions& options, double floor, NodeSeparation* out) {
+                        const FractureOptions& options, double floor, bool rotations_current,
+                        NodeSeparation* out) {
   const int nv = mesh.num_vertices();
   Eigen::VectorXd area;
   NodeAreas(mesh, model, options, &area, &out->toughness);
-  const Eigen::VectorXd sum = BoundSums(model, nullptr, x, nv);
+  const Eigen::VectorXd sum = BoundSums(model, x, nv);
   std::vector<char> want(static_cast<size_t>(nv), 0);
   int wanted = 0;
   for (int j = 0; j < nv; ++j) {
@@ -267,7 +316,18 @@ int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Ve
   out->measure = Eigen::VectorXd::Zero(nv);
   out->normal = Vertices::Zero(nv, 3);
   if (wanted == 0) return 0;
-  const std::vector<Eigen::Matrix3d> zeta = Tensors(mesh, model, nullptr, x, want);
+  std::vector<Eigen::Matrix3d> rotations;
+  if (!rotations_current) {
+    // Only the elements evaluated, found as ElasticModel::UpdateRotations would from the
+    // model's (the same start, so the same rotations).
+    rotations.resize(static_cast<size_t>(model.num_elements()));
+    for (int e = 0; e < model.num_elements(); ++e) {
+      bool needed = false;
+      for (int k = 0; k < 4 && !needed; ++k) needed = want[static_cast<size_t>(model.tets()(e, k))] != 0;
+      if (needed) rotations[static_cast<size_t>(e)] = RotationAt(model, x, e);
+    }
+  }
+  const std::vector<Eigen::Matrix3d> zeta = Tensors(mesh, model, rotations_current ? nullptr : &rotations, x, want);
   for (int j = 0; j < nv; ++j) {
     if (want[static_cast<size_t>(j)]) NodeMeasure(zeta[j], area(j), j, out);
   }
@@ -282,16 +342,7 @@ void DetectFractureWith(const TetMesh& mesh, const ElasticModel& model,
 
 std::vector<Eigen::Matrix3d> RotationsAt(const ElasticModel& model, const Vertices& x) {
   std::vector<Eigen::Matrix3d> rotations(static_cast<size_t>(model.num_elements()));
-  for (int e = 0; e < model.num_elements(); ++e) {
-    if (model.type() == ElasticModelType::kLinear) {
-      rotations[static_cast<size_t>(e)] = model.rotation(e);
-      continue;
-    }
-    Eigen::Matrix<double, 3, 4> xe;
-    for (int k = 0; k < 4; ++k) xe.col(k) = x.row(model.tets()(e, k)).transpose();
-    rotations[static_cast<size_t>(e)] =
-        PolarRotation(DeformationGradient(xe, model.rest(e).dm_inv), model.rotation(e));
-  }
+  for (int e = 0; e < model.num_elements(); ++e) rotations[static_cast<size_t>(e)] = RotationAt(model, x, e);
   return rotations;
 }
 

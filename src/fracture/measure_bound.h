@@ -14,19 +14,20 @@ namespace femreg {
 namespace fracture_internal {
 
 // Per node, an upper bound of DetectFracture's measure (Pa) at x: half the sum over its
-// elements of V_e nu_e |grad N_j| over the node's area, nu_e an upper bound of the largest
-// principal stress clamped at 0. rotations: per element (nullptr: the model's, which must be
-// current for x).
-Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
-                             const std::vector<Eigen::Matrix3d>* rotations = nullptr);
+// elements of a bound of V_e |sigma_e+ grad N_j|, over the node's area. It needs no element
+// rotation (the corotational stress is a function of F^T F) and no eigen-decomposition.
+Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, const Vertices& x);
 
 // DetectFracture at the nodes where it can reach `floor` times their toughness: out->toughness
 // at every node; out->measure and out->normal as DetectFracture's at every node of positive
 // toughness whose bound reaches floor times it, measure 0 and normal 0 at the others (their
 // measure is below floor times their toughness, or they cannot break). Returns the nodes
-// evaluated. The model's rotations must be current for x.
+// evaluated. rotations_current: the model's rotations are current for x; else the evaluated
+// elements' are found from them as ElasticModel::UpdateRotations would, and the model's are
+// left as they are.
 int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
-                        const FractureOptions& options, double floor, NodeSeparation* out);
+                        const FractureOptions& options, double floor, bool rotations_current,
+                        NodeSeparation* out);
 
 // DetectFracture with the element rotations given (the model's are not read).
 void DetectFractureWith(const TetMesh& mesh, const ElasticModel& model,

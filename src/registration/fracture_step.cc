@@ -15,22 +15,28 @@ namespace {
 // FractureOptions::data_gap: the data's evidence at most triples the measure.
 constexpr double kMaxDataGapWeight = 3.0;
 
-// Object i's model rotations at its current positions, which the detection reads; the next
-// outer iteration's rotation update is spared if it starts from the same positions.
-void RotateForDetection(int i, TrackerState* state) {
+// Whether the outer iterations keep object i's element rotations current (the corotational
+// regularizer updates them at the start of each; the neo-Hookean element reads none).
+bool RotationsKept(const TrackerState& state, int i) {
+  return state.options.regularizer == Regularizer::kCorotational &&
+         state.objects[i].model.type() != ElasticModelType::kNeoHookean;
+}
+
+// Object i's positions for the detection, which the outputs' measure is taken at.
+void DetectAt(int i, TrackerState* state) {
   FractureState& f = *state->fracture;
   ObjectState& o = state->objects[i];
   o.mesh.x = state->x.middleRows(o.offset, o.mesh.num_vertices());
-  o.model.UpdateRotations(o.mesh.x);
   f.detected_at[i] = o.mesh.x;
-  f.rotations_fresh[i] = 1;
   f.full_measure[i].resize(0);
 }
 
-// The measure in full at object i's current positions (the rotations current).
-void DetectAll(int i, TrackerState* state) {
+// The measure in full at object i's current positions, the model's rotations brought there
+// (unless they are already).
+void DetectAll(int i, bool rotate, TrackerState* state) {
   FractureState& f = *state->fracture;
-  const ObjectState& o = state->objects[i];
+  ObjectState& o = state->objects[i];
+  if (rotate) o.model.UpdateRotations(o.mesh.x);
   DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &f.separation[i]);
   f.partial[i] = 0;
 }
@@ -56,11 +62,15 @@ bool Reaches(const NodeSeparation& sep, double ratio, bool strictly = false) {
 void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
   FractureState& f = *state->fracture;
   ObjectState& o = state->objects[i];
-  RotateForDetection(i, state);
+  DetectAt(i, state);
   NodeSeparation& sep = f.separation[i];
   const bool weigh = f.options[i].data_gap, confirm = f.options[i].cut_through;
   const double floor = (f.live ? 1.0 : kFractureLiveRatio) / (weigh ? kMaxDataGapWeight : 1.0);
-  fracture_internal::DetectFractureAbove(o.mesh, o.model, o.mesh.x, f.options[i], floor, &sep);
+  // The bound needs no rotation; the nodes evaluated find theirs from the model's, which the
+  // next outer iteration brings here itself (so an intact frame's rotations are fracture off's).
+  const bool kept = RotationsKept(*state, i);
+  if (!kept) o.model.UpdateRotations(o.mesh.x);  // nothing else does
+  fracture_internal::DetectFractureAbove(o.mesh, o.model, o.mesh.x, f.options[i], floor, !kept, &sep);
   f.partial[i] = 1;
   sep.weight.resize(0);
   sep.gap.resize(0);
@@ -79,7 +89,7 @@ void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
   if (!f.live && Reaches(sep, kFractureLiveRatio)) f.live = true;
   if (Reaches(sep, 1.0, /*strictly=*/true)) {
     const Eigen::VectorXd weight = sep.weight, gap = sep.gap;  // they do not depend on the measure
-    DetectAll(i, state);
+    DetectAll(i, /*rotate=*/kept, state);
     sep.weight = weight;
     sep.gap = gap;
   }
@@ -205,18 +215,18 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
     const int budget = std::min(f.options[i].max_splits_per_iteration,
                                 f.options[i].max_splits_per_frame - f.frame_splits);
     if (budget <= 0) {  // still detect: the measure is an output
-      RotateForDetection(static_cast<int>(i), state);
-      DetectAll(static_cast<int>(i), state);
+      DetectAt(static_cast<int>(i), state);
+      DetectAll(static_cast<int>(i), /*rotate=*/true, state);
       continue;
     }
     Detect(static_cast<int>(i), cloud_index, state);
     TopologyChange change;
     std::vector<int> piece;
-    const int pieces_before = f.live ? ConnectedPieces(o.mesh, &piece) : 1;
+    // Only a detection with a node to split (evaluated in full) can change the mesh.
+    const int pieces_before = f.live && !f.partial[i] ? ConnectedPieces(o.mesh, &piece) : 1;
     SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
     if (!change.changed()) continue;
     changed = true;
-    f.rotations_fresh[i] = 0;  // another mesh
     if (ConnectedPieces(o.mesh, &piece) > pieces_before) {
       f.separated = f.frame_separated = true;
       parted[i] = 1;

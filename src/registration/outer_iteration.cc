@@ -51,19 +51,11 @@ void Tracker::Impl::UpdateElementRotations(FrameSummary* s) {
   // Only the corotational element reads rotations: what is off costs nothing (neo-Hookean
   // objects have none to hold; the fracture step refreshes its own).
   if (state.options.regularizer == Regularizer::kCorotational) {
-    for (size_t i = 0; i < state.objects.size(); ++i) {
-      ObjectState& o = state.objects[i];
+    for (ObjectState& o : state.objects) {
       if (o.model.type() == ElasticModelType::kNeoHookean) continue;
-      const auto x = state.x.middleRows(o.offset, o.mesh.num_vertices());
-      // The fracture step's detection brought them to these positions already.
-      if (state.fracture && state.fracture->rotations_fresh[i] && state.fracture->detected_at[i].rows() == x.rows() &&
-          state.fracture->detected_at[i] == x) {
-        continue;
-      }
-      o.model.UpdateRotations(x);
+      o.model.UpdateRotations(state.x.middleRows(o.offset, o.mesh.num_vertices()));
     }
   }
-  if (state.fracture) std::fill(state.fracture->rotations_fresh.begin(), state.fracture->rotations_fresh.end(), 0);
   s->time.rotations += Seconds(t0);
 }
 

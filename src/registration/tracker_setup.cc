@@ -135,7 +135,6 @@ Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
   }
   const size_t n = state.objects.size();
   f->detected_at.resize(n);
-  f->rotations_fresh.assign(n, 0);
   f->partial.assign(n, 0);
   f->full_measure.resize(n);
   state.fracture = std::move(f);

@@ -72,15 +72,12 @@ struct FractureState {
   // copies of split vertices, and vertices the split left on the surface that were inside),
   // which pair with no data (docs/theory/fracture.md#pieces).
   std::vector<char> crack;
-  // Per object: the positions of the last detection, at which it brought the model's
-  // rotations up to date; fresh until the next rotation update, which it spares (the same
-  // update at the same positions).
+  // Per object: the positions of the last detection.
   std::vector<Vertices> detected_at;
-  std::vector<char> rotations_fresh;
   // Per object: the last detection evaluated the measure only where a bound of it reaches
-  // what fracture acts on (until fracture is live; docs/theory/fracture.md#before-the-break),
-  // 0 elsewhere; Tracker::fracture_measure then evaluates it in full at detected_at, once
-  // (full_measure, empty until asked).
+  // what fracture acts on (docs/theory/fracture.md#before-the-break), 0 elsewhere;
+  // Tracker::fracture_measure then evaluates it in full at detected_at, once (full_measure,
+  // empty until asked).
   std::vector<char> partial;
   std::vector<Eigen::VectorXd> full_measure;
 };
