@@ -228,11 +228,16 @@ Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) 
       double c_top, c_bottom;
       EigenvalueBounds(C, &c_top, &c_bottom);
       const double trace = C.trace();
-      const double s_top = std::sqrt(std::max(0.0, std::min(c_top, trace)));
-      // tr S: at most sum |s_i| <= sqrt(3 tr C); at least sqrt(tr C) when no s_i is negative.
+      const double c_low = std::max(0.0, c_bottom);
+      const double s_top = std::sqrt(std::max(0.0, std::min(c_top, trace))), s_low = std::sqrt(c_low);
+      // tr S: at most sum |s_i| <= sqrt(3 tr C). At least, when no s_i is negative, the chord of
+      // the square root between C's eigenvalue bounds (it lies below the concave root) summed:
+      // 3 sqrt(c_low) + (tr C - 3 c_low) / (sqrt(c_top) + sqrt(c_low)).
       const bool inverted = !(F.determinant() > 0.0);
-      const double tr_high = std::sqrt(3.0 * trace), tr_low = inverted ? -tr_high : std::sqrt(trace);
-      const double s_bottom = inverted ? -s_top : std::sqrt(std::max(0.0, c_bottom));
+      const double tr_high = std::sqrt(3.0 * trace);
+      const double tr_low = inverted ? -tr_high
+                                     : 3.0 * s_low + (s_top + s_low > 0 ? (trace - 3.0 * c_low) / (s_top + s_low) : 0.0);
+      const double s_bottom = inverted ? -s_top : s_low;
       const double lambda = rest.lambda, mu = rest.mu;
       const double volumetric_high = lambda * ((lambda >= 0 ? tr_high : tr_low) - 3.0);
       const double volumetric_low = lambda * ((lambda >= 0 ? tr_low : tr_high) - 3.0);
