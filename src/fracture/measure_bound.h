@@ -1,7 +1,7 @@
 // The fracture measure where it matters: a cheap upper bound per node, and the full
 // evaluation (DetectFracture's) only at the nodes whose bound reaches a given fraction of their
-// toughness (docs/theory/fracture.md#before-the-break). The tracker uses it until fracture is
-// live; its outputs ask for the full measure at the last detection.
+// toughness (docs/theory/fracture.md#before-the-break). The tracker's detection uses it; its
+// outputs ask for the full measure at the last detection.
 #ifndef FEMREG_FRACTURE_MEASURE_BOUND_H_
 #define FEMREG_FRACTURE_MEASURE_BOUND_H_
 
