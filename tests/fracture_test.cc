@@ -266,13 +266,13 @@ TEST(MeasureBound, DetectionAboveAFloorMissesNoNodeAboveIt) {
       evaluated += n;
       skipped += static_cast<int>(full.measure.size()) - n;
       for (int j = 0; j < full.measure.size(); ++j) {
-        EXPECT_EQ(some.toughness(j), full.toughness(j));
+        EXPECT_DOUBLE_EQ(some.toughness(j), full.toughness(j));  // the same region's value
         const double scale = 1e-9 * full.measure.maxCoeff();
         if (full.measure(j) >= floor * full.toughness(j)) {
           ++above;
           EXPECT_NEAR(some.measure(j), full.measure(j), scale) << "trial " << trial << " node " << j;
           EXPECT_GT(std::abs(some.normal.row(j).dot(full.normal.row(j))), 1 - 1e-9);
-        } else if (some.measure(j) != 0.0) {  // evaluated all the same: then exactly
+        } else if (some.measure(j) != 0.0) {  // evaluated all the same: then the same measure
           EXPECT_NEAR(some.measure(j), full.measure(j), scale);
         }
       }
