@@ -1,9 +1,14 @@
 // What fracture costs (Google Benchmark): Track per frame on the first 12 frames of
-// datasets/beam_break (before the break) with effects.fracture off, and on with a
-// toughness nothing reaches (detection every outer iteration, no split), plus the
-// detection alone. Off is the baseline: with fracture off the tracker computes no tensor
-// and allocates nothing for it. Run from a build with -DFEMREG_BUILD_BENCHMARKS=ON:
-//   bench/femreg_fracture_bench --benchmark_repetitions=3
+// datasets/beam_break (before the break) with effects.fracture off, on with a toughness
+// nothing reaches (detection every outer iteration, no split), and on as bundled (its
+// toughness: the measure nears it from frame 8 on, and fracture is live from there), plus
+// the detection alone. Off is the baseline: with fracture off the tracker computes no tensor
+// and allocates nothing for it. Run from a build with -DFEMREG_BUILD_BENCHMARKS=ON, the cases
+// interleaved (the machine's load drifts):
+//   bench/femreg_fracture_bench --benchmark_filter=TrackBeam --benchmark_repetitions=9
+//     --benchmark_enable_random_interleaving=true   (one command line)
+// measure:1 also reads Tracker::fracture_measure after each frame, as `femreg register` does
+// for its VTU (after a partial detection, a full evaluation).
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -36,12 +41,15 @@ const std::vector<femreg::PointCloud>& Clouds() {
   return *clouds;
 }
 
-// state.range(0): 0 = fracture off, 1 = on with an unreachable toughness.
+// state.range(0): 0 = fracture off, 1 = on with an unreachable toughness, 2 = on as bundled;
+// state.range(1): 1 = read the measure after each frame.
 void TrackBeam(benchmark::State& state) {
   femreg::Scene scene;
   femreg::LoadScene(std::string(FEMREG_SOURCE_DIR) + "/datasets/beam_break/scene.yaml", &scene);
-  scene.effects.fracture = state.range(0) == 1;
-  for (femreg::ObjectSpec& o : scene.objects) o.toughness = 1e30;
+  scene.effects.fracture = state.range(0) >= 1;
+  if (state.range(0) == 1) {
+    for (femreg::ObjectSpec& o : scene.objects) o.toughness = 1e30;
+  }
   double fracture_s = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
@@ -52,13 +60,17 @@ void TrackBeam(benchmark::State& state) {
       femreg::FrameSummary summary;
       tracker->Track(cloud, &summary);
       fracture_s += summary.time.fracture;
+      if (state.range(1) == 1) benchmark::DoNotOptimize(tracker->fracture_measure(0).sum());
     }
   }
   state.SetItemsProcessed(state.iterations() * kFrames);
   state.counters["fracture_ms_per_frame"] =
       1e3 * fracture_s / std::max<double>(1.0, static_cast<double>(state.iterations() * kFrames));
 }
-BENCHMARK(TrackBeam)->Arg(0)->Arg(1)->ArgNames({"fracture"})->Unit(benchmark::kMillisecond);
+BENCHMARK(TrackBeam)
+    ->ArgsProduct({{0, 1, 2}, {0, 1}})
+    ->ArgNames({"fracture", "measure"})
+    ->Unit(benchmark::kMillisecond);
 
 // Detection alone (rotations, stresses, tensors, eigenvalues) on a bent beam.
 void DetectFracture(benchmark::State& state) {

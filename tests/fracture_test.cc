@@ -17,6 +17,7 @@
 
 #include "femreg/forward.h"
 #include "femreg/io.h"
+#include "fracture/measure_bound.h"
 #include "mesh/disjoint_sets.h"
 
 namespace femreg {
@@ -172,6 +173,132 @@ TEST(SeparationTensor, IndependentOfVertexAndElementNumbering) {
   }
   EXPECT_GT(breaking_a, 0);
   EXPECT_EQ(breaking_a, breaking_b);
+}
+
+// Random stress states of a beam with a weak region: a random rotation of a random
+// homogeneous strain (stretch, compression, shear, up to 6 %), a bend, and per-vertex noise.
+struct RandomStates {
+  RandomStates() : mesh(MakeBox(Eigen::Vector3d(0.1, 0.02, 0.02), 10, 2, 2)) {
+    for (int e = 0; e < mesh.num_tets(); ++e) {
+      double cx = 0;
+      for (int k = 0; k < 4; ++k) cx += 0.25 * mesh.rest(mesh.tets(e, k), 0);
+      if (cx > 0.06) mesh.region(e) = 1;
+    }
+    Material stiff = Soft();
+    stiff.youngs_modulus = 2e5;
+    model.Build(mesh, ElasticModelType::kCorotational, Soft(), {{1, stiff}});
+  }
+  Vertices Draw(std::mt19937* rng) {
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Matrix3d strain;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) strain(a, b) = 0.06 * u(*rng);
+    strain = 0.5 * (strain + strain.transpose()).eval();
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(3.0 * u(*rng), Eigen::Vector3d(u(*rng), u(*rng), u(*rng)).normalized()).toRotationMatrix();
+    const double kappa = 10.0 * u(*rng), noise = 0.001 * std::abs(u(*rng));
+    Vertices x = std::abs(kappa) > 0.5 ? Bend(mesh.rest, kappa, 0.0) : mesh.rest;
+    for (int v = 0; v < x.rows(); ++v) {
+      const Eigen::Vector3d p = x.row(v).transpose();
+      const Eigen::Vector3d q = R * (p + strain * p) + Eigen::Vector3d(u(*rng), u(*rng), u(*rng)) * noise;
+      x.row(v) = q.transpose();
+    }
+    model.UpdateRotations(x);
+    return x;
+  }
+  TetMesh mesh;
+  ElasticModel model;
+};
+
+// The bound the detection skips by is never below the measure it stands for.
+TEST(MeasureBound, NeverBelowTheMeasure) {
+  RandomStates states;
+  std::mt19937 rng(11);
+  FractureOptions options;
+  std::vector<double> ratios;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vertices x = states.Draw(&rng);
+    NodeSeparation full;
+    DetectFracture(states.mesh, states.model, x, options, &full);
+    const Eigen::VectorXd bound = fracture_internal::MeasureBound(states.mesh, states.model, x);
+    ASSERT_EQ(bound.size(), full.measure.size());
+    for (int j = 0; j < bound.size(); ++j) {
+      EXPECT_GE(bound(j), full.measure(j)) << "trial " << trial << " node " << j;
+    }
+    ratios.push_back(bound.maxCoeff() / full.measure.maxCoeff());
+  }
+  // And not so loose that it would skip nothing: its largest value is within a small factor of
+  // the measure's in most states (those under compression, with a measure near 0, are the
+  // exceptions).
+  std::sort(ratios.begin(), ratios.end());
+  EXPECT_LT(ratios[ratios.size() / 2], 4.0);
+  // At rest it is 0 up to its margin for round-off (a millionth of the modulus), as the
+  // measure.
+  EXPECT_LT(fracture_internal::MeasureBound(states.mesh, states.model, states.mesh.rest).maxCoeff(), 1.0);
+}
+
+// The detection that evaluates only where the bound reaches a fraction of the toughness finds
+// every node the full detection puts there, with the same measure and plane; the others read 0.
+TEST(MeasureBound, DetectionAboveAFloorMissesNoNodeAboveIt) {
+  RandomStates states;
+  std::mt19937 rng(5);
+  int skipped = 0, evaluated = 0, above = 0;
+  ElasticModel stale = states.model;  // rotations of the state before
+  for (int trial = 0; trial < 200; ++trial) {
+    if (trial > 0) stale = states.model;
+    const Vertices x = states.Draw(&rng);
+    FractureOptions options;
+    NodeSeparation full;
+    DetectFracture(states.mesh, states.model, x, options, &full);
+    // Toughness about the measure's scale, weaker where the beam is stiff.
+    std::vector<double> sorted(full.measure.data(), full.measure.data() + full.measure.size());
+    std::sort(sorted.begin(), sorted.end());
+    options.toughness = sorted[sorted.size() * (trial % 10) / 10] + 1e-3;
+    options.region_toughness = {{1, 0.5 * options.toughness}};
+    DetectFracture(states.mesh, states.model, x, options, &full);
+    for (double floor : {0.1, 0.3, 1.0}) {
+      // With the model's rotations current for x, or found from those of another state.
+      const bool current = trial % 2 == 0;
+      NodeSeparation some;
+      const int n = fracture_internal::DetectFractureAbove(states.mesh, current ? states.model : stale, x, options,
+                                                           floor, current, &some);
+      ASSERT_EQ(some.measure.size(), full.measure.size());
+      evaluated += n;
+      skipped += static_cast<int>(full.measure.size()) - n;
+      for (int j = 0; j < full.measure.size(); ++j) {
+        EXPECT_DOUBLE_EQ(some.toughness(j), full.toughness(j));  // the same region's value
+        const double scale = 1e-9 * full.measure.maxCoeff();
+        if (full.measure(j) >= floor * full.toughness(j)) {
+          ++above;
+          EXPECT_NEAR(some.measure(j), full.measure(j), scale) << "trial " << trial << " node " << j;
+          EXPECT_GT(std::abs(some.normal.row(j).dot(full.normal.row(j))), 1 - 1e-9);
+        } else if (some.measure(j) != 0.0) {  // evaluated all the same: then the same measure
+          EXPECT_NEAR(some.measure(j), full.measure(j), scale);
+        }
+      }
+    }
+  }
+  // Both cases occurred: nodes skipped, and nodes above the floor found.
+  EXPECT_GT(skipped, 0);
+  EXPECT_GT(above, 0);
+  EXPECT_GT(evaluated, above);
+}
+
+// With the model's rotations or with the same rotations given: the same detection.
+TEST(MeasureBound, RotationsGivenOrTheModels) {
+  RandomStates states;
+  std::mt19937 rng(3);
+  const Vertices x = states.Draw(&rng);
+  FractureOptions options;
+  NodeSeparation a, b;
+  DetectFracture(states.mesh, states.model, x, options, &a);
+  // Found from a start far from them (the model's at rest), as the model would.
+  ElasticModel at_rest;
+  at_rest.Build(states.mesh, ElasticModelType::kCorotational, Soft());
+  const std::vector<Eigen::Matrix3d> rotations = fracture_internal::RotationsAt(at_rest, x);
+  fracture_internal::DetectFractureWith(states.mesh, states.model, rotations, x, options, &b);
+  ASSERT_GT(a.measure.maxCoeff(), 0.0);
+  for (int j = 0; j < a.measure.size(); ++j) EXPECT_NEAR(b.measure(j), a.measure(j), 1e-9 * a.measure.maxCoeff());
 }
 
 // Pulls a bar clamped at both ends apart with the forward simulator and fracture on.

@@ -233,6 +233,40 @@ INSTANTIATE_TEST_SUITE_P(FractureTracking, SlabTearSequence,
                            return std::string(ToString(info.param));
                          });
 
+// Before the break, fracture on tracks as fracture off (what it turns off stays on until the
+// measure nears the toughness, and the detection changes nothing it does not act on), and its
+// measure is an output all the same.
+TEST(FractureTracking, BeforeTheBreakOnTracksAsOff) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene(std::string(FEMREG_DATASETS_DIR) + "/beam_break/scene.yaml", &scene).ok());
+  std::unique_ptr<Tracker> on, off;
+  ASSERT_TRUE(Tracker::Create(scene, &on).ok());
+  scene.effects.fracture = false;
+  ASSERT_TRUE(Tracker::Create(scene, &off).ok());
+  for (int f = 0; f < 6; ++f) {
+    char file[96];
+    std::snprintf(file, sizeof(file), "%s/beam_break/clouds/frame_%04d.pcd", FEMREG_DATASETS_DIR, f);
+    PointCloud cloud;
+    ASSERT_TRUE(ReadPointCloud(file, &cloud).ok());
+    FrameSummary a, b;
+    ASSERT_TRUE(on->Track(cloud, &a).ok());
+    ASSERT_TRUE(off->Track(cloud, &b).ok());
+    EXPECT_TRUE(a.fractures.empty());
+    EXPECT_GT(a.time.fracture, 0.0);
+    ASSERT_EQ(on->vertices(0).rows(), off->vertices(0).rows());
+    EXPECT_LT((on->vertices(0) - off->vertices(0)).rowwise().norm().maxCoeff(), 1e-6) << "frame " << f;
+    // The measure over the whole mesh, not only where it nears the toughness.
+    const Eigen::VectorXd& measure = on->fracture_measure(0);
+    ASSERT_EQ(measure.size(), on->mesh(0).num_vertices());
+    if (f > 0) {
+      EXPECT_GT(measure.maxCoeff(), 0.0) << "frame " << f;
+      // Below the 0.3 of beam_break's 6 kPa toughness at which fracture has its say.
+      EXPECT_LT(measure.maxCoeff(), 0.3 * 6000.0) << "frame " << f;
+      EXPECT_GT((measure.array() > 0.0).count(), measure.size() / 2) << "frame " << f;
+    }
+  }
+}
+
 // Fracture off: nothing is computed or exposed.
 TEST(FractureTracking, OffComputesNothing) {
   Scene scene;

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "parallel/stopwatch.h"
+#include "fracture/measure_bound.h"
 #include "registration/correspondences.h"
 #include "registration/prealign.h"
 
@@ -14,27 +15,84 @@ namespace {
 // FractureOptions::data_gap: the data's evidence at most triples the measure.
 constexpr double kMaxDataGapWeight = 3.0;
 
-// Object i's detection, and the weights of the data's evidence where a node could break.
-void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
+// Whether the outer iterations keep object i's element rotations current (the corotational
+// regularizer updates them at the start of each; the neo-Hookean element reads none).
+bool RotationsKept(const TrackerState& state, int i) {
+  return state.options.regularizer == Regularizer::kCorotational &&
+         state.objects[i].model.type() != ElasticModelType::kNeoHookean;
+}
+
+// Object i's positions for the detection, which the outputs' measure is taken at.
+void DetectAt(int i, TrackerState* state) {
   FractureState& f = *state->fracture;
   ObjectState& o = state->objects[i];
   o.mesh.x = state->x.middleRows(o.offset, o.mesh.num_vertices());
-  o.model.UpdateRotations(o.mesh.x);
+  f.detected_at[i] = o.mesh.x;
+  f.full_measure[i].resize(0);
+}
+
+// The measure in full at object i's current positions, the model's rotations brought there
+// (unless they are already).
+void DetectAll(int i, bool rotate, TrackerState* state) {
+  FractureState& f = *state->fracture;
+  ObjectState& o = state->objects[i];
+  if (rotate) o.model.UpdateRotations(o.mesh.x);
+  DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &f.separation[i]);
+  f.partial[i] = 0;
+}
+
+// Whether some node's measure (times the data's weight, if any) reaches `ratio` of its
+// toughness (exceeds it, if strictly: SplitNodes' test).
+bool Reaches(const NodeSeparation& sep, double ratio, bool strictly = false) {
+  const bool weighted = sep.weight.size() == sep.measure.size();
+  for (int v = 0; v < sep.measure.size(); ++v) {
+    const double m = weighted ? sep.weight(v) * sep.measure(v) : sep.measure(v);
+    const double t = ratio * sep.toughness(v);
+    if (sep.toughness(v) > 0 && (strictly ? m > t : m >= t)) return true;
+  }
+  return false;
+}
+
+// Object i's detection, and the weights of the data's evidence where a node could break.
+// The measure is evaluated only where its bound reaches what fracture acts on: the live
+// threshold until fracture is live, then the toughness, each over the data's largest weight
+// (docs/theory/fracture.md#before-the-break); every decision below reads it only there. A
+// detection with a node to split is done again in full, so that the splits see the measure
+// as before.
+void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
+  FractureState& f = *state->fracture;
+  ObjectState& o = state->objects[i];
+  DetectAt(i, state);
   NodeSeparation& sep = f.separation[i];
-  DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &sep);
+  const bool weigh = f.options[i].data_gap, confirm = f.options[i].cut_through;
+  const double floor = (f.live ? 1.0 : kFractureLiveRatio) / (weigh ? kMaxDataGapWeight : 1.0);
+  // The bound needs no rotation; the nodes evaluated find theirs from the model's, which the
+  // next outer iteration brings here itself (so an intact frame's rotations are fracture off's).
+  const bool kept = RotationsKept(*state, i);
+  if (!kept) o.model.UpdateRotations(o.mesh.x);  // nothing else does
+  fracture_internal::DetectFractureAbove(o.mesh, o.model, o.mesh.x, f.options[i], floor, !kept, &sep);
+  f.partial[i] = 1;
   sep.weight.resize(0);
   sep.gap.resize(0);
-  const bool weigh = f.options[i].data_gap, confirm = f.options[i].cut_through;
-  if (!(weigh || confirm) || !state->options.camera.enabled || cloud_index.size() == 0) return;
-  double top = 0.0;
-  for (int v = 0; v < sep.measure.size(); ++v) {
-    if (sep.toughness(v) > 0) top = std::max(top, sep.measure(v) / sep.toughness(v));
+  if ((weigh || confirm) && state->options.camera.enabled && cloud_index.size() > 0) {
+    double top = 0.0;
+    for (int v = 0; v < sep.measure.size(); ++v) {
+      if (sep.toughness(v) > 0) top = std::max(top, sep.measure(v) / sep.toughness(v));
+    }
+    // Only where a node could break (the data's gap costs a search per surface vertex).
+    if (top * (weigh ? kMaxDataGapWeight : 1.0) > 1.0) {
+      const double scale = state->options.data.loss_scale > 0 ? state->options.data.loss_scale : 0.005;
+      sep.gap = DataGap(*state, i, cloud_index) / scale;
+      if (weigh) sep.weight = (Eigen::VectorXd::Ones(sep.gap.size()) + sep.gap).cwiseMin(kMaxDataGapWeight);
+    }
   }
-  // Only where a node could break (the data's gap costs a search per surface vertex).
-  if (top * (weigh ? kMaxDataGapWeight : 1.0) <= 1.0) return;
-  const double scale = state->options.data.loss_scale > 0 ? state->options.data.loss_scale : 0.005;
-  sep.gap = DataGap(*state, i, cloud_index) / scale;
-  if (weigh) sep.weight = (Eigen::VectorXd::Ones(sep.gap.size()) + sep.gap).cwiseMin(kMaxDataGapWeight);
+  if (!f.live && Reaches(sep, kFractureLiveRatio)) f.live = true;
+  if (Reaches(sep, 1.0, /*strictly=*/true)) {
+    const Eigen::VectorXd weight = sep.weight, gap = sep.gap;  // they do not depend on the measure
+    DetectAll(i, /*rotate=*/kept, state);
+    sep.weight = weight;
+    sep.gap = gap;
+  }
 }
 
 // Carries the state's global arrays to the new numbering: new global vertex v comes from
@@ -157,22 +215,15 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
     const int budget = std::min(f.options[i].max_splits_per_iteration,
                                 f.options[i].max_splits_per_frame - f.frame_splits);
     if (budget <= 0) {  // still detect: the measure is an output
-      o.mesh.x = state->x.middleRows(o.offset, o.mesh.num_vertices());
-      o.model.UpdateRotations(o.mesh.x);
-      DetectFracture(o.mesh, o.model, o.mesh.x, f.options[i], &f.separation[i]);
+      DetectAt(static_cast<int>(i), state);
+      DetectAll(static_cast<int>(i), /*rotate=*/true, state);
       continue;
     }
     Detect(static_cast<int>(i), cloud_index, state);
-    if (!f.live) {
-      const NodeSeparation& sep = f.separation[i];
-      for (int v = 0; v < sep.measure.size() && !f.live; ++v) {
-        const double m = sep.weight.size() == sep.measure.size() ? sep.weight(v) * sep.measure(v) : sep.measure(v);
-        f.live = sep.toughness(v) > 0 && m >= kFractureLiveRatio * sep.toughness(v);
-      }
-    }
     TopologyChange change;
     std::vector<int> piece;
-    const int pieces_before = f.live ? ConnectedPieces(o.mesh, &piece) : 1;
+    // Only a detection with a node to split (evaluated in full) can change the mesh.
+    const int pieces_before = f.live && !f.partial[i] ? ConnectedPieces(o.mesh, &piece) : 1;
     SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
     if (!change.changed()) continue;
     changed = true;

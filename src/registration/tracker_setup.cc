@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "femreg/tracker.h"
+#include "fracture/measure_bound.h"
 #include "registration/tracker_impl.h"
 
 namespace femreg {
@@ -132,6 +133,10 @@ Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
     sep.measure = Eigen::VectorXd::Zero(o.mesh.num_vertices());
     f->separation.push_back(std::move(sep));
   }
+  const size_t n = state.objects.size();
+  f->detected_at.resize(n);
+  f->partial.assign(n, 0);
+  f->full_measure.resize(n);
   state.fracture = std::move(f);
   return Status::Ok();
 }
@@ -160,7 +165,23 @@ const Vertices& Tracker::external_forces(int object) const { return impl_->state
 
 const Eigen::VectorXd& Tracker::fracture_measure(int object) const {
   static const Eigen::VectorXd kEmpty;
-  return impl_->state.fracture ? impl_->state.fracture->separation.at(object).measure : kEmpty;
+  if (!impl_->state.fracture) return kEmpty;
+  FractureState& f = *impl_->state.fracture;
+  const NodeSeparation& sep = f.separation.at(object);
+  const Vertices& x = f.detected_at.at(object);
+  if (!f.partial.at(object) || x.rows() != sep.measure.size()) return sep.measure;
+  // The last detection evaluated it only where it could matter: the full measure at its
+  // positions, once (a cache: not to be asked from two threads at once), with the rotations
+  // found there (the model's are left as they are).
+  Eigen::VectorXd& full = f.full_measure[static_cast<size_t>(object)];
+  if (full.size() != sep.measure.size()) {
+    const ObjectState& o = impl_->state.objects[static_cast<size_t>(object)];
+    NodeSeparation all;
+    fracture_internal::DetectFractureWith(o.mesh, o.model, fracture_internal::RotationsAt(o.model, x), x,
+                                          f.options[static_cast<size_t>(object)], &all);
+    full = std::move(all.measure);
+  }
+  return full;
 }
 
 const std::vector<int>& Tracker::original_vertices(int object) const {

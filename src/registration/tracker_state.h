@@ -72,6 +72,14 @@ struct FractureState {
   // copies of split vertices, and vertices the split left on the surface that were inside),
   // which pair with no data (docs/theory/fracture.md#pieces).
   std::vector<char> crack;
+  // Per object: the positions of the last detection.
+  std::vector<Vertices> detected_at;
+  // Per object: the last detection evaluated the measure only where a bound of it reaches
+  // what fracture acts on (docs/theory/fracture.md#before-the-break), 0 elsewhere;
+  // Tracker::fracture_measure then evaluates it in full at detected_at, once (full_measure,
+  // empty until asked).
+  std::vector<char> partial;
+  std::vector<Eigen::VectorXd> full_measure;
 };
 // Low enough that what fracture turns off is off for the frames that lead up to a break (with
 // half the toughness, beam_break's trimmed fits kept its crack from going through).
