@@ -111,12 +111,14 @@ TEST(FractureTracking, BeamBreakSequence) {
   EXPECT_EQ(r.final_pieces, 2);
   ASSERT_GE(r.piece_mean.size(), 2u);
   // The camera's visibility test on: with the crack's surface paired with no data, the free
-  // piece (seen on its side and top only) no longer slides along its axis. Stated bounds (mean
-  // over a piece's vertices and the frames after the break): the clamped piece within 0.5 mm,
-  // the free one within 1.5 mm (measured values: docs/notes/2026-11-29-fracture-pieces.md).
+  // piece (seen on its side and top only) no longer slides along its axis, and, kept in its
+  // shape when the beam parts (relax_pieces puts only held pieces back at rest), it does not
+  // start off along it. Stated bounds (mean over a piece's vertices and the frames after the
+  // break): the clamped piece within 0.5 mm, the free one within the 1.0 mm (measured
+  // values: docs/notes/2026-11-29-fracture-cost.md).
   EXPECT_TRUE(r.tracker->options().data.visibility);
   EXPECT_LT(r.piece_mean[0], 0.0005);
-  EXPECT_LT(r.piece_mean[1], 0.0015);
+  EXPECT_LT(r.piece_mean[1], 0.0010);
   for (size_t p = 0; p < r.piece_mean.size(); ++p) {
     std::printf("beam_break piece %zu: mean error %.2f mm\n", p, 1e3 * r.piece_mean[p]);
   }

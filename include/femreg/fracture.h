@@ -70,10 +70,10 @@ struct FractureOptions {
   // back by a fit made for the others. Off by default: on the bundled sequences the pieces
   // move little from frame to frame, and it cost time without lowering the error.
   bool piece_prealign = false;
-  // Tracker only: when a split parts the body, each new piece is put back in its rest shape
-  // at the rigid pose that best fits where it was (its hard anchors' pose, if any), and the
-  // frame's remaining outer iterations fit the data from there: the break releases the
-  // strain the whole body held, and the pieces spring back.
+  // Tracker only: when a split parts the body, each new piece held by at least three hard
+  // anchors is put back in its rest shape at their rigid pose, and the frame's remaining outer
+  // iterations fit the data from there: the break releases the strain the whole body held, and
+  // the pieces spring back. A piece nothing holds keeps its shape and relaxes under the data.
   bool relax_pieces = true;
   bool IsValid(std::string* error) const;
 };

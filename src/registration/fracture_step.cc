@@ -153,14 +153,13 @@ void RelaxPieces(int i, TrackerState* state) {
         held_x.push_back(all_x.back());
       }
     }
-    if (all_rest.size() < 4) continue;
+    // A piece nothing holds keeps its shape: its rest at the pose fitted to a body still
+    // strained by the break slides along its long axis, where its data hardly hold it
+    // (docs/notes/2026-11-29-fracture-cost.md#the-free-piece-in-the-break-frame-item-2); the outer iterations relax it.
+    if (all_rest.size() < 4 || held_rest.size() < 3) continue;
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
-    if (held_rest.size() >= 3) {
-      Kabsch(held_rest, held_x, &R, &t);
-    } else {
-      Kabsch(all_rest, all_x, &R, &t);
-    }
+    Kabsch(held_rest, held_x, &R, &t);
     for (int v = 0; v < nv; ++v) {
       if (piece[v] != p || anchored[static_cast<size_t>(v)]) continue;
       state->x.row(o.offset + v) = (R * o.mesh.rest.row(v).transpose() + t).transpose();
