@@ -21,10 +21,11 @@ constexpr double kMinFootprints = 1.0;
 // A window's plane needs this many samples (of its 8 or 10).
 constexpr int kMinWindowSamples = 5;
 // A window's plane fits its samples within this share of the tolerance (RMS; noise alone
-// leaves 0.8 sigma): a plane tilted to take in a step of mixed pixels does not.
-constexpr double kWindowFit = 0.5;
+// leaves about a third of the second difference's sigma): a plane tilted to take in a step
+// of mixed pixels does not.
+constexpr double kWindowFit = 0.25;
 // Of the second differences along rows and columns, this share is within one standard
-// deviation of a Gaussian's; the sensor's noise is taken from that quantile.
+// deviation of a Gaussian's; their noise is taken from that quantile.
 constexpr double kOneSigmaQuantile = 0.683;
 
 struct Offset {
@@ -109,9 +110,10 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
   if (step == 0) return 0;  // no image structure to judge by
   const auto z_of = [&](int j) { return depth[static_cast<size_t>(j)]; };
 
-  // The sensor's depth noise, from the image itself: second differences along rows and
-  // columns (sqrt(6) sigma on a plane), over z^2 (a triangulating sensor's noise law). Edges
-  // are a minority of them; a quantile, not a mean, keeps them out.
+  // The noise of a depth predicted from its neighbours, from the image itself: the spread of
+  // the second differences along rows and columns (sqrt(6) times the depth's own noise on a
+  // plane), over z^2 (a triangulating sensor's noise law). Edges are a minority of them; a
+  // quantile, not a mean, keeps them out.
   std::vector<double> second;
   for (int i = 0; i < n; ++i) {
     const long p = pixel_of[static_cast<size_t>(i)];
@@ -123,11 +125,11 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
       if (a >= 0 && b >= 0) second.push_back(std::abs(z_of(a) - 2.0 * z + z_of(b)) / (z * z));
     }
   }
-  double sigma_over_z2 = 0.0;
+  double sigma_over_z2 = 0.0;  // of the second difference
   if (!second.empty()) {
     const size_t q = std::min(second.size() - 1, static_cast<size_t>(kOneSigmaQuantile * second.size()));
     std::nth_element(second.begin(), second.begin() + static_cast<std::ptrdiff_t>(q), second.end());
-    sigma_over_z2 = second[q] / std::sqrt(6.0);
+    sigma_over_z2 = second[q];
   }
 
   static const std::vector<std::vector<Offset>> windows = Windows();
