@@ -92,8 +92,10 @@ struct PreprocessOptions {
   double auto_voxel = 0.25;                             // >= 0, in mean surface edges
   double auto_voxel_min_ratio = 20.0;                   // >= 0
   // Flying pixels (docs/guide/depth-images.md#flying-pixels): with a camera
-  // (registration.camera), the points of a depth image that no surface around them supports
-  // within this many pixel footprints (z / fx) of depth are removed, before everything below.
+  // (registration.camera), the points of a depth image that lie between surfaces and that no
+  // surface around them predicts within this many standard deviations of the image's second
+  // differences of depth (the noise of a depth predicted from its neighbours; never below a
+  // sample footprint, z / fx) are removed, before everything below.
   // 0 = off. Clouds that are not one depth image of the camera are left as they are.
   double flying_pixels = 4.0;                           // >= 0
   int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
