@@ -403,7 +403,7 @@ struct FrameConfidence {
   double fit = 0.0;       // share of the cloud's points near the model (within data.max_distance,
                           // occluders left out) within the tolerance of its surface
   double coverage = 0.0;  // share of the sensor-facing surface vertices with a cloud point within it
-  double residual = 0.0;  // m: rms distance of the fit's points from the surface
+  double residual = 0.0;  // m: rms distance from the surface of the better-fitting half of them
   double strain = 0.0;    // 95th percentile over the elements of max |principal stretch - 1|
 };
 
