@@ -132,5 +132,39 @@ TEST(TrackingLoss, OutliersLowerTheConfidenceButDoNotLoseTheObject) {
   EXPECT_LE(s.confidence.fit, 1.0);
 }
 
+// A right fit among uniform junk (as many points as the object's, spread over its box and 3 cm
+// around): the junk near the surface fills the worse half of the pairs and the object's points
+// the better half, over which the residual is taken: it stays within a few times a clean
+// frame's (the junk's own distances, up to data.max_distance, are tens of times that).
+TEST(TrackingLoss, JunkAroundARightFitKeepsTheResidualScore) {
+  const TetMesh mesh = Box();
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.0005);
+  const auto noisy = [&](const Eigen::Vector3d& shift) {
+    PointCloud c = SurfaceCloud(mesh, shift);
+    for (int i = 0; i < c.size(); ++i) c.points.row(i) += Eigen::RowVector3d(noise(rng), noise(rng), noise(rng));
+    return c;
+  };
+  const auto with_junk = [&](PointCloud c) {
+    const int n = c.size();
+    const Eigen::RowVector3d lo = c.points.colwise().minCoeff().array() - 0.03;
+    const Eigen::RowVector3d hi = c.points.colwise().maxCoeff().array() + 0.03;
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    c.points.conservativeResize(2 * n, 3);
+    for (int i = 0; i < n; ++i) {
+      c.points.row(n + i) = lo + Eigen::RowVector3d(u(rng), u(rng), u(rng)).cwiseProduct(hi - lo);
+    }
+    return c;
+  };
+  auto tracker = MakeTracker(0.3);
+  FrameSummary s;
+  for (int f = 0; f < 3; ++f) ASSERT_TRUE(tracker->Track(noisy(Eigen::Vector3d::Zero()), &s).ok());
+  const double clean_residual = s.confidence.residual;
+  ASSERT_TRUE(tracker->Track(with_junk(noisy(Eigen::Vector3d::Zero())), &s).ok());
+  EXPECT_LT(s.confidence.residual, 5.0 * clean_residual) << clean_residual;
+  EXPECT_GT(s.confidence.confidence, 0.3);
+  EXPECT_FALSE(s.lost);
+}
+
 }  // namespace
 }  // namespace femreg

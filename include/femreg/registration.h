@@ -92,8 +92,10 @@ struct PreprocessOptions {
   double auto_voxel = 0.25;                             // >= 0, in mean surface edges
   double auto_voxel_min_ratio = 20.0;                   // >= 0
   // Flying pixels (docs/guide/depth-images.md#flying-pixels): with a camera
-  // (registration.camera), the points of a depth image that no surface around them supports
-  // within this many pixel footprints (z / fx) of depth are removed, before everything below.
+  // (registration.camera), the points of a depth image that lie between surfaces and that no
+  // surface around them predicts within this many standard deviations of the image's second
+  // differences of depth (the noise of a depth predicted from its neighbours; never below a
+  // sample footprint, z / fx) are removed, before everything below.
   // 0 = off. Clouds that are not one depth image of the camera are left as they are.
   double flying_pixels = 4.0;                           // >= 0
   int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
@@ -401,7 +403,7 @@ struct FrameConfidence {
   double fit = 0.0;       // share of the cloud's points near the model (within data.max_distance,
                           // occluders left out) within the tolerance of its surface
   double coverage = 0.0;  // share of the sensor-facing surface vertices with a cloud point within it
-  double residual = 0.0;  // m: rms distance of the fit's points from the surface
+  double residual = 0.0;  // m: rms distance from the surface of the better-fitting half of them
   double strain = 0.0;    // 95th percentile over the elements of max |principal stretch - 1|
 };
 

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "femreg/fem.h"
 
@@ -30,16 +32,26 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   FrameConfidence c;
   const Vertices& pair_x = surface != nullptr ? surface->view().x : state.x;
   // Fit: the cloud->model pairs (three vertices) within the tolerance at the result.
-  double within = 0.0, all = 0.0, squares = 0.0;
+  double within = 0.0, all = 0.0;
+  std::vector<std::pair<double, double>> distances;  // (distance, weight)
   for (const DataPair& p : pairs) {
     if (p.num_vertices != 3) continue;
     const double d = (p.Point(pair_x) - p.target).norm();
     all += p.weight;
-    squares += p.weight * d * d;
+    distances.emplace_back(d, p.weight);
     if (d <= tolerance) within += p.weight;
   }
   c.fit = all > 0.0 ? within / all : 0.0;
-  c.residual = all > 0.0 ? std::sqrt(squares / all) : 0.0;
+  // The residual over the better-fitting half of them (by weight): junk near the surface fills
+  // the other half whether the fit is right or pulled; a pulled fit misses its own points too.
+  std::sort(distances.begin(), distances.end());
+  double half = 0.0, squares = 0.0;
+  for (const auto& [d, weight] : distances) {
+    if (half >= 0.5 * all) break;
+    half += weight;
+    squares += weight * d * d;
+  }
+  c.residual = half > 0.0 ? std::sqrt(squares / half) : 0.0;
 
   // Coverage: the surface vertices facing the sensor with a cloud point near.
   const TrackerState& covered_state = surface != nullptr ? surface->view() : state;

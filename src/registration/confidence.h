@@ -6,9 +6,10 @@
 //             within `tolerance`, against what the sequence's trusted frames reach
 //             (state.coverage_reference; a partial view covers little of what faces the
 //             sensor in every frame, a lost object nothing): the result is where the cloud is;
-//   residual  the rms distance of those points from the surface, against twice what the
-//             trusted frames reach (state.residual_reference): a fit pulled by what is not
-//             the object;
+//   residual  the rms distance from the surface of the better-fitting half of those points
+//             (by weight), against twice what the trusted frames reach
+//             (state.residual_reference): a fit pulled by what is not the object misses its
+//             own points too, while junk around a right fit fills only the worse half;
 //   strain    1 / (1 + s^4), s the 95th percentile over the elements of the largest
 //             principal stretch's distance from 1 (infinite if inverted): a shape no
 //             material takes.

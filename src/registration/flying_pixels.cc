@@ -1,6 +1,10 @@
 #include "registration/flying_pixels.h"
 
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "femreg/point_cloud.h"
@@ -8,7 +12,52 @@
 
 namespace femreg {
 namespace {
+
 constexpr long kMaxPixelStep = 4;
+// The tolerance never goes below one sample footprint (k z / fx): a depth that close to a
+// surface is also a point up to a sample beside it, and a silhouette's last samples (a limb)
+// step by about that much.
+constexpr double kMinFootprints = 1.0;
+// A window's plane needs this many samples (of its 8 or 10).
+constexpr int kMinWindowSamples = 5;
+// A window's plane fits its samples within this share of the tolerance (RMS; noise alone
+// leaves about a third of the second difference's sigma): a plane tilted to take in a step
+// of mixed pixels does not.
+constexpr double kWindowFit = 0.25;
+// Of the second differences along rows and columns, this share is within one standard
+// deviation of a Gaussian's; their noise is taken from that quantile.
+constexpr double kOneSigmaQuantile = 0.683;
+
+struct Offset {
+  long du, dv;
+};
+
+// The windows a surface through a point may come from, in samples: the four half-windows of
+// its 5 x 5 neighbourhood (left, right, above, below) and its four 3 x 3 corner quadrants.
+std::vector<std::vector<Offset>> Windows() {
+  std::vector<std::vector<Offset>> w(8);
+  for (long dv = -2; dv <= 2; ++dv) {
+    for (long du = -2; du <= 2; ++du) {
+      if (du < 0) w[0].push_back({du, dv});
+      if (du > 0) w[1].push_back({du, dv});
+      if (dv < 0) w[2].push_back({du, dv});
+      if (dv > 0) w[3].push_back({du, dv});
+    }
+  }
+  int q = 4;
+  for (long sx : {-1L, 1L}) {
+    for (long sy : {-1L, 1L}) {
+      for (long dv = 0; dv <= 2; ++dv) {
+        for (long du = 0; du <= 2; ++du) {
+          if (du != 0 || dv != 0) w[static_cast<size_t>(q)].push_back({sx * du, sy * dv});
+        }
+      }
+      ++q;
+    }
+  }
+  return w;
+}
+
 }  // namespace
 
 int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud* cloud) {
@@ -39,9 +88,10 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
     depth[static_cast<size_t>(i)] = q.z();
   }
   if (10 * misplaced > n) return -1;
-  const auto occupied = [&](long u, long v) {
-    return u >= 0 && v >= 0 && u < camera.width && v < camera.height &&
-           pixel_point[static_cast<size_t>(v) * w + static_cast<size_t>(u)] >= 0;
+  // The point on pixel (u, v), or -1.
+  const auto at = [&](long u, long v) {
+    if (u < 0 || v < 0 || u >= camera.width || v >= camera.height) return -1;
+    return pixel_point[static_cast<size_t>(v) * w + static_cast<size_t>(u)];
   };
   // The image's sampling step (a sensor or a writer may keep every k-th pixel): the smallest
   // k at which half of the points have a neighbour k pixels right or down (a depth image's
@@ -53,45 +103,124 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
       const long p = pixel_of[static_cast<size_t>(i)];
       if (p < 0) continue;
       const long u = p % static_cast<long>(w), v = p / static_cast<long>(w);
-      if (occupied(u + k, v) || occupied(u, v + k)) ++paired;
+      if (at(u + k, v) >= 0 || at(u, v + k) >= 0) ++paired;
     }
     if (2 * paired >= n - misplaced) step = k;
   }
   if (step == 0) return 0;  // no image structure to judge by
+  const auto z_of = [&](int j) { return depth[static_cast<size_t>(j)]; };
 
+  // The noise of a depth predicted from its neighbours, from the image itself: the spread of
+  // the second differences along rows and columns (sqrt(6) times the depth's own noise on a
+  // plane), over z^2 (a triangulating sensor's noise law). Edges are a minority of them; a
+  // quantile, not a mean, keeps them out.
+  std::vector<double> second;
+  for (int i = 0; i < n; ++i) {
+    const long p = pixel_of[static_cast<size_t>(i)];
+    if (p < 0) continue;
+    const long u = p % static_cast<long>(w), v = p / static_cast<long>(w);
+    const double z = z_of(i);
+    for (const Offset d : {Offset{1, 0}, Offset{0, 1}}) {
+      const int a = at(u - step * d.du, v - step * d.dv), b = at(u + step * d.du, v + step * d.dv);
+      if (a >= 0 && b >= 0) second.push_back(std::abs(z_of(a) - 2.0 * z + z_of(b)) / (z * z));
+    }
+  }
+  double sigma_over_z2 = 0.0;  // of the second difference
+  if (!second.empty()) {
+    const size_t q = std::min(second.size() - 1, static_cast<size_t>(kOneSigmaQuantile * second.size()));
+    std::nth_element(second.begin(), second.begin() + static_cast<std::ptrdiff_t>(q), second.end());
+    sigma_over_z2 = second[q];
+  }
+
+  static const std::vector<std::vector<Offset>> windows = Windows();
   std::vector<char> drop(static_cast<size_t>(n), 0);
   int removed = 0;
   for (int i = 0; i < n; ++i) {
     const long p = pixel_of[static_cast<size_t>(i)];
     if (p < 0) continue;
     const long u = p % static_cast<long>(w), v = p / static_cast<long>(w);
-    const double z = depth[static_cast<size_t>(i)];
-    const double within = tolerance * static_cast<double>(step) * z / camera.fx;
-    int neighbours = 0, support = 0;
-    long su = 0, sv = 0;  // the first supporting neighbour's offset
-    bool spread = false;  // two supporting neighbours off one line through the pixel
-    bool nearer = false, farther = false;  // a neighbour in front of it, and one behind
+    const double z = z_of(i);
+    const double tau = std::max(tolerance * sigma_over_z2 * z * z,
+                                kMinFootprints * static_cast<double>(step) * z / camera.fx);
+    // A mixed pixel lies between the surfaces around it; a sample in front of (or behind)
+    // all its neighbours, an object sampled more sparsely than its background, is not one.
+    int neighbours = 0;
+    bool nearer = false, farther = false;
     for (long dv = -1; dv <= 1; ++dv) {
       for (long du = -1; du <= 1; ++du) {
-        const long uu = u + step * du, vv = v + step * dv;
-        if ((du == 0 && dv == 0) || !occupied(uu, vv)) continue;
-        const int j = pixel_point[static_cast<size_t>(vv) * w + static_cast<size_t>(uu)];
+        const int j = (du == 0 && dv == 0) ? -1 : at(u + step * du, v + step * dv);
+        if (j < 0) continue;
         ++neighbours;
-        const double dz = depth[static_cast<size_t>(j)] - z;
-        nearer |= dz < -within;
-        farther |= dz > within;
-        if (std::abs(dz) > within) continue;
-        if (support++ == 0) {
+        nearer |= z_of(j) - z < -tau;
+        farther |= z_of(j) - z > tau;
+      }
+    }
+    if (neighbours < 2 || !nearer || !farther) continue;
+
+    // Supported from a direction: the neighbour there at its depth, or the surface through
+    // that neighbour and the next one continued to it (a slanted plane: inverse depth is
+    // linear along the image). Two directions off one line: a surface, not the one-pixel
+    // curtain of mixed pixels along an edge, which only supports itself along the edge.
+    bool supported = false;
+    long su = 0, sv = 0;
+    int directions = 0;
+    for (long dv = -1; dv <= 1 && !supported; ++dv) {
+      for (long du = -1; du <= 1 && !supported; ++du) {
+        const int a = (du == 0 && dv == 0) ? -1 : at(u + step * du, v + step * dv);
+        if (a < 0) continue;
+        bool ok = std::abs(z_of(a) - z) <= tau;
+        const int b = at(u + 2 * step * du, v + 2 * step * dv);
+        if (!ok && b >= 0) {
+          const double inverse = 2.0 / z_of(a) - 1.0 / z_of(b);
+          ok = inverse > 0 && std::abs(z - 1.0 / inverse) <= tau;
+        }
+        // A curved surface (a limb, where the depth's slope grows): the parabola through
+        // three samples in a row.
+        const int c = at(u + 3 * step * du, v + 3 * step * dv);
+        if (!ok && b >= 0 && c >= 0) {
+          const double inverse = 3.0 / z_of(a) - 3.0 / z_of(b) + 1.0 / z_of(c);
+          ok = inverse > 0 && std::abs(z - 1.0 / inverse) <= tau;
+        }
+        if (!ok) continue;
+        if (directions++ == 0) {
           su = du;
           sv = dv;
         } else if (su * dv - sv * du != 0) {
-          spread = true;
+          supported = true;
         }
       }
     }
-    // A mixed pixel lies between the surfaces around it; a sample in front of all its
-    // neighbours (an object sampled more sparsely than its background) is not one.
-    if (neighbours >= 2 && !spread && nearer && farther) {
+    // Or a plane fitted to one side of the neighbourhood (a half or a corner of it, the
+    // surface there whole: at a silhouette's corner, or a face beside an edge of the object)
+    // fits its samples and the point, within the tolerance.
+    for (size_t k = 0; k < windows.size() && !supported; ++k) {
+      Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+      std::array<std::pair<Eigen::Vector3d, double>, 10> samples;
+      int count = 0;
+      for (const Offset d : windows[k]) {
+        const int j = at(u + step * d.du, v + step * d.dv);
+        if (j < 0) continue;
+        const Eigen::Vector3d f(1.0, static_cast<double>(d.du), static_cast<double>(d.dv));
+        normal += f * f.transpose();
+        rhs += f / z_of(j);
+        samples[static_cast<size_t>(count++)] = {f, z_of(j)};
+      }
+      if (count < kMinWindowSamples) continue;
+      // An integer matrix: singular (the samples on one line) exactly when this is 0.
+      if (std::abs(normal.determinant()) < 0.5) continue;
+      const Eigen::Vector3d plane = normal.ldlt().solve(rhs);  // inverse depth = plane . (1, du, dv)
+      if (!(plane(0) > 0) || !plane.allFinite()) continue;
+      double squares = 0.0;
+      for (int s = 0; s < count; ++s) {
+        const double zj = samples[static_cast<size_t>(s)].second;
+        const double off = (plane.dot(samples[static_cast<size_t>(s)].first) - 1.0 / zj) * zj * zj;
+        squares += off * off;
+      }
+      supported = squares <= kWindowFit * kWindowFit * tau * tau * count &&
+                  std::abs(z - 1.0 / plane(0)) <= tau;
+    }
+    if (!supported) {
       drop[static_cast<size_t>(i)] = 1;
       ++removed;
     }

@@ -7,13 +7,18 @@
 
 namespace femreg {
 
-// Removes the points of a depth image of `camera` that no surface around them supports:
-// a point is projected to its pixel, and kept if two of the points in its 8 neighbouring
-// samples (pixels, or every k-th pixel when the image was sampled so, k <= 4 found from the
-// cloud) that lie within tolerance * k * z / fx (that many sample footprints) of its depth z are
-// off one line through it (a surface, not the one-pixel curtain of mixed pixels along an
-// edge), if fewer than two neighbouring pixels hold a point (nothing to judge by), or if it
-// is not between surfaces (no neighbour both nearer and one farther by more than that).
+// Removes the points of a depth image of `camera` that no surface around them supports. Each
+// point is projected to its pixel; the image may keep every k-th pixel (k <= 4, found from the
+// cloud). The spread sigma of the image's second differences of depth along rows and columns
+// (taken as c z^2; on a plane, sqrt(6) times the depth's noise: the noise of a depth predicted
+// by continuing its neighbours' slope) is estimated from the image, and the tolerance at depth
+// z is tolerance * sigma(z), never below one sample footprint (k z / fx). A point is judged only if it lies between
+// surfaces: one of its 8 neighbouring samples nearer and another farther than the tolerance.
+// It is kept if a surface around it predicts its depth within the tolerance: in two directions
+// off one line, the neighbour's depth or the plane through the neighbour and the next sample
+// continued to it (or the parabola through three in a row); or a plane fitted to one half or one corner quadrant of its 5 x 5
+// neighbourhood, which fits its own samples within the tolerance (RMS). The one-pixel curtain
+// of mixed pixels along an edge supports itself only along the edge, and goes.
 // Returns how many were removed; -1 when the cloud is not one depth image of this camera
 // (more than a tenth of its points outside the image, behind the camera or sharing a
 // pixel), and then it is left as it is.
