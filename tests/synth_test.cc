@@ -351,8 +351,8 @@ TEST(SynthSequenceTest, BundledDatasetsRegenerateWithinTolerance) {
 namespace femreg {
 namespace {
 
-// organ-data --divisions: the tracked body's size, and a clear refusal outside 2-7 (the
-// ground truth's mesh, divisions 8, must stay finer) before anything is written.
+// organ-data --divisions: the tracked body's size, and a clear refusal outside 2-9 (the
+// ground truth's mesh, divisions 10, must stay finer) before anything is written.
 TEST(OrganPatchData, DivisionsSetTheTrackedMeshAndAreChecked) {
   const TetMesh bundled = OrganPatchMesh(4);
   EXPECT_EQ(bundled.num_vertices(), 729);
@@ -360,11 +360,11 @@ TEST(OrganPatchData, DivisionsSetTheTrackedMeshAndAreChecked) {
   const TetMesh fine = OrganPatchMesh(7);
   EXPECT_EQ(fine.num_vertices(), 3375);
   EXPECT_EQ(fine.num_tets(), 16464);
-  for (int divisions : {1, 8}) {
+  for (int divisions : {1, 10}) {
     const std::string dir = ::testing::TempDir() + "/organ_divisions_" + std::to_string(divisions);
     const Status status = GenerateOrganPatchSequence(dir, nullptr, divisions);
     ASSERT_FALSE(status.ok());
-    EXPECT_NE(status.message().find("divisions must be 2 to 7"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("divisions must be 2 to 9"), std::string::npos) << status.message();
     EXPECT_FALSE(std::filesystem::exists(dir));
   }
 }

@@ -23,7 +23,7 @@
 //     csv=out.csv (id,X,Y,Z,ux1,uy1,uz1,ux2,uy2,uz2,piece: after each step)  inp=out.inp
 //
 //   femreg_forward_probe shape=organ key=value ...   (organ_patch's ground truth, one frame)
-//     divisions=8 (the truth's mesh; the bundled one: 8)  frame=7 (0-11)
+//     divisions=10 (the truth's mesh; the bundled one: 10)  frame=7 (0-11)
 //     model=neo_hookean|corotational  volume=nodal|element (neo_hookean)  nu=0.47
 //     csv=out.csv (id,X,Y,Z,ux,uy,uz: the truth interpolated at the rest vertices of the
 //     organ's mesh at tracked=4 divisions, as ground_truth/ holds it)
@@ -87,7 +87,7 @@ std::string Text(const std::map<std::string, std::string>& args, const std::stri
 // the bundled truth's mesh is from converged.
 int Organ(const std::map<std::string, std::string>& args) {
   using namespace femreg;
-  const int divisions = static_cast<int>(Number(args, "divisions", 8));
+  const int divisions = static_cast<int>(Number(args, "divisions", 10));
   const int frame = static_cast<int>(Number(args, "frame", 7));
   const int tracked = static_cast<int>(Number(args, "tracked", 4));
   ObjectMaterial material = OrganPatchTruthMaterial();

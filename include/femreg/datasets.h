@@ -91,11 +91,11 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
 // `divisions` (2 to truth_divisions - 1) divides the tracked mesh: (2 n + 1)^3 vertices,
 // 48 n^3 tetrahedra (the bundled sequence: 4, 729 / 3072; 7: 3375 / 16464). The clouds and
 // the ground truth's solve, and so forces.csv, do not depend on it. `truth_divisions` (up to
-// 16) divides the ground truth's mesh (the bundled sequence: 8, 4913 vertices); a finer one
+// 16) divides the ground truth's mesh (the bundled sequence: 10, 9261 vertices); a finer one
 // shows how far that truth is from converged.
 Status GenerateOrganPatchSequence(const std::string& dir,
                                   void (*progress)(int done, int total) = nullptr,
-                                  int divisions = 4, int truth_divisions = 8);
+                                  int divisions = 4, int truth_divisions = 10);
 // The organ_patch body's tracked mesh at `divisions` (above).
 TetMesh OrganPatchMesh(int divisions);
 // The ground truth's material: E 5 kPa, nu 0.47 (the tracking scene says 0.45), density
@@ -113,7 +113,7 @@ struct OrganTruthFrame {
 };
 // Solves frame `frame` (0-11) of organ_patch's ground truth on OrganPatchMesh(divisions)
 // with `material` (OrganPatchTruthMaterial() for the bundled sequence, which uses
-// divisions 8), from rest, on one thread.
+// divisions 10), from rest, on one thread.
 Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material,
                             OrganTruthFrame* out);
 

@@ -5,7 +5,7 @@
 //
 // The body is a ball mapped to a flattened, bent ellipsoid (x, y, z) -> (a x, b y, c z +
 // d x^2), a map with a constant positive Jacobian, so every element stays positively
-// oriented. The ground truth is solved on the same shape twice as finely divided, with a
+// oriented. The ground truth is solved on the same shape 2.5 times as finely divided, with a
 // stiffer Poisson ratio than the tracker's, and interpolated at the tracked vertices; the
 // tool's true force is the reaction at the vertices it moves in that solve. At that nu
 // linear tetrahedra lock, so the truth uses the nodal volume: a benchmark's true force must
@@ -32,7 +32,7 @@ namespace {
 constexpr double kA = 0.08, kB = 0.055, kC = 0.035, kD = 0.012;  // m
 constexpr double kClampX = -0.056;       // vertices with x <= this are clamped (the far lobe)
 constexpr int kFrames = 12;
-constexpr int kTruthDivisions = 8;       // the ground truth's mesh (4913 vertices)
+constexpr int kTruthDivisions = 10;      // the ground truth's mesh (9261 vertices)
 constexpr int kMaxTruthDivisions = 16;   // 35937 vertices: enough to check convergence
 constexpr double kBalanceTolerance = 1e-4;  // |tool + clamp force| over |tool force|
 constexpr int kPoints = 500;             // per cloud

@@ -13,12 +13,12 @@ void AddOrganDataCommand(CLI::App* app) {
   auto out = std::make_shared<std::string>();
   auto force = std::make_shared<bool>(false);
   auto divisions = std::make_shared<int>(4);
-  auto truth_divisions = std::make_shared<int>(8);
+  auto truth_divisions = std::make_shared<int>(10);
   CLI::App* cmd = app->add_subcommand(
       "organ-data",
       "Write the organ_patch sequence: an organ-like body clamped at one end and pushed by a "
       "tool, seen as 500-point patches on ~15% of its surface with no camera (the neo-Hookean "
-      "element with the nodal volume, locking-free, on a finer mesh than the tracked one, 4913 "
+      "element with the nodal volume, locking-free, on a finer mesh than the tracked one, 9261 "
       "vertices). Writes OUT/organ.vtu, OUT/scene.yaml, "
       "OUT/clouds/*.pcd, OUT/ground_truth/*.csv, OUT/forces.csv (per frame, the tool's true force "
       "on the body and its torque about the body's centroid, for `femreg eval`) and OUT/README.md.");
@@ -31,7 +31,7 @@ void AddOrganDataCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::Range(2, 15));
   cmd->add_option("--truth-divisions", *truth_divisions,
-                  "Divisions of the ground truth's mesh, 3-16 (8: the bundled 4913 vertices). A finer "
+                  "Divisions of the ground truth's mesh, 3-16 (10: the bundled 9261 vertices). A finer "
                   "one shows how far the bundled truth is from converged; it changes the clouds, the "
                   "ground truth and forces.csv")
       ->capture_default_str()
