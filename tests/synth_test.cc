@@ -367,6 +367,15 @@ TEST(OrganPatchData, DivisionsSetTheTrackedMeshAndAreChecked) {
     EXPECT_NE(status.message().find("divisions must be 2 to 9"), std::string::npos) << status.message();
     EXPECT_FALSE(std::filesystem::exists(dir));
   }
+  // --truth-divisions: 3-16, and the tracked mesh must stay coarser than the truth's.
+  const std::string dir = ::testing::TempDir() + "/organ_truth_divisions";
+  Status status = GenerateOrganPatchSequence(dir, nullptr, 4, 17);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("truth divisions must be 3 to 16"), std::string::npos) << status.message();
+  status = GenerateOrganPatchSequence(dir, nullptr, 5, 5);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("divisions must be 2 to 4"), std::string::npos) << status.message();
+  EXPECT_FALSE(std::filesystem::exists(dir));
 }
 
 // The ground truth's element does not lock: it is the neo-Hookean one with the nodal volume,
