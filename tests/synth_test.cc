@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -350,8 +351,8 @@ TEST(SynthSequenceTest, BundledDatasetsRegenerateWithinTolerance) {
 namespace femreg {
 namespace {
 
-// organ-data --divisions: the tracked body's size, and a clear refusal outside 2-7 (the
-// ground truth's mesh, divisions 8, must stay finer) before anything is written.
+// organ-data --divisions: the tracked body's size, and a clear refusal outside 2-9 (the
+// ground truth's mesh, divisions 10, must stay finer) before anything is written.
 TEST(OrganPatchData, DivisionsSetTheTrackedMeshAndAreChecked) {
   const TetMesh bundled = OrganPatchMesh(4);
   EXPECT_EQ(bundled.num_vertices(), 729);
@@ -359,13 +360,54 @@ TEST(OrganPatchData, DivisionsSetTheTrackedMeshAndAreChecked) {
   const TetMesh fine = OrganPatchMesh(7);
   EXPECT_EQ(fine.num_vertices(), 3375);
   EXPECT_EQ(fine.num_tets(), 16464);
-  for (int divisions : {1, 8}) {
+  for (int divisions : {1, 10}) {
     const std::string dir = ::testing::TempDir() + "/organ_divisions_" + std::to_string(divisions);
     const Status status = GenerateOrganPatchSequence(dir, nullptr, divisions);
     ASSERT_FALSE(status.ok());
-    EXPECT_NE(status.message().find("divisions must be 2 to 7"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("divisions must be 2 to 9"), std::string::npos) << status.message();
     EXPECT_FALSE(std::filesystem::exists(dir));
   }
+  // --truth-divisions: 3-16, and the tracked mesh must stay coarser than the truth's.
+  const std::string dir = ::testing::TempDir() + "/organ_truth_divisions";
+  Status status = GenerateOrganPatchSequence(dir, nullptr, 4, 17);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("truth divisions must be 3 to 16"), std::string::npos) << status.message();
+  status = GenerateOrganPatchSequence(dir, nullptr, 5, 5);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("divisions must be 2 to 4"), std::string::npos) << status.message();
+  EXPECT_FALSE(std::filesystem::exists(dir));
+}
+
+// The ground truth's element does not lock: it is the neo-Hookean one with the nodal volume,
+// and on the same mesh the locked corotational element at the truth's nu pushes the tool back
+// harder (docs/notes/2026-11-29-organ-truth.md). Its forces balance: with no gravity the
+// tool's force and the clamp's reaction, and their torques, sum to zero.
+TEST(OrganPatchData, TruthIsLockingFreeAndItsForcesBalance) {
+  const ObjectMaterial material = OrganPatchTruthMaterial();
+  EXPECT_EQ(material.model, MaterialModel::kNeoHookean);
+  EXPECT_TRUE(material.nodal_volume);
+  EXPECT_DOUBLE_EQ(material.material.poisson_ratio, 0.47);
+  // The deepest press (frame 7) on the tracked mesh's size, to keep the test short.
+  OrganTruthFrame truth, locked;
+  Status status = SolveOrganPatchTruth(7, 4, material, &truth);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(truth.summary.termination, ForwardTermination::kConverged);
+  EXPECT_EQ(truth.positions.rows(), 729);
+  const double force = truth.tool.force.norm();
+  EXPECT_LT(truth.tool.force.z(), 0.0);  // pushing down into the body
+  EXPECT_GT(force, 0.05);
+  EXPECT_LT((truth.tool.force + truth.clamp.force).norm(), 1e-4 * force);
+  // A torque scale: the tool's force at the body's half length.
+  EXPECT_LT((truth.tool.torque + truth.clamp.torque).norm(), 1e-4 * force * 0.08);
+  EXPECT_GT(truth.tool.torque.norm(), 1e-3 * force * 0.08);  // not a zero that balances trivially
+
+  ObjectMaterial hooke(material.material);  // the corotational element, as before
+  status = SolveOrganPatchTruth(7, 4, hooke, &locked);
+  ASSERT_TRUE(status.ok()) << status.message();
+  std::printf("organ_patch truth, frame 7 on 729 vertices: tool force %.4f N (nodal volume), %.4f N "
+              "(corotational); imbalance %.2e N\n",
+              force, locked.tool.force.norm(), (truth.tool.force + truth.clamp.force).norm());
+  EXPECT_GT(locked.tool.force.norm(), 1.1 * force);
 }
 
 // The bundled organ_patch/forces.csv: a row per frame, the tool's force on the body pointing

@@ -22,6 +22,13 @@
 //     E=5e4 nu=0.35 bend=0.4 (rad) carry_x=0.016 carry_z=0.012 (m) load_steps=8 max_iterations=100
 //     csv=out.csv (id,X,Y,Z,ux1,uy1,uz1,ux2,uy2,uz2,piece: after each step)  inp=out.inp
 //
+//   femreg_forward_probe shape=organ key=value ...   (organ_patch's ground truth, one frame)
+//     divisions=10 (the truth's mesh; the bundled one: 10)  frame=7 (0-11)
+//     model=neo_hookean|corotational  volume=nodal|element (neo_hookean)  nu=0.47
+//     csv=out.csv (id,X,Y,Z,ux,uy,uz: the truth interpolated at the rest vertices of the
+//     organ's mesh at tracked=4 divisions, as ground_truth/ holds it)
+//   Prints the tool's force and the clamp's reaction (N) and the solve's Newton iterations.
+//
 //   femreg_forward_probe shape=press key=value ...   (contact: tools/press_case.h)
 //     support=block|plane  E=3e4 (pressed block)  E_base=6e4  nu=0.3  gap=5e-4  press=1.5e-3
 //     slide=0 (m, along x)  slide_frames=12  load_steps=8  stiffness=1e5 (k, N/m)  distance=1e-3
@@ -39,8 +46,10 @@
 #include <utility>
 #include <vector>
 
+#include "femreg/datasets.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
+#include "femreg/geometry.h"
 #include "femreg/io.h"
 #include "femreg/mesh.h"
 #include "tools/cut_case.h"
@@ -72,6 +81,55 @@ std::string Text(const std::map<std::string, std::string>& args, const std::stri
                  const std::string& fallback) {
   const auto it = args.find(key);
   return it == args.end() ? fallback : it->second;
+}
+
+// shape=organ: one frame of organ_patch's ground truth (femreg/datasets.h), to see how far
+// the bundled truth's mesh is from converged.
+int Organ(const std::map<std::string, std::string>& args) {
+  using namespace femreg;
+  const int divisions = static_cast<int>(Number(args, "divisions", 10));
+  const int frame = static_cast<int>(Number(args, "frame", 7));
+  const int tracked = static_cast<int>(Number(args, "tracked", 4));
+  ObjectMaterial material = OrganPatchTruthMaterial();
+  const std::string model = Text(args, "model", "neo_hookean");
+  if (model != "neo_hookean" && model != "corotational") {
+    std::cerr << "femreg_forward_probe: shape=organ takes model=neo_hookean or corotational\n";
+    return 2;
+  }
+  material.model = model == "neo_hookean" ? MaterialModel::kNeoHookean : MaterialModel::kHooke;
+  material.nodal_volume = model == "neo_hookean" && Text(args, "volume", "nodal") == "nodal";
+  material.material.poisson_ratio = Number(args, "nu", material.material.poisson_ratio);
+  const auto start = std::chrono::steady_clock::now();
+  OrganTruthFrame truth;
+  const Status status = SolveOrganPatchTruth(frame, divisions, material, &truth);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!status.ok()) {
+    std::cerr << "femreg_forward_probe: " << status.message() << "\n";
+    return 1;
+  }
+  const TetMesh mesh = OrganPatchMesh(divisions);
+  std::printf("organ divisions %d (%d vertices), frame %d, %s%s nu %.3f: %d Newton iterations, %.1f s\n",
+              divisions, mesh.num_vertices(), frame, model.c_str(), material.nodal_volume ? " (nodal volume)" : "",
+              material.material.poisson_ratio, truth.summary.NumNewtonIterations(), seconds);
+  std::printf("tool force   %+.6f %+.6f %+.6f N  |%.6f|\n", truth.tool.force.x(), truth.tool.force.y(),
+              truth.tool.force.z(), truth.tool.force.norm());
+  std::printf("clamp force  %+.6f %+.6f %+.6f N  imbalance %.2e N\n", truth.clamp.force.x(),
+              truth.clamp.force.y(), truth.clamp.force.z(), (truth.tool.force + truth.clamp.force).norm());
+  const std::string csv = Text(args, "csv", "");
+  if (!csv.empty()) {
+    const TetMesh at = OrganPatchMesh(tracked);
+    const Vertices x = InterpolateEmbedded(mesh, truth.positions, EmbedPoints(mesh, at.rest));
+    std::ofstream out(csv);
+    out << "id,X,Y,Z,ux,uy,uz\n";
+    char line[256];
+    for (int v = 0; v < at.num_vertices(); ++v) {
+      const Eigen::Vector3d X = at.rest.row(v), u = x.row(v) - at.rest.row(v);
+      std::snprintf(line, sizeof(line), "%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", v, X.x(), X.y(), X.z(), u.x(), u.y(),
+                    u.z());
+      out << line;
+    }
+  }
+  return 0;
 }
 
 // shape=press: the contact case of tools/press_case.h.
@@ -167,6 +225,7 @@ int main(int argc, char** argv) {
   const std::string shape = Text(args, "shape", "box");
   if (shape == "press") return Press(args);
   if (shape == "cut") return Cut(args);
+  if (shape == "organ") return Organ(args);
   const double length = Number(args, "length", 1.0);
   const int n = static_cast<int>(Number(args, "n", 4));
   int axial = static_cast<int>(Number(args, "axial", 0));

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "femreg/fem.h"
+#include "femreg/forward.h"
 #include "femreg/scene.h"
 #include "femreg/status.h"
 
@@ -86,14 +88,34 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
 // DIR/ground_truth/frame_NNNN.csv (visible = in the patch), DIR/forces.csv (the tool's true
 // force per frame: the reaction at the vertices it moves, with its torque about the body's
 // centroid; femreg/ground_truth.h's ForceFrame) and DIR/README.md; deterministic.
-// `divisions` (2-7) divides the tracked mesh: (2 n + 1)^3 vertices, 48 n^3 tetrahedra (the
-// bundled sequence: 4, 729 / 3072; 7: 3375 / 16464). The clouds and the ground truth's solve
-// (4913 vertices), and so forces.csv, do not depend on it.
+// `divisions` (2 to truth_divisions - 1) divides the tracked mesh: (2 n + 1)^3 vertices,
+// 48 n^3 tetrahedra (the bundled sequence: 4, 729 / 3072; 7: 3375 / 16464). The clouds and
+// the ground truth's solve, and so forces.csv, do not depend on it. `truth_divisions` (up to
+// 16) divides the ground truth's mesh (the bundled sequence: 10, 9261 vertices); a finer one
+// shows how far that truth is from converged.
 Status GenerateOrganPatchSequence(const std::string& dir,
                                   void (*progress)(int done, int total) = nullptr,
-                                  int divisions = 4);
+                                  int divisions = 4, int truth_divisions = 10);
 // The organ_patch body's tracked mesh at `divisions` (above).
 TetMesh OrganPatchMesh(int divisions);
+// The ground truth's material: E 5 kPa, nu 0.47 (the tracking scene says 0.45), density
+// 1000, the neo-Hookean element with the nodal volume (locking-free at this nu).
+ObjectMaterial OrganPatchTruthMaterial();
+
+// One frame of the organ_patch ground truth's solve.
+struct OrganTruthFrame {
+  Vertices positions;  // the solved vertices of OrganPatchMesh(truth divisions)
+  // The forces on the body, with their torques about its lumped-mass centroid: by the tool
+  // (the reactions at the vertices it moves; forces.csv) and by the clamp. With no gravity
+  // they sum to zero up to the solve's tolerance.
+  ForceResultant tool, clamp;
+  ForwardSummary summary;
+};
+// Solves frame `frame` (0-11) of organ_patch's ground truth on OrganPatchMesh(divisions)
+// with `material` (OrganPatchTruthMaterial() for the bundled sequence, which uses
+// divisions 10), from rest, on one thread.
+Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material,
+                            OrganTruthFrame* out);
 
 // ---------------------------------------------------------------------------------------
 // femreg hand-press-data: the bundled hand_press sequence.

@@ -5,9 +5,11 @@
 //
 // The body is a ball mapped to a flattened, bent ellipsoid (x, y, z) -> (a x, b y, c z +
 // d x^2), a map with a constant positive Jacobian, so every element stays positively
-// oriented. The ground truth is solved on the same shape twice as finely divided, with a
+// oriented. The ground truth is solved on the same shape 2.5 times as finely divided, with a
 // stiffer Poisson ratio than the tracker's, and interpolated at the tracked vertices; the
-// tool's true force is the reaction at the vertices it moves in that solve.
+// tool's true force is the reaction at the vertices it moves in that solve. At that nu
+// linear tetrahedra lock, so the truth uses the nodal volume: a benchmark's true force must
+// not be set by locked elements' stiffness (docs/notes/2026-11-29-organ-truth.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -30,7 +32,9 @@ namespace {
 constexpr double kA = 0.08, kB = 0.055, kC = 0.035, kD = 0.012;  // m
 constexpr double kClampX = -0.056;       // vertices with x <= this are clamped (the far lobe)
 constexpr int kFrames = 12;
-constexpr int kTruthDivisions = 8;       // the ground truth's mesh (4913 vertices)
+constexpr int kTruthDivisions = 10;      // the ground truth's mesh (9261 vertices)
+constexpr int kMaxTruthDivisions = 16;   // 35937 vertices: enough to check convergence
+constexpr double kBalanceTolerance = 1e-4;  // |tool + clamp force| over |tool force|
 constexpr int kPoints = 500;             // per cloud
 constexpr double kNoise = 3e-4;          // m, per coordinate
 constexpr double kPatchFraction = 0.15;  // of the rest surface area
@@ -98,15 +102,102 @@ struct Gaussian {
   std::mt19937_64 rng;
 };
 
+// The ground truth's body, element, clamp and tool, built once for all frames.
+struct Truth {
+  TetMesh mesh;
+  ElasticModel model;
+  ForwardProblem problem;  // the clamp
+  std::vector<int> tool;   // the upper surface vertices under the tool's tip
+};
+
+Status BuildTruth(int divisions, const ObjectMaterial& material, Truth* truth) {
+  std::string error;
+  if (!material.IsValid(&error)) return Status::Error("organ_patch truth material: " + error);
+  truth->mesh = OrganMesh(divisions);
+  ComputeLumpedMasses(&truth->mesh, material.material.density);
+  truth->model.Build(truth->mesh, ElasticModelType::kCorotational, material);
+  truth->problem = ForwardProblem();
+  truth->tool.clear();
+  for (int v = 0; v < truth->mesh.num_vertices(); ++v) {
+    const Eigen::Vector3d X = truth->mesh.rest.row(v);
+    if (X.x() <= kClampX) truth->problem.clamped.push_back(v);
+  }
+  for (int v : truth->mesh.surface_vertices) {
+    const Eigen::Vector3d X = truth->mesh.rest.row(v);
+    if (Upper(X) && (X.head<2>() - kToolCentre.head<2>()).norm() <= kToolRadius) truth->tool.push_back(v);
+  }
+  if (truth->tool.empty() || truth->problem.clamped.empty()) {
+    return Status::Error("organ_patch: empty tool or clamp");
+  }
+  return Status::Ok();
+}
+
+// Frame f's equilibrium from rest (truth->mesh.x), and the tool's and the clamp's forces.
+Status SolveTruthFrame(int f, Truth* truth, OrganTruthFrame* out) {
+  ForwardOptions forward;
+  forward.num_threads = 1;  // one summation order: the same bytes on every machine load
+  forward.max_iterations = 60;
+  forward.load_steps = 2;
+  ForwardProblem step = truth->problem;
+  for (int v : truth->tool) step.prescribed.emplace_back(v, ToolPath(f));
+  TetMesh& mesh = truth->mesh;
+  mesh.x = mesh.rest;
+  Status status = SolveQuasiStatic(step, forward, &truth->model, &mesh, &out->summary);
+  if (!status.ok()) return status;
+  if (out->summary.termination != ForwardTermination::kConverged) {
+    return Status::Error("organ_patch frame " + std::to_string(f) + ": the ground truth's solve did not converge: " +
+                         out->summary.message);
+  }
+  ForwardForces forces;
+  status = EvaluateForwardForces(step, forward, truth->model, mesh, mesh.x, &forces);
+  if (!status.ok()) return status;
+  Vertices by_tool = Vertices::Zero(mesh.num_vertices(), 3);
+  Vertices by_clamp = Vertices::Zero(mesh.num_vertices(), 3);
+  for (int v : truth->tool) by_tool.row(v) = forces.reactions.row(v);
+  for (int v : truth->problem.clamped) by_clamp.row(v) = forces.reactions.row(v);
+  out->positions = mesh.x;
+  out->tool = ResultantAboutCentroid(by_tool, mesh.x, mesh.mass);
+  out->clamp = ResultantAboutCentroid(by_clamp, mesh.x, mesh.mass);
+  return Status::Ok();
+}
+
 }  // namespace
 
 TetMesh OrganPatchMesh(int divisions) { return OrganMesh(divisions); }
 
+ObjectMaterial OrganPatchTruthMaterial() {
+  Material m;
+  m.youngs_modulus = 5e3;
+  m.poisson_ratio = 0.47;
+  m.density = 1000.0;
+  ObjectMaterial material(m);
+  material.model = MaterialModel::kNeoHookean;
+  material.nodal_volume = true;
+  return material;
+}
+
+Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material, OrganTruthFrame* out) {
+  if (frame < 0 || frame >= kFrames) {
+    return Status::Error("organ_patch: frame must be 0 to " + std::to_string(kFrames - 1));
+  }
+  if (divisions < 2 || divisions > kMaxTruthDivisions) {
+    return Status::Error("organ_patch: truth divisions must be 2 to " + std::to_string(kMaxTruthDivisions));
+  }
+  Truth truth;
+  Status status = BuildTruth(divisions, material, &truth);
+  if (!status.ok()) return status;
+  return SolveTruthFrame(frame, &truth, out);
+}
+
 Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int done, int total),
-                                  int divisions) {
-  if (divisions < 2 || divisions > kTruthDivisions - 1) {
-    return Status::Error("organ_patch: divisions must be 2 to " + std::to_string(kTruthDivisions - 1) +
-                         " (the ground truth's mesh has " + std::to_string(kTruthDivisions) +
+                                  int divisions, int truth_divisions) {
+  if (truth_divisions < 3 || truth_divisions > kMaxTruthDivisions) {
+    return Status::Error("organ_patch: truth divisions must be 3 to " + std::to_string(kMaxTruthDivisions) +
+                         ", got " + std::to_string(truth_divisions));
+  }
+  if (divisions < 2 || divisions > truth_divisions - 1) {
+    return Status::Error("organ_patch: divisions must be 2 to " + std::to_string(truth_divisions - 1) +
+                         " (the ground truth's mesh has " + std::to_string(truth_divisions) +
                          "), got " + std::to_string(divisions));
   }
   std::error_code ec;
@@ -115,27 +206,11 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   if (ec) return Status::Error(dir + ": cannot create: " + ec.message());
 
   const TetMesh coarse = OrganMesh(divisions);
-  TetMesh fine = OrganMesh(kTruthDivisions);
-  Material truth_material;
-  truth_material.youngs_modulus = 5e3;
-  truth_material.poisson_ratio = 0.47;
-  truth_material.density = 1000.0;
-  ComputeLumpedMasses(&fine, truth_material.density);
-  ElasticModel model;
-  model.Build(fine, ElasticModelType::kCorotational, truth_material);
+  Truth truth;
+  Status built = BuildTruth(truth_divisions, OrganPatchTruthMaterial(), &truth);
+  if (!built.ok()) return built;
+  TetMesh& fine = truth.mesh;
   const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
-
-  ForwardProblem problem;
-  std::vector<int> tool;
-  for (int v = 0; v < fine.num_vertices(); ++v) {
-    const Eigen::Vector3d X = fine.rest.row(v);
-    if (X.x() <= kClampX) problem.clamped.push_back(v);
-  }
-  for (int v : fine.surface_vertices) {
-    const Eigen::Vector3d X = fine.rest.row(v);
-    if (Upper(X) && (X.head<2>() - kToolCentre.head<2>()).norm() <= kToolRadius) tool.push_back(v);
-  }
-  if (tool.empty() || problem.clamped.empty()) return Status::Error("organ_patch: empty tool or clamp");
 
   // The patch radius that covers kPatchFraction of the surface (bisection on the rest area).
   double total_area = 0.0;
@@ -149,30 +224,23 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   const double radius = hi;
   const std::vector<int> patch = PatchTriangles(fine, radius, &area);
 
-  ForwardOptions forward;
-  forward.max_iterations = 40;
-  forward.load_steps = 2;
   double mean_motion = 0.0;
   std::vector<ForceFrame> tool_forces;
   for (int f = 0; f < kFrames; ++f) {
-    ForwardProblem step = problem;
-    for (int v : tool) step.prescribed.emplace_back(v, ToolPath(f));
-    fine.x = fine.rest;
-    ForwardSummary summary;
-    Status status = SolveQuasiStatic(step, forward, &model, &fine, &summary);
+    OrganTruthFrame solved;
+    Status status = SolveTruthFrame(f, &truth, &solved);
     if (!status.ok()) return status;
-    if (!summary.IsSolutionUsable()) {
-      return Status::Error("organ_patch frame " + std::to_string(f) + ": " + summary.message);
+    // The tool's force on the body (the clamp's, the only other external force, left out).
+    tool_forces.push_back({f, solved.tool.force, solved.tool.torque});
+    // With no gravity the clamp's reaction balances the tool's force: a truth whose forces
+    // do not is not an equilibrium to benchmark against.
+    const double imbalance = (solved.tool.force + solved.clamp.force).norm();
+    if (!(imbalance <= kBalanceTolerance * solved.tool.force.norm())) {
+      char why[160];
+      std::snprintf(why, sizeof(why), "organ_patch frame %d: the tool's and the clamp's forces do not balance (%.3g N)",
+                    f, imbalance);
+      return Status::Error(why);
     }
-    // The tool's force on the body: the reactions at the vertices it moves (the clamp's, the
-    // only other external force, left out).
-    ForwardForces forces;
-    status = EvaluateForwardForces(step, forward, model, fine, fine.x, &forces);
-    if (!status.ok()) return status;
-    Vertices by_tool = Vertices::Zero(fine.num_vertices(), 3);
-    for (int v : tool) by_tool.row(v) = forces.reactions.row(v);
-    const ForceResultant resultant = ResultantAboutCentroid(by_tool, fine.x, fine.mass);
-    tool_forces.push_back({f, resultant.force, resultant.torque});
     // 500 points spread over the patch by area, with noise.
     std::vector<double> cumulative;
     double sum = 0.0;
@@ -196,16 +264,18 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
       const Eigen::Vector3d noise(rng.Normal(), rng.Normal(), rng.Normal());
       cloud.points.row(i) = (a + u * (b - a) + w * (c - a) + kNoise * noise).transpose();
     }
-    GroundTruthFrame truth;
-    truth.positions = InterpolateEmbedded(fine, fine.x, embedded);
-    truth.visible.assign(static_cast<size_t>(coarse.num_vertices()), 0);
-    for (int v : coarse.surface_vertices) truth.visible[static_cast<size_t>(v)] = InPatch(coarse.rest.row(v), radius);
-    mean_motion = (truth.positions - coarse.rest).rowwise().norm().mean();
+    GroundTruthFrame at_tracked;
+    at_tracked.positions = InterpolateEmbedded(fine, fine.x, embedded);
+    at_tracked.visible.assign(static_cast<size_t>(coarse.num_vertices()), 0);
+    for (int v : coarse.surface_vertices) {
+      at_tracked.visible[static_cast<size_t>(v)] = InPatch(coarse.rest.row(v), radius);
+    }
+    mean_motion = (at_tracked.positions - coarse.rest).rowwise().norm().mean();
     char name[64];
     std::snprintf(name, sizeof(name), "frame_%04d", f);
     status = WritePointCloud((fs::path(dir) / "clouds" / (std::string(name) + ".pcd")).string(), cloud);
     if (status.ok()) {
-      status = WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / (std::string(name) + ".csv")).string(), truth);
+      status = WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / (std::string(name) + ".csv")).string(), at_tracked);
     }
     if (!status.ok()) return status;
     if (progress) progress(f + 1, kFrames);
@@ -245,7 +315,8 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   readme << line
          << " of the surface (the tool's footprint hidden). The clouds carry no viewpoint and "
             "the scene no camera: the partial-view case of docs/hard_cases.md.\n\n"
-            "Ground truth: corotational FEM on the same shape more finely divided ("
+            "Ground truth: the neo-Hookean element with the nodal volume (locking-free) on the "
+            "same shape more finely divided ("
          << fine.num_vertices() << " vertices), Poisson ratio 0.47 against the tracker's 0.45, "
             "interpolated at the tracked vertices; `visible` marks the tracked vertices in the "
             "patch. ";
@@ -265,8 +336,12 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
             "surface. There is no gravity; the clamp's reaction, the only other force on the body, "
             "balances it and is left out, as an estimate in `femreg register`'s stats.csv leaves "
             "it out: `femreg eval` compares the two.\n\n"
-         << (divisions == 4 ? std::string("Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ")
-                            : "Made by `femreg organ-data --divisions " + std::to_string(divisions) + "`; ")
+         << (divisions == 4 && truth_divisions == kTruthDivisions
+                 ? std::string("Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ")
+                 : "Made by `femreg organ-data --divisions " + std::to_string(divisions) +
+                       (truth_divisions == kTruthDivisions ? std::string()
+                                                           : " --truth-divisions " + std::to_string(truth_divisions)) +
+                       "`; ")
          << "deterministic.\n\n"
             "    femreg register --scene datasets/organ_patch/scene.yaml --frames datasets/organ_patch/clouds \\\n"
             "        --ground-truth datasets/organ_patch/ground_truth --out /tmp/organ_patch\n";

@@ -13,26 +13,34 @@ void AddOrganDataCommand(CLI::App* app) {
   auto out = std::make_shared<std::string>();
   auto force = std::make_shared<bool>(false);
   auto divisions = std::make_shared<int>(4);
+  auto truth_divisions = std::make_shared<int>(10);
   CLI::App* cmd = app->add_subcommand(
       "organ-data",
       "Write the organ_patch sequence: an organ-like body clamped at one end and pushed by a "
-      "tool, seen as 500-point patches on ~15% of its surface with no camera (corotational FEM "
-      "on a finer mesh than the tracked one, 4913 vertices). Writes OUT/organ.vtu, OUT/scene.yaml, "
+      "tool, seen as 500-point patches on ~15% of its surface with no camera (the neo-Hookean "
+      "element with the nodal volume, locking-free, on a finer mesh than the tracked one, 9261 "
+      "vertices). Writes OUT/organ.vtu, OUT/scene.yaml, "
       "OUT/clouds/*.pcd, OUT/ground_truth/*.csv, OUT/forces.csv (per frame, the tool's true force "
       "on the body and its torque about the body's centroid, for `femreg eval`) and OUT/README.md.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
   cmd->add_flag("--force", *force, "Write into a non-empty folder");
   cmd->add_option("--divisions", *divisions,
-                  "Divisions of the tracked mesh, 2-7: (2n+1)^3 vertices, 48 n^3 tetrahedra (4: the "
-                  "bundled 729 / 3072; 7: 3375 / 16464, the size of a benchmark organ). The clouds, "
-                  "the ground-truth solve and forces.csv do not change")
+                  "Divisions of the tracked mesh, 2 to the truth's divisions - 1: (2n+1)^3 vertices, "
+                  "48 n^3 tetrahedra (4: the bundled 729 / 3072; 7: 3375 / 16464, the size of a "
+                  "benchmark organ). The clouds, the ground-truth solve and forces.csv do not change")
       ->capture_default_str()
-      ->check(CLI::Range(2, 7));
-  cmd->callback([out, force, divisions] {
+      ->check(CLI::Range(2, 15));
+  cmd->add_option("--truth-divisions", *truth_divisions,
+                  "Divisions of the ground truth's mesh, 3-16 (10: the bundled 9261 vertices). A finer "
+                  "one shows how far the bundled truth is from converged; it changes the clouds, the "
+                  "ground truth and forces.csv")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 16));
+  cmd->callback([out, force, divisions, truth_divisions] {
     Status status = PrepareOutputDir(*out, *force);
     if (status.ok()) {
       ProgressBar bar("organ-data", 12);
-      status = GenerateOrganPatchSequence(*out, nullptr, *divisions);
+      status = GenerateOrganPatchSequence(*out, nullptr, *divisions, *truth_divisions);
       bar.Finish();
     }
     if (!status.ok()) {
