@@ -106,9 +106,8 @@ FirstFrame Register(const char* name, const TetMesh& truth, InitialPose pose, do
   f.x = tracker->vertices(0);
   f.error = (f.x - truth.rest).rowwise().norm().mean();
   std::printf("%s, %s, %.2f rad: mean error %.2f mm, initial pose '%s'%s, %.0f ms\n", name,
-              ToString(pose), angle, f.error * 1e3,
-              f.summary.initial_pose.c_str(), f.summary.pose_ambiguous ? " (ambiguous)" : "",
-              f.summary.time.total * 1e3);
+              ToString(pose), angle, f.error * 1e3, f.summary.initial_pose.c_str(),
+              f.summary.pose_ambiguous ? " (ambiguous)" : "", f.summary.time.total * 1e3);
   return f;
 }
 

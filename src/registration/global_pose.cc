@@ -385,14 +385,16 @@ std::vector<PoseHypothesis> Propose(const PclCloud& cloud, const Features& cloud
   for (int it = 0; it < kDraws; ++it) {
     const size_t s0 = draw(c.size()), s1 = draw(c.size());
     if (matches[s0].empty() || matches[s1].empty()) continue;
-    const pcl::PointNormal& q0 = (*model)[static_cast<size_t>(matches[s0][draw(matches[s0].size())])];
-    const pcl::PointNormal& q1 = (*model)[static_cast<size_t>(matches[s1][draw(matches[s1].size())])];
+    const pcl::PointNormal& q0 =
+        (*model)[static_cast<size_t>(matches[s0][draw(matches[s0].size())])];
+    const pcl::PointNormal& q1 =
+        (*model)[static_cast<size_t>(matches[s1][draw(matches[s1].size())])];
     const Eigen::Vector3d dc = c[s1] - c[s0], dm = position(q1) - position(q0);
     const double lc = dc.norm(), lm = dm.norm();
     if (!(lc > 2.0 * voxel) || std::min(lc, lm) < kSimilarity * std::max(lc, lm)) continue;
     const Eigen::Vector3d mn0 = normal(q0), mn1 = normal(q1);
-    if (!agree(cn[s0].dot(dc) / lc, mn0.dot(dm) / lm) || !agree(cn[s1].dot(dc) / lc, mn1.dot(dm) / lm) ||
-        !agree(cn[s0].dot(cn[s1]), mn0.dot(mn1))) {
+    if (!agree(cn[s0].dot(dc) / lc, mn0.dot(dm) / lm) ||
+        !agree(cn[s1].dot(dc) / lc, mn1.dot(dm) / lm) || !agree(cn[s0].dot(cn[s1]), mn0.dot(mn1))) {
       continue;
     }
     Eigen::Matrix3d Fc, Fm;
@@ -419,8 +421,9 @@ std::vector<PoseHypothesis> Propose(const PclCloud& cloud, const Features& cloud
   for (const Candidate& k : candidates) {
     bool distinct = true;
     for (const PoseHypothesis& h : out) {
-      distinct = distinct && (RotationAngle(k.R, h.R) > kDistinctAngle ||
-                              ((k.R * centroid + k.t) - (h.R * centroid + h.t)).norm() > 2.0 * voxel);
+      distinct =
+          distinct && (RotationAngle(k.R, h.R) > kDistinctAngle ||
+                       ((k.R * centroid + k.t) - (h.R * centroid + h.t)).norm() > 2.0 * voxel);
     }
     if (!distinct) continue;
     PoseHypothesis h;
@@ -503,7 +506,8 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   const PoseHypothesis* chosen = &best;
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   for (const PoseHypothesis& h : hypotheses) {
-    if (h.fit < kAmbiguousRatio * best.fit && RotationAngle(h.R, identity) < RotationAngle(chosen->R, identity)) {
+    if (h.fit < kAmbiguousRatio * best.fit &&
+        RotationAngle(h.R, identity) < RotationAngle(chosen->R, identity)) {
       chosen = &h;
     }
   }
