@@ -346,8 +346,9 @@ struct RegistrationOptions {
   // shape standing for the given pose), an object without anchors whose given pose leaves the cloud
   // farther from its surface than data.loss_scale (the trimmed mean of the cloud->surface
   // distances, plus with a sensor position that of the surface facing it to the cloud) is
-  // posed by a global search (FPFH features, RANSAC from fixed seeds, every hypothesis refined
-  // by rigid ICP), if that explains the cloud at least twice as well
+  // posed by a global search (FPFH features, RANSAC over pairs of oriented points from a fixed
+  // seed, the best hypotheses refined by rigid ICP), if that explains the cloud at least twice
+  // as well
   // (docs/guide/scene-files.md#initial-pose). A pose that explains it well is kept, so that
   // aligned scenes run as with given.
   InitialPose initial_pose = InitialPose::kAuto;

@@ -2,19 +2,19 @@
 
 #include <pcl/features/fpfh.h>
 #include <pcl/features/normal_3d.h>
+#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
-#include <pcl/registration/sample_consensus_prerejective.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
 #include <memory>
+#include <random>
 #include <unordered_map>
 #include <utility>
 
@@ -32,14 +32,16 @@ using Features = pcl::PointCloud<pcl::FPFHSignature33>;
 constexpr double kVoxelPerRadius = 0.1;
 constexpr double kNormalRadius = 2.0;   // voxels
 constexpr double kFeatureRadius = 5.0;  // voxels
-// RANSAC runs (std::rand seeded 1, 2, ...: PCL draws its samples from it), each keeping its
-// best pose; more runs give more distinct hypotheses to verify.
-constexpr int kSeeds = 16;
-constexpr int kIterations = 2500;  // per run
-// PCL keeps, of the poses that bring this fraction of the cloud's samples within 1.5 voxels
-// of the surface's, the one with the smallest error over those: a low bar lets a pose that
-// fits a quarter of the cloud closely win over the one that explains all of it.
-constexpr double kInlierFraction = 0.6;
+// The RANSAC of Propose: each cloud sample's candidate matches (its nearest model samples in
+// feature space), the pairs drawn, how alike two pairs' lengths must be and their normals'
+// angles, the least fraction of the cloud's samples a kept pose brings within 1.5 voxels of
+// the model's (a rough pose that ICP then refines), and how many distinct poses are refined.
+constexpr int kMatches = 3;
+constexpr int kDraws = 20000;
+constexpr double kSimilarity = 0.9;
+constexpr double kPairAngle = 15.0 * M_PI / 180.0;
+constexpr double kMinInlierFraction = 0.15;
+constexpr int kProposals = 16;
 constexpr double kKeep = 0.8;  // the trimmed fit keeps the closest 80 % of the points
 constexpr int kMaxScoredPoints = 2000;
 constexpr int kIcpIterations = 50;
@@ -314,6 +316,125 @@ double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return Eigen::AngleAxisd(a * b.transpose()).angle();
 }
 
+// Rough poses of the cloud on the model by RANSAC over FPFH matches, many kept, not one: each
+// draw takes two cloud samples, each with one of its kMatches nearest model samples in feature
+// space; two oriented points fix a pose, and the draw is dropped unless the two pairs' lengths
+// and their normals' angles (the point-pair feature) agree. A pose is kept if it brings
+// kMinInlierFraction of the cloud's samples within 1.5 voxels of the model's; returns the
+// distinct kept poses with the most inliers, most first. (PCL's SampleConsensusPrerejective
+// keeps one pose per run, and on a body of many alike parts it often reached its inlier
+// fraction in no run: the true pose was never proposed.) Draws from a fixed-seed std::mt19937:
+// the same poses on every run and thread count.
+std::vector<PoseHypothesis> Propose(const PclCloud& cloud, const Features& cloud_features,
+                                    const PclCloud::Ptr& model, const Features::Ptr& model_features,
+                                    double voxel) {
+  std::vector<PoseHypothesis> out;
+  const int n = static_cast<int>(cloud.size());
+  if (n < 3 || model->size() < 3) return out;
+  auto position = [](const pcl::PointNormal& q) { return Eigen::Vector3d(q.x, q.y, q.z); };
+  auto normal = [](const pcl::PointNormal& q) {
+    return Eigen::Vector3d(q.normal_x, q.normal_y, q.normal_z).normalized();
+  };
+  // Each cloud sample's candidate matches.
+  pcl::KdTreeFLANN<pcl::FPFHSignature33> feature_tree;
+  feature_tree.setInputCloud(model_features);
+  std::vector<std::vector<int>> matches(static_cast<size_t>(n));
+  std::vector<float> squared;
+  for (int i = 0; i < n; ++i) {
+    feature_tree.nearestKSearch(cloud_features[static_cast<size_t>(i)], kMatches,
+                                matches[static_cast<size_t>(i)], squared);
+  }
+  Vertices model_points(static_cast<Eigen::Index>(model->size()), 3);
+  for (size_t i = 0; i < model->size(); ++i)
+    model_points.row(static_cast<Eigen::Index>(i)) = position((*model)[i]).transpose();
+  const PointIndex model_index(model_points);
+  std::vector<Eigen::Vector3d> c, cn;
+  for (const pcl::PointNormal& q : cloud) {
+    c.push_back(position(q));
+    cn.push_back(normal(q));
+  }
+  std::mt19937 rng(1);
+  auto draw = [&rng](size_t size) { return static_cast<size_t>(rng() % size); };
+  // The inliers are counted in a shuffled order, so that a poor pose is dropped after a few.
+  std::vector<int> order(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
+  for (size_t i = order.size() - 1; i > 0; --i) std::swap(order[i], order[draw(i + 1)]);
+  const double inlier_squared = (1.5 * voxel) * (1.5 * voxel);
+  const int early = std::min(n, 30);
+  // The frame of an oriented pair: along the pair, the first normal's part across it, and
+  // their cross product.
+  auto frame = [](const Eigen::Vector3d& d, const Eigen::Vector3d& n0, Eigen::Matrix3d* F) {
+    const Eigen::Vector3d e1 = d.normalized();
+    const Eigen::Vector3d across = n0 - n0.dot(e1) * e1;
+    if (!(across.norm() > 0.1)) return false;  // the normal nearly along the pair
+    F->col(0) = e1;
+    F->col(1) = across.normalized();
+    F->col(2) = e1.cross(F->col(1));
+    return true;
+  };
+  auto agree = [](double cos_a, double cos_b) {
+    return std::abs(std::acos(std::clamp(cos_a, -1.0, 1.0)) -
+                    std::acos(std::clamp(cos_b, -1.0, 1.0))) <= kPairAngle;
+  };
+  struct Candidate {
+    int inliers;
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+  };
+  std::vector<Candidate> candidates;
+  for (int it = 0; it < kDraws; ++it) {
+    const size_t s0 = draw(c.size()), s1 = draw(c.size());
+    if (matches[s0].empty() || matches[s1].empty()) continue;
+    const pcl::PointNormal& q0 =
+        (*model)[static_cast<size_t>(matches[s0][draw(matches[s0].size())])];
+    const pcl::PointNormal& q1 =
+        (*model)[static_cast<size_t>(matches[s1][draw(matches[s1].size())])];
+    const Eigen::Vector3d dc = c[s1] - c[s0], dm = position(q1) - position(q0);
+    const double lc = dc.norm(), lm = dm.norm();
+    if (!(lc > 2.0 * voxel) || std::min(lc, lm) < kSimilarity * std::max(lc, lm)) continue;
+    const Eigen::Vector3d mn0 = normal(q0), mn1 = normal(q1);
+    if (!agree(cn[s0].dot(dc) / lc, mn0.dot(dm) / lm) ||
+        !agree(cn[s1].dot(dc) / lc, mn1.dot(dm) / lm) || !agree(cn[s0].dot(cn[s1]), mn0.dot(mn1))) {
+      continue;
+    }
+    Eigen::Matrix3d Fc, Fm;
+    if (!frame(dc, cn[s0], &Fc) || !frame(dm, mn0, &Fm)) continue;
+    const Eigen::Matrix3d R = Fm * Fc.transpose();
+    const Eigen::Vector3d t = 0.5 * (position(q0) + position(q1)) - R * (0.5 * (c[s0] + c[s1]));
+    int inliers = 0, checked = 0;
+    for (int i : order) {
+      double d2 = 0.0;
+      model_index.Nearest(R * c[static_cast<size_t>(i)] + t, &d2);
+      inliers += d2 < inlier_squared ? 1 : 0;
+      ++checked;
+      if (checked == early && inliers < kMinInlierFraction * early) break;
+    }
+    if (checked == n && inliers >= kMinInlierFraction * n) candidates.push_back({inliers, R, t});
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.inliers > b.inliers; });
+  // Distinct: turned by more than kDistinctAngle, or putting the cloud's centroid 2 voxels
+  // elsewhere (ICP takes a pose closer than that to the same place).
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : c) centroid += p;
+  centroid /= static_cast<double>(n);
+  for (const Candidate& k : candidates) {
+    bool distinct = true;
+    for (const PoseHypothesis& h : out) {
+      distinct =
+          distinct && (RotationAngle(k.R, h.R) > kDistinctAngle ||
+                       ((k.R * centroid + k.t) - (h.R * centroid + h.t)).norm() > 2.0 * voxel);
+    }
+    if (!distinct) continue;
+    PoseHypothesis h;
+    h.R = k.R;
+    h.t = k.t;
+    out.push_back(h);
+    if (static_cast<int>(out.size()) == kProposals) break;
+  }
+  return out;
+}
+
 }  // namespace
 
 GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, int object,
@@ -347,36 +468,9 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   Features::Ptr model_features, cloud_features;
   Describe(kFeatureRadius * voxel, &model, &model_features);
   Describe(kFeatureRadius * voxel, &cloud, &cloud_features);
-  if (model->size() >= 3 && cloud->size() >= 3) {
-    // The cloud is the source: a view covers part of the object, and nearly all of its points
-    // lie on the surface (the inlier fraction is the source's).
-    pcl::SampleConsensusPrerejective<pcl::PointNormal, pcl::PointNormal, pcl::FPFHSignature33>
-        ransac;
-    ransac.setInputSource(cloud);
-    ransac.setSourceFeatures(cloud_features);
-    ransac.setInputTarget(model);
-    ransac.setTargetFeatures(model_features);
-    ransac.setMaximumIterations(kIterations);
-    ransac.setNumberOfSamples(3);
-    ransac.setCorrespondenceRandomness(3);
-    ransac.setSimilarityThreshold(0.9f);
-    ransac.setMaxCorrespondenceDistance(1.5 * voxel);
-    ransac.setInlierFraction(static_cast<float>(kInlierFraction));
-    for (int seed = 1; seed <= kSeeds; ++seed) {
-      std::srand(static_cast<unsigned>(seed));
-      PclCloud aligned;
-      ransac.align(aligned);
-      if (!ransac.hasConverged()) continue;
-      const Eigen::Matrix4d T = ransac.getFinalTransformation().cast<double>();
-      PoseHypothesis h;
-      h.R = T.topLeftCorner<3, 3>();
-      h.t = T.topRightCorner<3, 1>();
-      // Orthonormal again after the float transform.
-      Eigen::JacobiSVD<Eigen::Matrix3d> svd(h.R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      h.R = svd.matrixU() * svd.matrixV().transpose();
-      verifier.Refine(&h);
-      hypotheses.push_back(h);
-    }
+  for (PoseHypothesis h : Propose(*cloud, *cloud_features, model, model_features, voxel)) {
+    verifier.Refine(&h);
+    hypotheses.push_back(h);
   }
   auto by_fit = [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.fit < b.fit; };
   std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
@@ -412,7 +506,8 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   const PoseHypothesis* chosen = &best;
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   for (const PoseHypothesis& h : hypotheses) {
-    if (h.fit < kAmbiguousRatio * best.fit && RotationAngle(h.R, identity) < RotationAngle(chosen->R, identity)) {
+    if (h.fit < kAmbiguousRatio * best.fit &&
+        RotationAngle(h.R, identity) < RotationAngle(chosen->R, identity)) {
       chosen = &h;
     }
   }

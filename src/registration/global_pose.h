@@ -36,12 +36,12 @@ struct GlobalPoseResult {
 
 // The search for object `object` of *state against `points` (its cloud points, #P by 3, in
 // the scene frame; eye: where the sensor was, or null when unknown): FPFH features of the
-// surface and of the cloud, SampleConsensusPrerejective from fixed seeds, each hypothesis
-// (and the given pose, and the best one's half-turns about the body's principal axes) refined
-// by a trimmed point-to-plane ICP and scored as PoseHypothesis::fit says (a point whose
-// closest surface point faces away from the eye counts as unexplained). Moves the object's
-// vertices in state->x when a global pose wins. The same result on any thread count and
-// every run (std::rand is seeded before each RANSAC run: PCL draws from it). With a data
+// surface and of the cloud, a RANSAC over oriented point pairs that keeps the distinct poses
+// with the most inliers, each hypothesis (and the given pose, and the best one's half-turns
+// about the body's principal axes) refined by a trimmed point-to-plane ICP and scored as
+// PoseHypothesis::fit says (a point whose closest surface point faces away from the eye counts
+// as unexplained). Moves the object's vertices in state->x when a global pose wins. The same
+// result on any thread count and every run (the draws come from a fixed-seed generator). With a data
 // surface (updated at state->x) that embeds a surface in the object, the pose is that of its
 // embedded surface, the one the cloud shows; the mesh moves with it.
 GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, int object,
