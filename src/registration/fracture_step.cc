@@ -143,20 +143,20 @@ void RelaxPieces(int i, TrackerState* state) {
     }
   }
   for (int p = 0; p < pieces; ++p) {
-    std::vector<Eigen::Vector3d> all_rest, all_x, held_rest, held_x;
+    // A piece nothing holds keeps its shape: a rest pose fitted to the body still strained by
+    // the break is off along the piece's length, where its data hold it least; the outer
+    // iterations relax it (docs/theory/fracture.md#pieces).
+    int size = 0;
+    std::vector<Eigen::Vector3d> held_rest, held_x;
     for (int v = 0; v < nv; ++v) {
       if (piece[v] != p) continue;
-      all_rest.push_back(o.mesh.rest.row(v).transpose());
-      all_x.push_back(state->x.row(o.offset + v).transpose());
+      ++size;
       if (anchored[static_cast<size_t>(v)]) {
-        held_rest.push_back(all_rest.back());
-        held_x.push_back(all_x.back());
+        held_rest.push_back(o.mesh.rest.row(v).transpose());
+        held_x.push_back(state->x.row(o.offset + v).transpose());
       }
     }
-    // A piece nothing holds keeps its shape: its rest at the pose fitted to a body still
-    // strained by the break slides along its long axis, where its data hardly hold it
-    // (docs/notes/2026-11-29-fracture-cost.md#the-free-piece-in-the-break-frame-item-2); the outer iterations relax it.
-    if (all_rest.size() < 4 || held_rest.size() < 3) continue;
+    if (size < 4 || held_rest.size() < 3) continue;
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
     Kabsch(held_rest, held_x, &R, &t);
