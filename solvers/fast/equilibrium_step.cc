@@ -28,6 +28,18 @@ constexpr int kMaxPcgIterations = 200;
 // The shift of K~ = K + shift * mean(diag K): enough for a free body's rigid motions (K's null
 // space) to factorize; raised 100-fold while the factorization fails.
 constexpr double kFirstShift = 1e-8;
+constexpr int kMaxKeptSkips = 8;
+
+// Whether a simplicial L D L^T factor has a pivot D_jj <= 0 (the first entry of column j).
+bool HasNegativePivot(const cholmod_factor& L) {
+  if (L.is_super || L.is_ll || L.xtype != CHOLMOD_REAL || L.itype != CHOLMOD_INT) return true;
+  const int* p = static_cast<const int*>(L.p);
+  const double* x = static_cast<const double*>(L.x);
+  for (size_t j = 0; j < L.n; ++j) {
+    if (!(x[p[j]] > 0.0)) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
@@ -45,10 +57,18 @@ struct EquilibriumSolver::Impl {
   // double where float fails) and the per-vertex blocks Phi~^-1.
   CholmodFactor factor;
   SupernodalSolve<float> substitutions;
-  CholmodFactor ldlt;  // of an indefinite K
+  CholmodFactor ldlt;  // of an indefinite K (simplicial)
   bool ldlt_analysed = false, use_ldlt = false;
   bool analysed = false, structure_pending = false, factor_valid = false, factor_single = false;
   int fresh_iterations = -1;  // PCG's iterations on the first step solved with the factor
+  // A kept factor that failed is not tried again for the next 2^k - 1 steps after its k-th
+  // failure in a row (at most kMaxKeptSkips): where K moves between steps a failed attempt
+  // costs more iterations than a fresh factor saves. Counts, not times: the same steps on
+  // every machine.
+  int kept_failures = 0, kept_skips = 0;
+  // K was indefinite at the last factorization (L D L^T with a negative pivot): the next one
+  // goes to L D L^T directly, without the Cholesky attempt that would fail.
+  bool last_indefinite = false;
   std::vector<Eigen::Matrix3d> phi_inverse;
 
   // The linearization at x: penalties, their gradients and curvatures; G the objective's gradient.
@@ -74,7 +94,7 @@ struct EquilibriumSolver::Impl {
   // fails too, its projection (energy/term.h, Curvature) with a shift. False if nothing factorizes.
   bool Factorize(const energy::Problem& problem, const Vertices& x, SolveReport* report) {
     use_ldlt = false;
-    if (FactorizeOf(&physics, kFirstShift, report)) return true;
+    if (!last_indefinite && FactorizeOf(&physics, kFirstShift, report)) return true;
     const auto t0 = Clock::now();
     if (!ldlt_analysed) {
       ldlt.setMode(Eigen::CholmodLDLt);
@@ -93,8 +113,10 @@ struct EquilibriumSolver::Impl {
       use_ldlt = true;
       factor_valid = true;
       fresh_iterations = -1;
+      last_indefinite = HasNegativePivot(*ldlt.raw());
       return true;
     }
+    last_indefinite = false;
     const auto t1 = Clock::now();
     // The same blocks as `physics`: the same pattern, and the analysis holds for both.
     projected.Prepare(problem, x);
@@ -305,15 +327,29 @@ struct EquilibriumSolver::Impl {
   }
 
   // PCG on (H + K Phi K) dx = b; false if it did not converge in max_iterations.
-  bool Pcg(const Eigen::VectorXd& b, int max_iterations, Eigen::VectorXd* dx, int* iterations,
+  // warm: start from *dx (a failed attempt's iterate, if it lowered the residual), else from 0.
+  bool Pcg(const Eigen::VectorXd& b, int max_iterations, bool warm, Eigen::VectorXd* dx, int* iterations,
            SolveReport* report) {
     const ScopedThreads one_thread(1);
     const auto t0 = Clock::now();
-    dx->setZero(b.size());
     *iterations = 0;
     const double b_norm = b.norm();
-    if (b_norm == 0.0) return true;
     Eigen::VectorXd r = b, z, q;
+    if (warm && dx->size() == b.size() && dx->allFinite()) {
+      Product(*dx, &q);
+      r = b - q;
+      if (!(r.norm() < b_norm)) {
+        dx->setZero(b.size());
+        r = b;
+      }
+    } else {
+      dx->setZero(b.size());
+    }
+    if (b_norm == 0.0) return true;
+    if (r.norm() <= kPcgTolerance * b_norm) {
+      report->linear_solve_s += Seconds(t0);
+      return true;
+    }
     Precondition(r, &z, report);
     Eigen::VectorXd p = z;
     double rz = r.dot(z);
@@ -342,18 +378,26 @@ struct EquilibriumSolver::Impl {
 
   // The step: PCG with the kept factor while it serves (at most twice, and 10 more than, the
   // iterations of the first step after it was made), else with a new one.
+  // A failed attempt's iterate is where the fresh factor's PCG starts.
   bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, SolveReport* report) {
     int iterations = 0;
-    if (factor_valid) {
+    bool warm = false;
+    if (factor_valid && kept_skips > 0) {
+      --kept_skips;
+    } else if (factor_valid) {
       const int limit = fresh_iterations < 0 ? kMaxPcgIterations
                                              : std::max(2 * fresh_iterations, fresh_iterations + 10);
-      if (Pcg(-G, limit, dx, &iterations, report)) {
+      if (Pcg(-G, limit, /*warm=*/false, dx, &iterations, report)) {
         if (fresh_iterations < 0) fresh_iterations = iterations;
+        kept_failures = 0;
         return true;
       }
+      kept_failures = std::min(kept_failures + 1, 30);
+      kept_skips = std::min((1 << std::min(kept_failures, 4)) - 1, kMaxKeptSkips);
+      warm = true;
     }
     if (!Factorize(problem, x, report)) return false;
-    if (!Pcg(-G, kMaxPcgIterations, dx, &iterations, report)) return false;
+    if (!Pcg(-G, kMaxPcgIterations, warm, dx, &iterations, report)) return false;
     fresh_iterations = iterations;
     return true;
   }
