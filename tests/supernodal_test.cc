@@ -1,6 +1,9 @@
 // The fast back end's own supernodal factorization and substitutions on CHOLMOD's analysis
 // (solvers/fast/supernodal_solve.h), against CHOLMOD's own solves.
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
 #include "backend_setup.h"
 
 namespace femreg {
@@ -267,6 +270,75 @@ TEST(FastBackend, TiledFactorizationSolvesLikeCholmod) {
       EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-9 * scale);
     }
   }
+}
+
+// The factorization of a symmetric matrix that is not positive definite (the equilibrium
+// solve's stiffness in compression): A = P^T L S L^T P without pivoting, S the pivots' signs.
+// A beam's stiffness less a shift between its 5th and 6th eigenvalues has 5 negative
+// eigenvalues, so (Sylvester's law of inertia) 5 negative pivots; its solves match a dense
+// solve, on an uncut and a cut tree alike. A positive definite matrix has none, and solves as
+// the Cholesky factorization does; a zero pivot is refused; Factorize afterwards is LL^T again.
+TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
+  const Eigen::SparseMatrix<double> H = BeamsSystem({{6, 5e4}}, 1.0);
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(H);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(dense);
+  ASSERT_EQ(eigen.info(), Eigen::Success);
+  const double shift = 0.5 * (eigen.eigenvalues()[4] + eigen.eigenvalues()[5]);
+  Eigen::SparseMatrix<double> identity(H.rows(), H.cols());
+  identity.setIdentity();
+  const Eigen::SparseMatrix<double> A = H - shift * identity;
+  ASSERT_EQ(A.nonZeros(), H.nonZeros());  // the same pattern (H has its whole diagonal)
+  fast_backend::CholmodFactor symbolic;
+  symbolic.setMode(Eigen::CholmodSupernodalLLt);
+  symbolic.analyzePattern(A);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd b(A.rows());
+  for (Eigen::Index i = 0; i < A.rows(); ++i) b[i] = u(rng);
+  const Eigen::VectorXd expected = Eigen::MatrixXd(A).partialPivLu().solve(b);
+  const double scale = expected.lpNorm<Eigen::Infinity>();
+  const ScopedThreads one_blas_thread(1);
+  for (int64_t cut_from : {int64_t{1} << 40, int64_t{0}}) {
+    fast_backend::SupernodalSolve<double> in_double;
+    in_double.set_cut_from(cut_from);
+    ASSERT_TRUE(in_double.FactorizeIndefinite(*symbolic.raw(), A, true)) << cut_from;
+    EXPECT_EQ(in_double.negative_pivots(), 5) << cut_from;
+    Eigen::VectorXd x;
+    in_double.Solve(b, &x);
+    EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-8 * scale) << cut_from;
+    fast_backend::SupernodalSolve<float> in_float;
+    in_float.set_cut_from(cut_from);
+    ASSERT_TRUE(in_float.FactorizeIndefinite(*symbolic.raw(), A, true)) << cut_from;
+    EXPECT_EQ(in_float.negative_pivots(), 5) << cut_from;
+    Eigen::VectorXd y;
+    in_float.Solve(b, &y);
+    EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 5e-2 * scale) << cut_from;
+    EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);
+    // Positive definite: no negative pivot, the Cholesky factorization's solve.
+    ASSERT_TRUE(in_double.FactorizeIndefinite(*symbolic.raw(), H, false));
+    EXPECT_EQ(in_double.negative_pivots(), 0);
+    Eigen::VectorXd z;
+    in_double.Solve(b, &z);
+    const Eigen::VectorXd h_expected = Eigen::MatrixXd(H).llt().solve(b);
+    EXPECT_LE((z - h_expected).lpNorm<Eigen::Infinity>(), 1e-8 * h_expected.lpNorm<Eigen::Infinity>());
+    // Factorize is L L^T again (no signs kept): the indefinite A is refused, H solves.
+    EXPECT_FALSE(in_double.Factorize(*symbolic.raw(), A, false, 1));
+    ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, false, 1));
+    EXPECT_EQ(in_double.negative_pivots(), 0);
+    in_double.Solve(b, &z);
+    EXPECT_LE((z - h_expected).lpNorm<Eigen::Infinity>(), 1e-8 * h_expected.lpNorm<Eigen::Infinity>());
+  }
+  // A zero pivot (a row and column of zeros, in the same pattern): refused.
+  Eigen::SparseMatrix<double> singular = A;
+  for (Eigen::Index c = 0; c < singular.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(singular, c); it; ++it) {
+      if (it.row() == 3 || it.col() == 3) it.valueRef() = 0.0;
+    }
+  }
+  fast_backend::SupernodalSolve<double> refused;
+  EXPECT_FALSE(refused.FactorizeIndefinite(*symbolic.raw(), singular, true));
+  EXPECT_FALSE(refused.loaded());
+  EXPECT_EQ(refused.negative_pivots(), 0);
 }
 
 }  // namespace

@@ -57,8 +57,14 @@ struct EquilibriumSolver::Impl {
   // double where float fails) and the per-vertex blocks Phi~^-1.
   CholmodFactor factor;
   SupernodalSolve<float> substitutions;
-  CholmodFactor ldlt;  // of an indefinite K (simplicial)
+  CholmodFactor ldlt;  // of an indefinite K (simplicial), where the own L S L^T fails
   bool ldlt_analysed = false, use_ldlt = false;
+  // The own L S L^T of an indefinite K on the same analysis: in float, else in double; which
+  // one holds the factor (0: neither), and whether each must take the structure again.
+  SupernodalSolve<float> indefinite_single;
+  SupernodalSolve<double> indefinite_double;
+  int use_indefinite = 0;
+  bool indefinite_pending[2] = {false, false};
   bool analysed = false, structure_pending = false, factor_valid = false, factor_single = false;
   int fresh_iterations = -1;  // PCG's iterations on the first step solved with the factor
   // A kept factor that failed is not tried again for the next 2^k - 1 steps after its k-th
@@ -86,15 +92,19 @@ struct EquilibriumSolver::Impl {
     }
     analysed = true;
     structure_pending = true;
+    indefinite_pending[0] = indefinite_pending[1] = true;
   }
 
   // Factorizes K~ (K as linearized last at x). Where K is not positive definite (compressed
   // or turning elements) K Phi K is still positive definite and K^-1 Phi^-1 K^-1 still its
-  // inverse: K is factorized as L D L^T (CHOLMOD's simplicial, without pivoting); if that
+  // inverse: K is factorized as L D L^T without pivoting (the own supernodal code, in float,
+  // else in double; then CHOLMOD's simplicial); if that
   // fails too, its projection (energy/term.h, Curvature) with a shift. False if nothing factorizes.
   bool Factorize(const energy::Problem& problem, const Vertices& x, SolveReport* report) {
     use_ldlt = false;
+    use_indefinite = 0;
     if (!last_indefinite && FactorizeOf(&physics, kFirstShift, report)) return true;
+    if (FactorizeIndefinite(report)) return true;
     const auto t0 = Clock::now();
     if (!ldlt_analysed) {
       ldlt.setMode(Eigen::CholmodLDLt);
@@ -125,6 +135,41 @@ struct EquilibriumSolver::Impl {
     projected.Finish(problem, 0.0, &unused);
     report->assemble_s += Seconds(t1);
     return FactorizeOf(&projected, 1.0, report);
+  }
+
+  // K~ (K with FactorizeOf's first shift) as L S L^T in the own supernodal code, in float,
+  // else in double; false if neither (a pivot too small at its precision).
+  bool FactorizeIndefinite(SolveReport* report) {
+    const auto t0 = Clock::now();
+    Eigen::SparseMatrix<double>& K = physics.H();
+    Analyse(K);
+    const std::vector<int>& diagonal_at = physics.diagonal_at();
+    double mean = 0.0;
+    for (int at : diagonal_at) mean += std::abs(K.valuePtr()[at]);
+    mean /= std::max<size_t>(1, diagonal_at.size());
+    for (int at : diagonal_at) K.valuePtr()[at] += kFirstShift * mean;
+    {
+      const ScopedThreads one_thread(1);
+      ++report->factorizations;
+      if (indefinite_single.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[0])) {
+        indefinite_pending[0] = false;
+        use_indefinite = 1;
+      } else {
+        ++report->factorizations;
+        if (indefinite_double.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[1])) {
+          indefinite_pending[1] = false;
+          use_indefinite = 2;
+        }
+      }
+    }
+    for (int at : diagonal_at) K.valuePtr()[at] -= kFirstShift * mean;
+    report->factorize_s += Seconds(t0);
+    if (use_indefinite == 0) return false;
+    const int negative = use_indefinite == 1 ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
+    last_indefinite = negative > 0;
+    factor_valid = true;
+    fresh_iterations = -1;
+    return true;
   }
 
   // Factorizes the matrix of `a` plus shifts from kFirstShift up to max_shift of its mean
@@ -304,7 +349,11 @@ struct EquilibriumSolver::Impl {
     Eigen::VectorXd u, projected = r;
     Project(&projected);
     auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd* out) {
-      if (use_ldlt) {
+      if (use_indefinite == 1) {
+        indefinite_single.Solve(b, out);
+      } else if (use_indefinite == 2) {
+        indefinite_double.Solve(b, out);
+      } else if (use_ldlt) {
         *out = ldlt.solve(b);
       } else if (factor_single) {
         substitutions.Solve(b, out);

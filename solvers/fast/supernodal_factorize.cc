@@ -127,6 +127,8 @@ void SupernodalSolve<Scalar>::SubtractUpdates(int s, int t0, int t1, bool whole,
     }
     if (ilo >= ihi) continue;
     const int jn = std::min(n, ihi);  // columns j <= i
+    // L S L^T (FactorizeIndefinite): d's columns carry their signs where any is negative.
+    const Scalar* sign = !sign_.empty() && negative_[static_cast<size_t>(d)] ? sign_.data() + super_[d] : nullptr;
     if (static_cast<int64_t>(m) * n * dcol < kBlasUpdate) {
       for (int j = 0; j < jn; ++j) {
         Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
@@ -134,10 +136,27 @@ void SupernodalSolve<Scalar>::SubtractUpdates(int s, int t0, int t1, bool whole,
         for (int i = i0; i < ihi; ++i) c[i] = 0;
         for (int k = 0; k < dcol; ++k) {
           const Scalar* column = D + static_cast<int64_t>(k) * drow;
-          const Scalar djk = column[j];
+          const Scalar djk = sign != nullptr ? column[j] * sign[k] : column[j];
           for (int i = i0; i < ihi; ++i) c[i] += column[i] * djk;
         }
         for (int i = i0; i < ihi; ++i) target[map[drows[i]]] -= c[i];
+      }
+      continue;
+    }
+    if (sign != nullptr) {  // W = D S (its m rows), then c = W D^T: a product, not a rank update
+      signed_.resize(std::max(signed_.size(), static_cast<size_t>(m) * dcol));
+      Scalar* W = signed_.data();
+      for (int k = 0; k < dcol; ++k) {
+        const Scalar* column = D + static_cast<int64_t>(k) * drow;
+        Scalar* wk = W + static_cast<int64_t>(k) * m;
+        for (int i = 0; i < m; ++i) wk[i] = column[i] * sign[k];
+      }
+      const int mt = ihi - ilo;
+      GemmNT(mt, jn, dcol, W + ilo, m, D, drow, c, mt);
+      for (int j = 0; j < jn; ++j) {
+        Scalar* target = L + static_cast<int64_t>(drows[j] - k1) * nrow;
+        const Scalar* cj = c + static_cast<int64_t>(j) * mt;
+        for (int i = std::max(j, ilo); i < ihi; ++i) target[map[drows[i]]] -= cj[i - ilo];
       }
       continue;
     }
@@ -165,12 +184,63 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* ma
   Scalar* L = values_.data() + px_[s];
   Gather(s, a, map);
   SubtractUpdates(s, 0, nrow, /*whole=*/true, map, c);
+  if (!sign_.empty()) return FactorizeIndefiniteBlock(s);
   if (Potrf(ncol, L, nrow) != 0) return false;
   for (int j = 0; j < ncol; ++j) {
     const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
     if (!(pivot > 0) || !std::isfinite(static_cast<double>(pivot))) return false;
   }
   if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
+  return true;
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
+  constexpr int kPanel = 32;
+  const int k0 = super_[s], ncol = super_[s + 1] - k0, nrow = pi_[s + 1] - pi_[s];
+  Scalar* L = values_.data() + px_[s];
+  bool negative = false;
+  for (int p0 = 0; p0 < ncol; p0 += kPanel) {
+    const int p1 = std::min(ncol, p0 + kPanel);
+    for (int j = p0; j < p1; ++j) {
+      Scalar* cj = L + static_cast<int64_t>(j) * nrow;
+      const Scalar pivot = cj[j];
+      if (!std::isfinite(static_cast<double>(pivot)) || !(std::abs(static_cast<double>(pivot)) > pivot_floor_)) {
+        return false;
+      }
+      const Scalar sign = pivot > 0 ? Scalar(1) : Scalar(-1);
+      const Scalar root = std::sqrt(std::abs(pivot));
+      sign_[static_cast<size_t>(k0 + j)] = sign;
+      if (sign < 0) {
+        negative = true;
+        ++negative_pivots_;
+      }
+      cj[j] = root;
+      const Scalar scale = sign / root;  // L_ij = a_ij s_j / |d_j|^(1/2)
+      for (int i = j + 1; i < nrow; ++i) cj[i] *= scale;
+      for (int k = j + 1; k < p1; ++k) {  // the panel's later columns: a_ik -= L_ij s_j L_kj
+        Scalar* ck = L + static_cast<int64_t>(k) * nrow;
+        const Scalar lkj = cj[k] * sign;
+        for (int i = k; i < nrow; ++i) ck[i] -= cj[i] * lkj;
+      }
+    }
+    if (p1 < ncol) {  // the columns right of the panel, rows from p1: -= (L S) L^T
+      const int m = nrow - p1, w = p1 - p0;
+      signed_.resize(std::max(signed_.size(), static_cast<size_t>(m) * w));
+      Scalar* W = signed_.data();
+      for (int k = 0; k < w; ++k) {
+        const Scalar* column = L + static_cast<int64_t>(p0 + k) * nrow + p1;
+        const Scalar sign = sign_[static_cast<size_t>(k0 + p0 + k)];
+        Scalar* wk = W + static_cast<int64_t>(k) * m;
+        for (int i = 0; i < m; ++i) wk[i] = column[i] * sign;
+      }
+      GemmNTSubtract(m, ncol - p1, w, W, m, L + static_cast<int64_t>(p0) * nrow + p1, nrow,
+                     L + static_cast<int64_t>(p1) * nrow + p1, nrow);
+    }
+  }
+  // Above the diagonal: zeros (the products wrote there; it is not part of L).
+  for (int j = 1; j < ncol; ++j) std::fill(L + static_cast<int64_t>(j) * nrow, L + static_cast<int64_t>(j) * nrow + j, Scalar(0));
+  negative_[static_cast<size_t>(s)] = negative ? 1 : 0;
   return true;
 }
 
@@ -263,9 +333,8 @@ bool SupernodalSolve<Scalar>::TiledTask(int s, int phase, int task, const double
 }
 
 template <class Scalar>
-bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
-                                        bool new_structure, int threads) {
-  threads_ = std::max(1, threads);
+bool SupernodalSolve<Scalar>::Prepare(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
+                                      bool new_structure) {
   if (new_structure || n_ != static_cast<int>(L.n) || super_.size() != L.nsuper + 1 || px_.empty() ||
       px_.back() != static_cast<int64_t>(L.xsize)) {
     loaded_ = false;
@@ -283,6 +352,54 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
     if (!PrepareFactorization(A)) return false;
   }
   values_.resize(static_cast<size_t>(px_.back()));
+  return true;
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
+                                                  bool new_structure) {
+  sign_.clear();
+  negative_pivots_ = 0;
+  if (!Prepare(L, A, new_structure)) return false;
+  double largest = 0.0;
+  for (Eigen::Index c = 0; c < A.outerSize(); ++c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it) {
+      if (it.row() == c) largest = std::max(largest, std::abs(it.value()));
+    }
+  }
+  // In float a pivot below 1e-8 of the diagonal is round-off: the size of the shift that
+  // lets a free body's rigid motions factorize, which the callers project out.
+  pivot_floor_ = (std::is_same_v<Scalar, float> ? 1e-8 : 1e-12) * largest;
+  sign_.assign(static_cast<size_t>(n_), Scalar(1));
+  negative_.assign(super_.size() - 1, 0);
+  const double* a = A.valuePtr();
+  bool ok = largest > 0.0 && std::isfinite(largest);
+  // Children before parents: the groups, then the top (no tiles: one thread).
+  for (size_t g = 0; g < groups_.size() && ok; ++g) {
+    for (int s : groups_[g]) {
+      if (!FactorizeSupernode(s, a, map_[g].data(), c_[g].data())) {
+        ok = false;
+        break;
+      }
+    }
+  }
+  for (size_t k = 0; k < top_.size() && ok; ++k) ok = FactorizeSupernode(top_[k], a, map_[0].data(), c_[0].data());
+  if (!ok) {
+    sign_.clear();
+    negative_pivots_ = 0;
+    return false;
+  }
+  loaded_ = true;
+  return true;
+}
+
+template <class Scalar>
+bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
+                                        bool new_structure, int threads) {
+  threads_ = std::max(1, threads);
+  sign_.clear();
+  negative_pivots_ = 0;
+  if (!Prepare(L, A, new_structure)) return false;
   const double* a = A.valuePtr();
   const int num_groups = static_cast<int>(groups_.size());
   bool ok = true;
@@ -379,6 +496,9 @@ template int SupernodalSolve<float>::TiledPhases(int) const;
 template int SupernodalSolve<float>::TiledTasks(int, int) const;
 template bool SupernodalSolve<float>::TiledTask(int, int, int, const double*, int*, float*);
 template bool SupernodalSolve<float>::Factorize(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool, int);
+template bool SupernodalSolve<float>::FactorizeIndefinite(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
+template bool SupernodalSolve<float>::FactorizeIndefiniteBlock(int);
+template bool SupernodalSolve<float>::Prepare(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
 template void SupernodalSolve<double>::Gather(int, const double*, int*);
 template void SupernodalSolve<double>::SubtractUpdates(int, int, int, bool, const int*, double*);
 template bool SupernodalSolve<double>::FactorizeSupernode(int, const double*, int*, double*);
@@ -389,6 +509,9 @@ template int SupernodalSolve<double>::TiledPhases(int) const;
 template int SupernodalSolve<double>::TiledTasks(int, int) const;
 template bool SupernodalSolve<double>::TiledTask(int, int, int, const double*, int*, double*);
 template bool SupernodalSolve<double>::Factorize(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool, int);
+template bool SupernodalSolve<double>::FactorizeIndefinite(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
+template bool SupernodalSolve<double>::FactorizeIndefiniteBlock(int);
+template bool SupernodalSolve<double>::Prepare(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
 
 }  // namespace fast_backend
 }  // namespace femreg

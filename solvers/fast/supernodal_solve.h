@@ -67,6 +67,15 @@ class SupernodalSolve {
   // ScopedThreads): the threads are this function's own.
   bool Factorize(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A, bool new_structure,
                  int threads);
+  // The same for a symmetric A that need not be positive definite: A = P^T L S L^T P with S
+  // a diagonal of signs and L = L' |D|^(1/2) for A's L' D L'^T, without pivoting (the
+  // ordering's). False, and nothing kept, when a pivot |D_jj| is below a relative 1e-8
+  // (float) or 1e-12 (double) of A's largest diagonal entry, or not finite. Solve then
+  // applies S between its substitutions. On one thread (no tiles).
+  bool FactorizeIndefinite(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
+                           bool new_structure);
+  // The negative pivots of the last FactorizeIndefinite (0 after Factorize or Load).
+  int negative_pivots() const { return negative_pivots_; }
   bool loaded() const { return loaded_; }
   // The threads of the next Solve (Load and Factorize set them too); any count, the same result.
   void set_threads(int threads) { threads_ = std::max(1, threads); }
@@ -89,12 +98,18 @@ class SupernodalSolve {
  private:
   // Takes L's structure and cuts the tree; false if L is not supernodal LL^T with int indices.
   bool TakeStructure(const cholmod_factor& L);
+  // Factorize's and FactorizeIndefinite's start: the structure (again when new or changed)
+  // and the plan for A's pattern; false if either cannot be had.
+  bool Prepare(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A, bool new_structure);
   // For Factorize, once per structure and pattern of A: which descendants update each
   // supernode (and with which of their rows), where A's entries go.
   bool PrepareFactorization(const Eigen::SparseMatrix<double>& A);
   // Supernode s of the factorization: A's entries, its descendants' updates, its dense
   // factorization. map: n ints, c: the largest update. False: a pivot not positive.
   bool FactorizeSupernode(int s, const double* a, int* map, Scalar* c);
+  // Supernode s's dense part as L S L^T (FactorizeIndefinite), after its updates: right-looking
+  // by panels, each panel's columns one by one, the columns right of it by a product.
+  bool FactorizeIndefiniteBlock(int s);
   // Supernode s's values: zeros, then A's entries; map[row] = the row's place in s.
   void Gather(int s, const double* a, int* map);
   // Subtracts the descendants' updates of s's rows [t0, t1) (whole: all of them), in
@@ -133,6 +148,14 @@ class SupernodalSolve {
   std::vector<int> super_of_;  // column -> its supernode
   std::vector<int64_t> px_;
   std::vector<Scalar> values_;
+  // FactorizeIndefinite's S (per column of L, +1 or -1; empty after Factorize or Load), per
+  // supernode whether any of its columns is -1, a column buffer of signed values, and its
+  // smallest pivot |D_jj|.
+  std::vector<Scalar> sign_;
+  std::vector<char> negative_;
+  std::vector<Scalar> signed_;
+  int negative_pivots_ = 0;
+  double pivot_floor_ = 0.0;
   // The factorization's plan (PrepareFactorization): per supernode s, its updates
   // [update_start_[s], update_start_[s + 1]) as (descendant, first row, end row) within the
   // descendant's rows; A's entries [a_start_[s], a_start_[s + 1]) as (index in A's values,

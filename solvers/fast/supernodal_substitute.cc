@@ -156,7 +156,11 @@ void SupernodalSolve<Scalar>::Forward(int s, const double* b, double* acc, doubl
   for (int j = 0; j < ncol; ++j) z[j] = b[k0 + j] - acc[k0 + j];
   for (int i = ncol; i < nrow; ++i) z[i] = 0.0;
   ForwardKernel(values_.data() + px_[static_cast<size_t>(s)], nrow, ncol, z);
-  for (int j = 0; j < ncol; ++j) y[k0 + j] = z[j];
+  if (sign_.empty()) {
+    for (int j = 0; j < ncol; ++j) y[k0 + j] = z[j];
+  } else {  // L S L^T: S's sign on the forward result (the updates below took it unsigned)
+    for (int j = 0; j < ncol; ++j) y[k0 + j] = static_cast<double>(sign_[static_cast<size_t>(k0 + j)]) * z[j];
+  }
   for (int i = ncol; i < nrow; ++i) acc[rows[i]] -= z[i];
 }
 
