@@ -328,17 +328,33 @@ TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
     in_double.Solve(b, &z);
     EXPECT_LE((z - h_expected).lpNorm<Eigen::Infinity>(), 1e-8 * h_expected.lpNorm<Eigen::Infinity>());
   }
-  // A zero pivot (a row and column of zeros, in the same pattern): refused.
+  // A zero pivot (a row and column of zeros, in the same pattern): replaced by the floor,
+  // and counted; the other unknowns solve as before (the zero column is decoupled), that
+  // one gets b's component over the floor. A value that is not finite: refused.
   Eigen::SparseMatrix<double> singular = A;
   for (Eigen::Index c = 0; c < singular.outerSize(); ++c) {
     for (Eigen::SparseMatrix<double>::InnerIterator it(singular, c); it; ++it) {
       if (it.row() == 3 || it.col() == 3) it.valueRef() = 0.0;
     }
   }
-  fast_backend::SupernodalSolve<double> refused;
-  EXPECT_FALSE(refused.FactorizeIndefinite(*symbolic.raw(), singular, true));
-  EXPECT_FALSE(refused.loaded());
-  EXPECT_EQ(refused.negative_pivots(), 0);
+  Eigen::MatrixXd reduced = Eigen::MatrixXd(singular);
+  reduced(3, 3) = 1.0;
+  Eigen::VectorXd b0 = b;
+  b0[3] = 0.0;
+  const Eigen::VectorXd reduced_expected = reduced.partialPivLu().solve(b0);
+  fast_backend::SupernodalSolve<double> floored;
+  ASSERT_TRUE(floored.FactorizeIndefinite(*symbolic.raw(), singular, true));
+  EXPECT_EQ(floored.perturbed_pivots(), 1);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> reduced_eigen(reduced);
+  EXPECT_EQ(floored.negative_pivots(), (reduced_eigen.eigenvalues().array() < 0.0).count());
+  Eigen::VectorXd x0;
+  floored.Solve(b0, &x0);
+  EXPECT_LE((x0 - reduced_expected).lpNorm<Eigen::Infinity>(), 1e-8 * reduced_expected.lpNorm<Eigen::Infinity>());
+  Eigen::SparseMatrix<double> not_finite = A;
+  not_finite.coeffRef(5, 5) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(floored.FactorizeIndefinite(*symbolic.raw(), not_finite, false));
+  EXPECT_FALSE(floored.loaded());
+  EXPECT_EQ(floored.negative_pivots(), 0);
 }
 
 }  // namespace

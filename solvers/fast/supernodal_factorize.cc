@@ -204,9 +204,11 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
     const int p1 = std::min(ncol, p0 + kPanel);
     for (int j = p0; j < p1; ++j) {
       Scalar* cj = L + static_cast<int64_t>(j) * nrow;
-      const Scalar pivot = cj[j];
-      if (!std::isfinite(static_cast<double>(pivot)) || !(std::abs(static_cast<double>(pivot)) > pivot_floor_)) {
-        return false;
+      Scalar pivot = cj[j];
+      if (!std::isfinite(static_cast<double>(pivot))) return false;
+      if (!(std::abs(static_cast<double>(pivot)) > pivot_floor_)) {  // round-off's: the floor
+        pivot = static_cast<Scalar>(pivot_floor_);
+        ++perturbed_pivots_;
       }
       const Scalar sign = pivot > 0 ? Scalar(1) : Scalar(-1);
       const Scalar root = std::sqrt(std::abs(pivot));
@@ -359,7 +361,7 @@ template <class Scalar>
 bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
                                                   bool new_structure) {
   sign_.clear();
-  negative_pivots_ = 0;
+  negative_pivots_ = perturbed_pivots_ = 0;
   if (!Prepare(L, A, new_structure)) return false;
   double largest = 0.0;
   for (Eigen::Index c = 0; c < A.outerSize(); ++c) {
@@ -370,6 +372,7 @@ bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const
   // In float a pivot below 1e-8 of the diagonal is round-off: the size of the shift that
   // lets a free body's rigid motions factorize, which the callers project out.
   pivot_floor_ = (std::is_same_v<Scalar, float> ? 1e-8 : 1e-12) * largest;
+  perturbed_pivots_ = 0;
   sign_.assign(static_cast<size_t>(n_), Scalar(1));
   negative_.assign(super_.size() - 1, 0);
   const double* a = A.valuePtr();
@@ -386,7 +389,7 @@ bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const
   for (size_t k = 0; k < top_.size() && ok; ++k) ok = FactorizeSupernode(top_[k], a, map_[0].data(), c_[0].data());
   if (!ok) {
     sign_.clear();
-    negative_pivots_ = 0;
+    negative_pivots_ = perturbed_pivots_ = 0;
     return false;
   }
   loaded_ = true;
@@ -398,7 +401,7 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
                                         bool new_structure, int threads) {
   threads_ = std::max(1, threads);
   sign_.clear();
-  negative_pivots_ = 0;
+  negative_pivots_ = perturbed_pivots_ = 0;
   if (!Prepare(L, A, new_structure)) return false;
   const double* a = A.valuePtr();
   const int num_groups = static_cast<int>(groups_.size());

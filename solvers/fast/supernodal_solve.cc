@@ -170,7 +170,7 @@ bool SupernodalSolve<Scalar>::Load(const cholmod_factor& L, bool new_structure, 
   }
   threads_ = std::max(1, threads);
   sign_.clear();
-  negative_pivots_ = 0;
+  negative_pivots_ = perturbed_pivots_ = 0;
   if (new_structure || !loaded_ || n_ != static_cast<int>(L.n) || super_.size() != L.nsuper + 1 ||
       values_.size() != L.xsize) {
     loaded_ = false;  // until the structure is whole again

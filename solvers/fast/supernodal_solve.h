@@ -69,13 +69,17 @@ class SupernodalSolve {
                  int threads);
   // The same for a symmetric A that need not be positive definite: A = P^T L S L^T P with S
   // a diagonal of signs and L = L' |D|^(1/2) for A's L' D L'^T, without pivoting (the
-  // ordering's). False, and nothing kept, when a pivot |D_jj| is below a relative 1e-8
-  // (float) or 1e-12 (double) of A's largest diagonal entry, or not finite. Solve then
-  // applies S between its substitutions. On one thread (no tiles).
+  // ordering's). A pivot |D_jj| below a relative 1e-8 (float) or 1e-12 (double) of A's
+  // largest diagonal entry is round-off at that precision (a free body's rigid motions,
+  // which the callers project out): it is replaced by that floor, and counted. False, and
+  // nothing kept, when a value is not finite. Solve then applies S between its
+  // substitutions. On one thread (no tiles).
   bool FactorizeIndefinite(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
                            bool new_structure);
-  // The negative pivots of the last FactorizeIndefinite (0 after Factorize or Load).
+  // The negative pivots of the last FactorizeIndefinite, and those replaced by the floor
+  // (0 after Factorize or Load).
   int negative_pivots() const { return negative_pivots_; }
+  int perturbed_pivots() const { return perturbed_pivots_; }
   bool loaded() const { return loaded_; }
   // The threads of the next Solve (Load and Factorize set them too); any count, the same result.
   void set_threads(int threads) { threads_ = std::max(1, threads); }
@@ -149,12 +153,12 @@ class SupernodalSolve {
   std::vector<int64_t> px_;
   std::vector<Scalar> values_;
   // FactorizeIndefinite's S (per column of L, +1 or -1; empty after Factorize or Load), per
-  // supernode whether any of its columns is -1, a column buffer of signed values, and its
-  // smallest pivot |D_jj|.
+  // supernode whether any of its columns is -1, a buffer of signed columns, and the floor of
+  // a pivot |D_jj|.
   std::vector<Scalar> sign_;
   std::vector<char> negative_;
   std::vector<Scalar> signed_;
-  int negative_pivots_ = 0;
+  int negative_pivots_ = 0, perturbed_pivots_ = 0;
   double pivot_floor_ = 0.0;
   // The factorization's plan (PrepareFactorization): per supernode s, its updates
   // [update_start_[s], update_start_[s + 1]) as (descendant, first row, end row) within the
