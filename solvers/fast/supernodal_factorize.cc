@@ -200,6 +200,7 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
   const int k0 = super_[s], ncol = super_[s + 1] - k0, nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
   bool negative = false;
+  // The diagonal block A11 = L11 S L11^T, by panels (rows < ncol only).
   for (int p0 = 0; p0 < ncol; p0 += kPanel) {
     const int p1 = std::min(ncol, p0 + kPanel);
     for (int j = p0; j < p1; ++j) {
@@ -219,15 +220,15 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
       }
       cj[j] = root;
       const Scalar scale = sign / root;  // L_ij = a_ij s_j / |d_j|^(1/2)
-      for (int i = j + 1; i < nrow; ++i) cj[i] *= scale;
+      for (int i = j + 1; i < ncol; ++i) cj[i] *= scale;
       for (int k = j + 1; k < p1; ++k) {  // the panel's later columns: a_ik -= L_ij s_j L_kj
         Scalar* ck = L + static_cast<int64_t>(k) * nrow;
         const Scalar lkj = cj[k] * sign;
-        for (int i = k; i < nrow; ++i) ck[i] -= cj[i] * lkj;
+        for (int i = k; i < ncol; ++i) ck[i] -= cj[i] * lkj;
       }
     }
-    if (p1 < ncol) {  // the columns right of the panel, rows from p1: -= (L S) L^T
-      const int m = nrow - p1, w = p1 - p0;
+    if (p1 < ncol) {  // the block's columns right of the panel, rows from p1: -= (L S) L^T
+      const int m = ncol - p1, w = p1 - p0;
       signed_.resize(std::max(signed_.size(), static_cast<size_t>(m) * w));
       Scalar* W = signed_.data();
       for (int k = 0; k < w; ++k) {
@@ -236,8 +237,19 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
         Scalar* wk = W + static_cast<int64_t>(k) * m;
         for (int i = 0; i < m; ++i) wk[i] = column[i] * sign;
       }
-      GemmNTSubtract(m, ncol - p1, w, W, m, L + static_cast<int64_t>(p0) * nrow + p1, nrow,
+      GemmNTSubtract(m, m, w, W, m, L + static_cast<int64_t>(p0) * nrow + p1, nrow,
                      L + static_cast<int64_t>(p1) * nrow + p1, nrow);
+    }
+  }
+  // The rows below: A21 = L21 S L11^T, so L21 = A21 L11^-T S.
+  if (nrow > ncol) {
+    TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
+    if (negative) {
+      for (int j = 0; j < ncol; ++j) {
+        if (sign_[static_cast<size_t>(k0 + j)] > 0) continue;
+        Scalar* below = L + static_cast<int64_t>(j) * nrow + ncol;
+        for (int i = 0; i < nrow - ncol; ++i) below[i] = -below[i];
+      }
     }
   }
   // Above the diagonal: zeros (the products wrote there; it is not part of L).

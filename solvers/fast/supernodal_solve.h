@@ -111,8 +111,9 @@ class SupernodalSolve {
   // Supernode s of the factorization: A's entries, its descendants' updates, its dense
   // factorization. map: n ints, c: the largest update. False: a pivot not positive.
   bool FactorizeSupernode(int s, const double* a, int* map, Scalar* c);
-  // Supernode s's dense part as L S L^T (FactorizeIndefinite), after its updates: right-looking
-  // by panels, each panel's columns one by one, the columns right of it by a product.
+  // Supernode s's dense part as L S L^T (FactorizeIndefinite), after its updates: the diagonal
+  // block right-looking by panels (each panel's columns one by one, the block's columns right
+  // of it by a product), then the rows below by a triangular solve and the signs.
   bool FactorizeIndefiniteBlock(int s);
   // Supernode s's values: zeros, then A's entries; map[row] = the row's place in s.
   void Gather(int s, const double* a, int* map);
