@@ -309,15 +309,13 @@ TEST(NeoHookeanRegistration, TrackerTakesTheElementAndRefusesWhatItCannotDo) {
   EXPECT_TRUE(Tracker::Create({mesh}, {material}, options, &tracker).ok());
 
   material.nodal_volume = true;
-  options.solver.backend = SolverBackend::kCeres;
-  Status status = Tracker::Create({mesh}, {material}, options, &tracker);
-  EXPECT_FALSE(status.ok());
-  EXPECT_NE(status.message().find("volume nodal needs solver.backend: fast"), std::string::npos) << status.message();
+  options.solver.backend = SolverBackend::kCeres;  // either back end (nodal_volume_registration_test)
+  EXPECT_TRUE(Tracker::Create({mesh}, {material}, options, &tracker).ok());
   options.solver.backend = SolverBackend::kFast;
 
   material.nodal_volume = false;
   options.regularizer = Regularizer::kMassSpring;
-  status = Tracker::Create({mesh}, {material}, options, &tracker);
+  Status status = Tracker::Create({mesh}, {material}, options, &tracker);
   EXPECT_FALSE(status.ok());
   EXPECT_NE(status.message().find("needs registration.regularizer corotational"), std::string::npos)
       << status.message();

@@ -13,16 +13,12 @@ namespace ceres_backend {
 
 SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
   // What only the fast back end solves.
-  const char* unsupported =
-      problem.equilibrium() != nullptr
-          ? "the Ceres back end does not solve equilibrium registration (registration.forces.estimate)"
-      : problem.nodal_volume() != nullptr
-          ? "the Ceres back end has no nodal-volume element (material.volume: nodal)"
-          : nullptr;
-  if (unsupported != nullptr) {
+  if (problem.equilibrium() != nullptr) {
     SolveReport report;
     report.stop = StopReason::kFailure;
-    report.message = std::string(unsupported) + "; use solver.backend: fast";
+    report.message =
+        "the Ceres back end does not solve equilibrium registration (registration.forces.estimate); use "
+        "solver.backend: fast";
     return report;
   }
   ceres::Problem::Options problem_options;
@@ -56,6 +52,17 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
       ceres_problem.AddResidualBlock(costs.back().get(), loss_function, blocks);
     }
   });
+  if (const energy::NodalVolume* nodal = problem.nodal_volume()) {
+    std::vector<double*> star_blocks;
+    for (int a = 0; a < nodal->num_vertices(); ++a) {
+      auto cost = std::make_unique<NodalVolumeCost>(nodal->StarOf(a));
+      if (cost->vertices().empty()) continue;
+      star_blocks.clear();
+      for (int v : cost->vertices()) star_blocks.push_back(data + 3 * v);
+      costs.push_back(std::move(cost));
+      ceres_problem.AddResidualBlock(costs.back().get(), nullptr, star_blocks);
+    }
+  }
   for (int v = 0; v < problem.num_vertices(); ++v) {
     double* block = data + 3 * v;
     if (problem.is_fixed(v) && ceres_problem.HasParameterBlock(block)) {

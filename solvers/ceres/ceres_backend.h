@@ -1,15 +1,19 @@
 // The Ceres back end: one generic cost adapter over any energy block type (its residual and
 // Jacobian, sqrt(w) folded in when the set has no robust loss), the energy layer's robust
 // loss wrapped as a ceres::LossFunction, and Levenberg-Marquardt or dogleg with sparse normal
-// Cholesky (SuiteSparse CHOLMOD) or CGNR. Every vertex is a parameter block of 3.
+// Cholesky (SuiteSparse CHOLMOD) or CGNR. Every vertex is a parameter block of 3. The
+// nodal volume, whose stencil is a vertex's star, has a cost of its own (NodalVolumeCost).
 #ifndef FEMREG_SOLVERS_CERES_CERES_BACKEND_H_
 #define FEMREG_SOLVERS_CERES_CERES_BACKEND_H_
 
 #include <ceres/ceres.h>
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "energy/loss.h"
+#include "energy/nodal_volume.h"
 #include "solvers/backend.h"
 
 namespace femreg {
@@ -59,6 +63,24 @@ class LossAdapter : public ceres::LossFunction {
  private:
   energy::Loss loss_;
   double weight_;
+};
+
+// The nodal-volume energy (energy/nodal_volume.h) at one vertex: r_a = sqrt(K_a V_a) (J_a - 1)
+// over the vertices of the elements around it, a parameter block each.
+class NodalVolumeCost : public ceres::CostFunction {
+ public:
+  explicit NodalVolumeCost(energy::NodalVolume::Star star) : star_(std::move(star)) {
+    set_num_residuals(1);
+    for (size_t i = 0; i < star_.vertices.size(); ++i) mutable_parameter_block_sizes()->push_back(3);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    residuals[0] = energy::NodalVolume::StarResidual(star_, parameters, jacobians);
+    return std::isfinite(residuals[0]);
+  }
+  const std::vector<int>& vertices() const { return star_.vertices; }
+
+ private:
+  energy::NodalVolume::Star star_;
 };
 
 class CeresBackend : public Backend {

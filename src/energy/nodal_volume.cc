@@ -1,6 +1,7 @@
 #include "energy/nodal_volume.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace femreg {
 namespace energy {
@@ -50,6 +51,66 @@ void NodalVolume::Build(const Tets& tets, const std::vector<const ElementRest*>&
   }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
+NodalVolume::Star NodalVolume::StarOf(int a) const {
+  Star star;
+  star.rest_volume = rest_volume_[a];
+  star.stiffness = stiffness_[a];
+  for (int s = element_offsets_[a]; s < element_offsets_[a + 1]; ++s) {
+    for (int k = 0; k < 4; ++k) star.vertices.push_back(tets_(element_slots_[s] / 4, k));
+  }
+  std::sort(star.vertices.begin(), star.vertices.end());
+  star.vertices.erase(std::unique(star.vertices.begin(), star.vertices.end()), star.vertices.end());
+  for (int s = element_offsets_[a]; s < element_offsets_[a + 1]; ++s) {
+    const int e = element_slots_[s] / 4;
+    std::array<int, 4> places;
+    for (int k = 0; k < 4; ++k) {
+      places[k] = static_cast<int>(std::lower_bound(star.vertices.begin(), star.vertices.end(), tets_(e, k)) -
+                                   star.vertices.begin());
+    }
+    star.elements.push_back(places);
+    star.rests.push_back(rests_[e]);
+  }
+  return star;
+}
+
+double NodalVolume::StarResidual(const Star& star, const double* const* x, double** jacobians) {
+  if (!(star.rest_volume > 0)) {
+    if (jacobians != nullptr) {
+      for (size_t i = 0; i < star.vertices.size(); ++i) {
+        if (jacobians[i] != nullptr) std::fill(jacobians[i], jacobians[i] + 3, 0.0);
+      }
+    }
+    return 0.0;
+  }
+  // r_a = sqrt(K_a V_a) / V_a * sum_e (v_e - V_e) / 4.
+  const double factor = std::sqrt(star.stiffness) / star.rest_volume;
+  if (jacobians != nullptr) {
+    for (size_t i = 0; i < star.vertices.size(); ++i) {
+      if (jacobians[i] != nullptr) std::fill(jacobians[i], jacobians[i] + 3, 0.0);
+    }
+  }
+  double change = 0.0;
+  for (size_t e = 0; e < star.elements.size(); ++e) {
+    const ElementRest& rest = *star.rests[e];
+    Vector12 xe;
+    Eigen::Matrix<double, 3, 4> xm;
+    for (int k = 0; k < 4; ++k) {
+      const double* p = x[star.elements[e][k]];
+      xe.segment<3>(3 * k) = Eigen::Vector3d(p[0], p[1], p[2]);
+      xm.col(k) = xe.segment<3>(3 * k);
+    }
+    change += 0.25 * rest.volume * DeterminantMinusOne(DeformationGradient(xm, rest.dm_inv));
+    if (jacobians == nullptr) continue;
+    const Vector12 g = VolumeGradient(rest, xe);
+    for (int k = 0; k < 4; ++k) {
+      double* j = jacobians[star.elements[e][k]];
+      if (j == nullptr) continue;
+      for (int d = 0; d < 3; ++d) j[d] += 0.25 * factor * g[3 * k + d];
+    }
+  }
+  return factor * change;
 }
 
 double NodalVolume::Pressures(const Vertices& x, std::vector<double>* pressure,

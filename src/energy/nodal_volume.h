@@ -17,6 +17,7 @@
 #define FEMREG_ENERGY_NODAL_VOLUME_H_
 
 #include <Eigen/Core>
+#include <array>
 #include <utility>
 #include <vector>
 
@@ -30,6 +31,22 @@ namespace energy {
 
 class NodalVolume {
  public:
+  // Vertex a's share of N as one residual, r_a = sqrt(K_a V_a) (J_a - 1), so that N = 1/2
+  // sum_a r_a^2 (the Ceres back end's form): the vertices of the elements around a, and per
+  // element its rest data and its four vertices' places among them.
+  struct Star {
+    std::vector<int> vertices;
+    std::vector<std::array<int, 4>> elements;
+    std::vector<const ElementRest*> rests;
+    double rest_volume = 0.0;  // V_a
+    double stiffness = 0.0;    // K_a V_a, the scale included
+  };
+  int num_vertices() const { return num_vertices_; }
+  Star StarOf(int a) const;
+  // r_a at the star's positions x[i] (3 each) and, if not null, dr_a/dx[i] (3 each; an entry
+  // null: not wanted).
+  static double StarResidual(const Star& star, const double* const* x, double** jacobians);
+
   // The elements (vertex indices into the positions) and their rest data, which must
   // outlive this term; `scale` multiplies the energy (registration's elastic weight).
   void Build(const Tets& tets, const std::vector<const ElementRest*>& rests, int num_vertices,

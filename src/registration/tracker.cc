@@ -98,10 +98,6 @@ Status Tracker::Impl::Init(std::vector<TetMesh> meshes, const std::vector<Object
                              "corotational (the FEM regularizer; got " +
                              std::string(ToString(options.regularizer)) + ")");
       }
-      if (materials[i].nodal_volume && options.solver.backend != SolverBackend::kFast) {
-        return Status::Error(name + ": material.volume nodal needs solver.backend: fast (the Ceres "
-                             "back end has no nodal-volume element; write volume: element)");
-      }
     }
     ObjectState& o = state.objects[i];
     o.mesh = std::move(meshes[i]);
