@@ -159,6 +159,37 @@ TEST(FlyingPixels, SteepNoisySurfacesStayBesideAnEdge) {
   EXPECT_GE(CountDepths(c, cloud, 0.98, 1.02), wall - 10);
 }
 
+// A tool masked out of the image (its pixels hold no point) in front of a wall: the wall's
+// samples beside it that mixed in the tool's depth lie 15-25 mm in front of the wall, with no
+// nearer neighbour left in the cloud to show they are between surfaces. Beside the hole, a
+// farther neighbour is enough to judge them: they go. The wall, up to the hole, stays; so does
+// the same wall with the hole and no mixed pixels.
+TEST(FlyingPixels, MixedPixelsBesideAMaskedToolGo) {
+  const CameraOptions c = Camera();
+  const auto tool = [](int u, int v) { return u >= 80 && u <= 110 && v >= 30 && v <= 90; };
+  const auto wall = [&](int u, int v) {
+    return tool(u, v) ? 0.0 : 0.5 + Noise(u, v, 0.5);
+  };
+  // Written at every other pixel, as the robustness sequences are: the samples beside the hole
+  // are in columns 78 and 112.
+  const auto mixed = [&](int u, int v) {
+    if ((u == 78 || u == 112) && v >= 30 && v <= 90) return 0.5 - 0.015 - 0.01 * (v % 5) / 4.0;
+    return wall(u, v);
+  };
+  PointCloud cloud = Render(c, mixed, 2);
+  const int in_front = CountDepths(c, cloud, 0.47, 0.49), behind = CountDepths(c, cloud, 0.49, 0.51);
+  ASSERT_EQ(in_front, 2 * 31);
+  ASSERT_EQ(in_front + behind, cloud.size());
+  RemoveFlyingPixels(c, 4.0, &cloud);
+  EXPECT_EQ(CountDepths(c, cloud, 0.47, 0.49), 0) << "mixed pixels beside the hole stayed";
+  EXPECT_GE(CountDepths(c, cloud, 0.49, 0.51), behind - 5);
+
+  PointCloud clean = Render(c, wall, 2);
+  const int points = clean.size();
+  EXPECT_EQ(RemoveFlyingPixels(c, 4.0, &clean), 0);
+  EXPECT_EQ(clean.size(), points);
+}
+
 // A cloud that is not one depth image of the camera (fused from two views: two points on
 // many pixels) is left as it is.
 TEST(FlyingPixels, OtherCloudsAreLeftAlone) {

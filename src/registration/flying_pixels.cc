@@ -144,18 +144,26 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
                                 kMinFootprints * static_cast<double>(step) * z / camera.fx);
     // A mixed pixel lies between the surfaces around it; a sample in front of (or behind)
     // all its neighbours, an object sampled more sparsely than its background, is not one.
+    // A sample missing inside the image may be a masked tool or hand in front: a point beside
+    // one, in front of a neighbour by more than the tolerance, may be its mixed pixel. (Behind a
+    // neighbour beside a hole is a slanted face's far edge as often: not judged.)
     int neighbours = 0;
-    bool nearer = false, farther = false;
+    bool nearer = false, farther = false, missing = false;
     for (long dv = -1; dv <= 1; ++dv) {
       for (long du = -1; du <= 1; ++du) {
-        const int j = (du == 0 && dv == 0) ? -1 : at(u + step * du, v + step * dv);
-        if (j < 0) continue;
+        if (du == 0 && dv == 0) continue;
+        const long nu = u + step * du, nv = v + step * dv;
+        const int j = at(nu, nv);
+        if (j < 0) {
+          missing |= nu >= 0 && nv >= 0 && nu < camera.width && nv < camera.height;
+          continue;
+        }
         ++neighbours;
         nearer |= z_of(j) - z < -tau;
         farther |= z_of(j) - z > tau;
       }
     }
-    if (neighbours < 2 || !nearer || !farther) continue;
+    if (neighbours < 2 || (!(nearer && farther) && !(missing && farther))) continue;
 
     // Supported from a direction: the neighbour there at its depth, or the surface through
     // that neighbour and the next one continued to it (a slanted plane: inverse depth is

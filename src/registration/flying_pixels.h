@@ -13,7 +13,8 @@ namespace femreg {
 // (taken as c z^2; on a plane, sqrt(6) times the depth's noise: the noise of a depth predicted
 // by continuing its neighbours' slope) is estimated from the image, and the tolerance at depth
 // z is tolerance * sigma(z), never below one sample footprint (k z / fx). A point is judged only if it lies between
-// surfaces: one of its 8 neighbouring samples nearer and another farther than the tolerance.
+// surfaces: one of its 8 neighbouring samples nearer and another farther than the tolerance, or,
+// beside a sample missing inside the image (a masked tool or hand), one farther.
 // It is kept if a surface around it predicts its depth within the tolerance: in two directions
 // off one line, the neighbour's depth or the plane through the neighbour and the next sample
 // continued to it (or the parabola through three in a row); or a plane fitted to one half or one corner quadrant of its 5 x 5
