@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -211,19 +212,29 @@ void EigenvalueBounds(const Eigen::Matrix3d& a, double* top, double* bottom) {
 // 2 mu (S - I), and S's eigenvalues are those of C = F^T F's square roots (one of them
 // negative for an inverted element), and g^T S g <= |g| |S g| = |g| sqrt(g^T C g). The linear
 // element's stress (no rotation) is taken as it is.
-Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) {
+Eigen::VectorXd BoundSums(const ElasticModel& model, const fracture_internal::BoundData& data, const Vertices& x,
+                          int nv) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(nv);
   const bool corotated = model.type() != ElasticModelType::kLinear;
   for (int e = 0; e < model.num_elements(); ++e) {
-    const ElementRest& rest = model.rest(e);
     double plus = 0.0, minus = 0.0, slack = 0.0;
     Eigen::Matrix3d quadratic;  // g^T quadratic g bounds g^T sigma g (corotated: with the root)
     double root_scale = 0.0;    // 2 mu: the weight of |g| sqrt(g^T C g)
     double diagonal = 0.0;      // and the weight of |g|^2
+    std::array<Eigen::Vector3d, 4> g;
+    std::array<double, 4> g2, g1;
+    std::array<int, 4> node;
+    double volume = 0.0;
     if (corotated) {
+      const fracture_internal::BoundData::Element& el = data.elements[static_cast<size_t>(e)];
+      g = el.g;
+      g2 = el.g2;
+      g1 = el.g1;
+      node = el.vertices;
+      volume = el.volume;
       Eigen::Matrix<double, 3, 4> xe;
-      for (int k = 0; k < 4; ++k) xe.col(k) = x.row(model.tets()(e, k)).transpose();
-      const Eigen::Matrix3d F = DeformationGradient(xe, rest.dm_inv);
+      for (int k = 0; k < 4; ++k) xe.col(k) = x.row(node[k]).transpose();
+      const Eigen::Matrix3d F = DeformationGradient(xe, el.dm_inv);
       const Eigen::Matrix3d C = F.transpose() * F;
       double c_top, c_bottom;
       EigenvalueBounds(C, &c_top, &c_bottom);
@@ -238,7 +249,7 @@ Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) 
       const double tr_low = inverted ? -tr_high
                                      : 3.0 * s_low + (s_top + s_low > 0 ? (trace - 3.0 * c_low) / (s_top + s_low) : 0.0);
       const double s_bottom = inverted ? -s_top : s_low;
-      const double lambda = rest.lambda, mu = rest.mu;
+      const double lambda = el.lambda, mu = el.mu;
       const double volumetric_high = lambda * ((lambda >= 0 ? tr_high : tr_low) - 3.0);
       const double volumetric_low = lambda * ((lambda >= 0 ? tr_low : tr_high) - 3.0);
       // Round-off of the full evaluation (the rotation, the closed-form eigen-solvers): a
@@ -247,16 +258,21 @@ Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) 
       plus = std::max(0.0, volumetric_high + 2.0 * mu * (s_top - 1.0)) + slack;
       minus = std::max(0.0, -(volumetric_low + 2.0 * mu * (s_bottom - 1.0))) + slack;
       if (plus <= slack) {  // no tensile part beyond round-off
-        for (int k = 0; k < 4; ++k) {
-          const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
-          sum(model.tets()(e, k)) += 0.5 * rest.volume * plus * g.norm();
-        }
+        for (int k = 0; k < 4; ++k) sum(node[k]) += 0.5 * volume * plus * g1[k];
         continue;
       }
       quadratic = C;
       root_scale = 2.0 * mu;
       diagonal = volumetric_high - 2.0 * mu;
     } else {
+      const ElementRest& rest = model.rest(e);
+      for (int k = 0; k < 4; ++k) {
+        g[k] = Eigen::Vector3d(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+        g2[k] = g[k].squaredNorm();
+        g1[k] = std::sqrt(g2[k]);
+        node[k] = model.tets()(e, k);
+      }
+      volume = rest.volume;
       const Vector6 s = ElementStress(rest, model.rotation(e), model.Gather(x, e));
       const Eigen::Matrix3d sigma = VoigtToTensor(s);
       double top, bottom;
@@ -267,13 +283,11 @@ Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) 
       quadratic = sigma;
     }
     for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
-      const double g2 = g.squaredNorm(), g1 = std::sqrt(g2);
-      const double q = g.dot(quadratic * g);
+      const double q = g[k].dot(quadratic * g[k]);
       // g^T sigma g, from above.
-      const double along_g = corotated ? root_scale * g1 * std::sqrt(std::max(0.0, q)) + diagonal * g2 : q;
-      const double along = std::sqrt(std::max(0.0, plus * (along_g + minus * g2)));
-      sum(model.tets()(e, k)) += 0.5 * rest.volume * (std::min(plus * g1, along) + slack * g1);
+      const double along_g = corotated ? root_scale * g1[k] * std::sqrt(std::max(0.0, q)) + diagonal * g2[k] : q;
+      const double along = std::sqrt(std::max(0.0, plus * (along_g + minus * g2[k])));
+      sum(node[k]) += 0.5 * volume * (std::min(plus * g1[k], along) + slack * g1[k]);
     }
   }
   return sum * (1.0 + 1e-9);
@@ -293,22 +307,53 @@ void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertic
 
 namespace fracture_internal {
 
+void BuildBoundData(const TetMesh& mesh, const ElasticModel& model, const FractureOptions& options,
+                    BoundData* data) {
+  data->num_vertices = mesh.num_vertices();
+  data->num_elements = model.num_elements();
+  NodeAreas(mesh, model, options, &data->area, &data->toughness);
+  data->elements.clear();
+  if (model.type() == ElasticModelType::kLinear) return;
+  data->elements.resize(static_cast<size_t>(model.num_elements()));
+  for (int e = 0; e < model.num_elements(); ++e) {
+    const ElementRest& rest = model.rest(e);
+    BoundData::Element& el = data->elements[static_cast<size_t>(e)];
+    for (int k = 0; k < 4; ++k) {
+      el.vertices[k] = model.tets()(e, k);
+      el.g[k] = Eigen::Vector3d(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+      el.g2[k] = el.g[k].squaredNorm();
+      el.g1[k] = std::sqrt(el.g2[k]);
+    }
+    el.dm_inv = rest.dm_inv;
+    el.volume = rest.volume;
+    el.lambda = rest.lambda;
+    el.mu = rest.mu;
+  }
+}
+
 Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, const Vertices& x) {
+  BoundData data;
+  BuildBoundData(mesh, model, FractureOptions(), &data);
   const int nv = mesh.num_vertices();
-  Eigen::VectorXd bound = BoundSums(model, x, nv);
-  Eigen::VectorXd area, toughness;
-  NodeAreas(mesh, model, FractureOptions(), &area, &toughness);
-  for (int j = 0; j < nv; ++j) bound(j) = area(j) > 0 ? bound(j) / area(j) : 0.0;
+  Eigen::VectorXd bound = BoundSums(model, data, x, nv);
+  for (int j = 0; j < nv; ++j) bound(j) = data.area(j) > 0 ? bound(j) / data.area(j) : 0.0;
   return bound;
 }
 
 int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
                         const FractureOptions& options, double floor, bool rotations_current,
                         NodeSeparation* out) {
+  BoundData data;
+  BuildBoundData(mesh, model, options, &data);
+  return DetectFractureAbove(mesh, model, x, floor, rotations_current, data, out);
+}
+
+int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Vertices& x, double floor,
+                        bool rotations_current, const BoundData& data, NodeSeparation* out) {
   const int nv = mesh.num_vertices();
-  Eigen::VectorXd area;
-  NodeAreas(mesh, model, options, &area, &out->toughness);
-  const Eigen::VectorXd sum = BoundSums(model, x, nv);
+  const Eigen::VectorXd& area = data.area;
+  out->toughness = data.toughness;
+  const Eigen::VectorXd sum = BoundSums(model, data, x, nv);
   std::vector<char> want(static_cast<size_t>(nv), 0);
   int wanted = 0;
   for (int j = 0; j < nv; ++j) {
