@@ -301,6 +301,41 @@ TEST(MeasureBound, RotationsGivenOrTheModels) {
   for (int j = 0; j < a.measure.size(); ++j) EXPECT_NEAR(b.measure(j), a.measure(j), 1e-9 * a.measure.maxCoeff());
 }
 
+// The detection evaluates exactly the nodes whose bound (MeasureBound's) reaches the floor
+// times their toughness, though it refines the bound only around the nodes its coarse part
+// (the largest principal stress alone) puts there: a node evaluated has its plane set.
+TEST(MeasureBound, DetectionEvaluatesWhereTheBoundReachesTheFloor) {
+  RandomStates states;
+  std::mt19937 rng(23);
+  int evaluated = 0, skipped = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const Vertices x = states.Draw(&rng);
+    const Eigen::VectorXd bound = fracture_internal::MeasureBound(states.mesh, states.model, x);
+    std::vector<double> sorted(bound.data(), bound.data() + bound.size());
+    std::sort(sorted.begin(), sorted.end());
+    FractureOptions options;
+    options.toughness = sorted[sorted.size() * (trial % 10) / 10] + 1e-3;
+    options.region_toughness = {{1, 0.5 * options.toughness}};
+    for (double floor : {0.3, 1.0}) {
+      NodeSeparation some;
+      fracture_internal::DetectFractureAbove(states.mesh, states.model, x, options, floor, true, &some);
+      for (int j = 0; j < bound.size(); ++j) {
+        const double level = floor * some.toughness(j);
+        const bool is_evaluated = some.normal.row(j).norm() > 0.5;
+        if (bound(j) > level * (1 + 1e-12)) {
+          EXPECT_TRUE(is_evaluated) << "trial " << trial << " node " << j;
+        } else if (bound(j) < level * (1 - 1e-12)) {
+          EXPECT_FALSE(is_evaluated) << "trial " << trial << " node " << j;
+        }
+        evaluated += is_evaluated;
+        skipped += !is_evaluated;
+      }
+    }
+  }
+  EXPECT_GT(evaluated, 0);
+  EXPECT_GT(skipped, 0);
+}
+
 // The bound's data kept for a topology (as the tracker keeps it between splits) detects as
 // the data built at each call: the same nodes evaluated, the same measures and toughness. A
 // split changes the counts, and the kept data no longer fits the mesh.
