@@ -122,6 +122,46 @@ void DetectBeforeTheBreak(benchmark::State& state) {
 }
 BENCHMARK(DetectBeforeTheBreak)->Arg(0)->Arg(1)->ArgName("kept")->Unit(benchmark::kMicrosecond);
 
+// The same detection at beam_break's tracked shapes at the ends of frames 0-11 (fracture off,
+// the scene's mesh and material), each from the model's rotations at the frame before: the
+// bound's time on the states of a real sequence, with the data kept.
+void DetectOnBeamBreak(benchmark::State& state) {
+  femreg::Scene scene;
+  femreg::LoadScene(std::string(FEMREG_SOURCE_DIR) + "/datasets/beam_break/scene.yaml", &scene);
+  scene.effects.fracture = false;
+  std::unique_ptr<femreg::Tracker> tracker;
+  femreg::Tracker::Create(scene, &tracker);
+  std::vector<femreg::Vertices> shapes;
+  for (const femreg::PointCloud& cloud : Clouds()) {
+    femreg::FrameSummary summary;
+    tracker->Track(cloud, &summary);
+    shapes.push_back(tracker->mesh(0).x);
+  }
+  const femreg::TetMesh& mesh = tracker->mesh(0);
+  femreg::ElasticModel model;
+  model.Build(mesh, femreg::ElasticModelType::kCorotational, scene.objects[0].material);
+  femreg::FractureOptions options;
+  options.toughness = scene.objects[0].toughness;
+  femreg::fracture_internal::BoundData kept;
+  femreg::fracture_internal::BuildBoundData(mesh, model, options, &kept);
+  std::vector<femreg::ElasticModel> before(shapes.size(), model);  // rotations at the frame before
+  for (size_t f = 1; f < shapes.size(); ++f) {
+    before[f] = before[f - 1];
+    before[f].UpdateRotations(shapes[f - 1]);
+  }
+  femreg::NodeSeparation separation;
+  int evaluated = 0;
+  for (auto _ : state) {
+    evaluated = 0;
+    for (size_t f = 0; f < shapes.size(); ++f) {
+      evaluated += femreg::fracture_internal::DetectFractureAbove(mesh, before[f], shapes[f], 0.3, false, kept,
+                                                                  &separation);
+    }
+  }
+  state.counters["evaluated"] = evaluated;
+}
+BENCHMARK(DetectOnBeamBreak)->Unit(benchmark::kMicrosecond);
+
 }  // namespace
 
 BENCHMARK_MAIN();
