@@ -17,7 +17,8 @@ namespace fracture_internal {
 // What the bound reads of a mesh, its model and the options, gathered once per topology: per
 // node the area and the toughness, per element of a corotated model the few numbers the bound
 // needs (the model's ElementRest is large, and the bound runs after every outer iteration).
-// Exactly the values the bound would read, so the bound is the same with or without it.
+// The values copied (or computed) as the bound read them from the model, so kept or rebuilt
+// it gives the same bound.
 struct BoundData {
   struct Element {
     std::array<int, 4> vertices;
