@@ -21,6 +21,7 @@
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
 #include "femreg/tracker.h"
+#include "fracture/measure_bound.h"
 
 namespace {
 
@@ -88,6 +89,78 @@ void DetectFracture(benchmark::State& state) {
   state.counters["vertices"] = mesh.num_vertices();
 }
 BENCHMARK(DetectFracture)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// The tracker's detection before the break (fracture/measure_bound.h): the bound everywhere, the
+// measure where the bound reaches 0.3 of the toughness (none here: a beam_break-sized mesh,
+// bent a quarter as much as above, with beam_break's toughness), the rotations found from the
+// model's.
+// state.range(0): 1 = the bound's data kept from the previous call (as the tracker keeps it
+// until a split), 0 = built at each call.
+void DetectBeforeTheBreak(benchmark::State& state) {
+  femreg::TetMesh mesh = femreg::MakeBox(Eigen::Vector3d(0.3, 0.045, 0.045), 20, 3, 3);
+  femreg::Material material;
+  material.youngs_modulus = 5e4;
+  material.poisson_ratio = 0.35;
+  femreg::ElasticModel model;
+  model.Build(mesh, femreg::ElasticModelType::kCorotational, material);
+  femreg::Vertices x = mesh.rest;
+  for (int v = 0; v < x.rows(); ++v) x(v, 2) -= 0.05 * x(v, 0) * x(v, 0);
+  femreg::FractureOptions options;
+  options.toughness = 6000;
+  femreg::fracture_internal::BoundData kept;
+  femreg::fracture_internal::BuildBoundData(mesh, model, options, &kept);
+  femreg::NodeSeparation separation;
+  int evaluated = 0;
+  for (auto _ : state) {
+    if (state.range(0) == 1) {
+      evaluated = femreg::fracture_internal::DetectFractureAbove(mesh, model, x, 0.3, false, kept, &separation);
+    } else {
+      evaluated = femreg::fracture_internal::DetectFractureAbove(mesh, model, x, options, 0.3, false, &separation);
+    }
+  }
+  state.counters["evaluated"] = evaluated;
+}
+BENCHMARK(DetectBeforeTheBreak)->Arg(0)->Arg(1)->ArgName("kept")->Unit(benchmark::kMicrosecond);
+
+// The same detection at beam_break's tracked shapes at the ends of frames 0-11 (fracture off,
+// the scene's mesh and material), each from the model's rotations at the frame before: the
+// bound's time on the states of a real sequence, with the data kept.
+void DetectOnBeamBreak(benchmark::State& state) {
+  femreg::Scene scene;
+  femreg::LoadScene(std::string(FEMREG_SOURCE_DIR) + "/datasets/beam_break/scene.yaml", &scene);
+  scene.effects.fracture = false;
+  std::unique_ptr<femreg::Tracker> tracker;
+  femreg::Tracker::Create(scene, &tracker);
+  std::vector<femreg::Vertices> shapes;
+  for (const femreg::PointCloud& cloud : Clouds()) {
+    femreg::FrameSummary summary;
+    tracker->Track(cloud, &summary);
+    shapes.push_back(tracker->mesh(0).x);
+  }
+  const femreg::TetMesh& mesh = tracker->mesh(0);
+  femreg::ElasticModel model;
+  model.Build(mesh, femreg::ElasticModelType::kCorotational, scene.objects[0].material);
+  femreg::FractureOptions options;
+  options.toughness = scene.objects[0].toughness;
+  femreg::fracture_internal::BoundData kept;
+  femreg::fracture_internal::BuildBoundData(mesh, model, options, &kept);
+  std::vector<femreg::ElasticModel> before(shapes.size(), model);  // rotations at the frame before
+  for (size_t f = 1; f < shapes.size(); ++f) {
+    before[f] = before[f - 1];
+    before[f].UpdateRotations(shapes[f - 1]);
+  }
+  femreg::NodeSeparation separation;
+  int evaluated = 0;
+  for (auto _ : state) {
+    evaluated = 0;
+    for (size_t f = 0; f < shapes.size(); ++f) {
+      evaluated += femreg::fracture_internal::DetectFractureAbove(mesh, before[f], shapes[f], 0.3, false, kept,
+                                                                  &separation);
+    }
+  }
+  state.counters["evaluated"] = evaluated;
+}
+BENCHMARK(DetectOnBeamBreak)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -301,6 +301,92 @@ TEST(MeasureBound, RotationsGivenOrTheModels) {
   for (int j = 0; j < a.measure.size(); ++j) EXPECT_NEAR(b.measure(j), a.measure(j), 1e-9 * a.measure.maxCoeff());
 }
 
+// The detection evaluates exactly the nodes whose bound (MeasureBound's) reaches the floor
+// times their toughness, though it refines the bound only around the nodes its coarse part
+// (the largest principal stress alone) puts there: a node evaluated has its plane set.
+TEST(MeasureBound, DetectionEvaluatesWhereTheBoundReachesTheFloor) {
+  RandomStates states;
+  std::mt19937 rng(23);
+  int evaluated = 0, skipped = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const Vertices x = states.Draw(&rng);
+    const Eigen::VectorXd bound = fracture_internal::MeasureBound(states.mesh, states.model, x);
+    std::vector<double> sorted(bound.data(), bound.data() + bound.size());
+    std::sort(sorted.begin(), sorted.end());
+    FractureOptions options;
+    options.toughness = sorted[sorted.size() * (trial % 10) / 10] + 1e-3;
+    options.region_toughness = {{1, 0.5 * options.toughness}};
+    for (double floor : {0.3, 1.0}) {
+      NodeSeparation some;
+      fracture_internal::DetectFractureAbove(states.mesh, states.model, x, options, floor, true, &some);
+      for (int j = 0; j < bound.size(); ++j) {
+        const double level = floor * some.toughness(j);
+        const bool is_evaluated = some.normal.row(j).norm() > 0.5;
+        if (bound(j) > level * (1 + 1e-12)) {
+          EXPECT_TRUE(is_evaluated) << "trial " << trial << " node " << j;
+        } else if (bound(j) < level * (1 - 1e-12)) {
+          EXPECT_FALSE(is_evaluated) << "trial " << trial << " node " << j;
+        }
+        evaluated += is_evaluated;
+        skipped += !is_evaluated;
+      }
+    }
+  }
+  EXPECT_GT(evaluated, 0);
+  EXPECT_GT(skipped, 0);
+}
+
+// The bound's data kept for a topology (as the tracker keeps it between splits) detects as
+// the data built at each call: the same nodes evaluated, the same measures and toughness. A
+// split changes the counts, and the kept data no longer fits the mesh.
+TEST(MeasureBound, KeptDataDetectsAsDataBuiltEachTime) {
+  RandomStates states;
+  std::mt19937 rng(17);
+  FractureOptions options;
+  options.toughness = 1500;
+  options.region_toughness = {{1, 700}};
+  fracture_internal::BoundData kept;
+  fracture_internal::BuildBoundData(states.mesh, states.model, options, &kept);
+  ASSERT_TRUE(kept.Fits(states.mesh, states.model));
+  ElasticModel stale = states.model;
+  int evaluated = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    if (trial > 0) stale = states.model;
+    const Vertices x = states.Draw(&rng);
+    for (double floor : {0.1, 0.3, 1.0}) {
+      const bool current = trial % 2 == 0;
+      const ElasticModel& model = current ? states.model : stale;
+      NodeSeparation built, reused;
+      const int n = fracture_internal::DetectFractureAbove(states.mesh, model, x, options, floor, current, &built);
+      const int m = fracture_internal::DetectFractureAbove(states.mesh, model, x, floor, current, kept, &reused);
+      ASSERT_EQ(m, n) << "trial " << trial;
+      evaluated += n;
+      for (int j = 0; j < built.measure.size(); ++j) {
+        EXPECT_DOUBLE_EQ(reused.measure(j), built.measure(j)) << "trial " << trial << " node " << j;
+        EXPECT_DOUBLE_EQ(reused.toughness(j), built.toughness(j));
+      }
+    }
+  }
+  EXPECT_GT(evaluated, 0);
+  // One node over its toughness splits: the mesh has another vertex.
+  NodeSeparation sep;
+  const int nv = states.mesh.num_vertices();
+  sep.measure = Eigen::VectorXd::Zero(nv);
+  sep.toughness = Eigen::VectorXd::Constant(nv, 1000.0);
+  sep.normal = Vertices::Zero(nv, 3);
+  sep.normal.col(0).setOnes();
+  int j = -1;
+  for (int v = 0; v < nv && j < 0; ++v) {
+    if (std::abs(states.mesh.rest(v, 0) - 0.05) < 1e-9) j = v;
+  }
+  ASSERT_GE(j, 0);
+  sep.measure(j) = 5000.0;
+  TopologyChange change;
+  SplitNodes(sep, FractureOptions(), 1, &states.mesh, &states.model, &change);
+  ASSERT_TRUE(change.changed());
+  EXPECT_FALSE(kept.Fits(states.mesh, states.model));
+}
+
 // Pulls a bar clamped at both ends apart with the forward simulator and fracture on.
 TEST(SplitNodes, BarPulledApartBreaksIntoTwoValidPieces) {
   TetMesh mesh = MakeBox(Eigen::Vector3d(0.1, 0.02, 0.02), 10, 2, 2);

@@ -9,6 +9,7 @@
 #ifndef FEMREG_DATASETS_H_
 #define FEMREG_DATASETS_H_
 
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -78,6 +79,17 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
 std::vector<std::string> FractureScenarios();
 Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
                                 void (*progress)(int done, int total) = nullptr);
+// A cut scenario ("beam_cut") with its ground truth given: per frame the displacements of the
+// ground truth's mesh (its vertices as created, #V by 3), from the deck below solved by another
+// simulator; `truth_source` names it in the README. Writes the sequence as "<scenario>_calculix".
+Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
+                                const std::vector<Vertices>& truth, const std::string& truth_source,
+                                void (*progress)(int done, int total) = nullptr);
+// The CalculiX deck of a cut scenario's ground truth: its mesh as C3D4 with *ELASTIC under
+// NLGEOM, one static step per frame (ending at total time frame + 1) with the grippers'
+// displacements, the slab's elements removed by *MODEL CHANGE, TYPE=ELEMENT, REMOVE in the cut
+// frame's step, U printed.
+Status WriteFractureSequenceDeck(const std::string& scenario, std::ostream& out);
 
 // ---------------------------------------------------------------------------------------
 // femreg organ-data: the bundled partial-view sequence.

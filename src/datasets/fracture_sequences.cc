@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <ostream>
 #include <sstream>
 
 #include "datasets/fracture_scenarios.h"
@@ -73,21 +74,65 @@ void RemoveElements(const std::function<bool(int)>& drop, const Material& materi
   model->Build(*mesh, ElasticModelType::kCorotational, material);
 }
 
-}  // namespace
-
-std::vector<std::string> FractureScenarios() { return {"beam_break", "slab_tear", "beam_cut"}; }
-
-Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
-                                void (*progress)(int done, int total)) {
-  Scenario s;
+Status FindScenario(const std::string& scenario, Scenario* s) {
   if (scenario == "beam_break") {
-    s = fracture_scenarios::BeamBreak();
+    *s = fracture_scenarios::BeamBreak();
   } else if (scenario == "slab_tear") {
-    s = fracture_scenarios::SlabTear();
+    *s = fracture_scenarios::SlabTear();
   } else if (scenario == "beam_cut") {
-    s = fracture_scenarios::BeamCut();
+    *s = fracture_scenarios::BeamCut();
   } else {
     return Status::Error("unknown scenario '" + scenario + "' (beam_break, slab_tear or beam_cut)");
+  }
+  return Status::Ok();
+}
+
+// The ground truth's mesh, before any break.
+TetMesh FineMesh(const Scenario& s, int refinement) {
+  const Eigen::Vector3i fine_cells = s.fine_cells.x() > 0 ? s.fine_cells : Eigen::Vector3i(s.cells * refinement);
+  return MakeBox(s.size, fine_cells.x(), fine_cells.y(), fine_cells.z());
+}
+
+// Whether element e of the fine mesh is in the cut's slab (by its rest centroid).
+bool InSlab(const Scenario& s, const TetMesh& fine, int e) {
+  double cx = 0;
+  for (int k = 0; k < 4; ++k) cx += 0.25 * fine.rest(fine.tets(e, k), 0);
+  return cx > s.cut_lo && cx < s.cut_hi;
+}
+
+// The grippers' displacements at frame f, of the fine vertices they hold (by rest position):
+// vertex, displacement from rest.
+std::vector<std::pair<int, Eigen::Vector3d>> GripperDisplacements(const Scenario& s, const TetMesh& fine, int f) {
+  Eigen::Matrix3d Rl, Rr;
+  Eigen::Vector3d tl, tr;
+  s.left(f, &Rl, &tl);
+  s.right(f, &Rr, &tr);
+  Eigen::Vector3d cl = Eigen::Vector3d::Zero(), cr = Eigen::Vector3d::Zero();
+  int nl = 0, nr = 0;
+  for (int v = 0; v < fine.num_vertices(); ++v) {
+    if (fine.rest(v, 0) <= s.left_x) { cl += fine.rest.row(v).transpose(); ++nl; }
+    if (fine.rest(v, 0) >= s.right_x) { cr += fine.rest.row(v).transpose(); ++nr; }
+  }
+  cl /= std::max(nl, 1);
+  cr /= std::max(nr, 1);
+  std::vector<std::pair<int, Eigen::Vector3d>> out;
+  for (int v = 0; v < fine.num_vertices(); ++v) {
+    const Eigen::Vector3d X = fine.rest.row(v);
+    if (X.x() <= s.left_x) out.emplace_back(v, cl + Rl * (X - cl) + tl - X);
+    if (X.x() >= s.right_x) out.emplace_back(v, cr + Rr * (X - cr) + tr - X);
+  }
+  return out;
+}
+
+Status Generate(const std::string& scenario, const std::string& dir, const std::vector<Vertices>* truth,
+                const std::string& truth_source, void (*progress)(int done, int total)) {
+  Scenario s;
+  Status found = FindScenario(scenario, &s);
+  if (!found.ok()) return found;
+  if (truth) {
+    if (s.cut_frame < 0) return Status::Error(scenario + ": a given ground truth is for a cut scenario only");
+    s.name += "_calculix";
+    s.title += ", the ground truth by CalculiX";
   }
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "clouds", ec);
@@ -97,7 +142,19 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   const int refinement = 2;
   TetMesh coarse = MakeBox(s.size, s.cells.x(), s.cells.y(), s.cells.z());
   const Eigen::Vector3i fine_cells = s.fine_cells.x() > 0 ? s.fine_cells : Eigen::Vector3i(s.cells * refinement);
-  TetMesh fine = MakeBox(s.size, fine_cells.x(), fine_cells.y(), fine_cells.z());
+  TetMesh fine = FineMesh(s, refinement);
+  if (truth) {
+    if (static_cast<int>(truth->size()) != s.frames) {
+      return Status::Error("the ground truth has " + std::to_string(truth->size()) + " frames, " + s.name + " " +
+                           std::to_string(s.frames));
+    }
+    for (const Vertices& u : *truth) {
+      if (u.rows() != fine.num_vertices()) {
+        return Status::Error("a ground truth frame has " + std::to_string(u.rows()) + " vertices, the mesh " +
+                             std::to_string(fine.num_vertices()));
+      }
+    }
+  }
   const double mid = 0.5 * s.size.x();
   for (int e = 0; e < fine.num_tets(); ++e) {
     double cx = 0;
@@ -143,11 +200,18 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   sensor_options.pixel_stride = s.pixel_stride;
   const DepthSensor sensor(sensor_options);
 
+  const std::string made_by = truth ? "`tools/make_calculix_cut.sh`: CalculiX's solution of `femreg fracture-data "
+                                      "--scenario " + scenario + " --calculix-deck`, then `femreg fracture-data "
+                                      "--scenario " + scenario + " --calculix-result`"
+                                    : "`femreg fracture-data --scenario " + s.name + "`";
   Status status = WriteScene(TrackingScene(s), (fs::path(dir) / "scene.yaml").string(),
-                             s.title + ": " + s.description + ".\nMade by `femreg fracture-data --scenario " +
-                                 s.name + "` (see README.md).");
+                             s.title + ": " + s.description + ".\nMade by " + made_by + " (see README.md).");
   if (!status.ok()) return status;
   std::vector<int> original;  // fine vertex -> initial fine vertex
+  if (truth) {  // (the solve starts it otherwise)
+    original.resize(static_cast<size_t>(fine.num_vertices()));
+    for (int v = 0; v < fine.num_vertices(); ++v) original[static_cast<size_t>(v)] = v;
+  }
   std::vector<FractureEvent> events;
   std::ostringstream events_csv;
   events_csv << "frame,node,nx,ny,nz,measure,pieces\n";
@@ -193,8 +257,16 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
     }
     ForwardSummary summary;
     const size_t before = events.size();
-    status = SolveQuasiStaticWithFracture(&problem, forward, fracture, 12, s.material.density,
-                                          &model, &fine, &original, &events, &summary);
+    if (truth) {  // given: the initial vertex each current one comes from moved by it
+      fine.x.resize(fine.num_vertices(), 3);
+      for (int v = 0; v < fine.num_vertices(); ++v) {
+        const int v0 = original[static_cast<size_t>(v)];
+        fine.x.row(v) = fine.rest.row(v) + (*truth)[static_cast<size_t>(f)].row(v0);
+      }
+    } else {
+      status = SolveQuasiStaticWithFracture(&problem, forward, fracture, 12, s.material.density,
+                                            &model, &fine, &original, &events, &summary);
+    }
     if (!status.ok()) return Status::Error(s.name + " frame " + std::to_string(f) + ": " + status.message());
     std::vector<int> fine_piece;
     const int pieces = ConnectedPieces(fine, &fine_piece);
@@ -315,7 +387,17 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   if (!status.ok()) return status;
 
   std::ostringstream truth_text;
-  if (s.cut_frame >= 0) {
+  if (truth) {
+    truth_text << "The ground truth is " << truth_source << " on a " << fine_cells.x() << " x " << fine_cells.y()
+               << " x " << fine_cells.z() << " box mesh (" << fine0.num_vertices() << " nodes, " << fine0.num_tets()
+               << " C3D4, faces at x = " << s.cut_lo << " and " << s.cut_hi << " m): `*ELASTIC` under NLGEOM, one "
+               << "static step per frame with the grippers' displacements; in frame " << s.cut_frame
+               << "'s step its elements between the faces are removed (`*MODEL CHANGE, TYPE=ELEMENT, REMOVE`): "
+               << "the beam is in two pieces from frame " << first_break << ". A tracked "
+               << "vertex within one tracked cell of a piece it is not in also has a row on that piece: "
+               << "the piece's nearest element's motion, extrapolated to it (a tracked mesh that "
+               << "splits on its own nodes puts it there).\n";
+  } else if (s.cut_frame >= 0) {
     truth_text << "The ground truth is a corotational FEM simulation (quasi-static, one solve per "
                << "frame) on a " << fine_cells.x() << " x " << fine_cells.y() << " x " << fine_cells.z()
                << " box mesh (" << fine0.num_vertices() << " vertices, faces at x = " << s.cut_lo
@@ -336,7 +418,8 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
   }
   std::ostringstream readme;
   readme << "# " << s.name << ": " << s.title << "\n\n"
-         << "Made by `femreg fracture-data --scenario " << s.name << " --out DIR` (deterministic).\n\n"
+         << (truth ? "Made by " + made_by + " (deterministic for one CalculiX version).\n\n"
+                   : "Made by `femreg fracture-data --scenario " + s.name + " --out DIR` (deterministic).\n\n")
          << "The object is " << s.description << ".\n\n"
          << "- `scene.yaml`: the tracking scene: a " << s.size.x() << " x " << s.size.y() << " x "
          << s.size.z() << " m box (E = " << s.material.youngs_modulus << " Pa, nu = "
@@ -369,6 +452,69 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
          << "normal, measure, pieces).\n\n"
          << truth_text.str();
   return WriteFileAtomically((fs::path(dir) / "README.md").string(), readme.str());
+}
+
+}  // namespace
+
+std::vector<std::string> FractureScenarios() { return {"beam_break", "slab_tear", "beam_cut"}; }
+
+Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
+                                void (*progress)(int done, int total)) {
+  return Generate(scenario, dir, nullptr, "", progress);
+}
+
+Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
+                                const std::vector<Vertices>& truth, const std::string& truth_source,
+                                void (*progress)(int done, int total)) {
+  return Generate(scenario, dir, &truth, truth_source, progress);
+}
+
+Status WriteFractureSequenceDeck(const std::string& scenario, std::ostream& out) {
+  Scenario s;
+  Status found = FindScenario(scenario, &s);
+  if (!found.ok()) return found;
+  if (s.cut_frame < 0) {
+    return Status::Error(scenario + ": a CalculiX deck is written for a cut scenario only (the others break "
+                         "by femreg's fracture model)");
+  }
+  const TetMesh fine = FineMesh(s, 2);
+  auto write_set = [&out](const std::string& kind, const std::string& name, const std::vector<int>& ids) {
+    out << "*" << kind << ", " << kind << "=" << name << "\n";
+    for (size_t i = 0; i < ids.size(); ++i) out << ids[i] + 1 << (i % 10 == 9 || i + 1 == ids.size() ? "\n" : ", ");
+  };
+  out.precision(15);
+  out << "** femreg fracture-data --scenario " << scenario << " --calculix-deck: " << fine.num_vertices()
+      << " nodes, " << fine.num_tets() << " C3D4, one step per frame (" << s.frames << ")\n*NODE, NSET=Nall\n";
+  for (int v = 0; v < fine.num_vertices(); ++v) {
+    out << v + 1 << ", " << fine.rest(v, 0) << ", " << fine.rest(v, 1) << ", " << fine.rest(v, 2) << "\n";
+  }
+  out << "*ELEMENT, TYPE=C3D4, ELSET=Eall\n";
+  std::vector<int> slab;
+  for (int e = 0; e < fine.num_tets(); ++e) {
+    out << e + 1;
+    for (int k = 0; k < 4; ++k) out << ", " << fine.tets(e, k) + 1;
+    out << "\n";
+    if (InSlab(s, fine, e)) slab.push_back(e);
+  }
+  write_set("ELSET", "Eslab", slab);
+  out << "*MATERIAL, NAME=M\n*ELASTIC\n" << s.material.youngs_modulus << ", " << s.material.poisson_ratio
+      << "\n*SOLID SECTION, ELSET=Eall, MATERIAL=M\n";
+  for (int f = 0; f < s.frames; ++f) {
+    out << "** frame " << f << "\n*STEP, NLGEOM, INC=1000\n";
+    if (f == s.cut_frame) out << "*MODEL CHANGE, TYPE=ELEMENT, REMOVE\nEslab\n";
+    // Each step ends at the total time f + 1 (the frame's displacements: the last block there).
+    out << "*STATIC\n0.25, 1.0, 1e-6, 0.25\n*BOUNDARY\n";
+    // ccx reads at most 20 characters a number: 12 digits, and round-off below a femtometre as 0.
+    out.precision(12);
+    for (const auto& [v, u] : GripperDisplacements(s, fine, f)) {
+      for (int a = 0; a < 3; ++a) {
+        out << v + 1 << ", " << a + 1 << ", " << a + 1 << ", " << (std::abs(u(a)) < 1e-15 ? 0.0 : u(a)) << "\n";
+      }
+    }
+    out.precision(15);
+    out << "*NODE PRINT, NSET=Nall\nU\n*END STEP\n";
+  }
+  return out ? Status::Ok() : Status::Error("cannot write the deck");
 }
 
 }  // namespace femreg

@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -211,72 +212,133 @@ void EigenvalueBounds(const Eigen::Matrix3d& a, double* top, double* bottom) {
 // 2 mu (S - I), and S's eigenvalues are those of C = F^T F's square roots (one of them
 // negative for an inverted element), and g^T S g <= |g| |S g| = |g| sqrt(g^T C g). The linear
 // element's stress (no rotation) is taken as it is.
-Eigen::VectorXd BoundSums(const ElasticModel& model, const Vertices& x, int nv) {
+// A corotated element's part of the bound: the bounds of its principal stresses (plus, minus,
+// with the round-off slack), and for the refinement along each gradient the weights of
+// |g| sqrt(g^T C g) (2 mu) and of |g|^2 (diagonal), with C = F^T F (its upper triangle).
+struct ElementScalars {
+  double plus, minus, slack, diagonal;
+  double c[6];
+  bool tensile;  // a tensile part beyond round-off
+};
+
+ElementScalars CorotatedScalars(const fracture_internal::BoundData::Element& el, const Vertices& x) {
+  ElementScalars r;
+  Eigen::Matrix<double, 3, 4> xe;
+  for (int k = 0; k < 4; ++k) xe.col(k) = x.row(el.vertices[k]).transpose();
+  const Eigen::Matrix3d F = DeformationGradient(xe, el.dm_inv);
+  const Eigen::Matrix3d C = F.transpose() * F;
+  double c_top, c_bottom;
+  EigenvalueBounds(C, &c_top, &c_bottom);
+  const double trace = C.trace();
+  const double c_low = std::max(0.0, c_bottom);
+  const double s_top = std::sqrt(std::max(0.0, std::min(c_top, trace))), s_low = std::sqrt(c_low);
+  // tr S: at most sum |s_i| <= sqrt(3 tr C). At least, when no s_i is negative, the chord of
+  // the square root between C's eigenvalue bounds (it lies below the concave root) summed:
+  // 3 sqrt(c_low) + (tr C - 3 c_low) / (sqrt(c_top) + sqrt(c_low)).
+  const bool inverted = !(F.determinant() > 0.0);
+  const double tr_high = std::sqrt(3.0 * trace);
+  const double tr_low = inverted ? -tr_high
+                                 : 3.0 * s_low + (s_top + s_low > 0 ? (trace - 3.0 * c_low) / (s_top + s_low) : 0.0);
+  const double s_bottom = inverted ? -s_top : s_low;
+  const double lambda = el.lambda, mu = el.mu;
+  const double volumetric_high = lambda * ((lambda >= 0 ? tr_high : tr_low) - 3.0);
+  const double volumetric_low = lambda * ((lambda >= 0 ? tr_low : tr_high) - 3.0);
+  // Round-off of the full evaluation (the rotation, the closed-form eigen-solvers): a
+  // compressed node's measure is 0 only to some 1e-9 of the stress.
+  r.slack = 1e-7 * (3.0 * std::abs(lambda) + 2.0 * mu) * (1.0 + s_top);
+  r.plus = std::max(0.0, volumetric_high + 2.0 * mu * (s_top - 1.0)) + r.slack;
+  r.minus = std::max(0.0, -(volumetric_low + 2.0 * mu * (s_bottom - 1.0))) + r.slack;
+  r.tensile = r.plus > r.slack;
+  r.diagonal = volumetric_high - 2.0 * mu;
+  r.c[0] = C(0, 0), r.c[1] = C(1, 1), r.c[2] = C(2, 2), r.c[3] = C(1, 2), r.c[4] = C(0, 2), r.c[5] = C(0, 1);
+  return r;
+}
+
+// Element e's terms of its nodes' sums: with plus alone (|sigma+ g| <= plus |g|: `coarse`), or
+// with the refinement along each gradient (every term at most the coarse one).
+void CorotatedTerms(const fracture_internal::BoundData::Element& el, const ElementScalars& r, bool coarse,
+                    double term[4]) {
+  if (!r.tensile) {  // no tensile part beyond round-off
+    for (int k = 0; k < 4; ++k) term[k] = 0.5 * el.volume * r.plus * el.g1[k];
+    return;
+  }
+  if (coarse) {
+    for (int k = 0; k < 4; ++k) term[k] = 0.5 * el.volume * (r.plus * el.g1[k] + r.slack * el.g1[k]);
+    return;
+  }
+  Eigen::Matrix3d C;  // C = F^T F is exactly symmetric (the same products in the same order)
+  C << r.c[0], r.c[5], r.c[4], r.c[5], r.c[1], r.c[3], r.c[4], r.c[3], r.c[2];
+  const double root_scale = 2.0 * el.mu;
+  for (int k = 0; k < 4; ++k) {
+    const double q = el.g[k].dot(C * el.g[k]);
+    // g^T sigma g, from above.
+    const double along_g = root_scale * el.g1[k] * std::sqrt(std::max(0.0, q)) + r.diagonal * el.g2[k];
+    const double along = std::sqrt(std::max(0.0, r.plus * (along_g + r.minus * el.g2[k])));
+    term[k] = 0.5 * el.volume * (std::min(r.plus * el.g1[k], along) + r.slack * el.g1[k]);
+  }
+}
+
+// MeasureBound's sums (N) before the division by the area, at the nodes that can reach `floor`
+// times their toughness (every node if floor < 0); at the others a sum that is below it. A
+// corotated model's are found in two passes: the coarse sums (plus |g| per term) everywhere,
+// then the refined ones only from the elements around the nodes whose coarse sum reaches the
+// floor. Every refined term is at most its coarse one, and both are summed in element order, so
+// a node the coarse sums leave out cannot reach the floor, and a node kept has the refined sum
+// of a single pass to the bit.
+Eigen::VectorXd BoundSums(const ElasticModel& model, const fracture_internal::BoundData& data, const Vertices& x,
+                          int nv, double floor) {
+  constexpr double kMargin = 1.0 + 1e-9;
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(nv);
-  const bool corotated = model.type() != ElasticModelType::kLinear;
-  for (int e = 0; e < model.num_elements(); ++e) {
-    const ElementRest& rest = model.rest(e);
-    double plus = 0.0, minus = 0.0, slack = 0.0;
-    Eigen::Matrix3d quadratic;  // g^T quadratic g bounds g^T sigma g (corotated: with the root)
-    double root_scale = 0.0;    // 2 mu: the weight of |g| sqrt(g^T C g)
-    double diagonal = 0.0;      // and the weight of |g|^2
-    if (corotated) {
-      Eigen::Matrix<double, 3, 4> xe;
-      for (int k = 0; k < 4; ++k) xe.col(k) = x.row(model.tets()(e, k)).transpose();
-      const Eigen::Matrix3d F = DeformationGradient(xe, rest.dm_inv);
-      const Eigen::Matrix3d C = F.transpose() * F;
-      double c_top, c_bottom;
-      EigenvalueBounds(C, &c_top, &c_bottom);
-      const double trace = C.trace();
-      const double c_low = std::max(0.0, c_bottom);
-      const double s_top = std::sqrt(std::max(0.0, std::min(c_top, trace))), s_low = std::sqrt(c_low);
-      // tr S: at most sum |s_i| <= sqrt(3 tr C). At least, when no s_i is negative, the chord of
-      // the square root between C's eigenvalue bounds (it lies below the concave root) summed:
-      // 3 sqrt(c_low) + (tr C - 3 c_low) / (sqrt(c_top) + sqrt(c_low)).
-      const bool inverted = !(F.determinant() > 0.0);
-      const double tr_high = std::sqrt(3.0 * trace);
-      const double tr_low = inverted ? -tr_high
-                                     : 3.0 * s_low + (s_top + s_low > 0 ? (trace - 3.0 * c_low) / (s_top + s_low) : 0.0);
-      const double s_bottom = inverted ? -s_top : s_low;
-      const double lambda = rest.lambda, mu = rest.mu;
-      const double volumetric_high = lambda * ((lambda >= 0 ? tr_high : tr_low) - 3.0);
-      const double volumetric_low = lambda * ((lambda >= 0 ? tr_low : tr_high) - 3.0);
-      // Round-off of the full evaluation (the rotation, the closed-form eigen-solvers): a
-      // compressed node's measure is 0 only to some 1e-9 of the stress.
-      slack = 1e-7 * (3.0 * std::abs(lambda) + 2.0 * mu) * (1.0 + s_top);
-      plus = std::max(0.0, volumetric_high + 2.0 * mu * (s_top - 1.0)) + slack;
-      minus = std::max(0.0, -(volumetric_low + 2.0 * mu * (s_bottom - 1.0))) + slack;
-      if (plus <= slack) {  // no tensile part beyond round-off
-        for (int k = 0; k < 4; ++k) {
-          const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
-          sum(model.tets()(e, k)) += 0.5 * rest.volume * plus * g.norm();
-        }
-        continue;
-      }
-      quadratic = C;
-      root_scale = 2.0 * mu;
-      diagonal = volumetric_high - 2.0 * mu;
-    } else {
+  if (model.type() == ElasticModelType::kLinear) {
+    for (int e = 0; e < model.num_elements(); ++e) {
+      const ElementRest& rest = model.rest(e);
       const Vector6 s = ElementStress(rest, model.rotation(e), model.Gather(x, e));
       const Eigen::Matrix3d sigma = VoigtToTensor(s);
       double top, bottom;
       EigenvalueBounds(sigma, &top, &bottom);
-      slack = 1e-7 * sigma.norm();
-      plus = std::max(0.0, top) + slack;
-      minus = std::max(0.0, -bottom) + slack;
-      quadratic = sigma;
+      const double slack = 1e-7 * sigma.norm();
+      const double plus = std::max(0.0, top) + slack, minus = std::max(0.0, -bottom) + slack;
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+        const double g2 = g.squaredNorm(), g1 = std::sqrt(g2);
+        const double q = g.dot(sigma * g);
+        const double along = std::sqrt(std::max(0.0, plus * (q + minus * g2)));
+        sum(model.tets()(e, k)) += 0.5 * rest.volume * (std::min(plus * g1, along) + slack * g1);
+      }
     }
-    for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
-      const double g2 = g.squaredNorm(), g1 = std::sqrt(g2);
-      const double q = g.dot(quadratic * g);
-      // g^T sigma g, from above.
-      const double along_g = corotated ? root_scale * g1 * std::sqrt(std::max(0.0, q)) + diagonal * g2 : q;
-      const double along = std::sqrt(std::max(0.0, plus * (along_g + minus * g2)));
-      sum(model.tets()(e, k)) += 0.5 * rest.volume * (std::min(plus * g1, along) + slack * g1);
-    }
+    return sum * kMargin;
   }
-  return sum * (1.0 + 1e-9);
+  const int ne = model.num_elements();
+  std::vector<ElementScalars> scalars(static_cast<size_t>(ne));
+  double term[4];
+  for (int e = 0; e < ne; ++e) {
+    const fracture_internal::BoundData::Element& el = data.elements[static_cast<size_t>(e)];
+    scalars[static_cast<size_t>(e)] = CorotatedScalars(el, x);
+    CorotatedTerms(el, scalars[static_cast<size_t>(e)], /*coarse=*/floor >= 0, term);
+    for (int k = 0; k < 4; ++k) sum(el.vertices[k]) += term[k];
+  }
+  if (floor < 0) return sum * kMargin;
+  std::vector<char> kept(static_cast<size_t>(nv), 0);
+  bool any = false;
+  for (int j = 0; j < nv; ++j) {
+    const double t = data.toughness(j);
+    kept[static_cast<size_t>(j)] = t > 0 && data.area(j) > 0 && sum(j) * kMargin >= floor * t * data.area(j);
+    any = any || kept[static_cast<size_t>(j)];
+  }
+  if (!any) return sum * kMargin;
+  Eigen::VectorXd refined = Eigen::VectorXd::Zero(nv);
+  for (int e = 0; e < ne; ++e) {
+    const fracture_internal::BoundData::Element& el = data.elements[static_cast<size_t>(e)];
+    bool needed = false;
+    for (int k = 0; k < 4 && !needed; ++k) needed = kept[static_cast<size_t>(el.vertices[k])] != 0;
+    if (!needed) continue;
+    CorotatedTerms(el, scalars[static_cast<size_t>(e)], /*coarse=*/false, term);
+    for (int k = 0; k < 4; ++k) refined(el.vertices[k]) += term[k];
+  }
+  for (int j = 0; j < nv; ++j) {
+    if (kept[static_cast<size_t>(j)]) sum(j) = refined(j);
+  }
+  return sum * kMargin;
 }
 
 }  // namespace
@@ -293,22 +355,53 @@ void DetectFracture(const TetMesh& mesh, const ElasticModel& model, const Vertic
 
 namespace fracture_internal {
 
+void BuildBoundData(const TetMesh& mesh, const ElasticModel& model, const FractureOptions& options,
+                    BoundData* data) {
+  data->num_vertices = mesh.num_vertices();
+  data->num_elements = model.num_elements();
+  NodeAreas(mesh, model, options, &data->area, &data->toughness);
+  data->elements.clear();
+  if (model.type() == ElasticModelType::kLinear) return;
+  data->elements.resize(static_cast<size_t>(model.num_elements()));
+  for (int e = 0; e < model.num_elements(); ++e) {
+    const ElementRest& rest = model.rest(e);
+    BoundData::Element& el = data->elements[static_cast<size_t>(e)];
+    for (int k = 0; k < 4; ++k) {
+      el.vertices[k] = model.tets()(e, k);
+      el.g[k] = Eigen::Vector3d(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+      el.g2[k] = el.g[k].squaredNorm();
+      el.g1[k] = std::sqrt(el.g2[k]);
+    }
+    el.dm_inv = rest.dm_inv;
+    el.volume = rest.volume;
+    el.lambda = rest.lambda;
+    el.mu = rest.mu;
+  }
+}
+
 Eigen::VectorXd MeasureBound(const TetMesh& mesh, const ElasticModel& model, const Vertices& x) {
+  BoundData data;
+  BuildBoundData(mesh, model, FractureOptions(), &data);
   const int nv = mesh.num_vertices();
-  Eigen::VectorXd bound = BoundSums(model, x, nv);
-  Eigen::VectorXd area, toughness;
-  NodeAreas(mesh, model, FractureOptions(), &area, &toughness);
-  for (int j = 0; j < nv; ++j) bound(j) = area(j) > 0 ? bound(j) / area(j) : 0.0;
+  Eigen::VectorXd bound = BoundSums(model, data, x, nv, -1.0);
+  for (int j = 0; j < nv; ++j) bound(j) = data.area(j) > 0 ? bound(j) / data.area(j) : 0.0;
   return bound;
 }
 
 int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Vertices& x,
                         const FractureOptions& options, double floor, bool rotations_current,
                         NodeSeparation* out) {
+  BoundData data;
+  BuildBoundData(mesh, model, options, &data);
+  return DetectFractureAbove(mesh, model, x, floor, rotations_current, data, out);
+}
+
+int DetectFractureAbove(const TetMesh& mesh, const ElasticModel& model, const Vertices& x, double floor,
+                        bool rotations_current, const BoundData& data, NodeSeparation* out) {
   const int nv = mesh.num_vertices();
-  Eigen::VectorXd area;
-  NodeAreas(mesh, model, options, &area, &out->toughness);
-  const Eigen::VectorXd sum = BoundSums(model, x, nv);
+  const Eigen::VectorXd& area = data.area;
+  out->toughness = data.toughness;
+  const Eigen::VectorXd sum = BoundSums(model, data, x, nv, floor);
   std::vector<char> want(static_cast<size_t>(nv), 0);
   int wanted = 0;
   for (int j = 0; j < nv; ++j) {

@@ -70,7 +70,9 @@ void Detect(int i, const PointIndex& cloud_index, TrackerState* state) {
   // next outer iteration brings here itself (so an intact frame's rotations are fracture off's).
   const bool kept = RotationsKept(*state, i);
   if (!kept) o.model.UpdateRotations(o.mesh.x);  // nothing else does
-  fracture_internal::DetectFractureAbove(o.mesh, o.model, o.mesh.x, f.options[i], floor, !kept, &sep);
+  fracture_internal::BoundData& bound = f.bound[i];
+  if (!bound.Fits(o.mesh, o.model)) fracture_internal::BuildBoundData(o.mesh, o.model, f.options[i], &bound);
+  fracture_internal::DetectFractureAbove(o.mesh, o.model, o.mesh.x, floor, !kept, bound, &sep);
   f.partial[i] = 1;
   sep.weight.resize(0);
   sep.gap.resize(0);
@@ -226,6 +228,7 @@ std::vector<int> FractureStep(int k, const PointIndex& cloud_index, TrackerState
     SplitNodes(f.separation[i], f.options[i], budget, &o.mesh, &o.model, &change);
     if (!change.changed()) continue;
     changed = true;
+    f.bound[i] = fracture_internal::BoundData();  // another topology
     if (ConnectedPieces(o.mesh, &piece) > pieces_before) {
       f.separated = f.frame_separated = true;
       parted[i] = 1;

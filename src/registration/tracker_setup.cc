@@ -137,6 +137,7 @@ Status Tracker::EnableFracture(const std::vector<FractureOptions>& options) {
   f->detected_at.resize(n);
   f->partial.assign(n, 0);
   f->full_measure.resize(n);
+  f->bound.resize(n);
   state.fracture = std::move(f);
   return Status::Ok();
 }

@@ -23,6 +23,7 @@
 #include "femreg/fracture.h"
 #include "femreg/mesh.h"
 #include "femreg/registration.h"
+#include "fracture/measure_bound.h"
 
 namespace femreg {
 
@@ -80,6 +81,9 @@ struct FractureState {
   // empty until asked).
   std::vector<char> partial;
   std::vector<Eigen::VectorXd> full_measure;
+  // Per object: what the bound reads of the mesh and the model, kept until a split changes
+  // the topology (empty until the first detection).
+  std::vector<fracture_internal::BoundData> bound;
 };
 // Low enough that what fracture turns off is off for the frames that lead up to a break (with
 // half the toughness, beam_break's trimmed fits kept its crack from going through).
