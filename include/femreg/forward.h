@@ -93,7 +93,7 @@ struct OptionFields<ForwardOptions> {
     v(&S::relative_tolerance, FieldInfo("tolerance")
                                   .Python("relative_tolerance")
                                   .Above(0)
-                                  .Doc("stop when |free residual| <= tolerance * |external load|"));
+                                  .Doc("stop when the free residual's norm is at most this times the external load's"));
     v(&S::absolute_tolerance, FieldInfo("absolute_tolerance").AtLeast(0).Doc("... or below this (N)"));
   }
 };
