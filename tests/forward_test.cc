@@ -46,9 +46,9 @@ TEST(ForwardOptions, IsValidNamesTheField) {
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("min_step"), std::string::npos);
   options = ForwardOptions();
-  options.relative_tolerance = std::nan("");
+  options.relative_tolerance = std::nan("");  // named by its scene key, forward.tolerance
   EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("relative_tolerance"), std::string::npos);
+  EXPECT_NE(error.find("forward.tolerance"), std::string::npos);
 }
 
 TEST(ForwardSummary, StartsNotRun) {

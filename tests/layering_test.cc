@@ -49,7 +49,7 @@ const std::map<std::string, int> kRank = {
 // Public headers (include/femreg/) by module.
 const std::map<std::string, std::string> kHeaderModule = {
     {"status.h", "mesh"},           {"mesh.h", "mesh"},
-    {"version.h", "mesh"},
+    {"version.h", "mesh"},          {"field_table.h", "mesh"},
     {"io.h", "io"},                 {"camera_io.h", "io"},
     {"geometry.h", "geometry"},
     {"fem.h", "fem"},               {"forward.h", "forward"},

@@ -66,16 +66,16 @@ TEST(SceneMaterials, BadValuesNameFileLineAndKey) {
       {"youngs_modulus: 1e5", "youngs_modulus: -2e3",
        "materials.yaml:5: objects[0].material.youngs_modulus: must be > 0 (got -2000)"},
       {"poisson_ratio: 0.3", "poisson_ratio: 0.5",
-       "materials.yaml:6: objects[0].material.poisson_ratio: must be < 0.5 (got 0.5)"},
+       "materials.yaml:6: objects[0].material.poisson_ratio: must be in (-1, 0.5) (got 0.5)"},
       {"poisson_ratio: 0.3", "poisson_ratio: -1",
-       "materials.yaml:6: objects[0].material.poisson_ratio: must be > -1 (got -1)"},
+       "materials.yaml:6: objects[0].material.poisson_ratio: must be in (-1, 0.5) (got -1)"},
       {"density: 1000", "density: 0",
        "materials.yaml:7: objects[0].material.density: must be > 0 (got 0)"},
       // A region's material: its own key path and line.
       {"youngs_modulus: 1e6", "youngs_modulus: -1",
        "materials.yaml:10: objects[0].regions.2.youngs_modulus: must be > 0 (got -1)"},
       {"poisson_ratio: 0.4", "poisson_ratio: 0.75",
-       "materials.yaml:11: objects[0].regions.2.poisson_ratio: must be < 0.5 (got 0.75)"},
+       "materials.yaml:11: objects[0].regions.2.poisson_ratio: must be in (-1, 0.5) (got 0.75)"},
       {"density: 500", "density: -3",
        "materials.yaml:12: objects[0].regions.2.density: must be > 0 (got -3)"},
   };
@@ -91,7 +91,7 @@ TEST(SceneMaterials, MessagesAreMaterialIsValids) {
   m.poisson_ratio = 0.75;
   std::string error;
   ASSERT_FALSE(m.IsValid(&error));
-  EXPECT_EQ(error, "poisson_ratio must be < 0.5 (got 0.75)");
+  EXPECT_EQ(error, "poisson_ratio must be in (-1, 0.5) (got 0.75)");
   const std::string message = ParseError(Replace(kScene, "poisson_ratio: 0.3", "poisson_ratio: 0.75"));
   EXPECT_NE(message.find("poisson_ratio: " + error.substr(std::string("poisson_ratio ").size())),
             std::string::npos)
@@ -100,7 +100,7 @@ TEST(SceneMaterials, MessagesAreMaterialIsValids) {
   m = Material();
   m.youngs_modulus = std::numeric_limits<double>::infinity();
   ASSERT_FALSE(m.IsValid(&error));
-  EXPECT_EQ(error, "youngs_modulus must be finite (got inf)");
+  EXPECT_EQ(error, "youngs_modulus must be > 0 (got inf)");
 }
 
 // A region that sets one value inherits the others from the object's material.

@@ -99,7 +99,7 @@ TEST_F(SceneOverrideTest, ErrorsNameTheKeyAndTheSet) {
   const std::vector<Case> cases = {
       // A bad value: checked by the scene parser like the file's own.
       {"objects[0].material.poisson_ratio=0.5",
-       {"scene.yaml:", "objects[0].material.poisson_ratio: must be < 0.5",
+       {"scene.yaml:", "objects[0].material.poisson_ratio: must be in (-1, 0.5)",
         "(from --set objects[0].material.poisson_ratio=0.5)"}},
       {"registration.solver.max_outer_iterations=abc",
        {"registration.solver.max_outer_iterations", "must be an integer", "(from --set"}},

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "femreg/field_table.h"
 #include "femreg/mesh.h"
 #include "femreg/status.h"
 
@@ -56,6 +57,25 @@ struct CollisionSpec {
   double friction = 0.0;
   std::vector<double> pair_friction;
   double friction_slip = 1.0e-4;
+  // The table's ranges (the pairs and obstacles are checked where they are read).
+  bool IsValid(std::string* error) const;
+};
+
+// The scene's `collision:` keys; `pairs` (with their own friction) and `obstacles` are lists
+// of entries, read and written by hand.
+template <>
+struct OptionFields<CollisionSpec> {
+  static constexpr const char* kSection = "collision";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = CollisionSpec;
+    v(&S::stiffness, FieldInfo("stiffness").Above(0).Doc("k (N/m) per contact"));
+    v(&S::distance, FieldInfo("distance").Above(0).Doc("D (m): contacts are detected within it"));
+    v(&S::tolerance, FieldInfo("tolerance").Above(0).Doc("registration: the penetration (m) a contact may keep"));
+    v(&S::augmented, FieldInfo("augmented").Doc("augmented Lagrangian; false: the bare penalty"));
+    v(&S::friction, FieldInfo("friction").AtLeast(0).Doc("Coulomb coefficient of every pair and obstacle"));
+    v(&S::friction_slip, FieldInfo("friction_slip").Above(0).Doc("slip (m) below which a contact sticks"));
+  }
 };
 
 // The resultant of the contact forces (N) between an object and another object or an obstacle,

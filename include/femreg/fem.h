@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "femreg/field_table.h"
 #include "femreg/mesh.h"
 
 namespace femreg {
@@ -18,6 +19,19 @@ struct Material {
   double poisson_ratio = 0.3;     // nu; in (-1, 0.5)
   double density = 1000.0;        // kg/m^3; > 0
   bool IsValid(std::string* error) const;
+};
+
+// A material's keys (an object's `material:`, a region's, synth's ground truth's).
+template <>
+struct OptionFields<Material> {
+  static constexpr const char* kSection = "";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = Material;
+    v(&S::youngs_modulus, FieldInfo("youngs_modulus").Above(0).Doc("E (Pa)"));
+    v(&S::poisson_ratio, FieldInfo("poisson_ratio").Above(-1).Below(0.5).Doc("nu, in (-1, 0.5)"));
+    v(&S::density, FieldInfo("density").Above(0).Doc("kg/m^3"));
+  }
 };
 
 // The constitutive law of an object's elements.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "femreg/fem.h"
+#include "femreg/field_table.h"
 #include "femreg/mesh.h"
 #include "femreg/status.h"
 
@@ -76,6 +77,25 @@ struct ForwardOptions {
   int num_threads = 0;
   bool verbose = false;              // one line per iteration on stdout
   bool IsValid(std::string* error) const;
+};
+
+// The scene's `forward:` keys (`model` is the Scene's, not an option of the solve). The
+// other members are the program's (femreg simulate's flags, the tools'), checked by IsValid
+// by hand.
+template <>
+struct OptionFields<ForwardOptions> {
+  static constexpr const char* kSection = "forward";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = ForwardOptions;
+    v(&S::max_iterations, FieldInfo("max_iterations").AtLeast(1).Doc("Newton iterations per load step"));
+    v(&S::load_steps, FieldInfo("load_steps").AtLeast(1).Doc("loads and prescribed displacements applied in steps"));
+    v(&S::relative_tolerance, FieldInfo("tolerance")
+                                  .Python("relative_tolerance")
+                                  .Above(0)
+                                  .Doc("stop when the free residual's norm is at most this times the external load's"));
+    v(&S::absolute_tolerance, FieldInfo("absolute_tolerance").AtLeast(0).Doc("... or below this (N)"));
+  }
 };
 
 enum class ForwardTermination {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "femreg/fem.h"
+#include "femreg/field_table.h"
 #include "femreg/forward.h"
 #include "femreg/mesh.h"
 
@@ -76,6 +77,29 @@ struct FractureOptions {
   // the pieces spring back. A piece nothing holds keeps its shape and relaxes under the data.
   bool relax_pieces = true;
   bool IsValid(std::string* error) const;
+};
+
+// The scene's `effects.fracture:` keys. toughness and region_toughness come from the objects
+// (their `toughness`), and min_piece_fraction is the program's; IsValid checks them by hand.
+template <>
+struct OptionFields<FractureOptions> {
+  static constexpr const char* kSection = "effects.fracture";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = FractureOptions;
+    v(&S::max_splits_per_iteration, FieldInfo("max_splits_per_iteration").AtLeast(1).Doc("node splits per outer iteration"));
+    v(&S::max_splits_per_frame, FieldInfo("max_splits_per_frame").AtLeast(1).Doc("node splits per frame"));
+    v(&S::crossing_tolerance, FieldInfo("crossing_tolerance")
+                                  .AtLeast(0)
+                                  .Below(1)
+                                  .Doc("elements crossed by the plane by more than this fraction of their "
+                                       "mean edge are removed"));
+    v(&S::max_cracks, FieldInfo("max_cracks").AtLeast(0).Note("(0 = any number)").Doc("cracks that may start; 0 = any number"));
+    v(&S::data_gap, FieldInfo("data_gap").Doc("tracker: the data's gaps raise the fracture measure"));
+    v(&S::cut_through, FieldInfo("cut_through").Doc("complete a crack across the section in one step"));
+    v(&S::piece_prealign, FieldInfo("piece_prealign").Doc("tracker: each piece moved rigidly onto its points first"));
+    v(&S::relax_pieces, FieldInfo("relax_pieces").Doc("tracker: held pieces put back in their rest shape after a break"));
+  }
 };
 
 // Per-vertex result of the detection.

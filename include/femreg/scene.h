@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "femreg/collision_spec.h"
+#include "femreg/field_table.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/fracture.h"
@@ -173,6 +174,19 @@ struct SynthBodySpec {
   double contact_tolerance = 1e-3;  // m: how far below the highest vertex the patch reaches
 };
 
+// A body's keys beside its name, box and keyframes (read and written by hand).
+template <>
+struct OptionFields<SynthBodySpec> {
+  static constexpr const char* kSection = "synth.bodies";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = SynthBodySpec;
+    v(&S::in_cloud, FieldInfo("in_cloud").Doc("its pixels return points (false: masked, it only hides)"));
+    v(&S::press, FieldInfo("press").Doc("pressed along -z into the object"));
+    v(&S::contact_tolerance, FieldInfo("contact_tolerance").AtLeast(0).Doc("m: how far below the highest vertex the patch reaches"));
+  }
+};
+
 struct SynthSpec {
   bool enabled = false;      // the scene has a synth section
   int frames = 30;
@@ -204,6 +218,21 @@ struct SynthSpec {
   int leave_frames = 0;
   int leave_start = -1;
   std::string source_name;         // the scene file's name, for the outputs
+};
+
+// The `synth:` section's own values. Its groups and lists (ground_truth, sensor, background,
+// motion, bodies, artefacts) are read and written by hand, the sensor and the bodies through
+// their own tables, the artefacts through SynthArtefactKeys.
+template <>
+struct OptionFields<SynthSpec> {
+  static constexpr const char* kSection = "synth";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = SynthSpec;
+    v(&S::frames, FieldInfo("frames").AtLeast(1).Doc("frames to simulate"));
+    v(&S::seed, FieldInfo("seed").AtLeast(0).Doc("the sensor noise's seed"));
+    v(&S::sanity_check, FieldInfo("sanity_check").Doc("ground truth made with the tracked mesh and material"));
+  }
 };
 
 // The artefacts of synth by name, as the scene's `synth.artefacts` map and `femreg synth
@@ -250,7 +279,7 @@ struct Scene {
 };
 
 // Reads and validates a scene. Errors name the file, line and key ("scene.yaml:14: objects[0].
-// material.poisson_ratio: must be < 0.5 (got 0.5)"): unknown keys, wrong types, out-of-range
+// material.poisson_ratio: must be in (-1, 0.5) (got 0.5)"): unknown keys, wrong types, out-of-range
 // values, missing mesh files, effects not built yet.
 Status LoadScene(const std::string& path, Scene* scene);
 // The same from text; `source` names it in messages and relative paths resolve against

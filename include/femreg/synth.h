@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/field_table.h"
 #include "femreg/geometry.h"
 #include "femreg/mesh.h"
 #include "femreg/registration.h"
@@ -65,6 +66,23 @@ struct DepthSensorOptions {
   double outlier_margin = 0.05;         // m around the seen points' bounding box
   SensorArtefacts artefacts;            // all off by default
   bool IsValid(std::string* error) const;
+};
+
+// The scene's `synth.sensor:` keys. The camera is registration.camera's; the artefacts have
+// their own table (SynthArtefactKeys, femreg/scene.h).
+template <>
+struct OptionFields<DepthSensorOptions> {
+  static constexpr const char* kSection = "sensor";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = DepthSensorOptions;
+    v(&S::noise_coefficient, FieldInfo("noise_coefficient").AtLeast(0).Doc("sigma_z = k z^2 (1/m); 0 = noiseless"));
+    v(&S::grazing_angle_deg, FieldInfo("grazing_angle_deg").Above(0).AtMost(90).Doc("pixels seeing a surface more obliquely are dropped"));
+    v(&S::pixel_stride, FieldInfo("pixel_stride").AtLeast(1).Doc("sample every k-th pixel in u and v"));
+    v(&S::outlier_fraction, FieldInfo("outlier_fraction").AtLeast(0).AtMost(10).Doc("extra uniform outliers, a fraction of the points"));
+    v(&S::outlier_margin, FieldInfo("outlier_margin").AtLeast(0).Doc("m around the seen points' bounding box"));
+    v(&S::near, FieldInfo("near").Above(0).Doc("m; closer surfaces are not seen"));
+  }
 };
 
 // A triangle surface to render: positions (#V by 3) and triangles (#F by 3).

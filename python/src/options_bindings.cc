@@ -1,6 +1,6 @@
 // Python bindings: Material and the registration options (the scene file's `registration:`
-// keys), enum fields as strings. The converted structs' fields come from their tables
-// (femreg/option_fields.h, DefFields).
+// keys), enum fields as strings. The structs' fields come from their tables
+// (femreg/field_table.h, DefFields).
 #include <string>
 
 #include "bindings.h"
@@ -12,7 +12,8 @@ namespace python {
 
 void BindOptions(py::module_& m) {
   // ---- materials and options ------------------------------------------------------------
-  py::class_<Material>(m, "Material", "Isotropic linear elastic material (SI units).")
+  auto material = py::class_<Material>(m, "Material", "Isotropic linear elastic material (SI units).");
+  material
       .def(py::init([](double e, double nu, double rho) {
              Material mat;
              mat.youngs_modulus = e;
@@ -24,14 +25,15 @@ void BindOptions(py::module_& m) {
            }),
            py::arg("youngs_modulus") = 1.0e5, py::arg("poisson_ratio") = 0.3,
            py::arg("density") = 1000.0)
-      .def_readwrite("youngs_modulus", &Material::youngs_modulus, "E (Pa)")
-      .def_readwrite("poisson_ratio", &Material::poisson_ratio, "nu, in (-1, 0.5)")
-      .def_readwrite("density", &Material::density, "kg/m^3")
       .def("__repr__", [](const Material& mat) {
-        return "Material(youngs_modulus=" + py::repr(py::float_(mat.youngs_modulus)).cast<std::string>() +
-               ", poisson_ratio=" + py::repr(py::float_(mat.poisson_ratio)).cast<std::string>() +
-               ", density=" + py::repr(py::float_(mat.density)).cast<std::string>() + ")";
+        std::string fields;  // Material(youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0)
+        OptionFields<Material>::Visit([&](auto member, const FieldInfo& f) {
+          fields += std::string(fields.empty() ? "" : ", ") + f.python_name() + "=" +
+                    py::repr(py::float_(mat.*member)).cast<std::string>();
+        });
+        return "Material(" + fields + ")";
       });
+  DefFields(material);
 
   auto camera = py::class_<CameraOptions>(m, "CameraOptions",
                                           "The camera: pose (position, target, up) and pinhole intrinsics.");

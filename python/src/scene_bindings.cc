@@ -1,4 +1,5 @@
-// Python bindings: scene files (Scene, load_scene, parse_scene) and the forward solve of one
+// Python bindings: scene files (Scene, load_scene, parse_scene), the options of their
+// sections beside the registration's (fields from their tables), and the forward solve of one
 // scene object (simulate).
 #include <string>
 #include <utility>
@@ -8,6 +9,7 @@
 #include "femreg/fem.h"
 #include "femreg/forward.h"
 #include "femreg/scene.h"
+#include "femreg/synth.h"
 
 namespace femreg {
 namespace python {
@@ -54,12 +56,45 @@ int ObjectIndex(const Scene& scene, const py::object& object) {
 }  // namespace
 
 void BindScene(py::module_& m) {
+  // ---- the scene's other options: their fields from their tables (DefFields) -------------
+  auto forward = py::class_<ForwardOptions>(m, "ForwardOptions", "The forward solve (the scene's forward: keys).");
+  forward.def(py::init<>());
+  DefFields(forward);
+  auto fracture = py::class_<FractureOptions>(m, "FractureOptions",
+                                              "The fracture model's limits (the scene's effects.fracture keys).");
+  fracture.def(py::init<>());
+  DefFields(fracture);
+  auto collision = py::class_<CollisionSpec>(
+      m, "CollisionOptions",
+      "Contacts' penalty and friction (the scene's collision: keys; its pairs and obstacles are the file's).");
+  collision.def(py::init<>());
+  DefFields(collision);
+  auto sensor = py::class_<DepthSensorOptions>(m, "DepthSensorOptions", "femreg synth's virtual sensor (synth.sensor).");
+  sensor.def(py::init<>());
+  DefFields(sensor);
+  auto synth = py::class_<SynthSpec>(m, "SynthOptions",
+                                     "femreg synth's own values (the scene's synth: keys), and its sensor.");
+  synth.def(py::init<>()).def_readwrite("sensor", &SynthSpec::sensor);
+  DefFields(synth);
+
   // ---- scenes ---------------------------------------------------------------------------
   py::class_<Scene>(m, "Scene", "A scene file: objects, materials, camera, registration settings.")
       .def_readonly("path", &Scene::path)
       .def_readonly("description", &Scene::description)
       .def_readwrite("registration", &Scene::registration,
                      "RegistrationOptions, changed in place (scene.registration.solver.backend = \"fast\")")
+      .def_readwrite("forward", &Scene::forward, "ForwardOptions (forward:)")
+      .def_property(
+          "fracture",
+          py::cpp_function([](Scene& s) -> FractureOptions& { return s.effects.fracture_options; },
+                           py::return_value_policy::reference_internal),
+          [](Scene& s, const FractureOptions& f) { s.effects.fracture_options = f; },
+          "FractureOptions (effects.fracture), changed in place; effects_fracture says whether it is on")
+      .def_property(
+          "effects_fracture", [](const Scene& s) { return s.effects.fracture; },
+          [](Scene& s, bool on) { s.effects.fracture = on; }, "effects.fracture: on or off")
+      .def_readwrite("collision", &Scene::collision, "CollisionOptions (collision:)")
+      .def_readwrite("synth", &Scene::synth, "SynthOptions (synth:; synth.frames ...)")
       .def_property_readonly("object_names",
                              [](const Scene& s) {
                                std::vector<std::string> names;

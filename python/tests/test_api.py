@@ -36,6 +36,27 @@ def test_options_attributes_follow_the_tables():
         options.validate()
 
 
+def test_scene_sections_follow_their_tables():
+    # The sections beside registration: (forward, effects.fracture, collision, synth) are
+    # bound from their tables too, changed in place and written back by to_yaml().
+    scene = femreg.parse_scene(
+        "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+        "forward: {load_steps: 3}\n"
+        "effects: {fracture: {max_cracks: 2}}\n"
+        "collision: {friction_slip: 0.0002}\n")
+    assert scene.forward.load_steps == 3
+    assert scene.fracture.max_cracks == 2 and scene.effects_fracture
+    assert scene.collision.friction_slip == pytest.approx(2e-4)
+    scene.forward.relative_tolerance = 1e-6  # the key `tolerance`
+    scene.fracture.cut_through = True
+    scene.collision.stiffness = 5e4
+    again = femreg.parse_scene(scene.to_yaml())
+    assert again.forward.relative_tolerance == pytest.approx(1e-6)
+    assert again.fracture.cut_through and again.fracture.max_cracks == 2
+    assert again.collision.stiffness == pytest.approx(5e4)
+    assert repr(femreg.Material()) == "Material(youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0)"
+
+
 def test_missing_files_raise():
     with pytest.raises(femreg.Error, match="no_such_mesh.vtu"):
         femreg.read_mesh("no_such_mesh.vtu")

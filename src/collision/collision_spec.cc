@@ -1,9 +1,12 @@
-// Keyframed obstacle poses (the collision section of a scene, femreg/collision_spec.h).
+// Keyframed obstacle poses and the collision options' ranges (the collision section of a
+// scene, femreg/collision_spec.h).
 #include "femreg/collision_spec.h"
 
 #include "femreg/geometry.h"
 
 namespace femreg {
+
+bool CollisionSpec::IsValid(std::string* error) const { return CheckFieldRanges(*this, error); }
 
 Eigen::Isometry3d ObstaclePose(const std::vector<ObstacleKeyframe>& keyframes, double frame) {
   auto pose = [](const ObstacleKeyframe& k) {

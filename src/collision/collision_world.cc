@@ -27,21 +27,8 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
                             const std::vector<Triangles>& surfaces, const Vertices& x,
                             const std::vector<Triangles>& obstacle_surfaces) {
   spec_ = spec;
-  if (!(spec.stiffness > 0) || !std::isfinite(spec.stiffness)) {
-    return Status::Error("collision.stiffness must be > 0");
-  }
-  if (!(spec.distance > 0) || !std::isfinite(spec.distance)) {
-    return Status::Error("collision.distance must be > 0");
-  }
-  if (!(spec.tolerance > 0) || !std::isfinite(spec.tolerance)) {
-    return Status::Error("collision.tolerance must be > 0");
-  }
-  if (!(spec.friction >= 0) || !std::isfinite(spec.friction)) {
-    return Status::Error("collision.friction must be >= 0");
-  }
-  if (!(spec.friction_slip > 0) || !std::isfinite(spec.friction_slip)) {
-    return Status::Error("collision.friction_slip must be > 0");
-  }
+  std::string error;
+  if (!spec.IsValid(&error)) return Status::Error(error);  // "collision.stiffness must be > 0 (got 0)"
   const int n = static_cast<int>(surfaces.size());
   surfaces_ = surfaces;
   auto find = [&](const std::string& name, int* index) {

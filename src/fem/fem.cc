@@ -11,33 +11,9 @@
 namespace femreg {
 
 bool Material::IsValid(std::string* error) const {
-  // The first violated constraint as "FIELD must be ... (got VALUE)", the field's name first:
-  // the scene parser puts the message at that key's line (scene/parse_objects.cc).
-  struct Check {
-    const char* field;
-    double value;
-    bool ok;
-    const char* constraint;
-  };
-  const Check checks[] = {
-      {"youngs_modulus", youngs_modulus, std::isfinite(youngs_modulus), "must be finite"},
-      {"youngs_modulus", youngs_modulus, youngs_modulus > 0, "must be > 0"},
-      {"poisson_ratio", poisson_ratio, std::isfinite(poisson_ratio), "must be finite"},
-      {"poisson_ratio", poisson_ratio, poisson_ratio < 0.5, "must be < 0.5"},
-      {"poisson_ratio", poisson_ratio, poisson_ratio > -1.0, "must be > -1"},
-      {"density", density, std::isfinite(density), "must be finite"},
-      {"density", density, density > 0, "must be > 0"},
-  };
-  for (const Check& c : checks) {
-    if (c.ok) continue;
-    if (error) {
-      std::ostringstream os;
-      os << c.field << " " << c.constraint << " (got " << c.value << ")";
-      *error = os.str();
-    }
-    return false;
-  }
-  return true;
+  // "poisson_ratio must be in (-1, 0.5) (got 0.5)", the field's name first: the scene parser
+  // puts the message at that key's line (scene/parse_objects.cc).
+  return CheckFieldRanges(*this, error);
 }
 
 const Material& ObjectMaterial::ForRegion(int region) const {

@@ -8,17 +8,10 @@
 
 namespace femreg {
 bool ForwardOptions::IsValid(std::string* error) const {
+  // The scene's keys by their table (femreg/forward.h); the program's own by hand.
   std::ostringstream os;
-  if (max_iterations < 1) {
-    os << "max_iterations must be >= 1 (got " << max_iterations << ")";
-  } else if (load_steps < 1) {
-    os << "load_steps must be >= 1 (got " << load_steps << ")";
-  } else if (!(std::isfinite(relative_tolerance) && relative_tolerance >= 0)) {
-    os << "relative_tolerance must be finite and >= 0 (got " << relative_tolerance << ")";
-  } else if (!(std::isfinite(absolute_tolerance) && absolute_tolerance >= 0)) {
-    os << "absolute_tolerance must be finite and >= 0 (got " << absolute_tolerance << ")";
-  } else if (relative_tolerance == 0 && absolute_tolerance == 0) {
-    os << "relative_tolerance and absolute_tolerance cannot both be 0";
+  if (!CheckFieldRanges(*this, error)) {
+    return false;
   } else if (!(std::isfinite(min_step) && min_step > 0 && min_step < 1)) {
     os << "min_step must be in (0, 1) (got " << min_step << ")";
   } else if (watchdog_steps < 0) {

@@ -163,29 +163,6 @@ bool FromString(const std::string& s, LinearSolver* v) { return EnumFromString(s
 bool FromString(const std::string& s, Preconditioner* v) { return EnumFromString(s, v); }
 bool FromString(const std::string& s, InitialPose* v) { return EnumFromString(s, v); }
 
-bool FieldInfo::InRange(double v) const {
-  if (std::isnan(v) || (finite && !std::isfinite(v))) return false;
-  if (has_min && (min_open ? !(v > min) : !(v >= min))) return false;
-  if (has_max && (max_open ? !(v < max) : !(v <= max))) return false;
-  return true;
-}
-
-std::string FieldInfo::RangeMessage() const {
-  std::ostringstream os;
-  os << "must be ";
-  if (has_min && has_max) {
-    os << "in " << (min_open ? "(" : "[") << min << ", " << max << (max_open ? ")" : "]");
-  } else if (has_min) {
-    os << (min_open ? "> " : ">= ") << min;
-  } else if (has_max) {
-    os << (max_open ? "< " : "<= ") << max;
-  } else {
-    os << "finite";
-  }
-  if (note != nullptr) os << " " << note;
-  return os.str();
-}
-
 bool CameraOptions::IsValid(std::string* error) const {
   if (!CheckFieldRanges(*this, error)) return false;
   if ((target - position).norm() <= 0) {

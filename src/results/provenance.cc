@@ -61,6 +61,24 @@ json RegistrationOptionsJson(const RegistrationOptions& o) {
   return j;
 }
 
+json SceneOptionsJson(const Scene& scene) {
+  json j;
+  j["forward"] = FieldsJson(scene.forward);
+  j["effects"] = {{"fracture", {{"enabled", scene.effects.fracture}}}, {"collision", scene.effects.collision}};
+  j["effects"]["fracture"].update(FieldsJson(scene.effects.fracture_options));
+  j["collision"] = FieldsJson(scene.collision);
+  json materials = json::array();
+  for (const ObjectSpec& o : scene.objects) materials.push_back(FieldsJson(o.material));
+  j["materials"] = materials;
+  if (scene.synth.enabled) {
+    j["synth"] = FieldsJson(scene.synth);
+    j["synth"]["sensor"] = FieldsJson(scene.synth.sensor);
+  } else {
+    j["synth"] = nullptr;
+  }
+  return j;
+}
+
 json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
                     const std::vector<std::string>& overrides,
                     const std::vector<std::string>& frame_files,
@@ -71,6 +89,7 @@ json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
   j["overrides"] = overrides;
   j["scene_resolved"] = SceneToYaml(scene);
   j["options"] = RegistrationOptionsJson(options);
+  j["scene_options"] = SceneOptionsJson(scene);
   json objects = json::array();
   for (const ObjectSpec& o : scene.objects) {
     objects.push_back({{"name", o.name},

@@ -17,9 +17,14 @@ namespace results_internal {
 // scene, --set and command-line flags were applied.
 nlohmann::ordered_json RegistrationOptionsJson(const RegistrationOptions& options);
 
+// The scene's other options, every field of their tables (femreg/field_table.h) by its scene
+// key: {"forward", "effects": {"fracture": {"enabled", ...}, "collision"}, "collision",
+// "materials": [per object], "synth" (with "sensor"; null without a synth section)}.
+nlohmann::ordered_json SceneOptionsJson(const Scene& scene);
+
 // {"femreg_version", "scene": path, "overrides": [--set ...], "scene_resolved": the scene as
 // YAML after the overrides (SceneToYaml: what differs from the defaults), "options": the
-// resolved registration options, "frame_files", "mask_dir" and "mask_files" (the depth
+// resolved registration options, "scene_options" (SceneOptionsJson), "frame_files", "mask_dir" and "mask_files" (the depth
 // frames' masks; null without), "ground_truth_files"}.
 nlohmann::ordered_json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
                               const std::vector<std::string>& overrides,

@@ -47,7 +47,7 @@ void SceneParser::ParseLoads(const YamlValue& list) {
 }
 
 void SceneParser::ParseForward(const YamlValue& v) {
-  v.CheckKeys({"model", "max_iterations", "load_steps", "tolerance", "absolute_tolerance"});
+  v.CheckKeys(FieldKeys<ForwardOptions>({}, {"model"}));
   if (v.Has("model")) {
     scene_->forward_model_chosen = true;
     scene_->forward_model =
@@ -55,13 +55,7 @@ void SceneParser::ParseForward(const YamlValue& v) {
                                                             ElasticModelType::kLinear,
                                                             ElasticModelType::kNeoHookean});
   }
-  ForwardOptions& f = scene_->forward;
-  if (v.Has("max_iterations")) f.max_iterations = IntAtLeast(v["max_iterations"], 1);
-  if (v.Has("load_steps")) f.load_steps = IntAtLeast(v["load_steps"], 1);
-  if (v.Has("tolerance")) f.relative_tolerance = PositiveDouble(v["tolerance"]);
-  if (v.Has("absolute_tolerance")) {
-    f.absolute_tolerance = NonNegativeDouble(v["absolute_tolerance"]);
-  }
+  ParseFields(v, &scene_->forward, /*check=*/true);  // the solve's limits (femreg/forward.h)
 }
 
 void SceneParser::ParseForceRegion(const YamlValue& v) {

@@ -23,28 +23,16 @@ void SceneParser::ParseFracture(const YamlValue& v) {
     e.fracture = v.AsBool();
     return;
   }
-  v.CheckKeys({"enabled", "max_splits_per_iteration", "max_splits_per_frame",
-               "crossing_tolerance", "max_cracks", "data_gap", "cut_through", "piece_prealign", "relax_pieces"});
+  v.CheckKeys(FieldKeys<FractureOptions>({}, {"enabled"}));
   e.fracture = v.Has("enabled") ? v["enabled"].AsBool() : true;
-  FractureOptions& f = e.fracture_options;
-  if (v.Has("max_splits_per_iteration")) f.max_splits_per_iteration = IntAtLeast(v["max_splits_per_iteration"], 1);
-  if (v.Has("max_splits_per_frame")) f.max_splits_per_frame = IntAtLeast(v["max_splits_per_frame"], 1);
-  if (v.Has("max_cracks")) f.max_cracks = IntAtLeast(v["max_cracks"], 0);
-  if (v.Has("data_gap")) f.data_gap = v["data_gap"].AsBool();
-  if (v.Has("cut_through")) f.cut_through = v["cut_through"].AsBool();
-  if (v.Has("piece_prealign")) f.piece_prealign = v["piece_prealign"].AsBool();
-  if (v.Has("relax_pieces")) f.relax_pieces = v["relax_pieces"].AsBool();
-  if (v.Has("crossing_tolerance")) {
-    f.crossing_tolerance = NonNegativeDouble(v["crossing_tolerance"]);
-    if (f.crossing_tolerance >= 1) v["crossing_tolerance"].Fail("must be < 1");
-  }
+  ParseFields(v, &e.fracture_options, /*check=*/true);  // the limits (femreg/fracture.h)
 }
 
 // The collision section (pairs of object names, penalty, rigid obstacles).
 void SceneParser::ParseCollision(const YamlValue& v) {
-  v.CheckKeys({"pairs", "stiffness", "distance", "tolerance", "augmented", "obstacles", "friction",
-               "friction_slip"});
+  v.CheckKeys(FieldKeys<CollisionSpec>({"obstacles"}, {"pairs"}));
   CollisionSpec& c = scene_->collision;
+  ParseFields(v, &c, /*check=*/true);  // the penalty and friction (femreg/collision_spec.h)
   auto object_name = [&](const YamlValue& n) {
     const std::string name = n.AsString();
     std::vector<std::string> names;
@@ -76,12 +64,6 @@ void SceneParser::ParseCollision(const YamlValue& v) {
       c.pair_friction.push_back(mu);
     }
   }
-  if (v.Has("stiffness")) c.stiffness = PositiveDouble(v["stiffness"]);
-  if (v.Has("distance")) c.distance = PositiveDouble(v["distance"]);
-  if (v.Has("tolerance")) c.tolerance = PositiveDouble(v["tolerance"]);
-  if (v.Has("augmented")) c.augmented = v["augmented"].AsBool();
-  if (v.Has("friction")) c.friction = NonNegativeDouble(v["friction"]);
-  if (v.Has("friction_slip")) c.friction_slip = PositiveDouble(v["friction_slip"]);
   if (v.Has("obstacles")) {
     const YamlValue list = v["obstacles"];
     list.RequireSequence();

@@ -157,29 +157,14 @@ MeshGeneratorSpec SceneParser::ParseGenerator(const YamlValue& v) {
 }
 
 Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults, bool region) {
-  if (region) {
-    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density", "toughness"});
-  } else {
-    v.CheckKeys({"youngs_modulus", "poisson_ratio", "density", "model", "volume"});
-  }
-  // The ranges are Material::IsValid's alone. The defaults are valid, so checking after each
-  // key is set blames the key just read, and the message goes to its line:
-  // "beam.yaml:6: objects[0].material.poisson_ratio: must be < 0.5 (got 0.5)".
+  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{"toughness"}
+                                          : std::vector<std::string>{"model", "volume"}));
+  // The keys and ranges are Material's table (femreg/fem.h); a bad value fails at its line:
+  // "beam.yaml:6: objects[0].material.poisson_ratio: must be in (-1, 0.5) (got 0.5)".
   Material m = defaults;
   std::string error;
   if (!m.IsValid(&error)) v.Fail(error);
-  const std::pair<const char*, double*> fields[] = {{"youngs_modulus", &m.youngs_modulus},
-                                                    {"poisson_ratio", &m.poisson_ratio},
-                                                    {"density", &m.density}};
-  for (const auto& [key, value] : fields) {
-    if (!v.Has(key)) continue;
-    const YamlValue field = v[key];
-    *value = field.AsDouble();
-    if (m.IsValid(&error)) continue;
-    // IsValid names the field first ("poisson_ratio must be ..."); the location names it too.
-    const std::string prefix = std::string(key) + " ";
-    field.Fail(error.compare(0, prefix.size(), prefix) == 0 ? error.substr(prefix.size()) : error);
-  }
+  ParseFields(v, &m, /*check=*/true);
   return m;
 }
 

@@ -10,8 +10,7 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseSynth(const YamlValue& v) {
-  v.CheckKeys({"frames", "seed", "sanity_check", "ground_truth", "sensor", "background",
-               "motion", "bodies", "artefacts"});
+  v.CheckKeys(FieldKeys<SynthSpec>({"ground_truth", "sensor", "background", "motion", "bodies", "artefacts"}));
   SynthSpec& s = scene_->synth;
   s.enabled = true;
   s.source_name = std::filesystem::path(source_).filename().string();
@@ -23,9 +22,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
   if (!scene_->registration.camera.enabled) {
     v.Fail("needs registration.camera: the virtual depth camera renders from it");
   }
-  if (v.Has("frames")) s.frames = IntAtLeast(v["frames"], 1);
-  if (v.Has("seed")) s.seed = static_cast<uint64_t>(IntAtLeast(v["seed"], 0));
-  if (v.Has("sanity_check")) s.sanity_check = v["sanity_check"].AsBool();
+  ParseFields(v, &s, /*check=*/true);  // frames, seed, sanity_check (femreg/scene.h)
   s.material = object.material;
   s.ground_truth_where = v.Location() + " (" + v.path() + ")";
   if (v.Has("ground_truth")) {
@@ -119,7 +116,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
     list.RequireSequence();
     for (int i = 0; i < list.size(); ++i) {
       const YamlValue b = list[i];
-      b.CheckKeys({"name", "box", "keyframes", "in_cloud", "press", "contact_tolerance"});
+      b.CheckKeys(FieldKeys<SynthBodySpec>({}, {"name", "box", "keyframes"}));
       SynthBodySpec body;
       body.name = b.Has("name") ? b["name"].AsString() : "body" + std::to_string(i);
       if (!names.insert(body.name).second) b["name"].Fail("duplicate name " + Quote(body.name));
@@ -133,34 +130,17 @@ void SceneParser::ParseSynth(const YamlValue& v) {
         box["max"].Fail("must be > min in every coordinate");
       }
       if (b.Has("keyframes")) body.keyframes = ParseKeyframes(b, false);
-      if (b.Has("in_cloud")) body.in_cloud = b["in_cloud"].AsBool();
-      if (b.Has("press")) body.press = b["press"].AsBool();
-      if (b.Has("contact_tolerance")) {
-        body.contact_tolerance = NonNegativeDouble(b["contact_tolerance"]);
-      }
+      ParseFields(b, &body, /*check=*/true);
       s.bodies.push_back(body);
     }
   }
 }
 
 void SceneParser::ParseSensor(const YamlValue& v, DepthSensorOptions* sensor) {
-  v.CheckKeys({"noise_coefficient", "grazing_angle_deg", "pixel_stride", "outlier_fraction",
-               "outlier_margin", "near"});
-  if (v.Has("noise_coefficient")) sensor->noise_coefficient = v["noise_coefficient"].AsDouble();
-  if (v.Has("grazing_angle_deg")) sensor->grazing_angle_deg = v["grazing_angle_deg"].AsDouble();
-  if (v.Has("pixel_stride")) sensor->pixel_stride = v["pixel_stride"].AsInt();
-  if (v.Has("outlier_fraction")) sensor->outlier_fraction = v["outlier_fraction"].AsDouble();
-  if (v.Has("outlier_margin")) sensor->outlier_margin = NonNegativeDouble(v["outlier_margin"]);
-  if (v.Has("near")) sensor->near = v["near"].AsDouble();
+  v.CheckKeys(FieldKeys<DepthSensorOptions>());
+  ParseFields(v, sensor, /*check=*/true);  // each key at its line (femreg/synth.h)
   std::string error;
-  if (!sensor->IsValid(&error)) {
-    // "sensor.pixel_stride must be >= 1 (got 0)": locate the key.
-    const size_t dot = error.find('.'), space = error.find(' ');
-    const std::string key =
-        dot != std::string::npos && dot < space ? error.substr(dot + 1, space - dot - 1) : "";
-    const YamlValue node = !key.empty() && v.Has(key) ? v[key] : v;
-    node.Fail(space == std::string::npos ? error : error.substr(space + 1));
-  }
+  if (!sensor->IsValid(&error)) v.Fail(error);  // the camera, the artefacts
 }
 
 // artefacts: {NAME: STRENGTH} or {NAME: {KEY: value, ...}}, names and keys from

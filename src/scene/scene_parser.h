@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "femreg/option_fields.h"
@@ -51,10 +52,11 @@ Enum ParseEnum(const YamlValue& v) {
   return ParseEnum(v, std::vector<Enum>(EnumValues<Enum>::kAll.begin(), EnumValues<Enum>::kAll.end()));
 }
 
-// The keys of an options table, then `extra` (keys its section reads itself).
+// The keys of an options table between `before` and `extra` (keys its section reads
+// itself), in the order messages list them.
 template <class Options>
-std::vector<std::string> FieldKeys(std::vector<std::string> extra = {}) {
-  std::vector<std::string> keys;
+std::vector<std::string> FieldKeys(std::vector<std::string> extra = {}, std::vector<std::string> before = {}) {
+  std::vector<std::string> keys = std::move(before);
   OptionFields<Options>::Visit([&](auto, const FieldInfo& f) {
     const std::string key = f.group != nullptr ? f.group : f.key;  // a group's key once
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
@@ -73,10 +75,12 @@ std::vector<std::string> GroupKeys(const std::string& group) {
   return keys;
 }
 
-// Reads the fields of an options table that the section `v` sets, each by its type. The
-// ranges are checked afterwards, by IsValid, which names the field.
+// Reads the fields of an options table that the section `v` sets, each by its type. With
+// `check`, a number out of its row's range fails at its key ("must be >= 1 (got 0)");
+// without, the ranges are checked afterwards, by IsValid, which names the field (the
+// registration, whose rules across fields come with the ranges).
 template <class Options>
-void ParseFields(const YamlValue& v, Options* o) {
+void ParseFields(const YamlValue& v, Options* o, bool check = false) {
   std::vector<std::string> checked;  // the groups whose keys were checked
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     if (f.group != nullptr) {
@@ -95,14 +99,18 @@ void ParseFields(const YamlValue& v, Options* o) {
     using T = std::decay_t<decltype(field)>;
     if constexpr (std::is_same_v<T, bool>) {
       field = x.AsBool();
-    } else if constexpr (std::is_same_v<T, int>) {
-      field = x.AsInt();
+    } else if constexpr (std::is_integral_v<T>) {  // int, a seed's unsigned
+      const int value = x.AsInt();
+      if (check && f.checked() && !f.InRange(value)) x.Fail(f.RangeError(value));
+      field = static_cast<T>(value);
     } else if constexpr (std::is_same_v<T, double>) {
-      field = x.AsDouble();
+      const double value = x.AsDouble();
+      if (check && f.checked() && !f.InRange(value)) x.Fail(f.RangeError(value));
+      field = value;
     } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
       field = x.AsVector3();
     } else {
-      static_assert(std::is_enum_v<T>, "an options table holds bool, int, double, Vector3d and enums");
+      static_assert(std::is_enum_v<T>, "an options table holds bool, integers, double, Vector3d and enums");
       field = ParseEnum<T>(x);
     }
   });

@@ -60,11 +60,10 @@ namespace {
 
 using namespace internal::scene_writer;  // NOLINT(build/namespaces)
 
+// The material's keys that differ from `base` (the object's material for a region).
 YAML::Node MaterialNode(const Material& m, const Material& base) {
   YAML::Node n = FlowMap();
-  Put(n, "youngs_modulus", m.youngs_modulus, base.youngs_modulus);
-  Put(n, "poisson_ratio", m.poisson_ratio, base.poisson_ratio);
-  Put(n, "density", m.density, base.density);
+  PutFields(n, m, {}, false, base);
   return n;
 }
 
@@ -182,17 +181,8 @@ YAML::Node AnchorNode(const Scene& scene, const AnchorSpec& a) {
 }
 
 YAML::Node EffectsNode(const EffectsSpec& e) {
-  const FractureOptions d;
-  const FractureOptions& f = e.fracture_options;
   YAML::Node fracture = FlowMap();
-  Put(fracture, "max_splits_per_iteration", f.max_splits_per_iteration, d.max_splits_per_iteration);
-  Put(fracture, "max_splits_per_frame", f.max_splits_per_frame, d.max_splits_per_frame);
-  Put(fracture, "crossing_tolerance", f.crossing_tolerance, d.crossing_tolerance);
-  Put(fracture, "max_cracks", f.max_cracks, d.max_cracks);
-  Put(fracture, "data_gap", f.data_gap, d.data_gap);
-  Put(fracture, "cut_through", f.cut_through, d.cut_through);
-  Put(fracture, "piece_prealign", f.piece_prealign, d.piece_prealign);
-  Put(fracture, "relax_pieces", f.relax_pieces, d.relax_pieces);
+  PutFields(fracture, e.fracture_options);
   YAML::Node n = FlowMap();
   if (fracture.size() > 0) {
     if (!e.fracture) fracture["enabled"] = false;
@@ -246,7 +236,6 @@ YAML::Node ObstacleNode(const ObstacleSpec& o, const std::string& base_dir) {
 }
 
 YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
-  const CollisionSpec d;
   YAML::Node n = Map();
   if (!c.pairs.empty()) {
     YAML::Node pairs = FlowSeq();
@@ -265,12 +254,7 @@ YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
     }
     n["pairs"] = pairs;
   }
-  Put(n, "stiffness", c.stiffness, d.stiffness);
-  Put(n, "distance", c.distance, d.distance);
-  Put(n, "tolerance", c.tolerance, d.tolerance);
-  Put(n, "augmented", c.augmented, d.augmented);
-  Put(n, "friction", c.friction, d.friction);
-  Put(n, "friction_slip", c.friction_slip, d.friction_slip);
+  PutFields(n, c);
   if (!c.obstacles.empty()) {
     YAML::Node obstacles(YAML::NodeType::Sequence);
     for (const ObstacleSpec& o : c.obstacles) obstacles.push_back(ObstacleNode(o, base_dir));
@@ -283,23 +267,15 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
   const SynthSpec& s = scene.synth;
   const SynthSpec d;
   YAML::Node n = Map();
-  Put(n, "frames", s.frames, d.frames);
-  if (s.seed != d.seed) n["seed"] = s.seed;
-  Put(n, "sanity_check", s.sanity_check, d.sanity_check);
+  PutFields(n, s);  // frames, seed, sanity_check
   YAML::Node truth = FlowMap();
   Put(truth, "refinement", s.refinement, d.refinement);
   if (!s.mesh_path.empty()) truth["mesh"] = FilePath(s.mesh_path, base_dir);
   if (s.generate.shape != MeshGeneratorSpec::Shape::kNone) truth["generate"] = GeneratorNode(s.generate);
   if (!scene.objects.empty()) PutMap(truth, "material", MaterialNode(s.material, scene.objects[0].material));
   PutMap(n, "ground_truth", truth);
-  const DepthSensorOptions& o = s.sensor;
   YAML::Node sensor = FlowMap();
-  Put(sensor, "noise_coefficient", o.noise_coefficient, d.sensor.noise_coefficient);
-  Put(sensor, "grazing_angle_deg", o.grazing_angle_deg, d.sensor.grazing_angle_deg);
-  Put(sensor, "pixel_stride", o.pixel_stride, d.sensor.pixel_stride);
-  Put(sensor, "outlier_fraction", o.outlier_fraction, d.sensor.outlier_fraction);
-  Put(sensor, "outlier_margin", o.outlier_margin, d.sensor.outlier_margin);
-  Put(sensor, "near", o.near, d.sensor.near);
+  PutFields(sensor, s.sensor);
   PutMap(n, "sensor", sensor);
   if (s.background) {
     YAML::Node background = FlowMap();
@@ -329,7 +305,6 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
   }
   if (!s.bodies.empty()) {
     YAML::Node bodies(YAML::NodeType::Sequence);
-    const SynthBodySpec body_defaults;
     for (const SynthBodySpec& b : s.bodies) {
       YAML::Node body = FlowMap();
       body["name"] = b.name;
@@ -338,9 +313,7 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
       box["max"] = Vec(b.box_max);
       body["box"] = box;
       if (!b.keyframes.empty()) body["keyframes"] = MotionKeyframes(b.keyframes, false);
-      Put(body, "in_cloud", b.in_cloud, body_defaults.in_cloud);
-      Put(body, "press", b.press, body_defaults.press);
-      Put(body, "contact_tolerance", b.contact_tolerance, body_defaults.contact_tolerance);
+      PutFields(body, b);
       bodies.push_back(body);
     }
     n["bodies"] = bodies;

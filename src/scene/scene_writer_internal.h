@@ -1,7 +1,8 @@
 // The YAML helpers shared by scene_writer.cc (objects, conditions, anchors, effects, collision,
 // synth; SceneToYaml) and scene_writer_options.cc (the forward and registration options):
-// numbers that read back exactly, flow maps and sequences, and Put, which writes a key only
-// where its value differs from the default.
+// numbers that read back exactly, flow maps and sequences, PutFields, which writes an options
+// table's keys (femreg/field_table.h), and Put, which writes a key of what has no table (a
+// list entry's) only where its value differs from the default.
 #ifndef FEMREG_SCENE_SCENE_WRITER_INTERNAL_H_
 #define FEMREG_SCENE_SCENE_WRITER_INTERNAL_H_
 
@@ -15,6 +16,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "femreg/field_table.h"
 #include "femreg/option_fields.h"
 #include "femreg/scene.h"
 
@@ -101,20 +103,20 @@ YAML::Node FieldNode(const T& value) {
   } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
     return Vec(value);
   } else {
+    static_assert(std::is_integral_v<T>, "an options table holds bool, integers, double, Vector3d and enums");
     return YAML::Node(value);
   }
 }
 
-// Every field of an options table (femreg/option_fields.h) that differs from the default
-// (every field with `all`), in the table's order, but those in `skip` (which the section
-// writes itself).
+// Every field of an options table (femreg/field_table.h) that differs from `d` (the
+// struct's defaults unless given; every field with `all`), in the table's order, but those in
+// `skip` (which the section writes itself).
 // A group (FieldInfo::group) is written, as a flow map, when any of its fields differs: the
 // fields that differ and those the group needs (FieldInfo::required: a plane's distance).
 // `skip` names fields by their path in the section ("crop.min").
 template <class Options>
 void PutFields(YAML::Node map, const Options& value, const std::vector<std::string>& skip = {},
-               bool all = false) {
-  const Options d;
+               bool all = false, const Options& d = Options()) {
   std::vector<std::string> changed_groups;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     if (f.group != nullptr && value.*member != d.*member) changed_groups.push_back(f.group);

@@ -12,16 +12,11 @@ namespace internal {
 namespace scene_writer {
 
 YAML::Node ForwardNode(const Scene& scene) {
-  const ForwardOptions& f = scene.forward;
-  const ForwardOptions d;
   YAML::Node n = FlowMap();
   if (scene.forward_model != ElasticModelType::kCorotational || scene.forward_model_chosen) {
     n["model"] = ToString(scene.forward_model);
   }
-  Put(n, "max_iterations", f.max_iterations, d.max_iterations);
-  Put(n, "load_steps", f.load_steps, d.load_steps);
-  Put(n, "tolerance", f.relative_tolerance, d.relative_tolerance);
-  Put(n, "absolute_tolerance", f.absolute_tolerance, d.absolute_tolerance);
+  PutFields(n, scene.forward);  // femreg/forward.h's table
   return n;
 }
 

@@ -61,25 +61,9 @@ bool SensorArtefacts::IsValid(std::string* error) const {
 }
 
 bool DepthSensorOptions::IsValid(std::string* error) const {
-  std::ostringstream os;
   if (!camera.IsValid(error)) return false;
-  if (!(near > 0)) {
-    os << "sensor.near must be > 0 (got " << near << ")";
-  } else if (!(noise_coefficient >= 0)) {
-    os << "sensor.noise_coefficient must be >= 0 (got " << noise_coefficient << ")";
-  } else if (!(grazing_angle_deg > 0 && grazing_angle_deg <= 90)) {
-    os << "sensor.grazing_angle_deg must be in (0, 90] (got " << grazing_angle_deg << ")";
-  } else if (pixel_stride < 1) {
-    os << "sensor.pixel_stride must be >= 1 (got " << pixel_stride << ")";
-  } else if (!(outlier_fraction >= 0 && outlier_fraction <= 10)) {
-    os << "sensor.outlier_fraction must be in [0, 10] (got " << outlier_fraction << ")";
-  } else if (!artefacts.IsValid(error)) {
-    return false;
-  } else {
-    return true;
-  }
-  if (error) *error = os.str();
-  return false;
+  // "sensor.near must be > 0 (got 0)": the table's ranges (femreg/synth.h), then the artefacts.
+  return CheckFieldRanges(*this, error) && artefacts.IsValid(error);
 }
 
 DepthSensor::DepthSensor(const DepthSensorOptions& options) : options_(options) {

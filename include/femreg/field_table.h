@@ -1,0 +1,179 @@
+// femreg/field_table.h - the machinery of the options' field tables, each option described
+// once.
+//
+// OptionFields<S>::Visit(v) calls v(&S::member, FieldInfo) for every member of the options
+// struct S that the table describes, in the order the scene file writes them. The scene
+// parser and writer, the range checks of S::IsValid, the Python module and a run's
+// provenance all walk the table, so an option is named in its struct and in its table row
+// and nowhere else (docs/dev/adding-an-option.md). A field's type says how it is read and
+// written: bool, an integer, double, Eigen::Vector3d (a list of 3), or an enum with
+// EnumValues (written as ToString's names).
+//
+// The tables sit beside their structs: the registration's in femreg/option_fields.h, the
+// material's in femreg/fem.h, the forward solve's in femreg/forward.h, collision's in
+// femreg/collision_spec.h, fracture's in femreg/fracture.h, the virtual sensor's in
+// femreg/synth.h and synth's in femreg/scene.h. This header depends on nothing of femreg, so
+// each module can describe its own options.
+#ifndef FEMREG_FIELD_TABLE_H_
+#define FEMREG_FIELD_TABLE_H_
+
+#include <Eigen/Core>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+namespace femreg {
+
+// One field: its scene key (also the key in provenance and in messages, "weights.elastic"),
+// its Python attribute where that differs, a docstring for Python, and the range IsValid
+// holds a number to. A number with a bound must also be finite.
+struct FieldInfo {
+  const char* key = "";
+  const char* python = nullptr;  // nullptr: the Python attribute is the key
+  const char* doc = "";
+  bool finite = false;
+  bool has_min = false, min_open = false, has_max = false, max_open = false;
+  double min = 0.0, max = 0.0;
+  const char* note = nullptr;  // follows the range in the message: "must be >= 0 (0 = off)"
+  // A field nested one level down in its section (`outliers: {neighbors: 8}`): the group's
+  // key; its own key is then the one inside the group. Null: directly in the section.
+  const char* group = nullptr;
+  bool required = false;  // in a group: written whenever the group is (a plane's distance)
+
+  constexpr explicit FieldInfo(const char* k) : key(k) {}
+  constexpr FieldInfo AtLeast(double v) const { return Bound(true, v, false); }
+  constexpr FieldInfo Above(double v) const { return Bound(true, v, true); }
+  constexpr FieldInfo AtMost(double v) const { return Bound(false, v, false); }
+  constexpr FieldInfo Below(double v) const { return Bound(false, v, true); }
+  constexpr FieldInfo Finite() const {
+    FieldInfo f = *this;
+    f.finite = true;
+    return f;
+  }
+  constexpr FieldInfo Note(const char* n) const {
+    FieldInfo f = *this;
+    f.note = n;
+    return f;
+  }
+  constexpr FieldInfo In(const char* g) const {
+    FieldInfo f = *this;
+    f.group = g;
+    return f;
+  }
+  constexpr FieldInfo Required() const {
+    FieldInfo f = *this;
+    f.required = true;
+    return f;
+  }
+  constexpr FieldInfo Python(const char* name) const {
+    FieldInfo f = *this;
+    f.python = name;
+    return f;
+  }
+  constexpr FieldInfo Doc(const char* d) const {
+    FieldInfo f = *this;
+    f.doc = d;
+    return f;
+  }
+  const char* python_name() const { return python != nullptr ? python : key; }
+  // The key within the section: "outliers.neighbors", or the key.
+  std::string path() const { return group != nullptr ? std::string(group) + "." + key : std::string(key); }
+  bool checked() const { return finite || has_min || has_max; }
+  // Whether a number lies in the range (NaN never does; nor infinity when checked).
+  bool InRange(double v) const {
+    if (std::isnan(v) || (finite && !std::isfinite(v))) return false;
+    if (has_min && (min_open ? !(v > min) : !(v >= min))) return false;
+    if (has_max && (max_open ? !(v < max) : !(v <= max))) return false;
+    return true;
+  }
+  // "must be >= 0 (0 = off)", "must be in (0, 1)", "must be finite".
+  std::string RangeMessage() const {
+    std::ostringstream os;
+    os << "must be ";
+    if (has_min && has_max) {
+      os << "in " << (min_open ? "(" : "[") << min << ", " << max << (max_open ? ")" : "]");
+    } else if (has_min) {
+      os << (min_open ? "> " : ">= ") << min;
+    } else if (has_max) {
+      os << (max_open ? "< " : "<= ") << max;
+    } else {
+      os << "finite";
+    }
+    if (note != nullptr) os << " " << note;
+    return os.str();
+  }
+  // RangeMessage and the value: "must be >= 0 (0 = off) (got -1)".
+  template <class T>
+  std::string RangeError(const T& value) const {
+    std::ostringstream os;
+    os << RangeMessage() << " (got " << value << ")";
+    return os.str();
+  }
+
+ private:
+  constexpr FieldInfo Bound(bool lower, double v, bool open) const {
+    FieldInfo f = *this;
+    f.finite = true;
+    if (lower) {
+      f.has_min = true, f.min = v, f.min_open = open;
+    } else {
+      f.has_max = true, f.max = v, f.max_open = open;
+    }
+    return f;
+  }
+};
+
+// An enum's values in the order messages list them; FromString accepts exactly their
+// ToString names. Specialized beside each enum a table holds.
+template <class Enum>
+struct EnumValues;
+
+// The tables. kSection is the struct's key path in the scene file ("weights",
+// "effects.fracture"; "" for the registration's top level and a material) and names its
+// fields in messages.
+template <class Options>
+struct OptionFields;
+
+// A field as messages name it: "weights.elastic"; "loads" at the top level.
+template <class Options>
+std::string FieldName(const FieldInfo& f) {
+  const std::string section = OptionFields<Options>::kSection;
+  return section.empty() ? f.path() : section + "." + f.path();
+}
+
+// The first number of `o` out of its table row's range, as "section.key message (got
+// value)" in *error (IsValid's form); true when every field is in range.
+template <class Options>
+bool CheckFieldRanges(const Options& o, std::string* error) {
+  bool ok = true;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    using T = std::decay_t<decltype(o.*member)>;
+    if constexpr (std::is_same_v<T, Eigen::Vector3d>) {  // finite only
+      const Eigen::Vector3d& value = o.*member;
+      if (!ok || !f.checked() || value.allFinite()) return;
+      ok = false;
+      if (error != nullptr) {
+        std::ostringstream os;
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got [" << value.x() << ", "
+           << value.y() << ", " << value.z() << "])";
+        *error = os.str();
+      }
+    } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+      const T value = o.*member;
+      if (!ok || !f.checked() || f.InRange(static_cast<double>(value))) return;
+      ok = false;
+      if (error != nullptr) {
+        std::ostringstream os;
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got "
+           << value << ")";
+        *error = os.str();
+      }
+    }
+  });
+  return ok;
+}
+
+}  // namespace femreg
+
+#endif  // FEMREG_FIELD_TABLE_H_

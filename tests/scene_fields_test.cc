@@ -1,0 +1,268 @@
+// The tables of the scene's sections beside the registration (femreg/field_table.h): a
+// material's, the forward solve's, collision's, fracture's, synth's, its sensor's and its
+// bodies'. Each covers every member of its struct but those named as read by hand; every
+// field, set alone to a value other than its default, is written by the scene writer and read
+// back by the parser unchanged; and a value out of a field's range fails, in IsValid (where
+// the struct has one) and in a scene file, with the field's name (there with the file, line
+// and key path). tests/option_fields_test.cc does the same for the registration's tables.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <type_traits>
+#include <utility>
+
+#include "femreg/collision_spec.h"
+#include "femreg/fem.h"
+#include "femreg/field_table.h"
+#include "femreg/forward.h"
+#include "femreg/fracture.h"
+#include "femreg/scene.h"
+#include "femreg/synth.h"
+
+namespace femreg {
+namespace {
+
+// The number of members of an aggregate: the longest brace list of AnyValue that
+// initializes it. A member added to a struct but not to its table changes this count.
+struct AnyValue {
+  template <class T>
+  constexpr operator T() const {  // NOLINT: converts to whatever member it initializes
+    return T{};
+  }
+};
+template <class T, class... A>
+auto Initializes(int) -> decltype(T{std::declval<A>()...}, std::true_type{});
+template <class T, class... A>
+std::false_type Initializes(...);
+template <class T, class... A>
+constexpr std::size_t MemberCount() {
+  if constexpr (decltype(Initializes<T, A..., AnyValue>(0))::value) {
+    return MemberCount<T, A..., AnyValue>();
+  } else {
+    return sizeof...(A);
+  }
+}
+
+template <class Options>
+std::size_t FieldCount() {
+  std::size_t n = 0;
+  OptionFields<Options>::Visit([&](auto, const FieldInfo&) { ++n; });
+  return n;
+}
+
+TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
+  EXPECT_EQ(FieldCount<Material>(), MemberCount<Material>());
+  // + min_step, tangent, watchdog_steps, num_threads, verbose: the program's, no scene keys.
+  EXPECT_EQ(FieldCount<ForwardOptions>() + 5, MemberCount<ForwardOptions>());
+  // + pairs, obstacles, pair_friction: lists of entries.
+  EXPECT_EQ(FieldCount<CollisionSpec>() + 3, MemberCount<CollisionSpec>());
+  // + toughness, region_toughness (the objects'), min_piece_fraction (no scene key).
+  EXPECT_EQ(FieldCount<FractureOptions>() + 3, MemberCount<FractureOptions>());
+  // + camera (registration.camera), artefacts (SynthArtefactKeys).
+  EXPECT_EQ(FieldCount<DepthSensorOptions>() + 2, MemberCount<DepthSensorOptions>());
+  // + name, box_min, box_max, keyframes.
+  EXPECT_EQ(FieldCount<SynthBodySpec>() + 4, MemberCount<SynthBodySpec>());
+  // + enabled, the ground truth's five (refinement, mesh_path, generate, material,
+  // ground_truth_where), sensor, the background's four, motion, bodies, the four of the
+  // artefacts table (occluder_*, leave_*), source_name.
+  EXPECT_EQ(FieldCount<SynthSpec>() + 18, MemberCount<SynthSpec>());
+}
+
+// A value other than `d` that the field's range allows: a flag flipped, a number one larger
+// (or one smaller, or halfway to an upper bound that one larger would pass).
+template <class T>
+T OtherValue(const FieldInfo& f, T d) {
+  if constexpr (std::is_same_v<T, bool>) {
+    return !d;
+  } else {
+    static_assert(std::is_arithmetic_v<T>, "the scene's tables hold flags and numbers");
+    T v = d + 1;
+    if (!f.InRange(static_cast<double>(v))) {
+      v = std::is_integral_v<T> ? static_cast<T>(d - 1) : static_cast<T>((d + f.max) / 2);
+    }
+    return v;
+  }
+}
+
+// One object, a camera and a synth section with a body, so that every section can be set.
+const char kBase[] =
+    "objects:\n"
+    "  - generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}\n"
+    "registration:\n"
+    "  camera: {position: [0, 0, 2], target: [0, 0, 0], up: [0, 1, 0]}\n"
+    "synth:\n"
+    "  ground_truth: {refinement: 2}\n"
+    "  bodies: [{box: {min: [0, 0, 0.2], max: [0.1, 0.1, 0.3]}}]\n";
+
+// What else a field needs to be set on its own (the parser's rules across keys).
+void AllowAlone(const std::string& field, Scene* scene) {
+  if (field == "synth.sanity_check") scene->synth.refinement = 1;  // a sanity check has no ground_truth
+}
+
+template <class Options>
+void ExpectSameFields(const Options& a, const Options& b, const std::string& when) {
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    EXPECT_EQ(a.*member, b.*member) << f.key << " after " << when;
+  });
+}
+
+template <class Options>
+void ExpectEachFieldRoundTrips(Options& (*section)(Scene&)) {
+  int fields = 0;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    ++fields;
+    const std::string field = FieldName<Options>(f);
+    Scene scene;
+    const Status base = ParseScene(kBase, "base.yaml", ".", &scene);
+    ASSERT_TRUE(base.ok()) << base.message();
+    Options& o = section(scene);
+    const auto d = o.*member;
+    o.*member = OtherValue(f, d);
+    ASSERT_NE(o.*member, d) << field;
+    AllowAlone(field, &scene);
+    std::string error;
+    EXPECT_TRUE(CheckFieldRanges(o, &error)) << field << ": " << error;
+
+    const std::string yaml = SceneToYaml(scene);
+    EXPECT_NE(yaml.find(std::string(f.key) + ": "), std::string::npos) << field << " not written:\n" << yaml;
+    Scene read;
+    const Status status = ParseScene(yaml, "written.yaml", ".", &read);
+    ASSERT_TRUE(status.ok()) << field << ": " << status.message() << "\n" << yaml;
+    ExpectSameFields(o, section(read), field);
+  });
+  EXPECT_EQ(fields, static_cast<int>(FieldCount<Options>()));
+}
+
+Material& ObjectMaterial0(Scene& s) { return s.objects[0].material; }
+ForwardOptions& Forward(Scene& s) { return s.forward; }
+CollisionSpec& Collision(Scene& s) { return s.collision; }
+FractureOptions& Fracture(Scene& s) { return s.effects.fracture_options; }
+DepthSensorOptions& Sensor(Scene& s) { return s.synth.sensor; }
+SynthSpec& Synth(Scene& s) { return s.synth; }
+SynthBodySpec& Body0(Scene& s) { return s.synth.bodies[0]; }
+
+TEST(SceneFields, EachFieldRoundTripsThroughTheSceneFile) {
+  ExpectEachFieldRoundTrips(&ObjectMaterial0);
+  ExpectEachFieldRoundTrips(&Forward);
+  ExpectEachFieldRoundTrips(&Collision);
+  ExpectEachFieldRoundTrips(&Fracture);
+  ExpectEachFieldRoundTrips(&Sensor);
+  ExpectEachFieldRoundTrips(&Synth);
+  ExpectEachFieldRoundTrips(&Body0);
+}
+
+// A value the field's range refuses: below a lower bound, above an upper one, else NaN.
+double OutOfRange(const FieldInfo& f) {
+  if (f.has_min) return f.min_open ? f.min : f.min - 1;
+  if (f.has_max) return f.max_open ? f.max : f.max + 1;
+  return std::nan("");
+}
+
+// Where a section's keys go in a scene file: the text around "KEY: VALUE", and the line and
+// key path the parser names it by.
+struct Place {
+  std::string before, after;
+  int line;
+  std::string path;
+};
+
+// The struct's own check where it has one (IsValid), else the table's ranges alone.
+template <class Options>
+bool Valid(const Options& o, std::string* error) {
+  if constexpr (std::is_same_v<Options, SynthSpec> || std::is_same_v<Options, SynthBodySpec>) {
+    return CheckFieldRanges(o, error);
+  } else {
+    return o.IsValid(error);
+  }
+}
+
+template <class Options>
+void ExpectRangesNamed(const Place& place) {
+  int checked = 0;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    if (!f.checked()) return;
+    ++checked;
+    const double bad = OutOfRange(f);
+    ASSERT_FALSE(f.InRange(bad)) << f.key;
+    const std::string field = FieldName<Options>(f);
+
+    Options o;
+    using T = std::decay_t<decltype(o.*member)>;
+    std::string error;
+    if (!std::is_unsigned_v<T>) {  // a seed cannot hold -1; the scene file can
+      o.*member = static_cast<T>(bad);
+      EXPECT_FALSE(Valid(o, &error)) << field;
+      EXPECT_EQ(error.rfind(field + " must be ", 0), 0u) << error;
+    }
+
+    std::string text = std::isnan(bad) ? ".nan" : std::to_string(bad);
+    if (std::is_integral_v<T>) text = std::to_string(static_cast<int>(bad));
+    Scene scene;
+    const std::string yaml = place.before + f.key + ": " + text + place.after;
+    const Status status = ParseScene(yaml, "bad.yaml", ".", &scene);
+    ASSERT_FALSE(status.ok()) << field << " = " << text << "\n" << yaml;
+    const std::string named =
+        "bad.yaml:" + std::to_string(place.line) + ": " + place.path + "." + f.key + ": must be ";
+    EXPECT_EQ(status.message().rfind(named, 0), 0u) << status.message();
+  });
+  EXPECT_GT(checked, 0);
+}
+
+const char kObject[] = "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n";
+const char kSynth[] =
+    "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+    "registration:\n"
+    "  camera: {position: [0, 0, 2], target: [0, 0, 0], up: [0, 1, 0]}\n"
+    "synth:\n"
+    "  ground_truth: {refinement: 2}\n";
+
+TEST(SceneFields, OutOfRangeValuesNameTheField) {
+  ExpectRangesNamed<Material>({"objects:\n  - generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}\n"
+                               "    material: {",
+                               "}\n", 3, "objects[0].material"});
+  ExpectRangesNamed<ForwardOptions>({std::string(kObject) + "forward: {", "}\n", 2, "forward"});
+  ExpectRangesNamed<CollisionSpec>({std::string(kObject) + "collision: {", "}\n", 2, "collision"});
+  ExpectRangesNamed<FractureOptions>({std::string(kObject) + "effects:\n  fracture: {", "}\n", 3, "effects.fracture"});
+  ExpectRangesNamed<DepthSensorOptions>({std::string(kSynth) + "  sensor: {", "}\n", 6, "synth.sensor"});
+  ExpectRangesNamed<SynthSpec>({std::string(kSynth) + "  ", "\n", 6, "synth"});
+  ExpectRangesNamed<SynthBodySpec>(
+      {std::string(kSynth) + "  bodies: [{box: {min: [0, 0, 0.2], max: [0.1, 0.1, 0.3]}, ", "}]\n", 6,
+       "synth.bodies[0]"});
+}
+
+// The messages the tables phrase, as IsValid and the parser give them.
+TEST(SceneFields, MessagesNameTheKey) {
+  std::string error;
+  Material m;
+  m.poisson_ratio = 0.5;
+  EXPECT_FALSE(m.IsValid(&error));
+  EXPECT_EQ(error, "poisson_ratio must be in (-1, 0.5) (got 0.5)");
+  FractureOptions f;
+  f.crossing_tolerance = 1;
+  EXPECT_FALSE(f.IsValid(&error));
+  EXPECT_EQ(error, "effects.fracture.crossing_tolerance must be in [0, 1) (got 1)");
+  ForwardOptions forward;
+  forward.load_steps = 0;
+  EXPECT_FALSE(forward.IsValid(&error));
+  EXPECT_EQ(error, "forward.load_steps must be >= 1 (got 0)");
+  CollisionSpec c;
+  c.friction_slip = 0;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "collision.friction_slip must be > 0 (got 0)");
+  DepthSensorOptions sensor;
+  sensor.grazing_angle_deg = 95;
+  EXPECT_FALSE(sensor.IsValid(&error));
+  EXPECT_EQ(error, "sensor.grazing_angle_deg must be in (0, 90] (got 95)");
+
+  Scene scene;
+  const Status status =
+      ParseScene(std::string(kObject) + "collision: {stiffness: 1e4, friction_slip: -1}\n", "c.yaml", ".", &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(), "c.yaml:2: collision.friction_slip: must be > 0 (got -1)");
+}
+
+}  // namespace
+}  // namespace femreg
