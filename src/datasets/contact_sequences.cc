@@ -45,8 +45,8 @@ DepthSensorOptions Sensor(const Eigen::Vector3d& position, const Eigen::Vector3d
   return s;
 }
 
-// contact_pair's gripper at frame f of `frames`: down 7 mm (through the 2.5 mm gap), then
-// 6 mm along +x while pressing.
+// contact_pair's gripper at frame f of `frames`: down through the gap in the first half, then
+// along +x while pressing (the amounts below).
 Eigen::Vector3d GripperPath(int f, int frames) {
   const double s = static_cast<double>(f) / (frames - 1);
   return Eigen::Vector3d(0.006 * std::max(0.0, 2 * s - 1), 0.0, -0.007 * std::min(1.0, 2 * s));
@@ -139,7 +139,7 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
     tool.name = "tool";
     tool.kind = ObstacleSpec::Kind::kMesh;
     tool.mesh_path = (fs::path(dir) / tool_file).string();
-    // Down onto the free end (slab top at 16 mm; tool bottom from 18 to 12.5 mm), then along -x.
+    // Down onto the free end (the tool's bottom from above the slab's top into it), then along -x.
     tool_keys[0].frame = 0;
     tool_keys[0].translation = Eigen::Vector3d(0.105, 0.02, 0.028);
     tool_keys[1].frame = 9;
