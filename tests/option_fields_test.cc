@@ -13,37 +13,13 @@
 
 #include "femreg/option_fields.h"
 #include "femreg/scene.h"
+#include "member_count.h"
 
 namespace femreg {
 namespace {
 
-// The number of members of an aggregate: the longest brace list of AnyValue that
-// initializes it. A member added to a struct but not to its table changes this count.
-struct AnyValue {
-  template <class T>
-  constexpr operator T() const {  // NOLINT: converts to whatever member it initializes
-    return T{};
-  }
-};
-template <class T, class... A>
-auto Initializes(int) -> decltype(T{std::declval<A>()...}, std::true_type{});
-template <class T, class... A>
-std::false_type Initializes(...);
-template <class T, class... A>
-constexpr std::size_t MemberCount() {
-  if constexpr (decltype(Initializes<T, A..., AnyValue>(0))::value) {
-    return MemberCount<T, A..., AnyValue>();
-  } else {
-    return sizeof...(A);
-  }
-}
-
-template <class Options>
-std::size_t FieldCount() {
-  std::size_t n = 0;
-  OptionFields<Options>::Visit([&](auto, const FieldInfo&) { ++n; });
-  return n;
-}
+using testing_tables::FieldCount;
+using testing_tables::MemberCount;
 
 TEST(OptionFields, EveryMemberHasARow) {
   EXPECT_EQ(FieldCount<DataTermOptions>(), MemberCount<DataTermOptions>());
