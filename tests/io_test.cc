@@ -16,6 +16,7 @@
 
 #include "femreg/io.h"
 #include "femreg/mesh.h"
+#include "io/ply_reader.h"
 #include "femreg_test_config.h"
 #include "test_util.h"
 
@@ -383,6 +384,42 @@ TEST(WriteVtu, BadFieldAndUnwritableFolderGiveStatus) {
   status = WriteVtu("/nonexistent/folder/a.vtu", mesh, mesh.rest);
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("/nonexistent/folder/a.vtu"), std::string::npos);
+}
+
+// The binary PolyData and PLY writers (a cloud; an embedded surface's frame): the PLY reads
+// back through the one PLY reader to the same vertices and triangles; the VTPs say their
+// counts and fields; normals that are not one per point are refused, naming the file.
+TEST(WriteBinary, TrianglesPlyAndVtpAndCloudVtp) {
+  const TetMesh mesh = MakeBox(Eigen::Vector3d(0.3, 0.2, 0.1), 2, 2, 1);
+  const Triangles& triangles = mesh.surface;
+  TempDir dir;
+  ASSERT_TRUE(WriteTrianglesPly(dir.File("s.ply"), mesh.rest, triangles).ok());
+  Vertices V;
+  Triangles F;
+  ASSERT_TRUE(internal::ReadPlySurface(dir.File("s.ply"), &V, &F).ok());
+  EXPECT_EQ(V, mesh.rest);
+  EXPECT_EQ(F, triangles);
+
+  Eigen::VectorXd height = mesh.rest.col(2);
+  ASSERT_TRUE(WriteTrianglesVtp(dir.File("s.vtp"), mesh.rest, triangles, {{"height", height}}).ok());
+  std::ifstream vtp(dir.File("s.vtp"), std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(vtp)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("NumberOfPoints=\"" + std::to_string(mesh.rest.rows()) + "\""), std::string::npos);
+  EXPECT_NE(text.find("NumberOfPolys=\"" + std::to_string(triangles.rows()) + "\""), std::string::npos);
+  EXPECT_NE(text.find("Name=\"height\""), std::string::npos);
+
+  Vertices normals = Vertices::Zero(mesh.rest.rows(), 3);
+  normals.col(2).setOnes();
+  ASSERT_TRUE(WriteCloudVtp(dir.File("c.vtp"), mesh.rest, &normals).ok());
+  std::ifstream cloud(dir.File("c.vtp"), std::ios::binary);
+  const std::string cloud_text((std::istreambuf_iterator<char>(cloud)), std::istreambuf_iterator<char>());
+  EXPECT_NE(cloud_text.find("NumberOfVerts=\"" + std::to_string(mesh.rest.rows()) + "\""), std::string::npos);
+  EXPECT_NE(cloud_text.find("Normals=\"normals\""), std::string::npos);
+  ASSERT_TRUE(WriteCloudVtp(dir.File("bare.vtp"), mesh.rest).ok());
+  const Vertices too_few = normals.topRows(3);
+  const Status refused = WriteCloudVtp(dir.File("bad.vtp"), mesh.rest, &too_few);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("bad.vtp"), std::string::npos) << refused.message();
 }
 
 TEST(WriteText, PvdPlyObjAndAtomicWrites) {

@@ -1,4 +1,4 @@
-// femreg/io.h - reading and writing meshes: tetrahedral meshes in, VTU/PVD/PLY/OBJ out;
+// femreg/io.h - reading and writing meshes: tetrahedral meshes in, VTU/PVD/PLY/OBJ/VTP out;
 // atomic writes and file lists. Depth images, masks, intrinsics and recordings:
 // femreg/camera_io.h.
 #ifndef FEMREG_IO_H_
@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "femreg/mesh.h"
@@ -57,6 +58,16 @@ Status WritePvd(const std::string& path, const std::vector<PvdEntry>& entries);
 // The boundary surface at `positions`, as PLY (ASCII) or OBJ. Atomic.
 Status WritePlySurface(const std::string& path, const TetMesh& mesh, const Vertices& positions);
 Status WriteObjSurface(const std::string& path, const TetMesh& mesh, const Vertices& positions);
+
+// Points (and their normals, the same rows, when given) as VTK PolyData (.vtp: float32 in raw
+// appended binary, a vertex cell per point) that ParaView opens. Atomic.
+Status WriteCloudVtp(const std::string& path, const Vertices& points, const Vertices* normals = nullptr);
+// A triangle surface (an embedded surface's frame) as VTK PolyData (Float64 points, a polygon
+// per triangle), with per-vertex scalar fields (name, #V values) beside it. Atomic.
+Status WriteTrianglesVtp(const std::string& path, const Vertices& vertices, const Triangles& triangles,
+                         const std::vector<std::pair<std::string, Eigen::VectorXd>>& fields = {});
+// The same as binary little-endian PLY (double x, y, z; int corners). Atomic.
+Status WriteTrianglesPly(const std::string& path, const Vertices& vertices, const Triangles& triangles);
 
 // Writes `contents` to `path` through a temporary file in the same folder and a rename.
 Status WriteFileAtomically(const std::string& path, const std::string& contents);

@@ -74,16 +74,6 @@ std::string FindPython();
 // returns its exit code, or -1 when it could not start.
 int RunProgram(const std::vector<std::string>& argv);
 
-// Writes the points (and normals when the cloud has them) as a VTK PolyData file (.vtp,
-// float32 in raw appended binary, one vertex cell per point) that ParaView opens; atomically.
-Status WriteCloudVtp(const std::string& path, const PointCloud& cloud);
-// A triangle surface (an embedded surface's frame) as VTK PolyData (Float64 points, one
-// polygon per triangle), with per-vertex scalar fields (name, #V values) beside it.
-Status WriteSurfaceVtp(const std::string& path, const Vertices& vertices, const Triangles& triangles,
-                       const std::vector<std::pair<std::string, Eigen::VectorXd>>& fields = {});
-// The same as a binary little-endian PLY (double x, y, z; int corners).
-Status WriteSurfacePly(const std::string& path, const Vertices& vertices, const Triangles& triangles);
-
 // Ctrl-C: the first SIGINT sets a flag that long loops poll; a second one, a second or more
 // later, exits at once (one sooner is the same request: timeout signals the command and its
 // process group). SIGTERM (timeout, schedulers, docker stop) is handled the same way.

@@ -42,7 +42,7 @@ struct EvalRow {
   ErrorStats embedded_all, embedded_seen;
 };
 
-// The points of an embedded surface's frame as `femreg register` writes it (WriteSurfaceVtp:
+// The points of an embedded surface's frame as `femreg register` writes it (WriteTrianglesVtp:
 // PolyData, raw appended data with UInt64 headers, Float64 points); other VTPs are refused.
 Status ReadRegisterSurfaceVtp(const std::string& path, Vertices* points) {
   std::ifstream in(path, std::ios::binary);

@@ -49,7 +49,8 @@ Status WriteFrameFiles(const RegisterArgs& args, size_t f, const Scene& scene, c
   {
     std::snprintf(name, sizeof(name), "cloud_%04zu.vtp", f);
     const std::string rel = std::string("frames/") + name;
-    status = WriteCloudVtp((fs::path(args.out) / rel).string(), used);
+    status = WriteCloudVtp((fs::path(args.out) / rel).string(), used.points,
+                           used.has_normals() ? &used.normals : nullptr);
     if (status.ok()) cloud_pvd->push_back({static_cast<double>(f), rel});
     if (!status.ok()) return status;
   }
@@ -110,10 +111,10 @@ Status WriteFrameFiles(const RegisterArgs& args, size_t f, const Scene& scene, c
     const std::string object_name = scene.objects[static_cast<size_t>(i)].name;
     std::snprintf(name, sizeof(name), "_surface_%04zu", f);
     const std::string rel = "frames/" + object_name + name + ".vtp";
-    status = WriteSurfaceVtp((fs::path(args.out) / rel).string(), v, tracker.surface_triangles(i), fields);
+    status = WriteTrianglesVtp((fs::path(args.out) / rel).string(), v, tracker.surface_triangles(i), fields);
     if (status.ok() && args.surface_ply) {
-      status = WriteSurfacePly((fs::path(args.out) / ("frames/" + object_name + name + ".ply")).string(), v,
-                               tracker.surface_triangles(i));
+      status = WriteTrianglesPly((fs::path(args.out) / ("frames/" + object_name + name + ".ply")).string(), v,
+                                 tracker.surface_triangles(i));
     }
     if (!status.ok()) return status;
     (*surface_pvd)[static_cast<size_t>(i)].push_back({static_cast<double>(f), rel});
