@@ -17,6 +17,23 @@ void AppendArray(const std::vector<T>& values, std::string* block) {
   block->append(reinterpret_cast<const char*>(&bytes), sizeof(bytes));
   block->append(reinterpret_cast<const char*>(values.data()), bytes);
 }
+// The cells (`cells`: Verts or Polys) and the appended data end both documents; written
+// atomically.
+Status FinishPolyData(const std::string& path, const char* cells, uint64_t offset_connectivity,
+                      uint64_t offset_offsets, const std::string& block, std::ostringstream* os) {
+  *os << "      <" << cells << ">\n"
+      << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\""
+      << offset_connectivity << "\"/>\n"
+      << "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\""
+      << offset_offsets << "\"/>\n"
+      << "      </" << cells << ">\n"
+      << "    </Piece>\n  </PolyData>\n"
+      << "  <AppendedData encoding=\"raw\">\n   _";
+  std::string text = os->str();
+  text += block;
+  text += "\n  </AppendedData>\n</VTKFile>\n";
+  return WriteFileAtomically(path, text);
+}
 }  // namespace
 
 Status WriteCloudVtp(const std::string& path, const Vertices& points_in, const Vertices* normals_in) {
@@ -73,23 +90,12 @@ Status WriteCloudVtp(const std::string& path, const Vertices& points_in, const V
   os << "      <Points>\n"
      << "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" "
         "format=\"appended\" offset=\"" << offset_points << "\"/>\n"
-     << "      </Points>\n"
-     << "      <Verts>\n"
-     << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\""
-     << offset_connectivity << "\"/>\n"
-     << "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\""
-     << offset_offsets << "\"/>\n"
-     << "      </Verts>\n"
-     << "    </Piece>\n  </PolyData>\n"
-     << "  <AppendedData encoding=\"raw\">\n   _";
-  std::string text = os.str();
-  text += block;
-  text += "\n  </AppendedData>\n</VTKFile>\n";
-  return WriteFileAtomically(path, text);
+     << "      </Points>\n";
+  return FinishPolyData(path, "Verts", offset_connectivity, offset_offsets, block, &os);
 }
 
 Status WriteTrianglesVtp(const std::string& path, const Vertices& vertices, const Triangles& triangles,
-                       const std::vector<std::pair<std::string, Eigen::VectorXd>>& fields) {
+                         const std::vector<std::pair<std::string, Eigen::VectorXd>>& fields) {
   const Eigen::Index n = vertices.rows(), nf = triangles.rows();
   if (n > (Eigen::Index(1) << 31) - 2 || 3 * nf > (Eigen::Index(1) << 31) - 2) {
     return Status::Error(path + ": too many vertices or triangles for a VTP");
@@ -134,19 +140,8 @@ Status WriteTrianglesVtp(const std::string& path, const Vertices& vertices, cons
   os << "      <Points>\n"
      << "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" "
         "format=\"appended\" offset=\"" << offset_points << "\"/>\n"
-     << "      </Points>\n"
-     << "      <Polys>\n"
-     << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\""
-     << offset_connectivity << "\"/>\n"
-     << "        <DataArray type=\"Int32\" Name=\"offsets\" format=\"appended\" offset=\""
-     << offset_offsets << "\"/>\n"
-     << "      </Polys>\n"
-     << "    </Piece>\n  </PolyData>\n"
-     << "  <AppendedData encoding=\"raw\">\n   _";
-  std::string text = os.str();
-  text += block;
-  text += "\n  </AppendedData>\n</VTKFile>\n";
-  return WriteFileAtomically(path, text);
+     << "      </Points>\n";
+  return FinishPolyData(path, "Polys", offset_connectivity, offset_offsets, block, &os);
 }
 
 Status WriteTrianglesPly(const std::string& path, const Vertices& vertices, const Triangles& triangles) {
