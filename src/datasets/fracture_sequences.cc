@@ -218,24 +218,8 @@ Status Generate(const std::string& scenario, const std::string& dir, const std::
   int first_break = -1, first_event = -1;
   for (int f = 0; f < s.frames; ++f) {
     // Boundary conditions on the current (possibly split) mesh, by rest position.
-    Eigen::Matrix3d Rl, Rr;
-    Eigen::Vector3d tl, tr;
-    s.left(f, &Rl, &tl);
-    s.right(f, &Rr, &tr);
-    Eigen::Vector3d cl = Eigen::Vector3d::Zero(), cr = Eigen::Vector3d::Zero();
-    int nl = 0, nr = 0;
-    for (int v = 0; v < fine.num_vertices(); ++v) {
-      if (fine.rest(v, 0) <= s.left_x) { cl += fine.rest.row(v).transpose(); ++nl; }
-      if (fine.rest(v, 0) >= s.right_x) { cr += fine.rest.row(v).transpose(); ++nr; }
-    }
-    cl /= std::max(nl, 1);
-    cr /= std::max(nr, 1);
     ForwardProblem problem;
-    for (int v = 0; v < fine.num_vertices(); ++v) {
-      const Eigen::Vector3d X = fine.rest.row(v);
-      if (X.x() <= s.left_x) problem.prescribed.emplace_back(v, cl + Rl * (X - cl) + tl - X);
-      if (X.x() >= s.right_x) problem.prescribed.emplace_back(v, cr + Rr * (X - cr) + tr - X);
-    }
+    problem.prescribed = GripperDisplacements(s, fine, f);
     if (f == s.cut_frame) {
       RemoveElements(
           [&](int e) {
@@ -249,11 +233,7 @@ Status Generate(const std::string& scenario, const std::string& dir, const std::
       events_csv << f << ",-1,1,0,0,0,2\n";
       // The conditions again, on the cut mesh's vertices.
       problem = ForwardProblem();
-      for (int v = 0; v < fine.num_vertices(); ++v) {
-        const Eigen::Vector3d X = fine.rest.row(v);
-        if (X.x() <= s.left_x) problem.prescribed.emplace_back(v, cl + Rl * (X - cl) + tl - X);
-        if (X.x() >= s.right_x) problem.prescribed.emplace_back(v, cr + Rr * (X - cr) + tr - X);
-      }
+      problem.prescribed = GripperDisplacements(s, fine, f);
     }
     ForwardSummary summary;
     const size_t before = events.size();
