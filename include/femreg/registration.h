@@ -452,8 +452,9 @@ struct FrameSummary {
   // edges, or the frame came after held or lost ones, and the frame started again, stiff and
   // stepping down (docs/theory/stopping.md#large-motions).
   int large_motion_restarts = 0;
-  // Cloud points found implausible (data.max_strain_step) and the frame's restarts for them.
-  int implausible_points = 0, implausible_restarts = 0;
+  // Cloud points found implausible (data.max_strain_step) and the frame's restarts for them;
+  // of those points, the ones near the last frame's implausible ones, left out from the start.
+  int implausible_points = 0, implausible_restarts = 0, implausible_carried = 0;
   FrameConfidence confidence;
   // The object was not found (data.lost_coverage): the result is the last good frame's shape.
   bool lost = false;

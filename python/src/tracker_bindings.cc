@@ -63,6 +63,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["rejected"] = s.rejected;
   d["occluded_points"] = s.occluded_points;
   d["implausible_points"] = s.implausible_points;
+  d["implausible_carried"] = s.implausible_carried;
   d["free_space_vertices"] = s.free_space_vertices;
   d["rms_residual"] = s.rms_residual;
   d["initial_pose"] = s.initial_pose;

@@ -37,6 +37,20 @@ void Grow(const Vertices& points, const PointIndex& cloud_index, double spacing,
   }
 }
 
+// Whether cloud point i lies off the model: farther than sqrt(grow2) from `surface`. Each
+// point is asked once (memo: -1 not yet, 0 on, 1 off).
+struct OffModel {
+  const SurfaceIndex* surface;
+  const Vertices* points;
+  double grow2;
+  std::vector<signed char>* memo;
+  bool operator()(int i) const {
+    signed char& o = (*memo)[static_cast<size_t>(i)];
+    if (o < 0) o = surface->Closest(points->row(i)).squared_distance > grow2 ? 1 : 0;
+    return o == 1;
+  }
+};
+
 }  // namespace
 
 OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
@@ -131,7 +145,7 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
   OccluderCounts counts;
   const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
   for (size_t i = 0; i < occluder->size(); ++i) {
-    if ((*occluder)[i] != 1) {
+    if ((*occluder)[i] != 1 && (*occluder)[i] != 3) {
       counts.occluders += (*occluder)[i] != 0;
       continue;
     }
@@ -181,13 +195,8 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
   // The meshes' own surfaces (an embedded surface's pairs act through the same elements).
   const SurfaceIndex surface(state.x, state.surface), at_start(start, state.surface);
-  // -1 unknown, 0 on the model at the start, 1 off it.
-  std::vector<signed char> off(static_cast<size_t>(n), -1);
-  auto Off = [&](int i) {
-    signed char& o = off[static_cast<size_t>(i)];
-    if (o < 0) o = at_start.Closest(points.row(i)).squared_distance > grow * grow ? 1 : 0;
-    return o == 1;
-  };
+  std::vector<signed char> memo(static_cast<size_t>(n), -1);
+  const OffModel Off{&at_start, &points, grow * grow, &memo};
   std::vector<int> queue;
   for (int i = 0; i < n; ++i) {
     if ((*marks)[static_cast<size_t>(i)]) continue;
@@ -203,6 +212,45 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   }
   Grow(points, cloud_index, spacing, 2, Off, &queue, marks);
   return static_cast<int>(queue.size());
+}
+
+int CarryImplausible(const TrackerState& state, const Vertices& before, const Vertices& points,
+                     const PointIndex& cloud_index, double spacing, std::vector<char>* marks) {
+  const int n = static_cast<int>(points.rows());
+  if (before.rows() == 0 || n == 0 || state.surface.rows() == 0) return 0;
+  if (marks->size() != static_cast<size_t>(n)) marks->assign(static_cast<size_t>(n), 0);
+  const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
+  const SurfaceIndex surface(state.x, state.surface);
+  const PointIndex last(before);
+  std::vector<signed char> memo(static_cast<size_t>(n), -1);
+  const OffModel Off{&surface, &points, grow * grow, &memo};
+  std::vector<int> queue;
+  for (int i = 0; i < n; ++i) {
+    if ((*marks)[static_cast<size_t>(i)]) continue;
+    double d2 = 0.0;
+    last.Nearest(points.row(i), &d2);
+    if (d2 > grow * grow || !Off(i)) continue;
+    (*marks)[static_cast<size_t>(i)] = 3;
+    queue.push_back(i);
+  }
+  Grow(points, cloud_index, spacing, 3, Off, &queue, marks);
+  return static_cast<int>(queue.size());
+}
+
+Vertices ImplausiblePoints(const TrackerState& state, const Vertices& points, const std::vector<char>& marks) {
+  std::vector<int> rows;
+  if (state.surface.rows() == 0) return Vertices(0, 3);
+  const double far = state.options.data.max_strain_step * state.mean_edge_length;
+  const SurfaceIndex surface(state.x, state.surface);
+  for (size_t i = 0; i < marks.size(); ++i) {
+    if ((marks[i] == 2 || marks[i] == 3) &&
+        surface.Closest(points.row(static_cast<Eigen::Index>(i))).squared_distance > far * far) {
+      rows.push_back(static_cast<int>(i));
+    }
+  }
+  Vertices out(static_cast<Eigen::Index>(rows.size()), 3);
+  for (size_t j = 0; j < rows.size(); ++j) out.row(static_cast<Eigen::Index>(j)) = points.row(rows[j]);
+  return out;
 }
 
 }  // namespace femreg

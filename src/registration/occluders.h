@@ -32,9 +32,10 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
                              std::vector<char>* occluder);
 
 // After the model moved (an outer iteration): the occluder points it now reaches (within the
-// loss scale, or two spacings) are released, not the implausible ones (MarkImplausible): a
-// part that lagged behind a fast motion and looked like an occluder has caught up. No point
-// is marked anew. Returns the occluders and implausible points left.
+// loss scale, or two spacings) are released, and so are the points carried from the last
+// frame's implausible ones (CarryImplausible), not those this frame found implausible
+// (MarkImplausible): a part that lagged behind a fast motion and looked like an occluder has
+// caught up. No point is marked anew. Returns the occluders and implausible points left.
 OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& surface,
                              const Vertices& points, double spacing, std::vector<char>* occluder);
 
@@ -47,6 +48,21 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 // (#P; assigned zeros when empty), which ReleaseReached keeps. Returns how many were marked.
 int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
                     const PointIndex& cloud_index, double spacing, std::vector<char>* marks);
+
+// The last frame's implausible points, at a frame's start: the hand that pulled them is
+// most likely still there, and a frame that lets it pull first must start again without it
+// (docs/guide/partial-views.md#implausible-points). The cloud points within the loss scale (or
+// two spacings) of a point in `before` that lie off the model at state.x by more than that,
+// grown through the cloud over points off the model, get 3 in *marks (#P; assigned zeros when
+// empty). ReleaseReached releases them when the model reaches them. Returns how many were marked.
+int CarryImplausible(const TrackerState& state, const Vertices& before, const Vertices& points,
+                     const PointIndex& cloud_index, double spacing, std::vector<char>* marks);
+
+// The points of `points` marked implausible in `marks` (2 or 3), in their order, that are still
+// farther from the meshes' surface at state.x than data.max_strain_step mean edges: the frame
+// did not reach them, and only a strain beyond that could in the next. Marks nearer (a part
+// of the object that lagged and was swept in with the hand's points) are not carried on.
+Vertices ImplausiblePoints(const TrackerState& state, const Vertices& points, const std::vector<char>& marks);
 
 }  // namespace femreg
 

@@ -25,7 +25,8 @@ std::string FrameSummary::BriefReport() const {
   }
   if (large_motion_restarts > 0) brief += ", large motion: started again stiff";
   if (implausible_restarts > 0) {
-    brief += ", " + std::to_string(implausible_points) + " implausible points: started again without them";
+    brief += ", " + std::to_string(implausible_points - implausible_carried) +
+             " implausible points: started again without them";
   }
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm, gap %.3f mm", contacts,
@@ -47,8 +48,12 @@ std::string FrameSummary::FullReport() const {
           "started again from iteration 2, the elastic weight x100, x30, x10, x3, then x1, pairing only "
           "surface that faces the sensor\n";
   }
+  if (implausible_carried > 0) {
+    os << "  implausible points: " << implausible_carried
+       << " cloud points near the last frame's implausible ones were left out from the start\n";
+  }
   if (implausible_restarts > 0) {
-    os << "  implausible points: " << implausible_points << " cloud points pulled elements beyond "
+    os << "  implausible points: " << implausible_points - implausible_carried << " cloud points pulled elements beyond "
           "data.max_strain_step; the frame started again without them (" << implausible_restarts << "x)\n";
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "

@@ -165,6 +165,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   state.x_before = state.x;  // held: no velocity to carry on
   state.held_before = true;
   state.lost_before = s->lost;
+  implausible_before.resize(0, 3);
   ++missed_frames;
   Outputs(index, {});
   s->time.total = Seconds(t_frame);
@@ -253,6 +254,12 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   t0 = Clock::now();
   PrepareFrameCloud(PairState(), Surface(), &fc);
   BuildObservedDepth(state, &fc);
+  if (options.data.max_strain_step > 0 && implausible_before.rows() > 0 && !FractureLive(state)) {
+    s.implausible_carried =
+        CarryImplausible(state, implausible_before, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
+    fc.occluders.occluders += s.implausible_carried;
+    s.implausible_points = s.implausible_carried;
+  }
   s.time.correspondences += Seconds(t0);
   s.visibility = fc.Describe();
   s.occluded_points = fc.occluders.occluders;
@@ -379,6 +386,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     }
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
+  implausible_before = state.held_before || FractureLive(state) || fc.occluder.empty()
+                           ? Vertices(0, 3)
+                           : ImplausiblePoints(state, fc.cloud.points, fc.occluder);
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
   MeasureForces(&s);

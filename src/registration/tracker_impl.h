@@ -104,6 +104,9 @@ struct Tracker::Impl {
   int iteration_budget = 0;
   bool stepping_in = false;
   double first_bulk_move = 0.0;  // m, of the frame's first outer iteration (BulkMove)
+  // The last solved frame's implausible cloud points (CarryImplausible); none after a held or
+  // lost frame, or with fracture live.
+  Vertices implausible_before;
   // The last outer iteration's start and its energy with what it found (Backtrack).
   Vertices merit_x;
   PointCloud prepared_cloud;  // Tracker::prepared_cloud
