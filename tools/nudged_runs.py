@@ -3,6 +3,7 @@
 
     python3 tools/nudged_runs.py DATASET [--femreg build/femreg] [--vs OTHER_FEMREG]
                                  [--nudges 7] [--out /tmp/nudged] [--threads 1]
+                                 [--set KEY.PATH=VALUE ...]
 
 Some sequences are sensitive: on hand_press a frame that stops one outer iteration earlier
 lifts the ball at another turn, and the mean error of the whole sequence changes by a sixth.
@@ -11,7 +12,8 @@ registers DATASET once per nudge, each with `registration.solver.bulk_step_toler
 by a step of 2 % (0.94 to 1.06 times the scene's value for the default seven nudges), and
 prints, per run and over the runs: the mean vertex error (mm), the outer iterations over the
 sequence, the frames not converged, and the median time per frame. With --vs, the same nudges
-with the other build, and the paired differences. Uses only the CLI and the standard library.
+with the other build, and the paired differences. --set passes scene overrides to every run
+(e.g. --set registration.forces.estimate=true). Uses only the CLI and the standard library.
 """
 import argparse
 import csv
@@ -39,11 +41,13 @@ def scene_value(scene):
     return DEFAULT_BULK_STEP
 
 
-def run(femreg, dataset, value, out, threads):
+def run(femreg, dataset, value, out, threads, overrides=()):
     folder = os.path.join(ROOT, "datasets", dataset)
     cmd = [femreg, "register", "--scene", os.path.join(folder, "scene.yaml"),
            "--frames", os.path.join(folder, "clouds"), "--out", out, "--force", "--no-progress",
            "--threads", str(threads), "--set", f"{KEY}={value:.6g}"]
+    for override in overrides:
+        cmd += ["--set", override]
     truth = os.path.join(folder, "ground_truth")
     if os.path.isdir(truth):
         cmd += ["--ground-truth", truth]
@@ -79,6 +83,8 @@ def main():
     parser.add_argument("--nudges", type=int, default=7, help="runs per build (odd: one is unnudged)")
     parser.add_argument("--out", default="/tmp/nudged")
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                        help="a scene override for every run (repeatable)")
     args = parser.parse_args()
     if args.nudges < 1:
         sys.exit("nudged_runs: --nudges must be at least 1")
@@ -93,7 +99,8 @@ def main():
     for k, factor in enumerate(factors):
         line = f"{factor:5.2f}    "
         for name, femreg in builds:  # alternated, so that a busy spell hits both
-            r = run(femreg, args.dataset, base * factor, os.path.join(args.out, f"{name}_{k}"), args.threads)
+            r = run(femreg, args.dataset, base * factor, os.path.join(args.out, f"{name}_{k}"), args.threads,
+                    args.set)
             results[name].append(r)
             line += f"{r['error']:14.3f}{r['outer']:7d}{r['capped']:8d}{r['ms']:8.1f}"
         print(line, flush=True)
