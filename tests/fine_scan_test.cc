@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "registration/confidence.h"
 #include "registration/correspondences.h"
 #include "registration/embedded_surface.h"
+#include "registration/prediction.h"
 #include "registration/tracker_state.h"
 
 namespace femreg {
@@ -166,6 +168,232 @@ TEST(FineScanTest, TheCoverageOverTheRingsIsTheWholeSurfaces) {
   EXPECT_GT(embedded.coverage, 0.1);
   EXPECT_LT(embedded.coverage, 0.9);
   EXPECT_EQ(embedded_ringed.coverage, embedded.coverage);
+}
+
+// A sphere of radius r, `rings` x 2 rings of latitude: #F by 3 outward triangles.
+void Sphere(double r, int rings, Vertices* x, Triangles* t) {
+  const int lat = rings, lon = 2 * rings;
+  x->resize(2 + (lat - 1) * lon, 3);
+  x->row(0) << 0, 0, r;
+  x->row(1) << 0, 0, -r;
+  for (int i = 1; i < lat; ++i) {
+    for (int j = 0; j < lon; ++j) {
+      const double th = M_PI * i / lat, ph = 2 * M_PI * j / lon;
+      x->row(2 + (i - 1) * lon + j) << r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), r * std::cos(th);
+    }
+  }
+  auto at = [&](int i, int j) { return 2 + (i - 1) * lon + (j % lon); };
+  std::vector<Eigen::Vector3i> f;
+  for (int j = 0; j < lon; ++j) {
+    f.emplace_back(0, at(1, j), at(1, j + 1));
+    f.emplace_back(1, at(lat - 1, j + 1), at(lat - 1, j));
+    for (int i = 1; i + 1 < lat; ++i) {
+      f.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      f.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  }
+  t->resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (size_t k = 0; k < f.size(); ++k) t->row(static_cast<Eigen::Index>(k)) = f[k].transpose();
+}
+
+// A cloud of n points on the half of surface (x, t) facing +z, a little off it.
+Vertices SeenHalf(const Vertices& x, const Triangles& t, int n, std::mt19937* rng) {
+  std::uniform_int_distribution<int> face(0, static_cast<int>(t.rows()) - 1);
+  std::uniform_real_distribution<double> u(0.0, 1.0), noise(-5e-4, 5e-4);
+  Vertices cloud(n, 3);
+  for (int i = 0; i < n;) {
+    const int f = face(*rng);
+    const Eigen::Vector3d a = x.row(t(f, 0)), b = x.row(t(f, 1)), c = x.row(t(f, 2));
+    if ((b - a).cross(c - a).z() <= 0) continue;
+    double s = u(*rng), r = u(*rng);
+    if (s + r > 1) s = 1 - s, r = 1 - r;
+    cloud.row(i++) = (a + s * (b - a) + r * (c - a) + Eigen::Vector3d(noise(*rng), noise(*rng), noise(*rng))).transpose();
+  }
+  return cloud;
+}
+
+// The first outer iteration's cloud->model queries of an embedded surface walk from a
+// triangle of the nearest subsample vertex (SubsampleStarts): they find the pairs the k-d tree
+// search over every surface vertex finds, on a deformed sphere with a subsample of one vertex
+// in 9. A walk that has not settled within FrameCloud::seeded_rings is searched in full: with
+// one ring most do not, and the pairs are still the same.
+TEST(FineScanTest, WalksFromTheSubsampleFindTheTreeSearchsPairs) {
+  TrackerState state;
+  Sphere(0.05, 40, &state.x, &state.surface);  // edges of about 4 mm
+  state.num_vertices = static_cast<int>(state.x.rows());
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
+  for (int v = 0; v < state.num_vertices; ++v) {
+    Eigen::Vector3d p = turn * state.x.row(v).transpose();
+    p.x() *= 1.3;
+    p.z() += 0.2 * p.x() * p.x() / 0.05;  // bent
+    state.x.row(v) = p.transpose();
+  }
+  for (int v = 0; v < state.num_vertices; v += 9) state.surface_vertices.push_back(v);
+  state.vertex_object.assign(static_cast<size_t>(state.num_vertices), 0);
+  state.options.data.model_to_cloud = false;  // the cloud->model pairs only
+  const SurfaceIndex index(state.x, state.surface);
+  std::mt19937 rng(7);
+  for (const int stride : {1, 2}) {
+    state.options.data.cloud_stride = stride;
+    FrameCloud fc;
+    fc.cloud.points = SeenHalf(state.x, state.surface, 3000, &rng);
+    fc.index = std::make_unique<PointIndex>(fc.cloud.points);
+    const int nq = (3000 + stride - 1) / stride;
+    std::vector<DataPair> from_tree;
+    PairCounts counts;
+    FindPairs(state, fc, index, 1, &from_tree, &counts);
+    ASSERT_EQ(static_cast<int>(from_tree.size()), nq);
+    for (const int rings : {16, 1}) {
+      std::vector<int> starts = SubsampleStarts(state, index.rings(), fc.cloud.points, stride, 2);
+      ASSERT_EQ(static_cast<int>(starts.size()), nq);
+      const std::vector<int> started = starts;
+      fc.seeded_rings = rings;
+      std::vector<DataPair> seeded;
+      FindPairs(state, fc, index, 1, &seeded, &counts, &starts);
+      ASSERT_EQ(seeded.size(), from_tree.size());
+      int moved_on = 0, unsettled = 0, other = 0;
+      for (size_t j = 0; j < seeded.size(); ++j) {
+        // The same closest point (on a shared edge either triangle may name it), or a closer
+        // one: the tree search tests the triangles around the 4 vertices nearest the query,
+        // which on a stretched surface may miss the closest.
+        const double d_seeded = (seeded[j].Point(state.x) - seeded[j].target).norm();
+        const double d_tree = (from_tree[j].Point(state.x) - from_tree[j].target).norm();
+        EXPECT_LE(d_seeded, d_tree + 1e-12) << "query " << j;
+        if ((seeded[j].Point(state.x) - from_tree[j].Point(state.x)).norm() > 1e-12) {
+          ++other;
+          continue;
+        }
+        EXPECT_LT((seeded[j].normal - from_tree[j].normal).norm(), 1e-9) << "query " << j;
+        moved_on += starts[j] != started[j];
+        bool settled = true;
+        index.ClosestFrom(fc.cloud.points.row(static_cast<Eigen::Index>(j) * stride), started[j], rings, &settled);
+        unsettled += !settled;
+      }
+      EXPECT_LE(other, nq / 500);
+      if (rings == 16) {
+        EXPECT_GT(moved_on, nq / 2);  // the walks, not the starts, found most of them
+        EXPECT_EQ(unsettled, 0);
+      } else {
+        EXPECT_GT(unsettled, nq / 4);  // searched in full
+      }
+    }
+  }
+  // No subsample vertex on a triangle: no starts.
+  state.surface_vertices.clear();
+  EXPECT_EQ(SubsampleStarts(state, index.rings(), Vertices::Zero(4, 3), 1, 1), std::vector<int>(4, -1));
+}
+
+// Model->cloud: vertices facing away from the sensor are not searched with
+// FrameCloud::skip_facing_away, and the pairs are the same, also from a held set whose
+// vertices turned away since (those are searched: the set keeps them). They count as trimmed.
+TEST(FineScanTest, VerticesFacingAwayAreNotSearchedAndThePairsAreTheSame) {
+  TrackerState state;
+  Vertices sphere;
+  Sphere(0.05, 30, &sphere, &state.surface);
+  state.x = sphere;
+  state.num_vertices = static_cast<int>(state.x.rows());
+  for (int v = 0; v < state.num_vertices; v += 2) state.surface_vertices.push_back(v);
+  state.vertex_object.assign(static_cast<size_t>(state.num_vertices), 0);
+  std::mt19937 rng(9);
+  FrameCloud fc;
+  fc.cloud.points = SeenHalf(state.x, state.surface, 2000, &rng);
+  fc.index = std::make_unique<PointIndex>(fc.cloud.points);
+  fc.view = FrameCloud::View::kCamera;
+  fc.eye = Eigen::Vector3d(0.0, 0.0, 0.4);
+  fc.trim = 0.004;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  Vertices turned = sphere;
+  for (int v = 0; v < state.num_vertices; ++v) turned.row(v) = (turn * sphere.row(v).transpose()).transpose();
+  auto pairs_of = [&](bool skip, PairCounts* first_counts, PairCounts* held_counts) {
+    fc.skip_facing_away = skip;
+    state.x = sphere;
+    std::vector<DataPair> first, held;
+    std::vector<char> paired;
+    {
+      const SurfaceIndex index(state.x, state.surface);
+      FindPairs(state, fc, index, 1, &first, first_counts, nullptr, &paired);
+    }
+    state.x = turned;  // some paired vertices now face away: the held set keeps them
+    const SurfaceIndex index(state.x, state.surface);
+    FindPairs(state, fc, index, 1, &held, held_counts, nullptr, &paired, true);
+    first.insert(first.end(), held.begin(), held.end());
+    return first;
+  };
+  PairCounts searched_first, searched_held, skipped_first, skipped_held;
+  const std::vector<DataPair> searched = pairs_of(false, &searched_first, &searched_held);
+  const std::vector<DataPair> skipped = pairs_of(true, &skipped_first, &skipped_held);
+  ASSERT_EQ(searched.size(), skipped.size());
+  for (size_t j = 0; j < searched.size(); ++j) {
+    EXPECT_EQ(searched[j].num_vertices, skipped[j].num_vertices);
+    EXPECT_EQ(searched[j].vertices[0], skipped[j].vertices[0]);
+    EXPECT_EQ(searched[j].target, skipped[j].target);
+    EXPECT_EQ(searched[j].normal, skipped[j].normal);
+  }
+  EXPECT_EQ(searched_first.model_to_cloud, skipped_first.model_to_cloud);
+  EXPECT_EQ(searched_held.model_to_cloud, skipped_held.model_to_cloud);
+  EXPECT_GT(searched_first.model_to_cloud, 100);
+  // The held set kept vertices that turned away: more pairs than facing vertices near the cloud.
+  int facing_paired = 0;
+  {
+    const Eigen::MatrixXd n = state.VertexNormals();
+    for (size_t j = static_cast<size_t>(searched_first.model_to_cloud + searched_first.cloud_to_model); j < skipped.size(); ++j) {
+      const DataPair& p = skipped[j];
+      if (p.num_vertices != 1) continue;
+      const Eigen::Vector3d x = turned.row(p.vertices[0]);
+      facing_paired += fc.Faces(x, n.row(p.vertices[0]).transpose());
+    }
+  }
+  EXPECT_LT(facing_paired, skipped_held.model_to_cloud);
+  // Not searched: trimmed, neither covered nor rejected.
+  EXPECT_LT(skipped_first.covered + skipped_first.rejected, searched_first.covered + searched_first.rejected);
+  EXPECT_GT(skipped_first.trimmed, searched_first.trimmed);
+}
+
+// A frame's two starts compare by how far the new cloud lies from them (StartMisfit): one
+// short of the body by more than the subsample's spacing fits worse than the body's place, a
+// prediction past it worse still, and one that went the other way too; the gate caps each
+// distance. On an embedded surface its subsample is what is measured.
+TEST(FineScanTest, TheStartNearerTheCloudHasTheSmallerMisfit) {
+  ScanOnCage scan;
+  TrackerState& state = scan.state;
+  DataSurface data;
+  data.Build(state, {&scan.surface});
+  std::mt19937 rng(11);
+  const Vertices rest = state.x;
+  auto shifted = [&](double dx) {
+    Vertices x = rest;
+    x.col(0).array() += dx;
+    return x;
+  };
+  // The cloud: the scan's top face (y = 0.1) and its end (x = 0.2) where the body is, 3 cm
+  // along x (the end shows the move along its normal).
+  const double at_x = 0.03;
+  const Vertices fine = data.Update(shifted(at_x)).x;
+  std::vector<int> seen;
+  for (Eigen::Index v = 0; v < fine.rows(); ++v) {
+    if (std::abs(fine(v, 1) - 0.1) < 1e-9 || std::abs(fine(v, 0) - 0.2 - at_x) < 1e-9) seen.push_back(static_cast<int>(v));
+  }
+  ASSERT_GT(seen.size(), 20u);
+  std::uniform_real_distribution<double> noise(-2e-4, 2e-4);
+  Vertices cloud(static_cast<Eigen::Index>(seen.size()), 3);
+  for (size_t i = 0; i < seen.size(); ++i) {
+    cloud.row(static_cast<Eigen::Index>(i)) = fine.row(seen[i]) + Eigen::RowVector3d(noise(rng), noise(rng), noise(rng));
+  }
+  const double gate = 0.1;
+  const double at = StartMisfit(state, shifted(at_x), cloud, gate, &data);
+  const double last = StartMisfit(state, shifted(at_x - 0.02), cloud, gate, &data);    // short of it
+  const double past = StartMisfit(state, shifted(at_x + 0.04), cloud, gate, &data);    // overshot
+  const double behind = StartMisfit(state, shifted(at_x - 0.05), cloud, gate, &data);  // went back
+  EXPECT_LT(at, last);
+  EXPECT_LT(last, past);
+  EXPECT_LT(last, behind);
+  // The mesh's own surface measures too.
+  EXPECT_LT(StartMisfit(state, shifted(at_x), cloud, gate), StartMisfit(state, shifted(at_x + 0.04), cloud, gate));
+  // Every point beyond the gate counts the gate; no points, nothing.
+  const Vertices far = cloud.array() + 1.0;
+  EXPECT_NEAR(StartMisfit(state, rest, far, 0.03, &data), 0.03 * 0.03, 1e-15);
+  EXPECT_LT(StartMisfit(state, shifted(at_x + 0.04), cloud, 0.01, &data), 0.01 * 0.01 + 1e-15);
+  EXPECT_EQ(StartMisfit(state, rest, Vertices(0, 3), gate, &data), 0.0);
 }
 
 }  // namespace

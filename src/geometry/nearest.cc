@@ -196,7 +196,9 @@ bool SurfaceIndex::TouchesRing(int v, int triangle) const {
   return false;
 }
 
-SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int start) const {
+SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int start, int max_rings,
+                                            bool* settled) const {
+  if (settled != nullptr) *settled = true;
   if (start < 0 || start >= triangles_.rows() || (!keep_.empty() && !keep_[static_cast<size_t>(start)])) {
     return Closest(query);
   }
@@ -204,12 +206,12 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
   best.squared_distance = std::numeric_limits<double>::infinity();
   Tested tested;
   int center = start;
-  constexpr int kMaxRings = 4;
-  for (int ring = 0; ring < kMaxRings; ++ring) {
+  for (int ring = 0; ring < max_rings; ++ring) {
     for (int k = 0; k < 3; ++k) TestAround(triangles_(center, k), query, &tested, &best);
     if (best.triangle == center) return best;  // no triangle around it is closer
     center = best.triangle;
   }
+  if (settled != nullptr) *settled = false;
   return best;
 }
 

@@ -80,8 +80,10 @@ class SurfaceIndex {
   // outer iteration's): the closest point among the triangles around start's vertices,
   // walked on from the best of them until it stays (a few rings at most). The same as
   // Closest while the query's closest triangle is within reach of start's rings, without
-  // the k-nearest search. start < 0 (or out of range): Closest(query).
-  Hit ClosestFrom(const Eigen::Vector3d& query, int start) const;
+  // the k-nearest search. start < 0 (or out of range): Closest(query). The walk tests at most
+  // max_rings centres; *settled (if given) says whether it stayed before that (false: the
+  // best found so far, which a closer triangle farther on may beat).
+  Hit ClosestFrom(const Eigen::Vector3d& query, int start, int max_rings = 4, bool* settled = nullptr) const;
   // Whether `triangle` touches vertex v's closed one-ring: one of its corners is v or shares
   // a triangle with v. v must be a vertex of `positions` (false for one on no triangle).
   bool TouchesRing(int v, int triangle) const;

@@ -179,8 +179,16 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       const SurfaceIndex* index = index_of(i);
       if (index == nullptr) continue;
       const Eigen::Vector3d q = cloud.points.row(i);
-      hits[static_cast<size_t>(j)] =
-          warm_start ? index->ClosestFrom(q, (*warm)[static_cast<size_t>(j)]) : index->Closest(q);
+      SurfaceIndex::Hit& hit = hits[static_cast<size_t>(j)];
+      if (!warm_start) {
+        hit = index->Closest(q);
+      } else if (fc.seeded_rings > 0) {
+        bool settled = true;
+        hit = index->ClosestFrom(q, (*warm)[static_cast<size_t>(j)], fc.seeded_rings, &settled);
+        if (!settled) hit = index->Closest(q);
+      } else {
+        hit = index->ClosestFrom(q, (*warm)[static_cast<size_t>(j)]);
+      }
     }
     if (warm != nullptr) {
       warm->resize(static_cast<size_t>(nq));
@@ -202,10 +210,22 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     // rings lost most of the gain (docs/notes/2026-11-28-figures-from-code-comments.md).
     const bool mutual = std::isfinite(fc.trim);  // the frame's reciprocity is on
     std::vector<char> foreign(static_cast<size_t>(mutual ? ns : 0), 0);
+    const bool hold = paired != nullptr && freeze && static_cast<int>(paired->size()) == ns;
+    // A vertex facing away pairs with nothing unless the held set keeps it (below); its
+    // nearest cloud point and the ring test decide nothing else.
+    std::vector<char> away(static_cast<size_t>(view ? ns : 0), 0);
+    constexpr int kFacingAway = -2;
 #pragma omp parallel for num_threads(PhaseThreads(threads, ns, kQueriesPerThread)) schedule(static)
     for (int i = 0; i < ns; ++i) {
       const int v = state.surface_vertices[static_cast<size_t>(i)];
       const Eigen::Vector3d p = x.row(v);
+      if (view) {
+        away[static_cast<size_t>(i)] = !fc.Faces(p, normals.row(i)) && !(hold && (*paired)[static_cast<size_t>(i)]);
+        if (away[static_cast<size_t>(i)] && fc.skip_facing_away) {
+          nearest[static_cast<size_t>(i)] = kFacingAway;
+          continue;
+        }
+      }
       int q = -1;
       double d2 = 0.0;
       if (!labels.active()) {
@@ -217,7 +237,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
         q = index.Nearest(p, &d2);
         if (q >= 0) q = labelled ? labels.object_points[o][q] : labels.free_points[q];
       }
-      if (mutual && q >= 0) {
+      if (mutual && q >= 0 && !(view && away[static_cast<size_t>(i)])) {
         const SurfaceIndex* index = index_of(q);
         const SurfaceIndex* ring = ring_index_of(q);
         int triangle = -1;
@@ -231,12 +251,15 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       nearest[static_cast<size_t>(i)] = q;
       dist2[static_cast<size_t>(i)] = d2;
     }
-    const bool hold = paired != nullptr && freeze && static_cast<int>(paired->size()) == ns;
     if (paired != nullptr && !hold) paired->assign(static_cast<size_t>(ns), 0);
     for (int i = 0; i < ns; ++i) {
       const int q = nearest[static_cast<size_t>(i)];
       const bool was_paired = hold && (*paired)[static_cast<size_t>(i)];
       if (hold) (*paired)[static_cast<size_t>(i)] = 0;
+      if (q == kFacingAway) {
+        ++counts->trimmed;
+        continue;
+      }
       if (q < 0) continue;
       const double d2 = dist2[static_cast<size_t>(i)];
       const int v = state.surface_vertices[static_cast<size_t>(i)];
@@ -329,6 +352,27 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       ++counts->cloud_to_model;
     }
   }
+}
+
+std::vector<int> SubsampleStarts(const TrackerState& view, const SurfaceRings& rings, const Vertices& points,
+                                 int stride, int num_threads) {
+  const int nq = static_cast<int>((points.rows() + stride - 1) / stride);
+  std::vector<int> starts(static_cast<size_t>(nq), -1);
+  std::vector<int> seeds;
+  for (int v : view.surface_vertices) {
+    if (v >= 0 && v < rings.num_vertices() && rings.has(v)) seeds.push_back(v);
+  }
+  if (seeds.empty()) return starts;
+  Vertices at(static_cast<Eigen::Index>(seeds.size()), 3);
+  for (size_t i = 0; i < seeds.size(); ++i) at.row(static_cast<Eigen::Index>(i)) = view.x.row(seeds[i]);
+  const PointIndex index(at);
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(num_threads), nq, kQueriesPerThread)) schedule(static)
+  for (int j = 0; j < nq; ++j) {
+    double d2 = 0.0;
+    const int i = index.Nearest(points.row(static_cast<Eigen::Index>(j) * stride), &d2);
+    if (i >= 0) starts[static_cast<size_t>(j)] = rings.list[static_cast<size_t>(rings.offsets[static_cast<size_t>(seeds[static_cast<size_t>(i)])])];
+  }
+  return starts;
 }
 
 void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs,

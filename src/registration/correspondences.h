@@ -56,6 +56,14 @@ struct FrameCloud {
   // Cloud->model pairs only with surface facing the sensor (a large motion's frame;
   // docs/theory/stopping.md#large-motions). No effect without a view or with labels.
   bool facing_only = false;
+  // > 0: the warm starts FindPairs is given are SubsampleStarts, not the last outer
+  // iteration's hits: each walk may go this many rings, and one that has not settled by then
+  // is searched in full.
+  int seeded_rings = 0;
+  // Surface vertices facing away from the sensor are not searched for a nearest cloud point
+  // (model->cloud): they pair with none (unless held), and an embedded surface's subsample
+  // need not say how near the cloud they are. They count as trimmed, not covered nor rejected.
+  bool skip_facing_away = false;
   // kCamera, kViewpoint: the sensor's position; kDirection: the unit direction towards it.
   Eigen::Vector3d eye = Eigen::Vector3d::Zero();
   // #P, or empty: the points of an occluder (registration/occluders.h), which pull nothing
@@ -155,6 +163,14 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
                int num_threads, std::vector<DataPair>* pairs, PairCounts* counts,
                std::vector<int>* warm = nullptr, std::vector<char>* paired = nullptr,
                bool freeze = false);
+
+// Starts for the first outer iteration's cloud->model walks on an embedded surface: per query
+// of `points` (every stride-th row), a triangle around the nearest of view's surface vertices
+// (an embedded surface's pair subsample) at view.x; -1 where there is none. The walk from
+// there (FrameCloud::seeded_rings) ends where the search over a k-d tree of every surface
+// vertex would, without building that tree each frame (docs/notes/2026-11-30-fine-scans.md).
+std::vector<int> SubsampleStarts(const TrackerState& view, const SurfaceRings& rings, const Vertices& points,
+                                 int stride, int num_threads);
 
 // The frame's per-vertex outputs (state.residuals, state.observed) and each object's
 // mesh.x from state.x. cloud_index may be null (no data). num_threads as in FindPairs.

@@ -4,6 +4,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+
+#include "geometry/nearest.h"
 
 namespace femreg {
 
@@ -124,6 +127,26 @@ Vertices PredictMotion(const TrackerState& state, DataSurface* data) {
     TurnBack(state, static_cast<int>(o), h.turn, h.centre + h.velocity, &predicted);  // the predicted centre
   }
   return predicted;
+}
+
+double StartMisfit(const TrackerState& state, const Vertices& x, const Vertices& points, double gate,
+                   DataSurface* data) {
+  const TrackerState& view = data != nullptr ? data->Update(x) : state;
+  const Vertices& at = data != nullptr ? view.x : x;
+  const int nv = static_cast<int>(view.surface_vertices.size());
+  const int np = static_cast<int>(points.rows());
+  if (nv == 0 || np == 0) return 0.0;
+  Vertices surface(nv, 3);
+  for (int i = 0; i < nv; ++i) surface.row(i) = at.row(view.surface_vertices[static_cast<size_t>(i)]);
+  const PointIndex index(surface);
+  const double cap2 = gate > 0 ? gate * gate : std::numeric_limits<double>::infinity();
+  double sum = 0.0;
+  for (int i = 0; i < np; ++i) {
+    double d2 = 0.0;
+    index.Nearest(points.row(i), &d2);
+    sum += std::min(d2, cap2);
+  }
+  return sum / static_cast<double>(np);
 }
 
 }  // namespace femreg

@@ -47,6 +47,13 @@ bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* 
 // (docs/theory/energy.md#the-prediction).
 Vertices PredictMotion(const TrackerState& state, DataSurface* data = nullptr);
 
+// How far the cloud `points` lie from the surface at x: the mean over the points of
+// min(d, gate)^2, d a point's distance to the nearest surface vertex (of the data surface's
+// subsample when `data` is set, else of the meshes' surfaces). Two starts of a frame on the
+// same surface compare by it: the sampling's share of d is the same for both.
+double StartMisfit(const TrackerState& state, const Vertices& x, const Vertices& points, double gate,
+                   DataSurface* data = nullptr);
+
 // A cube's faces show a fifth of its turns; a faceted sphere, a hundredth.
 constexpr double kVisibleTurn = 0.1;
 

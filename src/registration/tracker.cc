@@ -45,6 +45,10 @@ constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 // A frame after held or lost ones makes up for at most this many frames' motion in its
 // budget of outer iterations: the cost of one catch-up frame stays bounded.
 constexpr int kMaxCatchUpFrames = 4;
+// Rings a first outer iteration's walk from an embedded surface's subsample may go before the
+// query is searched in full: the subsample's spacing is a third of the cage's edge, a few of
+// the scan's (docs/notes/2026-11-30-fine-scans.md).
+constexpr int kSeededRings = 16;
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
@@ -221,7 +225,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
     const Vertices predicted = PredictMotion(state, data_surface.get());
     // Not through a flat element: the inversion barrier's energy is infinite there.
-    if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted))) {
+    if (predicted.allFinite() && (options.weights.barrier == 0 || NoFlatElement(state, predicted)) &&
+        PredictionFits(predicted, fc, &s)) {
       state.x = predicted;
     }
   }
@@ -260,6 +265,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     fc.occluders.occluders += s.implausible_carried;
     s.implausible_points = s.implausible_carried;
   }
+  // An embedded surface's subsample: its vertices facing away are not searched (FindPairs).
+  fc.skip_facing_away = data_surface != nullptr;
   s.time.correspondences += Seconds(t0);
   s.visibility = fc.Describe();
   s.occluded_points = fc.occluders.occluders;
@@ -271,6 +278,15 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
 
   std::vector<DataPair> pairs;
   warm_triangles.clear();  // a new cloud
+  if (data_surface && options.data.cloud_to_model) {
+    // An embedded surface: the first outer iteration's queries walk from its subsample, not
+    // from a k-d tree of every scan vertex built again each frame.
+    t0 = Clock::now();
+    warm_triangles = SubsampleStarts(PairState(), Surface().rings(), fc.cloud.points, options.data.cloud_stride,
+                                     options.solver.num_threads);
+    fc.seeded_rings = kSeededRings;
+    s.time.correspondences += Seconds(t0);
+  }
   paired_vertices.clear();
   rise_from = std::max(1, options.data.hold_pairs_after);
   merit = std::numeric_limits<double>::infinity();
@@ -309,6 +325,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.occluded_points = 0;
       s.trim_distance = 0.0;
     }
+    fc.seeded_rings = 0;  // from here on, from the last outer iteration's hits
     if (!go_on) break;
     if (k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
         options.weights.elastic > 0 && !options.forces.estimate && !FractureLive(state) &&
@@ -395,6 +412,16 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();
+}
+
+bool Tracker::Impl::PredictionFits(const Vertices& predicted, const FrameCloud& fc, FrameSummary* s) {
+  if (!data_surface) return true;
+  const auto t0 = Clock::now();
+  const double gate = state.options.data.max_distance;
+  const bool fits = StartMisfit(state, predicted, fc.cloud.points, gate, data_surface.get()) <=
+                    StartMisfit(state, state.x, fc.cloud.points, gate, data_surface.get());
+  s->time.correspondences += Seconds(t0);
+  return fits;
 }
 
 void Tracker::Impl::Outputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs) {

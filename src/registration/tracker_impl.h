@@ -87,6 +87,10 @@ struct Tracker::Impl {
   void Outputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs);
   // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
   std::vector<int> warm_triangles;
+  // With an embedded surface, whether the frame starts from the prediction: not where the
+  // new cloud lies farther from it than from the last result (the motion stopped or turned
+  // back; docs/notes/2026-11-30-fine-scans.md). Without one, always.
+  bool PredictionFits(const Vertices& predicted, const FrameCloud& fc, FrameSummary* s);
   std::vector<char> paired_vertices;
   // The first outer iteration of this frame whose energy rise may stop it: where the pair
   // set is held (data.hold_pairs_after), again after a fracture split.
