@@ -40,6 +40,12 @@ struct FieldInfo {
   // key; its own key is then the one inside the group. Null: directly in the section.
   const char* group = nullptr;
   bool required = false;  // in a group: written whenever the group is (a plane's distance)
+  // A flag that is its group's presence (FieldInfo::key names the group): set when the section
+  // has the group, and the group is written in full when it is set (synth's background).
+  bool switch_of_group = false;
+  // Written after the entries its section writes by hand (an object's toughness after its
+  // material), so that a written scene keeps the order of the hand-written ones.
+  bool after = false;
 
   constexpr explicit FieldInfo(const char* k) : key(k) {}
   constexpr FieldInfo AtLeast(double v) const { return Bound(true, v, false); }
@@ -64,6 +70,16 @@ struct FieldInfo {
   constexpr FieldInfo Required() const {
     FieldInfo f = *this;
     f.required = true;
+    return f;
+  }
+  constexpr FieldInfo SwitchesGroup() const {
+    FieldInfo f = *this;
+    f.switch_of_group = true;
+    return f;
+  }
+  constexpr FieldInfo After() const {
+    FieldInfo f = *this;
+    f.after = true;
     return f;
   }
   constexpr FieldInfo Python(const char* name) const {
@@ -140,6 +156,19 @@ template <class Options>
 std::string FieldName(const FieldInfo& f) {
   const std::string section = OptionFields<Options>::kSection;
   return section.empty() ? f.path() : section + "." + f.path();
+}
+
+// The row of one member in its struct's table (a key the section also reads elsewhere: a
+// region's toughness is the object's row).
+template <class Options, class T>
+FieldInfo FieldOf(T Options::*member) {
+  FieldInfo row("");
+  OptionFields<Options>::Visit([&](auto m, const FieldInfo& f) {
+    if constexpr (std::is_same_v<decltype(m), T Options::*>) {
+      if (m == member) row = f;
+    }
+  });
+  return row;
 }
 
 // The first number of `o` out of its table row's range, as "section.key message (got
