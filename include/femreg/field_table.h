@@ -52,46 +52,14 @@ struct FieldInfo {
   constexpr FieldInfo Above(double v) const { return Bound(true, v, true); }
   constexpr FieldInfo AtMost(double v) const { return Bound(false, v, false); }
   constexpr FieldInfo Below(double v) const { return Bound(false, v, true); }
-  constexpr FieldInfo Finite() const {
-    FieldInfo f = *this;
-    f.finite = true;
-    return f;
-  }
-  constexpr FieldInfo Note(const char* n) const {
-    FieldInfo f = *this;
-    f.note = n;
-    return f;
-  }
-  constexpr FieldInfo In(const char* g) const {
-    FieldInfo f = *this;
-    f.group = g;
-    return f;
-  }
-  constexpr FieldInfo Required() const {
-    FieldInfo f = *this;
-    f.required = true;
-    return f;
-  }
-  constexpr FieldInfo SwitchesGroup() const {
-    FieldInfo f = *this;
-    f.switch_of_group = true;
-    return f;
-  }
-  constexpr FieldInfo After() const {
-    FieldInfo f = *this;
-    f.after = true;
-    return f;
-  }
-  constexpr FieldInfo Python(const char* name) const {
-    FieldInfo f = *this;
-    f.python = name;
-    return f;
-  }
-  constexpr FieldInfo Doc(const char* d) const {
-    FieldInfo f = *this;
-    f.doc = d;
-    return f;
-  }
+  constexpr FieldInfo Finite() const { return With(&FieldInfo::finite, true); }
+  constexpr FieldInfo Note(const char* n) const { return With(&FieldInfo::note, n); }
+  constexpr FieldInfo In(const char* g) const { return With(&FieldInfo::group, g); }
+  constexpr FieldInfo Required() const { return With(&FieldInfo::required, true); }
+  constexpr FieldInfo SwitchesGroup() const { return With(&FieldInfo::switch_of_group, true); }
+  constexpr FieldInfo After() const { return With(&FieldInfo::after, true); }
+  constexpr FieldInfo Python(const char* name) const { return With(&FieldInfo::python, name); }
+  constexpr FieldInfo Doc(const char* d) const { return With(&FieldInfo::doc, d); }
   const char* python_name() const { return python != nullptr ? python : key; }
   // The key within the section: "outliers.neighbors", or the key.
   std::string path() const { return group != nullptr ? std::string(group) + "." + key : std::string(key); }
@@ -128,6 +96,13 @@ struct FieldInfo {
   }
 
  private:
+  // A copy with one member set: the builders above.
+  template <class T>
+  constexpr FieldInfo With(T FieldInfo::*member, T value) const {
+    FieldInfo f = *this;
+    f.*member = value;
+    return f;
+  }
   constexpr FieldInfo Bound(bool lower, double v, bool open) const {
     FieldInfo f = *this;
     f.finite = true;
