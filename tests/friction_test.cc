@@ -209,8 +209,7 @@ PairDrag DragPair(double mu) {
     if (v >= offsets[1] && z < 0.0205 + 1e-9) upper_bottom.push_back(v);
   }
   CollisionSpec spec;
-  spec.pairs = {{"lower", "upper"}};
-  spec.pair_friction = {mu};
+  spec.pairs = {{"lower", "upper", mu}};
   spec.distance = 0.001;
   spec.stiffness = 2e4;
   const std::vector<Triangles> surfaces = {lower.surface, (upper.surface.array() + offsets[1]).matrix()};
@@ -415,8 +414,7 @@ collision:
   EXPECT_EQ(c.friction, 0.3);
   EXPECT_EQ(c.friction_slip, 0.0002);
   ASSERT_EQ(c.pairs.size(), 1u);
-  ASSERT_EQ(c.pair_friction.size(), 1u);
-  EXPECT_EQ(c.pair_friction[0], 0.6);
+  EXPECT_EQ(c.pairs[0].friction, 0.6);
   ASSERT_EQ(c.obstacles.size(), 2u);
   EXPECT_EQ(c.obstacles[0].friction, 0.8);
   EXPECT_LT(c.obstacles[1].friction, 0.0);  // the default's
@@ -425,8 +423,8 @@ collision:
   ASSERT_TRUE(ParseScene(written, "g.yaml", "", &again).ok()) << written;
   EXPECT_EQ(again.collision.friction, 0.3);
   EXPECT_EQ(again.collision.friction_slip, 0.0002);
-  ASSERT_EQ(again.collision.pair_friction.size(), 1u);
-  EXPECT_EQ(again.collision.pair_friction[0], 0.6);
+  ASSERT_EQ(again.collision.pairs.size(), 1u);
+  EXPECT_EQ(again.collision.pairs[0].friction, 0.6);
   EXPECT_EQ(again.collision.obstacles[0].friction, 0.8);
   // The world's coefficient per contact: the pair's, the obstacle's, or the default.
   CollisionWorld world;

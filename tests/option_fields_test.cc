@@ -18,6 +18,7 @@
 namespace femreg {
 namespace {
 
+using testing_tables::ExpectSameFields;
 using testing_tables::FieldCount;
 using testing_tables::MemberCount;
 
@@ -66,18 +67,6 @@ void AllowAlone(const std::string& field, RegistrationOptions* o) {
   if (field.rfind("camera.", 0) == 0) o->camera.enabled = true;  // a scene's camera is on
   if (field.rfind("preprocess.crop.", 0) == 0) o->preprocess.crop = true;  // the group is the switch
   if (field == "preprocess.normals.neighbors") o->preprocess.normal_neighbors = 8;  // 0 or >= 3
-}
-
-template <class Options>
-void ExpectSameFields(const Options& a, const Options& b, const std::string& when) {
-  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    using T = std::decay_t<decltype(a.*member)>;
-    if constexpr (std::is_enum_v<T>) {
-      EXPECT_STREQ(ToString(a.*member), ToString(b.*member)) << f.key << " after " << when;
-    } else {
-      EXPECT_EQ(a.*member, b.*member) << f.key << " after " << when;
-    }
-  });
 }
 
 const char kObject[] = "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n";

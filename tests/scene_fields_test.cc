@@ -1,6 +1,7 @@
 // The tables of the scene's sections beside the registration (femreg/field_table.h): a
-// material's, the forward solve's, collision's, fracture's, synth's, its sensor's and its
-// bodies'. Each covers every member of its struct but those named as read by hand; every
+// material's, the forward solve's, collision's, fracture's, synth's and its sensor's, and
+// those of the lists' entries: objects, anchors, collision pairs and obstacles, synth's motion
+// tracks and bodies. Each covers every member of its struct but those named as read by hand; every
 // field, set alone to a value other than its default, is written by the scene writer and read
 // back by the parser unchanged; and a value out of a field's range fails, in IsValid (where
 // the struct has one) and in a scene file, with the field's name (there with the file, line
@@ -26,6 +27,7 @@
 namespace femreg {
 namespace {
 
+using testing_tables::ExpectSameFields;
 using testing_tables::FieldCount;
 using testing_tables::MemberCount;
 
@@ -33,26 +35,47 @@ TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
   EXPECT_EQ(FieldCount<Material>(), MemberCount<Material>());
   // + min_step, tangent, watchdog_steps, num_threads, verbose: the program's, no scene keys.
   EXPECT_EQ(FieldCount<ForwardOptions>() + 5, MemberCount<ForwardOptions>());
-  // + pairs, obstacles, pair_friction: lists of entries.
-  EXPECT_EQ(FieldCount<CollisionSpec>() + 3, MemberCount<CollisionSpec>());
+  // + pairs, obstacles: lists of entries.
+  EXPECT_EQ(FieldCount<CollisionSpec>() + 2, MemberCount<CollisionSpec>());
   // + toughness, region_toughness (the objects'), min_piece_fraction (no scene key).
   EXPECT_EQ(FieldCount<FractureOptions>() + 3, MemberCount<FractureOptions>());
   // + camera (registration.camera), artefacts (SynthArtefactKeys).
   EXPECT_EQ(FieldCount<DepthSensorOptions>() + 2, MemberCount<DepthSensorOptions>());
-  // + name, box_min, box_max, keyframes.
-  EXPECT_EQ(FieldCount<SynthBodySpec>() + 4, MemberCount<SynthBodySpec>());
-  // + enabled, the ground truth's five (refinement, mesh_path, generate, material,
-  // ground_truth_where), sensor, the background's four, motion, bodies, the four of the
-  // artefacts table (occluder_*, leave_*), source_name.
-  EXPECT_EQ(FieldCount<SynthSpec>() + 18, MemberCount<SynthSpec>());
+  // + name, keyframes.
+  EXPECT_EQ(FieldCount<SynthBodySpec>() + 2, MemberCount<SynthBodySpec>());
+  // + enabled, the ground truth's four (mesh_path, generate, material, ground_truth_where),
+  // sensor, motion, bodies, the four of the artefacts table (occluder_*, leave_*),
+  // source_name.
+  EXPECT_EQ(FieldCount<SynthSpec>() + 13, MemberCount<SynthSpec>());
+  // + name, mesh_path, generate, material, region_materials, material_model, nodal_volume,
+  // element_chosen, region_toughness, surface_path.
+  EXPECT_EQ(FieldCount<ObjectSpec>() + 10, MemberCount<ObjectSpec>());
+  // + name, object, selection, translations, rotations, centre.
+  EXPECT_EQ(FieldCount<AnchorSpec>() + 6, MemberCount<AnchorSpec>());
+  // + first, second (the objects).
+  EXPECT_EQ(FieldCount<CollisionPair>() + 2, MemberCount<CollisionPair>());
+  // + name, kind, plane_point, plane_normal, box_size, mesh_path, objects, keyframes.
+  EXPECT_EQ(FieldCount<ObstacleSpec>() + 8, MemberCount<ObstacleSpec>());
+  // + name, selection, has_centre, centre, keyframes.
+  EXPECT_EQ(FieldCount<MotionTrackSpec>() + 5, MemberCount<MotionTrackSpec>());
 }
 
-// A value other than `d` that the field's range allows: a flag flipped, a number one larger
-// (or one smaller, or halfway to an upper bound that one larger would pass).
+// A value other than `d` that the field's range allows: a flag flipped, an enum's next
+// value, a vector moved (a box's min down, else up), a number one larger (or one smaller, or
+// halfway to an upper bound that one larger would pass).
 template <class T>
 T OtherValue(const FieldInfo& f, T d) {
   if constexpr (std::is_same_v<T, bool>) {
     return !d;
+  } else if constexpr (std::is_enum_v<T>) {
+    const auto& all = EnumValues<T>::kAll;
+    for (size_t i = 0; i < all.size(); ++i) {
+      if (all[i] == d) return all[(i + 1) % all.size()];
+    }
+    return d;
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    const Eigen::Vector3d step(1, 2, 3);
+    return std::string(f.key) == "min" ? Eigen::Vector3d(d - step) : Eigen::Vector3d(d + step);
   } else {
     static_assert(std::is_arithmetic_v<T>, "the scene's tables hold flags and numbers");
     T v = d + 1;
@@ -63,7 +86,8 @@ T OtherValue(const FieldInfo& f, T d) {
   }
 }
 
-// One object, a camera and a synth section with a body, so that every section can be set.
+// One object, a camera and a synth section with a track and a body, so that every section
+// can be set.
 const char kBase[] =
     "objects:\n"
     "  - generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}\n"
@@ -71,28 +95,33 @@ const char kBase[] =
     "  camera: {position: [0, 0, 2], target: [0, 0, 0], up: [0, 1, 0]}\n"
     "synth:\n"
     "  ground_truth: {refinement: 2}\n"
+    "  motion: [{select: {all: true}, keyframes: [{frame: 0}]}]\n"
     "  bodies: [{box: {min: [0, 0, 0.2], max: [0.1, 0.1, 0.3]}}]\n";
+// Two objects with an anchor, a pair and an obstacle (whose frictions are set: left out,
+// they are < 0, out of their rows' range).
+const char kBaseLists[] =
+    "objects:\n"
+    "  - {name: a, generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}\n"
+    "  - {name: b, generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}\n"
+    "anchors: [{object: a, select: {all: true}}]\n"
+    "collision:\n"
+    "  pairs: [{objects: [a, b], friction: 0.5}]\n"
+    "  obstacles: [{plane: {point: [0, 0, 0], normal: [0, 0, 1]}, friction: 0.5}]\n";
 
 // What else a field needs to be set on its own (the parser's rules across keys).
 void AllowAlone(const std::string& field, Scene* scene) {
   if (field == "synth.sanity_check") scene->synth.refinement = 1;  // a sanity check has no ground_truth
+  if (field.rfind("synth.background.", 0) == 0) scene->synth.background = true;  // the group's switch
 }
 
 template <class Options>
-void ExpectSameFields(const Options& a, const Options& b, const std::string& when) {
-  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    EXPECT_EQ(a.*member, b.*member) << f.key << " after " << when;
-  });
-}
-
-template <class Options>
-void ExpectEachFieldRoundTrips(Options& (*section)(Scene&)) {
+void ExpectEachFieldRoundTrips(Options& (*section)(Scene&), const char* base_text = kBase) {
   int fields = 0;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     ++fields;
     const std::string field = FieldName<Options>(f);
     Scene scene;
-    const Status base = ParseScene(kBase, "base.yaml", ".", &scene);
+    const Status base = ParseScene(base_text, "base.yaml", ".", &scene);
     ASSERT_TRUE(base.ok()) << base.message();
     Options& o = section(scene);
     const auto d = o.*member;
@@ -119,6 +148,11 @@ FractureOptions& Fracture(Scene& s) { return s.effects.fracture_options; }
 DepthSensorOptions& Sensor(Scene& s) { return s.synth.sensor; }
 SynthSpec& Synth(Scene& s) { return s.synth; }
 SynthBodySpec& Body0(Scene& s) { return s.synth.bodies[0]; }
+MotionTrackSpec& Track0(Scene& s) { return s.synth.motion[0]; }
+ObjectSpec& Object0(Scene& s) { return s.objects[0]; }
+AnchorSpec& Anchor0(Scene& s) { return s.anchors[0]; }
+CollisionPair& Pair0(Scene& s) { return s.collision.pairs[0]; }
+ObstacleSpec& Obstacle0(Scene& s) { return s.collision.obstacles[0]; }
 
 TEST(SceneFields, EachFieldRoundTripsThroughTheSceneFile) {
   ExpectEachFieldRoundTrips(&ObjectMaterial0);
@@ -128,6 +162,11 @@ TEST(SceneFields, EachFieldRoundTripsThroughTheSceneFile) {
   ExpectEachFieldRoundTrips(&Sensor);
   ExpectEachFieldRoundTrips(&Synth);
   ExpectEachFieldRoundTrips(&Body0);
+  ExpectEachFieldRoundTrips(&Track0);
+  ExpectEachFieldRoundTrips(&Object0, kBaseLists);
+  ExpectEachFieldRoundTrips(&Anchor0, kBaseLists);
+  ExpectEachFieldRoundTrips(&Pair0, kBaseLists);
+  ExpectEachFieldRoundTrips(&Obstacle0, kBaseLists);
 }
 
 // A value the field's range refuses: below a lower bound, above an upper one, else NaN.
@@ -148,10 +187,12 @@ struct Place {
 // The struct's own check where it has one (IsValid), else the table's ranges alone.
 template <class Options>
 bool Valid(const Options& o, std::string* error) {
-  if constexpr (std::is_same_v<Options, SynthSpec> || std::is_same_v<Options, SynthBodySpec>) {
-    return CheckFieldRanges(o, error);
-  } else {
+  if constexpr (std::is_same_v<Options, Material> || std::is_same_v<Options, ForwardOptions> ||
+                std::is_same_v<Options, CollisionSpec> || std::is_same_v<Options, FractureOptions> ||
+                std::is_same_v<Options, DepthSensorOptions>) {
     return o.IsValid(error);
+  } else {
+    return CheckFieldRanges(o, error);
   }
 }
 
@@ -168,7 +209,7 @@ void ExpectRangesNamed(const Place& place) {
     Options o;
     using T = std::decay_t<decltype(o.*member)>;
     std::string error;
-    if (!std::is_unsigned_v<T>) {  // a seed cannot hold -1; the scene file can
+    if constexpr (std::is_arithmetic_v<T> && !std::is_unsigned_v<T>) {  // a seed cannot hold -1; the scene file can
       o.*member = static_cast<T>(bad);
       EXPECT_FALSE(Valid(o, &error)) << field;
       EXPECT_EQ(error.rfind(field + " must be ", 0), 0u) << error;
@@ -176,12 +217,14 @@ void ExpectRangesNamed(const Place& place) {
 
     std::string text = std::isnan(bad) ? ".nan" : std::to_string(bad);
     if (std::is_integral_v<T>) text = std::to_string(static_cast<int>(bad));
+    std::string entry = std::string(f.key) + ": " + text;
+    if (f.group != nullptr) entry = std::string(f.group) + ": {" + entry + "}";
     Scene scene;
-    const std::string yaml = place.before + f.key + ": " + text + place.after;
+    const std::string yaml = place.before + entry + place.after;
     const Status status = ParseScene(yaml, "bad.yaml", ".", &scene);
     ASSERT_FALSE(status.ok()) << field << " = " << text << "\n" << yaml;
     const std::string named =
-        "bad.yaml:" + std::to_string(place.line) + ": " + place.path + "." + f.key + ": must be ";
+        "bad.yaml:" + std::to_string(place.line) + ": " + place.path + "." + f.path() + ": must be ";
     EXPECT_EQ(status.message().rfind(named, 0), 0u) << status.message();
   });
   EXPECT_GT(checked, 0);
@@ -193,7 +236,10 @@ const char kSynth[] =
     "registration:\n"
     "  camera: {position: [0, 0, 2], target: [0, 0, 0], up: [0, 1, 0]}\n"
     "synth:\n"
-    "  ground_truth: {refinement: 2}\n";
+    "  sanity_check: true\n";
+const char kTwoObjects[] =
+    "objects: [{name: a, generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}},\n"
+    "          {name: b, generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n";
 
 TEST(SceneFields, OutOfRangeValuesNameTheField) {
   ExpectRangesNamed<Material>({"objects:\n  - generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}\n"
@@ -207,6 +253,13 @@ TEST(SceneFields, OutOfRangeValuesNameTheField) {
   ExpectRangesNamed<SynthBodySpec>(
       {std::string(kSynth) + "  bodies: [{box: {min: [0, 0, 0.2], max: [0.1, 0.1, 0.3]}, ", "}]\n", 6,
        "synth.bodies[0]"});
+  ExpectRangesNamed<ObjectSpec>({"objects:\n  - generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}\n    ",
+                                 "\n", 3, "objects[0]"});
+  ExpectRangesNamed<AnchorSpec>({std::string(kObject) + "anchors: [{select: {all: true}, ", "}]\n", 2, "anchors[0]"});
+  ExpectRangesNamed<CollisionPair>(
+      {std::string(kTwoObjects) + "collision:\n  pairs: [{objects: [a, b], ", "}]\n", 4, "collision.pairs[0]"});
+  ExpectRangesNamed<ObstacleSpec>({std::string(kObject) + "collision:\n  obstacles: [{plane: {point: [0, 0, 0], normal: [0, 0, 1]}, ",
+                                   "}]\n", 3, "collision.obstacles[0]"});
 }
 
 // The messages the tables phrase, as IsValid and the parser give them.

@@ -40,8 +40,40 @@ struct ObstacleSpec {
   double friction = -1.0;  // Coulomb coefficient against it; < 0: CollisionSpec::friction
 };
 
+// An obstacle's own values beside its name, geometry (plane, box or mesh), objects and
+// keyframes, which are read and written by hand. A friction left out is < 0.
+template <>
+struct OptionFields<ObstacleSpec> {
+  static constexpr const char* kSection = "collision.obstacles";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = ObstacleSpec;
+    v(&S::scale, FieldInfo("scale").Above(0).Doc("applied to the mesh file's coordinates"));
+    v(&S::friction, FieldInfo("friction").AtLeast(0).Doc("Coulomb coefficient against it (unset: the collision's)"));
+  }
+};
+
+// A pair of objects that may touch, with its own friction coefficient (< 0: the collision's).
+struct CollisionPair {
+  std::string first, second;  // object names
+  double friction = -1.0;
+  bool operator==(const CollisionPair& o) const {
+    return first == o.first && second == o.second && friction == o.friction;
+  }
+};
+
+// A pair's own value beside its objects: {objects: [a, b], friction: mu}.
+template <>
+struct OptionFields<CollisionPair> {
+  static constexpr const char* kSection = "collision.pairs";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    v(&CollisionPair::friction, FieldInfo("friction").AtLeast(0).Doc("Coulomb coefficient of the pair (unset: the collision's)"));
+  }
+};
+
 struct CollisionSpec {
-  std::vector<std::pair<std::string, std::string>> pairs;  // object pairs; empty: every pair
+  std::vector<CollisionPair> pairs;  // object pairs; empty: every pair
   double stiffness = 1.0e4;  // k (N/m) per contact
   double distance = 0.002;   // D (m): contacts are detected within it; not a standoff
   // Registration: the penetration (m) a contact may keep. The contact multipliers are
@@ -51,11 +83,10 @@ struct CollisionSpec {
   bool augmented = true;  // false: the bare penalty, zero at contact (penetration F / k)
   std::vector<ObstacleSpec> obstacles;
   // Coulomb friction (docs/theory/contact.md#friction): the coefficient mu of every pair and
-  // obstacle (0: frictionless), per pair (parallel to `pairs`; < 0 or missing: `friction`),
-  // and the slip (m) below which a contact sticks, where the friction force ramps up to
-  // mu times the normal force.
+  // obstacle (0: frictionless; a pair's and an obstacle's own override it), and the slip (m)
+  // below which a contact sticks, where the friction force ramps up to mu times the normal
+  // force.
   double friction = 0.0;
-  std::vector<double> pair_friction;
   double friction_slip = 1.0e-4;
   // The table's ranges (the pairs and obstacles are checked where they are read).
   bool IsValid(std::string* error) const;

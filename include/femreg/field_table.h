@@ -40,42 +40,26 @@ struct FieldInfo {
   // key; its own key is then the one inside the group. Null: directly in the section.
   const char* group = nullptr;
   bool required = false;  // in a group: written whenever the group is (a plane's distance)
+  // A flag that is its group's presence (FieldInfo::key names the group): set when the section
+  // has the group, and the group is written in full when it is set (synth's background).
+  bool switch_of_group = false;
+  // Written after the entries its section writes by hand (an object's toughness after its
+  // material), so that a written scene keeps the order of the hand-written ones.
+  bool after = false;
 
   constexpr explicit FieldInfo(const char* k) : key(k) {}
   constexpr FieldInfo AtLeast(double v) const { return Bound(true, v, false); }
   constexpr FieldInfo Above(double v) const { return Bound(true, v, true); }
   constexpr FieldInfo AtMost(double v) const { return Bound(false, v, false); }
   constexpr FieldInfo Below(double v) const { return Bound(false, v, true); }
-  constexpr FieldInfo Finite() const {
-    FieldInfo f = *this;
-    f.finite = true;
-    return f;
-  }
-  constexpr FieldInfo Note(const char* n) const {
-    FieldInfo f = *this;
-    f.note = n;
-    return f;
-  }
-  constexpr FieldInfo In(const char* g) const {
-    FieldInfo f = *this;
-    f.group = g;
-    return f;
-  }
-  constexpr FieldInfo Required() const {
-    FieldInfo f = *this;
-    f.required = true;
-    return f;
-  }
-  constexpr FieldInfo Python(const char* name) const {
-    FieldInfo f = *this;
-    f.python = name;
-    return f;
-  }
-  constexpr FieldInfo Doc(const char* d) const {
-    FieldInfo f = *this;
-    f.doc = d;
-    return f;
-  }
+  constexpr FieldInfo Finite() const { return With(&FieldInfo::finite, true); }
+  constexpr FieldInfo Note(const char* n) const { return With(&FieldInfo::note, n); }
+  constexpr FieldInfo In(const char* g) const { return With(&FieldInfo::group, g); }
+  constexpr FieldInfo Required() const { return With(&FieldInfo::required, true); }
+  constexpr FieldInfo SwitchesGroup() const { return With(&FieldInfo::switch_of_group, true); }
+  constexpr FieldInfo After() const { return With(&FieldInfo::after, true); }
+  constexpr FieldInfo Python(const char* name) const { return With(&FieldInfo::python, name); }
+  constexpr FieldInfo Doc(const char* d) const { return With(&FieldInfo::doc, d); }
   const char* python_name() const { return python != nullptr ? python : key; }
   // The key within the section: "outliers.neighbors", or the key.
   std::string path() const { return group != nullptr ? std::string(group) + "." + key : std::string(key); }
@@ -112,6 +96,13 @@ struct FieldInfo {
   }
 
  private:
+  // A copy with one member set: the builders above.
+  template <class T>
+  constexpr FieldInfo With(T FieldInfo::*member, T value) const {
+    FieldInfo f = *this;
+    f.*member = value;
+    return f;
+  }
   constexpr FieldInfo Bound(bool lower, double v, bool open) const {
     FieldInfo f = *this;
     f.finite = true;
@@ -140,6 +131,19 @@ template <class Options>
 std::string FieldName(const FieldInfo& f) {
   const std::string section = OptionFields<Options>::kSection;
   return section.empty() ? f.path() : section + "." + f.path();
+}
+
+// The row of one member in its struct's table (a key the section also reads elsewhere: a
+// region's toughness is the object's row).
+template <class Options, class T>
+FieldInfo FieldOf(T Options::*member) {
+  FieldInfo row("");
+  OptionFields<Options>::Visit([&](auto m, const FieldInfo& f) {
+    if constexpr (std::is_same_v<decltype(m), T Options::*>) {
+      if (m == member) row = f;
+    }
+  });
+  return row;
 }
 
 // The first number of `o` out of its table row's range, as "section.key message (got

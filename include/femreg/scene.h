@@ -4,6 +4,7 @@
 #define FEMREG_SCENE_H_
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -88,6 +89,22 @@ struct ObjectSpec {
   std::string surface_path;
 };
 
+// An object's own values beside its name, mesh or generator, materials, regions and surface,
+// which are read and written by hand (a region's toughness is the toughness row).
+template <>
+struct OptionFields<ObjectSpec> {
+  static constexpr const char* kSection = "objects";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = ObjectSpec;
+    v(&S::scale, FieldInfo("scale").Above(0).Doc("applied to the mesh file's coordinates (0.001 for mm)"));
+    v(&S::translation, FieldInfo("translation").In("pose").Doc("initial pose: translation (m)"));
+    v(&S::rotation, FieldInfo("rotation").In("pose").Doc("initial pose: rotation, axis * angle (rad)"));
+    v(&S::toughness, FieldInfo("toughness").AtLeast(0).After().Doc("fracture toughness (Pa); 0 = unbreakable"));
+    v(&S::label, FieldInfo("label").AtLeast(-1).After().Doc("cloud points with this label are its own; -1 = none"));
+  }
+};
+
 struct BoundaryConditionSpec {
   enum class Type { kClamp, kDisplacement };
   std::string object;  // object name; may be empty when the scene has one object
@@ -125,6 +142,19 @@ struct AnchorSpec {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
 };
 
+// An anchor's own values beside its name, object, selection and trajectory (translations,
+// rotations and their centre), which are read and written by hand.
+template <>
+struct OptionFields<AnchorSpec> {
+  static constexpr const char* kSection = "anchors";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    using S = AnchorSpec;
+    v(&S::hard, FieldInfo("hard").Doc("vertices fixed at the targets; false: a penalty"));
+    v(&S::weight, FieldInfo("weight").AtLeast(0).Doc("a soft anchor's weight; 0 = weights.anchor"));
+  }
+};
+
 struct EffectsSpec {
   bool fracture = false;
   bool collision = false;
@@ -159,6 +189,24 @@ struct MotionTrackSpec {
   // translations (rotation-free tracks only).
   Anchor anchor = Anchor::kNone;
 };
+const char* ToString(MotionTrackSpec::Anchor anchor);
+bool FromString(const std::string& name, MotionTrackSpec::Anchor* anchor);
+template <>
+struct EnumValues<MotionTrackSpec::Anchor> {
+  static constexpr std::array<MotionTrackSpec::Anchor, 3> kAll = {
+      MotionTrackSpec::Anchor::kNone, MotionTrackSpec::Anchor::kHard, MotionTrackSpec::Anchor::kSoft};
+};
+
+// A track's own value beside its name, selection, centre and keyframes (read and written by
+// hand).
+template <>
+struct OptionFields<MotionTrackSpec> {
+  static constexpr const char* kSection = "synth.motion";
+  template <class Visitor>
+  static void Visit(Visitor&& v) {
+    v(&MotionTrackSpec::anchor, FieldInfo("anchor").Doc("hard or soft: the tracking scene gets an anchor that follows it"));
+  }
+};
 
 // A rigid box rendered with the object (a tool, an occluder): never part of the ground
 // truth. Keyframes translate it (rotation is not supported for bodies).
@@ -174,16 +222,19 @@ struct SynthBodySpec {
   double contact_tolerance = 1e-3;  // m: how far below the highest vertex the patch reaches
 };
 
-// A body's keys beside its name, box and keyframes (read and written by hand).
+// A body's keys beside its name and keyframes (read and written by hand); its box is
+// required (min < max in every coordinate, checked where it is read).
 template <>
 struct OptionFields<SynthBodySpec> {
   static constexpr const char* kSection = "synth.bodies";
   template <class Visitor>
   static void Visit(Visitor&& v) {
     using S = SynthBodySpec;
-    v(&S::in_cloud, FieldInfo("in_cloud").Doc("its pixels return points (false: masked, it only hides)"));
-    v(&S::press, FieldInfo("press").Doc("pressed along -z into the object"));
-    v(&S::contact_tolerance, FieldInfo("contact_tolerance").AtLeast(0).Doc("m: how far below the highest vertex the patch reaches"));
+    v(&S::box_min, FieldInfo("min").In("box").Required().Python("box_min").Doc("the box's corner with the smallest coordinates (m)"));
+    v(&S::box_max, FieldInfo("max").In("box").Required().Python("box_max").Doc("the box's opposite corner (m)"));
+    v(&S::in_cloud, FieldInfo("in_cloud").After().Doc("its pixels return points (false: masked, it only hides)"));
+    v(&S::press, FieldInfo("press").After().Doc("pressed along -z into the object"));
+    v(&S::contact_tolerance, FieldInfo("contact_tolerance").After().AtLeast(0).Doc("m: how far below the highest vertex the patch reaches"));
   }
 };
 
@@ -220,9 +271,10 @@ struct SynthSpec {
   std::string source_name;         // the scene file's name, for the outputs
 };
 
-// The `synth:` section's own values. Its groups and lists (ground_truth, sensor, background,
-// motion, bodies, artefacts) are read and written by hand, the sensor and the bodies through
-// their own tables, the artefacts through SynthArtefactKeys.
+// The `synth:` section's own values, the ground truth's refinement and the background. The
+// rest of ground_truth (mesh, generate, material), the sensor, motion, bodies and artefacts
+// are read and written by hand, the sensor, tracks and bodies through their own tables, the
+// artefacts through SynthArtefactKeys.
 template <>
 struct OptionFields<SynthSpec> {
   static constexpr const char* kSection = "synth";
@@ -232,6 +284,11 @@ struct OptionFields<SynthSpec> {
     v(&S::frames, FieldInfo("frames").AtLeast(1).Doc("frames to simulate"));
     v(&S::seed, FieldInfo("seed").AtLeast(0).Doc("the sensor noise's seed"));
     v(&S::sanity_check, FieldInfo("sanity_check").Doc("ground truth made with the tracked mesh and material"));
+    v(&S::refinement, FieldInfo("refinement").In("ground_truth").AtLeast(1).Doc("the object's generator with cells * refinement"));
+    v(&S::background, FieldInfo("background").SwitchesGroup().After().Doc("a square table quad in view"));
+    v(&S::background_point, FieldInfo("point").In("background").After().Python("background_point").Doc("a point of the table (m)"));
+    v(&S::background_normal, FieldInfo("normal").In("background").After().Python("background_normal").Doc("the table's normal"));
+    v(&S::background_size, FieldInfo("size").In("background").After().Above(0).Python("background_size").Doc("m, edge length"));
   }
 };
 

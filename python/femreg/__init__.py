@@ -43,6 +43,7 @@ from ._femreg import (  # noqa: E402,F401  (the public API)
     RegistrationOptions,
     Scene,
     SolverOptions,
+    SynthBody,
     SynthOptions,
     Tracker,
     TumFrame,

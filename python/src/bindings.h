@@ -9,6 +9,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -77,6 +78,87 @@ void DefFields(Class& cls) {
       cls.def_readwrite(f.python_name(), member, f.doc);
     }
   });
+}
+
+// A field's value as Python shows it: an enum by its name, a Vector3d as a list of floats.
+template <typename T>
+py::object FieldObject(const T& value) {
+  if constexpr (std::is_enum_v<T>) {
+    return py::str(ToString(value));
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    return py::cast(std::vector<double>{value.x(), value.y(), value.z()});
+  } else {
+    return py::cast(value);
+  }
+}
+
+// "youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0": every field of a table.
+template <typename Options>
+std::string FieldsRepr(const Options& o) {
+  std::string fields;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    fields += std::string(fields.empty() ? "" : ", ") + f.python_name() + "=" +
+              py::repr(FieldObject(o.*member)).template cast<std::string>();
+  });
+  return fields;
+}
+
+// A constructor and __repr__ from an options table: Name(field=default, ...) takes every
+// field by its Python name (positional ones in the table's order), each defaulting to the
+// struct's default; an unknown or repeated name raises TypeError; `valid` (the struct's
+// IsValid, or its table's ranges) raises ValueError naming the field. The docstring lists
+// the keywords with their defaults.
+template <typename Class>
+void DefFieldsInit(Class& cls, const char* name,
+                   bool (*valid)(const typename Class::type&, std::string*) =
+                       &CheckFieldRanges<typename Class::type>) {
+  using Options = typename Class::type;
+  static const std::string doc = std::string(name) + "(" + FieldsRepr(Options()) + ")";
+  const std::string type = name;
+  cls.def(py::init([type, valid](const py::args& args, const py::kwargs& kwargs) {
+            Options o;
+            std::vector<std::string> names;
+            OptionFields<Options>::Visit([&](auto, const FieldInfo& f) { names.push_back(f.python_name()); });
+            if (args.size() > names.size()) {
+              throw py::type_error(type + "() takes at most " + std::to_string(names.size()) +
+                                   " positional arguments (got " + std::to_string(args.size()) + ")");
+            }
+            for (const auto& item : kwargs) {
+              const std::string key = py::str(item.first);
+              if (std::find(names.begin(), names.end(), key) == names.end()) {
+                std::string accepted;
+                for (const std::string& n : names) accepted += (accepted.empty() ? "" : ", ") + n;
+                throw py::type_error(type + "(): unexpected keyword argument '" + key + "' (one of: " + accepted + ")");
+              }
+            }
+            size_t i = 0;
+            OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+              py::object value;
+              if (i < args.size()) value = args[i];
+              ++i;
+              if (kwargs.contains(f.python_name())) {
+                if (value) throw py::type_error(type + "(): got multiple values for '" + f.python_name() + "'");
+                value = kwargs[f.python_name()];
+              }
+              if (!value) return;
+              using T = std::decay_t<decltype(o.*member)>;
+              if constexpr (std::is_enum_v<T>) {
+                o.*member = EnumFromString<T>(value.template cast<std::string>(), FieldName<Options>(f));
+              } else {
+                try {
+                  o.*member = value.template cast<T>();
+                } catch (const py::cast_error&) {
+                  throw py::type_error(type + "(): " + f.python_name() + ": cannot take " +
+                                       py::repr(value).template cast<std::string>());
+                }
+              }
+            });
+            std::string why;
+            if (!valid(o, &why)) throw py::value_error(type + ": " + why);
+            return o;
+          }),
+          doc.c_str());
+  cls.def("__repr__", [type](const Options& o) { return type + "(" + FieldsRepr(o) + ")"; });
 }
 
 // Open3D's objects, accepted without depending on Open3D: true when `obj` is an instance

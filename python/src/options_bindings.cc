@@ -1,6 +1,6 @@
 // Python bindings: Material and the registration options (the scene file's `registration:`
 // keys), enum fields as strings. The structs' fields come from their tables
-// (femreg/field_table.h, DefFields).
+// (femreg/field_table.h, DefFields), and Material's constructor too (DefFieldsInit).
 #include <string>
 
 #include "bindings.h"
@@ -13,26 +13,7 @@ namespace python {
 void BindOptions(py::module_& m) {
   // ---- materials and options ------------------------------------------------------------
   auto material = py::class_<Material>(m, "Material", "Isotropic linear elastic material (SI units).");
-  material
-      .def(py::init([](double e, double nu, double rho) {
-             Material mat;
-             mat.youngs_modulus = e;
-             mat.poisson_ratio = nu;
-             mat.density = rho;
-             std::string why;
-             if (!mat.IsValid(&why)) throw py::value_error("Material: " + why);
-             return mat;
-           }),
-           py::arg("youngs_modulus") = 1.0e5, py::arg("poisson_ratio") = 0.3,
-           py::arg("density") = 1000.0)
-      .def("__repr__", [](const Material& mat) {
-        std::string fields;  // Material(youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0)
-        OptionFields<Material>::Visit([&](auto member, const FieldInfo& f) {
-          fields += std::string(fields.empty() ? "" : ", ") + f.python_name() + "=" +
-                    py::repr(py::float_(mat.*member)).cast<std::string>();
-        });
-        return "Material(" + fields + ")";
-      });
+  DefFieldsInit(material, "Material", +[](const Material& mat, std::string* why) { return mat.IsValid(why); });
   DefFields(material);
 
   auto camera = py::class_<CameraOptions>(m, "CameraOptions",

@@ -72,9 +72,19 @@ void BindScene(py::module_& m) {
   auto sensor = py::class_<DepthSensorOptions>(m, "DepthSensorOptions", "femreg synth's virtual sensor (synth.sensor).");
   sensor.def(py::init<>());
   DefFields(sensor);
+  auto body = py::class_<SynthBodySpec>(
+      m, "SynthBody",
+      "A rigid box femreg synth renders with the object (an entry of the scene's synth.bodies); "
+      "its keyframes are the scene file's.");
+  DefFieldsInit(body, "SynthBody");
+  body.def_readwrite("name", &SynthBodySpec::name, "unique among the bodies and tracks");
+  DefFields(body);
   auto synth = py::class_<SynthSpec>(m, "SynthOptions",
-                                     "femreg synth's own values (the scene's synth: keys), and its sensor.");
-  synth.def(py::init<>()).def_readwrite("sensor", &SynthSpec::sensor);
+                                     "femreg synth's own values (the scene's synth: keys), its sensor and bodies.");
+  synth.def(py::init<>())
+      .def_readwrite("sensor", &SynthSpec::sensor)
+      .def_readwrite("bodies", &SynthSpec::bodies,
+                     "SynthBody list (synth.bodies); a copy: assign the whole list to change it");
   DefFields(synth);
 
   // ---- scenes ---------------------------------------------------------------------------

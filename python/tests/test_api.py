@@ -57,6 +57,35 @@ def test_scene_sections_follow_their_tables():
     assert repr(femreg.Material()) == "Material(youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0)"
 
 
+def test_material_and_synth_body_take_their_tables_fields():
+    # Their constructors' keywords are their tables' rows: each defaults to the struct's
+    # value, an unknown one raises TypeError naming the accepted ones, a bad value ValueError.
+    m = femreg.Material(poisson_ratio=0.45, density=900)
+    assert (m.youngs_modulus, m.poisson_ratio, m.density) == (1e5, 0.45, 900.0)
+    assert femreg.Material(2e5).youngs_modulus == 2e5
+    with pytest.raises(TypeError, match="unexpected keyword argument 'poisson'.*poisson_ratio"):
+        femreg.Material(poisson=0.3)
+    with pytest.raises(ValueError, match=r"Material: poisson_ratio must be in \(-1, 0.5\) \(got 0.5\)"):
+        femreg.Material(poisson_ratio=0.5)
+    body = femreg.SynthBody(box_min=[0, 0, 0.2], box_max=[0.1, 0.1, 0.3], press=True)
+    body.name = "tool"
+    assert body.press and not body.in_cloud and list(body.box_max) == pytest.approx([0.1, 0.1, 0.3])
+    assert repr(body).startswith("SynthBody(box_min=[0.0, 0.0, 0.2], box_max=[0.1, 0.1, 0.3], in_cloud=False")
+    with pytest.raises(ValueError, match=r"synth.bodies.contact_tolerance must be >= 0"):
+        femreg.SynthBody(box_max=[1, 1, 1], contact_tolerance=-1)
+    # A scene's synth section takes bodies made in Python and writes them back.
+    scene = femreg.parse_scene(
+        "objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n"
+        "registration:\n  camera: {position: [0, 0, 2], target: [0, 0, 0], up: [0, 1, 0]}\n"
+        "synth:\n  ground_truth: {refinement: 2}\n"
+        "  bodies: [{name: hand, box: {min: [0, 0, 0.5], max: [0.2, 0.1, 0.6]}, in_cloud: true}]\n")
+    assert [b.name for b in scene.synth.bodies] == ["hand"] and scene.synth.bodies[0].in_cloud
+    scene.synth.bodies = scene.synth.bodies + [body]
+    again = femreg.parse_scene(scene.to_yaml())
+    assert [b.name for b in again.synth.bodies] == ["hand", "tool"]
+    assert again.synth.bodies[1].press and list(again.synth.bodies[1].box_min) == pytest.approx([0, 0, 0.2])
+
+
 def test_missing_files_raise():
     with pytest.raises(femreg.Error, match="no_such_mesh.vtu"):
         femreg.read_mesh("no_such_mesh.vtu")

@@ -40,7 +40,8 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
     return false;
   };
   pairs_.clear();
-  std::vector<std::pair<std::string, std::string>> named = spec.pairs;
+  std::vector<std::pair<std::string, std::string>> named;
+  for (const CollisionPair& p : spec.pairs) named.emplace_back(p.first, p.second);
   if (named.empty()) {  // every pair
     for (size_t i = 0; i < names.size(); ++i)
       for (size_t j = i + 1; j < names.size(); ++j) named.emplace_back(names[i], names[j]);
@@ -57,11 +58,11 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
   // Friction per pair where the spec gives one (a coefficient < 0 falls back to the default).
   pair_friction_.clear();
   has_friction_ = spec.friction > 0;
-  for (size_t i = 0; i < spec.pairs.size() && i < spec.pair_friction.size(); ++i) {
+  for (const CollisionPair& p : spec.pairs) {
     int a = -1, b = -1;
-    if (spec.pair_friction[i] < 0 || !find(spec.pairs[i].first, &a) || !find(spec.pairs[i].second, &b)) continue;
-    pair_friction_.push_back({{std::min(a, b), std::max(a, b)}, spec.pair_friction[i]});
-    has_friction_ = has_friction_ || spec.pair_friction[i] > 0;
+    if (p.friction < 0 || !find(p.first, &a) || !find(p.second, &b)) continue;
+    pair_friction_.push_back({{std::min(a, b), std::max(a, b)}, p.friction});
+    has_friction_ = has_friction_ || p.friction > 0;
   }
   for (const ObstacleSpec& os : spec.obstacles) has_friction_ = has_friction_ || os.friction > 0;
 

@@ -484,7 +484,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
          << (t.spec->anchor == MotionTrackSpec::Anchor::kNone
                  ? ""
                  : std::string("; the tracking scene holds it with a ") +
-                       (t.spec->anchor == MotionTrackSpec::Anchor::kHard ? "hard" : "soft") +
+                       ToString(t.spec->anchor) +
                        " anchor")
          << ".\n";
     }

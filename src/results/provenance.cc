@@ -43,6 +43,22 @@ json FieldsJson(const Options& o) {
   return j;
 }
 
+// A list's entries: what names each (`head`), then its table's fields.
+template <class Entry, class Head>
+json EntriesJson(const std::vector<Entry>& entries, Head head) {
+  json list = json::array();
+  for (const Entry& e : entries) {
+    json j = head(e);
+    j.update(FieldsJson(e));
+    list.push_back(j);
+  }
+  return list;
+}
+template <class Entry>
+json Named(const std::vector<Entry>& entries) {
+  return EntriesJson(entries, [](const Entry& e) { return json{{"name", e.name}}; });
+}
+
 }  // namespace
 
 json RegistrationOptionsJson(const RegistrationOptions& o) {
@@ -67,12 +83,20 @@ json SceneOptionsJson(const Scene& scene) {
   j["effects"] = {{"fracture", {{"enabled", scene.effects.fracture}}}, {"collision", scene.effects.collision}};
   j["effects"]["fracture"].update(FieldsJson(scene.effects.fracture_options));
   j["collision"] = FieldsJson(scene.collision);
+  j["collision"]["pairs"] = EntriesJson(scene.collision.pairs, [](const CollisionPair& p) {
+    return json{{"objects", {p.first, p.second}}};
+  });
+  j["collision"]["obstacles"] = Named(scene.collision.obstacles);
   json materials = json::array();
   for (const ObjectSpec& o : scene.objects) materials.push_back(FieldsJson(o.material));
   j["materials"] = materials;
+  j["objects"] = Named(scene.objects);
+  j["anchors"] = Named(scene.anchors);
   if (scene.synth.enabled) {
     j["synth"] = FieldsJson(scene.synth);
     j["synth"]["sensor"] = FieldsJson(scene.synth.sensor);
+    j["synth"]["motion"] = Named(scene.synth.motion);
+    j["synth"]["bodies"] = Named(scene.synth.bodies);
   } else {
     j["synth"] = nullptr;
   }

@@ -18,8 +18,10 @@ namespace results_internal {
 nlohmann::ordered_json RegistrationOptionsJson(const RegistrationOptions& options);
 
 // The scene's other options, every field of their tables (femreg/field_table.h) by its scene
-// key: {"forward", "effects": {"fracture": {"enabled", ...}, "collision"}, "collision",
-// "materials": [per object], "synth" (with "sensor"; null without a synth section)}.
+// key: {"forward", "effects": {"fracture": {"enabled", ...}, "collision"}, "collision" (with
+// "pairs" and "obstacles"), "materials": [per object], "objects" and "anchors" (each entry's
+// name and table), "synth" (with "sensor", "motion" and "bodies"; null without a synth
+// section)}.
 nlohmann::ordered_json SceneOptionsJson(const Scene& scene);
 
 // {"femreg_version", "scene": path, "overrides": [--set ...], "scene_resolved": the scene as

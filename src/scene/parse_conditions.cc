@@ -78,7 +78,7 @@ void SceneParser::ParseAnchors(const YamlValue& list) {
   std::set<std::string> names;
   for (int i = 0; i < list.size(); ++i) {
     const YamlValue v = list[i];
-    v.CheckKeys({"name", "object", "select", "hard", "weight", "translations", "rotations", "centre"});
+    v.CheckKeys(FieldKeys<AnchorSpec>({"translations", "rotations", "centre"}, {"name", "object", "select"}));
     AnchorSpec anchor;
     anchor.name = v.Has("name") ? v["name"].AsString() : "anchor" + std::to_string(i);
     if (!names.insert(anchor.name).second) {
@@ -86,8 +86,7 @@ void SceneParser::ParseAnchors(const YamlValue& list) {
     }
     anchor.object = ParseObjectName(v);
     anchor.selection = ParseSelection(v);
-    if (v.Has("hard")) anchor.hard = v["hard"].AsBool();
-    if (v.Has("weight")) anchor.weight = NonNegativeDouble(v["weight"]);
+    ParseFields(v, &anchor, /*check=*/true);  // hard, weight (femreg/scene.h)
     if (v.Has("translations")) {
       const YamlValue t = v["translations"];
       if (!t.IsSequence()) t.Fail("must be a list of [x, y, z] per frame");

@@ -50,18 +50,18 @@ void SceneParser::ParseCollision(const YamlValue& v) {
     pairs.RequireSequence();
     for (int i = 0; i < pairs.size(); ++i) {
       const YamlValue entry = pairs[i];
-      double mu = -1.0;  // a pair with its own friction: {objects: [a, b], friction: mu}
+      CollisionPair pair;  // [a, b], or with its own friction: {objects: [a, b], friction: mu}
       if (entry.IsMap()) {
-        entry.CheckKeys({"objects", "friction"});
+        entry.CheckKeys(FieldKeys<CollisionPair>({}, {"objects"}));
         if (!entry.Has("objects")) entry.Fail("needs 'objects' (a pair of object names [a, b])");
-        if (entry.Has("friction")) mu = NonNegativeDouble(entry["friction"]);
+        ParseFields(entry, &pair, /*check=*/true);  // friction (femreg/collision_spec.h)
       }
       const YamlValue p = entry.IsMap() ? entry["objects"] : entry;
       if (!p.IsSequence() || p.size() != 2) p.Fail("must be a pair of object names [a, b]");
-      const std::string a = object_name(p[0]), b = object_name(p[1]);
-      if (a == b) p.Fail("an object cannot be paired with itself (" + Quote(a) + ")");
-      c.pairs.emplace_back(a, b);
-      c.pair_friction.push_back(mu);
+      pair.first = object_name(p[0]);
+      pair.second = object_name(p[1]);
+      if (pair.first == pair.second) p.Fail("an object cannot be paired with itself (" + Quote(pair.first) + ")");
+      c.pairs.push_back(pair);
     }
   }
   if (v.Has("obstacles")) {
@@ -70,7 +70,7 @@ void SceneParser::ParseCollision(const YamlValue& v) {
     std::set<std::string> names;
     for (int i = 0; i < list.size(); ++i) {
       const YamlValue o = list[i];
-      o.CheckKeys({"name", "plane", "box", "mesh", "scale", "objects", "pose", "keyframes", "friction"});
+      o.CheckKeys(FieldKeys<ObstacleSpec>({"objects", "pose", "keyframes"}, {"name", "plane", "box", "mesh"}));
       ObstacleSpec spec;
       spec.name = o.Has("name") ? o["name"].AsString() : "obstacle" + std::to_string(i);
       if (!names.insert(spec.name).second) o["name"].Fail("duplicate obstacle name " + Quote(spec.name));
@@ -103,8 +103,7 @@ void SceneParser::ParseCollision(const YamlValue& v) {
         const Status status = ReadTriangleSurface(spec.mesh_path, &vertices, &triangles);
         if (!status.ok()) mesh.Fail(status.message());
       }
-      if (o.Has("scale")) spec.scale = PositiveDouble(o["scale"]);
-      if (o.Has("friction")) spec.friction = NonNegativeDouble(o["friction"]);
+      ParseFields(o, &spec, /*check=*/true);  // scale, friction (femreg/collision_spec.h)
       if (o.Has("objects")) {
         const YamlValue objects = o["objects"];
         objects.RequireSequence();

@@ -27,8 +27,7 @@ void SceneParser::ParseObjects(const YamlValue& v) {
 }
 
 ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
-  v.CheckKeys({"name", "mesh", "generate", "scale", "pose", "material", "regions",
-               "toughness", "label", "surface"});
+  v.CheckKeys(FieldKeys<ObjectSpec>({"surface"}, {"name", "mesh", "generate", "material", "regions"}));
   ObjectSpec object;
   object.name = v.Has("name") ? v["name"].AsString() : "object" + std::to_string(index);
   if (object.name.empty()) v["name"].Fail("must not be empty");
@@ -60,13 +59,7 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) surface.Fail("surface file not found: " + object.surface_path);
   }
-  if (v.Has("scale")) object.scale = PositiveDouble(v["scale"]);
-  if (v.Has("pose")) {
-    const YamlValue pose = v["pose"];
-    pose.CheckKeys({"translation", "rotation"});
-    if (pose.Has("translation")) object.translation = pose["translation"].AsVector3();
-    if (pose.Has("rotation")) object.rotation = pose["rotation"].AsVector3();
-  }
+  ParseFields(v, &object, /*check=*/true);  // scale, pose, toughness, label (femreg/scene.h)
   if (v.Has("material")) {
     const YamlValue material = v["material"];
     object.material = ParseMaterial(material, object.material);
@@ -100,13 +93,13 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
         if (existing.first == region) key.Fail("region " + std::to_string(region) + " listed twice");
       }
       object.region_materials.emplace_back(region, ParseMaterial(entry, object.material, true));
-      if (entry.Has("toughness")) {
-        object.region_toughness.emplace_back(region, NonNegativeDouble(entry["toughness"]));
+      if (HasField(entry, &ObjectSpec::toughness)) {  // the object's row
+        double toughness = 0.0;
+        ReadField(FieldValue(entry, &ObjectSpec::toughness), FieldOf(&ObjectSpec::toughness), true, &toughness);
+        object.region_toughness.emplace_back(region, toughness);
       }
     }
   }
-  if (v.Has("toughness")) object.toughness = NonNegativeDouble(v["toughness"]);
-  if (v.Has("label")) object.label = IntAtLeast(v["label"], -1);
   return object;
 }
 
@@ -157,7 +150,7 @@ MeshGeneratorSpec SceneParser::ParseGenerator(const YamlValue& v) {
 }
 
 Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults, bool region) {
-  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{"toughness"}
+  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{FieldOf(&ObjectSpec::toughness).key}
                                           : std::vector<std::string>{"model", "volume"}));
   // The keys and ranges are Material's table (femreg/fem.h); a bad value fails at its line:
   // "beam.yaml:6: objects[0].material.poisson_ratio: must be in (-1, 0.5) (got 0.5)".

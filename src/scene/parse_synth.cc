@@ -10,7 +10,7 @@ namespace femreg {
 namespace scene_internal {
 
 void SceneParser::ParseSynth(const YamlValue& v) {
-  v.CheckKeys(FieldKeys<SynthSpec>({"ground_truth", "sensor", "background", "motion", "bodies", "artefacts"}));
+  v.CheckKeys(FieldKeys<SynthSpec>({"sensor", "motion", "bodies", "artefacts"}));
   SynthSpec& s = scene_->synth;
   s.enabled = true;
   s.source_name = std::filesystem::path(source_).filename().string();
@@ -22,26 +22,28 @@ void SceneParser::ParseSynth(const YamlValue& v) {
   if (!scene_->registration.camera.enabled) {
     v.Fail("needs registration.camera: the virtual depth camera renders from it");
   }
-  ParseFields(v, &s, /*check=*/true);  // frames, seed, sanity_check (femreg/scene.h)
+  // The ground truth's keys beside its refinement (the table's) are read here.
+  const char* truth_group = FieldOf(&SynthSpec::refinement).group;
+  if (v.Has(truth_group)) v[truth_group].CheckKeys(GroupKeys<SynthSpec>(truth_group, {"mesh", "generate", "material"}));
+  // frames, seed, sanity_check, ground_truth.refinement, background (femreg/scene.h)
+  ParseFields(v, &s, /*check=*/true, {truth_group});
   s.material = object.material;
   s.ground_truth_where = v.Location() + " (" + v.path() + ")";
-  if (v.Has("ground_truth")) {
-    const YamlValue g = v["ground_truth"];
+  if (v.Has(truth_group)) {
+    const YamlValue g = v[truth_group];
     if (s.sanity_check) {
       g.Fail("a sanity check tracks the data with the very mesh and material that made it: "
              "remove ground_truth or sanity_check");
     }
-    g.CheckKeys({"refinement", "mesh", "generate", "material"});
     s.ground_truth_where = g.Location() + " (" + g.path() + ")";
-    if (g.Has("refinement") + g.Has("mesh") + g.Has("generate") > 1) {
+    const bool refined = HasField(v, &SynthSpec::refinement);
+    if (refined + g.Has("mesh") + g.Has("generate") > 1) {
       g.Fail("needs at most one of refinement, mesh or generate");
     }
-    if (g.Has("refinement")) {
-      s.refinement = IntAtLeast(g["refinement"], 1);
-      if (object.generate.shape == MeshGeneratorSpec::Shape::kNone) {
-        g["refinement"].Fail("refines a generated object, and objects[0] reads a mesh file: "
-                             "give ground_truth.mesh (a finer mesh of the same shape)");
-      }
+    if (refined && object.generate.shape == MeshGeneratorSpec::Shape::kNone) {
+      FieldValue(v, &SynthSpec::refinement)
+          .Fail("refines a generated object, and objects[0] reads a mesh file: "
+                "give ground_truth.mesh (a finer mesh of the same shape)");
     }
     if (g.Has("mesh")) {
       std::filesystem::path path(g["mesh"].AsString());
@@ -67,14 +69,8 @@ void SceneParser::ParseSynth(const YamlValue& v) {
   s.sensor.camera = scene_->registration.camera;
   if (v.Has("sensor")) ParseSensor(v["sensor"], &s.sensor);
   if (v.Has("artefacts")) ParseArtefacts(v["artefacts"], &s);
-  if (v.Has("background")) {
-    const YamlValue b = v["background"];
-    b.CheckKeys({"point", "normal", "size"});
-    s.background = true;
-    if (b.Has("point")) s.background_point = b["point"].AsVector3();
-    if (b.Has("normal")) s.background_normal = b["normal"].AsVector3();
-    if (!(s.background_normal.norm() > 0)) b["normal"].Fail("must not be zero");
-    if (b.Has("size")) s.background_size = PositiveDouble(b["size"]);
+  if (s.background && !(s.background_normal.norm() > 0)) {
+    FieldValue(v, &SynthSpec::background_normal).Fail("must not be zero");
   }
   std::set<std::string> names;
   if (v.Has("motion")) {
@@ -82,7 +78,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
     list.RequireSequence();
     for (int i = 0; i < list.size(); ++i) {
       const YamlValue t = list[i];
-      t.CheckKeys({"name", "select", "centre", "keyframes", "anchor"});
+      t.CheckKeys(FieldKeys<MotionTrackSpec>({}, {"name", "select", "centre", "keyframes"}));
       MotionTrackSpec track;
       track.name = t.Has("name") ? t["name"].AsString() : "track" + std::to_string(i);
       if (!names.insert(track.name).second) t["name"].Fail("duplicate name " + Quote(track.name));
@@ -92,20 +88,11 @@ void SceneParser::ParseSynth(const YamlValue& v) {
         track.centre = t["centre"].AsVector3();
       }
       track.keyframes = ParseKeyframes(t, true);
-      if (t.Has("anchor")) {
-        const YamlValue a = t["anchor"];
-        const std::string kind = a.AsString();
-        if (kind == "hard") {
-          track.anchor = MotionTrackSpec::Anchor::kHard;
-        } else if (kind == "soft") {
-          track.anchor = MotionTrackSpec::Anchor::kSoft;
-        } else if (kind != "none") {
-          a.Fail("unknown value " + Quote(kind) + " (one of: none, hard, soft)");
-        }
-        for (const MotionKeyframe& k : track.keyframes) {
-          if (track.anchor != MotionTrackSpec::Anchor::kNone && k.rotation.norm() > 0 && !track.has_centre) {
-            a.Fail("this track rotates: its anchor turns about the track's centre, so give centre: [x, y, z]");
-          }
+      ParseFields(t, &track, /*check=*/true);  // anchor (femreg/scene.h)
+      for (const MotionKeyframe& k : track.keyframes) {
+        if (track.anchor != MotionTrackSpec::Anchor::kNone && k.rotation.norm() > 0 && !track.has_centre) {
+          FieldValue(t, &MotionTrackSpec::anchor)
+              .Fail("this track rotates: its anchor turns about the track's centre, so give centre: [x, y, z]");
         }
       }
       s.motion.push_back(track);
@@ -116,21 +103,21 @@ void SceneParser::ParseSynth(const YamlValue& v) {
     list.RequireSequence();
     for (int i = 0; i < list.size(); ++i) {
       const YamlValue b = list[i];
-      b.CheckKeys(FieldKeys<SynthBodySpec>({}, {"name", "box", "keyframes"}));
+      b.CheckKeys(FieldKeys<SynthBodySpec>({"keyframes"}, {"name"}));
       SynthBodySpec body;
       body.name = b.Has("name") ? b["name"].AsString() : "body" + std::to_string(i);
       if (!names.insert(body.name).second) b["name"].Fail("duplicate name " + Quote(body.name));
-      if (!b.Has("box")) b.Fail("needs 'box: {min: [x, y, z], max: [x, y, z]}'");
-      const YamlValue box = b["box"];
-      box.CheckKeys({"min", "max"});
-      if (!box.Has("min") || !box.Has("max")) box.Fail("needs 'min' and 'max'");
-      body.box_min = box["min"].AsVector3();
-      body.box_max = box["max"].AsVector3();
+      const char* box = FieldOf(&SynthBodySpec::box_min).group;
+      if (!b.Has(box)) b.Fail("needs 'box: {min: [x, y, z], max: [x, y, z]}'");
+      if (!HasField(b, &SynthBodySpec::box_min) || !HasField(b, &SynthBodySpec::box_max)) {
+        b[box].CheckKeys(GroupKeys<SynthBodySpec>(box));
+        b[box].Fail("needs 'min' and 'max'");
+      }
+      ParseFields(b, &body, /*check=*/true);  // box, in_cloud, press, contact_tolerance (femreg/scene.h)
       if ((body.box_min.array() >= body.box_max.array()).any()) {
-        box["max"].Fail("must be > min in every coordinate");
+        FieldValue(b, &SynthBodySpec::box_max).Fail("must be > min in every coordinate");
       }
       if (b.Has("keyframes")) body.keyframes = ParseKeyframes(b, false);
-      ParseFields(b, &body, /*check=*/true);
       s.bodies.push_back(body);
     }
   }

@@ -133,6 +133,28 @@ const char* ToString(MeshGeneratorSpec::Shape shape) {
   return "unknown";
 }
 
+const char* ToString(MotionTrackSpec::Anchor anchor) {
+  switch (anchor) {
+    case MotionTrackSpec::Anchor::kNone:
+      return "none";
+    case MotionTrackSpec::Anchor::kHard:
+      return "hard";
+    case MotionTrackSpec::Anchor::kSoft:
+      return "soft";
+  }
+  return "unknown";
+}
+
+bool FromString(const std::string& name, MotionTrackSpec::Anchor* anchor) {
+  for (MotionTrackSpec::Anchor a : EnumValues<MotionTrackSpec::Anchor>::kAll) {
+    if (name == ToString(a)) {
+      *anchor = a;
+      return true;
+    }
+  }
+  return false;
+}
+
 namespace scene_internal {
 
 std::string Number(double v) {

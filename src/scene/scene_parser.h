@@ -65,24 +65,56 @@ std::vector<std::string> FieldKeys(std::vector<std::string> extra = {}, std::vec
   return keys;
 }
 
-// The keys of an options table's group (FieldInfo::group).
+// The keys of an options table's group (FieldInfo::group), then `extra` (the group's keys
+// read by hand).
 template <class Options>
-std::vector<std::string> GroupKeys(const std::string& group) {
+std::vector<std::string> GroupKeys(const std::string& group, const std::vector<std::string>& extra = {}) {
   std::vector<std::string> keys;
   OptionFields<Options>::Visit([&](auto, const FieldInfo& f) {
     if (f.group != nullptr && group == f.group) keys.push_back(f.key);
   });
+  keys.insert(keys.end(), extra.begin(), extra.end());
   return keys;
+}
+
+// One field's value at `x`, by its type; with `check`, a number out of its row's range fails
+// there ("must be >= 1 (got 0)").
+template <class T>
+void ReadField(const YamlValue& x, const FieldInfo& f, bool check, T* field) {
+  if constexpr (std::is_same_v<T, bool>) {
+    *field = x.AsBool();
+  } else if constexpr (std::is_integral_v<T>) {  // int, a seed's unsigned
+    const int value = x.AsInt();
+    if (check && f.checked() && !f.InRange(value)) x.Fail(f.RangeError(value));
+    *field = static_cast<T>(value);
+  } else if constexpr (std::is_same_v<T, double>) {
+    const double value = x.AsDouble();
+    if (check && f.checked() && !f.InRange(value)) x.Fail(f.RangeError(value));
+    *field = value;
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    *field = x.AsVector3();
+  } else {
+    static_assert(std::is_enum_v<T>, "an options table holds bool, integers, double, Vector3d and enums");
+    *field = ParseEnum<T>(x);
+  }
 }
 
 // Reads the fields of an options table that the section `v` sets, each by its type. With
 // `check`, a number out of its row's range fails at its key ("must be >= 1 (got 0)");
 // without, the ranges are checked afterwards, by IsValid, which names the field (the
-// registration, whose rules across fields come with the ranges).
+// registration, whose rules across fields come with the ranges). A group's keys are checked
+// here unless it is in `checked` (a group with keys of its own beside the table's, which its
+// section checks). A group's switch (FieldInfo::switch_of_group) is set when the group is
+// there.
 template <class Options>
-void ParseFields(const YamlValue& v, Options* o, bool check = false) {
-  std::vector<std::string> checked;  // the groups whose keys were checked
+void ParseFields(const YamlValue& v, Options* o, bool check = false, std::vector<std::string> checked = {}) {
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    auto& field = o->*member;
+    using T = std::decay_t<decltype(field)>;
+    if (f.switch_of_group) {
+      if constexpr (std::is_same_v<T, bool>) field = v.Has(f.key);
+      return;
+    }
     if (f.group != nullptr) {
       if (!v.Has(f.group)) return;
       const YamlValue g = v[f.group];
@@ -94,26 +126,21 @@ void ParseFields(const YamlValue& v, Options* o, bool check = false) {
     } else if (!v.Has(f.key)) {
       return;
     }
-    const YamlValue x = f.group != nullptr ? v[f.group][f.key] : v[f.key];
-    auto& field = o->*member;
-    using T = std::decay_t<decltype(field)>;
-    if constexpr (std::is_same_v<T, bool>) {
-      field = x.AsBool();
-    } else if constexpr (std::is_integral_v<T>) {  // int, a seed's unsigned
-      const int value = x.AsInt();
-      if (check && f.checked() && !f.InRange(value)) x.Fail(f.RangeError(value));
-      field = static_cast<T>(value);
-    } else if constexpr (std::is_same_v<T, double>) {
-      const double value = x.AsDouble();
-      if (check && f.checked() && !f.InRange(value)) x.Fail(f.RangeError(value));
-      field = value;
-    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-      field = x.AsVector3();
-    } else {
-      static_assert(std::is_enum_v<T>, "an options table holds bool, integers, double, Vector3d and enums");
-      field = ParseEnum<T>(x);
-    }
+    ReadField(f.group != nullptr ? v[f.group][f.key] : v[f.key], f, check, &field);
   });
+}
+
+// One member's key in the section `v`, for a section's rules across keys and for a key read
+// elsewhere too (a region's toughness): whether `v` has it, and its value.
+template <class Options, class T>
+bool HasField(const YamlValue& v, T Options::*member) {
+  const FieldInfo f = FieldOf(member);
+  return f.group != nullptr ? v.Has(f.group) && v[f.group].Has(f.key) : v.Has(f.key);
+}
+template <class Options, class T>
+YamlValue FieldValue(const YamlValue& v, T Options::*member) {
+  const FieldInfo f = FieldOf(member);
+  return f.group != nullptr ? v[f.group][f.key] : v[f.key];
 }
 
 class SceneParser {

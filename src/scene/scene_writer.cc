@@ -128,11 +128,7 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
   } else {
     n["mesh"] = FilePath(o.mesh_path, base_dir);
   }
-  Put(n, "scale", o.scale, 1.0);
-  YAML::Node pose = FlowMap();
-  Put(pose, "translation", o.translation, Eigen::Vector3d::Zero());
-  Put(pose, "rotation", o.rotation, Eigen::Vector3d::Zero());
-  PutMap(n, "pose", pose);
+  PutFieldsBefore(n, o);  // scale, pose (femreg/scene.h)
   {
     YAML::Node material = MaterialNode(o.material, Material());
     if (o.material_model != MaterialModel::kHooke || o.element_chosen) {
@@ -146,14 +142,13 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
     for (const auto& [region, material] : o.region_materials) {
       YAML::Node entry = MaterialNode(material, o.material);
       for (const auto& [id, toughness] : o.region_toughness) {
-        if (id == region) entry["toughness"] = Number(toughness);
+        if (id == region) entry[FieldOf(&ObjectSpec::toughness).key] = Number(toughness);  // the object's row
       }
       regions[std::to_string(region)] = entry;
     }
     n["regions"] = regions;
   }
-  Put(n, "toughness", o.toughness, 0.0);
-  Put(n, "label", o.label, -1);
+  PutFieldsAfter(n, o);  // toughness, label
   if (!o.surface_path.empty()) n["surface"] = FilePath(o.surface_path, base_dir);
   return n;
 }
@@ -164,8 +159,7 @@ YAML::Node AnchorNode(const Scene& scene, const AnchorSpec& a) {
   n["name"] = a.name;
   PutObject(n, scene, a.object);
   n["select"] = SelectionNode(a.selection);
-  Put(n, "hard", a.hard, false);
-  Put(n, "weight", a.weight, 0.0);
+  PutFields(n, a);  // hard, weight (femreg/scene.h)
   if (!a.translations.empty()) {
     YAML::Node list(YAML::NodeType::Sequence);
     for (const Eigen::Vector3d& t : a.translations) list.push_back(Vec(t));
@@ -215,8 +209,7 @@ YAML::Node ObstacleNode(const ObstacleSpec& o, const std::string& base_dir) {
       n["mesh"] = FilePath(o.mesh_path, base_dir);
       break;
   }
-  Put(n, "scale", o.scale, 1.0);
-  if (o.friction >= 0) Put(n, "friction", o.friction, -1.0);
+  PutFields(n, o);  // scale, friction (femreg/collision_spec.h)
   if (!o.objects.empty()) {
     YAML::Node objects = FlowSeq();
     for (const std::string& name : o.objects) objects.push_back(name);
@@ -239,18 +232,14 @@ YAML::Node CollisionNode(const CollisionSpec& c, const std::string& base_dir) {
   YAML::Node n = Map();
   if (!c.pairs.empty()) {
     YAML::Node pairs = FlowSeq();
-    for (size_t i = 0; i < c.pairs.size(); ++i) {
+    for (const CollisionPair& p : c.pairs) {
       YAML::Node pair = FlowSeq();
-      pair.push_back(c.pairs[i].first);
-      pair.push_back(c.pairs[i].second);
-      if (i < c.pair_friction.size() && c.pair_friction[i] >= 0) {  // {objects: [a, b], friction: mu}
-        YAML::Node entry = FlowMap();
-        entry["objects"] = pair;
-        Put(entry, "friction", c.pair_friction[i], -1.0);
-        pairs.push_back(entry);
-        continue;
-      }
-      pairs.push_back(pair);
+      pair.push_back(p.first);
+      pair.push_back(p.second);
+      YAML::Node entry = FlowMap();  // {objects: [a, b], friction: mu}
+      entry["objects"] = pair;
+      PutFields(entry, p);  // friction (femreg/collision_spec.h)
+      pairs.push_back(entry.size() > 1 ? entry : pair);
     }
     n["pairs"] = pairs;
   }
@@ -267,23 +256,18 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
   const SynthSpec& s = scene.synth;
   const SynthSpec d;
   YAML::Node n = Map();
-  PutFields(n, s);  // frames, seed, sanity_check
-  YAML::Node truth = FlowMap();
-  Put(truth, "refinement", s.refinement, d.refinement);
+  PutFieldsBefore(n, s);  // frames, seed, sanity_check, ground_truth.refinement
+  const char* truth_group = FieldOf(&SynthSpec::refinement).group;
+  const YAML::Node refined = static_cast<const YAML::Node&>(n)[truth_group];
+  YAML::Node truth = refined.IsDefined() ? refined : FlowMap();
   if (!s.mesh_path.empty()) truth["mesh"] = FilePath(s.mesh_path, base_dir);
   if (s.generate.shape != MeshGeneratorSpec::Shape::kNone) truth["generate"] = GeneratorNode(s.generate);
   if (!scene.objects.empty()) PutMap(truth, "material", MaterialNode(s.material, scene.objects[0].material));
-  PutMap(n, "ground_truth", truth);
+  PutMap(n, truth_group, truth);
   YAML::Node sensor = FlowMap();
   PutFields(sensor, s.sensor);
   PutMap(n, "sensor", sensor);
-  if (s.background) {
-    YAML::Node background = FlowMap();
-    background["point"] = Vec(s.background_point);
-    background["normal"] = Vec(s.background_normal);
-    background["size"] = Number(s.background_size);
-    n["background"] = background;
-  }
+  PutFieldsAfter(n, s);  // background
   if (!s.motion.empty()) {
     YAML::Node motion(YAML::NodeType::Sequence);
     for (const MotionTrackSpec& t : s.motion) {
@@ -296,9 +280,7 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
         keyframes.push_back(KeyframeNode(k.frame, true, k.translation, k.rotation, true));
       }
       track["keyframes"] = keyframes;
-      if (t.anchor != MotionTrackSpec::Anchor::kNone) {
-        track["anchor"] = t.anchor == MotionTrackSpec::Anchor::kHard ? "hard" : "soft";
-      }
+      PutFields(track, t);  // anchor (femreg/scene.h)
       motion.push_back(track);
     }
     n["motion"] = motion;
@@ -308,12 +290,9 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
     for (const SynthBodySpec& b : s.bodies) {
       YAML::Node body = FlowMap();
       body["name"] = b.name;
-      YAML::Node box = FlowMap();
-      box["min"] = Vec(b.box_min);
-      box["max"] = Vec(b.box_max);
-      body["box"] = box;
+      PutFieldsBefore(body, b);  // box
       if (!b.keyframes.empty()) body["keyframes"] = MotionKeyframes(b.keyframes, false);
-      PutFields(body, b);
+      PutFieldsAfter(body, b);  // in_cloud, press, contact_tolerance
       bodies.push_back(body);
     }
     n["bodies"] = bodies;

@@ -108,32 +108,62 @@ YAML::Node FieldNode(const T& value) {
   }
 }
 
+// Which of a table's rows PutFields writes: every one, or those before or after the
+// entries the section writes by hand (FieldInfo::after).
+enum class Rows { kAll, kBefore, kAfter };
+
 // Every field of an options table (femreg/field_table.h) that differs from `d` (the
 // struct's defaults unless given; every field with `all`), in the table's order, but those in
-// `skip` (which the section writes itself).
+// `skip` (which the section writes itself) and those `rows` leaves out.
 // A group (FieldInfo::group) is written, as a flow map, when any of its fields differs: the
 // fields that differ and those the group needs (FieldInfo::required: a plane's distance).
+// A group with a switch (FieldInfo::switch_of_group) is written in full when the switch is
+// on, and not at all when it is off.
 // `skip` names fields by their path in the section ("crop.min").
 template <class Options>
 void PutFields(YAML::Node map, const Options& value, const std::vector<std::string>& skip = {},
-               bool all = false, const Options& d = Options()) {
-  std::vector<std::string> changed_groups;
+               bool all = false, const Options& d = Options(), Rows rows = Rows::kAll) {
+  std::vector<std::string> changed_groups, on_groups, off_groups;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     if (f.group != nullptr && value.*member != d.*member) changed_groups.push_back(f.group);
+    if constexpr (std::is_same_v<std::decay_t<decltype(value.*member)>, bool>) {
+      if (f.switch_of_group) (value.*member ? on_groups : off_groups).push_back(f.key);
+    }
   });
+  auto in = [](const std::vector<std::string>& groups, const char* group) {
+    return std::find(groups.begin(), groups.end(), group) != groups.end();
+  };
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    if ((rows == Rows::kBefore && f.after) || (rows == Rows::kAfter && !f.after)) return;
     for (const std::string& key : skip) {
       if (key == f.path()) return;
+    }
+    if (f.switch_of_group) {
+      if (in(on_groups, f.key)) map[f.key] = FlowMap();
+      return;
     }
     if (f.group == nullptr) {
       if (all || value.*member != d.*member) map[f.key] = FieldNode(value.*member);
       return;
     }
-    if (!all && std::find(changed_groups.begin(), changed_groups.end(), f.group) == changed_groups.end()) return;
-    if (!all && !f.required && value.*member == d.*member) return;
+    if (in(off_groups, f.group)) return;
+    const bool full = all || in(on_groups, f.group);
+    if (!full && !in(changed_groups, f.group)) return;
+    if (!full && !f.required && value.*member == d.*member) return;
     if (!map[f.group].IsDefined() || map[f.group].IsNull()) map[f.group] = FlowMap();
     map[f.group][f.key] = FieldNode(value.*member);
   });
+}
+
+// The rows before (or after) the entries a section writes by hand, where they differ from
+// the defaults.
+template <class Options>
+void PutFieldsBefore(YAML::Node map, const Options& value, const Options& d = Options()) {
+  PutFields(map, value, {}, false, d, Rows::kBefore);
+}
+template <class Options>
+void PutFieldsAfter(YAML::Node map, const Options& value, const Options& d = Options()) {
+  PutFields(map, value, {}, false, d, Rows::kAfter);
 }
 
 // map[key] = child when the child has entries.
