@@ -247,7 +247,8 @@ TEST(TrackingLoss, JunkAroundARightFitKeepsTheResidualScore) {
   const double volume_score = std::min(1.0, 0.02 / s.confidence.volume_change);
   // Within 5x the clean residual, the residual score keeps more than 2/5 of what the fit and
   // the swelling leave.
-  EXPECT_GT(s.confidence.confidence, 0.4 * s.confidence.fit * volume_score) << s.confidence.volume_change;
+  EXPECT_GT(s.confidence.confidence, 0.4 * s.confidence.fit * volume_score)
+      << s.confidence.volume_change;
   EXPECT_FALSE(s.lost);
 }
 

@@ -25,6 +25,15 @@ constexpr double kVolumeRate = 0.3;
 // doubted (a partial turn or a passing occluder takes less).
 constexpr double kPairsShare = 0.6;
 
+// The deformation gradient of object o's element e at its mesh.x.
+Eigen::Matrix3d DeformationGradient(const ObjectState& o, int e) {
+  const auto& t = o.model.tets();
+  Eigen::Matrix3d Ds;
+  const Eigen::Vector3d x0 = o.mesh.x.row(t(e, 0)).transpose();
+  for (int k = 0; k < 3; ++k) Ds.col(k) = o.mesh.x.row(t(e, k + 1)).transpose() - x0;
+  return Ds * o.model.rest(e).dm_inv;
+}
+
 int ModelPairs(const std::vector<DataPair>& pairs) {
   int n = 0;
   for (const DataPair& p : pairs) n += p.num_vertices == 1 ? 1 : 0;
@@ -45,15 +54,10 @@ std::vector<double> VolumeRatios(const TrackerState& state) {
   std::vector<double> ratios;
   ratios.reserve(state.objects.size());
   for (const ObjectState& o : state.objects) {
-    const ElasticModel& model = o.model;
-    const auto& t = model.tets();
     double volume = 0.0, rest = 0.0;
-    for (int e = 0; e < model.num_elements(); ++e) {
-      Eigen::Matrix3d Ds;
-      const Eigen::Vector3d x0 = o.mesh.x.row(t(e, 0)).transpose();
-      for (int k = 0; k < 3; ++k) Ds.col(k) = o.mesh.x.row(t(e, k + 1)).transpose() - x0;
-      volume += (Ds * model.rest(e).dm_inv).determinant() * model.rest(e).volume;
-      rest += model.rest(e).volume;
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      volume += DeformationGradient(o, e).determinant() * o.model.rest(e).volume;
+      rest += o.model.rest(e).volume;
     }
     ratios.push_back(rest > 0.0 ? volume / rest : 1.0);
   }
@@ -119,13 +123,8 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   // Strain: the 95th percentile of the elements' stretch deviations.
   std::vector<double> deviation;
   for (const ObjectState& o : state.objects) {
-    const ElasticModel& model = o.model;
-    for (int e = 0; e < model.num_elements(); ++e) {
-      Eigen::Matrix3d Ds;
-      const auto& t = model.tets();
-      const Eigen::Vector3d x0 = o.mesh.x.row(t(e, 0)).transpose();
-      for (int k = 0; k < 3; ++k) Ds.col(k) = o.mesh.x.row(t(e, k + 1)).transpose() - x0;
-      deviation.push_back(StretchDeviation(Ds * model.rest(e).dm_inv));
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      deviation.push_back(StretchDeviation(DeformationGradient(o, e)));
     }
   }
   if (!deviation.empty()) {
@@ -144,12 +143,15 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   if (!first && state.volume_reference.size() == volumes.size()) {
     for (size_t o = 0; o < volumes.size(); ++o) {
       if (state.volume_reference[o] > 0.0) {
-        c.volume_change = std::max(c.volume_change, std::abs(volumes[o] / state.volume_reference[o] - 1.0));
+        const double change = std::abs(volumes[o] / state.volume_reference[o] - 1.0);
+        c.volume_change = std::max(c.volume_change, change);
       }
     }
   }
-  const double volume_score = c.volume_change > kVolumeTolerance ? kVolumeTolerance / c.volume_change : 1.0;
-  // Pairs: how much of the surface facing the sensor the cloud pairs back, against the trusted frames.
+  const double volume_score =
+      c.volume_change > kVolumeTolerance ? kVolumeTolerance / c.volume_change : 1.0;
+  // Pairs: how much of the surface facing the sensor the cloud pairs back, against the trusted
+  // frames.
   double pairs_score = 1.0;
   if (!first && state.pairs_reference > 0.0) {
     const double share = ModelPairs(pairs) / (kPairsShare * state.pairs_reference);
@@ -173,7 +175,9 @@ void UpdateReferences(const FrameConfidence& confidence, const std::vector<DataP
   if (first || state->volume_reference.size() != volumes.size()) {
     state->volume_reference = volumes;  // the first frame, or an object count that changed
   } else {
-    for (size_t o = 0; o < volumes.size(); ++o) update(volumes[o], &state->volume_reference[o], kVolumeRate);
+    for (size_t o = 0; o < volumes.size(); ++o) {
+      update(volumes[o], &state->volume_reference[o], kVolumeRate);
+    }
   }
 }
 
