@@ -1,15 +1,21 @@
 // The per-frame confidence and the lost state (FrameSummary::confidence, lost;
 // registration/confidence.h): high where the cloud is the object, low where the object went
-// away or junk pulls the fit; a lost frame keeps the last good shape and tracking resumes
-// when the object comes back.
+// away, junk pulls the fit or the fit swells in one frame; a lost frame keeps the last good
+// shape and tracking resumes when the object comes back.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <memory>
 #include <random>
+#include <vector>
 
+#include "embedded_helpers.h"
 #include "femreg/io.h"
 #include "femreg/tracker.h"
+#include "registration/confidence.h"
+#include "registration/correspondences.h"
+#include "registration/tracker_state.h"
 
 namespace femreg {
 namespace {
@@ -36,6 +42,81 @@ std::unique_ptr<Tracker> MakeTracker(double lost_coverage) {
   std::unique_ptr<Tracker> tracker;
   EXPECT_TRUE(Tracker::Create({Box()}, {ObjectMaterial()}, options, &tracker).ok());
   return tracker;
+}
+
+// The box's surface cloud scaled by `scale` about the box's centre, with 0.5 mm of noise (a
+// noise-free cloud leaves the residual reference at 0).
+PointCloud ScaledCloud(const TetMesh& mesh, double scale, std::mt19937* rng) {
+  std::normal_distribution<double> noise(0.0, 0.0005);
+  PointCloud cloud = SurfaceCloud(mesh, Eigen::Vector3d::Zero());
+  const Eigen::RowVector3d centre(0.05, 0.02, 0.02);
+  for (int i = 0; i < cloud.size(); ++i) {
+    cloud.points.row(i) = centre + scale * (cloud.points.row(i) - centre) +
+                          Eigen::RowVector3d(noise(*rng), noise(*rng), noise(*rng));
+  }
+  return cloud;
+}
+
+// A fit that swells in one frame (towards a cloud 6 % larger every way: junk all round pulls so) is
+// doubted by the volume score, though every point fits and every element's strain is small;
+// an object that grows as much over many frames is not.
+TEST(TrackingLoss, AVolumeJumpLowersTheConfidenceASteadyChangeDoesNot) {
+  const TetMesh mesh = Box();
+  std::mt19937 rng(5);
+  auto tracker = MakeTracker(0.3);
+  FrameSummary s;
+  for (int f = 0; f < 3; ++f) ASSERT_TRUE(tracker->Track(ScaledCloud(mesh, 1.0, &rng), &s).ok());
+  EXPECT_GT(s.confidence.confidence, 0.9);
+  // 0.1 % larger each frame, 3 % in all.
+  for (int f = 1; f <= 30; ++f) {
+    ASSERT_TRUE(tracker->Track(ScaledCloud(mesh, 1.0 + 0.001 * f, &rng), &s).ok());
+    EXPECT_LT(s.confidence.volume_change, 0.02) << "frame " << f;
+    EXPECT_GT(s.confidence.confidence, 0.8) << "frame " << f << ": " << s.confidence.volume_change;
+  }
+  auto jumped = MakeTracker(0.3);
+  for (int f = 0; f < 3; ++f) ASSERT_TRUE(jumped->Track(ScaledCloud(mesh, 1.0, &rng), &s).ok());
+  ASSERT_TRUE(jumped->Track(ScaledCloud(mesh, 1.06, &rng), &s).ok());
+  EXPECT_FALSE(s.lost);
+  EXPECT_GT(s.confidence.fit, 0.9);
+  EXPECT_GT(s.confidence.volume_change, 0.04);
+  EXPECT_LT(s.confidence.confidence, 0.5) << s.confidence.volume_change;
+}
+
+// A model sat on part of another object's cloud, or on the half of its own still in view, keeps
+// few model->cloud pairs: with the fit and the coverage as they were, a third of the pairs the
+// trusted frames kept scales the confidence by (1/3 / 0.6)^2, all of them not at all.
+TEST(TrackingLoss, FewerModelPairsThanTheTrustedFramesKeptLowerTheConfidence) {
+  TrackerState state;
+  OneObject(Box(), &state);
+  state.residuals.assign(1, Eigen::VectorXd::Zero(state.num_vertices));  // every vertex covered
+  state.coverage_reference = 1.0;
+  state.residual_reference = 1e-3;
+  state.pairs_reference = 30.0;
+  state.volume_reference = VolumeRatios(state);
+  FrameCloud fc;  // no view: every surface vertex faces it
+  std::vector<DataPair> pairs;
+  DataPair on_surface;  // a cloud->model pair on the surface: the fit
+  on_surface.num_vertices = 3;
+  for (int k = 0; k < 3; ++k) on_surface.vertices[k] = state.surface(0, k);
+  on_surface.barycentric = Eigen::Vector3d::Constant(1.0 / 3.0);
+  on_surface.target = on_surface.Point(state.x);
+  pairs.push_back(on_surface);
+  const auto with_model_pairs = [&](int n) {
+    std::vector<DataPair> all = pairs;
+    for (int i = 0; i < n; ++i) {
+      DataPair p;
+      p.vertices[0] = state.surface_vertices[static_cast<size_t>(i) % state.surface_vertices.size()];
+      p.target = state.x.row(p.vertices[0]).transpose();
+      all.push_back(p);
+    }
+    return MeasureConfidence(state, fc, all, 1e-3);
+  };
+  const FrameConfidence kept = with_model_pairs(30), few = with_model_pairs(10);
+  EXPECT_GT(kept.confidence, 0.9) << kept.fit << " " << kept.coverage;
+  EXPECT_EQ(few.fit, kept.fit);
+  EXPECT_EQ(few.coverage, kept.coverage);
+  const double share = 10.0 / (0.6 * 30.0);
+  EXPECT_NEAR(few.confidence, share * share * kept.confidence, 1e-12);
 }
 
 TEST(TrackingLoss, LostWhileTheObjectIsAwayAndFoundWhenItComesBack) {
@@ -132,10 +213,11 @@ TEST(TrackingLoss, OutliersLowerTheConfidenceButDoNotLoseTheObject) {
   EXPECT_LE(s.confidence.fit, 1.0);
 }
 
-// A right fit among uniform junk (as many points as the object's, spread over its box and 3 cm
+// A fit among uniform junk (as many points as the object's, spread over its box and 3 cm
 // around): the junk near the surface fills the worse half of the pairs and the object's points
 // the better half, over which the residual is taken: it stays within a few times a clean
-// frame's (the junk's own distances, up to data.max_distance, are tens of times that).
+// frame's (the junk's own distances, up to data.max_distance, are tens of times that). The
+// junk all round swells the fit by a few per cent, which the volume score reads.
 TEST(TrackingLoss, JunkAroundARightFitKeepsTheResidualScore) {
   const TetMesh mesh = Box();
   std::mt19937 rng(7);
@@ -162,7 +244,11 @@ TEST(TrackingLoss, JunkAroundARightFitKeepsTheResidualScore) {
   const double clean_residual = s.confidence.residual;
   ASSERT_TRUE(tracker->Track(with_junk(noisy(Eigen::Vector3d::Zero())), &s).ok());
   EXPECT_LT(s.confidence.residual, 5.0 * clean_residual) << clean_residual;
-  EXPECT_GT(s.confidence.confidence, 0.3);
+  const double volume_score = std::min(1.0, 0.02 / s.confidence.volume_change);
+  // Within 5x the clean residual, the residual score keeps more than 2/5 of what the fit and
+  // the swelling leave.
+  EXPECT_GT(s.confidence.confidence, 0.4 * s.confidence.fit * volume_score)
+      << s.confidence.volume_change;
   EXPECT_FALSE(s.lost);
 }
 

@@ -396,9 +396,11 @@ struct StageTimes {
 
 // How far a frame's result can be trusted, from what the frame has (no ground truth;
 // docs/guide/tracking-loss.md): `confidence` = fit x coverage score x residual score x
-// 1 / (1 + strain^4), in [0, 1]; 0 when the frame could not be solved (held or predicted).
-// The coverage score is min(1, coverage / what the sequence's trusted frames reach), the
-// residual score min(1, 2 x their residual / residual); the first solved frame sets both.
+// 1 / (1 + strain^4) x volume score x pairs score, in [0, 1]; 0 when the frame could not be
+// solved (held or predicted). The coverage score is min(1, coverage / what the sequence's
+// trusted frames reach), the residual score min(1, 2 x their residual / residual), the
+// volume score min(1, 0.02 / volume_change), the pairs score min(1, (model->cloud pairs /
+// 0.6 x what the trusted frames keep)^2); the first solved frame sets all four references.
 struct FrameConfidence {
   double confidence = 0.0;
   double fit = 0.0;       // share of the cloud's points near the model (within data.max_distance,
@@ -406,6 +408,9 @@ struct FrameConfidence {
   double coverage = 0.0;  // share of the sensor-facing surface vertices with a cloud point within it
   double residual = 0.0;  // m: rms distance from the surface of the better-fitting half of them
   double strain = 0.0;    // 95th percentile over the elements of max |principal stretch - 1|
+  // The largest relative change over the objects of the volume against what the sequence's
+  // trusted frames keep (|V / V_reference - 1|): junk all round a fit inflates it in one frame.
+  double volume_change = 0.0;
 };
 
 struct FrameSummary {

@@ -56,7 +56,8 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["lost"] = s.lost;
   d["confidence_parts"] = py::dict(py::arg("fit") = s.confidence.fit, py::arg("coverage") = s.confidence.coverage,
                                    py::arg("residual") = s.confidence.residual,
-                                   py::arg("strain") = s.confidence.strain);
+                                   py::arg("strain") = s.confidence.strain,
+                                   py::arg("volume_change") = s.confidence.volume_change);
   d["stopped_by"] = s.stopped_by;
   d["model_to_cloud"] = s.model_to_cloud;
   d["cloud_to_model"] = s.cloud_to_model;

@@ -188,7 +188,7 @@ def test_tracker_follows_a_rigid_translation():
     assert np.abs(x - (mesh.rest + shift)).max() < 1e-4
     np.testing.assert_array_equal(tracker.vertices(0), x)
     assert summary["confidence"] > 0.9 and not summary["lost"]
-    assert set(summary["confidence_parts"]) == {"fit", "coverage", "residual", "strain"}
+    assert set(summary["confidence_parts"]) == {"fit", "coverage", "residual", "strain", "volume_change"}
 
 
 def test_a_frame_without_the_object_is_lost_and_keeps_the_last_good_shape():

@@ -15,6 +15,30 @@ namespace {
 // A trusted frame's coverage enters the reference (a running mean over such frames).
 constexpr double kTrusted = 0.5;
 constexpr double kReferenceRate = 0.1;
+// An object's volume may move this far (relative) from the trusted frames' before the frame
+// is doubted: what a steady deformation changes between frames stays well within it.
+constexpr double kVolumeTolerance = 0.02;
+// The volume reference follows the trusted frames faster than the others: an object squeezed
+// or stretched steadily stays within the tolerance of it.
+constexpr double kVolumeRate = 0.3;
+// The model->cloud pairs may fall to this share of the trusted frames' before the frame is
+// doubted (a partial turn or a passing occluder takes less).
+constexpr double kPairsShare = 0.6;
+
+// The deformation gradient of object o's element e at its mesh.x.
+Eigen::Matrix3d DeformationGradient(const ObjectState& o, int e) {
+  const auto& t = o.model.tets();
+  Eigen::Matrix3d Ds;
+  const Eigen::Vector3d x0 = o.mesh.x.row(t(e, 0)).transpose();
+  for (int k = 0; k < 3; ++k) Ds.col(k) = o.mesh.x.row(t(e, k + 1)).transpose() - x0;
+  return Ds * o.model.rest(e).dm_inv;
+}
+
+int ModelPairs(const std::vector<DataPair>& pairs) {
+  int n = 0;
+  for (const DataPair& p : pairs) n += p.num_vertices == 1 ? 1 : 0;
+  return n;
+}
 
 }  // namespace
 
@@ -24,6 +48,20 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
   eig.computeDirect(F.transpose() * F, Eigen::EigenvaluesOnly);
   const Eigen::Vector3d l = eig.eigenvalues().cwiseMax(0.0);
   return std::max(std::sqrt(l(2)) - 1.0, 1.0 - std::sqrt(l(0)));
+}
+
+std::vector<double> VolumeRatios(const TrackerState& state) {
+  std::vector<double> ratios;
+  ratios.reserve(state.objects.size());
+  for (const ObjectState& o : state.objects) {
+    double volume = 0.0, rest = 0.0;
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      volume += DeformationGradient(o, e).determinant() * o.model.rest(e).volume;
+      rest += o.model.rest(e).volume;
+    }
+    ratios.push_back(rest > 0.0 ? volume / rest : 1.0);
+  }
+  return ratios;
 }
 
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
@@ -85,13 +123,8 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   // Strain: the 95th percentile of the elements' stretch deviations.
   std::vector<double> deviation;
   for (const ObjectState& o : state.objects) {
-    const ElasticModel& model = o.model;
-    for (int e = 0; e < model.num_elements(); ++e) {
-      Eigen::Matrix3d Ds;
-      const auto& t = model.tets();
-      const Eigen::Vector3d x0 = o.mesh.x.row(t(e, 0)).transpose();
-      for (int k = 0; k < 3; ++k) Ds.col(k) = o.mesh.x.row(t(e, k + 1)).transpose() - x0;
-      deviation.push_back(StretchDeviation(Ds * model.rest(e).dm_inv));
+    for (int e = 0; e < o.model.num_elements(); ++e) {
+      deviation.push_back(StretchDeviation(DeformationGradient(o, e)));
     }
   }
   if (!deviation.empty()) {
@@ -105,18 +138,47 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
       first || c.residual <= 0.0 ? 1.0 : std::min(1.0, 2.0 * state.residual_reference / c.residual);
   const double s = c.strain;
   const double strain_score = std::isfinite(s) ? 1.0 / (1.0 + s * s * s * s) : 0.0;
-  c.confidence = c.fit * coverage_score * residual_score * strain_score;
+  // Volume: the object that moved furthest from the volume its trusted frames kept.
+  const std::vector<double> volumes = VolumeRatios(state);
+  if (!first && state.volume_reference.size() == volumes.size()) {
+    for (size_t o = 0; o < volumes.size(); ++o) {
+      if (state.volume_reference[o] > 0.0) {
+        const double change = std::abs(volumes[o] / state.volume_reference[o] - 1.0);
+        c.volume_change = std::max(c.volume_change, change);
+      }
+    }
+  }
+  const double volume_score =
+      c.volume_change > kVolumeTolerance ? kVolumeTolerance / c.volume_change : 1.0;
+  // Pairs: how much of the surface facing the sensor the cloud pairs back, against the trusted
+  // frames.
+  double pairs_score = 1.0;
+  if (!first && state.pairs_reference > 0.0) {
+    const double share = ModelPairs(pairs) / (kPairsShare * state.pairs_reference);
+    pairs_score = std::min(1.0, share * share);
+  }
+  c.confidence = c.fit * coverage_score * residual_score * strain_score * volume_score * pairs_score;
   return c;
 }
 
-void UpdateReferences(const FrameConfidence& confidence, TrackerState* state) {
+void UpdateReferences(const FrameConfidence& confidence, const std::vector<DataPair>& pairs,
+                      TrackerState* state) {
   const bool first = state->coverage_reference <= 0.0;
   if (!first && confidence.confidence < kTrusted) return;
-  auto update = [first](double value, double* reference) {
-    *reference = first ? value : (1.0 - kReferenceRate) * *reference + kReferenceRate * value;
+  auto update = [first](double value, double* reference, double rate = kReferenceRate) {
+    *reference = first ? value : (1.0 - rate) * *reference + rate * value;
   };
   update(std::max(confidence.coverage, 1e-3), &state->coverage_reference);
   update(confidence.residual, &state->residual_reference);
+  update(ModelPairs(pairs), &state->pairs_reference);
+  const std::vector<double> volumes = VolumeRatios(*state);
+  if (first || state->volume_reference.size() != volumes.size()) {
+    state->volume_reference = volumes;  // the first frame, or an object count that changed
+  } else {
+    for (size_t o = 0; o < volumes.size(); ++o) {
+      update(volumes[o], &state->volume_reference[o], kVolumeRate);
+    }
+  }
 }
 
 }  // namespace femreg

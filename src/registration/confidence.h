@@ -12,7 +12,16 @@
 //             own points too, while junk around a right fit fills only the worse half;
 //   strain    1 / (1 + s^4), s the 95th percentile over the elements of the largest
 //             principal stretch's distance from 1 (infinite if inverted): a shape no
-//             material takes.
+//             material takes;
+//   volume    min(1, 0.02 / c), c the largest relative change over the objects of the
+//             volume against what the trusted frames keep (state.volume_reference): junk
+//             all round a fit pulls its surface outwards in one frame, which no element's
+//             strain singles out, while an object squeezed or stretched gets there slowly;
+//   pairs     min(1, (m / 0.6 m_ref)^2), m the model->cloud pairs (the surface that faces the
+//             sensor and has a cloud point that pairs back), m_ref what the trusted frames
+//             keep (state.pairs_reference): a model sat on part of another object's cloud,
+//             or on the half of its own that is still in view, has points near most of it
+//             (the coverage) but pairs little of it.
 // The fit leaves out the points gated by data.max_distance: another object's, or the
 // background's; where the object went missing, the coverage says so.
 #ifndef FEMREG_REGISTRATION_CONFIDENCE_H_
@@ -41,9 +50,12 @@ double StretchDeviation(const Eigen::Matrix3d& F);
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,
                                   const std::vector<DataPair>& pairs, double tolerance,
                                   const DataSurface* surface = nullptr, const SurfaceRings* rings = nullptr);
-// Takes a trusted frame's coverage and residual into the references (running means); the
-// first solved frame sets them.
-void UpdateReferences(const FrameConfidence& confidence, TrackerState* state);
+// Takes a trusted frame's coverage, residual, model->cloud pairs and object volumes into
+// the references (running means); the first solved frame sets them.
+void UpdateReferences(const FrameConfidence& confidence, const std::vector<DataPair>& pairs,
+                      TrackerState* state);
+// Per object, its volume at state.objects' mesh.x over its rest volume.
+std::vector<double> VolumeRatios(const TrackerState& state);
 
 }  // namespace femreg
 

@@ -384,7 +384,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.confidence = MeasureConfidence(state, fc, pairs, tolerance, data_surface.get(), &rings);
     s.lost = state.coverage_reference > 0.0 &&
              s.confidence.coverage < options.data.lost_coverage * state.coverage_reference;
-    if (!s.lost) UpdateReferences(s.confidence, &state);
+    if (!s.lost) UpdateReferences(s.confidence, pairs, &state);
   } else {
     s.lost = options.data.lost_coverage > 0.0;
   }

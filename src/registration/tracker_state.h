@@ -98,6 +98,10 @@ struct TrackerState {
   // The coverage and the residual (m) this sequence's trusted frames usually reach (running
   // means; 0: none yet): the confidence's scores are relative to them (registration/confidence.h).
   double coverage_reference = 0.0, residual_reference = 0.0;
+  // Likewise the model->cloud pairs the trusted frames keep, and per object its volume over
+  // its rest volume (empty: none yet).
+  double pairs_reference = 0.0;
+  std::vector<double> volume_reference;
   // The last frame's result that was not lost (empty before the first): a lost frame keeps it.
   Vertices last_good;
   bool held_before = false;  // the last frame was held or lost (its successor's move is no velocity)

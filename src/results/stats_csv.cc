@@ -39,7 +39,7 @@ const char kStatsHeader[] =
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
     "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,implausible_points,contact_force_x_N,"
     "contact_force_y_N,contact_force_z_N,friction_force_x_N,friction_force_y_N,friction_force_z_N,"
-    "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,lost,free_space_vertices,flying_pixels,depth_offset_mm,"
+    "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,confidence_volume_change,lost,free_space_vertices,flying_pixels,depth_offset_mm,"
     "err_surface_mean_mm,err_surface_p95_mm,err_surface_max_mm,err_surface_seen_mean_mm,message\n";
 
 std::string StatsRow(size_t i, const FrameRecord& row) {
@@ -106,8 +106,8 @@ std::string StatsRow(size_t i, const FrameRecord& row) {
                 obstacle.z(), friction.x(), friction.y(), friction.z());
   os << buf;
   const FrameConfidence& c = s.confidence;
-  std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f,%.4g,%d", c.confidence, c.fit, c.coverage,
-                c.residual * 1e3, c.strain, s.lost ? 1 : 0);
+  std::snprintf(buf, sizeof(buf), ",%.4f,%.4f,%.4f,%.4f,%.4g,%.4g,%d", c.confidence, c.fit, c.coverage,
+                c.residual * 1e3, c.strain, c.volume_change, s.lost ? 1 : 0);
   os << buf << "," << s.free_space_vertices << "," << s.flying_pixels;
   std::snprintf(buf, sizeof(buf), ",%.4f", s.depth_offset * 1e3);
   os << buf;
