@@ -1,11 +1,12 @@
 // The tests' helpers for the options tables (femreg/field_table.h): the count of a struct's
 // members against its table's rows (a member added to a struct but not to its table changes
-// it), and two structs compared field by field.
+// it), two structs compared field by field, and a value other than a field's default.
 #ifndef FEMREG_TESTS_MEMBER_COUNT_H_
 #define FEMREG_TESTS_MEMBER_COUNT_H_
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <string>
 #include <type_traits>
@@ -57,6 +58,34 @@ void ExpectSameFields(const Options& a, const Options& b, const std::string& whe
       EXPECT_EQ(a.*member, b.*member) << f.key << " after " << when;
     }
   });
+}
+
+// A value other than `d` that the field's range allows: a flag flipped, the next enum value,
+// a vector moved (a box's min down, else up; an unbounded default such as a crop's +-1e30 to
+// zero), a number one larger (or one smaller for an integer, or halfway to an upper bound that
+// one larger would pass).
+template <class T>
+T OtherValue(const FieldInfo& f, T d) {
+  if constexpr (std::is_same_v<T, bool>) {
+    return !d;
+  } else if constexpr (std::is_enum_v<T>) {
+    const auto& all = EnumValues<T>::kAll;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (all[i] == d) return all[(i + 1) % all.size()];
+    }
+    return d;
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    const Eigen::Vector3d step(1, 2, 3);
+    const Eigen::Vector3d v = std::string(f.key) == "min" ? Eigen::Vector3d(d - step) : Eigen::Vector3d(d + step);
+    return v != d ? v : Eigen::Vector3d::Zero();
+  } else {
+    static_assert(std::is_arithmetic_v<T>, "the tables hold flags, enums, vectors and numbers");
+    T v = d + 1;
+    if (!f.InRange(static_cast<double>(v))) {
+      v = std::is_integral_v<T> ? static_cast<T>(d - 1) : static_cast<T>((d + f.max) / 2);
+    }
+    return v;
+  }
 }
 
 }  // namespace testing_tables

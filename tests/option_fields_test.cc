@@ -21,6 +21,7 @@ namespace {
 using testing_tables::ExpectSameFields;
 using testing_tables::FieldCount;
 using testing_tables::MemberCount;
+using testing_tables::OtherValue;
 
 TEST(OptionFields, EveryMemberHasARow) {
   EXPECT_EQ(FieldCount<DataTermOptions>(), MemberCount<DataTermOptions>());
@@ -34,27 +35,6 @@ TEST(OptionFields, EveryMemberHasARow) {
   EXPECT_EQ(FieldCount<RegistrationOptions>() + 7, MemberCount<RegistrationOptions>());
 }
 
-// A value other than `d` that the field's range allows: a flag flipped, the next enum value,
-// a vector or number one larger (or halfway to an upper bound that one larger would pass).
-template <class T>
-T OtherValue(const FieldInfo& f, T d) {
-  if constexpr (std::is_same_v<T, bool>) {
-    return !d;
-  } else if constexpr (std::is_enum_v<T>) {
-    const auto& all = EnumValues<T>::kAll;
-    for (std::size_t i = 0; i < all.size(); ++i) {
-      if (all[i] == d) return all[(i + 1) % all.size()];
-    }
-    return d;
-  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-    const Eigen::Vector3d v = d + Eigen::Vector3d::Ones();
-    return v != d ? v : Eigen::Vector3d::Zero();  // an unbounded default (a crop's +-1e30)
-  } else {
-    T v = d + 1;
-    if (!f.InRange(v)) v = std::is_same_v<T, int> ? d - 1 : static_cast<T>((d + f.max) / 2);
-    return v;
-  }
-}
 
 // What else a field needs to take effect on its own (the cross-field rules of the parser,
 // the writer and IsValid).

@@ -30,6 +30,7 @@ namespace {
 using testing_tables::ExpectSameFields;
 using testing_tables::FieldCount;
 using testing_tables::MemberCount;
+using testing_tables::OtherValue;
 
 TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
   EXPECT_EQ(FieldCount<Material>(), MemberCount<Material>());
@@ -60,31 +61,6 @@ TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
   EXPECT_EQ(FieldCount<MotionTrackSpec>() + 5, MemberCount<MotionTrackSpec>());
 }
 
-// A value other than `d` that the field's range allows: a flag flipped, an enum's next
-// value, a vector moved (a box's min down, else up), a number one larger (or one smaller, or
-// halfway to an upper bound that one larger would pass).
-template <class T>
-T OtherValue(const FieldInfo& f, T d) {
-  if constexpr (std::is_same_v<T, bool>) {
-    return !d;
-  } else if constexpr (std::is_enum_v<T>) {
-    const auto& all = EnumValues<T>::kAll;
-    for (size_t i = 0; i < all.size(); ++i) {
-      if (all[i] == d) return all[(i + 1) % all.size()];
-    }
-    return d;
-  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-    const Eigen::Vector3d step(1, 2, 3);
-    return std::string(f.key) == "min" ? Eigen::Vector3d(d - step) : Eigen::Vector3d(d + step);
-  } else {
-    static_assert(std::is_arithmetic_v<T>, "the scene's tables hold flags and numbers");
-    T v = d + 1;
-    if (!f.InRange(static_cast<double>(v))) {
-      v = std::is_integral_v<T> ? static_cast<T>(d - 1) : static_cast<T>((d + f.max) / 2);
-    }
-    return v;
-  }
-}
 
 // One object, a camera and a synth section with a track and a body, so that every section
 // can be set.

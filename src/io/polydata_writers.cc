@@ -17,6 +17,17 @@ void AppendArray(const std::vector<T>& values, std::string* block) {
   block->append(reinterpret_cast<const char*>(&bytes), sizeof(bytes));
   block->append(reinterpret_cast<const char*>(values.data()), bytes);
 }
+// Both documents' start, up to their Piece of n points with `verts` vertex and `polys`
+// polygon cells.
+void StartPolyData(Eigen::Index n, Eigen::Index verts, Eigen::Index polys, std::ostringstream* os) {
+  *os << "<?xml version=\"1.0\"?>\n"
+      << "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+         "header_type=\"UInt64\">\n"
+      << "  <PolyData>\n"
+      << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << verts
+      << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" << polys << "\">\n";
+}
+
 // The cells (`cells`: Verts or Polys) and the appended data end both documents; written
 // atomically.
 Status FinishPolyData(const std::string& path, const char* cells, uint64_t offset_connectivity,
@@ -75,12 +86,7 @@ Status WriteCloudVtp(const std::string& path, const Vertices& points_in, const V
   AppendArray(offsets, &block);
 
   std::ostringstream os;
-  os << "<?xml version=\"1.0\"?>\n"
-     << "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-        "header_type=\"UInt64\">\n"
-     << "  <PolyData>\n"
-     << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << n
-     << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n";
+  StartPolyData(n, n, 0, &os);
   if (normals) {
     os << "      <PointData Normals=\"normals\">\n"
        << "        <DataArray type=\"Float32\" Name=\"normals\" NumberOfComponents=\"3\" "
@@ -123,12 +129,7 @@ Status WriteTrianglesVtp(const std::string& path, const Vertices& vertices, cons
   const uint64_t offset_offsets = block.size();
   AppendArray(offsets, &block);
   std::ostringstream os;
-  os << "<?xml version=\"1.0\"?>\n"
-     << "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-        "header_type=\"UInt64\">\n"
-     << "  <PolyData>\n"
-     << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" "
-        "NumberOfStrips=\"0\" NumberOfPolys=\"" << nf << "\">\n";
+  StartPolyData(n, 0, nf, &os);
   if (!fields.empty()) {
     os << "      <PointData>\n";
     for (size_t j = 0; j < fields.size(); ++j) {

@@ -239,18 +239,19 @@ int CarryImplausible(const TrackerState& state, const Vertices& before, const Ve
 
 Vertices ImplausiblePoints(const TrackerState& state, const Vertices& points, const std::vector<char>& marks) {
   std::vector<int> rows;
-  if (state.surface.rows() == 0) return Vertices(0, 3);
+  for (size_t i = 0; i < marks.size(); ++i) {
+    if (marks[i] == 2 || marks[i] == 3) rows.push_back(static_cast<int>(i));
+  }
+  // Most frames with marks have only occluders: no surface index to build for them.
+  if (rows.empty() || state.surface.rows() == 0) return Vertices(0, 3);
   const double far = state.options.data.max_strain_step * state.mean_edge_length;
   const SurfaceIndex surface(state.x, state.surface);
-  for (size_t i = 0; i < marks.size(); ++i) {
-    if ((marks[i] == 2 || marks[i] == 3) &&
-        surface.Closest(points.row(static_cast<Eigen::Index>(i))).squared_distance > far * far) {
-      rows.push_back(static_cast<int>(i));
-    }
-  }
   Vertices out(static_cast<Eigen::Index>(rows.size()), 3);
-  for (size_t j = 0; j < rows.size(); ++j) out.row(static_cast<Eigen::Index>(j)) = points.row(rows[j]);
-  return out;
+  Eigen::Index kept = 0;
+  for (const int i : rows) {
+    if (surface.Closest(points.row(i)).squared_distance > far * far) out.row(kept++) = points.row(i);
+  }
+  return out.topRows(kept);
 }
 
 }  // namespace femreg
