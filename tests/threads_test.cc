@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "femreg/blas_kernels.h"
 #include "femreg/io.h"
 #include "parallel/threads.h"
 #include "test_util.h"
@@ -160,6 +161,42 @@ TEST(Threads, TheCommandLineWaitsPassively) {
   EXPECT_EQ(spin_count("OMP_WAIT_POLICY=active").find("'0'"), std::string::npos) << spin_count("OMP_WAIT_POLICY=active");
 }
 #endif
+
+// OpenBLAS's kernels: a user's OPENBLAS_CORETYPE is never overridden, and a switch to this
+// CPU's kernels (where OpenBLAS chose slower ones) leaves the factorizations right.
+TEST(BlasKernels, UsersChoiceIsKept) {
+  const char* before = std::getenv("OPENBLAS_CORETYPE");
+  const std::string kept = before != nullptr ? before : "";
+  ASSERT_EQ(setenv("OPENBLAS_CORETYPE", "Prescott", 1), 0);
+  EXPECT_EQ(BetterBlasCoreType(), nullptr);
+  if (before != nullptr) {
+    setenv("OPENBLAS_CORETYPE", kept.c_str(), 1);
+  } else {
+    unsetenv("OPENBLAS_CORETYPE");
+  }
+}
+
+TEST(BlasKernels, SwitchKeepsTheFactorizationsRight) {
+  if (BlasCoreName().empty()) GTEST_SKIP() << "the BLAS is not OpenBLAS";
+  const Eigen::SparseMatrix<double> H = SystemWithAWideSupernode();
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(H.rows(), -1.0, 1.0);
+  auto solve = [&] {
+    Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+    factor.setMode(Eigen::CholmodSupernodalLLt);
+    factor.compute(H);
+    EXPECT_EQ(factor.info(), Eigen::Success);
+    return Eigen::VectorXd(factor.solve(b));
+  };
+  const Eigen::VectorXd x0 = solve();
+  const char* better = BetterBlasCoreType();
+  const std::string wanted = better != nullptr ? better : BlasCoreName();
+  EXPECT_EQ(UseBetterBlasKernels(), wanted);
+  EXPECT_EQ(BlasCoreName(), wanted);
+  EXPECT_EQ(BetterBlasCoreType(), nullptr) << "nothing better is left after the switch";
+  const Eigen::VectorXd x1 = solve();
+  EXPECT_LE((H * x1 - b).norm(), 1e-10 * b.norm());
+  EXPECT_LE((x1 - x0).norm(), 1e-10 * x0.norm());
+}
 
 }  // namespace
 }  // namespace femreg

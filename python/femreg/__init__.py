@@ -26,6 +26,20 @@ import os as _os
 # unless the user chose a policy (read once, when OpenMP loads: docs/guide/busy-machines.md).
 _os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
+
+def _openblas_loaded():
+    try:
+        with open("/proc/self/maps") as maps:
+            return "openblas" in maps.read()
+    except OSError:
+        return True  # unknown: as if another module used it already
+
+
+# OpenBLAS takes slow generic kernels on a CPU newer than itself. femreg switches it to this
+# CPU's kernels when its own import loaded OpenBLAS (nothing else can be using it then), and
+# when the user did not choose (OPENBLAS_CORETYPE; docs/guide/busy-machines.md).
+_switch_blas = "OPENBLAS_CORETYPE" not in _os.environ and not _openblas_loaded()
+
 from ._femreg import (  # noqa: E402,F401  (the public API)
     __version__,
     TUM_DEPTH_SCALE,
@@ -71,4 +85,9 @@ from ._femreg import (  # noqa: E402,F401  (the public API)
     write_ply_surface,
     write_point_cloud,
     write_vtu,
+    blas_kernels,
+    use_better_blas_kernels,
 )
+
+if _switch_blas:
+    use_better_blas_kernels()

@@ -8,6 +8,7 @@
 #include <exception>
 
 #include "bindings.h"
+#include "femreg/blas_kernels.h"
 #include "femreg/version.h"
 
 PYBIND11_MODULE(_femreg, m) {
@@ -17,6 +18,16 @@ PYBIND11_MODULE(_femreg, m) {
             "point clouds (C++ core, pybind11 bindings).";
   // The library's version (CMakeLists.txt's project() line): femreg.__version__.
   m.attr("__version__") = femreg::Version();
+
+  // The BLAS kernels in use, and the switch to this CPU's best where OpenBLAS did not know it
+  // (femreg/blas_kernels.h); __init__.py switches by itself only if femreg's import loaded OpenBLAS.
+  m.def("blas_kernels", &BlasCoreName,
+        "The kernels of the loaded OpenBLAS ('SkylakeX', 'Haswell', ...; '' for another BLAS).");
+  m.def("use_better_blas_kernels", &UseBetterBlasKernels,
+        "Switches OpenBLAS to this CPU's best kernels where it took slower ones (a CPU newer than "
+        "the OpenBLAS) and OPENBLAS_CORETYPE is unset; returns the kernels in use. Only safe "
+        "while no other thread calls the BLAS (numpy included): importing femreg does it "
+        "itself when the import loaded OpenBLAS.");
 
   static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr p) {

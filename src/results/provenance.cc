@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <type_traits>
 
+#include "femreg/blas_kernels.h"
 #include "femreg/option_fields.h"
 #include "femreg/point_cloud.h"
 #include "femreg/version.h"
@@ -109,6 +110,8 @@ json ProvenanceJson(const Scene& scene, const RegistrationOptions& options,
                     const std::vector<std::string>& truth_files) {
   json j;
   j["femreg_version"] = Version();
+  // The BLAS kernels round the float factor differently: a result's last digits depend on them.
+  j["blas_kernels"] = BlasCoreName();
   j["scene_file"] = Absolute(scene.path);
   j["overrides"] = overrides;
   j["scene_resolved"] = SceneToYaml(scene);

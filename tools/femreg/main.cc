@@ -10,6 +10,7 @@
 
 #include "cli_util.h"
 #include "commands.h"
+#include "femreg/blas_kernels.h"
 #include "femreg/version.h"
 
 namespace {
@@ -28,10 +29,17 @@ int main(int argc, char** argv) {
   // other processes need. libgomp reads OMP_WAIT_POLICY once, as it loads (before main, and
   // before glibc sets up the environment for a .preinit_array): unless the user chose a policy
   // or a spin count, the command starts itself again with it set (docs/guide/busy-machines.md).
+  // OpenBLAS's kernels likewise, where it took slower ones than this CPU runs (a CPU newer
+  // than the OpenBLAS: femreg/blas_kernels.h).
+  bool again = false;
   if (std::getenv("OMP_WAIT_POLICY") == nullptr && std::getenv("GOMP_SPINCOUNT") == nullptr &&
       setenv("OMP_WAIT_POLICY", "passive", 1) == 0) {
-    execv("/proc/self/exe", argv);  // returns only if it failed: then on as it is
+    again = true;
   }
+  if (const char* kernels = femreg::BetterBlasCoreType()) {
+    if (setenv("OPENBLAS_CORETYPE", kernels, 1) == 0) again = true;
+  }
+  if (again) execv("/proc/self/exe", argv);  // returns only if it failed: then on as it is
   CLI::App app{
       "femreg - physics-regularized non-rigid registration of tetrahedral meshes to point "
       "clouds.\nRun 'femreg SUBCOMMAND --help' for the options of one subcommand."};
