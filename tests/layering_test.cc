@@ -50,6 +50,7 @@ const std::map<std::string, int> kRank = {
 const std::map<std::string, std::string> kHeaderModule = {
     {"status.h", "mesh"},           {"mesh.h", "mesh"},
     {"version.h", "mesh"},          {"field_table.h", "mesh"},
+    {"blas_kernels.h", "parallel"},
     {"io.h", "io"},                 {"camera_io.h", "io"},
     {"geometry.h", "geometry"},
     {"fem.h", "fem"},               {"forward.h", "forward"},
