@@ -245,6 +245,97 @@ TEST(Correspondences, AVertexDoesNotPullTowardsAPointAnotherPartIsCloserTo) {
   }
 }
 
+// A vertex behind an occluder was not seen: beyond its own ring (a mean edge), a cloud point
+// on a face turned away from its normal is the surface beside the occluder's shadow, across an
+// edge of the model. A block's edge seen from above: a top face (z = 0, x >= 0.01) and a side
+// face (x = 0.01, normal -x); the top's part x < 0.025 is hidden by an occluder's points 5 cm
+// above it, and the top's points start at x = 0.032. The hidden edge vertices (x = 0.01, their
+// normals between the two faces) do not pull towards them; the hidden vertices of the top face
+// (x = 0.02) still do, and so does every seen one. Without the occluder's marks all pull.
+TEST(Correspondences, AHiddenEdgeDoesNotPullTowardsTheFaceBesideAnOccludersShadow) {
+  TrackerState state;
+  constexpr int kCols = 7, kRows = 5;  // the top: x = 0.01 .. 0.07, y = 0 .. 0.04, 1 cm apart
+  const int side = kCols * kRows;      // then per row the side's vertices at z = -0.01, -0.02
+  state.num_vertices = side + 2 * kRows;
+  state.x.resize(state.num_vertices, 3);
+  for (int r = 0; r < kRows; ++r) {
+    for (int c = 0; c < kCols; ++c) state.x.row(r * kCols + c) << 0.01 + 0.01 * c, 0.01 * r, 0.0;
+    for (int k = 0; k < 2; ++k) state.x.row(side + 2 * r + k) << 0.01, 0.01 * r, -0.01 * (k + 1);
+  }
+  std::vector<Eigen::Vector3i> triangles;
+  for (int r = 0; r + 1 < kRows; ++r) {
+    for (int c = 0; c + 1 < kCols; ++c) {  // the top, normals +z
+      const int a = r * kCols + c;
+      triangles.emplace_back(a, a + 1, a + kCols + 1);
+      triangles.emplace_back(a, a + kCols + 1, a + kCols);
+    }
+    // The side, normals -x: the top's edge (column 0), then its two rows below.
+    const int column[3] = {r * kCols, side + 2 * r, side + 2 * r + 1};
+    const int next[3] = {(r + 1) * kCols, side + 2 * (r + 1), side + 2 * (r + 1) + 1};
+    for (int k = 0; k < 2; ++k) {
+      triangles.emplace_back(column[k], next[k], column[k + 1]);
+      triangles.emplace_back(column[k + 1], next[k], next[k + 1]);
+    }
+  }
+  state.surface.resize(static_cast<int>(triangles.size()), 3);
+  for (size_t f = 0; f < triangles.size(); ++f) state.surface.row(static_cast<int>(f)) = triangles[f].transpose();
+  for (int v = 0; v < state.num_vertices; ++v) state.surface_vertices.push_back(v);
+  state.vertex_object.assign(static_cast<size_t>(state.num_vertices), 0);
+  state.mean_edge_length = 0.01;
+  RegistrationOptions& options = state.options;
+  options.camera.enabled = true;
+  options.camera.position = Eigen::Vector3d(0.035, 0.02, 1.0);
+  options.camera.target = Eigen::Vector3d(0.035, 0.02, 0.0);
+  options.camera.up = Eigen::Vector3d::UnitY();
+  options.data.reciprocity = 0.0;  // no ring test of the nearest point: only the occluder's rule
+  options.data.max_distance = 0.05;
+  options.data.loss_scale = 0.005;
+  options.data.cloud_to_model = false;
+
+  // The top's points (2 mm apart, x >= 0.032), then the occluder's (x <= 0.025, z = 0.05).
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j <= 20; ++j) {
+    for (int i = 0; i <= 19; ++i) points.emplace_back(0.032 + 0.002 * i, 0.002 * j, 0.0);
+  }
+  const int top_points = static_cast<int>(points.size());
+  for (int j = 0; j <= 30; ++j) {
+    for (int i = 0; i <= 22; ++i) points.emplace_back(-0.02 + 0.002 * i, -0.01 + 0.002 * j, 0.05);
+  }
+  FrameCloud fc;
+  fc.cloud.points.resize(static_cast<int>(points.size()), 3);
+  for (size_t i = 0; i < points.size(); ++i) fc.cloud.points.row(static_cast<int>(i)) = points[i].transpose();
+  fc.index = std::make_unique<PointIndex>(fc.cloud.points);
+  fc.spacing = 0.002;
+  fc.view = FrameCloud::View::kCamera;
+  fc.eye = options.camera.position;
+  const SurfaceIndex surface(state.x, state.surface);
+
+  for (const bool marked : {true, false}) {
+    fc.occluder.assign(points.size(), 0);
+    if (marked) std::fill(fc.occluder.begin() + top_points, fc.occluder.end(), 1);
+    BuildOccluderDepth(state, &fc);
+    ASSERT_EQ(fc.occluder_depth.empty(), !marked);
+    std::vector<DataPair> pairs;
+    PairCounts counts;
+    FindPairs(state, fc, surface, 1, &pairs, &counts);
+    std::vector<char> pulled(static_cast<size_t>(state.num_vertices), 0);
+    for (const DataPair& p : pairs) {
+      ASSERT_EQ(p.num_vertices, 1);
+      pulled[static_cast<size_t>(p.vertices[0])] = 1;
+    }
+    for (int v = 0; v < state.num_vertices; ++v) {
+      const bool side_face = v >= side;  // faces away: never pulls
+      const int row = v / kCols;
+      // The edge's two ends have more of the top around them than of the side: their normals
+      // lean to the top's (within 30 deg), and they are not asked about.
+      if (!side_face && v % kCols == 0 && (row == 0 || row == kRows - 1)) continue;
+      const bool hidden_edge = marked && !side_face && v % kCols == 0;  // x = 0.01, z = 0
+      EXPECT_EQ(pulled[static_cast<size_t>(v)] != 0, !side_face && !hidden_edge)
+          << "vertex " << v << " at (" << state.x.row(v) << ")" << (marked ? ", occluder marked" : "");
+    }
+  }
+}
+
 TEST(Tracker, EmptyCloudHoldsTheShapeAndSaysWhy) {
   auto tracker = MakeTracker(Options());
   const Sequence seq = MakeBendingSequence(3, 0.02, 3);

@@ -99,6 +99,10 @@ struct LabelSplit {
 // grazing face of a model a little off its pose, a silhouette, the sensor's noise.
 constexpr double kMaxFacingAngleCos = -0.3;  // cos(107 deg)
 
+// A face turned less than this from a vertex's normal (cos 30 deg) is on the vertex's side of
+// the model: a corner's normal, between two faces, is 45 deg from each.
+constexpr double kSameSide = 0.866;
+
 // The closest-point index over the triangles of `surface` that face fc's sensor.
 std::unique_ptr<SurfaceIndex> FacingIndex(const Vertices& x, const Triangles& surface, const FrameCloud& fc) {
   std::vector<char> keep(static_cast<size_t>(surface.rows()), 0);
@@ -252,6 +256,25 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       dist2[static_cast<size_t>(i)] = d2;
     }
     if (paired != nullptr && !hold) paired->assign(static_cast<size_t>(ns), 0);
+    // A vertex hidden behind an occluder pairs with a point across an edge of the model only
+    // this near: within its own ring (a mean edge), the noise or the sampling.
+    const double hidden = std::max({data.loss_scale, 2.0 * fc.spacing, state.mean_edge_length});
+    const double hidden2 = hidden * hidden;
+    // Whether cloud point q's closest surface point lies on a face turned within kSameSide of
+    // the unit normal n: on the vertex's own side of the model, not across an edge.
+    auto same_side = [&](int q, const Eigen::Vector3d& n) {
+      const SurfaceIndex* ring = ring_index_of(q);
+      if (ring == nullptr) return true;
+      const int labelled = labels.active() ? labels.point_object[q] : -1;
+      const Triangles& tris = labelled >= 0 ? labels.object_surface[labelled]
+                                            : (labels.active() ? labels.free_surface : state.surface);
+      const SurfaceIndex::Hit hit = ring->Closest(cloud.points.row(q));
+      if (hit.triangle < 0) return true;
+      const Eigen::Vector3d a = x.row(tris(hit.triangle, 0)), b = x.row(tris(hit.triangle, 1)),
+                            c = x.row(tris(hit.triangle, 2));
+      const Eigen::Vector3d fn = (b - a).cross(c - a);
+      return !(fn.norm() > 0) || fn.dot(n) >= kSameSide * fn.norm() * n.norm();
+    };
     for (int i = 0; i < ns; ++i) {
       const int q = nearest[static_cast<size_t>(i)];
       const bool was_paired = hold && (*paired)[static_cast<size_t>(i)];
@@ -273,6 +296,14 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
         continue;
       }
       if ((mutual && foreign[static_cast<size_t>(i)]) || fc.Occluder(q)) {  // also from a held set
+        ++counts->trimmed;
+        continue;
+      }
+      if (d2 > hidden2 && normals.rows() == ns && fc.BehindOccluder(x.row(v), hidden) &&
+          !same_side(q, normals.row(i).transpose())) {
+        // Behind an occluder the camera did not see the vertex: a point beyond its ring on a
+        // face turned away from its normal is the surface beside the occluder's shadow, across
+        // an edge, whose plane pulls a hidden corner across (docs/notes/2026-11-30-artefacts.md).
         ++counts->trimmed;
         continue;
       }

@@ -73,7 +73,17 @@ struct FrameCloud {
   // The depth the sensor observed along its rays (registration.free_space): empty without a
   // view, or with free space off.
   ObservedDepth observed;
+  // The depth of the occluders' points (occluder == 1) along the camera's rays: empty without
+  // them (BuildOccluderDepth).
+  ObservedDepth occluder_depth;
   bool Occluder(int i) const { return !occluder.empty() && occluder[static_cast<size_t>(i)]; }
+  // Whether p lies behind an occluder's point along its ray by more than `tolerance`: the
+  // camera did not see it there.
+  bool BehindOccluder(const Eigen::Vector3d& p, double tolerance) const {
+    Eigen::Vector3d ray, origin;
+    double depth = 0.0;
+    return occluder_depth.Observed(p, &ray, &origin, &depth) && (p - origin).norm() > depth + tolerance;
+  }
 
   // Whether a surface point p with outward normal n faces the sensor.
   bool Faces(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
@@ -138,6 +148,11 @@ void PrepareFrameCloud(const TrackerState& state, const SurfaceIndex& surface, F
 // The occluders at state.x (MarkOccluders): fc->occluder and fc->occluders. With a camera,
 // data.occluders and no fracture; else none. fc->index and fc->spacing must be set.
 void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, FrameCloud* fc);
+
+// fc->occluder_depth from the points fc->occluder marks as occluders (1; not the implausible
+// ones): empty when there are none or the camera is not known. After UpdateOccluders and after
+// each change of the marks.
+void BuildOccluderDepth(const TrackerState& state, FrameCloud* fc);
 
 // The observed depth (fc->observed) of registration.free_space: from the camera's position
 // when it is known, else from the view PrepareFrameCloud decided (a viewpoint: perspective; a

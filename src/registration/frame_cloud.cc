@@ -240,6 +240,22 @@ void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, Fra
     fc->occluders = MarkOccluders(state, surface, fc->cloud.points, *fc->index, fc->spacing, &fc->occluder);
     if (fc->occluders.occluders == 0) fc->occluder.clear();
   }
+  BuildOccluderDepth(state, fc);
+}
+
+void BuildOccluderDepth(const TrackerState& state, FrameCloud* fc) {
+  fc->occluder_depth.Clear();
+  const CameraOptions& camera = state.options.camera;
+  if (!camera.enabled || fc->occluder.empty()) return;
+  std::vector<int> rows;
+  for (size_t i = 0; i < fc->occluder.size(); ++i) {
+    if (fc->occluder[i] == 1) rows.push_back(static_cast<int>(i));
+  }
+  if (rows.empty()) return;
+  Vertices points(static_cast<Eigen::Index>(rows.size()), 3);
+  for (size_t j = 0; j < rows.size(); ++j) points.row(static_cast<Eigen::Index>(j)) = fc->cloud.points.row(rows[j]);
+  const Eigen::Vector3d axis = CameraRotation(camera).row(2).transpose();
+  fc->occluder_depth.Build(points, true, camera.position, axis, fc->spacing);
 }
 
 void BuildObservedDepth(const TrackerState& state, FrameCloud* fc) {

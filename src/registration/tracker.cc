@@ -312,6 +312,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       t0 = Clock::now();
       fc.occluders.occluders =
           ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
+      BuildOccluderDepth(state, &fc);
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
@@ -321,6 +322,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       // Fracture has its say from here: what it turns off goes off for the rest of the frame.
       fc.trim = std::numeric_limits<double>::infinity();
       fc.occluder.clear();
+      fc.occluder_depth.Clear();
       fc.occluders = OccluderCounts();
       s.occluded_points = 0;
       s.trim_distance = 0.0;
