@@ -55,7 +55,7 @@ struct OffModel {
 
 OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
                              const Vertices& points, const PointIndex& cloud_index, double spacing,
-                             std::vector<char>* occluder) {
+                             std::vector<char>* occluder, const std::vector<int>& seeds, int seed_rings) {
   OccluderCounts counts;
   const int n = static_cast<int>(points.rows());
   occluder->assign(static_cast<size_t>(n), 0);
@@ -112,7 +112,10 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     const bool hit = std::isfinite(model_z);
     on_model += hit;
     if (!(z < model_z - grow)) continue;
-    const double d = std::sqrt(surface.Closest(points.row(i)).squared_distance);
+    const bool seeded = static_cast<int>(seeds.size()) == n && seed_rings > 0;
+    const double d = std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
+                                       : surface.Closest(points.row(i)))
+                                   .squared_distance);
     if (d <= grow) continue;
     off[static_cast<size_t>(i)] = 1;
     if (hit && z < model_z - margin && d > margin) {
