@@ -276,7 +276,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // The temporal springs hold to where the frame starts (the prediction, moved by the rigid
   // pre-alignment, so that inertia does not fight the rigid step) and the anchors.
   state.frame_start = state.x;
+  t0 = Clock::now();
   frame_problem.BuildFrameTerms(&state);
+  s.time.build += Seconds(t0);
 
   std::vector<DataPair> pairs;
   warm_triangles.clear();  // a new cloud
@@ -375,6 +377,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
+  const auto t_outputs = Clock::now();
   Outputs(fc.index.get(), pairs);
   if (s.IsSolutionUsable()) {
     const double tolerance = std::max(options.data.loss_scale, 2.0 * fc.spacing);
@@ -407,6 +410,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
   MeasureForces(&s);
+  s.time.outputs = Seconds(t_outputs);
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();
