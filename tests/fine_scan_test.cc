@@ -304,17 +304,26 @@ TEST(FineScanTest, OccludersFromTheSubsampleStartsAreTheTreeSearchs) {
   state.options.data.occluders = true;
   const SurfaceIndex index(state.x, state.surface);
   std::mt19937 rng(11);
+  // Seeds from 5 mm in front and off the surface: the points lifted off it are decided by
+  // their distances to it, some each way.
+  state.options.data.occluder_margin = 0.005;
   const Vertices seen = SeenHalf(state.x, state.surface, 2000, &rng);
-  std::uniform_real_distribution<double> u(-0.015, 0.015);
-  Vertices points(2000 + 300 + 40, 3);
+  const Vertices lifted = SeenHalf(state.x, state.surface, 400, &rng);
+  std::uniform_real_distribution<double> u(-0.015, 0.015), lift(0.002, 0.012);
+  Vertices points(2000 + 400 + 300 + 40, 3);
   points.topRows(2000) = seen;
-  for (int i = 0; i < 300; ++i) points.row(2000 + i) << u(rng), u(rng), 0.12;  // in front, 7 cm
-  for (int i = 0; i < 40; ++i) points.row(2300 + i) << 0.07 + 0.1 * u(rng), u(rng), 0.0;  // beside
+  for (int i = 0; i < 400; ++i) {
+    const Eigen::Vector3d p = lifted.row(i).transpose();
+    points.row(2000 + i) = (p + lift(rng) * p.normalized()).transpose();  // off the sphere
+  }
+  for (int i = 0; i < 300; ++i) points.row(2400 + i) << u(rng), u(rng), 0.12;  // in front, 7 cm
+  for (int i = 0; i < 40; ++i) points.row(2700 + i) << 0.07 + 0.1 * u(rng), u(rng), 0.0;  // beside
   const PointIndex cloud_index(points);
   const double spacing = 0.002;
   std::vector<char> from_tree;
   const OccluderCounts tree = MarkOccluders(state, index, points, cloud_index, spacing, &from_tree);
-  ASSERT_GT(tree.seeds, 100);
+  ASSERT_GT(tree.seeds, 400);  // the patch in front and part of the lifted points
+  ASSERT_LT(tree.seeds, 700);
   ASSERT_FALSE(tree.whole_view);
   const std::vector<int> seeds = SubsampleStarts(state, index.rings(), points, 1, 2);
   for (const int rings : {FrameCloud::kSeedRings, 1}) {
