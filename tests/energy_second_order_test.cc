@@ -2,6 +2,8 @@
 // projection) against central differences of its gradient, the least-squares energy where its
 // held parameters are current, the elastic Hessians' rigid null space, and the assembler's
 // second-order system against the sum of its blocks.
+#include <algorithm>
+
 #include "energy_samples.h"
 
 namespace femreg {
@@ -214,6 +216,71 @@ TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
     EXPECT_LT((H - first).norm(), 1e-14 * first.norm()) << "the same on any thread count";
     EXPECT_FALSE(assembler.AddBlock(0, 4, Eigen::Matrix3d::Identity()));  // two elements apart
     EXPECT_TRUE(assembler.AddBlock(0, 1, Eigen::Matrix3d::Identity()));
+  }
+}
+
+// 4-vertex stencils are found again by key (an embedded surface's data pairs, a new set every
+// outer iteration, on the cage's elements): in any vertex order, and in a set made anew, each
+// block lands where its vertices are. The system is the blocks' sum on one and two threads.
+TEST(Assembler, FourVertexStencilsMetAgainScatterWhereTheirVerticesAre) {
+  std::mt19937 rng(43);
+  const int count = 600;  // elements; 4 data blocks each: past the parallel threshold
+  energy::Problem problem;
+  problem.Reset(4 * count);
+  Vertices x(4 * count, 3);
+  std::vector<std::array<int, 4>> cells;
+  for (int i = 0; i < count; ++i) {
+    cells.push_back({4 * i, 4 * i + 1, 4 * i + 2, 4 * i + 3});
+    for (int k = 0; k < 4; ++k) x.row(4 * i + k) = RandomPoint(&rng, 0.01).transpose();
+  }
+  problem.SetCoupling(cells);
+  auto& data = problem.AddSet<energy::PointToPlane<4>>(energy::TermGroup::kData);
+  // Every block of the set on a permutation of its element's vertices (drawn by `draw`).
+  auto fill = [&](int draw) {
+    std::mt19937 order(static_cast<unsigned>(draw));
+    std::vector<energy::PointToPlane<4>>& blocks = *data.mutable_blocks();
+    blocks.clear();
+    for (int i = 0; i < count; ++i) {
+      for (int k = 0; k < 4; ++k) {
+        Sample<energy::PointToPlane<4>> sample(&rng);
+        std::array<int, 4> v = cells[static_cast<size_t>(i)];
+        std::shuffle(v.begin(), v.end(), order);
+        sample.block.vertices = v;
+        blocks.push_back(sample.block);
+      }
+    }
+  };
+  auto dense_sum = [&](Eigen::VectorXd* gradient) {
+    std::vector<Eigen::Triplet<double>> entries;
+    gradient->setZero(12 * count);
+    for (const auto& b : data.blocks()) {
+      energy::Linearization<energy::PointToPlane<4>> lin;
+      EXPECT_TRUE(energy::Linearize(b, data.loss(), x, &lin));
+      for (int i = 0; i < 4; ++i) {
+        gradient->segment<3>(3 * b.vertices[i]) += lin.gradient[i];
+        for (int j = 0; j < 4; ++j)
+          for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r)
+              entries.emplace_back(3 * b.vertices[i] + r, 3 * b.vertices[j] + c, lin.hessian[i * 4 + j](r, c));
+      }
+    }
+    Eigen::SparseMatrix<double> sum(12 * count, 12 * count);
+    sum.setFromTriplets(entries.begin(), entries.end());
+    return sum;
+  };
+  for (int threads : {1, 2}) {
+    energy::Assembler assembler(threads);
+    for (int round = 0; round < 3; ++round) {  // the second and third sets: their stencils known
+      fill(round);
+      const int builds = assembler.Prepare(problem, x);
+      EXPECT_EQ(builds, round == 0 ? 1 : 0) << "the elements' pattern holds";
+      Eigen::VectorXd g, gradient;
+      assembler.AssembleGaussNewton(problem, x, /*first=*/true, &g);
+      const Eigen::SparseMatrix<double> sum = dense_sum(&gradient);
+      const Eigen::SparseMatrix<double> H = assembler.H();
+      EXPECT_LT((H - sum).norm(), 1e-10 * sum.norm()) << threads << " threads, set " << round;
+      EXPECT_LT((g - gradient).norm(), 1e-12 * gradient.norm()) << threads << " threads, set " << round;
+    }
   }
 }
 

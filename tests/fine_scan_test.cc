@@ -15,6 +15,7 @@
 #include "registration/confidence.h"
 #include "registration/correspondences.h"
 #include "registration/embedded_surface.h"
+#include "registration/occluders.h"
 #include "registration/prediction.h"
 #include "registration/tracker_state.h"
 
@@ -281,6 +282,64 @@ TEST(FineScanTest, WalksFromTheSubsampleFindTheTreeSearchsPairs) {
   // No subsample vertex on a triangle: no starts.
   state.surface_vertices.clear();
   EXPECT_EQ(SubsampleStarts(state, index.rings(), Vertices::Zero(4, 3), 1, 1), std::vector<int>(4, -1));
+}
+
+// The occluders' distances walk from the subsample's starts (FrameCloud::seeds), as the first
+// outer iteration's queries do: the same points are marked as with the k-d tree search over
+// every surface vertex, on a turned sphere seen from a camera with a patch of points in front
+// of it (an occluder) and a few beside it; with one ring most walks do not settle and are
+// searched in full, the marks again the same.
+TEST(FineScanTest, OccludersFromTheSubsampleStartsAreTheTreeSearchs) {
+  TrackerState state;
+  Sphere(0.05, 40, &state.x, &state.surface);
+  state.num_vertices = static_cast<int>(state.x.rows());
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
+  for (int v = 0; v < state.num_vertices; ++v) state.x.row(v) = (turn * state.x.row(v).transpose()).transpose();
+  for (int v = 0; v < state.num_vertices; v += 9) state.surface_vertices.push_back(v);
+  state.vertex_object.assign(static_cast<size_t>(state.num_vertices), 0);
+  state.mean_edge_length = 0.004;
+  state.options.camera.enabled = true;
+  state.options.camera.position = Eigen::Vector3d(0, 0, 0.3);
+  state.options.camera.target = Eigen::Vector3d::Zero();
+  state.options.data.occluders = true;
+  const SurfaceIndex index(state.x, state.surface);
+  std::mt19937 rng(11);
+  // Seeds from 5 mm in front and off the surface: the points lifted off it are decided by
+  // their distances to it, some each way.
+  state.options.data.occluder_margin = 0.005;
+  const Vertices seen = SeenHalf(state.x, state.surface, 2000, &rng);
+  const Vertices lifted = SeenHalf(state.x, state.surface, 400, &rng);
+  std::uniform_real_distribution<double> u(-0.015, 0.015), lift(0.002, 0.012);
+  Vertices points(2000 + 400 + 300 + 40, 3);
+  points.topRows(2000) = seen;
+  for (int i = 0; i < 400; ++i) {
+    const Eigen::Vector3d p = lifted.row(i).transpose();
+    points.row(2000 + i) = (p + lift(rng) * p.normalized()).transpose();  // off the sphere
+  }
+  for (int i = 0; i < 300; ++i) points.row(2400 + i) << u(rng), u(rng), 0.12;  // in front, 7 cm
+  for (int i = 0; i < 40; ++i) points.row(2700 + i) << 0.07 + 0.1 * u(rng), u(rng), 0.0;  // beside
+  const PointIndex cloud_index(points);
+  const double spacing = 0.002;
+  std::vector<char> from_tree;
+  const OccluderCounts tree = MarkOccluders(state, index, points, cloud_index, spacing, &from_tree);
+  ASSERT_GT(tree.seeds, 400);  // the patch in front and part of the lifted points
+  ASSERT_LT(tree.seeds, 700);
+  ASSERT_FALSE(tree.whole_view);
+  const std::vector<int> seeds = SubsampleStarts(state, index.rings(), points, 1, 2);
+  for (const int rings : {FrameCloud::kSeedRings, 1}) {
+    std::vector<char> seeded;
+    const OccluderCounts walked = MarkOccluders(state, index, points, cloud_index, spacing, &seeded, seeds, rings);
+    EXPECT_EQ(walked.seeds, tree.seeds) << rings;
+    EXPECT_EQ(walked.occluders, tree.occluders) << rings;
+    EXPECT_EQ(seeded, from_tree) << rings;
+  }
+  int unsettled = 0;
+  for (int i = 0; i < points.rows(); ++i) {
+    bool settled = true;
+    index.ClosestFrom(points.row(i), seeds[static_cast<size_t>(i)], 1, &settled);
+    unsettled += !settled;
+  }
+  EXPECT_GT(unsettled, 100);  // with one ring, the full search decided those
 }
 
 // Model->cloud: vertices facing away from the sensor are not searched with

@@ -392,6 +392,9 @@ struct StageTimes {
   double assembly = 0.0, factorization = 0.0, linear_solve = 0.0, evaluation = 0.0;
   double collision = 0.0;  // contact detection (refit, broad and narrow phase)
   double fracture = 0.0;  // detection and splits (0 when effects.fracture is off)
+  // After the outer iterations: the per-vertex outputs (residuals, observed), the confidence,
+  // the implausible points carried to the next frame and the external forces.
+  double outputs = 0.0;
 };
 
 // How far a frame's result can be trusted, from what the frame has (no ground truth;

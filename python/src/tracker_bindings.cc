@@ -91,6 +91,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   t["solve"] = s.time.solve;
   t["collision"] = s.time.collision;
   t["fracture"] = s.time.fracture;
+  t["outputs"] = s.time.outputs;
   t["total"] = s.time.total;
   d["time_s"] = t;
   py::list iterations;

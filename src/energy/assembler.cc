@@ -137,11 +137,20 @@ Assembler::Slot Assembler::Find(int a, int b) const {
 }
 
 namespace {
-// A key for a stencil of 2 or 3 vertices in that order, each below 2^20 - 1; 0 (no key) else.
+// A key for a stencil of 2 or 3 vertices in that order, each below 2^20 - 1, or of 4 vertices
+// each below 2^15 - 1 (an element: a cage's embedded-surface pairs, new every outer
+// iteration, sit on its elements); 0 (no key) else.
 template <size_t n>
 uint64_t StencilKey(const std::array<int, n>& v) {
   static_assert(n >= 1);
-  if constexpr (n < 2 || n > 3) {
+  if constexpr (n == 4) {
+    uint64_t key = 0;  // low bits 0: no 2- or 3-vertex key's
+    for (size_t i = 0; i < n; ++i) {
+      if (v[i] < 0 || v[i] + 1 >= (1 << 15)) return 0;
+      key |= static_cast<uint64_t>(v[i] + 1) << (2 + 15 * i);
+    }
+    return key;
+  } else if constexpr (n < 2 || n > 3) {
     return 0;
   } else {
     uint64_t key = n;  // the count in the low bits: (a, b) and (a, b, 0) differ

@@ -134,7 +134,7 @@ class Assembler {
   int owner_threads_ = 0;  // the thread count vertex_owner_ was cut for
   std::vector<double> scratch_;  // the straddling blocks' linearizations
   std::map<uint64_t, SetCache> cache_;
-  // The slots of the 2- and 3-vertex stencils met on this pattern (a key of the stencil ->
+  // The slots of the 2-, 3- and 4-vertex stencils met on this pattern (a key of the stencil ->
   // their n * n slots at that offset of stencil_pool_): the data terms' sets are made anew
   // every outer iteration, their blocks mostly on surface triangles met before.
   std::unordered_map<uint64_t, int> stencil_slots_;

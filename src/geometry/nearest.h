@@ -84,6 +84,12 @@ class SurfaceIndex {
   // max_rings centres; *settled (if given) says whether it stayed before that (false: the
   // best found so far, which a closer triangle farther on may beat).
   Hit ClosestFrom(const Eigen::Vector3d& query, int start, int max_rings = 4, bool* settled = nullptr) const;
+  // ClosestFrom(query, start, max_rings), and Closest(query) where that walk has not settled.
+  Hit ClosestSeeded(const Eigen::Vector3d& query, int start, int max_rings) const {
+    bool settled = true;
+    const Hit hit = ClosestFrom(query, start, max_rings, &settled);
+    return settled ? hit : Closest(query);
+  }
   // Whether `triangle` touches vertex v's closed one-ring: one of its corners is v or shares
   // a triangle with v. v must be a vertex of `positions` (false for one on no triangle).
   bool TouchesRing(int v, int triangle) const;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "femreg/fem.h"
+#include "parallel/threads.h"
 
 namespace femreg {
 namespace {
@@ -123,9 +124,11 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   // Strain: the 95th percentile of the elements' stretch deviations.
   std::vector<double> deviation;
   for (const ObjectState& o : state.objects) {
-    for (int e = 0; e < o.model.num_elements(); ++e) {
-      deviation.push_back(StretchDeviation(DeformationGradient(o, e)));
-    }
+    const size_t first = deviation.size();
+    const int ne = o.model.num_elements();
+    deviation.resize(first + static_cast<size_t>(ne));
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), ne, 2048)) schedule(static)
+    for (int e = 0; e < ne; ++e) deviation[first + static_cast<size_t>(e)] = StretchDeviation(DeformationGradient(o, e));
   }
   if (!deviation.empty()) {
     const size_t at = std::min(deviation.size() - 1, static_cast<size_t>(0.95 * deviation.size()));

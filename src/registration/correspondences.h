@@ -60,6 +60,12 @@ struct FrameCloud {
   // iteration's hits: each walk may go this many rings, and one that has not settled by then
   // is searched in full.
   int seeded_rings = 0;
+  // An embedded surface's walk starts at the frame's start shape: per cloud point a triangle
+  // around the nearest subsample vertex (SubsampleStarts), or empty. The occluders' queries
+  // walk from them (at most kSeedRings rings, else searched in full), as the first outer
+  // iteration's do, and no k-d tree of every surface vertex is built for them.
+  std::vector<int> seeds;
+  static constexpr int kSeedRings = 16;
   // Surface vertices facing away from the sensor are not searched for a nearest cloud point
   // (model->cloud): they pair with none (unless held), and an embedded surface's subsample
   // need not say how near the cloud they are. They count as trimmed, not covered nor rejected.

@@ -202,6 +202,18 @@ const TrackerState& DataSurface::Update(const Vertices& x) {
   return view_;
 }
 
+Vertices DataSurface::PairVerticesAt(const Vertices& x) const {
+  const std::vector<int>& picked = view_.surface_vertices;
+  Vertices out(static_cast<Eigen::Index>(picked.size()), 3);
+  for (size_t i = 0; i < picked.size(); ++i) {  // Update's sum, term by term
+    const Stencil& st = vertex_[static_cast<size_t>(picked[i])];
+    Eigen::RowVector3d p = st.weights[0] * x.row(st.vertices[0]);
+    for (int k = 1; k < st.n; ++k) p += st.weights[static_cast<size_t>(k)] * x.row(st.vertices[static_cast<size_t>(k)]);
+    out.row(static_cast<Eigen::Index>(i)) = p;
+  }
+  return out;
+}
+
 DataSurface::Stencil DataSurface::Map(const DataPair& pair) const {
   if (pair.num_vertices == 1) return vertex_[static_cast<size_t>(pair.vertices[0])];
   Stencil out;

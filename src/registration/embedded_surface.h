@@ -45,6 +45,9 @@ class DataSurface {
   // surface_vertices, those that pair with the cloud (model->cloud), are for an embedded
   // surface one per voxel of a third of its mesh's mean surface edge (pair_area).
   const TrackerState& Update(const Vertices& x);
+  // The positions of view().surface_vertices (in that order) at the coarse positions x, as
+  // Update computes them, without updating the view (the pair subsample, not the whole scan).
+  Vertices PairVerticesAt(const Vertices& x) const;
   const TrackerState& view() const { return view_; }
   // The mean edge (m) of the data surface's triangles at rest (the view's mean_edge_length is
   // the meshes').

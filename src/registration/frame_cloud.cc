@@ -237,7 +237,8 @@ void UpdateOccluders(const TrackerState& state, const SurfaceIndex& surface, Fra
   fc->occluders = OccluderCounts();
   // Not with fracture live: a piece that comes apart is a displacement no strain bounds.
   if (options.camera.enabled && options.data.occluders && !FractureLive(state)) {
-    fc->occluders = MarkOccluders(state, surface, fc->cloud.points, *fc->index, fc->spacing, &fc->occluder);
+    fc->occluders = MarkOccluders(state, surface, fc->cloud.points, *fc->index, fc->spacing, &fc->occluder,
+                                  fc->seeds, FrameCloud::kSeedRings);
     if (fc->occluders.occluders == 0) fc->occluder.clear();
   }
   BuildOccluderDepth(state, fc);

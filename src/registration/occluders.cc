@@ -6,6 +6,7 @@
 
 #include "femreg/point_cloud.h"  // CameraRotation
 #include "geometry/zbuffer.h"
+#include "parallel/threads.h"
 #include "registration/confidence.h"  // StretchDeviation
 
 namespace femreg {
@@ -55,7 +56,7 @@ struct OffModel {
 
 OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
                              const Vertices& points, const PointIndex& cloud_index, double spacing,
-                             std::vector<char>* occluder) {
+                             std::vector<char>* occluder, const std::vector<int>& seeds, int seed_rings) {
   OccluderCounts counts;
   const int n = static_cast<int>(points.rows());
   occluder->assign(static_cast<size_t>(n), 0);
@@ -99,7 +100,11 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
 
   // Per point: in front of the model (or beside it) and off its surface.
   std::vector<char> off(static_cast<size_t>(n), 0), seed(static_cast<size_t>(n), 0);
-  int on_model = 0;
+  int on_model = 0, seeds_found = 0;
+  const bool seeded = static_cast<int>(seeds.size()) == n && seed_rings > 0;
+  // Each point on its own (counts of integers): the same on any thread count.
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), n, 1024)) schedule(static) \
+    reduction(+ : on_model, seeds_found)
   for (int i = 0; i < n; ++i) {
     double u = 0, v = 0, z = 0;
     if (!camera.Project(points.row(i), &u, &v, &z)) continue;
@@ -112,14 +117,17 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     const bool hit = std::isfinite(model_z);
     on_model += hit;
     if (!(z < model_z - grow)) continue;
-    const double d = std::sqrt(surface.Closest(points.row(i)).squared_distance);
+    const double d = std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
+                                       : surface.Closest(points.row(i)))
+                                   .squared_distance);
     if (d <= grow) continue;
     off[static_cast<size_t>(i)] = 1;
     if (hit && z < model_z - margin && d > margin) {
       seed[static_cast<size_t>(i)] = 1;
-      ++counts.seeds;
+      ++seeds_found;
     }
   }
+  counts.seeds = seeds_found;
   if (counts.seeds == 0) return counts;
   if (counts.seeds > kWholeView * on_model) {
     counts.whole_view = true;

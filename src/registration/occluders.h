@@ -27,9 +27,12 @@ struct OccluderCounts {
 // silhouette, and farther from its surface than the loss scale (or two spacings). When the
 // seeds are most of the points in front of the model, the object itself came closer, and
 // nothing is marked. `cloud_index` indexes `points`; `spacing` is the cloud's point spacing.
+// `seeds` (per point a triangle of `surface` near it, or empty): the distances to the surface
+// are walked from there (SurfaceIndex::ClosestSeeded, seed_rings rings).
 OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surface,
                              const Vertices& points, const PointIndex& cloud_index, double spacing,
-                             std::vector<char>* occluder);
+                             std::vector<char>* occluder, const std::vector<int>& seeds = {},
+                             int seed_rings = 0);
 
 // After the model moved (an outer iteration): the occluder points it now reaches (within the
 // loss scale, or two spacings) are released, and so are the points carried from the last

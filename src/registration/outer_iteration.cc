@@ -134,6 +134,7 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
   const double allowed = merit + options.solver.relative_energy_tolerance * std::abs(merit);
   double at = frame_problem.problem().Evaluate(state.x).total();
   s->time.evaluation += Seconds(t0);
+  s->time.solve += Seconds(t0);
   if (at <= allowed) return true;
   const double rose_to = at;
   const Vertices reached = state.x;
@@ -144,6 +145,7 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
     t0 = Clock::now();
     at = frame_problem.problem().Evaluate(state.x).total();
     s->time.evaluation += Seconds(t0);
+    s->time.solve += Seconds(t0);
     ++s->backtracks;
     if (at <= allowed) {
       *previous_energy = std::numeric_limits<double>::infinity();  // that of another step

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "geometry/nearest.h"
+#include "parallel/threads.h"
 
 namespace femreg {
 
@@ -131,21 +133,23 @@ Vertices PredictMotion(const TrackerState& state, DataSurface* data) {
 
 double StartMisfit(const TrackerState& state, const Vertices& x, const Vertices& points, double gate,
                    DataSurface* data) {
-  const TrackerState& view = data != nullptr ? data->Update(x) : state;
-  const Vertices& at = data != nullptr ? view.x : x;
-  const int nv = static_cast<int>(view.surface_vertices.size());
+  const int nv = static_cast<int>(data != nullptr ? data->view().surface_vertices.size() : state.surface_vertices.size());
   const int np = static_cast<int>(points.rows());
   if (nv == 0 || np == 0) return 0.0;
-  Vertices surface(nv, 3);
-  for (int i = 0; i < nv; ++i) surface.row(i) = at.row(view.surface_vertices[static_cast<size_t>(i)]);
+  Vertices surface;
+  if (data != nullptr) {
+    surface = data->PairVerticesAt(x);  // the subsample only: not the whole scan
+  } else {
+    surface.resize(nv, 3);
+    for (int i = 0; i < nv; ++i) surface.row(i) = x.row(state.surface_vertices[static_cast<size_t>(i)]);
+  }
   const PointIndex index(surface);
   const double cap2 = gate > 0 ? gate * gate : std::numeric_limits<double>::infinity();
-  double sum = 0.0;
-  for (int i = 0; i < np; ++i) {
-    double d2 = 0.0;
-    index.Nearest(points.row(i), &d2);
-    sum += std::min(d2, cap2);
-  }
+  std::vector<double> d2(static_cast<size_t>(np), 0.0);
+#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), np, 256)) schedule(static)
+  for (int i = 0; i < np; ++i) index.Nearest(points.row(i), &d2[static_cast<size_t>(i)]);
+  double sum = 0.0;  // in the points' order: the same on any thread count
+  for (int i = 0; i < np; ++i) sum += std::min(d2[static_cast<size_t>(i)], cap2);
   return sum / static_cast<double>(np);
 }
 

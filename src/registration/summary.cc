@@ -73,9 +73,10 @@ std::string FrameSummary::FullReport() const {
   }
   std::snprintf(buf, sizeof(buf),
                 "  time (ms): preprocess %.2f, prealign %.2f, rotations %.2f, correspondences "
-                "%.2f, build %.2f, solve %.2f, total %.2f\n",
+                "%.2f, build %.2f, solve %.2f, outputs %.2f, total %.2f\n",
                 time.preprocess * 1e3, time.prealign * 1e3, time.rotations * 1e3,
-                time.correspondences * 1e3, time.build * 1e3, time.solve * 1e3, time.total * 1e3);
+                time.correspondences * 1e3, time.build * 1e3, time.solve * 1e3, time.outputs * 1e3,
+                time.total * 1e3);
   os << buf;
   std::snprintf(buf, sizeof(buf),
                 "  solve (ms): assembly %.2f, factorization %.2f (%d), linear solves %.2f (%d, %d "

@@ -45,10 +45,6 @@ constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 // A frame after held or lost ones makes up for at most this many frames' motion in its
 // budget of outer iterations: the cost of one catch-up frame stays bounded.
 constexpr int kMaxCatchUpFrames = 4;
-// Rings a first outer iteration's walk from an embedded surface's subsample may go before the
-// query is searched in full: the subsample's spacing is a third of the cage's edge, a few of
-// the scan's (docs/notes/2026-11-30-fine-scans.md).
-constexpr int kSeededRings = 16;
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
@@ -257,6 +253,12 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.time.prealign += Seconds(t0);
   }
   t0 = Clock::now();
+  if (data_surface) {
+    // An embedded surface: the frame's first closest-point queries (the occluders', the first
+    // outer iteration's) walk from its subsample, not from a k-d tree of every scan vertex
+    // built again each frame.
+    fc.seeds = SubsampleStarts(PairState(), Surface().rings(), fc.cloud.points, 1, options.solver.num_threads);
+  }
   PrepareFrameCloud(PairState(), Surface(), &fc);
   BuildObservedDepth(state, &fc);
   if (options.data.max_strain_step > 0 && implausible_before.rows() > 0 && !FractureLive(state)) {
@@ -274,18 +276,16 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // The temporal springs hold to where the frame starts (the prediction, moved by the rigid
   // pre-alignment, so that inertia does not fight the rigid step) and the anchors.
   state.frame_start = state.x;
+  t0 = Clock::now();
   frame_problem.BuildFrameTerms(&state);
+  s.time.build += Seconds(t0);
 
   std::vector<DataPair> pairs;
   warm_triangles.clear();  // a new cloud
   if (data_surface && options.data.cloud_to_model) {
-    // An embedded surface: the first outer iteration's queries walk from its subsample, not
-    // from a k-d tree of every scan vertex built again each frame.
-    t0 = Clock::now();
-    warm_triangles = SubsampleStarts(PairState(), Surface().rings(), fc.cloud.points, options.data.cloud_stride,
-                                     options.solver.num_threads);
-    fc.seeded_rings = kSeededRings;
-    s.time.correspondences += Seconds(t0);
+    const int stride = options.data.cloud_stride;
+    for (size_t i = 0; i < fc.seeds.size(); i += static_cast<size_t>(stride)) warm_triangles.push_back(fc.seeds[i]);
+    fc.seeded_rings = FrameCloud::kSeedRings;
   }
   paired_vertices.clear();
   rise_from = std::max(1, options.data.hold_pairs_after);
@@ -379,6 +379,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
+  const auto t_outputs = Clock::now();
   Outputs(fc.index.get(), pairs);
   if (s.IsSolutionUsable()) {
     const double tolerance = std::max(options.data.loss_scale, 2.0 * fc.spacing);
@@ -411,6 +412,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
   MeasureForces(&s);
+  s.time.outputs = Seconds(t_outputs);
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();

@@ -40,7 +40,7 @@ const char kStatsHeader[] =
     "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,occluded_points,implausible_points,contact_force_x_N,"
     "contact_force_y_N,contact_force_z_N,friction_force_x_N,friction_force_y_N,friction_force_z_N,"
     "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,confidence_volume_change,lost,free_space_vertices,flying_pixels,depth_offset_mm,"
-    "err_surface_mean_mm,err_surface_p95_mm,err_surface_max_mm,err_surface_seen_mean_mm,message\n";
+    "err_surface_mean_mm,err_surface_p95_mm,err_surface_max_mm,err_surface_seen_mean_mm,t_outputs_ms,message\n";
 
 std::string StatsRow(size_t i, const FrameRecord& row) {
   std::ostringstream os;
@@ -119,6 +119,8 @@ std::string StatsRow(size_t i, const FrameRecord& row) {
   } else {
     os << ",,,,";
   }
+  std::snprintf(buf, sizeof(buf), ",%.3f", s.time.outputs * 1e3);
+  os << buf;
   std::string msg = row.read_error.empty() ? s.message : row.read_error;
   std::replace(msg.begin(), msg.end(), '"', '\'');
   os << ",\"" << msg << "\"\n";
