@@ -13,10 +13,7 @@ namespace scene_writer {
 
 YAML::Node ForwardNode(const Scene& scene) {
   YAML::Node n = FlowMap();
-  if (scene.forward_model != ElasticModelType::kCorotational || scene.forward_model_chosen) {
-    n["model"] = ToString(scene.forward_model);
-  }
-  PutFields(n, scene.forward);  // femreg/forward.h's table
+  PutFields(n, scene.forward);  // femreg/forward.h's table; a model set is written, even corotational
   return n;
 }
 
