@@ -38,7 +38,7 @@ struct ObstacleSpec {
   double scale = 1.0;     // applied to the mesh file's coordinates
   std::vector<std::string> objects;  // objects it collides with; empty = all
   std::vector<ObstacleKeyframe> keyframes;  // empty = identity pose
-  std::optional<double> friction;  // Coulomb coefficient against it; unset: CollisionSpec::friction
+  std::optional<double> friction = std::nullopt;  // Coulomb coefficient against it; unset: CollisionSpec::friction
 };
 
 // An obstacle's own values beside its name, geometry (plane, box or mesh), objects and
@@ -57,7 +57,7 @@ struct OptionFields<ObstacleSpec> {
 // A pair of objects that may touch, with its own friction coefficient (unset: the collision's).
 struct CollisionPair {
   std::string first, second;  // object names
-  std::optional<double> friction;
+  std::optional<double> friction = std::nullopt;  // its own coefficient; unset: the collision's
   bool operator==(const CollisionPair& o) const {
     return first == o.first && second == o.second && friction == o.friction;
   }

@@ -81,7 +81,7 @@ struct ForwardOptions {
   // calibrate, synth); SolveQuasiStatic takes the model built, not this. Unset: corotational,
   // and a nearly incompressible object may get the neo-Hookean element instead
   // (ChooseForwardElements in femreg/scene.h); set, even to corotational, every object keeps it.
-  std::optional<ElasticModelType> model;
+  std::optional<ElasticModelType> model = std::nullopt;
   ElasticModelType Model() const { return model.value_or(ElasticModelType::kCorotational); }
   bool IsValid(std::string* error) const;
 };
