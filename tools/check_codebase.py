@@ -8,7 +8,9 @@ Each check prints what fails; the exit status is 1 when any does:
   - no source file (C++, Python, shell) has more than 600 lines;
   - at most 10 comment lines quote figures (timings, before -> after errors, counts), and none
     refers to a document outside the repository (docs/notes/ holds the figures);
-  - one PLY reader: only src/io/ply_reader.cc reads a PLY header;
+  - one home per concept: only src/io/ply_reader.cc reads a PLY header, only
+    src/mesh/disjoint_sets.h is a union-find, only src/registration/depth_image.cc builds the
+    camera frame, only src/scene/yaml_reader.cc maps a YAML error to file and line;
   - the developer guide's architecture page matches the code: its layer table names every
     module of src/ and solvers/ at the rank tests/layering_test.cc gives it, every path it
     names exists, and every C++ name it gives is in the sources.
@@ -105,21 +107,37 @@ def check_files():
              + "\n    ".join(figures))
 
 
-def check_one_ply_reader():
-    """A header read is a comparison with "end_header" (writers and tests only write it)."""
-    home = os.path.join("src", "io", "ply_reader.cc")
-    reads = re.compile(r'[=!]=\s*"end_header"|"end_header"\s*[=!]=|(find|compare|StartsWith|rfind)\([^)]*"end_header"')
-    readers = set()
+# One home per concept: a line of C++ code (src, include, solvers, tools, python/src) that does
+# the concept's work, the file it belongs in. The patterns are the way the home does it (so
+# the home must match: the check cannot pass by no longer seeing it); a copy written the same
+# way elsewhere fails.
+ONE_HOME = [
+    ("one PLY reader", re.compile(r'[=!]=\s*"end_header"|"end_header"\s*[=!]=|(find|compare|StartsWith)\([^)]*"end_header"'),
+     os.path.join("src", "io", "ply_reader.cc")),
+    ("one union-find", re.compile(r"iota\(\s*parent"), os.path.join("src", "mesh", "disjoint_sets.h")),
+    ("one camera frame", re.compile(r"Vector3d\s+\w+\s*=\s*[\w.]*target\s*-\s*[\w.]*position\b"),
+     os.path.join("src", "registration", "depth_image.cc")),
+    ("one YAML-error mapping", re.compile(r"\.mark\.(line|column|is_null)\b"), os.path.join("src", "scene", "yaml_reader.cc")),
+]
+
+
+def check_one_home():
+    found = {name: False for name, _, _ in ONE_HOME}
     for path in source_files():
-        if not path.endswith((".cc", ".h")) or rel(path).split(os.sep)[0] in ("tests", "fuzz", "bench"):
+        if not path.endswith((".cc", ".h")) or rel(path).split(os.sep)[0] in ("tests", "fuzz", "bench", "examples"):
             continue
         for i, line in enumerate(read_lines(path), 1):
-            if reads.search(line.split("//")[0]):
-                readers.add(rel(path))
-                if rel(path) != home:
-                    fail("one PLY reader", f"{rel(path)}:{i} reads a PLY header (the reader is {home}): {line.strip()}")
-    if home not in readers:
-        fail("one PLY reader", f"{home} no longer reads the header as this check expects: update the check")
+            code = line.split("//")[0]
+            for name, pattern, home in ONE_HOME:
+                if not pattern.search(code):
+                    continue
+                if rel(path) == home:
+                    found[name] = True
+                else:
+                    fail(name, f"{rel(path)}:{i} does what {home} does: {line.strip()}")
+    for name, _, home in ONE_HOME:
+        if not found[name]:
+            fail(name, f"{home} no longer matches this check's pattern: update the check")
 
 
 def layering_ranks():
@@ -175,7 +193,7 @@ def check_architecture():
 
 check_readme()
 check_files()
-check_one_ply_reader()
+check_one_home()
 check_architecture()
 for f in failures:
     print(f)
