@@ -91,7 +91,7 @@ TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
         << "differs between two runs";
     ++files;
   }
-  EXPECT_EQ(files, 3 * kFrames + 4);  // clouds, ground truth, truth; scene, README, forces, log
+  EXPECT_EQ(files, 3 * kFrames + 4);  // clouds, ground truth, truth; scene, README.md, forces, log
 
   EXPECT_EQ(report.frames, kFrames);
   EXPECT_EQ(report.tracked_vertices, 1331);

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -52,7 +53,10 @@ template <class Options>
 void ExpectSameFields(const Options& a, const Options& b, const std::string& when) {
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using T = std::decay_t<decltype(a.*member)>;
-    if constexpr (std::is_enum_v<T>) {
+    if constexpr (FieldType<T>::kOptional) {  // both unset, or both set to the same value
+      EXPECT_EQ((a.*member).has_value(), (b.*member).has_value()) << f.key << " after " << when;
+      EXPECT_TRUE(a.*member == b.*member) << f.key << " after " << when;
+    } else if constexpr (std::is_enum_v<T>) {
       EXPECT_STREQ(ToString(a.*member), ToString(b.*member)) << f.key << " after " << when;
     } else {
       EXPECT_EQ(a.*member, b.*member) << f.key << " after " << when;
@@ -63,10 +67,19 @@ void ExpectSameFields(const Options& a, const Options& b, const std::string& whe
 // A value other than `d` that the field's range allows: a flag flipped, the next enum value,
 // a vector moved (a box's min down, else up; an unbounded default such as a crop's +-1e30 to
 // zero), a number one larger (or one smaller for an integer, or halfway to an upper bound that
-// one larger would pass).
+// one larger would pass). An optional left unset gets its type's zero (the first enum value,
+// 0) where the range allows it, else the value other than that; one set is unset.
 template <class T>
 T OtherValue(const FieldInfo& f, T d) {
-  if constexpr (std::is_same_v<T, bool>) {
+  if constexpr (FieldType<T>::kOptional) {
+    using V = typename FieldType<T>::Value;
+    if (d.has_value()) return T();
+    const V zero{};
+    if constexpr (std::is_arithmetic_v<V>) {
+      if (!f.InRange(static_cast<double>(zero))) return OtherValue(f, zero);
+    }
+    return zero;
+  } else if constexpr (std::is_same_v<T, bool>) {
     return !d;
   } else if constexpr (std::is_enum_v<T>) {
     const auto& all = EnumValues<T>::kAll;

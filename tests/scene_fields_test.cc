@@ -73,16 +73,16 @@ const char kBase[] =
     "  ground_truth: {refinement: 2}\n"
     "  motion: [{select: {all: true}, keyframes: [{frame: 0}]}]\n"
     "  bodies: [{box: {min: [0, 0, 0.2], max: [0.1, 0.1, 0.3]}}]\n";
-// Two objects with an anchor, a pair and an obstacle (whose frictions are set: left out,
-// they are < 0, out of their rows' range).
+// Two objects with an anchor, a pair and an obstacle (whose frictions are left unset: the
+// round trip sets them to 0, a frictionless pair that is not the collision's default).
 const char kBaseLists[] =
     "objects:\n"
     "  - {name: a, generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}\n"
     "  - {name: b, generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}\n"
     "anchors: [{object: a, select: {all: true}}]\n"
     "collision:\n"
-    "  pairs: [{objects: [a, b], friction: 0.5}]\n"
-    "  obstacles: [{plane: {point: [0, 0, 0], normal: [0, 0, 1]}, friction: 0.5}]\n";
+    "  pairs: [{objects: [a, b]}]\n"
+    "  obstacles: [{plane: {point: [0, 0, 0], normal: [0, 0, 1]}}]\n";
 
 // What else a field needs to be set on its own (the parser's rules across keys).
 void AllowAlone(const std::string& field, Scene* scene) {
@@ -183,9 +183,13 @@ void ExpectRangesNamed(const Place& place) {
     const std::string field = FieldName<Options>(f);
 
     Options o;
-    using T = std::decay_t<decltype(o.*member)>;
+    using Field = std::decay_t<decltype(o.*member)>;
+    using T = typename FieldType<Field>::Value;  // an optional's value: checked when set
     std::string error;
     if constexpr (std::is_arithmetic_v<T> && !std::is_unsigned_v<T>) {  // a seed cannot hold -1; the scene file can
+      if constexpr (FieldType<Field>::kOptional) {
+        EXPECT_TRUE(Valid(o, &error)) << field << " unset: " << error;
+      }
       o.*member = static_cast<T>(bad);
       EXPECT_FALSE(Valid(o, &error)) << field;
       EXPECT_EQ(error.rfind(field + " must be ", 0), 0u) << error;
@@ -267,6 +271,64 @@ TEST(SceneFields, MessagesNameTheKey) {
       ParseScene(std::string(kObject) + "collision: {stiffness: 1e4, friction_slip: -1}\n", "c.yaml", ".", &scene);
   ASSERT_FALSE(status.ok());
   EXPECT_EQ(status.message(), "c.yaml:2: collision.friction_slip: must be > 0 (got -1)");
+}
+
+// A value a scene may leave unset (std::optional): unset, it is not written and passes the
+// checks; set, even to what the program would use without it, it is written and read back
+// set (a frictionless pair under a frictional collision, a corotational model kept for a
+// nearly incompressible object).
+TEST(SceneFields, UnsetValuesStayUnsetAndSetOnesAreWritten) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene(kBaseLists, "lists.yaml", ".", &scene).ok());
+  EXPECT_FALSE(scene.forward.model.has_value());
+  EXPECT_EQ(scene.forward.Model(), ElasticModelType::kCorotational);
+  ASSERT_EQ(scene.collision.pairs.size(), 1u);
+  ASSERT_EQ(scene.collision.obstacles.size(), 1u);
+  EXPECT_FALSE(scene.collision.pairs[0].friction.has_value());
+  EXPECT_FALSE(scene.collision.obstacles[0].friction.has_value());
+  std::string error;
+  EXPECT_TRUE(CheckFieldRanges(scene.collision.pairs[0], &error)) << error;
+  EXPECT_TRUE(CheckFieldRanges(scene.collision.obstacles[0], &error)) << error;
+  EXPECT_TRUE(scene.forward.IsValid(&error)) << error;
+  std::string yaml = SceneToYaml(scene);
+  EXPECT_EQ(yaml.find("friction"), std::string::npos) << yaml;
+  EXPECT_EQ(yaml.find("forward"), std::string::npos) << yaml;
+
+  scene.collision.friction = 0.5;
+  scene.collision.pairs[0].friction = 0.0;
+  scene.forward.model = ElasticModelType::kCorotational;
+  yaml = SceneToYaml(scene);
+  EXPECT_NE(yaml.find("forward: {model: corotational}"), std::string::npos) << yaml;
+  Scene read;
+  ASSERT_TRUE(ParseScene(yaml, "written.yaml", ".", &read).ok()) << yaml;
+  EXPECT_EQ(read.forward.model, ElasticModelType::kCorotational);
+  EXPECT_EQ(read.collision.friction, 0.5);
+  EXPECT_EQ(read.collision.pairs[0].friction, 0.0);
+  EXPECT_FALSE(read.collision.obstacles[0].friction.has_value());
+
+  // Set out of range, it fails by its name as every other field does.
+  scene.collision.obstacles[0].friction = -1.0;
+  EXPECT_FALSE(CheckFieldRanges(scene.collision.obstacles[0], &error));
+  EXPECT_EQ(error, "collision.obstacles.friction must be >= 0 (got -1)");
+}
+
+// forward.model is read by its row: an unknown name or key fails at its line with the same
+// message as when it was read by hand.
+TEST(SceneFields, ForwardModelMessages) {
+  Scene scene;
+  Status status = ParseScene(std::string(kObject) + "forward: {model: corotatonal}\n", "f.yaml", ".", &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(),
+            "f.yaml:2: forward.model: unknown value 'corotatonal' (did you mean 'corotational'? one of: "
+            "corotational, linear, neo_hookean)");
+  status = ParseScene(std::string(kObject) + "forward: {modle: linear}\n", "f.yaml", ".", &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(), "f.yaml:2: forward.modle: unknown key (did you mean 'model'?)");
+  status = ParseScene(std::string(kObject) + "forward: {zzz: 1}\n", "f.yaml", ".", &scene);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(),
+            "f.yaml:2: forward.zzz: unknown key (allowed: model, max_iterations, load_steps, tolerance, "
+            "absolute_tolerance)");
 }
 
 }  // namespace

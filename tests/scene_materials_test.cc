@@ -178,6 +178,15 @@ TEST(SceneMaterials, NearlyIncompressibleChoosesTheNodalVolume) {
   ASSERT_TRUE(ParseScene(linear, "materials.yaml", ".", &scene).ok());
   EXPECT_TRUE(ChooseForwardElements(&scene).empty());
   EXPECT_FALSE(scene.objects[0].nodal_volume);
+
+  // forward.model: corotational is a choice too, kept and written back.
+  const std::string corotational = soft + "forward: {model: corotational}\n";
+  ASSERT_TRUE(ParseScene(corotational, "materials.yaml", ".", &scene).ok());
+  Scene written;
+  ASSERT_TRUE(ParseScene(SceneToYaml(scene), "written.yaml", ".", &written).ok()) << SceneToYaml(scene);
+  EXPECT_EQ(written.forward.model, ElasticModelType::kCorotational);
+  EXPECT_TRUE(ChooseForwardElements(&written).empty());
+  EXPECT_EQ(written.objects[0].material_model, MaterialModel::kHooke);
 }
 
 // Registration's default is the neo-Hookean element with nu capped in its elastic term (the

@@ -167,7 +167,7 @@ effects: {fracture: false, collision: false}
   EXPECT_EQ(scene.loads[0].object, "rod");
   EXPECT_EQ(scene.loads[0].selection.kind, VertexSelection::Kind::kAll);
 
-  EXPECT_EQ(scene.forward_model, ElasticModelType::kLinear);
+  EXPECT_EQ(scene.forward.model, ElasticModelType::kLinear);
   EXPECT_EQ(scene.forward.max_iterations, 7);
   EXPECT_EQ(scene.forward.load_steps, 3);
   EXPECT_DOUBLE_EQ(scene.forward.relative_tolerance, 1e-6);

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,11 +38,11 @@ struct ObstacleSpec {
   double scale = 1.0;     // applied to the mesh file's coordinates
   std::vector<std::string> objects;  // objects it collides with; empty = all
   std::vector<ObstacleKeyframe> keyframes;  // empty = identity pose
-  double friction = -1.0;  // Coulomb coefficient against it; < 0: CollisionSpec::friction
+  std::optional<double> friction = std::nullopt;  // Coulomb coefficient against it; unset: CollisionSpec::friction
 };
 
 // An obstacle's own values beside its name, geometry (plane, box or mesh), objects and
-// keyframes, which are read and written by hand. A friction left out is < 0.
+// keyframes, which are read and written by hand.
 template <>
 struct OptionFields<ObstacleSpec> {
   static constexpr const char* kSection = "collision.obstacles";
@@ -53,10 +54,10 @@ struct OptionFields<ObstacleSpec> {
   }
 };
 
-// A pair of objects that may touch, with its own friction coefficient (< 0: the collision's).
+// A pair of objects that may touch, with its own friction coefficient (unset: the collision's).
 struct CollisionPair {
   std::string first, second;  // object names
-  double friction = -1.0;
+  std::optional<double> friction = std::nullopt;  // its own coefficient; unset: the collision's
   bool operator==(const CollisionPair& o) const {
     return first == o.first && second == o.second && friction == o.friction;
   }

@@ -81,7 +81,7 @@ Status GenerateFractureSequence(const std::string& scenario, const std::string& 
                                 void (*progress)(int done, int total) = nullptr);
 // A cut scenario ("beam_cut") with its ground truth given: per frame the displacements of the
 // ground truth's mesh (its vertices as created, #V by 3), from the deck below solved by another
-// simulator; `truth_source` names it in the README. Writes the sequence as "<scenario>_calculix".
+// simulator; `truth_source` names it in README.md. Writes the sequence as "<scenario>_calculix".
 Status GenerateFractureSequence(const std::string& scenario, const std::string& dir,
                                 const std::vector<Vertices>& truth, const std::string& truth_source,
                                 void (*progress)(int done, int total) = nullptr);

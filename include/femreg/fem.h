@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -68,6 +69,11 @@ enum class ElasticModelType {
 };
 const char* ToString(ElasticModelType type);
 bool FromString(const std::string& name, ElasticModelType* type);
+template <>
+struct EnumValues<ElasticModelType> {
+  static constexpr std::array<ElasticModelType, 3> kAll = {ElasticModelType::kCorotational, ElasticModelType::kLinear,
+                                                           ElasticModelType::kNeoHookean};
+};
 
 using Matrix6x12 = Eigen::Matrix<double, 6, 12>;
 using Matrix12 = Eigen::Matrix<double, 12, 12>;

@@ -7,7 +7,9 @@
 // provenance all walk the table, so an option is named in its struct and in its table row
 // and nowhere else (docs/dev/adding-an-option.md). A field's type says how it is read and
 // written: bool, an integer, double, Eigen::Vector3d (a list of 3), or an enum with
-// EnumValues (written as ToString's names).
+// EnumValues (written as ToString's names); or std::optional of one of them, a value a scene
+// may leave unset (a pair's own friction, forward.model): unset, it is neither written nor
+// range-checked, and Python and the provenance show it as None / null.
 //
 // The tables sit beside their structs: the registration's in femreg/option_fields.h, the
 // material's in femreg/fem.h, the forward solve's in femreg/forward.h, collision's in
@@ -19,11 +21,25 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
 
 namespace femreg {
+
+// Whether a field's type is std::optional (a value a scene may leave unset), and the type of
+// its value either way.
+template <class T>
+struct FieldType {
+  static constexpr bool kOptional = false;
+  using Value = T;
+};
+template <class T>
+struct FieldType<std::optional<T>> {
+  static constexpr bool kOptional = true;
+  using Value = T;
+};
 
 // One field: its scene key (also the key in provenance and in messages, "weights.elastic"),
 // its Python attribute where that differs, a docstring for Python, and the range IsValid
@@ -152,25 +168,31 @@ template <class Options>
 bool CheckFieldRanges(const Options& o, std::string* error) {
   bool ok = true;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    using T = std::decay_t<decltype(o.*member)>;
+    using Field = std::decay_t<decltype(o.*member)>;
+    using T = typename FieldType<Field>::Value;
+    if (!ok || !f.checked()) return;
+    const T* value = nullptr;
+    if constexpr (FieldType<Field>::kOptional) {
+      if (!(o.*member).has_value()) return;  // unset: nothing to check
+      value = &*(o.*member);
+    } else {
+      value = &(o.*member);
+    }
     if constexpr (std::is_same_v<T, Eigen::Vector3d>) {  // finite only
-      const Eigen::Vector3d& value = o.*member;
-      if (!ok || !f.checked() || value.allFinite()) return;
+      if (value->allFinite()) return;
       ok = false;
       if (error != nullptr) {
         std::ostringstream os;
-        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got [" << value.x() << ", "
-           << value.y() << ", " << value.z() << "])";
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got [" << value->x() << ", "
+           << value->y() << ", " << value->z() << "])";
         *error = os.str();
       }
     } else if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
-      const T value = o.*member;
-      if (!ok || !f.checked() || f.InRange(static_cast<double>(value))) return;
+      if (f.InRange(static_cast<double>(*value))) return;
       ok = false;
       if (error != nullptr) {
         std::ostringstream os;
-        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got "
-           << value << ")";
+        os << FieldName<Options>(f) << " " << f.RangeMessage() << " (got " << *value << ")";
         *error = os.str();
       }
     }

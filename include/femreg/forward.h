@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -76,18 +77,25 @@ struct ForwardOptions {
   // this many during the solve); 0 = OpenMP's current default (omp_get_max_threads).
   int num_threads = 0;
   bool verbose = false;              // one line per iteration on stdout
+  // The element the scene's objects are built with for their forward solves (femreg simulate,
+  // calibrate, synth); SolveQuasiStatic takes the model built, not this. Unset: corotational,
+  // and a nearly incompressible object may get the neo-Hookean element instead
+  // (ChooseForwardElements in femreg/scene.h); set, even to corotational, every object keeps it.
+  std::optional<ElasticModelType> model = std::nullopt;
+  ElasticModelType Model() const { return model.value_or(ElasticModelType::kCorotational); }
   bool IsValid(std::string* error) const;
 };
 
-// The scene's `forward:` keys (`model` is the Scene's, not an option of the solve). The
-// other members are the program's (femreg simulate's flags, the tools'), checked by IsValid
-// by hand.
+// The scene's `forward:` keys. The other members are the program's (femreg simulate's flags,
+// the tools'), checked by IsValid by hand.
 template <>
 struct OptionFields<ForwardOptions> {
   static constexpr const char* kSection = "forward";
   template <class Visitor>
   static void Visit(Visitor&& v) {
     using S = ForwardOptions;
+    v(&S::model, FieldInfo("model").Doc("corotational, linear or neo_hookean; None: corotational, and the "
+                                         "neo-Hookean element for nearly incompressible objects"));
     v(&S::max_iterations, FieldInfo("max_iterations").AtLeast(1).Doc("Newton iterations per load step"));
     v(&S::load_steps, FieldInfo("load_steps").AtLeast(1).Doc("loads and prescribed displacements applied in steps"));
     v(&S::relative_tolerance, FieldInfo("tolerance")

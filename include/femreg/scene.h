@@ -322,9 +322,7 @@ struct Scene {
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  // m/s^2
   std::vector<BoundaryConditionSpec> boundary_conditions;
   std::vector<LoadSpec> loads;
-  ForwardOptions forward;
-  ElasticModelType forward_model = ElasticModelType::kCorotational;
-  bool forward_model_chosen = false;  // forward.model was written
+  ForwardOptions forward;  // forward: (with the objects' element, forward.model)
   RegistrationOptions registration;
   std::vector<AnchorSpec> anchors;
   std::vector<ForceRegionSpec> force_regions;  // registration.forces.region; empty: every free surface vertex

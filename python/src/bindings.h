@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -65,14 +66,38 @@ void EnumProperty(Class& cls, const char* name, Enum Struct::*field, std::string
       doc);
 }
 
+// Binds an optional enum field (a value a scene may leave unset) as a string property that
+// is None when unset and takes None to unset it.
+template <typename Class, typename Struct, typename Enum>
+void OptionalEnumProperty(Class& cls, const char* name, std::optional<Enum> Struct::*field,
+                          std::string qualified, const char* doc) {
+  cls.def_property(
+      name,
+      [field](const Struct& s) -> py::object {
+        return (s.*field).has_value() ? py::object(py::str(ToString(*(s.*field)))) : py::object(py::none());
+      },
+      [field, qualified](Struct& s, const py::object& v) {
+        if (v.is_none()) {
+          s.*field = std::nullopt;
+        } else {
+          s.*field = EnumFromString<Enum>(v.cast<std::string>(), qualified);
+        }
+      },
+      doc);
+}
+
 // Binds every field of an options table (femreg/option_fields.h) under its Python name:
-// flags and numbers as attributes, enums as string properties ("data.loss" in messages).
+// flags and numbers as attributes, enums as string properties ("data.loss" in messages), a
+// value the scene may leave unset (std::optional) as None when it is.
 template <typename Class>
 void DefFields(Class& cls) {
   using Options = typename Class::type;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    using T = std::decay_t<decltype(std::declval<Options&>().*member)>;
-    if constexpr (std::is_enum_v<T>) {
+    using Field = std::decay_t<decltype(std::declval<Options&>().*member)>;
+    using T = typename FieldType<Field>::Value;
+    if constexpr (std::is_enum_v<T> && FieldType<Field>::kOptional) {
+      OptionalEnumProperty(cls, f.python_name(), member, FieldName<Options>(f), f.doc);
+    } else if constexpr (std::is_enum_v<T>) {
       EnumProperty(cls, f.python_name(), member, FieldName<Options>(f), f.doc);
     } else {
       cls.def_readwrite(f.python_name(), member, f.doc);
@@ -80,10 +105,13 @@ void DefFields(Class& cls) {
   });
 }
 
-// A field's value as Python shows it: an enum by its name, a Vector3d as a list of floats.
+// A field's value as Python shows it: an enum by its name, a Vector3d as a list of floats, an
+// unset optional as None.
 template <typename T>
 py::object FieldObject(const T& value) {
-  if constexpr (std::is_enum_v<T>) {
+  if constexpr (FieldType<T>::kOptional) {
+    return value.has_value() ? FieldObject(*value) : py::object(py::none());
+  } else if constexpr (std::is_enum_v<T>) {
     return py::str(ToString(value));
   } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
     return py::cast(std::vector<double>{value.x(), value.y(), value.z()});
@@ -141,12 +169,17 @@ void DefFieldsInit(Class& cls, const char* name,
                 value = kwargs[f.python_name()];
               }
               if (!value) return;
-              using T = std::decay_t<decltype(o.*member)>;
+              using Field = std::decay_t<decltype(o.*member)>;
+              using T = typename FieldType<Field>::Value;
               if constexpr (std::is_enum_v<T>) {
-                o.*member = EnumFromString<T>(value.template cast<std::string>(), FieldName<Options>(f));
-              } else {
+                if (FieldType<Field>::kOptional && value.is_none()) {
+                  o.*member = Field();  // None: unset
+                } else {
+                  o.*member = EnumFromString<T>(value.template cast<std::string>(), FieldName<Options>(f));
+                }
+              } else {  // an optional takes None
                 try {
-                  o.*member = value.template cast<T>();
+                  o.*member = value.template cast<Field>();
                 } catch (const py::cast_error&) {
                   throw py::type_error(type + "(): " + f.python_name() + ": cannot take " +
                                        py::repr(value).template cast<std::string>());

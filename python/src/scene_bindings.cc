@@ -151,10 +151,8 @@ void BindSimulate(py::module_& m) {
         [](const Scene& scene, const py::object& object, const std::string& model,
            int load_steps, int max_iterations, const std::string& tangent, int threads) {
           const int index = ObjectIndex(scene, object);
-          ElasticModelType model_type = scene.forward_model;
-          if (!model.empty() && !FromString(model, &model_type)) {
-            throw py::value_error("model: use corotational or linear (got '" + model + "')");
-          }
+          const ElasticModelType model_type =
+              model.empty() ? scene.forward.Model() : EnumFromString<ElasticModelType>(model, "model");
           ForwardOptions forward = scene.forward;
           if (load_steps > 0) forward.load_steps = load_steps;
           if (max_iterations > 0) forward.max_iterations = max_iterations;

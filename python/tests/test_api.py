@@ -57,6 +57,22 @@ def test_scene_sections_follow_their_tables():
     assert repr(femreg.Material()) == "Material(youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0)"
 
 
+def test_forward_model_is_unset_until_a_scene_or_caller_sets_it():
+    # forward.model is a row of ForwardOptions' table: None until set (the corotational
+    # element, and the neo-Hookean one for a nearly incompressible object); set, even to
+    # corotational, it is written and read back; None unsets it again.
+    scene = femreg.parse_scene("objects: [{generate: {shape: box, size: [1, 0.1, 0.1], cells: [4, 1, 1]}}]\n")
+    assert scene.forward.model is None and femreg.ForwardOptions().model is None
+    assert "model" not in scene.to_yaml()
+    scene.forward.model = "corotational"
+    assert "forward: {model: corotational}" in scene.to_yaml()
+    assert femreg.parse_scene(scene.to_yaml()).forward.model == "corotational"
+    with pytest.raises(ValueError, match="forward.model: unknown value 'hooke'"):
+        scene.forward.model = "hooke"
+    scene.forward.model = None
+    assert "model" not in scene.to_yaml()
+
+
 def test_material_and_synth_body_take_their_tables_fields():
     # Their constructors' keywords are their tables' rows: each defaults to the struct's
     # value, an unknown one raises TypeError naming the accepted ones, a bad value ValueError.

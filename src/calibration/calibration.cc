@@ -80,7 +80,7 @@ class Search {
     const Scene s = ApplyCalibration(scene_, options_, value);
     const ObjectSpec& spec = s.objects[options_.object];
     ElasticModel model;
-    model.Build(mesh_, s.forward_model, spec.Materials());
+    model.Build(mesh_, s.forward.Model(), spec.Materials());
     TetMesh mesh = mesh_;
     ForwardOptions forward = s.forward;
     forward.verbose = false;
@@ -335,7 +335,7 @@ Status SolveSceneObject(const Scene& given, int object, TetMesh* mesh, ForwardSu
   if (!status.ok()) return status;
   const ObjectSpec& spec = scene.objects[object];
   ElasticModel model;
-  model.Build(*mesh, scene.forward_model, spec.Materials());
+  model.Build(*mesh, scene.forward.Model(), spec.Materials());
   ForwardSummary summary;
   status = SolveQuasiStatic(problem, scene.forward, &model, mesh, &summary);
   if (out) *out = summary;

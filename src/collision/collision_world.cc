@@ -55,16 +55,16 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
   }
   std::sort(pairs_.begin(), pairs_.end());
   pairs_.erase(std::unique(pairs_.begin(), pairs_.end()), pairs_.end());
-  // Friction per pair where the spec gives one (a coefficient < 0 falls back to the default).
+  // Friction per pair where the spec gives one (an unset one falls back to the default).
   pair_friction_.clear();
   has_friction_ = spec.friction > 0;
   for (const CollisionPair& p : spec.pairs) {
     int a = -1, b = -1;
-    if (p.friction < 0 || !find(p.first, &a) || !find(p.second, &b)) continue;
-    pair_friction_.push_back({{std::min(a, b), std::max(a, b)}, p.friction});
-    has_friction_ = has_friction_ || p.friction > 0;
+    if (!p.friction || !find(p.first, &a) || !find(p.second, &b)) continue;
+    pair_friction_.push_back({{std::min(a, b), std::max(a, b)}, *p.friction});
+    has_friction_ = has_friction_ || *p.friction > 0;
   }
-  for (const ObstacleSpec& os : spec.obstacles) has_friction_ = has_friction_ || os.friction > 0;
+  for (const ObstacleSpec& os : spec.obstacles) has_friction_ = has_friction_ || os.friction.value_or(0.0) > 0;
 
   obstacles_.clear();
   for (const ObstacleSpec& os : spec.obstacles) {

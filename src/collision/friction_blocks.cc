@@ -11,7 +11,7 @@ namespace femreg {
 double CollisionWorld::Friction(const Contact& c) const {
   if (c.obstacle()) {
     const size_t i = static_cast<size_t>(-1 - c.object_b);
-    if (i < obstacles_.size() && obstacles_[i].spec.friction >= 0) return obstacles_[i].spec.friction;
+    if (i < obstacles_.size()) return obstacles_[i].spec.friction.value_or(spec_.friction);
     return spec_.friction;
   }
   const std::pair<int, int> key(std::min(c.object_a, c.object_b), std::max(c.object_a, c.object_b));

@@ -1,5 +1,5 @@
 // What the fracture sequence generator's files share (fracture_sequences.cc: the ground
-// truth's simulation, the frames and the README; fracture_scenarios.cc: each scenario's
+// truth's simulation, the frames and the README.md; fracture_scenarios.cc: each scenario's
 // settings and its tracking scene).
 #ifndef FEMREG_DATASETS_FRACTURE_SCENARIOS_H_
 #define FEMREG_DATASETS_FRACTURE_SCENARIOS_H_

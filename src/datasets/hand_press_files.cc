@@ -1,5 +1,5 @@
 // The hand_press dataset's fixed parts (hand_press_internal.h): the ball's material, the
-// camera, and the files written beside the frames (the tracking scene, the README).
+// camera, and the files written beside the frames (the tracking scene, README.md).
 #include <cstdio>
 #include <sstream>
 #include <string>

@@ -227,7 +227,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   ElasticModel model;
   ObjectMaterial truth_material = truth_object.Materials();
   truth_material.material = s.material;
-  model.Build(fine, scene.forward_model, truth_material);
+  model.Build(fine, scene.forward.Model(), truth_material);
 
   // Static boundary conditions and loads of the scene, on the ground truth mesh.
   ForwardProblem base;
@@ -463,7 +463,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
      << "% of the vertices).\n"
      << "- `truth/frame_NNNN.vtu`: the ground truth mesh's surface per frame (for "
      << "`femreg eval`).\n\n"
-     << "The ground truth is a quasi-static " << ToString(scene.forward_model) << " FEM "
+     << "The ground truth is a quasi-static " << ToString(scene.forward.Model()) << " FEM "
      << "simulation on ";
   if (s.sanity_check) {
     md << "the tracked mesh itself";

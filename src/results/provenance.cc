@@ -25,21 +25,27 @@ std::string Absolute(const std::string& path) {
   return ec ? path : p.lexically_normal().string();
 }
 
+// A field's value: an enum by name, a vector as a list, an unset optional as null.
+template <class T>
+json FieldJson(const T& value) {
+  if constexpr (FieldType<T>::kOptional) {
+    return value.has_value() ? FieldJson(*value) : json(nullptr);
+  } else if constexpr (std::is_enum_v<T>) {
+    return ToString(value);
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    return Vector(value);
+  } else {
+    return value;
+  }
+}
+
 // Every field of an options table (femreg/option_fields.h) by its scene key (a grouped one
-// by its Python name, "outlier_neighbors": one flat object per section); enums by name.
+// by its Python name, "outlier_neighbors": one flat object per section).
 template <class Options>
 json FieldsJson(const Options& o) {
   json j = json::object();
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    using T = std::decay_t<decltype(o.*member)>;
-    const char* key = f.group != nullptr ? f.python_name() : f.key;
-    if constexpr (std::is_enum_v<T>) {
-      j[key] = ToString(o.*member);
-    } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-      j[key] = Vector(o.*member);
-    } else {
-      j[key] = o.*member;
-    }
+    j[f.group != nullptr ? f.python_name() : f.key] = FieldJson(o.*member);
   });
   return j;
 }

@@ -107,13 +107,8 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
                        {"elastic_poisson_ratio", number(chosen.objects[i].material.poisson_ratio)}});
   }
   j["objects"] = objects;
-  j["solver"] = {{"backend", ToString(o.solver.backend)},
-                 {"max_outer_iterations", o.solver.max_outer_iterations},
-                 {"max_inner_iterations", o.solver.max_inner_iterations},
-                 {"linear_solver", ToString(o.solver.linear_solver)},
-                 {"trust_region", ToString(o.solver.trust_region)},
-                 {"preconditioner", ToString(o.solver.preconditioner)},
-                 {"threads", o.solver.num_threads}};
+  // The solver's options by their table (the same keys as provenance.options.solver).
+  j["solver"] = results_internal::RegistrationOptionsJson(o)["solver"];
   // How the first frame was posed (registration.initial_pose; FrameSummary::initial_pose).
   if (!rows.empty()) {
     const FrameSummary& first = rows.front().summary;

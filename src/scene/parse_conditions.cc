@@ -47,15 +47,8 @@ void SceneParser::ParseLoads(const YamlValue& list) {
 }
 
 void SceneParser::ParseForward(const YamlValue& v) {
-  v.CheckKeys(FieldKeys<ForwardOptions>({}, {"model"}));
-  if (v.Has("model")) {
-    scene_->forward_model_chosen = true;
-    scene_->forward_model =
-        ParseEnum(v["model"], std::vector<ElasticModelType>{ElasticModelType::kCorotational,
-                                                            ElasticModelType::kLinear,
-                                                            ElasticModelType::kNeoHookean});
-  }
-  ParseFields(v, &scene_->forward, /*check=*/true);  // the solve's limits (femreg/forward.h)
+  v.CheckKeys(FieldKeys<ForwardOptions>());
+  ParseFields(v, &scene_->forward, /*check=*/true);  // the model and the solve's limits (femreg/forward.h)
 }
 
 void SceneParser::ParseForceRegion(const YamlValue& v) {

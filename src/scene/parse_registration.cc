@@ -31,11 +31,16 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     r.camera.enabled = true;
     if (c.Has("intrinsics")) {
       // An Open3D PinholeCameraIntrinsic JSON, relative to the scene's folder; instead of
-      // the keys it sets, never beside them (which would win is a guess).
-      for (const char* key : {"fx", "fy", "cx", "cy", "width", "height"}) {
-        if (c.Has(key)) {
-          c[key].Fail(std::string("given beside camera.intrinsics, which sets it: give the "
-                                  "intrinsics either in the file or as fx, fy, cx, cy, width, height"));
+      // the rows it sets, never beside them (which would win is a guess).
+      const FieldInfo set_by_file[] = {FieldOf(&CameraOptions::fx), FieldOf(&CameraOptions::fy),
+                                       FieldOf(&CameraOptions::cx), FieldOf(&CameraOptions::cy),
+                                       FieldOf(&CameraOptions::width), FieldOf(&CameraOptions::height)};
+      std::string keys;
+      for (const FieldInfo& f : set_by_file) keys += (keys.empty() ? "" : ", ") + std::string(f.key);
+      for (const FieldInfo& f : set_by_file) {
+        if (c.Has(f.key)) {
+          c[f.key].Fail("given beside camera.intrinsics, which sets it: give the intrinsics either in the file or as " +
+                        keys);
         }
       }
       const YamlValue file = c["intrinsics"];
@@ -61,9 +66,13 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       r.preprocess.mask_dir = path.lexically_normal().string();
     }
     // A scene crops by giving the box, and removes a plane by giving its distance.
-    if (p.Has("crop") && (!p["crop"].Has("min") || !p["crop"].Has("max"))) p["crop"].Fail("needs 'min' and 'max'");
-    if (p.Has("plane") && !p["plane"].Has("distance")) p["plane"].Fail("needs 'distance' (m)");
-    r.preprocess.crop = p.Has("crop");
+    const std::string crop = FieldOf(&PreprocessOptions::crop_min).group;
+    const std::string plane = FieldOf(&PreprocessOptions::plane_distance).group;
+    if (p.Has(crop) && (!HasField(p, &PreprocessOptions::crop_min) || !HasField(p, &PreprocessOptions::crop_max))) {
+      p[crop].Fail("needs 'min' and 'max'");
+    }
+    if (p.Has(plane) && !HasField(p, &PreprocessOptions::plane_distance)) p[plane].Fail("needs 'distance' (m)");
+    r.preprocess.crop = p.Has(crop);
     ParseFields(p, &r.preprocess);
   }
   if (v.Has("data")) {
@@ -71,7 +80,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     d.CheckKeys(FieldKeys<DataTermOptions>());
     DataTermOptions& o = r.data;
     ParseFields(d, &o);
-    if (!d.Has("auto_visibility") && d.Has("visibility") && !o.visibility) {
+    if (!HasField(d, &DataTermOptions::auto_visibility) && HasField(d, &DataTermOptions::visibility) && !o.visibility) {
       // `visibility: false` written out means every surface vertex pulls: without this, a
       // scene with a camera would still get the camera's test from auto_visibility.
       o.auto_visibility = false;
@@ -80,25 +89,31 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
     w.CheckKeys(FieldKeys<WeightOptions>());
-    if (w.Has("data") && w.Has("data_per_area")) {
-      w["data"].Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
-                     "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
+    const bool per_correspondence = HasField(w, &WeightOptions::data);
+    const bool per_area = HasField(w, &WeightOptions::data_per_area);
+    if (per_correspondence && per_area) {
+      FieldValue(w, &WeightOptions::data)
+          .Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
+                "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
     }
     ParseFields(w, &r.weights);
-    if (w.Has("data") && !(r.weights.data >= 0)) w["data"].Fail("must be >= 0 (N/m per correspondence)");
-    if (w.Has("data_per_area")) r.weights.data = -1.0;  // per unit area instead of per correspondence
+    if (per_correspondence && !(r.weights.data >= 0)) {
+      FieldValue(w, &WeightOptions::data).Fail("must be >= 0 (N/m per correspondence)");
+    }
+    if (per_area) r.weights.data = -1.0;  // per unit area instead of per correspondence
   }
   if (v.Has("solver")) {
     const YamlValue s = v["solver"];
     s.CheckKeys(FieldKeys<SolverOptions>());
     SolverOptions& o = r.solver;
     ParseFields(s, &o);
-    if (!s.Has("backend") && (s.Has("trust_region") || s.Has("linear_solver"))) {
+    const FieldInfo ceres_only[] = {FieldOf(&SolverOptions::trust_region), FieldOf(&SolverOptions::linear_solver)};
+    if (!HasField(s, &SolverOptions::backend) && (s.Has(ceres_only[0].key) || s.Has(ceres_only[1].key))) {
       o.backend = SolverBackend::kCeres;  // only Ceres has them: applied, not ignored
     }
     if (o.backend == SolverBackend::kFast) {
-      for (const char* key : {"trust_region", "linear_solver"}) {
-        if (s.Has(key)) s[key].Fail("is a setting of the Ceres back end (solver.backend: ceres); the fast back end has none");
+      for (const FieldInfo& f : ceres_only) {
+        if (s.Has(f.key)) s[f.key].Fail("is a setting of the Ceres back end (solver.backend: ceres); the fast back end has none");
       }
     }
   }

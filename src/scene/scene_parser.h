@@ -81,7 +81,11 @@ std::vector<std::string> GroupKeys(const std::string& group, const std::vector<s
 // there ("must be >= 1 (got 0)").
 template <class T>
 void ReadField(const YamlValue& x, const FieldInfo& f, bool check, T* field) {
-  if constexpr (std::is_same_v<T, bool>) {
+  if constexpr (FieldType<T>::kOptional) {  // a value the scene may leave unset: set here
+    typename FieldType<T>::Value value{};
+    ReadField(x, f, check, &value);
+    *field = value;
+  } else if constexpr (std::is_same_v<T, bool>) {
     *field = x.AsBool();
   } else if constexpr (std::is_integral_v<T>) {  // int, a seed's unsigned
     const int value = x.AsInt();
@@ -94,7 +98,7 @@ void ReadField(const YamlValue& x, const FieldInfo& f, bool check, T* field) {
   } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
     *field = x.AsVector3();
   } else {
-    static_assert(std::is_enum_v<T>, "an options table holds bool, integers, double, Vector3d and enums");
+    static_assert(std::is_enum_v<T>, "an options table holds bool, integers, double, Vector3d, enums and their optionals");
     *field = ParseEnum<T>(x);
   }
 }

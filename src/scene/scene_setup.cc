@@ -237,7 +237,7 @@ Status CopyMaterials(const Scene& from, Scene* scene) {
 
 std::vector<std::string> ChooseForwardElements(Scene* scene) {
   std::vector<std::string> lines;
-  if (scene->forward_model_chosen) return lines;
+  if (scene->forward.model) return lines;  // forward.model chosen: every object keeps it
   for (ObjectSpec& o : scene->objects) {
     if (o.element_chosen) continue;
     double nu = o.material.poisson_ratio;

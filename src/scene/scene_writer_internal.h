@@ -93,17 +93,20 @@ inline void Put(YAML::Node map, const char* key, const Eigen::Vector3d& value,
          const Eigen::Vector3d& default_value) {
   if (value != default_value) map[key] = Vec(value);
 }
-// A field's value as the scene file writes it.
+// A field's value as the scene file writes it (an optional's value: PutFields writes no
+// unset one).
 template <class T>
 YAML::Node FieldNode(const T& value) {
-  if constexpr (std::is_enum_v<T>) {
+  if constexpr (FieldType<T>::kOptional) {
+    return FieldNode(*value);
+  } else if constexpr (std::is_enum_v<T>) {
     return YAML::Node(ToString(value));
   } else if constexpr (std::is_same_v<T, double>) {
     return YAML::Node(Number(value));
   } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
     return Vec(value);
   } else {
-    static_assert(std::is_integral_v<T>, "an options table holds bool, integers, double, Vector3d and enums");
+    static_assert(std::is_integral_v<T>, "an options table holds bool, integers, double, Vector3d, enums and their optionals");
     return YAML::Node(value);
   }
 }
@@ -119,6 +122,7 @@ enum class Rows { kAll, kBefore, kAfter };
 // fields that differ and those the group needs (FieldInfo::required: a plane's distance).
 // A group with a switch (FieldInfo::switch_of_group) is written in full when the switch is
 // on, and not at all when it is off.
+// An optional field (FieldType) is written when it is set, and never when it is not.
 // `skip` names fields by their path in the section ("crop.min").
 template <class Options>
 void PutFields(YAML::Node map, const Options& value, const std::vector<std::string>& skip = {},
@@ -137,6 +141,9 @@ void PutFields(YAML::Node map, const Options& value, const std::vector<std::stri
     if ((rows == Rows::kBefore && f.after) || (rows == Rows::kAfter && !f.after)) return;
     for (const std::string& key : skip) {
       if (key == f.path()) return;
+    }
+    if constexpr (FieldType<std::decay_t<decltype(value.*member)>>::kOptional) {
+      if (!(value.*member).has_value()) return;  // unset: the file leaves the key out
     }
     if (f.switch_of_group) {
       if (in(on_groups, f.key)) map[f.key] = FlowMap();

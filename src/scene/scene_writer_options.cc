@@ -13,10 +13,7 @@ namespace scene_writer {
 
 YAML::Node ForwardNode(const Scene& scene) {
   YAML::Node n = FlowMap();
-  if (scene.forward_model != ElasticModelType::kCorotational || scene.forward_model_chosen) {
-    n["model"] = ToString(scene.forward_model);
-  }
-  PutFields(n, scene.forward);  // femreg/forward.h's table
+  PutFields(n, scene.forward);  // femreg/forward.h's table; a model set is written, even corotational
   return n;
 }
 
@@ -33,12 +30,13 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   const PreprocessOptions& p = r.preprocess;
   YAML::Node preprocess = FlowMap();
   if (!p.mask_dir.empty()) preprocess["mask_dir"] = FilePath(p.mask_dir, base_dir);
-  PutFields(preprocess, p, {"crop.min", "crop.max"});
+  const FieldInfo crop_min = FieldOf(&PreprocessOptions::crop_min), crop_max = FieldOf(&PreprocessOptions::crop_max);
+  PutFields(preprocess, p, {crop_min.path(), crop_max.path()});
   if (p.crop) {  // the group is the switch
     YAML::Node crop = FlowMap();
-    crop["min"] = Vec(p.crop_min);
-    crop["max"] = Vec(p.crop_max);
-    preprocess["crop"] = crop;
+    crop[crop_min.key] = Vec(p.crop_min);
+    crop[crop_max.key] = Vec(p.crop_max);
+    preprocess[crop_min.group] = crop;
   }
   PutMap(n, "preprocess", preprocess);
 
@@ -49,14 +47,15 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   YAML::Node weights = FlowMap();
   // Which of the two is written also selects the weighting: written whenever the weighting
   // differs from the default's, else only when its value does.
+  const FieldInfo per_correspondence = FieldOf(&WeightOptions::data), per_area = FieldOf(&WeightOptions::data_per_area);
   if (r.weights.data < 0) {
     if (d.weights.data >= 0 || r.weights.data_per_area != d.weights.data_per_area) {
-      weights["data_per_area"] = Number(r.weights.data_per_area);
+      weights[per_area.key] = Number(r.weights.data_per_area);
     }
   } else if (d.weights.data < 0 || r.weights.data != d.weights.data) {
-    weights["data"] = Number(r.weights.data);
+    weights[per_correspondence.key] = Number(r.weights.data);
   }
-  PutFields(weights, r.weights, {"data", "data_per_area"});
+  PutFields(weights, r.weights, {per_correspondence.path(), per_area.path()});
   PutMap(n, "weights", weights);
 
   YAML::Node forces = FlowMap();
@@ -79,7 +78,9 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
 
   YAML::Node solver = FlowMap();
   std::vector<std::string> skip;  // Ceres' own settings: refused beside backend: fast
-  if (r.solver.backend != SolverBackend::kCeres) skip = {"trust_region", "linear_solver"};
+  if (r.solver.backend != SolverBackend::kCeres) {
+    skip = {FieldOf(&SolverOptions::trust_region).path(), FieldOf(&SolverOptions::linear_solver).path()};
+  }
   PutFields(solver, r.solver, skip);
   PutMap(n, "solver", solver);
   return n;

@@ -271,7 +271,7 @@ void RunSimulate(const SimulateOptions& options) {
                 names + ")");
   }
 
-  ElasticModelType model_type = scene.forward_model;
+  ElasticModelType model_type = scene.forward.Model();
   if (!options.model.empty() && !FromString(options.model, &model_type)) {
     return Fail("--model " + options.model + ": use corotational, linear or neo_hookean");
   }
