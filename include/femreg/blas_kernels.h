@@ -16,11 +16,14 @@ namespace femreg {
 // BLAS is not OpenBLAS.
 std::string BlasCoreName();
 
+// The file of the loaded OpenBLAS ("" when the BLAS is not OpenBLAS).
+std::string BlasLibraryPath();
+
 // OpenBLAS's name for the best kernels this CPU and operating system support ("SkylakeX" with
 // AVX-512, "Haswell" with AVX2 and FMA, "Sandybridge" with AVX), where the loaded OpenBLAS
-// chose slower ones and has them built in. nullptr where there is nothing to gain: another
-// BLAS, kernels already as good, a choice this function does not know (left as it is), or
-// OPENBLAS_CORETYPE set by the user.
+// took its generic (SSE3 or older) kernels and has those built in. nullptr otherwise: another
+// BLAS, kernels OpenBLAS chose for the CPU (left as they are), or OPENBLAS_CORETYPE set by the
+// user.
 const char* BetterBlasCoreType();
 
 // Switches the loaded OpenBLAS to BetterBlasCoreType()'s kernels, in this process, and

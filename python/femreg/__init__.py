@@ -27,18 +27,20 @@ import os as _os
 _os.environ.setdefault("OMP_WAIT_POLICY", "passive")
 
 
-def _openblas_loaded():
+def _mapped_files():
+    """The files mapped into this process (None where /proc cannot tell)."""
     try:
         with open("/proc/self/maps") as maps:
-            return "openblas" in maps.read()
+            return {line.split(None, 5)[5].strip() for line in maps if len(line.split(None, 5)) == 6}
     except OSError:
-        return True  # unknown: as if another module used it already
+        return None
 
 
-# OpenBLAS takes slow generic kernels on a CPU newer than itself. femreg switches it to this
-# CPU's kernels when its own import loaded OpenBLAS (nothing else can be using it then), and
-# when the user did not choose (OPENBLAS_CORETYPE; docs/guide/busy-machines.md).
-_switch_blas = "OPENBLAS_CORETYPE" not in _os.environ and not _openblas_loaded()
+# OpenBLAS takes slow generic kernels on a CPU newer than itself. femreg switches the OpenBLAS
+# it uses to this CPU's kernels when its own import loaded that library (nothing else can be
+# using it then; numpy's wheels bring copies of their own), and when the user did not choose
+# (OPENBLAS_CORETYPE; docs/guide/busy-machines.md).
+_mapped_before = _mapped_files() if "OPENBLAS_CORETYPE" not in _os.environ else None
 
 from ._femreg import (  # noqa: E402,F401  (the public API)
     __version__,
@@ -89,5 +91,16 @@ from ._femreg import (  # noqa: E402,F401  (the public API)
     use_better_blas_kernels,
 )
 
-if _switch_blas:
+from ._femreg import _blas_library  # noqa: E402
+
+
+def _loaded_by_this_import(path):
+    if not path or _mapped_before is None:
+        return False
+    real = _os.path.realpath(path)
+    return not any(f == path or _os.path.realpath(f) == real for f in _mapped_before if f.startswith("/"))
+
+
+if _loaded_by_this_import(_blas_library()):
     use_better_blas_kernels()
+del _mapped_before

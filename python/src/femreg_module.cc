@@ -20,9 +20,10 @@ PYBIND11_MODULE(_femreg, m) {
   m.attr("__version__") = femreg::Version();
 
   // The BLAS kernels in use, and the switch to this CPU's best where OpenBLAS did not know it
-  // (femreg/blas_kernels.h); __init__.py switches by itself only if femreg's import loaded OpenBLAS.
+  // (femreg/blas_kernels.h); __init__.py switches by itself only if femreg's import loaded that OpenBLAS.
   m.def("blas_kernels", &BlasCoreName,
         "The kernels of the loaded OpenBLAS ('SkylakeX', 'Haswell', ...; '' for another BLAS).");
+  m.def("_blas_library", &BlasLibraryPath);
   m.def("use_better_blas_kernels", &UseBetterBlasKernels,
         "Switches OpenBLAS to this CPU's best kernels where it took slower ones (a CPU newer than "
         "the OpenBLAS) and OPENBLAS_CORETYPE is unset; returns the kernels in use. Only safe "

@@ -64,8 +64,10 @@ const char* BetterBlasCoreType() {
   if (std::getenv("OPENBLAS_CORETYPE") != nullptr) return nullptr;
   const std::string current = BlasCoreName();
   if (current.empty()) return nullptr;
+  // Only OpenBLAS's generic kernels are replaced: kernels it chose for an instruction set of
+  // their own are its tuned choice (a Zen, a Sandy Bridge), left as they are.
   const int have = KernelLevel(current.c_str());
-  if (have < 0) return nullptr;
+  if (have != 0) return nullptr;
   // OpenBLAS's names for its kernels and the symbols of their tables (present only where the
   // library was built with them).
   struct Kernels {
@@ -82,6 +84,15 @@ const char* BetterBlasCoreType() {
     if (k.level <= cpu && dlsym(RTLD_DEFAULT, k.table) != nullptr) return k.name;
   }
   return nullptr;
+}
+
+std::string BlasLibraryPath() {
+  const CoreName name = OpenBlasCoreName();
+  Dl_info info;
+  if (name == nullptr || dladdr(reinterpret_cast<void*>(name), &info) == 0 || info.dli_fname == nullptr) {
+    return "";
+  }
+  return info.dli_fname;
 }
 
 std::string UseBetterBlasKernels() {

@@ -117,9 +117,15 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     const bool hit = std::isfinite(model_z);
     on_model += hit;
     if (!(z < model_z - grow)) continue;
-    const double d = std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
-                                       : surface.Closest(points.row(i)))
-                                   .squared_distance);
+    double d = std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
+                                 : surface.Closest(points.row(i)))
+                             .squared_distance);
+    // A walk from the nearest subsample vertex can stop on a thin part's far side: its distance
+    // exceeds the true one by at most the subsample's spacing (under a mesh edge), so a point
+    // within that of the limit is searched in full.
+    if (seeded && d > grow && d <= grow + state.mean_edge_length) {
+      d = std::sqrt(surface.Closest(points.row(i)).squared_distance);
+    }
     if (d <= grow) continue;
     off[static_cast<size_t>(i)] = 1;
     if (hit && z < model_z - margin && d > margin) {
