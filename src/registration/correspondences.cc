@@ -304,6 +304,8 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
         // Behind an occluder the camera did not see the vertex: a point beyond its ring on a
         // face turned away from its normal is the surface beside the occluder's shadow, across
         // an edge, whose plane pulls a hidden corner across (docs/notes/2026-11-30-artefacts.md).
+        // Also from a held set, as the occluders' own marks: a vertex that moves behind the
+        // occluder lets go. Needs the vertex normals (a view or point-to-plane).
         ++counts->trimmed;
         continue;
       }
