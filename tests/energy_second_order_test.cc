@@ -168,6 +168,20 @@ TEST(ElasticElement, SmallStrainSecondOrderIsK) {
 
 // The assembler's exact Hessian and gradient of a problem are the sum of its blocks' (placed
 // densely), the same on one and two threads; a pair outside the pattern is refused.
+// A 4-vertex block's linearization added into a dense sum: its gradient into `gradient`, its
+// Hessian blocks as triplets.
+template <class Lin>
+void AddToDenseSum(const std::array<int, 4>& vertices, const Lin& lin, Eigen::VectorXd* gradient,
+                   std::vector<Eigen::Triplet<double>>* entries) {
+  for (int i = 0; i < 4; ++i) {
+    gradient->segment<3>(3 * vertices[i]) += lin.gradient[i];
+    for (int j = 0; j < 4; ++j)
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+          entries->emplace_back(3 * vertices[i] + r, 3 * vertices[j] + c, lin.hessian[i * 4 + j](r, c));
+  }
+}
+
 TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
   std::mt19937 rng(41);
   std::vector<std::unique_ptr<Sample<energy::ElasticElement>>> elements;
@@ -193,13 +207,7 @@ TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
   for (const auto& b : set.blocks()) {
     energy::Linearization<energy::ElasticElement> lin;
     ASSERT_TRUE(energy::LinearizeSecondOrder(b, set.loss(), x, energy::Curvature::kExact, &lin));
-    for (int i = 0; i < 4; ++i) {
-      gradient.segment<3>(3 * b.vertices[i]) += lin.gradient[i];
-      for (int j = 0; j < 4; ++j)
-        for (int c = 0; c < 3; ++c)
-          for (int r = 0; r < 3; ++r)
-            entries.emplace_back(3 * b.vertices[i] + r, 3 * b.vertices[j] + c, lin.hessian[i * 4 + j](r, c));
-    }
+    AddToDenseSum(b.vertices, lin, &gradient, &entries);
   }
   Eigen::SparseMatrix<double> sum(12 * count, 12 * count);
   sum.setFromTriplets(entries.begin(), entries.end());
@@ -256,13 +264,7 @@ TEST(Assembler, FourVertexStencilsMetAgainScatterWhereTheirVerticesAre) {
     for (const auto& b : data.blocks()) {
       energy::Linearization<energy::PointToPlane<4>> lin;
       EXPECT_TRUE(energy::Linearize(b, data.loss(), x, &lin));
-      for (int i = 0; i < 4; ++i) {
-        gradient->segment<3>(3 * b.vertices[i]) += lin.gradient[i];
-        for (int j = 0; j < 4; ++j)
-          for (int c = 0; c < 3; ++c)
-            for (int r = 0; r < 3; ++r)
-              entries.emplace_back(3 * b.vertices[i] + r, 3 * b.vertices[j] + c, lin.hessian[i * 4 + j](r, c));
-      }
+      AddToDenseSum(b.vertices, lin, gradient, &entries);
     }
     Eigen::SparseMatrix<double> sum(12 * count, 12 * count);
     sum.setFromTriplets(entries.begin(), entries.end());
