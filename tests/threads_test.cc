@@ -9,12 +9,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <vector>
 
 #include "femreg/blas_kernels.h"
 #include "femreg/io.h"
+#include "parallel/blas_choice.h"
 #include "parallel/threads.h"
 #include "test_util.h"
 
@@ -174,6 +176,28 @@ TEST(BlasKernels, UsersChoiceIsKept) {
   } else {
     unsetenv("OPENBLAS_CORETYPE");
   }
+}
+
+// The rule itself: only generic kernels are replaced, by the best the CPU runs and the library
+// has; kernels OpenBLAS chose for the CPU, and names it does not list, are left alone.
+TEST(BlasKernels, OnlyGenericKernelsAreReplacedByTheBestTheCpuRuns) {
+  auto all = [](const char*) { return true; };
+  auto no_skylakex = [](const char* table) { return std::string(table) != "gotoblas_SKYLAKEX"; };
+  auto none = [](const char*) { return false; };
+  auto choose = [](const char* current, int cpu, const std::function<bool(const char*)>& has) {
+    const char* k = ChooseBlasKernels(current, cpu, has);
+    return std::string(k != nullptr ? k : "(kept)");
+  };
+  EXPECT_EQ(choose("Prescott", 3, all), "SkylakeX");
+  EXPECT_EQ(choose("Prescott", 3, no_skylakex), "Haswell");
+  EXPECT_EQ(choose("Core2", 2, all), "Haswell");
+  EXPECT_EQ(choose("Nehalem", 1, all), "Sandybridge");
+  EXPECT_EQ(choose("Prescott", 0, all), "(kept)");  // nothing better to run
+  EXPECT_EQ(choose("Prescott", 3, none), "(kept)");  // the library has no better tables
+  EXPECT_EQ(choose("Haswell", 3, all), "(kept)");    // OpenBLAS's own choice
+  EXPECT_EQ(choose("Zen", 3, all), "(kept)");
+  EXPECT_EQ(choose("Sandybridge", 2, all), "(kept)");
+  EXPECT_EQ(choose("SomeFutureCore", 3, all), "(kept)");
 }
 
 TEST(BlasKernels, SwitchKeepsTheFactorizationsRight) {

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <mutex>
 
+#include "parallel/blas_choice.h"
+
 namespace femreg {
 namespace {
 
@@ -60,16 +62,13 @@ std::string BlasCoreName() {
   return s != nullptr ? std::string(s) : std::string();
 }
 
-const char* BetterBlasCoreType() {
-  if (std::getenv("OPENBLAS_CORETYPE") != nullptr) return nullptr;
-  const std::string current = BlasCoreName();
-  if (current.empty()) return nullptr;
+const char* ChooseBlasKernels(const char* current, int cpu_level,
+                              const std::function<bool(const char* table)>& has_table) {
   // Only OpenBLAS's generic kernels are replaced: kernels it chose for an instruction set of
   // their own are its tuned choice (a Zen, a Sandy Bridge), left as they are.
-  const int have = KernelLevel(current.c_str());
-  if (have != 0) return nullptr;
+  if (current == nullptr || KernelLevel(current) != 0) return nullptr;
   // OpenBLAS's names for its kernels and the symbols of their tables (present only where the
-  // library was built with them).
+  // library was built with them), best first.
   struct Kernels {
     int level;
     const char* name;
@@ -78,12 +77,18 @@ const char* BetterBlasCoreType() {
   static const Kernels kChoices[] = {{3, "SkylakeX", "gotoblas_SKYLAKEX"},
                                      {2, "Haswell", "gotoblas_HASWELL"},
                                      {1, "Sandybridge", "gotoblas_SANDYBRIDGE"}};
-  const int cpu = CpuLevel();
   for (const Kernels& k : kChoices) {
-    if (k.level <= have) break;
-    if (k.level <= cpu && dlsym(RTLD_DEFAULT, k.table) != nullptr) return k.name;
+    if (k.level <= cpu_level && has_table(k.table)) return k.name;
   }
   return nullptr;
+}
+
+const char* BetterBlasCoreType() {
+  if (std::getenv("OPENBLAS_CORETYPE") != nullptr) return nullptr;
+  const std::string current = BlasCoreName();
+  if (current.empty()) return nullptr;
+  return ChooseBlasKernels(current.c_str(), CpuLevel(),
+                           [](const char* table) { return dlsym(RTLD_DEFAULT, table) != nullptr; });
 }
 
 std::string BlasLibraryPath() {
