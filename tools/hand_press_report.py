@@ -7,6 +7,9 @@ OUT is a `femreg register` output folder (OUT/frames/<object>_NNNN.vtu, OUT/stat
 dataset folder has ground_truth/frame_NNNN.csv (x,y,z,visible per tracked vertex). Per frame:
 
   seen_mm, hidden_mm   mean vertex error of the seen and the hidden vertices
+  shape_mm             mean vertex error after the best rigid fit of the tracked vertices onto
+                       the true ones: the error in the shape alone, not in the pose (a ball's
+                       turn about its centre barely changes what a depth camera sees)
   inverted             tracked elements with signed volume <= 0
   min_z_mm             the tracked mesh's lowest point; truth_min_z_mm the truth's
   base_gap_mm          min_z - truth_min_z: > 0, the base lifted off where the truth rests
@@ -88,6 +91,13 @@ def kabsch(rest, x):
     u, _, vt = np.linalg.svd(a.T @ b)
     d = np.sign(np.linalg.det(vt.T @ u.T))
     return vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+
+
+def rigid_fit_error(x, truth):
+    """Per vertex, the distance to the truth of x moved by its best rigid fit onto the truth."""
+    r = kabsch(x, truth)
+    fitted = (x - x.mean(axis=0)) @ r.T + truth.mean(axis=0)
+    return np.linalg.norm(fitted - truth, axis=1)
 
 
 def angle_deg(r):
@@ -234,6 +244,7 @@ def main(argv=None):
             "frame": frame,
             "seen_mm": float(err[seen].mean()) if seen.any() else float("nan"),
             "hidden_mm": float(err[~seen].mean()) if (~seen).any() else float("nan"),
+            "shape_mm": float(rigid_fit_error(x, truth).mean() * 1e3),
             "inverted": int((signed_volumes(x, tets) <= 0).sum()),
             "min_z_mm": float(x[:, 2].min() * 1e3),
             "truth_min_z_mm": float(truth[:, 2].min() * 1e3),
@@ -269,7 +280,7 @@ def main(argv=None):
     if not rows:
         sys.exit("no frame has both a registered mesh and a ground truth")
 
-    columns = ["frame", "seen_mm", "hidden_mm", "inverted", "min_z_mm", "truth_min_z_mm",
+    columns = ["frame", "seen_mm", "hidden_mm", "shape_mm", "inverted", "min_z_mm", "truth_min_z_mm",
                "base_gap_mm", "penetration_mm", "top_gap_mm", "rot_deg", "truth_rot_deg",
                "rot_err_deg", "fit_rms_mm", "ball_points", "ball_fit_mm", "ball_beyond_5mm_pct",
                "capped", "lost", "ms"]
@@ -289,7 +300,8 @@ def main(argv=None):
 
     print()
     print(f"frames: {n}")
-    print(f"mean error: seen {np.nanmean(col('seen_mm')):.2f} mm, hidden {np.nanmean(col('hidden_mm')):.2f} mm")
+    print(f"mean error: seen {np.nanmean(col('seen_mm')):.2f} mm, hidden {np.nanmean(col('hidden_mm')):.2f} mm; "
+          f"after the best rigid fit (the shape alone) {np.nanmean(col('shape_mm')):.2f} mm")
     inv = col("inverted")
     print(f"inverted elements: in {int((inv > 0).sum())} frames, at most {int(inv.max())}")
     print(f"base above the truth's: at most {col('base_gap_mm').max():.2f} mm "
