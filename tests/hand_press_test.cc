@@ -91,7 +91,8 @@ TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
         << "differs between two runs";
     ++files;
   }
-  EXPECT_EQ(files, 3 * kFrames + 4);  // clouds, ground truth, truth; scene, README.md, forces, log
+  // clouds with and without the hand, ground truth, truth; scene, README.md, forces, log
+  EXPECT_EQ(files, 4 * kFrames + 4);
 
   EXPECT_EQ(report.frames, kFrames);
   EXPECT_EQ(report.tracked_vertices, 1331);
@@ -118,6 +119,16 @@ TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
   int above = 0;
   for (int i = 0; i < cloud.size(); ++i) above += cloud.points(i, 2) > 0.15 ? 1 : 0;
   EXPECT_GT(above, 100);
+  // Without the hand: the same points less the hand's, each one of the cloud's.
+  PointCloud only_ball;
+  ASSERT_TRUE(ReadPointCloud(a.File("clouds_without_hand/frame_0000.pcd"), &only_ball).ok());
+  EXPECT_EQ(only_ball.size() + above, cloud.size());
+  int kept = 0;
+  for (int i = 0, j = 0; i < cloud.size() && j < only_ball.size(); ++i) {
+    if ((cloud.points.row(i) - only_ball.points.row(j)).norm() == 0.0) ++kept, ++j;
+  }
+  EXPECT_EQ(kept, only_ball.size());
+  for (int j = 0; j < only_ball.size(); ++j) EXPECT_LE(only_ball.points(j, 2), 0.15);
 
   // Against the bundled dataset (tools/make_datasets.sh), within what may vary from one CPU
   // or BLAS build to another: the bounds tests/synth_test.cc argues for the synth datasets,

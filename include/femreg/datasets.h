@@ -154,7 +154,8 @@ struct HandPressReport {
 // table's are not. Ground truth: corotational FEM on a finer sphere (4913 vertices) with
 // sticking unilateral contacts with the table and the hand (an active set of held
 // vertices; their reactions are the contact forces). Writes DIR/scene.yaml (the tracking
-// scene), DIR/clouds/frame_NNNN.pcd, DIR/ground_truth/frame_NNNN.csv (1331 tracked
+// scene), DIR/clouds/frame_NNNN.pcd, DIR/clouds_without_hand/frame_NNNN.pcd (the same
+// clouds less the hand's points), DIR/ground_truth/frame_NNNN.csv (1331 tracked
 // vertices), DIR/truth/frame_NNNN.vtu, DIR/forces.csv (per frame: the resultant and torque
 // about the centre of mass of the external forces other than gravity, the table's normal
 // force and the hand's force), DIR/truth_solve.csv (the solve per frame) and

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <map>
 #include <sstream>
+#include <vector>
 
 #include "femreg/datasets.h"
 #include "femreg/eval.h"
@@ -48,6 +49,33 @@ using hand_press_internal::kTruthCells;
 using hand_press_internal::Readme;
 using hand_press_internal::TrackingScene;
 
+
+// The points of `cloud` whose pixel saw surface `kept` of `image`: a mask that keeps only
+// that surface. A point lies on its pixel's ray (noise moves it along the ray), so projecting
+// it gives its pixel back.
+PointCloud OnlySurface(const PointCloud& cloud, const DepthImage& image, const DepthSensor& sensor,
+                       int kept) {
+  std::vector<int> rows;
+  for (int i = 0; i < cloud.size(); ++i) {
+    double u = 0, v = 0, z = 0;
+    if (!sensor.Project(cloud.points.row(i).transpose(), &u, &v, &z)) continue;
+    const long px = std::lround(u), py = std::lround(v);
+    if (px < 0 || py < 0 || px >= image.width || py >= image.height) continue;
+    if (image.surface[static_cast<size_t>(py * image.width + px)] == kept) rows.push_back(i);
+  }
+  PointCloud out = cloud;
+  out.points.resize(static_cast<Eigen::Index>(rows.size()), 3);
+  for (size_t r = 0; r < rows.size(); ++r) out.points.row(static_cast<Eigen::Index>(r)) = cloud.points.row(rows[r]);
+  if (cloud.has_normals()) {
+    out.normals.resize(static_cast<Eigen::Index>(rows.size()), 3);
+    for (size_t r = 0; r < rows.size(); ++r) out.normals.row(static_cast<Eigen::Index>(r)) = cloud.normals.row(rows[r]);
+  }
+  if (cloud.has_labels()) {
+    out.labels.resize(static_cast<Eigen::Index>(rows.size()));
+    for (size_t r = 0; r < rows.size(); ++r) out.labels(static_cast<Eigen::Index>(r)) = cloud.labels(rows[r]);
+  }
+  return out;
+}
 
 // A rounded box: the points within `radius` of the box of half-extents `half` centred at
 // the origin of its frame.
@@ -256,7 +284,7 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
   // One thread (OpenMP and BLAS): sums in one order, the same bytes on every run.
   const ScopedThreads one_thread(1);
   std::error_code ec;
-  for (const char* sub : {"clouds", "ground_truth", "truth"}) {
+  for (const char* sub : {"clouds", "clouds_without_hand", "ground_truth", "truth"}) {
     fs::create_directories(fs::path(dir) / sub, ec);
     if (ec) return Status::Error(dir + "/" + sub + ": cannot create: " + ec.message());
   }
@@ -506,6 +534,10 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
 
     const std::string name = FrameName(f);
     Status status = WritePointCloud((fs::path(dir) / "clouds" / (name + ".pcd")).string(), cloud);
+    if (status.ok()) {  // surfaces[0] is the ball: the hand hides it but returns nothing
+      status = WritePointCloud((fs::path(dir) / "clouds_without_hand" / (name + ".pcd")).string(),
+                               OnlySurface(cloud, image, sensor, 0));
+    }
     if (status.ok()) {
       status =
           WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / (name + ".csv")).string(), truth);

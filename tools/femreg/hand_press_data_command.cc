@@ -28,7 +28,8 @@ void AddHandPressDataCommand(CLI::App* app) {
       "Write the hand_press sequence: a foam ball on a table pressed by a hand whose points are "
       "in the clouds, then grasped, lifted, tilted and set down (corotational FEM with sticking "
       "contacts on a finer mesh than the tracked one, one depth camera above and in front). "
-      "Writes OUT/scene.yaml, OUT/clouds/*.pcd, OUT/ground_truth/*.csv, OUT/truth/*.vtu, "
+      "Writes OUT/scene.yaml, OUT/clouds/*.pcd, OUT/clouds_without_hand/*.pcd (the hand's points "
+      "left out), OUT/ground_truth/*.csv, OUT/truth/*.vtu, "
       "OUT/forces.csv, OUT/truth_solve.csv and OUT/README.md.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
   cmd->add_flag("--force", *force, "Write into a non-empty folder");
