@@ -1,4 +1,5 @@
 """Shared fixtures: where the repository and the femreg command line are."""
+import importlib.util
 import os
 import pathlib
 
@@ -28,3 +29,11 @@ def femreg_cli():
     if not cli or not os.path.exists(cli):
         pytest.fail("the femreg command line is needed: set FEMREG_CLI (CTest does)")
     return cli
+
+
+def load_tool(name):
+    """A script of tools/ as a module (tools/NAME.py), for the tests of its functions."""
+    spec = importlib.util.spec_from_file_location(name, SOURCE_DIR / "tools" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

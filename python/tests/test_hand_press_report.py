@@ -1,17 +1,14 @@
 """tools/hand_press_report.py's shape error: the error left after the best rigid fit of the
 tracked vertices onto the true ones, which separates a wrong shape from a wrong pose."""
-import importlib.util
-
 import numpy as np
 import pytest
 
+from conftest import load_tool
+
 
 @pytest.fixture(scope="module")
-def report(source_dir):
-    spec = importlib.util.spec_from_file_location("hand_press_report", source_dir / "tools" / "hand_press_report.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def report():
+    return load_tool("hand_press_report")
 
 
 def rotation(axis, angle):

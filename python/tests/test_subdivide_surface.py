@@ -1,17 +1,14 @@
 """tools/subdivide_surface.py, which makes the embedded-surface benchmarks' scans: its sqrt(3)
 subdivision keeps a closed, consistently oriented surface and gives 3x the triangles."""
-import importlib.util
-
 import numpy as np
 import pytest
 
+from conftest import load_tool
+
 
 @pytest.fixture(scope="module")
-def subdivide(source_dir):
-    spec = importlib.util.spec_from_file_location("subdivide_surface", source_dir / "tools" / "subdivide_surface.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def subdivide():
+    return load_tool("subdivide_surface")
 
 
 def octahedron():
