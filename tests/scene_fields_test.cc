@@ -62,6 +62,17 @@ TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
 }
 
 
+// FieldOf finds a member's row when the code compiles (a member without one does not compile:
+// CTest field_of_needs_a_row).
+TEST(SceneFields, FieldOfFindsTheRowWhenItCompiles) {
+  static_assert(HasRow(&ObjectSpec::rotation) && HasRow(&ObjectSpec::toughness));
+  static_assert(!HasRow(&ObjectSpec::name) && !HasRow(&ObjectSpec::material));
+  constexpr FieldInfo rotation = FieldOf<&ObjectSpec::rotation>();
+  EXPECT_STREQ(rotation.key, "rotation");
+  EXPECT_STREQ(rotation.group, "pose");
+  EXPECT_EQ(FieldName<ObjectSpec>(FieldOf<&ObjectSpec::toughness>()), "objects.toughness");
+}
+
 // One object, a camera and a synth section with a track and a body, so that every section
 // can be set.
 const char kBase[] =

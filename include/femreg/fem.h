@@ -27,7 +27,7 @@ template <>
 struct OptionFields<Material> {
   static constexpr const char* kSection = "";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = Material;
     v(&S::youngs_modulus, FieldInfo("youngs_modulus").Above(0).Doc("E (Pa)"));
     v(&S::poisson_ratio, FieldInfo("poisson_ratio").Above(-1).Below(0.5).Doc("nu, in (-1, 0.5)"));

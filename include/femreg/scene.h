@@ -95,7 +95,7 @@ template <>
 struct OptionFields<ObjectSpec> {
   static constexpr const char* kSection = "objects";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = ObjectSpec;
     v(&S::scale, FieldInfo("scale").Above(0).Doc("applied to the mesh file's coordinates (0.001 for mm)"));
     v(&S::translation, FieldInfo("translation").In("pose").Doc("initial pose: translation (m)"));
@@ -148,7 +148,7 @@ template <>
 struct OptionFields<AnchorSpec> {
   static constexpr const char* kSection = "anchors";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = AnchorSpec;
     v(&S::hard, FieldInfo("hard").Doc("vertices fixed at the targets; false: a penalty"));
     v(&S::weight, FieldInfo("weight").AtLeast(0).Doc("a soft anchor's weight; 0 = weights.anchor"));
@@ -203,7 +203,7 @@ template <>
 struct OptionFields<MotionTrackSpec> {
   static constexpr const char* kSection = "synth.motion";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     v(&MotionTrackSpec::anchor, FieldInfo("anchor").Doc("hard or soft: the tracking scene gets an anchor that follows it"));
   }
 };
@@ -228,7 +228,7 @@ template <>
 struct OptionFields<SynthBodySpec> {
   static constexpr const char* kSection = "synth.bodies";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = SynthBodySpec;
     v(&S::box_min, FieldInfo("min").In("box").Required().Python("box_min").Doc("the box's corner with the smallest coordinates (m)"));
     v(&S::box_max, FieldInfo("max").In("box").Required().Python("box_max").Doc("the box's opposite corner (m)"));
@@ -279,7 +279,7 @@ template <>
 struct OptionFields<SynthSpec> {
   static constexpr const char* kSection = "synth";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = SynthSpec;
     v(&S::frames, FieldInfo("frames").AtLeast(1).Doc("frames to simulate"));
     v(&S::seed, FieldInfo("seed").AtLeast(0).Doc("the sensor noise's seed"));

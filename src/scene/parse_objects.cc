@@ -93,9 +93,9 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
         if (existing.first == region) key.Fail("region " + std::to_string(region) + " listed twice");
       }
       object.region_materials.emplace_back(region, ParseMaterial(entry, object.material, true));
-      if (HasField(entry, &ObjectSpec::toughness)) {  // the object's row
+      if (HasField<&ObjectSpec::toughness>(entry)) {  // the object's row
         double toughness = 0.0;
-        ReadField(FieldValue(entry, &ObjectSpec::toughness), FieldOf(&ObjectSpec::toughness), true, &toughness);
+        ReadField(FieldValue<&ObjectSpec::toughness>(entry), FieldOf<&ObjectSpec::toughness>(), true, &toughness);
         object.region_toughness.emplace_back(region, toughness);
       }
     }
@@ -150,7 +150,7 @@ MeshGeneratorSpec SceneParser::ParseGenerator(const YamlValue& v) {
 }
 
 Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults, bool region) {
-  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{FieldOf(&ObjectSpec::toughness).key}
+  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{FieldOf<&ObjectSpec::toughness>().key}
                                           : std::vector<std::string>{"model", "volume"}));
   // The keys and ranges are Material's table (femreg/fem.h); a bad value fails at its line:
   // "beam.yaml:6: objects[0].material.poisson_ratio: must be in (-1, 0.5) (got 0.5)".

@@ -142,7 +142,7 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
     for (const auto& [region, material] : o.region_materials) {
       YAML::Node entry = MaterialNode(material, o.material);
       for (const auto& [id, toughness] : o.region_toughness) {
-        if (id == region) entry[FieldOf(&ObjectSpec::toughness).key] = Number(toughness);  // the object's row
+        if (id == region) entry[FieldOf<&ObjectSpec::toughness>().key] = Number(toughness);  // the object's row
       }
       regions[std::to_string(region)] = entry;
     }
@@ -257,7 +257,7 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
   const SynthSpec d;
   YAML::Node n = Map();
   PutFieldsBefore(n, s);  // frames, seed, sanity_check, ground_truth.refinement
-  const char* truth_group = FieldOf(&SynthSpec::refinement).group;
+  const char* truth_group = FieldOf<&SynthSpec::refinement>().group;
   const YAML::Node refined = static_cast<const YAML::Node&>(n)[truth_group];
   YAML::Node truth = refined.IsDefined() ? refined : FlowMap();
   if (!s.mesh_path.empty()) truth["mesh"] = FilePath(s.mesh_path, base_dir);
