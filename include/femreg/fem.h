@@ -42,6 +42,20 @@ enum class MaterialModel {
 };
 const char* ToString(MaterialModel model);
 bool FromString(const std::string& name, MaterialModel* model);
+template <>
+struct EnumValues<MaterialModel> {
+  static constexpr std::array<MaterialModel, 2> kAll = {MaterialModel::kHooke, MaterialModel::kNeoHookean};
+};
+
+// Where an object's volumetric energy lives: in each element, or on the vertices' volumes
+// (ObjectMaterial::nodal_volume below; neo-Hookean only).
+enum class MaterialVolume { kElement, kNodal };
+const char* ToString(MaterialVolume volume);
+bool FromString(const std::string& name, MaterialVolume* volume);
+template <>
+struct EnumValues<MaterialVolume> {
+  static constexpr std::array<MaterialVolume, 2> kAll = {MaterialVolume::kElement, MaterialVolume::kNodal};
+};
 
 // The materials of one object: one for every element, or per region (the mesh's element
 // tags) with a default for the regions not listed.

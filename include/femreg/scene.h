@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -71,11 +72,14 @@ struct ObjectSpec {
   std::vector<std::pair<int, Material>> region_materials;  // region id -> material
   // material.model: the constitutive law of all its elements; material.volume: nodal
   // (neo-Hookean only; simulate, calibrate): the volumetric energy on the vertices (fem.h).
-  MaterialModel material_model = MaterialModel::kHooke;
-  bool nodal_volume = false;
-  // material.model or material.volume was written (or simulate --model given): the scene
-  // chose the element, and no automatic choice replaces it (ChooseForwardElements).
-  bool element_chosen = false;
+  // Set: the element is chosen (by the file, simulate --model, or ChooseForwardElements and
+  // ChooseRegistrationElements for a nearly incompressible object), and no automatic choice
+  // replaces it. Unset: hooke with element volumes, open to the automatic choice.
+  std::optional<MaterialModel> model;
+  std::optional<MaterialVolume> volume;
+  bool ElementChosen() const { return model.has_value() || volume.has_value(); }
+  MaterialModel Model() const { return model.value_or(MaterialModel::kHooke); }
+  bool NodalVolume() const { return volume == MaterialVolume::kNodal; }
   // The above as the FEM layer takes them.
   ObjectMaterial Materials() const;
   // Fracture toughness (Pa): a node breaks when its fracture measure exceeds it; used when
@@ -90,7 +94,8 @@ struct ObjectSpec {
 };
 
 // An object's own values beside its name, mesh or generator, materials, regions and surface,
-// which are read and written by hand (a region's toughness is the toughness row).
+// which are read and written by hand (a region's toughness is the toughness row). The element
+// rows sit in the `material` group beside the material's own keys (Material's table).
 template <>
 struct OptionFields<ObjectSpec> {
   static constexpr const char* kSection = "objects";
@@ -100,6 +105,8 @@ struct OptionFields<ObjectSpec> {
     v(&S::scale, FieldInfo("scale").Above(0).Doc("applied to the mesh file's coordinates (0.001 for mm)"));
     v(&S::translation, FieldInfo("translation").In("pose").Doc("initial pose: translation (m)"));
     v(&S::rotation, FieldInfo("rotation").In("pose").Doc("initial pose: rotation, axis * angle (rad)"));
+    v(&S::model, FieldInfo("model").In("material").Python("material_model").Doc("the elements' law; unset: hooke"));
+    v(&S::volume, FieldInfo("volume").In("material").Python("material_volume").Doc("nodal: neo_hookean's volumetric energy on the vertices"));
     v(&S::toughness, FieldInfo("toughness").AtLeast(0).After().Doc("fracture toughness (Pa); 0 = unbreakable"));
     v(&S::label, FieldInfo("label").AtLeast(-1).After().Doc("cloud points with this label are its own; -1 = none"));
   }

@@ -103,7 +103,7 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
                        {"tetrahedra", m.num_tets()},
                        {"youngs_modulus", number(scene.objects[i].material.youngs_modulus)},
                        {"poisson_ratio", number(scene.objects[i].material.poisson_ratio)},
-                       {"element", ToString(chosen.objects[i].material_model)},
+                       {"element", ToString(chosen.objects[i].Model())},
                        {"elastic_poisson_ratio", number(chosen.objects[i].material.poisson_ratio)}});
   }
   j["objects"] = objects;

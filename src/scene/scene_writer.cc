@@ -128,14 +128,16 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
   } else {
     n["mesh"] = FilePath(o.mesh_path, base_dir);
   }
-  PutFieldsBefore(n, o);  // scale, pose (femreg/scene.h)
+  PutFieldsBefore(n, o);  // scale, pose, material.model and material.volume (femreg/scene.h)
   {
+    // The material's own keys (Material's table), then the element's rows, set or not.
+    const char* group = FieldOf<&ObjectSpec::model>().group;
     YAML::Node material = MaterialNode(o.material, Material());
-    if (o.material_model != MaterialModel::kHooke || o.element_chosen) {
-      material["model"] = ToString(o.material_model);  // a chosen hooke stays chosen
+    const YAML::Node element = static_cast<const YAML::Node&>(n)[group];
+    if (element.IsDefined()) {
+      for (const auto& row : element) material[row.first.Scalar()] = row.second.Scalar();
     }
-    if (o.nodal_volume) material["volume"] = "nodal";
-    PutMap(n, "material", material);
+    PutMap(n, group, material);
   }
   if (!o.region_materials.empty()) {
     YAML::Node regions = FlowMap();
