@@ -48,9 +48,8 @@ TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
   // sensor, motion, bodies, the four of the artefacts table (occluder_*, leave_*),
   // source_name.
   EXPECT_EQ(FieldCount<SynthSpec>() + 13, MemberCount<SynthSpec>());
-  // + name, mesh_path, generate, material, region_materials, material_model, nodal_volume,
-  // element_chosen, region_toughness, surface_path.
-  EXPECT_EQ(FieldCount<ObjectSpec>() + 10, MemberCount<ObjectSpec>());
+  // + name, mesh_path, generate, material, region_materials, region_toughness, surface_path.
+  EXPECT_EQ(FieldCount<ObjectSpec>() + 7, MemberCount<ObjectSpec>());
   // + name, object, selection, translations, rotations, centre.
   EXPECT_EQ(FieldCount<AnchorSpec>() + 6, MemberCount<AnchorSpec>());
   // + first, second (the objects).
@@ -61,6 +60,19 @@ TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
   EXPECT_EQ(FieldCount<MotionTrackSpec>() + 5, MemberCount<MotionTrackSpec>());
 }
 
+// FieldOf finds a member's row when the code compiles (a member without one does not compile:
+// CTest field_of_needs_a_row).
+TEST(SceneFields, FieldOfFindsTheRowWhenItCompiles) {
+  static_assert(HasRow(&ObjectSpec::rotation) && HasRow(&ObjectSpec::toughness));
+  static_assert(!HasRow(&ObjectSpec::name) && !HasRow(&ObjectSpec::material));
+  constexpr FieldInfo rotation = FieldOf<&ObjectSpec::rotation>();
+  EXPECT_STREQ(rotation.key, "rotation");
+  EXPECT_STREQ(rotation.group, "pose");
+  EXPECT_EQ(FieldName<ObjectSpec>(FieldOf<&ObjectSpec::toughness>()), "objects.toughness");
+  // An object's element: two rows in the material group.
+  static_assert(HasRow(&ObjectSpec::model) && HasRow(&ObjectSpec::volume));
+  EXPECT_EQ(FieldName<ObjectSpec>(FieldOf<&ObjectSpec::volume>()), "objects.material.volume");
+}
 
 // One object, a camera and a synth section with a track and a body, so that every section
 // can be set.

@@ -121,13 +121,13 @@ TEST(SceneMaterials, RegionInheritsTheObjectsMaterial) {
 TEST(SceneMaterials, ModelAndVolume) {
   Scene scene;
   ASSERT_TRUE(ParseScene(kScene, "materials.yaml", ".", &scene).ok());
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
-  EXPECT_FALSE(scene.objects[0].nodal_volume);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kHooke);
+  EXPECT_FALSE(scene.objects[0].NodalVolume());
   const std::string text = Replace(kScene, "      density: 1000\n",
                                    "      density: 1000\n      model: neo_hookean\n      volume: nodal\n");
   ASSERT_TRUE(ParseScene(text, "materials.yaml", ".", &scene).ok());
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
-  EXPECT_TRUE(scene.objects[0].nodal_volume);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kNeoHookean);
+  EXPECT_TRUE(scene.objects[0].NodalVolume());
   const ObjectMaterial m = scene.objects[0].Materials();
   EXPECT_EQ(m.model, MaterialModel::kNeoHookean);
   EXPECT_TRUE(m.nodal_volume);
@@ -135,8 +135,8 @@ TEST(SceneMaterials, ModelAndVolume) {
   // Written and read back.
   Scene again;
   ASSERT_TRUE(ParseScene(SceneToYaml(scene), "again.yaml", ".", &again).ok()) << SceneToYaml(scene);
-  EXPECT_EQ(again.objects[0].material_model, MaterialModel::kNeoHookean);
-  EXPECT_TRUE(again.objects[0].nodal_volume);
+  EXPECT_EQ(again.objects[0].Model(), MaterialModel::kNeoHookean);
+  EXPECT_TRUE(again.objects[0].NodalVolume());
 
   EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      model: neohooke\n")),
             "materials.yaml:8: objects[0].material.model: unknown value 'neohooke' (one of: hooke, "
@@ -144,6 +144,21 @@ TEST(SceneMaterials, ModelAndVolume) {
   EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      volume: nodal\n")),
             "materials.yaml:8: objects[0].material.volume: 'nodal' needs 'model: neo_hookean' (the "
             "nodal volume is the neo-Hookean element's remedy for locking)");
+  EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      volume: nodl\n")),
+            "materials.yaml:8: objects[0].material.volume: unknown value 'nodl' (did you mean 'nodal'? one of: "
+            "element, nodal)");
+  // The element's rows are the material group's keys beside the material's own.
+  EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      volme: nodal\n")),
+            "materials.yaml:8: objects[0].material.volme: unknown key (did you mean 'volume'?)");
+
+  // volume: element alone chooses the element (hooke), as model: hooke does, and stays chosen.
+  const std::string element = Replace(kScene, "      density: 1000\n", "      density: 1000\n      volume: element\n");
+  ASSERT_TRUE(ParseScene(element, "materials.yaml", ".", &scene).ok());
+  EXPECT_TRUE(scene.objects[0].ElementChosen());
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kHooke);
+  ASSERT_TRUE(ParseScene(SceneToYaml(scene), "again.yaml", ".", &again).ok()) << SceneToYaml(scene);
+  EXPECT_TRUE(again.objects[0].ElementChosen()) << SceneToYaml(scene);
+  EXPECT_FALSE(again.objects[0].NodalVolume());
 }
 
 // Nearly incompressible objects get the nodal-volume neo-Hookean element for forward solves
@@ -152,24 +167,24 @@ TEST(SceneMaterials, NearlyIncompressibleChoosesTheNodalVolume) {
   Scene scene;
   ASSERT_TRUE(ParseScene(kScene, "materials.yaml", ".", &scene).ok());
   EXPECT_TRUE(ChooseForwardElements(&scene).empty());  // nu 0.3 and 0.4: unchanged
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kHooke);
 
   const std::string soft = Replace(kScene, "        poisson_ratio: 0.4\n", "        poisson_ratio: 0.49\n");
   ASSERT_TRUE(ParseScene(soft, "materials.yaml", ".", &scene).ok());
-  EXPECT_FALSE(scene.objects[0].element_chosen);
+  EXPECT_FALSE(scene.objects[0].ElementChosen());
   const std::vector<std::string> lines = ChooseForwardElements(&scene);
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_NE(lines[0].find("block: nu 0.49 >= 0.45"), std::string::npos) << lines[0];
   EXPECT_NE(lines[0].find("model: hooke"), std::string::npos) << lines[0];
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
-  EXPECT_TRUE(scene.objects[0].nodal_volume);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kNeoHookean);
+  EXPECT_TRUE(scene.objects[0].NodalVolume());
   EXPECT_TRUE(ChooseForwardElements(&scene).empty());  // already chosen: no second line
 
   const std::string hooke = Replace(soft, "      density: 1000\n", "      density: 1000\n      model: hooke\n");
   ASSERT_TRUE(ParseScene(hooke, "materials.yaml", ".", &scene).ok());
-  EXPECT_TRUE(scene.objects[0].element_chosen);
+  EXPECT_TRUE(scene.objects[0].ElementChosen());
   EXPECT_TRUE(ChooseForwardElements(&scene).empty());
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kHooke);
   Scene again;
   ASSERT_TRUE(ParseScene(SceneToYaml(scene), "again.yaml", ".", &again).ok());
   EXPECT_TRUE(ChooseForwardElements(&again).empty()) << SceneToYaml(scene);
@@ -177,7 +192,7 @@ TEST(SceneMaterials, NearlyIncompressibleChoosesTheNodalVolume) {
   const std::string linear = soft + "forward: {model: linear}\n";
   ASSERT_TRUE(ParseScene(linear, "materials.yaml", ".", &scene).ok());
   EXPECT_TRUE(ChooseForwardElements(&scene).empty());
-  EXPECT_FALSE(scene.objects[0].nodal_volume);
+  EXPECT_FALSE(scene.objects[0].NodalVolume());
 
   // forward.model: corotational is a choice too, kept and written back.
   const std::string corotational = soft + "forward: {model: corotational}\n";
@@ -186,7 +201,7 @@ TEST(SceneMaterials, NearlyIncompressibleChoosesTheNodalVolume) {
   ASSERT_TRUE(ParseScene(SceneToYaml(scene), "written.yaml", ".", &written).ok()) << SceneToYaml(scene);
   EXPECT_EQ(written.forward.model, ElasticModelType::kCorotational);
   EXPECT_TRUE(ChooseForwardElements(&written).empty());
-  EXPECT_EQ(written.objects[0].material_model, MaterialModel::kHooke);
+  EXPECT_EQ(written.objects[0].Model(), MaterialModel::kHooke);
 }
 
 // Registration's default is the neo-Hookean element with nu capped in its elastic term (the
@@ -199,8 +214,8 @@ TEST(SceneMaterials, NearlyIncompressibleRegistrationCapsNu) {
   const std::vector<std::string> lines = ChooseRegistrationElements(&scene);
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_NE(lines[0].find("nu 0.35"), std::string::npos) << lines[0];
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
-  EXPECT_FALSE(scene.objects[0].nodal_volume);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kNeoHookean);
+  EXPECT_FALSE(scene.objects[0].NodalVolume());
   EXPECT_EQ(scene.objects[0].material.poisson_ratio, kRegistrationPoissonRatio);
   EXPECT_EQ(scene.objects[0].region_materials[0].second.poisson_ratio, kRegistrationPoissonRatio);
   EXPECT_TRUE(ChooseRegistrationElements(&scene).empty());  // once
@@ -212,14 +227,14 @@ TEST(SceneMaterials, NearlyIncompressibleRegistrationCapsNu) {
 
   ASSERT_TRUE(ParseScene(soft + "registration: {regularizer: linear}\n", "materials.yaml", ".", &scene).ok());
   EXPECT_TRUE(ChooseRegistrationElements(&scene).empty());
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kHooke);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kHooke);
 
   const std::string forces = soft + "registration: {solver: {backend: fast}, forces: {estimate: true}}\n";
   ASSERT_TRUE(ParseScene(forces, "materials.yaml", ".", &scene).ok());
   const std::vector<std::string> given = ChooseRegistrationElements(&scene);
   ASSERT_EQ(given.size(), 1u);
   EXPECT_NE(given[0].find("as given"), std::string::npos) << given[0];
-  EXPECT_EQ(scene.objects[0].material_model, MaterialModel::kNeoHookean);
+  EXPECT_EQ(scene.objects[0].Model(), MaterialModel::kNeoHookean);
   EXPECT_EQ(scene.objects[0].material.poisson_ratio, 0.49);
 }
 

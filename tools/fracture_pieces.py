@@ -29,32 +29,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from hand_press_report import read_vtu  # noqa: E402
-
-
-def pieces_of(tets, n):
-    parent = list(range(n))
-
-    def find(a):
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-    for t in tets:
-        for k in range(1, 4):
-            a, b = find(t[0]), find(t[k])
-            if a != b:
-                parent[max(a, b)] = min(a, b)
-    roots = {}
-    return np.array([roots.setdefault(find(i), len(roots)) for i in range(n)])
-
-
-def kabsch(a, b):
-    ca, cb = a.mean(0), b.mean(0)
-    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
-    d = np.sign(np.linalg.det(vt.T @ u.T))
-    r = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
-    return r, cb - r @ ca
+from femreg_tools import components, kabsch, read_vtu  # noqa: E402
 
 
 def main(argv=None):
@@ -72,7 +47,7 @@ def main(argv=None):
         x = a["Points"]
         rest = x - a["displacement"]
         original = a["original_vertex"].astype(int)
-        piece = pieces_of(a["connectivity"].reshape(-1, 4), len(x))
+        piece = components(len(x), a["connectivity"].reshape(-1, 4))
         gt = np.loadtxt(os.path.join(args.dataset, "ground_truth", f"frame_{frame:04d}.csv"),
                         delimiter=",", skiprows=1, ndmin=2)
         side = {}

@@ -27,8 +27,7 @@ dataset folder has ground_truth/frame_NNNN.csv (x,y,z,visible per tracked vertex
   lost                 1 when it found no correspondence (the mesh left the cloud)
   ms                   t_total_ms of stats.csv
 
-Only numpy and the standard library (the VTU reader below handles what femreg writes:
-appended raw data, zlib-compressed or not, UInt32 or UInt64 headers).
+Only numpy and the standard library (the VTU reader and the rigid fit are tools/femreg_tools.py's).
 """
 import argparse
 import csv
@@ -36,68 +35,21 @@ import glob
 import os
 import re
 import sys
-import zlib
 
 import numpy as np
 
-_TYPES = {"Float32": "<f4", "Float64": "<f8", "Int32": "<i4", "Int64": "<i8", "UInt8": "u1",
-          "UInt32": "<u4", "UInt64": "<u8", "Int8": "i1", "Int16": "<i2", "UInt16": "<u2"}
-
-
-def read_vtu(path):
-    """The arrays of a VTU with appended raw data: {name: numpy array}, Points as 'Points'."""
-    data = open(path, "rb").read()
-    start = data.index(b"<AppendedData")
-    head = data[:start].decode("utf-8", "replace")
-    raw = data[data.index(b"_", start) + 1:]
-    header_type = re.search(r'header_type="(\w+)"', head)
-    htype = np.dtype(_TYPES[header_type.group(1)] if header_type else "<u4")
-    compressed = "compressor=" in head.split(">", 1)[0]
-    arrays = {}
-    for tag in re.finditer(r"<DataArray([^>]*)>", head):
-        attrs = dict(re.findall(r'(\w+)="([^"]*)"', tag.group(1)))
-        if attrs.get("format") != "appended":
-            continue
-        offset = int(attrs["offset"])
-        dtype = np.dtype(_TYPES[attrs["type"]])
-        hs = htype.itemsize
-        if compressed:
-            nblocks = int(np.frombuffer(raw, htype, 1, offset)[0])
-            sizes = np.frombuffer(raw, htype, 3 + nblocks, offset)
-            pos = offset + hs * (3 + nblocks)
-            chunks = []
-            for size in sizes[3:]:
-                chunks.append(zlib.decompress(raw[pos:pos + int(size)]))
-                pos += int(size)
-            payload = b"".join(chunks)
-        else:
-            nbytes = int(np.frombuffer(raw, htype, 1, offset)[0])
-            payload = raw[offset + hs:offset + hs + nbytes]
-        values = np.frombuffer(payload, dtype)
-        components = int(attrs.get("NumberOfComponents", "1"))
-        arrays[attrs.get("Name", "")] = values.reshape(-1, components) if components > 1 else values
-    return arrays
-
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from femreg_tools import kabsch, read_vtu  # noqa: E402
 
 def read_truth(path):
     rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     return rows[:, :3], rows[:, 3] > 0.5
 
 
-def kabsch(rest, x):
-    """The rotation of the best rigid fit of rest onto x (equal weights)."""
-    a = rest - rest.mean(axis=0)
-    b = x - x.mean(axis=0)
-    u, _, vt = np.linalg.svd(a.T @ b)
-    d = np.sign(np.linalg.det(vt.T @ u.T))
-    return vt.T @ np.diag([1.0, 1.0, d]) @ u.T
-
-
 def rigid_fit_error(x, truth):
     """Per vertex, the distance to the truth of x moved by its best rigid fit onto the truth."""
-    r = kabsch(x, truth)
-    fitted = (x - x.mean(axis=0)) @ r.T + truth.mean(axis=0)
-    return np.linalg.norm(fitted - truth, axis=1)
+    r, t = kabsch(x, truth)
+    return np.linalg.norm(x @ r.T + t - truth, axis=1)
 
 
 def angle_deg(r):
@@ -253,7 +205,7 @@ def main(argv=None):
         }
         row["base_gap_mm"] = row["min_z_mm"] - row["truth_min_z_mm"]
         if rest is not None:
-            r_track, r_truth = kabsch(rest, x), kabsch(rest, truth)
+            r_track, r_truth = kabsch(rest, x)[0], kabsch(rest, truth)[0]
             row["rot_deg"] = angle_deg(r_track)
             row["truth_rot_deg"] = angle_deg(r_truth)
             row["rot_err_deg"] = angle_deg(r_track @ r_truth.T)

@@ -16,42 +16,13 @@ into its own fan, so that the surface is manifold and bounds a volume.
 Needs numpy only.
 """
 import argparse
-import struct
+import os
 import sys
 
 import numpy as np
 
-
-def read_stl(path):
-    data = open(path, "rb").read()
-    if data[:5] == b"solid" and b"facet" in data[:400]:
-        corners = [list(map(float, line.split()[1:4]))
-                   for line in data.decode("ascii", "replace").splitlines()
-                   if line.strip().startswith("vertex")]
-        corners = np.array(corners, dtype=float)
-    else:
-        n = struct.unpack("<I", data[80:84])[0]
-        record = np.dtype([("n", "<3f4"), ("v", "<9f4"), ("a", "<u2")])
-        corners = np.frombuffer(data[84:84 + 50 * n], dtype=record)["v"].reshape(-1, 3).astype(float)
-    vertices, index = np.unique(corners, axis=0, return_inverse=True)
-    return vertices, index.reshape(-1, 3)
-
-
-def read_ascii_ply(path):
-    lines = open(path).read().splitlines()
-    nv = nf = 0
-    i = 0
-    while lines[i].strip() != "end_header":
-        parts = lines[i].split()
-        if parts[:2] == ["element", "vertex"]:
-            nv = int(parts[2])
-        if parts[:2] == ["element", "face"]:
-            nf = int(parts[2])
-        i += 1
-    body = lines[i + 1:]
-    vertices = np.array([list(map(float, l.split()[:3])) for l in body[:nv]])
-    faces = np.array([list(map(int, l.split()[1:4])) for l in body[nv:nv + nf]])
-    return vertices, faces
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from femreg_tools import DisjointSets, read_surface  # noqa: E402
 
 
 def split_nonmanifold(vertices, faces):
@@ -65,14 +36,7 @@ def split_nonmanifold(vertices, faces):
     out = list(vertices)
     added = 0
     for v, fs in sorted(around.items()):
-        parent = {f: f for f in fs}
-
-        def root(f):
-            while parent[f] != f:
-                parent[f] = parent[parent[f]]
-                f = parent[f]
-            return f
-
+        fan_of = DisjointSets(fs)
         by_edge = {}
         for f in fs:
             for w in faces[f]:
@@ -80,10 +44,10 @@ def split_nonmanifold(vertices, faces):
                     by_edge.setdefault(int(w), []).append(f)
         for shared in by_edge.values():
             for f in shared[1:]:
-                parent[root(f)] = root(shared[0])
+                fan_of.union(f, shared[0])
         fans = {}
         for f in fs:
-            fans.setdefault(root(f), []).append(f)
+            fans.setdefault(fan_of.find(f), []).append(f)
         if len(fans) < 2:
             continue
         for k, fan in enumerate(sorted(fans.values())):
@@ -184,10 +148,7 @@ def main():
     p.add_argument("--scale", type=float, default=1.0)
     p.add_argument("--split-nonmanifold", action="store_true")
     args = p.parse_args()
-    if args.input.lower().endswith(".stl"):
-        vertices, faces = read_stl(args.input)
-    else:
-        vertices, faces = read_ascii_ply(args.input)
+    vertices, faces = read_surface(args.input)
     if args.split_nonmanifold:
         vertices, faces, added = split_nonmanifold(vertices, faces)
         print(f"{args.input}: {added} non-manifold vertices split")

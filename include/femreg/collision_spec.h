@@ -47,7 +47,7 @@ template <>
 struct OptionFields<ObstacleSpec> {
   static constexpr const char* kSection = "collision.obstacles";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = ObstacleSpec;
     v(&S::scale, FieldInfo("scale").Above(0).Doc("applied to the mesh file's coordinates"));
     v(&S::friction, FieldInfo("friction").AtLeast(0).Doc("Coulomb coefficient against it (unset: the collision's)"));
@@ -68,7 +68,7 @@ template <>
 struct OptionFields<CollisionPair> {
   static constexpr const char* kSection = "collision.pairs";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     v(&CollisionPair::friction, FieldInfo("friction").AtLeast(0).Doc("Coulomb coefficient of the pair (unset: the collision's)"));
   }
 };
@@ -99,7 +99,7 @@ template <>
 struct OptionFields<CollisionSpec> {
   static constexpr const char* kSection = "collision";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = CollisionSpec;
     v(&S::stiffness, FieldInfo("stiffness").Above(0).Doc("k (N/m) per contact"));
     v(&S::distance, FieldInfo("distance").Above(0).Doc("D (m): contacts are detected within it"));

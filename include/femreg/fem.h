@@ -27,7 +27,7 @@ template <>
 struct OptionFields<Material> {
   static constexpr const char* kSection = "";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = Material;
     v(&S::youngs_modulus, FieldInfo("youngs_modulus").Above(0).Doc("E (Pa)"));
     v(&S::poisson_ratio, FieldInfo("poisson_ratio").Above(-1).Below(0.5).Doc("nu, in (-1, 0.5)"));
@@ -42,6 +42,20 @@ enum class MaterialModel {
 };
 const char* ToString(MaterialModel model);
 bool FromString(const std::string& name, MaterialModel* model);
+template <>
+struct EnumValues<MaterialModel> {
+  static constexpr std::array<MaterialModel, 2> kAll = {MaterialModel::kHooke, MaterialModel::kNeoHookean};
+};
+
+// Where an object's volumetric energy lives: in each element, or on the vertices' volumes
+// (ObjectMaterial::nodal_volume below; neo-Hookean only).
+enum class MaterialVolume { kElement, kNodal };
+const char* ToString(MaterialVolume volume);
+bool FromString(const std::string& name, MaterialVolume* volume);
+template <>
+struct EnumValues<MaterialVolume> {
+  static constexpr std::array<MaterialVolume, 2> kAll = {MaterialVolume::kElement, MaterialVolume::kNodal};
+};
 
 // The materials of one object: one for every element, or per region (the mesh's element
 // tags) with a default for the regions not listed.

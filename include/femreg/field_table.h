@@ -2,7 +2,8 @@
 // once.
 //
 // OptionFields<S>::Visit(v) calls v(&S::member, FieldInfo) for every member of the options
-// struct S that the table describes, in the order the scene file writes them. The scene
+// struct S that the table describes, in the order the scene file writes them (constexpr, so
+// that FieldOf refuses a member without a row when it compiles). The scene
 // parser and writer, the range checks of S::IsValid, the Python module and a run's
 // provenance all walk the table, so an option is named in its struct and in its table row
 // and nowhere else (docs/dev/adding-an-option.md). A field's type says how it is read and
@@ -149,14 +150,37 @@ std::string FieldName(const FieldInfo& f) {
   return section.empty() ? f.path() : section + "." + f.path();
 }
 
-// The row of one member in its struct's table (a key the section also reads elsewhere: a
-// region's toughness is the object's row).
+// The struct and the type of a pointer to one of its members.
+template <class M>
+struct MemberPointer;
+template <class C, class T>
+struct MemberPointer<T C::*> {
+  using Class = C;
+  using Field = T;
+};
+
+// Whether `member` has a row in its struct's table; a constant expression (the tables'
+// Visit are constexpr), so that FieldOf refuses a member without a row when it compiles.
 template <class Options, class T>
-FieldInfo FieldOf(T Options::*member) {
+constexpr bool HasRow(T Options::*member) {
+  bool found = false;
+  OptionFields<Options>::Visit([&](auto m, const FieldInfo&) {
+    if constexpr (std::is_same_v<decltype(m), T Options::*>) found = found || m == member;
+  });
+  return found;
+}
+
+// The row of one member in its struct's table (a key the section also reads elsewhere: a
+// region's toughness is the object's row): FieldOf<&ObjectSpec::toughness>(). A member
+// without a row does not compile.
+template <auto kMember>
+constexpr FieldInfo FieldOf() {
+  using Options = typename MemberPointer<decltype(kMember)>::Class;
+  static_assert(HasRow(kMember), "FieldOf: this member has no row in its struct's OptionFields table");
   FieldInfo row("");
   OptionFields<Options>::Visit([&](auto m, const FieldInfo& f) {
-    if constexpr (std::is_same_v<decltype(m), T Options::*>) {
-      if (m == member) row = f;
+    if constexpr (std::is_same_v<decltype(m), decltype(kMember)>) {
+      if (m == kMember) row = f;
     }
   });
   return row;

@@ -92,7 +92,7 @@ template <>
 struct OptionFields<ForwardOptions> {
   static constexpr const char* kSection = "forward";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = ForwardOptions;
     v(&S::model, FieldInfo("model").Doc("corotational, linear or neo_hookean; None: corotational, and the "
                                          "neo-Hookean element for nearly incompressible objects"));

@@ -85,7 +85,7 @@ template <>
 struct OptionFields<FractureOptions> {
   static constexpr const char* kSection = "effects.fracture";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = FractureOptions;
     v(&S::max_splits_per_iteration, FieldInfo("max_splits_per_iteration").AtLeast(1).Doc("node splits per outer iteration"));
     v(&S::max_splits_per_frame, FieldInfo("max_splits_per_frame").AtLeast(1).Doc("node splits per frame"));

@@ -61,7 +61,7 @@ template <>
 struct OptionFields<CameraOptions> {
   static constexpr const char* kSection = "camera";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = CameraOptions;
     v(&S::position, FieldInfo("position").Finite());
     v(&S::target, FieldInfo("target").Finite());
@@ -82,7 +82,7 @@ template <>
 struct OptionFields<PreprocessOptions> {
   static constexpr const char* kSection = "preprocess";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = PreprocessOptions;
     v(&S::scale, FieldInfo("scale").Above(0).Doc("Points (and normals, viewpoint) scaled first: 0.001 for mm."));
     v(&S::translation, FieldInfo("translation").In("transform").Finite().Doc("m, after the rotation"));
@@ -114,7 +114,7 @@ template <>
 struct OptionFields<DataTermOptions> {
   static constexpr const char* kSection = "data";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = DataTermOptions;
     v(&S::model_to_cloud, FieldInfo("model_to_cloud"));
     v(&S::cloud_to_model, FieldInfo("cloud_to_model"));
@@ -140,7 +140,7 @@ template <>
 struct OptionFields<WeightOptions> {
   static constexpr const char* kSection = "weights";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = WeightOptions;
     // data and data_per_area: which one a scene sets selects the weighting (the parser and
     // writer handle the pair; < 0 data means per area).
@@ -161,7 +161,7 @@ template <>
 struct OptionFields<ForceOptions> {
   static constexpr const char* kSection = "forces";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = ForceOptions;
     v(&S::estimate, FieldInfo("estimate"));
     v(&S::weight, FieldInfo("weight").Above(0));
@@ -176,7 +176,7 @@ template <>
 struct OptionFields<FreeSpaceOptions> {
   static constexpr const char* kSection = "free_space";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = FreeSpaceOptions;
     v(&S::enabled, FieldInfo("enabled"));
     v(&S::tolerance, FieldInfo("tolerance").Above(0).Note("(m)"));
@@ -188,7 +188,7 @@ template <>
 struct OptionFields<SolverOptions> {
   static constexpr const char* kSection = "solver";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = SolverOptions;
     v(&S::backend, FieldInfo("backend").Doc("ceres or fast"));
     v(&S::max_outer_iterations, FieldInfo("max_outer_iterations").AtLeast(1));
@@ -226,7 +226,7 @@ template <>
 struct OptionFields<RegistrationOptions> {
   static constexpr const char* kSection = "";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = RegistrationOptions;
     v(&S::regularizer, FieldInfo("regularizer").Doc("corotational, linear, mass_spring or none"));
     v(&S::loads, FieldInfo("loads").Doc("The scene's gravity and loads act in the registration energy."));

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -71,11 +72,14 @@ struct ObjectSpec {
   std::vector<std::pair<int, Material>> region_materials;  // region id -> material
   // material.model: the constitutive law of all its elements; material.volume: nodal
   // (neo-Hookean only; simulate, calibrate): the volumetric energy on the vertices (fem.h).
-  MaterialModel material_model = MaterialModel::kHooke;
-  bool nodal_volume = false;
-  // material.model or material.volume was written (or simulate --model given): the scene
-  // chose the element, and no automatic choice replaces it (ChooseForwardElements).
-  bool element_chosen = false;
+  // Set: the element is chosen (by the file, simulate --model, or ChooseForwardElements and
+  // ChooseRegistrationElements for a nearly incompressible object), and no automatic choice
+  // replaces it. Unset: hooke with element volumes, open to the automatic choice.
+  std::optional<MaterialModel> model;
+  std::optional<MaterialVolume> volume;
+  bool ElementChosen() const { return model.has_value() || volume.has_value(); }
+  MaterialModel Model() const { return model.value_or(MaterialModel::kHooke); }
+  bool NodalVolume() const { return volume == MaterialVolume::kNodal; }
   // The above as the FEM layer takes them.
   ObjectMaterial Materials() const;
   // Fracture toughness (Pa): a node breaks when its fracture measure exceeds it; used when
@@ -90,16 +94,19 @@ struct ObjectSpec {
 };
 
 // An object's own values beside its name, mesh or generator, materials, regions and surface,
-// which are read and written by hand (a region's toughness is the toughness row).
+// which are read and written by hand (a region's toughness is the toughness row). The element
+// rows sit in the `material` group beside the material's own keys (Material's table).
 template <>
 struct OptionFields<ObjectSpec> {
   static constexpr const char* kSection = "objects";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = ObjectSpec;
     v(&S::scale, FieldInfo("scale").Above(0).Doc("applied to the mesh file's coordinates (0.001 for mm)"));
     v(&S::translation, FieldInfo("translation").In("pose").Doc("initial pose: translation (m)"));
     v(&S::rotation, FieldInfo("rotation").In("pose").Doc("initial pose: rotation, axis * angle (rad)"));
+    v(&S::model, FieldInfo("model").In("material").Python("material_model").Doc("the elements' law; unset: hooke"));
+    v(&S::volume, FieldInfo("volume").In("material").Python("material_volume").Doc("nodal: neo_hookean's volumetric energy on the vertices"));
     v(&S::toughness, FieldInfo("toughness").AtLeast(0).After().Doc("fracture toughness (Pa); 0 = unbreakable"));
     v(&S::label, FieldInfo("label").AtLeast(-1).After().Doc("cloud points with this label are its own; -1 = none"));
   }
@@ -148,7 +155,7 @@ template <>
 struct OptionFields<AnchorSpec> {
   static constexpr const char* kSection = "anchors";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = AnchorSpec;
     v(&S::hard, FieldInfo("hard").Doc("vertices fixed at the targets; false: a penalty"));
     v(&S::weight, FieldInfo("weight").AtLeast(0).Doc("a soft anchor's weight; 0 = weights.anchor"));
@@ -203,7 +210,7 @@ template <>
 struct OptionFields<MotionTrackSpec> {
   static constexpr const char* kSection = "synth.motion";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     v(&MotionTrackSpec::anchor, FieldInfo("anchor").Doc("hard or soft: the tracking scene gets an anchor that follows it"));
   }
 };
@@ -228,7 +235,7 @@ template <>
 struct OptionFields<SynthBodySpec> {
   static constexpr const char* kSection = "synth.bodies";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = SynthBodySpec;
     v(&S::box_min, FieldInfo("min").In("box").Required().Python("box_min").Doc("the box's corner with the smallest coordinates (m)"));
     v(&S::box_max, FieldInfo("max").In("box").Required().Python("box_max").Doc("the box's opposite corner (m)"));
@@ -279,7 +286,7 @@ template <>
 struct OptionFields<SynthSpec> {
   static constexpr const char* kSection = "synth";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = SynthSpec;
     v(&S::frames, FieldInfo("frames").AtLeast(1).Doc("frames to simulate"));
     v(&S::seed, FieldInfo("seed").AtLeast(0).Doc("the sensor noise's seed"));

@@ -74,7 +74,7 @@ template <>
 struct OptionFields<DepthSensorOptions> {
   static constexpr const char* kSection = "sensor";
   template <class Visitor>
-  static void Visit(Visitor&& v) {
+  static constexpr void Visit(Visitor&& v) {
     using S = DepthSensorOptions;
     v(&S::noise_coefficient, FieldInfo("noise_coefficient").AtLeast(0).Doc("sigma_z = k z^2 (1/m); 0 = noiseless"));
     v(&S::grazing_angle_deg, FieldInfo("grazing_angle_deg").Above(0).AtMost(90).Doc("pixels seeing a surface more obliquely are dropped"));

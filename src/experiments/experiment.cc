@@ -316,8 +316,7 @@ std::vector<Setting> DefaultComparison(const Scene& base) {
                      for (ObjectSpec& o : sc->objects) {
                        o.material.youngs_modulus *= factor;
                        o.material.poisson_ratio = poisson;
-                       o.material_model = MaterialModel::kHooke;  // this element at this nu
-                       o.element_chosen = true;
+                       o.model = MaterialModel::kHooke;  // this element at this nu
                      }
                    },
                    1.0});

@@ -87,6 +87,16 @@ bool FromString(const std::string& name, MaterialModel* model) {
   return true;
 }
 
+const char* ToString(MaterialVolume volume) {
+  return volume == MaterialVolume::kNodal ? "nodal" : "element";
+}
+
+bool FromString(const std::string& name, MaterialVolume* volume) {
+  if (name != "element" && name != "nodal") return false;
+  *volume = name == "nodal" ? MaterialVolume::kNodal : MaterialVolume::kElement;
+  return true;
+}
+
 Matrix6 IsotropicElasticity(double E, double nu) {
   const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
   const double mu = E / (2.0 * (1.0 + nu));

@@ -68,6 +68,8 @@ json Named(const std::vector<Entry>& entries) {
 
 }  // namespace
 
+json MaterialJson(const Material& material) { return FieldsJson(material); }
+
 json RegistrationOptionsJson(const RegistrationOptions& o) {
   json j = FieldsJson(o);  // regularizer, loads, initial_pose
   j["camera"] = {{"enabled", o.camera.enabled}};
@@ -95,7 +97,7 @@ json SceneOptionsJson(const Scene& scene) {
   });
   j["collision"]["obstacles"] = Named(scene.collision.obstacles);
   json materials = json::array();
-  for (const ObjectSpec& o : scene.objects) materials.push_back(FieldsJson(o.material));
+  for (const ObjectSpec& o : scene.objects) materials.push_back(MaterialJson(o.material));
   j["materials"] = materials;
   j["objects"] = Named(scene.objects);
   j["anchors"] = Named(scene.anchors);

@@ -17,6 +17,9 @@ namespace results_internal {
 // scene, --set and command-line flags were applied.
 nlohmann::ordered_json RegistrationOptionsJson(const RegistrationOptions& options);
 
+// A material's fields by their table's keys (femreg/fem.h): {"youngs_modulus", ...}.
+nlohmann::ordered_json MaterialJson(const Material& material);
+
 // The scene's other options, every field of their tables (femreg/field_table.h) by its scene
 // key: {"forward", "effects": {"fracture": {"enabled", ...}, "collision"}, "collision" (with
 // "pairs" and "obstacles"), "materials": [per object], "objects" and "anchors" (each entry's

@@ -68,6 +68,8 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
     }
   }
   const RegistrationOptions& o = tracker.options();
+  // The options the blocks below echo, from their tables (the same as provenance.options).
+  const json options = results_internal::RegistrationOptionsJson(o);
   json j;
   j["femreg_version"] = Version();
   j["scene"] = run.scene;
@@ -82,10 +84,10 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
   // was decided (the last solved frame) and the smallest coverage of the surface.
   j["clouds"] = {{"auto_voxel_m", number(voxel)},
                  {"visibility", visibility},
-                 {"reciprocity", number(o.data.reciprocity)},
+                 {"reciprocity", options["data"]["reciprocity"]},
                  {"min_coverage", number(coverage)}};
-  j["regularizer"] = ToString(o.regularizer);
-  j["backend"] = ToString(o.solver.backend);
+  j["regularizer"] = options["regularizer"];
+  j["backend"] = options["solver"]["backend"];
   // What solved the frames (a contact scene runs on Ceres whatever the option says).
   json used = json::array();
   for (const FrameRecord& r : rows) {
@@ -98,21 +100,19 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
   ChooseRegistrationElements(&chosen);
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const TetMesh& m = tracker.mesh(static_cast<int>(i));
-    objects.push_back({{"name", scene.objects[i].name},
-                       {"vertices", m.num_vertices()},
-                       {"tetrahedra", m.num_tets()},
-                       {"youngs_modulus", number(scene.objects[i].material.youngs_modulus)},
-                       {"poisson_ratio", number(scene.objects[i].material.poisson_ratio)},
-                       {"element", ToString(chosen.objects[i].material_model)},
-                       {"elastic_poisson_ratio", number(chosen.objects[i].material.poisson_ratio)}});
+    json object = {{"name", scene.objects[i].name}, {"vertices", m.num_vertices()}, {"tetrahedra", m.num_tets()}};
+    object.update(results_internal::MaterialJson(scene.objects[i].material));  // as the scene gives it
+    object["element"] = ToString(chosen.objects[i].Model());
+    object["elastic_poisson_ratio"] = number(chosen.objects[i].material.poisson_ratio);
+    objects.push_back(object);
   }
   j["objects"] = objects;
   // The solver's options by their table (the same keys as provenance.options.solver).
-  j["solver"] = results_internal::RegistrationOptionsJson(o)["solver"];
+  j["solver"] = options["solver"];
   // How the first frame was posed (registration.initial_pose; FrameSummary::initial_pose).
   if (!rows.empty()) {
     const FrameSummary& first = rows.front().summary;
-    j["initial_pose"] = {{"option", ToString(o.initial_pose)},
+    j["initial_pose"] = {{"option", options["initial_pose"]},
                          {"chosen", first.initial_pose.empty() ? "given" : first.initial_pose},
                          {"ambiguous", first.pose_ambiguous},
                          {"first_frame_ms", number(first.time.total * 1e3)}};
@@ -166,15 +166,16 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
                             {"hidden_max", number(t.hidden_max * 1e3)}};
   }
   {
-    // The external forces' resultant per frame (N): what the run estimated (or, without
-    // registration.forces.estimate, the data term's pull).
+    // registration.forces, and the external forces' resultant per frame (N): what the run
+    // estimated (or, without forces.estimate, the data term's pull).
     json forces = json::array();
     for (const FrameRecord& r : rows) {
       const FrameSummary& s = r.summary;
       forces.push_back({{"force_N", {number(s.force.x()), number(s.force.y()), number(s.force.z())}},
                         {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}});
     }
-    j["forces"] = {{"estimated", o.forces.estimate}, {"per_frame", forces}};
+    j["forces"] = options["forces"];
+    j["forces"]["per_frame"] = forces;
   }
   {
     // How far each frame can be trusted, and the frames where the object was lost.
@@ -186,13 +187,11 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
     j["tracking"] = {{"confidence_per_frame", confidence}, {"lost_frames", lost}};
   }
   {
-    // Surface vertices held back by free space per frame (registration.free_space).
+    // registration.free_space, and the surface vertices it held back per frame.
     json held = json::array();
     for (const FrameRecord& r : rows) held.push_back(r.summary.free_space_vertices);
-    j["free_space"] = {{"enabled", o.free_space.enabled},
-                       {"tolerance_m", number(o.free_space.tolerance)},
-                       {"weight_N_per_m", number(o.free_space.weight)},
-                       {"vertices_per_frame", held}};
+    j["free_space"] = options["free_space"];
+    j["free_space"]["vertices_per_frame"] = held;
   }
   double deepest = 0.0;
   int contacts = 0;

@@ -59,28 +59,15 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) surface.Fail("surface file not found: " + object.surface_path);
   }
-  ParseFields(v, &object, /*check=*/true);  // scale, pose, toughness, label (femreg/scene.h)
-  if (v.Has("material")) {
-    const YamlValue material = v["material"];
-    object.material = ParseMaterial(material, object.material);
-    object.element_chosen = material.Has("model") || material.Has("volume");
-    if (material.Has("model")) {
-      object.material_model = ParseEnum(
-          material["model"], std::vector<MaterialModel>{MaterialModel::kHooke, MaterialModel::kNeoHookean});
-    }
-    if (material.Has("volume")) {
-      const YamlValue volume = material["volume"];
-      const std::string name = volume.AsString();
-      if (name != "element" && name != "nodal") {
-        volume.Fail("unknown value " + Quote(name) + " (one of: element, nodal)");
-      }
-      object.nodal_volume = name == "nodal";
-      if (object.nodal_volume && object.material_model != MaterialModel::kNeoHookean) {
-        volume.Fail("'nodal' needs 'model: neo_hookean' (the nodal volume is the neo-Hookean "
-                    "element's remedy for locking)");
-      }
-    }
+  // scale, pose, material.model and material.volume, toughness, label (femreg/scene.h); the
+  // material's own keys are Material's table, checked with the group's rows by ParseMaterial.
+  const char* material_group = FieldOf<&ObjectSpec::model>().group;
+  ParseFields(v, &object, /*check=*/true, {material_group});
+  if (object.NodalVolume() && object.Model() != MaterialModel::kNeoHookean) {
+    FieldValue<&ObjectSpec::volume>(v).Fail(
+        "'nodal' needs 'model: neo_hookean' (the nodal volume is the neo-Hookean element's remedy for locking)");
   }
+  if (v.Has(material_group)) object.material = ParseMaterial(v[material_group], object.material);
   if (v.Has("regions")) {
     const YamlValue regions = v["regions"];
     regions.RequireMap();
@@ -93,9 +80,9 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
         if (existing.first == region) key.Fail("region " + std::to_string(region) + " listed twice");
       }
       object.region_materials.emplace_back(region, ParseMaterial(entry, object.material, true));
-      if (HasField(entry, &ObjectSpec::toughness)) {  // the object's row
+      if (HasField<&ObjectSpec::toughness>(entry)) {  // the object's row
         double toughness = 0.0;
-        ReadField(FieldValue(entry, &ObjectSpec::toughness), FieldOf(&ObjectSpec::toughness), true, &toughness);
+        ReadField(FieldValue<&ObjectSpec::toughness>(entry), FieldOf<&ObjectSpec::toughness>(), true, &toughness);
         object.region_toughness.emplace_back(region, toughness);
       }
     }
@@ -150,8 +137,8 @@ MeshGeneratorSpec SceneParser::ParseGenerator(const YamlValue& v) {
 }
 
 Material SceneParser::ParseMaterial(const YamlValue& v, const Material& defaults, bool region) {
-  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{FieldOf(&ObjectSpec::toughness).key}
-                                          : std::vector<std::string>{"model", "volume"}));
+  v.CheckKeys(FieldKeys<Material>(region ? std::vector<std::string>{FieldOf<&ObjectSpec::toughness>().key}
+                                          : GroupKeys<ObjectSpec>(FieldOf<&ObjectSpec::model>().group)));
   // The keys and ranges are Material's table (femreg/fem.h); a bad value fails at its line:
   // "beam.yaml:6: objects[0].material.poisson_ratio: must be in (-1, 0.5) (got 0.5)".
   Material m = defaults;

@@ -32,9 +32,9 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     if (c.Has("intrinsics")) {
       // An Open3D PinholeCameraIntrinsic JSON, relative to the scene's folder; instead of
       // the rows it sets, never beside them (which would win is a guess).
-      const FieldInfo set_by_file[] = {FieldOf(&CameraOptions::fx), FieldOf(&CameraOptions::fy),
-                                       FieldOf(&CameraOptions::cx), FieldOf(&CameraOptions::cy),
-                                       FieldOf(&CameraOptions::width), FieldOf(&CameraOptions::height)};
+      const FieldInfo set_by_file[] = {FieldOf<&CameraOptions::fx>(), FieldOf<&CameraOptions::fy>(),
+                                       FieldOf<&CameraOptions::cx>(), FieldOf<&CameraOptions::cy>(),
+                                       FieldOf<&CameraOptions::width>(), FieldOf<&CameraOptions::height>()};
       std::string keys;
       for (const FieldInfo& f : set_by_file) keys += (keys.empty() ? "" : ", ") + std::string(f.key);
       for (const FieldInfo& f : set_by_file) {
@@ -66,12 +66,12 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       r.preprocess.mask_dir = path.lexically_normal().string();
     }
     // A scene crops by giving the box, and removes a plane by giving its distance.
-    const std::string crop = FieldOf(&PreprocessOptions::crop_min).group;
-    const std::string plane = FieldOf(&PreprocessOptions::plane_distance).group;
-    if (p.Has(crop) && (!HasField(p, &PreprocessOptions::crop_min) || !HasField(p, &PreprocessOptions::crop_max))) {
+    const std::string crop = FieldOf<&PreprocessOptions::crop_min>().group;
+    const std::string plane = FieldOf<&PreprocessOptions::plane_distance>().group;
+    if (p.Has(crop) && (!HasField<&PreprocessOptions::crop_min>(p) || !HasField<&PreprocessOptions::crop_max>(p))) {
       p[crop].Fail("needs 'min' and 'max'");
     }
-    if (p.Has(plane) && !HasField(p, &PreprocessOptions::plane_distance)) p[plane].Fail("needs 'distance' (m)");
+    if (p.Has(plane) && !HasField<&PreprocessOptions::plane_distance>(p)) p[plane].Fail("needs 'distance' (m)");
     r.preprocess.crop = p.Has(crop);
     ParseFields(p, &r.preprocess);
   }
@@ -80,7 +80,7 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     d.CheckKeys(FieldKeys<DataTermOptions>());
     DataTermOptions& o = r.data;
     ParseFields(d, &o);
-    if (!HasField(d, &DataTermOptions::auto_visibility) && HasField(d, &DataTermOptions::visibility) && !o.visibility) {
+    if (!HasField<&DataTermOptions::auto_visibility>(d) && HasField<&DataTermOptions::visibility>(d) && !o.visibility) {
       // `visibility: false` written out means every surface vertex pulls: without this, a
       // scene with a camera would still get the camera's test from auto_visibility.
       o.auto_visibility = false;
@@ -89,16 +89,16 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
   if (v.Has("weights")) {
     const YamlValue w = v["weights"];
     w.CheckKeys(FieldKeys<WeightOptions>());
-    const bool per_correspondence = HasField(w, &WeightOptions::data);
-    const bool per_area = HasField(w, &WeightOptions::data_per_area);
+    const bool per_correspondence = HasField<&WeightOptions::data>(w);
+    const bool per_area = HasField<&WeightOptions::data_per_area>(w);
     if (per_correspondence && per_area) {
-      FieldValue(w, &WeightOptions::data)
+      FieldValue<&WeightOptions::data>(w)
           .Fail("set data (legacy: N/m per correspondence, so the fit changes with the "
                 "cloud's density) or data_per_area (N/m^3, per unit observed area), not both");
     }
     ParseFields(w, &r.weights);
     if (per_correspondence && !(r.weights.data >= 0)) {
-      FieldValue(w, &WeightOptions::data).Fail("must be >= 0 (N/m per correspondence)");
+      FieldValue<&WeightOptions::data>(w).Fail("must be >= 0 (N/m per correspondence)");
     }
     if (per_area) r.weights.data = -1.0;  // per unit area instead of per correspondence
   }
@@ -107,8 +107,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     s.CheckKeys(FieldKeys<SolverOptions>());
     SolverOptions& o = r.solver;
     ParseFields(s, &o);
-    const FieldInfo ceres_only[] = {FieldOf(&SolverOptions::trust_region), FieldOf(&SolverOptions::linear_solver)};
-    if (!HasField(s, &SolverOptions::backend) && (s.Has(ceres_only[0].key) || s.Has(ceres_only[1].key))) {
+    const FieldInfo ceres_only[] = {FieldOf<&SolverOptions::trust_region>(), FieldOf<&SolverOptions::linear_solver>()};
+    if (!HasField<&SolverOptions::backend>(s) && (s.Has(ceres_only[0].key) || s.Has(ceres_only[1].key))) {
       o.backend = SolverBackend::kCeres;  // only Ceres has them: applied, not ignored
     }
     if (o.backend == SolverBackend::kFast) {

@@ -23,7 +23,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
     v.Fail("needs registration.camera: the virtual depth camera renders from it");
   }
   // The ground truth's keys beside its refinement (the table's) are read here.
-  const char* truth_group = FieldOf(&SynthSpec::refinement).group;
+  const char* truth_group = FieldOf<&SynthSpec::refinement>().group;
   if (v.Has(truth_group)) v[truth_group].CheckKeys(GroupKeys<SynthSpec>(truth_group, {"mesh", "generate", "material"}));
   // frames, seed, sanity_check, ground_truth.refinement, background (femreg/scene.h)
   ParseFields(v, &s, /*check=*/true, {truth_group});
@@ -36,12 +36,12 @@ void SceneParser::ParseSynth(const YamlValue& v) {
              "remove ground_truth or sanity_check");
     }
     s.ground_truth_where = g.Location() + " (" + g.path() + ")";
-    const bool refined = HasField(v, &SynthSpec::refinement);
+    const bool refined = HasField<&SynthSpec::refinement>(v);
     if (refined + g.Has("mesh") + g.Has("generate") > 1) {
       g.Fail("needs at most one of refinement, mesh or generate");
     }
     if (refined && object.generate.shape == MeshGeneratorSpec::Shape::kNone) {
-      FieldValue(v, &SynthSpec::refinement)
+      FieldValue<&SynthSpec::refinement>(v)
           .Fail("refines a generated object, and objects[0] reads a mesh file: "
                 "give ground_truth.mesh (a finer mesh of the same shape)");
     }
@@ -70,7 +70,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
   if (v.Has("sensor")) ParseSensor(v["sensor"], &s.sensor);
   if (v.Has("artefacts")) ParseArtefacts(v["artefacts"], &s);
   if (s.background && !(s.background_normal.norm() > 0)) {
-    FieldValue(v, &SynthSpec::background_normal).Fail("must not be zero");
+    FieldValue<&SynthSpec::background_normal>(v).Fail("must not be zero");
   }
   std::set<std::string> names;
   if (v.Has("motion")) {
@@ -91,7 +91,7 @@ void SceneParser::ParseSynth(const YamlValue& v) {
       ParseFields(t, &track, /*check=*/true);  // anchor (femreg/scene.h)
       for (const MotionKeyframe& k : track.keyframes) {
         if (track.anchor != MotionTrackSpec::Anchor::kNone && k.rotation.norm() > 0 && !track.has_centre) {
-          FieldValue(t, &MotionTrackSpec::anchor)
+          FieldValue<&MotionTrackSpec::anchor>(t)
               .Fail("this track rotates: its anchor turns about the track's centre, so give centre: [x, y, z]");
         }
       }
@@ -107,15 +107,15 @@ void SceneParser::ParseSynth(const YamlValue& v) {
       SynthBodySpec body;
       body.name = b.Has("name") ? b["name"].AsString() : "body" + std::to_string(i);
       if (!names.insert(body.name).second) b["name"].Fail("duplicate name " + Quote(body.name));
-      const char* box = FieldOf(&SynthBodySpec::box_min).group;
+      const char* box = FieldOf<&SynthBodySpec::box_min>().group;
       if (!b.Has(box)) b.Fail("needs 'box: {min: [x, y, z], max: [x, y, z]}'");
-      if (!HasField(b, &SynthBodySpec::box_min) || !HasField(b, &SynthBodySpec::box_max)) {
+      if (!HasField<&SynthBodySpec::box_min>(b) || !HasField<&SynthBodySpec::box_max>(b)) {
         b[box].CheckKeys(GroupKeys<SynthBodySpec>(box));
         b[box].Fail("needs 'min' and 'max'");
       }
       ParseFields(b, &body, /*check=*/true);  // box, in_cloud, press, contact_tolerance (femreg/scene.h)
       if ((body.box_min.array() >= body.box_max.array()).any()) {
-        FieldValue(b, &SynthBodySpec::box_max).Fail("must be > min in every coordinate");
+        FieldValue<&SynthBodySpec::box_max>(b).Fail("must be > min in every coordinate");
       }
       if (b.Has("keyframes")) body.keyframes = ParseKeyframes(b, false);
       s.bodies.push_back(body);

@@ -114,8 +114,8 @@ ObjectMaterial ObjectSpec::Materials() const {
   ObjectMaterial m;
   m.material = material;
   m.regions = region_materials;
-  m.model = material_model;
-  m.nodal_volume = nodal_volume;
+  m.model = Model();
+  m.nodal_volume = NodalVolume();
   return m;
 }
 

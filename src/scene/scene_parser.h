@@ -135,15 +135,16 @@ void ParseFields(const YamlValue& v, Options* o, bool check = false, std::vector
 }
 
 // One member's key in the section `v`, for a section's rules across keys and for a key read
-// elsewhere too (a region's toughness): whether `v` has it, and its value.
-template <class Options, class T>
-bool HasField(const YamlValue& v, T Options::*member) {
-  const FieldInfo f = FieldOf(member);
+// elsewhere too (a region's toughness): whether `v` has it, and its value
+// (HasField<&WeightOptions::data>(w)).
+template <auto kMember>
+bool HasField(const YamlValue& v) {
+  constexpr FieldInfo f = FieldOf<kMember>();
   return f.group != nullptr ? v.Has(f.group) && v[f.group].Has(f.key) : v.Has(f.key);
 }
-template <class Options, class T>
-YamlValue FieldValue(const YamlValue& v, T Options::*member) {
-  const FieldInfo f = FieldOf(member);
+template <auto kMember>
+YamlValue FieldValue(const YamlValue& v) {
+  constexpr FieldInfo f = FieldOf<kMember>();
   return f.group != nullptr ? v[f.group][f.key] : v[f.key];
 }
 

@@ -228,9 +228,8 @@ Status CopyMaterials(const Scene& from, Scene* scene) {
     }
     o.material = it->material;
     o.region_materials = it->region_materials;
-    o.material_model = it->material_model;
-    o.nodal_volume = it->nodal_volume;
-    o.element_chosen = it->element_chosen;
+    o.model = it->model;
+    o.volume = it->volume;
   }
   return Status::Ok();
 }
@@ -239,14 +238,12 @@ std::vector<std::string> ChooseForwardElements(Scene* scene) {
   std::vector<std::string> lines;
   if (scene->forward.model) return lines;  // forward.model chosen: every object keeps it
   for (ObjectSpec& o : scene->objects) {
-    if (o.element_chosen) continue;
+    if (o.ElementChosen()) continue;  // by the file, or by a call before: no second line
     double nu = o.material.poisson_ratio;
     for (const auto& r : o.region_materials) nu = std::max(nu, r.second.poisson_ratio);
     if (nu < kNearlyIncompressibleNu) continue;
-    const bool changed = o.material_model != MaterialModel::kNeoHookean || !o.nodal_volume;
-    o.material_model = MaterialModel::kNeoHookean;
-    o.nodal_volume = true;
-    if (!changed) continue;
+    o.model = MaterialModel::kNeoHookean;
+    o.volume = MaterialVolume::kNodal;
     std::ostringstream line;
     line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
          << " (nearly incompressible), where linear tetrahedra lock: using the neo-Hookean "
@@ -261,13 +258,12 @@ std::vector<std::string> ChooseRegistrationElements(Scene* scene) {
   std::vector<std::string> lines;
   if (scene->registration.regularizer != Regularizer::kCorotational) return lines;
   for (ObjectSpec& o : scene->objects) {
-    if (o.element_chosen) continue;
+    if (o.ElementChosen()) continue;
     double nu = o.material.poisson_ratio;
     for (const auto& r : o.region_materials) nu = std::max(nu, r.second.poisson_ratio);
     if (nu < kNearlyIncompressibleNu) continue;
-    o.material_model = MaterialModel::kNeoHookean;
-    o.nodal_volume = false;
-    o.element_chosen = true;  // once: a second call changes nothing
+    o.model = MaterialModel::kNeoHookean;  // chosen: a second call changes nothing
+    o.volume.reset();  // element volumes
     std::ostringstream line;
     line << o.name << ": nu " << nu << " >= " << kNearlyIncompressibleNu
          << " (nearly incompressible), where linear tetrahedra lock: registering with the "

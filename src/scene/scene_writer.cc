@@ -128,21 +128,23 @@ YAML::Node ObjectNode(const ObjectSpec& o, const std::string& base_dir) {
   } else {
     n["mesh"] = FilePath(o.mesh_path, base_dir);
   }
-  PutFieldsBefore(n, o);  // scale, pose (femreg/scene.h)
+  PutFieldsBefore(n, o);  // scale, pose, material.model and material.volume (femreg/scene.h)
   {
+    // The material's own keys (Material's table), then the element's rows, set or not.
+    const char* group = FieldOf<&ObjectSpec::model>().group;
     YAML::Node material = MaterialNode(o.material, Material());
-    if (o.material_model != MaterialModel::kHooke || o.element_chosen) {
-      material["model"] = ToString(o.material_model);  // a chosen hooke stays chosen
+    const YAML::Node element = static_cast<const YAML::Node&>(n)[group];
+    if (element.IsDefined()) {
+      for (const auto& row : element) material[row.first.Scalar()] = row.second.Scalar();
     }
-    if (o.nodal_volume) material["volume"] = "nodal";
-    PutMap(n, "material", material);
+    PutMap(n, group, material);
   }
   if (!o.region_materials.empty()) {
     YAML::Node regions = FlowMap();
     for (const auto& [region, material] : o.region_materials) {
       YAML::Node entry = MaterialNode(material, o.material);
       for (const auto& [id, toughness] : o.region_toughness) {
-        if (id == region) entry[FieldOf(&ObjectSpec::toughness).key] = Number(toughness);  // the object's row
+        if (id == region) entry[FieldOf<&ObjectSpec::toughness>().key] = Number(toughness);  // the object's row
       }
       regions[std::to_string(region)] = entry;
     }
@@ -257,7 +259,7 @@ YAML::Node SynthNode(const Scene& scene, const std::string& base_dir) {
   const SynthSpec d;
   YAML::Node n = Map();
   PutFieldsBefore(n, s);  // frames, seed, sanity_check, ground_truth.refinement
-  const char* truth_group = FieldOf(&SynthSpec::refinement).group;
+  const char* truth_group = FieldOf<&SynthSpec::refinement>().group;
   const YAML::Node refined = static_cast<const YAML::Node&>(n)[truth_group];
   YAML::Node truth = refined.IsDefined() ? refined : FlowMap();
   if (!s.mesh_path.empty()) truth["mesh"] = FilePath(s.mesh_path, base_dir);

@@ -30,7 +30,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   const PreprocessOptions& p = r.preprocess;
   YAML::Node preprocess = FlowMap();
   if (!p.mask_dir.empty()) preprocess["mask_dir"] = FilePath(p.mask_dir, base_dir);
-  const FieldInfo crop_min = FieldOf(&PreprocessOptions::crop_min), crop_max = FieldOf(&PreprocessOptions::crop_max);
+  const FieldInfo crop_min = FieldOf<&PreprocessOptions::crop_min>();
+  const FieldInfo crop_max = FieldOf<&PreprocessOptions::crop_max>();
   PutFields(preprocess, p, {crop_min.path(), crop_max.path()});
   if (p.crop) {  // the group is the switch
     YAML::Node crop = FlowMap();
@@ -47,7 +48,8 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   YAML::Node weights = FlowMap();
   // Which of the two is written also selects the weighting: written whenever the weighting
   // differs from the default's, else only when its value does.
-  const FieldInfo per_correspondence = FieldOf(&WeightOptions::data), per_area = FieldOf(&WeightOptions::data_per_area);
+  const FieldInfo per_correspondence = FieldOf<&WeightOptions::data>();
+  const FieldInfo per_area = FieldOf<&WeightOptions::data_per_area>();
   if (r.weights.data < 0) {
     if (d.weights.data >= 0 || r.weights.data_per_area != d.weights.data_per_area) {
       weights[per_area.key] = Number(r.weights.data_per_area);
@@ -79,7 +81,7 @@ YAML::Node RegistrationNode(const RegistrationOptions& r, const std::vector<Forc
   YAML::Node solver = FlowMap();
   std::vector<std::string> skip;  // Ceres' own settings: refused beside backend: fast
   if (r.solver.backend != SolverBackend::kCeres) {
-    skip = {FieldOf(&SolverOptions::trust_region).path(), FieldOf(&SolverOptions::linear_solver).path()};
+    skip = {FieldOf<&SolverOptions::trust_region>().path(), FieldOf<&SolverOptions::linear_solver>().path()};
   }
   PutFields(solver, r.solver, skip);
   PutMap(n, "solver", solver);

@@ -278,9 +278,8 @@ void RunSimulate(const SimulateOptions& options) {
   if (!options.model.empty()) {  // every object, whatever its material.model says
     for (ObjectSpec& o : scene.objects) {
       const bool neo_hookean = model_type == ElasticModelType::kNeoHookean;
-      o.material_model = neo_hookean ? MaterialModel::kNeoHookean : MaterialModel::kHooke;
-      o.nodal_volume = neo_hookean && o.nodal_volume;
-      o.element_chosen = true;
+      o.model = neo_hookean ? MaterialModel::kNeoHookean : MaterialModel::kHooke;  // chosen
+      if (!neo_hookean) o.volume.reset();  // the nodal volume is neo-Hookean's
     }
   }
   for (const std::string& line : ChooseForwardElements(&scene)) std::cout << line << "\n";
