@@ -301,6 +301,106 @@ TEST(Open3dIntrinsics, SceneCameraReadsTheFile) {
                       "matrix column by column (got a list of 3 values)");
 }
 
+// ---- A camera matrix as text
+
+// DeepDeform's intrinsics.txt as its sequences hold it: numpy.savetxt of the 4x4 matrix.
+const char kDeepDeformMatrix[] =
+    "5.755480000000000018e+02 0.000000000000000000e+00 3.231720000000000255e+02 0.000000000000000000e+00\n"
+    "0.000000000000000000e+00 5.774600000000000364e+02 2.364170000000000016e+02 0.000000000000000000e+00\n"
+    "0.000000000000000000e+00 0.000000000000000000e+00 1.000000000000000000e+00 0.000000000000000000e+00\n"
+    "0.000000000000000000e+00 0.000000000000000000e+00 0.000000000000000000e+00 1.000000000000000000e+00\n";
+
+TEST(MatrixIntrinsics, ReadsDeepDeformsFourByFourAndAThreeByThree) {
+  TempDir tmp;
+  PinholeIntrinsics k;
+  Status s = ReadMatrixIntrinsics(tmp.Write("intrinsics.txt", kDeepDeformMatrix), &k);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(k.fx, 575.548);
+  EXPECT_EQ(k.fy, 577.46);
+  EXPECT_EQ(k.cx, 323.172);
+  EXPECT_EQ(k.cy, 236.417);
+  EXPECT_EQ(k.width, 0);  // a matrix has no image size
+  EXPECT_EQ(k.height, 0);
+  EXPECT_FALSE(LooksLikeJsonFile(tmp.File("intrinsics.txt")));
+
+  // A 3x3 K with a comment, blank lines and Windows line ends.
+  s = ReadMatrixIntrinsics(tmp.Write("k.txt", "# K\r\n525 0 319.5\r\n\r\n0 520.5 239.25  # fy, cy\r\n0 0 1\r\n"), &k);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(k.fx, 525.0);
+  EXPECT_EQ(k.fy, 520.5);
+  EXPECT_EQ(k.cx, 319.5);
+  EXPECT_EQ(k.cy, 239.25);
+
+  // Into a camera: fx..cy change; the image size and the pose are the camera's.
+  CameraOptions camera;
+  camera.width = 320;
+  camera.height = 240;
+  camera.position = Eigen::Vector3d(1, 2, 3);
+  s = ReadCameraIntrinsics(tmp.File("intrinsics.txt"), &camera);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(camera.fx, 575.548);
+  EXPECT_EQ(camera.cy, 236.417);
+  EXPECT_EQ(camera.width, 320);
+  EXPECT_EQ(camera.height, 240);
+  EXPECT_EQ(camera.position, Eigen::Vector3d(1, 2, 3));
+  // A JSON file (even with white space before its brace) is still read as Open3D's.
+  s = ReadCameraIntrinsics(tmp.Write("camera.json", std::string("\n  ") + kOpen3dJson), &camera);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(camera.width, 640);
+  EXPECT_EQ(camera.fy, 520.5);
+}
+
+TEST(MatrixIntrinsics, ErrorsNameTheFileTheLineAndTheEntry) {
+  TempDir tmp;
+  PinholeIntrinsics k;
+  auto refuse = [&](const std::string& text) {
+    return ErrorOf(ReadMatrixIntrinsics(tmp.Write("m.txt", text), &k));
+  };
+  const std::string m = tmp.File("m.txt");
+  EXPECT_HAS(refuse("525 0 319.5\n0 0 239.5\n0 0 1\n"), m + ":2: [1][1] (fy): must be > 0 (got 0)");
+  EXPECT_HAS(refuse("525 0.5 319.5\n0 525 239.5\n0 0 1\n"), m + ":1: [0][1] (the skew): must be 0 in a pinhole matrix (got 0.5)");
+  // Transposed (cx, cy in the last row): said so.
+  EXPECT_HAS(refuse("525 0 0\n0 525 0\n319.5 239.5 1\n"),
+             m + ":3: [2][0]: must be 0 in a pinhole matrix (got 319.5); cx and cy are in the last row");
+  EXPECT_HAS(refuse("525 0 319.5 0\n0 525 239.5 0\n0 0 1 0\n0 0 0 2\n"), m + ":4: [3][3]: must be 1 in a pinhole matrix (got 2)");
+  EXPECT_HAS(refuse("525 0 319.5\n0 525 239.5\n"), m + ": has 2 rows of numbers; a camera matrix as text has 3 (K) or 4");
+  EXPECT_HAS(refuse("525 0 319.5\n0 525\n0 0 1\n"), m + ":2: row 1 has 2 numbers; a 3x3 matrix has 3 in every row");
+  EXPECT_HAS(refuse("525 0 319.5\n0 fy 239.5\n0 0 1\n"), m + ":2: 'fy' is not a finite number");
+  EXPECT_HAS(refuse("525 0 319.5\n0 nan 239.5\n0 0 1\n"), m + ":2: 'nan' is not a finite number");
+  EXPECT_HAS(ErrorOf(ReadMatrixIntrinsics(tmp.File("none.txt"), &k)), tmp.File("none.txt") + ": cannot open");
+  CameraOptions camera;
+  EXPECT_HAS(ErrorOf(ReadCameraIntrinsics(tmp.File("none.txt"), &camera)), tmp.File("none.txt") + ": cannot open");
+}
+
+// The scene key with a matrix: fx..cy from the file, width and height beside it (required:
+// the file has none), the keys the file sets refused beside it.
+TEST(MatrixIntrinsics, SceneCameraTakesTheMatrixAndTheImageSizeBesideIt) {
+  TempDir tmp;
+  tmp.Write("intrinsics.txt", kDeepDeformMatrix);
+  const std::string objects = "objects: [{generate: {shape: box, size: [0.1, 0.02, 0.02], cells: [4, 1, 1]}}]\n";
+  tmp.Write("scene.yaml", objects + "registration:\n  camera: {intrinsics: intrinsics.txt, width: 640, height: 480}\n");
+  Scene scene;
+  Status s = LoadScene(tmp.File("scene.yaml"), &scene);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_TRUE(scene.registration.camera.enabled);
+  EXPECT_EQ(scene.registration.camera.fx, 575.548);
+  EXPECT_EQ(scene.registration.camera.cx, 323.172);
+  EXPECT_EQ(scene.registration.camera.width, 640);
+  EXPECT_EQ(scene.registration.camera.height, 480);
+
+  tmp.Write("nosize.yaml", objects + "registration:\n  camera: {intrinsics: intrinsics.txt, width: 640}\n");
+  EXPECT_HAS(ErrorOf(LoadScene(tmp.File("nosize.yaml"), &scene)),
+             "is a camera matrix (not Open3D's JSON), which holds no image size: give camera.width and "
+             "camera.height beside it");
+  tmp.Write("both.yaml", objects + "registration:\n  camera: {intrinsics: intrinsics.txt, width: 640, height: 480, cy: 240}\n");
+  EXPECT_HAS(ErrorOf(LoadScene(tmp.File("both.yaml"), &scene)),
+             "registration.camera.cy: given beside camera.intrinsics, which sets it: give the intrinsics either in "
+             "the file or as fx, fy, cx, cy");
+  tmp.Write("bad.txt", "525 0 319.5\n0 0 239.5\n0 0 1\n");
+  tmp.Write("bad.yaml", objects + "registration:\n  camera: {intrinsics: bad.txt, width: 640, height: 480}\n");
+  EXPECT_HAS(ErrorOf(LoadScene(tmp.File("bad.yaml"), &scene)), tmp.File("bad.txt") + ":2: [1][1] (fy): must be > 0");
+}
+
 // ---- TUM RGB-D lists
 
 // A sequence folder with depth/ and rgb/ images (empty files: the list reader checks that

@@ -160,5 +160,31 @@ TEST(FrameLayouts, RegisterReadsNpyFramesThroughOpen3dIntrinsics) {
   EXPECT_NE(run.out.find("--intrinsics: the frames are point clouds"), std::string::npos) << run.out;
 }
 
+// The camera matrix as text (DeepDeform's intrinsics.txt is its 4x4 form): --intrinsics
+// replaces a wrong fx and a wrong image size that --set put in the scene; the size is the
+// first frame's. The bundled PNG frames' errors.
+TEST(FrameLayouts, RegisterTakesAMatrixAndTheFramesImageSize) {
+  TempDir tmp;
+  const std::vector<std::string> plain = PlainErrors(tmp);
+  Scene scene;
+  ASSERT_TRUE(LoadScene(Demo() + "/scene.yaml", &scene).ok());
+  const CameraOptions& c = scene.registration.camera;
+  char matrix[512];
+  std::snprintf(matrix, sizeof(matrix), "%.17g 0 %.17g 0\n0 %.17g %.17g 0\n0 0 1 0\n0 0 0 1\n", c.fx, c.cx, c.fy,
+                c.cy);
+  tmp.Write("intrinsics.txt", matrix);
+  CliRun run = Femreg(RegisterArgs(tmp.File("plain"), tmp.File("out_matrix")) +
+                      " --set registration.camera.fx=100 --set registration.camera.width=100 --intrinsics " +
+                      tmp.File("intrinsics.txt"));
+  ASSERT_EQ(run.code, 0) << run.out;
+  ExpectSameErrors(StatsColumn(tmp.File("out_matrix"), "err_mean_mm"), plain, 2e-3);
+
+  tmp.Write("bad.txt", "262.5 0 159.5\n0 0 119.5\n0 0 1\n");
+  run = Femreg(RegisterArgs(tmp.File("plain"), tmp.File("out_bad")) + " --intrinsics " + tmp.File("bad.txt"));
+  EXPECT_EQ(run.code, 1) << run.out;
+  EXPECT_NE(run.out.find("--intrinsics: " + tmp.File("bad.txt") + ":2: [1][1] (fy): must be > 0 (got 0)"),
+            std::string::npos) << run.out;
+}
+
 }  // namespace
 }  // namespace femreg

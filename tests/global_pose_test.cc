@@ -131,6 +131,35 @@ TEST(GlobalPose, KeepsAPoseTheFirstFrameExplains) {
   EXPECT_TRUE(automatic.x == given.x);
 }
 
+TEST(GlobalPose, KeepsTheGivenPoseOfALargeBodySeenWhole) {
+  // A 100 x 75 x 20 cm block seen where it is by a camera 1 m above its top: the top facing
+  // the camera is judged against every point of the cloud, not against the few thousand the
+  // fit is scored on, whose spacing alone put a large body seen whole beyond loss_scale and
+  // searched (docs/notes/2026-11-30-real-frames.md).
+  TetMesh block = MakeBox(Eigen::Vector3d(1.0, 0.75, 0.2), 40, 30, 4);
+  RegistrationOptions options;
+  options.camera.enabled = true;
+  options.camera.position = Eigen::Vector3d(0.5, 0.375, 1.2);
+  options.camera.target = Eigen::Vector3d(0.5, 0.375, 0.0);
+  options.camera.up = Eigen::Vector3d::UnitY();
+  options.initial_pose = InitialPose::kAuto;
+  DepthSensorOptions sensor;
+  sensor.camera = options.camera;
+  sensor.noise_coefficient = 1e-3;  // 1 mm at 1 m
+  const DepthSensor camera(sensor);
+  const RenderSurface s{&block.rest, &block.surface, true};
+  const PointCloud cloud = camera.Sample(camera.Render({s}), {s}, 7);
+  std::unique_ptr<Tracker> tracker;
+  const Status status = Tracker::Create({block}, {Material{1e5, 0.3, 1000.0}}, options, &tracker);
+  ASSERT_TRUE(status.ok()) << status.message();
+  FrameSummary summary;
+  ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
+  std::printf("block: %d points read, %d used; initial pose '%s'\n", static_cast<int>(cloud.points.rows()),
+              summary.points_used, summary.initial_pose.c_str());
+  EXPECT_GT(summary.points_used, 4000);  // more than the fit scores
+  EXPECT_EQ(summary.initial_pose, "given");
+}
+
 TEST(GlobalPose, SameOnEveryRunAndThreadCount) {
   // Every run: the test binary's runs of the same case (the first test's) agree too.
   const FirstFrame one = Register("bent ellipsoid", Body(false), InitialPose::kAuto, 2.5, 1);

@@ -1,6 +1,6 @@
 // femreg/camera_io.h - the files of depth cameras and of the tools around them: depth images
 // (16-bit PNG, NumPy .npy), segmentation masks (PNG), pinhole intrinsics (Open3D's
-// PinholeCameraIntrinsic JSON) and recordings in the TUM RGB-D layout. Files only: the
+// PinholeCameraIntrinsic JSON, or the matrix as text) and recordings in the TUM RGB-D layout. Files only: the
 // camera model and the back-projection are the registration module's (femreg/point_cloud.h).
 #ifndef FEMREG_CAMERA_IO_H_
 #define FEMREG_CAMERA_IO_H_
@@ -70,6 +70,19 @@ struct PinholeIntrinsics {
 Status ReadOpen3dIntrinsics(const std::string& path, PinholeIntrinsics* intrinsics);
 // Writes the same layout (what Open3D reads back), atomically.
 Status WriteOpen3dIntrinsics(const std::string& path, const PinholeIntrinsics& intrinsics);
+
+// ---- A pinhole matrix as text (matrix_intrinsics.cc)
+
+// Reads the camera matrix as numpy.savetxt writes it (and numpy.loadtxt reads it): rows of
+// whitespace-separated numbers, row-major, either the 3x3 K = [fx 0 cx; 0 fy cy; 0 0 1] or
+// K padded to a 4x4 homogeneous matrix (DeepDeform's intrinsics.txt). '#' starts a comment.
+// The zeros and the 1s of K (and of the padding) must be there, fx and fy positive. The
+// file holds no image size: width and height are returned 0. Errors name the file, the
+// line and the entry ("intrinsics.txt:2: [1][1] (fy): must be > 0 (got 0)").
+Status ReadMatrixIntrinsics(const std::string& path, PinholeIntrinsics* intrinsics);
+// True when the file's first character that is not white space is '{' (a JSON object: an
+// Open3D file), false for anything else (a matrix, or a file that cannot be read).
+bool LooksLikeJsonFile(const std::string& path);
 
 // ---- The TUM RGB-D layout (tum_sequence.cc)
 

@@ -89,9 +89,10 @@ struct DepthImageOptions {
 // images are back-projected and the virtual camera (DepthSensor) renders through it.
 Eigen::Matrix3d CameraRotation(const CameraOptions& camera);
 
-// Sets the camera's intrinsics (fx, fy, cx, cy, width, height) from an Open3D
-// PinholeCameraIntrinsic JSON file (ReadOpen3dIntrinsics); its pose and `enabled` stay as
-// they are. Errors name the file and the field.
+// Sets the camera's intrinsics from a file: fx, fy, cx, cy, width and height from an Open3D
+// PinholeCameraIntrinsic JSON (ReadOpen3dIntrinsics); fx, fy, cx and cy from a matrix as
+// text (ReadMatrixIntrinsics: any file that is not JSON), whose width and height stay the
+// camera's. Its pose and `enabled` stay as they are. Errors name the file and the field.
 Status ReadCameraIntrinsics(const std::string& path, CameraOptions* camera);
 // Writes the camera's intrinsics as that JSON (WriteOpen3dIntrinsics).
 Status WriteCameraIntrinsics(const std::string& path, const CameraOptions& camera);

@@ -1,5 +1,5 @@
 // Python bindings: the files of depth cameras (femreg/camera_io.h) - NumPy depth frames,
-// Open3D's intrinsics (a JSON file, or a PinholeCameraIntrinsic object), TUM RGB-D
+// intrinsics (Open3D's JSON or the matrix as text, or a PinholeCameraIntrinsic object), TUM RGB-D
 // sequences - and the frames of a recording as `femreg register` lists and reads them.
 #include <cstring>
 #include <string>
@@ -45,14 +45,16 @@ void BindCameraFiles(py::module_& m) {
 
   m.def("read_intrinsics",
         [](const std::string& path, const py::object& camera) {
-          PinholeIntrinsics k;
-          Check(ReadOpen3dIntrinsics(path, &k));
-          return WithIntrinsics(camera, k);
+          CameraOptions c = camera.is_none() ? CameraOptions() : camera.cast<CameraOptions>();
+          Check(ReadCameraIntrinsics(path, &c));
+          return c;
         },
         py::arg("path"), py::arg("camera") = py::none(),
-        "A CameraOptions with the intrinsics (fx, fy, cx, cy, width, height) of an Open3D "
-        "PinholeCameraIntrinsic JSON file and the pose of `camera` (default: the camera "
-        "frame is the scene frame). femreg.Error names the file and the field.");
+        "A CameraOptions with the intrinsics of a file and the pose of `camera` (default: the "
+        "camera frame is the scene frame): fx, fy, cx, cy, width and height from an Open3D "
+        "PinholeCameraIntrinsic JSON file; fx, fy, cx and cy from the camera matrix as text "
+        "(3x3, or 4x4 as DeepDeform's intrinsics.txt), whose width and height stay `camera`'s. "
+        "femreg.Error names the file and the field.");
   m.def("write_intrinsics",
         [](const std::string& path, const CameraOptions& c) { Check(WriteCameraIntrinsics(path, c)); },
         py::arg("path"), py::arg("camera"),

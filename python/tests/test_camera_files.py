@@ -104,6 +104,25 @@ def test_intrinsics_json(tmp_path):
         femreg.read_intrinsics(str(path))
 
 
+
+def test_intrinsics_matrix(tmp_path):
+    """The camera matrix as numpy.savetxt writes it (DeepDeform's intrinsics.txt is the 4x4
+    form): fx..cy from the file, the image size and the pose the camera's."""
+    path = tmp_path / "intrinsics.txt"
+    k = np.eye(4)
+    k[0, 0], k[1, 1], k[0, 2], k[1, 2] = 575.548, 577.46, 323.172, 236.417
+    np.savetxt(path, k)
+    posed = femreg.CameraOptions()
+    posed.position = [0.0, 0.0, 1.0]
+    posed.width, posed.height = 320, 240
+    camera = femreg.read_intrinsics(str(path), posed)
+    assert (camera.fx, camera.fy, camera.cx, camera.cy) == (575.548, 577.46, 323.172, 236.417)
+    assert (camera.width, camera.height) == (320, 240)
+    np.testing.assert_array_equal(camera.position, [0, 0, 1])
+    np.savetxt(path, k[:3, :3].T)   # transposed: cx, cy in the last row
+    with pytest.raises(femreg.Error, match=r"intrinsics\.txt:3: \[2\]\[0\]: must be 0 .*transposed"):
+        femreg.read_intrinsics(str(path))
+
 def make_tum(datasets, root, frames=3):
     """The demo's first frames as a TUM sequence: 5000 units per metre, depth.txt."""
     (root / "depth").mkdir(parents=True)

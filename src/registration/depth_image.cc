@@ -213,9 +213,17 @@ void SetIntrinsics(const PinholeIntrinsics& k, CameraOptions* camera) {
 
 Status ReadCameraIntrinsics(const std::string& path, CameraOptions* camera) {
   PinholeIntrinsics k;
-  Status status = ReadOpen3dIntrinsics(path, &k);
-  if (status.ok()) SetIntrinsics(k, camera);
-  return status;
+  if (LooksLikeJsonFile(path)) {
+    Status status = ReadOpen3dIntrinsics(path, &k);
+    if (status.ok()) SetIntrinsics(k, camera);
+    return status;
+  }
+  Status status = ReadMatrixIntrinsics(path, &k);
+  if (!status.ok()) return status;
+  k.width = camera->width;  // a matrix holds no image size
+  k.height = camera->height;
+  SetIntrinsics(k, camera);
+  return Status::Ok();
 }
 
 Status WriteCameraIntrinsics(const std::string& path, const CameraOptions& camera) {

@@ -180,6 +180,7 @@ class Verifier {
     const int stride = std::max<int>(1, static_cast<int>(points.rows()) / kMaxScoredPoints);
     for (Eigen::Index i = 0; i < points.rows(); i += stride)
       points_.push_back(points.row(i).transpose());
+    if (has_eye_) all_points_ = points;
   }
 
   // The trimmed mean distance of the cloud, mapped by h, to the surface (m).
@@ -196,10 +197,9 @@ class Verifier {
       samples_.emplace_back(q.x, q.y, q.z);
       sample_normals_.emplace_back(q.normal_x, q.normal_y, q.normal_z);
     }
-    Vertices cloud(static_cast<Eigen::Index>(points_.size()), 3);
-    for (size_t i = 0; i < points_.size(); ++i)
-      cloud.row(static_cast<Eigen::Index>(i)) = points_[i].transpose();
-    cloud_index_ = std::make_unique<PointIndex>(cloud);
+    // Every point, not the scored ones: the nearest of a thinned cloud's points is about its
+    // spacing away, which on a large object seen whole exceeds loss_scale by itself.
+    cloud_index_ = std::make_unique<PointIndex>(all_points_);
   }
 
   // Fit plus, with surface samples, the trimmed mean distance from the surface facing the eye
@@ -304,7 +304,8 @@ class Verifier {
   const Triangles& tris_;
   SurfaceIndex index_;
   Eigen::MatrixXd face_normals_;
-  std::vector<Eigen::Vector3d> points_;
+  std::vector<Eigen::Vector3d> points_;  // the scored cloud (at most kMaxScoredPoints)
+  Vertices all_points_;                   // the whole cloud, with an eye
   std::vector<Eigen::Vector3d> samples_, sample_normals_;
   std::unique_ptr<PointIndex> cloud_index_;
   bool has_eye_;

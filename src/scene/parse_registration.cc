@@ -1,7 +1,9 @@
 // Scene section: registration (regularizer, camera, preprocessing, data term, weights,
 // solver); range checks through RegistrationOptions::IsValid.
 #include <filesystem>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include "femreg/point_cloud.h"
 #include "scene/scene_parser.h"
@@ -30,11 +32,22 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
     c.CheckKeys(FieldKeys<CameraOptions>({"intrinsics"}));
     r.camera.enabled = true;
     if (c.Has("intrinsics")) {
-      // An Open3D PinholeCameraIntrinsic JSON, relative to the scene's folder; instead of
-      // the rows it sets, never beside them (which would win is a guess).
-      const FieldInfo set_by_file[] = {FieldOf<&CameraOptions::fx>(), FieldOf<&CameraOptions::fy>(),
-                                       FieldOf<&CameraOptions::cx>(), FieldOf<&CameraOptions::cy>(),
-                                       FieldOf<&CameraOptions::width>(), FieldOf<&CameraOptions::height>()};
+      // An intrinsics file, relative to the scene's folder: Open3D's PinholeCameraIntrinsic
+      // JSON sets fx..height, a matrix as text (DeepDeform's intrinsics.txt) fx..cy and leaves
+      // the image size to width and height beside it. Never a key the file sets beside it
+      // (which would win is a guess).
+      const YamlValue file = c["intrinsics"];
+      std::filesystem::path path(file.AsString());
+      if (path.empty()) {
+        file.Fail("must name an intrinsics file (Open3D's PinholeCameraIntrinsic JSON, or the camera matrix as text)");
+      }
+      if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
+      const std::string resolved = path.lexically_normal().string();
+      const bool json_file = LooksLikeJsonFile(resolved);
+      std::vector<FieldInfo> set_by_file = {FieldOf<&CameraOptions::fx>(), FieldOf<&CameraOptions::fy>(),
+                                            FieldOf<&CameraOptions::cx>(), FieldOf<&CameraOptions::cy>()};
+      const FieldInfo size_fields[] = {FieldOf<&CameraOptions::width>(), FieldOf<&CameraOptions::height>()};
+      if (json_file) set_by_file.insert(set_by_file.end(), std::begin(size_fields), std::end(size_fields));
       std::string keys;
       for (const FieldInfo& f : set_by_file) keys += (keys.empty() ? "" : ", ") + std::string(f.key);
       for (const FieldInfo& f : set_by_file) {
@@ -43,11 +56,15 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
                         keys);
         }
       }
-      const YamlValue file = c["intrinsics"];
-      std::filesystem::path path(file.AsString());
-      if (path.empty()) file.Fail("must name an intrinsics file (Open3D's PinholeCameraIntrinsic JSON)");
-      if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
-      const Status read = ReadCameraIntrinsics(path.lexically_normal().string(), &r.camera);
+      if (!json_file) {
+        for (const FieldInfo& f : size_fields) {
+          if (!c.Has(f.key)) {
+            file.Fail(resolved + " is a camera matrix (not Open3D's JSON), which holds no image size: give " +
+                      "camera.width and camera.height beside it (the depth images' size)");
+          }
+        }
+      }
+      const Status read = ReadCameraIntrinsics(resolved, &r.camera);
       if (!read.ok()) file.Fail(read.message());
     }
     ParseFields(c, &r.camera);

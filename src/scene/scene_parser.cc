@@ -28,6 +28,7 @@
 //     camera: {position: [0, 0, 1], target: [0, 0, 0], up: [0, -1, 0], fx: 525, fy: 525,
 //              cx: 319.5, cy: 239.5, width: 640, height: 480}  # present = a known camera
 //              # or intrinsics: camera.json (Open3D's PinholeCameraIntrinsic) for fx..height
+//              # or intrinsics: intrinsics.txt (the matrix as text) for fx..cy, with width, height
 //     preprocess: {mask_dir: masks,               # depth frames: mask_dir/<frame name>.png
 //                  crop: {min: [..], max: [..]}, plane: {distance: 0.005, iterations: 200},
 //                  voxel_size: 0,

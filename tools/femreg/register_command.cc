@@ -109,6 +109,22 @@ int RunRegister(const RegisterArgs& args) {
       std::cerr << "femreg register: --intrinsics: " << status.message() << "\n";
       return 1;
     }
+    if (!LooksLikeJsonFile(args.intrinsics)) {
+      // A camera matrix as text holds no image size: the frames' is the camera's.
+      const std::string& first = *std::find_if(files.begin(), files.end(), IsDepthImageFile);
+      RawDepthImage image;
+      std::string ext = fs::path(first).extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+      status = ext == ".npy" ? ReadDepthNpy(first, &image) : ReadDepthPng(first, &image);
+      if (!status.ok()) {
+        std::cerr << "femreg register: --intrinsics " << args.intrinsics
+                  << " holds no image size, and the first depth frame cannot be read for it: " << status.message()
+                  << "\n";
+        return 1;
+      }
+      scene.registration.camera.width = image.width;
+      scene.registration.camera.height = image.height;
+    }
     scene.registration.camera.enabled = true;
   }
   // The depth scale: --depth-scale, else the layout's (TUM RGB-D: 5000 units per metre),
@@ -547,8 +563,10 @@ void AddRegisterCommand(CLI::App* app) {
       ->each([args](const std::string&) { args->depth_scale_given = true; });
   cmd->add_option("--intrinsics", args->intrinsics,
                   "The camera's intrinsics from an Open3D PinholeCameraIntrinsic JSON (width, height, "
-                  "intrinsic_matrix), replacing the scene's fx, fy, cx, cy, width and height; the pose "
-                  "stays the scene's camera's (without one, the scene frame is the camera's)")
+                  "intrinsic_matrix), or from the 3x3 or 4x4 camera matrix as text (DeepDeform's "
+                  "intrinsics.txt; width and height then the first depth frame's), replacing the scene's "
+                  "fx, fy, cx, cy, width and height; the pose stays the scene's camera's (without one, the "
+                  "scene frame is the camera's)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--mask-dir", args->mask_dir,
                   "A folder of segmentation masks for depth PNG frames, DIR/<frame name>.png: 8- or "
