@@ -215,8 +215,6 @@ struct OptionFields<SolverOptions> {
     v(&S::backtrack, FieldInfo("backtrack"));
     v(&S::hold_hidden_turns,
       FieldInfo("hold_hidden_turns").Doc("Outer iterations leave out turns of free objects that their surface does not show."));
-    v(&S::outer_steps, FieldInfo("outer_steps")
-                           .Doc("Anderson steps over the outer iterations, kept where they lower the energy."));
     v(&S::rigid_prealign, FieldInfo("rigid_prealign"));
     v(&S::rigid_iterations, FieldInfo("rigid_iterations").AtLeast(0));
   }

@@ -285,11 +285,6 @@ struct SolverOptions {
   // its surface does not show (a ball's about its centre, a cylinder's about its axis): no
   // data decides it, so the registration does not make it (docs/theory/stopping.md#hidden-turns).
   bool hold_hidden_turns = true;
-  // From the held pair set on, after each outer iteration, try Anderson's step over the last
-  // three (the solve from each shape with what is found there, as a fixed-point map) and go
-  // on from it where the energy with the rotations, pairs and contacts found there is lower
-  // (docs/notes/2026-11-30-outer-steps.md).
-  bool outer_steps = true;
   bool rigid_prealign = false;           // rigid ICP step before the non-rigid solve
   int rigid_iterations = 30;
   bool IsValid(std::string* error) const;
@@ -461,8 +456,6 @@ struct FrameSummary {
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
-  int outer_steps = 0;       // Anderson steps over the outer iterations tried (solver.outer_steps)
-  int outer_steps_kept = 0;  // ... and kept: the energy with what was found there was lower
   // 1 when the first outer iteration moved the bulk of the vertices (99 %) more than 3 mean
   // edges, or the frame came after held or lost ones, and the frame started again, stiff and
   // stepping down (docs/theory/stopping.md#large-motions).

@@ -51,8 +51,6 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["outer_iterations"] = s.outer_iterations;
   d["inner_iterations"] = s.inner_iterations;
   d["backtracks"] = s.backtracks;
-  d["outer_steps"] = s.outer_steps;
-  d["outer_steps_kept"] = s.outer_steps_kept;
   d["large_motion_restarts"] = s.large_motion_restarts;
   d["confidence"] = s.confidence.confidence;
   d["lost"] = s.lost;

@@ -128,13 +128,11 @@ bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
 
 bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previous,
                               std::vector<DataPair>* pairs, PairCounts* counts,
-                              femreg::OuterIteration* row, double* previous_energy, FrameSummary* s,
-                              double start_energy) {
+                              femreg::OuterIteration* row, double* previous_energy, FrameSummary* s) {
   const RegistrationOptions& options = state.options;
   auto t0 = Clock::now();
   const double allowed = merit + options.solver.relative_energy_tolerance * std::abs(merit);
-  double at =
-      std::isnan(start_energy) ? frame_problem.problem().Evaluate(state.x).total() : start_energy;
+  double at = frame_problem.problem().Evaluate(state.x).total();
   s->time.evaluation += Seconds(t0);
   s->time.solve += Seconds(t0);
   if (at <= allowed) return true;
@@ -228,23 +226,12 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   row.iteration = k + 1;
   PairCounts counts;
   const bool warm_start = options.forces.estimate && k == 0;
-  // The energy at state.x with everything found there, when the last outer step found it.
-  double start_energy = std::numeric_limits<double>::quiet_NaN();
-  if (prepared_k == k) {
-    row = prepared_row;
-    row.iteration = k + 1;
-    counts = prepared_counts;
-    start_energy = prepared_energy;
-  } else {
-    UpdateElementRotations(s);
-    if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
-  }
-  prepared_k = -1;
+  UpdateElementRotations(s);
+  if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
   // Vertices in the seen-through space: free space pushes them out, a change of the problem
   // like new contact multipliers, which the last start's energy is not to undo.
   if (frame_problem.FreeSpaceHeld(state.x) > 0) merit = std::numeric_limits<double>::infinity();
-  if (Backtracks(k, warm_start) &&
-      !Backtrack(k, fc, *previous, pairs, &counts, &row, previous_energy, s, start_energy)) {
+  if (Backtracks(k, warm_start) && !Backtrack(k, fc, *previous, pairs, &counts, &row, previous_energy, s)) {
     return false;
   }
   const energy::Problem& problem = frame_problem.problem();
@@ -320,7 +307,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       warm_triangles.clear();  // a new surface
       paired_vertices.clear();
       FindPairs(PairState(), fc, Surface(), options.solver.num_threads, pairs, &counts);  // for the outputs
-      ResetOuterSteps();
       moved = std::numeric_limits<double>::infinity();  // a new topology: not converged
       bulk = moved;
       // The next outer iteration forms a new pair set, held from the one after.
@@ -389,81 +375,16 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->message = "time budget of " + std::to_string(options.solver.time_budget_s) + " s used";
     return false;
   }
-  if (k + 1 < iteration_limit && !warm_start && std::isfinite(moved)) {
-    OuterStep(k, fc, *previous, before_solve, pairs, s);
-  }
   if (k + 1 == iteration_limit) {
     s->termination = TerminationType::kMaxIterations;
-    s->message = "reached solver.max_outer_iterations = " +
-                 std::to_string(options.solver.max_outer_iterations);
+    s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
     if (iteration_budget != options.solver.max_outer_iterations) {
       s->message += " x " + std::to_string(iteration_budget / options.solver.max_outer_iterations) +
-                    " (catching up after " + std::to_string(missed_frames) +
-                    " held or lost frames)";
+                    " (catching up after " + std::to_string(missed_frames) + " held or lost frames)";
     }
-    if (s->large_motion_restarts > 0)
-      s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
+    if (s->large_motion_restarts > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
   }
   return true;
-}
-
-void Tracker::Impl::OuterStep(int k, const FrameCloud& fc, const Vertices& previous,
-                              const Vertices& start, std::vector<DataPair>* pairs,
-                              FrameSummary* s) {
-  // One schedule's consecutive outer iterations: not across the stiff stages of a large
-  // motion or fracture's, whose energies differ from one outer iteration to the next.
-  if (stepping_in || FractureLive(state)) {
-    outer_steps.Clear();
-    return;
-  }
-  outer_steps.Record(k, start, state.x);
-  // From where the pair set is held: before, the pairs and the occluders still change with
-  // more than the shape.
-  Vertices further;
-  if (!state.options.solver.outer_steps || k < rise_from || !outer_steps.Propose(&further)) return;
-  const Vertices reached = state.x;
-  if (!((further - reached).rowwise().norm().maxCoeff() >
-        state.options.solver.step_tolerance * state.mean_edge_length)) {
-    return;
-  }
-  // The held pair set and the walks' starts as found at the solve's end (the first call): a
-  // step not kept leaves no trace.
-  std::vector<char> paired_at;
-  std::vector<int> warm_at;
-  int calls = 0;
-  auto energy = [&](const Vertices& y) {
-    if (calls++ == 1) {
-      paired_at = paired_vertices;
-      warm_at = warm_triangles;
-    }
-    state.x = y;
-    UpdateElementRotations(s);
-    if (!PrepareIteration(k + 1, fc, previous, pairs, &prepared_counts, &prepared_row, s)) {
-      return std::numeric_limits<double>::quiet_NaN();
-    }
-    const auto t0 = Clock::now();
-    const double e = frame_problem.problem().Evaluate(state.x).total();
-    s->time.evaluation += Seconds(t0);
-    s->time.solve += Seconds(t0);
-    return e;
-  };
-  const OuterStepTrial trial = TryOuterStep(reached, further, energy);
-  if (calls < 2) {
-    // Nothing to judge by at the solve's end: the next outer iteration finds it again.
-    state.x = reached;
-    return;
-  }
-  ++s->outer_steps;
-  if (trial.kept) {
-    ++s->outer_steps_kept;
-    prepared_k = k + 1;
-    prepared_energy = trial.further;
-    return;
-  }
-  // Back to the solve's end: the next outer iteration finds everything there again.
-  state.x = reached;
-  paired_vertices = paired_at;
-  warm_triangles = warm_at;
 }
 
 void Tracker::Impl::MeasureContacts(FrameSummary* s) {

@@ -296,7 +296,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   iteration_limit = iteration_budget;
   stepping_in = false;
   fc.facing_only = false;
-  ResetOuterSteps();
   const Vertices start = state.x;
   int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
   for (int k = 0; k < iteration_limit; ++k) {
@@ -338,7 +337,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       // lost ones starts so too: its held shape is several frames' motion away, and its
       // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
       state.x = start;
-      ResetOuterSteps();
       stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
       stepping_in = true;
       fc.facing_only = true;
@@ -357,7 +355,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       if (marked > 0) {
         // Back to the start without them: the shape they pulled into is no starting point.
         state.x = start;
-        ResetOuterSteps();
         fc.occluders.occluders += marked;
         s.occluded_points = fc.occluders.occluders;
         s.implausible_points += marked;

@@ -5,7 +5,6 @@
 #define FEMREG_REGISTRATION_TRACKER_IMPL_H_
 
 #include <chrono>
-#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,7 +16,6 @@
 #include "registration/depth_offset.h"
 #include "registration/embedded_surface.h"
 #include "registration/frame_problem.h"
-#include "registration/outer_steps.h"
 #include "registration/tracker_state.h"
 #include "solvers/backend.h"
 
@@ -53,26 +51,12 @@ struct Tracker::Impl {
   // finds must not rise above the last solve's start (merit): else the move is halved back
   // towards that start (docs/theory/stopping.md#backtracking). False: the frame stops (the
   // summary says why).
-  bool Backtrack(int k, const FrameCloud& fc, const Vertices& previous,
-                 std::vector<DataPair>* pairs, PairCounts* counts, femreg::OuterIteration* row,
-                 double* previous_energy, FrameSummary* s,
-                 double start_energy = std::numeric_limits<double>::quiet_NaN());
+  bool Backtrack(int k, const FrameCloud& fc, const Vertices& previous, std::vector<DataPair>* pairs,
+                 PairCounts* counts, femreg::OuterIteration* row, double* previous_energy, FrameSummary* s);
   // One outer iteration k; false when the frame stops (the summary says why).
   bool OuterIteration(int k, const FrameCloud& fc, Clock::time_point t_frame,
                       std::vector<DataPair>* pairs, double* previous_energy, Vertices* previous,
                       FrameSummary* s);
-  // After outer iteration k's solve took state.x from `start` to state.x: from the third outer
-  // iteration of a schedule on (the pair set held), an Anderson step over the last outer
-  // iterations, kept only where the energy with everything found there is lower than at
-  // state.x; either way the next outer iteration starts prepared
-  // (docs/notes/2026-11-30-outer-steps.md).
-  void OuterStep(int k, const FrameCloud& fc, const Vertices& previous, const Vertices& start,
-                 std::vector<DataPair>* pairs, FrameSummary* s);
-  // Forget the outer iterations' history (a new frame, a restart, a split).
-  void ResetOuterSteps() {
-    outer_steps.Clear();
-    prepared_k = -1;
-  }
   // The contacts the result keeps and the deepest penetration (collision on).
   void MeasureContacts(FrameSummary* s);
   // The external forces on the result: per vertex (state.external_forces) and their resultant.
@@ -129,14 +113,6 @@ struct Tracker::Impl {
   Vertices implausible_before;
   // The last outer iteration's start and its energy with what it found (Backtrack).
   Vertices merit_x;
-  // Outer steps (OuterStep): this schedule's latest outer iterations; and the outer iteration
-  // whose rotations, pairs and contacts are already found at state.x (-1: none), with what
-  // that found and the energy there.
-  OuterStepHistory outer_steps;
-  int prepared_k = -1;
-  femreg::OuterIteration prepared_row;
-  PairCounts prepared_counts;
-  double prepared_energy = 0.0;
   PointCloud prepared_cloud;  // Tracker::prepared_cloud
   double merit = 0.0;
 };
