@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -377,7 +375,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->message = "time budget of " + std::to_string(options.solver.time_budget_s) + " s used";
     return false;
   }
-  if (k + 1 < iteration_limit && !warm_start && std::isfinite(moved)) Zig(k, fc, *previous, before_solve, pairs, s);
   if (k + 1 == iteration_limit) {
     s->termination = TerminationType::kMaxIterations;
     s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);
@@ -388,48 +385,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     if (s->large_motion_restarts > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
   }
   return true;
-}
-
-void Tracker::Impl::Zig(int k, const FrameCloud& fc, const Vertices& previous, const Vertices& start,
-                        std::vector<DataPair>* pairs, FrameSummary* s) {
-  static const int mode = std::getenv("FEMREG_ZIG") ? std::atoi(std::getenv("FEMREG_ZIG")) : 0;
-  static const bool verbose = std::getenv("FEMREG_ZIG_VERBOSE") != nullptr;
-  const Vertices move = state.x - start;
-  const bool have = zig_k == k - 1 && zig_last.rows() == move.rows() && !stepping_in && !FractureLive(state) &&
-                    k - 1 >= iteration_base;
-  const Vertices last = zig_last;
-  zig_last = move;
-  zig_k = k;
-  if (mode == 0 || !have || k < rise_from) return;
-  // Per vertex, Anderson with one difference, only damping (gamma in [0, 1]).
-  const Vertices reached = state.x;
-  Vertices y = reached;
-  int damped = 0;
-  for (int i = 0; i < move.rows(); ++i) {
-    const Eigen::Vector3d f = move.row(i), df = (move.row(i) - last.row(i));
-    const double d2 = df.squaredNorm();
-    if (!(d2 > 0) || f.dot(last.row(i)) >= 0) continue;
-    const double gamma = std::min(1.0, std::max(0.0, f.dot(df) / d2));
-    y.row(i) -= gamma * f;
-    ++damped;
-  }
-  if (damped == 0) return;
-  femreg::OuterIteration row;
-  PairCounts counts;
-  UpdateElementRotations(s);
-  if (!PrepareIteration(k + 1, fc, previous, pairs, &counts, &row, s)) { state.x = reached; return; }
-  const double at = frame_problem.problem().Evaluate(state.x).total();
-  const std::vector<char> paired_at = paired_vertices;
-  const std::vector<int> warm_at = warm_triangles;
-  state.x = y;
-  UpdateElementRotations(s);
-  double ey = std::numeric_limits<double>::infinity();
-  if (PrepareIteration(k + 1, fc, previous, pairs, &counts, &row, s)) ey = frame_problem.problem().Evaluate(state.x).total();
-  if (verbose) std::fprintf(stderr, "zig frame %d k %d damped %d: %.6g -> %.6g %s\n", state.frame, k, damped, at, ey, ey < at ? "kept" : "back");
-  if (ey < at) return;
-  state.x = reached;
-  paired_vertices = paired_at;
-  warm_triangles = warm_at;
 }
 
 void Tracker::Impl::MeasureContacts(FrameSummary* s) {

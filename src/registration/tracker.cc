@@ -296,7 +296,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   iteration_limit = iteration_budget;
   stepping_in = false;
   fc.facing_only = false;
-  zig_k = -100;
   const Vertices start = state.x;
   int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
   for (int k = 0; k < iteration_limit; ++k) {

@@ -114,10 +114,6 @@ struct Tracker::Impl {
   // The last outer iteration's start and its energy with what it found (Backtrack).
   Vertices merit_x;
   PointCloud prepared_cloud;  // Tracker::prepared_cloud
-  Vertices zig_last;  // experiment
-  int zig_k = -100;
-  void Zig(int k, const FrameCloud& fc, const Vertices& previous, const Vertices& start,
-           std::vector<DataPair>* pairs, FrameSummary* s);
   double merit = 0.0;
 };
 
