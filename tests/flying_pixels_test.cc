@@ -190,6 +190,60 @@ TEST(FlyingPixels, MixedPixelsBesideAMaskedToolGo) {
   EXPECT_EQ(clean.size(), points);
 }
 
+// Mixed pixels that hold each other up: a near wall (0.5 m) left of column 81, a far one
+// right of it, and three mixed pixels on the edge. X (80, 60) lies within the tolerance of W
+// below it and of Z up and right: two directions off one line, so X alone would stay. W and Z
+// have one direction each and go; support comes only from points that stay, so X goes too.
+// Both walls stay whole.
+TEST(FlyingPixels, MixedPixelsThatOnlySupportEachOtherGo) {
+  const CameraOptions c = Camera();
+  const auto depth = [&](int u, int v) {
+    if (u == 80 && v == 60) return 0.55;   // X
+    if (u == 80 && v == 61) return 0.552;  // W
+    if (u == 81 && v == 59) return 0.551;  // Z
+    return u <= 80 ? 0.5 : 0.6 + 0.0005 * (u - 80);
+  };
+  PointCloud cloud = Render(c, depth);
+  const int near = CountDepths(c, cloud, 0.49, 0.51), far = CountDepths(c, cloud, 0.59, 0.7);
+  ASSERT_EQ(near + far + 3, cloud.size());
+  EXPECT_EQ(RemoveFlyingPixels(c, 3.0, &cloud), 3);
+  EXPECT_EQ(CountDepths(c, cloud, 0.51, 0.59), 0) << "mixed pixels stayed";
+  EXPECT_EQ(CountDepths(c, cloud, 0.49, 0.51), near);
+  EXPECT_EQ(CountDepths(c, cloud, 0.59, 0.7), far);
+}
+
+// A clean object's silhouette, where another camera would put mixed pixels: a ball in front
+// of a table seen obliquely, with the sensor's noise and its grazing limit, written at every
+// other pixel. Its limb's last samples step steeply away, between the ball's nearer samples
+// and the table behind (or a hole), but they lie on the ball: every point of the ball stays,
+// and so does the table.
+TEST(FlyingPixels, TheSilhouetteOfACleanObjectStays) {
+  const CameraOptions c = Camera();
+  const Eigen::Vector3d centre(0.0, 0.0, 0.5);
+  const double radius = 0.08;
+  const auto depth = [&](int u, int v) {
+    const Eigen::Vector3d ray((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0);
+    // The ball: the nearer root of |t ray - centre| = radius (z = t, the ray's z being 1).
+    const double a = ray.squaredNorm(), b = -2.0 * ray.dot(centre), k = centre.squaredNorm() - radius * radius;
+    const double disc = b * b - 4.0 * a * k;
+    // The table: the plane z = 0.7 + 0.5 y, seen at about 27 degrees.
+    double z = 0.7 / (1.0 - 0.5 * ray.y());
+    if (disc >= 0) {
+      z = (-b - std::sqrt(disc)) / (2.0 * a);
+      // No return beyond 80 degrees of incidence (a sensor's grazing limit).
+      const Eigen::Vector3d normal = (z * ray - centre) / radius;
+      if (std::abs(normal.dot(ray.normalized())) < std::cos(80.0 * M_PI / 180.0)) return 0.0;
+    }
+    return z + Noise(u, v, z);
+  };
+  PointCloud cloud = Render(c, depth, 2);
+  const int ball = CountDepths(c, cloud, 0.4, 0.6), table = cloud.size() - ball;
+  ASSERT_GT(ball, 500);
+  RemoveFlyingPixels(c, 4.0, &cloud);
+  EXPECT_EQ(CountDepths(c, cloud, 0.4, 0.6), ball) << "the ball's own points went";
+  EXPECT_GE(cloud.size() - CountDepths(c, cloud, 0.4, 0.6), table - 5);
+}
+
 // A cloud that is not one depth image of the camera (fused from two views: two points on
 // many pixels) is left as it is.
 TEST(FlyingPixels, OtherCloudsAreLeftAlone) {

@@ -133,11 +133,11 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
   }
 
   static const std::vector<std::vector<Offset>> windows = Windows();
-  std::vector<char> drop(static_cast<size_t>(n), 0);
-  int removed = 0;
-  for (int i = 0; i < n; ++i) {
+  // The image as given: a pixel whose point is removed below is not a hole (a masked tool).
+  const std::vector<int> given = pixel_point;
+  // Whether point i lies between surfaces and no surface around it supports it.
+  const auto unsupported = [&](int i) {
     const long p = pixel_of[static_cast<size_t>(i)];
-    if (p < 0) continue;
     const long u = p % static_cast<long>(w), v = p / static_cast<long>(w);
     const double z = z_of(i);
     const double tau = std::max(tolerance * sigma_over_z2 * z * z,
@@ -155,7 +155,8 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
         const long nu = u + step * du, nv = v + step * dv;
         const int j = at(nu, nv);
         if (j < 0) {
-          missing |= nu >= 0 && nv >= 0 && nu < camera.width && nv < camera.height;
+          missing |= nu >= 0 && nv >= 0 && nu < camera.width && nv < camera.height &&
+                     given[static_cast<size_t>(nv) * w + static_cast<size_t>(nu)] < 0;
           continue;
         }
         ++neighbours;
@@ -163,7 +164,7 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
         farther |= z_of(j) - z > tau;
       }
     }
-    if (neighbours < 2 || (!(nearer && farther) && !(missing && farther))) continue;
+    if (neighbours < 2 || (!(nearer && farther) && !(missing && farther))) return false;
 
     // Supported from a direction: the neighbour there at its depth, or the surface through
     // that neighbour and the next one continued to it (a slanted plane: inverse depth is
@@ -228,10 +229,47 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
       supported = squares <= kWindowFit * kWindowFit * tau * tau * count &&
                   std::abs(z - 1.0 / plane(0)) <= tau;
     }
-    if (!supported) {
-      drop[static_cast<size_t>(i)] = 1;
-      ++removed;
+    return !supported;
+  };
+  // Support must come from points that stay. A sensor that mixes at every pixel, written at
+  // every other one, leaves mixed pixels two samples deep along an edge, and they hold each
+  // other up; so the points around those removed are judged again without them, until none
+  // goes. (Removing points only takes support away, never adds it; each pass removes some.)
+  std::vector<char> drop(static_cast<size_t>(n), 0);
+  std::vector<int> judge;
+  for (int i = 0; i < n; ++i) {
+    if (pixel_of[static_cast<size_t>(i)] >= 0) judge.push_back(i);
+  }
+  std::vector<char> queued(static_cast<size_t>(n), 0);
+  int removed = 0;
+  while (!judge.empty()) {
+    std::vector<int> go;
+    for (const int i : judge) {
+      if (unsupported(i)) go.push_back(i);
     }
+    for (const int i : go) {
+      drop[static_cast<size_t>(i)] = 1;
+      pixel_point[static_cast<size_t>(pixel_of[static_cast<size_t>(i)])] = -1;
+    }
+    removed += static_cast<int>(go.size());
+    // Judged again: the points whose judgement looked at a removed one (within three
+    // samples, the parabola's reach; the windows reach two).
+    std::fill(queued.begin(), queued.end(), 0);
+    judge.clear();
+    for (const int i : go) {
+      const long p = pixel_of[static_cast<size_t>(i)];
+      const long u = p % static_cast<long>(w), v = p / static_cast<long>(w);
+      for (long dv = -3; dv <= 3; ++dv) {
+        for (long du = -3; du <= 3; ++du) {
+          const int j = at(u + step * du, v + step * dv);
+          if (j >= 0 && !queued[static_cast<size_t>(j)]) {
+            queued[static_cast<size_t>(j)] = 1;
+            judge.push_back(j);
+          }
+        }
+      }
+    }
+    std::sort(judge.begin(), judge.end());
   }
   if (removed == 0) return 0;
   KeepPoints([&](int i) { return !drop[static_cast<size_t>(i)]; }, cloud);

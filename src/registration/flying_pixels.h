@@ -19,7 +19,9 @@ namespace femreg {
 // off one line, the neighbour's depth or the plane through the neighbour and the next sample
 // continued to it (or the parabola through three in a row); or a plane fitted to one half or one corner quadrant of its 5 x 5
 // neighbourhood, which fits its own samples within the tolerance (RMS). The one-pixel curtain
-// of mixed pixels along an edge supports itself only along the edge, and goes.
+// of mixed pixels along an edge supports itself only along the edge, and goes. Support comes
+// only from points that stay: the points around those removed are judged again without them,
+// until none goes (mixed pixels two samples deep hold each other up until one of them goes).
 // Returns how many were removed; -1 when the cloud is not one depth image of this camera
 // (more than a tenth of its points outside the image, behind the camera or sharing a
 // pixel), and then it is left as it is.
