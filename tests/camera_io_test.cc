@@ -290,6 +290,8 @@ TEST(Open3dIntrinsics, SceneCameraReadsTheFile) {
   // Written back resolved: the numbers, so the scene stands without the file.
   EXPECT_HAS(SceneToYaml(scene, tmp.path()), "fy: 520.5");
 
+  tmp.Write("missing.yaml", objects + "registration:\n  camera: {intrinsics: absent.json}\n");
+  EXPECT_HAS(ErrorOf(LoadScene(tmp.File("missing.yaml"), &scene)), "absent.json: cannot open: no such file");
   tmp.Write("both.yaml", objects + "registration:\n  camera: {intrinsics: camera.json, fx: 500}\n");
   EXPECT_HAS(ErrorOf(LoadScene(tmp.File("both.yaml"), &scene)),
              "registration.camera.fx: given beside camera.intrinsics, which sets it");

@@ -53,6 +53,9 @@ from scipy.spatial import cKDTree
 import vtk
 from vtk.util import numpy_support
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from femreg_tools import kabsch, read_vtu  # noqa: E402
+
 
 def read_png(path):
     return np.array(Image.open(path)).astype(np.int64)
@@ -165,22 +168,6 @@ def write_vtu(path, vertices, tets):
         sys.exit(f"cannot write {path}")
 
 
-def read_vtu_points(path):
-    reader = vtk.vtkXMLUnstructuredGridReader()
-    reader.SetFileName(path)
-    reader.Update()
-    return numpy_support.vtk_to_numpy(reader.GetOutput().GetPoints().GetData()).astype(np.float64)
-
-
-def best_rigid(a, b):
-    """R, t minimising sum |R a + t - b|^2 (Kabsch)."""
-    ca, cb = a.mean(axis=0), b.mean(axis=0)
-    u, _, vt = np.linalg.svd((a - ca).T @ (b - cb))
-    d = np.sign(np.linalg.det(vt.T @ u.T))
-    r = vt.T @ np.diag([1, 1, d]) @ u.T
-    return r, cb - r @ ca
-
-
 def carried_mask(mask, oflow, depth_target):
     """The source mask moved along the optical flow to the target frame, closed over the
     holes the rounding leaves, kept where the target has a depth."""
@@ -255,7 +242,7 @@ def main():
     start = vertices
     if args.start == "rigid-truth":
         args.frames = "target"
-        r, t = best_rigid(points0[tv, tu], points0[tv, tu] + true)
+        r, t = kabsch(points0[tv, tu], points0[tv, tu] + true)
         start = vertices @ r.T + t
     mesh_path = os.path.join(args.out, "slab.vtu")
     write_vtu(mesh_path, start, tets)
@@ -286,7 +273,7 @@ objects:
     mesh: slab.vtu
     material: {{youngs_modulus: {args.youngs_modulus:g}, poisson_ratio: {args.poisson_ratio:g}, density: 200}}
 registration:
-  camera: {{position: [0, 0, 0], target: [0, 0, 1], up: [0, -1, 0], intrinsics: {intrinsics_path}, width: {w}, height: {h}}}
+  camera: {{position: [0, 0, 0], target: [0, 0, 1], up: [0, -1, 0], intrinsics: {json.dumps(intrinsics_path)}, width: {w}, height: {h}}}
   data: {{visibility: true}}
 """)
     run = os.path.join(args.out, "run")
@@ -305,8 +292,8 @@ registration:
     expected = 2 if args.frames == "both" else 1
     if len(outs) != expected:
         sys.exit(f"{run}: expected {expected} frames of {obj}, found {outs}")
-    x0 = read_vtu_points(outs[0]) if expected == 2 else start
-    x1 = read_vtu_points(outs[-1])
+    x0 = read_vtu(outs[0])["Points"].astype(np.float64) if expected == 2 else start
+    x1 = read_vtu(outs[-1])["Points"].astype(np.float64)
     disp = x1[:n_front] - vertices[:n_front]  # from the slab as built, not from the fit to frame 0
 
     gi = tv // args.stride

@@ -47,13 +47,17 @@ void BindCameraFiles(py::module_& m) {
         [](const std::string& path, const py::object& camera) {
           CameraOptions c = camera.is_none() ? CameraOptions() : camera.cast<CameraOptions>();
           Check(ReadCameraIntrinsics(path, &c));
+          if (camera.is_none() && !LooksLikeJsonFile(path)) {
+            Check(Status::Error(path + ": a camera matrix holds no image size: pass camera= "
+                                "with the depth images' width and height"));
+          }
           return c;
         },
         py::arg("path"), py::arg("camera") = py::none(),
         "A CameraOptions with the intrinsics of a file and the pose of `camera` (default: the "
         "camera frame is the scene frame): fx, fy, cx, cy, width and height from an Open3D "
         "PinholeCameraIntrinsic JSON file; fx, fy, cx and cy from the camera matrix as text "
-        "(3x3, or 4x4 as DeepDeform's intrinsics.txt), whose width and height stay `camera`'s. "
+        "(3x3, or 4x4 as DeepDeform's intrinsics.txt), whose width and height stay `camera`'s (required then). "
         "femreg.Error names the file and the field.");
   m.def("write_intrinsics",
         [](const std::string& path, const CameraOptions& c) { Check(WriteCameraIntrinsics(path, c)); },

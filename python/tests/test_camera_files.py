@@ -104,7 +104,6 @@ def test_intrinsics_json(tmp_path):
         femreg.read_intrinsics(str(path))
 
 
-
 def test_intrinsics_matrix(tmp_path):
     """The camera matrix as numpy.savetxt writes it (DeepDeform's intrinsics.txt is the 4x4
     form): fx..cy from the file, the image size and the pose the camera's."""
@@ -122,6 +121,10 @@ def test_intrinsics_matrix(tmp_path):
     np.savetxt(path, k[:3, :3].T)   # transposed: cx, cy in the last row
     with pytest.raises(femreg.Error, match=r"intrinsics\.txt:3: \[2\]\[0\]: must be 0 .*transposed"):
         femreg.read_intrinsics(str(path))
+    np.savetxt(path, k)
+    with pytest.raises(femreg.Error, match=r"intrinsics\.txt: a camera matrix holds no image size"):
+        femreg.read_intrinsics(str(path))
+
 
 def make_tum(datasets, root, frames=3):
     """The demo's first frames as a TUM sequence: 5000 units per metre, depth.txt."""

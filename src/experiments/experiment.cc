@@ -317,6 +317,7 @@ std::vector<Setting> DefaultComparison(const Scene& base) {
                        o.material.youngs_modulus *= factor;
                        o.material.poisson_ratio = poisson;
                        o.model = MaterialModel::kHooke;  // this element at this nu
+                       o.volume.reset();                 // the corotational element's own volume
                      }
                    },
                    1.0});

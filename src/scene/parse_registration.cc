@@ -43,6 +43,8 @@ void SceneParser::ParseRegistration(const YamlValue& v) {
       }
       if (path.is_relative() && !base_dir_.empty()) path = std::filesystem::path(base_dir_) / path;
       const std::string resolved = path.lexically_normal().string();
+      std::error_code missing;
+      if (!std::filesystem::is_regular_file(resolved, missing)) file.Fail(resolved + ": cannot open: no such file");
       const bool json_file = LooksLikeJsonFile(resolved);
       std::vector<FieldInfo> set_by_file = {FieldOf<&CameraOptions::fx>(), FieldOf<&CameraOptions::fy>(),
                                             FieldOf<&CameraOptions::cx>(), FieldOf<&CameraOptions::cy>()};

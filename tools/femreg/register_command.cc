@@ -95,7 +95,8 @@ int RunRegister(const RegisterArgs& args) {
     return 1;
   }
   std::vector<std::string>& files = frame_list.files;
-  // --intrinsics: the camera's intrinsics from an Open3D PinholeCameraIntrinsic JSON, for
+  // --intrinsics: the camera's intrinsics from an Open3D PinholeCameraIntrinsic JSON or the
+  // camera matrix as text (the image size then from the first frame), for
   // depth images; its pose stays the scene's, or, without a camera in the scene, is the
   // scene frame itself (depth images back-project into camera coordinates).
   if (!args.intrinsics.empty()) {
