@@ -41,6 +41,11 @@ Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh);
 // "path:line: message" (or "path: message" when line <= 0).
 Status FileError(const std::string& path, int line, const std::string& message);
 
+// The whole of a small file (at most max_bytes; `what` names the kind in the error, e.g.
+// "an intrinsics file") in *text. Errors name the file.
+Status ReadSmallFile(const std::string& path, std::streamoff max_bytes, const std::string& what,
+                     std::string* text);
+
 // A VTK XML unstructured grid (.vtu) as femreg's own reader found it (vtu_reader.cc), one
 // VtuPiece per <Piece> of the file: indices in a piece's connectivity refer to its own points.
 struct VtuArray {

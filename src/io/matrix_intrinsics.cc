@@ -39,13 +39,9 @@ bool LooksLikeJsonFile(const std::string& path) {
 
 Status ReadMatrixIntrinsics(const std::string& path, PinholeIntrinsics* intrinsics) {
   using internal::FileError;
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return FileError(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  const std::streamoff size = in.tellg();
-  if (size > kMaxBytes) {
-    return FileError(path, 0, std::to_string(size) + " bytes: too large for an intrinsics file");
-  }
-  in.seekg(0);
+  std::string text;
+  if (Status read = internal::ReadSmallFile(path, kMaxBytes, "an intrinsics file", &text); !read.ok()) return read;
+  std::istringstream in(text);
   // The rows that hold numbers, each with its line.
   std::vector<std::vector<double>> rows;
   std::vector<int> row_lines;

@@ -1,7 +1,9 @@
 // Format detection, ReadTetMesh and the checks shared by all readers.
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -20,6 +22,19 @@ Status FileError(const std::string& path, int line, const std::string& message) 
   if (line > 0) os << ":" << line;
   os << ": " << message;
   return Status::Error(os.str());
+}
+
+Status ReadSmallFile(const std::string& path, std::streamoff max_bytes, const std::string& what,
+                     std::string* text) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return FileError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  const std::streamoff size = in.tellg();
+  if (size > max_bytes) return FileError(path, 0, std::to_string(size) + " bytes: too large for " + what);
+  in.seekg(0);
+  text->assign(static_cast<size_t>(std::max<std::streamoff>(size, 0)), '\0');
+  in.read(&(*text)[0], size);
+  if (!in) return FileError(path, 0, "cannot read");
+  return Status::Ok();
 }
 
 bool RegionIdFrom(double value, int* id) {

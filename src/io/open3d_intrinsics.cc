@@ -54,15 +54,8 @@ std::string NotPositiveInt(const json& v, int* out) {
 
 Status ReadOpen3dIntrinsics(const std::string& path, PinholeIntrinsics* intrinsics) {
   using internal::FileError;
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return FileError(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  const std::streamoff size = in.tellg();
-  if (size > kMaxBytes) {
-    return FileError(path, 0, std::to_string(size) + " bytes: too large for an intrinsics file");
-  }
-  in.seekg(0);
-  std::string text(static_cast<size_t>(std::max<std::streamoff>(size, 0)), '\0');
-  in.read(&text[0], size);
+  std::string text;
+  if (Status read = internal::ReadSmallFile(path, kMaxBytes, "an intrinsics file", &text); !read.ok()) return read;
 
   json doc;
   try {
