@@ -3,6 +3,7 @@
 #define FEMREG_IO_IO_INTERNAL_H_
 
 #include <array>
+#include <ios>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,12 @@ Status FinishRawMesh(const std::string& path, RawTetMesh raw, TetMesh* mesh);
 
 // "path:line: message" (or "path: message" when line <= 0).
 Status FileError(const std::string& path, int line, const std::string& message);
+
+// An intrinsics file is a few hundred bytes; anything much larger is another file.
+constexpr std::streamoff kMaxIntrinsicsBytes = 1 << 20;
+
+// v with every digit a double holds (17 significant), for messages that quote a file's number.
+std::string ExactNumber(double v);
 
 // The whole of a small file (at most max_bytes; `what` names the kind in the error, e.g.
 // "an intrinsics file") in *text. Errors name the file.

@@ -14,19 +14,7 @@
 #include "io/io_internal.h"
 
 namespace femreg {
-namespace {
-
-// An intrinsics file is a few hundred bytes; anything much larger is another file.
-constexpr std::streamoff kMaxBytes = 1 << 20;
-
-std::string Number(double v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << v;
-  return os.str();
-}
-
-}  // namespace
+using internal::ExactNumber;
 
 bool LooksLikeJsonFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -40,7 +28,7 @@ bool LooksLikeJsonFile(const std::string& path) {
 Status ReadMatrixIntrinsics(const std::string& path, PinholeIntrinsics* intrinsics) {
   using internal::FileError;
   std::string text;
-  if (Status read = internal::ReadSmallFile(path, kMaxBytes, "an intrinsics file", &text); !read.ok()) return read;
+  if (Status read = internal::ReadSmallFile(path, internal::kMaxIntrinsicsBytes, "an intrinsics file", &text); !read.ok()) return read;
   std::istringstream in(text);
   // The rows that hold numbers, each with its line.
   std::vector<std::vector<double>> rows;
@@ -86,7 +74,7 @@ Status ReadMatrixIntrinsics(const std::string& path, PinholeIntrinsics* intrinsi
   for (size_t i : {0, 1}) {
     if (!(rows[i][i] > 0)) {
       return FileError(path, row_lines[i], entry(i, i) + (i == 0 ? " (fx)" : " (fy)") + ": must be > 0 (got " +
-                                               Number(rows[i][i]) + ")");
+                                               ExactNumber(rows[i][i]) + ")");
     }
   }
   for (size_t i = 0; i < n; ++i) {
@@ -100,8 +88,8 @@ Status ReadMatrixIntrinsics(const std::string& path, PinholeIntrinsics* intrinsi
                                        "matrix: K is read row by row"
                                      : "";
         return FileError(path, row_lines[i], entry(i, j) + (i == 0 && j == 1 ? " (the skew)" : "") +
-                                                 ": must be " + Number(want) + " in a pinhole matrix (got " +
-                                                 Number(rows[i][j]) + ")" + hint);
+                                                 ": must be " + ExactNumber(want) + " in a pinhole matrix (got " +
+                                                 ExactNumber(rows[i][j]) + ")" + hint);
       }
     }
   }

@@ -24,6 +24,13 @@ Status FileError(const std::string& path, int line, const std::string& message) 
   return Status::Error(os.str());
 }
 
+std::string ExactNumber(double v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << v;
+  return os.str();
+}
+
 Status ReadSmallFile(const std::string& path, std::streamoff max_bytes, const std::string& what,
                      std::string* text) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);

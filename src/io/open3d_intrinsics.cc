@@ -20,20 +20,12 @@ namespace {
 
 using json = nlohmann::json;
 
-// An intrinsics file is a few hundred bytes; anything much larger is another file.
-constexpr std::streamoff kMaxBytes = 1 << 20;
-
-std::string Number(double v) {
-  std::ostringstream os;
-  os.precision(17);
-  os << v;
-  return os.str();
-}
+using internal::ExactNumber;
 
 // What a JSON value is, for "got ..." parts (containers by their size: dumping a deeply
 // nested one would recurse as deep).
 std::string Describe(const json& v) {
-  if (v.is_number()) return Number(v.get<double>());
+  if (v.is_number()) return ExactNumber(v.get<double>());
   if (v.is_string()) return "the string " + internal::Quoted(v.get<std::string>());
   if (v.is_array()) return "a list of " + std::to_string(v.size()) + " values";
   if (v.is_object()) return "an object";
@@ -45,7 +37,7 @@ std::string Describe(const json& v) {
 std::string NotPositiveInt(const json& v, int* out) {
   if (!v.is_number()) return "must be a positive integer (got " + Describe(v) + ")";
   const double d = v.get<double>();
-  if (!(d >= 1) || d > 1e9 || std::floor(d) != d) return "must be a positive integer (got " + Number(d) + ")";
+  if (!(d >= 1) || d > 1e9 || std::floor(d) != d) return "must be a positive integer (got " + ExactNumber(d) + ")";
   *out = static_cast<int>(d);
   return "";
 }
@@ -55,7 +47,7 @@ std::string NotPositiveInt(const json& v, int* out) {
 Status ReadOpen3dIntrinsics(const std::string& path, PinholeIntrinsics* intrinsics) {
   using internal::FileError;
   std::string text;
-  if (Status read = internal::ReadSmallFile(path, kMaxBytes, "an intrinsics file", &text); !read.ok()) return read;
+  if (Status read = internal::ReadSmallFile(path, internal::kMaxIntrinsicsBytes, "an intrinsics file", &text); !read.ok()) return read;
 
   json doc;
   try {
@@ -108,7 +100,7 @@ Status ReadOpen3dIntrinsics(const std::string& path, PinholeIntrinsics* intrinsi
   for (int i : {0, 4}) {
     if (!(a[i] > 0)) {
       return FileError(path, 0, "intrinsic_matrix[" + std::to_string(i) + "] (" + names[i] +
-                                    "): must be > 0 (got " + Number(a[i]) + ")");
+                                    "): must be > 0 (got " + ExactNumber(a[i]) + ")");
     }
   }
   for (int i : {1, 2, 3, 5}) {
@@ -116,11 +108,11 @@ Status ReadOpen3dIntrinsics(const std::string& path, PinholeIntrinsics* intrinsi
       return FileError(path, 0, "intrinsic_matrix[" + std::to_string(i) + "]" +
                                     (names[i][0] ? std::string(" (") + names[i] + ")" : std::string()) +
                                     ": must be 0 in a pinhole matrix [fx, 0, 0, 0, fy, 0, cx, cy, 1] "
-                                    "(got " + Number(a[i]) + ")");
+                                    "(got " + ExactNumber(a[i]) + ")");
     }
   }
   if (a[8] != 1) {
-    return FileError(path, 0, "intrinsic_matrix[8]: must be 1 (got " + Number(a[8]) + ")");
+    return FileError(path, 0, "intrinsic_matrix[8]: must be 1 (got " + ExactNumber(a[8]) + ")");
   }
   k.fx = a[0];
   k.fy = a[4];
