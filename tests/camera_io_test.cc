@@ -324,6 +324,11 @@ TEST(MatrixIntrinsics, ReadsDeepDeformsFourByFourAndAThreeByThree) {
   EXPECT_EQ(k.width, 0);  // a matrix has no image size
   EXPECT_EQ(k.height, 0);
   EXPECT_FALSE(LooksLikeJsonFile(tmp.File("intrinsics.txt")));
+  // A byte order mark before Open3D's JSON: still JSON, and read as such.
+  EXPECT_TRUE(LooksLikeJsonFile(tmp.Write("bom.json", std::string("\xEF\xBB\xBF") + kOpen3dJson)));
+  PinholeIntrinsics with_bom;
+  ASSERT_TRUE(ReadOpen3dIntrinsics(tmp.File("bom.json"), &with_bom).ok());
+  EXPECT_EQ(with_bom.fx, 525.0);
 
   // A 3x3 K with a comment, blank lines and Windows line ends.
   s = ReadMatrixIntrinsics(tmp.Write("k.txt", "# K\r\n525 0 319.5\r\n\r\n0 520.5 239.25  # fy, cy\r\n0 0 1\r\n"), &k);

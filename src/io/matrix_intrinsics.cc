@@ -18,6 +18,13 @@ using internal::ExactNumber;
 
 bool LooksLikeJsonFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
+  // A UTF-8 byte order mark (some Windows editors write one) is not the content.
+  char bom[3] = {0, 0, 0};
+  in.read(bom, 3);
+  if (!(in.gcount() == 3 && bom[0] == '\xEF' && bom[1] == '\xBB' && bom[2] == '\xBF')) {
+    in.clear();
+    in.seekg(0);
+  }
   char c = 0;
   while (in.get(c)) {
     if (!std::isspace(static_cast<unsigned char>(c))) return c == '{';

@@ -254,7 +254,7 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
     removed += static_cast<int>(go.size());
     // Judged again: the points whose judgement looked at a removed one (within three
     // samples, the parabola's reach; the windows reach two).
-    std::fill(queued.begin(), queued.end(), 0);
+    for (const int j : judge) queued[static_cast<size_t>(j)] = 0;  // only those this pass set
     judge.clear();
     for (const int i : go) {
       const long p = pixel_of[static_cast<size_t>(i)];
