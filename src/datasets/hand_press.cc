@@ -27,6 +27,7 @@
 #include "femreg/point_cloud.h"
 #include "femreg/synth.h"
 #include "parallel/threads.h"
+#include "registration/cloud_subset.h"
 #include "datasets/hand_press_internal.h"
 
 namespace fs = std::filesystem;
@@ -55,25 +56,16 @@ using hand_press_internal::TrackingScene;
 // it gives its pixel back.
 PointCloud OnlySurface(const PointCloud& cloud, const DepthImage& image, const DepthSensor& sensor,
                        int kept) {
-  std::vector<int> rows;
-  for (int i = 0; i < cloud.size(); ++i) {
-    double u = 0, v = 0, z = 0;
-    if (!sensor.Project(cloud.points.row(i).transpose(), &u, &v, &z)) continue;
-    const long px = std::lround(u), py = std::lround(v);
-    if (px < 0 || py < 0 || px >= image.width || py >= image.height) continue;
-    if (image.surface[static_cast<size_t>(py * image.width + px)] == kept) rows.push_back(i);
-  }
   PointCloud out = cloud;
-  out.points.resize(static_cast<Eigen::Index>(rows.size()), 3);
-  for (size_t r = 0; r < rows.size(); ++r) out.points.row(static_cast<Eigen::Index>(r)) = cloud.points.row(rows[r]);
-  if (cloud.has_normals()) {
-    out.normals.resize(static_cast<Eigen::Index>(rows.size()), 3);
-    for (size_t r = 0; r < rows.size(); ++r) out.normals.row(static_cast<Eigen::Index>(r)) = cloud.normals.row(rows[r]);
-  }
-  if (cloud.has_labels()) {
-    out.labels.resize(static_cast<Eigen::Index>(rows.size()));
-    for (size_t r = 0; r < rows.size(); ++r) out.labels(static_cast<Eigen::Index>(r)) = cloud.labels(rows[r]);
-  }
+  KeepPoints(
+      [&](int i) {
+        double u = 0, v = 0, z = 0;
+        if (!sensor.Project(cloud.points.row(i).transpose(), &u, &v, &z)) return false;
+        const long px = std::lround(u), py = std::lround(v);
+        if (px < 0 || py < 0 || px >= image.width || py >= image.height) return false;
+        return image.surface[static_cast<size_t>(py * image.width + px)] == kept;
+      },
+      &out);
   return out;
 }
 
