@@ -48,7 +48,6 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-
 std::string Vec(const Eigen::Vector3d& v) {
   std::ostringstream os;
   os << std::setprecision(4) << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
