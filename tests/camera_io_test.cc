@@ -197,6 +197,30 @@ TEST(NpyDepth, FramesBackProjectAsTheirPngTwins) {
   EXPECT_LT(masked.size(), from_png.size());
 }
 
+// ReadDepthImageFile picks the reader by the extension, in any case: a .npy and a .png of
+// the same units read as the same image; another extension is refused naming the file.
+TEST(DepthImageFile, ReadsPngAndNpyByExtensionAndRefusesOthers) {
+  TempDir tmp;
+  RawDepthImage image;
+  image.width = 3, image.height = 2, image.values = {0, 1000, 1200, 65535, 7, 900};
+  ASSERT_TRUE(WriteDepthPng(tmp.File("d.PNG"), image).ok());
+  tmp.Write("d.npy", NpyBytes("{'descr': '<u2', 'fortran_order': False, 'shape': (2, 3), }", Bytes(image.values)));
+  RawDepthImage png, npy;
+  Status s = ReadDepthImageFile(tmp.File("d.PNG"), &png);
+  ASSERT_TRUE(s.ok()) << s.message();
+  s = ReadDepthImageFile(tmp.File("d.npy"), &npy);
+  ASSERT_TRUE(s.ok()) << s.message();
+  for (const RawDepthImage* read : {&png, &npy}) {
+    EXPECT_EQ(read->width, 3);
+    EXPECT_EQ(read->height, 2);
+    EXPECT_EQ(read->values, image.values);
+  }
+  fs::copy_file(tmp.File("d.npy"), tmp.File("d.tif"));
+  const std::string error = ErrorOf(ReadDepthImageFile(tmp.File("d.tif"), &png));
+  EXPECT_HAS(error, tmp.File("d.tif"));
+  EXPECT_HAS(error, ".png or a .npy");
+}
+
 // ---- Open3D intrinsics
 
 // What open3d.io.write_pinhole_camera_intrinsic writes (Open3D 0.16: tabs, spaces before

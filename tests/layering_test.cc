@@ -41,9 +41,9 @@ const std::map<std::string, int> kRank = {
     {"datasets", 11},     // the sequence generators
     {"experiments", 11},  // the bench / compare sweep
     {"calibration", 11},  // material from data: forward solves against observed clouds
-    {"results", 11},      // a registration run's stats.csv and summary.json
-    {"tools", 12},        // the femreg command line
-    {"python", 12},       // the Python module (python/src)
+    {"results", 12},      // the files runs write: register's, simulate's, calibrate's
+    {"tools", 13},        // the femreg command line
+    {"python", 13},       // the Python module (python/src)
 };
 
 // Public headers (include/femreg/) by module.
@@ -64,6 +64,7 @@ const std::map<std::string, std::string> kHeaderModule = {
     {"synth.h", "synth"},           {"scene.h", "scene"},
     {"datasets.h", "datasets"},     {"experiment.h", "experiments"},
     {"calibration.h", "calibration"}, {"results.h", "results"},
+    {"forward_results.h", "results"},
 };
 
 // Arrows that point up today, each with the change that removes it. Keep this list short.

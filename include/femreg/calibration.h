@@ -11,6 +11,7 @@
 #ifndef FEMREG_CALIBRATION_H_
 #define FEMREG_CALIBRATION_H_
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,12 @@ enum class CalibrationParameter {
 const char* ToString(CalibrationParameter parameter);
 // "E", "nu", "region_E" (also "youngs_modulus", "poisson_ratio").
 bool FromString(const std::string& name, CalibrationParameter* parameter);
+template <>
+struct EnumValues<CalibrationParameter> {
+  static constexpr std::array<CalibrationParameter, 3> kAll = {
+      CalibrationParameter::kYoungsModulus, CalibrationParameter::kPoissonRatio,
+      CalibrationParameter::kRegionYoungsModulus};
+};
 
 struct CalibrationOptions {
   CalibrationParameter parameter = CalibrationParameter::kYoungsModulus;
@@ -58,6 +65,29 @@ struct CalibrationOptions {
   bool warm_start = true;  // start each forward solve from the nearest evaluated equilibrium
   bool verbose = false;    // one line per evaluation on stdout
   bool IsValid(std::string* error) const;  // names the field
+};
+
+// The options calibration.json records (its "options" block), by the names of femreg
+// calibrate's flags where they have one. The ranges are IsValid's, which checks them together.
+template <>
+struct OptionFields<CalibrationOptions> {
+  static constexpr const char* kSection = "calibration";
+  template <class Visitor>
+  static constexpr void Visit(Visitor&& v) {
+    using S = CalibrationOptions;
+    v(&S::parameter, FieldInfo("parameter").Doc("E, nu or region_E"));
+    v(&S::object, FieldInfo("object").Doc("index of the scene object whose material is fitted"));
+    v(&S::region, FieldInfo("region").Doc("region_E: the region id"));
+    v(&S::lower, FieldInfo("lower").Doc("search interval's lower end; 0 = automatic"));
+    v(&S::upper, FieldInfo("upper").Doc("search interval's upper end; 0 = automatic"));
+    v(&S::grid_samples, FieldInfo("grid_samples").Doc("samples of the bracketing grid"));
+    v(&S::tolerance, FieldInfo("tolerance").Doc("golden section's bracket width (ln E, or nu)"));
+    v(&S::max_evaluations, FieldInfo("max_evaluations").Doc("forward solves in all"));
+    v(&S::loss_scale, FieldInfo("loss_scale").Doc("Huber scale of the distance (m)"));
+    v(&S::max_distance, FieldInfo("max_distance").Doc("distance cap (m): farther points are outliers"));
+    v(&S::min_overlap, FieldInfo("min_overlap").Doc("fraction of each cloud within max_distance at the fit"));
+    v(&S::warm_start, FieldInfo("warm_start").Doc("start each solve from the nearest equilibrium"));
+  }
 };
 
 // One forward solve of the search.

@@ -51,6 +51,12 @@ Status WriteMaskPng(const std::string& path, int width, int height, const std::v
 // byte offset.
 Status ReadDepthNpy(const std::string& path, RawDepthImage* image);
 
+// ---- Either, by extension (depth_image_file.cc)
+
+// Reads a depth image by its file's extension (any case): .npy with ReadDepthNpy, .png with
+// ReadDepthPng. Another extension is refused naming the file.
+Status ReadDepthImageFile(const std::string& path, RawDepthImage* image);
+
 // ---- Open3D's PinholeCameraIntrinsic JSON (open3d_intrinsics.cc)
 
 // Pinhole intrinsics in pixels: pixel centres at integer coordinates, x right, y down (the

@@ -110,7 +110,7 @@ Status BackProjectDepth(const RawDepthImage& image, const CameraOptions& camera,
                         const DepthImageOptions& options, const std::vector<uint8_t>* keep,
                         PointCloud* cloud, SensorPose* sensor = nullptr);
 
-// A depth frame from its file: a .npy (ReadDepthNpy), else a PNG (ReadDepthPng); its mask
+// A depth frame from its file: a .npy or a .png (ReadDepthImageFile); its mask
 // (options.mask_dir, MaskPathFor); BackProjectDepth. Errors name the file.
 Status ReadDepthFrame(const std::string& path, const CameraOptions& camera,
                       const DepthImageOptions& options, PointCloud* cloud,

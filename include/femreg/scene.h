@@ -112,6 +112,11 @@ struct OptionFields<ObjectSpec> {
   }
 };
 
+// Why an object's element cannot be built, a check across its rows beside their ranges
+// ("'nodal' needs 'model: neo_hookean' (...)", of material.volume); "" when it can. The scene
+// parser and the Python module both ask it.
+std::string ObjectElementError(const ObjectSpec& object);
+
 struct BoundaryConditionSpec {
   enum class Type { kClamp, kDisplacement };
   std::string object;  // object name; may be empty when the scene has one object

@@ -86,6 +86,21 @@ void OptionalEnumProperty(Class& cls, const char* name, std::optional<Enum> Stru
       doc);
 }
 
+// A field's value as Python shows it: an enum by its name, a Vector3d as a list of floats, an
+// unset optional as None.
+template <typename T>
+py::object FieldObject(const T& value) {
+  if constexpr (FieldType<T>::kOptional) {
+    return value.has_value() ? FieldObject(*value) : py::object(py::none());
+  } else if constexpr (std::is_enum_v<T>) {
+    return py::str(ToString(value));
+  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
+    return py::cast(std::vector<double>{value.x(), value.y(), value.z()});
+  } else {
+    return py::cast(value);
+  }
+}
+
 // Binds every field of an options table (femreg/option_fields.h) under its Python name:
 // flags and numbers as attributes, enums as string properties ("data.loss" in messages), a
 // value the scene may leave unset (std::optional) as None when it is.
@@ -105,19 +120,43 @@ void DefFields(Class& cls) {
   });
 }
 
-// A field's value as Python shows it: an enum by its name, a Vector3d as a list of floats, an
-// unset optional as None.
-template <typename T>
-py::object FieldObject(const T& value) {
-  if constexpr (FieldType<T>::kOptional) {
-    return value.has_value() ? FieldObject(*value) : py::object(py::none());
-  } else if constexpr (std::is_enum_v<T>) {
-    return py::str(ToString(value));
-  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-    return py::cast(std::vector<double>{value.x(), value.y(), value.z()});
-  } else {
-    return py::cast(value);
-  }
+// Binds every field of a table as a property whose setter checks the struct with the new
+// value (`valid`: the table's ranges and any rule across fields, as the scene parser checks
+// them); a bad value raises ValueError with valid's message, naming the field, and leaves
+// the struct as it was. Enums and unset optionals read and take strings and None; a vector
+// reads as a list.
+template <typename Class>
+void DefCheckedFields(Class& cls, bool (*valid)(const typename Class::type&, std::string*)) {
+  using Options = typename Class::type;
+  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
+    using Field = std::decay_t<decltype(std::declval<Options&>().*member)>;
+    using T = typename FieldType<Field>::Value;
+    const std::string name = FieldName<Options>(f);
+    cls.def_property(
+        f.python_name(), [member](const Options& o) { return FieldObject(o.*member); },
+        [member, name, valid](Options& o, const py::object& value) {
+          const Field old = o.*member;
+          if constexpr (std::is_enum_v<T>) {
+            if (FieldType<Field>::kOptional && value.is_none()) {
+              o.*member = Field();  // None: unset
+            } else {
+              o.*member = EnumFromString<T>(value.cast<std::string>(), name);
+            }
+          } else {
+            try {
+              o.*member = value.cast<Field>();
+            } catch (const py::cast_error&) {
+              throw py::type_error(name + ": cannot take " + py::repr(value).template cast<std::string>());
+            }
+          }
+          std::string why;
+          if (!valid(o, &why)) {
+            o.*member = old;
+            throw py::value_error(why);
+          }
+        },
+        f.doc);
+  });
 }
 
 // "youngs_modulus=100000.0, poisson_ratio=0.3, density=1000.0": every field of a table.

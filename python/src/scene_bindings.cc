@@ -1,6 +1,6 @@
-// Python bindings: scene files (Scene, load_scene, parse_scene), the options of their
-// sections beside the registration's (fields from their tables), and the forward solve of one
-// scene object (simulate).
+// Python bindings: scene files (Scene, load_scene, parse_scene), their objects and the options
+// of their sections beside the registration's (fields from their tables), and the forward
+// solve of one scene object (simulate).
 #include <string>
 #include <utility>
 #include <vector>
@@ -53,6 +53,16 @@ int ObjectIndex(const Scene& scene, const py::object& object) {
   return i;
 }
 
+// An object's own values as the scene parser checks them: its table's ranges, then its element
+// (ObjectElementError, named as the table names material.volume).
+bool ObjectValid(const ObjectSpec& object, std::string* why) {
+  if (!CheckFieldRanges(object, why)) return false;
+  const std::string element = ObjectElementError(object);
+  if (element.empty()) return true;
+  *why = FieldName<ObjectSpec>(FieldOf<&ObjectSpec::volume>()) + ": " + element;
+  return false;
+}
+
 }  // namespace
 
 void BindScene(py::module_& m) {
@@ -87,6 +97,29 @@ void BindScene(py::module_& m) {
                      "SynthBody list (synth.bodies); a copy: assign the whole list to change it");
   DefFields(synth);
 
+  // ---- a scene's objects: their own values from their table, checked as the parser does ----
+  auto object = py::class_<ObjectSpec>(
+      m, "SceneObject",
+      "An object of a scene (an entry of its objects:), changed in place: scene.object(\"name\"). Its "
+      "values (scale, pose, material_model, material_volume, toughness, label) are checked when "
+      "set, as the scene file's are; its name, mesh and regions are the file's.");
+  object.def_readonly("name", &ObjectSpec::name)
+      .def_readonly("mesh", &ObjectSpec::mesh_path, "the mesh file (\"\" when generated)")
+      .def_readonly("surface", &ObjectSpec::surface_path, "the embedded surface's file (\"\" for none)")
+      .def_property(
+          "material", py::cpp_function([](ObjectSpec& o) -> Material& { return o.material; },
+                                       py::return_value_policy::reference_internal),
+          [](ObjectSpec& o, const Material& material) {
+            std::string why;
+            if (!material.IsValid(&why)) throw py::value_error("objects.material: " + why);
+            o.material = material;
+          },
+          "Material (material:), changed in place or assigned; a tracker or solve checks it when built");
+  DefCheckedFields(object, &ObjectValid);
+  object.def("__repr__", [](const ObjectSpec& o) {
+    return "SceneObject(name=" + py::repr(py::str(o.name)).cast<std::string>() + ", " + FieldsRepr(o) + ")";
+  });
+
   // ---- scenes ---------------------------------------------------------------------------
   py::class_<Scene>(m, "Scene", "A scene file: objects, materials, camera, registration settings.")
       .def_readonly("path", &Scene::path)
@@ -111,6 +144,21 @@ void BindScene(py::module_& m) {
                                for (const ObjectSpec& o : s.objects) names.push_back(o.name);
                                return names;
                              })
+      .def_property_readonly(
+          "objects",
+          [](py::object self) {
+            py::list list;
+            for (ObjectSpec& o : self.cast<Scene&>().objects) {
+              list.append(py::cast(&o, py::return_value_policy::reference_internal, self));
+            }
+            return list;
+          },
+          "SceneObject list, each changed in place (the list itself is the file's)")
+      .def(
+          "object",
+          [](Scene& s, const py::object& object) -> ObjectSpec& { return s.objects[ObjectIndex(s, object)]; },
+          py::return_value_policy::reference_internal, py::arg("object") = 0,
+          "The object (by index or name) as a SceneObject, changed in place.")
       .def("material",
            [](const Scene& s, const py::object& object) {
              return s.objects[ObjectIndex(s, object)].material;

@@ -125,7 +125,7 @@ Status ReadDepthFrame(const std::string& path, const CameraOptions& camera,
   std::string why;
   if (!options.IsValid(&why)) return Status::Error(path + ": depth image options: " + why);
   RawDepthImage image;
-  Status status = Extension(path) == ".npy" ? ReadDepthNpy(path, &image) : ReadDepthPng(path, &image);
+  Status status = ReadDepthImageFile(path, &image);
   if (!status.ok()) return status;
   std::vector<uint8_t> keep;
   if (!options.mask_dir.empty()) {

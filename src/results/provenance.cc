@@ -15,39 +15,10 @@ namespace {
 
 using json = nlohmann::ordered_json;
 
-// JSON has no infinity or NaN: those become null (the crop box's open sides are +-1e30).
-json Number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-json Vector(const Eigen::Vector3d& v) { return json::array({Number(v.x()), Number(v.y()), Number(v.z())}); }
-
 std::string Absolute(const std::string& path) {
   std::error_code ec;
   const std::filesystem::path p = std::filesystem::absolute(path, ec);
   return ec ? path : p.lexically_normal().string();
-}
-
-// A field's value: an enum by name, a vector as a list, an unset optional as null.
-template <class T>
-json FieldJson(const T& value) {
-  if constexpr (FieldType<T>::kOptional) {
-    return value.has_value() ? FieldJson(*value) : json(nullptr);
-  } else if constexpr (std::is_enum_v<T>) {
-    return ToString(value);
-  } else if constexpr (std::is_same_v<T, Eigen::Vector3d>) {
-    return Vector(value);
-  } else {
-    return value;
-  }
-}
-
-// Every field of an options table (femreg/option_fields.h) by its scene key (a grouped one
-// by its Python name, "outlier_neighbors": one flat object per section).
-template <class Options>
-json FieldsJson(const Options& o) {
-  json j = json::object();
-  OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
-    j[f.group != nullptr ? f.python_name() : f.key] = FieldJson(o.*member);
-  });
-  return j;
 }
 
 // A list's entries: what names each (`head`), then its table's fields.

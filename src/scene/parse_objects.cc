@@ -8,6 +8,14 @@
 #include "scene/scene_parser.h"
 
 namespace femreg {
+
+std::string ObjectElementError(const ObjectSpec& object) {
+  if (object.NodalVolume() && object.Model() != MaterialModel::kNeoHookean) {
+    return "'nodal' needs 'model: neo_hookean' (the nodal volume is the neo-Hookean element's remedy for locking)";
+  }
+  return "";
+}
+
 namespace scene_internal {
 
 void SceneParser::ParseObjects(const YamlValue& v) {
@@ -63,10 +71,8 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
   // material's own keys are Material's table, checked with the group's rows by ParseMaterial.
   const char* material_group = FieldOf<&ObjectSpec::model>().group;
   ParseFields(v, &object, /*check=*/true, {material_group});
-  if (object.NodalVolume() && object.Model() != MaterialModel::kNeoHookean) {
-    FieldValue<&ObjectSpec::volume>(v).Fail(
-        "'nodal' needs 'model: neo_hookean' (the nodal volume is the neo-Hookean element's remedy for locking)");
-  }
+  const std::string element_error = ObjectElementError(object);
+  if (!element_error.empty()) FieldValue<&ObjectSpec::volume>(v).Fail(element_error);
   if (v.Has(material_group)) object.material = ParseMaterial(v[material_group], object.material);
   if (v.Has("regions")) {
     const YamlValue regions = v["regions"];

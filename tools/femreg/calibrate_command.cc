@@ -15,6 +15,7 @@
 #include "cli_util.h"
 #include "commands.h"
 #include "femreg/calibration.h"
+#include "femreg/forward_results.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
 #include "femreg/scene.h"
@@ -47,69 +48,6 @@ struct CalibrateArgs {
 void Fail(const std::string& message) {
   std::cerr << "femreg calibrate: " << message << "\n";
   SetExitCode(1);
-}
-
-std::string SamplesJson(const CalibrationSummary& s) {
-  std::ostringstream os;
-  os << "[";
-  for (size_t i = 0; i < s.samples.size(); ++i) {
-    const CalibrationSample& c = s.samples[i];
-    os << (i ? "," : "") << "\n    {\"value\": " << JsonNumber(c.value)
-       << ", \"objective\": " << JsonNumber(c.objective)
-       << ", \"far_objective\": " << JsonNumber(c.far_objective)
-       << ", \"mean_mm\": " << JsonNumber(c.mean_distance * 1e3)
-       << ", \"rms_mm\": " << JsonNumber(c.rms_distance * 1e3)
-       << ", \"inlier_fraction\": " << JsonNumber(c.inlier_fraction)
-       << ", \"newton_iterations\": " << c.newton_iterations
-       << ", \"time_s\": " << JsonNumber(c.time_s)
-       << ", \"stage\": " << JsonString(c.grid ? "grid" : "golden") << "}";
-  }
-  os << (s.samples.empty() ? "]" : "\n  ]");
-  return os.str();
-}
-
-std::string OptionalNumber(bool known, double v) { return known ? JsonNumber(v) : "null"; }
-
-std::string SummaryJson(const CalibrateArgs& args, const Scene& scene,
-                        const CalibrationOptions& options, const CalibrationSummary& s,
-                        const std::vector<int>& cloud_points) {
-  const bool width = s.sigma_t > 0;
-  std::ostringstream os;
-  os << "{\n  \"scene\": " << JsonString(args.scene_path) << ",\n  \"observed\": [";
-  for (size_t i = 0; i < args.observed.size(); ++i) {
-    os << (i ? ", " : "") << "{\"file\": " << JsonString(args.observed[i])
-       << ", \"points\": " << cloud_points[i] << "}";
-  }
-  os << "],\n"
-     << "  \"object\": " << JsonString(scene.objects[options.object].name) << ",\n"
-     << "  \"parameter\": " << JsonString(ToString(s.parameter)) << ",\n"
-     << "  \"region\": " << (options.parameter == CalibrationParameter::kRegionYoungsModulus
-                                 ? std::to_string(options.region) : std::string("null"))
-     << ",\n"
-     << "  \"termination\": " << JsonString(ToString(s.termination)) << ",\n"
-     << "  \"message\": " << JsonString(s.message) << ",\n"
-     << "  \"usable\": " << (s.IsSolutionUsable() ? "true" : "false") << ",\n"
-     << "  \"value\": " << JsonNumber(s.value) << ",\n"
-     << "  \"initial_value\": " << JsonNumber(s.initial_value) << ",\n"
-     << "  \"interval\": [" << JsonNumber(s.lower) << ", " << JsonNumber(s.upper) << "],\n"
-     << "  \"misfit_mean_mm\": " << JsonNumber(s.mean_distance * 1e3) << ",\n"
-     << "  \"misfit_rms_mm\": " << JsonNumber(s.rms_distance * 1e3) << ",\n"
-     << "  \"objective\": " << JsonNumber(s.objective) << ",\n"
-     << "  \"inlier_fraction\": " << JsonNumber(s.inlier_fraction) << ",\n"
-     << "  \"points\": " << s.num_points << ",\n"
-     << "  \"uncertainty\": {\"sigma\": " << OptionalNumber(width, s.sigma_t)
-     << ", \"sigma_of\": " << JsonString(options.parameter == CalibrationParameter::kPoissonRatio ? "nu" : "ln E")
-     << ", \"one_sigma\": [" << OptionalNumber(width, s.value_low) << ", "
-     << OptionalNumber(width, s.value_high) << "], \"rms_within_10_percent\": ["
-     << OptionalNumber(width, s.width_low) << ", " << OptionalNumber(width, s.width_high) << "]},\n"
-     << "  \"loss\": {\"huber_scale_m\": " << JsonNumber(options.loss_scale)
-     << ", \"max_distance_m\": " << JsonNumber(options.max_distance) << "},\n"
-     << "  \"evaluations\": " << s.evaluations << ",\n"
-     << "  \"newton_iterations\": " << s.newton_iterations << ",\n"
-     << "  \"time_s\": " << JsonNumber(s.total_time_s) << ",\n"
-     << "  \"forward_time_s\": " << JsonNumber(s.forward_time_s) << ",\n"
-     << "  \"samples\": " << SamplesJson(s) << "\n}\n";
-  return os.str();
 }
 
 // The plotting script beside the sources, or installed.
@@ -190,7 +128,7 @@ void RunCalibrate(const CalibrateArgs& args) {
   std::cout << summary.BriefReport() << "\n";
 
   const std::string json_path = (out / "calibration.json").string();
-  status = WriteFileAtomically(json_path, SummaryJson(args, scene, options, summary, points));
+  status = WriteFileAtomically(json_path, CalibrationJson({args.scene_path, args.observed, points}, scene, options, summary));
   if (!status.ok()) return Fail(status.message());
   std::cout << "wrote " << json_path << "\n";
 

@@ -15,7 +15,6 @@
 // at most once a second and when the run ends, however it ends (an error, Ctrl-C). So an
 // interrupt leaves whole files behind that cover the frames done so far.
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cerrno>
 #include <chrono>
@@ -114,9 +113,7 @@ int RunRegister(const RegisterArgs& args) {
       // A camera matrix as text holds no image size: the frames' is the camera's.
       const std::string& first = *std::find_if(files.begin(), files.end(), IsDepthImageFile);
       RawDepthImage image;
-      std::string ext = fs::path(first).extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-      status = ext == ".npy" ? ReadDepthNpy(first, &image) : ReadDepthPng(first, &image);
+      status = ReadDepthImageFile(first, &image);
       if (!status.ok()) {
         std::cerr << "femreg register: --intrinsics " << args.intrinsics
                   << " holds no image size, and the first depth frame cannot be read for it: " << status.message()

@@ -10,7 +10,6 @@
 #include <limits>
 #include <memory>
 #include <sstream>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -19,9 +18,9 @@
 #include "mesh_warnings.h"
 #include "femreg/fem.h"
 #include "femreg/forward.h"
+#include "femreg/forward_results.h"
 #include "femreg/io.h"
 #include "femreg/scene.h"
-#include "femreg/version.h"
 
 namespace femreg {
 namespace cli {
@@ -43,32 +42,10 @@ struct SimulateOptions {
   std::vector<std::string> sets;  // --set key.path=value
 };
 
-// What one object's run produced, for the report and summary.json.
-struct ObjectResult {
-  std::string name;
-  std::string vtu;  // file name inside the output folder, "" when not written
-  int num_vertices = 0, num_tets = 0;
-  int num_clamped = 0, num_prescribed = 0, num_loaded = 0;
-  ForwardSummary summary;
-  std::string model, volume;  // the element it was solved with: model.type(), element/nodal
-  std::string error;  // set when the object could not be run
-  int max_vertex = -1;
-  double max_displacement = 0.0;
-  Eigen::Vector3d max_rest = Eigen::Vector3d::Zero();
-  int end_vertex = -1;  // the vertex farthest from the clamped ones
-  Eigen::Vector3d end_displacement = Eigen::Vector3d::Zero();
-  bool max_at_free_end = false;
-  double load_time_s = 0.0, solve_time_s = 0.0, write_time_s = 0.0;
-};
+using ObjectResult = SimulateObjectResult;
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
-
-
-
-std::string JsonVector(const Eigen::Vector3d& v) {
-  return "[" + JsonNumber(v.x()) + ", " + JsonNumber(v.y()) + ", " + JsonNumber(v.z()) + "]";
 }
 
 std::string Vec(const Eigen::Vector3d& v) {
@@ -171,83 +148,6 @@ bool RunObject(const Scene& scene, int index, ElasticModelType model_type,
   return true;
 }
 
-// Per load step: [{"load_step": 1, "load_factor": 0.5, "termination": ..., ...}, ...].
-std::string LoadStepsJson(const ForwardSummary& s) {
-  std::ostringstream os;
-  os << "[";
-  for (size_t i = 0; i < s.load_steps.size(); ++i) {
-    const ForwardLoadStep& step = s.load_steps[i];
-    os << (i ? "," : "") << "\n        {\"load_step\": " << step.load_step
-       << ", \"load_factor\": " << JsonNumber(step.load_factor)
-       << ", \"termination\": " << JsonString(ToString(step.termination))
-       << ", \"newton_iterations\": " << step.iterations
-       << ", \"projected_iterations\": " << step.projected_iterations
-       << ", \"relaxed_steps\": " << step.relaxed_steps
-       << ", \"watchdog_restarts\": " << step.watchdog_restarts
-       << ", \"initial_residual\": " << JsonNumber(step.initial_residual_norm)
-       << ", \"final_residual\": " << JsonNumber(step.final_residual_norm) << "}";
-  }
-  os << (s.load_steps.empty() ? "]" : "\n      ]");
-  return os.str();
-}
-
-std::string SummaryJson(const SimulateOptions& options, const Scene& scene,
-                        ElasticModelType model_type, const ForwardOptions& forward,
-                        const std::vector<ObjectResult>& results, double total_time_s) {
-  std::ostringstream os;
-  // The --set overrides through nlohmann-json (register's summary.json is written with it
-  // whole; this one keeps its layout, which tests and scripts match as text).
-  const std::string overrides =
-      nlohmann::json(options.sets).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
-  os << "{\n  \"femreg_version\": " << JsonString(Version()) << ",\n"
-     << "  \"scene\": " << JsonString(options.scene_path) << ",\n"
-     << "  \"overrides\": " << overrides << ",\n"
-     << "  \"model\": " << JsonString(ToString(model_type)) << ",\n"
-     << "  \"tangent\": " << JsonString(ToString(forward.tangent)) << ",\n"
-     << "  \"load_steps\": " << forward.load_steps << ",\n"
-     << "  \"max_iterations\": " << forward.max_iterations << ",\n"
-     << "  \"gravity\": " << JsonVector(scene.gravity) << ",\n"
-     << "  \"objects\": [";
-  for (size_t i = 0; i < results.size(); ++i) {
-    const ObjectResult& r = results[i];
-    const ForwardSummary& s = r.summary;
-    os << (i ? "," : "") << "\n    {\n"
-       << "      \"name\": " << JsonString(r.name) << ",\n"
-       << "      \"vtu\": " << (r.vtu.empty() ? "null" : JsonString(r.vtu)) << ",\n"
-       << "      \"ok\": " << (r.error.empty() ? "true" : "false") << ",\n"
-       << "      \"error\": " << (r.error.empty() ? "null" : JsonString(r.error)) << ",\n"
-       << "      \"vertices\": " << r.num_vertices << ",\n"
-       << "      \"elements\": " << r.num_tets << ",\n"
-       << "      \"model\": " << JsonString(r.model) << ",\n"
-       << "      \"volume\": " << JsonString(r.volume) << ",\n"
-       << "      \"clamped_vertices\": " << r.num_clamped << ",\n"
-       << "      \"prescribed_vertices\": " << r.num_prescribed << ",\n"
-       << "      \"loaded_vertices\": " << r.num_loaded << ",\n"
-       << "      \"termination\": " << JsonString(ToString(s.termination)) << ",\n"
-       << "      \"message\": " << JsonString(s.message) << ",\n"
-       << "      \"iterations\": " << s.NumNewtonIterations() << ",\n"
-       << "      \"load_steps\": " << LoadStepsJson(s) << ",\n"
-       << "      \"free_dofs\": " << s.num_free_dofs << ",\n"
-       << "      \"initial_residual\": " << JsonNumber(s.initial_residual_norm) << ",\n"
-       << "      \"final_residual\": " << JsonNumber(s.final_residual_norm) << ",\n"
-       << "      \"final_energy\": " << JsonNumber(s.final_energy) << ",\n"
-       << "      \"max_displacement\": " << JsonNumber(r.max_displacement) << ",\n"
-       << "      \"inverted_elements\": " << s.inverted_elements << ",\n"
-       << "      \"max_displacement_vertex\": " << r.max_vertex << ",\n"
-       << "      \"max_displacement_rest_position\": " << JsonVector(r.max_rest) << ",\n"
-       << "      \"free_end_vertex\": " << r.end_vertex << ",\n"
-       << "      \"free_end_displacement\": " << JsonVector(r.end_displacement) << ",\n"
-       << "      \"max_at_free_end\": " << (r.max_at_free_end ? "true" : "false") << ",\n"
-       << "      \"time_s\": {\"load\": " << JsonNumber(r.load_time_s)
-       << ", \"solve\": " << JsonNumber(r.solve_time_s)
-       << ", \"factorization\": " << JsonNumber(s.factorization_time_s)
-       << ", \"write\": " << JsonNumber(r.write_time_s) << "}"
-       << ",\n      \"threads\": " << s.num_threads << "\n    }";
-  }
-  os << "\n  ],\n  \"total_time_s\": " << JsonNumber(total_time_s) << "\n}\n";
-  return os.str();
-}
-
 // Fails with a message on stderr and exit code 1.
 void Fail(const std::string& message) {
   std::cerr << "femreg simulate: " << message << "\n";
@@ -284,6 +184,7 @@ void RunSimulate(const SimulateOptions& options) {
   }
   for (const std::string& line : ChooseForwardElements(&scene)) std::cout << line << "\n";
   ForwardOptions forward = scene.forward;
+  if (!options.model.empty()) forward.model = model_type;  // summary.json's forward block says so
   if (options.load_steps > 0) forward.load_steps = options.load_steps;
   if (options.max_iterations > 0) forward.max_iterations = options.max_iterations;
   if (!options.tangent.empty() && !FromString(options.tangent, &forward.tangent)) {
@@ -327,8 +228,13 @@ void RunSimulate(const SimulateOptions& options) {
     results.push_back(std::move(result));
   }
 
-  const std::string json =
-      SummaryJson(options, scene, model_type, forward, results, Seconds(start));
+  SimulateRun run;
+  run.scene = options.scene_path;
+  run.overrides = options.sets;
+  run.model = model_type;
+  run.forward = forward;
+  run.total_time_s = Seconds(start);
+  const std::string json = SimulateSummaryJson(run, scene, results);
   status = WriteFileAtomically((out_dir / "summary.json").string(), json);
   if (!status.ok()) return Fail(status.message());
   std::cout << "wrote " << (out_dir / "summary.json").string() << "\n";
