@@ -33,7 +33,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <map>
@@ -51,7 +50,6 @@
 #include "solvers/fast/supernodal_solve.h"
 
 namespace femreg {
-int g_outer_k = 0;  // TEMPORARY
 namespace fast_backend {
 
 namespace {
@@ -78,12 +76,6 @@ constexpr double kQuadraticAgreement = 1e-6;
 // smoother, if PCG found it indefinite), then as many with a new one; if that does not
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
-
-// TEMPORARY knobs for measurement.
-double EnvOr(const char* name, double fallback) {
-  const char* v = std::getenv(name);
-  return v ? std::atof(v) : fallback;
-}
 
 }  // namespace
 
@@ -155,8 +147,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
     r -= alpha * q;
     ++report->pcg_iterations;
     if (!with_multigrid) ++pcg_since_factor;
-    if (std::getenv("FEMREG_TRACE_PCG")) std::fprintf(stderr, "R %d %.3e\n", k, r.norm() / b_norm);
-    if (r.norm() <= pcg_tolerance * b_norm) {
+    if (r.norm() <= kPcgTolerance * b_norm) {
       pcg_model_gain = 0.5 * x->dot(b + r);
       pcg_residual.swap(r);
       pcg_with_multigrid = with_multigrid;
@@ -258,19 +249,10 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g
     if (outcome != Outcome::kFailed) return outcome;
   }
   const auto t0 = Clock::now();
-  static const int kept_last = static_cast<int>(EnvOr("FEMREG_KEPT_LAST", 1000));
-  static const int kept_cap = static_cast<int>(EnvOr("FEMREG_KEPT_CAP", 1000));
-  if (factor_valid && options.max_pcg_iterations > 0 && pcg_since_factor < PcgBudget() &&
-      last_kept_iterations <= kept_last) {
-    const int before_kept = report->pcg_iterations;
+  if (factor_valid && options.max_pcg_iterations > 0 && pcg_since_factor < PcgBudget()) {
     const Outcome outcome =
-        Pcg(-g, negligible, std::min(kept_cap, std::min(options.max_pcg_iterations, std::max(1, PcgBudget()))), dx, report);
-    last_kept_iterations = report->pcg_iterations - before_kept;
+        Pcg(-g, negligible, std::min(options.max_pcg_iterations, std::max(1, PcgBudget())), dx, report);
     report->linear_solve_s += Seconds(t0);
-    if (std::getenv("FEMREG_TRACE_PCG")) {
-      std::fprintf(stderr, "TRACE kept %d it %d budget %d since %d\n", static_cast<int>(outcome),
-                   report->pcg_iterations - before_kept, PcgBudget(), pcg_since_factor);
-    }
     if (outcome == Outcome::kNegligible) return outcome;
     if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
   }
@@ -280,13 +262,8 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStep(const Eigen::VectorXd& g
   if (options.max_pcg_iterations > 0 && single_backoff == 0) {
     if (FactorizeSingle(report)) {
       const auto t1 = Clock::now();
-      const int before_fresh = report->pcg_iterations;
       const Outcome outcome = Pcg(-g, 0.0, options.max_pcg_iterations, dx, report);
       report->linear_solve_s += Seconds(t1);
-      if (std::getenv("FEMREG_TRACE_PCG")) {
-        std::fprintf(stderr, "TRACE fresh %d it %d budget %d\n", static_cast<int>(outcome),
-                     report->pcg_iterations - before_fresh, PcgBudget());
-      }
       if (outcome == Outcome::kSolved && dx->allFinite()) return Outcome::kSolved;
     }
     single_backoff = kSingleBackoff;
@@ -372,17 +349,6 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   report.assemble_s += Seconds(t0);
   report.after = report.before;
   double energy = report.before.total();
-  // TEMPORARY: a forcing term on the inner tolerance.
-  double tolerance = m.options.relative_tolerance;
-  {
-    static const double c = EnvOr("FEMREG_FORCING", 0.0);
-    static const double cap = EnvOr("FEMREG_FORCING_MAX", 1e-2);
-    static const int from = static_cast<int>(EnvOr("FEMREG_FORCING_FROM", 0));
-    if (c > 0 && g_outer_k >= from) {
-      const double jump = m.last_after > 0 ? std::abs(energy - m.last_after) / std::max(energy, 1e-300) : 1.0;
-      tolerance = std::max(tolerance, std::min(cap, c * jump));
-    }
-  }
   const double first_gradient = g.lpNorm<Eigen::Infinity>();
   report.success = true;
   report.stop = StopReason::kMaxIterations;
@@ -399,12 +365,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     // a factor of a similar H, a few with a multigrid V-cycle, so that a step skipped there
     // would still gain less than the tolerance.
     const double negligible =
-        step > 0 ? kNegligibleGain * tolerance * energy : 0.0;
-    {
-      static const double tol = EnvOr("FEMREG_PCG_TOL", kPcgTolerance);
-      static const double tol_first = EnvOr("FEMREG_PCG_TOL_FIRST", tol);
-      m.pcg_tolerance = step == 0 ? tol_first : tol;
-    }
+        step > 0 ? kNegligibleGain * m.options.relative_tolerance * energy : 0.0;
     const Impl::Outcome outcome = m.SolveStep(g, negligible, &dx, &report);
     if (outcome == Impl::Outcome::kNegligible) {
       report.stop = StopReason::kPredicted;
@@ -432,7 +393,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
       report.stop = StopReason::kStep;
       break;
     }
-    if (decrease < tolerance) {
+    if (decrease < m.options.relative_tolerance) {
       report.stop = StopReason::kEnergy;
       break;
     }
@@ -443,7 +404,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     // after an assembly and a PCG solve; it is not taken. See kQuadraticAgreement.
     if (alpha == 1.0 && m.pcg_model_gain > 0.0 && !m.pcg_with_multigrid) {
       const double model_error = std::abs(gain - m.pcg_model_gain);
-      const double limit = tolerance * energy;
+      const double limit = m.options.relative_tolerance * energy;
       if (model_error <= kQuadraticAgreement * m.pcg_model_gain &&
           model_error + m.ResidualGain(&report) < limit) {
         report.stop = StopReason::kPredicted;
@@ -460,7 +421,6 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     report.assemble_s += Seconds(t0);
   }
   m.positions = nullptr;
-  m.last_after = report.after.total();
   if (report.success) report.message = std::string("fast back end: ") + ToString(report.stop);
   if (!x->allFinite()) {
     report.success = false;

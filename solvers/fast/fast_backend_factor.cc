@@ -6,7 +6,6 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <algorithm>
-#include <cstdio>
 #include <cstdlib>
 #include <vector>
 
@@ -85,13 +84,9 @@ void FastBackend::Impl::Analyse() {
   const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
   pcg_budget_double = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   pcg_budget_single = iteration_flops > 0
-                          ? static_cast<int>(common.fl / iteration_flops / (std::getenv("FEMREG_FACT_SPEED") ? std::atof(std::getenv("FEMREG_FACT_SPEED")) : kSingleFactorizationSpeed))
+                          ? static_cast<int>(common.fl / iteration_flops / kSingleFactorizationSpeed)
                           : 0;
   structure_pending = true;
-  if (std::getenv("FEMREG_TRACE_PCG")) {
-    std::fprintf(stderr, "ANALYSE n %d nnzH %ld lnz %.0f fl %.3g it_flops %.3g budget %d\n", static_cast<int>(H.cols()),
-                 static_cast<long>(H.nonZeros()), common.lnz, common.fl, iteration_flops, pcg_budget_single);
-  }
 }
 
 double FastBackend::Impl::EstimateFill() const {
@@ -137,7 +132,6 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
     WithThreadLimit(1, [&] { factor.factorize(H); });
   }
   pcg_since_factor = 0;
-  last_kept_iterations = 0;
   factor_single = false;
   ++report->factorizations;
   report->factorize_s += Seconds(t0);
@@ -157,7 +151,6 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
   const auto t0 = Clock::now();
   Analyse();
   pcg_since_factor = 0;
-  last_kept_iterations = 0;
   factor_single = true;
   ++report->factorizations;
   // Its BLAS calls on one thread; its own team of `threads`.

@@ -94,8 +94,6 @@ struct FastBackend::Impl {
   // factorization, the next step factorizes anew (the ski-rental rule: never more than twice the
   // cost of the better choice in hindsight) (docs/notes/2026-11-28-figures-from-code-comments.md).
   int pcg_since_factor = 0;
-  int last_kept_iterations = 0;  // TEMPORARY
-  double last_after = -1.0;       // TEMPORARY
 
   // The multigrid preconditioner (solvers/fast/multigrid.h), where the factor would fill in
   // (options.multigrid_fill): a hierarchy of an earlier step's H, kept while the PCG solves
@@ -159,7 +157,6 @@ struct FastBackend::Impl {
   // 1/2 x.(b + r) = b.x - 1/2 x^T H x with r = b - H x (-1: no such step, e.g. a direct
   // solve), its residual r and whether multigrid preconditioned it.
   double pcg_model_gain = -1.0;
-  double pcg_tolerance = kPcgTolerance;
   Eigen::VectorXd pcg_residual;
   bool pcg_with_multigrid = false;
   // What a further step on the same model would gain: 1/2 r^T M^-1 r, with the

@@ -19,7 +19,6 @@
 #include "registration/tracker_state.h"
 
 namespace femreg {
-extern int g_outer_k;  // TEMPORARY
 
 namespace {
 
@@ -242,7 +241,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
                                ? std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame))
                                : 0.0;
   const Vertices before_solve = state.x;
-  g_outer_k = k - iteration_base;
   const SolveReport report = backend->Solve(problem, time_left, &state.x);
   s->time.solve += Seconds(t0);
   row.before = report.before;

@@ -6,8 +6,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -299,8 +297,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   stepping_in = false;
   fc.facing_only = false;
   const Vertices start = state.x;
-  Vertices plausible;  // TEMPORARY: the last iterate after which no point was marked
-  static const bool from_plausible = std::getenv("FEMREG_FROM_PLAUSIBLE") != nullptr;
   int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
   for (int k = 0; k < iteration_limit; ++k) {
     if (stepping_in) {
@@ -341,7 +337,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       // lost ones starts so too: its held shape is several frames' motion away, and its
       // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
       state.x = start;
-      plausible.resize(0, 3);
       stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
       stepping_in = true;
       fc.facing_only = true;
@@ -357,27 +352,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       const int marked =
           MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
       s.time.correspondences += Seconds(t0);
-      static const int restart_min = [] {
-        const char* v = std::getenv("FEMREG_RESTART_MIN");
-        return v ? std::atoi(v) : 1;
-      }();
-      if (marked > 0 && marked < restart_min) {
-        // TEMPORARY: few points: left out from here on, no restart.
-        fc.occluders.occluders += marked;
-        s.occluded_points = fc.occluders.occluders;
-        s.implausible_points += marked;
-        merit = std::numeric_limits<double>::infinity();
-        previous_energy = merit;
-      }
-      if (std::getenv("FEMREG_TRACE_RESTART")) {
-        std::fprintf(stderr, "TRACE frame %d after %d marked %d\n", state.frame, k + 1, marked);
-      }
-      if (marked > 0 && marked < restart_min) {
-      } else if (marked == 0) {
-        if (from_plausible) plausible = state.x;
-      } else if (marked > 0) {
+      if (marked > 0) {
         // Back to the start without them: the shape they pulled into is no starting point.
-        state.x = plausible.rows() == start.rows() ? plausible : start;
+        state.x = start;
         fc.occluders.occluders += marked;
         s.occluded_points = fc.occluders.occluders;
         s.implausible_points += marked;
