@@ -78,10 +78,6 @@ class Backend {
   // Minimizes problem from *x (#V by 3, updated in place; fixed vertices do not move).
   // time_limit_s <= 0: no limit. On failure *x is left at the last accepted iterate.
   virtual SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) = 0;
-  // Whether the next Solves may stop their inner iterations early where the new rotations and
-  // pairs moved the energy much since the last Solve ended (an inexact Newton method's forcing
-  // term; the fast back end's, docs/notes/2026-11-30-hand-press-cost.md). Off by default.
-  virtual void AllowLooseInnerSolves(bool allowed) { (void)allowed; }
 };
 
 std::unique_ptr<Backend> MakeBackend(const BackendOptions& options);

@@ -77,14 +77,6 @@ constexpr double kQuadraticAgreement = 1e-6;
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
 
-// Where the tracker allows it (Backend::AllowLooseInnerSolves), a Solve's inner tolerance is
-// raised to this fraction of the energy's relative change between the last Solve's end and this
-// one's start (new rotations and pairs), up to kLooseInnerMax: an inexact Newton method's
-// forcing term. When the outer iteration moved the problem by much, solving its linearization
-// tighter than that is not seen after the next one (docs/notes/2026-11-30-hand-press-cost.md).
-constexpr double kLooseInnerFraction = 0.1;
-constexpr double kLooseInnerMax = 1e-2;
-
 }  // namespace
 
 // H is symmetric, so y_c = H(:, c) . p: each entry a gather over its column, in parallel
@@ -118,7 +110,6 @@ FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
   impl_->assembler.set_threads(impl_->threads);
 }
 FastBackend::~FastBackend() = default;
-void FastBackend::AllowLooseInnerSolves(bool allowed) { impl_->loose_inner = allowed; }
 
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
                                                   int max_iterations, Eigen::VectorXd* x,
@@ -358,12 +349,6 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   report.assemble_s += Seconds(t0);
   report.after = report.before;
   double energy = report.before.total();
-  double tolerance = m.options.relative_tolerance;
-  if (m.loose_inner) {
-    const double jump =
-        m.last_solve_energy > 0.0 ? std::abs(energy - m.last_solve_energy) / std::max(energy, 1e-300) : 1.0;
-    tolerance = std::max(tolerance, std::min(kLooseInnerMax, kLooseInnerFraction * jump));
-  }
   const double first_gradient = g.lpNorm<Eigen::Infinity>();
   report.success = true;
   report.stop = StopReason::kMaxIterations;
@@ -380,7 +365,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     // a factor of a similar H, a few with a multigrid V-cycle, so that a step skipped there
     // would still gain less than the tolerance.
     const double negligible =
-        step > 0 ? kNegligibleGain * tolerance * energy : 0.0;
+        step > 0 ? kNegligibleGain * m.options.relative_tolerance * energy : 0.0;
     const Impl::Outcome outcome = m.SolveStep(g, negligible, &dx, &report);
     if (outcome == Impl::Outcome::kNegligible) {
       report.stop = StopReason::kPredicted;
@@ -408,7 +393,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
       report.stop = StopReason::kStep;
       break;
     }
-    if (decrease < tolerance) {
+    if (decrease < m.options.relative_tolerance) {
       report.stop = StopReason::kEnergy;
       break;
     }
@@ -419,7 +404,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     // after an assembly and a PCG solve; it is not taken. See kQuadraticAgreement.
     if (alpha == 1.0 && m.pcg_model_gain > 0.0 && !m.pcg_with_multigrid) {
       const double model_error = std::abs(gain - m.pcg_model_gain);
-      const double limit = tolerance * energy;
+      const double limit = m.options.relative_tolerance * energy;
       if (model_error <= kQuadraticAgreement * m.pcg_model_gain &&
           model_error + m.ResidualGain(&report) < limit) {
         report.stop = StopReason::kPredicted;
@@ -436,7 +421,6 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     report.assemble_s += Seconds(t0);
   }
   m.positions = nullptr;
-  m.last_solve_energy = report.after.total();
   if (report.success) report.message = std::string("fast back end: ") + ToString(report.stop);
   if (!x->allFinite()) {
     report.success = false;

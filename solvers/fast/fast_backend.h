@@ -42,7 +42,6 @@ class FastBackend : public Backend {
   ~FastBackend() override;
   SolverBackend type() const override { return SolverBackend::kFast; }
   SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) override;
-  void AllowLooseInnerSolves(bool allowed) override;
 
  private:
   struct Impl;

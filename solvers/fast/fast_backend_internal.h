@@ -94,9 +94,6 @@ struct FastBackend::Impl {
   // factorization, the next step factorizes anew (the ski-rental rule: never more than twice the
   // cost of the better choice in hindsight) (docs/notes/2026-11-28-figures-from-code-comments.md).
   int pcg_since_factor = 0;
-  // AllowLooseInnerSolves, and the energy where the last (classic) Solve ended (-1: none yet).
-  bool loose_inner = false;
-  double last_solve_energy = -1.0;
 
   // The multigrid preconditioner (solvers/fast/multigrid.h), where the factor would fill in
   // (options.multigrid_fill): a hierarchy of an earlier step's H, kept while the PCG solves

@@ -43,10 +43,6 @@ constexpr double kRiseEnergyLimit = 0.1;
 // Halvings of an outer iteration's move tried when the energy it reached, with its new pairs,
 // is more than kRiseEnergyLimit above its start's (Backtrack): down to an eighth of the move.
 constexpr int kBacktrackHalvings = 3;
-// The back end's inner solves may stop early (Backend::AllowLooseInnerSolves) from this outer
-// iteration of a schedule on (counted from 0): the first ones carry most of a frame's motion on
-// most sequences, and loosening them cost accuracy (docs/notes/2026-11-30-hand-press-cost.md).
-constexpr int kLooseInnerFrom = 2;
 
 }  // namespace
 
@@ -245,7 +241,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
                                ? std::max(1e-3, options.solver.time_budget_s - Seconds(t_frame))
                                : 0.0;
   const Vertices before_solve = state.x;
-  backend->AllowLooseInnerSolves(k - iteration_base >= kLooseInnerFrom);
   const SolveReport report = backend->Solve(problem, time_left, &state.x);
   s->time.solve += Seconds(t0);
   row.before = report.before;
