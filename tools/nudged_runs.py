@@ -11,14 +11,17 @@ One run of a build against another then says little about the change between the
 registers DATASET once per nudge, each with `registration.solver.bulk_step_tolerance` moved
 by a step of 2 % (0.94 to 1.06 times the scene's value for the default seven nudges), and
 prints, per run and over the runs: the mean vertex error (mm), the outer iterations over the
-sequence, the frames not converged, and the median time per frame. With --vs, the same nudges
-with the other build, and the paired differences. --set passes scene overrides to every run
+sequence, the frames not converged, the median time per frame and the run's CPU seconds (user
+and system: on a busy shared host the wall time per frame swings by tens of percent from one
+run to the next, the CPU time far less). With --vs, the same nudges with the other build, and
+the paired differences. --set passes scene overrides to every run
 (e.g. --set registration.forces.estimate=true). Uses only the CLI and the standard library.
 """
 import argparse
 import csv
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -51,7 +54,10 @@ def run(femreg, dataset, value, out, threads, overrides=()):
     truth = os.path.join(folder, "ground_truth")
     if os.path.isdir(truth):
         cmd += ["--ground-truth", truth]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if done.returncode != 0:
         sys.exit(f"nudged_runs: {' '.join(cmd)} failed:\n{done.stdout[-2000:]}")
     with open(os.path.join(out, "summary.json")) as f:
@@ -64,6 +70,7 @@ def run(femreg, dataset, value, out, threads, overrides=()):
         "outer": sum(int(r["outer_iterations"]) for r in rows),
         "capped": sum(r["termination"] != "converged" for r in rows),
         "ms": summary.get("ms_per_frame_median", float("nan")),
+        "cpu": cpu,
     }
 
 
@@ -72,7 +79,8 @@ def describe(name, results):
     outer = [r["outer"] for r in results]
     print(f"{name}: mean error {statistics.mean(errors):.3f} mm (min {min(errors):.3f}, "
           f"max {max(errors):.3f}), outer iterations {statistics.mean(outer):.1f}, "
-          f"frames not converged {statistics.mean(r['capped'] for r in results):.1f}")
+          f"frames not converged {statistics.mean(r['capped'] for r in results):.1f}, "
+          f"CPU {statistics.mean(r['cpu'] for r in results):.2f} s per run")
 
 
 def main():
@@ -94,7 +102,7 @@ def main():
     builds = [("A", args.femreg)] + ([("B", args.vs)] if args.vs else [])
     results = {name: [] for name, _ in builds}
     print(f"{args.dataset}: {KEY} = {base:g} x " + ", ".join(f"{f:.2f}" for f in factors))
-    print("nudge    " + "".join(f"{name + ' error mm':>14s}{'outer':>7s}{'capped':>8s}{'ms':>8s}"
+    print("nudge    " + "".join(f"{name + ' error mm':>14s}{'outer':>7s}{'capped':>8s}{'ms':>8s}{'cpu s':>8s}"
                                   for name, _ in builds))
     for k, factor in enumerate(factors):
         line = f"{factor:5.2f}    "
@@ -102,7 +110,7 @@ def main():
             r = run(femreg, args.dataset, base * factor, os.path.join(args.out, f"{name}_{k}"), args.threads,
                     args.set)
             results[name].append(r)
-            line += f"{r['error']:14.3f}{r['outer']:7d}{r['capped']:8d}{r['ms']:8.1f}"
+            line += f"{r['error']:14.3f}{r['outer']:7d}{r['capped']:8d}{r['ms']:8.1f}{r['cpu']:8.2f}"
         print(line, flush=True)
     for name, femreg in builds:
         describe(f"{name} ({femreg})", results[name])
@@ -110,6 +118,10 @@ def main():
         diffs = [b["error"] - a["error"] for a, b in zip(results["A"], results["B"])]
         print(f"B - A, paired: mean {statistics.mean(diffs):+.3f} mm, "
               f"min {min(diffs):+.3f}, max {max(diffs):+.3f}")
+        ratios = [b["cpu"] / a["cpu"] for a, b in zip(results["A"], results["B"]) if a["cpu"] > 0]
+        if ratios:
+            print(f"B / A, CPU seconds per run: median {statistics.median(ratios):.2f} "
+                  f"(min {min(ratios):.2f}, max {max(ratios):.2f})")
 
 
 if __name__ == "__main__":
