@@ -18,8 +18,9 @@ using BlockType = typename std::decay_t<decltype(std::declval<T>().blocks())>::v
 
 // A set is assembled on several threads once its blocks hold this many 3x3 Hessian blocks
 // (#blocks x n^2): below, the team costs more than it saves, mostly the cache lines of H
-// that the other core must fetch (docs/notes: the assembler's thresholds).
-constexpr int kParallelWork = 32768;
+// that the other core must fetch; a 1,543-vertex cage's sets (up to 118k) were faster serial
+// (docs/notes/2026-11-30-two-threads.md).
+constexpr int kParallelWork = 131072;
 
 }  // namespace
 
