@@ -19,12 +19,12 @@ namespace femreg {
 
 namespace {
 
-thread_local bool inside_task = false;
+thread_local bool inside_task = false;  // this thread runs a task (a nested call runs serially)
 
 // After a job a worker polls for the next one this long before it sleeps: the hot loops come in
 // runs (a substitution's two halves, the PCG iterations, an assembly's two steps), and a
 // sleeping worker takes longer than that to wake. Short enough to cost a busy machine little.
-constexpr std::chrono::microseconds kPoll(50);  // this thread runs a task (a nested call runs serially)
+constexpr std::chrono::microseconds kPoll(50);
 
 struct Job {
   const std::function<void(int)>* body = nullptr;
