@@ -185,7 +185,7 @@ void AddToDenseSum(const std::array<int, 4>& vertices, const Lin& lin, Eigen::Ve
 TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
   std::mt19937 rng(41);
   std::vector<std::unique_ptr<Sample<energy::ElasticElement>>> elements;
-  const int count = 3000;  // past the parallel threshold
+  const int count = 9000;  // past the parallel threshold (144k 3x3 blocks)
   Vertices x(4 * count, 3);
   energy::Problem problem;
   problem.Reset(4 * count);
@@ -232,7 +232,7 @@ TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
 // block lands where its vertices are. The system is the blocks' sum on one and two threads.
 TEST(Assembler, FourVertexStencilsMetAgainScatterWhereTheirVerticesAre) {
   std::mt19937 rng(43);
-  const int count = 600;  // elements; 4 data blocks each: past the parallel threshold
+  const int count = 2400;  // elements; 4 data blocks each: past the parallel threshold (154k)
   energy::Problem problem;
   problem.Reset(4 * count);
   Vertices x(4 * count, 3);

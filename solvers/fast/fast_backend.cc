@@ -45,6 +45,7 @@
 #include "parallel/signals.h"
 #include "solvers/fast/equilibrium_step.h"
 #include "solvers/fast/fast_backend_internal.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 #include "solvers/fast/multigrid.h"
 #include "solvers/fast/supernodal_solve.h"
@@ -97,8 +98,9 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
                     [pp](int row) { return pp + row; }, yy + 3 * b);
   };
   if (threads > 1 && blocks >= parallel_from) {
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int b = 0; b < blocks; ++b) column(b);
+    ParallelRanges(threads, blocks, (blocks + 15) / 16, [&](int64_t begin, int64_t end) {
+      for (int64_t b = begin; b < end; ++b) column(static_cast<int>(b));
+    });
   } else {
     for (int b = 0; b < blocks; ++b) column(b);
   }
@@ -110,6 +112,10 @@ FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
   impl_->assembler.set_threads(impl_->threads);
 }
 FastBackend::~FastBackend() = default;
+
+namespace {
+constexpr int kPcgProductParallelFrom = 1024;
+}  // namespace
 
 FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, double negligible,
                                                   int max_iterations, Eigen::VectorXd* x,
@@ -131,7 +137,9 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   Eigen::VectorXd q(b.size());
   double rz = r.dot(z);
   for (int k = 0; k < max_iterations; ++k) {
-    BlockProduct(H, p, threads, &q);
+    // Between two substitutions on the same workers (they poll for the next job, parallel/pool.h):
+    // a product from 1024 vertices on pays for them.
+    BlockProduct(H, p, threads, &q, kPcgProductParallelFrom);
     const double pq = p.dot(q);
     // (rz <= 0: the preconditioner is not positive definite, e.g. a multigrid smoother
     // whose eigenvalue bound fell short.)

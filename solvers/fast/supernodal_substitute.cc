@@ -7,6 +7,7 @@
 #include <numeric>
 #include <type_traits>
 
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 #include "solvers/fast/supernodal_solve.h"
 
@@ -217,25 +218,21 @@ void SupernodalSolve<Scalar>::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x
       for (auto it = group.rbegin(); it != group.rend(); ++it) Backward(*it, y, z_[static_cast<size_t>(g)].data());
     }
   } else {
-#pragma omp parallel num_threads(std::min(threads_, num_groups))
-    {
-      const int t = TeamThread(), team = TeamSize();
-      for (int g = t; g < num_groups; g += team) {
-        acc_[static_cast<size_t>(g)].setZero();
-        for (int s : groups_[static_cast<size_t>(g)]) {
-          Forward(s, b_.data(), acc_[static_cast<size_t>(g)].data(), y, z_[static_cast<size_t>(g)].data());
-        }
+    // The groups on femreg's workers (parallel/pool.h), the top on this thread between.
+    const int team = std::min(threads_, num_groups);
+    RunTasks(team, num_groups, [&](int g) {
+      acc_[static_cast<size_t>(g)].setZero();
+      for (int s : groups_[static_cast<size_t>(g)]) {
+        Forward(s, b_.data(), acc_[static_cast<size_t>(g)].data(), y, z_[static_cast<size_t>(g)].data());
       }
-#pragma omp barrier
-#pragma omp single
-      SolveTop(num_groups, y);  // a barrier
-      for (int g = t; g < num_groups; g += team) {
-        const std::vector<int>& group = groups_[static_cast<size_t>(g)];
-        for (auto it = group.rbegin(); it != group.rend(); ++it) {
-          Backward(*it, y, z_[static_cast<size_t>(g)].data());
-        }
+    });
+    SolveTop(num_groups, y);
+    RunTasks(team, num_groups, [&](int g) {
+      const std::vector<int>& group = groups_[static_cast<size_t>(g)];
+      for (auto it = group.rbegin(); it != group.rend(); ++it) {
+        Backward(*it, y, z_[static_cast<size_t>(g)].data());
       }
-    }
+    });
   }
   x->resize(n_);
   for (int k = 0; k < n_; ++k) (*x)[perm[k]] = y[k];

@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "energy/nodal_volume.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -17,8 +18,9 @@ using BlockType = typename std::decay_t<decltype(std::declval<T>().blocks())>::v
 
 // A set is assembled on several threads once its blocks hold this many 3x3 Hessian blocks
 // (#blocks x n^2): below, the team costs more than it saves, mostly the cache lines of H
-// that the other core must fetch (docs/notes: the assembler's thresholds).
-constexpr int kParallelWork = 32768;
+// that the other core must fetch; a 1,543-vertex cage's sets (up to 118k) were faster serial
+// (docs/notes/2026-11-30-two-threads.md).
+constexpr int kParallelWork = 131072;
 
 }  // namespace
 
@@ -312,12 +314,12 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
     // regrown part every time.
     if (scratch_.size() < kStride * straddling.size()) scratch_.resize(kStride * straddling.size());
     double* buffer = scratch_.data();
-#pragma omp parallel num_threads(threads_)
-    {
-      const int t = TeamThread();
+    // Two steps on femreg's workers (parallel/pool.h): the straddling blocks in pieces, then
+    // one task per region; the caller takes over a worker's part if it starts late.
+    ParallelRanges(threads_, num_straddling, (num_straddling + 4 * threads_ - 1) / (4 * threads_),
+                   [&](int64_t begin, int64_t end) {
       Linearization<T> lin;
-#pragma omp for schedule(static)
-      for (int k = 0; k < num_straddling; ++k) {
+      for (int64_t k = begin; k < end; ++k) {
         double* out = buffer + kStride * static_cast<size_t>(k);
         const int b = straddling[static_cast<size_t>(k)];
         const bool adds = linearize(blocks[static_cast<size_t>(b)], set.loss(), &lin, with_hessian) &&
@@ -331,8 +333,11 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
             Eigen::Map<Eigen::Matrix3d>(out + 1 + 3 * n + 9 * ij) = lin.hessian[ij];
           }
         }
-      }  // a barrier: every straddling block is linearized
-      // The thread's blocks in ascending order, interior and straddling alike: every entry
+      }
+    });  // every straddling block is linearized
+    RunTasks(threads_, threads_, [&](int t) {
+      Linearization<T> lin;
+      // The region's blocks in ascending order, interior and straddling alike: every entry
       // receives its terms in block order, as on one thread (docs/notes/2026-11-29-threads.md).
       for (int e : c.interior[static_cast<size_t>(t)]) {
         if (e >= 0) {
@@ -353,7 +358,7 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
         }
         scatter(b, lin.gradient.data(), lin.hessian.data(), t);
       }
-    }
+    });
     set_done();
   });
 }

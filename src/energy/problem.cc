@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "energy/nodal_volume.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -82,8 +83,7 @@ void BlockValues(const TermSet<T>& set, const Vertices& x, int threads, std::vec
   };
   const int team = PhaseThreads(threads, chunks, 2);  // 2 chunks a thread at least
   if (team > 1) {
-#pragma omp parallel for schedule(static) num_threads(team)
-    for (int c = 0; c < chunks; ++c) chunk(c);
+    RunTasks(team, chunks, chunk);
   } else {
     for (int c = 0; c < chunks; ++c) chunk(c);
   }

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "parallel/pool.h"
+
 namespace femreg {
 
 bool Material::IsValid(std::string* error) const {
@@ -348,13 +350,12 @@ void ElasticModel::UpdateRotations(const Vertices& x) {
   const int n = num_elements();
   // A team only from 1024 elements on: below, its start costs more than the polar steps
   // (docs/notes/2026-11-29-threads.md).
-#pragma omp parallel for schedule(static) if (n >= 1024)
-  for (int e = 0; e < n; ++e) {
+  ParallelFor(0, n, 512, [&](int64_t e) {
     Eigen::Matrix<double, 3, 4> xe;
     for (int k = 0; k < 4; ++k) xe.col(k) = x.row(tets_(e, k)).transpose();
     // Warm-started from the rotation before: a few Newton steps instead of an SVD.
     rotations_[e] = PolarRotation(DeformationGradient(xe, rest_[e].dm_inv), rotations_[e]);
-  }
+  });
 }
 
 double ElasticModel::Energy(const Vertices& x) const {

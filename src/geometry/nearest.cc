@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "femreg/geometry.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -90,10 +91,9 @@ Eigen::MatrixXd VertexNormalsAt(const Vertices& x, const Triangles& triangles, c
   const int n = static_cast<int>(vertices.size());
   Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(n, 3);
   // Each row on its own: the same on any thread count (an embedded scan's subsample: thousands).
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), n, 2048)) schedule(static)
-  for (int i = 0; i < n; ++i) {
+  ParallelFor(0, n, 2048, [&](int64_t i) {
     const int v = vertices[static_cast<size_t>(i)];
-    if (v < 0 || v >= rings.num_vertices()) continue;
+    if (v < 0 || v >= rings.num_vertices()) return;
     // As TrackerState::VertexNormals: from zero, each face's (b - a) x (c - a) in face order
     // (a face that lists v twice counts twice), then normalized.
     Eigen::RowVector3d sum = Eigen::RowVector3d::Zero();
@@ -105,7 +105,7 @@ Eigen::MatrixXd VertexNormalsAt(const Vertices& x, const Triangles& triangles, c
     const double len = sum.norm();
     if (len > 0) sum /= len;
     normals.row(i) = sum;
-  }
+  });
   return normals;
 }
 

@@ -5,6 +5,7 @@
 #include <limits>
 #include <vector>
 
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -39,17 +40,15 @@ void Rasterize(const PinholeCamera& camera, const Vertices& positions, const Tri
     bool ok = false;
   };
   std::vector<Projected> projected(static_cast<size_t>(nv));
-#pragma omp parallel for num_threads(PhaseThreads(threads, nv, 8192)) schedule(static)
-  for (int i = 0; i < nv; ++i) {
+  ParallelFor(threads, nv, 8192, [&](int64_t i) {
     Projected& p = projected[static_cast<size_t>(i)];
     p.ok = camera.Project(positions.row(i), &p.u, &p.v, &p.z);
-  }
+  });
   // The image in bands of rows, one per thread, each going through the triangles in order:
   // a pixel is written by one thread, and the nearest triangle (the first of equals) wins as
   // on one thread.
   const int bands = std::min(std::max(1, height), PhaseThreads(threads, nf, 8192));
-#pragma omp parallel for num_threads(bands) schedule(static, 1)
-  for (int band = 0; band < bands; ++band) {
+  RunTasks(bands, bands, [&](int band) {
     const int row0 = static_cast<int>(static_cast<long long>(height) * band / bands);
     const int row1 = static_cast<int>(static_cast<long long>(height) * (band + 1) / bands) - 1;
     for (int f = 0; f < nf; ++f) {
@@ -91,7 +90,7 @@ void Rasterize(const PinholeCamera& camera, const Vertices& positions, const Tri
         }
       }
     }
-  }
+  });
 }
 
 }  // namespace femreg

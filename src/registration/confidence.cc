@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "femreg/fem.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -127,8 +128,9 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
     const size_t first = deviation.size();
     const int ne = o.model.num_elements();
     deviation.resize(first + static_cast<size_t>(ne));
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), ne, 2048)) schedule(static)
-    for (int e = 0; e < ne; ++e) deviation[first + static_cast<size_t>(e)] = StretchDeviation(DeformationGradient(o, e));
+    ParallelFor(0, ne, 2048, [&](int64_t e) {
+      deviation[first + static_cast<size_t>(e)] = StretchDeviation(DeformationGradient(o, static_cast<int>(e)));
+    });
   }
   if (!deviation.empty()) {
     const size_t at = std::min(deviation.size() - 1, static_cast<size_t>(0.95 * deviation.size()));

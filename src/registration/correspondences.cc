@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "femreg/geometry.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -177,11 +178,11 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     // From the last outer iteration's triangles (each query always uses the same index: its
     // label's): faster, the same pairs (docs/notes/2026-11-28-figures-from-code-comments.md).
     const bool warm_start = warm != nullptr && static_cast<int>(warm->size()) == nq;
-#pragma omp parallel for num_threads(PhaseThreads(threads, nq, kQueriesPerThread)) schedule(static)
-    for (int j = 0; j < nq; ++j) {
+    ParallelFor(threads, nq, kQueriesPerThread, [&](int64_t jj) {
+      const int j = static_cast<int>(jj);
       const int i = j * data.cloud_stride;
       const SurfaceIndex* index = index_of(i);
-      if (index == nullptr) continue;
+      if (index == nullptr) return;
       const Eigen::Vector3d q = cloud.points.row(i);
       SurfaceIndex::Hit& hit = hits[static_cast<size_t>(j)];
       if (!warm_start) {
@@ -193,7 +194,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       } else {
         hit = index->ClosestFrom(q, (*warm)[static_cast<size_t>(j)]);
       }
-    }
+    });
     if (warm != nullptr) {
       warm->resize(static_cast<size_t>(nq));
       for (int j = 0; j < nq; ++j) (*warm)[static_cast<size_t>(j)] = hits[static_cast<size_t>(j)].triangle;
@@ -219,15 +220,15 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
     // nearest cloud point and the ring test decide nothing else.
     std::vector<char> away(static_cast<size_t>(view ? ns : 0), 0);
     constexpr int kFacingAway = -2;
-#pragma omp parallel for num_threads(PhaseThreads(threads, ns, kQueriesPerThread)) schedule(static)
-    for (int i = 0; i < ns; ++i) {
+    ParallelFor(threads, ns, kQueriesPerThread, [&](int64_t ii) {
+      const int i = static_cast<int>(ii);
       const int v = state.surface_vertices[static_cast<size_t>(i)];
       const Eigen::Vector3d p = x.row(v);
       if (view) {
         away[static_cast<size_t>(i)] = !fc.Faces(p, normals.row(i)) && !(hold && (*paired)[static_cast<size_t>(i)]);
         if (away[static_cast<size_t>(i)] && fc.skip_facing_away) {
           nearest[static_cast<size_t>(i)] = kFacingAway;
-          continue;
+          return;
         }
       }
       int q = -1;
@@ -254,7 +255,7 @@ void FindPairs(const TrackerState& state, const FrameCloud& fc, const SurfaceInd
       }
       nearest[static_cast<size_t>(i)] = q;
       dist2[static_cast<size_t>(i)] = d2;
-    }
+    });
     if (paired != nullptr && !hold) paired->assign(static_cast<size_t>(ns), 0);
     // A vertex hidden behind an occluder pairs with a point across an edge of the model only
     // this near: within its own ring (a mean edge), the noise or the sampling.
@@ -399,12 +400,11 @@ std::vector<int> SubsampleStarts(const TrackerState& view, const SurfaceRings& r
   Vertices at(static_cast<Eigen::Index>(seeds.size()), 3);
   for (size_t i = 0; i < seeds.size(); ++i) at.row(static_cast<Eigen::Index>(i)) = view.x.row(seeds[i]);
   const PointIndex index(at);
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(num_threads), nq, kQueriesPerThread)) schedule(static)
-  for (int j = 0; j < nq; ++j) {
+  ParallelFor(num_threads, nq, kQueriesPerThread, [&](int64_t j) {
     double d2 = 0.0;
     const int i = index.Nearest(points.row(static_cast<Eigen::Index>(j) * stride), &d2);
     if (i >= 0) starts[static_cast<size_t>(j)] = rings.list[static_cast<size_t>(rings.offsets[static_cast<size_t>(seeds[static_cast<size_t>(i)])])];
-  }
+  });
   return starts;
 }
 
@@ -418,13 +418,12 @@ void UpdateOutputs(const PointIndex* cloud_index, const std::vector<DataPair>& p
     if (cloud_index != nullptr && cloud_index->size() > 0) {
       const int ns = static_cast<int>(o.mesh.surface_vertices.size());
       Eigen::VectorXd& residuals = state->residuals[i];
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(num_threads), ns, kQueriesPerThread)) schedule(static)
-      for (int j = 0; j < ns; ++j) {
+      ParallelFor(num_threads, ns, kQueriesPerThread, [&](int64_t j) {
         const int v = o.mesh.surface_vertices[static_cast<size_t>(j)];
         double d2 = 0.0;
         cloud_index->Nearest(o.mesh.x.row(v), &d2);
         residuals(v) = std::sqrt(d2);
-      }
+      });
     }
   }
   for (const DataPair& p : pairs) {

@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -191,13 +192,12 @@ const TrackerState& DataSurface::Update(const Vertices& x) {
   // computed once (the whole scan: the cost grows with it).
   if (updated_at_.rows() == x.rows() && updated_at_.cols() == x.cols() && updated_at_ == x) return view_;
   const int n = static_cast<int>(vertex_.size());
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), n, 4096)) schedule(static)
-  for (int v = 0; v < n; ++v) {  // each row on its own: the same on any thread count
+  ParallelFor(0, n, 4096, [&](int64_t v) {  // each row on its own: the same on any thread count
     const Stencil& st = vertex_[static_cast<size_t>(v)];
     Eigen::RowVector3d p = st.weights[0] * x.row(st.vertices[0]);
     for (int k = 1; k < st.n; ++k) p += st.weights[static_cast<size_t>(k)] * x.row(st.vertices[static_cast<size_t>(k)]);
     view_.x.row(v) = p;
-  }
+  });
   updated_at_ = x;
   return view_;
 }

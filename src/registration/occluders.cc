@@ -1,11 +1,13 @@
 #include "registration/occluders.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
 #include "femreg/point_cloud.h"  // CameraRotation
 #include "geometry/zbuffer.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 #include "registration/confidence.h"  // StretchDeviation
 
@@ -100,14 +102,12 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
 
   // Per point: in front of the model (or beside it) and off its surface.
   std::vector<char> off(static_cast<size_t>(n), 0), seed(static_cast<size_t>(n), 0);
-  int on_model = 0, seeds_found = 0;
+  std::atomic<int> on_model{0}, seeds_found{0};
   const bool seeded = static_cast<int>(seeds.size()) == n && seed_rings > 0;
   // Each point on its own (counts of integers): the same on any thread count.
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), n, 1024)) schedule(static) \
-    reduction(+ : on_model, seeds_found)
-  for (int i = 0; i < n; ++i) {
+  ParallelFor(0, n, 1024, [&](int64_t i) {
     double u = 0, v = 0, z = 0;
-    if (!camera.Project(points.row(i), &u, &v, &z)) continue;
+    if (!camera.Project(points.row(i), &u, &v, &z)) return;
     const int px = static_cast<int>(std::lround(u)), py = static_cast<int>(std::lround(v));
     double model_z = std::numeric_limits<double>::infinity();
     if (px >= 0 && py >= 0 && px < image.width && py < image.height) {
@@ -115,8 +115,8 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
       model_z = image.depth[idx];
     }
     const bool hit = std::isfinite(model_z);
-    on_model += hit;
-    if (!(z < model_z - grow)) continue;
+    if (hit) on_model.fetch_add(1, std::memory_order_relaxed);
+    if (!(z < model_z - grow)) return;
     double d = std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
                                  : surface.Closest(points.row(i)))
                              .squared_distance);
@@ -126,16 +126,16 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     if (seeded && d > grow && d <= grow + state.mean_edge_length) {
       d = std::sqrt(surface.Closest(points.row(i)).squared_distance);
     }
-    if (d <= grow) continue;
+    if (d <= grow) return;
     off[static_cast<size_t>(i)] = 1;
     if (hit && z < model_z - margin && d > margin) {
       seed[static_cast<size_t>(i)] = 1;
-      ++seeds_found;
+      seeds_found.fetch_add(1, std::memory_order_relaxed);
     }
-  }
-  counts.seeds = seeds_found;
+  });
+  counts.seeds = seeds_found.load();
   if (counts.seeds == 0) return counts;
-  if (counts.seeds > kWholeView * on_model) {
+  if (counts.seeds > kWholeView * on_model.load()) {
     counts.whole_view = true;
     return counts;
   }

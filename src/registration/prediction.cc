@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "geometry/nearest.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -146,8 +147,7 @@ double StartMisfit(const TrackerState& state, const Vertices& x, const Vertices&
   const PointIndex index(surface);
   const double cap2 = gate > 0 ? gate * gate : std::numeric_limits<double>::infinity();
   std::vector<double> d2(static_cast<size_t>(np), 0.0);
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(0), np, 256)) schedule(static)
-  for (int i = 0; i < np; ++i) index.Nearest(points.row(i), &d2[static_cast<size_t>(i)]);
+  ParallelFor(0, np, 256, [&](int64_t i) { index.Nearest(points.row(i), &d2[static_cast<size_t>(i)]); });
   double sum = 0.0;  // in the points' order: the same on any thread count
   for (int i = 0; i < np; ++i) sum += std::min(d2[static_cast<size_t>(i)], cap2);
   return sum / static_cast<double>(np);

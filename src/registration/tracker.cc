@@ -24,6 +24,7 @@
 #include "registration/prediction.h"
 #include "registration/tracker_impl.h"
 #include "registration/tracker_state.h"
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 #include "solvers/backend.h"
 
@@ -451,13 +452,12 @@ void Tracker::Impl::Outputs(const PointIndex* cloud_index, const std::vector<Dat
   residuals.setConstant(std::numeric_limits<double>::quiet_NaN());
   if (cloud_index == nullptr || cloud_index->size() == 0) return;
   const int ns = static_cast<int>(view.surface_vertices.size());
-#pragma omp parallel for num_threads(PhaseThreads(ResolveThreadCount(threads), ns, 64)) schedule(static)
-  for (int j = 0; j < ns; ++j) {
+  ParallelFor(threads, ns, 64, [&](int64_t j) {
     const int v = view.surface_vertices[static_cast<size_t>(j)];
     double d2 = 0.0;
     cloud_index->Nearest(view.x.row(v), &d2);
     residuals(v) = std::sqrt(d2);
-  }
+  });
 }
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <limits>
 
+#include "parallel/pool.h"
 #include "parallel/threads.h"
 
 namespace femreg {
@@ -61,20 +62,18 @@ Eigen::MatrixXd TrackerState::VertexNormals() const {
   const int nf = static_cast<int>(surface.rows());
   const int threads = ResolveThreadCount(0);
   Eigen::MatrixXd face(nf, 3);
-#pragma omp parallel for num_threads(PhaseThreads(threads, nf, 4096)) schedule(static)
-  for (int f = 0; f < nf; ++f) {
+  ParallelFor(threads, nf, 4096, [&](int64_t f) {
     const Eigen::Vector3d a = x.row(surface(f, 0)), b = x.row(surface(f, 1)), c = x.row(surface(f, 2));
     face.row(f) = (b - a).cross(c - a).transpose();  // area weighted
-  }
+  });
   Eigen::MatrixXd n = Eigen::MatrixXd::Zero(num_vertices, 3);
   for (int f = 0; f < nf; ++f) {
     for (int k = 0; k < 3; ++k) n.row(surface(f, k)) += face.row(f);
   }
-#pragma omp parallel for num_threads(PhaseThreads(threads, num_vertices, 4096)) schedule(static)
-  for (int v = 0; v < num_vertices; ++v) {
+  ParallelFor(threads, num_vertices, 4096, [&](int64_t v) {
     const double len = n.row(v).norm();
     if (len > 0) n.row(v) /= len;
-  }
+  });
   return n;
 }
 

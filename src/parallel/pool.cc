@@ -1,0 +1,168 @@
+#include "parallel/pool.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "parallel/threads.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace femreg {
+
+namespace {
+
+thread_local bool inside_task = false;  // this thread runs a task (a nested call runs serially)
+
+// After a job a worker polls for the next one this long before it sleeps: the hot loops come in
+// runs (a substitution's two halves, the PCG iterations, an assembly's two steps), and a
+// sleeping worker takes longer than that to wake. Short enough to cost a busy machine little.
+constexpr std::chrono::microseconds kPoll(50);
+
+struct Job {
+  const std::function<void(int)>* body = nullptr;
+  int tasks = 0;
+  std::atomic<int> next{0};
+  int wanted = 0;   // workers that may join
+  int joined = 0;   // workers that joined (under the pool's mutex, as the two below)
+  int active = 0;   // workers still taking tasks
+  bool closed = false;  // the caller took the last task: no worker joins any more
+};
+
+inline void Pause() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+
+void TakeTasks(Job* job) {
+  const bool was_inside = inside_task;
+  inside_task = true;
+  for (int i = job->next.fetch_add(1, std::memory_order_relaxed); i < job->tasks;
+       i = job->next.fetch_add(1, std::memory_order_relaxed)) {
+    (*job->body)(i);
+  }
+  inside_task = was_inside;
+}
+
+class Pool {
+ public:
+  static Pool& Get() {
+    static Pool* pool = new Pool;  // never destroyed: workers may still sleep at exit
+    return *pool;
+  }
+
+  void Run(int threads, int tasks, const std::function<void(int)>& body) {
+    Job job;
+    job.body = &body;
+    job.tasks = tasks;
+    job.wanted = threads - 1;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (job_ != nullptr) {  // another thread's call is running: this one alone
+        job.wanted = 0;
+      } else {
+        const uint64_t before = generation_.load(std::memory_order_relaxed);
+        while (static_cast<int>(workers_.size()) < job.wanted) {
+          workers_.emplace_back([this, before] { Work(before); });  // it takes this job too
+        }
+        job_ = &job;
+        generation_.store(generation_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+      }
+    }
+    if (job.wanted == 0) {
+      for (int i = 0; i < tasks; ++i) body(i);
+      return;
+    }
+    if (job.wanted >= static_cast<int>(workers_.size())) {
+      wake_.notify_all();
+    } else {
+      for (int w = 0; w < job.wanted; ++w) wake_.notify_one();
+    }
+    std::exception_ptr error;
+    try {
+      TakeTasks(&job);
+    } catch (...) {
+      error = std::current_exception();
+      job.next.store(tasks, std::memory_order_relaxed);  // the workers take no more
+    }
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      job.closed = true;
+      job_ = nullptr;
+      done_.wait(lock, [&job] { return job.active == 0; });
+    }
+    if (error) std::rethrow_exception(error);
+  }
+
+ private:
+  void Work(uint64_t seen) {
+#ifdef _OPENMP
+    omp_set_num_threads(1);  // an OpenMP loop inside a task runs on it alone, as one nested in a team
+#endif
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      if (generation_.load(std::memory_order_relaxed) == seen) {
+        lock.unlock();
+        const auto until = std::chrono::steady_clock::now() + kPoll;
+        while (generation_.load(std::memory_order_acquire) == seen && std::chrono::steady_clock::now() < until) {
+          for (int i = 0; i < 16; ++i) Pause();
+        }
+        lock.lock();
+        wake_.wait(lock, [&] { return generation_.load(std::memory_order_relaxed) != seen; });
+      }
+      seen = generation_.load(std::memory_order_relaxed);
+      Job* job = job_;
+      if (job == nullptr || job->closed || job->joined >= job->wanted) continue;
+      ++job->joined;
+      ++job->active;
+      lock.unlock();
+      TakeTasks(job);
+      lock.lock();
+      if (--job->active == 0 && job->closed) done_.notify_one();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;  // a new job
+  std::condition_variable done_;  // a job's last worker finished
+  Job* job_ = nullptr;
+  std::atomic<uint64_t> generation_{0};  // changed under mutex_, polled without it
+  std::vector<std::thread> workers_;
+};
+
+}  // namespace
+
+void RunTasks(int threads, int tasks, const std::function<void(int)>& body) {
+  if (tasks <= 0) return;
+  threads = std::min(ResolveThreadCount(threads), tasks);
+  if (threads <= 1 || inside_task) {
+    for (int i = 0; i < tasks; ++i) body(i);
+    return;
+  }
+  Pool::Get().Run(threads, tasks, body);
+}
+
+void ParallelRanges(int threads, int64_t n, int64_t grain,
+                    const std::function<void(int64_t, int64_t)>& body) {
+  if (n <= 0) return;
+  grain = std::max<int64_t>(grain, 1);
+  const int64_t pieces = (n + grain - 1) / grain;
+  if (pieces == 1) {
+    body(0, n);
+    return;
+  }
+  RunTasks(threads, static_cast<int>(pieces), [&](int p) {
+    const int64_t begin = static_cast<int64_t>(p) * grain;
+    body(begin, std::min(n, begin + grain));
+  });
+}
+
+}  // namespace femreg

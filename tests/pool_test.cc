@@ -1,0 +1,91 @@
+// femreg's worker threads (parallel/pool.h): every task runs once, whoever runs it, and the
+// loops built on them give the serial loop's result on any thread count.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "parallel/pool.h"
+
+namespace femreg {
+namespace {
+
+TEST(RunTasks, EveryTaskOnceOnAnyThreadCount) {
+  for (int threads : {1, 2, 3, 8}) {
+    for (int tasks : {0, 1, 2, 5, 64, 1000}) {
+      std::vector<std::atomic<int>> runs(static_cast<size_t>(tasks));
+      for (auto& r : runs) r = 0;
+      RunTasks(threads, tasks, [&](int i) { runs[static_cast<size_t>(i)].fetch_add(1); });
+      for (int i = 0; i < tasks; ++i) {
+        EXPECT_EQ(runs[static_cast<size_t>(i)].load(), 1) << threads << " threads, task " << i << " of " << tasks;
+      }
+    }
+  }
+}
+
+TEST(RunTasks, ManyJobsInARow) {
+  // The workers poll for the next job, then sleep: jobs close together and far apart.
+  std::vector<int64_t> out(257, 0);
+  for (int job = 0; job < 2000; ++job) {
+    RunTasks(2, 257, [&](int i) { out[static_cast<size_t>(i)] += i; });
+    if (job % 500 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  for (int i = 0; i < 257; ++i) EXPECT_EQ(out[static_cast<size_t>(i)], 2000 * static_cast<int64_t>(i));
+}
+
+TEST(RunTasks, NestedAndConcurrentCallsComplete) {
+  std::atomic<int> inner{0};
+  RunTasks(2, 8, [&](int) { RunTasks(2, 16, [&](int) { inner.fetch_add(1); }); });
+  EXPECT_EQ(inner.load(), 8 * 16);
+  // Two threads of the caller's at once: one of them gets the workers, the other runs alone.
+  std::atomic<int> a{0}, b{0};
+  std::thread other([&] {
+    for (int k = 0; k < 200; ++k) RunTasks(2, 50, [&](int) { a.fetch_add(1); });
+  });
+  for (int k = 0; k < 200; ++k) RunTasks(2, 50, [&](int) { b.fetch_add(1); });
+  other.join();
+  EXPECT_EQ(a.load(), 200 * 50);
+  EXPECT_EQ(b.load(), 200 * 50);
+}
+
+TEST(RunTasks, ACallersExceptionPropagatesAfterTheWorkersStop) {
+  // Task 0 throws wherever it runs; a worker's throw ends the program, so only the caller's
+  // is tested: with one thread the caller runs every task.
+  EXPECT_THROW(RunTasks(1, 4, [](int i) {
+                 if (i == 0) throw std::runtime_error("task 0");
+               }),
+               std::runtime_error);
+  std::atomic<int> runs{0};
+  RunTasks(2, 10, [&](int) { runs.fetch_add(1); });  // the pool still works
+  EXPECT_EQ(runs.load(), 10);
+}
+
+TEST(ParallelFor, SameAsTheSerialLoop) {
+  const int64_t n = 100003;
+  std::vector<double> serial(static_cast<size_t>(n)), one(static_cast<size_t>(n)), two(static_cast<size_t>(n));
+  auto f = [](int64_t i) { return std::sin(0.001 * static_cast<double>(i)) * std::sqrt(static_cast<double>(i)); };
+  for (int64_t i = 0; i < n; ++i) serial[static_cast<size_t>(i)] = f(i);
+  ParallelFor(1, n, 64, [&](int64_t i) { one[static_cast<size_t>(i)] = f(i); });
+  ParallelFor(2, n, 64, [&](int64_t i) { two[static_cast<size_t>(i)] = f(i); });
+  EXPECT_EQ(one, serial);
+  EXPECT_EQ(two, serial);
+}
+
+TEST(ParallelRanges, PiecesDependOnTheSizeAlone) {
+  for (int threads : {1, 2, 4}) {
+    std::vector<std::atomic<int64_t>> begins(10);
+    for (auto& b : begins) b = -1;
+    ParallelRanges(threads, 95, 10, [&](int64_t begin, int64_t end) {
+      EXPECT_EQ(end, std::min<int64_t>(95, begin + 10));
+      begins[static_cast<size_t>(begin / 10)] = begin;
+    });
+    for (int p = 0; p < 10; ++p) EXPECT_EQ(begins[static_cast<size_t>(p)].load(), 10 * p) << threads;
+  }
+}
+
+}  // namespace
+}  // namespace femreg
