@@ -64,6 +64,7 @@ class Pool {
     job.body = &body;
     job.tasks = tasks;
     job.wanted = threads - 1;
+    int workers = 0;  // read under the lock: another caller may add workers once this job ends
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (job_ != nullptr) {  // another thread's call is running: this one alone
@@ -73,6 +74,7 @@ class Pool {
         while (static_cast<int>(workers_.size()) < job.wanted) {
           workers_.emplace_back([this, before] { Work(before); });  // it takes this job too
         }
+        workers = static_cast<int>(workers_.size());
         job_ = &job;
         generation_.store(generation_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
       }
@@ -81,7 +83,7 @@ class Pool {
       for (int i = 0; i < tasks; ++i) body(i);
       return;
     }
-    if (job.wanted >= static_cast<int>(workers_.size())) {
+    if (job.wanted >= workers) {
       wake_.notify_all();
     } else {
       for (int w = 0; w < job.wanted; ++w) wake_.notify_one();
