@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -52,9 +53,76 @@ TEST(RunTasks, NestedAndConcurrentCallsComplete) {
   EXPECT_EQ(b.load(), 200 * 50);
 }
 
+TEST(RunTasks, TwoCallersWithSeveralWorkersEachReturn) {
+  // With three workers one caller's job can end while another's runs: each caller must be
+  // woken when its own job's last worker finishes (a hang here is the failure).
+  std::atomic<int> a{0}, b{0};
+  std::thread other([&] {
+    for (int k = 0; k < 300; ++k) RunTasks(4, 40, [&](int) { a.fetch_add(1); });
+  });
+  for (int k = 0; k < 300; ++k) RunTasks(4, 40, [&](int) { b.fetch_add(1); });
+  other.join();
+  EXPECT_EQ(a.load(), 300 * 40);
+  EXPECT_EQ(b.load(), 300 * 40);
+}
+
+// True once a call with two threads has run its tasks on two threads: the caller is not
+// stuck in serial mode. Tries a number of jobs, since a worker may start late on a busy machine.
+bool UsesAWorker() {
+  const auto caller = std::this_thread::get_id();
+  for (int attempt = 0; attempt < 200; ++attempt) {
+    std::atomic<bool> on_worker{false};
+    RunTasks(2, 32, [&](int) {
+      if (std::this_thread::get_id() != caller) on_worker = true;
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+    });
+    if (on_worker.load()) return true;
+  }
+  return false;
+}
+
+TEST(RunTasks, AWorkersExceptionReachesTheCaller) {
+  const auto caller = std::this_thread::get_id();
+  bool thrown = false;
+  for (int attempt = 0; attempt < 200 && !thrown; ++attempt) {
+    std::atomic<bool> on_worker{false};
+    try {
+      RunTasks(2, 32, [&](int) {
+        if (std::this_thread::get_id() != caller) {
+          on_worker = true;
+          throw std::runtime_error("on a worker");
+        }
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+      });
+      EXPECT_FALSE(on_worker.load()) << "a worker's task threw and the caller did not see it";
+    } catch (const std::runtime_error&) {
+      EXPECT_TRUE(on_worker.load());
+      thrown = true;
+    }
+  }
+  EXPECT_TRUE(thrown) << "no task ran on a worker in 200 jobs";
+  EXPECT_TRUE(UsesAWorker());
+}
+
+TEST(RunTasks, ACallersExceptionLeavesItsThreadParallel) {
+  const auto caller = std::this_thread::get_id();
+  bool thrown = false;
+  for (int attempt = 0; attempt < 200 && !thrown; ++attempt) {
+    try {
+      RunTasks(2, 32, [&](int) {
+        if (std::this_thread::get_id() == caller) throw std::runtime_error("on the caller");
+      });
+    } catch (const std::runtime_error&) {
+      thrown = true;
+    }
+  }
+  EXPECT_TRUE(thrown);
+  // The thread's next calls still share their tasks with the workers.
+  EXPECT_TRUE(UsesAWorker());
+}
+
 TEST(RunTasks, ACallersExceptionPropagatesAfterTheWorkersStop) {
-  // Task 0 throws wherever it runs; a worker's throw ends the program, so only the caller's
-  // is tested: with one thread the caller runs every task.
+  // With one thread the caller runs every task.
   EXPECT_THROW(RunTasks(1, 4, [](int i) {
                  if (i == 0) throw std::runtime_error("task 0");
                }),

@@ -6,6 +6,7 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -34,6 +35,8 @@ struct Job {
   int joined = 0;   // workers that joined (under the pool's mutex, as the two below)
   int active = 0;   // workers still taking tasks
   bool closed = false;  // the caller took the last task: no worker joins any more
+  std::mutex error_mutex;
+  std::exception_ptr error;  // the first task that threw, on whichever thread: the caller rethrows it
 };
 
 inline void Pause() {
@@ -42,14 +45,30 @@ inline void Pause() {
 #endif
 }
 
+// Marks this thread as running a task for the scope, also when a task throws.
+class InsideTask {
+ public:
+  InsideTask() : was_(inside_task) { inside_task = true; }
+  ~InsideTask() { inside_task = was_; }
+  InsideTask(const InsideTask&) = delete;
+  InsideTask& operator=(const InsideTask&) = delete;
+
+ private:
+  bool was_;
+};
+
 void TakeTasks(Job* job) {
-  const bool was_inside = inside_task;
-  inside_task = true;
-  for (int i = job->next.fetch_add(1, std::memory_order_relaxed); i < job->tasks;
-       i = job->next.fetch_add(1, std::memory_order_relaxed)) {
-    (*job->body)(i);
+  InsideTask inside;
+  try {
+    for (int i = job->next.fetch_add(1, std::memory_order_relaxed); i < job->tasks;
+         i = job->next.fetch_add(1, std::memory_order_relaxed)) {
+      (*job->body)(i);
+    }
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(job->error_mutex);
+    if (!job->error) job->error = std::current_exception();
+    job->next.store(job->tasks, std::memory_order_relaxed);  // nobody takes another task
   }
-  inside_task = was_inside;
 }
 
 class Pool {
@@ -71,12 +90,18 @@ class Pool {
         job.wanted = 0;
       } else {
         const uint64_t before = generation_.load(std::memory_order_relaxed);
-        while (static_cast<int>(workers_.size()) < job.wanted) {
-          workers_.emplace_back([this, before] { Work(before); });  // it takes this job too
+        try {
+          while (static_cast<int>(workers_.size()) < job.wanted) {
+            workers_.emplace_back([this, before] { Work(before); });  // it takes this job too
+          }
+        } catch (const std::system_error&) {  // no more threads to be had: go on with those there are
         }
         workers = static_cast<int>(workers_.size());
-        job_ = &job;
-        generation_.store(generation_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+        job.wanted = std::min(job.wanted, workers);
+        if (job.wanted > 0) {
+          job_ = &job;
+          generation_.store(generation_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
+        }
       }
     }
     if (job.wanted == 0) {
@@ -88,20 +113,14 @@ class Pool {
     } else {
       for (int w = 0; w < job.wanted; ++w) wake_.notify_one();
     }
-    std::exception_ptr error;
-    try {
-      TakeTasks(&job);
-    } catch (...) {
-      error = std::current_exception();
-      job.next.store(tasks, std::memory_order_relaxed);  // the workers take no more
-    }
+    TakeTasks(&job);
     {
       std::unique_lock<std::mutex> lock(mutex_);
       job.closed = true;
       job_ = nullptr;
       done_.wait(lock, [&job] { return job.active == 0; });
     }
-    if (error) std::rethrow_exception(error);
+    if (job.error) std::rethrow_exception(job.error);
   }
 
  private:
@@ -128,7 +147,8 @@ class Pool {
       lock.unlock();
       TakeTasks(job);
       lock.lock();
-      if (--job->active == 0 && job->closed) done_.notify_one();
+      // Every waiter: another caller's job may have started (and be waited for) since this one.
+      if (--job->active == 0 && job->closed) done_.notify_all();
     }
   }
 

@@ -104,8 +104,8 @@ std::string SimulateSummaryJson(const SimulateRun& run, const Scene& scene,
   j["overrides"] = run.overrides;
   j["model"] = ToString(run.model);
   j["tangent"] = ToString(run.forward.tangent);  // the command line's, not a scene key
-  j["load_steps"] = forward["load_steps"];
-  j["max_iterations"] = forward["max_iterations"];
+  j["load_steps"] = forward.at("load_steps");
+  j["max_iterations"] = forward.at("max_iterations");
   j["gravity"] = Vector(scene.gravity);
   j["forward"] = forward;
   json list = json::array();
@@ -130,8 +130,8 @@ std::string CalibrationJson(const CalibrationRun& run, const Scene& scene, const
   j["observed"] = observed;
   const bool object_known = options.object >= 0 && options.object < static_cast<int>(scene.objects.size());
   j["object"] = object_known ? json(scene.objects[options.object].name) : json(nullptr);
-  j["parameter"] = table["parameter"];
-  j["region"] = options.parameter == CalibrationParameter::kRegionYoungsModulus ? table["region"] : json(nullptr);
+  j["parameter"] = table.at("parameter");
+  j["region"] = options.parameter == CalibrationParameter::kRegionYoungsModulus ? table.at("region") : json(nullptr);
   j["options"] = table;
   j["termination"] = ToString(s.termination);
   j["message"] = s.message;
@@ -148,7 +148,7 @@ std::string CalibrationJson(const CalibrationRun& run, const Scene& scene, const
                       {"sigma_of", options.parameter == CalibrationParameter::kPoissonRatio ? "nu" : "ln E"},
                       {"one_sigma", {if_width(s.value_low), if_width(s.value_high)}},
                       {"rms_within_10_percent", {if_width(s.width_low), if_width(s.width_high)}}};
-  j["loss"] = {{"huber_scale_m", table["loss_scale"]}, {"max_distance_m", table["max_distance"]}};
+  j["loss"] = {{"huber_scale_m", table.at("loss_scale")}, {"max_distance_m", table.at("max_distance")}};
   j["evaluations"] = s.evaluations;
   j["newton_iterations"] = s.newton_iterations;
   j["time_s"] = Number(s.total_time_s);
