@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <random>
 #include <set>
 #include <sstream>
@@ -35,49 +34,6 @@ using V3 = Eigen::Vector3d;
 const bool kOneThread = testing_util::UseOneOpenMpThread();
 
 // --- surfaces, scenes and the tracker -----------------------------------------------------
-
-TEST(TriangleSurface, ReadsObjAndAsciiAndBinaryStl) {
-  const std::string dir = testing::TempDir();
-  {
-    std::ofstream o(dir + "/quad.obj");
-    o << "# quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1 2/2 3/3 4/4\n";
-  }
-  Vertices v;
-  Triangles t;
-  ASSERT_TRUE(ReadTriangleSurface(dir + "/quad.obj", &v, &t).ok());
-  EXPECT_EQ(v.rows(), 4);
-  EXPECT_EQ(t.rows(), 2);
-  {
-    std::ofstream o(dir + "/tri.stl");
-    o << "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
-         "endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 1 0 0\nvertex 1 1 0\n"
-         "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n";
-  }
-  ASSERT_TRUE(ReadTriangleSurface(dir + "/tri.stl", &v, &t).ok());
-  EXPECT_EQ(v.rows(), 4);  // welded
-  EXPECT_EQ(t.rows(), 2);
-  {
-    std::ofstream o(dir + "/bin.stl", std::ios::binary);
-    char header[80] = {0};
-    o.write(header, 80);
-    uint32_t n = 1;
-    o.write(reinterpret_cast<const char*>(&n), 4);
-    float rec[12] = {0, 0, 1, 0, 0, 0, 2, 0, 0, 0, 2, 0};
-    o.write(reinterpret_cast<const char*>(rec), 48);
-    uint16_t attr = 0;
-    o.write(reinterpret_cast<const char*>(&attr), 2);
-  }
-  ASSERT_TRUE(ReadTriangleSurface(dir + "/bin.stl", &v, &t).ok());
-  EXPECT_EQ(t.rows(), 1);
-  EXPECT_EQ(v(1, 0), 2.0);
-  {
-    std::ofstream o(dir + "/bad.obj");
-    o << "v 0 0 0\nf 1 2 3\n";
-  }
-  const Status s = ReadTriangleSurface(dir + "/bad.obj", &v, &t);
-  EXPECT_FALSE(s.ok());
-  EXPECT_NE(s.message().find("bad.obj:2"), std::string::npos) << s.message();
-}
 
 TEST(ObstaclePose, InterpolatesKeyframes) {
   std::vector<ObstacleKeyframe> k(2);

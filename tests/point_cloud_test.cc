@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "femreg/point_cloud.h"
 #include "femreg_test_config.h"
@@ -77,6 +78,31 @@ TEST(ReadPointCloud, PlyAndText) {
   ASSERT_TRUE(ReadPointCloud(Fixture("cloud.xyz"), &xyz).ok());
   EXPECT_EQ(xyz.size(), 3);
   EXPECT_DOUBLE_EQ(xyz.points(2, 1), 5.0);
+}
+
+TEST(ReadPointCloud, TextCloudsTakeSeparatorsNormalsAndComments) {
+  const std::string dir = testing::TempDir();
+  auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir + "/" + name) << text;
+    return dir + "/" + name;
+  };
+  PointCloud cloud;
+  ASSERT_TRUE(ReadPointCloud(write("n.xyz", "# x y z nx ny nz\n\n1,2,3,0,0,1\n4;5;6;0;1;0\r\n"), &cloud).ok());
+  ASSERT_EQ(cloud.size(), 2);
+  ASSERT_TRUE(cloud.has_normals());
+  EXPECT_DOUBLE_EQ(cloud.points(1, 2), 6.0);
+  EXPECT_DOUBLE_EQ(cloud.normals(1, 1), 1.0);
+  EXPECT_FALSE(cloud.has_labels());
+  ASSERT_TRUE(ReadPointCloud(write("p.txt", "1 2 3\n"), &cloud).ok());
+  EXPECT_FALSE(cloud.has_normals());
+  const std::string mixed = write("mixed.xyz", "1 2 3\n1 2 3 0 0 1\n");
+  EXPECT_EQ(ReadPointCloud(mixed, &cloud).message(), mixed + ":2: 6 values where earlier lines had 3");
+  const std::string four = write("four.xyz", "1 2 3 4\n");
+  EXPECT_EQ(ReadPointCloud(four, &cloud).message(),
+            four + ":1: expected 'x y z' or 'x y z nx ny nz', got 4 values");
+  const std::string word = write("word.xyz", "1 2 abc\n");
+  EXPECT_EQ(ReadPointCloud(word, &cloud).message(), word + ":1: not a number: 'abc'");
+  EXPECT_EQ(cloud.size(), 1);  // left as it was
 }
 
 TEST(ReadPointCloud, ErrorsNameTheFileAndLine) {

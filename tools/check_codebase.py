@@ -11,6 +11,9 @@ Each check prints what fails; the exit status is 1 when any does:
   - one home per concept: only src/io/ply_reader.cc reads a PLY header, only
     src/mesh/disjoint_sets.h is a union-find, only src/registration/depth_image.cc builds the
     camera frame, only src/scene/yaml_reader.cc maps a YAML error to file and line;
+  - file formats are parsed in src/io: no other file of src/ opens a file for reading, but for
+    a short allow-list of files that read something else (the machine's load, the scene's
+    YAML text, ground truth CSV), each with its reason;
   - the developer guide's architecture page matches the code: its layer table names every
     module of src/ and solvers/ at the rank tests/layering_test.cc gives it, every path it
     names exists, and every C++ name it gives is in the sources.
@@ -140,6 +143,38 @@ def check_one_home():
             fail(name, f"{home} no longer matches this check's pattern: update the check")
 
 
+# Opening a file for reading: an input stream or fopen in a read mode (writers are not looked at).
+READS_FILE = re.compile(r'\b(std::)?i?fstream\s*[\w({]|\bfopen\s*\([^;]*,\s*"r')
+# The files of src/ outside src/io that read a file, each with why that is not a file format io
+# should parse. Everything else that reads a file belongs in src/io.
+READS_FILE_ALLOWED = {
+    os.path.join("src", "parallel", "threads.cc"): "/proc/loadavg, the machine's load",
+    os.path.join("src", "scene", "scene_parser.cc"): "the scene file's text, parsed by yaml-cpp",
+    os.path.join("src", "eval", "ground_truth.cc"): "a dataset's ground truth CSV",
+    os.path.join("src", "eval", "piece_errors.cc"): "a dataset's per-piece ground truth CSV",
+    os.path.join("src", "eval", "forces.cc"): "a dataset's forces.csv and a run's stats.csv",
+    os.path.join("src", "experiments", "experiment.cc"): "the bench / compare CSV that module writes",
+}
+
+
+def check_file_formats_in_io():
+    reading = set()
+    for path in source_files():
+        r = rel(path)
+        if not r.startswith("src" + os.sep) or r.startswith(os.path.join("src", "io") + os.sep):
+            continue
+        for i, line in enumerate(read_lines(path), 1):
+            code = line.split("//")[0]
+            if code.lstrip().startswith("#") or not READS_FILE.search(code):
+                continue
+            reading.add(r)
+            if r not in READS_FILE_ALLOWED:
+                fail("file formats in io", f"{r}:{i} reads a file outside src/io (a file format's "
+                     f"parser belongs in src/io, or give the file a reason in READS_FILE_ALLOWED): {line.strip()}")
+    for r in sorted(set(READS_FILE_ALLOWED) - reading):
+        fail("file formats in io", f"{r} is allowed to read a file but no longer does: drop it from READS_FILE_ALLOWED")
+
+
 def layering_ranks():
     text = open(os.path.join(ROOT, "tests", "layering_test.cc"), encoding="utf-8").read()
     table = text[text.index("kRank"):]
@@ -194,6 +229,7 @@ def check_architecture():
 check_readme()
 check_files()
 check_one_home()
+check_file_formats_in_io()
 check_architecture()
 for f in failures:
     print(f)

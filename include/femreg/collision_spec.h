@@ -1,7 +1,7 @@
 // femreg/collision_spec.h - what a scene says about collision (docs/theory/contact.md): the object
-// pairs, the penalty and the rigid obstacles with their keyframed poses, and the triangle
-// surfaces obstacle meshes are read from. femreg/collision.h detects and penalizes the
-// contacts a spec describes.
+// pairs, the penalty and the rigid obstacles with their keyframed poses (their triangle
+// surfaces are read by ReadTriangleSurface, femreg/io.h). femreg/collision.h detects and
+// penalizes the contacts a spec describes.
 #ifndef FEMREG_COLLISION_SPEC_H_
 #define FEMREG_COLLISION_SPEC_H_
 
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "femreg/field_table.h"
+#include "femreg/io.h"  // ReadTriangleSurface, which obstacle meshes are read with
 #include "femreg/mesh.h"
 #include "femreg/status.h"
 
@@ -120,9 +121,6 @@ struct ContactForce {
   Eigen::Vector3d friction = Eigen::Vector3d::Zero();  // the friction part of `force`
   bool obstacle() const { return other < 0; }
 };
-
-// Reads a triangle surface: OBJ (v / f lines, polygons fanned) or STL (ASCII or binary).
-Status ReadTriangleSurface(const std::string& path, Vertices* vertices, Triangles* triangles);
 
 // The pose of a keyframed obstacle at `frame`.
 Eigen::Isometry3d ObstaclePose(const std::vector<ObstacleKeyframe>& keyframes, double frame);

@@ -1,6 +1,6 @@
-// femreg/io.h - reading and writing meshes: tetrahedral meshes in, VTU/PVD/PLY/OBJ/VTP out;
-// atomic writes and file lists. Depth images, masks, intrinsics and recordings:
-// femreg/camera_io.h.
+// femreg/io.h - reading and writing meshes: tetrahedral meshes and triangle surfaces (OBJ,
+// STL) in, VTU/PVD/PLY/OBJ/VTP out; atomic writes and file lists. Depth images, masks,
+// intrinsics and recordings: femreg/camera_io.h.
 #ifndef FEMREG_IO_H_
 #define FEMREG_IO_H_
 
@@ -33,6 +33,11 @@ MeshFormat DetectMeshFormat(const std::string& path);
 // allocated or read; errors name the file and the line (text) or byte offset (binary), and
 // quote a bad token by at most 80 characters. `mesh` is left as it was on error.
 Status ReadTetMesh(const std::string& path, TetMesh* mesh);
+
+// Reads a triangle surface (a rigid obstacle, a surface to mesh) by its extension: OBJ (v / f
+// lines, polygons fanned, negative indices, v/vt/vn forms) or STL (ASCII or binary, corners
+// merged by exact position). No triangle is an error.
+Status ReadTriangleSurface(const std::string& path, Vertices* vertices, Triangles* triangles);
 
 // A field written with a mesh: `values` has one row per vertex (point field) or per
 // element (cell field), and 1 (scalar) or 3 (vector) columns.

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "femreg/collision.h"
+#include "femreg/io.h"  // ReadTriangleSurface
 
 namespace femreg {
 

@@ -103,6 +103,14 @@ struct RawCloud {
 // PCD (pcd_reader.cc): ASCII, binary and binary_compressed, every header count checked
 // against the file's length first. PLY clouds: ReadPlyCloud (ply_reader.h).
 Status ReadPcdCloud(const std::string& path, RawCloud* cloud);
+// Text clouds (xyz_reader.cc): 'x y z' or 'x y z nx ny nz' a line, split by spaces, tabs,
+// commas or semicolons; '#' comments. Every line has the first data line's column count.
+Status ReadXyzCloud(const std::string& path, RawCloud* cloud);
+
+// What a cloud file holds, by its first bytes (xyz_reader.cc): "ply", a PCD header keyword,
+// or else text. Only a file that cannot be opened is an error.
+enum class CloudFileFormat { kPly, kPcd, kText };
+Status DetectCloudFormat(const std::string& path, CloudFileFormat* format);
 
 // A fresh temporary file name in the folder of `path` (for write-and-rename).
 std::string TemporaryPathFor(const std::string& path);

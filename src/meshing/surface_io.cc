@@ -8,7 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "femreg/collision_spec.h"  // ReadTriangleSurface (OBJ, STL)
 #include "femreg/io.h"
 #include "femreg/meshing.h"
 #include "io/ply_reader.h"

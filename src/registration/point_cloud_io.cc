@@ -1,6 +1,6 @@
-// Point clouds: the reader front end (PCD and PLY read by io/pcd_reader.cc and
-// io/ply_reader.cc, converted here; text here), the
-// binary PCD writer (PCL) and the filters (PCL).
+// Point clouds: the reader front end (PCD, PLY and text read by io/pcd_reader.cc,
+// io/ply_reader.cc and io/xyz_reader.cc, converted here), the binary PCD writer (PCL) and
+// the filters (PCL).
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>
 #include <pcl/features/normal_3d.h>
@@ -15,14 +15,10 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
-#include <sstream>
 
 #include "femreg/point_cloud.h"
 #include "io/io_internal.h"
 #include "io/ply_reader.h"
-#include "io/text_tokens.h"
 #include "registration/cloud_files.h"
 #include "registration/cloud_subset.h"
 
@@ -84,59 +80,6 @@ void Store(const internal::RawCloud& raw, PointCloud* cloud) {
   }
 }
 
-Status ReadText(const std::string& path, PointCloud* cloud) {
-  std::ifstream in(path);
-  if (!in) return Status::Error(path + ": cannot open");
-  std::vector<double> pts, nrm;
-  std::string line;
-  int line_no = 0;
-  int columns = -1;
-  while (std::getline(in, line)) {
-    ++line_no;
-    const auto start = line.find_first_not_of(" \t\r");
-    if (start == std::string::npos || line[start] == '#') continue;
-    for (char& c : line) {
-      if (c == ',' || c == ';') c = ' ';
-    }
-    std::istringstream ls(line);
-    std::vector<double> values;
-    std::string token;
-    while (ls >> token) {
-      char* end = nullptr;
-      const double v = std::strtod(token.c_str(), &end);
-      if (end == token.c_str() || *end != '\0') {
-        std::ostringstream os;
-        os << path << ":" << line_no << ": not a number: " << internal::Quoted(token);
-        return Status::Error(os.str());
-      }
-      values.push_back(v);
-    }
-    if (values.size() != 3 && values.size() != 6) {
-      std::ostringstream os;
-      os << path << ":" << line_no << ": expected 'x y z' or 'x y z nx ny nz', got "
-         << values.size() << " values";
-      return Status::Error(os.str());
-    }
-    if (columns < 0) columns = static_cast<int>(values.size());
-    if (static_cast<int>(values.size()) != columns) {
-      std::ostringstream os;
-      os << path << ":" << line_no << ": " << values.size() << " values where earlier lines had "
-         << columns;
-      return Status::Error(os.str());
-    }
-    pts.insert(pts.end(), values.begin(), values.begin() + 3);
-    if (columns == 6) nrm.insert(nrm.end(), values.begin() + 3, values.end());
-  }
-  const Eigen::Index n = static_cast<Eigen::Index>(pts.size() / 3);
-  cloud->points = Eigen::Map<Vertices>(pts.data(), n, 3);
-  if (columns == 6) {
-    cloud->normals = Eigen::Map<Vertices>(nrm.data(), n, 3);
-  } else {
-    cloud->normals.resize(0, 3);
-  }
-  return Status::Ok();
-}
-
 }  // namespace
 
 namespace internal {
@@ -196,26 +139,18 @@ namespace {
 
 Status ReadPointCloudUnchecked(const std::string& path, PointCloud* cloud, int* nonfinite_dropped,
                                SensorPose* sensor) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path + ": cannot open");
-  std::string head(256, '\0');
-  in.read(&head[0], static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<size_t>(in.gcount()));
-  in.close();
-  Status status;
+  internal::CloudFileFormat format;
+  Status status = internal::DetectCloudFormat(path, &format);
+  if (!status.ok()) return status;
   if (sensor != nullptr) *sensor = SensorPose();
-  // A PCD header is recognized by any of its keywords, so that one with a line missing
-  // (FIELDS deleted, say) is refused as a PCD rather than read as text.
-  auto pcd_key = [&](const char* key) {
-    return head.compare(0, std::strlen(key), key) == 0 || head.find(std::string("\n") + key) != std::string::npos;
-  };
-  if (head.compare(0, 3, "ply") == 0) {
+  if (format == internal::CloudFileFormat::kPly) {
     status = internal::ReadPlyFile(path, cloud);
-  } else if (head.find("# .PCD") != std::string::npos || pcd_key("VERSION") || pcd_key("FIELDS") ||
-             pcd_key("SIZE") || pcd_key("TYPE") || pcd_key("WIDTH") || pcd_key("DATA")) {
+  } else if (format == internal::CloudFileFormat::kPcd) {
     status = internal::ReadPcdFile(path, cloud, sensor);
   } else {
-    status = ReadText(path, cloud);
+    internal::RawCloud raw;
+    status = internal::ReadXyzCloud(path, &raw);
+    if (status.ok()) Store(raw, cloud);
   }
   if (!status.ok()) return status;
   const int dropped = DropNonFinite(cloud);

@@ -4,6 +4,7 @@
 #include <set>
 #include <string>
 
+#include "femreg/io.h"  // ReadTriangleSurface
 #include "scene/scene_parser.h"
 
 namespace femreg {

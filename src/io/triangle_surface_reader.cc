@@ -1,12 +1,17 @@
-// Triangle surfaces for rigid obstacles: OBJ (v / f, polygons fanned, negative indices,
+// Triangle surfaces (rigid obstacles, surfaces to mesh): OBJ (v / f, polygons fanned, negative indices,
 // v/vt/vn forms) and STL (ASCII or binary, vertices merged by exact position).
+#include <array>
+#include <cctype>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
-#include "femreg/collision_spec.h"
+#include "femreg/io.h"
 
 namespace femreg {
 
