@@ -31,17 +31,12 @@ struct CalibrateArgs {
   std::vector<std::string> observed;
   std::string out_dir;
   std::string object;
-  std::string param = "E";
-  int region = -1;
-  double lower = 0.0, upper = 0.0;
-  int grid = 9;
-  double tolerance = 1e-3;
-  int max_evaluations = 40;
-  double loss_scale = 0.002;
-  double max_distance = 0.02;
+  // The search's options, with their defaults, where the flags write them (femreg/calibration.h);
+  // --param and --object are parsed into it.
+  CalibrationOptions options;
+  std::string param = ToString(CalibrationOptions{}.parameter);
   bool no_preprocess = false;
   bool plot = true;
-  bool verbose = false;
   bool force = false;
 };
 
@@ -67,7 +62,7 @@ void RunCalibrate(const CalibrateArgs& args) {
   Status status = LoadScene(args.scene_path, &scene);
   if (!status.ok()) return Fail(status.message());
 
-  CalibrationOptions options;
+  CalibrationOptions options = args.options;
   if (!FromString(args.param, &options.parameter)) {
     return Fail("--param " + args.param + ": use E, nu or region_E");
   }
@@ -83,15 +78,6 @@ void RunCalibrate(const CalibrateArgs& args) {
     return Fail("the scene has " + std::to_string(scene.objects.size()) +
                 " objects: say which one with --object");
   }
-  options.region = args.region;
-  options.lower = args.lower;
-  options.upper = args.upper;
-  options.grid_samples = args.grid;
-  options.tolerance = args.tolerance;
-  options.max_evaluations = args.max_evaluations;
-  options.loss_scale = args.loss_scale;
-  options.max_distance = args.max_distance;
-  options.verbose = args.verbose;
   std::string error;
   if (!options.IsValid(&error)) return Fail("--" + error);
 
@@ -180,7 +166,7 @@ void AddCalibrateCommand(CLI::App* app) {
       "DIR/misfit.png. Exit code 1 when the fit is not usable: no load (the parameter cannot\n"
       "be observed), a cloud that does not overlap the object, a best value at an end of the\n"
       "interval (widen it), a forward solve that does not converge.\n"
-      "Example: femreg calibrate --scene datasets/sag_track/scene.yaml\n"
+      "Example: femreg calibrate --scene datasets/sag_track/calibration.yaml\n"
       "           --observed datasets/sag_track/clouds/frame_0000.pcd --out /tmp/cal");
   cmd->add_option("--scene,-s", args->scene_path, "Scene file (YAML)")->required();
   cmd->add_option("--observed", args->observed, "Observed cloud(s): PCD, PLY or text")
@@ -190,27 +176,27 @@ void AddCalibrateCommand(CLI::App* app) {
   cmd->add_option("--object", args->object, "The object to fit (required with several)");
   cmd->add_option("--param", args->param, "E (default), nu, or region_E (with --region)")
       ->check(CLI::IsMember({"E", "nu", "region_E"}));
-  cmd->add_option("--region", args->region, "Region id for --param region_E");
-  cmd->add_option("--lower", args->lower,
+  cmd->add_option("--region", args->options.region, "Region id for --param region_E");
+  cmd->add_option("--lower", args->options.lower,
                   "Lower end of the search interval (default: scene's E / 10; nu: 0)");
-  cmd->add_option("--upper", args->upper,
+  cmd->add_option("--upper", args->options.upper,
                   "Upper end of the search interval (default: scene's E * 10; nu: 0.495)");
-  cmd->add_option("--grid", args->grid, "Samples of the bracketing grid (>= 3)")
+  cmd->add_option("--grid", args->options.grid_samples, "Samples of the bracketing grid (>= 3)")
       ->capture_default_str();
-  cmd->add_option("--tolerance", args->tolerance,
+  cmd->add_option("--tolerance", args->options.tolerance,
                   "Golden section stops at this bracket width (in ln E, or in nu)")
       ->capture_default_str();
-  cmd->add_option("--max-evaluations", args->max_evaluations, "Forward solves in all")
+  cmd->add_option("--max-evaluations", args->options.max_evaluations, "Forward solves in all")
       ->capture_default_str();
-  cmd->add_option("--loss-scale", args->loss_scale, "Huber scale of the distance (m)")
+  cmd->add_option("--loss-scale", args->options.loss_scale, "Huber scale of the distance (m)")
       ->capture_default_str();
-  cmd->add_option("--max-distance", args->max_distance,
+  cmd->add_option("--max-distance", args->options.max_distance,
                   "Points farther than this from the simulated surface count as outliers (m)")
       ->capture_default_str();
   cmd->add_flag("--no-preprocess", args->no_preprocess,
                 "Use the clouds as read (skip the scene's registration.preprocess)");
   cmd->add_flag("!--no-plot", args->plot, "Do not draw misfit.png");
-  cmd->add_flag("-v,--verbose", args->verbose, "One line per forward solve");
+  cmd->add_flag("-v,--verbose", args->options.verbose, "One line per forward solve");
   cmd->add_flag("-f,--force", args->force, "Write into a non-empty output folder");
   cmd->callback([args] { RunCalibrate(*args); });
 }
