@@ -71,21 +71,21 @@ struct CalibrationOptions {
 // calibrate's flags where they have one. The ranges are IsValid's, which checks them together.
 template <>
 struct OptionFields<CalibrationOptions> {
-  static constexpr const char* kSection = "calibration";
+  static constexpr const char* kSection = "";  // command-line options, not a scene section
   template <class Visitor>
   static constexpr void Visit(Visitor&& v) {
     using S = CalibrationOptions;
     v(&S::parameter, FieldInfo("parameter").Doc("E, nu or region_E"));
-    v(&S::object, FieldInfo("object").Doc("index of the scene object whose material is fitted"));
+    v(&S::object, FieldInfo("object").AtLeast(0).Doc("index of the scene object whose material is fitted"));
     v(&S::region, FieldInfo("region").Doc("region_E: the region id"));
-    v(&S::lower, FieldInfo("lower").Doc("search interval's lower end; 0 = automatic"));
-    v(&S::upper, FieldInfo("upper").Doc("search interval's upper end; 0 = automatic"));
-    v(&S::grid_samples, FieldInfo("grid_samples").Doc("samples of the bracketing grid"));
-    v(&S::tolerance, FieldInfo("tolerance").Doc("golden section's bracket width (ln E, or nu)"));
+    v(&S::lower, FieldInfo("lower").Finite().Doc("search interval's lower end; 0 = automatic"));
+    v(&S::upper, FieldInfo("upper").Finite().Doc("search interval's upper end; 0 = automatic"));
+    v(&S::grid_samples, FieldInfo("grid_samples").AtLeast(3).Doc("samples of the bracketing grid"));
+    v(&S::tolerance, FieldInfo("tolerance").Above(0).Doc("golden section's bracket width (ln E, or nu)"));
     v(&S::max_evaluations, FieldInfo("max_evaluations").Doc("forward solves in all"));
-    v(&S::loss_scale, FieldInfo("loss_scale").Doc("Huber scale of the distance (m)"));
-    v(&S::max_distance, FieldInfo("max_distance").Doc("distance cap (m): farther points are outliers"));
-    v(&S::min_overlap, FieldInfo("min_overlap").Doc("fraction of each cloud within max_distance at the fit"));
+    v(&S::loss_scale, FieldInfo("loss_scale").Above(0).Note("m").Doc("Huber scale of the distance (m)"));
+    v(&S::max_distance, FieldInfo("max_distance").Above(0).Note("m").Doc("distance cap (m): farther points are outliers"));
+    v(&S::min_overlap, FieldInfo("min_overlap").AtLeast(0).AtMost(1).Doc("fraction of each cloud within max_distance at the fit"));
     v(&S::warm_start, FieldInfo("warm_start").Doc("start each solve from the nearest equilibrium"));
   }
 };

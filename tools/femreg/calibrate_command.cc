@@ -79,7 +79,17 @@ void RunCalibrate(const CalibrateArgs& args) {
                 " objects: say which one with --object");
   }
   std::string error;
-  if (!options.IsValid(&error)) return Fail("--" + error);
+  if (!options.IsValid(&error)) {
+    // The message names the option's field; say which flag sets it.
+    const std::pair<const char*, const char*> flags[] = {
+        {"region", "--region"},   {"lower", "--lower"},         {"upper", "--upper"},
+        {"grid_samples", "--grid"}, {"tolerance", "--tolerance"}, {"max_evaluations", "--max-evaluations"},
+        {"loss_scale", "--loss-scale"}, {"max_distance", "--max-distance"}};
+    for (const auto& [field, flag] : flags) {
+      if (error.rfind(field, 0) == 0) return Fail(std::string(flag) + ": " + error);
+    }
+    return Fail(error);
+  }
 
   std::vector<PointCloud> clouds;
   std::vector<int> points;
