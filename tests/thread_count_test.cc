@@ -66,7 +66,9 @@ void ExpectTheSameOnOneAndTwoThreads(const std::string& name, int frames, bool w
   ASSERT_EQ(two.x.size(), one.x.size());
   ASSERT_GT(one.size, 0.0);
   // The test is only as strong as its frames: some must stop unconverged.
-  if (with_unconverged) EXPECT_GT(one.unconverged, 0) << name << ": every frame converged";
+  if (with_unconverged) {
+    EXPECT_GT(one.unconverged, 0) << name << ": every frame converged";
+  }
   EXPECT_EQ(two.unconverged, one.unconverged);
   for (size_t f = 0; f < one.x.size(); ++f) {
     const double apart = (one.x[f] - two.x[f]).cwiseAbs().maxCoeff();
