@@ -5,6 +5,7 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -12,11 +13,13 @@
 #include <functional>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "femreg/blas_kernels.h"
 #include "femreg/io.h"
 #include "parallel/blas_choice.h"
+#include "parallel/load.h"
 #include "parallel/threads.h"
 #include "test_util.h"
 
@@ -138,6 +141,34 @@ TEST(Threads, ZeroThreadsIsTheEnclosingCount) {
   EXPECT_GE(available, 1);
   EXPECT_LE(available, DefaultThreadCount());
   EXPECT_EQ(AdaptiveThreadCount(5), 5);
+}
+
+// The adaptive count takes the machine's runnable threads less this process's own: a worker
+// of femreg's that polls for its next job (or an OpenMP thread that spins) is runnable, and
+// counted as another process's it would cost the next frame a thread.
+TEST(Threads, OwnRunnableThreadsAreNotOtherProcessesLoad) {
+  std::atomic<bool> stop{false};
+  std::atomic<int> started{0};
+  std::vector<std::thread> spinning;
+  for (int k = 0; k < 2; ++k) {
+    spinning.emplace_back([&] {
+      started.fetch_add(1);
+      while (!stop.load(std::memory_order_relaxed)) {
+      }
+    });
+  }
+  while (started.load() < 2) std::this_thread::yield();
+  const int own = OwnRunnableThreads();
+  stop = true;
+  for (std::thread& t : spinning) t.join();
+  EXPECT_GE(own, 3);  // the two spinning and the caller
+  // Two cores, and the runnable threads are this process's three: both cores are free.
+  EXPECT_EQ(ThreadsLeftFree(2, 3, 3), 2);
+  EXPECT_EQ(ThreadsLeftFree(2, 2, 3), 2);  // one stopped between the two counts
+  EXPECT_EQ(ThreadsLeftFree(2, 4, 3), 1);  // another process's thread
+  EXPECT_EQ(ThreadsLeftFree(8, 6, 2), 4);
+  EXPECT_EQ(ThreadsLeftFree(2, 9, 1), 1);  // at least one
+  EXPECT_EQ(ThreadsLeftFree(4, 1, 0), 4);  // the caller is running even when not counted
 }
 
 #ifdef FEMREG_CLI_PATH
