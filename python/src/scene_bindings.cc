@@ -54,12 +54,15 @@ int ObjectIndex(const Scene& scene, const py::object& object) {
 }
 
 // An object's own values as the scene parser checks them: its table's ranges, then its element
-// (ObjectElementError, named as the table names material.volume).
-bool ObjectValid(const ObjectSpec& object, std::string* why) {
+// (ObjectElementError), named by the row just set (`field`: material.model or material.volume)
+// and the object.
+bool ObjectValid(const ObjectSpec& object, const std::string& field, std::string* why) {
   if (!CheckFieldRanges(object, why)) return false;
   const std::string element = ObjectElementError(object);
   if (element.empty()) return true;
-  *why = FieldName<ObjectSpec>(FieldOf<&ObjectSpec::volume>()) + ": " + element;
+  const std::string model = FieldName<ObjectSpec>(FieldOf<&ObjectSpec::model>());
+  *why = (field == model ? model : FieldName<ObjectSpec>(FieldOf<&ObjectSpec::volume>())) + " (object " +
+         py::repr(py::str(object.name)).cast<std::string>() + "): " + element;
   return false;
 }
 

@@ -81,8 +81,10 @@ def test_bad_values_raise_value_error_naming_the_field():
         bar.material_model = "rubber"
     with pytest.raises(TypeError, match="objects.pose.translation: cannot take"):
         bar.translation = "up"
-    # Nodal volume needs the neo-Hookean element: the scene parser's message, for the same field.
-    with pytest.raises(ValueError, match=r"^objects.material.volume: 'nodal' needs 'model: neo_hookean'") as info:
+    # Nodal volume needs the neo-Hookean element: the scene parser's message, for the field set,
+    # with the object's name.
+    with pytest.raises(ValueError, match=r"^objects.material.volume \(object 'bar'\): 'nodal' needs "
+                                         r"'model: neo_hookean'") as info:
         bar.material_volume = "nodal"
     assert bar.material_volume is None
     with pytest.raises(femreg.Error) as parsed:
@@ -90,9 +92,12 @@ def test_bad_values_raise_value_error_naming_the_field():
     assert str(info.value).split(": ", 1)[1] in str(parsed.value)
     bar.material_model = "neo_hookean"
     bar.material_volume = "nodal"
-    with pytest.raises(ValueError, match="objects.material.volume: 'nodal' needs"):
+    # Here the model set is the row that breaks the rule: the message names it.
+    with pytest.raises(ValueError, match=r"^objects.material.model \(object 'bar'\): 'nodal' needs"):
         bar.material_model = "hooke"
     assert bar.material_model == "neo_hookean"
+    with pytest.raises(femreg.Error, match=r"objects\[0\].material.model: 'nodal' needs"):
+        bar_scene(extra=", volume: nodal, model: hooke")
     soft = femreg.Material()
     soft.poisson_ratio = 0.7
     with pytest.raises(ValueError, match=r"objects.material: poisson_ratio must be in \(-1, 0.5\)"):
