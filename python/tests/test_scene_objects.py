@@ -98,9 +98,28 @@ def test_bad_values_raise_value_error_naming_the_field():
     assert bar.material_model == "neo_hookean"
     with pytest.raises(femreg.Error, match=r"objects\[0\].material.model: 'nodal' needs"):
         bar_scene(extra=", volume: nodal, model: hooke")
-    soft = femreg.Material()
-    soft.poisson_ratio = 0.7
-    with pytest.raises(ValueError, match=r"objects.material: poisson_ratio must be in \(-1, 0.5\)"):
-        bar.material = soft
     bar.material = femreg.Material(youngs_modulus=3e5)
     assert scene.object(0).material.youngs_modulus == 3e5
+
+
+def test_a_material_changed_in_place_is_checked_when_set():
+    scene = bar_scene()
+    bar = scene.object("bar")
+    # Through the object, in place: raised at the assignment, naming the key, the value kept.
+    with pytest.raises(ValueError, match=r"^Material: youngs_modulus must be > 0 \(got -1"):
+        bar.material.youngs_modulus = -1
+    assert bar.material.youngs_modulus == 1e5
+    with pytest.raises(ValueError, match=r"^Material: poisson_ratio must be in \(-1, 0.5\) \(got 0.7"):
+        scene.objects[0].material.poisson_ratio = 0.7
+    with pytest.raises(ValueError, match=r"^Material: density must be > 0"):
+        scene.object(0).material.density = 0
+    assert scene.object(0).material.poisson_ratio == 0.3 and scene.object(0).material.density == 1000
+    with pytest.raises(TypeError, match="youngs_modulus: cannot take"):
+        bar.material.youngs_modulus = "stiff"
+    bar.material.youngs_modulus = 2e5                   # a good value is taken
+    assert scene.object("bar").material.youngs_modulus == 2e5
+    # A Material of its own, as its constructor does.
+    soft = femreg.Material()
+    with pytest.raises(ValueError, match=r"^Material: poisson_ratio must be in \(-1, 0.5\)"):
+        soft.poisson_ratio = 0.5
+    assert soft.poisson_ratio == 0.3
