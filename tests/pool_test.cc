@@ -156,12 +156,12 @@ std::string ForkAndRunParallelLoop() {
   const pid_t child = fork();
   if (child < 0) return std::string("fork failed: ") + std::strerror(errno);
   if (child == 0) {
-    alarm(60);
+    alarm(30);
     _exit(ParallelLoopInChild());
   }
   int status = 0;
   pid_t done = 0;
-  for (int waited_ms = 0; waited_ms < 120000; waited_ms += 10) {
+  for (int waited_ms = 0; waited_ms < 60000; waited_ms += 10) {
     done = waitpid(child, &status, WNOHANG);
     if (done != 0) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));

@@ -2,12 +2,18 @@
 // libraries that ask for teams of their own (CHOLMOD 5's supernodal factorization asks
 // OpenMP for 4 threads whatever the program set).
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <atomic>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -110,6 +116,57 @@ TEST(Threads, TeamThreadNumbersTheTeam) {
 #ifdef _OPENMP
   EXPECT_EQ(team, 3);  // dynamic adjustment is off by default
 #endif
+}
+
+// An OpenMP team of two threads: 0 when it had them.
+int TeamOfTwo() {
+  std::atomic<int> threads{0};
+#ifdef _OPENMP
+#pragma omp parallel num_threads(2)
+#endif
+  threads.fetch_add(1);
+  return threads.load() == 2 ? 0 : 1;
+}
+
+// Forks; the child opens an OpenMP team of two and exits with TeamOfTwo's code. "" when it
+// did, else what happened. A child that hangs is ended by its alarm, or killed here.
+std::string ForkAndOpenATeam() {
+  const pid_t child = fork();
+  if (child < 0) return std::string("fork failed: ") + std::strerror(errno);
+  if (child == 0) {
+    alarm(30);
+    _exit(TeamOfTwo());
+  }
+  int status = 0;
+  pid_t done = 0;
+  for (int waited_ms = 0; waited_ms < 60000 && done == 0; waited_ms += 10) {
+    done = waitpid(child, &status, WNOHANG);
+    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (done == 0) {
+    kill(child, SIGKILL);
+    waitpid(child, &status, 0);
+    return "the child hung";
+  }
+  if (done < 0) return std::string("waitpid failed: ") + std::strerror(errno);
+  if (WIFSIGNALED(status)) return "the child died of signal " + std::to_string(WTERMSIG(status)) + " (14: its alarm: a hang)";
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "the child's team did not have two threads";
+  return "";
+}
+
+// Python's multiprocessing forks a process that has run femreg's OpenMP teams: libgomp's
+// child would wait for the parent's idle team threads, which it does not have. femreg frees
+// the forking thread's OpenMP threads before a fork (threads.cc), so the child starts its own.
+TEST(Threads, AForkedChildOpensOpenMpTeams) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+  ASSERT_EQ(TeamOfTwo(), 0);  // the parent's threads, idle
+  EXPECT_EQ(ForkAndOpenATeam(), "");
+  EXPECT_EQ(TeamOfTwo(), 0);  // and the parent's teams still have their threads
+  if (!HasFailure()) {
+    EXPECT_EQ(ForkAndOpenATeam(), "");  // again, after teams in the parent
+  }
 }
 
 // A phase takes at most its threads, one per `per_thread` units of work, at least one.

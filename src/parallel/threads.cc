@@ -4,6 +4,7 @@
 
 #include <dirent.h>
 #include <dlfcn.h>
+#include <pthread.h>
 
 #include <algorithm>
 #include <atomic>
@@ -145,6 +146,21 @@ ScopedThreads::~ScopedThreads() {
 #endif
   if (previous_blas_ > 0) OpenBlas().set(previous_blas_);
 }
+
+namespace {
+
+#ifdef _OPENMP
+// fork() copies only the forking thread. libgomp keeps the threads of that thread's last team
+// idle for its next one, and a forked child would wait for them forever (Python's
+// multiprocessing forks after femreg's teams ran): they are freed before the fork, so parent
+// and child each start new ones at their next team. From inside a team nothing is freed.
+void FreeOpenMpThreadsBeforeFork() {
+  if (!omp_in_parallel()) omp_pause_resource_all(omp_pause_hard);
+}
+const int kOpenMpForkHandler = pthread_atfork(&FreeOpenMpThreadsBeforeFork, nullptr, nullptr);
+#endif
+
+}  // namespace
 
 int TeamThread() {
 #ifdef _OPENMP
