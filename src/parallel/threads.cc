@@ -1,7 +1,5 @@
 #include "parallel/threads.h"
 
-#include "parallel/load.h"
-
 #include <dirent.h>
 #include <dlfcn.h>
 #include <pthread.h>
@@ -19,6 +17,8 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+
+#include "parallel/load.h"
 
 namespace femreg {
 
