@@ -188,6 +188,10 @@ class Pool {
 
 std::atomic<Pool*> Pool::forked_{nullptr};
 
+// The pool is made as the library loads, not at its first use: a fork while another thread
+// is inside that first use's initialization would leave the child's Get() waiting for it.
+[[maybe_unused]] const bool kPoolMadeAtLoad = (Pool::Get(), true);
+
 }  // namespace
 
 void RunTasks(int threads, int tasks, const std::function<void(int)>& body) {
