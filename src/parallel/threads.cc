@@ -41,6 +41,9 @@ const Blas& OpenBlas() {
   }();
   return blas;
 }
+// Looked up as the library loads, not at the first ScopedThreads: a fork while another thread
+// is inside that first lookup would leave the child waiting for it (parallel/pool.cc's pool too).
+[[maybe_unused]] const bool kOpenBlasLookedUpAtLoad = (OpenBlas(), true);
 
 }  // namespace
 
