@@ -1,12 +1,17 @@
 // femreg's worker threads (parallel/pool.h): every task runs once, whoever runs it, and the
 // loops built on them give the serial loop's result on any thread count.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -130,6 +135,71 @@ TEST(RunTasks, ACallersExceptionPropagatesAfterTheWorkersStop) {
   std::atomic<int> runs{0};
   RunTasks(2, 10, [&](int) { runs.fetch_add(1); });  // the pool still works
   EXPECT_EQ(runs.load(), 10);
+}
+
+// In a forked child, a parallel loop: every task once, on a worker of the child's own
+// (the parent's workers are not copied). Returns the child's exit code: 0 when that holds.
+int ParallelLoopInChild() {
+  std::vector<std::atomic<int>> runs(64);
+  for (auto& r : runs) r = 0;
+  RunTasks(2, 64, [&](int i) { runs[static_cast<size_t>(i)].fetch_add(1); });
+  for (auto& r : runs) {
+    if (r.load() != 1) return 2;
+  }
+  return UsesAWorker() ? 0 : 3;
+}
+
+// Forks and runs ParallelLoopInChild in the child; the child's status, or a message. A child
+// that deadlocks is ended by its alarm, and killed here if it outlives a generous bound, so a
+// hang fails the test instead of stalling it.
+std::string ForkAndRunParallelLoop() {
+  const pid_t child = fork();
+  if (child < 0) return std::string("fork failed: ") + std::strerror(errno);
+  if (child == 0) {
+    alarm(30);
+    _exit(ParallelLoopInChild());
+  }
+  int status = 0;
+  pid_t done = 0;
+  for (int waited_ms = 0; waited_ms < 60000; waited_ms += 10) {
+    done = waitpid(child, &status, WNOHANG);
+    if (done != 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (done == 0) {
+    kill(child, SIGKILL);
+    waitpid(child, &status, 0);
+    return "the child hung";
+  }
+  if (done < 0) return std::string("waitpid failed: ") + std::strerror(errno);
+  if (WIFSIGNALED(status)) return "the child died of signal " + std::to_string(WTERMSIG(status)) + " (14: its alarm: a hang)";
+  if (!WIFEXITED(status)) return "the child did not exit";
+  const int code = WEXITSTATUS(status);
+  if (code == 2) return "in the child a task did not run exactly once";
+  if (code == 3) return "in the child no task ran on a worker (the pool counts the parent's workers)";
+  return code == 0 ? "" : "the child exited " + std::to_string(code);
+}
+
+TEST(RunTasks, AForkedChildRunsParallelLoops) {
+  ASSERT_TRUE(UsesAWorker());  // the parent's pool has a worker
+  EXPECT_EQ(ForkAndRunParallelLoop(), "");
+  EXPECT_TRUE(UsesAWorker());  // and the parent's still works
+}
+
+TEST(RunTasks, AForkedChildRunsParallelLoopsWhileTheParentsPoolIsBusy) {
+  // Another thread keeps the pool's workers taking jobs (and its mutex taken and released)
+  // while this one forks: no child may inherit the mutex held by a thread it does not have.
+  std::atomic<bool> stop{false};
+  std::atomic<int64_t> tasks{0};
+  std::thread busy([&] {
+    while (!stop.load()) RunTasks(3, 8, [&](int) { tasks.fetch_add(1); });
+  });
+  std::string failure;
+  for (int k = 0; k < 20 && failure.empty(); ++k) failure = ForkAndRunParallelLoop();
+  stop = true;
+  busy.join();
+  EXPECT_EQ(failure, "");
+  EXPECT_GT(tasks.load(), 0);
 }
 
 TEST(ParallelFor, SameAsTheSerialLoop) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -113,6 +114,46 @@ TEST(Results, SummaryJsonRecordsTheRunAndItsInputs) {
   const std::string whole = SummaryJson(run, scene, *tracker, rows);
   EXPECT_EQ(whole.find("\"interrupted_by\""), std::string::npos);
   EXPECT_EQ(whole.find("\"vertex_error_mm\""), std::string::npos);
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+// femreg eval takes the scene order of a run's objects from its summary.json: the names as
+// SummaryJson writes them, and errors that name the file.
+TEST(Results, ReadSummaryObjectNamesReadsWhatSummaryJsonWrites) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene("objects:\n"
+                         "  - {name: top, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}}\n"
+                         "  - {name: base, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]},"
+                         " pose: {translation: [0, 0, -0.05]}}\n",
+                         "two.yaml", "", &scene)
+                  .ok());
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  const testing_util::TempDir dir("femreg_results");
+  const std::string path = dir.path() + "/summary.json";
+  WriteText(path, SummaryJson(RunInputs(), scene, *tracker, {}));
+  std::vector<std::string> names;
+  ASSERT_TRUE(ReadSummaryObjectNames(path, &names).ok());
+  EXPECT_EQ(names, (std::vector<std::string>{"top", "base"}));
+
+  const std::string missing = dir.path() + "/none.json";
+  Status status = ReadSummaryObjectNames(missing, &names);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind(missing + ": cannot open", 0), 0u) << status.message();
+  WriteText(path, "{\"objects\": [{\"name\": \"top\"}");
+  status = ReadSummaryObjectNames(path, &names);
+  EXPECT_EQ(status.message(), path + ": not JSON (not a summary.json written by femreg register)");
+  WriteText(path, "{\"frames_done\": 3}");
+  status = ReadSummaryObjectNames(path, &names);
+  EXPECT_EQ(status.message(), path + ": no \"objects\" list (not a summary.json written by femreg register)");
+  WriteText(path, "{\"objects\": [{\"name\": \"top\"}, {\"vertices\": 8}]}");
+  status = ReadSummaryObjectNames(path, &names);
+  EXPECT_EQ(status.message(), path + ": objects[1] has no \"name\"");
+  EXPECT_TRUE(names.empty());
 }
 
 }  // namespace

@@ -144,6 +144,11 @@ TEST(SceneMaterials, ModelAndVolume) {
   EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      volume: nodal\n")),
             "materials.yaml:8: objects[0].material.volume: 'nodal' needs 'model: neo_hookean' (the "
             "nodal volume is the neo-Hookean element's remedy for locking)");
+  // A model the file wrote is the row that breaks the rule, not the volume it cannot take.
+  EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n",
+                               "      density: 1000\n      volume: nodal\n      model: hooke\n")),
+            "materials.yaml:9: objects[0].material.model: 'nodal' needs 'model: neo_hookean' (the "
+            "nodal volume is the neo-Hookean element's remedy for locking)");
   EXPECT_EQ(ParseError(Replace(kScene, "      density: 1000\n", "      density: 1000\n      volume: nodl\n")),
             "materials.yaml:8: objects[0].material.volume: unknown value 'nodl' (did you mean 'nodal'? one of: "
             "element, nodal)");

@@ -2,21 +2,30 @@
 // libraries that ask for teams of their own (CHOLMOD 5's supernodal factorization asks
 // OpenMP for 4 threads whatever the program set).
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "femreg/blas_kernels.h"
 #include "femreg/io.h"
 #include "parallel/blas_choice.h"
+#include "parallel/load.h"
 #include "parallel/threads.h"
 #include "test_util.h"
 
@@ -109,6 +118,57 @@ TEST(Threads, TeamThreadNumbersTheTeam) {
 #endif
 }
 
+// An OpenMP team of two threads: 0 when it had them.
+int TeamOfTwo() {
+  std::atomic<int> threads{0};
+#ifdef _OPENMP
+#pragma omp parallel num_threads(2)
+#endif
+  threads.fetch_add(1);
+  return threads.load() == 2 ? 0 : 1;
+}
+
+// Forks; the child opens an OpenMP team of two and exits with TeamOfTwo's code. "" when it
+// did, else what happened. A child that hangs is ended by its alarm, or killed here.
+std::string ForkAndOpenATeam() {
+  const pid_t child = fork();
+  if (child < 0) return std::string("fork failed: ") + std::strerror(errno);
+  if (child == 0) {
+    alarm(30);
+    _exit(TeamOfTwo());
+  }
+  int status = 0;
+  pid_t done = 0;
+  for (int waited_ms = 0; waited_ms < 60000 && done == 0; waited_ms += 10) {
+    done = waitpid(child, &status, WNOHANG);
+    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (done == 0) {
+    kill(child, SIGKILL);
+    waitpid(child, &status, 0);
+    return "the child hung";
+  }
+  if (done < 0) return std::string("waitpid failed: ") + std::strerror(errno);
+  if (WIFSIGNALED(status)) return "the child died of signal " + std::to_string(WTERMSIG(status)) + " (14: its alarm: a hang)";
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "the child's team did not have two threads";
+  return "";
+}
+
+// Python's multiprocessing forks a process that has run femreg's OpenMP teams: libgomp's
+// child would wait for the parent's idle team threads, which it does not have. femreg frees
+// the forking thread's OpenMP threads before a fork (threads.cc), so the child starts its own.
+TEST(Threads, AForkedChildOpensOpenMpTeams) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+  ASSERT_EQ(TeamOfTwo(), 0);  // the parent's threads, idle
+  EXPECT_EQ(ForkAndOpenATeam(), "");
+  EXPECT_EQ(TeamOfTwo(), 0);  // and the parent's teams still have their threads
+  if (!HasFailure()) {
+    EXPECT_EQ(ForkAndOpenATeam(), "");  // again, after teams in the parent
+  }
+}
+
 // A phase takes at most its threads, one per `per_thread` units of work, at least one.
 TEST(Threads, PhaseThreadsRunSmallPhasesSerially) {
   EXPECT_EQ(PhaseThreads(2, 100, 64), 1);
@@ -138,6 +198,34 @@ TEST(Threads, ZeroThreadsIsTheEnclosingCount) {
   EXPECT_GE(available, 1);
   EXPECT_LE(available, DefaultThreadCount());
   EXPECT_EQ(AdaptiveThreadCount(5), 5);
+}
+
+// The adaptive count takes the machine's runnable threads less this process's own: a worker
+// of femreg's that polls for its next job (or an OpenMP thread that spins) is runnable, and
+// counted as another process's it would cost the next frame a thread.
+TEST(Threads, OwnRunnableThreadsAreNotOtherProcessesLoad) {
+  std::atomic<bool> stop{false};
+  std::atomic<int> started{0};
+  std::vector<std::thread> spinning;
+  for (int k = 0; k < 2; ++k) {
+    spinning.emplace_back([&] {
+      started.fetch_add(1);
+      while (!stop.load(std::memory_order_relaxed)) {
+      }
+    });
+  }
+  while (started.load() < 2) std::this_thread::yield();
+  const int own = OwnRunnableThreads();
+  stop = true;
+  for (std::thread& t : spinning) t.join();
+  EXPECT_GE(own, 3);  // the two spinning and the caller
+  // Two cores, and the runnable threads are this process's three: both cores are free.
+  EXPECT_EQ(ThreadsLeftFree(2, 3, 3), 2);
+  EXPECT_EQ(ThreadsLeftFree(2, 2, 3), 2);  // one stopped between the two counts
+  EXPECT_EQ(ThreadsLeftFree(2, 4, 3), 1);  // another process's thread
+  EXPECT_EQ(ThreadsLeftFree(8, 6, 2), 4);
+  EXPECT_EQ(ThreadsLeftFree(2, 9, 1), 1);  // at least one
+  EXPECT_EQ(ThreadsLeftFree(4, 1, 0), 4);  // the caller is running even when not counted
 }
 
 #ifdef FEMREG_CLI_PATH

@@ -86,6 +86,11 @@ struct RunInputs {
 std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker& tracker,
                         const std::vector<FrameRecord>& rows);
 
+// The names in a summary.json's "objects" (scene order), as SummaryJson writes them, for a
+// program that reads a run's folder (femreg eval). An error names the file: it cannot be
+// read, is not JSON, or has no "objects" list of objects with a "name".
+Status ReadSummaryObjectNames(const std::string& path, std::vector<std::string>* names);
+
 }  // namespace femreg
 
 #endif  // FEMREG_RESULTS_H_

@@ -122,11 +122,12 @@ void DefFields(Class& cls) {
 
 // Binds every field of a table as a property whose setter checks the struct with the new
 // value (`valid`: the table's ranges and any rule across fields, as the scene parser checks
-// them); a bad value raises ValueError with valid's message, naming the field, and leaves
-// the struct as it was. Enums and unset optionals read and take strings and None; a vector
-// reads as a list.
+// them; `field` is the name of the field just set, for a rule across fields to name it); a
+// bad value raises ValueError with valid's message and leaves the struct as it was. Enums
+// and unset optionals read and take strings and None; a vector reads as a list.
 template <typename Class>
-void DefCheckedFields(Class& cls, bool (*valid)(const typename Class::type&, std::string*)) {
+void DefCheckedFields(Class& cls,
+                      bool (*valid)(const typename Class::type&, const std::string& field, std::string*)) {
   using Options = typename Class::type;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using Field = std::decay_t<decltype(std::declval<Options&>().*member)>;
@@ -150,7 +151,7 @@ void DefCheckedFields(Class& cls, bool (*valid)(const typename Class::type&, std
             }
           }
           std::string why;
-          if (!valid(o, &why)) {
+          if (!valid(o, name, &why)) {
             o.*member = old;
             throw py::value_error(why);
           }

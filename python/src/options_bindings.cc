@@ -12,9 +12,16 @@ namespace python {
 
 void BindOptions(py::module_& m) {
   // ---- materials and options ------------------------------------------------------------
+  // A Material's values are checked when set, as its constructor checks them: a scene
+  // object's material (scene.object(...).material, changed in place) is otherwise first
+  // checked when a tracker is built from the scene.
   auto material = py::class_<Material>(m, "Material", "Isotropic linear elastic material (SI units).");
   DefFieldsInit(material, "Material", +[](const Material& mat, std::string* why) { return mat.IsValid(why); });
-  DefFields(material);
+  DefCheckedFields(material, +[](const Material& mat, const std::string&, std::string* why) {
+    if (mat.IsValid(why)) return true;
+    *why = "Material: " + *why;
+    return false;
+  });
 
   auto camera = py::class_<CameraOptions>(m, "CameraOptions",
                                           "The camera: pose (position, target, up) and pinhole intrinsics.");

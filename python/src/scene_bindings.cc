@@ -54,12 +54,15 @@ int ObjectIndex(const Scene& scene, const py::object& object) {
 }
 
 // An object's own values as the scene parser checks them: its table's ranges, then its element
-// (ObjectElementError, named as the table names material.volume).
-bool ObjectValid(const ObjectSpec& object, std::string* why) {
+// (ObjectElementError), named by the row just set (`field`: material.model or material.volume)
+// and the object.
+bool ObjectValid(const ObjectSpec& object, const std::string& field, std::string* why) {
   if (!CheckFieldRanges(object, why)) return false;
   const std::string element = ObjectElementError(object);
   if (element.empty()) return true;
-  *why = FieldName<ObjectSpec>(FieldOf<&ObjectSpec::volume>()) + ": " + element;
+  const std::string model = FieldName<ObjectSpec>(FieldOf<&ObjectSpec::model>());
+  *why = (field == model ? model : FieldName<ObjectSpec>(FieldOf<&ObjectSpec::volume>())) + " (object " +
+         py::repr(py::str(object.name)).cast<std::string>() + "): " + element;
   return false;
 }
 
@@ -101,8 +104,8 @@ void BindScene(py::module_& m) {
   auto object = py::class_<ObjectSpec>(
       m, "SceneObject",
       "An object of a scene (an entry of its objects:), changed in place: scene.object(\"name\"). Its "
-      "values (scale, pose, material_model, material_volume, toughness, label) are checked when "
-      "set, as the scene file's are; its name, mesh and regions are the file's.");
+      "values (scale, pose, material_model, material_volume, toughness, label, and its material's) "
+      "are checked when set, as the scene file's are; its name, mesh and regions are the file's.");
   object.def_readonly("name", &ObjectSpec::name)
       .def_readonly("mesh", &ObjectSpec::mesh_path, "the mesh file (\"\" when generated)")
       .def_readonly("surface", &ObjectSpec::surface_path, "the embedded surface's file (\"\" for none)")
@@ -114,7 +117,7 @@ void BindScene(py::module_& m) {
             if (!material.IsValid(&why)) throw py::value_error("objects.material: " + why);
             o.material = material;
           },
-          "Material (material:), changed in place or assigned; a tracker or solve checks it when built");
+          "Material (material:), changed in place (each value checked when set) or assigned");
   DefCheckedFields(object, &ObjectValid);
   object.def("__repr__", [](const ObjectSpec& o) {
     return "SceneObject(name=" + py::repr(py::str(o.name)).cast<std::string>() + ", " + FieldsRepr(o) + ")";

@@ -81,8 +81,10 @@ def test_bad_values_raise_value_error_naming_the_field():
         bar.material_model = "rubber"
     with pytest.raises(TypeError, match="objects.pose.translation: cannot take"):
         bar.translation = "up"
-    # Nodal volume needs the neo-Hookean element: the scene parser's message, for the same field.
-    with pytest.raises(ValueError, match=r"^objects.material.volume: 'nodal' needs 'model: neo_hookean'") as info:
+    # Nodal volume needs the neo-Hookean element: the scene parser's message, for the field set,
+    # with the object's name.
+    with pytest.raises(ValueError, match=r"^objects.material.volume \(object 'bar'\): 'nodal' needs "
+                                         r"'model: neo_hookean'") as info:
         bar.material_volume = "nodal"
     assert bar.material_volume is None
     with pytest.raises(femreg.Error) as parsed:
@@ -90,12 +92,34 @@ def test_bad_values_raise_value_error_naming_the_field():
     assert str(info.value).split(": ", 1)[1] in str(parsed.value)
     bar.material_model = "neo_hookean"
     bar.material_volume = "nodal"
-    with pytest.raises(ValueError, match="objects.material.volume: 'nodal' needs"):
+    # Here the model set is the row that breaks the rule: the message names it.
+    with pytest.raises(ValueError, match=r"^objects.material.model \(object 'bar'\): 'nodal' needs"):
         bar.material_model = "hooke"
     assert bar.material_model == "neo_hookean"
-    soft = femreg.Material()
-    soft.poisson_ratio = 0.7
-    with pytest.raises(ValueError, match=r"objects.material: poisson_ratio must be in \(-1, 0.5\)"):
-        bar.material = soft
+    with pytest.raises(femreg.Error, match=r"objects\[0\].material.model: 'nodal' needs"):
+        bar_scene(extra=", volume: nodal, model: hooke")
     bar.material = femreg.Material(youngs_modulus=3e5)
     assert scene.object(0).material.youngs_modulus == 3e5
+
+
+def test_a_material_changed_in_place_is_checked_when_set():
+    scene = bar_scene()
+    bar = scene.object("bar")
+    # Through the object, in place: raised at the assignment, naming the key, the value kept.
+    with pytest.raises(ValueError, match=r"^Material: youngs_modulus must be > 0 \(got -1"):
+        bar.material.youngs_modulus = -1
+    assert bar.material.youngs_modulus == 1e5
+    with pytest.raises(ValueError, match=r"^Material: poisson_ratio must be in \(-1, 0.5\) \(got 0.7"):
+        scene.objects[0].material.poisson_ratio = 0.7
+    with pytest.raises(ValueError, match=r"^Material: density must be > 0"):
+        scene.object(0).material.density = 0
+    assert scene.object(0).material.poisson_ratio == 0.3 and scene.object(0).material.density == 1000
+    with pytest.raises(TypeError, match="youngs_modulus: cannot take"):
+        bar.material.youngs_modulus = "stiff"
+    bar.material.youngs_modulus = 2e5                   # a good value is taken
+    assert scene.object("bar").material.youngs_modulus == 2e5
+    # A Material of its own, as its constructor does.
+    soft = femreg.Material()
+    with pytest.raises(ValueError, match=r"^Material: poisson_ratio must be in \(-1, 0.5\)"):
+        soft.poisson_ratio = 0.5
+    assert soft.poisson_ratio == 0.3

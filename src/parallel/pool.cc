@@ -1,14 +1,16 @@
 #include "parallel/pool.h"
 
+#include <pthread.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <new>
 #include <system_error>
 #include <thread>
-#include <vector>
 
 #include "parallel/threads.h"
 
@@ -74,7 +76,12 @@ void TakeTasks(Job* job) {
 class Pool {
  public:
   static Pool& Get() {
-    static Pool* pool = new Pool;  // never destroyed: workers may still sleep at exit
+    static Pool* pool = [] {
+      Pool* p = new Pool;  // never destroyed: workers may still sleep at exit
+      forked_.store(p, std::memory_order_release);
+      pthread_atfork(&BeforeFork, &AfterForkInParent, &AfterForkInChild);
+      return p;
+    }();
     return *pool;
   }
 
@@ -91,12 +98,13 @@ class Pool {
       } else {
         const uint64_t before = generation_.load(std::memory_order_relaxed);
         try {
-          while (static_cast<int>(workers_.size()) < job.wanted) {
-            workers_.emplace_back([this, before] { Work(before); });  // it takes this job too
+          while (workers_ < job.wanted) {
+            std::thread([this, before] { Work(before); }).detach();  // it takes this job too
+            ++workers_;
           }
         } catch (const std::system_error&) {  // no more threads to be had: go on with those there are
         }
-        workers = static_cast<int>(workers_.size());
+        workers = workers_;
         job.wanted = std::min(job.wanted, workers);
         if (job.wanted > 0) {
           job_ = &job;
@@ -124,6 +132,23 @@ class Pool {
   }
 
  private:
+  // fork() copies only the thread that calls it. Its mutex is taken around the fork so that
+  // no worker holds it in the child, where the child starts the pool anew: no workers (the
+  // next call starts its own), no job, a fresh mutex and condition variables (the parent's
+  // may count waiters that the child does not have).
+  // (The handlers reach the pool through forked_, not Get(): a fork while Get() registers them
+  // must not wait for Get().)
+  static void BeforeFork() { forked_.load(std::memory_order_acquire)->mutex_.lock(); }
+  static void AfterForkInParent() { forked_.load(std::memory_order_acquire)->mutex_.unlock(); }
+  static void AfterForkInChild() {
+    Pool& pool = *forked_.load(std::memory_order_acquire);
+    new (&pool.mutex_) std::mutex;
+    new (&pool.wake_) std::condition_variable;
+    new (&pool.done_) std::condition_variable;
+    pool.job_ = nullptr;
+    pool.workers_ = 0;
+  }
+
   void Work(uint64_t seen) {
 #ifdef _OPENMP
     omp_set_num_threads(1);  // an OpenMP loop inside a task runs on it alone, as one nested in a team
@@ -157,8 +182,15 @@ class Pool {
   std::condition_variable done_;  // a job's last worker finished
   Job* job_ = nullptr;
   std::atomic<uint64_t> generation_{0};  // changed under mutex_, polled without it
-  std::vector<std::thread> workers_;
+  static std::atomic<Pool*> forked_;  // the pool, for the fork handlers
+  int workers_ = 0;  // detached: the pool lives to the process's end, and a forked child has none
 };
+
+std::atomic<Pool*> Pool::forked_{nullptr};
+
+// The pool is made as the library loads, not at its first use: a fork while another thread
+// is inside that first use's initialization would leave the child's Get() waiting for it.
+[[maybe_unused]] const bool kPoolMadeAtLoad = (Pool::Get(), true);
 
 }  // namespace
 

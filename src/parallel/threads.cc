@@ -1,18 +1,24 @@
 #include "parallel/threads.h"
 
+#include <dirent.h>
 #include <dlfcn.h>
+#include <pthread.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
+#include <string>
 #include <thread>
 
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+
+#include "parallel/load.h"
 
 namespace femreg {
 
@@ -35,6 +41,9 @@ const Blas& OpenBlas() {
   }();
   return blas;
 }
+// Looked up as the library loads, not at the first ScopedThreads: a fork while another thread
+// is inside that first lookup would leave the child waiting for it (parallel/pool.cc's pool too).
+[[maybe_unused]] const bool kOpenBlasLookedUpAtLoad = (OpenBlas(), true);
 
 }  // namespace
 
@@ -51,9 +60,6 @@ int ResolveThreadCount(int requested) {
   return scoped_threads > 0 ? scoped_threads : DefaultThreadCount();
 }
 
-namespace {
-// The kernel's count of running and runnable threads, system-wide (the fourth field of
-// /proc/loadavg, "running/total"); -1 where it cannot be read.
 int RunnableThreads() {
   FILE* f = std::fopen("/proc/loadavg", "r");
   if (f == nullptr) return -1;
@@ -63,7 +69,32 @@ int RunnableThreads() {
   std::fclose(f);
   return running;
 }
-}  // namespace
+
+int OwnRunnableThreads() {
+  DIR* tasks = opendir("/proc/self/task");
+  if (tasks == nullptr) return -1;
+  int running = 0;
+  while (const dirent* entry = readdir(tasks)) {
+    if (entry->d_name[0] == '.') continue;
+    const std::string path = std::string("/proc/self/task/") + entry->d_name + "/stat";
+    FILE* f = std::fopen(path.c_str(), "r");
+    if (f == nullptr) continue;  // the thread ended since the listing
+    char line[512];
+    const bool read = std::fgets(line, sizeof(line), f) != nullptr;
+    std::fclose(f);
+    if (!read) continue;
+    // "tid (name) S ...": the state follows the last ')' (a thread's name may hold one).
+    const char* close = std::strrchr(line, ')');
+    if (close != nullptr && close[1] == ' ' && close[2] == 'R') ++running;
+  }
+  closedir(tasks);
+  return running;
+}
+
+int ThreadsLeftFree(int cores, int running, int own) {
+  const int others = std::max(0, running - std::max(own, 1));  // the caller is running, at least
+  return std::clamp(cores - others, 1, std::max(cores, 1));
+}
 
 int AvailableThreadCount() {
   using Clock = std::chrono::steady_clock;
@@ -74,11 +105,14 @@ int AvailableThreadCount() {
   const int known = available.load(std::memory_order_relaxed);
   if (known > 0 && then != std::numeric_limits<int64_t>::min() && now - then < 50) return known;
   const int cores = DefaultThreadCount();
+  // This process's own runnable threads are no competition: the caller, and the workers that
+  // poll for their next job after the last one (parallel/pool.cc) or OpenMP threads that spin.
+  // Counted before and after the kernel's count, so that one that starts or stops between is
+  // not taken for another process's.
+  const int own_before = OwnRunnableThreads();
   const int running = RunnableThreads();
-  // The caller is one of the running threads (femreg's other threads sleep between teams:
-  // OMP_WAIT_POLICY=passive, docs/guide/busy-machines.md).
-  const int others = running > 0 ? running - 1 : 0;
-  const int n = std::clamp(cores - others, 1, cores);
+  const int own = std::max(own_before, OwnRunnableThreads());
+  const int n = running > 0 ? ThreadsLeftFree(cores, running, own) : cores;
   available.store(n, std::memory_order_relaxed);
   sampled_at.store(now, std::memory_order_relaxed);
   return n;
@@ -115,6 +149,21 @@ ScopedThreads::~ScopedThreads() {
 #endif
   if (previous_blas_ > 0) OpenBlas().set(previous_blas_);
 }
+
+namespace {
+
+#ifdef _OPENMP
+// fork() copies only the forking thread. libgomp keeps the threads of that thread's last team
+// idle for its next one, and a forked child would wait for them forever (Python's
+// multiprocessing forks after femreg's teams ran): they are freed before the fork, so parent
+// and child each start new ones at their next team. From inside a team nothing is freed.
+void FreeOpenMpThreadsBeforeFork() {
+  if (!omp_in_parallel()) omp_pause_resource_all(omp_pause_hard);
+}
+const int kOpenMpForkHandler = pthread_atfork(&FreeOpenMpThreadsBeforeFork, nullptr, nullptr);
+#endif
+
+}  // namespace
 
 int TeamThread() {
 #ifdef _OPENMP

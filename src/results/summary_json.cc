@@ -9,6 +9,7 @@
 #include "femreg/collision.h"
 #include "femreg/results.h"
 #include "femreg/version.h"
+#include "io/io_internal.h"
 #include "results/provenance.h"
 
 namespace fs = std::filesystem;
@@ -222,6 +223,31 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
   j["provenance"]["tum_list"] = run.tum_list.empty() ? json(nullptr) : json(ec ? run.tum_list : tum_list.string());
   // A file name or description that is not UTF-8 must not end the run: replace its bytes.
   return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
+Status ReadSummaryObjectNames(const std::string& path, std::vector<std::string>* names) {
+  names->clear();
+  // A long run's summary (a row of contact forces per frame) is megabytes, never gigabytes.
+  constexpr std::streamoff kMaxSummaryBytes = std::streamoff(1) << 30;
+  std::string text;
+  if (Status read = internal::ReadSmallFile(path, kMaxSummaryBytes, "a run's summary.json", &text); !read.ok()) {
+    return read;
+  }
+  const nlohmann::json summary = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (summary.is_discarded()) return Status::Error(path + ": not JSON (not a summary.json written by femreg register)");
+  if (!summary.is_object() || !summary.contains("objects") || !summary["objects"].is_array()) {
+    return Status::Error(path + ": no \"objects\" list (not a summary.json written by femreg register)");
+  }
+  const nlohmann::json& objects = summary["objects"];
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const nlohmann::json& o = objects[i];
+    if (!o.is_object() || !o.contains("name") || !o["name"].is_string()) {
+      names->clear();
+      return Status::Error(path + ": objects[" + std::to_string(i) + "] has no \"name\"");
+    }
+    names->push_back(o["name"].get<std::string>());
+  }
+  return Status::Ok();
 }
 
 }  // namespace femreg

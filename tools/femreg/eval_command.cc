@@ -15,7 +15,6 @@
 #include <iostream>
 #include <iterator>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <memory>
 #include <regex>
 #include <sstream>
@@ -25,6 +24,7 @@
 #include "femreg/eval.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
+#include "femreg/results.h"
 
 namespace fs = std::filesystem;
 
@@ -105,18 +105,18 @@ Status ResultObjects(const std::string& result, const std::vector<std::string>& 
     (*frames)[m[1].str()].push_back(file);
   }
   if (frames->empty()) return Status::Error(result + "/frames: no <object>_NNNN.vtu files");
-  std::ifstream in((fs::path(result) / "summary.json").string());
-  if (in) {
+  const std::string summary = (fs::path(result) / "summary.json").string();
+  std::error_code ec;
+  if (fs::exists(summary, ec)) {
     // The scene order of the objects; a summary that cannot be read leaves the files' order.
-    const nlohmann::json summary = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
-    if (summary.is_object() && summary.contains("objects") && summary["objects"].is_array()) {
-      for (const nlohmann::json& o : summary["objects"]) {
-        if (!o.is_object() || !o.contains("name") || !o["name"].is_string()) continue;
-        const std::string name = o["name"].get<std::string>();
-        if (frames->count(name) &&
-            std::find(names->begin(), names->end(), name) == names->end()) {
-          names->push_back(name);
-        }
+    std::vector<std::string> listed;
+    const Status read = ReadSummaryObjectNames(summary, &listed);
+    if (!read.ok()) {
+      std::cerr << "femreg eval: warning: " << read.message() << "; the objects in the frame files' order\n";
+    }
+    for (const std::string& name : listed) {
+      if (frames->count(name) && std::find(names->begin(), names->end(), name) == names->end()) {
+        names->push_back(name);
       }
     }
   }
