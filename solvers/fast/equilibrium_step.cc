@@ -29,6 +29,12 @@ constexpr int kMaxPcgIterations = 200;
 // space) to factorize; raised 100-fold while the factorization fails.
 constexpr double kFirstShift = 1e-8;
 constexpr int kMaxKeptSkips = 8;
+// After this many Gauss-Newton steps of a solve (an outer iteration), a step that lowers the
+// energy by less than kLateTolerance ends it. Each step linearizes every element again and
+// makes a new factor, while the next outer iteration's pairs and held turns move the problem
+// anyway (docs/notes/2026-11-30-equilibrium-steps.md).
+constexpr int kFullSteps = 4;
+constexpr double kLateTolerance = 1e-2;
 
 // Whether a simplicial L D L^T factor has a pivot D_jj <= 0 (the first entry of column j).
 bool HasNegativePivot(const cholmod_factor& L) {
@@ -527,7 +533,9 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       report.stop = StopReason::kStep;
       break;
     }
-    if (decrease < m.options.relative_tolerance) {
+    const double tolerance = step + 1 >= kFullSteps ? std::max(m.options.relative_tolerance, kLateTolerance)
+                                                    : m.options.relative_tolerance;
+    if (decrease < tolerance) {
       report.stop = StopReason::kEnergy;
       break;
     }
