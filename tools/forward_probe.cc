@@ -122,6 +122,9 @@ int Organ(const std::map<std::string, std::string>& args) {
               truth.tool.force.z(), truth.tool.force.norm());
   std::printf("clamp force  %+.6f %+.6f %+.6f N  imbalance %.2e N\n", truth.clamp.force.x(),
               truth.clamp.force.y(), truth.clamp.force.z(), (truth.tool.force + truth.clamp.force).norm());
+  if (tool == "contact") {
+    std::printf("contacts %d, deepest penetration %.4f mm\n", truth.contacts, truth.max_penetration * 1e3);
+  }
   const std::string csv = Text(args, "csv", "");
   if (!csv.empty()) {
     const TetMesh at = OrganPatchMesh(tracked);

@@ -134,6 +134,10 @@ struct OrganTruthFrame {
   // clamp. With no gravity they sum to zero up to the solve's tolerance.
   ForceResultant tool, clamp;
   ForwardSummary summary;
+  // The contact tool's touching contacts and their deepest penetration (m; the penalty lets
+  // a contact in by its force / k); 0 for the glued tool.
+  int contacts = 0;
+  double max_penetration = 0.0;
 };
 // Solves frame `frame` (0-11) of organ_patch's ground truth on OrganPatchMesh(divisions)
 // with `material` (OrganPatchTruthMaterial() for the bundled sequence, which uses

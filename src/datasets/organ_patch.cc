@@ -306,6 +306,13 @@ Status SolveTruthFrame(int f, Truth* truth, OrganTruthFrame* out) {
   Vertices by_clamp = Vertices::Zero(mesh.num_vertices(), 3);
   for (int v : truth->tool) by_tool.row(v) = forces.reactions.row(v);
   for (int v : truth->problem.clamped) by_clamp.row(v) = forces.reactions.row(v);
+  if (truth->contact) {
+    std::vector<Contact> contacts;
+    truth->world->Detect(mesh.x, 0.0, &contacts);
+    const ContactStats stats = truth->world->Evaluate(contacts, mesh.x);
+    out->contacts = stats.contacts;
+    out->max_penetration = stats.max_penetration;
+  }
   out->positions = mesh.x;
   out->tool = ResultantAboutCentroid(by_tool, mesh.x, mesh.mass);
   out->clamp = ResultantAboutCentroid(by_clamp, mesh.x, mesh.mass);
