@@ -50,7 +50,7 @@ constexpr double kToolRadius = 0.012;    // m
 // The contact tool: its edge's rounding, its height, how far above the top it starts (a flat
 // end touches the sloped top first at its edge), the poses it is moved through per frame (a
 // fraction of the detection distance each, so no vertex starts a solve deep inside it) and
-// the penalty (per contact; its penetration, force / k, stays a few micrometres).
+// the penalty (per contact, tool_table's; its penetration, force / k, is small against the push).
 constexpr double kToolFillet = 0.003, kToolHeight = 0.05, kToolLift = 0.001;  // m
 constexpr int kToolSubsteps = 4;
 constexpr double kContactStiffness = 2000.0, kContactDistance = 0.0015;  // N/m, m
@@ -111,8 +111,8 @@ void ContactToolSurface(Vertices* vertices, Triangles* triangles) {
   for (int s = 0; s < segments; ++s) {
     triangles->row(t++) << 0, at(0, s + 1), at(0, s);
     triangles->row(t++) << 1, at(rings - 1, s), at(rings - 1, s + 1);
-    // Each quad's diagonal mirrored across y = 0 (s and segments - 1 - s), so that the tool
-    // does not push the body sideways.
+    // Each quad's diagonal mirrored across y = 0 (s and segments - 1 - s): the tool is as
+    // mirror-symmetric as the body.
     const bool left = 2 * s < segments;
     for (int i = 0; i + 1 < rings; ++i) {
       if (left) {
