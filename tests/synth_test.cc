@@ -410,6 +410,36 @@ TEST(OrganPatchData, TruthIsLockingFreeAndItsForcesBalance) {
   EXPECT_GT(locked.tool.force.norm(), 1.1 * force);
 }
 
+// organ-data --tool contact: a rigid, frictionless tool pressing by contact. At the deepest
+// press its force pushes down into the body, nearly along the top's normal (the glued tool's
+// no-slip footprint adds a pull along the surface nearly as large as the push,
+// docs/notes/2026-11-30-organ-contact-tool.md), the solve converged and the clamp's reaction
+// balances it, force and torque.
+TEST(OrganPatchData, ContactToolPushesAlongTheNormalAndBalances) {
+  const ObjectMaterial material = OrganPatchTruthMaterial();
+  OrganTruthFrame contact, glued;
+  Status status = SolveOrganPatchTruth(7, 3, material, &contact, OrganTool::kContact);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(contact.summary.termination, ForwardTermination::kConverged);
+  const Eigen::Vector3d force = contact.tool.force;
+  EXPECT_LT(force.z(), -0.05);  // pushing down into the body
+  const double along = force.head<2>().norm();
+  EXPECT_LT(along, 0.35 * -force.z());
+  EXPECT_LT(std::abs(force.y()), 0.05 * force.norm());  // mirror symmetric while it only presses
+  EXPECT_LT((contact.tool.force + contact.clamp.force).norm(), 1e-4 * force.norm());
+  EXPECT_LT((contact.tool.torque + contact.clamp.torque).norm(), 1e-4 * force.norm() * 0.08);
+  EXPECT_GT(contact.tool.torque.norm(), 1e-3 * force.norm() * 0.08);
+  EXPECT_GT(contact.contacts, 0);
+  EXPECT_LT(contact.max_penetration, 1e-4);  // the penalty's give, small against the 14 mm push
+
+  status = SolveOrganPatchTruth(7, 3, material, &glued);
+  ASSERT_TRUE(status.ok()) << status.message();
+  std::printf("organ_patch truth, frame 7 on 343 vertices: contact tool (%.4f, %.4f, %.4f) N, glued "
+              "(%.4f, %.4f, %.4f) N\n",
+              force.x(), force.y(), force.z(), glued.tool.force.x(), glued.tool.force.y(), glued.tool.force.z());
+  EXPECT_GT(glued.tool.force.head<2>().norm(), 0.5 * -glued.tool.force.z());
+}
+
 // The bundled organ_patch/forces.csv: a row per frame, the tool's force on the body pointing
 // down into it; while the tool only presses (frames 0-7) the body's mirror symmetry in y
 // leaves no y force and the force grows with the depth; the drag along +y (frames 8-11) adds

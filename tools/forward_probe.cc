@@ -25,6 +25,7 @@
 //   femreg_forward_probe shape=organ key=value ...   (organ_patch's ground truth, one frame)
 //     divisions=10 (the truth's mesh; the bundled one: 10)  frame=7 (0-11)
 //     model=neo_hookean|corotational  volume=nodal|element (neo_hookean)  nu=0.47
+//     tool=glued|contact (the contact tool solves the frames up to `frame` in order)
 //     csv=out.csv (id,X,Y,Z,ux,uy,uz: the truth interpolated at the rest vertices of the
 //     organ's mesh at tracked=4 divisions, as ground_truth/ holds it)
 //   Prints the tool's force and the clamp's reaction (N) and the solve's Newton iterations.
@@ -99,9 +100,15 @@ int Organ(const std::map<std::string, std::string>& args) {
   material.model = model == "neo_hookean" ? MaterialModel::kNeoHookean : MaterialModel::kHooke;
   material.nodal_volume = model == "neo_hookean" && Text(args, "volume", "nodal") == "nodal";
   material.material.poisson_ratio = Number(args, "nu", material.material.poisson_ratio);
+  const std::string tool = Text(args, "tool", "glued");
+  if (tool != "glued" && tool != "contact") {
+    std::cerr << "femreg_forward_probe: shape=organ takes tool=glued or contact\n";
+    return 2;
+  }
   const auto start = std::chrono::steady_clock::now();
   OrganTruthFrame truth;
-  const Status status = SolveOrganPatchTruth(frame, divisions, material, &truth);
+  const Status status = SolveOrganPatchTruth(frame, divisions, material, &truth,
+                                             tool == "contact" ? OrganTool::kContact : OrganTool::kGlued);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!status.ok()) {
     std::cerr << "femreg_forward_probe: " << status.message() << "\n";
@@ -115,6 +122,9 @@ int Organ(const std::map<std::string, std::string>& args) {
               truth.tool.force.z(), truth.tool.force.norm());
   std::printf("clamp force  %+.6f %+.6f %+.6f N  imbalance %.2e N\n", truth.clamp.force.x(),
               truth.clamp.force.y(), truth.clamp.force.z(), (truth.tool.force + truth.clamp.force).norm());
+  if (tool == "contact") {
+    std::printf("contacts %d, deepest penetration %.4f mm\n", truth.contacts, truth.max_penetration * 1e3);
+  }
   const std::string csv = Text(args, "csv", "");
   if (!csv.empty()) {
     const TetMesh at = OrganPatchMesh(tracked);

@@ -105,9 +105,21 @@ Status WriteFractureSequenceDeck(const std::string& scenario, std::ostream& out)
 // the ground truth's solve, and so forces.csv, do not depend on it. `truth_divisions` (up to
 // 16) divides the ground truth's mesh (the bundled sequence: 10, 9261 vertices); a finer one
 // shows how far that truth is from converged.
+// `tool` says how the tool holds the body (OrganTool below); the bundled sequence's is glued.
+enum class OrganTool {
+  // The upper-surface vertices within the tool's radius of its axis follow it without slip;
+  // its force is their reaction, with a part along the surface as large as the push.
+  kGlued,
+  // A rigid, frictionless flat-ended cylinder of the same radius with a rounded edge, posed per
+  // frame along the same path, pressing by the contact penalty of femreg/collision.h; its
+  // force is the contacts' resultant on the body, normal to the surface it touches. The frames
+  // are solved in order, each from the last.
+  kContact,
+};
 Status GenerateOrganPatchSequence(const std::string& dir,
                                   void (*progress)(int done, int total) = nullptr,
-                                  int divisions = 4, int truth_divisions = 10);
+                                  int divisions = 4, int truth_divisions = 10,
+                                  OrganTool tool = OrganTool::kGlued);
 // The organ_patch body's tracked mesh at `divisions` (above).
 TetMesh OrganPatchMesh(int divisions);
 // The ground truth's material: E 5 kPa, nu 0.47 (the tracking scene says 0.45), density
@@ -118,16 +130,21 @@ ObjectMaterial OrganPatchTruthMaterial();
 struct OrganTruthFrame {
   Vertices positions;  // the solved vertices of OrganPatchMesh(truth divisions)
   // The forces on the body, with their torques about its lumped-mass centroid: by the tool
-  // (the reactions at the vertices it moves; forces.csv) and by the clamp. With no gravity
-  // they sum to zero up to the solve's tolerance.
+  // (the reactions at the vertices it moves, or its contacts' forces; forces.csv) and by the
+  // clamp. With no gravity they sum to zero up to the solve's tolerance.
   ForceResultant tool, clamp;
   ForwardSummary summary;
+  // The contact tool's touching contacts and their deepest penetration (m; the penalty lets
+  // a contact in by its force / k); 0 for the glued tool.
+  int contacts = 0;
+  double max_penetration = 0.0;
 };
 // Solves frame `frame` (0-11) of organ_patch's ground truth on OrganPatchMesh(divisions)
 // with `material` (OrganPatchTruthMaterial() for the bundled sequence, which uses
-// divisions 10), from rest, on one thread.
+// divisions 10) and `tool`, from rest (the contact tool: through the frames before it), on
+// one thread.
 Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material,
-                            OrganTruthFrame* out);
+                            OrganTruthFrame* out, OrganTool tool = OrganTool::kGlued);
 
 // ---------------------------------------------------------------------------------------
 // femreg hand-press-data: the bundled hand_press sequence.

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "datasets/binary_stl.h"
 #include "datasets/scene_numbers.h"
 #include "femreg/collision.h"
 #include "femreg/datasets.h"
@@ -123,17 +124,8 @@ Status GenerateContactSequence(const std::string& scenario, const std::string& d
     // The tool: a 2 x 5 x 2 cm box surface written as binary STL, centred at its origin.
     const TetMesh box = MakeBox(Eigen::Vector3d(0.02, 0.05, 0.02), 1, 1, 1,
                                 Eigen::Vector3d(-0.01, -0.025, -0.01));
-    std::string stl(80, '\0');
-    const uint32_t count = static_cast<uint32_t>(box.surface.rows());
-    stl.append(reinterpret_cast<const char*>(&count), 4);
-    for (int f = 0; f < box.surface.rows(); ++f) {
-      float rec[12] = {0};
-      for (int c = 0; c < 3; ++c)
-        for (int d = 0; d < 3; ++d) rec[3 + 3 * c + d] = static_cast<float>(box.rest(box.surface(f, c), d));
-      stl.append(reinterpret_cast<const char*>(rec), 48);
-      stl.append(2, '\0');
-    }
-    Status status = WriteFileAtomically((fs::path(dir) / tool_file).string(), stl);
+    Status status = WriteFileAtomically((fs::path(dir) / tool_file).string(),
+                                        datasets_internal::BinaryStl(box.rest, box.surface));
     if (!status.ok()) return status;
     ObstacleSpec tool;
     tool.name = "tool";

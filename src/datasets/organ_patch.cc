@@ -7,16 +7,23 @@
 // d x^2), a map with a constant positive Jacobian, so every element stays positively
 // oriented. The ground truth is solved on the same shape 2.5 times as finely divided, with a
 // stiffer Poisson ratio than the tracker's, and interpolated at the tracked vertices; the
-// tool's true force is the reaction at the vertices it moves in that solve. At that nu
+// tool's true force is the reaction at the vertices it moves in that solve (or, with the
+// contact tool, the resultant of its contacts on the body). At that nu
 // linear tetrahedra lock, so the truth uses the nodal volume: a benchmark's true force must
 // not be set by locked elements' stiffness (docs/notes/2026-11-29-organ-truth.md).
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <sstream>
 
+#include <unistd.h>
+
+#include "datasets/binary_stl.h"
+#include "femreg/collision.h"
 #include "femreg/datasets.h"
 #include "femreg/forward.h"
 #include "femreg/ground_truth.h"
@@ -40,6 +47,13 @@ constexpr double kNoise = 3e-4;          // m, per coordinate
 constexpr double kPatchFraction = 0.15;  // of the rest surface area
 const Eigen::Vector3d kToolCentre(0.025, 0.0, 0.0);  // x, y of the tool's tip (z: the top)
 constexpr double kToolRadius = 0.012;    // m
+// The contact tool: its edge's rounding, its height, how far above the top it starts (a flat
+// end touches the sloped top first at its edge), the poses it is moved through per frame (a
+// fraction of the detection distance each, so no vertex starts a solve deep inside it) and
+// the penalty (per contact, tool_table's; its penetration, force / k, is small against the push).
+constexpr double kToolFillet = 0.003, kToolHeight = 0.05, kToolLift = 0.001;  // m
+constexpr int kToolSubsteps = 4;
+constexpr double kContactStiffness = 2000.0, kContactDistance = 0.0015;  // N/m, m
 
 TetMesh OrganMesh(int n) {
   TetMesh mesh = MakeSphere(1.0, n);
@@ -59,6 +73,72 @@ Eigen::Vector3d ToolPath(int f) {
   const double down = 0.014 * std::min(1.0, (f + 1) / 8.0);
   const double side = 0.006 * std::max(0.0, (f - 7) / 4.0);
   return Eigen::Vector3d(0.0, side, -down);
+}
+
+// The upper surface's height above (x, y) on the smooth body (not on a mesh's facets).
+double TopHeight(double x, double y) {
+  const double u = x / kA, v = y / kB;
+  return kC * std::sqrt(std::max(0.0, 1.0 - u * u - v * v)) + kD * u * u;
+}
+
+// The contact tool's surface in its own frame, outward normals: a cylinder of radius
+// kToolRadius standing on the origin, its flat end's edge rounded by kToolFillet. A surface
+// of revolution of the profile (r, z) from the end's centre to the top's, in rings of
+// `segments` vertices.
+void ContactToolSurface(Vertices* vertices, Triangles* triangles) {
+  constexpr int segments = 48, fillet_steps = 6;
+  std::vector<Eigen::Vector2d> ring;  // (r, z) of each ring between the two axis points
+  const double flat = kToolRadius - kToolFillet;
+  for (double r = 0.0015; r < flat - 1e-9; r += 0.0015) ring.emplace_back(r, 0.0);
+  for (int k = 0; k <= fillet_steps; ++k) {
+    const double t = 0.5 * M_PI * k / fillet_steps;
+    ring.emplace_back(flat + kToolFillet * std::sin(t), kToolFillet * (1.0 - std::cos(t)));
+  }
+  for (double z = 0.005; z <= kToolHeight + 1e-9; z += 0.005) ring.emplace_back(kToolRadius, z);
+  const int rings = static_cast<int>(ring.size());
+  vertices->resize(2 + rings * segments, 3);
+  vertices->row(0) << 0.0, 0.0, 0.0;
+  vertices->row(1) << 0.0, 0.0, kToolHeight;
+  auto at = [&](int i, int s) { return 2 + i * segments + s % segments; };
+  for (int i = 0; i < rings; ++i) {
+    for (int s = 0; s < segments; ++s) {
+      const double phi = 2.0 * M_PI * s / segments;
+      vertices->row(at(i, s)) << ring[i].x() * std::cos(phi), ring[i].x() * std::sin(phi), ring[i].y();
+    }
+  }
+  triangles->resize(2 * segments * rings, 3);
+  int t = 0;
+  for (int s = 0; s < segments; ++s) {
+    triangles->row(t++) << 0, at(0, s + 1), at(0, s);
+    triangles->row(t++) << 1, at(rings - 1, s), at(rings - 1, s + 1);
+    // Each quad's diagonal mirrored across y = 0 (s and segments - 1 - s): the tool is as
+    // mirror-symmetric as the body.
+    const bool left = 2 * s < segments;
+    for (int i = 0; i + 1 < rings; ++i) {
+      if (left) {
+        triangles->row(t++) << at(i, s), at(i + 1, s + 1), at(i + 1, s);
+        triangles->row(t++) << at(i, s), at(i, s + 1), at(i + 1, s + 1);
+      } else {
+        triangles->row(t++) << at(i, s), at(i, s + 1), at(i + 1, s);
+        triangles->row(t++) << at(i, s + 1), at(i + 1, s + 1), at(i + 1, s);
+      }
+    }
+  }
+}
+
+// The contact tool as an obstacle: its end's centre on the top above the tool's centre,
+// kToolLift above it at collision frame 0, then along ToolPath: frame f's pose is collision
+// frame f + 1.
+ObstacleSpec ContactToolObstacle(const std::string& mesh_path) {
+  ObstacleSpec tool;
+  tool.name = "tool";
+  tool.kind = ObstacleSpec::Kind::kMesh;
+  tool.mesh_path = mesh_path;
+  tool.friction = 0.0;
+  const Eigen::Vector3d start(kToolCentre.x(), kToolCentre.y(), TopHeight(kToolCentre.x(), kToolCentre.y()));
+  tool.keyframes.push_back({0, start + Eigen::Vector3d(0.0, 0.0, kToolLift), Eigen::Vector3d::Zero()});
+  for (int f = 0; f < kFrames; ++f) tool.keyframes.push_back({f + 1, start + ToolPath(f), Eigen::Vector3d::Zero()});
+  return tool;
 }
 
 // A point of the patch (rest positions): the upper side, within `radius` of the patch
@@ -106,11 +186,49 @@ struct Gaussian {
 struct Truth {
   TetMesh mesh;
   ElasticModel model;
-  ForwardProblem problem;  // the clamp
-  std::vector<int> tool;   // the upper surface vertices under the tool's tip
+  ForwardProblem problem;  // the clamp (and the contact tool's potential)
+  std::vector<int> tool;   // the glued tool: the upper surface vertices under its tip
+  // The contact tool: its world, its penalty (problem.potential) and the last frame solved
+  // (mesh.x holds it).
+  std::unique_ptr<CollisionWorld> world;
+  std::unique_ptr<ContactPotential> contact;
+  int solved_through = -1;
 };
 
-Status BuildTruth(int divisions, const ObjectMaterial& material, Truth* truth) {
+ForwardOptions TruthForwardOptions() {
+  ForwardOptions forward;
+  forward.num_threads = 1;  // one summation order: the same bytes on every machine load
+  forward.max_iterations = 60;
+  forward.load_steps = 2;
+  return forward;
+}
+
+// The contact tool's world and penalty. CollisionWorld reads an obstacle's surface from a file:
+// a scratch STL, removed once read.
+Status BuildContactTool(Truth* truth) {
+  static std::atomic<int> count{0};
+  const fs::path stl = fs::temp_directory_path() / ("femreg_organ_tool_" + std::to_string(getpid()) + "_" +
+                                                     std::to_string(count++) + ".stl");
+  Vertices vertices;
+  Triangles triangles;
+  ContactToolSurface(&vertices, &triangles);
+  Status status = WriteFileAtomically(stl.string(), datasets_internal::BinaryStl(vertices, triangles));
+  if (!status.ok()) return status;
+  CollisionSpec spec;
+  spec.stiffness = kContactStiffness;
+  spec.distance = kContactDistance;
+  spec.obstacles.push_back(ContactToolObstacle(stl.string()));
+  truth->world = std::make_unique<CollisionWorld>();
+  status = truth->world->Init(spec, {"organ"}, {truth->mesh.surface}, truth->mesh.x);
+  std::error_code ec;
+  fs::remove(stl, ec);
+  if (!status.ok()) return status;
+  truth->contact = std::make_unique<ContactPotential>(truth->world.get(), 0.5 * kContactDistance);
+  truth->problem.potential = truth->contact.get();
+  return Status::Ok();
+}
+
+Status BuildTruth(int divisions, const ObjectMaterial& material, OrganTool tool, Truth* truth) {
   std::string error;
   if (!material.IsValid(&error)) return Status::Error("organ_patch truth material: " + error);
   truth->mesh = OrganMesh(divisions);
@@ -118,9 +236,14 @@ Status BuildTruth(int divisions, const ObjectMaterial& material, Truth* truth) {
   truth->model.Build(truth->mesh, ElasticModelType::kCorotational, material);
   truth->problem = ForwardProblem();
   truth->tool.clear();
+  truth->solved_through = -1;
   for (int v = 0; v < truth->mesh.num_vertices(); ++v) {
     const Eigen::Vector3d X = truth->mesh.rest.row(v);
     if (X.x() <= kClampX) truth->problem.clamped.push_back(v);
+  }
+  if (tool == OrganTool::kContact) {
+    if (truth->problem.clamped.empty()) return Status::Error("organ_patch: empty clamp");
+    return BuildContactTool(truth);
   }
   for (int v : truth->mesh.surface_vertices) {
     const Eigen::Vector3d X = truth->mesh.rest.row(v);
@@ -132,33 +255,78 @@ Status BuildTruth(int divisions, const ObjectMaterial& material, Truth* truth) {
   return Status::Ok();
 }
 
-// Frame f's equilibrium from rest (truth->mesh.x), and the tool's and the clamp's forces.
-Status SolveTruthFrame(int f, Truth* truth, OrganTruthFrame* out) {
-  ForwardOptions forward;
-  forward.num_threads = 1;  // one summation order: the same bytes on every machine load
-  forward.max_iterations = 60;
-  forward.load_steps = 2;
-  ForwardProblem step = truth->problem;
-  for (int v : truth->tool) step.prescribed.emplace_back(v, ToolPath(f));
-  TetMesh& mesh = truth->mesh;
-  mesh.x = mesh.rest;
-  Status status = SolveQuasiStatic(step, forward, &truth->model, &mesh, &out->summary);
-  if (!status.ok()) return status;
-  if (out->summary.termination != ForwardTermination::kConverged) {
-    return Status::Error("organ_patch frame " + std::to_string(f) + ": the ground truth's solve did not converge: " +
-                         out->summary.message);
+Status RequireConverged(int f, const ForwardSummary& summary) {
+  if (summary.termination == ForwardTermination::kConverged) return Status::Ok();
+  return Status::Error("organ_patch frame " + std::to_string(f) + ": the ground truth's solve did not converge: " +
+                       summary.message);
+}
+
+// The glued tool's frame f: from rest, its vertices moved along the path.
+Status SolveGluedFrame(int f, Truth* truth, ForwardProblem* step, ForwardSummary* summary) {
+  *step = truth->problem;
+  for (int v : truth->tool) step->prescribed.emplace_back(v, ToolPath(f));
+  truth->mesh.x = truth->mesh.rest;
+  Status status = SolveQuasiStatic(*step, TruthForwardOptions(), &truth->model, &truth->mesh, summary);
+  return status.ok() ? RequireConverged(f, *summary) : status;
+}
+
+// The contact tool's frame f: the frames up to it in order, each from the last through
+// kToolSubsteps poses (from rest the body would start inside the tool).
+Status SolveContactFrame(int f, Truth* truth, ForwardProblem* step, ForwardSummary* summary) {
+  *step = truth->problem;
+  if (truth->solved_through >= f) {
+    truth->mesh.x = truth->mesh.rest;
+    truth->solved_through = -1;
   }
-  ForwardForces forces;
-  status = EvaluateForwardForces(step, forward, truth->model, mesh, mesh.x, &forces);
+  ForwardOptions forward = TruthForwardOptions();
+  forward.load_steps = 1;  // nothing is prescribed: the poses are the steps
+  for (int g = truth->solved_through + 1; g <= f; ++g) {
+    for (int s = 1; s <= kToolSubsteps; ++s) {
+      truth->world->SetFrame(g + static_cast<double>(s) / kToolSubsteps);
+      Status status = SolveQuasiStatic(*step, forward, &truth->model, &truth->mesh, summary);
+      if (status.ok()) status = RequireConverged(g, *summary);
+      if (!status.ok()) return status;
+    }
+    truth->solved_through = g;
+  }
+  return Status::Ok();
+}
+
+// Frame f's equilibrium (in truth->mesh.x), and the tool's and the clamp's forces.
+Status SolveTruthFrame(int f, Truth* truth, OrganTruthFrame* out) {
+  ForwardProblem step;
+  Status status = truth->contact ? SolveContactFrame(f, truth, &step, &out->summary)
+                                 : SolveGluedFrame(f, truth, &step, &out->summary);
   if (!status.ok()) return status;
-  Vertices by_tool = Vertices::Zero(mesh.num_vertices(), 3);
+  TetMesh& mesh = truth->mesh;
+  ForwardForces forces;
+  status = EvaluateForwardForces(step, TruthForwardOptions(), truth->model, mesh, mesh.x, &forces);
+  if (!status.ok()) return status;
+  Vertices by_tool = truth->contact ? forces.potential : Vertices::Zero(mesh.num_vertices(), 3);
   Vertices by_clamp = Vertices::Zero(mesh.num_vertices(), 3);
   for (int v : truth->tool) by_tool.row(v) = forces.reactions.row(v);
   for (int v : truth->problem.clamped) by_clamp.row(v) = forces.reactions.row(v);
+  if (truth->contact) {
+    std::vector<Contact> contacts;
+    truth->world->Detect(mesh.x, 0.0, &contacts);
+    const ContactStats stats = truth->world->Evaluate(contacts, mesh.x);
+    out->contacts = stats.contacts;
+    out->max_penetration = stats.max_penetration;
+  }
   out->positions = mesh.x;
   out->tool = ResultantAboutCentroid(by_tool, mesh.x, mesh.mass);
   out->clamp = ResultantAboutCentroid(by_clamp, mesh.x, mesh.mass);
   return Status::Ok();
+}
+
+// The README's line on the command that made the sequence.
+std::string MadeBy(int divisions, int truth_divisions, OrganTool tool) {
+  if (divisions == 4 && truth_divisions == kTruthDivisions && tool == OrganTool::kGlued) {
+    return "Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ";
+  }
+  return "Made by `femreg organ-data --divisions " + std::to_string(divisions) +
+         (truth_divisions == kTruthDivisions ? std::string() : " --truth-divisions " + std::to_string(truth_divisions)) +
+         (tool == OrganTool::kContact ? " --tool contact" : "") + "`; ";
 }
 
 }  // namespace
@@ -176,7 +344,8 @@ ObjectMaterial OrganPatchTruthMaterial() {
   return material;
 }
 
-Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material, OrganTruthFrame* out) {
+Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material, OrganTruthFrame* out,
+                            OrganTool tool) {
   if (frame < 0 || frame >= kFrames) {
     return Status::Error("organ_patch: frame must be 0 to " + std::to_string(kFrames - 1));
   }
@@ -184,13 +353,13 @@ Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& mate
     return Status::Error("organ_patch: truth divisions must be 2 to " + std::to_string(kMaxTruthDivisions));
   }
   Truth truth;
-  Status status = BuildTruth(divisions, material, &truth);
+  Status status = BuildTruth(divisions, material, tool, &truth);
   if (!status.ok()) return status;
   return SolveTruthFrame(frame, &truth, out);
 }
 
 Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int done, int total),
-                                  int divisions, int truth_divisions) {
+                                  int divisions, int truth_divisions, OrganTool tool) {
   if (truth_divisions < 3 || truth_divisions > kMaxTruthDivisions) {
     return Status::Error("organ_patch: truth divisions must be 3 to " + std::to_string(kMaxTruthDivisions) +
                          ", got " + std::to_string(truth_divisions));
@@ -207,7 +376,7 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
 
   const TetMesh coarse = OrganMesh(divisions);
   Truth truth;
-  Status built = BuildTruth(truth_divisions, OrganPatchTruthMaterial(), &truth);
+  Status built = BuildTruth(truth_divisions, OrganPatchTruthMaterial(), tool, &truth);
   if (!built.ok()) return built;
   TetMesh& fine = truth.mesh;
   const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
@@ -300,6 +469,7 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), scene.str());
   if (!status.ok()) return status;
 
+  const bool contact = tool == OrganTool::kContact;
   char line[512];
   std::ostringstream readme;
   readme << "# organ_patch\n\n"
@@ -307,8 +477,9 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
             "tracked mesh "
          << coarse.num_vertices() << " vertices / " << coarse.num_tets()
          << " tetrahedra in `organ.vtu`), clamped at its far lobe (x <= " << kClampX * 1e3
-         << " mm), pushed 14 mm down by a tool of radius " << kToolRadius * 1e3
-         << " mm and then dragged 6 mm sideways; " << kFrames
+         << " mm), pushed 14 mm down by a tool of radius " << kToolRadius * 1e3 << " mm"
+         << (contact ? " (a rigid, frictionless flat-ended cylinder with a rounded edge, pressing by contact)" : "")
+         << " and then dragged 6 mm sideways; " << kFrames
          << " frames. Each cloud has " << kPoints << " points (noise " << kNoise * 1e3
          << " mm per coordinate) on one patch of the upper side that covers ";
   std::snprintf(line, sizeof(line), "%.0f%%", 100.0 * area / total_area);
@@ -327,22 +498,20 @@ Status GenerateOrganPatchSequence(const std::string& dir, void (*progress)(int d
   for (const ForceFrame& t : tool_forces) peak = std::max(peak, t.force.norm());
   std::snprintf(line, sizeof(line), "%.2f N", peak);
   readme << "`forces.csv`: per frame, the tool's true force on the body (`force_x_N, force_y_N, "
-            "force_z_N`: the reaction at the ground truth's vertices the tool moves, pointing into "
-            "the body; up to "
+            "force_z_N`: "
+         << (contact ? "the resultant of its contact forces on the body" : "the reaction at the ground truth's vertices the tool moves")
+         << ", pointing into the body; up to "
          << line
          << ") and its torque about the body's centroid (`torque_x_Nm, torque_y_Nm, torque_z_Nm`; "
-            "the centroid is the lumped-mass-weighted mean of the true vertex positions). The tool "
-            "moves the vertices it touches without slip, so its force also has a part along the "
-            "surface. There is no gravity; the clamp's reaction, the only other force on the body, "
+            "the centroid is the lumped-mass-weighted mean of the true vertex positions). "
+         << (contact ? "The tool is frictionless: its force is normal to the surface it touches, the top "
+                       "and, once the tool has sunk in, the sides around it."
+                     : "The tool moves the vertices it touches without slip, so its force also has a part "
+                       "along the surface.")
+         << " There is no gravity; the clamp's reaction, the only other force on the body, "
             "balances it and is left out, as an estimate in `femreg register`'s stats.csv leaves "
             "it out: `femreg eval` compares the two.\n\n"
-         << (divisions == 4 && truth_divisions == kTruthDivisions
-                 ? std::string("Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ")
-                 : "Made by `femreg organ-data --divisions " + std::to_string(divisions) +
-                       (truth_divisions == kTruthDivisions ? std::string()
-                                                           : " --truth-divisions " + std::to_string(truth_divisions)) +
-                       "`; ")
-         << "deterministic.\n\n"
+         << MadeBy(divisions, truth_divisions, tool) << "deterministic.\n\n"
             "    femreg register --scene datasets/organ_patch/scene.yaml --frames datasets/organ_patch/clouds \\\n"
             "        --ground-truth datasets/organ_patch/ground_truth --out /tmp/organ_patch\n";
   return WriteFileAtomically((fs::path(dir) / "README.md").string(), readme.str());

@@ -14,6 +14,7 @@ void AddOrganDataCommand(CLI::App* app) {
   auto force = std::make_shared<bool>(false);
   auto divisions = std::make_shared<int>(4);
   auto truth_divisions = std::make_shared<int>(10);
+  auto tool = std::make_shared<std::string>("glued");
   CLI::App* cmd = app->add_subcommand(
       "organ-data",
       "Write the organ_patch sequence: an organ-like body clamped at one end and pushed by a "
@@ -36,11 +37,20 @@ void AddOrganDataCommand(CLI::App* app) {
                   "ground truth and forces.csv")
       ->capture_default_str()
       ->check(CLI::Range(3, 16));
-  cmd->callback([out, force, divisions, truth_divisions] {
+  cmd->add_option("--tool", *tool,
+                  "How the tool holds the body: glued (the bundled sequence: the upper-surface vertices "
+                  "within its radius follow it without slip) or contact (a rigid, frictionless "
+                  "flat-ended cylinder of the same radius pressing by the contact penalty; its force is "
+                  "normal to the surface it touches). It changes the clouds, the ground truth and "
+                  "forces.csv")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"glued", "contact"}));
+  cmd->callback([out, force, divisions, truth_divisions, tool] {
     Status status = PrepareOutputDir(*out, *force);
     if (status.ok()) {
       ProgressBar bar("organ-data", 12);
-      status = GenerateOrganPatchSequence(*out, nullptr, *divisions, *truth_divisions);
+      status = GenerateOrganPatchSequence(*out, nullptr, *divisions, *truth_divisions,
+                                          *tool == "contact" ? OrganTool::kContact : OrganTool::kGlued);
       bar.Finish();
     }
     if (!status.ok()) {
