@@ -1,20 +1,17 @@
 // femreg's worker threads (parallel/pool.h): every task runs once, whoever runs it, and the
 // loops built on them give the serial loop's result on any thread count.
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "forked_child.h"
 #include "parallel/pool.h"
 
 namespace femreg {
@@ -149,32 +146,11 @@ int ParallelLoopInChild() {
   return UsesAWorker() ? 0 : 3;
 }
 
-// Forks and runs ParallelLoopInChild in the child; the child's status, or a message. A child
-// that deadlocks is ended by its alarm, and killed here if it outlives a generous bound, so a
-// hang fails the test instead of stalling it.
+// Forks and runs ParallelLoopInChild in the child: "" when it held, else what happened.
 std::string ForkAndRunParallelLoop() {
-  const pid_t child = fork();
-  if (child < 0) return std::string("fork failed: ") + std::strerror(errno);
-  if (child == 0) {
-    alarm(30);
-    _exit(ParallelLoopInChild());
-  }
-  int status = 0;
-  pid_t done = 0;
-  for (int waited_ms = 0; waited_ms < 60000; waited_ms += 10) {
-    done = waitpid(child, &status, WNOHANG);
-    if (done != 0) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  if (done == 0) {
-    kill(child, SIGKILL);
-    waitpid(child, &status, 0);
-    return "the child hung";
-  }
-  if (done < 0) return std::string("waitpid failed: ") + std::strerror(errno);
-  if (WIFSIGNALED(status)) return "the child died of signal " + std::to_string(WTERMSIG(status)) + " (14: its alarm: a hang)";
-  if (!WIFEXITED(status)) return "the child did not exit";
-  const int code = WEXITSTATUS(status);
+  std::string failure;
+  const int code = testing_util::ExitCodeOfForkedChild(&ParallelLoopInChild, &failure);
+  if (code < 0) return failure;
   if (code == 2) return "in the child a task did not run exactly once";
   if (code == 3) return "in the child no task ran on a worker (the pool counts the parent's workers)";
   return code == 0 ? "" : "the child exited " + std::to_string(code);

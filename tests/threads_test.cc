@@ -2,14 +2,10 @@
 // libraries that ask for teams of their own (CHOLMOD 5's supernodal factorization asks
 // OpenMP for 4 threads whatever the program set).
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 #include <atomic>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -23,6 +19,7 @@
 #include <vector>
 
 #include "femreg/blas_kernels.h"
+#include "forked_child.h"
 #include "femreg/io.h"
 #include "parallel/blas_choice.h"
 #include "parallel/load.h"
@@ -128,30 +125,12 @@ int TeamOfTwo() {
   return threads.load() == 2 ? 0 : 1;
 }
 
-// Forks; the child opens an OpenMP team of two and exits with TeamOfTwo's code. "" when it
-// did, else what happened. A child that hangs is ended by its alarm, or killed here.
+// Forks; the child opens an OpenMP team of two. "" when it did, else what happened.
 std::string ForkAndOpenATeam() {
-  const pid_t child = fork();
-  if (child < 0) return std::string("fork failed: ") + std::strerror(errno);
-  if (child == 0) {
-    alarm(30);
-    _exit(TeamOfTwo());
-  }
-  int status = 0;
-  pid_t done = 0;
-  for (int waited_ms = 0; waited_ms < 60000 && done == 0; waited_ms += 10) {
-    done = waitpid(child, &status, WNOHANG);
-    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  if (done == 0) {
-    kill(child, SIGKILL);
-    waitpid(child, &status, 0);
-    return "the child hung";
-  }
-  if (done < 0) return std::string("waitpid failed: ") + std::strerror(errno);
-  if (WIFSIGNALED(status)) return "the child died of signal " + std::to_string(WTERMSIG(status)) + " (14: its alarm: a hang)";
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "the child's team did not have two threads";
-  return "";
+  std::string failure;
+  const int code = testing_util::ExitCodeOfForkedChild(&TeamOfTwo, &failure);
+  if (code < 0) return failure;
+  return code == 0 ? "" : "the child's team did not have two threads";
 }
 
 // Python's multiprocessing forks a process that has run femreg's OpenMP teams: libgomp's
