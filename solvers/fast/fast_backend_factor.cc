@@ -18,6 +18,11 @@ namespace fast_backend {
 
 namespace {
 
+// The own factorization's team: one thread per this many flops (CHOLMOD's count). Below it the
+// team's start and the barriers of its tiled top cost more than the second thread saves
+// (docs/notes/2026-11-30-factorization-team.md).
+constexpr double kFactorizationFlopsPerThread = 1e8;
+
 // CHOLMOD's supernodal factorization is faster than its simplicial one on these systems at
 // every size measured, so it is always used (docs/notes/2026-11-28-figures-from-code-comments.md).
 
@@ -81,6 +86,7 @@ void FastBackend::Impl::Analyse() {
   // the substitutions' rate.
   if (factor.raw() != nullptr) PrimeAllocator(*factor.raw(), H);
   fill = H.nonZeros() > 0 ? common.lnz / static_cast<double>(H.nonZeros()) : 0.0;
+  factor_flops = common.fl;
   const double iteration_flops = 4.0 * common.lnz + 2.0 * static_cast<double>(H.nonZeros());
   pcg_budget_double = iteration_flops > 0 ? static_cast<int>(common.fl / iteration_flops) : 0;
   pcg_budget_single = iteration_flops > 0
@@ -153,11 +159,14 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
   pcg_since_factor = 0;
   factor_single = true;
   ++report->factorizations;
-  // Its BLAS calls on one thread; its own team of `threads`.
+  // Its BLAS calls on one thread; its own team, of up to `threads` by its size.
   {
     const ScopedThreads one_thread(1);
+    const int team = PhaseThreads(threads, static_cast<long long>(factor_flops),
+                                  static_cast<long long>(kFactorizationFlopsPerThread));
     factor_valid = factor.raw() != nullptr &&
-                   substitutions.Factorize(*factor.raw(), H, structure_pending, threads);
+                   substitutions.Factorize(*factor.raw(), H, structure_pending, team);
+    substitutions.set_threads(threads);  // the substitutions' groups as before
   }
   if (factor_valid) structure_pending = false;
   report->factorize_s += Seconds(t0);

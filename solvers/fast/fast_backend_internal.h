@@ -108,6 +108,7 @@ struct FastBackend::Impl {
   bool pcg_indefinite = false;
   // nnz(L) / nnz(H) from the analysis of the pattern.
   double fill = 0.0;
+  double factor_flops = 0.0;  // CHOLMOD's flop count of one factorization (Analyse)
   int analyses = 0;  // Analyse's, over the back end's life (SolveReport::analyses per solve)
   // Before that analysis, for kAuto: an estimate of it from the vertex graph (-1: not yet
   // made for this pattern), see EstimateFill.
