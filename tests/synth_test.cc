@@ -430,7 +430,7 @@ TEST(OrganPatchData, ContactToolPushesAlongTheNormalAndBalances) {
   EXPECT_LT((contact.tool.torque + contact.clamp.torque).norm(), 1e-4 * force.norm() * 0.08);
   EXPECT_GT(contact.tool.torque.norm(), 1e-3 * force.norm() * 0.08);
   EXPECT_GT(contact.contacts, 0);
-  EXPECT_LT(contact.max_penetration, 1e-4);  // the penalty's give, small against the 14 mm push
+  EXPECT_LT(contact.max_penetration, 1e-4);  // the penalty's give, small against the tool's push
 
   status = SolveOrganPatchTruth(7, 3, material, &glued);
   ASSERT_TRUE(status.ok()) << status.message();

@@ -96,6 +96,9 @@ int ThreadsLeftFree(int cores, int running, int own) {
   return std::clamp(cores - others, 1, std::max(cores, 1));
 }
 
+// AvailableThreadCount's sampling interval: the load a frame sees, without reading /proc per call.
+constexpr int64_t kLoadSampleMs = 50;
+
 int AvailableThreadCount() {
   using Clock = std::chrono::steady_clock;
   static std::atomic<int64_t> sampled_at{std::numeric_limits<int64_t>::min()};
@@ -103,7 +106,7 @@ int AvailableThreadCount() {
   const int64_t now = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now().time_since_epoch()).count();
   const int64_t then = sampled_at.load(std::memory_order_relaxed);
   const int known = available.load(std::memory_order_relaxed);
-  if (known > 0 && then != std::numeric_limits<int64_t>::min() && now - then < 50) return known;
+  if (known > 0 && then != std::numeric_limits<int64_t>::min() && now - then < kLoadSampleMs) return known;
   const int cores = DefaultThreadCount();
   // This process's own runnable threads are no competition: the caller, and the workers that
   // poll for their next job after the last one (parallel/pool.cc) or OpenMP threads that spin.

@@ -17,7 +17,8 @@ int ResolveThreadCount(int requested);
 
 // The hardware threads that other processes leave free: DefaultThreadCount() less the
 // threads of other processes that are running or ready to run (the kernel's count, less this
-// process's own: parallel/load.h), at least 1. Sampled at most every 50 ms (cheap to call per frame or per solve).
+// process's own: parallel/load.h), at least 1. Sampled at most once per kLoadSampleMs
+// (threads.cc), so that it is cheap to call per frame or per solve.
 // A busy machine gets fewer threads, so that no team waits on a core another process holds.
 int AvailableThreadCount();
 

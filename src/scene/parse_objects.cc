@@ -74,8 +74,10 @@ ObjectSpec SceneParser::ParseObject(const YamlValue& v, int index) {
   // The element's rule at the row that breaks it: a model the file wrote against its volume,
   // else the volume the default model cannot take.
   const std::string element_error = ObjectElementError(object);
-  if (!element_error.empty() && object.model) FieldValue<&ObjectSpec::model>(v).Fail(element_error);
-  if (!element_error.empty()) FieldValue<&ObjectSpec::volume>(v).Fail(element_error);
+  if (!element_error.empty()) {
+    if (object.model) FieldValue<&ObjectSpec::model>(v).Fail(element_error);
+    FieldValue<&ObjectSpec::volume>(v).Fail(element_error);
+  }
   if (v.Has(material_group)) object.material = ParseMaterial(v[material_group], object.material);
   if (v.Has("regions")) {
     const YamlValue regions = v["regions"];
