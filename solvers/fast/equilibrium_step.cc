@@ -109,8 +109,22 @@ struct EquilibriumSolver::Impl {
   bool Factorize(const energy::Problem& problem, const Vertices& x, SolveReport* report) {
     use_ldlt = false;
     use_indefinite = 0;
-    if (!last_indefinite && FactorizeOf(&physics, kFirstShift, report)) return true;
-    if (FactorizeIndefinite(report)) return true;
+    const bool cholesky_first = !last_indefinite;
+    if (cholesky_first && FactorizeOf(&physics, kFirstShift, kOwnFloat, report)) return true;
+    if (FactorizeIndefinite(report)) {
+      // A negative pivot above round-off is K's own, and CHOLMOD's double Cholesky would fail
+      // too. Without one, the float Cholesky failed on round-off, where that factor serves PCG
+      // better than the floored pivots.
+      if (!cholesky_first || last_indefinite) return true;
+      const int held = use_indefinite;
+      use_indefinite = 0;
+      if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
+      use_indefinite = held;
+      factor_valid = true;
+      fresh_iterations = -1;
+      return true;
+    }
+    if (cholesky_first && FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
     const auto t0 = Clock::now();
     if (!ldlt_analysed) {
       ldlt.setMode(Eigen::CholmodLDLt);
@@ -140,7 +154,7 @@ struct EquilibriumSolver::Impl {
     projected.AssembleSecondOrder(problem, x, energy::Curvature::kProjected, true, &unused);
     projected.Finish(problem, 0.0, &unused);
     report->assemble_s += Seconds(t1);
-    return FactorizeOf(&projected, 1.0, report);
+    return FactorizeOf(&projected, 1.0, kOwnFloat | kCholmodDouble, report);
   }
 
   // K~ (K with FactorizeOf's first shift) as L S L^T in the own supernodal code, in float,
@@ -178,9 +192,12 @@ struct EquilibriumSolver::Impl {
     return true;
   }
 
+  // The Cholesky factorizations FactorizeOf tries at each shift, in this order.
+  static constexpr int kOwnFloat = 1, kCholmodDouble = 2;
+
   // Factorizes the matrix of `a` plus shifts from kFirstShift up to max_shift of its mean
-  // diagonal; false if none is positive definite.
-  bool FactorizeOf(energy::Assembler* a, double max_shift, SolveReport* report) {
+  // diagonal, with the `attempts` (kOwnFloat, kCholmodDouble); false if none is positive definite.
+  bool FactorizeOf(energy::Assembler* a, double max_shift, int attempts, SolveReport* report) {
     const auto t0 = Clock::now();
     Eigen::SparseMatrix<double>& K = a->H();
     Analyse(K);
@@ -195,8 +212,9 @@ struct EquilibriumSolver::Impl {
     factor_valid = false;
     for (double shift = kFirstShift; shift <= max_shift && !factor_valid; shift *= 100.0) {
       for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c] + shift * mean;
-      ++report->factorizations;
-      {
+      factor_single = false;
+      if (attempts & kOwnFloat) {
+        ++report->factorizations;
         const ScopedThreads one_thread(1);
         // On one thread: the same factor (and so the same PCG iterates) on any thread count
         // (the team's tiles round differently), and no team to wait for on a busy machine.
@@ -207,6 +225,8 @@ struct EquilibriumSolver::Impl {
         factor_valid = true;
         break;
       }
+      if (!(attempts & kCholmodDouble)) continue;
+      ++report->factorizations;
       const ScopedThreads one_thread(1);
       WithThreadLimit(1, [&] { factor.factorize(K); });
       factor_valid = factor.info() == Eigen::Success;
