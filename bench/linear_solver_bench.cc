@@ -113,6 +113,7 @@ void OwnFactorize(benchmark::State& state) {
     benchmark::DoNotOptimize(factor.Factorize(*llt.raw(), H, false, threads));
   }
   state.counters["dofs"] = static_cast<double>(H.rows());
+  state.counters["flops"] = llt.cholmod().fl;  // CHOLMOD's count, what the back end sizes its team by
   state.counters["serial"] = factor.serial_fraction();
 }
 
@@ -181,7 +182,16 @@ BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Factorize, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSimplicialLLt)->Apply(Sizes);
 BENCHMARK_TEMPLATE(Solve, Eigen::CholmodSupernodalLLt)->Apply(Sizes);
-BENCHMARK_TEMPLATE(OwnFactorize, float)->Apply(Sizes);
+// Between Sizes' 1k and 4k: where a second thread starts to pay for the own factorization
+// (kFactorizationFlopsPerThread in fast_backend_factor.cc).
+void TeamSizes(benchmark::internal::Benchmark* b) {
+  for (int v : {1000, 2000, 2500, 4000}) {  // boxes of 936, 1,519, 2,304 and 3,321 vertices
+    for (int t : {1, 2}) b->Args({v, t});
+  }
+  b->ArgNames({"vertices", "threads"})->Unit(benchmark::kMillisecond);
+}
+
+BENCHMARK_TEMPLATE(OwnFactorize, float)->Apply(TeamSizes);
 BENCHMARK_TEMPLATE(OwnFactorize, double)->Apply(Sizes);
 BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(Sizes);
 BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
