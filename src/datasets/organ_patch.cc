@@ -321,6 +321,14 @@ std::string MadeBy(int divisions, int truth_divisions, OrganTool tool) {
 
 }  // namespace
 
+const char* ToString(OrganTool tool) { return tool == OrganTool::kContact ? "contact" : "glued"; }
+
+bool FromString(const std::string& name, OrganTool* tool) {
+  if (name != "glued" && name != "contact") return false;
+  *tool = name == "contact" ? OrganTool::kContact : OrganTool::kGlued;
+  return true;
+}
+
 TetMesh OrganPatchMesh(int divisions) { return OrganMesh(divisions); }
 
 ObjectMaterial OrganPatchTruthMaterial() {
