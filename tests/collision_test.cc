@@ -169,6 +169,73 @@ TEST(CollisionWorld, VertexDeeperThanDIsFoundAndPushedOut) {
   EXPECT_TRUE(deep);
 }
 
+// A mesh obstacle given in memory (ObstacleSpec::surface) meets the slab as the same surface
+// read from a file does: the same contacts and forces, with the scale and pose applied alike.
+// A surface in memory with no triangle or an index past its vertices is refused by name.
+TEST(CollisionWorld, MeshObstacleInMemoryActsAsTheSameSurfaceFromAFile) {
+  TetMesh slab = MakeBox(V3(0.06, 0.04, 0.01), 12, 8, 2);
+  TetMesh block = MakeBox(V3(20, 16, 10), 2, 2, 1, V3(-10, -8, 0));  // mm: scale 0.001
+  testing_util::TempDir tmp;
+  std::ostringstream obj;
+  obj.precision(17);
+  for (int v = 0; v < block.rest.rows(); ++v)
+    obj << "v " << block.rest(v, 0) << " " << block.rest(v, 1) << " " << block.rest(v, 2) << "\n";
+  for (int f = 0; f < block.surface.rows(); ++f)
+    obj << "f " << block.surface(f, 0) + 1 << " " << block.surface(f, 1) + 1 << " " << block.surface(f, 2) + 1 << "\n";
+  ObstacleSpec tool;
+  tool.name = "tool";
+  tool.kind = ObstacleSpec::Kind::kMesh;
+  tool.scale = 0.001;
+  tool.keyframes.resize(1);  // tilted, its lowest edge 0.6 mm into the slab's top
+  tool.keyframes[0].rotation = V3(0.3, 0.2, 0);
+  tool.keyframes[0].translation = V3(0.03, 0.02, 0.0137);
+  CollisionSpec spec;
+  spec.distance = 0.002;
+  spec.stiffness = 1e3;
+  ObstacleSpec from_file = tool, in_memory = tool;
+  from_file.mesh_path = tmp.Write("block.obj", obj.str());
+  in_memory.surface = ObstacleSpec::Surface{block.rest, block.surface};
+  CollisionWorld worlds[2];
+  ContactPotential potentials[2] = {ContactPotential(&worlds[0], 0.001), ContactPotential(&worlds[1], 0.001)};
+  const ObstacleSpec* tools[2] = {&from_file, &in_memory};
+  for (int w = 0; w < 2; ++w) {
+    spec.obstacles = {*tools[w]};
+    const Status status = worlds[w].Init(spec, {"slab"}, {slab.surface}, slab.x);
+    ASSERT_TRUE(status.ok()) << status.message();
+    potentials[w].Refresh(slab.x);
+  }
+  ASSERT_EQ(worlds[1].obstacle_vertices(0).rows(), worlds[0].obstacle_vertices(0).rows());
+  EXPECT_NEAR((worlds[1].obstacle_vertices(0) - worlds[0].obstacle_vertices(0)).norm(), 0.0, 1e-15);
+  const std::vector<Contact>& a = potentials[0].contacts();
+  const std::vector<Contact>& b = potentials[1].contacts();
+  ASSERT_GT(worlds[0].Evaluate(a, slab.x).max_penetration, 0.0);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].source, b[k].source) << k;
+    EXPECT_EQ(a[k].vertices_a, b[k].vertices_a) << k;
+    EXPECT_NEAR(a[k].gap, b[k].gap, 1e-15) << k;
+    EXPECT_NEAR((a[k].normal - b[k].normal).norm(), 0.0, 1e-12) << k;
+  }
+  const std::vector<ContactForce> fa = potentials[0].Forces(slab.x), fb = potentials[1].Forces(slab.x);
+  ASSERT_EQ(fa.size(), 1u);
+  ASSERT_EQ(fb.size(), 1u);
+  EXPECT_GT(fa[0].force.norm(), 0.0);
+  EXPECT_EQ(fa[0].contacts, fb[0].contacts);
+  EXPECT_NEAR((fa[0].force - fb[0].force).norm(), 0.0, 1e-12 * fa[0].force.norm());
+
+  CollisionWorld bad;
+  spec.obstacles = {in_memory};
+  spec.obstacles[0].surface->triangles(3, 1) = static_cast<int>(block.rest.rows());
+  Status status = bad.Init(spec, {"slab"}, {slab.surface}, slab.x);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("'tool'"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("index"), std::string::npos) << status.message();
+  spec.obstacles[0].surface->triangles.resize(0, 3);
+  status = bad.Init(spec, {"slab"}, {slab.surface}, slab.x);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("no triangle"), std::string::npos) << status.message();
+}
+
 TEST(ContactPotential, GradientMatchesFiniteDifferences) {
   Merged m = Merge(TwoBoxes(-0.0005));  // 0.5 mm into each other: the penalty is zero at contact
   CollisionSpec spec;

@@ -54,8 +54,8 @@ TEST(SceneFields, EveryMemberHasARowOrIsNamedAsReadByHand) {
   EXPECT_EQ(FieldCount<AnchorSpec>() + 6, MemberCount<AnchorSpec>());
   // + first, second (the objects).
   EXPECT_EQ(FieldCount<CollisionPair>() + 2, MemberCount<CollisionPair>());
-  // + name, kind, plane_point, plane_normal, box_size, mesh_path, objects, keyframes.
-  EXPECT_EQ(FieldCount<ObstacleSpec>() + 8, MemberCount<ObstacleSpec>());
+  // + name, kind, plane_point, plane_normal, box_size, mesh_path, surface, objects, keyframes.
+  EXPECT_EQ(FieldCount<ObstacleSpec>() + 9, MemberCount<ObstacleSpec>());
   // + name, selection, has_centre, centre, keyframes.
   EXPECT_EQ(FieldCount<MotionTrackSpec>() + 5, MemberCount<MotionTrackSpec>());
 }

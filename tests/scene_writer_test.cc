@@ -209,6 +209,7 @@ void ExpectSameScene(const Scene& a, const Scene& b) {
     EXPECT_EQ(o.plane_normal, p.plane_normal);
     EXPECT_EQ(o.box_size, p.box_size);
     EXPECT_EQ(o.mesh_path, p.mesh_path);
+    EXPECT_EQ(o.surface.has_value(), p.surface.has_value());  // a scene names files only
     ExpectSameFields(o, p, "a round trip");  // scale, friction
     EXPECT_EQ(o.objects, p.objects);
     ASSERT_EQ(o.keyframes.size(), p.keyframes.size());
@@ -380,6 +381,33 @@ TEST_F(SceneWriterTest, EverySectionReadsBackTheSame) {
   back.objects[0].mesh_path = scene.objects[0].mesh_path;
   back.collision.obstacles[2].mesh_path = scene.collision.obstacles[2].mesh_path;
   ExpectSameScene(scene, back);
+}
+
+// A mesh obstacle whose surface is in memory has no file for a scene to name: WriteScene
+// refuses the scene, naming the obstacle, and writes nothing; the text says what it was.
+TEST_F(SceneWriterTest, ObstacleSurfaceInMemoryIsRefusedByName) {
+  Scene scene;
+  ASSERT_TRUE(ParseScene("objects:\n  - {name: beam, mesh: beam.mesh}\n", "inline", dir_.path(), &scene).ok());
+  ObstacleSpec tool;
+  tool.name = "probe";
+  tool.kind = ObstacleSpec::Kind::kMesh;
+  tool.surface.emplace();
+  tool.surface->vertices.resize(3, 3);
+  tool.surface->vertices << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  tool.surface->triangles.resize(1, 3);
+  tool.surface->triangles << 0, 1, 2;
+  scene.collision.obstacles.push_back(tool);
+  const std::string path = (fs::path(dir_.path()) / "refused.yaml").string();
+  const Status status = WriteScene(scene, path);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("'probe'"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("in memory"), std::string::npos) << status.message();
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_NE(SceneToYaml(scene).find("in memory: 3 vertices, 1 triangles"), std::string::npos)
+      << SceneToYaml(scene);
+  scene.collision.obstacles[0].surface.reset();  // named by a file: written
+  scene.collision.obstacles[0].mesh_path = (fs::path(dir_.path()) / "tool.obj").string();
+  EXPECT_TRUE(WriteScene(scene, path).ok());
 }
 
 TEST_F(SceneWriterTest, SynthSectionReadsBackTheSame) {

@@ -100,15 +100,14 @@ int Organ(const std::map<std::string, std::string>& args) {
   material.model = model == "neo_hookean" ? MaterialModel::kNeoHookean : MaterialModel::kHooke;
   material.nodal_volume = model == "neo_hookean" && Text(args, "volume", "nodal") == "nodal";
   material.material.poisson_ratio = Number(args, "nu", material.material.poisson_ratio);
-  const std::string tool = Text(args, "tool", "glued");
-  if (tool != "glued" && tool != "contact") {
+  OrganTool tool = OrganTool::kGlued;
+  if (!FromString(Text(args, "tool", "glued"), &tool)) {
     std::cerr << "femreg_forward_probe: shape=organ takes tool=glued or contact\n";
     return 2;
   }
   const auto start = std::chrono::steady_clock::now();
   OrganTruthFrame truth;
-  const Status status = SolveOrganPatchTruth(frame, divisions, material, &truth,
-                                             tool == "contact" ? OrganTool::kContact : OrganTool::kGlued);
+  const Status status = SolveOrganPatchTruth(frame, divisions, material, &truth, tool);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!status.ok()) {
     std::cerr << "femreg_forward_probe: " << status.message() << "\n";
@@ -122,7 +121,7 @@ int Organ(const std::map<std::string, std::string>& args) {
               truth.tool.force.z(), truth.tool.force.norm());
   std::printf("clamp force  %+.6f %+.6f %+.6f N  imbalance %.2e N\n", truth.clamp.force.x(),
               truth.clamp.force.y(), truth.clamp.force.z(), (truth.tool.force + truth.clamp.force).norm());
-  if (tool == "contact") {
+  if (tool == OrganTool::kContact) {
     std::printf("contacts %d, deepest penetration %.4f mm\n", truth.contacts, truth.max_penetration * 1e3);
   }
   const std::string csv = Text(args, "csv", "");

@@ -62,7 +62,8 @@ struct ContactStats {
 class CollisionWorld {
  public:
   // Objects are surfaces in the global numbering of x; names match the spec's pairs (an
-  // empty pair list with collision on means every pair). Obstacle meshes are read here.
+  // empty pair list with collision on means every pair). Obstacle meshes are read here (or
+  // taken from ObstacleSpec::surface; one with no triangle or a bad index is an error).
   // obstacle_surfaces[i], where given with rows, is the surface object i meets the obstacles
   // with instead (an embedded surface, its vertices also in x); its contacts are object i's.
   Status Init(const CollisionSpec& spec, const std::vector<std::string>& object_names,

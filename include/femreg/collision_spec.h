@@ -1,7 +1,7 @@
 // femreg/collision_spec.h - what a scene says about collision (docs/theory/contact.md): the object
 // pairs, the penalty and the rigid obstacles with their keyframed poses (their triangle
-// surfaces are read by ReadTriangleSurface, femreg/io.h). femreg/collision.h detects and
-// penalizes the contacts a spec describes.
+// surfaces are read by ReadTriangleSurface, femreg/io.h, or given in memory). femreg/collision.h
+// detects and penalizes the contacts a spec describes.
 #ifndef FEMREG_COLLISION_SPEC_H_
 #define FEMREG_COLLISION_SPEC_H_
 
@@ -29,6 +29,11 @@ struct ObstacleKeyframe {
 
 struct ObstacleSpec {
   enum class Kind { kPlane, kBox, kMesh };
+  // A mesh obstacle's triangle surface in memory, as ReadTriangleSurface reads a file's.
+  struct Surface {
+    Vertices vertices;
+    Triangles triangles;
+  };
   std::string name;
   Kind kind = Kind::kPlane;
   // Plane (in the obstacle frame): the solid side is behind `normal`.
@@ -36,7 +41,11 @@ struct ObstacleSpec {
   Eigen::Vector3d plane_normal = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d box_size = Eigen::Vector3d::Ones();  // box centred at the obstacle origin
   std::string mesh_path;  // triangle surface (OBJ, ASCII or binary STL), outward normals
-  double scale = 1.0;     // applied to the mesh file's coordinates
+  // The surface given in memory instead (outward normals), used in place of mesh_path when
+  // set: a program's own obstacle needs no file. A scene names a file, so WriteScene refuses
+  // an obstacle with one (femreg/scene.h).
+  std::optional<Surface> surface;
+  double scale = 1.0;     // applied to the mesh's coordinates (the file's or `surface`'s)
   std::vector<std::string> objects;  // objects it collides with; empty = all
   std::vector<ObstacleKeyframe> keyframes;  // empty = identity pose
   std::optional<double> friction = std::nullopt;  // Coulomb coefficient against it; unset: CollisionSpec::friction

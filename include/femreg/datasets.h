@@ -116,6 +116,9 @@ enum class OrganTool {
   // are solved in order, each from the last.
   kContact,
 };
+// "glued", "contact": organ-data's --tool names.
+const char* ToString(OrganTool tool);
+bool FromString(const std::string& name, OrganTool* tool);
 Status GenerateOrganPatchSequence(const std::string& dir,
                                   void (*progress)(int done, int total) = nullptr,
                                   int divisions = 4, int truth_divisions = 10,

@@ -363,10 +363,12 @@ Status ParseScene(const std::string& yaml_text, const std::string& source,
 // plane, a selection). Numbers are written in the shortest form that reads back to the same
 // double. File paths (meshes) are written relative to the scene file's folder. `comment`
 // (may be empty) goes first, each of its lines as a '#' comment. The file is replaced
-// atomically; errors name it.
+// atomically; errors name it. A mesh obstacle whose surface is in memory
+// (ObstacleSpec::surface) has no file to name: such a scene is refused, naming the obstacle.
 Status WriteScene(const Scene& scene, const std::string& path, const std::string& comment = "");
 // The same as text; file paths relative to `base_dir` (the folder ParseScene will resolve
-// them against; "" writes them as they are).
+// them against; "" writes them as they are). An obstacle surface in memory is written as
+// "(in memory: V vertices, T triangles)" in place of its file, which ParseScene refuses.
 std::string SceneToYaml(const Scene& scene, const std::string& base_dir = "",
                         const std::string& comment = "");
 

@@ -93,8 +93,20 @@ Status CollisionWorld::Init(const CollisionSpec& spec, const std::vector<std::st
           0, 4, 6, 0, 6, 2,             // -x
           1, 3, 7, 1, 7, 5;             // +x
     } else if (os.kind == ObstacleSpec::Kind::kMesh) {
-      Status status = ReadTriangleSurface(os.mesh_path, &o.local, &o.triangles);
-      if (!status.ok()) return Status::Error("collision.obstacles '" + os.name + "': " + status.message());
+      const std::string what = "collision.obstacles '" + os.name + "': ";
+      if (os.surface) {  // checked as the reader checks a file's
+        o.local = os.surface->vertices;
+        o.triangles = os.surface->triangles;
+        if (o.triangles.rows() == 0) return Status::Error(what + "its surface in memory has no triangle");
+        if (!o.local.allFinite()) return Status::Error(what + "its surface in memory has a vertex that is not finite");
+        if (o.triangles.minCoeff() < 0 || o.triangles.maxCoeff() >= o.local.rows()) {
+          return Status::Error(what + "its surface in memory has a triangle index outside its " +
+                               std::to_string(o.local.rows()) + " vertices");
+        }
+      } else {
+        Status status = ReadTriangleSurface(os.mesh_path, &o.local, &o.triangles);
+        if (!status.ok()) return Status::Error(what + status.message());
+      }
       o.local *= os.scale;
     } else if (!(os.plane_normal.norm() > 0)) {
       return Status::Error("collision.obstacles '" + os.name + "': the plane normal is zero");

@@ -1,5 +1,5 @@
-// The binary STL bytes of a triangle surface, for the rigid tools the generators pose as
-// collision obstacles (ObstacleSpec::Kind::kMesh reads its surface from a file).
+// The binary STL bytes of a triangle surface, for the rigid tools the generators write beside
+// their scenes as collision obstacles (a scene's mesh obstacle names a file).
 #ifndef FEMREG_DATASETS_BINARY_STL_H_
 #define FEMREG_DATASETS_BINARY_STL_H_
 

@@ -12,7 +12,6 @@
 // linear tetrahedra lock, so the truth uses the nodal volume: a benchmark's true force must
 // not be set by locked elements' stiffness (docs/notes/2026-11-29-organ-truth.md).
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -20,9 +19,6 @@
 #include <random>
 #include <sstream>
 
-#include <unistd.h>
-
-#include "datasets/binary_stl.h"
 #include "femreg/collision.h"
 #include "femreg/datasets.h"
 #include "femreg/forward.h"
@@ -129,11 +125,16 @@ void ContactToolSurface(Vertices* vertices, Triangles* triangles) {
 // The contact tool as an obstacle: its end's centre on the top above the tool's centre,
 // kToolLift above it at collision frame 0, then along ToolPath: frame f's pose is collision
 // frame f + 1.
-ObstacleSpec ContactToolObstacle(const std::string& mesh_path) {
+ObstacleSpec ContactToolObstacle() {
   ObstacleSpec tool;
   tool.name = "tool";
   tool.kind = ObstacleSpec::Kind::kMesh;
-  tool.mesh_path = mesh_path;
+  tool.surface.emplace();
+  ContactToolSurface(&tool.surface->vertices, &tool.surface->triangles);
+  // Its corners as floats, as the STL it was first read from held them: the push, symmetric
+  // in y through frame 7, takes one of two mirror-image solutions by the tool's rounding, and
+  // the data keep theirs (docs/notes/2026-11-30-organ-contact-tool.md).
+  tool.surface->vertices = tool.surface->vertices.cast<float>().cast<double>();
   tool.friction = 0.0;
   const Eigen::Vector3d start(kToolCentre.x(), kToolCentre.y(), TopHeight(kToolCentre.x(), kToolCentre.y()));
   tool.keyframes.push_back({0, start + Eigen::Vector3d(0.0, 0.0, kToolLift), Eigen::Vector3d::Zero()});
@@ -203,25 +204,14 @@ ForwardOptions TruthForwardOptions() {
   return forward;
 }
 
-// The contact tool's world and penalty. CollisionWorld reads an obstacle's surface from a file:
-// a scratch STL, removed once read.
+// The contact tool's world and penalty.
 Status BuildContactTool(Truth* truth) {
-  static std::atomic<int> count{0};
-  const fs::path stl = fs::temp_directory_path() / ("femreg_organ_tool_" + std::to_string(getpid()) + "_" +
-                                                     std::to_string(count++) + ".stl");
-  Vertices vertices;
-  Triangles triangles;
-  ContactToolSurface(&vertices, &triangles);
-  Status status = WriteFileAtomically(stl.string(), datasets_internal::BinaryStl(vertices, triangles));
-  if (!status.ok()) return status;
   CollisionSpec spec;
   spec.stiffness = kContactStiffness;
   spec.distance = kContactDistance;
-  spec.obstacles.push_back(ContactToolObstacle(stl.string()));
+  spec.obstacles.push_back(ContactToolObstacle());
   truth->world = std::make_unique<CollisionWorld>();
-  status = truth->world->Init(spec, {"organ"}, {truth->mesh.surface}, truth->mesh.x);
-  std::error_code ec;
-  fs::remove(stl, ec);
+  const Status status = truth->world->Init(spec, {"organ"}, {truth->mesh.surface}, truth->mesh.x);
   if (!status.ok()) return status;
   truth->contact = std::make_unique<ContactPotential>(truth->world.get(), 0.5 * kContactDistance);
   truth->problem.potential = truth->contact.get();
@@ -330,6 +320,14 @@ std::string MadeBy(int divisions, int truth_divisions, OrganTool tool) {
 }
 
 }  // namespace
+
+const char* ToString(OrganTool tool) { return tool == OrganTool::kContact ? "contact" : "glued"; }
+
+bool FromString(const std::string& name, OrganTool* tool) {
+  if (name != "glued" && name != "contact") return false;
+  *tool = name == "contact" ? OrganTool::kContact : OrganTool::kGlued;
+  return true;
+}
 
 TetMesh OrganPatchMesh(int divisions) { return OrganMesh(divisions); }
 

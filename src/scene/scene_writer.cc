@@ -208,7 +208,12 @@ YAML::Node ObstacleNode(const ObstacleSpec& o, const std::string& base_dir) {
       break;
     }
     case ObstacleSpec::Kind::kMesh:
-      n["mesh"] = FilePath(o.mesh_path, base_dir);
+      if (o.surface) {  // no file to name (WriteScene refuses it): the text says what it was
+        n["mesh"] = "(in memory: " + std::to_string(o.surface->vertices.rows()) + " vertices, " +
+                    std::to_string(o.surface->triangles.rows()) + " triangles)";
+      } else {
+        n["mesh"] = FilePath(o.mesh_path, base_dir);
+      }
       break;
   }
   PutFields(n, o);  // scale, friction (femreg/collision_spec.h)
@@ -367,6 +372,14 @@ std::string SceneToYaml(const Scene& scene, const std::string& base_dir,
 }
 
 Status WriteScene(const Scene& scene, const std::string& path, const std::string& comment) {
+  // A scene file that LoadScene could not read back is refused rather than written.
+  for (const ObstacleSpec& o : scene.collision.obstacles) {
+    if (o.kind == ObstacleSpec::Kind::kMesh && o.surface) {
+      return Status::Error(path + ": collision.obstacles '" + o.name +
+                           "' has its surface in memory, and a scene names a file: write the surface "
+                           "to an OBJ or STL file and set its mesh_path instead");
+    }
+  }
   const fs::path parent = fs::path(path).parent_path();
   return WriteFileAtomically(path, SceneToYaml(scene, parent.empty() ? "." : parent.string(), comment));
 }

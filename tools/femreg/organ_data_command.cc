@@ -1,6 +1,8 @@
 // femreg organ-data: writes the bundled partial-view sequence organ_patch.
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cli_util.h"
 #include "commands.h"
@@ -44,13 +46,15 @@ void AddOrganDataCommand(CLI::App* app) {
                   "normal to the surface it touches). It changes the clouds, the ground truth and "
                   "forces.csv")
       ->capture_default_str()
-      ->check(CLI::IsMember({"glued", "contact"}));
+      ->check(CLI::IsMember(std::vector<std::string>{ToString(OrganTool::kGlued), ToString(OrganTool::kContact)}));
   cmd->callback([out, force, divisions, truth_divisions, tool] {
-    Status status = PrepareOutputDir(*out, *force);
+    OrganTool organ_tool = OrganTool::kGlued;
+    Status status = FromString(*tool, &organ_tool)
+                        ? PrepareOutputDir(*out, *force)
+                        : Status::Error("--tool " + *tool + ": use glued or contact");
     if (status.ok()) {
       ProgressBar bar("organ-data", 12);
-      status = GenerateOrganPatchSequence(*out, nullptr, *divisions, *truth_divisions,
-                                          *tool == "contact" ? OrganTool::kContact : OrganTool::kGlued);
+      status = GenerateOrganPatchSequence(*out, nullptr, *divisions, *truth_divisions, organ_tool);
       bar.Finish();
     }
     if (!status.ok()) {
