@@ -387,9 +387,10 @@ TEST(OrganPatchData, TruthIsLockingFreeAndItsForcesBalance) {
   EXPECT_EQ(material.model, MaterialModel::kNeoHookean);
   EXPECT_TRUE(material.nodal_volume);
   EXPECT_DOUBLE_EQ(material.material.poisson_ratio, 0.47);
-  // The deepest press (frame 7) on the tracked mesh's size, to keep the test short.
+  // The deepest press (frame 7) on the tracked mesh's size, by the glued tool (solved from
+  // rest, where the contact tool goes through the frames before), to keep the test short.
   OrganTruthFrame truth, locked;
-  Status status = SolveOrganPatchTruth(7, 4, material, &truth);
+  Status status = SolveOrganPatchTruth(7, 4, material, &truth, OrganTool::kGlued);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(truth.summary.termination, ForwardTermination::kConverged);
   EXPECT_EQ(truth.positions.rows(), 729);
@@ -402,7 +403,7 @@ TEST(OrganPatchData, TruthIsLockingFreeAndItsForcesBalance) {
   EXPECT_GT(truth.tool.torque.norm(), 1e-3 * force * 0.08);  // not a zero that balances trivially
 
   ObjectMaterial hooke(material.material);  // the corotational element, as before
-  status = SolveOrganPatchTruth(7, 4, hooke, &locked);
+  status = SolveOrganPatchTruth(7, 4, hooke, &locked, OrganTool::kGlued);
   ASSERT_TRUE(status.ok()) << status.message();
   std::printf("organ_patch truth, frame 7 on 729 vertices: tool force %.4f N (nodal volume), %.4f N "
               "(corotational); imbalance %.2e N\n",
@@ -432,7 +433,7 @@ TEST(OrganPatchData, ContactToolPushesAlongTheNormalAndBalances) {
   EXPECT_GT(contact.contacts, 0);
   EXPECT_LT(contact.max_penetration, 1e-4);  // the penalty's give, small against the tool's push
 
-  status = SolveOrganPatchTruth(7, 3, material, &glued);
+  status = SolveOrganPatchTruth(7, 3, material, &glued, OrganTool::kGlued);
   ASSERT_TRUE(status.ok()) << status.message();
   std::printf("organ_patch truth, frame 7 on 343 vertices: contact tool (%.4f, %.4f, %.4f) N, glued "
               "(%.4f, %.4f, %.4f) N\n",
@@ -440,10 +441,10 @@ TEST(OrganPatchData, ContactToolPushesAlongTheNormalAndBalances) {
   EXPECT_GT(glued.tool.force.head<2>().norm(), 0.5 * -glued.tool.force.z());
 }
 
-// The bundled organ_patch/forces.csv: a row per frame, the tool's force on the body pointing
-// down into it; while the tool only presses (frames 0-7) the body's mirror symmetry in y
-// leaves no y force and the force grows with the depth; the drag along +y (frames 8-11) adds
-// a +y force.
+// The bundled organ_patch/forces.csv (the contact tool): a row per frame, the tool's force on
+// the body pointing down into it, nearly along the top's normal; while the tool only presses
+// (frames 0-7) the body's mirror symmetry in y leaves next to no y force and the force grows
+// with the depth; the frictionless drag at that depth (frames 8-11) keeps its size.
 TEST(OrganPatchData, BundledToolForcePushesIntoTheBody) {
   std::vector<ForceFrame> forces;
   bool has_columns = false;
@@ -455,14 +456,16 @@ TEST(OrganPatchData, BundledToolForcePushesIntoTheBody) {
   for (int f = 0; f < 12; ++f) {
     SCOPED_TRACE("frame " + std::to_string(f));
     EXPECT_EQ(forces[f].frame, f);
-    EXPECT_LT(forces[f].force.z(), 0.0);
+    const Eigen::Vector3d& force = forces[f].force;
+    EXPECT_LT(force.z(), 0.0);
+    EXPECT_LT(force.head<2>().norm(), 0.35 * -force.z());
     if (f < 8) {
-      EXPECT_EQ(forces[f].force.y(), 0.0);
+      EXPECT_LT(std::abs(force.y()), 0.01 * force.norm());
       if (f > 0) {
-        EXPECT_GT(forces[f].force.norm(), forces[f - 1].force.norm());
+        EXPECT_GT(force.norm(), forces[f - 1].force.norm());
       }
     } else {
-      EXPECT_GT(forces[f].force.y(), forces[f - 1].force.y());
+      EXPECT_NEAR(force.norm(), forces[7].force.norm(), 0.05 * forces[7].force.norm());
     }
   }
 }

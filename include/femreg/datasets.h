@@ -98,14 +98,15 @@ Status WriteFractureSequenceDeck(const std::string& scenario, std::ostream& out)
 // 500-point patches on ~15% of its surface, no camera and no viewpoint. Writes
 // DIR/organ.vtu (the tracked mesh), DIR/scene.yaml, DIR/clouds/frame_NNNN.pcd,
 // DIR/ground_truth/frame_NNNN.csv (visible = in the patch), DIR/forces.csv (the tool's true
-// force per frame: the reaction at the vertices it moves, with its torque about the body's
-// centroid; femreg/ground_truth.h's ForceFrame) and DIR/README.md; deterministic.
+// force per frame on the body, with its torque about the body's centroid;
+// femreg/ground_truth.h's ForceFrame) and DIR/README.md; deterministic.
 // `divisions` (2 to truth_divisions - 1) divides the tracked mesh: (2 n + 1)^3 vertices,
 // 48 n^3 tetrahedra (the bundled sequence: 4, 729 / 3072; 7: 3375 / 16464). The clouds and
 // the ground truth's solve, and so forces.csv, do not depend on it. `truth_divisions` (up to
 // 16) divides the ground truth's mesh (the bundled sequence: 10, 9261 vertices); a finer one
 // shows how far that truth is from converged.
-// `tool` says how the tool holds the body (OrganTool below); the bundled sequence's is glued.
+// `tool` says how the tool holds the body (OrganTool below); the bundled sequence's pushes by
+// contact, a force a camera can see.
 enum class OrganTool {
   // The upper-surface vertices within the tool's radius of its axis follow it without slip;
   // its force is their reaction, with a part along the surface as large as the push.
@@ -122,7 +123,7 @@ bool FromString(const std::string& name, OrganTool* tool);
 Status GenerateOrganPatchSequence(const std::string& dir,
                                   void (*progress)(int done, int total) = nullptr,
                                   int divisions = 4, int truth_divisions = 10,
-                                  OrganTool tool = OrganTool::kGlued);
+                                  OrganTool tool = OrganTool::kContact);
 // The organ_patch body's tracked mesh at `divisions` (above).
 TetMesh OrganPatchMesh(int divisions);
 // The ground truth's material: E 5 kPa, nu 0.47 (the tracking scene says 0.45), density
@@ -147,7 +148,7 @@ struct OrganTruthFrame {
 // divisions 10) and `tool`, from rest (the contact tool: through the frames before it), on
 // one thread.
 Status SolveOrganPatchTruth(int frame, int divisions, const ObjectMaterial& material,
-                            OrganTruthFrame* out, OrganTool tool = OrganTool::kGlued);
+                            OrganTruthFrame* out, OrganTool tool = OrganTool::kContact);
 
 // ---------------------------------------------------------------------------------------
 // femreg hand-press-data: the bundled hand_press sequence.

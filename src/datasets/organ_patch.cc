@@ -311,12 +311,12 @@ Status SolveTruthFrame(int f, Truth* truth, OrganTruthFrame* out) {
 
 // The README's line on the command that made the sequence.
 std::string MadeBy(int divisions, int truth_divisions, OrganTool tool) {
-  if (divisions == 4 && truth_divisions == kTruthDivisions && tool == OrganTool::kGlued) {
+  if (divisions == 4 && truth_divisions == kTruthDivisions && tool == OrganTool::kContact) {
     return "Made by `femreg organ-data --out datasets/organ_patch` (tools/make_datasets.sh); ";
   }
   return "Made by `femreg organ-data --divisions " + std::to_string(divisions) +
          (truth_divisions == kTruthDivisions ? std::string() : " --truth-divisions " + std::to_string(truth_divisions)) +
-         (tool == OrganTool::kContact ? " --tool contact" : "") + "`; ";
+         (tool == OrganTool::kGlued ? " --tool glued" : "") + "`; ";
 }
 
 }  // namespace

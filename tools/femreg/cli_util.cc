@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <sstream>
 
 #include "femreg/experiment.h"
@@ -96,6 +97,23 @@ void ProgressBar::Update(int done, const std::string& note) {
 void ProgressBar::Finish() {
   if (enabled_ && tty_) std::fprintf(stderr, "\n");
 }
+
+namespace {
+std::unique_ptr<ProgressBar> generator_bar;
+}  // namespace
+
+void StartGeneratorProgress(const std::string& label) {
+  generator_bar = std::make_unique<ProgressBar>(label, 1);  // the generator gives the total
+}
+
+void GeneratorProgress(int done, int total) {
+  if (generator_bar == nullptr) return;
+  generator_bar->set_total(total);
+  generator_bar->Update(done);
+  if (done == total) generator_bar->Finish();
+}
+
+void StopGeneratorProgress() { generator_bar.reset(); }
 
 void AddSetOption(CLI::App* cmd, std::vector<std::string>* sets) {
   cmd->add_option("--set", *sets,

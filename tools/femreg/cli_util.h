@@ -44,6 +44,13 @@ class ProgressBar {
   std::chrono::steady_clock::time_point start_;
 };
 
+// The bar of a dataset generator that reports (done, total) through a plain function pointer:
+// StartGeneratorProgress before the generator runs (so that the rate counts the first frame's
+// time), GeneratorProgress as its callback, StopGeneratorProgress after it, also on failure.
+void StartGeneratorProgress(const std::string& label);
+void GeneratorProgress(int done, int total);
+void StopGeneratorProgress();
+
 // Per frame of a tracked fracture sequence: node splits, connected pieces and the error of
 // each piece against the ground truth (empty without one).
 struct FractureFrame {

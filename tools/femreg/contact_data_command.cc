@@ -9,17 +9,6 @@
 
 namespace femreg {
 namespace cli {
-namespace {
-// Started before the generator runs, so that its rate counts the first frame's time.
-std::unique_ptr<ProgressBar> bar;
-void Progress(int done, int total) {
-  if (bar == nullptr) bar = std::make_unique<ProgressBar>("contact-data", total);
-  bar->set_total(total);
-  bar->Update(done);
-  if (done == total) bar->Finish();
-}
-}  // namespace
-
 void AddContactDataCommand(CLI::App* app) {
   auto out = std::make_shared<std::string>();
   auto scenario = std::make_shared<std::string>();
@@ -40,10 +29,10 @@ void AddContactDataCommand(CLI::App* app) {
   cmd->add_flag("--force", *force, "Write into a non-empty folder");
   cmd->callback([out, scenario, force] {
     Status status = PrepareOutputDir(*out, *force);
-    bar.reset();
     if (status.ok()) {
-      bar = std::make_unique<ProgressBar>("contact-data", 1);  // the generator gives the total
-      status = GenerateContactSequence(*scenario, *out, &Progress);
+      StartGeneratorProgress("contact-data");
+      status = GenerateContactSequence(*scenario, *out, &GeneratorProgress);
+      StopGeneratorProgress();
     }
     if (!status.ok()) {
       std::cerr << "femreg contact-data: " << status.message() << "\n";

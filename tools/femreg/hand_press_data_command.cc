@@ -9,16 +9,6 @@
 
 namespace femreg {
 namespace cli {
-namespace {
-std::unique_ptr<ProgressBar> bar;
-void Progress(int done, int total) {
-  if (bar == nullptr) bar = std::make_unique<ProgressBar>("hand-press-data", total);
-  bar->set_total(total);
-  bar->Update(done);
-  if (done == total) bar->Finish();
-}
-}  // namespace
-
 void AddHandPressDataCommand(CLI::App* app) {
   auto out = std::make_shared<std::string>();
   auto force = std::make_shared<bool>(false);
@@ -38,11 +28,11 @@ void AddHandPressDataCommand(CLI::App* app) {
       ->check(CLI::Range(1, 30));
   cmd->callback([out, force, frames] {
     Status status = PrepareOutputDir(*out, *force);
-    bar.reset();
     HandPressReport report;
     if (status.ok()) {
-      bar = std::make_unique<ProgressBar>("hand-press-data", 1);  // the generator gives the total
-      status = GenerateHandPressSequence(*out, *frames, &report, &Progress);
+      StartGeneratorProgress("hand-press-data");
+      status = GenerateHandPressSequence(*out, *frames, &report, &GeneratorProgress);
+      StopGeneratorProgress();
     }
     if (!status.ok()) {
       std::cerr << "femreg hand-press-data: " << status.message() << "\n";

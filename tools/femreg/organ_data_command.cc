@@ -16,7 +16,7 @@ void AddOrganDataCommand(CLI::App* app) {
   auto force = std::make_shared<bool>(false);
   auto divisions = std::make_shared<int>(4);
   auto truth_divisions = std::make_shared<int>(10);
-  auto tool = std::make_shared<std::string>("glued");
+  auto tool = std::make_shared<std::string>(ToString(OrganTool::kContact));
   CLI::App* cmd = app->add_subcommand(
       "organ-data",
       "Write the organ_patch sequence: an organ-like body clamped at one end and pushed by a "
@@ -40,22 +40,22 @@ void AddOrganDataCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::Range(3, 16));
   cmd->add_option("--tool", *tool,
-                  "How the tool holds the body: glued (the bundled sequence: the upper-surface vertices "
-                  "within its radius follow it without slip) or contact (a rigid, frictionless "
-                  "flat-ended cylinder of the same radius pressing by the contact penalty; its force is "
-                  "normal to the surface it touches). It changes the clouds, the ground truth and "
-                  "forces.csv")
+                  "How the tool holds the body: contact (the bundled sequence: a rigid, frictionless "
+                  "flat-ended cylinder pressing by the contact penalty; its force is normal to the "
+                  "surface it touches, one a camera can see) or glued (the upper-surface vertices "
+                  "within its radius follow it without slip, with a force along the surface that no "
+                  "view shows). It changes the clouds, the ground truth and forces.csv")
       ->capture_default_str()
       ->check(CLI::IsMember(std::vector<std::string>{ToString(OrganTool::kGlued), ToString(OrganTool::kContact)}));
   cmd->callback([out, force, divisions, truth_divisions, tool] {
-    OrganTool organ_tool = OrganTool::kGlued;
+    OrganTool organ_tool = OrganTool::kContact;
     Status status = FromString(*tool, &organ_tool)
                         ? PrepareOutputDir(*out, *force)
                         : Status::Error("--tool " + *tool + ": use glued or contact");
     if (status.ok()) {
-      ProgressBar bar("organ-data", 12);
-      status = GenerateOrganPatchSequence(*out, nullptr, *divisions, *truth_divisions, organ_tool);
-      bar.Finish();
+      StartGeneratorProgress("organ-data");
+      status = GenerateOrganPatchSequence(*out, &GeneratorProgress, *divisions, *truth_divisions, organ_tool);
+      StopGeneratorProgress();
     }
     if (!status.ok()) {
       std::cerr << "femreg organ-data: " << status.message() << "\n";
