@@ -122,12 +122,21 @@ Matrix12 NeoHookeanTangent(const ElementRest& rest, double kappa, double pressur
   const Eigen::Matrix<double, 3, 4> b = ShapeGradients(rest);
   const Matrix9 H =
       NeoHookeanDensityHessian(ElementF(rest, x), rest.mu, kappa, pressure, projection, info);
-  // B (9 by 12): vec F (3 c + a) depends on x_k (3 k + a) with weight b_k(c).
-  Eigen::Matrix<double, 9, 12> B = Eigen::Matrix<double, 9, 12>::Zero();
-  for (int k = 0; k < 4; ++k)
-    for (int c = 0; c < 3; ++c)
-      for (int a = 0; a < 3; ++a) B(3 * c + a, 3 * k + a) = b(c, k);
-  Matrix12 K = rest.volume * B.transpose() * H * B;
+  // K = V B^T H B, where B (9 by 12) has vec F (3 c + a) depend on x_k (3 k + a) with weight
+  // b_k(c): three terms per entry of H B and of B^T (H B), where a dense product's packing
+  // costs more than its flops at this size.
+  Eigen::Matrix<double, 9, 12> HB;
+  for (int k = 0; k < 4; ++k) {
+    for (int a = 0; a < 3; ++a) {
+      HB.col(3 * k + a) = b(0, k) * H.col(a) + b(1, k) * H.col(3 + a) + b(2, k) * H.col(6 + a);
+    }
+  }
+  Matrix12 K;
+  for (int k = 0; k < 4; ++k) {
+    for (int a = 0; a < 3; ++a) {
+      K.row(3 * k + a) = rest.volume * (b(0, k) * HB.row(a) + b(1, k) * HB.row(3 + a) + b(2, k) * HB.row(6 + a));
+    }
+  }
   return 0.5 * (K + K.transpose());
 }
 
