@@ -20,7 +20,7 @@ namespace {
 
 // The own factorization's team: one thread per this many flops (CHOLMOD's count). Below it the
 // team's start and the barriers of its tiled top cost more than the second thread saves
-// (docs/notes/2026-11-30-factorization-team.md).
+// (docs/notes/2026-11-30-factorization-team.md, 2026-11-30-team-threshold.md).
 constexpr double kFactorizationFlopsPerThread = 1e8;
 
 // CHOLMOD's supernodal factorization is faster than its simplicial one on these systems at
