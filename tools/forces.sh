@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Registers the bundled sequences that carry the true external force (forces.csv: organ_patch,
+# hand_press, tool_table) with the classic energy and with the forces estimated (the physical
+# mode, registration.forces.estimate), one thread each, and writes the table of vertex errors
+# (seen / hidden), resultant-force errors and time per frame to docs/accuracy/forces.md.
+# About five minutes on one core; run it on a quiet machine for the times.
+#   tools/forces.sh [BUILD_DIR]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FEMREG=${1:-build}/femreg
+OUT=out/forces  # the runs (ignored by git); the table goes to docs/accuracy/forces.md
+rm -rf "$OUT"
+mkdir -p "$OUT"
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1} OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
+for name in organ_patch hand_press tool_table; do
+  for mode in classic physical; do
+    flag=()
+    [[ $mode == physical ]] && flag=(--set registration.forces.estimate=true)
+    run="$OUT/${name}_$mode"
+    "$FEMREG" register --scene "datasets/$name/scene.yaml" --frames "datasets/$name/clouds" \
+      --ground-truth "datasets/$name/ground_truth" --out "$run" --threads 1 \
+      --no-progress --report none "${flag[@]}" > "$run.txt"
+    "$FEMREG" eval "$run" "datasets/$name" > "$run.eval.txt"
+  done
+done
+"${FEMREG_PYTHON:-python3}" tools/forces_table.py "$OUT" > docs/accuracy/forces.md
+cat docs/accuracy/forces.md
