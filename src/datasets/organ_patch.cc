@@ -324,9 +324,13 @@ std::string MadeBy(int divisions, int truth_divisions, OrganTool tool) {
 const char* ToString(OrganTool tool) { return tool == OrganTool::kContact ? "contact" : "glued"; }
 
 bool FromString(const std::string& name, OrganTool* tool) {
-  if (name != "glued" && name != "contact") return false;
-  *tool = name == "contact" ? OrganTool::kContact : OrganTool::kGlued;
-  return true;
+  for (OrganTool t : {OrganTool::kGlued, OrganTool::kContact}) {
+    if (name == ToString(t)) {
+      *tool = t;
+      return true;
+    }
+  }
+  return false;
 }
 
 TetMesh OrganPatchMesh(int divisions) { return OrganMesh(divisions); }
