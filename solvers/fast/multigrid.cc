@@ -13,6 +13,7 @@
 #include <xmmintrin.h>
 #endif
 
+#include "parallel/pool.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/multigrid_internal.h"
 
@@ -96,13 +97,15 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorX
     for (int j = 0; j < 3; ++j) yy[3 * b + j] = sums[j];
   };
   if (threads > 1 && blocks >= parallel_from) {
-#pragma omp parallel num_threads(threads)
-    {
-#pragma omp for schedule(static)
-      for (int b = 0; b < blocks; ++b) convert(b);
-#pragma omp for schedule(static)
-      for (int b = 0; b < blocks; ++b) column(b, b + 1 < blocks);
-    }
+    // Pieces, not halves: a mesh generator numbers the interior vertices (with more neighbours)
+    // last, and a static half each left one thread 1.6 times the entries of the other.
+    const int64_t grain = (blocks + 15) / 16;
+    ParallelRanges(threads, blocks, grain, [&](int64_t begin, int64_t end) {
+      for (int64_t b = begin; b < end; ++b) convert(static_cast<int>(b));
+    });
+    ParallelRanges(threads, blocks, grain, [&](int64_t begin, int64_t end) {
+      for (int64_t b = begin; b < end; ++b) column(static_cast<int>(b), b + 1 < blocks);
+    });
   } else {
     for (int b = 0; b < blocks; ++b) convert(b);
     for (int b = 0; b < blocks; ++b) column(b, b + 1 < blocks);
@@ -160,8 +163,9 @@ void Multigrid::BlockJacobi(const Level& L, const Eigen::VectorXd& r, Eigen::Vec
     }
   };
   if (threads_ > 1 && r.size() >= kParallelUnknowns) {
-#pragma omp parallel for schedule(static) num_threads(threads_)
-    for (int k = 0; k < nodes; ++k) node(k);
+    ParallelRanges(threads_, nodes, (nodes + 15) / 16, [&](int64_t begin, int64_t end) {
+      for (int64_t k = begin; k < end; ++k) node(static_cast<int>(k));
+    });
   } else {
     for (int k = 0; k < nodes; ++k) node(k);
   }
@@ -227,10 +231,11 @@ bool Multigrid::InvertDiagonalBlocks(int l, const SparseMatrix& A, std::vector<d
   };
   std::atomic<bool> positive(true);
   if (threads_ > 1 && total >= static_cast<size_t>(3 * kParallelUnknowns)) {
-#pragma omp parallel for schedule(static) num_threads(threads_)
-    for (int k = 0; k < nodes; ++k) {
-      if (!node(k)) positive = false;
-    }
+    ParallelRanges(threads_, nodes, (nodes + 15) / 16, [&](int64_t begin, int64_t end) {
+      for (int64_t k = begin; k < end; ++k) {
+        if (!node(static_cast<int>(k))) positive = false;
+      }
+    });
   } else {
     for (int k = 0; k < nodes && positive; ++k) {
       if (!node(k)) positive = false;

@@ -13,6 +13,7 @@
 #include <xmmintrin.h>
 #endif
 
+#include "parallel/pool.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/multigrid.h"
 #include "solvers/fast/multigrid_internal.h"
@@ -221,13 +222,12 @@ void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eige
     }
   };
   if (threads > 1 && (cols >= kParallelUnknowns || static_cast<int64_t>(values.size()) >= kParallelNonzeros)) {
-#pragma omp parallel num_threads(threads)
-    {
-#pragma omp for schedule(static)
-      for (int i = 0; i < n; ++i) xf[i] = static_cast<float>(xx[i]);
-#pragma omp for schedule(static)
-      for (int c = 0; c < nodes; ++c) node(c);
-    }
+    ParallelRanges(threads, n, (n + 15) / 16, [&](int64_t begin, int64_t end) {
+      for (int64_t i = begin; i < end; ++i) xf[i] = static_cast<float>(xx[i]);
+    });
+    ParallelRanges(threads, nodes, (nodes + 15) / 16, [&](int64_t begin, int64_t end) {
+      for (int64_t c = begin; c < end; ++c) node(static_cast<int>(c));
+    });
   } else {
     for (int i = 0; i < n; ++i) xf[i] = static_cast<float>(xx[i]);
     for (int c = 0; c < nodes; ++c) node(c);
@@ -265,17 +265,15 @@ inline void AddProduct(const double* X, int m, int k, const double* Y, int n, do
   }
 }
 
-// Runs row(r, scratch) for r in [0, rows) on `threads` threads (static schedule), each
-// thread with its own scratch of `width` ints set to -1.
+// Runs row(r, scratch) for r in [0, rows) on `threads` threads, in 16 pieces, each piece with
+// its own scratch of `width` ints set to -1.
 template <class Row>
 void ForRows(int rows, int width, int threads, const Row& row) {
   if (threads > 1 && rows >= 64) {
-#pragma omp parallel num_threads(threads)
-    {
+    ParallelRanges(threads, rows, (rows + 15) / 16, [&](int64_t begin, int64_t end) {
       std::vector<int> scratch(static_cast<size_t>(width), -1);
-#pragma omp for schedule(static)
-      for (int r = 0; r < rows; ++r) row(r, &scratch);
-    }
+      for (int64_t r = begin; r < end; ++r) row(static_cast<int>(r), &scratch);
+    });
   } else {
     std::vector<int> scratch(static_cast<size_t>(width), -1);
     for (int r = 0; r < rows; ++r) row(r, &scratch);
