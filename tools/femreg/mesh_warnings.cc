@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <iostream>
-#include <map>
 #include <utility>
 
 #include "femreg/io.h"
@@ -13,30 +12,43 @@ namespace femreg {
 namespace cli {
 
 std::vector<int> FoldedElements(const TetMesh& mesh) {
-  // Face (sorted vertices) -> the first element met with it and that element's fourth vertex.
-  std::map<std::array<int, 3>, std::pair<int, int>> faces;
-  std::vector<char> folded(static_cast<size_t>(mesh.num_tets()), 0);
+  // Every element's faces (sorted vertices), its fourth vertex and the element, sorted by face
+  // and then element: each later element with a face is compared with the first one met.
+  // A sort, not a map: a map took a scan's 128k elements 0.2 s at every command's start.
+  struct Face {
+    std::array<int, 3> key;
+    int element;
+    int apex;
+  };
+  std::vector<Face> faces;
+  faces.reserve(4 * static_cast<size_t>(mesh.num_tets()));
   static const int kFace[4][4] = {{1, 2, 3, 0}, {0, 2, 3, 1}, {0, 1, 3, 2}, {0, 1, 2, 3}};
   for (int t = 0; t < mesh.num_tets(); ++t) {
     for (const auto& f : kFace) {
       std::array<int, 3> key = {mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2])};
       std::sort(key.begin(), key.end());
-      const int apex = mesh.tets(t, f[3]);
-      const auto it = faces.find(key);
-      if (it == faces.end()) {
-        faces.emplace(key, std::make_pair(t, apex));
-        continue;
-      }
+      faces.push_back({key, t, mesh.tets(t, f[3])});
+    }
+  }
+  std::sort(faces.begin(), faces.end(), [](const Face& a, const Face& b) {
+    return a.key != b.key ? a.key < b.key : a.element < b.element;
+  });
+  std::vector<char> folded(static_cast<size_t>(mesh.num_tets()), 0);
+  for (size_t first = 0; first < faces.size();) {
+    size_t next = first + 1;
+    for (; next < faces.size() && faces[next].key == faces[first].key; ++next) {
+      const std::array<int, 3>& key = faces[first].key;
       const Eigen::Vector3d a = mesh.rest.row(key[0]), b = mesh.rest.row(key[1]),
                             c = mesh.rest.row(key[2]);
       const Eigen::Vector3d n = (b - a).cross(c - a);
-      const double s1 = n.dot(Eigen::Vector3d(mesh.rest.row(it->second.second)) - a);
-      const double s2 = n.dot(Eigen::Vector3d(mesh.rest.row(apex)) - a);
+      const double s1 = n.dot(Eigen::Vector3d(mesh.rest.row(faces[first].apex)) - a);
+      const double s2 = n.dot(Eigen::Vector3d(mesh.rest.row(faces[next].apex)) - a);
       if (s1 * s2 > 0) {  // both apexes on the same side: the elements overlap
-        folded[static_cast<size_t>(t)] = 1;
-        folded[static_cast<size_t>(it->second.first)] = 1;
+        folded[static_cast<size_t>(faces[next].element)] = 1;
+        folded[static_cast<size_t>(faces[first].element)] = 1;
       }
     }
+    first = next;
   }
   std::vector<int> out;
   for (int t = 0; t < mesh.num_tets(); ++t) {
