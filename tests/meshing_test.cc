@@ -108,6 +108,20 @@ TEST(MeshingTest, CubeFromObjIsFilledWithPositiveTetsOfTheTargetSize) {
   EXPECT_EQ(report.vertices, mesh.num_vertices());
   EXPECT_EQ(report.tets, mesh.num_tets());
 
+  // The elements come along a curve through space, not in TetGen's order: consecutive ones are
+  // neighbours (median centroid distance half an edge on a scan; TetGen's order gave 24 edges).
+  std::vector<double> step;
+  for (int t = 1; t < mesh.num_tets(); ++t) {
+    Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) {
+      a += 0.25 * mesh.rest.row(mesh.tets(t - 1, k)).transpose();
+      b += 0.25 * mesh.rest.row(mesh.tets(t, k)).transpose();
+    }
+    step.push_back((b - a).norm());
+  }
+  std::nth_element(step.begin(), step.begin() + static_cast<std::ptrdiff_t>(step.size() / 2), step.end());
+  EXPECT_LT(step[step.size() / 2], mean_edge);
+
   // A finer target makes more tets.
   options.edge_length = 0.05;
   TetMesh finer;

@@ -5,6 +5,7 @@
 #include <type_traits>
 
 #include "energy/nodal_volume.h"
+#include "geometry/morton.h"
 #include "parallel/pool.h"
 #include "parallel/threads.h"
 
@@ -33,39 +34,9 @@ void Assembler::ResetPattern(const Problem& problem, const Vertices& x) {
   BuildPattern();
 }
 
-namespace {
-// The bits of v (21 of them) spread to every third bit: one coordinate of a Morton code.
-uint64_t SpreadBits(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
-  return v;
-}
-}  // namespace
-
 void Assembler::OrderVertices(const Vertices& x) {
   const int n = num_vertices_;
-  std::vector<uint64_t> code(static_cast<size_t>(n), 0);
-  if (n > 0 && x.allFinite()) {
-    const Eigen::RowVector3d lo = x.colwise().minCoeff();
-    const Eigen::RowVector3d extent = (x.colwise().maxCoeff() - lo).cwiseMax(1e-300);
-    for (int v = 0; v < n; ++v) {
-      uint64_t c = 0;
-      for (int d = 0; d < 3; ++d) {
-        const double t = std::clamp((x(v, d) - lo[d]) / extent[d], 0.0, 1.0);
-        c |= SpreadBits(static_cast<uint64_t>(t * ((1 << 21) - 1))) << d;
-      }
-      code[static_cast<size_t>(v)] = c;
-    }
-  }
-  std::vector<int> along(static_cast<size_t>(n));
-  for (int v = 0; v < n; ++v) along[static_cast<size_t>(v)] = v;
-  // Ties (and non-finite positions: all codes 0) keep the vertex numbering.
-  std::stable_sort(along.begin(), along.end(),
-                   [&](int a, int b) { return code[static_cast<size_t>(a)] < code[static_cast<size_t>(b)]; });
+  const std::vector<int> along = MortonOrder(x.topRows(n));
   owner_threads_ = threads_;
   vertex_owner_.assign(static_cast<size_t>(n), 0);
   for (int k = 0; k < n; ++k) {

@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "femreg/meshing.h"
+#include "geometry/morton.h"
 #include "meshing/mesh_measures.h"
 #include "meshing/remesh_surface.h"
 #include "meshing/surface_check.h"
@@ -524,6 +525,25 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
       }
       result.region(t) = static_cast<int>(id);
     }
+  }
+  // The elements along a curve through their centroids: TetGen's come in no spatial order, and
+  // every loop over them (assembly, rotations, energies) then reads the vertices and writes
+  // the matrix at scattered places (docs/notes/2026-11-30-element-order.md).
+  {
+    Vertices centroids(nt, 3);
+    for (int t = 0; t < nt; ++t) {
+      centroids.row(t) = 0.25 * (result.rest.row(result.tets(t, 0)) + result.rest.row(result.tets(t, 1)) +
+                                 result.rest.row(result.tets(t, 2)) + result.rest.row(result.tets(t, 3)));
+    }
+    const std::vector<int> along = MortonOrder(centroids);
+    Tets tets(nt, 4);
+    Eigen::VectorXi region(nt);
+    for (int t = 0; t < nt; ++t) {
+      tets.row(t) = result.tets.row(along[static_cast<size_t>(t)]);
+      region(t) = result.region(along[static_cast<size_t>(t)]);
+    }
+    result.tets = tets;
+    result.region = region;
   }
   status = FinalizeMesh(&result, source + " (TetGen's mesh)");
   if (!status.ok()) return status;
