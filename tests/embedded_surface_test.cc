@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include <string>
 #include <memory>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "bending_beam.h"
@@ -105,8 +107,28 @@ TEST(EmbeddedSurfaceTest, DataSurfaceFollowsAnAffineMotionExactly) {
   const Eigen::Vector3d t(0.01, -0.02, 0.005);
   const Vertices x = ((cage.rest * A.transpose()).rowwise() + t.transpose()).eval();
   const TrackerState& view = data.Update(x);
+  // The view holds the surface in its own order (source(): the given vertex of each row), with
+  // the given triangles renumbered.
+  ASSERT_EQ(data.source().size(), static_cast<size_t>(rest.rows()));
+  std::vector<int> row_of(static_cast<size_t>(rest.rows()), -1);
+  for (size_t i = 0; i < data.source().size(); ++i) row_of[static_cast<size_t>(data.source()[i])] = static_cast<int>(i);
+  EXPECT_EQ(std::count(row_of.begin(), row_of.end(), -1), 0);  // a permutation
+  std::set<std::array<int, 3>> given, viewed;
+  auto rotated = [](int a, int b, int c) {  // a triangle from its smallest corner, orientation kept
+    if (a < b && a < c) return std::array<int, 3>{{a, b, c}};
+    if (b < c) return std::array<int, 3>{{b, c, a}};
+    return std::array<int, 3>{{c, a, b}};
+  };
+  for (Eigen::Index f = 0; f < triangles.rows(); ++f) given.insert(rotated(triangles(f, 0), triangles(f, 1), triangles(f, 2)));
+  for (Eigen::Index f = 0; f < view.surface.rows(); ++f) {
+    viewed.insert(rotated(data.source()[static_cast<size_t>(view.surface(f, 0))], data.source()[static_cast<size_t>(view.surface(f, 1))],
+                          data.source()[static_cast<size_t>(view.surface(f, 2))]));
+  }
+  EXPECT_EQ(viewed, given);
   const Vertices expected = ((rest * A.transpose()).rowwise() + t.transpose()).eval();
-  EXPECT_LT((view.x - expected).cwiseAbs().maxCoeff(), 1e-13);
+  for (Eigen::Index i = 0; i < view.x.rows(); ++i) {
+    EXPECT_LT((view.x.row(i) - expected.row(data.source()[static_cast<size_t>(i)])).cwiseAbs().maxCoeff(), 1e-13);
+  }
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int k = 0; k < 200; ++k) {
@@ -115,7 +137,7 @@ TEST(EmbeddedSurfaceTest, DataSurfaceFollowsAnAffineMotionExactly) {
     b /= b.sum();
     DataPair pair;
     pair.num_vertices = 3;
-    for (int j = 0; j < 3; ++j) pair.vertices[j] = triangles(f, j);
+    for (int j = 0; j < 3; ++j) pair.vertices[j] = row_of[static_cast<size_t>(triangles(f, j))];
     pair.barycentric = b;
     const DataSurface::Stencil st = data.Map(pair);
     ASSERT_EQ(st.n, 4);

@@ -119,25 +119,28 @@ TEST(FineScanTest, TheDataSurfaceFollowsEveryChangeOfTheCageAndOnlyThose) {
   DataSurface data;
   data.Build(state, {&surface});
   const Vertices bent = BentBox(cage);
+  // Row i of the view is the given surface's vertex source()[i].
   auto expected = [&](const Vertices& x) {
     Vertices out(rest.rows(), 3);
-    for (Eigen::Index v = 0; v < rest.rows(); ++v) {
-      const int e = surface.embedding.element[static_cast<size_t>(v)];
-      const Eigen::Vector4d& b = surface.embedding.barycentric[static_cast<size_t>(v)];
-      out.row(v).setZero();
-      for (int k = 0; k < 4; ++k) out.row(v) += b[k] * x.row(cage.tets(e, k));
+    for (Eigen::Index i = 0; i < rest.rows(); ++i) {
+      const auto v = static_cast<size_t>(data.source()[static_cast<size_t>(i)]);
+      const int e = surface.embedding.element[v];
+      const Eigen::Vector4d& b = surface.embedding.barycentric[v];
+      out.row(i).setZero();
+      for (int k = 0; k < 4; ++k) out.row(i) += b[k] * x.row(cage.tets(e, k));
     }
     return out;
   };
   Vertices x = cage.rest;
-  EXPECT_LT((data.Update(x).x - rest).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT((data.Update(x).x - expected(cage.rest)).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT((data.Update(x).x - data.rest()).cwiseAbs().maxCoeff(), 1e-15);
   x = bent;
   EXPECT_LT((data.Update(x).x - expected(bent)).cwiseAbs().maxCoeff(), 1e-15);
   // In place, as the tracker moves state.x: one vertex changed is seen.
   x(5, 1) += 0.01;
   EXPECT_LT((data.Update(x).x - expected(x)).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_LT((data.Update(x).x - expected(x)).cwiseAbs().maxCoeff(), 1e-15);
-  EXPECT_LT((data.Update(cage.rest).x - rest).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT((data.Update(cage.rest).x - data.rest()).cwiseAbs().maxCoeff(), 1e-15);
 }
 
 TEST(FineScanTest, TheCoverageOverTheRingsIsTheWholeSurfaces) {
@@ -158,17 +161,30 @@ TEST(FineScanTest, TheCoverageOverTheRingsIsTheWholeSurfaces) {
   EXPECT_GT(whole.coverage, 0.1);
   EXPECT_LT(whole.coverage, 0.9);
   EXPECT_EQ(ringed.coverage, whole.coverage);
-  // An embedded surface's subsample.
+  // An embedded surface's subsample, covered where a cloud point lies within the tolerance:
+  // about half of its vertices get one (0.2-0.9 mm off; the vertices are 17 mm apart).
   DataSurface data;
   data.Build(state, {&surface});
   const TrackerState& view = data.Update(state.x);
-  for (Eigen::Index v = 0; v < data.residuals.size(); ++v) data.residuals(v) = u(rng);
+  std::bernoulli_distribution half(0.5);
+  std::vector<Eigen::RowVector3d> near;
+  for (Eigen::Index v = 0; v < view.x.rows(); ++v) {
+    if (half(rng)) near.push_back(view.x.row(v) + Eigen::RowVector3d(u(rng), u(rng), u(rng)).cwiseMin(4e-4) + Eigen::RowVector3d::Constant(1e-4));
+  }
+  Vertices cloud(static_cast<Eigen::Index>(near.size()), 3);
+  for (size_t i = 0; i < near.size(); ++i) cloud.row(static_cast<Eigen::Index>(i)) = near[i];
+  fc.index = std::make_unique<PointIndex>(cloud);
   const SurfaceRings view_rings(static_cast<int>(view.x.rows()), view.surface);
   const FrameConfidence embedded = MeasureConfidence(state, fc, {}, 1e-3, &data);
   const FrameConfidence embedded_ringed = MeasureConfidence(state, fc, {}, 1e-3, &data, &view_rings);
   EXPECT_GT(embedded.coverage, 0.1);
   EXPECT_LT(embedded.coverage, 0.9);
   EXPECT_EQ(embedded_ringed.coverage, embedded.coverage);
+  // Every vertex within the tolerance of a point, and none.
+  fc.index = std::make_unique<PointIndex>(view.x);
+  EXPECT_EQ(MeasureConfidence(state, fc, {}, 1e-3, &data).coverage, 1.0);
+  fc.index = std::make_unique<PointIndex>(Vertices(view.x.array() + 2e-3));
+  EXPECT_EQ(MeasureConfidence(state, fc, {}, 1e-3, &data).coverage, 0.0);
 }
 
 // A sphere of radius r, `rings` x 2 rings of latitude: #F by 3 outward triangles.

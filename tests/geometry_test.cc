@@ -231,6 +231,26 @@ TEST(PointIndex, EmptyIndexFindsNothing) {
   PointIndex index(Vertices(0, 3));
   double d2 = 0;
   EXPECT_EQ(index.Nearest(Eigen::Vector3d::Zero(), &d2), -1);
+  EXPECT_FALSE(index.AnyWithin(Eigen::Vector3d::Zero(), 1.0));
+}
+
+TEST(PointIndex, AnyWithinIsTheNearestDistanceAgainstTheBound) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Vertices pts(500, 3);
+  for (int i = 0; i < pts.rows(); ++i) pts.row(i) << u(rng), u(rng), u(rng);
+  const PointIndex index(pts);
+  for (int q = 0; q < 300; ++q) {
+    const Eigen::Vector3d p(2 * u(rng), 2 * u(rng), 2 * u(rng));  // some far outside the points
+    double d2 = 0;
+    index.Nearest(p, &d2);
+    const double d = std::sqrt(d2);
+    EXPECT_TRUE(index.AnyWithin(p, d * (1 + 1e-12)));
+    EXPECT_FALSE(index.AnyWithin(p, d * (1 - 1e-9)));
+  }
+  // A point exactly at the bound counts (d <= bound, as the confidence's tolerance reads).
+  EXPECT_TRUE(index.AnyWithin(Eigen::Vector3d(pts.row(7)) + Eigen::Vector3d(0.25, 0, 0), 0.25));
+  EXPECT_FALSE(index.AnyWithin(Eigen::Vector3d::Zero(), -1.0));
 }
 
 TEST(TriangleClosestPoint, MatchesDenseSampling) {

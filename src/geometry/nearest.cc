@@ -3,6 +3,7 @@
 #include <nanoflann.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -50,6 +51,19 @@ int PointIndex::Nearest(const Eigen::Vector3d& query, double* squared_distance) 
   tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (squared_distance) *squared_distance = d2;
   return static_cast<int>(index);
+}
+
+bool PointIndex::AnyWithin(const Eigen::Vector3d& query, double max_distance) const {
+  if (!tree_ || !(max_distance >= 0.0)) return false;
+  uint32_t index = 0;
+  double d2 = 0.0;
+  nanoflann::KNNResultSet<double, uint32_t> result(1);
+  result.init(&index, &d2);
+  // The result set's worst distance bounds the search: only points nearer are visited. Its
+  // test is strict, so the bound is the next double above max_distance^2.
+  d2 = std::nextafter(max_distance * max_distance, std::numeric_limits<double>::infinity());
+  tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  return result.size() > 0;
 }
 
 int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,

@@ -26,6 +26,9 @@ class PointIndex {
   const Vertices& points() const { return points_; }
   // Index of the nearest point and its squared distance; -1 when empty.
   int Nearest(const Eigen::Vector3d& query, double* squared_distance) const;
+  // Whether a point lies within `max_distance` of query (a search that stops there: cheap for
+  // a query far from every point).
+  bool AnyWithin(const Eigen::Vector3d& query, double max_distance) const;
   // Up to k nearest, closest first.
   int KNearest(const Eigen::Vector3d& query, int k, int* indices, double* squared_distances) const;
 

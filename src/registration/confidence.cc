@@ -105,20 +105,22 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
     normals.resize(static_cast<Eigen::Index>(vertices.size()), 3);
     for (size_t i = 0; i < vertices.size(); ++i) normals.row(static_cast<Eigen::Index>(i)) = all_normals.row(vertices[i]);
   }
-  // The residual of vertices[i]: the data surface's, or its object's.
-  auto residual = [&](size_t i) {
+  // Whether vertices[i] has a cloud point within the tolerance: its object's residual, or on a
+  // data surface a search bounded there (only the facing vertices are asked, and a vertex far
+  // from the cloud costs little).
+  auto is_covered = [&](size_t i) {
     const int v = vertices[i];
-    if (surface != nullptr) return surface->residuals(v);
+    if (surface != nullptr) return fc.index != nullptr && fc.index->AnyWithin(covered_state.x.row(v).transpose(), tolerance);
     const int o = state.vertex_object[static_cast<size_t>(v)];
-    return state.residuals[static_cast<size_t>(o)](v - state.objects[static_cast<size_t>(o)].offset);
+    const double d = state.residuals[static_cast<size_t>(o)](v - state.objects[static_cast<size_t>(o)].offset);
+    return std::isfinite(d) && d <= tolerance;
   };
   int facing = 0, covered = 0;
   for (size_t i = 0; i < vertices.size(); ++i) {
     const int v = vertices[i];
     if (!fc.Faces(covered_state.x.row(v).transpose(), normals.row(static_cast<Eigen::Index>(i)).transpose())) continue;
     ++facing;
-    const double d = residual(i);
-    if (std::isfinite(d) && d <= tolerance) ++covered;
+    if (is_covered(i)) ++covered;
   }
   c.coverage = facing > 0 ? static_cast<double>(covered) / facing : 0.0;
 

@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 
+#include "geometry/morton.h"
 #include "parallel/pool.h"
 #include "parallel/threads.h"
 
@@ -41,6 +42,43 @@ Status MakeEmbeddedSurface(const TetMesh& mesh, const Vertices& rest, const Tria
   return Status::Ok();
 }
 
+namespace {
+// A copy of `s` with its vertices along a Morton curve and its triangles along the curve of
+// their centroids: the pair search, the normals and the depth image walk a scan's rings and
+// triangles in the order they lie in space, not in its file's (the view's numbering is the
+// tracker's own; the API and the outputs keep the file's).
+EmbeddedSurface SpatiallyOrdered(const EmbeddedSurface& s, std::vector<int>* order_out) {
+  const Eigen::Index n = s.rest.rows(), nf = s.triangles.rows();
+  const std::vector<int> order = MortonOrder(s.rest);  // new index -> old
+  *order_out = order;
+  std::vector<int> new_index(static_cast<size_t>(n));
+  EmbeddedSurface out;
+  out.outside = s.outside;
+  out.rest.resize(n, 3);
+  out.embedding.element.resize(static_cast<size_t>(n));
+  out.embedding.barycentric.resize(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const int old = order[static_cast<size_t>(i)];
+    new_index[static_cast<size_t>(old)] = static_cast<int>(i);
+    out.rest.row(i) = s.rest.row(old);
+    out.embedding.element[static_cast<size_t>(i)] = s.embedding.element[static_cast<size_t>(old)];
+    out.embedding.barycentric[static_cast<size_t>(i)] = s.embedding.barycentric[static_cast<size_t>(old)];
+  }
+  Vertices centroids(nf, 3);
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    centroids.row(f) = (s.rest.row(s.triangles(f, 0)) + s.rest.row(s.triangles(f, 1)) + s.rest.row(s.triangles(f, 2))) / 3.0;
+  }
+  const std::vector<int> face_order = MortonOrder(centroids);
+  out.triangles.resize(nf, 3);
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      out.triangles(f, k) = new_index[static_cast<size_t>(s.triangles(face_order[static_cast<size_t>(f)], k))];
+    }
+  }
+  return out;
+}
+}  // namespace
+
 void DataSurface::Build(const TrackerState& state, const std::vector<const EmbeddedSurface*>& surfaces) {
   const size_t n_objects = state.objects.size();
   offset_.assign(n_objects, 0);
@@ -67,6 +105,7 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
   updated_at_.resize(0, 3);
   rest_.resize(rows, 3);
   pair_area_.assign(static_cast<size_t>(rows), 0.0);
+  source_.assign(static_cast<size_t>(rows), 0);
   vertex_.resize(static_cast<size_t>(rows));
   element_.assign(static_cast<size_t>(rows), -1);
   view_.options = state.options;
@@ -82,6 +121,7 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
     for (int v = 0; v < count_[i]; ++v) view_.vertex_object[static_cast<size_t>(base + v)] = static_cast<int>(i);
     if (s == nullptr) {
       rest_.middleRows(base, count_[i]) = o.mesh.rest;
+      for (int v = 0; v < count_[i]; ++v) source_[static_cast<size_t>(base + v)] = v;
       for (int v = 0; v < count_[i]; ++v) {
         Stencil& st = vertex_[static_cast<size_t>(base + v)];
         st.n = 1;
@@ -99,6 +139,10 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
       }
       continue;
     }
+    std::vector<int> order;
+    const EmbeddedSurface ordered = SpatiallyOrdered(*s, &order);
+    s = &ordered;
+    for (int v = 0; v < count_[i]; ++v) source_[static_cast<size_t>(base + v)] = order[static_cast<size_t>(v)];
     rest_.middleRows(base, count_[i]) = s->rest;
     const int first_element = static_cast<int>(elements_.size());
     for (int e = 0; e < o.mesh.num_tets(); ++e) {
@@ -183,7 +227,6 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
   // surface would make them cost as much as it is fine.
   view_.mean_edge_length = state.mean_edge_length;
   view_.x.resize(rows, 3);
-  residuals = Eigen::VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN());
   Update(state.x);
 }
 

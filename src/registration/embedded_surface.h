@@ -53,6 +53,10 @@ class DataSurface {
   // the meshes').
   double surface_edge() const { return surface_edge_; }
   const Vertices& rest() const { return rest_; }
+  // Per data-surface vertex, its index among its object's surface vertices as they were given
+  // (an embedded surface's file order, or the mesh's vertex): the view keeps an embedded
+  // surface in its own spatial order.
+  const std::vector<int>& source() const { return source_; }
   int offset(int object) const { return offset_[static_cast<size_t>(object)]; }
   int count(int object) const { return count_[static_cast<size_t>(object)]; }
   bool embedded(int object) const { return embedded_[static_cast<size_t>(object)] != 0; }
@@ -89,16 +93,13 @@ class DataSurface {
   // A data-surface vertex's coarse vertex with the largest weight (the per-vertex outputs).
   int Dominant(int vertex) const;
 
-  // Per data-surface vertex, the distance (m) to the nearest cloud point after the last frame
-  // (NaN for vertices on no triangle and without a cloud): the confidence's coverage.
-  Eigen::VectorXd residuals;
-
  private:
   TrackerState view_;
   Vertices updated_at_;  // the coarse positions view_.x was last computed at
   Vertices rest_;
   double surface_edge_ = 0.0;
   std::vector<double> pair_area_;
+  std::vector<int> source_;
   std::vector<int> offset_, count_;
   std::vector<int> first_triangle_, num_triangles_;  // per object, its rows of view_.surface
   std::vector<char> embedded_;

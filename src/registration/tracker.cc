@@ -447,17 +447,7 @@ void Tracker::Impl::Outputs(const PointIndex* cloud_index, const std::vector<Dat
     }
   }
   UpdateOutputs(cloud_index, coarse, &state, threads);
-  const TrackerState& view = PairState();
-  Eigen::VectorXd& residuals = data_surface->residuals;
-  residuals.setConstant(std::numeric_limits<double>::quiet_NaN());
-  if (cloud_index == nullptr || cloud_index->size() == 0) return;
-  const int ns = static_cast<int>(view.surface_vertices.size());
-  ParallelFor(threads, ns, 64, [&](int64_t j) {
-    const int v = view.surface_vertices[static_cast<size_t>(j)];
-    double d2 = 0.0;
-    cloud_index->Nearest(view.x.row(v), &d2);
-    residuals(v) = std::sqrt(d2);
-  });
+  PairState();  // the data surface at the result: the confidence reads it
 }
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {
