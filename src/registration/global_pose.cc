@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "geometry/nearest.h"
+#include "parallel/pool.h"
 
 namespace femreg {
 namespace {
@@ -328,7 +329,7 @@ double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 // the same poses on every run and thread count.
 std::vector<PoseHypothesis> Propose(const PclCloud& cloud, const Features& cloud_features,
                                     const PclCloud::Ptr& model, const Features::Ptr& model_features,
-                                    double voxel) {
+                                    double voxel, int threads) {
   std::vector<PoseHypothesis> out;
   const int n = static_cast<int>(cloud.size());
   if (n < 3 || model->size() < 3) return out;
@@ -382,24 +383,40 @@ std::vector<PoseHypothesis> Propose(const PclCloud& cloud, const Features& cloud
     Eigen::Matrix3d R;
     Eigen::Vector3d t;
   };
-  std::vector<Candidate> candidates;
-  for (int it = 0; it < kDraws; ++it) {
-    const size_t s0 = draw(c.size()), s1 = draw(c.size());
-    if (matches[s0].empty() || matches[s1].empty()) continue;
-    const pcl::PointNormal& q0 =
-        (*model)[static_cast<size_t>(matches[s0][draw(matches[s0].size())])];
-    const pcl::PointNormal& q1 =
-        (*model)[static_cast<size_t>(matches[s1][draw(matches[s1].size())])];
+  // The draws first, in the random sequence's order (a draw whose samples have no match draws
+  // no model points); then each draw's pose and inlier count on its own, on several threads:
+  // the same candidates, in the same order, on any thread count.
+  struct Draw {
+    size_t s0 = 0, s1 = 0;
+    int m0 = -1, m1 = -1;  // -1: a sample without a match
+  };
+  std::vector<Draw> draws(static_cast<size_t>(kDraws));
+  for (Draw& d : draws) {
+    d.s0 = draw(c.size());
+    d.s1 = draw(c.size());
+    if (matches[d.s0].empty() || matches[d.s1].empty()) continue;
+    d.m0 = matches[d.s0][draw(matches[d.s0].size())];
+    d.m1 = matches[d.s1][draw(matches[d.s1].size())];
+  }
+  std::vector<Candidate> found(draws.size());
+  ParallelFor(threads, static_cast<int64_t>(draws.size()), 1024, [&](int64_t it) {
+    const Draw& d = draws[static_cast<size_t>(it)];
+    Candidate& out_candidate = found[static_cast<size_t>(it)];
+    out_candidate.inliers = -1;  // none
+    if (d.m0 < 0) return;
+    const size_t s0 = d.s0, s1 = d.s1;
+    const pcl::PointNormal& q0 = (*model)[static_cast<size_t>(d.m0)];
+    const pcl::PointNormal& q1 = (*model)[static_cast<size_t>(d.m1)];
     const Eigen::Vector3d dc = c[s1] - c[s0], dm = position(q1) - position(q0);
     const double lc = dc.norm(), lm = dm.norm();
-    if (!(lc > 2.0 * voxel) || std::min(lc, lm) < kSimilarity * std::max(lc, lm)) continue;
+    if (!(lc > 2.0 * voxel) || std::min(lc, lm) < kSimilarity * std::max(lc, lm)) return;
     const Eigen::Vector3d mn0 = normal(q0), mn1 = normal(q1);
     if (!agree(cn[s0].dot(dc) / lc, mn0.dot(dm) / lm) ||
         !agree(cn[s1].dot(dc) / lc, mn1.dot(dm) / lm) || !agree(cn[s0].dot(cn[s1]), mn0.dot(mn1))) {
-      continue;
+      return;
     }
     Eigen::Matrix3d Fc, Fm;
-    if (!frame(dc, cn[s0], &Fc) || !frame(dm, mn0, &Fm)) continue;
+    if (!frame(dc, cn[s0], &Fc) || !frame(dm, mn0, &Fm)) return;
     const Eigen::Matrix3d R = Fm * Fc.transpose();
     const Eigen::Vector3d t = 0.5 * (position(q0) + position(q1)) - R * (0.5 * (c[s0] + c[s1]));
     int inliers = 0, checked = 0;
@@ -410,7 +427,11 @@ std::vector<PoseHypothesis> Propose(const PclCloud& cloud, const Features& cloud
       ++checked;
       if (checked == early && inliers < kMinInlierFraction * early) break;
     }
-    if (checked == n && inliers >= kMinInlierFraction * n) candidates.push_back({inliers, R, t});
+    if (checked == n && inliers >= kMinInlierFraction * n) out_candidate = {inliers, R, t};
+  });
+  std::vector<Candidate> candidates;
+  for (const Candidate& k : found) {
+    if (k.inliers >= 0) candidates.push_back(k);
   }
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& a, const Candidate& b) { return a.inliers > b.inliers; });
@@ -464,17 +485,24 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   if (!(given_score > state->options.data.loss_scale)) return result;
   result.searched = true;
 
-  // The given pose refined locally is a hypothesis like the global ones.
-  std::vector<PoseHypothesis> hypotheses(1);
-  verifier.Refine(&hypotheses[0]);
+  // The given pose refined locally is a hypothesis like the global ones. Each is refined on its
+  // own (the verifier only reads), so on several threads at once, with the same results.
+  const int threads = state->options.solver.num_threads;
+  auto refine_all = [&](std::vector<PoseHypothesis>* batch) {
+    RunTasks(threads, static_cast<int>(batch->size()), [&](int i) { verifier.Refine(&(*batch)[static_cast<size_t>(i)]); });
+  };
   PclCloud::Ptr cloud = CloudSamples(points, eye, voxel);
   Features::Ptr model_features, cloud_features;
-  Describe(kFeatureRadius * voxel, &model, &model_features);
-  Describe(kFeatureRadius * voxel, &cloud, &cloud_features);
-  for (PoseHypothesis h : Propose(*cloud, *cloud_features, model, model_features, voxel)) {
-    verifier.Refine(&h);
-    hypotheses.push_back(h);
-  }
+  RunTasks(threads, 2, [&](int which) {  // two estimators of their own: side by side
+    if (which == 0) {
+      Describe(kFeatureRadius * voxel, &model, &model_features);
+    } else {
+      Describe(kFeatureRadius * voxel, &cloud, &cloud_features);
+    }
+  });
+  std::vector<PoseHypothesis> hypotheses(1);
+  for (const PoseHypothesis& h : Propose(*cloud, *cloud_features, model, model_features, voxel, threads)) hypotheses.push_back(h);
+  refine_all(&hypotheses);
   auto by_fit = [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.fit < b.fit; };
   std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
   // A symmetric body's other poses are the best one turned by half a turn about one of its
@@ -485,15 +513,16 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
       (y.rowwise() - centre.transpose()).transpose() * (y.rowwise() - centre.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);
   const PoseHypothesis first = hypotheses.front();
+  std::vector<PoseHypothesis> turned(3);
   for (int k = 0; k < 3; ++k) {
     const Eigen::Matrix3d half =
         Eigen::AngleAxisd(M_PI, axes.eigenvectors().col(k)).toRotationMatrix();
-    PoseHypothesis h;
+    PoseHypothesis& h = turned[static_cast<size_t>(k)];
     h.R = half * first.R;
     h.t = half * (first.t - centre) + centre;
-    verifier.Refine(&h);
-    hypotheses.push_back(h);
   }
+  refine_all(&turned);
+  hypotheses.insert(hypotheses.end(), turned.begin(), turned.end());
   std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
   const PoseHypothesis& best = hypotheses.front();
   for (size_t i = 1; i < hypotheses.size(); ++i) {
