@@ -212,13 +212,19 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   std::vector<signed char> memo(static_cast<size_t>(n), -1);
   const OffModel Off{&at_start, &points, grow * grow, &memo};
   std::vector<int> queue;
+  // Each point's closest triangle on the workers (the search is most of the cost); the marks
+  // then in the points' order, as on one thread.
+  std::vector<int> closest(static_cast<size_t>(n), -1);
+  ParallelFor(state.options.solver.num_threads, n, 2048, [&](int64_t i) {
+    if ((*marks)[static_cast<size_t>(i)]) return;
+    closest[static_cast<size_t>(i)] = surface.Closest(points.row(i)).triangle;
+  });
   for (int i = 0; i < n; ++i) {
-    if ((*marks)[static_cast<size_t>(i)]) continue;
-    const SurfaceIndex::Hit hit = surface.Closest(points.row(i));
-    if (hit.triangle < 0) continue;
+    const int triangle = closest[static_cast<size_t>(i)];
+    if (triangle < 0) continue;
     bool touches = false;
     for (int k = 0; k < 3; ++k) {
-      touches |= strained[static_cast<size_t>(state.surface(hit.triangle, k))] != 0;
+      touches |= strained[static_cast<size_t>(state.surface(triangle, k))] != 0;
     }
     if (!touches || !Off(i)) continue;
     (*marks)[static_cast<size_t>(i)] = 2;
