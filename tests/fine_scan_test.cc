@@ -180,6 +180,19 @@ TEST(FineScanTest, TheCoverageOverTheRingsIsTheWholeSurfaces) {
   EXPECT_GT(embedded.coverage, 0.1);
   EXPECT_LT(embedded.coverage, 0.9);
   EXPECT_EQ(embedded_ringed.coverage, embedded.coverage);
+  // The share of the facing subsample vertices whose nearest point is within the tolerance.
+  const Eigen::MatrixXd normals = VertexNormalsAt(view.x, view.surface, view_rings, view.surface_vertices);
+  int facing = 0, near_enough = 0;
+  for (size_t i = 0; i < view.surface_vertices.size(); ++i) {
+    const Eigen::Vector3d p = view.x.row(view.surface_vertices[i]).transpose();
+    if (!fc.Faces(p, normals.row(static_cast<Eigen::Index>(i)).transpose())) continue;
+    ++facing;
+    double d2 = 0;
+    fc.index->Nearest(p, &d2);
+    near_enough += std::sqrt(d2) <= 1e-3 ? 1 : 0;
+  }
+  ASSERT_GT(facing, 0);
+  EXPECT_EQ(embedded.coverage, static_cast<double>(near_enough) / facing);
   // Every vertex within the tolerance of a point, and none.
   fc.index = std::make_unique<PointIndex>(view.x);
   EXPECT_EQ(MeasureConfidence(state, fc, {}, 1e-3, &data).coverage, 1.0);

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <set>
 #include <utility>
@@ -248,9 +249,22 @@ TEST(PointIndex, AnyWithinIsTheNearestDistanceAgainstTheBound) {
     EXPECT_TRUE(index.AnyWithin(p, d * (1 + 1e-12)));
     EXPECT_FALSE(index.AnyWithin(p, d * (1 - 1e-9)));
   }
-  // A point exactly at the bound counts (d <= bound, as the confidence's tolerance reads).
-  EXPECT_TRUE(index.AnyWithin(Eigen::Vector3d(pts.row(7)) + Eigen::Vector3d(0.25, 0, 0), 0.25));
   EXPECT_FALSE(index.AnyWithin(Eigen::Vector3d::Zero(), -1.0));
+  // At the last bit: one point, bounds at and next to its distance; the answer is
+  // sqrt(squared distance) <= bound, as a test of the nearest distance would give.
+  Vertices one(1, 3);
+  one << 0.1, -0.2, 0.3;
+  const PointIndex single(one);
+  const double inf = std::numeric_limits<double>::infinity();
+  for (int q = 0; q < 200; ++q) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    double d2 = 0;
+    single.Nearest(p, &d2);
+    const double d = std::sqrt(d2);
+    for (double bound : {std::nextafter(d, 0.0), d, std::nextafter(d, inf)}) {
+      EXPECT_EQ(single.AnyWithin(p, bound), std::sqrt(d2) <= bound) << "bound " << bound;
+    }
+  }
 }
 
 TEST(TriangleClosestPoint, MatchesDenseSampling) {

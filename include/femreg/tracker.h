@@ -143,7 +143,8 @@ class Tracker {
   const PointCloud& prepared_cloud() const;
   // The contact detector, or null when collision is off or nothing can collide (then no
   // hierarchy is built and no contact residual is added). With an embedded surface it detects
-  // on the meshes' vertices followed by the embedded surfaces' (the obstacles meet those).
+  // on the meshes' vertices followed by the embedded surfaces' (the obstacles meet those), the
+  // latter in the tracker's own order, not surface_vertices()'s: for its own use.
   const CollisionWorld* collision() const;
 
  private:

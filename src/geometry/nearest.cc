@@ -59,11 +59,14 @@ bool PointIndex::AnyWithin(const Eigen::Vector3d& query, double max_distance) co
   double d2 = 0.0;
   nanoflann::KNNResultSet<double, uint32_t> result(1);
   result.init(&index, &d2);
-  // The result set's worst distance bounds the search: only points nearer are visited. Its
-  // test is strict, so the bound is the next double above max_distance^2.
-  d2 = std::nextafter(max_distance * max_distance, std::numeric_limits<double>::infinity());
+  // The result set's worst distance bounds the search: only points nearer are visited. The
+  // bound is a little looser than max_distance^2 and the nearest point found is then tested
+  // as sqrt(d2) <= max_distance, which is what the nearest distance itself would say.
+  const double inf = std::numeric_limits<double>::infinity();
+  const double loose = std::nextafter(max_distance, inf);
+  d2 = std::nextafter(loose * loose, inf);
   tree_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
-  return result.size() > 0;
+  return result.size() > 0 && std::sqrt(d2) <= max_distance;
 }
 
 int PointIndex::KNearest(const Eigen::Vector3d& query, int k, int* indices,

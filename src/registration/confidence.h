@@ -44,7 +44,8 @@ double StretchDeviation(const Eigen::Matrix3d& F);
 // The scores of state.x against the frame's cloud: `pairs` are the last outer iteration's
 // (their cloud->model pairs stand for the points they were made from), and state.residuals
 // hold each surface vertex's distance to the nearest cloud point (UpdateOutputs). With a data
-// surface, the pairs are on it, and its fit and coverage are that surface's (its residuals).
+// surface, the pairs are on it, and its fit and coverage are that surface's (its facing
+// subsample vertices with a point of fc.index within the tolerance).
 // `rings`, if not null, are the rings of the surface the coverage is on (the data surface's,
 // else state.surface's): the normals are then found over the covered vertices' rings only.
 FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& fc,

@@ -82,8 +82,8 @@ struct Tracker::Impl {
   Vertices collision_x;
   Status BuildCollision();
   const Vertices& CollisionPositions();
-  // UpdateOutputs with the frame's pairs (on the data surface if there is one; its vertices'
-  // residuals too).
+  // UpdateOutputs with the frame's pairs (on the data surface if there is one, updated to
+  // state.x for the confidence).
   void Outputs(const PointIndex* cloud_index, const std::vector<DataPair>& pairs);
   // Per cloud query of this frame, the triangle of its last cloud->model hit (FindPairs).
   std::vector<int> warm_triangles;
