@@ -22,6 +22,10 @@ using BlockType = typename std::decay_t<decltype(std::declval<T>().blocks())>::v
 // that the other core must fetch; a 1,543-vertex cage's sets (up to 118k) were faster serial
 // (docs/notes/2026-11-30-two-threads.md).
 constexpr int kParallelWork = 131072;
+// The exact second-order linearization costs several times the Gauss-Newton one per block (a
+// corotational element's rotation derivative, a neo-Hookean element's full Hessian), so its
+// sets go to the team from this fraction of kParallelWork.
+constexpr int kSecondOrderWorkFactor = 8;
 
 }  // namespace
 
@@ -191,7 +195,8 @@ Assembler::SetCache& Assembler::CacheOf(const Set& set,
 
 template <class Take, class WithHessian, class Linearizer>
 void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take, WithHessian hessian,
-                           Linearizer linearize, Eigen::VectorXd* g, std::vector<double>* set_energy) {
+                           Linearizer linearize, Eigen::VectorXd* g, std::vector<double>* set_energy,
+                           int64_t parallel_work) {
   double* values = H_.valuePtr();
   double* gradient = g->data();
   int ordinal = -1;
@@ -242,7 +247,7 @@ void Assembler::Accumulate(const Problem& problem, const Vertices& x, Take take,
       if (static_cast<int>(set_energy->size()) <= ordinal) set_energy->resize(static_cast<size_t>(ordinal) + 1, 0.0);
       (*set_energy)[static_cast<size_t>(ordinal)] = Problem::SumBlockValues(block_values_);
     };
-    if (threads_ == 1 || static_cast<int64_t>(size) * n * n < kParallelWork) {
+    if (threads_ == 1 || static_cast<int64_t>(size) * n * n < parallel_work) {
       // One pass, no OpenMP region (even a team of one costs libgomp a futex wake-up).
       Linearization<T> lin;
       for (int b = 0; b < size; ++b) {
@@ -405,16 +410,16 @@ void Assembler::AssembleGaussNewton(const Problem& problem, const Vertices& x, b
   if (set_energy != nullptr) set_energy->clear();
   if (first) {
     std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
-    Accumulate(problem, x, constant, always, gauss_newton, g, set_energy);
+    Accumulate(problem, x, constant, always, gauss_newton, g, set_energy, kParallelWork);
     constant_values_.assign(H_.valuePtr(), H_.valuePtr() + H_.nonZeros());
   } else {
     // The constant sets' gradient is linearized element by element again, not formed as the
     // first one plus H_c (x - x_first): that sum cancels on nearly flat elements (a 1:1000
     // plate's stiffness against its small gradient; tests/hard_cases_test.cc).
     std::copy(constant_values_.begin(), constant_values_.end(), H_.valuePtr());
-    Accumulate(problem, x, constant, [](const auto&) { return false; }, gauss_newton, g, nullptr);
+    Accumulate(problem, x, constant, [](const auto&) { return false; }, gauss_newton, g, nullptr, kParallelWork);
   }
-  Accumulate(problem, x, varying, always, gauss_newton, g, set_energy);
+  Accumulate(problem, x, varying, always, gauss_newton, g, set_energy, kParallelWork);
   if (set_energy != nullptr) *energy = SumByGroup(problem, *set_energy);
   const double nodal = AddNodalVolume(problem, x, Curvature::kGaussNewton, true, g);
   if (set_energy != nullptr) energy->elastic += nodal;
@@ -431,7 +436,7 @@ double Assembler::AssembleSecondOrder(const Problem& problem, const Vertices& x,
   g->setZero(3 * num_vertices_);
   if (with_hessian) std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
   set_energy_.clear();
-  Accumulate(problem, x, always, hessian, second_order, g, &set_energy_);
+  Accumulate(problem, x, always, hessian, second_order, g, &set_energy_, kParallelWork / kSecondOrderWorkFactor);
   const double nodal = AddNodalVolume(problem, x, curvature, with_hessian, g);
   return SumByGroup(problem, set_energy_).total() + nodal;
 }

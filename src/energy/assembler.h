@@ -106,10 +106,12 @@ class Assembler {
   SetCache& CacheOf(const Set& set, std::vector<std::pair<int, int>>* missing);
   // Adds the blocks of the sets for which take(set) holds: gradient always, Hessian when
   // hessian(set), linearized by linearize(block, loss, out, with_hessian). With set_energy:
-  // the energy of each set taken, at its place in ForEachSet's order.
+  // the energy of each set taken, at its place in ForEachSet's order. A set of at least
+  // `parallel_work` 3x3 blocks (#blocks x n^2) is assembled on the threads.
   template <class Take, class WithHessian, class Linearizer>
   void Accumulate(const Problem& problem, const Vertices& x, Take take, WithHessian hessian,
-                  Linearizer linearize, Eigen::VectorXd* g, std::vector<double>* set_energy);
+                  Linearizer linearize, Eigen::VectorXd* g, std::vector<double>* set_energy,
+                  int64_t parallel_work);
   // The problem's nodal volume (if any, and if the elastic group is assembled): adds its
   // gradient to *g and its Hessian to H; returns its energy.
   double AddNodalVolume(const Problem& problem, const Vertices& x, Curvature curvature,
