@@ -99,13 +99,8 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorX
   if (threads > 1 && blocks >= parallel_from) {
     // Pieces, not halves: a mesh generator numbers the interior vertices (with more neighbours)
     // last, and a static half each left one thread 1.6 times the entries of the other.
-    const int64_t grain = (blocks + 15) / 16;
-    ParallelRanges(threads, blocks, grain, [&](int64_t begin, int64_t end) {
-      for (int64_t b = begin; b < end; ++b) convert(static_cast<int>(b));
-    });
-    ParallelRanges(threads, blocks, grain, [&](int64_t begin, int64_t end) {
-      for (int64_t b = begin; b < end; ++b) column(static_cast<int>(b), b + 1 < blocks);
-    });
+    ParallelFor(threads, blocks, 1, [&](int64_t b) { convert(static_cast<int>(b)); });
+    ParallelFor(threads, blocks, 1, [&](int64_t b) { column(static_cast<int>(b), b + 1 < blocks); });
   } else {
     for (int b = 0; b < blocks; ++b) convert(b);
     for (int b = 0; b < blocks; ++b) column(b, b + 1 < blocks);
@@ -163,9 +158,7 @@ void Multigrid::BlockJacobi(const Level& L, const Eigen::VectorXd& r, Eigen::Vec
     }
   };
   if (threads_ > 1 && r.size() >= kParallelUnknowns) {
-    ParallelRanges(threads_, nodes, (nodes + 15) / 16, [&](int64_t begin, int64_t end) {
-      for (int64_t k = begin; k < end; ++k) node(static_cast<int>(k));
-    });
+    ParallelFor(threads_, nodes, 1, [&](int64_t k) { node(static_cast<int>(k)); });
   } else {
     for (int k = 0; k < nodes; ++k) node(k);
   }
@@ -231,10 +224,8 @@ bool Multigrid::InvertDiagonalBlocks(int l, const SparseMatrix& A, std::vector<d
   };
   std::atomic<bool> positive(true);
   if (threads_ > 1 && total >= static_cast<size_t>(3 * kParallelUnknowns)) {
-    ParallelRanges(threads_, nodes, (nodes + 15) / 16, [&](int64_t begin, int64_t end) {
-      for (int64_t k = begin; k < end; ++k) {
-        if (!node(static_cast<int>(k))) positive = false;
-      }
+    ParallelFor(threads_, nodes, 1, [&](int64_t k) {
+      if (!node(static_cast<int>(k))) positive = false;
     });
   } else {
     for (int k = 0; k < nodes && positive; ++k) {

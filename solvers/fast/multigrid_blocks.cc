@@ -222,12 +222,8 @@ void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eige
     }
   };
   if (threads > 1 && (cols >= kParallelUnknowns || static_cast<int64_t>(values.size()) >= kParallelNonzeros)) {
-    ParallelRanges(threads, n, (n + 15) / 16, [&](int64_t begin, int64_t end) {
-      for (int64_t i = begin; i < end; ++i) xf[i] = static_cast<float>(xx[i]);
-    });
-    ParallelRanges(threads, nodes, (nodes + 15) / 16, [&](int64_t begin, int64_t end) {
-      for (int64_t c = begin; c < end; ++c) node(static_cast<int>(c));
-    });
+    ParallelFor(threads, n, 1, [&](int64_t i) { xf[i] = static_cast<float>(xx[i]); });
+    ParallelFor(threads, nodes, 1, [&](int64_t c) { node(static_cast<int>(c)); });
   } else {
     for (int i = 0; i < n; ++i) xf[i] = static_cast<float>(xx[i]);
     for (int c = 0; c < nodes; ++c) node(c);

@@ -121,8 +121,8 @@ void DataSurface::Build(const TrackerState& state, const std::vector<const Embed
     for (int v = 0; v < count_[i]; ++v) view_.vertex_object[static_cast<size_t>(base + v)] = static_cast<int>(i);
     if (s == nullptr) {
       rest_.middleRows(base, count_[i]) = o.mesh.rest;
-      for (int v = 0; v < count_[i]; ++v) source_[static_cast<size_t>(base + v)] = v;
       for (int v = 0; v < count_[i]; ++v) {
+        source_[static_cast<size_t>(base + v)] = v;
         Stencil& st = vertex_[static_cast<size_t>(base + v)];
         st.n = 1;
         st.vertices = {{o.offset + v, 0, 0, 0}};

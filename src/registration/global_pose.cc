@@ -507,7 +507,7 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   // A symmetric body's other poses are the best one turned by half a turn about one of its
   // principal axes: tried as hypotheses too, so that the ambiguity shows whether or not RANSAC
   // happened to find them.
-  const Eigen::Vector3d centre = y.colwise().mean().transpose();
+  const Eigen::Vector3d centre = mean.transpose();
   const Eigen::Matrix3d covariance =
       (y.rowwise() - centre.transpose()).transpose() * (y.rowwise() - centre.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> axes(covariance);
