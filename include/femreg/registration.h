@@ -85,8 +85,10 @@ struct PreprocessOptions {
   // With voxel_size 0: clouds much denser than the mesh (more than auto_voxel_min_ratio
   // points per surface vertex) are subsampled on a voxel grid of auto_voxel * (the mean
   // surface edge length of the meshes at rest), one point per voxel (the one nearest the
-  // voxel's centroid), weighted by the points it stands for so that the data term keeps its
-  // weight. 0 = off. The summary reports the voxel used (FrameSummary::voxel_size).
+  // voxel's centroid), weighted by the points it stands for, and all the weights scaled so
+  // that the data term weighs what a cloud of auto_voxel_min_ratio points per surface vertex
+  // would: a denser cloud adds no stiffness (docs/theory/data-weight.md). 0 = off. The
+  // summary reports the voxel used (FrameSummary::voxel_size).
   // (Coarser voxels, or subsampling clouds of 3-10 points per surface vertex, cost accuracy
   // on the bundled datasets (docs/notes/2026-11-28-figures-from-code-comments.md).)
   double auto_voxel = 0.25;                             // >= 0, in mean surface edges

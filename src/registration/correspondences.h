@@ -112,8 +112,9 @@ void TransformCloud(const PreprocessOptions& options, PointCloud* cloud);
 // One point per occupied voxel of edge `voxel` (m): its point nearest to the voxel's
 // centroid, with that point's normal and label (labelled points only share a voxel with
 // points of the same label), in the order the voxels are first met. *weights: the points
-// each kept point stands for.
-void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights);
+// each kept point stands for, scaled down together where they sum to more than max_total.
+void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights,
+                    double max_total = std::numeric_limits<double>::infinity());
 
 // A closest-point index over the whole surface at state.x, kept across outer iterations
 // and frames and rebuilt only when a surface vertex moved more than `tolerance` (m) from

@@ -45,10 +45,14 @@ void TransformCloud(const PreprocessOptions& options, PointCloud* cloud) {
   if (cloud->has_viewpoint) cloud->viewpoint = A * cloud->viewpoint + options.translation;
 }
 
-void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights) {
+void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights, double max_total) {
   const int n = cloud->size();
   weights->setOnes(n);
   if (!(voxel > 0) || n == 0) return;
+  const auto bound = [&] {
+    const double total = weights->sum();
+    if (total > max_total) *weights *= max_total / total;
+  };
   struct Key {
     int64_t i, j, k;
     int label;
@@ -79,7 +83,10 @@ void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights) {
     voxel_of[static_cast<size_t>(p)] = it->second;
   }
   const int m = static_cast<int>(first.size());
-  if (m == n) return;
+  if (m == n) {
+    bound();
+    return;
+  }
   // Each voxel keeps its point nearest to the voxel's centroid: a measured point, on the
   // surface (a centroid would sit inside the surface wherever it bends within the voxel).
   Vertices centroid = Vertices::Zero(m, 3);
@@ -113,6 +120,7 @@ void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights) {
   cloud->normals = normals_kept;
   cloud->labels = labels_kept;
   *weights = count;
+  bound();
 }
 
 bool ModelIndex::SameSurface(const TrackerState& state) const {

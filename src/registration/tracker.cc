@@ -150,7 +150,10 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   const double dense = pre.auto_voxel_min_ratio * static_cast<double>(pair_state.surface_vertices.size());
   if (pre.voxel_size == 0 && pre.auto_voxel > 0 && fc->cloud.size() > dense) {
     s->voxel_size = pre.auto_voxel * (data_surface ? data_surface->surface_edge() : mean_edge);
-    SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights);
+    // Weighing as much as a cloud of exactly that density: points closer than the mesh can
+    // follow add no information, and their stiffness would crush its elements
+    // (docs/notes/2026-11-30-dense-clouds.md).
+    SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights, dense);
   } else {
     fc->weights.setOnes(fc->cloud.size());
   }
