@@ -20,6 +20,7 @@
 #include "geometry/nearest.h"
 #include "registration/correspondences.h"
 #include "registration/tracker_state.h"
+#include "surface_samples.h"
 
 namespace femreg {
 namespace {
@@ -74,27 +75,8 @@ struct SparseBoxSequence {
   }
   explicit SparseBoxSequence(int points) {
     std::mt19937 rng(5);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    std::normal_distribution<double> noise(0.0, 5e-4);
     for (int f = 0; f < kFrames; ++f) {
-      const Vertices x = Bent(f);
-      std::vector<double> cumulative;
-      double total = 0.0;
-      for (int t = 0; t < mesh.num_surface_triangles(); ++t) {
-        const Eigen::Vector3d a = x.row(mesh.surface(t, 0)), b = x.row(mesh.surface(t, 1)), c = x.row(mesh.surface(t, 2));
-        cumulative.push_back(total += 0.5 * (b - a).cross(c - a).norm());
-      }
-      PointCloud cloud;
-      cloud.points.resize(points, 3);
-      for (int i = 0; i < points; ++i) {
-        const int t = static_cast<int>(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) -
-                                       cumulative.begin());
-        double r1 = u(rng), r2 = u(rng);
-        if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
-        const Eigen::Vector3d a = x.row(mesh.surface(t, 0)), b = x.row(mesh.surface(t, 1)), c = x.row(mesh.surface(t, 2));
-        cloud.points.row(i) = (a + r1 * (b - a) + r2 * (c - a) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))).transpose();
-      }
-      clouds.push_back(cloud);
+      clouds.push_back(testing_util::SampleSurfaceByArea(mesh, Bent(f), points, 5e-4, &rng));
     }
   }
 };

@@ -15,6 +15,7 @@
 #include "femreg/registration.h"
 #include "femreg/tracker.h"
 #include "registration/correspondences.h"
+#include "surface_samples.h"
 
 namespace femreg {
 namespace {
@@ -62,31 +63,6 @@ TEST(DenseCloud, ThreeHundredThousandPointsDoNotCrushABentBox) {
     return x;
   };
   std::mt19937 rng(17);
-  auto sample = [&](const Vertices& x, int points) {
-    std::vector<double> cumulative;
-    double total = 0.0;
-    for (int f = 0; f < box.num_surface_triangles(); ++f) {
-      const Eigen::Vector3d a = x.row(box.surface(f, 0)), b = x.row(box.surface(f, 1)), c = x.row(box.surface(f, 2));
-      total += 0.5 * (b - a).cross(c - a).norm();
-      cumulative.push_back(total);
-    }
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    std::normal_distribution<double> noise(0.0, 5e-4);
-    PointCloud cloud;
-    cloud.points.resize(points, 3);
-    for (int i = 0; i < points; ++i) {
-      const auto f = static_cast<int>(std::lower_bound(cumulative.begin(), cumulative.end(), u(rng) * total) -
-                                      cumulative.begin());
-      double r1 = u(rng), r2 = u(rng);
-      if (r1 + r2 > 1.0) {
-        r1 = 1.0 - r1;
-        r2 = 1.0 - r2;
-      }
-      const Eigen::Vector3d a = x.row(box.surface(f, 0)), b = x.row(box.surface(f, 1)), c = x.row(box.surface(f, 2));
-      cloud.points.row(i) = (a + r1 * (b - a) + r2 * (c - a) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))).transpose();
-    }
-    return cloud;
-  };
   auto volumes = [&](const Vertices& x) {
     Eigen::VectorXd v(box.num_tets());
     for (int t = 0; t < box.num_tets(); ++t) {
@@ -110,7 +86,7 @@ TEST(DenseCloud, ThreeHundredThousandPointsDoNotCrushABentBox) {
   for (int f = 0; f < 3; ++f) {
     const Vertices truth = bent(0.004 * (f + 1));
     FrameSummary s;
-    ASSERT_TRUE(tracker->Track(sample(truth, 300000), &s).ok());
+    ASSERT_TRUE(tracker->Track(testing_util::SampleSurfaceByArea(box, truth, 300000, 5e-4, &rng), &s).ok());
     EXPECT_EQ(s.termination, TerminationType::kConverged) << "frame " << f;
     EXPECT_GT(s.voxel_size, 0.0) << "frame " << f;
     EXPECT_GT(volumes(tracker->vertices(0)).cwiseQuotient(rest).minCoeff(), 0.9) << "frame " << f;

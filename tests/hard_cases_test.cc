@@ -20,6 +20,7 @@
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/tracker.h"
+#include "surface_samples.h"
 
 namespace femreg {
 namespace {
@@ -45,31 +46,7 @@ Vertices Bend(const Vertices& rest, double drop) {
 // Gaussian noise of sigma (m); one seed, one cloud.
 PointCloud SampleSurface(const TetMesh& mesh, const Vertices& x, int n, double sigma, uint64_t seed) {
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  std::normal_distribution<double> normal(0.0, sigma > 0 ? sigma : 1.0);
-  std::vector<double> cumulative;
-  double sum = 0;
-  for (int f = 0; f < mesh.num_surface_triangles(); ++f) {
-    const Eigen::Vector3d a = x.row(mesh.surface(f, 0)), b = x.row(mesh.surface(f, 1)),
-                          c = x.row(mesh.surface(f, 2));
-    cumulative.push_back(sum += 0.5 * (b - a).cross(c - a).norm());
-  }
-  PointCloud cloud;
-  cloud.points.resize(n, 3);
-  for (int i = 0; i < n; ++i) {
-    const size_t f = std::min(cumulative.size() - 1,
-                              static_cast<size_t>(std::lower_bound(cumulative.begin(), cumulative.end(),
-                                                                   uniform(rng) * sum) -
-                                                  cumulative.begin()));
-    double u = uniform(rng), w = uniform(rng);
-    if (u + w > 1) u = 1 - u, w = 1 - w;
-    const Eigen::Vector3d a = x.row(mesh.surface(f, 0)), b = x.row(mesh.surface(f, 1)),
-                          c = x.row(mesh.surface(f, 2));
-    Eigen::Vector3d p = a + u * (b - a) + w * (c - a);
-    if (sigma > 0) p += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
-    cloud.points.row(i) = p.transpose();
-  }
-  return cloud;
+  return testing_util::SampleSurfaceByArea(mesh, x, n, sigma, &rng);
 }
 
 std::vector<int> Clamped(const TetMesh& mesh) {
