@@ -4,11 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
-#include <vector>
 
 #include "femreg/mesh.h"
 #include "femreg/point_cloud.h"
@@ -35,7 +33,8 @@ TEST(DenseCloud, SubsamplingBoundsTheTotalWeight) {
   EXPECT_NEAR(weights.sum(), 1200.0, 1e-9);
   // Scaled together: a voxel of many points still weighs more than one of few.
   for (int v = 0; v < weights.size(); ++v) EXPECT_NEAR(weights(v), counts(v) * 1200.0 / 5000.0, 1e-12);
-  // A bound above the count changes nothing, and so does a grid that keeps every point.
+  // A bound above the total changes nothing; one below it scales the weights even where the
+  // grid keeps every point.
   cloud = unbounded = PointCloud();
   cloud.points = Eigen::MatrixXd::Identity(3, 3);
   SubsampleCloud(0.01, &cloud, &weights, 10.0);
@@ -44,11 +43,11 @@ TEST(DenseCloud, SubsamplingBoundsTheTotalWeight) {
   EXPECT_NEAR(weights.sum(), 1.5, 1e-12);
 }
 
-// The scaling benchmark's box (docs/performance/scaling.md) at about 2.3k vertices, bent as
-// a cantilever (every cross-section turned with the bend), seen whole through 300k noisy
-// points a frame: 130 points per surface vertex, thinned to about 20. Weighed by every point
-// it stood for, the cloud crushed the free end's bottom corner (smallest volume ratio 0.68
-// by frame 2) and erred 0.19 mm on average; weighed as 20 points a vertex, 0.97 and 0.12 mm.
+// The scaling benchmark's box (docs/performance/scaling.md) at 2,275 vertices (1,010 on the
+// surface), bent as a cantilever (every cross-section turned with the bend), seen whole
+// through 300k noisy points a frame, about 300 per surface vertex. Weighed by every point
+// they stood for, the thinned points crushed the free end's bottom corner
+// (docs/notes/2026-11-30-dense-clouds.md).
 TEST(DenseCloud, ThreeHundredThousandPointsDoNotCrushABentBox) {
   const Eigen::Vector3d size(0.2, 0.1, 0.05);
   const TetMesh box = MakeBox(size, 24, 12, 6);

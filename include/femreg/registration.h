@@ -86,9 +86,10 @@ struct PreprocessOptions {
   // points per surface vertex) are subsampled on a voxel grid of auto_voxel * (the mean
   // surface edge length of the meshes at rest), one point per voxel (the one nearest the
   // voxel's centroid), weighted by the points it stands for, and all the weights scaled so
-  // that the data term weighs what a cloud of auto_voxel_min_ratio points per surface vertex
-  // would: a denser cloud adds no stiffness (docs/theory/data-weight.md). 0 = off. The
-  // summary reports the voxel used (FrameSummary::voxel_size).
+  // that (with the weight per pair, weights.data) the data term weighs what a cloud of
+  // auto_voxel_min_ratio points per surface vertex would: a denser cloud adds no stiffness
+  // (docs/theory/data-weight.md). auto_voxel_min_ratio 0 thins every cloud and keeps the
+  // counts; auto_voxel 0 = off. The summary reports the voxel used (FrameSummary::voxel_size).
   // (Coarser voxels, or subsampling clouds of 3-10 points per surface vertex, cost accuracy
   // on the bundled datasets (docs/notes/2026-11-28-figures-from-code-comments.md).)
   double auto_voxel = 0.25;                             // >= 0, in mean surface edges
@@ -210,7 +211,7 @@ struct WeightOptions {
   double data = 200.0;
   // With the weight per pair (data >= 0): where an object has more model->cloud pairs than
   // cloud points behind its cloud->model pairs (its mesh is finer than the cloud; a voxel
-  // counts the points it stands for, a cloud_stride its stride), each of its model->cloud
+  // counts its weight, preprocess.auto_voxel's, a cloud_stride its stride), each of its model->cloud
   // pairs weighs data times (those points / model->cloud pairs), so that the model->cloud
   // term pulls no harder in all than one pair per cloud point, however fine the mesh. Each
   // surface vertex pairs with its nearest cloud point, which on a sparse cloud lies up to

@@ -28,7 +28,7 @@ struct DataPair {
   Eigen::Vector3d barycentric = Eigen::Vector3d(1, 0, 0);
   Eigen::Vector3d target = Eigen::Vector3d::Zero();  // the cloud point
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit for point-to-plane; zero: point-to-point
-  double weight = 1.0;  // multiplies weights.data: the cloud points a subsampled point stands for
+  double weight = 1.0;  // multiplies weights.data: a thinned cloud's points behind it, scaled (SubsampleCloud)
   Eigen::Vector3d Point(const Vertices& x) const;    // the model point at x
 };
 
@@ -46,7 +46,7 @@ struct PairCounts {
 struct FrameCloud {
   enum class View { kNone, kCamera, kViewpoint, kDirection };
   PointCloud cloud;
-  Eigen::VectorXd weights;  // #P: the input points each point stands for (all 1 unless subsampled)
+  Eigen::VectorXd weights;  // #P: SubsampleCloud's weights (all 1 unless subsampled)
   std::unique_ptr<PointIndex> index;
   double spacing = 0.0;     // m: median distance from a point to its nearest other point
   // m: the reciprocity trim; inf = reciprocity off (data.reciprocity 0, or fracture on), also
@@ -112,7 +112,8 @@ void TransformCloud(const PreprocessOptions& options, PointCloud* cloud);
 // One point per occupied voxel of edge `voxel` (m): its point nearest to the voxel's
 // centroid, with that point's normal and label (labelled points only share a voxel with
 // points of the same label), in the order the voxels are first met. *weights: the points
-// each kept point stands for, scaled down together where they sum to more than max_total.
+// each kept point stands for, scaled down together where they sum to more than max_total
+// (voxel > 0; otherwise all 1).
 void SubsampleCloud(double voxel, PointCloud* cloud, Eigen::VectorXd* weights,
                     double max_total = std::numeric_limits<double>::infinity());
 

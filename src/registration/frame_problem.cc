@@ -315,7 +315,7 @@ void FrameProblem::SetData(const std::vector<DataPair>& pairs, const Registratio
   };
   // The balance (weights.model_to_cloud_balance): per object, the share of its model->cloud
   // pairs' weight when they outnumber the cloud points its cloud->model pairs stand for (a
-  // voxel's points, p.weight, and every cloud_stride-th point's stride: a dense cloud
+  // voxel's weight, p.weight, and every cloud_stride-th point's stride: a dense cloud
   // subsampled is still the denser); 1 otherwise, and 1 for an object without cloud->model
   // pairs (data.cloud_to_model off, or its points all another object's). A cloud->model pair
   // is its triangle's object's.

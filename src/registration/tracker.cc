@@ -153,7 +153,8 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
     // Weighing as much as a cloud of exactly that density: points closer than the mesh can
     // follow add no information, and their stiffness would crush its elements
     // (docs/notes/2026-11-30-dense-clouds.md).
-    SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights, dense);
+    SubsampleCloud(s->voxel_size, &fc->cloud, &fc->weights,
+                   dense > 0 ? dense : std::numeric_limits<double>::infinity());
   } else {
     fc->weights.setOnes(fc->cloud.size());
   }
