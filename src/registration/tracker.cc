@@ -303,9 +303,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   fc.facing_only = false;
   const Vertices start = state.x;
   int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
+  int stiff_from = 1;    // the outer iteration of the first stiff stage
   for (int k = 0; k < iteration_limit; ++k) {
     if (stepping_in) {
-      const int stage = k - 1;
+      const int stage = k - stiff_from;
       stepping_in = stage < stiff_stages;
       frame_problem.SetElasticScale(state, stepping_in ? kStiffScales[stage] : 1.0);
       merit = std::numeric_limits<double>::infinity();  // another energy
@@ -334,18 +335,25 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     }
     fc.seeded_rings = 0;  // from here on, from the last outer iteration's hits
     if (!go_on) break;
-    if (k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
+    // Where asked, the solves before the pair set is held are watched for a crushed element.
+    const bool watch_volume = options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
+                              k < std::max(1, options.data.hold_pairs_after);
+    if ((k == 0 || watch_volume) && iteration_limit > k + 1 && options.regularizer != Regularizer::kNone &&
         options.weights.elastic > 0 && !options.forces.estimate && !FractureLive(state) &&
-        (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0)) {
+        ((k == 0 && (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0)) ||
+         (watch_volume && SmallestVolumeRatio(state, start, state.x) < options.solver.stiff_restart_volume))) {
       // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
       // the sensor (docs/theory/stopping.md#large-motions). A frame catching up after held or
       // lost ones starts so too: its held shape is several frames' motion away, and its
       // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
+      // So does a frame whose first solves crushed an element, where asked
+      // (solver.stiff_restart_volume): their pairs were wrong at that distance too.
       state.x = start;
       stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
       stepping_in = true;
       fc.facing_only = true;
-      iteration_base = 1 + stiff_stages;
+      stiff_from = k + 1;
+      iteration_base = stiff_from + stiff_stages;
       iteration_limit = iteration_base + iteration_budget;
       rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
       warm_triangles.clear();

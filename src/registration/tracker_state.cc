@@ -95,6 +95,23 @@ double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const s
   return bulk;
 }
 
+double SmallestVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to) {
+  double smallest = 1.0;
+  for (const ObjectState& o : state.objects) {
+    for (int t = 0; t < o.mesh.num_tets(); ++t) {
+      auto volume = [&](const Vertices& x) {
+        const Eigen::RowVector3d a = x.row(o.offset + o.mesh.tets(t, 0));
+        Eigen::Matrix3d edges;
+        for (int c = 0; c < 3; ++c) edges.row(c) = x.row(o.offset + o.mesh.tets(t, c + 1)) - a;
+        return edges.determinant();
+      };
+      const double before = volume(from);
+      if (before > 0) smallest = std::min(smallest, volume(to) / before);
+    }
+  }
+  return smallest;
+}
+
 Triangles TrackerState::ObjectSurface(int i) const {
   const ObjectState& o = objects[i];
   return o.mesh.surface.array() + o.offset;
