@@ -108,8 +108,8 @@ TEST(DenseCloud, ThreeHundredThousandPointsDoNotCrushABentBox) {
 
 // A soft box (10 kPa, 5,049 vertices) bent 4 mm from rest under 20k points: the first solve's
 // pairs, made at rest, pull the free end's bottom corner in, and the frame converges with it
-// crushed. With solver.stiff_restart_volume the frame starts again stiff once the first
-// solve has taken an element below that share of its volume
+// crushed. With solver.stiff_restart_volume the frame starts again stiff once one of the
+// first two solves has taken an element below that share of its volume
 // (docs/notes/2026-12-01-crushed-first-steps.md).
 TEST(CrushedFirstStep, AStiffRestartKeepsTheSoftBoxsCornerWhole) {
   const TetMesh box = MakeBox(kBoxSize, 32, 16, 8);
@@ -130,13 +130,14 @@ TEST(CrushedFirstStep, AStiffRestartKeepsTheSoftBoxsCornerWhole) {
     EXPECT_EQ(s.termination, TerminationType::kConverged) << "run " << run;
     smallest[run] = SmallestVolumeRatio(box, tracker->vertices(0));
     error[run] = (tracker->vertices(0) - truth).rowwise().norm().mean();
-    restarts[run] = s.large_motion_restarts;
+    restarts[run] = s.crushed_restarts;
+    EXPECT_EQ(s.large_motion_restarts, 0) << "run " << run;
   }
   EXPECT_EQ(restarts[0], 0);
-  EXPECT_LT(smallest[0], 0.3);  // crushed: the case is still one that needs the option
+  EXPECT_LT(smallest[0], 0.5);  // crushed: the case is still one that needs the option
   EXPECT_EQ(restarts[1], 1);
   EXPECT_GT(smallest[1], 0.7);
-  EXPECT_LT(error[1], 0.8 * error[0]);
+  EXPECT_LT(error[1], 0.85 * error[0]);
 }
 
 }  // namespace

@@ -260,9 +260,10 @@ struct SolverOptions {
   // A frame whose outer iterations before the pair set is held (data.hold_pairs_after) leave
   // an element with less than this fraction of the volume it had at the frame's start starts
   // again stiff, as after a large motion (docs/theory/stopping.md#large-motions): the pairs
-  // were wrong at that distance. Off by default (0): on a soft or fine mesh bent a few mm it
-  // keeps the corners whole and lowers the error, on hand_press it costs 1.36x the time and
-  // 0.22 mm (docs/notes/2026-12-01-crushed-first-steps.md).
+  // were wrong at that distance. An element counts where it is below the fraction of both its
+  // start and its rest volume (FrameSummary::crushed_restarts). Off by default (0): it helps a
+  // soft or fine mesh bent a few mm, and costs hand_press time and accuracy
+  // (docs/notes/2026-12-01-crushed-first-steps.md).
   double stiff_restart_volume = 0.0;
   double time_budget_s = 0.0;            // per frame; 0 = none
   // Which back end minimizes each outer iteration (both take every term, contacts included,
@@ -470,6 +471,9 @@ struct FrameSummary {
   // edges, or the frame came after held or lost ones, and the frame started again, stiff and
   // stepping down (docs/theory/stopping.md#large-motions).
   int large_motion_restarts = 0;
+  // 1 when, with solver.stiff_restart_volume, an outer iteration before the pair set was held
+  // crushed an element and the frame started again in the same way.
+  int crushed_restarts = 0;
   // Cloud points found implausible (data.max_strain_step) and the frame's restarts for them;
   // of those points, the ones near the last frame's implausible ones, left out from the start.
   int implausible_points = 0, implausible_restarts = 0, implausible_carried = 0;

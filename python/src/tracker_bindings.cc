@@ -52,6 +52,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["inner_iterations"] = s.inner_iterations;
   d["backtracks"] = s.backtracks;
   d["large_motion_restarts"] = s.large_motion_restarts;
+  d["crushed_restarts"] = s.crushed_restarts;
   d["confidence"] = s.confidence.confidence;
   d["lost"] = s.lost;
   d["confidence_parts"] = py::dict(py::arg("fit") = s.confidence.fit, py::arg("coverage") = s.confidence.coverage,

@@ -383,6 +383,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
                     " (catching up after " + std::to_string(missed_frames) + " held or lost frames)";
     }
     if (s->large_motion_restarts > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
+    if (s->crushed_restarts > 0) s->message += " after a crushed element's " + std::to_string(iteration_base) + " stiff start";
   }
   return true;
 }

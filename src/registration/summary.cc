@@ -24,6 +24,7 @@ std::string FrameSummary::BriefReport() const {
     brief += ", initial pose " + initial_pose + (pose_ambiguous ? " (ambiguous)" : "");
   }
   if (large_motion_restarts > 0) brief += ", large motion: started again stiff";
+  if (crushed_restarts > 0) brief += ", crushed element: started again stiff";
   if (implausible_restarts > 0) {
     brief += ", " + std::to_string(implausible_points - implausible_carried) +
              " implausible points: started again without them";
@@ -47,6 +48,11 @@ std::string FrameSummary::FullReport() const {
     os << "  large motion: iteration 1 moved the bulk of the vertices more than 3 mean edges; the frame "
           "started again from iteration 2, the elastic weight x100, x30, x10, x3, then x1, pairing only "
           "surface that faces the sensor\n";
+  }
+  if (crushed_restarts > 0) {
+    os << "  crushed element: an outer iteration left an element below solver.stiff_restart_volume of its "
+          "volume at the frame's start and at rest; the frame started again, the elastic weight x100, x30, "
+          "x10, x3, then x1, pairing only surface that faces the sensor\n";
   }
   if (implausible_carried > 0) {
     os << "  implausible points: " << implausible_carried

@@ -334,20 +334,27 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.trim_distance = 0.0;
     }
     fc.seeded_rings = 0;  // from here on, from the last outer iteration's hits
-    if (!go_on) break;
-    // Where asked, the solves before the pair set is held are watched for a crushed element.
-    const bool watch_volume = options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
-                              k < std::max(1, options.data.hold_pairs_after);
-    if ((k == 0 || watch_volume) && iteration_limit > k + 1 && options.regularizer != Regularizer::kNone &&
+    // Where asked, the solves before the pair set is held are watched for a crushed element,
+    // also one that would have ended the frame as converged.
+    const bool crushed = options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
+                         k < std::max(1, options.data.hold_pairs_after) && iteration_budget > 1 &&
+                         (go_on || s.termination == TerminationType::kConverged) &&
+                         options.regularizer != Regularizer::kNone && options.weights.elastic > 0 &&
+                         !options.forces.estimate && !FractureLive(state) &&
+                         CrushedVolumeRatio(state, start, state.x) < options.solver.stiff_restart_volume;
+    if (!go_on && !crushed) break;
+    const bool large_motion =
+        k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
         options.weights.elastic > 0 && !options.forces.estimate && !FractureLive(state) &&
-        ((k == 0 && (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0)) ||
-         (watch_volume && SmallestVolumeRatio(state, start, state.x) < options.solver.stiff_restart_volume))) {
+        (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0);
+    if (large_motion || crushed) {
       // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
       // the sensor (docs/theory/stopping.md#large-motions). A frame catching up after held or
       // lost ones starts so too: its held shape is several frames' motion away, and its
       // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
       // So does a frame whose first solves crushed an element, where asked
-      // (solver.stiff_restart_volume): their pairs were wrong at that distance too.
+      // (solver.stiff_restart_volume): their pairs were wrong at that distance too. Only a
+      // large motion's restart drops the velocity (below): a crushed frame did not jump.
       state.x = start;
       stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
       stepping_in = true;
@@ -358,7 +365,12 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
       warm_triangles.clear();
       paired_vertices.clear();
-      ++s.large_motion_restarts;
+      ++(large_motion ? s.large_motion_restarts : s.crushed_restarts);
+      if (!go_on) {  // a crushed frame that had stopped goes on
+        s.termination = TerminationType::kNotRun;
+        s.stopped_by.clear();
+        s.message.clear();
+      }
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();

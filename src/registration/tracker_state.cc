@@ -95,18 +95,20 @@ double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const s
   return bulk;
 }
 
-double SmallestVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to) {
+double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to) {
   double smallest = 1.0;
   for (const ObjectState& o : state.objects) {
     for (int t = 0; t < o.mesh.num_tets(); ++t) {
-      auto volume = [&](const Vertices& x) {
-        const Eigen::RowVector3d a = x.row(o.offset + o.mesh.tets(t, 0));
+      auto volume = [&](const Vertices& x, int offset) {
+        const Eigen::RowVector3d a = x.row(offset + o.mesh.tets(t, 0));
         Eigen::Matrix3d edges;
-        for (int c = 0; c < 3; ++c) edges.row(c) = x.row(o.offset + o.mesh.tets(t, c + 1)) - a;
+        for (int c = 0; c < 3; ++c) edges.row(c) = x.row(offset + o.mesh.tets(t, c + 1)) - a;
         return edges.determinant();
       };
-      const double before = volume(from);
-      if (before > 0) smallest = std::min(smallest, volume(to) / before);
+      const double before = volume(from, o.offset), rest = volume(o.mesh.rest, 0);
+      if (!(before > 0) || !(rest > 0)) continue;
+      const double now = volume(to, o.offset);
+      smallest = std::min(smallest, std::max(now / before, now / rest));
     }
   }
   return smallest;

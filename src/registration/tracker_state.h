@@ -158,9 +158,12 @@ inline bool FractureLive(const TrackerState& state) { return state.fracture && s
 // the largest); 0 when no vertex is free.
 double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const std::vector<char>& fixed);
 
-// The smallest ratio, over every object's elements, of an element's volume at `to` to its
-// volume at `from` (elements not positive at `from` left out); 1 when there is none.
-double SmallestVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to);
+// How crushed the most crushed element is at `to`: the smallest, over every object's elements,
+// of the larger of (its volume at `to` / at `from`) and (its volume at `to` / at rest). An
+// element counts only where it lost that share both since `from` and since rest (one already
+// flat at `from` changes its ratio to `from` by little motions). Elements not positive at
+// `from` left out; 1 when there is none.
+double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to);
 
 // Region id -> density of an object's materials (for ComputeLumpedMasses).
 std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material);
