@@ -336,17 +336,15 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     fc.seeded_rings = 0;  // from here on, from the last outer iteration's hits
     // Where asked, the solves before the pair set is held are watched for a crushed element,
     // also one that would have ended the frame as converged.
-    const bool crushed = options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
+    const bool can_restart = options.regularizer != Regularizer::kNone && options.weights.elastic > 0 &&
+                             !options.forces.estimate && !FractureLive(state);
+    const bool crushed = can_restart && options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
                          k < std::max(1, options.data.hold_pairs_after) && iteration_budget > 1 &&
                          (go_on || s.termination == TerminationType::kConverged) &&
-                         options.regularizer != Regularizer::kNone && options.weights.elastic > 0 &&
-                         !options.forces.estimate && !FractureLive(state) &&
                          CrushedVolumeRatio(state, start, state.x) < options.solver.stiff_restart_volume;
     if (!go_on && !crushed) break;
-    const bool large_motion =
-        k == 0 && iteration_limit > 1 && options.regularizer != Regularizer::kNone &&
-        options.weights.elastic > 0 && !options.forces.estimate && !FractureLive(state) &&
-        (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0);
+    const bool large_motion = can_restart && k == 0 && iteration_limit > 1 &&
+                              (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0);
     if (large_motion || crushed) {
       // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
       // the sensor (docs/theory/stopping.md#large-motions). A frame catching up after held or

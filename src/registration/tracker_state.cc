@@ -100,10 +100,8 @@ double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const
   for (const ObjectState& o : state.objects) {
     for (int t = 0; t < o.mesh.num_tets(); ++t) {
       auto volume = [&](const Vertices& x, int offset) {
-        const Eigen::RowVector3d a = x.row(offset + o.mesh.tets(t, 0));
-        Eigen::Matrix3d edges;
-        for (int c = 0; c < 3; ++c) edges.row(c) = x.row(offset + o.mesh.tets(t, c + 1)) - a;
-        return edges.determinant();
+        auto at = [&](int k) { return Eigen::Vector3d(x.row(offset + o.mesh.tets(t, k))); };
+        return SignedTetVolume(at(0), at(1), at(2), at(3));
       };
       const double before = volume(from, o.offset), rest = volume(o.mesh.rest, 0);
       if (!(before > 0) || !(rest > 0)) continue;
