@@ -323,8 +323,9 @@ struct ForceOptions {
   double friction = -1.0;
   // The weight where no force may act (inside the body, off the region) and on a pushing-only
   // force's pulling part, over `weight`: large enough to hold equilibrium there to a fraction
-  // of the forces elsewhere. >= 1.
-  double balance = 1e4;
+  // of the forces elsewhere, and no larger: a stiffer penalty takes more Gauss-Newton steps
+  // (docs/notes/2026-12-01-equilibrium-balance.md). >= 1.
+  double balance = 1e3;
   bool IsValid(std::string* error) const;
 };
 

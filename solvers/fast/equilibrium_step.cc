@@ -35,6 +35,12 @@ constexpr int kMaxKeptSkips = 8;
 // anyway (docs/notes/2026-11-30-equilibrium-steps.md).
 constexpr int kFullSteps = 4;
 constexpr double kLateTolerance = 1e-2;
+// A step's PCG stops at kPcgTolerance of its own gradient or at this share of the solve's
+// first gradient, whichever is larger, and the solve stops once the gradient is below that
+// share: resolving a gradient ten thousand times smaller than the solve's start changes the
+// energy by about 1e-8 of it, and took 50-100 PCG iterations a step
+// (docs/notes/2026-12-01-equilibrium-balance.md).
+constexpr double kGradientFloor = 1e-4;
 
 // Whether a simplicial L D L^T factor has a pivot D_jj <= 0 (the first entry of column j).
 bool HasNegativePivot(const cholmod_factor& L) {
@@ -82,6 +88,7 @@ struct EquilibriumSolver::Impl {
   // goes to L D L^T directly, without the Cholesky attempt that would fail.
   bool last_indefinite = false;
   std::vector<Eigen::Matrix3d> phi_inverse;
+  double first_gradient_norm = 0.0;  // |G| at the solve's start (kGradientFloor)
 
   // The linearization at x: penalties, their gradients and curvatures; G the objective's gradient.
   Eigen::VectorXd g, f, phi_gradient, G;
@@ -409,6 +416,7 @@ struct EquilibriumSolver::Impl {
     const auto t0 = Clock::now();
     *iterations = 0;
     const double b_norm = b.norm();
+    const double target = std::max(kPcgTolerance * b_norm, kGradientFloor * first_gradient_norm);
     Eigen::VectorXd r = b, z, q;
     if (warm && dx->size() == b.size() && dx->allFinite()) {
       Product(*dx, &q);
@@ -421,7 +429,7 @@ struct EquilibriumSolver::Impl {
       dx->setZero(b.size());
     }
     if (b_norm == 0.0) return true;
-    if (r.norm() <= kPcgTolerance * b_norm) {
+    if (r.norm() <= target) {
       report->linear_solve_s += Seconds(t0);
       return true;
     }
@@ -438,7 +446,7 @@ struct EquilibriumSolver::Impl {
       r -= step * q;
       ++*iterations;
       ++report->pcg_iterations;
-      if (r.norm() <= kPcgTolerance * b_norm) {
+      if (r.norm() <= target) {
         converged = true;
         break;
       }
@@ -523,13 +531,15 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   report.after = report.before;
   double energy = report.before.total();
   const double first_gradient = m.G.lpNorm<Eigen::Infinity>();
+  m.first_gradient_norm = m.G.norm();
   report.success = true;
   report.stop = StopReason::kMaxIterations;
   Eigen::VectorXd dx;
   Vertices trial;
   for (int step = 0; step < m.options.max_iterations; ++step) {
     const double gradient = m.G.lpNorm<Eigen::Infinity>();
-    if (gradient == 0.0 || (step > 0 && gradient <= 1e-9 * first_gradient)) {
+    if (gradient == 0.0 || (step > 0 && (gradient <= 1e-9 * first_gradient ||
+                                         m.G.norm() <= kGradientFloor * m.first_gradient_norm))) {
       report.stop = StopReason::kGradient;
       break;
     }
