@@ -296,7 +296,7 @@ TEST(EquilibriumRegistration, RecoversTheLoadThatMadeTheShape) {
     if (!on_surface[static_cast<size_t>(v)]) inside += f.row(v).norm();
   }
   EXPECT_LT(inside, 1e-3 * total);  // below 0.01 % at the default; 0.28 % at balance 10, 2.6 % at 1
-  std::printf("load %s N, estimated %s N, on the last 4 cm %s N, inside %.2f %% of sum |f|; shape error %.3f mm\n",
+  std::printf("load %s N, estimated %s N, on the last 4 cm %s N, inside %.3g %% of sum |f|; shape error %.3f mm\n",
               Format(load).c_str(), Format(s.force).c_str(), Format(near_tip).c_str(), 100.0 * inside / total,
               shape_error * 1e3);
 }

@@ -37,8 +37,9 @@ constexpr int kFullSteps = 4;
 constexpr double kLateTolerance = 1e-2;
 // A step's PCG stops at kPcgTolerance of its own gradient or at this share of the solve's
 // first gradient, whichever is larger, and the solve stops once the gradient is below that
-// share: resolving a gradient ten thousand times smaller than the solve's start changes the
-// energy by about 1e-8 of it, and took 50-100 PCG iterations a step
+// share: a gradient ten thousand times smaller than the solve's first promises about 1e-8 of
+// what the first step gained (the model's decrease goes as |G|^2), and took 50-100 PCG
+// iterations a step
 // (docs/notes/2026-12-01-equilibrium-balance.md).
 constexpr double kGradientFloor = 1e-4;
 
