@@ -28,7 +28,6 @@ constexpr int kMaxPcgIterations = 200;
 // The shift of K~ = K + shift * mean(diag K): enough for a free body's rigid motions (K's null
 // space) to factorize; raised 100-fold while the factorization fails.
 constexpr double kFirstShift = 1e-8;
-constexpr int kMaxKeptSkips = 8;
 // After this many Gauss-Newton steps of a solve (an outer iteration), a step that lowers the
 // energy by less than kLateTolerance ends it. Each step linearizes every element again and
 // makes a new factor, while the next outer iteration's pairs and held turns move the problem
@@ -78,13 +77,7 @@ struct EquilibriumSolver::Impl {
   SupernodalSolve<double> indefinite_double;
   int use_indefinite = 0;
   bool indefinite_pending[2] = {false, false};
-  bool analysed = false, structure_pending = false, factor_valid = false, factor_single = false;
-  int fresh_iterations = -1;  // PCG's iterations on the first step solved with the factor
-  // A kept factor that failed is not tried again for the next 2^k - 1 steps after its k-th
-  // failure in a row (at most kMaxKeptSkips): where K moves between steps a failed attempt
-  // costs more iterations than a fresh factor saves. Counts, not times: the same steps on
-  // every machine.
-  int kept_failures = 0, kept_skips = 0;
+  bool analysed = false, structure_pending = false, factor_single = false;
   // K was indefinite at the last factorization (L D L^T with a negative pivot): the next one
   // goes to L D L^T directly, without the Cholesky attempt that would fail.
   bool last_indefinite = false;
@@ -128,8 +121,6 @@ struct EquilibriumSolver::Impl {
       use_indefinite = 0;
       if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
       use_indefinite = held;
-      factor_valid = true;
-      fresh_iterations = -1;
       return true;
     }
     if (cholesky_first && FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
@@ -149,8 +140,6 @@ struct EquilibriumSolver::Impl {
     report->factorize_s += Seconds(t0);
     if (ldlt.info() == Eigen::Success) {
       use_ldlt = true;
-      factor_valid = true;
-      fresh_iterations = -1;
       last_indefinite = HasNegativePivot(*ldlt.raw());
       return true;
     }
@@ -195,8 +184,6 @@ struct EquilibriumSolver::Impl {
     if (use_indefinite == 0) return false;
     const int negative = use_indefinite == 1 ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
     last_indefinite = negative > 0;
-    factor_valid = true;
-    fresh_iterations = -1;
     return true;
   }
 
@@ -217,8 +204,8 @@ struct EquilibriumSolver::Impl {
       mean += std::abs(diagonal[c]);
     }
     mean /= std::max<size_t>(1, diagonal.size());
-    factor_valid = false;
-    for (double shift = kFirstShift; shift <= max_shift && !factor_valid; shift *= 100.0) {
+    bool valid = false;
+    for (double shift = kFirstShift; shift <= max_shift && !valid; shift *= 100.0) {
       for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c] + shift * mean;
       factor_single = false;
       if (attempts & kOwnFloat) {
@@ -230,19 +217,18 @@ struct EquilibriumSolver::Impl {
       }
       if (factor_single) {
         structure_pending = false;
-        factor_valid = true;
+        valid = true;
         break;
       }
       if (!(attempts & kCholmodDouble)) continue;
       ++report->factorizations;
       const ScopedThreads one_thread(1);
       WithThreadLimit(1, [&] { factor.factorize(K); });
-      factor_valid = factor.info() == Eigen::Success;
+      valid = factor.info() == Eigen::Success;
     }
     for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c];
-    fresh_iterations = -1;
     report->factorize_s += Seconds(t0);
-    return factor_valid;
+    return valid;
   }
 
   // The penalties at f (set by Linearize): value, gradients, curvatures, and Phi~^-1.
@@ -409,26 +395,14 @@ struct EquilibriumSolver::Impl {
     for (size_t j = 0; j < modes.size(); ++j) *z += solved[static_cast<Eigen::Index>(j)] * modes[j];
   }
 
-  // PCG on (H + K Phi K) dx = b; false if it did not converge in max_iterations.
-  // warm: start from *dx (a failed attempt's iterate, if it lowered the residual), else from 0.
-  bool Pcg(const Eigen::VectorXd& b, int max_iterations, bool warm, Eigen::VectorXd* dx, int* iterations,
-           SolveReport* report) {
+  // PCG on (H + K Phi K) dx = b from dx = 0; false if it did not converge in max_iterations.
+  bool Pcg(const Eigen::VectorXd& b, int max_iterations, Eigen::VectorXd* dx, SolveReport* report) {
     const ScopedThreads one_thread(1);
     const auto t0 = Clock::now();
-    *iterations = 0;
     const double b_norm = b.norm();
     const double target = std::max(kPcgTolerance * b_norm, kGradientFloor * first_gradient_norm);
     Eigen::VectorXd r = b, z, q;
-    if (warm && dx->size() == b.size() && dx->allFinite()) {
-      Product(*dx, &q);
-      r = b - q;
-      if (!(r.norm() < b_norm)) {
-        dx->setZero(b.size());
-        r = b;
-      }
-    } else {
-      dx->setZero(b.size());
-    }
+    dx->setZero(b.size());
     if (b_norm == 0.0) return true;
     if (r.norm() <= target) {
       report->linear_solve_s += Seconds(t0);
@@ -445,7 +419,6 @@ struct EquilibriumSolver::Impl {
       const double step = rz / pq;
       *dx += step * p;
       r -= step * q;
-      ++*iterations;
       ++report->pcg_iterations;
       if (r.norm() <= target) {
         converged = true;
@@ -460,30 +433,12 @@ struct EquilibriumSolver::Impl {
     return converged && dx->allFinite();
   }
 
-  // The step: PCG with the kept factor while it serves (at most twice, and 10 more than, the
-  // iterations of the first step after it was made), else with a new one.
-  // A failed attempt's iterate is where the fresh factor's PCG starts.
+  // The step: a new factor of K~ at x, then PCG with it. A factor kept from an earlier step
+  // (while K moves with the turning elements and the contacts) failed more often than it
+  // served: the failed attempts cost more PCG iterations than the factorizations it saved
+  // (docs/notes/2026-12-01-equilibrium-fresh-factor.md).
   bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, SolveReport* report) {
-    int iterations = 0;
-    bool warm = false;
-    if (factor_valid && kept_skips > 0) {
-      --kept_skips;
-    } else if (factor_valid) {
-      const int limit = fresh_iterations < 0 ? kMaxPcgIterations
-                                             : std::max(2 * fresh_iterations, fresh_iterations + 10);
-      if (Pcg(-G, limit, /*warm=*/false, dx, &iterations, report)) {
-        if (fresh_iterations < 0) fresh_iterations = iterations;
-        kept_failures = 0;
-        return true;
-      }
-      kept_failures = std::min(kept_failures + 1, 30);
-      kept_skips = std::min((1 << std::min(kept_failures, 4)) - 1, kMaxKeptSkips);
-      warm = true;
-    }
-    if (!Factorize(problem, x, report)) return false;
-    if (!Pcg(-G, kMaxPcgIterations, warm, dx, &iterations, report)) return false;
-    fresh_iterations = iterations;
-    return true;
+    return Factorize(problem, x, report) && Pcg(-G, kMaxPcgIterations, dx, report);
   }
 };
 
@@ -524,7 +479,6 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     m.pattern_revision = m.physics.pattern_revision();
     m.analysed = false;
     m.ldlt_analysed = false;
-    m.factor_valid = false;
     ++report.analyses;
   }
   report.assemble_s += Seconds(t0);
