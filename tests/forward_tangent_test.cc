@@ -250,6 +250,42 @@ TEST(CorotationalTangent, SignedSvdMatchesPolarRotation) {
   }
 }
 
+// With a start rotation (the element's last) the tangent comes from Newton's polar rotation
+// and a closed-form symmetric eigensolver instead of the SVD: the same matrix to round-off,
+// also at rest (three equal singular values), at nearly equal ones, and for inverted and
+// degenerate elements; from a start near R(x) and from one 1 rad away.
+TEST(CorotationalTangent, AStartRotationGivesTheSameTangent) {
+  std::mt19937 rng(20);
+  const ElementRest rest = TangentTestRest(0.4);
+  std::vector<std::pair<std::string, Eigen::Matrix3d>> states = TangentStates(&rng);
+  states.push_back({"rest", Eigen::Matrix3d::Identity()});
+  states.push_back({"rotated", RandomRotation(&rng)});
+  states.push_back({"nearly equal", RandomRotation(&rng) * Eigen::Vector3d(1.0 + 1e-9, 1.0, 1.0 - 1e-9).asDiagonal()});
+  states.push_back({"two equal", RandomRotation(&rng) * Eigen::Vector3d(1.2, 0.9, 0.9).asDiagonal() *
+                                     RandomRotation(&rng).transpose()});
+  states.push_back({"inverted, sigma2 = -sigma3", Eigen::Vector3d(1.0, 0.5, -0.5).asDiagonal()});
+  states.push_back({"collapsed to a point", Eigen::Matrix3d::Zero()});
+  for (const auto& [name, F] : states) {
+    const Vector12 x = PositionsWithGradient(rest, F, Eigen::Vector3d(0.1, -0.2, 0.3));
+    ElementTangentInfo info, info_start;
+    Eigen::Matrix3d R, R_start;
+    const Matrix12 t = CorotationalTangent(rest, x, TangentProjection::kNone, &info, &R);
+    const double scale = std::max(t.cwiseAbs().maxCoeff(), rest.K.cwiseAbs().maxCoeff());
+    for (const double angle : {0.01, 1.0}) {
+      const Eigen::Matrix3d start = R * Eigen::AngleAxisd(angle, Eigen::Vector3d(1, 2, 2).normalized()).toRotationMatrix();
+      const Matrix12 t_start =
+          CorotationalTangent(rest, x, TangentProjection::kNone, &info_start, &R_start, &start);
+      EXPECT_LT((t_start - t).cwiseAbs().maxCoeff(), 1e-9 * scale) << name << ", start " << angle;
+      EXPECT_LT((R_start - R).cwiseAbs().maxCoeff(), 1e-9) << name << ", start " << angle;
+      EXPECT_EQ(info_start.degenerate_modes, info.degenerate_modes) << name;
+      // Under a rigid motion every g_ij is 0 up to round-off, and so is its sign.
+      if (std::abs(info.min_eigenvalue) > 1e-9 * rest.mu) {
+        EXPECT_EQ(info_start.negative_modes, info.negative_modes) << name;
+      }
+    }
+  }
+}
+
 TEST(CorotationalTangent, EnergyAndForceInOnePass) {
   std::mt19937 rng(19);
   const ElementRest rest = TangentTestRest(0.3);

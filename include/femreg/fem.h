@@ -245,9 +245,12 @@ struct ElementTangentInfo {
 // positions x, with R = R(x) recomputed from x (not the model's stored rotation):
 // WarpedStiffness(rest, R) + V_e sum_ij g_ij b_ij b_ij^T with b_ij = dF/dx^T : T_ij.
 // rotation, if not null: R(x) = U V^T of the same decomposition (PolarRotation's, to round-off).
+// start, if not null: a rotation near R(x) (the element's last), for Newton's polar rotation
+// and a symmetric eigensolver in place of the SVD; the same tangent to round-off.
 Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
                              TangentProjection projection,
-                             ElementTangentInfo* info = nullptr, Eigen::Matrix3d* rotation = nullptr);
+                             ElementTangentInfo* info = nullptr, Eigen::Matrix3d* rotation = nullptr,
+                             const Eigen::Matrix3d* start = nullptr);
 
 // Energy 0.5 u^T K u and force f = -R K u (12) of an element in one pass (u = R^T x - X
 // formed once); same values as ElementEnergy and ElementForce.

@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <sstream>
@@ -419,15 +420,72 @@ SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F) {
   return out;
 }
 
+namespace {
+// The signed SVD from the polar rotation R of F (Newton's, from a close start): S = R^T F is
+// symmetric, its eigenvectors are V and U = R V. A 3x3 eigensolver in closed form costs about
+// a fifth of the SVD. False where its eigenvectors are not orthonormal to 1e-10 (round-off
+// at nearly equal eigenvalues), for the SVD to decide.
+bool SignedSvdFromPolar(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, SignedSvd* out) {
+  Eigen::Matrix3d S = R.transpose() * F;
+  S = (0.5 * (S + S.transpose())).eval();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(S);
+  const Eigen::Vector3d& values = eigen.eigenvalues();
+  const Eigen::Matrix3d& vectors = eigen.eigenvectors();
+  if (!values.allFinite() || !vectors.allFinite() ||
+      !((vectors.transpose() * vectors - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-10)) {
+    return false;
+  }
+  // |sigma| decreasing; R maximizes tr(R^T F), so a negative eigenvalue is the smallest in
+  // size and lands in sigma(2), as the SVD's sign convention has it.
+  int order[3] = {0, 1, 2};
+  std::sort(order, order + 3, [&](int a, int b) { return std::abs(values(a)) > std::abs(values(b)); });
+  for (int k = 0; k < 3; ++k) {
+    out->sigma(k) = values(order[k]);
+    out->V.col(k) = vectors.col(order[k]);
+  }
+  if (out->V.determinant() < 0) out->V.col(2) *= -1.0;
+  out->U = R * out->V;
+  return true;
+}
+
+// WarpedStiffness of the isotropic element from its shape gradients: block (i, j) is
+// V (lambda c_i c_j^T + mu c_j c_i^T + mu (b_i . b_j) I) with c_i = R b_i, a third of the
+// products of R K_ij R^T.
+Matrix12 IsotropicWarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 4, 3> b;
+  b.bottomRows<3>() = rest.dm_inv;
+  b.row(0) = -(rest.dm_inv.row(0) + rest.dm_inv.row(1) + rest.dm_inv.row(2));
+  const Eigen::Matrix<double, 4, 3> c = b * R.transpose();  // row i: (R b_i)^T
+  const Eigen::Matrix4d dots = b * b.transpose();
+  const double Vmu = rest.volume * rest.mu, Vlambda = rest.volume * rest.lambda;
+  Matrix12 out;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i; j < 4; ++j) {
+      Eigen::Matrix3d block = Vlambda * c.row(i).transpose() * c.row(j);
+      block.noalias() += Vmu * c.row(j).transpose() * c.row(i);
+      block.diagonal().array() += Vmu * dots(i, j);
+      out.block<3, 3>(3 * i, 3 * j) = block;
+      if (j != i) out.block<3, 3>(3 * j, 3 * i) = block.transpose();
+    }
+  }
+  return out;
+}
+}  // namespace
+
 Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
                              TangentProjection projection, ElementTangentInfo* info,
-                             Eigen::Matrix3d* rotation) {
+                             Eigen::Matrix3d* rotation, const Eigen::Matrix3d* start) {
   Eigen::Matrix<double, 3, 4> xm;
   for (int k = 0; k < 4; ++k) xm.col(k) = x.segment<3>(3 * k);
-  const SignedSvd svd = SignedSingularValueDecomposition(DeformationGradient(xm, rest.dm_inv));
+  const Eigen::Matrix3d F = DeformationGradient(xm, rest.dm_inv);
+  SignedSvd svd;
+  if (start == nullptr || !F.allFinite() || !SignedSvdFromPolar(F, PolarRotation(F, *start), &svd)) {
+    svd = SignedSingularValueDecomposition(F);
+  }
   const Eigen::Matrix3d R = svd.U * svd.V.transpose();
   if (rotation != nullptr) *rotation = R;
-  Matrix12 tangent = WarpedStiffness(rest, R);
+  Matrix12 tangent = IsotropicWarpedStiffness(rest, R);
 
   // Lame parameters of the (isotropic) Hooke matrix, and tr(S - I).
   const double mu = rest.C(3, 3);
