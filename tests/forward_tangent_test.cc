@@ -250,10 +250,13 @@ TEST(CorotationalTangent, SignedSvdMatchesPolarRotation) {
   }
 }
 
-// With a start rotation (the element's last) the tangent comes from Newton's polar rotation
-// and a closed-form symmetric eigensolver instead of the SVD: the same matrix to round-off,
-// also at rest (three equal singular values), at nearly equal ones, and for inverted and
-// degenerate elements; from a start near R(x) and from one 1 rad away.
+// With a start rotation (the element's held one) the tangent comes from Newton's polar
+// rotation and a closed-form symmetric eigensolver instead of the SVD: the same matrix to
+// 1e-9, also at rest (three equal singular values), at nearly equal or equal ones (where the
+// closed form's roots split by sqrt(eps), amplified by 1 / (sigma_i + sigma_j) for an
+// inverted element near the tie), and for inverted and degenerate elements; from starts 0.01
+// and 0.3 rad from R(x) (Newton's steps; from 1 rad its first step is too long and the SVD
+// decides).
 TEST(CorotationalTangent, AStartRotationGivesTheSameTangent) {
   std::mt19937 rng(20);
   const ElementRest rest = TangentTestRest(0.4);
@@ -264,6 +267,15 @@ TEST(CorotationalTangent, AStartRotationGivesTheSameTangent) {
   states.push_back({"two equal", RandomRotation(&rng) * Eigen::Vector3d(1.2, 0.9, 0.9).asDiagonal() *
                                      RandomRotation(&rng).transpose()});
   states.push_back({"inverted, sigma2 = -sigma3", Eigen::Vector3d(1.0, 0.5, -0.5).asDiagonal()});
+  for (const double c : {0.2, 0.9, 0.99}) {
+    for (int frame = 0; frame < 20; ++frame) {
+      states.push_back({"inverted, two equal, sigma3 = -" + std::to_string(c),
+                        RandomRotation(&rng) * Eigen::Vector3d(1.0, 1.0, -c).asDiagonal() *
+                            RandomRotation(&rng).transpose()});
+    }
+  }
+  states.push_back({"flat, two equal", RandomRotation(&rng) * Eigen::Vector3d(1.0, 1.0, 1e-3).asDiagonal() *
+                                           RandomRotation(&rng).transpose()});
   states.push_back({"collapsed to a point", Eigen::Matrix3d::Zero()});
   for (const auto& [name, F] : states) {
     const Vector12 x = PositionsWithGradient(rest, F, Eigen::Vector3d(0.1, -0.2, 0.3));
@@ -271,7 +283,7 @@ TEST(CorotationalTangent, AStartRotationGivesTheSameTangent) {
     Eigen::Matrix3d R, R_start;
     const Matrix12 t = CorotationalTangent(rest, x, TangentProjection::kNone, &info, &R);
     const double scale = std::max(t.cwiseAbs().maxCoeff(), rest.K.cwiseAbs().maxCoeff());
-    for (const double angle : {0.01, 1.0}) {
+    for (const double angle : {0.01, 0.3}) {
       const Eigen::Matrix3d start = R * Eigen::AngleAxisd(angle, Eigen::Vector3d(1, 2, 2).normalized()).toRotationMatrix();
       const Matrix12 t_start =
           CorotationalTangent(rest, x, TangentProjection::kNone, &info_start, &R_start, &start);

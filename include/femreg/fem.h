@@ -245,8 +245,9 @@ struct ElementTangentInfo {
 // positions x, with R = R(x) recomputed from x (not the model's stored rotation):
 // WarpedStiffness(rest, R) + V_e sum_ij g_ij b_ij b_ij^T with b_ij = dF/dx^T : T_ij.
 // rotation, if not null: R(x) = U V^T of the same decomposition (PolarRotation's, to round-off).
-// start, if not null: a rotation near R(x) (the element's last), for Newton's polar rotation
-// and a symmetric eigensolver in place of the SVD; the same tangent to round-off.
+// start, if not null: a rotation near R(x) (e.g. the element's held rotation), for Newton's
+// polar rotation and a closed-form symmetric eigensolver in place of the SVD (the SVD where
+// the start is too far for Newton); the same tangent to 1e-9 of its largest entry.
 Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
                              TangentProjection projection,
                              ElementTangentInfo* info = nullptr, Eigen::Matrix3d* rotation = nullptr,

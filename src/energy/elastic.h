@@ -35,8 +35,8 @@ struct ElasticElement {
   bool Normal(const double* const* x, double* squared_norm, Eigen::Vector3d* jtr,
               Eigen::Matrix3d* jtj) const;
   // The exact element (energy/term.h's SecondOrder): R = R(x), the polar rotation of F(x)
-  // (the held rotation is not read), and the Hessian the consistent corotational tangent
-  // (femreg/fem.h's CorotationalTangent); the small-strain element's is K.
+  // (the held rotation is only Newton's start), and the Hessian the consistent corotational
+  // tangent (femreg/fem.h's CorotationalTangent); the small-strain element's is K.
   bool SecondOrder(const double* const* x, double* energy, Eigen::Vector3d* gradient,
                    Eigen::Matrix3d* hessian, TangentProjection projection) const;
 };

@@ -423,8 +423,10 @@ SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F) {
 namespace {
 // The signed SVD from the polar rotation R of F (Newton's, from a close start): S = R^T F is
 // symmetric, its eigenvectors are V and U = R V. A 3x3 eigensolver in closed form costs about
-// a fifth of the SVD. False where its eigenvectors are not orthonormal to 1e-10 (round-off
-// at nearly equal eigenvalues), for the SVD to decide.
+// a fifth of the SVD. Its eigenvalues come from a cubic's roots, which split a double root by
+// about sqrt(eps); the Rayleigh quotients v^T S v of its eigenvectors are accurate to
+// round-off (any vector of a double root's plane has that root's quotient). False where the
+// eigenvectors are not orthonormal to 1e-10, for the SVD to decide.
 bool SignedSvdFromPolar(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, SignedSvd* out) {
   Eigen::Matrix3d S = R.transpose() * F;
   S = (0.5 * (S + S.transpose())).eval();
@@ -436,12 +438,15 @@ bool SignedSvdFromPolar(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, Sign
       !((vectors.transpose() * vectors - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-10)) {
     return false;
   }
-  // |sigma| decreasing; R maximizes tr(R^T F), so a negative eigenvalue is the smallest in
-  // size and lands in sigma(2), as the SVD's sign convention has it.
+  Eigen::Vector3d quotients;
+  for (int k = 0; k < 3; ++k) quotients(k) = vectors.col(k).dot(S * vectors.col(k));
+  // |sigma| decreasing. R maximizes tr(R^T F), so a negative eigenvalue is the smallest in
+  // size, and lands in sigma(2) unless it ties with another (the tangent sums over unordered
+  // pairs: the order does not change it).
   int order[3] = {0, 1, 2};
-  std::sort(order, order + 3, [&](int a, int b) { return std::abs(values(a)) > std::abs(values(b)); });
+  std::sort(order, order + 3, [&](int a, int b) { return std::abs(quotients(a)) > std::abs(quotients(b)); });
   for (int k = 0; k < 3; ++k) {
-    out->sigma(k) = values(order[k]);
+    out->sigma(k) = quotients(order[k]);
     out->V.col(k) = vectors.col(order[k]);
   }
   if (out->V.determinant() < 0) out->V.col(2) *= -1.0;
