@@ -438,7 +438,13 @@ struct EquilibriumSolver::Impl {
   // served: the failed attempts cost more PCG iterations than the factorizations it saved
   // (docs/notes/2026-12-01-equilibrium-fresh-factor.md).
   bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, SolveReport* report) {
-    return Factorize(problem, x, report) && Pcg(-G, kMaxPcgIterations, dx, report);
+    if (!Factorize(problem, x, report)) return false;
+    if (Pcg(-G, kMaxPcgIterations, dx, report)) return true;
+    // PCG's iterates lower the step's quadratic model from 0, so one that has not converged
+    // still points downhill: the line search takes it. Where soft anchors hold most of a
+    // body the preconditioner (which takes an anchored vertex's free force as a surface
+    // one's) can need more than kMaxPcgIterations (docs/notes/2026-12-01-equilibrium-fresh-factor.md).
+    return dx->allFinite() && dx->dot(G) < 0.0;
   }
 };
 

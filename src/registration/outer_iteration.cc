@@ -111,12 +111,17 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
                               previous, std::max(0, state.frame - 1));
     s->time.collision += Seconds(t_collision);
   }
-  // Equilibrium registration starts each frame with one outer iteration of the energy without
-  // it: Gauss-Newton on the force residual converges slowly from far away (its curvature
-  // grows with the residual), and that iteration brings the shape near (docs/theory/equilibrium.md).
-  const bool warm_start = options.forces.estimate && k == 0;
+  // Equilibrium registration starts each frame (and a large motion's restart) with the
+  // energy without it: Gauss-Newton on the force residual converges slowly from far away (its
+  // curvature grows with the residual), and those iterations bring the shape near
+  // (docs/theory/equilibrium.md).
+  const bool warm_start = WarmStart(k);
   frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start);
   return true;
+}
+
+bool Tracker::Impl::WarmStart(int k) const {
+  return state.options.forces.estimate && k <= warm_until;
 }
 
 bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
@@ -225,7 +230,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   femreg::OuterIteration row;
   row.iteration = k + 1;
   PairCounts counts;
-  const bool warm_start = options.forces.estimate && k == 0;
+  const bool warm_start = WarmStart(k);
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
   // Vertices in the seen-through space: free space pushes them out, a change of the problem

@@ -297,6 +297,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   merit = std::numeric_limits<double>::infinity();
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
+  warm_until = 0;
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;
   stepping_in = false;
@@ -337,7 +338,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     // Where asked, the solves before the pair set is held are watched for a crushed element,
     // also one that would have ended the frame as converged.
     const bool can_restart = options.regularizer != Regularizer::kNone && options.weights.elastic > 0 &&
-                             !options.forces.estimate && !FractureLive(state);
+                             !FractureLive(state);
     const bool crushed = can_restart && options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
                          k < std::max(1, options.data.hold_pairs_after) && iteration_budget > 1 &&
                          (go_on || s.termination == TerminationType::kConverged) &&
@@ -359,6 +360,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       fc.facing_only = true;
       stiff_from = k + 1;
       iteration_base = stiff_from + stiff_stages;
+      warm_until = iteration_base;
       iteration_limit = iteration_base + iteration_budget;
       rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
       warm_triangles.clear();

@@ -45,6 +45,12 @@ struct Tracker::Impl {
   // `previous`: the last frame's result (friction's slip is from there).
   bool PrepareIteration(int k, const FrameCloud& fc, const Vertices& previous, std::vector<DataPair>* pairs,
                         PairCounts* counts, femreg::OuterIteration* row, FrameSummary* s);
+  // Whether outer iteration k solves the energy without the equilibrium terms though the
+  // forces are estimated (up to warm_until): the frame's first, and after a large motion's
+  // (or a crushed element's) restart its stiff stages and the first outer iteration after
+  // them, so that the force residual's Gauss-Newton starts near
+  // (docs/theory/equilibrium.md#solving-it).
+  bool WarmStart(int k) const;
   // Whether outer iteration k holds its start against the last one's (Backtrack).
   bool Backtracks(int k, bool warm_start) const;
   // From the held pair set on, the energy at state.x with the rotations, pairs and contacts it
@@ -100,6 +106,7 @@ struct Tracker::Impl {
   // (docs/theory/stopping.md#large-motions).
   int iteration_base = 0;
   int iteration_limit = 0;
+  int warm_until = 0;  // WarmStart's last outer iteration
   // Frames held or lost since the last one solved: the next solved frame catches up with
   // their motion too, and has iteration_budget outer iterations from each start (a restart
   // counts again): solver.max_outer_iterations per frame it makes up for, up to
