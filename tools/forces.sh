@@ -5,7 +5,7 @@
 # frame of the sequences that carry the true external force (forces.csv: organ_patch,
 # hand_press, tool_table) to docs/accuracy/forces.md, and the vertex errors, time and frames
 # converged of both modes on every sequence to docs/accuracy/physical_mode.md.
-# About five minutes on one core; run it on a quiet machine for the times.
+# About a minute on one core (16 sequences, 2026-12-01); run it on a quiet machine for the times.
 #   tools/forces.sh [BUILD_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."

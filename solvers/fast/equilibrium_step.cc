@@ -436,14 +436,17 @@ struct EquilibriumSolver::Impl {
   // The step: a new factor of K~ at x, then PCG with it. A factor kept from an earlier step
   // (while K moves with the turning elements and the contacts) failed more often than it
   // served: the failed attempts cost more PCG iterations than the factorizations it saved
-  // (docs/notes/2026-12-01-equilibrium-fresh-factor.md).
-  bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, SolveReport* report) {
+  // (docs/notes/2026-12-01-equilibrium-fresh-factor.md). *truncated: PCG did not converge.
+  bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, bool* truncated,
+            SolveReport* report) {
+    *truncated = false;
     if (!Factorize(problem, x, report)) return false;
     if (Pcg(-G, kMaxPcgIterations, dx, report)) return true;
     // PCG's iterates lower the step's quadratic model from 0, so one that has not converged
     // still points downhill: the line search takes it. Where soft anchors hold most of a
     // body the preconditioner (which takes an anchored vertex's free force as a surface
     // one's) can need more than kMaxPcgIterations (docs/notes/2026-12-01-equilibrium-fresh-factor.md).
+    *truncated = true;
     return dx->allFinite() && dx->dot(G) < 0.0;
   }
 };
@@ -503,14 +506,21 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       report.stop = StopReason::kGradient;
       break;
     }
-    if (!m.Step(problem, *x, &dx, &report)) {
+    bool truncated = false;
+    const bool stepped = m.Step(problem, *x, &dx, &truncated, &report);
+    Backtracked b;
+    if (stepped) {
+      ++report.iterations;
+      b = Backtrack(problem, dx, energy, 10, m.threads, &trial, x, &report);
+    }
+    // A truncated step that the line search cannot use is the solver's failure, not a
+    // stationary point.
+    if (!stepped || (truncated && !b.accepted)) {
       report.success = false;
       report.stop = StopReason::kFailure;
       report.message = "fast back end: the equilibrium step did not converge";
       break;
     }
-    ++report.iterations;
-    const Backtracked b = Backtrack(problem, dx, energy, 10, m.threads, &trial, x, &report);
     if (!b.accepted) {
       report.stop = StopReason::kNoDecrease;
       break;

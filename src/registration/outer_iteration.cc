@@ -120,6 +120,14 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   return true;
 }
 
+bool Tracker::Impl::TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const {
+  const double budget = state.options.solver.time_budget_s;
+  if (!(budget > 0) || Seconds(t_frame) < budget) return false;
+  s->termination = TerminationType::kTimeBudget;
+  s->message = "time budget of " + std::to_string(budget) + " s used";
+  return true;
+}
+
 bool Tracker::Impl::WarmStart(int k) const {
   return state.options.forces.estimate && k <= warm_until;
 }
@@ -328,7 +336,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // energy (see there).
   if (warm_start) {  // another energy: nothing to compare with
     *previous_energy = std::numeric_limits<double>::infinity();
-    return k + 1 < iteration_limit;
+    return !TimeBudgetUsed(t_frame, s) && k + 1 < iteration_limit;
   }
   const double e1 = row.after.total();
   const double e0 = *previous_energy;
@@ -375,11 +383,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     s->message = os.str();
     return false;
   }
-  if (options.solver.time_budget_s > 0 && Seconds(t_frame) >= options.solver.time_budget_s) {
-    s->termination = TerminationType::kTimeBudget;
-    s->message = "time budget of " + std::to_string(options.solver.time_budget_s) + " s used";
-    return false;
-  }
+  if (TimeBudgetUsed(t_frame, s)) return false;
   if (k + 1 == iteration_limit) {
     s->termination = TerminationType::kMaxIterations;
     s->message = "reached solver.max_outer_iterations = " + std::to_string(options.solver.max_outer_iterations);

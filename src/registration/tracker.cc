@@ -385,6 +385,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         s.implausible_points += marked;
         ++s.implausible_restarts;
         iteration_base = k + 1;
+        // After a large motion's restart the frame's start is far: with the forces estimated,
+        // one outer iteration without the equilibrium terms first again (WarmStart).
+        if (warm_until > 0) warm_until = iteration_base;
         iteration_limit = iteration_base + iteration_budget;
         rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
         merit = std::numeric_limits<double>::infinity();

@@ -51,6 +51,8 @@ struct Tracker::Impl {
   // them, so that the force residual's Gauss-Newton starts near
   // (docs/theory/equilibrium.md#solving-it).
   bool WarmStart(int k) const;
+  // Whether the frame has used solver.time_budget_s (then *s says so).
+  bool TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const;
   // Whether outer iteration k holds its start against the last one's (Backtrack).
   bool Backtracks(int k, bool warm_start) const;
   // From the held pair set on, the energy at state.x with the rotations, pairs and contacts it
