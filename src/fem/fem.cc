@@ -261,11 +261,24 @@ Vector12 ElementForce(const ElementRest& rest, const Eigen::Matrix3d& R, const V
   return f;
 }
 
+// R K_ij R^T of the isotropic element (BuildElementRest's C is isotropic) from its shape
+// gradients: block (i, j) is V (lambda c_i c_j^T + mu c_j c_i^T + mu (b_i . b_j) I) with
+// c_i = R b_i, a third of the products of rotating K's blocks.
 Matrix12 WarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 4, 3> b;
+  b.bottomRows<3>() = rest.dm_inv;
+  b.row(0) = -(rest.dm_inv.row(0) + rest.dm_inv.row(1) + rest.dm_inv.row(2));
+  const Eigen::Matrix<double, 4, 3> c = b * R.transpose();  // row i: (R b_i)^T
+  const Eigen::Matrix4d dots = b * b.transpose();
+  const double Vmu = rest.volume * rest.mu, Vlambda = rest.volume * rest.lambda;
   Matrix12 out;
   for (int i = 0; i < 4; ++i) {
-    for (int j = 0; j < 4; ++j) {
-      out.block<3, 3>(3 * i, 3 * j) = R * rest.K.block<3, 3>(3 * i, 3 * j) * R.transpose();
+    for (int j = i; j < 4; ++j) {
+      Eigen::Matrix3d block = Vlambda * c.row(i).transpose() * c.row(j);
+      block.noalias() += Vmu * c.row(j).transpose() * c.row(i);
+      block.diagonal().array() += Vmu * dots(i, j);
+      out.block<3, 3>(3 * i, 3 * j) = block;
+      if (j != i) out.block<3, 3>(3 * j, 3 * i) = block.transpose();
     }
   }
   return out;
@@ -454,28 +467,6 @@ bool SignedSvdFromPolar(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, Sign
   return true;
 }
 
-// WarpedStiffness of the isotropic element from its shape gradients: block (i, j) is
-// V (lambda c_i c_j^T + mu c_j c_i^T + mu (b_i . b_j) I) with c_i = R b_i, a third of the
-// products of R K_ij R^T.
-Matrix12 IsotropicWarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R) {
-  Eigen::Matrix<double, 4, 3> b;
-  b.bottomRows<3>() = rest.dm_inv;
-  b.row(0) = -(rest.dm_inv.row(0) + rest.dm_inv.row(1) + rest.dm_inv.row(2));
-  const Eigen::Matrix<double, 4, 3> c = b * R.transpose();  // row i: (R b_i)^T
-  const Eigen::Matrix4d dots = b * b.transpose();
-  const double Vmu = rest.volume * rest.mu, Vlambda = rest.volume * rest.lambda;
-  Matrix12 out;
-  for (int i = 0; i < 4; ++i) {
-    for (int j = i; j < 4; ++j) {
-      Eigen::Matrix3d block = Vlambda * c.row(i).transpose() * c.row(j);
-      block.noalias() += Vmu * c.row(j).transpose() * c.row(i);
-      block.diagonal().array() += Vmu * dots(i, j);
-      out.block<3, 3>(3 * i, 3 * j) = block;
-      if (j != i) out.block<3, 3>(3 * j, 3 * i) = block.transpose();
-    }
-  }
-  return out;
-}
 }  // namespace
 
 Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
@@ -490,7 +481,7 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
   }
   const Eigen::Matrix3d R = svd.U * svd.V.transpose();
   if (rotation != nullptr) *rotation = R;
-  Matrix12 tangent = IsotropicWarpedStiffness(rest, R);
+  Matrix12 tangent = WarpedStiffness(rest, R);
 
   // Lame parameters of the (isotropic) Hooke matrix, and tr(S - I).
   const double mu = rest.C(3, 3);
