@@ -11,7 +11,8 @@
 // solves with a Cholesky factor of K~ = K + a small shift (rigid motions of a free body)
 // and a 3x3 block per vertex. M^-1 (K Phi K) is the identity, so PCG's iterations go to the
 // few smooth modes the data H stiffens: the same spectrum as the reduced, force-space
-// problem's (docs/theory/equilibrium.md). Every step factorizes K~ anew.
+// problem's (docs/theory/equilibrium.md). Every step factorizes K~ anew; after a step whose
+// PCG took many iterations (soft modes of K that the data hold), K~ + s H instead.
 #ifndef FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
 #define FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
 
