@@ -200,7 +200,7 @@ struct OptionFields<SolverOptions> {
     v(&S::bulk_step_tolerance,
       FieldInfo("bulk_step_tolerance").AtLeast(0).Note("(a fraction of the mean edge length; 0 = off)"));
     v(&S::stiff_restart_volume,
-      FieldInfo("stiff_restart_volume").AtLeast(0).Below(1).Note("(a fraction of each element's volume at the frame's start; 0 = off)"));
+      FieldInfo("stiff_restart_volume").Finite().Below(1).Note("(a fraction of each element's volume at the frame's start; 0 = off; < 0: automatic, 0.1 with the forces estimated, else off)"));
     v(&S::max_pcg_iterations, FieldInfo("max_pcg_iterations").AtLeast(0).Note("(0: factorize every step)"));
     v(&S::preconditioner,
       FieldInfo("preconditioner")

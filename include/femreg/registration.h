@@ -261,10 +261,13 @@ struct SolverOptions {
   // an element with less than this fraction of the volume it had at the frame's start starts
   // again stiff, as after a large motion (docs/theory/stopping.md#large-motions): the pairs
   // were wrong at that distance. An element counts where it is below the fraction of both its
-  // start and its rest volume (FrameSummary::crushed_restarts). Off by default (0): it helps a
-  // soft or fine mesh bent a few mm, and costs hand_press time and accuracy
-  // (docs/notes/2026-12-01-crushed-first-steps.md).
-  double stiff_restart_volume = 0.0;
+  // start and its rest volume (FrameSummary::crushed_restarts). 0 = off. Negative (the
+  // default): automatic, 0.1 with the forces estimated and off otherwise. The classic energy
+  // goes on past a crushed element, and the restart helps a soft or fine mesh bent a few mm
+  // but costs hand_press time and accuracy (docs/notes/2026-12-01-crushed-first-steps.md);
+  // an equilibrium solve that starts from one is held by the inversion barrier's force and
+  // stops without getting out (docs/notes/2026-12-01-soft-modes.md).
+  double stiff_restart_volume = -1.0;
   double time_budget_s = 0.0;            // per frame; 0 = none
   // Which back end minimizes each outer iteration (both take every term, contacts included,
   // and reach the same minimum). The fast one by default: the same vertex errors in much less

@@ -339,10 +339,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     // also one that would have ended the frame as converged.
     const bool can_restart = options.regularizer != Regularizer::kNone && options.weights.elastic > 0 &&
                              !FractureLive(state);
-    const bool crushed = can_restart && options.solver.stiff_restart_volume > 0 && iteration_base == 0 &&
+    const double restart_volume = StiffRestartVolume(options);
+    const bool crushed = can_restart && restart_volume > 0 && iteration_base == 0 &&
                          k < std::max(1, options.data.hold_pairs_after) && iteration_budget > 1 &&
                          (go_on || s.termination == TerminationType::kConverged) &&
-                         CrushedVolumeRatio(state, start, state.x) < options.solver.stiff_restart_volume;
+                         CrushedVolumeRatio(state, start, state.x) < restart_volume;
     if (!go_on && !crushed) break;
     const bool large_motion = can_restart && k == 0 && iteration_limit > 1 &&
                               (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0);

@@ -95,6 +95,12 @@ double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const s
   return bulk;
 }
 
+double StiffRestartVolume(const RegistrationOptions& options) {
+  const double v = options.solver.stiff_restart_volume;
+  if (v >= 0) return v;
+  return options.forces.estimate ? 0.1 : 0.0;
+}
+
 double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to) {
   double smallest = 1.0;
   for (const ObjectState& o : state.objects) {

@@ -165,6 +165,11 @@ double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const s
 // `from` left out; 1 when there is none.
 double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to);
 
+// solver.stiff_restart_volume with its automatic value (< 0) resolved: 0.1 with the forces
+// estimated, where an equilibrium solve that starts from a crushed element stops against the
+// inversion barrier's force (docs/notes/2026-12-01-soft-modes.md); else 0 (off).
+double StiffRestartVolume(const RegistrationOptions& options);
+
 // Region id -> density of an object's materials (for ComputeLumpedMasses).
 std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material);
 
