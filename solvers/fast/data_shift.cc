@@ -31,7 +31,7 @@ std::vector<double> AddDataShift(const energy::Problem& problem, const Eigen::Sp
     h += d[c];
     ++observed;
   }
-  if (free == 0 || observed == 0 || !(phi > 0.0) || !(h > 0.0)) return before;
+  if (free == 0 || observed == 0 || !(phi > 0.0) || !(h > 0.0)) return {};
   const double shift = 1.0 / std::sqrt((phi / free) * (h / observed));
   const int* outer = K->outerIndexPtr();
   const int* inner = K->innerIndexPtr();

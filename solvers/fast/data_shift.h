@@ -15,10 +15,12 @@ namespace femreg {
 namespace fast_backend {
 
 // Adds s H to *K where K's pattern has H's entries (it is a preconditioner: the others are left
-// out), not in a fixed vertex's rows or columns, and returns K's values before. phi is the mean
-// force weight of the free-surface vertices (problem.equilibrium()), h the mean diagonal of H
-// where it is at least 1 % of its largest (the observed vertices, not the temporal springs).
-// Nothing is added without a free vertex or an observed one.
+// out), not in a fixed vertex's rows or columns, and returns K's values before. H is the
+// objective's Gauss-Newton matrix: the data, and the temporal springs, soft anchors and the
+// inversion barrier where they act. phi is the mean force weight of the free-surface vertices
+// (problem.equilibrium()), h the mean diagonal of H over the coordinates where it is at least
+// 1 % of its largest: the observed vertices and the anchored ones, not the temporal springs.
+// Returns nothing (and adds nothing) without a free vertex or such a coordinate.
 std::vector<double> AddDataShift(const energy::Problem& problem, const Eigen::SparseMatrix<double>& H,
                                  Eigen::SparseMatrix<double>* K);
 

@@ -43,11 +43,11 @@ constexpr double kLateTolerance = 1e-2;
 // (docs/notes/2026-12-01-equilibrium-balance.md).
 constexpr double kGradientFloor = 1e-4;
 // A step whose PCG took more than this many iterations on K~'s factor has the next ones
-// preconditioned with the factor of K~ + s H instead (AddDataShift), until that takes more
-// than the last plain step did: where the data hold soft modes of K (a slender tail, a body
-// on soft anchors), K Phi K is tiny along them, H is not, and M = K~ Phi~ K~ misses them one
-// PCG iteration each. Not lower: hand_press's steps pass 30 now and then, and there the
-// shifted factor took more steps (docs/notes/2026-12-01-soft-modes.md).
+// preconditioned with the factor of K~ + s H instead (AddDataShift), for as long as they take
+// no more than this either: where the data hold soft modes of K (a slender tail, a body on
+// soft anchors), K Phi K is tiny along them, H is not, and M = K~ Phi~ K~ misses them one PCG
+// iteration each. Not lower: hand_press's steps pass 30 now and then, and there the shifted
+// factor took more steps (docs/notes/2026-12-01-soft-modes.md).
 constexpr int kShiftAfterIterations = 60;
 
 // Whether a simplicial L D L^T factor has a pivot D_jj <= 0 (the first entry of column j).
@@ -91,10 +91,9 @@ struct EquilibriumSolver::Impl {
   bool last_indefinite = false;
   std::vector<Eigen::Matrix3d> phi_inverse;
   double first_gradient_norm = 0.0;  // |G| at the solve's start (kGradientFloor)
-  // Whether the next step's factor takes the data in (kShiftAfterIterations), and the PCG
-  // iterations of the last step without them; kept from solve to solve.
+  // Whether the next step's factor takes the data in (kShiftAfterIterations); kept from solve
+  // to solve while the pattern holds.
   bool shift_data = false;
-  int plain_iterations = 0;
 
   // The linearization at x: penalties, their gradients and curvatures; G the objective's gradient.
   Eigen::VectorXd g, f, phi_gradient, G;
@@ -452,21 +451,17 @@ struct EquilibriumSolver::Impl {
   bool Step(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx, bool* truncated,
             SolveReport* report) {
     *truncated = false;
-    const bool shifted = shift_data;
     std::vector<double> plain_values;
-    if (shifted) plain_values = AddDataShift(problem, objective.H(), &physics.H());
+    if (shift_data) plain_values = AddDataShift(problem, objective.H(), &physics.H());
     const bool factored = Factorize(problem, x, report);
-    if (shifted) std::copy(plain_values.begin(), plain_values.end(), physics.H().valuePtr());
+    if (!plain_values.empty()) std::copy(plain_values.begin(), plain_values.end(), physics.H().valuePtr());
     if (!factored) return false;
     const int iterations_before = report->pcg_iterations;
     const bool converged = Pcg(-G, kMaxPcgIterations, dx, report);
+    // On K~'s factor: more than the threshold switches the shift on; on K~ + s H's: more
+    // switches it off, and the next step measures K~'s factor again.
     const int iterations = report->pcg_iterations - iterations_before;
-    if (shifted) {
-      shift_data = iterations <= plain_iterations;
-    } else {
-      plain_iterations = iterations;
-      shift_data = iterations > kShiftAfterIterations;
-    }
+    shift_data = plain_values.empty() ? iterations > kShiftAfterIterations : iterations <= kShiftAfterIterations;
     if (converged) return true;
     // PCG's iterates lower the step's quadratic model from 0, so one that has not converged
     // still points downhill: the line search takes it. Where soft anchors hold most of a
@@ -514,6 +509,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     m.pattern_revision = m.physics.pattern_revision();
     m.analysed = false;
     m.ldlt_analysed = false;
+    m.shift_data = false;  // another mesh or set of terms: K~'s factor is measured again
     ++report.analyses;
   }
   report.assemble_s += Seconds(t0);
