@@ -164,5 +164,34 @@ TEST(CrushedFirstStep, TheRestartIsOnByDefaultWithTheForcesEstimated) {
   EXPECT_FALSE(options.IsValid(&error));
 }
 
+// The tracker takes the automatic value: a soft box whose cloud has a deep dent at one end (the
+// top pressed down by 80 % of the height); with the forces estimated the frame's warm start
+// (the classic energy) crushes an element there, and by default the frame starts again stiff;
+// with stiff_restart_volume 0 it does not.
+TEST(CrushedFirstStep, WithTheForcesEstimatedACrushedWarmStartStartsAgainByDefault) {
+  const TetMesh box = MakeBox(kBoxSize, 8, 4, 2);
+  Vertices truth = box.rest;
+  for (int v = 0; v < truth.rows(); ++v) {
+    if (box.rest(v, 0) > 0.75 * kBoxSize.x() && box.rest(v, 2) > 0.9 * kBoxSize.z()) truth(v, 2) -= 0.8 * kBoxSize.z();
+  }
+  std::mt19937 rng(17);
+  const PointCloud cloud = testing_util::SampleSurfaceByArea(box, truth, 4000, 2e-4, &rng);
+  int restarts[2];
+  for (int run = 0; run < 2; ++run) {
+    RegistrationOptions options;
+    options.solver.num_threads = 1;
+    options.forces.estimate = true;
+    if (run == 1) options.solver.stiff_restart_volume = 0.0;
+    const std::unique_ptr<Tracker> tracker = BoxTracker(box, 1e3, options);
+    ASSERT_TRUE(tracker);
+    FrameSummary s;
+    ASSERT_TRUE(tracker->Track(cloud, &s).ok());
+    EXPECT_EQ(s.termination, TerminationType::kConverged) << "run " << run;
+    restarts[run] = s.crushed_restarts;
+  }
+  EXPECT_EQ(restarts[0], 1);
+  EXPECT_EQ(restarts[1], 0);
+}
+
 }  // namespace
 }  // namespace femreg
