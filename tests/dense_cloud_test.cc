@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
-#include <string>
 #include <random>
+#include <string>
 
 #include "femreg/mesh.h"
 #include "femreg/point_cloud.h"

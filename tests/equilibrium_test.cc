@@ -8,21 +8,22 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
-#include <string>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "energy/equilibrium.h"
 #include "energy/problem.h"
 #include "femreg/forward.h"
-#include "femreg/io.h"
-#include "femreg/tracker.h"
-#include "femreg/scene.h"
-#include "femreg/point_cloud.h"
 #include "femreg/ground_truth.h"
+#include "femreg/io.h"
+#include "femreg/point_cloud.h"
+#include "femreg/scene.h"
+#include "femreg/tracker.h"
 #include "femreg_test_config.h"
 #include "solvers/backend.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -374,15 +375,12 @@ TEST(EquilibriumRegistration, SoftlyAnchoredSlabHasNoSolverFailure) {
   double seen = 0.0;
   int frames = 0, converged = 0;
   for (int f = 0;; ++f) {
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%04d", f);
     PointCloud cloud;
-    if (!ReadPointCloud(dir + "/clouds/" + name + ".pcd", &cloud).ok()) break;
     GroundTruthFrame truth;
-    ASSERT_TRUE(ReadGroundTruthFrame(dir + "/ground_truth/" + name + ".csv", &truth).ok());
+    if (!testing_util::ReadDatasetFrame(dir, f, &cloud, &truth).ok()) break;  // past the last frame
     FrameSummary s;
     ASSERT_TRUE(tracker->Track(cloud, &s).ok());
-    SCOPED_TRACE(std::string(name) + ": " + s.BriefReport());
+    SCOPED_TRACE("frame " + std::to_string(f) + ": " + s.BriefReport());
     EXPECT_NE(s.termination, TerminationType::kSolverFailure);
     converged += s.termination == TerminationType::kConverged ? 1 : 0;
     const VertexErrors e = ComputeVertexErrors(tracker->vertices(0), truth);
