@@ -99,7 +99,8 @@ const Case& CaseFor(int vertices, int points) {
 // per pair, the default 200 N/m; 1: per area, the setting docs/theory/data-weight.md suggests:
 // data_per_area 1.15e7 with model_to_cloud_share 0.1; 2: per pair at 36 N/m, what that
 // per-area setting gives each point of these 2000-point clouds on the 64k-vertex box, where
-// its area-per-point estimate is one triangle's area: docs/performance/scaling.md).
+// its area-per-point estimate is one triangle's area: docs/performance/scaling.md), threads
+// (solver.num_threads; 1 in the size rows, so that they measure the mesh and not the machine).
 void Track(benchmark::State& state) {
   const int vertices = static_cast<int>(state.range(0));
   const int points = static_cast<int>(state.range(1));
@@ -109,7 +110,7 @@ void Track(benchmark::State& state) {
   const femreg::Preconditioner preconditioners[] = {femreg::Preconditioner::kAuto, femreg::Preconditioner::kFactor,
                                                     femreg::Preconditioner::kMultigrid};
   options.solver.preconditioner = preconditioners[state.range(2)];
-  options.solver.num_threads = 1;
+  options.solver.num_threads = static_cast<int>(state.range(4));
   if (state.range(3) == 1) {
     options.weights.data = -1.0;
     options.weights.data_per_area = 1.15e7;
@@ -157,6 +158,7 @@ void Track(benchmark::State& state) {
   state.counters["preconditioner"] = static_cast<double>(state.range(2));
   state.counters["per_area"] = state.range(3) == 1 ? 1.0 : 0.0;
   state.counters["data_per_pair"] = options.weights.data;  // N/m; < 0: per area
+  state.counters["threads"] = static_cast<double>(state.range(4));
   state.counters["points_used"] = frames > 0 ? used / frames : 0;
   state.counters["converged"] = frames > 0 ? converged / frames : 0;
   // Mean vertex error against the bent shape the clouds were sampled from (mm).
@@ -166,17 +168,20 @@ void Track(benchmark::State& state) {
 }
 
 BENCHMARK(Track)
-    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}, {0}, {0}})
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000, 20000, 300000}, {0}, {0}, {1}})
     // The factor where auto takes multigrid (the boxes from 5k vertices on), to compare.
-    ->Args({4000, 2000, 1, 0})
-    ->Args({16000, 2000, 1, 0})
-    ->Args({64000, 2000, 1, 0})
+    ->Args({4000, 2000, 1, 0, 1})
+    ->Args({16000, 2000, 1, 0, 1})
+    ->Args({64000, 2000, 1, 0, 1})
     // The data weight per area (its area-per-point estimate saturates at a triangle's area
     // on the finer boxes, so each point weighs 288 N/m at 1.4k vertices down to 36 at 70k).
-    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000}, {0}, {1}})
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000}, {0}, {1}, {1}})
     // Per pair with the weight per area gives each point on the finest box: the cost of the
     // data term's stiffness against the elements', whatever the weighting.
-    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000}, {0}, {2}})
+    ->ArgsProduct({{1000, 4000, 16000, 64000}, {2000}, {0}, {2}, {1}})
+    // Two threads against the one-thread rows above (issue 41: at least 1.6x from 20k
+    // vertices on a free second core).
+    ->ArgsProduct({{4000, 16000, 64000}, {2000}, {0}, {0}, {2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);

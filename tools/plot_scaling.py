@@ -38,7 +38,9 @@ def main():
             # Before 2026-11-27 there was no choice: the default was the factor at every size.
             "preconditioner": PRECONDITIONERS[int(b.get("preconditioner", 0))],
             # The fourth argument (from 2026-11-27 on): the data weight per pair or per area.
-            "data_weight": DataWeight(b), "ms_per_frame": ms,
+            "data_weight": DataWeight(b),
+            # The fifth argument (from 2026-12-01 on): solver.num_threads; one before.
+            "threads": int(b.get("threads", 1)), "ms_per_frame": ms,
             "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
             "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
             # The solve's parts and counts (benchmarks from 2026-11-26 on; 0 before).
@@ -51,21 +53,21 @@ def main():
             # 2026-11-28 on).
             "error_mm": b.get("error_mm", float("nan")),
         })
-    rows.sort(key=lambda r: (r["data_weight"] != "per pair", r["data_weight"], r["preconditioner"] != "auto",
-                             r["points"], r["vertices"]))
+    rows.sort(key=lambda r: (r["threads"], r["data_weight"] != "per pair", r["data_weight"],
+                             r["preconditioner"] != "auto", r["points"], r["vertices"]))
     with open(out / "scaling.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.2f}" if isinstance(v, float) else v) for k, v in r.items()})
-    lines = ["| vertices | tets | cloud points (used) | preconditioner | data weight | ms/frame | correspondences | "
+    lines = ["| vertices | tets | cloud points (used) | preconditioner | data weight | threads | ms/frame | correspondences | "
              "rotations | solve "
              "(assembly / factorization or hierarchy / linear solves) | factorizations or hierarchies, PCG iterations, outer iterations "
              "per frame | preprocess | converged | error (mm) |",
-             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['preconditioner']} | "
-                     f"{r['data_weight']} | "
+                     f"{r['data_weight']} | {r['threads']} | "
                      f"{r['ms_per_frame']:.1f} | "
                      f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} "
                      f"({r['assembly_ms']:.0f} / {r['factorization_ms']:.0f} / {r['linear_solve_ms']:.0f}) | "
@@ -74,6 +76,7 @@ def main():
     (out / "table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     fig, ax = plt.subplots(figsize=(6, 4.2))
+    rows = [r for r in rows if r["threads"] == 1]  # the plot: one thread, the mesh's cost
     default = [r for r in rows if r["preconditioner"] == "auto" and r["data_weight"] == "per pair"]
     for points in sorted({r["points"] for r in default}):
         sel = [r for r in default if r["points"] == points]
