@@ -184,11 +184,43 @@ TEST(Element, CorotationalZeroAtRestAndUnderRigidMotion) {
   EXPECT_GT(linear_nonzero, 90);
 }
 
+// The rest data keep what every step reads; the matrices are formed from it: C is
+// IsotropicElasticity's, and the force through the stress is -R K u with K = V L^T C L.
+TEST(Element, MatricesFromTheRestDataAreTheElementsOwn) {
+  const Material material = TestMaterial();
+  const ElementRest rest = BuildElementRest(RestTet(), material);
+  const Matrix6 C = IsotropicElasticity(material.youngs_modulus, material.poisson_ratio);
+  EXPECT_LT((HookeMatrix(rest) - C).cwiseAbs().maxCoeff(), 1e-12 * C.cwiseAbs().maxCoeff());
+  const Matrix6x12 L = StrainDisplacement(rest);
+  const Matrix12 K = ElementStiffness(rest);
+  EXPECT_LT((K - rest.volume * L.transpose() * C * L).norm(), 1e-12 * K.norm());
+  // L u is the small strain of the displacement: a uniform stretch of 1e-3 along x.
+  Vector12 u = Vector12::Zero();
+  for (int i = 0; i < 4; ++i) u(3 * i) = 1e-3 * rest.X(3 * i);
+  const Vector6 strain = L * u;
+  EXPECT_NEAR(strain(0), 1e-3, 1e-15);
+  EXPECT_LT(strain.tail<5>().cwiseAbs().maxCoeff(), 1e-15);
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vector12 x = RandomDeformed(rest, &rng);
+    const Eigen::Matrix3d R = RotationAt(rest, x);
+    Vector12 ur;
+    for (int i = 0; i < 4; ++i) ur.segment<3>(3 * i) = R.transpose() * x.segment<3>(3 * i) - rest.X.segment<3>(3 * i);
+    const Vector12 ku = K * ur;
+    Vector12 expected;
+    for (int i = 0; i < 4; ++i) expected.segment<3>(3 * i) = -R * ku.segment<3>(3 * i);
+    EXPECT_LT((ElementForce(rest, R, x) - expected).norm(), 1e-10 * expected.norm()) << "trial " << trial;
+    EXPECT_NEAR(ElementEnergy(rest, R, x), 0.5 * ur.dot(ku), 1e-10 * ur.dot(ku)) << "trial " << trial;
+  }
+}
+
 TEST(Element, StiffnessAtRestIsSymmetricPsdWithSixRigidModes) {
   const ElementRest rest = BuildElementRest(RestTet(), TestMaterial());
-  EXPECT_LT((rest.K - rest.K.transpose()).norm(), 1e-12 * rest.K.norm());
-  EXPECT_LT((rest.S.transpose() * rest.S - rest.K).norm(), 1e-10 * rest.K.norm());
-  Eigen::SelfAdjointEigenSolver<Matrix12> eig(rest.K);
+  const Matrix12 K = ElementStiffness(rest);
+  const Matrix6x12 S = ElementResidualMatrix(rest);
+  EXPECT_LT((K - K.transpose()).norm(), 1e-12 * K.norm());
+  EXPECT_LT((S.transpose() * S - K).norm(), 1e-10 * K.norm());
+  Eigen::SelfAdjointEigenSolver<Matrix12> eig(K);
   const Vector12 values = eig.eigenvalues();
   const double tol = 1e-10 * values.maxCoeff();
   int zeros = 0;

@@ -99,18 +99,29 @@ using Vector6 = Eigen::Matrix<double, 6, 1>;
 // shear strains (gamma = 2 eps).
 Matrix6 IsotropicElasticity(double youngs_modulus, double poisson_ratio);
 
-// Rest data of one element, built once per topology.
+// Rest data of one element, built once per topology: what the kernels read every step, in
+// 192 bytes. The element's matrices (L, C, K, S below) are formed from it where a kernel
+// needs them: stored, they took 2.8 kB an element (1 GB for a 70k-vertex mesh), and the
+// fields read every step lay three cache lines apart
+// (docs/notes/2026-12-01-element-rest-size.md).
 struct ElementRest {
   Eigen::Matrix3d dm_inv;  // inverse of D_m = [X1-X0, X2-X0, X3-X0]
   double volume = 0.0;     // rest volume V_e (> 0)
-  Matrix6x12 L;            // strain-displacement: eps = L u, u = [u0; u1; u2; u3]
-  Matrix6 C;               // Hooke matrix of the element's material
-  double lambda = 0.0;     // its Lame parameters (C is isotropic): lambda ...
+  double lambda = 0.0;     // the material's Lame parameters (isotropic): lambda ...
   double mu = 0.0;         // ... and the shear modulus
-  Matrix6x12 S;            // sqrt(V_e) C^(1/2) L, so that S^T S = K
-  Matrix12 K;              // V_e L^T C L
   Vector12 X;              // rest positions [X0; X1; X2; X3]
 };
+
+// The element's strain-displacement matrix L (eps = L u, u = [u0; u1; u2; u3], Voigt order
+// and engineering shears as IsotropicElasticity), from its shape gradients.
+Matrix6x12 StrainDisplacement(const ElementRest& rest);
+// Its Hooke matrix C: IsotropicElasticity's, from lambda and mu.
+Matrix6 HookeMatrix(const ElementRest& rest);
+// Its stiffness K = V_e L^T C L (12 by 12).
+Matrix12 ElementStiffness(const ElementRest& rest);
+// The residual's matrix S = sqrt(V_e) C^(1/2) L (C^(1/2) the symmetric square root), so that
+// S^T S = K.
+Matrix6x12 ElementResidualMatrix(const ElementRest& rest);
 
 // X: 3 by 4 rest positions (columns are the vertices).
 ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Material& material);

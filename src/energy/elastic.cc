@@ -39,7 +39,7 @@ bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Matrix12 K;
   if (hessian != nullptr) {  // one decomposition for R and the tangent
-    K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R, rotation) : rest->K;
+    K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R, rotation) : ElementStiffness(*rest);
   } else if (corotational) {
     // Newton from the held rotation (near R(x) between outer iterations) costs a fraction
     // of the SVD: the force residual of equilibrium registration evaluates every element.

@@ -118,38 +118,63 @@ ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Materia
   Dm << X.col(1) - X.col(0), X.col(2) - X.col(0), X.col(3) - X.col(0);
   r.volume = std::abs(Dm.determinant()) / 6.0;
   r.dm_inv = Dm.inverse();
+  const Matrix6 C = IsotropicElasticity(material.youngs_modulus, material.poisson_ratio);
+  r.lambda = C(0, 1);
+  r.mu = C(3, 3);
+  for (int i = 0; i < 4; ++i) r.X.segment<3>(3 * i) = X.col(i);
+  return r;
+}
+
+Matrix6x12 StrainDisplacement(const ElementRest& rest) {
   // Gradients of the barycentric shape functions: grad N_i (i = 1..3) is row i-1 of
   // D_m^-1; grad N_0 = -(sum of the others).
   Eigen::Matrix<double, 3, 4> grad;
-  grad.col(1) = r.dm_inv.row(0).transpose();
-  grad.col(2) = r.dm_inv.row(1).transpose();
-  grad.col(3) = r.dm_inv.row(2).transpose();
+  grad.col(1) = rest.dm_inv.row(0).transpose();
+  grad.col(2) = rest.dm_inv.row(1).transpose();
+  grad.col(3) = rest.dm_inv.row(2).transpose();
   grad.col(0) = -(grad.col(1) + grad.col(2) + grad.col(3));
-  r.L.setZero();
+  Matrix6x12 L = Matrix6x12::Zero();
   for (int i = 0; i < 4; ++i) {
     const double gx = grad(0, i), gy = grad(1, i), gz = grad(2, i);
     const int c = 3 * i;
-    r.L(0, c + 0) = gx;
-    r.L(1, c + 1) = gy;
-    r.L(2, c + 2) = gz;
-    r.L(3, c + 1) = gz;
-    r.L(3, c + 2) = gy;
-    r.L(4, c + 0) = gz;
-    r.L(4, c + 2) = gx;
-    r.L(5, c + 0) = gy;
-    r.L(5, c + 1) = gx;
+    L(0, c + 0) = gx;
+    L(1, c + 1) = gy;
+    L(2, c + 2) = gz;
+    L(3, c + 1) = gz;
+    L(3, c + 2) = gy;
+    L(4, c + 0) = gz;
+    L(4, c + 2) = gx;
+    L(5, c + 0) = gy;
+    L(5, c + 1) = gx;
   }
-  r.C = IsotropicElasticity(material.youngs_modulus, material.poisson_ratio);
-  r.lambda = r.C(0, 1);
-  r.mu = r.C(3, 3);
-  Eigen::SelfAdjointEigenSolver<Matrix6> eig(r.C);
-  const Matrix6 C_half = eig.eigenvectors() *
-                         eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() *
-                         eig.eigenvectors().transpose();
-  r.S = std::sqrt(r.volume) * C_half * r.L;
-  r.K = r.volume * r.L.transpose() * r.C * r.L;
-  for (int i = 0; i < 4; ++i) r.X.segment<3>(3 * i) = X.col(i);
-  return r;
+  return L;
+}
+
+Matrix6 HookeMatrix(const ElementRest& rest) {
+  Matrix6 C = Matrix6::Zero();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) C(i, j) = rest.lambda;
+    C(i, i) = rest.lambda + 2.0 * rest.mu;
+    C(i + 3, i + 3) = rest.mu;
+  }
+  return C;
+}
+
+Matrix12 ElementStiffness(const ElementRest& rest) {
+  const Matrix6x12 L = StrainDisplacement(rest);
+  return rest.volume * L.transpose() * HookeMatrix(rest) * L;
+}
+
+Matrix6x12 ElementResidualMatrix(const ElementRest& rest) {
+  // C's symmetric square root in closed form: on the normal strains C = lambda 1 1^T + 2 mu I
+  // (eigenvalues 3 lambda + 2 mu along 1 and 2 mu across it), on the shears mu I.
+  const double across = std::sqrt(std::max(0.0, 2.0 * rest.mu));
+  const double along = std::sqrt(std::max(0.0, 3.0 * rest.lambda + 2.0 * rest.mu));
+  Matrix6 C_half = Matrix6::Zero();
+  C_half.topLeftCorner<3, 3>().setConstant((along - across) / 3.0);
+  C_half.topLeftCorner<3, 3>().diagonal().array() += across;
+  C_half.bottomRightCorner<3, 3>().diagonal().setConstant(std::sqrt(std::max(0.0, rest.mu)));
+  return std::sqrt(rest.volume) * C_half * StrainDisplacement(rest);
 }
 
 Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F) {
@@ -246,7 +271,7 @@ Vector12 RotatedDisplacement(const ElementRest& rest, const Eigen::Matrix3d& R,
 }  // namespace
 
 Vector6 ElementResidual(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
-  return rest.S * RotatedDisplacement(rest, R, x);
+  return ElementResidualMatrix(rest) * RotatedDisplacement(rest, R, x);
 }
 
 double ElementEnergy(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
@@ -254,10 +279,8 @@ double ElementEnergy(const ElementRest& rest, const Eigen::Matrix3d& R, const Ve
 }
 
 Vector12 ElementForce(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
-  // Coefficient by coefficient: Eigen sends a 12 by 12 product to its general kernel, slower here.
-  const Vector12 ku = rest.K.lazyProduct(RotatedDisplacement(rest, R, x));
   Vector12 f;
-  for (int i = 0; i < 4; ++i) f.segment<3>(3 * i) = -R * ku.segment<3>(3 * i);
+  ElementEnergyAndForce(rest, R, x, &f);
   return f;
 }
 
@@ -286,17 +309,18 @@ Matrix12 WarpedStiffness(const ElementRest& rest, const Eigen::Matrix3d& R) {
 
 Eigen::Matrix<double, 6, 3> ElementResidualJacobianBlock(const ElementRest& rest,
                                                          const Eigen::Matrix3d& R, int i) {
-  return rest.S.block<6, 3>(0, 3 * i) * R.transpose();
+  return ElementResidualMatrix(rest).block<6, 3>(0, 3 * i) * R.transpose();
 }
 
 Matrix6x12 ElementResidualJacobian(const ElementRest& rest, const Eigen::Matrix3d& R) {
+  const Matrix6x12 S = ElementResidualMatrix(rest);
   Matrix6x12 J;
-  for (int i = 0; i < 4; ++i) J.block<6, 3>(0, 3 * i) = ElementResidualJacobianBlock(rest, R, i);
+  for (int i = 0; i < 4; ++i) J.block<6, 3>(0, 3 * i) = S.block<6, 3>(0, 3 * i) * R.transpose();
   return J;
 }
 
 Vector6 ElementStress(const ElementRest& rest, const Eigen::Matrix3d& R, const Vector12& x) {
-  return rest.C * (rest.L * RotatedDisplacement(rest, R, x));
+  return HookeMatrix(rest) * (StrainDisplacement(rest) * RotatedDisplacement(rest, R, x));
 }
 
 void ElasticModel::Build(const TetMesh& mesh, ElasticModelType type,
@@ -484,8 +508,8 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
   Matrix12 tangent = WarpedStiffness(rest, R);
 
   // Lame parameters of the (isotropic) Hooke matrix, and tr(S - I).
-  const double mu = rest.C(3, 3);
-  const double lambda = rest.C(0, 1);
+  const double mu = rest.mu;
+  const double lambda = rest.lambda;
   const double trace = svd.sigma.sum() - 3.0;
   // Shape-function gradients (columns): F = sum_k x_k grad N_k^T.
   Eigen::Matrix<double, 3, 4> grad;
@@ -523,8 +547,15 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
 double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
                              const Vector12& x, Vector12* force) {
   const Vector12 u = RotatedDisplacement(rest, R, x);
-  // Coefficient by coefficient: Eigen sends a 12 by 12 product to its general kernel, slower here.
-  const Vector12 ku = rest.K.lazyProduct(u);
+  // K u = V L^T (C (L u)) through the strain and the stress: L has 36 nonzeros and C is
+  // isotropic, fewer products than K's 144, and K is not stored (ElementRest).
+  const Matrix6x12 L = StrainDisplacement(rest);
+  const Vector6 strain = L * u;
+  const double trace = strain(0) + strain(1) + strain(2);
+  Vector6 stress;
+  stress.head<3>() = 2.0 * rest.mu * strain.head<3>() + Eigen::Vector3d::Constant(rest.lambda * trace);
+  stress.tail<3>() = rest.mu * strain.tail<3>();
+  const Vector12 ku = rest.volume * (L.transpose() * stress);
   for (int i = 0; i < 4; ++i) force->segment<3>(3 * i) = -R * ku.segment<3>(3 * i);
   return 0.5 * u.dot(ku);
 }

@@ -429,7 +429,15 @@ double QuasiStaticSolver::Potential(double elastic, const Vertices& x,
 double QuasiStaticSolver::RoundoffFloor(const Vertices& x) const {
   // The forces are sums of K_e x_e terms: their round-off is about eps |K| |x| per DOF.
   double max_diagonal = 0.0;
-  for (int e = 0; e < nt(); ++e) max_diagonal = std::max(max_diagonal, model_.rest(e).K.diagonal().maxCoeff());
+  for (int e = 0; e < nt(); ++e) {
+    // K's diagonal: V (mu |b_i|^2 + (lambda + mu) b_ia^2) for shape gradient b_i.
+    const ElementRest& rest = model_.rest(e);
+    const Eigen::Matrix<double, 3, 4> b = ShapeGradients(rest);
+    for (int i = 0; i < 4; ++i) {
+      const double diagonal = rest.mu * b.col(i).squaredNorm() + (rest.lambda + rest.mu) * b.col(i).cwiseAbs2().maxCoeff();
+      max_diagonal = std::max(max_diagonal, rest.volume * diagonal);
+    }
+  }
   const double max_coordinate = std::max(x.cwiseAbs().maxCoeff(), mesh_.rest.cwiseAbs().maxCoeff());
   return 64.0 * std::numeric_limits<double>::epsilon() * max_diagonal * max_coordinate *
          std::sqrt(static_cast<double>(free_dofs_.size()));

@@ -96,8 +96,9 @@ void AddElement(const ElasticModel& model, int e, const Eigen::Matrix3d& R, cons
   const Eigen::Matrix3d sp = n * nu.cwiseMax(0.0).asDiagonal() * n.transpose();
   const Eigen::Matrix3d sm = n * nu.cwiseMin(0.0).asDiagonal() * n.transpose();
   // Eqs. 11-12: nodal forces V L^T sigma+-, rotated to the world frame.
-  const Vector12 fp = rest.volume * rest.L.transpose() * TensorToVoigt(sp);
-  const Vector12 fm = rest.volume * rest.L.transpose() * TensorToVoigt(sm);
+  const Matrix6x12 L = StrainDisplacement(rest);
+  const Vector12 fp = rest.volume * L.transpose() * TensorToVoigt(sp);
+  const Vector12 fm = rest.volume * L.transpose() * TensorToVoigt(sm);
   for (int k = 0; k < 4; ++k) {
     const int j = model.tets()(e, k);
     const Eigen::Vector3d a = R * fp.segment<3>(3 * k), b = R * fm.segment<3>(3 * k);
@@ -293,8 +294,9 @@ Eigen::VectorXd BoundSums(const ElasticModel& model, const fracture_internal::Bo
       EigenvalueBounds(sigma, &top, &bottom);
       const double slack = 1e-7 * sigma.norm();
       const double plus = std::max(0.0, top) + slack, minus = std::max(0.0, -bottom) + slack;
+      const Eigen::Matrix<double, 3, 4> gradients = ShapeGradients(rest);
       for (int k = 0; k < 4; ++k) {
-        const Eigen::Vector3d g(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+        const Eigen::Vector3d g = gradients.col(k);
         const double g2 = g.squaredNorm(), g1 = std::sqrt(g2);
         const double q = g.dot(sigma * g);
         const double along = std::sqrt(std::max(0.0, plus * (q + minus * g2)));
@@ -360,10 +362,11 @@ void BuildBoundData(const TetMesh& mesh, const ElasticModel& model, const Fractu
   data->elements.resize(static_cast<size_t>(model.num_elements()));
   for (int e = 0; e < model.num_elements(); ++e) {
     const ElementRest& rest = model.rest(e);
+    const Eigen::Matrix<double, 3, 4> gradients = ShapeGradients(rest);
     BoundData::Element& el = data->elements[static_cast<size_t>(e)];
     for (int k = 0; k < 4; ++k) {
       el.vertices[k] = model.tets()(e, k);
-      el.g[k] = Eigen::Vector3d(rest.L(0, 3 * k), rest.L(1, 3 * k + 1), rest.L(2, 3 * k + 2));
+      el.g[k] = gradients.col(k);
       el.g2[k] = el.g[k].squaredNorm();
       el.g1[k] = std::sqrt(el.g2[k]);
     }
