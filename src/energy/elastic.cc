@@ -39,7 +39,8 @@ bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Matrix12 K;
   if (hessian != nullptr) {  // one decomposition for R and the tangent
-    K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R, rotation) : ElementStiffness(*rest);
+    K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R, rotation)
+                     : WarpedStiffness(*rest, Eigen::Matrix3d::Identity());  // K, in closed form
   } else if (corotational) {
     // Newton from the held rotation (near R(x) between outer iterations) costs a fraction
     // of the SVD: the force residual of equilibrium registration evaluates every element.
@@ -89,12 +90,17 @@ bool EdgeSpring::SecondOrder(const double* const* x, double* energy, Eigen::Vect
 bool ElasticElement::Evaluate(const double* const* x, double* r, double** J) const {
   Vector12 xe;
   for (int i = 0; i < 4; ++i) xe.segment<3>(3 * i) = Eigen::Map<const Eigen::Vector3d>(x[i]);
-  Eigen::Map<Vector6>{r} = ElementResidual(*rest, *rotation, xe);
+  // S formed once for the residual and the four blocks (the rest data do not store it).
+  const Matrix6x12 S = ElementResidualMatrix(*rest);
+  const Eigen::Matrix3d& R = *rotation;
+  Vector12 u;
+  for (int i = 0; i < 4; ++i) u.segment<3>(3 * i) = R.transpose() * xe.segment<3>(3 * i) - rest->X.segment<3>(3 * i);
+  Eigen::Map<Vector6>{r} = S * u;
   if (J == nullptr) return true;
   for (int i = 0; i < 4; ++i) {
     if (J[i] == nullptr) continue;
     Eigen::Map<Eigen::Matrix<double, 6, 3, Eigen::RowMajor>> Ji(J[i]);
-    Ji = ElementResidualJacobianBlock(*rest, *rotation, i);
+    Ji = S.block<6, 3>(0, 3 * i) * R.transpose();
   }
   return true;
 }

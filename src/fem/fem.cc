@@ -547,8 +547,8 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
 double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
                              const Vector12& x, Vector12* force) {
   const Vector12 u = RotatedDisplacement(rest, R, x);
-  // K u = V L^T (C (L u)) through the strain and the stress: L has 36 nonzeros and C is
-  // isotropic, fewer products than K's 144, and K is not stored (ElementRest).
+  // K u = V L^T (C (L u)) through the strain and the isotropic stress: about the products
+  // of K's 12x12 one, and K is not stored (ElementRest).
   const Matrix6x12 L = StrainDisplacement(rest);
   const Vector6 strain = L * u;
   const double trace = strain(0) + strain(1) + strain(2);

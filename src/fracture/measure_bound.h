@@ -16,14 +16,14 @@ namespace fracture_internal {
 
 // What the bound reads of a mesh, its model and the options, gathered once per topology: per
 // node the area and the toughness, per element of a corotated model the few numbers the bound
-// needs (the model's ElementRest is large, and the bound runs after every outer iteration).
+// needs, side by side (the bound runs after every outer iteration).
 // The values copied (or computed) as the bound read them from the model, so kept or rebuilt
 // it gives the same bound.
 struct BoundData {
   struct Element {
     std::array<int, 4> vertices;
     Eigen::Matrix3d dm_inv;
-    std::array<Eigen::Vector3d, 4> g;  // the shape functions' gradients, as in ElementRest::L
+    std::array<Eigen::Vector3d, 4> g;  // the shape functions' gradients (ShapeGradients)
     std::array<double, 4> g2, g1;      // their squared norms and norms
     double volume, lambda, mu;
   };
