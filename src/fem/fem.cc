@@ -126,13 +126,7 @@ ElementRest BuildElementRest(const Eigen::Matrix<double, 3, 4>& X, const Materia
 }
 
 Matrix6x12 StrainDisplacement(const ElementRest& rest) {
-  // Gradients of the barycentric shape functions: grad N_i (i = 1..3) is row i-1 of
-  // D_m^-1; grad N_0 = -(sum of the others).
-  Eigen::Matrix<double, 3, 4> grad;
-  grad.col(1) = rest.dm_inv.row(0).transpose();
-  grad.col(2) = rest.dm_inv.row(1).transpose();
-  grad.col(3) = rest.dm_inv.row(2).transpose();
-  grad.col(0) = -(grad.col(1) + grad.col(2) + grad.col(3));
+  const Eigen::Matrix<double, 3, 4> grad = ShapeGradients(rest);
   Matrix6x12 L = Matrix6x12::Zero();
   for (int i = 0; i < 4; ++i) {
     const double gx = grad(0, i), gy = grad(1, i), gz = grad(2, i);
@@ -547,15 +541,15 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
 double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
                              const Vector12& x, Vector12* force) {
   const Vector12 u = RotatedDisplacement(rest, R, x);
-  // K u = V L^T (C (L u)) through the strain and the isotropic stress: about the products
-  // of K's 12x12 one, and K is not stored (ElementRest).
-  const Matrix6x12 L = StrainDisplacement(rest);
-  const Vector6 strain = L * u;
-  const double trace = strain(0) + strain(1) + strain(2);
-  Vector6 stress;
-  stress.head<3>() = 2.0 * rest.mu * strain.head<3>() + Eigen::Vector3d::Constant(rest.lambda * trace);
-  stress.tail<3>() = rest.mu * strain.tail<3>();
-  const Vector12 ku = rest.volume * (L.transpose() * stress);
+  // K u = V L^T C L u from the shape gradients b_i, as ElasticElement::Normal: the small strain
+  // e = sym(sum_i u_i b_i^T), the stress P = 2 mu e + lambda tr(e) I, and (K u)_i = V P b_i.
+  const Eigen::Matrix<double, 3, 4> b = ShapeGradients(rest);
+  Eigen::Matrix3d e = Eigen::Map<const Eigen::Matrix<double, 3, 4>>(u.data()) * b.transpose();
+  e = (0.5 * (e + e.transpose())).eval();
+  Eigen::Matrix3d P = 2.0 * rest.mu * e;
+  P.diagonal().array() += rest.lambda * e.trace();
+  Vector12 ku;
+  Eigen::Map<Eigen::Matrix<double, 3, 4>>(ku.data()) = rest.volume * P * b;
   for (int i = 0; i < 4; ++i) force->segment<3>(3 * i) = -R * ku.segment<3>(3 * i);
   return 0.5 * u.dot(ku);
 }
