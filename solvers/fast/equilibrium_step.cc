@@ -17,6 +17,7 @@
 #include "parallel/threads.h"
 #include "solvers/fast/data_shift.h"
 #include "solvers/fast/fast_backend.h"
+#include "solvers/fast/fast_backend_internal.h"
 #include "solvers/fast/supernodal_solve.h"
 
 namespace femreg {
@@ -104,6 +105,7 @@ struct EquilibriumSolver::Impl {
     if (analysed) return;
     factor.setMode(Eigen::CholmodSupernodalLLt);
     factor.cholmod().print = 0;  // a matrix that is not positive definite is an answer here
+    ConfigureAnalysis(&factor.cholmod());  // the classic solve's orderings and supernodes
     {
       const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
       factor.analyzePattern(K);

@@ -59,22 +59,26 @@ void OrderWithAmdAndMetis(cholmod_common* common) {
 
 }  // namespace
 
-void FastBackend::Impl::Analyse() {
-  if (analysed) return;
-  factor.setMode(Eigen::CholmodSupernodalLLt);
-  cholmod_common& common = factor.cholmod();
-  OrderWithAmdAndMetis(&common);
+void ConfigureAnalysis(cholmod_common* common) {
+  OrderWithAmdAndMetis(common);
   // Relaxed amalgamation a little beyond CHOLMOD's defaults ({4, 16, 48} columns with {0.8, 0.1,
   // 0.05} of explicit zeros): with 3 unknowns per vertex, its first threshold merges little more
   // than one vertex, which leaves many small supernodes, each a BLAS call too small to run at
   // speed; larger settings slowed the substitutions
   // (docs/notes/2026-11-28-figures-from-code-comments.md).
-  common.nrelax[0] = 6;
-  common.nrelax[1] = 24;
-  common.nrelax[2] = 64;
-  common.zrelax[0] = 0.8;
-  common.zrelax[1] = 0.15;
-  common.zrelax[2] = 0.06;
+  common->nrelax[0] = 6;
+  common->nrelax[1] = 24;
+  common->nrelax[2] = 64;
+  common->zrelax[0] = 0.8;
+  common->zrelax[1] = 0.15;
+  common->zrelax[2] = 0.06;
+}
+
+void FastBackend::Impl::Analyse() {
+  if (analysed) return;
+  factor.setMode(Eigen::CholmodSupernodalLLt);
+  cholmod_common& common = factor.cholmod();
+  ConfigureAnalysis(&common);
   {
     const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
     factor.analyzePattern(H);

@@ -49,6 +49,11 @@ constexpr double kFillEstimateMargin = 1.5;
 // (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int kFillEstimateFrom = 8192;
 
+// The supernodal analysis's settings for these systems (3 unknowns per vertex): AMD and METIS
+// both, and supernodes amalgamated a little beyond CHOLMOD's defaults. For every factor of the
+// back end, the equilibrium step's too (fast_backend_factor.cc says why).
+void ConfigureAnalysis(cholmod_common* common);
+
 struct FastBackend::Impl {
   BackendOptions options;
   int threads = 1;
