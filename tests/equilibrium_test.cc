@@ -238,6 +238,71 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
   EXPECT_NE(ceres.message.find("equilibrium"), std::string::npos);
 }
 
+// A free box whose data ask for a turn about z and a shift: with z held
+// (Equilibrium::held_turns), the solve makes the shift and the other turns but not the held one.
+TEST(EquilibriumSolve, MakesNoHeldTurn) {
+  const double angle = 0.02;
+  const Eigen::Vector3d shift(0.004, -0.002, 0.003);
+  const Eigen::Matrix3d turn =
+      (Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  auto solve = [&](bool hold, Vertices* x) {
+    BoxProblem box(2);
+    const int n = box.mesh.num_vertices();
+    const Eigen::Vector3d centre = box.mesh.rest.colwise().mean().transpose();
+    auto& data = box.problem.AddSet<energy::PointToPoint<1>>(energy::TermGroup::kData);
+    for (int v = 0; v < n; ++v) {
+      energy::PointToPoint<1> b;
+      b.vertices = {{v}};
+      b.barycentric = {{1.0}};
+      b.weight = 500.0;
+      b.target = centre + turn * (box.mesh.rest.row(v).transpose() - centre) + shift;
+      data.Add(b);
+    }
+    auto eq = std::make_shared<energy::Equilibrium>();
+    eq->site.assign(n, energy::ForceSite::kFree);
+    eq->force_weight.assign(n, 1e-2);
+    eq->strong_weight.assign(n, 1e2);
+    if (hold) eq->held_turns.push_back({0, n, Eigen::Vector3d::UnitZ()});
+    ASSERT_TRUE(eq->IsValid(n));
+    box.problem.SetEquilibrium(eq);
+    BackendOptions options;
+    options.type = SolverBackend::kFast;
+    options.max_iterations = 20;
+    options.relative_tolerance = 1e-10;
+    *x = box.mesh.rest;
+    const SolveReport report = MakeBackend(options)->Solve(box.problem, 0.0, x);
+    ASSERT_TRUE(report.success) << report.message;
+    EXPECT_LT(report.after.total(), report.before.total());
+  };
+  // The least-squares turn about axis a through the vertices' centroid, and the centroid's move.
+  BoxProblem reference(2);
+  const Vertices& rest = reference.mesh.rest;
+  const Eigen::Vector3d centre = rest.colwise().mean().transpose();
+  auto turn_about = [&](const Vertices& x, const Eigen::Vector3d& a) {
+    double num = 0.0, den = 0.0;
+    for (int v = 0; v < rest.rows(); ++v) {
+      const Eigen::Vector3d m = a.cross(rest.row(v).transpose() - centre);
+      num += m.dot((x.row(v) - rest.row(v)).transpose());
+      den += m.squaredNorm();
+    }
+    return num / den;
+  };
+  Vertices free_x, held_x;
+  solve(false, &free_x);
+  solve(true, &held_x);
+  const Eigen::Vector3d free_shift = (free_x - rest).colwise().mean().transpose();
+  const Eigen::Vector3d held_shift = (held_x - rest).colwise().mean().transpose();
+  std::printf("turn about z: free %.5f, held %.2e rad; about x: free %.5f, held %.5f; shift error %.2e / %.2e m\n",
+              turn_about(free_x, Eigen::Vector3d::UnitZ()), turn_about(held_x, Eigen::Vector3d::UnitZ()),
+              turn_about(free_x, Eigen::Vector3d::UnitX()), turn_about(held_x, Eigen::Vector3d::UnitX()),
+              (free_shift - shift).norm(), (held_shift - shift).norm());
+  EXPECT_NEAR(turn_about(free_x, Eigen::Vector3d::UnitZ()), angle, 0.05 * angle);
+  EXPECT_LT(std::abs(turn_about(held_x, Eigen::Vector3d::UnitZ())), 1e-3 * angle);
+  EXPECT_NEAR(turn_about(held_x, Eigen::Vector3d::UnitX()), angle, 0.1 * angle);
+  EXPECT_LT((held_shift - shift).norm(), 0.05 * shift.norm());
+}
+
 // A slender cantilever (80 cm long, 2 cm across) whose top is pulled into a bend by data: its
 // bending modes are soft, K Phi K is tiny along them and the data are not, and K~'s factor alone
 // preconditions them one PCG iteration each. After a step that took more than 60, the next

@@ -11,13 +11,13 @@
 
 #include "energy/assembler.h"
 #include "energy/equilibrium.h"
-#include "mesh/disjoint_sets.h"
 #include "parallel/signals.h"
 #include "parallel/stopwatch.h"
 #include "parallel/threads.h"
 #include "solvers/fast/data_shift.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/fast_backend_internal.h"
+#include "solvers/fast/step_modes.h"
 #include "solvers/fast/supernodal_solve.h"
 
 namespace femreg {
@@ -265,90 +265,8 @@ struct EquilibriumSolver::Impl {
     }
   }
 
-  // The rigid motions of the pieces no vertex of which is fixed (K's null space, up to the
-  // contacts' and loads' share): orthonormal, and the coarse matrix (R^T A R)^-1 over them.
-  // The preconditioner solves them exactly and K~'s factor on the rest: a free body's rigid
-  // motion is what the data alone decide, and K~ has only a tiny shift for it.
-  std::vector<Eigen::VectorXd> modes;
-  Eigen::MatrixXd coarse_inverse;
-  std::vector<std::vector<int>> free_pieces;  // per piece without fixed vertices, its vertices
-
-  void FindFreePieces(const energy::Problem& problem) {
-    const int n = problem.num_vertices();
-    DisjointSets sets(n);
-    for (const auto& cell : problem.coupling()) {
-      for (int k = 1; k < 4; ++k) sets.Unite(cell[0], cell[k]);
-    }
-    std::vector<int> piece_of(static_cast<size_t>(n), -1);
-    std::vector<std::vector<int>> pieces;
-    std::vector<char> fixed;
-    for (int v = 0; v < n; ++v) {
-      const int root = sets.Find(v);
-      if (piece_of[static_cast<size_t>(root)] < 0) {
-        piece_of[static_cast<size_t>(root)] = static_cast<int>(pieces.size());
-        pieces.emplace_back();
-        fixed.push_back(0);
-      }
-      const int p = piece_of[static_cast<size_t>(root)];
-      pieces[static_cast<size_t>(p)].push_back(v);
-      if (problem.is_fixed(v)) fixed[static_cast<size_t>(p)] = 1;
-    }
-    free_pieces.clear();
-    for (size_t p = 0; p < pieces.size(); ++p) {
-      if (!fixed[p] && pieces[p].size() >= 2) free_pieces.push_back(std::move(pieces[p]));
-    }
-  }
-
-  // The modes at x and their coarse matrix (after Penalties: A is this step's).
-  void RigidModes(const energy::Problem& problem, const Vertices& x) {
-    FindFreePieces(problem);
-    modes.clear();
-    const int n = problem.num_vertices();
-    for (const std::vector<int>& piece : free_pieces) {
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      for (int v : piece) centre += x.row(v).transpose();
-      centre /= static_cast<double>(piece.size());
-      const size_t first = modes.size();
-      for (int k = 0; k < 6; ++k) {
-        Eigen::VectorXd m = Eigen::VectorXd::Zero(3 * n);
-        for (int v : piece) {
-          if (k < 3) {
-            m[3 * v + k] = 1.0;
-          } else {
-            m.segment<3>(3 * v) = Eigen::Vector3d::Unit(k - 3).cross(x.row(v).transpose() - centre);
-          }
-        }
-        for (size_t j = first; j < modes.size(); ++j) m -= modes[j].dot(m) * modes[j];
-        const double norm = m.norm();
-        if (norm > 1e-12 * std::sqrt(static_cast<double>(piece.size()))) modes.push_back(m / norm);
-      }
-    }
-    const int c = static_cast<int>(modes.size());
-    coarse_inverse.resize(0, 0);
-    if (c == 0) return;
-    Eigen::MatrixXd coarse(c, c);
-    Eigen::VectorXd am;
-    for (int j = 0; j < c; ++j) {
-      Product(modes[static_cast<size_t>(j)], &am);
-      for (int i = 0; i < c; ++i) coarse(i, j) = modes[static_cast<size_t>(i)].dot(am);
-    }
-    coarse = 0.5 * (coarse + coarse.transpose()).eval();
-    Eigen::LDLT<Eigen::MatrixXd> ldlt_coarse(coarse);
-    const double largest = coarse.diagonal().cwiseAbs().maxCoeff();
-    if (ldlt_coarse.info() != Eigen::Success || !(largest > 0) ||
-        ldlt_coarse.vectorD().minCoeff() <= 1e-14 * largest) {
-      // A rigid motion nothing resists (no data on the piece): the whisper of Tikhonov the
-      // objective's assembly adds stands for it.
-      coarse.diagonal().array() += 1e-12 * std::max(largest, 1.0);
-      ldlt_coarse.compute(coarse);
-    }
-    coarse_inverse = ldlt_coarse.solve(Eigen::MatrixXd::Identity(c, c));
-  }
-
-  // v - R R^T v.
-  void Project(Eigen::VectorXd* v) const {
-    for (const Eigen::VectorXd& m : modes) *v -= m.dot(*v) * m;
-  }
+  // The rigid modes and the held turns at x (solvers/fast/step_modes.h).
+  StepModes modes;
 
   // H, g, K, f, the penalties and G at x; *terms (first only) the energy there.
   void Linearize(const energy::Problem& problem, const Vertices& x, bool first, EnergyTerms* terms,
@@ -358,15 +276,17 @@ struct EquilibriumSolver::Impl {
     physics.AssembleSecondOrder(problem, x, energy::Curvature::kExact, true, &f);
     physics.Finish(problem, 0.0, &f);
     Penalties(*problem.equilibrium());
-    RigidModes(problem, x);
+    modes.Build(problem, x, [this](const Eigen::VectorXd& p, Eigen::VectorXd* y) { Product(p, y); });
     Eigen::VectorXd k_phi;
     BlockProduct(physics.H(), phi_gradient, threads, &k_phi);
     G = g + k_phi;
+    modes.ProjectHeld(&G);  // the gradient in the steps' space: its norm is what the stops compare
     if (terms != nullptr) terms->equilibrium = equilibrium_energy;
     report->assemble_s += Seconds(t0);
   }
 
-  // y = (H + K Phi K) p.
+  // y = Q (H + K Phi K) p, Q = I - W W^T (p orthogonal to the held turns W: the step's
+  // matrix on their complement).
   void Product(const Eigen::VectorXd& p, Eigen::VectorXd* y) {
     Eigen::VectorXd kp, hp;
     BlockProduct(physics.H(), p, threads, &kp);
@@ -374,13 +294,14 @@ struct EquilibriumSolver::Impl {
     BlockProduct(physics.H(), kp, threads, y);
     BlockProduct(objective.H(), p, threads, &hp);
     *y += hp;
+    modes.ProjectHeld(y);
   }
 
   // z = B Phi~^-1 B r + R (R^T A R)^-1 R^T r with B = Q K~^-1 Q, Q = I - R R^T (no rigid
   // modes: B = K~^-1).
   void Precondition(const Eigen::VectorXd& r, Eigen::VectorXd* z, SolveReport* report) {
     Eigen::VectorXd u, projected = r;
-    Project(&projected);
+    modes.Project(&projected);
     auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd* out) {
       if (use_indefinite == 1) {
         indefinite_single.Solve(b, out);
@@ -396,16 +317,12 @@ struct EquilibriumSolver::Impl {
       ++report->linear_solves;
     };
     solve(projected, &u);
-    Project(&u);
+    modes.Project(&u);
     for (size_t v = 0; v < phi_inverse.size(); ++v) u.segment<3>(3 * v) = phi_inverse[v] * u.segment<3>(3 * v).eval();
-    Project(&u);
+    modes.Project(&u);
     solve(u, z);
-    Project(z);
-    if (modes.empty()) return;
-    Eigen::VectorXd coefficients(static_cast<Eigen::Index>(modes.size()));
-    for (size_t j = 0; j < modes.size(); ++j) coefficients[static_cast<Eigen::Index>(j)] = modes[j].dot(r);
-    const Eigen::VectorXd solved = coarse_inverse * coefficients;
-    for (size_t j = 0; j < modes.size(); ++j) *z += solved[static_cast<Eigen::Index>(j)] * modes[j];
+    modes.Project(z);
+    modes.AddCoarse(r, z);
   }
 
   // PCG on (H + K Phi K) dx = b from dx = 0; false if it did not converge in max_iterations.

@@ -12,7 +12,9 @@
 // and a 3x3 block per vertex. M^-1 (K Phi K) is the identity, so PCG's iterations go to the
 // few smooth modes the data H stiffens: the same spectrum as the reduced, force-space
 // problem's (docs/theory/equilibrium.md). Every step factorizes K~ anew; after a step whose
-// PCG took many iterations (soft modes of K that the data hold), K~ + s H instead.
+// PCG took many iterations (soft modes of K that the data hold), K~ + s H instead. The step
+// stays orthogonal to the problem's held turns (Equilibrium::held_turns: a free body's turns
+// that its surface does not show).
 #ifndef FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
 #define FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
 

@@ -1,5 +1,6 @@
 #include "energy/equilibrium.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "energy/nodal_volume.h"
@@ -76,7 +77,10 @@ bool Equilibrium::IsValid(int num_vertices) const {
   const size_t n = static_cast<size_t>(num_vertices);
   return site.size() == n && force_weight.size() == n && strong_weight.size() == n &&
          (sparsity.empty() || sparsity.size() == n) && (!pushing_only || normal.size() == n) &&
-         (sparsity.empty() || sparsity_floor > 0.0);
+         (sparsity.empty() || sparsity_floor > 0.0) &&
+         std::all_of(held_turns.begin(), held_turns.end(), [&](const HeldTurn& h) {
+           return h.first >= 0 && h.count >= 0 && h.first + h.count <= num_vertices && h.axis.allFinite();
+         });
 }
 
 uint32_t PhysicsGroups() {

@@ -45,12 +45,21 @@ struct Equilibrium {
   double sparsity_floor = 0.0;          // eps (N), > 0 where sparsity is
   bool pushing_only = false;            // a force points into the body: f . n <= 0
   double friction = -1.0;               // mu: |f_t| <= mu |f . n|; < 0: any tangential force
+  // Turns a step does not make: a free body's turn about an axis its surface does not show
+  // (docs/theory/stopping.md#hidden-turns). Vertices [first, first + count) turn about `axis`
+  // through their centroid; the fast back end's step stays orthogonal to that motion.
+  struct HeldTurn {
+    int first = 0, count = 0;
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  };
+  std::vector<HeldTurn> held_turns;
 
   // phi_v(f), its gradient and a positive semi-definite curvature (the sparse term's
   // majorizer s / sqrt(|f|^2 + eps^2) I, the cone's along the distance's direction).
   double Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gradient,
                  Eigen::Matrix3d* curvature) const;
-  // The size of every per-vertex list is #V (normal too with pushing_only).
+  // The size of every per-vertex list is #V (normal too with pushing_only); the held turns'
+  // vertices are within #V.
   bool IsValid(int num_vertices) const;
 };
 

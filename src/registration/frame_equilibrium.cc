@@ -7,12 +7,13 @@
 
 #include "energy/equilibrium.h"
 #include "registration/frame_problem.h"
+#include "registration/prediction.h"
 
 namespace femreg {
 
 using energy::TermGroup;
 
-void FrameProblem::SetEquilibrium(const TrackerState& state, bool on) {
+void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurface* data) {
   const ForceOptions& options = state.options.forces;
   if (!on) {
     problem_.SetEquilibrium(nullptr);
@@ -76,6 +77,16 @@ void FrameProblem::SetEquilibrium(const TrackerState& state, bool on) {
     ++floor_count;
   }
   eq->sparsity_floor = floor_count > 0 ? floor_sum / floor_count : 1.0;
+  // The hold of the outer iterations (docs/theory/stopping.md#hidden-turns) inside the solve:
+  // its steps along a turn the data do not show gained little and were taken back after it.
+  if (state.options.solver.hold_hidden_turns) {
+    for (size_t i = 0; i < state.objects.size(); ++i) {
+      const ObjectState& o = state.objects[i];
+      for (const Eigen::Vector3d& axis : HiddenTurnAxes(state, static_cast<int>(i), state.x, data)) {
+        eq->held_turns.push_back({o.offset, o.mesh.num_vertices(), axis});
+      }
+    }
+  }
   // Clamps and anchors: their reaction is whatever holds them.
   for (const auto& kv : state.anchors) {
     for (int g : kv.second.vertices) eq->site[g] = energy::ForceSite::kSupport;

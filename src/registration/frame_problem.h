@@ -80,9 +80,10 @@ class FrameProblem {
   std::vector<ContactForce> ContactForces(const Vertices& x) const;
 
   // Equilibrium registration (registration.forces, energy/equilibrium.h): where forces may
-  // act, their penalties, and the surface's normals at state.x. Every outer iteration, after
-  // SetLoads and SetContacts; off (no equilibrium) unless `on`.
-  void SetEquilibrium(const TrackerState& state, bool on);
+  // act, their penalties, the surface's normals and the turns the step does not make
+  // (solver.hold_hidden_turns; `data`, may be null, as for HoldHiddenTurns) at state.x. Every
+  // outer iteration, after SetLoads and SetContacts; off (no equilibrium) unless `on`.
+  void SetEquilibrium(const TrackerState& state, bool on, DataSurface* data = nullptr);
   // The external forces on the vertices at state.x (N, #V by 3): what the elastic forces,
   // gravity and the loads leave unbalanced, the contacts' forces and the estimated ones
   // (without forces.estimate: the data term's pull). Zero at clamps and anchors (their

@@ -116,7 +116,7 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   // curvature grows with the residual), and those iterations bring the shape near
   // (docs/theory/equilibrium.md).
   const bool warm_start = WarmStart(k);
-  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start);
+  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start, data_surface.get());
   return true;
 }
 

@@ -121,6 +121,28 @@ bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* 
   return turned;
 }
 
+std::vector<Eigen::Vector3d> HiddenTurnAxes(const TrackerState& state, int o, const Vertices& x, DataSurface* data) {
+  std::vector<Eigen::Vector3d> hidden;
+  if (FractureLive(state) || Held(state, o)) return hidden;
+  const ObjectState& object = state.objects[static_cast<size_t>(o)];
+  double mass = 0.0;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int i = object.offset; i < object.offset + object.mesh.num_vertices(); ++i) {
+    mass += state.mass(i);
+    c += state.mass(i) * x.row(i).transpose();
+  }
+  if (!(mass > 0)) return hidden;
+  c /= mass;
+  Eigen::Matrix3d axes;
+  const Eigen::Vector3d visibility =
+      data != nullptr && data->embedded(o) ? TurnVisibility(data->Update(x).x, data->ObjectTriangles(o), c, &axes)
+                                           : TurnVisibility(x, object.mesh.surface, c, &axes, object.offset);
+  for (int k = 0; k < 3; ++k) {
+    if (visibility(k) < 0.5 * kVisibleTurn) hidden.push_back(axes.col(k).normalized());
+  }
+  return hidden;
+}
+
 Vertices PredictMotion(const TrackerState& state, DataSurface* data) {
   Vertices predicted = 2.0 * state.x - state.x_before;
   if (FractureLive(state)) return predicted;  // pieces turn as they part: their own pre-alignment

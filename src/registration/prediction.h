@@ -4,6 +4,7 @@
 #define FEMREG_REGISTRATION_PREDICTION_H_
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "registration/embedded_surface.h"
 #include "registration/tracker_state.h"
@@ -40,6 +41,14 @@ HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from
 // iteration's move keeps only the turns the data can see (docs/theory/stopping.md#hidden-turns).
 // Nothing with fracture live. True when some object was turned.
 bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* x, DataSurface* data = nullptr);
+
+// The axes about which object o's surface at x shows a turn about its mass centre by less
+// than half of kVisibleTurn (TurnVisibility; the embedded surface's with `data`): turns the
+// hold above would take back more than half of, which the physical mode's step does not make
+// (docs/theory/stopping.md#hidden-turns). None for an object an anchor holds, or with
+// fracture live.
+std::vector<Eigen::Vector3d> HiddenTurnAxes(const TrackerState& state, int o, const Vertices& x,
+                                            DataSurface* data = nullptr);
 
 // 2 x - x_before, except that for each object that nothing holds (no anchor), the predicted
 // turn about an axis of visibility lambda < kVisibleTurn is scaled by lambda / kVisibleTurn:
