@@ -238,25 +238,27 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
   EXPECT_NE(ceres.message.find("equilibrium"), std::string::npos);
 }
 
-// A free box whose data ask for a turn about z and a shift: with z held
-// (Equilibrium::held_turns), the solve makes the shift and the other turns but not the held one.
+// A free box whose data ask for a turn about z and x and a shift: with z held
+// (Equilibrium::held_turns), the solve makes the shift and the turn about x but not the held one.
 TEST(EquilibriumSolve, MakesNoHeldTurn) {
   const double angle = 0.02;
   const Eigen::Vector3d shift(0.004, -0.002, 0.003);
   const Eigen::Matrix3d turn =
       (Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()))
           .toRotationMatrix();
+  BoxProblem reference(2);
+  const Vertices& rest = reference.mesh.rest;
+  const int n = reference.mesh.num_vertices();
+  const Eigen::Vector3d centre = rest.colwise().mean().transpose();
   auto solve = [&](bool hold, Vertices* x) {
     BoxProblem box(2);
-    const int n = box.mesh.num_vertices();
-    const Eigen::Vector3d centre = box.mesh.rest.colwise().mean().transpose();
     auto& data = box.problem.AddSet<energy::PointToPoint<1>>(energy::TermGroup::kData);
     for (int v = 0; v < n; ++v) {
       energy::PointToPoint<1> b;
       b.vertices = {{v}};
       b.barycentric = {{1.0}};
       b.weight = 500.0;
-      b.target = centre + turn * (box.mesh.rest.row(v).transpose() - centre) + shift;
+      b.target = centre + turn * (rest.row(v).transpose() - centre) + shift;
       data.Add(b);
     }
     auto eq = std::make_shared<energy::Equilibrium>();
@@ -270,18 +272,15 @@ TEST(EquilibriumSolve, MakesNoHeldTurn) {
     options.type = SolverBackend::kFast;
     options.max_iterations = 20;
     options.relative_tolerance = 1e-10;
-    *x = box.mesh.rest;
+    *x = rest;
     const SolveReport report = MakeBackend(options)->Solve(box.problem, 0.0, x);
     ASSERT_TRUE(report.success) << report.message;
     EXPECT_LT(report.after.total(), report.before.total());
   };
-  // The least-squares turn about axis a through the vertices' centroid, and the centroid's move.
-  BoxProblem reference(2);
-  const Vertices& rest = reference.mesh.rest;
-  const Eigen::Vector3d centre = rest.colwise().mean().transpose();
+  // The least-squares turn about axis a through the centroid.
   auto turn_about = [&](const Vertices& x, const Eigen::Vector3d& a) {
     double num = 0.0, den = 0.0;
-    for (int v = 0; v < rest.rows(); ++v) {
+    for (int v = 0; v < n; ++v) {
       const Eigen::Vector3d m = a.cross(rest.row(v).transpose() - centre);
       num += m.dot((x.row(v) - rest.row(v)).transpose());
       den += m.squaredNorm();
@@ -289,8 +288,8 @@ TEST(EquilibriumSolve, MakesNoHeldTurn) {
     return num / den;
   };
   Vertices free_x, held_x;
-  solve(false, &free_x);
-  solve(true, &held_x);
+  ASSERT_NO_FATAL_FAILURE(solve(false, &free_x));
+  ASSERT_NO_FATAL_FAILURE(solve(true, &held_x));
   const Eigen::Vector3d free_shift = (free_x - rest).colwise().mean().transpose();
   const Eigen::Vector3d held_shift = (held_x - rest).colwise().mean().transpose();
   std::printf("turn about z: free %.5f, held %.2e rad; about x: free %.5f, held %.5f; shift error %.2e / %.2e m\n",

@@ -142,5 +142,39 @@ TEST(HoldHiddenTurns, TheEmbeddedSurfaceDecides) {
   EXPECT_TRUE(HoldHiddenTurns(state, state.x_before, &x));
 }
 
+// The turns the physical mode's step holds are those the hold takes back: a sphere's three, a
+// box's none, and, on a tilted cylinder with uneven masses, a rigid move with no component
+// along the returned turn (sum_v (c x r_v) . d_v = 0) has no hidden turn for FindHiddenTurn.
+TEST(HiddenTurnAxes, AreTheTurnsTheHoldTakesBack) {
+  const TrackerState sphere = Turned(MakeSphere(0.05, 5), Eigen::Vector3d(0, 0, 1), 0.0, Eigen::Vector3d::Zero());
+  EXPECT_EQ(HiddenTurnAxes(sphere, 0, sphere.x).size(), 3u);
+  const TrackerState box = Turned(MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 3, 3, 3), Eigen::Vector3d(0, 0, 1), 0.0,
+                                  Eigen::Vector3d::Zero());
+  EXPECT_TRUE(HiddenTurnAxes(box, 0, box.x).empty());
+
+  TrackerState cyl = Turned(MakeCylinder(0.02, 0.2, 16, 10), Eigen::Vector3d(1, 2, 0.5), 0.6, Eigen::Vector3d::Zero());
+  const int n = cyl.num_vertices;
+  for (int v = 0; v < n; ++v) cyl.mass(v) = 1.0 + 0.8 * std::sin(3.0 * v);
+  const std::vector<Eigen::Vector3d> held = HiddenTurnAxes(cyl, 0, cyl.x);
+  ASSERT_EQ(held.size(), 1u);
+  const Eigen::Vector3d centroid = cyl.x.colwise().mean().transpose();
+  // A small rigid move about a point off the body: a turn about every axis and a shift.
+  const Eigen::Vector3d w = 1e-6 * Eigen::Vector3d(0.3, -1.1, 0.7), pivot(0.05, -0.02, 0.1);
+  Eigen::VectorXd u(3 * n), d(3 * n);
+  for (int v = 0; v < n; ++v) {
+    u.segment<3>(3 * v) = held[0].cross(cyl.x.row(v).transpose() - centroid);
+    d.segment<3>(3 * v) = w.cross(cyl.x.row(v).transpose() - pivot);
+  }
+  const Eigen::VectorXd kept = d - (u.dot(d) / u.squaredNorm()) * u;  // still rigid: u is a turn
+  auto hidden_turn = [&](const Eigen::VectorXd& move) {
+    Vertices to = cyl.x;
+    for (int v = 0; v < n; ++v) to.row(v) += move.segment<3>(3 * v).transpose();
+    return FindHiddenTurn(cyl, 0, cyl.x, to).turn.norm();
+  };
+  const double before = hidden_turn(d), after = hidden_turn(kept);
+  EXPECT_GT(before, 0.1 * w.norm());
+  EXPECT_LT(after, 1e-4 * before) << before << " -> " << after;
+}
+
 }  // namespace
 }  // namespace femreg

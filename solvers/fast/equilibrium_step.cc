@@ -32,8 +32,8 @@ constexpr int kMaxPcgIterations = 200;
 constexpr double kFirstShift = 1e-8;
 // After this many Gauss-Newton steps of a solve (an outer iteration), a step that lowers the
 // energy by less than kLateTolerance ends it. Each step linearizes every element again and
-// makes a new factor, while the next outer iteration's pairs and held turns move the problem
-// anyway (docs/notes/2026-11-30-equilibrium-steps.md).
+// makes a new factor, while the next outer iteration's pairs and hold of hidden turns move
+// the problem anyway (docs/notes/2026-11-30-equilibrium-steps.md).
 constexpr int kFullSteps = 4;
 constexpr double kLateTolerance = 1e-2;
 // A step's PCG stops at kPcgTolerance of its own gradient or at this share of the solve's
@@ -285,7 +285,7 @@ struct EquilibriumSolver::Impl {
     report->assemble_s += Seconds(t0);
   }
 
-  // y = Q (H + K Phi K) p, Q = I - W W^T (p orthogonal to the held turns W: the step's
+  // y = P_W (H + K Phi K) p, P_W = I - W W^T (p orthogonal to the held turns W: the step's
   // matrix on their complement).
   void Product(const Eigen::VectorXd& p, Eigen::VectorXd* y) {
     Eigen::VectorXd kp, hp;
@@ -297,8 +297,8 @@ struct EquilibriumSolver::Impl {
     modes.ProjectHeld(y);
   }
 
-  // z = B Phi~^-1 B r + R (R^T A R)^-1 R^T r with B = Q K~^-1 Q, Q = I - R R^T (no rigid
-  // modes: B = K~^-1).
+  // z = B Phi~^-1 B r + R (R^T A R)^-1 R^T r with B = P K~^-1 P, P = I - R R^T - W W^T (no
+  // rigid modes and no held turns: B = K~^-1). On the held turns' complement, where PCG runs.
   void Precondition(const Eigen::VectorXd& r, Eigen::VectorXd* z, SolveReport* report) {
     Eigen::VectorXd u, projected = r;
     modes.Project(&projected);
@@ -325,7 +325,8 @@ struct EquilibriumSolver::Impl {
     modes.AddCoarse(r, z);
   }
 
-  // PCG on (H + K Phi K) dx = b from dx = 0; false if it did not converge in max_iterations.
+  // PCG on P_W (H + K Phi K) dx = b from dx = 0 (b and dx orthogonal to the held turns);
+  // false if it did not converge in max_iterations.
   bool Pcg(const Eigen::VectorXd& b, int max_iterations, Eigen::VectorXd* dx, SolveReport* report) {
     const ScopedThreads one_thread(1);
     const auto t0 = Clock::now();

@@ -50,8 +50,8 @@ constexpr double kFillEstimateMargin = 1.5;
 constexpr int kFillEstimateFrom = 8192;
 
 // The supernodal analysis's settings for these systems (3 unknowns per vertex): AMD and METIS
-// both, and supernodes amalgamated a little beyond CHOLMOD's defaults. For every factor of the
-// back end, the equilibrium step's too (fast_backend_factor.cc says why).
+// both, and supernodes amalgamated a little beyond CHOLMOD's defaults. For the back end's
+// supernodal factors, the equilibrium step's too (fast_backend_factor.cc says why).
 void ConfigureAnalysis(cholmod_common* common);
 
 struct FastBackend::Impl {

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "mesh/disjoint_sets.h"
 
@@ -18,6 +19,7 @@ void StepModes::Build(const energy::Problem& problem, const Vertices& x, const P
 
 void StepModes::HeldTurns(const energy::Problem& problem, const Vertices& x) {
   held_.clear();
+  held_range_.clear();
   if (problem.equilibrium() == nullptr) return;
   const int n = problem.num_vertices();
   for (const energy::Equilibrium::HeldTurn& turn : problem.equilibrium()->held_turns) {
@@ -34,9 +36,12 @@ void StepModes::HeldTurns(const energy::Problem& problem, const Vertices& x) {
     for (int v = turn.first; v < turn.first + turn.count; ++v) {
       m.segment<3>(3 * v) = turn.axis.cross(x.row(v).transpose() - centre);
     }
+    const double before = m.norm();
     for (const Eigen::VectorXd& h : held_) m -= h.dot(m) * h;
     const double norm = m.norm();
-    if (norm > 1e-12 * std::sqrt(static_cast<double>(turn.count))) held_.push_back(m / norm);
+    if (!(norm > 1e-8 * before)) continue;  // zero, or a turn the others hold already
+    held_.push_back(m / norm);
+    held_range_.emplace_back(turn.first, turn.first + turn.count);
   }
 }
 
@@ -69,11 +74,18 @@ void StepModes::FindFreePieces(const energy::Problem& problem) {
 void StepModes::RigidModes(const energy::Problem& problem, const Vertices& x, const Product& product) {
   modes_.clear();
   const int n = problem.num_vertices();
+  // The modes of the pieces a held turn reaches: a held turn spans its object's pieces, so
+  // their modes, made orthogonal to it, overlap one another's pieces.
+  std::vector<size_t> reached;
   for (const std::vector<int>& piece : free_pieces_) {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (int v : piece) centre += x.row(v).transpose();
     centre /= static_cast<double>(piece.size());
     const size_t first = modes_.size();
+    const bool reaches = std::any_of(held_range_.begin(), held_range_.end(), [&](const std::pair<int, int>& range) {
+      const auto it = std::lower_bound(piece.begin(), piece.end(), range.first);  // pieces are sorted
+      return it != piece.end() && *it < range.second;
+    });
     for (int k = 0; k < 6; ++k) {
       Eigen::VectorXd m = Eigen::VectorXd::Zero(3 * n);
       for (int v : piece) {
@@ -83,12 +95,16 @@ void StepModes::RigidModes(const energy::Problem& problem, const Vertices& x, co
           m.segment<3>(3 * v) = Eigen::Vector3d::Unit(k - 3).cross(x.row(v).transpose() - centre);
         }
       }
-      ProjectHeld(&m);
-      // Without held turns the pieces' modes do not overlap; a held turn spans its object's
-      // pieces, and m may now overlap another piece's.
-      for (size_t j = held_.empty() ? first : 0; j < modes_.size(); ++j) m -= modes_[j].dot(m) * modes_[j];
+      if (reaches) {
+        ProjectHeld(&m);
+        for (size_t j : reached) m -= modes_[j].dot(m) * modes_[j];
+      }
+      for (size_t j = first; j < modes_.size(); ++j) m -= modes_[j].dot(m) * modes_[j];
       const double norm = m.norm();
       if (norm > 1e-12 * std::sqrt(static_cast<double>(piece.size()))) modes_.push_back(m / norm);
+    }
+    if (reaches) {
+      for (size_t j = first; j < modes_.size(); ++j) reached.push_back(j);
     }
   }
   const int c = static_cast<int>(modes_.size());

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include "energy/problem.h"
@@ -21,8 +22,8 @@ class StepModes {
   // y = A p for the step's matrix A, with the held turns projected out of y (ProjectHeld).
   using Product = std::function<void(const Eigen::VectorXd& p, Eigen::VectorXd* y)>;
 
-  // The held turns at x (orthonormal; a turn about its axis through its vertices' centroid,
-  // none for a set with a fixed vertex), the rigid modes at x (orthonormal, and orthogonal to
+  // The held turns at x (orthonormal; each a turn about its axis through its vertices'
+  // centroid, none for a set with a fixed vertex), the rigid modes at x (orthonormal, and orthogonal to
   // the held turns) and the coarse matrix's inverse (R^T A R)^-1 over them.
   void Build(const energy::Problem& problem, const Vertices& x, const Product& product);
   // v - W W^T v over the held turns W.
@@ -38,6 +39,7 @@ class StepModes {
   void RigidModes(const energy::Problem& problem, const Vertices& x, const Product& product);
 
   std::vector<Eigen::VectorXd> held_;
+  std::vector<std::pair<int, int>> held_range_;  // each held turn's vertices [first, end)
   std::vector<Eigen::VectorXd> modes_;
   Eigen::MatrixXd coarse_inverse_;
   std::vector<std::vector<int>> free_pieces_;  // per piece without fixed vertices, its vertices

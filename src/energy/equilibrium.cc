@@ -79,7 +79,7 @@ bool Equilibrium::IsValid(int num_vertices) const {
          (sparsity.empty() || sparsity.size() == n) && (!pushing_only || normal.size() == n) &&
          (sparsity.empty() || sparsity_floor > 0.0) &&
          std::all_of(held_turns.begin(), held_turns.end(), [&](const HeldTurn& h) {
-           return h.first >= 0 && h.count >= 0 && h.first + h.count <= num_vertices && h.axis.allFinite();
+           return h.first >= 0 && h.count >= 0 && h.count <= num_vertices - h.first && h.axis.allFinite();
          });
 }
 

@@ -46,8 +46,11 @@ struct Equilibrium {
   bool pushing_only = false;            // a force points into the body: f . n <= 0
   double friction = -1.0;               // mu: |f_t| <= mu |f . n|; < 0: any tangential force
   // Turns a step does not make: a free body's turn about an axis its surface does not show
-  // (docs/theory/stopping.md#hidden-turns). Vertices [first, first + count) turn about `axis`
-  // through their centroid; the fast back end's step stays orthogonal to that motion.
+  // (docs/theory/stopping.md#hidden-turns). The fast back end's step dx keeps
+  // sum_v (axis x (x_v - c)) . dx_v = 0 over the vertices [first, first + count), c their
+  // centroid: a rigid motion of theirs, in K's null space as the preconditioner's rigid modes
+  // are. With registration/prediction.h's HiddenTurnAxes as the axis, the turns the hold of
+  // the outer iterations measures as hidden.
   struct HeldTurn {
     int first = 0, count = 0;
     Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();

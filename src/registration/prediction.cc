@@ -125,20 +125,31 @@ std::vector<Eigen::Vector3d> HiddenTurnAxes(const TrackerState& state, int o, co
   std::vector<Eigen::Vector3d> hidden;
   if (FractureLive(state) || Held(state, o)) return hidden;
   const ObjectState& object = state.objects[static_cast<size_t>(o)];
+  const int begin = object.offset, n = object.mesh.num_vertices();
   double mass = 0.0;
-  Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (int i = object.offset; i < object.offset + object.mesh.num_vertices(); ++i) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero(), centroid = Eigen::Vector3d::Zero();
+  for (int i = begin; i < begin + n; ++i) {
     mass += state.mass(i);
     c += state.mass(i) * x.row(i).transpose();
+    centroid += x.row(i).transpose();
   }
-  if (!(mass > 0)) return hidden;
+  if (!(mass > 0) || n < 2) return hidden;
   c /= mass;
+  centroid /= static_cast<double>(n);
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+  for (int i = begin; i < begin + n; ++i) {
+    const Eigen::Vector3d r = x.row(i).transpose() - centroid;
+    inertia += r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose();
+  }
   Eigen::Matrix3d axes;
   const Eigen::Vector3d visibility =
       data != nullptr && data->embedded(o) ? TurnVisibility(data->Update(x).x, data->ObjectTriangles(o), c, &axes)
-                                           : TurnVisibility(x, object.mesh.surface, c, &axes, object.offset);
+                                           : TurnVisibility(x, object.mesh.surface, c, &axes, begin);
+  // A rigid move with turn w has sum_v r_v x d_v = I w, and FindHiddenTurn's component k of w
+  // is e_k^T axes^-1 w = c_k^T I w with c_k = I^-1 axes^-T e_k.
+  const Eigen::Matrix3d dual = inertia.ldlt().solve(axes.transpose().partialPivLu().solve(Eigen::Matrix3d::Identity()));
   for (int k = 0; k < 3; ++k) {
-    if (visibility(k) < 0.5 * kVisibleTurn) hidden.push_back(axes.col(k).normalized());
+    if (visibility(k) < 0.5 * kVisibleTurn && dual.col(k).allFinite()) hidden.push_back(dual.col(k));
   }
   return hidden;
 }

@@ -42,10 +42,13 @@ HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from
 // Nothing with fracture live. True when some object was turned.
 bool HoldHiddenTurns(const TrackerState& state, const Vertices& from, Vertices* x, DataSurface* data = nullptr);
 
-// The axes about which object o's surface at x shows a turn about its mass centre by less
-// than half of kVisibleTurn (TurnVisibility; the embedded surface's with `data`): turns the
-// hold above would take back more than half of, which the physical mode's step does not make
-// (docs/theory/stopping.md#hidden-turns). None for an object an anchor holds, or with
+// The turns of object o at x that its surface shows by less than half of kVisibleTurn
+// (TurnVisibility about its mass centre; the embedded surface's with `data`): turns the hold
+// above would take back more than half of, which the physical mode's step does not make
+// (docs/theory/stopping.md#hidden-turns). One vector c per such turn, for the step's
+// constraint sum_v (c x (x_v - centroid)) . d_v = 0: on a rigid move d it holds exactly when
+// FindHiddenTurn finds no turn about that axis (c = I^-1 axes^-T e_k, I the vertices'
+// unweighted inertia about their centroid). None for an object an anchor holds, or with
 // fracture live.
 std::vector<Eigen::Vector3d> HiddenTurnAxes(const TrackerState& state, int o, const Vertices& x,
                                             DataSurface* data = nullptr);
