@@ -203,8 +203,11 @@ namespace {
 // (the data's pull can be far stiffer than k, and the inner solve is truncated), kept while
 // the contact is detected, so that one that flickers open and shut does not leak again.
 // Contacts no longer detected drop both. True while a contact is deeper than the tolerance
-// or held open wider than it: the frame goes on.
-bool UpdateContactMultipliers(TrackerState* state, const Vertices& y) {
+// or held open wider than it: the frame goes on. With `within_tolerance` false, a contact
+// within the tolerance keeps its multiplier: in the physical mode the contact's force is part
+// of the potential's, and each update unbalances it by k times the penetration, which the next
+// solve has to balance again (docs/notes/2026-12-01-held-turns-in-the-step.md).
+bool UpdateContactMultipliers(TrackerState* state, const Vertices& y, bool within_tolerance) {
   const CollisionWorld& world = *state->collision;
   const double k0 = world.stiffness(), tolerance = world.tolerance();
   const double k_max = 1e3 * k0;  // keeps the stiffest contact within the solvers' reach
@@ -218,7 +221,9 @@ bool UpdateContactMultipliers(TrackerState* state, const Vertices& y) {
     if (it != state->contact_multipliers.end()) m = it->second;
     const double penetration = world.Penetration(c, y);
     const bool stalled = penetration > tolerance && penetration > 0.5 * m.penetration;
-    m.lambda = std::max(0.0, m.lambda + m.stiffness * penetration);
+    if (within_tolerance || std::abs(penetration) > tolerance) {
+      m.lambda = std::max(0.0, m.lambda + m.stiffness * penetration);
+    }
     if (stalled) m.stiffness = std::min(k_max, 4.0 * m.stiffness);
     m.penetration = penetration;
     if (penetration > tolerance || (m.lambda > 0 && -penetration > tolerance)) pending = true;
@@ -280,7 +285,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
   }
   const bool contacts_pending =
-      state.collision && state.collision->augmented() && UpdateContactMultipliers(&state, CollisionPositions());
+      state.collision && state.collision->augmented() &&
+      UpdateContactMultipliers(&state, CollisionPositions(), !options.forces.estimate);
   // New multipliers change the energy: the next start is not held against this one.
   if (contacts_pending) merit = std::numeric_limits<double>::infinity();
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices
