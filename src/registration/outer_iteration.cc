@@ -199,15 +199,15 @@ namespace {
 // The augmented-Lagrangian update after a solve (docs/theory/contact.md#response): each
 // contact's multiplier takes in the force its penetration still asks for, lambda <-
 // max(0, lambda + k (-g)), and a contact still deeper than the tolerance that did not at
-// least halve its penetration since the last update (or is new) gets 4 times its stiffness
-// (the data's pull can be far stiffer than k, and the inner solve is truncated), kept while
-// the contact is detected, so that one that flickers open and shut does not leak again.
+// least halve its penetration since the last outer iteration (or is new) gets 4 times its
+// stiffness (the data's pull can be far stiffer than k, and the inner solve is truncated), kept
+// while the contact is detected, so that one that flickers open and shut does not leak again.
 // Contacts no longer detected drop both. True while a contact is deeper than the tolerance
-// or held open wider than it: the frame goes on. With `within_tolerance` false, a contact
-// within the tolerance keeps its multiplier: in the physical mode the contact's force is part
-// of the potential's, and each update unbalances it by k times the penetration, which the next
-// solve has to balance again (docs/notes/2026-12-01-held-turns-in-the-step.md).
-bool UpdateContactMultipliers(TrackerState* state, const Vertices& y, bool within_tolerance) {
+// or held open wider than it: the frame goes on. Without `update_within_tolerance` (the
+// physical mode, where the penalty is part of the potential, whose balance an update would
+// upset by k p) a multiplier moves only outside the tolerance, or to release a contact open
+// past its standoff, whose force is zero either way (docs/notes/2026-12-01-held-turns-in-the-step.md).
+bool UpdateContactMultipliers(TrackerState* state, const Vertices& y, bool update_within_tolerance) {
   const CollisionWorld& world = *state->collision;
   const double k0 = world.stiffness(), tolerance = world.tolerance();
   const double k_max = 1e3 * k0;  // keeps the stiffest contact within the solvers' reach
@@ -221,7 +221,7 @@ bool UpdateContactMultipliers(TrackerState* state, const Vertices& y, bool withi
     if (it != state->contact_multipliers.end()) m = it->second;
     const double penetration = world.Penetration(c, y);
     const bool stalled = penetration > tolerance && penetration > 0.5 * m.penetration;
-    if (within_tolerance || std::abs(penetration) > tolerance) {
+    if (update_within_tolerance || std::abs(penetration) > tolerance || -penetration * m.stiffness >= m.lambda) {
       m.lambda = std::max(0.0, m.lambda + m.stiffness * penetration);
     }
     if (stalled) m.stiffness = std::min(k_max, 4.0 * m.stiffness);
@@ -286,7 +286,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   }
   const bool contacts_pending =
       state.collision && state.collision->augmented() &&
-      UpdateContactMultipliers(&state, CollisionPositions(), !options.forces.estimate);
+      UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!options.forces.estimate);
   // New multipliers change the energy: the next start is not held against this one.
   if (contacts_pending) merit = std::numeric_limits<double>::infinity();
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices
