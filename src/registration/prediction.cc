@@ -61,6 +61,15 @@ bool TurnBack(const TrackerState& state, int o, const Eigen::Vector3d& turn, con
   return true;
 }
 
+// TurnVisibility of object o at x about c, on the surface the data see: its embedded
+// surface's where it has one (`data` may be null), else its mesh's.
+Eigen::Vector3d ObjectTurnVisibility(const TrackerState& state, int o, const Vertices& x, const Eigen::Vector3d& c,
+                                     DataSurface* data, Eigen::Matrix3d* axes) {
+  if (data != nullptr && data->embedded(o)) return TurnVisibility(data->Update(x).x, data->ObjectTriangles(o), c, axes);
+  const ObjectState& object = state.objects[static_cast<size_t>(o)];
+  return TurnVisibility(x, object.mesh.surface, c, axes, object.offset);
+}
+
 }  // namespace
 
 HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from, const Vertices& to,
@@ -94,12 +103,7 @@ HiddenTurn FindHiddenTurn(const TrackerState& state, int o, const Vertices& from
   if (!w.allFinite() || w.isZero(0.0)) return out;
 
   Eigen::Matrix3d axes;
-  Eigen::Vector3d visibility;
-  if (data != nullptr && data->embedded(o)) {
-    visibility = TurnVisibility(data->Update(to).x, data->ObjectTriangles(o), c, &axes);
-  } else {
-    visibility = TurnVisibility(to, object.mesh.surface, c, &axes, object.offset);
-  }
+  const Eigen::Vector3d visibility = ObjectTurnVisibility(state, o, to, c, data, &axes);
   // w = sum_k a_k axes_k with a = axes^-1 w; the hidden part of each a_k is kept.
   const Eigen::Vector3d a = axes.partialPivLu().solve(w);
   for (int k = 0; k < 3; ++k) {
@@ -142,9 +146,7 @@ std::vector<Eigen::Vector3d> HiddenTurnAxes(const TrackerState& state, int o, co
     inertia += r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose();
   }
   Eigen::Matrix3d axes;
-  const Eigen::Vector3d visibility =
-      data != nullptr && data->embedded(o) ? TurnVisibility(data->Update(x).x, data->ObjectTriangles(o), c, &axes)
-                                           : TurnVisibility(x, object.mesh.surface, c, &axes, begin);
+  const Eigen::Vector3d visibility = ObjectTurnVisibility(state, o, x, c, data, &axes);
   // A rigid move with turn w has sum_v r_v x d_v = I w, and FindHiddenTurn's component k of w
   // is e_k^T axes^-1 w = c_k^T I w with c_k = I^-1 axes^-T e_k.
   const Eigen::Matrix3d dual = inertia.ldlt().solve(axes.transpose().partialPivLu().solve(Eigen::Matrix3d::Identity()));
