@@ -180,21 +180,21 @@ TEST(ForceResidual, ForcesBalanceTheLoads) {
 
 // The fast back end stops where the energy is stationary: its gradient (central differences of
 // Problem::Evaluate) a small fraction of where it started.
-TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
-  BoxProblem box(1);
-  const int n = box.mesh.num_vertices();
-  box.problem.fixed().assign(static_cast<size_t>(n), 0);
-  for (int v = 0; v < n; ++v) box.problem.fixed()[v] = box.mesh.rest(v, 0) < 1e-9;
-  box.AddGravity(box.mesh.rest);
-  // Data: the far end's vertices pulled 1 cm down and sideways.
-  auto& data = box.problem.AddSet<energy::PointToPoint<1>>(energy::TermGroup::kData);
+// A cantilever box clamped at x = 0 under gravity, its far end's vertices pulled 1 cm down
+// and sideways by the data, free to take a force anywhere but at the clamp.
+void SetUpPulledCantilever(BoxProblem* box) {
+  const int n = box->mesh.num_vertices();
+  box->problem.fixed().assign(static_cast<size_t>(n), 0);
+  for (int v = 0; v < n; ++v) box->problem.fixed()[v] = box->mesh.rest(v, 0) < 1e-9;
+  box->AddGravity(box->mesh.rest);
+  auto& data = box->problem.AddSet<energy::PointToPoint<1>>(energy::TermGroup::kData);
   for (int v = 0; v < n; ++v) {
-    if (box.mesh.rest(v, 0) < 0.2 - 1e-9) continue;
+    if (box->mesh.rest(v, 0) < 0.2 - 1e-9) continue;
     energy::PointToPoint<1> b;
     b.vertices = {{v}};
     b.barycentric = {{1.0}};
     b.weight = 500.0;
-    b.target = box.mesh.rest.row(v).transpose() + Eigen::Vector3d(0, 0.004, -0.01);
+    b.target = box->mesh.rest.row(v).transpose() + Eigen::Vector3d(0, 0.004, -0.01);
     data.Add(b);
   }
   auto eq = std::make_shared<energy::Equilibrium>();
@@ -202,9 +202,15 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
   eq->force_weight.assign(n, 1e-2);
   eq->strong_weight.assign(n, 1e2);
   for (int v = 0; v < n; ++v) {
-    if (box.problem.is_fixed(v)) eq->site[v] = energy::ForceSite::kSupport;
+    if (box->problem.is_fixed(v)) eq->site[v] = energy::ForceSite::kSupport;
   }
-  box.problem.SetEquilibrium(eq);
+  box->problem.SetEquilibrium(eq);
+}
+
+TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
+  BoxProblem box(1);
+  const int n = box.mesh.num_vertices();
+  SetUpPulledCantilever(&box);
   auto gradient = [&](const Vertices& x) {
     Eigen::VectorXd g(3 * n);
     const double h = 1e-7;
@@ -236,6 +242,32 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
   const SolveReport ceres = MakeBackend(options)->Solve(box.problem, 0.0, &x);
   EXPECT_FALSE(ceres.success);
   EXPECT_NE(ceres.message.find("equilibrium"), std::string::npos);
+}
+
+// equilibrium_step_tolerance ends the solve after the first step that moves no vertex more
+// than it (and lowers the energy by less than 10 %): fewer steps, and a shape within a few
+// such moves of the full solve's.
+TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
+  BoxProblem box(1);
+  SetUpPulledCantilever(&box);
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.max_iterations = 50;
+  options.relative_tolerance = 1e-12;
+  Vertices full = box.mesh.rest;
+  const SolveReport exact = MakeBackend(options)->Solve(box.problem, 0.0, &full);
+  ASSERT_TRUE(exact.success) << exact.message;
+  const double tolerance = 2e-4;  // m: of the 1 cm pull
+  options.equilibrium_step_tolerance = tolerance;
+  Vertices x = box.mesh.rest;
+  const SolveReport early = MakeBackend(options)->Solve(box.problem, 0.0, &x);
+  ASSERT_TRUE(early.success) << early.message;
+  std::printf("steps: %d to the end, %d with the tolerance; largest difference %.3g mm\n", exact.iterations,
+              early.iterations, 1e3 * (x - full).rowwise().norm().maxCoeff());
+  EXPECT_EQ(early.stop, StopReason::kStep) << early.message;
+  EXPECT_LT(early.iterations, exact.iterations);
+  EXPECT_LT((x - full).rowwise().norm().maxCoeff(), 4 * tolerance);
+  EXPECT_GT((x - box.mesh.rest).rowwise().norm().maxCoeff(), 0.005);
 }
 
 // A free box whose data ask for a turn about z and x and a shift: with z held
