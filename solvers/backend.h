@@ -24,9 +24,10 @@ struct BackendOptions {
   // Fast back end: stop when no vertex moved more than this in a step (m; 0: off). The
   // tracker sets it from the mesh's edge length (solver.step_tolerance).
   double step_tolerance = 0.0;
-  // Fast back end, equilibrium problems (energy/equilibrium.h): stop also after a step that
-  // moved no vertex more than this (m; 0: step_tolerance alone). Each of their steps makes a
-  // new factor; the tracker sets half the move its outer iterations count as settled.
+  // Fast back end, equilibrium problems (energy/equilibrium.h): stop also after a whole step
+  // that moved no vertex more than this (m; 0: step_tolerance alone) and lowered the energy
+  // little. Each of their steps makes a new factor; the tracker sets a quarter of the move its
+  // outer iterations count as settled.
   double equilibrium_step_tolerance = 0.0;
   // Fast back end: a step is first solved by conjugate gradients preconditioned with the last
   // factorization (of an earlier, similar system), for at most this many iterations; only

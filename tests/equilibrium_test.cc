@@ -244,9 +244,9 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
   EXPECT_NE(ceres.message.find("equilibrium"), std::string::npos);
 }
 
-// equilibrium_step_tolerance ends the solve after the first step that moves no vertex more
-// than it (and lowers the energy by less than 10 %): fewer steps, and a shape within a few
-// such moves of the full solve's.
+// equilibrium_step_tolerance ends the solve after the first whole step that moves no vertex
+// more than it (and lowers the energy by less than 10 %): fewer steps, and a shape within a
+// few such moves of the full solve's.
 TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
   BoxProblem box(1);
   SetUpPulledCantilever(&box);

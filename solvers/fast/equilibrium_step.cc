@@ -36,11 +36,12 @@ constexpr double kFirstShift = 1e-8;
 // the problem anyway (docs/notes/2026-11-30-equilibrium-steps.md).
 constexpr int kFullSteps = 4;
 constexpr double kLateTolerance = 1e-2;
-// A step that moved no vertex more than BackendOptions::equilibrium_step_tolerance and lowered
-// the energy by less than this share ends the solve. A short step can still balance much of
-// the forces: on a stiff cantilever a 0.27 mm step lowered it by 97 %, and without it 0.35 %
-// of the estimated force stayed inside the body instead of 0.003 %
-// (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
+// A whole step (the line search took all of it) that moved no vertex more than
+// BackendOptions::equilibrium_step_tolerance and lowered the energy by less than this share
+// ends the solve. A short step can still balance much of the forces: on a stiff cantilever a
+// 0.27 mm step lowered it by 97 %, and without it 0.35 % of the estimated force stayed inside
+// the body instead of 0.003 %. A step the line search cut is short because the energy bends,
+// not because the solve is near its end (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
 constexpr double kSmallStepDecrease = 0.1;
 // A step's PCG stops at kPcgTolerance of its own gradient or at this share of the solve's
 // first gradient, whichever is larger, and the solve stops once the gradient is below that
@@ -478,7 +479,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     energy = b.energy;
     report.after = b.terms;
     if (largest <= m.options.step_tolerance || largest == 0.0 ||
-        (largest <= m.options.equilibrium_step_tolerance && decrease < kSmallStepDecrease)) {
+        (b.alpha == 1.0 && largest <= m.options.equilibrium_step_tolerance && decrease < kSmallStepDecrease)) {
       report.stop = StopReason::kStep;
       break;
     }

@@ -55,7 +55,7 @@ BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_
   b.step_tolerance = 0.1 * solver.step_tolerance * mean_edge_length;
   // The next step would move less, and the next outer iteration pairs anew anyway
   // (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
-  b.equilibrium_step_tolerance = 0.5 * solver.bulk_step_tolerance * mean_edge_length;
+  b.equilibrium_step_tolerance = 0.25 * solver.bulk_step_tolerance * mean_edge_length;
   b.max_pcg_iterations = solver.max_pcg_iterations;
   b.preconditioner = solver.preconditioner;
   b.num_threads = solver.num_threads;  // 0: the frame's count (Track), chosen per frame
