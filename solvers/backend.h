@@ -26,8 +26,8 @@ struct BackendOptions {
   double step_tolerance = 0.0;
   // Fast back end, equilibrium problems (energy/equilibrium.h): stop also after a whole step
   // that moved no vertex more than this (m; 0: step_tolerance alone) and lowered the energy
-  // little. Each of their steps makes a new factor; the tracker sets a quarter of the move its
-  // outer iterations count as settled.
+  // little. Each of their steps makes a new factor; the tracker sets a quarter of
+  // solver.bulk_step_tolerance of a mean edge, the move its outer iterations count as settled.
   double equilibrium_step_tolerance = 0.0;
   // Fast back end: a step is first solved by conjugate gradients preconditioned with the last
   // factorization (of an earlier, similar system), for at most this many iterations; only
@@ -45,7 +45,7 @@ struct BackendOptions {
 enum class StopReason {
   kNotRun,
   kGradient,       // the gradient fell to 1e-9 of where it started (or to zero)
-  kStep,           // no vertex moved more than step_tolerance
+  kStep,           // no vertex moved more than step_tolerance (or equilibrium_step_tolerance)
   kEnergy,         // the energy fell by less than relative_tolerance
   kPredicted,      // the next step would lower it by less than that (fast back end's model)
   kNoDecrease,     // no step along the descent direction lowered the energy (round-off)

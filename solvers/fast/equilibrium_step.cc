@@ -36,12 +36,10 @@ constexpr double kFirstShift = 1e-8;
 // the problem anyway (docs/notes/2026-11-30-equilibrium-steps.md).
 constexpr int kFullSteps = 4;
 constexpr double kLateTolerance = 1e-2;
-// A whole step (the line search took all of it) that moved no vertex more than
+// A whole step (PCG converged, the line search took all of it) that moved no vertex more than
 // BackendOptions::equilibrium_step_tolerance and lowered the energy by less than this share
-// ends the solve. A short step can still balance much of the forces: on a stiff cantilever a
-// 0.27 mm step lowered it by 97 %, and without it 0.35 % of the estimated force stayed inside
-// the body instead of 0.003 %. A step the line search cut is short because the energy bends,
-// not because the solve is near its end (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
+// ends the solve: on a stiff body a short step can still balance much of the forces, and a cut
+// or truncated step is short for other reasons (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
 constexpr double kSmallStepDecrease = 0.1;
 // A step's PCG stops at kPcgTolerance of its own gradient or at this share of the solve's
 // first gradient, whichever is larger, and the solve stops once the gradient is below that
@@ -478,8 +476,9 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     const double decrease = (energy - b.energy) / std::max(energy, 1e-300);
     energy = b.energy;
     report.after = b.terms;
-    if (largest <= m.options.step_tolerance || largest == 0.0 ||
-        (b.alpha == 1.0 && largest <= m.options.equilibrium_step_tolerance && decrease < kSmallStepDecrease)) {
+    const bool settled = !truncated && b.alpha == 1.0 && largest <= m.options.equilibrium_step_tolerance &&
+                         decrease < kSmallStepDecrease;
+    if (largest <= m.options.step_tolerance || largest == 0.0 || settled) {
       report.stop = StopReason::kStep;
       break;
     }

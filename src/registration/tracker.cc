@@ -53,8 +53,8 @@ BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_
   b.max_iterations = solver.max_inner_iterations;
   b.relative_tolerance = solver.inner_tolerance;
   b.step_tolerance = 0.1 * solver.step_tolerance * mean_edge_length;
-  // The next step would move less, and the next outer iteration pairs anew anyway
-  // (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
+  // A quarter of the outer iterations' settle move: the next step would move less, and the
+  // next outer iteration pairs anew anyway (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
   b.equilibrium_step_tolerance = 0.25 * solver.bulk_step_tolerance * mean_edge_length;
   b.max_pcg_iterations = solver.max_pcg_iterations;
   b.preconditioner = solver.preconditioner;
