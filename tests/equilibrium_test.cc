@@ -8,11 +8,13 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "energy/contact.h"
 #include "energy/equilibrium.h"
 #include "energy/problem.h"
 #include "femreg/forward.h"
@@ -178,6 +180,15 @@ TEST(ForceResidual, ForcesBalanceTheLoads) {
   EXPECT_LT((free_sum + reactions + weight).norm(), 1e-9 * weight.norm());
 }
 
+// The fast back end, stopped by nothing but a stationary point (or 50 steps).
+BackendOptions FastSolveToTheEnd() {
+  BackendOptions options;
+  options.type = SolverBackend::kFast;
+  options.max_iterations = 50;
+  options.relative_tolerance = 1e-12;
+  return options;
+}
+
 // A cantilever box clamped at x = 0 under gravity, its far end's vertices pulled 1 cm down
 // and sideways by the data, free to take a force anywhere but at the clamp.
 void SetUpPulledCantilever(BoxProblem* box) {
@@ -227,10 +238,7 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
   };
   Vertices x = box.mesh.rest;
   const double before = gradient(x).norm();
-  BackendOptions options;
-  options.type = SolverBackend::kFast;
-  options.max_iterations = 50;
-  options.relative_tolerance = 1e-12;
+  BackendOptions options = FastSolveToTheEnd();
   auto backend = MakeBackend(options);
   const SolveReport report = backend->Solve(box.problem, 0.0, &x);
   ASSERT_TRUE(report.success) << report.message;
@@ -250,10 +258,7 @@ TEST(EquilibriumSolve, ReachesAStationaryPointOfTheEnergy) {
 TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
   BoxProblem box(1);
   SetUpPulledCantilever(&box);
-  BackendOptions options;
-  options.type = SolverBackend::kFast;
-  options.max_iterations = 50;
-  options.relative_tolerance = 1e-12;
+  BackendOptions options = FastSolveToTheEnd();
   Vertices full = box.mesh.rest;
   const SolveReport exact = MakeBackend(options)->Solve(box.problem, 0.0, &full);
   ASSERT_TRUE(exact.success) << exact.message;
@@ -276,6 +281,44 @@ TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
   ASSERT_TRUE(any_move.success) << any_move.message;
   EXPECT_GT(any_move.iterations, 1);
   EXPECT_LT((y - full).rowwise().norm().maxCoeff(), 4 * tolerance);
+}
+
+// The cantilever's pulled end meets a table 4 mm below it. The contacts' force is piecewise
+// linear in the positions, and a step's model without the contacts it closes overshoots them
+// and the line search cuts it short; with them closed in the model
+// (solvers/fast/closing_contacts.h) the steps are whole, and the solve ends in fewer of them.
+TEST(EquilibriumSolve, StepsThroughTheContactsTheyClose) {
+  BoxProblem box(1);
+  SetUpPulledCantilever(&box);
+  const int n = box.mesh.num_vertices();
+  const double table = box.mesh.rest.col(2).minCoeff() - 0.004;
+  auto& contacts = box.problem.AddSet<energy::ContactPenalty<3>>(energy::TermGroup::kCollision);
+  int touching = 0;
+  for (int v = 0; v < n; ++v) {
+    if (box.mesh.rest(v, 0) < 0.2 - 1e-9 || box.mesh.rest(v, 2) > table + 0.004 + 1e-9) continue;
+    energy::ContactPenalty<3> b;
+    b.vertices = {{v, (v + 1) % n, (v + 2) % n}};
+    b.coefficients = {{1.0, 0.0, 0.0}};
+    b.normal = Eigen::Vector3d::UnitZ();
+    b.offset = table;  // delta = table - z_v: > 0 below the table
+    b.weight = 1e5;    // N/m
+    contacts.Add(b);
+    ++touching;
+  }
+  ASSERT_GT(touching, 0);
+  BackendOptions options = FastSolveToTheEnd();
+  Vertices x = box.mesh.rest;
+  const SolveReport report = MakeBackend(options)->Solve(box.problem, 0.0, &x);
+  ASSERT_TRUE(report.success) << report.message;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (int v = 0; v < n; ++v) {
+    if (box.mesh.rest(v, 0) > 0.2 - 1e-9) lowest = std::min(lowest, x(v, 2));
+  }
+  std::printf("%d steps, %d factorizations; the end's lowest vertex %.3f mm below the table\n", report.iterations,
+              report.factorizations, 1e3 * (table - lowest));
+  EXPECT_LT(table - lowest, 1e-4);  // resting on the table: pressed in 0.04 mm, not through
+  EXPECT_GT(table - lowest, 0.0);
+  EXPECT_LE(report.iterations, 5);  // 4; 9 with the closing contacts left out of the model
 }
 
 // A free box whose data ask for a turn about z and x and a shift: with z held

@@ -14,6 +14,7 @@
 #include "parallel/signals.h"
 #include "parallel/stopwatch.h"
 #include "parallel/threads.h"
+#include "solvers/fast/closing_contacts.h"
 #include "solvers/fast/data_shift.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/fast_backend_internal.h"
@@ -272,11 +273,14 @@ struct EquilibriumSolver::Impl {
 
   // The rigid modes and the held turns at x (solvers/fast/step_modes.h).
   StepModes modes;
+  // The contacts the step being solved closes, closed in its model (empty otherwise).
+  ClosingContacts closing;
 
   // H, g, K, f, the penalties and G at x; *terms (first only) the energy there.
   void Linearize(const energy::Problem& problem, const Vertices& x, bool first, EnergyTerms* terms,
                  SolveReport* report) {
     const auto t0 = Clock::now();
+    closing.Clear();
     objective.AssembleGaussNewton(problem, x, first, &g, terms);
     physics.AssembleSecondOrder(problem, x, energy::Curvature::kExact, true, &f);
     physics.Finish(problem, 0.0, &f);
@@ -295,8 +299,10 @@ struct EquilibriumSolver::Impl {
   void Product(const Eigen::VectorXd& p, Eigen::VectorXd* y) {
     Eigen::VectorXd kp, hp;
     BlockProduct(physics.H(), p, threads, &kp);
+    closing.AddProduct(p, &kp);
     for (size_t v = 0; v < phi.size(); ++v) kp.segment<3>(3 * v) = phi[v] * kp.segment<3>(3 * v).eval();
     BlockProduct(physics.H(), kp, threads, y);
+    closing.AddProduct(kp, y);
     BlockProduct(objective.H(), p, threads, &hp);
     *y += hp;
     modes.ProjectHeld(y);
@@ -369,6 +375,27 @@ struct EquilibriumSolver::Impl {
     return converged && dx->allFinite();
   }
 
+  // Where *dx closes contacts that are open at x, solves the step again with them closed in
+  // its model (solvers/fast/closing_contacts.h), on the same factor, and keeps that step if
+  // PCG converged and it goes downhill. f, the penalties and G stay x's own.
+  void ResolveWithClosingContacts(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx,
+                                  SolveReport* report) {
+    if (closing.Find(problem, x, *dx) == 0) return;
+    const Eigen::VectorXd f_at_x = f;
+    closing.AddForce(&f);
+    Penalties(*problem.equilibrium());
+    Eigen::VectorXd model_gradient;
+    BlockProduct(physics.H(), phi_gradient, threads, &model_gradient);
+    closing.AddProduct(phi_gradient, &model_gradient);
+    model_gradient += g;
+    modes.ProjectHeld(&model_gradient);
+    Eigen::VectorXd resolved;
+    if (Pcg(-model_gradient, kMaxPcgIterations, &resolved, report) && resolved.dot(G) < 0.0) *dx = resolved;
+    f = f_at_x;
+    Penalties(*problem.equilibrium());
+    closing.Clear();
+  }
+
   // The step: a new factor of K~ at x, then PCG with it. A factor kept from an earlier step
   // (while K moves with the turning elements and the contacts) failed more often than it
   // served: the failed attempts cost more PCG iterations than the factorizations it saved
@@ -383,6 +410,7 @@ struct EquilibriumSolver::Impl {
     if (!factored) return false;
     const int iterations_before = report->pcg_iterations;
     const bool converged = Pcg(-G, kMaxPcgIterations, dx, report);
+    if (converged) ResolveWithClosingContacts(problem, x, dx, report);
     // On K~'s factor: more than the threshold switches the shift on; on K~ + s H's: more
     // switches it off, and the next step measures K~'s factor again.
     const int iterations = report->pcg_iterations - iterations_before;

@@ -14,7 +14,8 @@
 // problem's (docs/theory/equilibrium.md). Every step factorizes K~ anew; after a step whose
 // PCG took many iterations (soft modes of K that the data hold), K~ + s H instead. The step
 // stays orthogonal to the problem's held turns (Equilibrium::held_turns: a free body's turns
-// that its surface does not show).
+// that its surface does not show). A step that closes contacts open at x is solved again with
+// them closed in its model (solvers/fast/closing_contacts.h).
 #ifndef FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
 #define FEMREG_SOLVERS_FAST_EQUILIBRIUM_STEP_H_
 

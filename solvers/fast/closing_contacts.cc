@@ -1,0 +1,71 @@
+#include "solvers/fast/closing_contacts.h"
+
+#include <type_traits>
+
+#include "energy/contact.h"
+
+namespace femreg {
+namespace fast_backend {
+
+namespace {
+
+template <typename T>
+struct IsContactPenalty : std::false_type {};
+template <int N>
+struct IsContactPenalty<energy::ContactPenalty<N>> : std::true_type {};
+
+}  // namespace
+
+int ClosingContacts::Find(const energy::Problem& problem, const Vertices& x, const Eigen::VectorXd& dx) {
+  closing_.clear();
+  problem.ForEachSet([&](const auto& set) {
+    using T = typename std::decay_t<decltype(set)>::Block;
+    if constexpr (IsContactPenalty<T>::value) {
+      static_assert(T::kVertices <= 6, "a contact stencil has at most six vertices");
+      for (const T& b : set.blocks()) {
+        if (!(b.weight > 0.0)) continue;
+        std::array<const double*, T::kVertices> at;
+        for (int i = 0; i < T::kVertices; ++i) at[i] = x.row(b.vertices[i]).data();
+        const double before = b.Penetration(at.data());
+        double after = before;
+        for (int i = 0; i < T::kVertices; ++i) {
+          after -= b.coefficients[i] * b.normal.dot(dx.segment<3>(3 * b.vertices[i]));
+        }
+        if (before > 0.0 || after <= 0.0) continue;
+        Closing c;
+        for (int i = 0; i < T::kVertices; ++i) {
+          if (problem.is_fixed(b.vertices[i])) continue;
+          c.vertices[c.count] = b.vertices[i];
+          c.coefficients[c.count] = b.coefficients[i];
+          ++c.count;
+        }
+        c.normal = b.normal;
+        c.stiffness = b.weight;
+        c.delta = before;
+        if (c.count > 0) closing_.push_back(c);
+      }
+    }
+  });
+  return static_cast<int>(closing_.size());
+}
+
+void ClosingContacts::AddForce(Eigen::VectorXd* f) const {
+  for (const Closing& c : closing_) {
+    for (int i = 0; i < c.count; ++i) {
+      f->segment<3>(3 * c.vertices[i]) -= c.stiffness * c.delta * c.coefficients[i] * c.normal;
+    }
+  }
+}
+
+void ClosingContacts::AddProduct(const Eigen::VectorXd& p, Eigen::VectorXd* y) const {
+  for (const Closing& c : closing_) {
+    double along = 0.0;
+    for (int i = 0; i < c.count; ++i) along += c.coefficients[i] * c.normal.dot(p.segment<3>(3 * c.vertices[i]));
+    for (int i = 0; i < c.count; ++i) {
+      y->segment<3>(3 * c.vertices[i]) += c.stiffness * c.coefficients[i] * along * c.normal;
+    }
+  }
+}
+
+}  // namespace fast_backend
+}  // namespace femreg
