@@ -180,7 +180,7 @@ TEST(ForceResidual, ForcesBalanceTheLoads) {
   EXPECT_LT((free_sum + reactions + weight).norm(), 1e-9 * weight.norm());
 }
 
-// The fast back end, stopped by nothing but a stationary point (or 50 steps).
+// The fast back end with its own stops only (the inner tolerance out of play), up to 50 steps.
 BackendOptions FastSolveToTheEnd() {
   BackendOptions options;
   options.type = SolverBackend::kFast;
@@ -297,7 +297,7 @@ TEST(EquilibriumSolve, StepsThroughTheContactsTheyClose) {
   for (int v = 0; v < n; ++v) {
     if (box.mesh.rest(v, 0) < 0.2 - 1e-9 || box.mesh.rest(v, 2) > table + 0.004 + 1e-9) continue;
     energy::ContactPenalty<3> b;
-    b.vertices = {{v, (v + 1) % n, (v + 2) % n}};
+    b.vertices = {{v, (v + 1) % n, (v + 2) % n}};  // a point contact: the other two weigh 0
     b.coefficients = {{1.0, 0.0, 0.0}};
     b.normal = Eigen::Vector3d::UnitZ();
     b.offset = table;  // delta = table - z_v: > 0 below the table
@@ -314,11 +314,13 @@ TEST(EquilibriumSolve, StepsThroughTheContactsTheyClose) {
   for (int v = 0; v < n; ++v) {
     if (box.mesh.rest(v, 0) > 0.2 - 1e-9) lowest = std::min(lowest, x(v, 2));
   }
-  std::printf("%d steps, %d factorizations; the end's lowest vertex %.3f mm below the table\n", report.iterations,
-              report.factorizations, 1e3 * (table - lowest));
-  EXPECT_LT(table - lowest, 1e-4);  // resting on the table: pressed in 0.04 mm, not through
+  std::printf("%d steps, %d factorizations, stopped by %s; the end's lowest vertex %.3f mm below the table\n",
+              report.iterations, report.factorizations, ToString(report.stop), 1e3 * (table - lowest));
+  EXPECT_LT(table - lowest, 1e-4);  // resting on the table: pressed in, not through
   EXPECT_GT(table - lowest, 0.0);
-  EXPECT_LE(report.iterations, 5);  // 4; 9 with the closing contacts left out of the model
+  // Without the closing contacts in the model it takes about twice as many
+  // (docs/notes/2026-12-01-equilibrium-inexact-solves.md#contacts-closed-within-a-step).
+  EXPECT_LE(report.iterations, 5);
 }
 
 // A free box whose data ask for a turn about z and x and a shift: with z held

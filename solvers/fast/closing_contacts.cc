@@ -3,6 +3,7 @@
 #include <type_traits>
 
 #include "energy/contact.h"
+#include "energy/equilibrium.h"
 
 namespace femreg {
 namespace fast_backend {
@@ -22,6 +23,8 @@ int ClosingContacts::Find(const energy::Problem& problem, const Vertices& x, con
     using T = typename std::decay_t<decltype(set)>::Block;
     if constexpr (IsContactPenalty<T>::value) {
       static_assert(T::kVertices <= 6, "a contact stencil has at most six vertices");
+      // As the potential's assembly takes them: its groups, no robust loss.
+      if (!energy::InGroups(energy::PhysicsGroups(), set.group()) || set.loss().robust()) return;
       for (const T& b : set.blocks()) {
         if (!(b.weight > 0.0)) continue;
         std::array<const double*, T::kVertices> at;

@@ -4,8 +4,8 @@
 // meets a force its model did not have, and the line search cuts it short. The penetration
 // delta is linear in the positions, so the contacts that x + dx closes are known exactly; the
 // step is solved again with them taken as closed (their stiffness added to K's products, their
-// force on the closed branch to f), a semismooth Newton step on max(0, .)
-// (docs/notes/2026-12-01-equilibrium-inexact-solves.md#contacts-closed-within-a-step).
+// force on the closed branch to f): one update of the active set of the step's piecewise-linear
+// model, by the contacts it closes (docs/notes/2026-12-01-equilibrium-inexact-solves.md#contacts-closed-within-a-step).
 #ifndef FEMREG_SOLVERS_FAST_CLOSING_CONTACTS_H_
 #define FEMREG_SOLVERS_FAST_CLOSING_CONTACTS_H_
 

@@ -376,8 +376,9 @@ struct EquilibriumSolver::Impl {
   }
 
   // Where *dx closes contacts that are open at x, solves the step again with them closed in
-  // its model (solvers/fast/closing_contacts.h), on the same factor, and keeps that step if
-  // PCG converged and it goes downhill. f, the penalties and G stay x's own.
+  // its model (solvers/fast/closing_contacts.h), and keeps that step if PCG converged and it
+  // goes downhill. The preconditioner stays x's (its factor and its coarse matrix): the change
+  // is a few rank-one terms. f, the penalties and G stay x's own.
   void ResolveWithClosingContacts(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx,
                                   SolveReport* report) {
     if (closing.Find(problem, x, *dx) == 0) return;
@@ -410,10 +411,11 @@ struct EquilibriumSolver::Impl {
     if (!factored) return false;
     const int iterations_before = report->pcg_iterations;
     const bool converged = Pcg(-G, kMaxPcgIterations, dx, report);
-    if (converged) ResolveWithClosingContacts(problem, x, dx, report);
     // On K~'s factor: more than the threshold switches the shift on; on K~ + s H's: more
-    // switches it off, and the next step measures K~'s factor again.
+    // switches it off, and the next step measures K~'s factor again. (One PCG's count: the
+    // re-solve below is another system.)
     const int iterations = report->pcg_iterations - iterations_before;
+    if (converged) ResolveWithClosingContacts(problem, x, dx, report);
     shift_data = plain_values.empty() ? iterations > kShiftAfterIterations : iterations <= kShiftAfterIterations;
     if (converged) return true;
     // PCG's iterates lower the step's quadratic model from 0, so one that has not converged
