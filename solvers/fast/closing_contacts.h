@@ -24,7 +24,6 @@ class ClosingContacts {
   // Returns how many.
   int Find(const energy::Problem& problem, const Vertices& x, const Eigen::VectorXd& dx);
   void Clear() { closing_.clear(); }
-  bool empty() const { return closing_.empty(); }
   // f += their potential's gradient on the closed branch at x: k delta(x) d(delta)/dx.
   void AddForce(Eigen::VectorXd* f) const;
   // y += sum of k d(delta)/dx d(delta)/dx^T p: their share of K p.
