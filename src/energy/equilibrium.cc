@@ -12,21 +12,42 @@ namespace energy {
 namespace {
 
 // The part of f outside the admissible cone {f . n <= 0, |f_t| <= mu (-f . n)} (mu < 0: the
-// half-space f . n <= 0): f minus its projection on the cone.
-Eigen::Vector3d OutsideCone(const Eigen::Vector3d& f, const Eigen::Vector3d& n, double mu) {
+// half-space f . n <= 0): f minus its projection on the cone. The Hessian of 1/2 |outside|^2
+// is u u^T + side (b b^T), u = outside / |outside|: where f projects on the cone's side, b is
+// the tangent direction across f's plane (n, f_t), along which the projection turns with f
+// (docs/theory/equilibrium.md#pushing-only); everywhere else side is 0.
+struct ConeExcess {
+  Eigen::Vector3d outside = Eigen::Vector3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  double side = 0.0;
+};
+
+ConeExcess OutsideCone(const Eigen::Vector3d& f, const Eigen::Vector3d& n, double mu) {
+  ConeExcess excess;
   const double fn = f.dot(n);
-  if (mu < 0.0) return fn > 0.0 ? Eigen::Vector3d(fn * n) : Eigen::Vector3d::Zero();
+  if (mu < 0.0) {
+    if (fn > 0.0) excess.outside = fn * n;
+    return excess;
+  }
   const Eigen::Vector3d ft = f - fn * n;
   const double t = ft.norm();
   const double a = -fn;  // along the inward axis
-  if (t <= mu * a) return Eigen::Vector3d::Zero();  // inside
+  if (t <= mu * a) return excess;  // inside
   // The cone's generator in the plane of the axis and f: e = cos(theta) (-n) + sin(theta) t_dir.
   const double c = 1.0 / std::sqrt(1.0 + mu * mu), s = mu * c;
   const Eigen::Vector3d t_dir = t > 0.0 ? Eigen::Vector3d(ft / t) : Eigen::Vector3d::Zero();
   const Eigen::Vector3d e = -c * n + s * t_dir;
   const double along = f.dot(e);
-  if (along <= 0.0) return f;  // in the polar cone: the projection is the apex
-  return f - along * e;
+  if (along <= 0.0) {  // in the polar cone: the projection is the apex
+    excess.outside = f;
+    return excess;
+  }
+  excess.outside = f - along * e;
+  // The projection along * e turns about n as f_t does: d(t_dir) = (b b^T / t) df, so the
+  // projection's Jacobian has (along s / t) b b^T besides e e^T; 0 <= along s / t < 1 here.
+  excess.b = n.cross(t_dir);
+  excess.side = 1.0 - along * s / t;
+  return excess;
 }
 
 }  // namespace
@@ -57,16 +78,21 @@ double Equilibrium::Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gr
     if (curvature != nullptr) curvature->diagonal().array() += s / root;
   }
   if (pushing_only) {
-    const Eigen::Vector3d out = OutsideCone(f, normal[static_cast<size_t>(v)], friction);
-    const double d2 = out.squaredNorm();
+    const ConeExcess excess = OutsideCone(f, normal[static_cast<size_t>(v)], friction);
+    const double d2 = excess.outside.squaredNorm();
     if (d2 > 0.0) {
       value += 0.5 * beta * d2;
-      if (gradient != nullptr) *gradient += beta * out;
+      if (gradient != nullptr) *gradient += beta * excess.outside;
       if (curvature != nullptr) {
-        // The distance's direction (the exact curvature where the projection is a point or a
-        // half-space's face; a lower bound on the cone's side).
-        const Eigen::Vector3d u = out / std::sqrt(d2);
-        *curvature += beta * u * u.transpose();
+        if (excess.side > 0.0) {
+          const Eigen::Vector3d u = excess.outside / std::sqrt(d2);
+          *curvature += beta * (u * u.transpose() + excess.side * excess.b * excess.b.transpose());
+        } else if (friction < 0.0) {  // the half-space's face
+          const Eigen::Vector3d& nv = normal[static_cast<size_t>(v)];
+          *curvature += beta * nv * nv.transpose();
+        } else {  // the apex
+          curvature->diagonal().array() += beta;
+        }
       }
     }
   }
