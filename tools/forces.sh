@@ -3,7 +3,8 @@
 # forces estimated (the physical mode, registration.forces.estimate), one thread each, and
 # writes two tables: the vertex errors (seen / hidden), resultant-force errors and time per
 # frame of the sequences that carry the true external force (forces.csv: organ_patch,
-# hand_press, tool_table) to docs/accuracy/forces.md, and the vertex errors, time and frames
+# hand_press, tool_table; those also pushing only, with the friction they were made with) to
+# docs/accuracy/forces.md, and the vertex errors, time and frames
 # converged of both modes on every sequence to docs/accuracy/physical_mode.md.
 # About a minute on one core (16 sequences, 2026-12-01); run it on a quiet machine for the times.
 #   tools/forces.sh [BUILD_DIR]
@@ -19,11 +20,18 @@ for dir in datasets/*/; do
   name=$(basename "$dir")
   [[ -f "$dir/scene.yaml" && -d "$dir/clouds" && -d "$dir/ground_truth" ]] && names+=("$name")
 done
+# The contacts' friction the sequences with a true force were made with (their READMEs): the
+# tool's and the table's penalties are frictionless; the hand's contacts stick (-1: no bound).
+declare -A FRICTION=([organ_patch]=0 [tool_table]=0 [hand_press]=-1)
 for name in "${names[@]}"; do
   echo "forces.sh: $name" >&2
-  for mode in classic physical; do
+  modes=(classic physical)
+  [[ -n "${FRICTION[$name]:-}" ]] && modes+=(pushing)
+  for mode in "${modes[@]}"; do
     flag=()
-    [[ $mode == physical ]] && flag=(--set registration.forces.estimate=true)
+    [[ $mode != classic ]] && flag=(--set registration.forces.estimate=true)
+    [[ $mode == pushing ]] && flag+=(--set registration.forces.pushing_only=true
+                                     --set "registration.forces.friction=${FRICTION[$name]}")
     run="$OUT/${name}_$mode"
     "$FEMREG" register --scene "datasets/$name/scene.yaml" --frames "datasets/$name/clouds" \
       --ground-truth "datasets/$name/ground_truth" --out "$run" --threads 1 \

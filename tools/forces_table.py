@@ -19,7 +19,8 @@ import os
 import sys
 
 DATASETS = ("organ_patch", "hand_press", "tool_table")
-MODES = (("classic", "classic"), ("physical", "forces estimated"))
+MODES = (("classic", "classic"), ("physical", "forces estimated"),
+         ("pushing", "forces estimated, pushing only, friction as made"))
 
 
 def row(out, name, mode):
@@ -75,6 +76,8 @@ def main():
     print("|---|---|---|---:|---:|---:|---:|")
     for name in DATASETS:
         for mode, label in MODES:
+            if not os.path.isdir(os.path.join(out, f"{name}_{mode}")):
+                continue
             print(f"| {name} | {label} | " + " | ".join(row(out, name, mode)) + " |")
 
 
