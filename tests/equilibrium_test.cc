@@ -114,6 +114,29 @@ TEST(EquilibriumPenalty, PushingOnlyCostsNothingMoreInsideTheConeAndTheSupportNo
   EXPECT_EQ(cone.Penalty(2, pull, nullptr, nullptr), 0.0);
   const double balanced = 0.5 * cone.strong_weight[0] * pull.squaredNorm();
   EXPECT_NEAR(cone.Penalty(0, pull, nullptr, nullptr), balanced, 1e-14 * balanced);
+  // Frictionless, a pull straight along the normal is all outside (the ray), a push not.
+  const energy::Equilibrium ray = Sites(true, 0.0, 0.0);
+  EXPECT_NEAR(ray.Penalty(1, pull, nullptr, nullptr) - free.Penalty(1, pull, nullptr, nullptr),
+              0.5 * ray.strong_weight[1] * pull.squaredNorm(), 1e-12);
+  EXPECT_NEAR(ray.Penalty(1, -pull, nullptr, nullptr), free.Penalty(1, -pull, nullptr, nullptr), 1e-12);
+}
+
+// Just outside the cone's side the curvature is its side's (u u^T plus a vanishing b b^T),
+// continuous with the inside's nothing, not the apex's beta I.
+TEST(EquilibriumPenalty, CurvatureJustOutsideTheConesSideIsTheSides) {
+  const energy::Equilibrium cone = Sites(true, 0.5, 0.0);
+  const energy::Equilibrium free = Sites(false, -1.0, 0.0);
+  const Eigen::Vector3d n = cone.normal[1];
+  const Eigen::Vector3d t = n.unitOrthogonal();
+  for (double excess : {1e-15, 1e-12, 1e-9}) {
+    const Eigen::Vector3d f = -2.0 * n + (1.0 + excess) * t;  // |f_t| just above 0.5 * 2
+    Eigen::Matrix3d c, c_free;
+    cone.Penalty(1, f, nullptr, &c);
+    free.Penalty(1, f, nullptr, &c_free);
+    const double beta = cone.strong_weight[1];
+    EXPECT_LE((c - c_free).trace(), beta * (1.0 + 1e-6)) << "excess " << excess;
+    EXPECT_GE((c - c_free).trace(), 0.0);
+  }
 }
 
 // A 2 x 1 x 1 box of corotational elements, optionally under gravity on its lumped masses.

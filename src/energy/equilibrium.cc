@@ -12,13 +12,15 @@ namespace energy {
 namespace {
 
 // The part of f outside the admissible cone {f . n <= 0, |f_t| <= mu (-f . n)} (mu < 0: the
-// half-space f . n <= 0): f minus its projection on the cone. The Hessian of 1/2 |outside|^2
-// is u u^T + side (b b^T), u = outside / |outside|: where f projects on the cone's side, b is
-// the tangent direction across f's plane (n, f_t), along which the projection turns with f
-// (docs/theory/equilibrium.md#pushing-only); everywhere else side is 0.
+// half-space f . n <= 0): f minus its projection on the cone, and the Hessian of
+// 1/2 |outside|^2 (docs/theory/equilibrium.md#pushing-only): I where f projects on the apex,
+// n n^T on the half-space's face, and u u^T + side b b^T on the cone's side, u the outward
+// unit normal of the cone there and b the tangent direction across f's plane (n, f_t), along
+// which the projection turns with f.
 struct ConeExcess {
+  enum Region { kInside, kFace, kSide, kApex } region = kInside;
   Eigen::Vector3d outside = Eigen::Vector3d::Zero();
-  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d u = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
   double side = 0.0;
 };
 
@@ -26,27 +28,35 @@ ConeExcess OutsideCone(const Eigen::Vector3d& f, const Eigen::Vector3d& n, doubl
   ConeExcess excess;
   const double fn = f.dot(n);
   if (mu < 0.0) {
-    if (fn > 0.0) excess.outside = fn * n;
+    if (fn > 0.0) {
+      excess.region = ConeExcess::kFace;
+      excess.outside = fn * n;
+    }
     return excess;
   }
   const Eigen::Vector3d ft = f - fn * n;
   const double t = ft.norm();
   const double a = -fn;  // along the inward axis
-  if (t <= mu * a) return excess;  // inside
+  // (a >= 0: a pull along the normal, t = 0, is outside a frictionless cone, the ray.)
+  if (a >= 0.0 && t <= mu * a) return excess;  // inside
   // The cone's generator in the plane of the axis and f: e = cos(theta) (-n) + sin(theta) t_dir.
   const double c = 1.0 / std::sqrt(1.0 + mu * mu), s = mu * c;
   const Eigen::Vector3d t_dir = t > 0.0 ? Eigen::Vector3d(ft / t) : Eigen::Vector3d::Zero();
   const Eigen::Vector3d e = -c * n + s * t_dir;
   const double along = f.dot(e);
-  if (along <= 0.0) {  // in the polar cone: the projection is the apex
+  if (along <= 0.0 || t == 0.0) {  // in the polar cone: the projection is the apex
+    excess.region = ConeExcess::kApex;
     excess.outside = f;
     return excess;
   }
-  excess.outside = f - along * e;
-  // The projection along * e turns about n as f_t does: d(t_dir) = (b b^T / t) df, so the
-  // projection's Jacobian has (along s / t) b b^T besides e e^T; 0 <= along s / t < 1 here.
+  // The cone's outward normal in f's plane, exact (f - along e loses digits near the cone).
+  excess.region = ConeExcess::kSide;
+  excess.u = s * n + c * t_dir;
+  excess.outside = std::max(0.0, f.dot(excess.u)) * excess.u;
+  // The projection along * e turns about n as f_t does: d(t_dir) = (b b^T / t) df, so its
+  // Jacobian has (along s / t) b b^T besides e e^T; 0 < 1 - along s / t <= 1 here.
   excess.b = n.cross(t_dir);
-  excess.side = 1.0 - along * s / t;
+  excess.side = std::max(0.0, 1.0 - along * s / t);
   return excess;
 }
 
@@ -80,18 +90,24 @@ double Equilibrium::Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gr
   if (pushing_only) {
     const ConeExcess excess = OutsideCone(f, normal[static_cast<size_t>(v)], friction);
     const double d2 = excess.outside.squaredNorm();
-    if (d2 > 0.0) {
+    if (excess.region != ConeExcess::kInside && d2 > 0.0) {
       value += 0.5 * beta * d2;
       if (gradient != nullptr) *gradient += beta * excess.outside;
       if (curvature != nullptr) {
-        if (excess.side > 0.0) {
-          const Eigen::Vector3d u = excess.outside / std::sqrt(d2);
-          *curvature += beta * (u * u.transpose() + excess.side * excess.b * excess.b.transpose());
-        } else if (friction < 0.0) {  // the half-space's face
-          const Eigen::Vector3d& nv = normal[static_cast<size_t>(v)];
-          *curvature += beta * nv * nv.transpose();
-        } else {  // the apex
-          curvature->diagonal().array() += beta;
+        switch (excess.region) {
+          case ConeExcess::kSide:
+            *curvature += beta * (excess.u * excess.u.transpose() + excess.side * excess.b * excess.b.transpose());
+            break;
+          case ConeExcess::kFace: {
+            const Eigen::Vector3d& nv = normal[static_cast<size_t>(v)];
+            *curvature += beta * nv * nv.transpose();
+            break;
+          }
+          case ConeExcess::kApex:
+            curvature->diagonal().array() += beta;
+            break;
+          case ConeExcess::kInside:
+            break;
         }
       }
     }
