@@ -437,6 +437,7 @@ TEST(OrganForces, ToolForceFromPartialViewsAndCloserWhenTheToolIsKnownFrictionle
   const Status status = ReadForces(kOrgan + "/forces.csv", &truth, &has_columns);
   ASSERT_TRUE(status.ok()) << status.message();
   ASSERT_TRUE(has_columns);
+  ASSERT_EQ(truth.size(), 12u);
   const OrganRun free_forces = Summarize(RunOrgan([](Scene* s) { s->registration.forces.estimate = true; }));
   const OrganRun frictionless = Summarize(RunOrgan([](Scene* s) {
     s->registration.forces.estimate = true;
@@ -453,7 +454,8 @@ TEST(OrganForces, ToolForceFromPartialViewsAndCloserWhenTheToolIsKnownFrictionle
               100 * frictionless_error.relative, frictionless.seen_mm, frictionless.hidden_mm);
   EXPECT_EQ(free_forces.converged, 12);
   EXPECT_EQ(frictionless.converged, 12);
-  // Measured 24 % and 0.40 / 0.46 mm; 9 % and 0.30 / 0.34 mm (docs/notes/2026-12-02-frictionless-contacts.md);
+  // Measured (per-frame means over the frames) 24 % and 0.40 / 0.46 mm; 9 % and 0.30 / 0.34 mm
+  // (docs/notes/2026-12-02-frictionless-contacts.md);
   // the bounds leave room for other CPUs' rounding (docs/guide/busy-machines.md).
   EXPECT_LT(free_error.relative, 0.30);
   EXPECT_LT(free_forces.seen_mm, 0.50);
@@ -466,8 +468,10 @@ TEST(OrganForces, ToolForceFromPartialViewsAndCloserWhenTheToolIsKnownFrictionle
   // the true force's, where the default estimate has a fifth of it.
   for (int f = 4; f < 12; ++f) {
     SCOPED_TRACE("frame " + std::to_string(f));
-    EXPECT_LT(frictionless.forces[f].force.x(), 0.5 * truth[f].force.x());
-    EXPECT_GT(frictionless.forces[f].force.x(), 2.0 * truth[f].force.x());
+    ASSERT_EQ(truth[f].frame, f);
+    const double ratio = frictionless.forces[f].force.x() / truth[f].force.x();
+    EXPECT_GT(ratio, 0.5);
+    EXPECT_LT(ratio, 2.0);
   }
 }
 

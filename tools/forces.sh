@@ -6,7 +6,7 @@
 # hand_press, tool_table; those also pushing only, with the friction they were made with) to
 # docs/accuracy/forces.md, and the vertex errors, time and frames
 # converged of both modes on every sequence to docs/accuracy/physical_mode.md.
-# About a minute on one core (16 sequences, 2026-12-01); run it on a quiet machine for the times.
+# About two minutes on one core (16 sequences, 2026-12-02); run it on a quiet machine for the times.
 #   tools/forces.sh [BUILD_DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,8 +20,9 @@ for dir in datasets/*/; do
   name=$(basename "$dir")
   [[ -f "$dir/scene.yaml" && -d "$dir/clouds" && -d "$dir/ground_truth" ]] && names+=("$name")
 done
-# The contacts' friction the sequences with a true force were made with (their READMEs): the
-# tool's and the table's penalties are frictionless; the hand's contacts stick (-1: no bound).
+# The contacts' friction the sequences with a true force were made with: organ_patch's tool is
+# frictionless (its README), tool_table's tool and table press by a contact penalty without
+# friction (femreg contact-data); hand_press's hand sticks (its README; -1: no bound).
 declare -A FRICTION=([organ_patch]=0 [tool_table]=0 [hand_press]=-1)
 for name in "${names[@]}"; do
   echo "forces.sh: $name" >&2
