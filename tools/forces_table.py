@@ -4,7 +4,8 @@
 
     python3 tools/forces_table.py OUT_DIR [--modes]
 
-Forces table, per dataset with a true force and mode: the mean vertex error of the seen and
+Forces table, per dataset with a true force and mode (OUT_DIR/NAME_classic, NAME_physical and,
+where forces.sh ran it, NAME_pushing): the mean vertex error of the seen and
 hidden vertices (summary.json), the median over the frames of the resultant-force error in
 newtons and in percent of the true force (the totals row of `femreg eval`'s eval.csv), the
 median time per frame and the frames that stopped on their tolerance.
