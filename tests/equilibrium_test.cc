@@ -137,7 +137,9 @@ TEST(EquilibriumPenalty, CurvatureJustOutsideTheConesSideIsTheSides) {
     EXPECT_LE((c - c_free).trace(), beta * (1.0 + 1e-6)) << "excess " << excess;
     EXPECT_GE((c - c_free).trace(), 0.0);
     // (At 1e-15 the force may round back inside; beyond, it is on the side: u u^T.)
-    if (excess >= 1e-12) EXPECT_GE((c - c_free).trace(), beta * (1.0 - 1e-6)) << "excess " << excess;
+    if (excess >= 1e-12) {
+      EXPECT_GE((c - c_free).trace(), beta * (1.0 - 1e-6)) << "excess " << excess;
+    }
   }
 }
 
