@@ -77,6 +77,10 @@ constexpr double kQuadraticAgreement = 1e-6;
 // smoother, if PCG found it indefinite), then as many with a new one; if that does not
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
+// What a new hierarchy costs in PCG iterations with it: 30-60 from 4k to 64k vertices
+// (bench/linear_solver_bench.cc, MultigridBuild against MultigridCycle plus BlockProduct). A
+// count, not a timing: the same choices, and so the same result, on any machine.
+constexpr int kMultigridBuildIterations = 25;
 
 }  // namespace
 
@@ -194,8 +198,9 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
                                                                  double negligible,
                                                                  Eigen::VectorXd* dx,
                                                                  SolveReport* report) {
-  // The kept hierarchy while the last solve with it took at most twice (and 4 more than) the
-  // iterations of the first solve after its build. If PCG finds the V-cycle not positive
+  // The kept hierarchy while the last solve with it took at most twice, or at most
+  // kMultigridBuildIterations more than, the iterations of the first solve after its build:
+  // a new one would cost more than it saves. If PCG finds the V-cycle not positive
   // definite for this H (the finest smoother's eigenvalue bound is an earlier H's), once
   // more with that bound estimated for this H.
   auto solve = [&](double* seconds) {
@@ -218,7 +223,8 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
     report->factorize_s += Seconds(t0);
     return set;
   };
-  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + 4) && set_finest()) {
+  if (multigrid.built() && multigrid_last_iterations <= std::max(2 * fresh, fresh + kMultigridBuildIterations) &&
+      set_finest()) {
     Outcome outcome = solve(&report->linear_solve_s);
     if (outcome == Outcome::kFailed && pcg_indefinite) {
       const auto t0 = Clock::now();
