@@ -129,13 +129,21 @@ TEST(HandPress, TheFingersBesideTheBallAreImplausiblePoints) {
 
 // The next three switch off the implausible points too: the fingers' pull they remove is what
 // made the press cycle, and it also stood behind the climb and the inversions.
-TEST(HandPress, WithoutBacktrackingThePressedFramesCycleToTheCap) {
+TEST(HandPress, WithoutBacktrackingOrReversalCutsThePressedFramesCycleToTheCap) {
   const PressRun run = RunHandPress([](Scene* s) {
     s->registration.solver.backtrack = false;
+    s->registration.solver.cut_reversals = false;
     s->registration.data.max_strain_step = 0.0;
   });
   EXPECT_EQ(run.backtracks, 0);
   EXPECT_GE(run.capped, 3);
+  // Either safeguard alone stops the cycles (docs/theory/stopping.md#reversals).
+  const PressRun cut = RunHandPress([](Scene* s) {
+    s->registration.solver.backtrack = false;
+    s->registration.data.max_strain_step = 0.0;
+  });
+  EXPECT_EQ(cut.backtracks, 0);
+  EXPECT_EQ(cut.capped, 0);
 }
 
 TEST(HandPress, WithoutOccludersTheBallClimbsIntoTheHand) {

@@ -215,6 +215,7 @@ struct OptionFields<SolverOptions> {
                            .Note("(0: the cores other processes leave free, per frame)"));
     v(&S::predict_motion, FieldInfo("predict_motion"));
     v(&S::backtrack, FieldInfo("backtrack"));
+    v(&S::cut_reversals, FieldInfo("cut_reversals"));
     v(&S::hold_hidden_turns,
       FieldInfo("hold_hidden_turns").Doc("Outer iterations leave out turns of free objects that their surface does not show."));
     v(&S::rigid_prealign, FieldInfo("rigid_prealign"));

@@ -295,6 +295,10 @@ struct SolverOptions {
   // From the held pair set on, halve an outer iteration's move while the energy with the pairs
   // it finds rose (docs/theory/stopping.md#backtracking). Not with fracture on.
   bool backtrack = true;
+  // From the held pair set on, cut an outer iteration's move that reverses the last one to
+  // where the two-cycle's fixed point is estimated (docs/theory/stopping.md#reversals). Not
+  // with fracture on.
+  bool cut_reversals = true;
   // Each outer iteration's move leaves out the turn of an object nothing holds about the axes
   // its surface does not show (a ball's about its centre, a cylinder's about its axis): no
   // data decides it, so the registration does not make it (docs/theory/stopping.md#hidden-turns).
@@ -471,6 +475,9 @@ struct FrameSummary {
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
+  // Outer-iteration moves cut short because they reversed the last one (a two-cycle:
+  // docs/theory/stopping.md#reversals).
+  int reversals = 0;
   // 1 when the first outer iteration moved the bulk of the vertices (99 %) more than 3 mean
   // edges, or the frame came after held or lost ones, and the frame started again, stiff and
   // stepping down (docs/theory/stopping.md#large-motions).

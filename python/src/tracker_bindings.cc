@@ -51,6 +51,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["outer_iterations"] = s.outer_iterations;
   d["inner_iterations"] = s.inner_iterations;
   d["backtracks"] = s.backtracks;
+  d["reversals"] = s.reversals;
   d["large_motion_restarts"] = s.large_motion_restarts;
   d["crushed_restarts"] = s.crushed_restarts;
   d["confidence"] = s.confidence.confidence;

@@ -3,6 +3,7 @@
 // (docs/theory/stopping.md#backtracking), the solve and the stopping rules, and the contacts'
 // multipliers. The frame loop that runs them is in tracker.cc.
 #include <algorithm>
+#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -43,6 +44,11 @@ constexpr double kRiseEnergyLimit = 0.1;
 // Halvings of an outer iteration's move tried when the energy it reached, with its new pairs,
 // is more than kRiseEnergyLimit above its start's (Backtrack): down to an eighth of the move.
 constexpr int kBacktrackHalvings = 3;
+// An outer iteration's move whose cosine with the last one's is below this reverses it: the
+// iterations are caught in a two-cycle (CutReversal).
+constexpr double kReversalCosine = -0.5;
+// The shortest share of a reversing move that CutReversal keeps.
+constexpr double kShortestReversalCut = 0.25;
 
 }  // namespace
 
@@ -194,6 +200,33 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
   return false;
 }
 
+bool Tracker::Impl::CutReversal(int k, bool warm_start, const Vertices& before_solve, FrameSummary* s) {
+  Vertices move = state.x - before_solve;
+  const bool follows = state.options.solver.cut_reversals && k >= rise_from && k - 1 >= iteration_base && last_move_iteration == k - 1 &&
+                       last_move.rows() == move.rows() && !warm_start && !stepping_in && !FractureLive(state);
+  bool cut = false;
+  if (follows) {
+    // Where the fixed-point map of the outer iterations turns a mode over (its factor lambda
+    // near -1: a body that slides to and fro along a cloud denser than its mesh), each move
+    // undoes the last and the frame never settles. With d_k = lambda d_(k-1) along that mode,
+    // the fixed point is d_k / (1 - lambda) from this start: half the move at lambda = -1
+    // (docs/theory/stopping.md#reversals).
+    const double along = move.cwiseProduct(last_move).sum();
+    const double last2 = last_move.squaredNorm(), move2 = move.squaredNorm();
+    if (last2 > 0 && move2 > 0 && along < kReversalCosine * std::sqrt(last2 * move2)) {
+      const double lambda = along / last2;
+      const double share = std::clamp(1.0 / (1.0 - lambda), kShortestReversalCut, 1.0);
+      move *= share;
+      state.x = before_solve + move;
+      ++s->reversals;
+      cut = true;
+    }
+  }
+  last_move = std::move(move);
+  last_move_iteration = k;
+  return cut;
+}
+
 namespace {
 
 // The augmented-Lagrangian update after a solve (docs/theory/contact.md#response): each
@@ -284,6 +317,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
     row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
   }
+  const bool reversed = CutReversal(k, warm_start, before_solve, s);
+  if (reversed) row.after = frame_problem.problem().Evaluate(state.x);
   const bool contacts_pending =
       state.collision && state.collision->augmented() &&
       UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!options.forces.estimate);

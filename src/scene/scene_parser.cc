@@ -44,7 +44,7 @@
 //              trust_region: levenberg_marquardt|dogleg,
 //              linear_solver: sparse_normal_cholesky|conjugate_gradients, threads: 1,
 //              rigid_prealign: false, rigid_iterations: 20, predict_motion: true,
-//              backtrack: true, backend: ceres|fast}
+//              backtrack: true, cut_reversals: true, backend: ceres|fast}
 //   anchors:
 //     - {name: gripper, object: beam, select: SELECTION, hard: false, weight: 0,
 //        translations: [[0, 0, 0], [0, 0, 0.01]],   # per frame; the last one repeats
