@@ -297,7 +297,7 @@ struct SolverOptions {
   bool backtrack = true;
   // From the held pair set on, cut an outer iteration's move that reverses the last one to
   // where the two-cycle's fixed point is estimated (docs/theory/stopping.md#reversals). Not
-  // with fracture on.
+  // once fracture is live.
   bool cut_reversals = true;
   // Each outer iteration's move leaves out the turn of an object nothing holds about the axes
   // its surface does not show (a ball's about its centre, a cylinder's about its axis): no

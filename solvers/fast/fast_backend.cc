@@ -77,7 +77,7 @@ constexpr double kQuadraticAgreement = 1e-6;
 // smoother, if PCG found it indefinite), then as many with a new one; if that does not
 // converge either, the step goes to the factorization.
 constexpr int kMultigridMaxIterations = 100;
-// What a new hierarchy costs in PCG iterations with it: 30-60 from 4k to 64k vertices
+// Below what a new hierarchy costs in PCG iterations with it: 28-60 from 4k to 64k vertices
 // (bench/linear_solver_bench.cc, MultigridBuild against MultigridCycle plus BlockProduct). A
 // count, not a timing: the same choices, and so the same result, on any machine.
 constexpr int kMultigridBuildIterations = 25;

@@ -3,7 +3,6 @@
 // (docs/theory/stopping.md#backtracking), the solve and the stopping rules, and the contacts'
 // multipliers. The frame loop that runs them is in tracker.cc.
 #include <algorithm>
-#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -200,12 +199,17 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
   return false;
 }
 
-bool Tracker::Impl::CutReversal(int k, bool warm_start, const Vertices& before_solve, FrameSummary* s) {
-  Vertices move = state.x - before_solve;
-  const bool follows = state.options.solver.cut_reversals && k >= rise_from && k - 1 >= iteration_base && last_move_iteration == k - 1 &&
-                       last_move.rows() == move.rows() && !warm_start && !stepping_in && !FractureLive(state);
+bool Tracker::Impl::CutReversal(int k, bool comparable, const Vertices& before_solve, double start_energy,
+                                femreg::OuterIteration* row, FrameSummary* s) {
+  const Vertices move = state.x - before_solve;
+  // The last move: from the last outer iteration's start to this one's (a backtrack's halving
+  // and a cut included).
+  const bool follows = state.options.solver.cut_reversals && comparable && k >= rise_from &&
+                       k - 1 >= iteration_base && last_start_iteration == k - 1 &&
+                       last_start.rows() == move.rows() && !stepping_in && !FractureLive(state);
   bool cut = false;
   if (follows) {
+    const Vertices last_move = before_solve - last_start;
     // Where the fixed-point map of the outer iterations turns a mode over (its factor lambda
     // near -1: a body that slides to and fro along a cloud denser than its mesh), each move
     // undoes the last and the frame never settles. With d_k = lambda d_(k-1) along that mode,
@@ -216,14 +220,25 @@ bool Tracker::Impl::CutReversal(int k, bool warm_start, const Vertices& before_s
     if (last2 > 0 && move2 > 0 && along < kReversalCosine * std::sqrt(last2 * move2)) {
       const double lambda = along / last2;
       const double share = std::clamp(1.0 / (1.0 - lambda), kShortestReversalCut, 1.0);
-      move *= share;
-      state.x = before_solve + move;
-      ++s->reversals;
-      cut = true;
+      const Vertices reached = state.x;
+      state.x = before_solve + share * move;
+      const auto t0 = Clock::now();
+      const EnergyTerms at = frame_problem.problem().Evaluate(state.x);
+      s->time.evaluation += Seconds(t0);
+      s->time.solve += Seconds(t0);
+      // Only a cut that keeps the solve's descent from its start (with its pairs, along the
+      // segment the energy is all but convex).
+      if (at.total() <= start_energy) {
+        row->after = at;
+        ++s->reversals;
+        cut = true;
+      } else {
+        state.x = reached;
+      }
     }
   }
-  last_move = std::move(move);
-  last_move_iteration = k;
+  last_start = before_solve;
+  last_start_iteration = k;
   return cut;
 }
 
@@ -285,6 +300,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (Backtracks(k, warm_start) && !Backtrack(k, fc, *previous, pairs, &counts, &row, previous_energy, s)) {
     return false;
   }
+  // The last outer iteration's energy and this one's compare (no new contact multipliers, held
+  // free space or another energy since): so do their moves (CutReversal).
+  const bool comparable = std::isfinite(merit);
   const energy::Problem& problem = frame_problem.problem();
 
   auto t0 = Clock::now();
@@ -317,8 +335,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
     row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
   }
-  const bool reversed = CutReversal(k, warm_start, before_solve, s);
-  if (reversed) row.after = frame_problem.problem().Evaluate(state.x);
+  CutReversal(k, comparable && !warm_start, before_solve, report.before.total(), &row, s);
   const bool contacts_pending =
       state.collision && state.collision->augmented() &&
       UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!options.forces.estimate);
