@@ -201,45 +201,36 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
 
 bool Tracker::Impl::CutReversal(int k, bool comparable, const Vertices& before_solve, double start_energy,
                                 femreg::OuterIteration* row, FrameSummary* s) {
-  const Vertices move = state.x - before_solve;
-  // The last move: from the last outer iteration's start to this one's (a backtrack's halving
-  // and a cut included).
-  const bool follows = state.options.solver.cut_reversals && comparable && k >= rise_from &&
-                       k - 1 >= iteration_base && last_start_iteration == k - 1 &&
-                       last_start.rows() == move.rows() && !stepping_in && !FractureLive(state);
-  bool cut = false;
-  if (follows) {
-    const Vertices last_move = before_solve - last_start;
-    // Where the fixed-point map of the outer iterations turns a mode over (its factor lambda
-    // near -1: a body that slides to and fro along a cloud denser than its mesh), each move
-    // undoes the last and the frame never settles. With d_k = lambda d_(k-1) along that mode,
-    // the fixed point is d_k / (1 - lambda) from this start: half the move at lambda = -1
-    // (docs/theory/stopping.md#reversals).
-    const double along = move.cwiseProduct(last_move).sum();
-    const double last2 = last_move.squaredNorm(), move2 = move.squaredNorm();
-    if (last2 > 0 && move2 > 0 && along < kReversalCosine * std::sqrt(last2 * move2)) {
-      const double lambda = along / last2;
-      const double share = std::clamp(1.0 / (1.0 - lambda), kShortestReversalCut, 1.0);
-      const Vertices reached = state.x;
-      state.x = before_solve + share * move;
-      const auto t0 = Clock::now();
-      const EnergyTerms at = frame_problem.problem().Evaluate(state.x);
-      s->time.evaluation += Seconds(t0);
-      s->time.solve += Seconds(t0);
-      // Only a cut that keeps the solve's descent from its start (with its pairs, along the
-      // segment the energy is all but convex).
-      if (at.total() <= start_energy) {
-        row->after = at;
-        ++s->reversals;
-        cut = true;
-      } else {
-        state.x = reached;
-      }
-    }
+  // While the last outer iteration's energy compares with this one's, merit_x is its start.
+  if (!state.options.solver.cut_reversals || !comparable || k < rise_from || stepping_in || FractureLive(state) ||
+      merit_x.rows() != state.x.rows()) {
+    return false;
   }
-  last_start = before_solve;
-  last_start_iteration = k;
-  return cut;
+  // Where the fixed-point map of the outer iterations turns a mode over (its factor lambda
+  // near -1: a body that slides to and fro along a cloud denser than its mesh), each move
+  // undoes the last and the frame never settles. With d_k = lambda d_(k-1) along that mode,
+  // the fixed point is d_k / (1 - lambda) from this start: half the move at lambda = -1
+  // (docs/theory/stopping.md#reversals). The last move runs from the last start to this one
+  // (a backtrack's halving and a cut included).
+  const Vertices move = state.x - before_solve;
+  const double along = move.cwiseProduct(before_solve - merit_x).sum();
+  const double last2 = (before_solve - merit_x).squaredNorm(), move2 = move.squaredNorm();
+  if (!(last2 > 0 && move2 > 0 && along < kReversalCosine * std::sqrt(last2 * move2))) return false;
+  const double share = std::clamp(1.0 / (1.0 - along / last2), kShortestReversalCut, 1.0);
+  state.x = before_solve + share * move;
+  const auto t0 = Clock::now();
+  const EnergyTerms at = frame_problem.problem().Evaluate(state.x);
+  s->time.evaluation += Seconds(t0);
+  s->time.solve += Seconds(t0);
+  // Only a cut that keeps the solve's descent from its start (with its pairs, along the
+  // segment the energy is all but convex).
+  if (!(at.total() <= start_energy)) {
+    state.x = before_solve + move;
+    return false;
+  }
+  row->after = at;
+  ++s->reversals;
+  return true;
 }
 
 namespace {
@@ -314,9 +305,6 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   s->time.solve += Seconds(t0);
   row.before = report.before;
   if (k == 0) s->initial = row.before;
-  // The next outer iteration's energy, with what it finds, is held against this start's.
-  merit = warm_start ? std::numeric_limits<double>::infinity() : report.before.total();
-  merit_x = before_solve;
   s->time.assembly += report.assemble_s;
   s->time.factorization += report.factorize_s;
   s->time.linear_solve += report.linear_solve_s;
@@ -335,7 +323,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
     row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
   }
-  CutReversal(k, comparable && !warm_start, before_solve, report.before.total(), &row, s);
+  CutReversal(k, comparable, before_solve, report.before.total(), &row, s);
+  // The next outer iteration's energy, with what it finds, is held against this start's.
+  merit = warm_start ? std::numeric_limits<double>::infinity() : report.before.total();
+  merit_x = before_solve;
   const bool contacts_pending =
       state.collision && state.collision->augmented() &&
       UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!options.forces.estimate);

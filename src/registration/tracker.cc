@@ -298,7 +298,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   paired_vertices.clear();
   rise_from = std::max(1, options.data.hold_pairs_after);
   merit = std::numeric_limits<double>::infinity();
-  last_start_iteration = -1;
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
   warm_until = 0;

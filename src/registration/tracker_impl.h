@@ -61,11 +61,11 @@ struct Tracker::Impl {
   // summary says why).
   bool Backtrack(int k, const FrameCloud& fc, const Vertices& previous, std::vector<DataPair>* pairs,
                  PairCounts* counts, femreg::OuterIteration* row, double* previous_energy, FrameSummary* s);
-  // After outer iteration k's solve from before_solve (energy start_energy with its pairs): a
-  // move that reverses the last one is cut to where the two-cycle's fixed point is estimated
-  // (docs/theory/stopping.md#reversals), *row's energy then the cut's. `comparable`: the last
-  // outer iteration's energy is this one's. True when it was cut; the stopping rules then
-  // measure the cut move.
+  // After outer iteration k's solve from before_solve (energy start_energy with its pairs), before
+  // merit_x takes this start: a move that reverses the last one is cut to where the two-cycle's
+  // fixed point is estimated (docs/theory/stopping.md#reversals), *row's energy then the cut's.
+  // `comparable`: the last outer iteration's energy (merit) compares with this one's. True when
+  // it was cut; the stopping rules then measure the cut move.
   bool CutReversal(int k, bool comparable, const Vertices& before_solve, double start_energy,
                    femreg::OuterIteration* row, FrameSummary* s);
   // One outer iteration k; false when the frame stops (the summary says why).
@@ -129,9 +129,6 @@ struct Tracker::Impl {
   Vertices implausible_before;
   // The last outer iteration's start and its energy with what it found (Backtrack).
   Vertices merit_x;
-  // The last outer iteration's start and its number (CutReversal; -1 at a frame's start).
-  Vertices last_start;
-  int last_start_iteration = -1;
   PointCloud prepared_cloud;  // Tracker::prepared_cloud
   double merit = 0.0;
 };
