@@ -301,21 +301,32 @@ TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
   for (int64_t cut_from : {int64_t{1} << 40, int64_t{0}}) {
     fast_backend::SupernodalSolve<double> in_double;
     in_double.set_cut_from(cut_from);
-    ASSERT_TRUE(in_double.FactorizeIndefinite(*symbolic.raw(), A, true)) << cut_from;
+    ASSERT_TRUE(in_double.FactorizeIndefinite(*symbolic.raw(), A, true, 1)) << cut_from;
     EXPECT_EQ(in_double.negative_pivots(), 5) << cut_from;
     Eigen::VectorXd x;
     in_double.Solve(b, &x);
     EXPECT_LE((x - expected).lpNorm<Eigen::Infinity>(), 1e-8 * scale) << cut_from;
     fast_backend::SupernodalSolve<float> in_float;
     in_float.set_cut_from(cut_from);
-    ASSERT_TRUE(in_float.FactorizeIndefinite(*symbolic.raw(), A, true)) << cut_from;
+    ASSERT_TRUE(in_float.FactorizeIndefinite(*symbolic.raw(), A, true, 1)) << cut_from;
     EXPECT_EQ(in_float.negative_pivots(), 5) << cut_from;
     Eigen::VectorXd y;
     in_float.Solve(b, &y);
     EXPECT_LE((y - expected).lpNorm<Eigen::Infinity>(), 5e-2 * scale) << cut_from;
     EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);
+    // The cut's groups on 2 and 3 threads: the same factor and signs as on one.
+    for (int threads : {2, 3}) {
+      fast_backend::SupernodalSolve<float> on_team;
+      on_team.set_cut_from(cut_from);
+      ASSERT_TRUE(on_team.FactorizeIndefinite(*symbolic.raw(), A, true, threads)) << cut_from;
+      EXPECT_TRUE(on_team.values() == in_float.values()) << cut_from << ", " << threads << " threads: another factor";
+      EXPECT_EQ(on_team.negative_pivots(), 5) << cut_from << ", " << threads << " threads";
+      Eigen::VectorXd w;
+      on_team.Solve(b, &w);
+      EXPECT_TRUE(w == y) << cut_from << ", " << threads << " threads";
+    }
     // Positive definite: no negative pivot, the Cholesky factorization's solve.
-    ASSERT_TRUE(in_double.FactorizeIndefinite(*symbolic.raw(), H, false));
+    ASSERT_TRUE(in_double.FactorizeIndefinite(*symbolic.raw(), H, false, 1));
     EXPECT_EQ(in_double.negative_pivots(), 0);
     Eigen::VectorXd z;
     in_double.Solve(b, &z);
@@ -343,7 +354,7 @@ TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
   b0[3] = 0.0;
   const Eigen::VectorXd reduced_expected = reduced.partialPivLu().solve(b0);
   fast_backend::SupernodalSolve<double> floored;
-  ASSERT_TRUE(floored.FactorizeIndefinite(*symbolic.raw(), singular, true));
+  ASSERT_TRUE(floored.FactorizeIndefinite(*symbolic.raw(), singular, true, 1));
   EXPECT_EQ(floored.perturbed_pivots(), 1);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> reduced_eigen(reduced);
   EXPECT_EQ(floored.negative_pivots(), (reduced_eigen.eigenvalues().array() < 0.0).count());
@@ -352,7 +363,7 @@ TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
   EXPECT_LE((x0 - reduced_expected).lpNorm<Eigen::Infinity>(), 1e-8 * reduced_expected.lpNorm<Eigen::Infinity>());
   Eigen::SparseMatrix<double> not_finite = A;
   not_finite.coeffRef(5, 5) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_FALSE(floored.FactorizeIndefinite(*symbolic.raw(), not_finite, false));
+  EXPECT_FALSE(floored.FactorizeIndefinite(*symbolic.raw(), not_finite, false, 1));
   EXPECT_FALSE(floored.loaded());
   EXPECT_EQ(floored.negative_pivots(), 0);
 }

@@ -96,5 +96,12 @@ TEST(ThreadCount, OrganPatchWithForcesIsTheSameOnOneAndTwoThreads) {
                                   {{"registration.forces.estimate", "true"}, {"registration.forces.weight", "0.01"}});
 }
 
+// The same ball with its forces estimated: its factor (2e8 flops, 7e5 entries) is large
+// enough for the factorizations' team (Cholesky and L S L^T, most of its steps) and for the
+// substitutions' groups on two threads.
+TEST(ThreadCount, HandPressWithForcesIsTheSameOnOneAndTwoThreads) {
+  ExpectTheSameOnOneAndTwoThreads("hand_press", 4, false, {{"registration.forces.estimate", "true"}});
+}
+
 }  // namespace
 }  // namespace femreg

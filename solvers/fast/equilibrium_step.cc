@@ -93,6 +93,7 @@ struct EquilibriumSolver::Impl {
   int use_indefinite = 0;
   bool indefinite_pending[2] = {false, false};
   bool analysed = false, structure_pending = false, factor_single = false;
+  double factor_flops = 0.0;  // CHOLMOD's flop count of one factorization (Analyse)
   // K was indefinite at the last factorization (L D L^T with a negative pivot): the next one
   // goes to L D L^T directly, without the Cholesky attempt that would fail.
   bool last_indefinite = false;
@@ -116,6 +117,7 @@ struct EquilibriumSolver::Impl {
       const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
       factor.analyzePattern(K);
     }
+    factor_flops = factor.cholmod().fl;
     analysed = true;
     structure_pending = true;
     indefinite_pending[0] = indefinite_pending[1] = true;
@@ -173,6 +175,13 @@ struct EquilibriumSolver::Impl {
     return FactorizeOf(&projected, 1.0, kOwnFloat | kCholmodDouble, report);
   }
 
+  // The own factorizations' team: up to `threads` by the factor's size. The tree's cut and the
+  // tiles depend on the factor alone, so every team gives the same factor.
+  int FactorTeam() const {
+    return PhaseThreads(threads, static_cast<long long>(factor_flops),
+                        static_cast<long long>(kFactorizationFlopsPerThread));
+  }
+
   // K~ (K with FactorizeOf's first shift) as L S L^T in the own supernodal code, in float,
   // else in double; false if neither (a pivot too small at its precision).
   bool FactorizeIndefinite(SolveReport* report) {
@@ -185,16 +194,19 @@ struct EquilibriumSolver::Impl {
     mean /= std::max<size_t>(1, diagonal_at.size());
     for (int at : diagonal_at) K.valuePtr()[at] += kFirstShift * mean;
     {
-      const ScopedThreads one_thread(1);
+      const ScopedThreads one_thread(1);  // the BLAS; the groups on the factorization's own team
+      const int team = FactorTeam();
       ++report->factorizations;
-      if (indefinite_single.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[0])) {
+      if (indefinite_single.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[0], team)) {
         indefinite_pending[0] = false;
         use_indefinite = 1;
+        indefinite_single.set_threads(threads);
       } else {
         ++report->factorizations;
-        if (indefinite_double.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[1])) {
+        if (indefinite_double.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[1], team)) {
           indefinite_pending[1] = false;
           use_indefinite = 2;
+          indefinite_double.set_threads(threads);
         }
       }
     }
@@ -229,10 +241,9 @@ struct EquilibriumSolver::Impl {
       factor_single = false;
       if (attempts & kOwnFloat) {
         ++report->factorizations;
-        const ScopedThreads one_thread(1);
-        // On one thread: the same factor (and so the same PCG iterates) on any thread count
-        // (the team's tiles round differently), and no team to wait for on a busy machine.
-        factor_single = substitutions.Factorize(*factor.raw(), K, structure_pending, 1);
+        const ScopedThreads one_thread(1);  // the BLAS; the factorization's own team
+        factor_single = substitutions.Factorize(*factor.raw(), K, structure_pending, FactorTeam());
+        substitutions.set_threads(threads);  // PCG's substitutions: the groups on the workers
       }
       if (factor_single) {
         structure_pending = false;

@@ -18,11 +18,6 @@ namespace fast_backend {
 
 namespace {
 
-// The own factorization's team: one thread per this many flops (CHOLMOD's count). Below it the
-// team's start and the barriers of its tiled top cost more than the second thread saves
-// (docs/notes/2026-11-30-factorization-team.md, 2026-11-30-team-threshold.md).
-constexpr double kFactorizationFlopsPerThread = 1e8;
-
 // CHOLMOD's supernodal factorization is faster than its simplicial one on these systems at
 // every size measured, so it is always used (docs/notes/2026-11-28-figures-from-code-comments.md).
 

@@ -30,6 +30,11 @@ using Clock = std::chrono::steady_clock;
 // (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr double kSingleFactorizationSpeed = 3.0;
 
+// The own factorization's team: one thread per this many flops (CHOLMOD's count). Below it the
+// team's start and the barriers of its tiled top cost more than the second thread saves
+// (docs/notes/2026-11-30-factorization-team.md, 2026-11-30-team-threshold.md).
+constexpr double kFactorizationFlopsPerThread = 1e8;
+
 // After a single-precision factorization failed (or PCG did not converge with it), this many
 // factorizations are CHOLMOD's in double before single precision is tried again: a matrix
 // too ill-conditioned for float (the 1:1000 flat plate of tests/hard_cases_test.cc) stays so

@@ -107,7 +107,7 @@ void SupernodalSolve<Scalar>::Gather(int s, const double* a, int* map) {
 
 template <class Scalar>
 void SupernodalSolve<Scalar>::SubtractUpdates(int s, int t0, int t1, bool whole, const int* map,
-                                              Scalar* c) {
+                                              Scalar* c, std::vector<Scalar>* signed_columns) {
   const int k1 = super_[s], nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
   for (int u = update_start_[s]; u < update_start_[s + 1]; ++u) {
@@ -144,8 +144,8 @@ void SupernodalSolve<Scalar>::SubtractUpdates(int s, int t0, int t1, bool whole,
       continue;
     }
     if (sign != nullptr) {  // W = D S (its m rows), then c = W D^T: a product, not a rank update
-      signed_.resize(std::max(signed_.size(), static_cast<size_t>(m) * dcol));
-      Scalar* W = signed_.data();
+      signed_columns->resize(std::max(signed_columns->size(), static_cast<size_t>(m) * dcol));
+      Scalar* W = signed_columns->data();
       for (int k = 0; k < dcol; ++k) {
         const Scalar* column = D + static_cast<int64_t>(k) * drow;
         Scalar* wk = W + static_cast<int64_t>(k) * m;
@@ -179,12 +179,13 @@ void SupernodalSolve<Scalar>::SubtractUpdates(int s, int t0, int t1, bool whole,
 }
 
 template <class Scalar>
-bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* map, Scalar* c) {
+bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, int g, const double* a) {
   const int ncol = super_[s + 1] - super_[s], nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
+  int* map = map_[static_cast<size_t>(g)].data();
   Gather(s, a, map);
-  SubtractUpdates(s, 0, nrow, /*whole=*/true, map, c);
-  if (!sign_.empty()) return FactorizeIndefiniteBlock(s);
+  SubtractUpdates(s, 0, nrow, /*whole=*/true, map, c_[static_cast<size_t>(g)].data(), &signed_[static_cast<size_t>(g)]);
+  if (!sign_.empty()) return FactorizeIndefiniteBlock(s, g);
   if (Potrf(ncol, L, nrow) != 0) return false;
   for (int j = 0; j < ncol; ++j) {
     const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
@@ -195,7 +196,7 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, const double* a, int* ma
 }
 
 template <class Scalar>
-bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
+bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s, int g) {
   constexpr int kPanel = 32;
   const int k0 = super_[s], ncol = super_[s + 1] - k0, nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
@@ -209,14 +210,14 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
       if (!std::isfinite(static_cast<double>(pivot))) return false;
       if (!(std::abs(static_cast<double>(pivot)) > pivot_floor_)) {  // round-off's: the floor
         pivot = static_cast<Scalar>(pivot_floor_);
-        ++perturbed_pivots_;
+        ++group_perturbed_[static_cast<size_t>(g)];
       }
       const Scalar sign = pivot > 0 ? Scalar(1) : Scalar(-1);
       const Scalar root = std::sqrt(std::abs(pivot));
       sign_[static_cast<size_t>(k0 + j)] = sign;
       if (sign < 0) {
         negative = true;
-        ++negative_pivots_;
+        ++group_negative_[static_cast<size_t>(g)];
       }
       cj[j] = root;
       const Scalar scale = sign / root;  // L_ij = a_ij s_j / |d_j|^(1/2)
@@ -229,8 +230,9 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s) {
     }
     if (p1 < ncol) {  // the block's columns right of the panel, rows from p1: -= (L S) L^T
       const int m = ncol - p1, w = p1 - p0;
-      signed_.resize(std::max(signed_.size(), static_cast<size_t>(m) * w));
-      Scalar* W = signed_.data();
+      std::vector<Scalar>& buffer = signed_[static_cast<size_t>(g)];
+      buffer.resize(std::max(buffer.size(), static_cast<size_t>(m) * w));
+      Scalar* W = buffer.data();
       for (int k = 0; k < w; ++k) {
         const Scalar* column = L + static_cast<int64_t>(p0 + k) * nrow + p1;
         const Scalar sign = sign_[static_cast<size_t>(k0 + p0 + k)];
@@ -313,7 +315,7 @@ bool SupernodalSolve<Scalar>::TiledTask(int s, int phase, int task, const double
     return true;
   }
   if (phase == 1) {  // the updates of the rows [task R, task R + R)
-    SubtractUpdates(s, task * R, std::min(nrow, (task + 1) * R), /*whole=*/false, map, c);
+    SubtractUpdates(s, task * R, std::min(nrow, (task + 1) * R), /*whole=*/false, map, c, nullptr);
     return true;
   }
   const int p = (phase - 2) / 3;
@@ -371,7 +373,8 @@ bool SupernodalSolve<Scalar>::Prepare(const cholmod_factor& L, const Eigen::Spar
 
 template <class Scalar>
 bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
-                                                  bool new_structure) {
+                                                  bool new_structure, int threads) {
+  threads_ = std::max(1, threads);
   sign_.clear();
   negative_pivots_ = perturbed_pivots_ = 0;
   if (!Prepare(L, A, new_structure)) return false;
@@ -384,21 +387,37 @@ bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const
   // In float a pivot below 1e-8 of the diagonal is round-off: the size of the shift that
   // lets a free body's rigid motions factorize, which the callers project out.
   pivot_floor_ = (std::is_same_v<Scalar, float> ? 1e-8 : 1e-12) * largest;
-  perturbed_pivots_ = 0;
   sign_.assign(static_cast<size_t>(n_), Scalar(1));
   negative_.assign(super_.size() - 1, 0);
+  group_negative_.assign(groups_.size(), 0);
+  group_perturbed_.assign(groups_.size(), 0);
   const double* a = A.valuePtr();
-  bool ok = largest > 0.0 && std::isfinite(largest);
-  // Children before parents: the groups, then the top (no tiles: one thread).
-  for (size_t g = 0; g < groups_.size() && ok; ++g) {
-    for (int s : groups_[g]) {
-      if (!FactorizeSupernode(s, a, map_[g].data(), c_[g].data())) {
-        ok = false;
+  const int num_groups = static_cast<int>(groups_.size());
+  std::vector<char> group_ok(static_cast<size_t>(num_groups), 1);
+  // Children before parents: the groups (each writes only its own supernodes, signs and
+  // counts), then the top on one thread (no tiles).
+  auto factorize_group = [&](int g) {
+    for (int s : groups_[static_cast<size_t>(g)]) {
+      if (!FactorizeSupernode(s, g, a)) {
+        group_ok[static_cast<size_t>(g)] = 0;
         break;
       }
     }
+  };
+  bool ok = largest > 0.0 && std::isfinite(largest);
+  const int team = std::min(threads_, num_groups);
+  if (ok && team > 1) {
+#pragma omp parallel for schedule(static, 1) num_threads(team)
+    for (int g = 0; g < num_groups; ++g) factorize_group(g);
+  } else if (ok) {
+    for (int g = 0; g < num_groups; ++g) factorize_group(g);
   }
-  for (size_t k = 0; k < top_.size() && ok; ++k) ok = FactorizeSupernode(top_[k], a, map_[0].data(), c_[0].data());
+  ok = ok && std::all_of(group_ok.begin(), group_ok.end(), [](char c) { return c != 0; });
+  for (size_t k = 0; k < top_.size() && ok; ++k) ok = FactorizeSupernode(top_[k], 0, a);
+  for (int g = 0; g < num_groups; ++g) {
+    negative_pivots_ += group_negative_[static_cast<size_t>(g)];
+    perturbed_pivots_ += group_perturbed_[static_cast<size_t>(g)];
+  }
   if (!ok) {
     sign_.clear();
     negative_pivots_ = perturbed_pivots_ = 0;
@@ -420,12 +439,12 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
   bool ok = true;
   if (num_groups == 1) {
     for (int s : groups_[0]) {
-      if (!FactorizeSupernode(s, a, map_[0].data(), c_[0].data())) return false;
+      if (!FactorizeSupernode(s, 0, a)) return false;
     }
   } else if (threads_ == 1) {  // the same groups, top and tiles, one after the other
     for (size_t g = 0; g < groups_.size() && ok; ++g) {
       for (int s : groups_[g]) {
-        if (!FactorizeSupernode(s, a, map_[g].data(), c_[g].data())) {
+        if (!FactorizeSupernode(s, static_cast<int>(g), a)) {
           ok = false;
           break;
         }
@@ -434,7 +453,7 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
     for (size_t k = 0; k < top_.size() && ok; ++k) {
       const int s = top_[k];
       if (!Tiled(s)) {
-        ok = FactorizeSupernode(s, a, map_[0].data(), c_[0].data());
+        ok = FactorizeSupernode(s, 0, a);
         continue;
       }
       const int phases = TiledPhases(s);
@@ -449,7 +468,7 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
 #pragma omp parallel for schedule(static, 1) num_threads(team)
     for (int g = 0; g < num_groups; ++g) {
       for (int s : groups_[static_cast<size_t>(g)]) {
-        if (!FactorizeSupernode(s, a, map_[static_cast<size_t>(g)].data(), c_[static_cast<size_t>(g)].data())) {
+        if (!FactorizeSupernode(s, g, a)) {
           group_ok[static_cast<size_t>(g)] = 0;
           break;
         }
@@ -480,7 +499,7 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
           if (!Tiled(s)) {
 #pragma omp single
             {
-              if (!has_failed() && !FactorizeSupernode(s, a, map, c)) fail();
+              if (!has_failed() && !FactorizeSupernode(s, 0, a)) fail();
             }
             continue;
           }
@@ -502,8 +521,8 @@ bool SupernodalSolve<Scalar>::Factorize(const cholmod_factor& L, const Eigen::Sp
 }
 
 template void SupernodalSolve<float>::Gather(int, const double*, int*);
-template void SupernodalSolve<float>::SubtractUpdates(int, int, int, bool, const int*, float*);
-template bool SupernodalSolve<float>::FactorizeSupernode(int, const double*, int*, float*);
+template void SupernodalSolve<float>::SubtractUpdates(int, int, int, bool, const int*, float*, std::vector<float>*);
+template bool SupernodalSolve<float>::FactorizeSupernode(int, int, const double*);
 template bool SupernodalSolve<float>::Tiled(int) const;
 template int SupernodalSolve<float>::tiled_supernodes() const;
 template int SupernodalSolve<float>::TileRows(int) const;
@@ -511,12 +530,12 @@ template int SupernodalSolve<float>::TiledPhases(int) const;
 template int SupernodalSolve<float>::TiledTasks(int, int) const;
 template bool SupernodalSolve<float>::TiledTask(int, int, int, const double*, int*, float*);
 template bool SupernodalSolve<float>::Factorize(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool, int);
-template bool SupernodalSolve<float>::FactorizeIndefinite(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
-template bool SupernodalSolve<float>::FactorizeIndefiniteBlock(int);
+template bool SupernodalSolve<float>::FactorizeIndefinite(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool, int);
+template bool SupernodalSolve<float>::FactorizeIndefiniteBlock(int, int);
 template bool SupernodalSolve<float>::Prepare(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
 template void SupernodalSolve<double>::Gather(int, const double*, int*);
-template void SupernodalSolve<double>::SubtractUpdates(int, int, int, bool, const int*, double*);
-template bool SupernodalSolve<double>::FactorizeSupernode(int, const double*, int*, double*);
+template void SupernodalSolve<double>::SubtractUpdates(int, int, int, bool, const int*, double*, std::vector<double>*);
+template bool SupernodalSolve<double>::FactorizeSupernode(int, int, const double*);
 template bool SupernodalSolve<double>::Tiled(int) const;
 template int SupernodalSolve<double>::tiled_supernodes() const;
 template int SupernodalSolve<double>::TileRows(int) const;
@@ -524,8 +543,8 @@ template int SupernodalSolve<double>::TiledPhases(int) const;
 template int SupernodalSolve<double>::TiledTasks(int, int) const;
 template bool SupernodalSolve<double>::TiledTask(int, int, int, const double*, int*, double*);
 template bool SupernodalSolve<double>::Factorize(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool, int);
-template bool SupernodalSolve<double>::FactorizeIndefinite(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
-template bool SupernodalSolve<double>::FactorizeIndefiniteBlock(int);
+template bool SupernodalSolve<double>::FactorizeIndefinite(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool, int);
+template bool SupernodalSolve<double>::FactorizeIndefiniteBlock(int, int);
 template bool SupernodalSolve<double>::Prepare(const cholmod_factor&, const Eigen::SparseMatrix<double>&, bool);
 
 }  // namespace fast_backend

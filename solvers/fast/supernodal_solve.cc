@@ -249,6 +249,7 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
   }
   map_.assign(groups_.size(), std::vector<int>(static_cast<size_t>(n_), 0));
   c_.assign(groups_.size(), std::vector<Scalar>(static_cast<size_t>(max_update_)));
+  signed_.assign(groups_.size(), {});
   prepared_outer_.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
   prepared_inner_.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
   prepared_ = true;

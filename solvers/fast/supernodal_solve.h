@@ -73,9 +73,10 @@ class SupernodalSolve {
   // largest diagonal entry is round-off at that precision (a free body's rigid motions,
   // which the callers project out): it is replaced by that floor, and counted. False, and
   // nothing kept, when a value is not finite. Solve then applies S between its
-  // substitutions. On one thread (no tiles).
+  // substitutions. The groups of the tree's cut on up to `threads` threads, the top on one
+  // (no tiles): the same factor on any thread count. The BLAS on one thread, as in Factorize.
   bool FactorizeIndefinite(const cholmod_factor& L, const Eigen::SparseMatrix<double>& A,
-                           bool new_structure);
+                           bool new_structure, int threads);
   // The negative pivots of the last FactorizeIndefinite, and those replaced by the floor
   // (0 after Factorize or Load).
   int negative_pivots() const { return negative_pivots_; }
@@ -109,17 +110,20 @@ class SupernodalSolve {
   // supernode (and with which of their rows), where A's entries go.
   bool PrepareFactorization(const Eigen::SparseMatrix<double>& A);
   // Supernode s of the factorization: A's entries, its descendants' updates, its dense
-  // factorization. map: n ints, c: the largest update. False: a pivot not positive.
-  bool FactorizeSupernode(int s, const double* a, int* map, Scalar* c);
+  // factorization, on group g's work vectors (map, c, signed_) and pivot counts (0: the
+  // top's). False: a pivot not positive.
+  bool FactorizeSupernode(int s, int g, const double* a);
   // Supernode s's dense part as L S L^T (FactorizeIndefinite), after its updates: the diagonal
   // block right-looking by panels (each panel's columns one by one, the block's columns right
   // of it by a product), then the rows below by a triangular solve and the signs.
-  bool FactorizeIndefiniteBlock(int s);
+  bool FactorizeIndefiniteBlock(int s, int g);
   // Supernode s's values: zeros, then A's entries; map[row] = the row's place in s.
   void Gather(int s, const double* a, int* map);
   // Subtracts the descendants' updates of s's rows [t0, t1) (whole: all of them), in
   // ascending descendant. c: the largest update.
-  void SubtractUpdates(int s, int t0, int t1, bool whole, const int* map, Scalar* c);
+  // signed_columns: a buffer for L S L^T's signed columns (unused by a Cholesky factorization).
+  void SubtractUpdates(int s, int t0, int t1, bool whole, const int* map, Scalar* c,
+                       std::vector<Scalar>* signed_columns);
   // A supernode of the top with at least two tiles' rows (tile_rows_) is factorized in tiles: its
   // updates a row tile at a time, its dense part by panels of as many columns (right-looking: the
   // panel's diagonal block, the rows below it, the columns right of it). The tasks of a phase are
@@ -154,11 +158,12 @@ class SupernodalSolve {
   std::vector<int64_t> px_;
   std::vector<Scalar> values_;
   // FactorizeIndefinite's S (per column of L, +1 or -1; empty after Factorize or Load), per
-  // supernode whether any of its columns is -1, a buffer of signed columns, and the floor of
-  // a pivot |D_jj|.
+  // supernode whether any of its columns is -1, per group a buffer of signed columns and its
+  // counts of negative and floored pivots, and the floor of a pivot |D_jj|.
   std::vector<Scalar> sign_;
   std::vector<char> negative_;
-  std::vector<Scalar> signed_;
+  std::vector<std::vector<Scalar>> signed_;
+  std::vector<int> group_negative_, group_perturbed_;
   int negative_pivots_ = 0, perturbed_pivots_ = 0;
   double pivot_floor_ = 0.0;
   // The factorization's plan (PrepareFactorization): per supernode s, its updates
