@@ -339,6 +339,39 @@ TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
     in_double.Solve(b, &z);
     EXPECT_LE((z - h_expected).lpNorm<Eigen::Infinity>(), 1e-8 * h_expected.lpNorm<Eigen::Infinity>());
   }
+  // Negative pivots inside the cut's groups, not only in its top (a shift between the 41st and
+  // 42nd eigenvalues: 41 of them): on teams of 2 and 3 the same factor, signs, counts and
+  // solves as on one thread; a value that is not finite fails on a team as on one thread.
+  {
+    const double deep = 0.5 * (eigen.eigenvalues()[40] + eigen.eigenvalues()[41]);
+    const Eigen::SparseMatrix<double> D = H - deep * identity;
+    fast_backend::SupernodalSolve<double> exact;
+    exact.set_cut_from(0);
+    ASSERT_TRUE(exact.FactorizeIndefinite(*symbolic.raw(), D, true, 3));
+    EXPECT_EQ(exact.negative_pivots(), 41);
+    fast_backend::SupernodalSolve<float> one;
+    one.set_cut_from(0);
+    ASSERT_TRUE(one.FactorizeIndefinite(*symbolic.raw(), D, true, 1));
+    EXPECT_LT(one.serial_fraction(), 1.0);  // the tree is cut
+    Eigen::VectorXd y1;
+    one.Solve(b, &y1);
+    for (int threads : {2, 3}) {
+      fast_backend::SupernodalSolve<float> on_team;
+      on_team.set_cut_from(0);
+      ASSERT_TRUE(on_team.FactorizeIndefinite(*symbolic.raw(), D, true, threads)) << threads << " threads";
+      EXPECT_TRUE(on_team.values() == one.values()) << threads << " threads: another factor";
+      EXPECT_EQ(on_team.negative_pivots(), one.negative_pivots()) << threads << " threads";
+      EXPECT_EQ(on_team.perturbed_pivots(), one.perturbed_pivots()) << threads << " threads";
+      Eigen::VectorXd w;
+      on_team.Solve(b, &w);
+      EXPECT_TRUE(w == y1) << threads << " threads";
+      Eigen::SparseMatrix<double> broken = D;
+      broken.coeffRef(5, 5) = std::numeric_limits<double>::quiet_NaN();
+      EXPECT_FALSE(on_team.FactorizeIndefinite(*symbolic.raw(), broken, false, threads)) << threads << " threads";
+      EXPECT_FALSE(on_team.loaded());
+      EXPECT_EQ(on_team.negative_pivots(), 0);
+    }
+  }
   // A zero pivot (a row and column of zeros, in the same pattern): replaced by the floor,
   // and counted; the other unknowns solve as before (the zero column is decoupled), that
   // one gets b's component over the floor. A value that is not finite: refused.

@@ -197,7 +197,7 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, int g, const double* a) 
 
 template <class Scalar>
 bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s, int g) {
-  constexpr int kPanel = 32;
+  constexpr int kPanel = kIndefinitePanel;
   const int k0 = super_[s], ncol = super_[s + 1] - k0, nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
   bool negative = false;
@@ -391,6 +391,10 @@ bool SupernodalSolve<Scalar>::FactorizeIndefinite(const cholmod_factor& L, const
   negative_.assign(super_.size() - 1, 0);
   group_negative_.assign(groups_.size(), 0);
   group_perturbed_.assign(groups_.size(), 0);
+  // The signed buffers at their largest before the team starts (no allocation inside it).
+  for (std::vector<Scalar>& buffer : signed_) {
+    if (static_cast<int64_t>(buffer.size()) < max_signed_) buffer.resize(static_cast<size_t>(max_signed_));
+  }
   const double* a = A.valuePtr();
   const int num_groups = static_cast<int>(groups_.size());
   std::vector<char> group_ok(static_cast<size_t>(num_groups), 1);

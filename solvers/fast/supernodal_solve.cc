@@ -193,9 +193,11 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
   // by target, in ascending d.
   std::vector<std::vector<std::array<int, 3>>> by_target(static_cast<size_t>(nsuper));
   max_update_ = 0;
+  max_signed_ = 0;
   for (int d = 0; d < nsuper; ++d) {
     const int ncol = super_[d + 1] - super_[d];
     const int nrow = pi_[d + 1] - pi_[d];
+    max_signed_ = std::max<int64_t>(max_signed_, static_cast<int64_t>(ncol) * std::min(ncol, kIndefinitePanel));
     const int* rows = rows_.data() + pi_[d];
     int r = ncol;
     while (r < nrow) {
@@ -205,6 +207,7 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
       while (r2 < nrow && rows[r2] < super_[t + 1]) ++r2;
       by_target[static_cast<size_t>(t)].push_back({d, r, r2});
       max_update_ = std::max<int64_t>(max_update_, static_cast<int64_t>(nrow - r) * (r2 - r));
+      max_signed_ = std::max<int64_t>(max_signed_, static_cast<int64_t>(nrow - r) * ncol);
       r = r2;
     }
   }

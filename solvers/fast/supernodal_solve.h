@@ -163,6 +163,7 @@ class SupernodalSolve {
   std::vector<Scalar> sign_;
   std::vector<char> negative_;
   std::vector<std::vector<Scalar>> signed_;
+  int64_t max_signed_ = 0;  // the largest signed block (PrepareFactorization)
   std::vector<int> group_negative_, group_perturbed_;
   int negative_pivots_ = 0, perturbed_pivots_ = 0;
   double pivot_floor_ = 0.0;
@@ -175,6 +176,8 @@ class SupernodalSolve {
   std::vector<int> update_start_, update_d_, update_r1_, update_r2_;
   std::vector<int64_t> a_start_, a_src_, a_dst_;
   int64_t max_update_ = 0;
+  // FactorizeIndefiniteBlock's panel width.
+  static constexpr int kIndefinitePanel = 32;
   std::vector<std::vector<int>> map_;
   std::vector<std::vector<Scalar>> c_;
   // Per group, its supernodes in ascending order (children before parents); the top.
