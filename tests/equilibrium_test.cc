@@ -1,7 +1,7 @@
-// Equilibrium registration (energy/equilibrium.h, solvers/fast/equilibrium_step.h): the
-// penalties' derivatives, the force residual's invariants (zero at rest and under rigid
-// motion, force balance), the fast back end's solve reaching a stationary point of the
-// energy, and the tracker recovering a known load from the shape it made.
+// Equilibrium registration (energy/equilibrium.h, solvers/fast/equilibrium_step.h; the
+// penalties are equilibrium_penalty_test.cc's): the force residual's invariants (zero at rest
+// and under rigid motion, force balance), the fast back end's solve reaching a stationary
+// point of the energy, and the tracker recovering a known load from the shape it made.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -34,113 +34,6 @@ std::string Format(const Eigen::Vector3d& v) {
   char buf[96];
   std::snprintf(buf, sizeof(buf), "(%.4f, %.4f, %.4f)", v.x(), v.y(), v.z());
   return buf;
-}
-
-// One vertex of each kind, the free one with every option.
-energy::Equilibrium Sites(bool pushing_only, double friction, double sparsity) {
-  energy::Equilibrium eq;
-  eq.site = {energy::ForceSite::kBalanced, energy::ForceSite::kFree, energy::ForceSite::kSupport};
-  eq.force_weight = {1.0, 0.7, 1.0};
-  eq.strong_weight = {50.0, 80.0, 50.0};
-  eq.sparsity = {0.0, sparsity, 0.0};
-  eq.sparsity_floor = 0.05;
-  eq.pushing_only = pushing_only;
-  eq.friction = friction;
-  eq.normal.assign(3, Eigen::Vector3d(1, 2, 2) / 3.0);
-  return eq;
-}
-
-TEST(EquilibriumPenalty, GradientAndCurvatureMatchCentralDifferencesAndCurvatureIsPositive) {
-  std::mt19937 rng(5);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (bool pushing : {false, true}) {
-    for (double friction : {-1.0, 0.0, 0.6}) {
-      if (friction >= 0 && !pushing) continue;
-      for (double sparsity : {0.0, 0.3}) {
-        const energy::Equilibrium eq = Sites(pushing, friction, sparsity);
-        ASSERT_TRUE(eq.IsValid(3));
-        for (int trial = 0; trial < 200; ++trial) {
-          for (int v = 0; v < 3; ++v) {
-            const Eigen::Vector3d f(normal(rng), normal(rng), normal(rng));
-            Eigen::Vector3d g;
-            Eigen::Matrix3d c;
-            const double value = eq.Penalty(v, f, &g, &c);
-            EXPECT_GE(value, 0.0);
-            const double h = 1e-6;
-            for (int k = 0; k < 3; ++k) {
-              Eigen::Vector3d fp = f, fm = f;
-              fp[k] += h;
-              fm[k] -= h;
-              const double slope = (eq.Penalty(v, fp, nullptr, nullptr) - eq.Penalty(v, fm, nullptr, nullptr)) / (2 * h);
-              EXPECT_NEAR(g[k], slope, 1e-5 * (1.0 + g.norm())) << "vertex " << v << " pushing " << pushing
-                                                                 << " friction " << friction;
-            }
-            // The cone's curvature is exact (the sparse term's is a majorizer): the gradient's
-            // central differences, away from the cone's edges (random f are, almost surely).
-            if (sparsity == 0.0) {
-              for (int k = 0; k < 3; ++k) {
-                Eigen::Vector3d fp = f, fm = f, gp, gm;
-                fp[k] += h;
-                fm[k] -= h;
-                eq.Penalty(v, fp, &gp, nullptr);
-                eq.Penalty(v, fm, &gm, nullptr);
-                EXPECT_LT((c.col(k) - (gp - gm) / (2 * h)).norm(), 1e-5 * (1.0 + c.norm()))
-                    << "vertex " << v << " pushing " << pushing << " friction " << friction << " f "
-                    << Format(f);
-              }
-            }
-            EXPECT_LT((c - c.transpose()).norm(), 1e-12 * (1.0 + c.norm()));
-            EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().minCoeff(), -1e-12);
-          }
-        }
-      }
-    }
-  }
-}
-
-TEST(EquilibriumPenalty, PushingOnlyCostsNothingMoreInsideTheConeAndTheSupportNothing) {
-  const energy::Equilibrium free = Sites(false, -1.0, 0.0);
-  const energy::Equilibrium cone = Sites(true, 0.5, 0.0);
-  const Eigen::Vector3d n = cone.normal[1];
-  const Eigen::Vector3d t = n.unitOrthogonal();
-  const Eigen::Vector3d push = -2.0 * n + 0.9 * t;  // |f_t| = 0.9 <= 0.5 * 2
-  const double inside = free.Penalty(1, push, nullptr, nullptr);
-  EXPECT_NEAR(cone.Penalty(1, push, nullptr, nullptr), inside, 1e-14 * inside);
-  const Eigen::Vector3d slide = -2.0 * n + 1.5 * t;  // beyond the cone
-  EXPECT_GT(cone.Penalty(1, slide, nullptr, nullptr), free.Penalty(1, slide, nullptr, nullptr));
-  const Eigen::Vector3d pull = 2.0 * n;  // the whole pull is outside: 1/2 beta |f|^2 more
-  EXPECT_NEAR(cone.Penalty(1, pull, nullptr, nullptr) - free.Penalty(1, pull, nullptr, nullptr),
-              0.5 * cone.strong_weight[1] * pull.squaredNorm(), 1e-12);
-  EXPECT_EQ(cone.Penalty(2, pull, nullptr, nullptr), 0.0);
-  const double balanced = 0.5 * cone.strong_weight[0] * pull.squaredNorm();
-  EXPECT_NEAR(cone.Penalty(0, pull, nullptr, nullptr), balanced, 1e-14 * balanced);
-  // Frictionless, a pull straight along the normal is all outside (the ray), a push not.
-  const energy::Equilibrium ray = Sites(true, 0.0, 0.0);
-  EXPECT_NEAR(ray.Penalty(1, pull, nullptr, nullptr) - free.Penalty(1, pull, nullptr, nullptr),
-              0.5 * ray.strong_weight[1] * pull.squaredNorm(), 1e-12);
-  EXPECT_NEAR(ray.Penalty(1, -pull, nullptr, nullptr), free.Penalty(1, -pull, nullptr, nullptr), 1e-12);
-}
-
-// Just outside the cone's side the curvature is its side's (u u^T plus a vanishing b b^T),
-// continuous with the inside's nothing, not the apex's beta I.
-TEST(EquilibriumPenalty, CurvatureJustOutsideTheConesSideIsTheSides) {
-  const energy::Equilibrium cone = Sites(true, 0.5, 0.0);
-  const energy::Equilibrium free = Sites(false, -1.0, 0.0);
-  const Eigen::Vector3d n = cone.normal[1];
-  const Eigen::Vector3d t = n.unitOrthogonal();
-  for (double excess : {1e-15, 1e-12, 1e-9}) {
-    const Eigen::Vector3d f = -2.0 * n + (1.0 + excess) * t;  // |f_t| just above 0.5 * 2
-    Eigen::Matrix3d c, c_free;
-    cone.Penalty(1, f, nullptr, &c);
-    free.Penalty(1, f, nullptr, &c_free);
-    const double beta = cone.strong_weight[1];
-    EXPECT_LE((c - c_free).trace(), beta * (1.0 + 1e-6)) << "excess " << excess;
-    EXPECT_GE((c - c_free).trace(), 0.0);
-    // (At 1e-15 the force may round back inside; beyond, it is on the side: u u^T.)
-    if (excess >= 1e-12) {
-      EXPECT_GE((c - c_free).trace(), beta * (1.0 - 1e-6)) << "excess " << excess;
-    }
-  }
 }
 
 // A 2 x 1 x 1 box of corotational elements, optionally under gravity on its lumped masses.

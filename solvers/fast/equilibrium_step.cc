@@ -18,6 +18,7 @@
 #include "solvers/fast/data_shift.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/fast_backend_internal.h"
+#include "solvers/fast/penalty_pieces.h"
 #include "solvers/fast/step_modes.h"
 #include "solvers/fast/supernodal_solve.h"
 
@@ -56,6 +57,8 @@ constexpr double kGradientFloor = 1e-4;
 // iteration each. Not lower: hand_press's steps pass 30 now and then, and there the shifted
 // factor took more steps (docs/notes/2026-12-01-soft-modes.md).
 constexpr int kShiftAfterIterations = 60;
+// ResolveAcrossPenaltyKinks' re-solves of a step at most.
+constexpr int kPieceRounds = 3;
 
 // Whether a simplicial L D L^T factor has a pivot D_jj <= 0 (the first entry of column j).
 bool HasNegativePivot(const cholmod_factor& L) {
@@ -94,6 +97,8 @@ struct EquilibriumSolver::Impl {
   bool indefinite_pending[2] = {false, false};
   bool analysed = false, structure_pending = false, factor_single = false;
   double factor_flops = 0.0;  // CHOLMOD's flop count of one factorization (Analyse)
+  // The PCG iterations that cost about as many flops as a factorization (Analyse).
+  int factorization_iterations = 0;
   // K was indefinite at the last factorization (L D L^T with a negative pivot): the next one
   // goes to L D L^T directly, without the Cholesky attempt that would fail.
   bool last_indefinite = false;
@@ -118,6 +123,9 @@ struct EquilibriumSolver::Impl {
       factor.analyzePattern(K);
     }
     factor_flops = factor.cholmod().fl;
+    // A PCG iteration: four triangular sweeps (2 nnz(L) flops each) and two products with K.
+    const double iteration_flops = 4.0 * factor.cholmod().lnz + 2.0 * static_cast<double>(K.nonZeros());
+    factorization_iterations = iteration_flops > 0 ? static_cast<int>(factor_flops / iteration_flops) : 0;
     analysed = true;
     structure_pending = true;
     indefinite_pending[0] = indefinite_pending[1] = true;
@@ -273,12 +281,7 @@ struct EquilibriumSolver::Impl {
       Eigen::Matrix3d& c = phi[static_cast<size_t>(v)];
       equilibrium_energy += eq.Penalty(v, f.segment<3>(3 * v), &gradient, &c);
       phi_gradient.segment<3>(3 * v) = gradient;
-      // Phi~: a support's reaction is free (Phi = 0); the preconditioner takes its vertex as a
-      // free one's.
-      double floor = 1e-6 * eq.force_weight[static_cast<size_t>(v)];
-      if (eq.site[static_cast<size_t>(v)] == energy::ForceSite::kSupport) floor = eq.force_weight[static_cast<size_t>(v)];
-      floor = std::max(floor, 1e-300);
-      phi_inverse[static_cast<size_t>(v)] = Eigen::Matrix3d(c + floor * Eigen::Matrix3d::Identity()).inverse();
+      phi_inverse[static_cast<size_t>(v)] = PenaltyBlockInverse(eq, v, c);
     }
   }
 
@@ -408,6 +411,37 @@ struct EquilibriumSolver::Impl {
     closing.Clear();
   }
 
+  // Where *dx carries forces across the pushing-only penalty's kinks, solves the step again
+  // with the penalty modelled around the predicted forces (solvers/fast/penalty_pieces.h), on
+  // the same factor; repeated while the predicted pieces change, up to kPieceRounds times,
+  // within the PCG iterations a factorization costs (past them a new step is cheaper), and
+  // kept while PCG converges and the step goes downhill.
+  void ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
+    const energy::Equilibrium& eq = *problem.equilibrium();
+    if (!eq.pushing_only) return;
+    int budget = factorization_iterations;
+    PenaltyPieces pieces;
+    pieces.Start(eq, f);
+    bool remodelled = false;
+    for (int round = 0; round < kPieceRounds; ++round) {
+      Eigen::VectorXd kdx;
+      BlockProduct(physics.H(), *dx, threads, &kdx);
+      if (pieces.Remodel(eq, f, kdx, &phi, &phi_gradient, &phi_inverse) == 0) break;
+      remodelled = true;
+      Eigen::VectorXd model_gradient;
+      BlockProduct(physics.H(), phi_gradient, threads, &model_gradient);
+      model_gradient += g;
+      modes.ProjectHeld(&model_gradient);
+      Eigen::VectorXd resolved;
+      const int before = report->pcg_iterations;
+      const bool converged = budget > 0 && Pcg(-model_gradient, budget, &resolved, report);
+      budget -= report->pcg_iterations - before;
+      if (!(converged && resolved.dot(G) < 0.0)) break;
+      *dx = resolved;
+    }
+    if (remodelled) Penalties(eq);  // x's own model again
+  }
+
   // The step: a new factor of K~ at x, then PCG with it. A factor kept from an earlier step
   // (while K moves with the turning elements and the contacts) failed more often than it
   // served: the failed attempts cost more PCG iterations than the factorizations it saved
@@ -427,6 +461,7 @@ struct EquilibriumSolver::Impl {
     // re-solve below is another system.)
     const int iterations = report->pcg_iterations - iterations_before;
     if (converged) ResolveWithClosingContacts(problem, x, dx, report);
+    if (converged) ResolveAcrossPenaltyKinks(problem, dx, report);
     shift_data = plain_values.empty() ? iterations > kShiftAfterIterations : iterations <= kShiftAfterIterations;
     if (converged) return true;
     // PCG's iterates lower the step's quadratic model from 0, so one that has not converged

@@ -115,6 +115,11 @@ double Equilibrium::Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gr
   return value;
 }
 
+int Equilibrium::PenaltyPiece(int v, const Eigen::Vector3d& f) const {
+  if (!pushing_only || site[static_cast<size_t>(v)] != ForceSite::kFree) return 0;
+  return static_cast<int>(OutsideCone(f, normal[static_cast<size_t>(v)], friction).region);
+}
+
 bool Equilibrium::IsValid(int num_vertices) const {
   const size_t n = static_cast<size_t>(num_vertices);
   return site.size() == n && force_weight.size() == n && strong_weight.size() == n &&

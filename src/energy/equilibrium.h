@@ -61,6 +61,10 @@ struct Equilibrium {
   // majorizer s / sqrt(|f|^2 + eps^2) I, the cone's along the distance's direction).
   double Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gradient,
                  Eigen::Matrix3d* curvature) const;
+  // Which piece of the pushing-only penalty holds at f on vertex v: 0 inside the cone (or no
+  // cone), 1 beyond the half-space's face, 2 beyond the cone's side, 3 beyond its apex. Each
+  // is smooth; the penalty has kinks only between them.
+  int PenaltyPiece(int v, const Eigen::Vector3d& f) const;
   // The size of every per-vertex list is #V (normal too with pushing_only); the held turns'
   // vertices are within #V.
   bool IsValid(int num_vertices) const;
