@@ -11,15 +11,12 @@
 #include <string>
 
 #include "energy/equilibrium.h"
+#include "test_util.h"
 
 namespace femreg {
 namespace {
 
-std::string Format(const Eigen::Vector3d& v) {
-  char buf[96];
-  std::snprintf(buf, sizeof(buf), "(%.4f, %.4f, %.4f)", v.x(), v.y(), v.z());
-  return buf;
-}
+using testing_util::Format;
 
 // One vertex of each kind, the free one with every option.
 energy::Equilibrium Sites(bool pushing_only, double friction, double sparsity) {

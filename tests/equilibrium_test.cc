@@ -30,11 +30,7 @@
 namespace femreg {
 namespace {
 
-std::string Format(const Eigen::Vector3d& v) {
-  char buf[96];
-  std::snprintf(buf, sizeof(buf), "(%.4f, %.4f, %.4f)", v.x(), v.y(), v.z());
-  return buf;
-}
+using testing_util::Format;
 
 // A 2 x 1 x 1 box of corotational elements, optionally under gravity on its lumped masses.
 struct BoxProblem {

@@ -131,6 +131,13 @@ inline Vertices Grid() {
   return v;
 }
 
+// "(x, y, z)" to four decimals, for failure messages.
+inline std::string Format(const Eigen::Vector3d& v) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "(%.4f, %.4f, %.4f)", v.x(), v.y(), v.z());
+  return buf;
+}
+
 }  // namespace testing_util
 }  // namespace femreg
 
