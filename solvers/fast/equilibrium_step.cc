@@ -418,7 +418,7 @@ struct EquilibriumSolver::Impl {
   // within the PCG iterations a factorization costs (past them a new step is cheaper), and
   // kept while PCG converges and the step goes downhill. Its model leaves out the contacts
   // the step closes (ResolveWithClosingContacts' model): with them hand_press, pushing only,
-  // erred 4.60 mm seen against 2.45 (docs/notes/2026-12-02-penalty-kinks.md).
+  // erred the most of the versions tried (docs/notes/2026-12-02-penalty-kinks.md).
   void ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
     const energy::Equilibrium& eq = *problem.equilibrium();
     int budget = std::min(factorization_iterations, kMaxPcgIterations);
