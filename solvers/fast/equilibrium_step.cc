@@ -301,12 +301,20 @@ struct EquilibriumSolver::Impl {
     physics.Finish(problem, 0.0, &f);
     Penalties(*problem.equilibrium());
     modes.Build(problem, x, [this](const Eigen::VectorXd& p, Eigen::VectorXd* y) { Product(p, y); });
-    Eigen::VectorXd k_phi;
-    BlockProduct(physics.H(), phi_gradient, threads, &k_phi);
-    G = g + k_phi;
-    modes.ProjectHeld(&G);  // the gradient in the steps' space: its norm is what the stops compare
+    G = ModelGradient();  // in the steps' space: its norm is what the stops compare
     if (terms != nullptr) terms->equilibrium = equilibrium_energy;
     report->assemble_s += Seconds(t0);
+  }
+
+  // The step model's gradient g + K phi' at the current penalties (with the contacts a re-solve
+  // holds closed: their stiffness in K's product), on the held turns' complement.
+  Eigen::VectorXd ModelGradient() {
+    Eigen::VectorXd gradient;
+    BlockProduct(physics.H(), phi_gradient, threads, &gradient);
+    closing.AddProduct(phi_gradient, &gradient);
+    gradient += g;
+    modes.ProjectHeld(&gradient);
+    return gradient;
   }
 
   // y = P_W (H + K Phi K) p, P_W = I - W W^T (p orthogonal to the held turns W: the step's
@@ -400,13 +408,8 @@ struct EquilibriumSolver::Impl {
     const Eigen::VectorXd f_at_x = f;
     closing.AddForce(&f);
     Penalties(*problem.equilibrium());
-    Eigen::VectorXd model_gradient;
-    BlockProduct(physics.H(), phi_gradient, threads, &model_gradient);
-    closing.AddProduct(phi_gradient, &model_gradient);
-    model_gradient += g;
-    modes.ProjectHeld(&model_gradient);
     Eigen::VectorXd resolved;
-    if (Pcg(-model_gradient, kMaxPcgIterations, &resolved, report) && resolved.dot(G) < 0.0) *dx = resolved;
+    if (Pcg(-ModelGradient(), kMaxPcgIterations, &resolved, report) && resolved.dot(G) < 0.0) *dx = resolved;
     f = f_at_x;
     Penalties(*problem.equilibrium());
     closing.Clear();
@@ -431,13 +434,9 @@ struct EquilibriumSolver::Impl {
       BlockProduct(physics.H(), *dx, threads, &kdx);
       if (pieces.Remodel(eq, f, kdx, &phi, &phi_gradient, &phi_inverse) == 0) break;
       remodelled = true;
-      Eigen::VectorXd model_gradient;
-      BlockProduct(physics.H(), phi_gradient, threads, &model_gradient);
-      model_gradient += g;
-      modes.ProjectHeld(&model_gradient);
       Eigen::VectorXd resolved;
       const int before = report->pcg_iterations;
-      const bool converged = Pcg(-model_gradient, budget, &resolved, report);
+      const bool converged = Pcg(-ModelGradient(), budget, &resolved, report);
       budget -= report->pcg_iterations - before;
       if (!(converged && resolved.dot(G) < 0.0)) break;
       *dx = resolved;
