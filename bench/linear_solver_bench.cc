@@ -117,6 +117,30 @@ void OwnFactorize(benchmark::State& state) {
   state.counters["serial"] = factor.serial_fraction();
 }
 
+// The equilibrium step's L S L^T (FactorizeIndefinite) of the same matrix, positive definite
+// (range 2: 0), as OwnFactorize's Cholesky costs, or shifted by a hundredth of its mean
+// diagonal (1), where its lowest modes give negative pivots.
+template <class Scalar>
+void OwnFactorizeIndefinite(benchmark::State& state) {
+  Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
+  femreg::fast_backend::CholmodFactor llt;
+  llt.setMode(Eigen::CholmodSupernodalLLt);
+  llt.analyzePattern(H);
+  if (state.range(2) != 0) {
+    const double shift = 0.01 * H.diagonal().cwiseAbs().mean();
+    for (Eigen::Index c = 0; c < H.cols(); ++c) H.coeffRef(c, c) -= shift;
+  }
+  const femreg::ScopedThreads one_blas_thread(1);
+  const int threads = static_cast<int>(state.range(1));
+  femreg::fast_backend::SupernodalSolve<Scalar> factor;
+  if (!factor.FactorizeIndefinite(*llt.raw(), H, true, threads)) state.SkipWithError("not finite");
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(factor.FactorizeIndefinite(*llt.raw(), H, false, threads));
+  }
+  state.counters["dofs"] = static_cast<double>(H.rows());
+  state.counters["negative"] = factor.negative_pivots();
+}
+
 void Product(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
   const Eigen::VectorXd p = Eigen::VectorXd::Ones(H.rows());
@@ -193,6 +217,15 @@ void TeamSizes(benchmark::internal::Benchmark* b) {
 
 BENCHMARK_TEMPLATE(OwnFactorize, float)->Apply(TeamSizes);
 BENCHMARK_TEMPLATE(OwnFactorize, double)->Apply(Sizes);
+void IndefiniteSizes(benchmark::internal::Benchmark* b) {
+  for (int v : {1000, 4000}) {
+    for (int t : {1, 2}) {
+      for (int shifted : {0, 1}) b->Args({v, t, shifted});
+    }
+  }
+  b->ArgNames({"vertices", "threads", "shifted"})->Unit(benchmark::kMillisecond);
+}
+BENCHMARK_TEMPLATE(OwnFactorizeIndefinite, float)->Apply(IndefiniteSizes);
 BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(Sizes);
 BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
 BENCHMARK(Product)->Apply(Sizes);

@@ -349,6 +349,15 @@ TEST(FastBackend, OwnIndefiniteFactorizationSolvesTheShiftedSystem) {
     in_double.Solve(b, &z);
     const Eigen::VectorXd h_expected = Eigen::MatrixXd(H).llt().solve(b);
     EXPECT_LE((z - h_expected).lpNorm<Eigen::Infinity>(), 1e-8 * h_expected.lpNorm<Eigen::Infinity>());
+    // Its factor is the Cholesky one (every diagonal block by LAPACK's Cholesky), in float too.
+    fast_backend::SupernodalSolve<float> cholesky;
+    cholesky.set_cut_from(cut_from);
+    ASSERT_TRUE(cholesky.Factorize(*symbolic.raw(), H, true, 1));
+    ASSERT_TRUE(in_float.FactorizeIndefinite(*symbolic.raw(), H, false, 1));
+    EXPECT_EQ(in_float.negative_pivots(), 0);
+    EXPECT_EQ(in_float.perturbed_pivots(), 0);
+    EXPECT_LE(LargestDifference(in_float.values(), cholesky.values()), 1e-6 * LargestValue(cholesky.values()))
+        << cut_from;
     // Factorize is L L^T again (no signs kept): the indefinite A is refused, H solves.
     EXPECT_FALSE(in_double.Factorize(*symbolic.raw(), A, false, 1));
     ASSERT_TRUE(in_double.Factorize(*symbolic.raw(), H, false, 1));

@@ -60,17 +60,6 @@ constexpr int kShiftAfterIterations = 60;
 // ResolveAcrossPenaltyKinks' re-solves of a step at most.
 constexpr int kPieceRounds = 3;
 
-// Whether a simplicial L D L^T factor has a pivot D_jj <= 0 (the first entry of column j).
-bool HasNegativePivot(const cholmod_factor& L) {
-  if (L.is_super || L.is_ll || L.xtype != CHOLMOD_REAL || L.itype != CHOLMOD_INT) return true;
-  const int* p = static_cast<const int*>(L.p);
-  const double* x = static_cast<const double*>(L.x);
-  for (size_t j = 0; j < L.n; ++j) {
-    if (!(x[p[j]] > 0.0)) return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 struct EquilibriumSolver::Impl {
@@ -99,9 +88,7 @@ struct EquilibriumSolver::Impl {
   double factor_flops = 0.0;  // CHOLMOD's flop count of one factorization (Analyse)
   // The PCG iterations that cost about as many flops as a factorization (Analyse).
   int factorization_iterations = 0;
-  // K was indefinite at the last factorization (L D L^T with a negative pivot): the next one
-  // goes to L D L^T directly, without the Cholesky attempt that would fail.
-  bool last_indefinite = false;
+  int indefinite_negative = 0;  // the own L S L^T's negative pivots
   std::vector<Eigen::Matrix3d> phi_inverse;
   double first_gradient_norm = 0.0;  // |G| at the solve's start (kGradientFloor)
   // Whether the next step's factor takes the data in (kShiftAfterIterations); kept from solve
@@ -134,26 +121,29 @@ struct EquilibriumSolver::Impl {
 
   // Factorizes K~ (K as linearized last at x). Where K is not positive definite (compressed
   // or turning elements) K Phi K is still positive definite and K^-1 Phi^-1 K^-1 still its
-  // inverse: K is factorized as L D L^T without pivoting (the own supernodal code, in float,
-  // else in double; then CHOLMOD's simplicial); if that
-  // fails too, its projection (energy/term.h, Curvature) with a shift. False if nothing factorizes.
+  // inverse: K is factorized as L S L^T without pivoting (the own supernodal code, in float,
+  // else in double; its positive definite supernodes by LAPACK's Cholesky, so that on a
+  // positive definite K it is the Cholesky factor at a Cholesky's cost), then CHOLMOD's
+  // simplicial L D L^T; if that fails too, its projection (energy/term.h, Curvature) with a
+  // shift. False if nothing factorizes.
   bool Factorize(const energy::Problem& problem, const Vertices& x, SolveReport* report) {
     use_ldlt = false;
     use_indefinite = 0;
-    const bool cholesky_first = !last_indefinite;
-    if (cholesky_first && FactorizeOf(&physics, kFirstShift, kOwnFloat, report)) return true;
+    factor_single = false;
     if (FactorizeIndefinite(report)) {
-      // A negative pivot above round-off is K's own, and CHOLMOD's double Cholesky would fail
-      // too. Without one, the float Cholesky failed on round-off, where that factor serves PCG
-      // better than the floored pivots.
-      if (!cholesky_first || last_indefinite) return true;
+      // A negative pivot above round-off is K's own. Without one, pivots at the floor are
+      // round-off on a positive definite K, where CHOLMOD's double-precision Cholesky is the
+      // better preconditioner.
+      const int perturbed =
+          use_indefinite == 1 ? indefinite_single.perturbed_pivots() : indefinite_double.perturbed_pivots();
+      if (indefinite_negative > 0 || perturbed == 0) return true;
       const int held = use_indefinite;
       use_indefinite = 0;
       if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
       use_indefinite = held;
       return true;
     }
-    if (cholesky_first && FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
+    if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
     const auto t0 = Clock::now();
     if (!ldlt_analysed) {
       ldlt.setMode(Eigen::CholmodLDLt);
@@ -170,10 +160,8 @@ struct EquilibriumSolver::Impl {
     report->factorize_s += Seconds(t0);
     if (ldlt.info() == Eigen::Success) {
       use_ldlt = true;
-      last_indefinite = HasNegativePivot(*ldlt.raw());
       return true;
     }
-    last_indefinite = false;
     const auto t1 = Clock::now();
     // The same blocks as `physics`: the same pattern, and the analysis holds for both.
     projected.Prepare(problem, x);
@@ -222,8 +210,8 @@ struct EquilibriumSolver::Impl {
     for (int at : diagonal_at) K.valuePtr()[at] -= kFirstShift * mean;
     report->factorize_s += Seconds(t0);
     if (use_indefinite == 0) return false;
-    const int negative = use_indefinite == 1 ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
-    last_indefinite = negative > 0;
+    indefinite_negative =
+        use_indefinite == 1 ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
     return true;
   }
 

@@ -200,6 +200,29 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s, int g) {
   constexpr int kPanel = kIndefinitePanel;
   const int k0 = super_[s], ncol = super_[s + 1] - k0, nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
+  // Most blocks are positive definite (a negative pivot is where elements turn or are
+  // compressed): LAPACK's Cholesky first, on a copy kept for the panels if it fails. Its
+  // signs are then all +1, and a positive pivot is taken as it is, as Factorize takes it.
+  std::vector<Scalar>& copy = signed_[static_cast<size_t>(g)];
+  copy.resize(std::max(copy.size(), static_cast<size_t>(ncol) * ncol));
+  for (int j = 0; j < ncol; ++j) {
+    std::copy(L + static_cast<int64_t>(j) * nrow + j, L + static_cast<int64_t>(j) * nrow + ncol,
+              copy.data() + static_cast<int64_t>(j) * ncol + j);
+  }
+  bool positive = Potrf(ncol, L, nrow) == 0;
+  for (int j = 0; j < ncol && positive; ++j) {
+    const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
+    positive = pivot > 0 && std::isfinite(static_cast<double>(pivot));
+  }
+  if (positive) {
+    if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
+    negative_[static_cast<size_t>(s)] = 0;
+    return true;
+  }
+  for (int j = 0; j < ncol; ++j) {
+    std::copy(copy.data() + static_cast<int64_t>(j) * ncol + j, copy.data() + static_cast<int64_t>(j) * ncol + ncol,
+              L + static_cast<int64_t>(j) * nrow + j);
+  }
   bool negative = false;
   // The diagonal block A11 = L11 S L11^T, by panels (rows < ncol only).
   for (int p0 = 0; p0 < ncol; p0 += kPanel) {

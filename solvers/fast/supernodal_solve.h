@@ -69,9 +69,11 @@ class SupernodalSolve {
                  int threads);
   // The same for a symmetric A that need not be positive definite: A = P^T L S L^T P with S
   // a diagonal of signs and L = L' |D|^(1/2) for A's L' D L'^T, without pivoting (the
-  // ordering's). A pivot |D_jj| below a relative 1e-8 (float) or 1e-12 (double) of A's
-  // largest diagonal entry is round-off at that precision (a free body's rigid motions,
-  // which the callers project out): it is replaced by that floor, and counted. False, and
+  // ordering's). A supernode whose diagonal block is positive definite is factorized as
+  // Factorize does (LAPACK's Cholesky; its pivots as they are), the others by panels: there a
+  // pivot |D_jj| below a relative 1e-8 (float) or 1e-12 (double) of A's largest diagonal
+  // entry is round-off at that precision (a free body's rigid motions, which the callers
+  // project out): it is replaced by that floor, and counted. False, and
   // nothing kept, when a value is not finite. Solve then applies S between its
   // substitutions. The groups of the tree's cut on up to `threads` threads, the top on one
   // (no tiles): the same factor on any thread count. The BLAS on one thread, as in Factorize.
@@ -113,9 +115,10 @@ class SupernodalSolve {
   // factorization, on group g's work vectors (map, c, signed_) and pivot counts (0: the
   // top's). False: a pivot not positive.
   bool FactorizeSupernode(int s, int g, const double* a);
-  // Supernode s's dense part as L S L^T (FactorizeIndefinite), after its updates: the diagonal
-  // block right-looking by panels (each panel's columns one by one, the block's columns right
-  // of it by a product), then the rows below by a triangular solve and the signs.
+  // Supernode s's dense part as L S L^T (FactorizeIndefinite), after its updates: LAPACK's
+  // Cholesky of the diagonal block where it is positive definite, else the block right-looking
+  // by panels (each panel's columns one by one, the block's columns right of it by a
+  // product); then the rows below by a triangular solve and the signs.
   bool FactorizeIndefiniteBlock(int s, int g);
   // Supernode s's values: zeros, then A's entries; map[row] = the row's place in s.
   void Gather(int s, const double* a, int* map);
@@ -158,12 +161,12 @@ class SupernodalSolve {
   std::vector<int64_t> px_;
   std::vector<Scalar> values_;
   // FactorizeIndefinite's S (per column of L, +1 or -1; empty after Factorize or Load), per
-  // supernode whether any of its columns is -1, per group a buffer of signed columns and its
-  // counts of negative and floored pivots, and the floor of a pivot |D_jj|.
+  // supernode whether any of its columns is -1, per group a buffer (signed columns, a diagonal
+  // block's copy) and its counts of negative and floored pivots, and the floor of a pivot |D_jj|.
   std::vector<Scalar> sign_;
   std::vector<char> negative_;
   std::vector<std::vector<Scalar>> signed_;
-  int64_t max_signed_ = 0;  // the largest signed block (PrepareFactorization)
+  int64_t max_signed_ = 0;  // that buffer's largest use (PrepareFactorization)
   std::vector<int> group_negative_, group_perturbed_;
   int negative_pivots_ = 0, perturbed_pivots_ = 0;
   double pivot_floor_ = 0.0;
