@@ -25,9 +25,9 @@ std::string FrameSummary::BriefReport() const {
   }
   if (large_motion_restarts > 0) brief += ", large motion: started again stiff";
   if (crushed_restarts > 0) brief += ", crushed element: started again stiff";
-  if (implausible_restarts > 0) {
-    brief += ", " + std::to_string(implausible_points - implausible_carried) +
-             " implausible points: started again without them";
+  if (implausible_points > implausible_carried) {
+    brief += ", " + std::to_string(implausible_points - implausible_carried) + " implausible points: " +
+             (implausible_restarts > 0 ? "started again without them" : "left out");
   }
   if (contacts > 0 || time.collision > 0) {
     std::snprintf(buf, sizeof(buf), ", %d contacts, deepest %.3f mm, gap %.3f mm", contacts,
@@ -58,9 +58,14 @@ std::string FrameSummary::FullReport() const {
     os << "  implausible points: " << implausible_carried
        << " cloud points near the last frame's implausible ones were left out from the start\n";
   }
-  if (implausible_restarts > 0) {
+  if (implausible_points > implausible_carried) {
     os << "  implausible points: " << implausible_points - implausible_carried << " cloud points pulled elements beyond "
-          "data.max_strain_step; the frame started again without them (" << implausible_restarts << "x)\n";
+          "data.max_strain_step; ";
+    if (implausible_restarts > 0) {
+      os << "the frame started again without them (" << implausible_restarts << "x)\n";
+    } else {
+      os << "under 0.1 % of the cloud's weight, the frame went on without them\n";
+    }
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "
      << flying_pixels << " flying pixels, " << points_used << " used";

@@ -42,10 +42,29 @@ using Clock = std::chrono::steady_clock;
 constexpr double kLargeMotionEdges = 3.0;
 // Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
 constexpr int kMaxImplausibleRestarts = 2;
+// Implausible points below this share of the cloud's weight strained a few elements (single
+// points of a dense cloud at a fine mesh's small elements), not the shape: the frame goes on
+// from where it is without them. From it on (a hand's fingers: 5-60 % of hand_press's points)
+// it starts again (docs/notes/2026-12-02-fine-box-stalls.md).
+constexpr double kImplausibleRestartShare = 0.001;
 constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 // A frame after held or lost ones makes up for at most this many frames' motion in its
 // budget of outer iterations: the cost of one catch-up frame stays bounded.
 constexpr int kMaxCatchUpFrames = 4;
+
+// The weight of the cloud's points (SubsampleCloud's: what each stands for), and of those
+// marked implausible.
+double CloudWeight(const FrameCloud& fc) {
+  return fc.weights.size() == fc.cloud.points.rows() ? fc.weights.sum() : static_cast<double>(fc.cloud.points.rows());
+}
+double ImplausibleWeight(const FrameCloud& fc) {
+  const bool weighted = fc.weights.size() == fc.cloud.points.rows();
+  double sum = 0.0;
+  for (size_t i = 0; i < fc.occluder.size(); ++i) {
+    if (fc.occluder[i] == 2) sum += weighted ? fc.weights[static_cast<Eigen::Index>(i)] : 1.0;
+  }
+  return sum;
+}
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
@@ -378,15 +397,22 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
+      const double weight_before = ImplausibleWeight(fc);
       const int marked =
           MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
       s.time.correspondences += Seconds(t0);
       if (marked > 0) {
-        // Back to the start without them: the shape they pulled into is no starting point.
-        state.x = start;
         fc.occluders.occluders += marked;
         s.occluded_points = fc.occluders.occluders;
         s.implausible_points += marked;
+      }
+      if (marked > 0 && ImplausibleWeight(fc) - weight_before < kImplausibleRestartShare * CloudWeight(fc)) {
+        // Another energy from here: not compared with the last.
+        merit = std::numeric_limits<double>::infinity();
+        previous_energy = merit;
+      } else if (marked > 0) {
+        // Back to the start without them: the shape they pulled into is no starting point.
+        state.x = start;
         ++s.implausible_restarts;
         iteration_base = k + 1;
         // After a large motion's restart the frame's start is far: with the forces estimated,
