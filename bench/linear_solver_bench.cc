@@ -139,6 +139,7 @@ void OwnFactorizeIndefinite(benchmark::State& state) {
   }
   state.counters["dofs"] = static_cast<double>(H.rows());
   state.counters["negative"] = factor.negative_pivots();
+  state.counters["perturbed"] = factor.perturbed_pivots();
 }
 
 void Product(benchmark::State& state) {

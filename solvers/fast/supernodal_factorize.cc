@@ -201,13 +201,15 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s, int g) {
   const int k0 = super_[s], ncol = super_[s + 1] - k0, nrow = pi_[s + 1] - pi_[s];
   Scalar* L = values_.data() + px_[s];
   // Most blocks are positive definite (a negative pivot is where elements turn or are
-  // compressed): LAPACK's Cholesky first, on a copy kept for the panels if it fails. Its
-  // signs are then all +1, and a positive pivot is taken as it is, as Factorize takes it.
-  std::vector<Scalar>& copy = signed_[static_cast<size_t>(g)];
-  copy.resize(std::max(copy.size(), static_cast<size_t>(ncol) * ncol));
+  // compressed): LAPACK's Cholesky first. The block is kept for the panels if it fails: its
+  // strict lower triangle in the strict upper one (zeros until here: Gather and the updates
+  // write the lower triangle), transposed, its diagonal in the group's buffer (at least ncol).
+  // A block that factorizes has signs +1, and a positive pivot is taken as it is, as
+  // Factorize takes it.
+  Scalar* diagonal = signed_[static_cast<size_t>(g)].data();
   for (int j = 0; j < ncol; ++j) {
-    std::copy(L + static_cast<int64_t>(j) * nrow + j, L + static_cast<int64_t>(j) * nrow + ncol,
-              copy.data() + static_cast<int64_t>(j) * ncol + j);
+    diagonal[j] = L[static_cast<int64_t>(j) * nrow + j];
+    for (int i = j + 1; i < ncol; ++i) L[static_cast<int64_t>(i) * nrow + j] = L[static_cast<int64_t>(j) * nrow + i];
   }
   bool positive = Potrf(ncol, L, nrow) == 0;
   for (int j = 0; j < ncol && positive; ++j) {
@@ -215,13 +217,14 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s, int g) {
     positive = pivot > 0 && std::isfinite(static_cast<double>(pivot));
   }
   if (positive) {
+    for (int j = 1; j < ncol; ++j) std::fill(L + static_cast<int64_t>(j) * nrow, L + static_cast<int64_t>(j) * nrow + j, Scalar(0));
     if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
     negative_[static_cast<size_t>(s)] = 0;
     return true;
   }
   for (int j = 0; j < ncol; ++j) {
-    std::copy(copy.data() + static_cast<int64_t>(j) * ncol + j, copy.data() + static_cast<int64_t>(j) * ncol + ncol,
-              L + static_cast<int64_t>(j) * nrow + j);
+    L[static_cast<int64_t>(j) * nrow + j] = diagonal[j];
+    for (int i = j + 1; i < ncol; ++i) L[static_cast<int64_t>(j) * nrow + i] = L[static_cast<int64_t>(i) * nrow + j];
   }
   bool negative = false;
   // The diagonal block A11 = L11 S L11^T, by panels (rows < ncol only).

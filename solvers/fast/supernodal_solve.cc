@@ -197,7 +197,7 @@ bool SupernodalSolve<Scalar>::PrepareFactorization(const Eigen::SparseMatrix<dou
   for (int d = 0; d < nsuper; ++d) {
     const int ncol = super_[d + 1] - super_[d];
     const int nrow = pi_[d + 1] - pi_[d];
-    max_signed_ = std::max<int64_t>(max_signed_, static_cast<int64_t>(ncol) * ncol);  // FactorizeIndefiniteBlock's copy
+    max_signed_ = std::max<int64_t>(max_signed_, static_cast<int64_t>(ncol) * std::min(ncol, kIndefinitePanel));
     const int* rows = rows_.data() + pi_[d];
     int r = ncol;
     while (r < nrow) {

@@ -162,7 +162,7 @@ class SupernodalSolve {
   std::vector<Scalar> values_;
   // FactorizeIndefinite's S (per column of L, +1 or -1; empty after Factorize or Load), per
   // supernode whether any of its columns is -1, per group a buffer (signed columns, a diagonal
-  // block's copy) and its counts of negative and floored pivots, and the floor of a pivot |D_jj|.
+  // block's diagonal) and its counts of negative and floored pivots, and the floor of a pivot |D_jj|.
   std::vector<Scalar> sign_;
   std::vector<char> negative_;
   std::vector<std::vector<Scalar>> signed_;
