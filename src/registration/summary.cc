@@ -64,7 +64,7 @@ std::string FrameSummary::FullReport() const {
     if (implausible_restarts > 0) {
       os << "the frame started again without them (" << implausible_restarts << "x)\n";
     } else {
-      os << "under 0.1 % of the cloud's weight, the frame went on without them\n";
+      os << "too few to have moved the shape, the frame went on without them\n";
     }
   }
   os << "  cloud: " << cloud_points << " points, " << nonfinite_dropped << " non-finite dropped, "

@@ -42,9 +42,9 @@ using Clock = std::chrono::steady_clock;
 constexpr double kLargeMotionEdges = 3.0;
 // Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
 constexpr int kMaxImplausibleRestarts = 2;
-// Implausible points below this share of the cloud's weight strained a few elements (single
-// points of a dense cloud at a fine mesh's small elements), not the shape: the frame goes on
-// from where it is without them. From it on (a hand's fingers: 5-60 % of hand_press's points)
+// Implausible points below this share of the cloud's weight (those marked since the frame
+// last started) strained a few elements (single points of a dense cloud at a fine mesh's
+// small elements), not the shape: the frame goes on from where it is without them. From it on (a hand's fingers: 5-60 % of hand_press's points)
 // it starts again (docs/notes/2026-12-02-fine-box-stalls.md).
 constexpr double kImplausibleRestartShare = 0.001;
 constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
@@ -325,6 +325,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   stepping_in = false;
   fc.facing_only = false;
   const Vertices start = state.x;
+  // The weight of the points marked implausible when the frame last started (again): what is
+  // marked since is held against kImplausibleRestartShare, in one go or a few at a time.
+  double implausible_at_start = 0.0;
   int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
   int stiff_from = 1;    // the outer iteration of the first stiff stage
   for (int k = 0; k < iteration_limit; ++k) {
@@ -397,7 +400,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
-      const double weight_before = ImplausibleWeight(fc);
       const int marked =
           MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
       s.time.correspondences += Seconds(t0);
@@ -406,7 +408,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         s.occluded_points = fc.occluders.occluders;
         s.implausible_points += marked;
       }
-      if (marked > 0 && ImplausibleWeight(fc) - weight_before < kImplausibleRestartShare * CloudWeight(fc)) {
+      if (marked > 0 && ImplausibleWeight(fc) - implausible_at_start < kImplausibleRestartShare * CloudWeight(fc)) {
         // Another energy from here: not compared with the last.
         merit = std::numeric_limits<double>::infinity();
         previous_energy = merit;
@@ -414,6 +416,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         // Back to the start without them: the shape they pulled into is no starting point.
         state.x = start;
         ++s.implausible_restarts;
+        implausible_at_start = ImplausibleWeight(fc);
         iteration_base = k + 1;
         // After a large motion's restart the frame's start is far: with the forces estimated,
         // one outer iteration without the equilibrium terms first again (WarmStart).
