@@ -88,7 +88,6 @@ struct EquilibriumSolver::Impl {
   double factor_flops = 0.0;  // CHOLMOD's flop count of one factorization (Analyse)
   // The PCG iterations that cost about as many flops as a factorization (Analyse).
   int factorization_iterations = 0;
-  int indefinite_negative = 0;  // the own L S L^T's negative pivots
   std::vector<Eigen::Matrix3d> phi_inverse;
   double first_gradient_norm = 0.0;  // |G| at the solve's start (kGradientFloor)
   // Whether the next step's factor takes the data in (kShiftAfterIterations); kept from solve
@@ -134,9 +133,10 @@ struct EquilibriumSolver::Impl {
       // A negative pivot above round-off is K's own. Without one, pivots at the floor are
       // round-off on a positive definite K, where CHOLMOD's double-precision Cholesky is the
       // better preconditioner.
-      const int perturbed =
-          use_indefinite == 1 ? indefinite_single.perturbed_pivots() : indefinite_double.perturbed_pivots();
-      if (indefinite_negative > 0 || perturbed == 0) return true;
+      const bool single = use_indefinite == 1;
+      const int negative = single ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
+      const int perturbed = single ? indefinite_single.perturbed_pivots() : indefinite_double.perturbed_pivots();
+      if (negative > 0 || perturbed == 0) return true;
       const int held = use_indefinite;
       use_indefinite = 0;
       if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
@@ -209,10 +209,7 @@ struct EquilibriumSolver::Impl {
     }
     for (int at : diagonal_at) K.valuePtr()[at] -= kFirstShift * mean;
     report->factorize_s += Seconds(t0);
-    if (use_indefinite == 0) return false;
-    indefinite_negative =
-        use_indefinite == 1 ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
-    return true;
+    return use_indefinite != 0;
   }
 
   // The Cholesky factorizations FactorizeOf tries at each shift, in this order.

@@ -55,6 +55,19 @@ inline void TrsmRightLowerTransposed(int m, int n, const T* a, int lda, T* b, in
     dtrsm_("R", "L", "T", "N", &m, &n, &one, a, &lda, b, &ldb);
   }
 }
+// A supernode's dense part (its ncol columns of nrow rows, lower triangle) as Cholesky's: the
+// diagonal block by LAPACK, the rows below by a triangular solve. False, the rows below left
+// as they were, when a pivot is not positive and finite.
+template <class T>
+bool CholeskyBlock(int ncol, int nrow, T* L) {
+  if (Potrf(ncol, L, nrow) != 0) return false;
+  for (int j = 0; j < ncol; ++j) {
+    const T pivot = L[static_cast<int64_t>(j) * nrow + j];
+    if (!(pivot > 0) || !std::isfinite(static_cast<double>(pivot))) return false;
+  }
+  if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
+  return true;
+}
 // c (lower n x n) = a a^T, a n x k.
 template <class T>
 inline void SyrkLower(int n, int k, const T* a, int lda, T* c, int ldc) {
@@ -186,13 +199,7 @@ bool SupernodalSolve<Scalar>::FactorizeSupernode(int s, int g, const double* a) 
   Gather(s, a, map);
   SubtractUpdates(s, 0, nrow, /*whole=*/true, map, c_[static_cast<size_t>(g)].data(), &signed_[static_cast<size_t>(g)]);
   if (!sign_.empty()) return FactorizeIndefiniteBlock(s, g);
-  if (Potrf(ncol, L, nrow) != 0) return false;
-  for (int j = 0; j < ncol; ++j) {
-    const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
-    if (!(pivot > 0) || !std::isfinite(static_cast<double>(pivot))) return false;
-  }
-  if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
-  return true;
+  return CholeskyBlock(ncol, nrow, L);
 }
 
 template <class Scalar>
@@ -211,14 +218,8 @@ bool SupernodalSolve<Scalar>::FactorizeIndefiniteBlock(int s, int g) {
     diagonal[j] = L[static_cast<int64_t>(j) * nrow + j];
     for (int i = j + 1; i < ncol; ++i) L[static_cast<int64_t>(i) * nrow + j] = L[static_cast<int64_t>(j) * nrow + i];
   }
-  bool positive = Potrf(ncol, L, nrow) == 0;
-  for (int j = 0; j < ncol && positive; ++j) {
-    const Scalar pivot = L[static_cast<int64_t>(j) * nrow + j];
-    positive = pivot > 0 && std::isfinite(static_cast<double>(pivot));
-  }
-  if (positive) {
+  if (CholeskyBlock(ncol, nrow, L)) {
     for (int j = 1; j < ncol; ++j) std::fill(L + static_cast<int64_t>(j) * nrow, L + static_cast<int64_t>(j) * nrow + j, Scalar(0));
-    if (nrow > ncol) TrsmRightLowerTransposed(nrow - ncol, ncol, L, nrow, L + ncol, nrow);
     negative_[static_cast<size_t>(s)] = 0;
     return true;
   }

@@ -44,8 +44,9 @@ constexpr double kLargeMotionEdges = 3.0;
 constexpr int kMaxImplausibleRestarts = 2;
 // Implausible points below this share of the cloud's weight (those marked since the frame
 // last started) strained a few elements (single points of a dense cloud at a fine mesh's
-// small elements), not the shape: the frame goes on from where it is without them. From it on (a hand's fingers: 5-60 % of hand_press's points)
-// it starts again (docs/notes/2026-12-02-fine-box-stalls.md).
+// small elements), not the shape: the frame goes on from where it is without them. From it
+// on (a hand's fingers: 5-60 % of hand_press's points) it starts again
+// (docs/notes/2026-12-02-fine-box-stalls.md).
 constexpr double kImplausibleRestartShare = 0.001;
 constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 // A frame after held or lost ones makes up for at most this many frames' motion in its
