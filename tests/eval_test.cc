@@ -360,6 +360,14 @@ TEST(EvalCliTest, ZeroErrorOnTheGroundTruthAndExactlyAnOffset) {
   ASSERT_EQ(t.size(), 17u);
   for (int i : {1, 2, 3, 4, 6, 7, 8, 9}) EXPECT_NEAR(t[i], 4.0, 1e-4) << "column " << i;  // mm
   EXPECT_NEAR(t[16], 4.0, 1e-3);  // Hausdorff: the z faces are 4 mm apart
+  // The dataset's ground_truth/ folder (what register --ground-truth takes) stands for it.
+  const std::string inner_csv = dir.path() + "/offset_inner.csv";
+  ASSERT_EQ(std::system((cli + " eval " + dir.path() + "/offset/result " + dir.path() +
+                         "/offset/truth/ground_truth --csv " + inner_csv + " > /dev/null").c_str()),
+            0);
+  const std::vector<double> inner = Totals(inner_csv);
+  ASSERT_EQ(inner.size(), t.size());
+  for (size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(inner[i], t[i], 1e-9) << "column " << i;
 
   // A ground truth folder with too few frames fails with a message.
   fs::remove(dir.path() + "/offset/truth/ground_truth/frame_0000.csv");

@@ -23,7 +23,7 @@ def num(v):
     return "–" if v in ("nan", "-nan") else v
 print("# Hard cases\n")
 print("Made by `tools/hard_cases.sh` from `tests/hard_cases_test.cc` (`ctest -L hard_cases`);")
-print("on the machine's cores (`solver.num_threads` left at its default: femreg sets its own")
+print("on the machine's cores (`solver.threads` left at its default: femreg sets its own")
 print("thread count, whatever `OMP_NUM_THREADS` says), so the times are comparable between rows,")
 print("not with a loaded or a faster machine. Each case must end finite, bounded, and with a termination")
 print("that says what happened; the test's assertions are in the source, next to each case.\n")

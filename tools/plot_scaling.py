@@ -39,8 +39,12 @@ def main():
             "preconditioner": PRECONDITIONERS[int(b.get("preconditioner", 0))],
             # The fourth argument (from 2026-11-27 on): the data weight per pair or per area.
             "data_weight": DataWeight(b),
-            # The fifth argument (from 2026-12-01 on): solver.num_threads; one before.
+            # The fifth argument (from 2026-12-01 on): solver.threads; one before.
             "threads": int(b.get("threads", 1)), "ms_per_frame": ms,
+            # The first frame (pattern, analysis, hierarchy, first touch of their memory) and the
+            # mean of the later ones (from 2026-12-02 on; NaN before).
+            "first_frame_ms": b.get("first_frame_ms", float("nan")),
+            "later_frame_ms": b.get("later_frame_ms", float("nan")),
             "correspondences_ms": b["correspondences_ms"], "rotations_ms": b["rotations_ms"],
             "solve_ms": b["solve_ms"], "preprocess_ms": b["preprocess_ms"],
             # The solve's parts and counts (benchmarks from 2026-11-26 on; 0 before).
@@ -60,15 +64,16 @@ def main():
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.2f}" if isinstance(v, float) else v) for k, v in r.items()})
-    lines = ["| vertices | tets | cloud points (used) | preconditioner | data weight | threads | ms/frame | correspondences | "
+    lines = ["| vertices | tets | cloud points (used) | preconditioner | data weight | threads | ms/frame | "
+             "first frame / later frames (ms) | correspondences | "
              "rotations | solve "
              "(assembly / factorization or hierarchy / linear solves) | factorizations or hierarchies, PCG iterations, outer iterations "
              "per frame | preprocess | converged | error (mm) |",
-             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['vertices']} | {r['tets']} | {r['points']} ({r['points_used']}) | {r['preconditioner']} | "
                      f"{r['data_weight']} | {r['threads']} | "
-                     f"{r['ms_per_frame']:.1f} | "
+                     f"{r['ms_per_frame']:.1f} | {r['first_frame_ms']:.0f} / {r['later_frame_ms']:.1f} | "
                      f"{r['correspondences_ms']:.1f} | {r['rotations_ms']:.1f} | {r['solve_ms']:.1f} "
                      f"({r['assembly_ms']:.0f} / {r['factorization_ms']:.0f} / {r['linear_solve_ms']:.0f}) | "
                      f"{r['factorizations']:.1f}, {r['pcg_iterations']:.0f}, {r['outer_iterations']:.1f} | "
@@ -81,6 +86,12 @@ def main():
     for points in sorted({r["points"] for r in default}):
         sel = [r for r in default if r["points"] == points]
         ax.loglog([r["vertices"] for r in sel], [r["ms_per_frame"] for r in sel], "o-", label=f"{points} points")
+    # What a long sequence pays per frame: the frames after the first (its setup apart).
+    later = sorted([r for r in default if r["points"] == min(r["points"] for r in default)
+                    and r["later_frame_ms"] == r["later_frame_ms"]], key=lambda r: r["vertices"])
+    if later:
+        ax.loglog([r["vertices"] for r in later], [r["later_frame_ms"] for r in later], "o:", color="C0",
+                  label=f"{later[0]['points']} points, frames after the first")
     # The factor at every size: the auto rows below the switch and the factor rows above it.
     factor = [r for r in rows if r["preconditioner"] == "factor"]
     if factor:

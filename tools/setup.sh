@@ -3,7 +3,8 @@
 # (tools/docs.sh) need (nothing when all are present), then builds the femreg Python package
 # for Debian's python3 and installs it into its site directory
 # (/usr/local/lib/python3.11/dist-packages), so that
-# `python3 -c "import femreg"` works. Run as root (or with sudo) on Debian 12.
+# `python3 -c "import femreg"` works. On Debian 12; root (or sudo) is needed only to install
+# (with every package present and without root, it skips the Python package's install).
 # FEMREG_SETUP_PYTHON=0 skips the Python package; FEMREG_WITH_OPEN3D=1 adds python3-open3d
 # (optional); BUILD_DIR (default build) and JOBS as in tools/build.sh.
 set -euo pipefail
@@ -41,15 +42,18 @@ for p in "${want[@]}"; do
   fi
 done
 
+# Root (or sudo) only for what needs it: installing packages and the Python package.
 SUDO=""
-if [ "$(id -u)" != 0 ]; then
-  command -v sudo >/dev/null || { echo "setup: need root or sudo to install packages" >&2; exit 1; }
+have_root() {
+  if [ "$(id -u)" = 0 ]; then return 0; fi
+  command -v sudo >/dev/null || return 1
   SUDO=sudo
-fi
+}
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#want[@]} packages present"
 else
+  have_root || { echo "setup: need root or sudo to install: ${missing[*]}" >&2; exit 1; }
   echo "setup: installing ${#missing[@]} package(s): ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
   $SUDO apt-get update -qq
@@ -59,7 +63,9 @@ fi
 
 # The Python package, for Debian's interpreter (the one with python3-numpy), in the same
 # build folder as tools/build.sh (an up-to-date build costs nothing).
-if [ "${FEMREG_SETUP_PYTHON:-1}" = 1 ]; then
+if [ "${FEMREG_SETUP_PYTHON:-1}" = 1 ] && ! have_root; then
+  echo "setup: no root or sudo: the Python package is not installed for python3 (the tests use the build's own)"
+elif [ "${FEMREG_SETUP_PYTHON:-1}" = 1 ]; then
   BUILD_DIR=${BUILD_DIR:-build}
   JOBS=${JOBS:-$(nproc)}
   echo "setup: building the femreg Python package in $BUILD_DIR"

@@ -229,16 +229,23 @@ Status CompareForceFiles(const std::string& result, const std::string& truth_dir
   return Status::Ok();
 }
 
-int RunEval(const std::string& result, const std::string& truth_dir, std::string csv) {
+int RunEval(const std::string& result, const std::string& dataset, std::string csv) {
   auto fail = [](const std::string& message) {
     std::cerr << "femreg eval: " << message << "\n";
     return 1;
   };
+  // The dataset's folder; its ground_truth/ folder itself (what `register --ground-truth`
+  // takes) stands for it.
+  std::string truth_dir = dataset;
+  const fs::path given = fs::path(dataset).lexically_normal();
+  if (!fs::is_directory(given / "ground_truth") && given.filename() == "ground_truth") {
+    truth_dir = given.parent_path().empty() ? std::string(".") : given.parent_path().string();
+  }
   std::vector<std::string> result_files, truth_csvs, truth_vtus;
   Status status = ListFiles((fs::path(result) / "frames").string(), {".vtu"}, &result_files);
   if (!status.ok()) return fail(status.message() + " (RESULT must be a `femreg register` output folder)");
   status = ListFiles((fs::path(truth_dir) / "ground_truth").string(), {".csv"}, &truth_csvs);
-  if (!status.ok()) return fail(status.message() + " (GROUND_TRUTH must be a `femreg synth` output folder)");
+  if (!status.ok()) return fail(status.message() + " (DATASET must be a dataset or `femreg synth` output folder with ground_truth/)");
   // Fracture sequences keep the events and per-piece positions beside the frames.
   truth_csvs.erase(std::remove_if(truth_csvs.begin(), truth_csvs.end(),
                                   [](const std::string& f) {
@@ -544,8 +551,9 @@ void AddEvalCommand(CLI::App* app) {
   cmd->add_option("result", *result, "A `femreg register` output folder (frames/<object>_NNNN.vtu)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("ground_truth", *truth,
-                  "A `femreg synth` output folder (ground_truth/*.csv, truth/*.vtu; forces.csv)")
+  cmd->add_option("dataset", *truth,
+                  "A dataset or `femreg synth` output folder (ground_truth/*.csv, truth/*.vtu; forces.csv), "
+                  "e.g. datasets/demo; its ground_truth/ folder is taken for it too")
       ->required()
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--csv", *csv,
