@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -187,4 +188,25 @@ TEST(FrameLayouts, RegisterTakesAMatrixAndTheFramesImageSize) {
 }
 
 }  // namespace
+// --force writes over a last run: a shorter run leaves none of the longer one's frames, which
+// `femreg eval` would count.
+TEST(FrameLayouts, ForceRemovesTheLastRunsFrames) {
+  TempDir tmp;
+  const std::string out = tmp.File("out");
+  auto vtus = [&] {
+    int n = 0;
+    for (const auto& entry : fs::directory_iterator(out + "/frames")) n += entry.path().extension() == ".vtu";
+    return n;
+  };
+  CliRun run = Femreg(RegisterArgs(Demo() + "/clouds", out) + " --max-frames 3");
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(vtus(), 3);
+  std::ofstream(out + "/notes.txt") << "the user's own file\n";
+  run = Femreg(RegisterArgs(Demo() + "/clouds", out) + " --max-frames 1");
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(vtus(), 1);
+  EXPECT_TRUE(fs::is_regular_file(out + "/notes.txt"));  // only the frames/ folder goes
+  EXPECT_EQ(StatsColumn(out, "err_mean_mm").size(), 1u);
+}
+
 }  // namespace femreg

@@ -206,6 +206,31 @@ TEST(WritePointCloud, RoundTripsWithAndWithoutNormals) {
     std::remove(path.c_str());
   }
   EXPECT_FALSE(WritePointCloud("/nonexistent/dir/x.pcd", cloud).ok());
+  // Only PCD is written: a .ply name would hold a PCD.
+  const std::string ply = TempPath("rt.ply");
+  const Status refused = WritePointCloud(ply, cloud);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("name the file .pcd"), std::string::npos) << refused.message();
+  std::ifstream written(ply);
+  EXPECT_FALSE(written.good());
+}
+
+TEST(ReadPointCloud, AnEmptyPcdOrPlyFileIsAnErrorAnEmptyTextCloudIsNot) {
+  for (const char* name : {"empty.pcd", "empty.PLY"}) {
+    const std::string path = TempPath(name);
+    std::ofstream(path).close();
+    PointCloud cloud;
+    const Status s = ReadPointCloud(path, &cloud);
+    std::remove(path.c_str());
+    ASSERT_FALSE(s.ok()) << name;
+    EXPECT_NE(s.message().find("the file is empty (0 bytes)"), std::string::npos) << s.message();
+  }
+  const std::string text = TempPath("empty.xyz");
+  std::ofstream(text).close();
+  PointCloud cloud;
+  EXPECT_TRUE(ReadPointCloud(text, &cloud).ok());
+  std::remove(text.c_str());
+  EXPECT_EQ(cloud.size(), 0);
 }
 
 PointCloud NoisyPlane(int n, double z, uint64_t seed) {

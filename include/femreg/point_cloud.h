@@ -33,7 +33,8 @@ struct SensorPose {
 Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite_dropped = nullptr,
                       SensorPose* sensor = nullptr);
 
-// Writes a binary PCD (with normals when the cloud has them), atomically.
+// Writes a binary PCD (with normals when the cloud has them), atomically; a path that does
+// not end in .pcd is refused.
 Status WritePointCloud(const std::string& path, const PointCloud& cloud);
 
 // The plane preprocess.plane removed from a cloud: normal . x = offset (|normal| = 1), and

@@ -101,11 +101,33 @@ py::object FieldObject(const T& value) {
   }
 }
 
+// An options object takes only the attributes its class has: a misspelt or renamed one
+// (`solver.thread = 1`) raises AttributeError naming the ones there are.
+template <typename Class>
+void RefuseUnknownAttributes(Class& cls) {
+  cls.def("__setattr__", [](const py::object& self, const std::string& name, const py::object& value) {
+    const py::object type = py::type::of(self);
+    if (!py::hasattr(type, name.c_str())) {
+      const py::object property = py::module_::import("builtins").attr("property");
+      std::string names;
+      for (const auto& item : py::module_::import("builtins").attr("dir")(type)) {
+        const std::string n = py::str(item);
+        if (n.empty() || n[0] == '_' || !py::isinstance(type.attr(n.c_str()), property)) continue;
+        names += (names.empty() ? "" : ", ") + n;
+      }
+      throw py::attribute_error(type.attr("__name__").cast<std::string>() + " has no attribute '" + name +
+                                "' (its attributes: " + names + ")");
+    }
+    py::module_::import("builtins").attr("object").attr("__setattr__")(self, name, value);
+  });
+}
+
 // Binds every field of an options table (femreg/option_fields.h) under its Python name:
 // flags and numbers as attributes, enums as string properties ("data.loss" in messages), a
 // value the scene may leave unset (std::optional) as None when it is.
 template <typename Class>
 void DefFields(Class& cls) {
+  RefuseUnknownAttributes(cls);
   using Options = typename Class::type;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using Field = std::decay_t<decltype(std::declval<Options&>().*member)>;
@@ -128,6 +150,7 @@ void DefFields(Class& cls) {
 template <typename Class>
 void DefCheckedFields(Class& cls,
                       bool (*valid)(const typename Class::type&, const std::string& field, std::string*)) {
+  RefuseUnknownAttributes(cls);
   using Options = typename Class::type;
   OptionFields<Options>::Visit([&](auto member, const FieldInfo& f) {
     using Field = std::decay_t<decltype(std::declval<Options&>().*member)>;

@@ -209,7 +209,7 @@ void BindPointClouds(py::module_& m) {
         },
         py::arg("path"), py::arg("points"), py::arg("normals") = py::none(),
         "Writes a binary PCD of (N, 3) points or an open3d.geometry.PointCloud (with normals "
-        "when given or when it has them); atomic.");
+        "when given or when it has them); atomic. The path must end in .pcd.");
 }
 
 void BindDepthImages(py::module_& m) {

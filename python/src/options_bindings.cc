@@ -59,6 +59,8 @@ void BindOptions(py::module_& m) {
   auto solver = py::class_<SolverOptions>(m, "SolverOptions");
   solver.def(py::init<>());
   DefFields(solver);
+  // The scene key's name too (solver.threads), beside the C++ member's (num_threads).
+  solver.def_readwrite("threads", &SolverOptions::num_threads, "The same as num_threads (the scene's solver.threads)");
 
   auto options = py::class_<RegistrationOptions>(
       m, "RegistrationOptions",

@@ -34,6 +34,13 @@ def test_options_attributes_follow_the_tables():
     options.solver.num_threads = -1
     with pytest.raises(ValueError, match=r"solver.threads must be >= 0 .* \(got -1\)"):
         options.validate()
+    # The scene key's name too; a misspelt attribute names the ones there are.
+    options.solver.threads = 2
+    assert options.solver.num_threads == 2
+    with pytest.raises(AttributeError, match=r"SolverOptions has no attribute 'thread' \(its attributes: .*backend"):
+        options.solver.thread = 1
+    with pytest.raises(AttributeError, match="visibility"):
+        options.data.visibilty = True
 
 
 def test_scene_sections_follow_their_tables():

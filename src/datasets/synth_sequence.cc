@@ -450,8 +450,10 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
      << "; the camera; the registration settings and the anchors the robot knows about.\n"
      << "- `clouds/frame_NNNN.pcd`: " << r.min_points << " to " << r.max_points
      << " points per frame from a virtual " << c.width << "x" << c.height
-     << " depth camera (z-buffer, every " << s.sensor.pixel_stride
-     << ". pixel, depth noise sigma = " << s.sensor.noise_coefficient
+     << " depth camera (z-buffer, "
+     << (s.sensor.pixel_stride == 1 ? std::string("every pixel")
+                                    : "one pixel in " + std::to_string(s.sensor.pixel_stride) + " in u and v")
+     << ", depth noise sigma = " << s.sensor.noise_coefficient
      << " z^2, no returns beyond " << s.sensor.grazing_angle_deg << " deg incidence, "
      << s.sensor.outlier_fraction * 100 << "% outliers)";
   if (s.background) md << ", with a " << s.background_size << " m table quad in view";

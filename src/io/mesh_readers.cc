@@ -284,8 +284,8 @@ Status ReadTetMeshUnchecked(const std::string& path, TetMesh* mesh) {
       if (!surface.empty()) {
         return Status::Error(path + ": no tetrahedra: this is a surface mesh (" + surface +
                              "), not a volume mesh; femreg needs a tetrahedral mesh "
-                             "(Gmsh, TetGen, MEDIT, VTK or VTU): tetrahedralize it first "
-                             "(e.g. with TetGen, fTetWild or Gmsh)");
+                             "(Gmsh, TetGen, MEDIT, VTK or VTU): tetrahedralize it first, "
+                             "e.g. `femreg mesh SURFACE --out MESH.vtu --edge-length L`");
       }
       return Status::Error(path +
                            ": unsupported or unrecognized mesh format (expected Gmsh .msh, "

@@ -372,8 +372,10 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
                          " (edge length " + Fmt(report.edge_length) + ") makes at least " +
                          Fmt(at_least) + " tetrahedra in a volume of " +
                          Fmt(report.surface_volume) +
-                         ", more than max_tets = " + std::to_string(options.max_tets) +
-                         ": choose a larger edge length or max volume");
+                         ", more than the limit of " + std::to_string(options.max_tets) + " (max_tets)" +
+                         ": choose a larger edge length or max volume, or, if the surface is not "
+                         "in metres (a volume of " + Fmt(report.surface_volume) +
+                         " m^3), --scale it (0.001 for millimetres)");
   }
 
   // Remesh to the target edge length; TetGen then keeps that surface.

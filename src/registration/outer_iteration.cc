@@ -442,6 +442,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     }
     if (s->large_motion_restarts > 0) s->message += " after a large motion's " + std::to_string(iteration_base) + " stiff start";
     if (s->crushed_restarts > 0) s->message += " after a crushed element's " + std::to_string(iteration_base) + " stiff start";
+    if (s->implausible_restarts > 0 && s->large_motion_restarts == 0 && s->crushed_restarts == 0) {
+      s->message += " since the frame started again without implausible points (" +
+                    std::to_string(iteration_base) + " outer iterations before)";
+    }
   }
   return true;
 }

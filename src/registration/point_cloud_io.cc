@@ -13,8 +13,11 @@
 #include <pcl/sample_consensus/model_types.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 #include "femreg/point_cloud.h"
 #include "io/io_internal.h"
@@ -139,6 +142,17 @@ namespace {
 
 Status ReadPointCloudUnchecked(const std::string& path, PointCloud* cloud, int* nonfinite_dropped,
                                SensorPose* sensor) {
+  // A PCD or PLY file always has a header: with no byte at all it was cut off or never
+  // written (a text cloud with no line is a cloud without points).
+  std::error_code ec;
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if ((extension == ".pcd" || extension == ".ply") && std::filesystem::is_regular_file(path, ec) &&
+      std::filesystem::file_size(path, ec) == 0 && !ec) {
+    return Status::Error(path + ": the file is empty (0 bytes): a " + extension.substr(1) +
+                         " file starts with its header");
+  }
   internal::CloudFileFormat format;
   Status status = internal::DetectCloudFormat(path, &format);
   if (!status.ok()) return status;
@@ -177,6 +191,13 @@ Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite
 }
 
 Status WritePointCloud(const std::string& path, const PointCloud& cloud) {
+  // Written as binary PCD only: a file named otherwise would hold what its name does not say.
+  std::string extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".pcd") {
+    return Status::Error(path + ": point clouds are written as PCD (binary); name the file .pcd");
+  }
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   const std::string tmp = path + ".tmp";
   PclCloud::Ptr pc = ToPcl(cloud);

@@ -18,6 +18,12 @@ Status YamlErrorStatus(const std::string& source, const YAML::Exception& e) {
   // yaml-cpp's mark is 0-based.
   if (!e.mark.is_null()) os << ":" << e.mark.line + 1 << ":" << e.mark.column + 1;
   os << ": " << e.msg;
+  // yaml-cpp's parser messages name the grammar, not the mistake, which is most often the
+  // indentation: a key indented unlike its siblings, a list item's '-' out of line.
+  if (dynamic_cast<const YAML::ParserException*>(&e) != nullptr) {
+    os << " (YAML nests by indentation: check that this line and the one before it are indented "
+          "like their siblings, with spaces, not tabs)";
+  }
   return Status::Error(os.str());
 }
 

@@ -53,12 +53,18 @@ std::string CapForMessage(const std::string& text, size_t max_chars) {
   return text.substr(0, max_chars) + "... (" + std::to_string(text.size()) + " bytes)";
 }
 
-Status PrepareOutputDir(const std::string& dir, bool force) {
+Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& owned) {
   std::error_code ec;
   if (fs::exists(dir, ec)) {
     if (!fs::is_directory(dir, ec)) return Status::Error(dir + ": exists and is not a folder");
     if (!fs::is_empty(dir, ec) && !force) {
       return Status::Error(dir + ": folder is not empty; pass --force to write into it anyway");
+    }
+    for (const std::string& name : owned) {
+      const fs::path sub = fs::path(dir) / name;
+      if (!fs::is_directory(sub, ec)) continue;
+      fs::remove_all(sub, ec);
+      if (ec) return Status::Error(sub.string() + ": cannot remove the last run's files: " + ec.message());
     }
     return Status::Ok();
   }

@@ -25,8 +25,10 @@ std::string JsonNumber(double v);
 // "... (N bytes)" added, so that a 4 MB bad token is not echoed whole.
 std::string CapForMessage(const std::string& text, size_t max_chars = 80);
 
-// Makes `dir` (and parents). A non-empty existing folder is refused unless `force`.
-Status PrepareOutputDir(const std::string& dir, bool force);
+// Makes `dir` (and parents). A non-empty existing folder is refused unless `force`; with
+// `force`, its subfolders named in `owned` (those only the command writes, e.g. register's
+// frames/) are removed first, so that a shorter run leaves none of a longer one's frames.
+Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& owned = {});
 
 // A one-line progress bar on stderr when it is a terminal; a line every 10% otherwise.
 class ProgressBar {

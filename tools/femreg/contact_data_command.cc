@@ -26,9 +26,9 @@ void AddContactDataCommand(CLI::App* app) {
       ->required()
       ->check(CLI::IsMember(ContactScenarios()));
   cmd->add_option("--out,-o", *out, "Output folder")->required();
-  cmd->add_flag("--force", *force, "Write into a non-empty folder");
+  cmd->add_flag("--force", *force, "Write into a non-empty folder (the folders of frames it writes, a last run's, are removed first)");
   cmd->callback([out, scenario, force] {
-    Status status = PrepareOutputDir(*out, *force);
+    Status status = PrepareOutputDir(*out, *force, {"clouds", "ground_truth"});
     if (status.ok()) {
       StartGeneratorProgress("contact-data");
       status = GenerateContactSequence(*scenario, *out, &GeneratorProgress);

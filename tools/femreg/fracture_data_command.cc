@@ -107,7 +107,7 @@ void AddFractureDataCommand(CLI::App* app) {
       ->required()
       ->check(CLI::IsMember(FractureScenarios()));
   cmd->add_option("--out,-o", *out, "Output folder (not with --calculix-deck)");
-  cmd->add_flag("--force", *force, "Write into a non-empty folder");
+  cmd->add_flag("--force", *force, "Write into a non-empty folder (the folders of frames it writes, a last run's, are removed first)");
   cmd->add_option("--calculix-deck", *deck,
                   "beam_cut only: write the ground truth's CalculiX deck (one NLGEOM step per frame, "
                   "the slab removed by *MODEL CHANGE) to this file, and nothing else");
@@ -128,12 +128,12 @@ void AddFractureDataCommand(CLI::App* app) {
     } else if (!result->empty()) {
       std::vector<Vertices> truth;
       status = ReadStepEnds(*result, &truth);
-      if (status.ok()) status = PrepareOutputDir(*out, *force);
+      if (status.ok()) status = PrepareOutputDir(*out, *force, {"clouds", "ground_truth"});
       if (status.ok()) {
         status = GenerateFractureSequence(*scenario, *out, truth, "CalculiX's solution (`ccx`)", &Progress);
       }
     } else {
-      status = PrepareOutputDir(*out, *force);
+      status = PrepareOutputDir(*out, *force, {"clouds", "ground_truth"});
       if (status.ok()) status = GenerateFractureSequence(*scenario, *out, &Progress);
     }
     if (!status.ok()) {

@@ -22,12 +22,12 @@ void AddHandPressDataCommand(CLI::App* app) {
       "left out), OUT/ground_truth/*.csv, OUT/truth/*.vtu, "
       "OUT/forces.csv, OUT/truth_solve.csv and OUT/README.md.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
-  cmd->add_flag("--force", *force, "Write into a non-empty folder");
+  cmd->add_flag("--force", *force, "Write into a non-empty folder (the folders of frames it writes, a last run's, are removed first)");
   cmd->add_option("--frames", *frames,
                   "Make only the first N frames of the 30 (the same files as a full run's)")
       ->check(CLI::Range(1, 30));
   cmd->callback([out, force, frames] {
-    Status status = PrepareOutputDir(*out, *force);
+    Status status = PrepareOutputDir(*out, *force, {"clouds", "clouds_without_hand", "ground_truth", "truth"});
     HandPressReport report;
     if (status.ok()) {
       StartGeneratorProgress("hand-press-data");

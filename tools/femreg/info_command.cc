@@ -131,7 +131,7 @@ void AddInfoCommand(CLI::App* app) {
       "TetGen .node/.ele (give either file or the base name), MEDIT .mesh, VTK legacy "
       "ASCII unstructured grid, VTU. Only tetrahedra are kept; other cells and unused "
       "vertices are dropped.\n"
-      "Exit code 0 on success, 1 when the mesh cannot be read (the reason goes to stderr).\n"
+      "Exit code 0 on success, 1 when the mesh cannot be read (the reason goes to stderr), 2 for a wrong or missing argument.\n"
       "Example: femreg info liver.msh --json");
   cmd->add_option("mesh", options->mesh_path, "Tetrahedral mesh file")->required();
   cmd->add_flag("--json", options->json, "Print one JSON object instead of text");

@@ -53,7 +53,12 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version as CLI11 prints them; a wrong or missing argument (a file that
+    // does not exist included) named after the command, exit code 2.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::cerr << CommandName(app) << ": " << e.what() << "\nRun '" << CommandName(app)
+              << " --help' for its options.\n";
+    return 2;
   } catch (const std::bad_alloc&) {
     std::cerr << CommandName(app) << ": out of memory (an input larger than this machine can hold?)\n";
     return 2;

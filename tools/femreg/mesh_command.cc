@@ -287,7 +287,7 @@ void AddMeshCommand(CLI::App* app) {
       "Prints the input and output counts, merged duplicate vertices, the volume of the surface "
       "and "
       "of the mesh, edge lengths, element quality (dihedral angles, aspect ratio) and times.\n"
-      "Exit code 0 on success; 1 when the surface cannot be read or meshed, the output "
+      "Exit code 0 on success; 2 for a wrong or missing argument (a file that does not exist); 1 when the surface cannot be read or meshed, the output "
       "exists (without --force) or cannot be written (the reason goes to stderr; nothing is "
       "written then). The output is written to a temporary file and renamed.\n"
       "Example: femreg mesh scan.stl --out scan.vtu --scale 0.001 --edge-length 0.004");

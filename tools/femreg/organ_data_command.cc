@@ -26,7 +26,7 @@ void AddOrganDataCommand(CLI::App* app) {
       "OUT/clouds/*.pcd, OUT/ground_truth/*.csv, OUT/forces.csv (per frame, the tool's true force "
       "on the body and its torque about the body's centroid, for `femreg eval`) and OUT/README.md.");
   cmd->add_option("--out,-o", *out, "Output folder")->required();
-  cmd->add_flag("--force", *force, "Write into a non-empty folder");
+  cmd->add_flag("--force", *force, "Write into a non-empty folder (the folders of frames it writes, a last run's, are removed first)");
   cmd->add_option("--divisions", *divisions,
                   "Divisions of the tracked mesh, 2 to the truth's divisions - 1: (2n+1)^3 vertices, "
                   "48 n^3 tetrahedra (4: the bundled 729 / 3072; 7: 3375 / 16464, the size of a "
@@ -50,7 +50,7 @@ void AddOrganDataCommand(CLI::App* app) {
   cmd->callback([out, force, divisions, truth_divisions, tool] {
     OrganTool organ_tool = OrganTool::kContact;
     Status status = FromString(*tool, &organ_tool)
-                        ? PrepareOutputDir(*out, *force)
+                        ? PrepareOutputDir(*out, *force, {"clouds", "ground_truth"})
                         : Status::Error("--tool " + *tool + ": use glued or contact");
     if (status.ok()) {
       StartGeneratorProgress("organ-data");

@@ -194,7 +194,7 @@ int RunRegister(const RegisterArgs& args) {
     WarnFoldedElements("register", "object '" + scene.objects[static_cast<size_t>(i)].name + "'",
                        tracker->mesh(i));
   }
-  status = PrepareOutputDir(args.out, args.force);
+  status = PrepareOutputDir(args.out, args.force, {"frames"});
   if (status.ok()) status = PrepareOutputDir((fs::path(args.out) / "frames").string(), true);
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";
@@ -545,14 +545,14 @@ void AddRegisterCommand(CLI::App* app) {
                   "Take each object's material from this scene (matched by object name), e.g. "
                   "the scene.yaml `femreg calibrate` wrote: track with the identified material")
       ->check(CLI::ExistingFile);
-  cmd->add_flag("--force", args->force, "Write into a non-empty output folder");
+  cmd->add_flag("--force", args->force, "Write into a non-empty output folder (its frames/ folder, a last run's, is removed first)");
   cmd->add_flag("--surface-ply", args->surface_ply,
                 "Also write each frame's embedded surfaces (objects[i].surface) as PLY beside their VTP");
   cmd->add_option("--max-frames", args->max_frames, "Register only the first N frames");
   cmd->add_option("--report", args->report, "Per-frame report: brief, full or none")
       ->check(CLI::IsMember({"brief", "full", "none"}));
   cmd->add_option("--threads", args->threads, "Solver threads (overrides the scene)");
-  cmd->add_flag("!--no-progress", args->progress, "No progress bar (print a line per frame)");
+  cmd->add_flag_callback("--no-progress", [args] { args->progress = false; }, "No progress bar (print a line per frame)");
   cmd->add_option("--depth-scale", args->depth_scale,
                   "Metres per unit of 16-bit depth frames (.png, uint16 .npy; default 0.001: "
                   "millimetres, the common sensor convention; a TUM RGB-D sequence's 0.0002); "
@@ -567,7 +567,7 @@ void AddRegisterCommand(CLI::App* app) {
                   "scene frame is the camera's)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--mask-dir", args->mask_dir,
-                  "A folder of segmentation masks for depth PNG frames, DIR/<frame name>.png: 8- or "
+                  "A folder of segmentation masks for depth frames (.png, .npy), DIR/<frame name>.png: 8- or "
                   "16-bit PNGs of the depth image's size, nonzero = the object (overrides the "
                   "scene's registration.preprocess.mask_dir); a frame without its mask is an error");
   cmd->add_flag("--skip-bad-frames", args->skip_bad_frames,

@@ -37,13 +37,31 @@ int RunSynth(const std::string& scene_path, const std::string& out, int frames, 
     std::string why;
     if (!scene.synth.sensor.IsValid(&why)) status = Status::Error("--artefact: " + why);
   }
-  if (status.ok()) status = PrepareOutputDir(out, force);
+  if (status.ok()) status = PrepareOutputDir(out, force, {"clouds", "ground_truth", "truth", "depth"});
   if (!status.ok()) {
     std::cerr << "femreg synth: " << status.message() << "\n";
     return 1;
   }
   WarnFoldedSceneMeshes("synth", scene);
   const int total = frames > 0 ? frames : scene.synth.frames;
+  // A keyframe past the last frame: the motion is cut where the sequence ends.
+  auto warn_past_end = [&](const std::string& what, const std::vector<MotionKeyframe>& keyframes) {
+    if (!keyframes.empty() && keyframes.back().frame > scene.synth.frames - 1) {
+      std::cerr << "femreg synth: warning: " << what << "'s last keyframe is at frame " << keyframes.back().frame
+                << ", past the last frame (" << scene.synth.frames - 1 << ", synth.frames: " << scene.synth.frames
+                << "): the motion after it is not made\n";
+    }
+  };
+  for (size_t i = 0; i < scene.synth.motion.size(); ++i) {
+    const MotionTrackSpec& track = scene.synth.motion[i];
+    warn_past_end("synth.motion[" + std::to_string(i) + "]" + (track.name.empty() ? "" : " (" + track.name + ")"),
+                  track.keyframes);
+  }
+  for (size_t i = 0; i < scene.synth.bodies.size(); ++i) {
+    const SynthBodySpec& body = scene.synth.bodies[i];
+    warn_past_end("synth.bodies[" + std::to_string(i) + "]" + (body.name.empty() ? "" : " (" + body.name + ")"),
+                  body.keyframes);
+  }
   g_bar = std::make_unique<ProgressBar>("synth", total, progress);
   SynthReport report;
   status = GenerateSynthSequence(scene, out, frames, &report, &Progress);
@@ -102,8 +120,8 @@ void AddSynthCommand(CLI::App* app) {
                   "Make only the first N frames (default: synth.frames); the motion script's "
                   "timeline stays the same")
       ->check(CLI::Range(1, 100000));
-  cmd->add_flag("--force", *force, "Write into a non-empty folder");
-  cmd->add_flag("!--no-progress", *progress, "No progress bar");
+  cmd->add_flag("--force", *force, "Write into a non-empty folder (the folders of frames it writes, a last run's, are removed first)");
+  cmd->add_flag_callback("--no-progress", [progress] { *progress = false; }, "No progress bar");
   cmd->add_flag("--depth-png", *depth_png,
                 "Also write OUT/depth/frame_NNNN.png: each cloud as the 16-bit depth image the "
                 "camera stores (millimetres unless --depth-scale)");
