@@ -30,6 +30,7 @@ struct SynthReport {
   int truth_vertices = 0, truth_tets = 0;
   int min_points = 0, max_points = 0;  // cloud sizes
   double mean_seen_fraction = 0.0;     // tracked vertices the camera saw, mean over frames
+  std::string note;                    // a choice made for the user (the truth's element), or empty
 };
 
 // femreg synth: simulates the scene's synth section (scene.synth.enabled) frame by frame

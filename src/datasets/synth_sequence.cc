@@ -227,6 +227,19 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   ElasticModel model;
   ObjectMaterial truth_material = truth_object.Materials();
   truth_material.material = s.material;
+  // As simulate (ChooseForwardElements): a nearly incompressible truth on linear tetrahedra
+  // locks, and would come out stiffer than its material; without an element chosen, the
+  // neo-Hookean one with the nodal volume.
+  std::string truth_element = std::string(ToString(scene.forward.Model())) + " FEM", truth_note;
+  if (!scene.forward.model && !truth_object.ElementChosen() && s.material.poisson_ratio >= kNearlyIncompressibleNu) {
+    truth_material.model = MaterialModel::kNeoHookean;
+    truth_material.nodal_volume = true;
+    truth_element = "neo-Hookean FEM (nodal volume)";
+    truth_note = "ground truth: nu " + std::to_string(s.material.poisson_ratio).substr(0, 5) + " >= " +
+                   std::to_string(kNearlyIncompressibleNu).substr(0, 4) +
+                   " (nearly incompressible), where linear tetrahedra lock: simulated with the neo-Hookean "
+                   "element with nodal volume; write the object's material.model: hooke to keep the linear element";
+  }
   model.Build(fine, scene.forward.Model(), truth_material);
 
   // Static boundary conditions and loads of the scene, on the ground truth mesh.
@@ -323,6 +336,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   if (!status.ok()) return status;
 
   SynthReport r;
+  r.note = truth_note;
   r.frames = num_frames;
   r.tracked_vertices = coarse.num_vertices();
   r.tracked_tets = coarse.num_tets();
@@ -465,7 +479,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
      << "% of the vertices).\n"
      << "- `truth/frame_NNNN.vtu`: the ground truth mesh's surface per frame (for "
      << "`femreg eval`).\n\n"
-     << "The ground truth is a quasi-static " << ToString(scene.forward.Model()) << " FEM "
+     << "The ground truth is a quasi-static " << truth_element << " "
      << "simulation on ";
   if (s.sanity_check) {
     md << "the tracked mesh itself";

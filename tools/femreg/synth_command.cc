@@ -71,6 +71,7 @@ int RunSynth(const std::string& scene_path, const std::string& out, int frames, 
     std::cerr << "femreg synth: " << status.message() << "\n";
     return 1;
   }
+  if (!report.note.empty()) std::cout << "femreg synth: " << report.note << "\n";
   std::cout << "Wrote " << report.frames << " frames to " << out << ": tracked mesh "
             << report.tracked_vertices << " vertices, ground truth mesh " << report.truth_vertices
             << " vertices" << (scene.synth.sanity_check ? " (SANITY CHECK: the same mesh and material)" : "")
