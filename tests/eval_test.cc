@@ -368,6 +368,10 @@ TEST(EvalCliTest, ZeroErrorOnTheGroundTruthAndExactlyAnOffset) {
   const std::vector<double> inner = Totals(inner_csv);
   ASSERT_EQ(inner.size(), t.size());
   for (size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(inner[i], t[i], 1e-9) << "column " << i;
+  // ... written with a trailing slash too.
+  ASSERT_EQ(std::system((cli + " eval " + dir.path() + "/offset/result " + dir.path() +
+                         "/offset/truth/ground_truth/ --csv " + inner_csv + " > /dev/null").c_str()),
+            0);
 
   // A ground truth folder with too few frames fails with a message.
   fs::remove(dir.path() + "/offset/truth/ground_truth/frame_0000.csv");

@@ -207,6 +207,14 @@ TEST(FrameLayouts, ForceRemovesTheLastRunsFrames) {
   EXPECT_EQ(vtus(), 1);
   EXPECT_TRUE(fs::is_regular_file(out + "/notes.txt"));  // only the frames/ folder goes
   EXPECT_EQ(StatsColumn(out, "err_mean_mm").size(), 1u);
+  // Not when an input lies in it: the recording in OUT/frames stays, and the run is refused.
+  const std::string rec = tmp.File("rec");
+  fs::create_directories(rec + "/frames");
+  fs::copy_file(Demo() + "/clouds/frame_0000.pcd", rec + "/frames/frame_0000.pcd");
+  run = Femreg(RegisterArgs(rec + "/frames", rec));
+  EXPECT_NE(run.code, 0) << run.out;
+  EXPECT_NE(run.out.find("holds the input"), std::string::npos) << run.out;
+  EXPECT_TRUE(fs::is_regular_file(rec + "/frames/frame_0000.pcd"));
 }
 
 }  // namespace femreg

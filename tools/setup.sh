@@ -47,6 +47,7 @@ SUDO=""
 have_root() {
   if [ "$(id -u)" = 0 ]; then return 0; fi
   command -v sudo >/dev/null || return 1
+  sudo -n true 2>/dev/null || return 1  # sudo that would ask for a password is no sudo here
   SUDO=sudo
 }
 

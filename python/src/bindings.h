@@ -107,7 +107,8 @@ template <typename Class>
 void RefuseUnknownAttributes(Class& cls) {
   cls.def("__setattr__", [](const py::object& self, const std::string& name, const py::object& value) {
     const py::object type = py::type::of(self);
-    if (!py::hasattr(type, name.c_str())) {
+    // A Python subclass's instances have a __dict__ of their own: their attributes are theirs.
+    if (!py::hasattr(type, name.c_str()) && !py::hasattr(self, "__dict__")) {
       const py::object property = py::module_::import("builtins").attr("property");
       std::string names;
       for (const auto& item : py::module_::import("builtins").attr("dir")(type)) {

@@ -230,17 +230,22 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   // As simulate (ChooseForwardElements): a nearly incompressible truth on linear tetrahedra
   // locks, and would come out stiffer than its material; without an element chosen, the
   // neo-Hookean one with the nodal volume.
-  std::string truth_element = std::string(ToString(scene.forward.Model())) + " FEM", truth_note;
-  if (!scene.forward.model && !truth_object.ElementChosen() && s.material.poisson_ratio >= kNearlyIncompressibleNu) {
+  std::string truth_note;
+  double truth_nu = s.material.poisson_ratio;
+  for (const auto& r : truth_material.regions) truth_nu = std::max(truth_nu, r.second.poisson_ratio);
+  if (!scene.forward.model && !truth_object.ElementChosen() && truth_nu >= kNearlyIncompressibleNu) {
     truth_material.model = MaterialModel::kNeoHookean;
     truth_material.nodal_volume = true;
-    truth_element = "neo-Hookean FEM (nodal volume)";
-    truth_note = "ground truth: nu " + std::to_string(s.material.poisson_ratio).substr(0, 5) + " >= " +
+    truth_note = "ground truth: nu " + std::to_string(truth_nu).substr(0, 5) + " >= " +
                    std::to_string(kNearlyIncompressibleNu).substr(0, 4) +
                    " (nearly incompressible), where linear tetrahedra lock: simulated with the neo-Hookean "
                    "element with nodal volume; write the object's material.model: hooke to keep the linear element";
   }
   model.Build(fine, scene.forward.Model(), truth_material);
+  const std::string truth_element =
+      truth_material.model == MaterialModel::kNeoHookean
+          ? std::string("neo-Hookean FEM") + (truth_material.nodal_volume ? " (nodal volume)" : "")
+          : std::string(ToString(scene.forward.Model())) + " FEM";
 
   // Static boundary conditions and loads of the scene, on the ground truth mesh.
   ForwardProblem base;

@@ -20,7 +20,8 @@ Status YamlErrorStatus(const std::string& source, const YAML::Exception& e) {
   os << ": " << e.msg;
   // yaml-cpp's parser messages name the grammar, not the mistake, which is most often the
   // indentation: a key indented unlike its siblings, a list item's '-' out of line.
-  if (dynamic_cast<const YAML::ParserException*>(&e) != nullptr) {
+  if (dynamic_cast<const YAML::ParserException*>(&e) != nullptr && e.msg.find("flow") == std::string::npos &&
+      e.msg.find("quote") == std::string::npos) {
     os << " (YAML nests by indentation: check that this line and the one before it are indented "
           "like their siblings, with spaces, not tabs)";
   }

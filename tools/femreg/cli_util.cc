@@ -53,12 +53,29 @@ std::string CapForMessage(const std::string& text, size_t max_chars) {
   return text.substr(0, max_chars) + "... (" + std::to_string(text.size()) + " bytes)";
 }
 
-Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& owned) {
+Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& owned,
+                        const std::vector<std::string>& inputs) {
   std::error_code ec;
   if (fs::exists(dir, ec)) {
     if (!fs::is_directory(dir, ec)) return Status::Error(dir + ": exists and is not a folder");
     if (!fs::is_empty(dir, ec) && !force) {
       return Status::Error(dir + ": folder is not empty; pass --force to write into it anyway");
+    }
+    auto inside = [](const fs::path& path, const fs::path& folder) {
+      std::error_code e;
+      const fs::path p = fs::weakly_canonical(path, e), f = fs::weakly_canonical(folder, e);
+      const auto mismatch = std::mismatch(f.begin(), f.end(), p.begin(), p.end());
+      return mismatch.first == f.end();
+    };
+    for (const std::string& name : owned) {
+      const fs::path sub = fs::path(dir) / name;
+      if (!fs::is_directory(sub, ec)) continue;
+      for (const std::string& input : inputs) {
+        if (!input.empty() && inside(input, sub)) {
+          return Status::Error(sub.string() + ": --force would remove this folder, which holds the input " + input +
+                               ": write the results elsewhere (--out)");
+        }
+      }
     }
     for (const std::string& name : owned) {
       const fs::path sub = fs::path(dir) / name;

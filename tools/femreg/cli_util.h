@@ -27,8 +27,11 @@ std::string CapForMessage(const std::string& text, size_t max_chars = 80);
 
 // Makes `dir` (and parents). A non-empty existing folder is refused unless `force`; with
 // `force`, its subfolders named in `owned` (those only the command writes, e.g. register's
-// frames/) are removed first, so that a shorter run leaves none of a longer one's frames.
-Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& owned = {});
+// frames/) are removed first, so that a shorter run leaves none of a longer one's frames,
+// unless one of the command's `inputs` lies in one of them: then nothing is removed and the
+// run is refused.
+Status PrepareOutputDir(const std::string& dir, bool force, const std::vector<std::string>& owned = {},
+                        const std::vector<std::string>& inputs = {});
 
 // A one-line progress bar on stderr when it is a terminal; a line every 10% otherwise.
 class ProgressBar {

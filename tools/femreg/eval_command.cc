@@ -237,7 +237,8 @@ int RunEval(const std::string& result, const std::string& dataset, std::string c
   // The dataset's folder; its ground_truth/ folder itself (what `register --ground-truth`
   // takes) stands for it.
   std::string truth_dir = dataset;
-  const fs::path given = fs::path(dataset).lexically_normal();
+  fs::path given = fs::path(dataset).lexically_normal();
+  if (!given.has_filename()) given = given.parent_path();  // a trailing slash
   if (!fs::is_directory(given / "ground_truth") && given.filename() == "ground_truth") {
     truth_dir = given.parent_path().empty() ? std::string(".") : given.parent_path().string();
   }

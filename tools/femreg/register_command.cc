@@ -194,7 +194,8 @@ int RunRegister(const RegisterArgs& args) {
     WarnFoldedElements("register", "object '" + scene.objects[static_cast<size_t>(i)].name + "'",
                        tracker->mesh(i));
   }
-  status = PrepareOutputDir(args.out, args.force, {"frames"});
+  status = PrepareOutputDir(args.out, args.force, {"frames"},
+                            {args.scene, args.frames, args.ground_truth, mask_dir, args.material, args.intrinsics});
   if (status.ok()) status = PrepareOutputDir((fs::path(args.out) / "frames").string(), true);
   if (!status.ok()) {
     std::cerr << "femreg register: " << status.message() << "\n";

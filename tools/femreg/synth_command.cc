@@ -37,7 +37,14 @@ int RunSynth(const std::string& scene_path, const std::string& out, int frames, 
     std::string why;
     if (!scene.synth.sensor.IsValid(&why)) status = Status::Error("--artefact: " + why);
   }
-  if (status.ok()) status = PrepareOutputDir(out, force, {"clouds", "ground_truth", "truth", "depth"});
+  if (status.ok()) {
+    std::vector<std::string> owned = {"clouds", "ground_truth", "truth"};
+    if (depth_scale > 0) owned.push_back("depth");  // kept unless this run writes it (datasets/demo's)
+    std::vector<std::string> inputs = {scene_path};
+    for (const ObjectSpec& o : scene.objects) inputs.push_back(o.mesh_path);
+    inputs.push_back(scene.synth.mesh_path);
+    status = PrepareOutputDir(out, force, owned, inputs);
+  }
   if (!status.ok()) {
     std::cerr << "femreg synth: " << status.message() << "\n";
     return 1;
