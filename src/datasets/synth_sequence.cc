@@ -224,23 +224,12 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   }
   status = LoadObjectMesh(truth_scene, 0, &fine);
   if (!status.ok()) return Status::Error(s.ground_truth_where + ": " + status.message());
+  // As simulate: a nearly incompressible truth (no element chosen) gets the neo-Hookean
+  // element with the nodal volume, since linear tetrahedra lock and come out too stiff.
+  const std::vector<std::string> chosen = ChooseForwardElements(&truth_scene);
+  const std::string truth_note = chosen.empty() ? std::string() : "ground truth: " + chosen.front();
   ElasticModel model;
-  ObjectMaterial truth_material = truth_object.Materials();
-  truth_material.material = s.material;
-  // As simulate (ChooseForwardElements): a nearly incompressible truth on linear tetrahedra
-  // locks, and would come out stiffer than its material; without an element chosen, the
-  // neo-Hookean one with the nodal volume.
-  std::string truth_note;
-  double truth_nu = s.material.poisson_ratio;
-  for (const auto& r : truth_material.regions) truth_nu = std::max(truth_nu, r.second.poisson_ratio);
-  if (!scene.forward.model && !truth_object.ElementChosen() && truth_nu >= kNearlyIncompressibleNu) {
-    truth_material.model = MaterialModel::kNeoHookean;
-    truth_material.nodal_volume = true;
-    truth_note = "ground truth: nu " + std::to_string(truth_nu).substr(0, 5) + " >= " +
-                   std::to_string(kNearlyIncompressibleNu).substr(0, 4) +
-                   " (nearly incompressible), where linear tetrahedra lock: simulated with the neo-Hookean "
-                   "element with nodal volume; write the object's material.model: hooke to keep the linear element";
-  }
+  const ObjectMaterial truth_material = truth_object.Materials();
   model.Build(fine, scene.forward.Model(), truth_material);
   const std::string truth_element =
       truth_material.model == MaterialModel::kNeoHookean

@@ -6,12 +6,12 @@
 #include <string>
 
 #include "femreg/camera_io.h"
+#include "io/io_internal.h"
 
 namespace femreg {
 
 Status ReadDepthImageFile(const std::string& path, RawDepthImage* image) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = internal::LowercaseExtension(path);
   if (ext == ".npy") return ReadDepthNpy(path, image);
   if (ext == ".png") return ReadDepthPng(path, image);
   return Status::Error(path + ": not a depth image file (a depth image is a .png or a .npy)");

@@ -2,7 +2,10 @@
 #ifndef FEMREG_IO_IO_INTERNAL_H_
 #define FEMREG_IO_IO_INTERNAL_H_
 
+#include <algorithm>
 #include <array>
+#include <cctype>
+#include <filesystem>
 #include <ios>
 #include <string>
 #include <vector>
@@ -13,6 +16,13 @@
 namespace femreg {
 
 namespace internal {
+
+// A path's extension in lower case (".PCD" -> ".pcd"), the dot included; "" without one.
+inline std::string LowercaseExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
 
 // A scalar type of a binary file (VTK legacy BINARY, PCD binary, PLY binary): its size in
 // bytes (1, 2, 4 or 8; 0: a type that cannot be read), float or integer, signed or not.

@@ -13,15 +13,12 @@
 #include "femreg/camera_io.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
+#include "io/io_internal.h"
 
 namespace femreg {
 namespace {
 
-std::string Extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  return ext;
-}
+std::string Extension(const std::string& path) { return internal::LowercaseExtension(path); }
 
 }  // namespace
 

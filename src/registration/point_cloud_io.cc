@@ -13,8 +13,6 @@
 #include <pcl/sample_consensus/model_types.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
-#include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -145,9 +143,7 @@ Status ReadPointCloudUnchecked(const std::string& path, PointCloud* cloud, int* 
   // A PCD or PLY file always has a header: with no byte at all it was cut off or never
   // written (a text cloud with no line is a cloud without points).
   std::error_code ec;
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = internal::LowercaseExtension(path);
   if ((extension == ".pcd" || extension == ".ply") && std::filesystem::is_regular_file(path, ec) &&
       std::filesystem::file_size(path, ec) == 0 && !ec) {
     return Status::Error(path + ": the file is empty (0 bytes): a " + extension.substr(1) +
@@ -192,10 +188,7 @@ Status ReadPointCloud(const std::string& path, PointCloud* cloud, int* nonfinite
 
 Status WritePointCloud(const std::string& path, const PointCloud& cloud) {
   // Written as binary PCD only: a file named otherwise would hold what its name does not say.
-  std::string extension = std::filesystem::path(path).extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension != ".pcd") {
+  if (internal::LowercaseExtension(path) != ".pcd") {
     return Status::Error(path + ": point clouds are written as PCD (binary); name the file .pcd");
   }
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
