@@ -466,6 +466,19 @@ TEST(EvalCliTest, ForceErrorsWhenTheDatasetHasForcesAndTheResultEstimates) {
   EXPECT_EQ(rows[5][at], "");
   EXPECT_NEAR(cell(5, 1), 0.1, 1e-6);   // median of 0.1, 0.1, 0.8, 0.05
   EXPECT_NEAR(cell(5, 2), 10.0, 1e-3);  // median of 10, 5, 20
+  EXPECT_EQ(run.out.find("did not estimate"), std::string::npos) << run.out;  // no summary.json
+  // A run that did not estimate them says what its columns hold.
+  std::ofstream(result + "/summary.json") << "{\"forces\": {\"estimate\": false}, \"objects\": []}";
+  run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_NE(run.out.find("The run did not estimate the forces: these are its data term's pull"),
+            std::string::npos)
+      << run.out;
+  std::ofstream(result + "/summary.json") << "{\"forces\": {\"estimate\": true}, \"objects\": []}";
+  run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+  ASSERT_EQ(run.code, 0) << run.out;
+  EXPECT_EQ(run.out.find("did not estimate"), std::string::npos) << run.out;
+  fs::remove(result + "/summary.json");
 
   // A result without force columns, or a dataset without forces.csv: as before.
   std::ofstream(result + "/stats.csv")

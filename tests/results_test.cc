@@ -156,5 +156,32 @@ TEST(Results, ReadSummaryObjectNamesReadsWhatSummaryJsonWrites) {
   EXPECT_TRUE(names.empty());
 }
 
+// femreg eval says when a run's force columns are not an estimate: summary.json's
+// forces.estimate, as SummaryJson writes it; -1 when a summary does not say.
+TEST(Results, ReadSummaryForcesEstimatedReadsWhatSummaryJsonWrites) {
+  for (const bool estimate : {false, true}) {
+    Scene scene;
+    ASSERT_TRUE(ParseScene("objects:\n"
+                           "  - {name: top, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}}\n"
+                           "registration: {forces: {estimate: " + std::string(estimate ? "true" : "false") + "}}\n",
+                           "one.yaml", "", &scene)
+                    .ok());
+    std::unique_ptr<Tracker> tracker;
+    ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+    const testing_util::TempDir dir("femreg_results");
+    const std::string path = dir.path() + "/summary.json";
+    WriteText(path, SummaryJson(RunInputs(), scene, *tracker, {}));
+    int estimated = -2;
+    ASSERT_TRUE(ReadSummaryForcesEstimated(path, &estimated).ok());
+    EXPECT_EQ(estimated, estimate ? 1 : 0);
+    WriteText(path, "{\"objects\": []}");
+    ASSERT_TRUE(ReadSummaryForcesEstimated(path, &estimated).ok());
+    EXPECT_EQ(estimated, -1);
+    WriteText(path, "{\"forces\": ");
+    const Status status = ReadSummaryForcesEstimated(path, &estimated);
+    EXPECT_EQ(status.message(), path + ": not JSON (not a summary.json written by femreg register)");
+  }
+}
+
 }  // namespace
 }  // namespace femreg

@@ -289,6 +289,74 @@ TEST(SynthSequenceTest, SanityCheckIsLabelledAndThePressMovesThePatch) {
   EXPECT_LT(truth.positions(0, 2), 1e-9);  // clamped bottom stays
 }
 
+// forces.csv holds every external force but gravity and what the tracking scene's anchors
+// hold. A block clamped at its bottom and pressed by a tool (no gravity): with the clamp
+// anchored (by a box, or by the tracked vertices' indices on a refined truth) the truth is
+// the tool's push, down; with nothing anchored it is the tool and the clamp together, which
+// balance to zero.
+TEST(SynthSequenceTest, ForcesAreWhatTheAnchorsDoNotHold) {
+  const std::string base =
+      "objects:\n"
+      "  - name: block\n"
+      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
+      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
+      "boundary:\n"
+      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
+      "registration:\n"
+      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
+      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
+      "synth:\n"
+      "  frames: 2\n"
+      "  ground_truth: {refinement: 2}\n"
+      "  bodies:\n"
+      "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
+      "       keyframes: [{frame: 0}, {frame: 1, translation: [0, 0, -0.014]}]}\n";
+  std::string bottom_indices;
+  const TetMesh tracked = MakeBox(Eigen::Vector3d(0.04, 0.04, 0.02), 4, 4, 2);
+  for (int v = 0; v < tracked.num_vertices(); ++v) {
+    if (tracked.rest(v, 2) < 1e-4) bottom_indices += (bottom_indices.empty() ? "" : ", ") + std::to_string(v);
+  }
+  struct Case {
+    const char* name;
+    std::string anchors;
+    bool pressed;
+  };
+  const Case cases[] = {
+      {"box anchor", "anchors:\n  - {name: table, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, hard: true}\n", true},
+      {"index anchor", "anchors:\n  - {name: table, select: {indices: [" + bottom_indices + "]}, hard: true}\n", true},
+      {"no anchor", "", false},
+  };
+  std::vector<double> pushes;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Scene scene;
+    const Status parsed = ParseScene(base + c.anchors, "press.yaml", "", &scene);
+    ASSERT_TRUE(parsed.ok()) << parsed.message();
+    TempDir dir;
+    SynthReport report;
+    const Status status = GenerateSynthSequence(scene, dir.path(), 0, &report);
+    ASSERT_TRUE(status.ok()) << status.message();
+    EXPECT_GT(report.truth_vertices, report.tracked_vertices);
+    std::vector<ForceFrame> forces;
+    bool has_columns = false;
+    ASSERT_TRUE(ReadForces(dir.path() + "/forces.csv", &forces, &has_columns).ok());
+    ASSERT_TRUE(has_columns);
+    ASSERT_EQ(forces.size(), 2u);
+    EXPECT_LT(forces[0].force.norm(), 1e-9);  // the tool above the block
+    if (c.pressed) {
+      // 14 mm into 2 cm of a 1e4 Pa block under a 2 x 2 cm tool: about E A d / h = 2.8 N.
+      EXPECT_LT(forces[1].force.z(), -0.5);
+      EXPECT_LT(forces[1].force.head<2>().norm(), 0.05 * std::abs(forces[1].force.z()));
+      pushes.push_back(forces[1].force.z());
+    } else {
+      EXPECT_LT(forces[1].force.norm(), 1e-6);
+      EXPECT_LT(forces[1].torque.norm(), 1e-6);
+    }
+  }
+  ASSERT_EQ(pushes.size(), 2u);
+  EXPECT_NEAR(pushes[0], pushes[1], 1e-9 * std::abs(pushes[0]));  // the same vertices held
+}
+
 // Each bundled dataset regenerates from its seed: its first two frames and its scene.yaml,
 // within tolerances that say what can vary from one CPU or BLAS build to another:
 //

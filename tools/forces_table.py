@@ -4,7 +4,7 @@
 
     python3 tools/forces_table.py OUT_DIR [--modes]
 
-Forces table, per dataset with a true force and mode (OUT_DIR/NAME_classic, NAME_physical and,
+Forces table, per dataset with a true force that is not zero on every frame, and mode (OUT_DIR/NAME_classic, NAME_physical and,
 where forces.sh ran it, NAME_pushing): the mean vertex error of the seen and
 hidden vertices (summary.json), the median over the frames of the resultant-force error in
 newtons and in percent of the true force (the totals row of `femreg eval`'s eval.csv), the
@@ -19,7 +19,9 @@ import json
 import os
 import sys
 
-DATASETS = ("organ_patch", "hand_press", "tool_table")
+# The sequences made for the force estimate first, then the other sequences whose true force
+# is not zero on every frame (femreg synth's: a pressing tool, a track without an anchor).
+FIRST = ("organ_patch", "hand_press", "tool_table")
 MODES = (("classic", "classic"), ("physical", "forces estimated"),
          ("pushing", "forces estimated, pushing only, friction as made"))
 
@@ -75,7 +77,18 @@ def main():
     print("<!-- written by tools/forces.sh; do not edit by hand -->")
     print("| dataset | mode | seen / hidden mean error (mm) | force error, median (N) | the same, % of the true force | ms per frame (median, 1 thread) | frames converged |")
     print("|---|---|---|---:|---:|---:|---:|")
-    for name in DATASETS:
+    def has_force(name):
+        path = os.path.join(out, f"{name}_physical", "eval.csv")
+        if not os.path.exists(path):
+            return False
+        with open(path) as f:
+            total = [r for r in csv.DictReader(f) if r["frame"] == "total"]
+        return bool(total) and total[0].get("force_error_pct", "") != ""
+
+    runs = sorted({d.rsplit("_", 1)[0] for d in os.listdir(out)
+                   if d.endswith("_physical") and os.path.isdir(os.path.join(out, d))})
+    names = [n for n in FIRST if n in runs] + [n for n in runs if n not in FIRST and has_force(n)]
+    for name in names:
         for mode, label in MODES:
             if not os.path.isdir(os.path.join(out, f"{name}_{mode}")):
                 continue

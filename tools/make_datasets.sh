@@ -48,7 +48,7 @@ for name in "${names[@]}"; do
   esac
   [[ -f $dir/synth.yaml ]] || { echo "make_datasets: $dir/synth.yaml not found" >&2; exit 1; }
   # Only the generated parts are replaced; synth.yaml stays.
-  rm -rf "$dir/clouds" "$dir/ground_truth" "$dir/truth" "$dir/scene.yaml" "$dir/README.md"
+  rm -rf "$dir/clouds" "$dir/ground_truth" "$dir/truth" "$dir/scene.yaml" "$dir/README.md" "$dir/forces.csv"
   echo "== $name"
   "$FEMREG" synth "$dir/synth.yaml" --out "$dir" --force --no-progress
 done

@@ -91,6 +91,11 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
 // read, is not JSON, or has no "objects" list of objects with a "name".
 Status ReadSummaryObjectNames(const std::string& path, std::vector<std::string>* names);
 
+// Whether the run behind a summary.json estimated the external forces
+// (registration.forces.estimate): 1 or 0, -1 when the summary does not say (an older one).
+// An error names the file: it cannot be read or is not JSON.
+Status ReadSummaryForcesEstimated(const std::string& path, int* estimated);
+
 }  // namespace femreg
 
 #endif  // FEMREG_RESULTS_H_

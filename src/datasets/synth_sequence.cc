@@ -124,6 +124,41 @@ std::string Fixed(double v, int digits = 3) {
   return buf;
 }
 
+// Marks the ground truth vertices that the tracking scene's anchors hold. A box, a plane or
+// "all" is evaluated on the truth mesh's rest positions; an index list names tracked
+// vertices, so a truth vertex counts when its nearest tracked vertex at rest is listed (the
+// very vertex when the truth mesh is the tracked one).
+Status MarkAnchoredTruthVertices(const std::vector<AnchorSpec>& anchors, const TetMesh& tracked,
+                                 const TetMesh& truth, std::vector<char>* known) {
+  const bool same_mesh = tracked.num_vertices() == truth.num_vertices() && tracked.rest == truth.rest;
+  std::vector<int> nearest;  // truth vertex -> nearest tracked vertex, built on first need
+  for (const AnchorSpec& anchor : anchors) {
+    std::vector<int> vertices;
+    if (anchor.selection.kind != VertexSelection::Kind::kIndices || same_mesh) {
+      const Status status = SelectVertices(anchor.selection, truth.rest, &vertices);
+      if (!status.ok()) return Status::Error(status.message() + " (on the ground truth mesh, for anchor '" + anchor.name + "')");
+      for (int v : vertices) (*known)[static_cast<size_t>(v)] = 1;
+      continue;
+    }
+    const Status status = SelectVertices(anchor.selection, tracked.rest, &vertices);
+    if (!status.ok()) return status;
+    std::vector<char> listed(static_cast<size_t>(tracked.num_vertices()), 0);
+    for (int v : vertices) listed[static_cast<size_t>(v)] = 1;
+    if (nearest.empty()) {
+      nearest.resize(static_cast<size_t>(truth.num_vertices()));
+      for (int v = 0; v < truth.num_vertices(); ++v) {
+        Eigen::Index closest = 0;
+        (tracked.rest.rowwise() - truth.rest.row(v)).rowwise().squaredNorm().minCoeff(&closest);
+        nearest[static_cast<size_t>(v)] = static_cast<int>(closest);
+      }
+    }
+    for (int v = 0; v < truth.num_vertices(); ++v) {
+      if (listed[static_cast<size_t>(nearest[static_cast<size_t>(v)])]) (*known)[static_cast<size_t>(v)] = 1;
+    }
+  }
+  return Status::Ok();
+}
+
 struct Track {
   const MotionTrackSpec* spec;
   std::vector<int> vertices;
@@ -273,6 +308,15 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     tracks.push_back(track);
   }
 
+  // forces.csv's truth is every external force but gravity and what the tracking scene's
+  // anchors hold (the robot knows those): pressing bodies, tracks without an anchor, the
+  // boundary and loads (which the tracking scene leaves out) and obstacle contacts.
+  const Scene tracking_scene = SynthTrackingScene(scene, dir);
+  std::vector<char> known(static_cast<size_t>(fine.num_vertices()), 0);
+  status = MarkAnchoredTruthVertices(tracking_scene.anchors, coarse, fine, &known);
+  if (!status.ok()) return status;
+  std::vector<ForceFrame> true_forces;
+
   const EmbeddedPoints embedded = EmbedPoints(fine, coarse.rest);
   // The tracked object's embedded surface (objects[0].surface), if any: its vertices' ground
   // truth is where the truth mesh carries them (extrapolated like the tracker's, not clamped:
@@ -326,7 +370,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
       "camera, the registration settings and the anchors the robot knows about. Run\n"
       "  femreg register --scene scene.yaml --frames clouds --ground-truth ground_truth --out OUT";
   if (s.sanity_check) comment += "\nSANITY CHECK: the data were made with this very mesh and material.";
-  status = WriteScene(SynthTrackingScene(scene, dir), (fs::path(dir) / "scene.yaml").string(), comment);
+  status = WriteScene(tracking_scene, (fs::path(dir) / "scene.yaml").string(), comment);
   if (!status.ok()) return status;
 
   SynthReport r;
@@ -383,6 +427,27 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
       return Status::Error(scene.path + ": frame " + std::to_string(f) +
                            ": the forward solve failed: " + summary.message);
     }
+
+    ForwardForces forces;
+    status = EvaluateForwardForces(problem, forward, model, fine, fine.x, &forces);
+    if (!status.ok()) return Status::Error(scene.path + ": frame " + std::to_string(f) + ": " + status.message());
+    Vertices external = forces.potential + forces.loads - fine.mass * problem.gravity.transpose();
+    for (int v = 0; v < fine.num_vertices(); ++v) {
+      if (!known[static_cast<size_t>(v)]) external.row(v) += forces.reactions.row(v);
+    }
+    ForceResultant resultant = ResultantAboutCentroid(external, fine.x, fine.mass);
+    // What is left of forces that balance (a rigidly carried body) is the solve's unbalanced
+    // residual, not a force: below what its tolerance leaves (summed over the vertices) or a
+    // millionth of the forces that act, it is written as zero.
+    double acting = (fine.mass.sum() * problem.gravity).norm();
+    for (int v = 0; v < fine.num_vertices(); ++v) acting += forces.reactions.row(v).norm();
+    const double floor =
+        std::max(1e-6 * acting, std::sqrt(static_cast<double>(fine.num_vertices())) *
+                                    std::max(forward.absolute_tolerance, forward.relative_tolerance * acting));
+    const double size = (fine.x.colwise().maxCoeff() - fine.x.colwise().minCoeff()).norm();
+    if (resultant.force.norm() < floor) resultant.force.setZero();
+    if (resultant.torque.norm() < floor * size) resultant.torque.setZero();
+    true_forces.push_back({f, resultant.force, resultant.torque});
 
     const bool left = f >= leave_start && f < leave_start + s.leave_frames;
     std::vector<RenderSurface> surfaces;
@@ -441,6 +506,9 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   }
   r.mean_seen_fraction = seen_sum / num_frames;
 
+  status = WriteForces((fs::path(dir) / "forces.csv").string(), true_forces);
+  if (!status.ok()) return status;
+
   const ObjectSpec& object = scene.objects[0];
   const CameraOptions& c = s.sensor.camera;
   std::ostringstream md;
@@ -472,7 +540,12 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
      << "and whether the camera saw it (on average " << Fixed(100 * r.mean_seen_fraction, 1)
      << "% of the vertices).\n"
      << "- `truth/frame_NNNN.vtu`: the ground truth mesh's surface per frame (for "
-     << "`femreg eval`).\n\n"
+     << "`femreg eval`).\n"
+     << "- `forces.csv`: per frame, the resultant of the external forces on the ground truth "
+     << "(N) and their torque about its centroid (N m): what presses, pulls or supports it, "
+     << "gravity and the reactions of the tracking scene's anchors left out (the estimate "
+     << "`femreg register` makes with `registration.forces.estimate`, compared by `femreg "
+     << "eval`).\n\n"
      << "The ground truth is a quasi-static " << truth_element << " "
      << "simulation on ";
   if (s.sanity_check) {

@@ -225,17 +225,30 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
   return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
 }
 
-Status ReadSummaryObjectNames(const std::string& path, std::vector<std::string>* names) {
-  names->clear();
+namespace {
+
+// A run's summary.json, parsed; an error names the file.
+Status ParseSummary(const std::string& path, nlohmann::json* summary) {
   // A long run's summary (a row of contact forces per frame) is megabytes, never gigabytes.
   constexpr std::streamoff kMaxSummaryBytes = std::streamoff(1) << 30;
   std::string text;
   if (Status read = internal::ReadSmallFile(path, kMaxSummaryBytes, "a run's summary.json", &text); !read.ok()) {
     return read;
   }
-  const nlohmann::json summary = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (summary.is_discarded()) return Status::Error(path + ": not JSON (not a summary.json written by femreg register)");
-  if (!summary.is_object() || !summary.contains("objects") || !summary["objects"].is_array()) {
+  *summary = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (summary->is_discarded() || !summary->is_object()) {
+    return Status::Error(path + ": not JSON (not a summary.json written by femreg register)");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ReadSummaryObjectNames(const std::string& path, std::vector<std::string>* names) {
+  names->clear();
+  nlohmann::json summary;
+  if (Status parsed = ParseSummary(path, &summary); !parsed.ok()) return parsed;
+  if (!summary.contains("objects") || !summary["objects"].is_array()) {
     return Status::Error(path + ": no \"objects\" list (not a summary.json written by femreg register)");
   }
   const nlohmann::json& objects = summary["objects"];
@@ -246,6 +259,17 @@ Status ReadSummaryObjectNames(const std::string& path, std::vector<std::string>*
       return Status::Error(path + ": objects[" + std::to_string(i) + "] has no \"name\"");
     }
     names->push_back(o["name"].get<std::string>());
+  }
+  return Status::Ok();
+}
+
+Status ReadSummaryForcesEstimated(const std::string& path, int* estimated) {
+  *estimated = -1;
+  nlohmann::json summary;
+  if (Status parsed = ParseSummary(path, &summary); !parsed.ok()) return parsed;
+  if (summary.contains("forces") && summary["forces"].is_object() && summary["forces"].contains("estimate") &&
+      summary["forces"]["estimate"].is_boolean()) {
+    *estimated = summary["forces"]["estimate"].get<bool>() ? 1 : 0;
   }
   return Status::Ok();
 }

@@ -140,6 +140,7 @@ struct ForceReport {
   std::vector<ForceError> errors;
   std::map<int, size_t> of_frame;  // frame -> its entry in errors
   std::string truth_path;
+  int estimated = -1;  // summary.json's forces.estimate: 1, 0, or -1 (not said)
 
   // eval.csv's force cells of frame f: empty when that frame has no estimate.
   std::string Cells(int f) const {
@@ -188,6 +189,10 @@ struct ForceReport {
       std::printf(" (%d more with a true force of 0: no relative error)", undefined);
     }
     std::printf(".\n");
+    if (estimated == 0) {
+      std::printf("The run did not estimate the forces: these are its data term's pull and its contacts' "
+                  "push (register with --set registration.forces.estimate=true for an estimate).\n");
+    }
   }
 };
 
@@ -217,6 +222,12 @@ Status CompareForceFiles(const std::string& result, const std::string& truth_dir
   status = ReadForces(stats_path.string(), &estimated, &has_columns);
   if (!status.ok()) return status;
   if (!has_columns) return Status::Ok();  // a result without force estimates
+  const fs::path summary = fs::path(result) / "summary.json";
+  std::error_code ec;
+  if (fs::exists(summary, ec)) {
+    const Status read = ReadSummaryForcesEstimated(summary.string(), &report->estimated);
+    if (!read.ok()) std::cerr << "femreg eval: warning: " << read.message() << "\n";
+  }
   const auto beyond = [&](const ForceFrame& f) { return f.frame >= static_cast<int>(num_frames); };
   truth.erase(std::remove_if(truth.begin(), truth.end(), beyond), truth.end());
   report->errors = CompareForces(estimated, truth);
