@@ -217,4 +217,44 @@ TEST(FrameLayouts, ForceRemovesTheLastRunsFrames) {
   EXPECT_TRUE(fs::is_regular_file(rec + "/frames/frame_0000.pcd"));
 }
 
+// The command line's contract: --help exits 0; an argument error (a missing file
+// included) exits 2 with the command's name and where to look; a keyframe past the end of
+// a synth sequence is said, not silently cut.
+TEST(FrameLayouts, HelpExitsZeroArgumentErrorsExitTwoNamingTheCommand) {
+  for (const char* command : {"", "register ", "synth ", "mesh ", "eval "}) {
+    const CliRun run = Femreg(std::string(command) + "--help");
+    EXPECT_EQ(run.code, 0) << command << run.out;
+    EXPECT_NE(run.out.find("Usage:"), std::string::npos) << run.out;
+  }
+  TempDir tmp;
+  CliRun run = Femreg("mesh " + tmp.File("missing.ply") + " --out " + tmp.File("m.vtu"));
+  EXPECT_EQ(run.code, 2) << run.out;
+  EXPECT_EQ(run.out.rfind("femreg mesh: ", 0), 0u) << run.out;
+  EXPECT_NE(run.out.find("Run 'femreg mesh --help'"), std::string::npos) << run.out;
+  run = Femreg("register --scene " + Demo() + "/scene.yaml --frames " + Demo() + "/clouds --no-such-flag");
+  EXPECT_EQ(run.code, 2) << run.out;
+  EXPECT_EQ(run.out.rfind("femreg register: ", 0), 0u) << run.out;
+
+  const std::string scene = tmp.File("late.yaml");
+  std::ofstream(scene) << "objects:\n"
+                          "  - name: block\n"
+                          "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}\n"
+                          "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
+                          "boundary:\n"
+                          "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
+                          "registration:\n"
+                          "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
+                          "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
+                          "synth:\n"
+                          "  frames: 2\n"
+                          "  sanity_check: true\n"
+                          "  bodies:\n"
+                          "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
+                          "       keyframes: [{frame: 0}, {frame: 5, translation: [0, 0, -0.014]}]}\n";
+  run = Femreg("synth " + scene + " --out " + tmp.File("late") + " --no-progress");
+  EXPECT_EQ(run.code, 0) << run.out;
+  EXPECT_NE(run.out.find("femreg synth: warning: synth.bodies[0] (tool)'s last keyframe is at frame 5"), std::string::npos)
+      << run.out;
+}
+
 }  // namespace femreg

@@ -357,6 +357,46 @@ TEST(SynthSequenceTest, ForcesAreWhatTheAnchorsDoNotHold) {
   EXPECT_NEAR(pushes[0], pushes[1], 1e-9 * std::abs(pushes[0]));  // the same vertices held
 }
 
+// A nearly incompressible ground truth (nu >= 0.45) with no element chosen is simulated with
+// the neo-Hookean nodal-volume element, as simulate does, and the report and README say so;
+// forward.model keeps the element the scene names.
+TEST(SynthSequenceTest, NearlyIncompressibleTruthGetsTheNodalElementUnlessOneIsChosen) {
+  const std::string base =
+      "objects:\n"
+      "  - name: block\n"
+      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
+      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
+      "boundary:\n"
+      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
+      "registration:\n"
+      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
+      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
+      "synth:\n"
+      "  frames: 2\n"
+      "  ground_truth: {material: {poisson_ratio: 0.49}}\n"
+      "  bodies:\n"
+      "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
+      "       keyframes: [{frame: 0}, {frame: 1, translation: [0, 0, -0.012]}]}\n";
+  for (const bool chosen : {false, true}) {
+    SCOPED_TRACE(chosen ? "forward.model: corotational" : "no element chosen");
+    Scene scene;
+    const Status parsed = ParseScene(base + (chosen ? "forward: {model: corotational}\n" : ""), "soft.yaml", "", &scene);
+    ASSERT_TRUE(parsed.ok()) << parsed.message();
+    TempDir dir;
+    SynthReport report;
+    const Status status = GenerateSynthSequence(scene, dir.path(), 0, &report);
+    ASSERT_TRUE(status.ok()) << status.message();
+    const std::string readme = ReadFile(dir.path() + "/README.md");
+    if (chosen) {
+      EXPECT_TRUE(report.note.empty()) << report.note;
+      EXPECT_NE(readme.find("quasi-static corotational FEM"), std::string::npos) << readme;
+    } else {
+      EXPECT_NE(report.note.find("neo-Hookean"), std::string::npos) << report.note;
+      EXPECT_NE(readme.find("neo-Hookean FEM (nodal volume)"), std::string::npos) << readme;
+    }
+  }
+}
+
 // Each bundled dataset regenerates from its seed: its first two frames and its scene.yaml,
 // within tolerances that say what can vary from one CPU or BLAS build to another:
 //

@@ -121,7 +121,8 @@ void AddSynthCommand(CLI::App* app) {
       "Make a synthetic sequence with ground truth from a scene's 'synth:' section: the motion "
       "script is simulated with quasi-static FEM on a ground truth mesh and rendered by a virtual "
       "depth camera. Writes OUT/scene.yaml (the tracking scene), OUT/clouds/*.pcd, "
-      "OUT/ground_truth/*.csv, OUT/truth/*.vtu and OUT/README.md.");
+      "OUT/ground_truth/*.csv, OUT/truth/*.vtu, OUT/forces.csv (the true external forces) and "
+      "OUT/README.md. One thread, so that every run writes the same bytes.");
   cmd->add_option("scene", *scene, "Scene file with a synth section (YAML)")->required();
   cmd->add_option("--out,-o", *out, "Output folder (refused if not empty, unless --force)")->required();
   cmd->add_option("--frames", *frames,
