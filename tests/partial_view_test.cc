@@ -480,5 +480,34 @@ TEST(OrganForces, ToolForceFromPartialViewsAndCloserWhenTheToolIsKnownFrictionle
   }
 }
 
+// The demo's unanchored track bends the beam: femreg synth's forces.csv holds its reaction.
+// The physical mode estimates it from the views; the classic registration's force columns
+// (its data term's pull) are far off (the measurements: docs/accuracy/forces.md).
+TEST(DemoForces, PhysicalModeEstimatesTheUnanchoredTracksForce) {
+  const std::string demo = std::string(FEMREG_DATASETS_DIR) + "/demo";
+  std::vector<ForceFrame> truth;
+  bool has_columns = false;
+  ASSERT_TRUE(ReadForces(demo + "/forces.csv", &truth, &has_columns).ok());
+  ASSERT_TRUE(has_columns);
+  testing_util::TempDir tmp;
+  double median[2] = {0, 0};
+  for (int physical = 0; physical < 2; ++physical) {
+    const std::string out = tmp.path() + (physical ? "/physical" : "/classic");
+    const CliRun r = Femreg("register --scene " + demo + "/scene.yaml --frames " + demo + "/clouds --ground-truth " +
+                            demo + "/ground_truth --out " + out + " --threads 1 --no-progress --report none" +
+                            (physical ? " --set registration.forces.estimate=true" : ""));
+    ASSERT_EQ(r.code, 0) << r.out;
+    std::vector<ForceFrame> estimated;
+    ASSERT_TRUE(ReadForces(out + "/stats.csv", &estimated, &has_columns).ok());
+    ASSERT_TRUE(has_columns);
+    ASSERT_EQ(estimated.size(), truth.size());
+    median[physical] = MedianForceErrors(CompareForces(estimated, truth)).relative;
+  }
+  std::printf("demo: median force error classic %.1f %%, forces estimated %.1f %%\n", 100 * median[0],
+              100 * median[1]);
+  EXPECT_LT(median[1], 0.30);
+  EXPECT_GT(median[0], median[1] + 0.2);
+}
+
 }  // namespace
 }  // namespace femreg
