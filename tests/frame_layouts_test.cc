@@ -19,6 +19,7 @@
 #include "femreg/scene.h"
 #include "femreg_test_config.h"
 #include "npy_bytes.h"
+#include "synth_samples.h"
 #include "test_util.h"
 
 namespace femreg {
@@ -236,21 +237,8 @@ TEST(FrameLayouts, HelpExitsZeroArgumentErrorsExitTwoNamingTheCommand) {
   EXPECT_EQ(run.out.rfind("femreg register: ", 0), 0u) << run.out;
 
   const std::string scene = tmp.File("late.yaml");
-  std::ofstream(scene) << "objects:\n"
-                          "  - name: block\n"
-                          "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}\n"
-                          "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
-                          "boundary:\n"
-                          "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
-                          "registration:\n"
-                          "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
-                          "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-                          "synth:\n"
-                          "  frames: 2\n"
-                          "  sanity_check: true\n"
-                          "  bodies:\n"
-                          "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
-                          "       keyframes: [{frame: 0}, {frame: 5, translation: [0, 0, -0.014]}]}\n";
+  std::ofstream(scene) << testing_util::BlockPressSynthScene("  frames: 2\n  sanity_check: true\n",
+                                                         "{frame: 5, translation: [0, 0, -0.014]}");
   run = Femreg("synth " + scene + " --out " + tmp.File("late") + " --no-progress");
   EXPECT_EQ(run.code, 0) << run.out;
   EXPECT_NE(run.out.find("femreg synth: warning: synth.bodies[0] (tool)'s last keyframe is at frame 5"), std::string::npos)

@@ -121,21 +121,28 @@ void WriteText(const std::string& path, const std::string& text) {
   out << text;
 }
 
+// The summary.json SummaryJson writes for a scene (YAML) with no frames, at `path`.
+::testing::AssertionResult WriteSummaryOf(const std::string& yaml, const std::string& path) {
+  Scene scene;
+  const Status parsed = ParseScene(yaml, "summary.yaml", "", &scene);
+  if (!parsed.ok()) return ::testing::AssertionFailure() << parsed.message();
+  std::unique_ptr<Tracker> tracker;
+  const Status created = Tracker::Create(scene, &tracker);
+  if (!created.ok()) return ::testing::AssertionFailure() << created.message();
+  WriteText(path, SummaryJson(RunInputs(), scene, *tracker, {}));
+  return ::testing::AssertionSuccess();
+}
+
 // femreg eval takes the scene order of a run's objects from its summary.json: the names as
 // SummaryJson writes them, and errors that name the file.
 TEST(Results, ReadSummaryObjectNamesReadsWhatSummaryJsonWrites) {
-  Scene scene;
-  ASSERT_TRUE(ParseScene("objects:\n"
-                         "  - {name: top, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}}\n"
-                         "  - {name: base, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]},"
-                         " pose: {translation: [0, 0, -0.05]}}\n",
-                         "two.yaml", "", &scene)
-                  .ok());
-  std::unique_ptr<Tracker> tracker;
-  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
   const testing_util::TempDir dir("femreg_results");
   const std::string path = dir.path() + "/summary.json";
-  WriteText(path, SummaryJson(RunInputs(), scene, *tracker, {}));
+  ASSERT_TRUE(WriteSummaryOf("objects:\n"
+                             "  - {name: top, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}}\n"
+                             "  - {name: base, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]},"
+                             " pose: {translation: [0, 0, -0.05]}}\n",
+                             path));
   std::vector<std::string> names;
   ASSERT_TRUE(ReadSummaryObjectNames(path, &names).ok());
   EXPECT_EQ(names, (std::vector<std::string>{"top", "base"}));
@@ -160,17 +167,12 @@ TEST(Results, ReadSummaryObjectNamesReadsWhatSummaryJsonWrites) {
 // forces.estimate, as SummaryJson writes it; -1 when a summary does not say.
 TEST(Results, ReadSummaryForcesEstimatedReadsWhatSummaryJsonWrites) {
   for (const bool estimate : {false, true}) {
-    Scene scene;
-    ASSERT_TRUE(ParseScene("objects:\n"
-                           "  - {name: top, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}}\n"
-                           "registration: {forces: {estimate: " + std::string(estimate ? "true" : "false") + "}}\n",
-                           "one.yaml", "", &scene)
-                    .ok());
-    std::unique_ptr<Tracker> tracker;
-    ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
     const testing_util::TempDir dir("femreg_results");
     const std::string path = dir.path() + "/summary.json";
-    WriteText(path, SummaryJson(RunInputs(), scene, *tracker, {}));
+    ASSERT_TRUE(WriteSummaryOf("objects:\n"
+                               "  - {name: top, generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [2, 2, 1]}}\n"
+                               "registration: {forces: {estimate: " + std::string(estimate ? "true" : "false") + "}}\n",
+                               path));
     int estimated = -2;
     ASSERT_TRUE(ReadSummaryForcesEstimated(path, &estimated).ok());
     EXPECT_EQ(estimated, estimate ? 1 : 0);

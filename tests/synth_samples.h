@@ -25,6 +25,29 @@ inline DepthSensorOptions AxisSensor() {
   return s;
 }
 
+// A synth scene: a 4 x 4 x 2 cm block clamped at its bottom, a camera above and in front,
+// the lines `synth` of its synth: section (indented by two spaces), a 2 x 2 cm tool pressing
+// its top from frame 0 to `press` (a keyframe), and `after` (top-level lines) at the end.
+inline std::string BlockPressSynthScene(const std::string& synth,
+                                        const std::string& press = "{frame: 1, translation: [0, 0, -0.014]}",
+                                        const std::string& after = "") {
+  return "objects:\n"
+         "  - name: block\n"
+         "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
+         "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
+         "boundary:\n"
+         "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
+         "registration:\n"
+         "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
+         "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
+         "synth:\n" +
+         synth +
+         "  bodies:\n"
+         "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
+         "       keyframes: [{frame: 0}, " +
+         press + "]}\n" + after;
+}
+
 // A synth scene: one clamped bar, a camera in front and above, and `synth` (the lines of its
 // synth: section, indented by two spaces).
 inline std::string BarSynthScene(const std::string& synth) {

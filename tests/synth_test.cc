@@ -244,22 +244,7 @@ std::string ReadFile(const std::string& path) {
 
 TEST(SynthSequenceTest, SanityCheckIsLabelledAndThePressMovesThePatch) {
   Scene scene;
-  const std::string text =
-      "objects:\n"
-      "  - name: block\n"
-      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
-      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
-      "boundary:\n"
-      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
-      "registration:\n"
-      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
-      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-      "synth:\n"
-      "  frames: 2\n"
-      "  sanity_check: true\n"
-      "  bodies:\n"
-      "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
-      "       keyframes: [{frame: 0}, {frame: 1, translation: [0, 0, -0.014]}]}\n";
+  const std::string text = testing_util::BlockPressSynthScene("  frames: 2\n  sanity_check: true\n");
   ASSERT_TRUE(ParseScene(text, "press.yaml", "", &scene).ok());
   TempDir dir;
   SynthReport report;
@@ -295,22 +280,7 @@ TEST(SynthSequenceTest, SanityCheckIsLabelledAndThePressMovesThePatch) {
 // the tool's push, down; with nothing anchored it is the tool and the clamp together, which
 // balance to zero.
 TEST(SynthSequenceTest, ForcesAreWhatTheAnchorsDoNotHold) {
-  const std::string base =
-      "objects:\n"
-      "  - name: block\n"
-      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
-      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
-      "boundary:\n"
-      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
-      "registration:\n"
-      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
-      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-      "synth:\n"
-      "  frames: 2\n"
-      "  ground_truth: {refinement: 2}\n"
-      "  bodies:\n"
-      "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
-      "       keyframes: [{frame: 0}, {frame: 1, translation: [0, 0, -0.014]}]}\n";
+  const std::string synth = "  frames: 2\n  ground_truth: {refinement: 2}\n";
   std::string bottom_indices;
   const TetMesh tracked = MakeBox(Eigen::Vector3d(0.04, 0.04, 0.02), 4, 4, 2);
   for (int v = 0; v < tracked.num_vertices(); ++v) {
@@ -330,7 +300,9 @@ TEST(SynthSequenceTest, ForcesAreWhatTheAnchorsDoNotHold) {
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     Scene scene;
-    const Status parsed = ParseScene(base + c.anchors, "press.yaml", "", &scene);
+    const Status parsed =
+        ParseScene(testing_util::BlockPressSynthScene(synth, "{frame: 1, translation: [0, 0, -0.014]}", c.anchors),
+                   "press.yaml", "", &scene);
     ASSERT_TRUE(parsed.ok()) << parsed.message();
     TempDir dir;
     SynthReport report;
@@ -361,26 +333,14 @@ TEST(SynthSequenceTest, ForcesAreWhatTheAnchorsDoNotHold) {
 // the neo-Hookean nodal-volume element, as simulate does, and the report and README say so;
 // forward.model keeps the element the scene names.
 TEST(SynthSequenceTest, NearlyIncompressibleTruthGetsTheNodalElementUnlessOneIsChosen) {
-  const std::string base =
-      "objects:\n"
-      "  - name: block\n"
-      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
-      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
-      "boundary:\n"
-      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
-      "registration:\n"
-      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
-      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-      "synth:\n"
-      "  frames: 2\n"
-      "  ground_truth: {material: {poisson_ratio: 0.49}}\n"
-      "  bodies:\n"
-      "    - {name: tool, box: {min: [0.01, 0.01, 0.03], max: [0.03, 0.03, 0.05]}, press: true,\n"
-      "       keyframes: [{frame: 0}, {frame: 1, translation: [0, 0, -0.012]}]}\n";
+  const std::string synth = "  frames: 2\n  ground_truth: {material: {poisson_ratio: 0.49}}\n";
   for (const bool chosen : {false, true}) {
     SCOPED_TRACE(chosen ? "forward.model: corotational" : "no element chosen");
     Scene scene;
-    const Status parsed = ParseScene(base + (chosen ? "forward: {model: corotational}\n" : ""), "soft.yaml", "", &scene);
+    const Status parsed = ParseScene(
+        testing_util::BlockPressSynthScene(synth, "{frame: 1, translation: [0, 0, -0.012]}",
+                                           chosen ? "forward: {model: corotational}\n" : ""),
+        "soft.yaml", "", &scene);
     ASSERT_TRUE(parsed.ok()) << parsed.message();
     TempDir dir;
     SynthReport report;
