@@ -127,19 +127,21 @@ std::string Fixed(double v, int digits = 3) {
 // Marks the ground truth vertices that the tracking scene's anchors hold. A box, a plane or
 // "all" is evaluated on the truth mesh's rest positions; an index list names tracked
 // vertices, so a truth vertex counts when its nearest tracked vertex at rest is listed (the
-// very vertex when the truth mesh is the tracked one).
+// very vertex when the truth mesh is the tracked one), as it does for a box that selects no
+// truth vertex.
 Status MarkAnchoredTruthVertices(const std::vector<AnchorSpec>& anchors, const TetMesh& tracked,
                                  const TetMesh& truth, std::vector<char>* known) {
   const bool same_mesh = tracked.num_vertices() == truth.num_vertices() && tracked.rest == truth.rest;
   std::vector<int> nearest;  // truth vertex -> nearest tracked vertex, built on first need
   for (const AnchorSpec& anchor : anchors) {
     std::vector<int> vertices;
-    if (anchor.selection.kind != VertexSelection::Kind::kIndices || same_mesh) {
-      const Status status = SelectVertices(anchor.selection, truth.rest, &vertices);
-      if (!status.ok()) return Status::Error(status.message() + " (on the ground truth mesh, for anchor '" + anchor.name + "')");
+    if ((anchor.selection.kind != VertexSelection::Kind::kIndices || same_mesh) &&
+        SelectVertices(anchor.selection, truth.rest, &vertices).ok()) {
       for (int v : vertices) (*known)[static_cast<size_t>(v)] = 1;
       continue;
     }
+    // An index list, or a box that holds no truth vertex (a truth mesh of its own): by the
+    // nearest tracked vertex.
     const Status status = SelectVertices(anchor.selection, tracked.rest, &vertices);
     if (!status.ok()) return status;
     std::vector<char> listed(static_cast<size_t>(tracked.num_vertices()), 0);
