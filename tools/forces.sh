@@ -3,7 +3,8 @@
 # forces estimated (the physical mode, registration.forces.estimate), one thread each, and
 # writes two tables: the vertex errors (seen / hidden), resultant-force errors and time per
 # frame of the sequences that carry the true external force (forces.csv: organ_patch,
-# hand_press, tool_table; those also pushing only, with the friction they were made with) to
+# hand_press, tool_table; those also pushing only, with the friction they were made with;
+# every sequence with forces.csv also with forces.adaptive_weight) to
 # docs/accuracy/forces.md, and the vertex errors, time and frames
 # converged of both modes on every sequence to docs/accuracy/physical_mode.md.
 # About two minutes on one core (16 sequences, 2026-12-02); run it on a quiet machine for the times.
@@ -28,9 +29,11 @@ for name in "${names[@]}"; do
   echo "forces.sh: $name" >&2
   modes=(classic physical)
   [[ -n "${FRICTION[$name]:-}" ]] && modes+=(pushing)
+  [[ -f "datasets/$name/forces.csv" ]] && modes+=(adaptive)
   for mode in "${modes[@]}"; do
     flag=()
     [[ $mode != classic ]] && flag=(--set registration.forces.estimate=true)
+    [[ $mode == adaptive ]] && flag+=(--set registration.forces.adaptive_weight=true)
     [[ $mode == pushing ]] && flag+=(--set registration.forces.pushing_only=true
                                      --set "registration.forces.friction=${FRICTION[$name]}")
     run="$OUT/${name}_$mode"

@@ -5,7 +5,7 @@
     python3 tools/forces_table.py OUT_DIR [--modes]
 
 Forces table, per dataset with a true force that is not zero on every frame, and mode (OUT_DIR/NAME_classic, NAME_physical and,
-where forces.sh ran it, NAME_pushing): the mean vertex error of the seen and
+where forces.sh ran them, NAME_pushing and NAME_adaptive): the mean vertex error of the seen and
 hidden vertices (summary.json), the median over the frames of the resultant-force error in
 newtons and in percent of the true force (the totals row of `femreg eval`'s eval.csv), the
 median time per frame and the frames that stopped on their tolerance.
@@ -23,7 +23,8 @@ import sys
 # is not zero on every frame (femreg synth's: a pressing tool, a track without an anchor).
 FIRST = ("organ_patch", "hand_press", "tool_table")
 MODES = (("classic", "classic"), ("physical", "forces estimated"),
-         ("pushing", "forces estimated, pushing only, friction as made"))
+         ("pushing", "forces estimated, pushing only, friction as made"),
+         ("adaptive", "forces estimated, adaptive weight"))
 
 
 def row(out, name, mode):

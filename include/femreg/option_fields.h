@@ -165,6 +165,8 @@ struct OptionFields<ForceOptions> {
     using S = ForceOptions;
     v(&S::estimate, FieldInfo("estimate"));
     v(&S::weight, FieldInfo("weight").Above(0));
+    v(&S::adaptive_weight, FieldInfo("adaptive_weight"));
+    v(&S::misfit_ratio, FieldInfo("misfit_ratio").Above(1));
     v(&S::sparsity, FieldInfo("sparsity").AtLeast(0));
     v(&S::pushing_only, FieldInfo("pushing_only"));
     v(&S::friction, FieldInfo("friction").Finite().Note("(< 0: no bound)"));

@@ -320,6 +320,13 @@ struct ForceOptions {
   // per area times (L / E)^2, L the body's size, E its Young's modulus): smaller lets larger
   // forces act, larger holds the shape nearer its unforced equilibrium. > 0.
   double weight = 1.0;
+  // The weight adapts from frame to frame to the misfit the forces leave: where the cloud's
+  // RMS residual exceeds the classic fit's (the frame's warm start) by more than
+  // misfit_ratio over recent frames, the forces are held too tightly and the weight falls
+  // (down to 1/100 of `weight`); where they leave almost none, it rises back, never above
+  // `weight` (docs/guide/forces.md#choosing-the-weight).
+  bool adaptive_weight = false;
+  double misfit_ratio = 1.2;  // > 1
   // A group-L1 term on the nodal forces, in the same scale times a traction of 1% of E:
   // > 0 makes the forces localise to few vertices (the contact area finds itself). >= 0.
   double sparsity = 0.0;
@@ -473,6 +480,10 @@ struct FrameSummary {
   // contacts' push. Per
   // vertex: Tracker::external_forces.
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();
+  // With the forces estimated: the forces.weight this frame's penalty used (adapted with
+  // forces.adaptive_weight), and the cloud's RMS residual over the classic fit's that started
+  // the frame (its warm start's shape, with the pairs found there; 0: not measured).
+  double force_weight = 0.0, misfit_ratio = 0.0;
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
   // Outer-iteration moves cut short because they reversed the last one (a two-cycle:

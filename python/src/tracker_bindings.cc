@@ -69,6 +69,8 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["implausible_carried"] = s.implausible_carried;
   d["free_space_vertices"] = s.free_space_vertices;
   d["rms_residual"] = s.rms_residual;
+  d["force_weight"] = s.force_weight;
+  d["misfit_ratio"] = s.misfit_ratio;
   d["initial_pose"] = s.initial_pose;
   d["pose_ambiguous"] = s.pose_ambiguous;
   d["contacts"] = s.contacts;

@@ -45,7 +45,7 @@ void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurfac
     const double L = std::cbrt(std::max(volume, 1e-300));
     const double E = o.material.material.youngs_modulus;
     const double c = data_per_area * (L / E) * (L / E);
-    const double alpha = options.weight * c;
+    const double alpha = options.weight * state.force_weight_scale * c;
     double area_sum = 0.0;
     for (int v : o.mesh.surface_vertices) area_sum += vertex_area_[static_cast<size_t>(o.offset + v)];
     const double mean_area =

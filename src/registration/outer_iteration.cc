@@ -133,6 +133,15 @@ bool Tracker::Impl::TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) c
   return true;
 }
 
+double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
+  if (pairs.empty()) return 0.0;
+  // The pairs index the surface they were found on: the data surface's vertices if there is one.
+  const Vertices& paired = data_surface ? PairState().x : state.x;
+  double sum2 = 0.0;
+  for (const DataPair& p : pairs) sum2 += (p.Point(paired) - p.target).squaredNorm();
+  return std::sqrt(sum2 / static_cast<double>(pairs.size()));
+}
+
 bool Tracker::Impl::WarmStart(int k) const {
   return state.options.forces.estimate && k <= warm_until;
 }
@@ -285,6 +294,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const bool warm_start = WarmStart(k);
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
+  // The classic fit's misfit (forces.adaptive_weight): its warm start's shape, with the pairs
+  // found there.
+  if (!warm_start && k > 0 && WarmStart(k - 1)) misfit_reference = RmsResidual(*pairs);
   // Vertices in the seen-through space: free space pushes them out, a change of the problem
   // like new contact multipliers, which the last start's energy is not to undo.
   if (frame_problem.FreeSpaceHeld(state.x) > 0) merit = std::numeric_limits<double>::infinity();
@@ -339,11 +351,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   double bulk = BulkMove(state, moves, frame_problem.problem().fixed());
   row.max_move = moved;
   first_bulk_move = k == 0 ? bulk : first_bulk_move;
-  double sum2 = 0.0;
-  // The pairs index the surface they were found on: the data surface's vertices if there is one.
-  const Vertices& paired = data_surface ? PairState().x : state.x;
-  for (const DataPair& p : *pairs) sum2 += (p.Point(paired) - p.target).squaredNorm();
-  row.rms_residual = std::sqrt(sum2 / static_cast<double>(pairs->size()));
+  row.rms_residual = RmsResidual(*pairs);
   row.time_s = Seconds(t_outer);
   s->iterations.push_back(row);
   s->inner_iterations += row.inner_iterations;

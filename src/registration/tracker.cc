@@ -17,6 +17,7 @@
 #include "registration/depth_offset.h"
 #include "registration/fracture_step.h"
 #include "registration/flying_pixels.h"
+#include "registration/force_weight.h"
 #include "registration/frame_problem.h"
 #include "registration/global_pose.h"
 #include "geometry/nearest.h"
@@ -321,6 +322,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
   warm_until = 0;
+  misfit_reference = 0.0;
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;
   stepping_in = false;
@@ -438,6 +440,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   if (s.termination == TerminationType::kNoCorrespondences) state.x = previous;
   if (state.collision) MeasureContacts(&s);
+  if (options.forces.estimate) {
+    s.force_weight = options.forces.weight * state.force_weight_scale;
+    if (misfit_reference > 0.0 && s.rms_residual > 0.0) s.misfit_ratio = s.rms_residual / misfit_reference;
+  }
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   state.x_before = previous;
@@ -468,6 +474,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     }
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
+  if (options.forces.estimate && options.forces.adaptive_weight && !state.held_before) {
+    AdaptForceWeight(s.misfit_ratio, &state);
+  }
   implausible_before = state.held_before || FractureLive(state) || fc.occluder.empty()
                            ? Vertices(0, 3)
                            : ImplausiblePoints(state, fc.cloud.points, fc.occluder);

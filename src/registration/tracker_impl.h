@@ -51,6 +51,8 @@ struct Tracker::Impl {
   // them, so that the force residual's Gauss-Newton starts near
   // (docs/theory/equilibrium.md#solving-it).
   bool WarmStart(int k) const;
+  // The pairs' RMS distance (m) at state.x (on the data surface where there is one).
+  double RmsResidual(const std::vector<DataPair>& pairs);
   // Whether the frame has used solver.time_budget_s (then *s says so).
   bool TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const;
   // Whether outer iteration k holds its start against the last one's (Backtrack).
@@ -116,6 +118,9 @@ struct Tracker::Impl {
   int iteration_base = 0;
   int iteration_limit = 0;
   int warm_until = 0;  // WarmStart's last outer iteration
+  // The RMS residual (m) at the end of the frame's last warm start, with the pairs found there
+  // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).
+  double misfit_reference = 0.0;
   // Frames held or lost since the last one solved: the next solved frame catches up with
   // their motion too, and has iteration_budget outer iterations from each start (a restart
   // counts again): solver.max_outer_iterations per frame it makes up for, up to

@@ -106,6 +106,10 @@ struct TrackerState {
   Vertices last_good;
   bool held_before = false;  // the last frame was held or lost (its successor's move is no velocity)
   bool lost_before = false;  // the last frame was lost: initial_pose auto searches again
+  // forces.adaptive_weight: the factor on forces.weight (in [kMinForceWeightScale, 1]) and
+  // the misfit ratios of the frames solved at it (registration/force_weight.h).
+  double force_weight_scale = 1.0;
+  std::vector<double> misfit_ratios;
   Eigen::VectorXd mass;             // #V lumped masses
   Triangles surface;                // #F by 3, global indices
   std::vector<int> surface_vertices;

@@ -172,8 +172,13 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
     json forces = json::array();
     for (const FrameRecord& r : rows) {
       const FrameSummary& s = r.summary;
-      forces.push_back({{"force_N", {number(s.force.x()), number(s.force.y()), number(s.force.z())}},
-                        {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}});
+      json frame = {{"force_N", {number(s.force.x()), number(s.force.y()), number(s.force.z())}},
+                    {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}};
+      if (s.force_weight > 0.0) {  // estimated: the penalty's weight and the misfit it left
+        frame["weight"] = number(s.force_weight);
+        frame["misfit_ratio"] = number(s.misfit_ratio);
+      }
+      forces.push_back(frame);
     }
     j["forces"] = options["forces"];
     j["forces"]["per_frame"] = forces;

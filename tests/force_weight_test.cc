@@ -1,0 +1,128 @@
+// forces.adaptive_weight: the controller on its own, and on a bundled press whose default
+// weight holds the forces too tightly.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "femreg/ground_truth.h"
+#include "femreg_test_config.h"
+#include "registration/force_weight.h"
+#include "registration/tracker_state.h"
+#include "test_util.h"
+
+namespace femreg {
+namespace {
+
+// Feeds the ratios one frame at a time; returns the scale after each.
+std::vector<double> Feed(TrackerState* state, const std::vector<double>& ratios) {
+  std::vector<double> scales;
+  for (double r : ratios) {
+    AdaptForceWeight(r, state);
+    scales.push_back(state->force_weight_scale);
+  }
+  return scales;
+}
+
+TEST(AdaptForceWeight, FallsHalfADecadeOnceThreeFramesLeaveTooMuchMisfit) {
+  TrackerState state;
+  state.options.forces.misfit_ratio = 1.1;
+  const std::vector<double> scales = Feed(&state, {1.2, 1.3});
+  EXPECT_EQ(scales.back(), 1.0);  // two frames decide nothing
+  EXPECT_TRUE(AdaptForceWeight(1.25, &state));
+  EXPECT_NEAR(state.force_weight_scale, 1.0 / std::sqrt(10.0), 1e-12);
+  // The ratios measured at the old weight are forgotten: the next two decide nothing.
+  Feed(&state, {1.3, 1.3});
+  EXPECT_NEAR(state.force_weight_scale, 1.0 / std::sqrt(10.0), 1e-12);
+  EXPECT_TRUE(AdaptForceWeight(1.3, &state));
+  EXPECT_NEAR(state.force_weight_scale, 0.1, 1e-12);
+}
+
+TEST(AdaptForceWeight, OneOutlyingFrameMovesNothing) {
+  TrackerState state;
+  state.options.forces.misfit_ratio = 1.1;
+  const std::vector<double> scales = Feed(&state, {1.02, 2.5, 1.03, 1.01, 3.0});
+  for (double s : scales) EXPECT_EQ(s, 1.0);
+}
+
+TEST(AdaptForceWeight, StopsAtItsFloorAndRisesBackOnlyWhenTheMisfitIsNearlyGone) {
+  TrackerState state;
+  state.options.forces.misfit_ratio = 1.2;
+  Feed(&state, std::vector<double>(40, 1.5));
+  EXPECT_NEAR(state.force_weight_scale, kMinForceWeightScale, 1e-15);
+  // Between 1 + kMisfitRaiseShare * 0.2 and the bound: it stays.
+  Feed(&state, std::vector<double>(9, 1.1));
+  EXPECT_NEAR(state.force_weight_scale, kMinForceWeightScale, 1e-15);
+  Feed(&state, std::vector<double>(3, 1.02));
+  EXPECT_NEAR(state.force_weight_scale, kMinForceWeightScale * kForceWeightStep, 1e-15);
+  Feed(&state, std::vector<double>(60, 1.0));
+  EXPECT_EQ(state.force_weight_scale, 1.0);  // never above the scene's weight
+}
+
+TEST(AdaptForceWeight, FramesWithoutAMeasuredRatioAreLeftOut) {
+  TrackerState state;
+  state.options.forces.misfit_ratio = 1.1;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(AdaptForceWeight(0.0, &state));
+  EXPECT_FALSE(AdaptForceWeight(nan, &state));
+  EXPECT_FALSE(AdaptForceWeight(std::numeric_limits<double>::infinity(), &state));
+  EXPECT_TRUE(state.misfit_ratios.empty());
+  Feed(&state, {1.5, 0.0, 1.5, nan, 1.5});
+  EXPECT_LT(state.force_weight_scale, 1.0);
+}
+
+#ifdef FEMREG_CLI_PATH
+double Mean(const std::vector<std::string>& cells) {
+  double sum = 0.0;
+  for (const std::string& c : cells) sum += std::stod(c);
+  return cells.empty() ? 0.0 : sum / static_cast<double>(cells.size());
+}
+
+// block_press: a tool presses 12 mm into a block and hides its footprint; the default weight
+// leaves most of the push unexplained (the forces' misfit well above the classic fit's).
+TEST(AdaptiveForceWeight, LowersThePenaltyWhereTheForcesLeaveMisfitAndGetsThePushCloser) {
+  const std::string data = std::string(FEMREG_DATASETS_DIR) + "/block_press";
+  std::vector<ForceFrame> truth;
+  bool has_columns = false;
+  ASSERT_TRUE(ReadForces(data + "/forces.csv", &truth, &has_columns).ok());
+  testing_util::TempDir tmp;
+  double force_error[2], vertex_error[2];
+  for (int adaptive = 0; adaptive < 2; ++adaptive) {
+    const std::string out = tmp.path() + (adaptive ? "/adaptive" : "/fixed");
+    const testing_util::CliRun r = testing_util::Femreg("register --scene " + data + "/scene.yaml --frames " + data + "/clouds --ground-truth " +
+                            data + "/ground_truth --out " + out +
+                            " --threads 1 --no-progress --report none --set registration.forces.estimate=true" +
+                            (adaptive ? " --set registration.forces.adaptive_weight=true" : ""));
+    ASSERT_EQ(r.code, 0) << r.out;
+    std::vector<ForceFrame> estimated;
+    ASSERT_TRUE(ReadForces(out + "/stats.csv", &estimated, &has_columns).ok());
+    ASSERT_EQ(estimated.size(), truth.size());
+    force_error[adaptive] = MedianForceErrors(CompareForces(estimated, truth)).relative;
+    vertex_error[adaptive] = Mean(testing_util::StatsColumn(out, "err_mean_mm"));
+    const std::vector<std::string> weights = testing_util::StatsColumn(out, "force_weight");
+    const std::vector<std::string> ratios = testing_util::StatsColumn(out, "misfit_ratio");
+    ASSERT_EQ(weights.size(), truth.size());
+    double lowest = 1.0, highest_ratio = 0.0;
+    for (const std::string& w : weights) lowest = std::min(lowest, std::stod(w));
+    for (const std::string& q : ratios) highest_ratio = std::max(highest_ratio, std::stod(q));
+    EXPECT_GT(highest_ratio, 1.2) << "the press leaves more misfit than the classic fit";
+    if (adaptive) {
+      EXPECT_LT(lowest, 0.5);
+      EXPECT_GE(lowest, kMinForceWeightScale);
+      EXPECT_EQ(std::stod(weights.front()), 1.0);  // before the press
+    } else {
+      EXPECT_EQ(lowest, 1.0);
+    }
+  }
+  std::printf("block_press: force error %.1f %% -> %.1f %%, mean vertex error %.3f -> %.3f mm\n",
+              100 * force_error[0], 100 * force_error[1], vertex_error[0], vertex_error[1]);
+  EXPECT_LT(force_error[1], force_error[0] - 0.05);
+  EXPECT_LT(vertex_error[1], 0.92 * vertex_error[0]);
+}
+#endif
+
+}  // namespace
+}  // namespace femreg
