@@ -143,7 +143,7 @@ Status MarkAnchoredTruthVertices(const std::vector<AnchorSpec>& anchors, const T
     // An index list, or a box that holds no truth vertex (a truth mesh of its own): by the
     // nearest tracked vertex.
     const Status status = SelectVertices(anchor.selection, tracked.rest, &vertices);
-    if (!status.ok()) return status;
+    if (!status.ok()) return Status::Error("anchor '" + anchor.name + "' (on either mesh): " + status.message());
     std::vector<char> listed(static_cast<size_t>(tracked.num_vertices()), 0);
     for (int v : vertices) listed[static_cast<size_t>(v)] = 1;
     if (nearest.empty()) {
@@ -375,6 +375,10 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   status = WriteScene(tracking_scene, (fs::path(dir) / "scene.yaml").string(), comment);
   if (!status.ok()) return status;
 
+  // The last run's forces.csv goes first: a run that fails must not leave it beside new clouds.
+  std::error_code removed;
+  if (!fs::remove(fs::path(dir) / "forces.csv", removed) && removed) return Status::Error(dir + "/forces.csv: " + removed.message());
+
   SynthReport r;
   r.note = truth_note;
   r.frames = num_frames;
@@ -433,19 +437,21 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
     ForwardForces forces;
     status = EvaluateForwardForces(problem, forward, model, fine, fine.x, &forces);
     if (!status.ok()) return Status::Error(scene.path + ": frame " + std::to_string(f) + ": " + status.message());
+    // Contacts, loads and unanchored reactions; nothing where an anchor holds (as the tracker).
     Vertices external = forces.potential + forces.loads - fine.mass * problem.gravity.transpose();
     for (int v = 0; v < fine.num_vertices(); ++v) {
-      if (!known[static_cast<size_t>(v)]) external.row(v) += forces.reactions.row(v);
+      if (known[static_cast<size_t>(v)]) external.row(v).setZero();
+      else external.row(v) += forces.reactions.row(v);
     }
     ForceResultant resultant = ResultantAboutCentroid(external, fine.x, fine.mass);
     // What is left of forces that balance (a rigidly carried body) is the solve's unbalanced
-    // residual, not a force: below what its tolerance leaves (summed over the vertices) or a
-    // millionth of the forces that act, it is written as zero.
+    // residual, not a force: below what the solve left unbalanced (its free vertices' residual,
+    // whose resultant is at most sqrt(N) times its norm) or a millionth of the forces that act,
+    // it is written as zero.
     double acting = (fine.mass.sum() * problem.gravity).norm();
     for (int v = 0; v < fine.num_vertices(); ++v) acting += forces.reactions.row(v).norm();
-    const double floor =
-        std::max(1e-6 * acting, std::sqrt(static_cast<double>(fine.num_vertices())) *
-                                    std::max(forward.absolute_tolerance, forward.relative_tolerance * acting));
+    const double free_vertices = std::max(1.0, summary.num_free_dofs / 3.0);
+    const double floor = std::max(1e-6 * acting, std::sqrt(free_vertices) * summary.final_residual_norm);
     const double size = (fine.x.colwise().maxCoeff() - fine.x.colwise().minCoeff()).norm();
     if (resultant.force.norm() < floor) resultant.force.setZero();
     if (resultant.torque.norm() < floor * size) resultant.torque.setZero();
