@@ -420,6 +420,7 @@ TEST(SynthSequenceTest, NearlyIncompressibleTruthGetsTheNodalElementUnlessOneIsC
 // - Visibility: a vertex within 2 mm of the depth image is seen; one within kMaxShift of that
 //   threshold may flip: at most 2 per frame.
 // - Clouds: regen::CloudsAgree.
+// - forces.csv: within a millinewton, or a thousandth of the force.
 TEST(SynthSequenceTest, BundledDatasetsRegenerateWithinTolerance) {
   const double kMaxShift = 20e-6;  // m
   int checked = 0;
@@ -454,6 +455,19 @@ TEST(SynthSequenceTest, BundledDatasetsRegenerateWithinTolerance) {
       std::string why;
       EXPECT_TRUE(regen::CloudsAgree(bundled("clouds/" + name + ".pcd"), mine("clouds/" + name + ".pcd"), &why))
           << why;
+    }
+    // The true forces of the frames made: what the positions' tolerance moves them by is far
+    // below a millinewton or a thousandth of the force; a changed definition is not.
+    std::vector<ForceFrame> bundled_forces, my_forces;
+    bool has_columns = false;
+    ASSERT_TRUE(ReadForces((entry.path() / "forces.csv").string(), &bundled_forces, &has_columns).ok());
+    ASSERT_TRUE(ReadForces(dir.path() + "/forces.csv", &my_forces, &has_columns).ok());
+    ASSERT_EQ(my_forces.size(), 2u);
+    ASSERT_GE(bundled_forces.size(), 2u);
+    for (size_t f = 0; f < 2; ++f) {
+      const double tolerance = 1e-3 * std::max(1.0, bundled_forces[f].force.norm());
+      EXPECT_LE((my_forces[f].force - bundled_forces[f].force).norm(), tolerance) << "forces.csv frame " << f;
+      EXPECT_LE((my_forces[f].torque - bundled_forces[f].torque).norm(), 0.1 * tolerance) << "forces.csv frame " << f;
     }
     ++checked;
   }
