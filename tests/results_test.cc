@@ -154,6 +154,9 @@ TEST(Results, ReadSummaryObjectNamesReadsWhatSummaryJsonWrites) {
   WriteText(path, "{\"objects\": [{\"name\": \"top\"}");
   status = ReadSummaryObjectNames(path, &names);
   EXPECT_EQ(status.message(), path + ": not JSON (not a summary.json written by femreg register)");
+  WriteText(path, "[{\"name\": \"top\"}]");
+  status = ReadSummaryObjectNames(path, &names);
+  EXPECT_EQ(status.message(), path + ": JSON, but not an object (not a summary.json written by femreg register)");
   WriteText(path, "{\"frames_done\": 3}");
   status = ReadSummaryObjectNames(path, &names);
   EXPECT_EQ(status.message(), path + ": no \"objects\" list (not a summary.json written by femreg register)");

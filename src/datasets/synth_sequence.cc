@@ -127,8 +127,8 @@ std::string Fixed(double v, int digits = 3) {
 // Marks the ground truth vertices that the tracking scene's anchors hold. A box, a plane or
 // "all" is evaluated on the truth mesh's rest positions; an index list names tracked
 // vertices, so a truth vertex counts when its nearest tracked vertex at rest is listed (the
-// very vertex when the truth mesh is the tracked one), as it does for a box that selects no
-// truth vertex.
+// very vertex when the truth mesh is the tracked one; of two as near, the lower index, as a
+// refined truth's mid-edge vertices are), as it does for a box that selects no truth vertex.
 Status MarkAnchoredTruthVertices(const std::vector<AnchorSpec>& anchors, const TetMesh& tracked,
                                  const TetMesh& truth, std::vector<char>* known) {
   const bool same_mesh = tracked.num_vertices() == truth.num_vertices() && tracked.rest == truth.rest;

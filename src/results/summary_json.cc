@@ -241,8 +241,11 @@ Status ParseSummary(const std::string& path, nlohmann::json* summary) {
     return read;
   }
   *summary = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (summary->is_discarded() || !summary->is_object()) {
+  if (summary->is_discarded()) {
     return Status::Error(path + ": not JSON (not a summary.json written by femreg register)");
+  }
+  if (!summary->is_object()) {
+    return Status::Error(path + ": JSON, but not an object (not a summary.json written by femreg register)");
   }
   return Status::Ok();
 }
