@@ -285,23 +285,16 @@ TEST(SynthSequenceTest, SanityCheckIsLabelledAndThePressMovesThePatch) {
 // 0.3 N, solved to a loose tolerance, is written as it acts.
 TEST(SynthSequenceTest, ASmallForceAboveTheSolvesLeftoverIsKept) {
   Scene scene;
+  // The block of the press scenes with its tool kept above it.
   const Status parsed = ParseScene(
-      "objects:\n"
-      "  - name: block\n"
-      "    generate: {shape: box, size: [0.04, 0.04, 0.02], cells: [4, 4, 2]}\n"
-      "    material: {youngs_modulus: 1e4, poisson_ratio: 0.3}\n"
-      "boundary:\n"
-      "  - {select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, clamp: true}\n"
-      "registration:\n"
-      "  camera: {position: [0.02, -0.1, 0.1], target: [0.02, 0.02, 0], up: [0, 0, 1],\n"
-      "           fx: 60, fy: 60, cx: 39.5, cy: 29.5, width: 80, height: 60}\n"
-      "anchors:\n"
-      "  - {name: table, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, hard: true}\n"
-      "gravity: [0, 0, -9.81]\n"
-      "forward: {tolerance: 1e-4}\n"
-      "loads:\n"
-      "  - {select: {box: {min: [-1, -1, 0.0199], max: [1, 1, 1]}}, force: [0.001, 0, 0]}\n"
-      "synth:\n  frames: 1\n  ground_truth: {refinement: 2}\n",
+      testing_util::BlockPressSynthScene(
+          "  frames: 1\n  ground_truth: {refinement: 2}\n", "{frame: 1}",
+          "anchors:\n"
+          "  - {name: table, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, hard: true}\n"
+          "gravity: [0, 0, -9.81]\n"
+          "forward: {tolerance: 1e-4}\n"
+          "loads:\n"
+          "  - {select: {box: {min: [-1, -1, 0.0199], max: [1, 1, 1]}}, force: [0.001, 0, 0]}\n"),
       "small.yaml", "", &scene);
   ASSERT_TRUE(parsed.ok()) << parsed.message();
   TempDir dir;
