@@ -6,7 +6,8 @@
 
 namespace femreg {
 
-bool AdaptForceWeight(double misfit_ratio, TrackerState* state) {
+bool AdaptForceWeight(double misfit_ratio, TrackerState* state,
+                      const std::function<bool(double lower_scale)>& lower_pays) {
   if (!(misfit_ratio > 0.0) || !std::isfinite(misfit_ratio)) return false;
   std::vector<double>& ratios = state->misfit_ratios;
   ratios.push_back(misfit_ratio);
@@ -19,7 +20,12 @@ bool AdaptForceWeight(double misfit_ratio, TrackerState* state) {
   double& scale = state->force_weight_scale;
   const double before = scale;
   if (median > bound) {
-    scale = std::max(kMinForceWeightScale, scale / kForceWeightStep);
+    const double lower = std::max(kMinForceWeightScale, scale / kForceWeightStep);
+    if (lower < scale && lower_pays && !lower_pays(lower)) {
+      ratios.clear();  // not the penalty's misfit: three more frames before the next try
+      return false;
+    }
+    scale = lower;
   } else if (median < 1.0 + kMisfitRaiseShare * (bound - 1.0)) {
     scale = std::min(1.0, scale * kForceWeightStep);
   }

@@ -296,7 +296,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
   // The classic fit's misfit (forces.adaptive_weight): its warm start's shape, with the pairs
   // found there.
-  if (!warm_start && k > 0 && WarmStart(k - 1)) misfit_reference = RmsResidual(*pairs);
+  if (!warm_start && k > 0 && WarmStart(k - 1)) {
+    misfit_reference = RmsResidual(*pairs);
+    misfit_reference_x = state.x;
+  }
   // Vertices in the seen-through space: free space pushes them out, a change of the problem
   // like new contact multipliers, which the last start's energy is not to undo.
   if (frame_problem.FreeSpaceHeld(state.x) > 0) merit = std::numeric_limits<double>::infinity();

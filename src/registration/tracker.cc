@@ -323,6 +323,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   iteration_base = 0;
   warm_until = 0;
   misfit_reference = 0.0;
+  misfit_reference_x.resize(0, 3);
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;
   stepping_in = false;
@@ -475,7 +476,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   if (options.forces.estimate && options.forces.adaptive_weight && !state.held_before) {
-    AdaptForceWeight(s.misfit_ratio, &state);
+    AdaptForceWeight(s.misfit_ratio, &state, [&](double lower) { return LowerForceWeightPays(lower, pairs, &s); });
   }
   implausible_before = state.held_before || FractureLive(state) || fc.occluder.empty()
                            ? Vertices(0, 3)
@@ -518,6 +519,24 @@ void Tracker::Impl::Outputs(const PointIndex* cloud_index, const std::vector<Dat
   }
   UpdateOutputs(cloud_index, coarse, &state, threads);
   PairState();  // the data surface at the result: the confidence reads it
+}
+
+bool Tracker::Impl::LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs, FrameSummary* s) {
+  if (misfit_reference_x.rows() != state.x.rows() || pairs.empty()) return true;
+  const Vertices result = state.x;
+  const double scale = state.force_weight_scale;
+  const double reference = frame_problem.problem().Evaluate(misfit_reference_x).data;
+  state.force_weight_scale = lower_scale;
+  frame_problem.SetEquilibrium(state, true, data_surface.get());
+  const auto t0 = Clock::now();
+  const SolveReport report = backend->Solve(frame_problem.problem(), 0.0, &state.x);
+  s->time.solve += Seconds(t0);
+  // The frame keeps its result and the problem its weight: only the next frames' weight moves.
+  state.x = result;
+  state.force_weight_scale = scale;
+  frame_problem.SetEquilibrium(state, true, data_surface.get());
+  if (!report.success) return false;
+  return report.after.data - reference <= kLowerWeightKeeps * (report.before.data - reference);
 }
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {

@@ -53,6 +53,10 @@ struct Tracker::Impl {
   bool WarmStart(int k) const;
   // The pairs' RMS distance (m) at state.x (on the data surface where there is one).
   double RmsResidual(const std::vector<DataPair>& pairs);
+  // forces.adaptive_weight's check before a lower weight (kLowerWeightKeeps): the frame's last
+  // solve again at `lower_scale`, from its result with its pairs; the frame's result and the
+  // problem are left as they were.
+  bool LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs, FrameSummary* s);
   // Whether the frame has used solver.time_budget_s (then *s says so).
   bool TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const;
   // Whether outer iteration k holds its start against the last one's (Backtrack).
@@ -121,6 +125,7 @@ struct Tracker::Impl {
   // The RMS residual (m) at the end of the frame's last warm start, with the pairs found there
   // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).
   double misfit_reference = 0.0;
+  Vertices misfit_reference_x;  // that warm start's shape
   // Frames held or lost since the last one solved: the next solved frame catches up with
   // their motion too, and has iteration_budget outer iterations from each start (a restart
   // counts again): solver.max_outer_iterations per frame it makes up for, up to
