@@ -476,7 +476,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   if (options.forces.estimate && options.forces.adaptive_weight && !state.held_before) {
-    AdaptForceWeight(s.misfit_ratio, &state, [&](double lower) { return LowerForceWeightPays(lower, pairs, &s); });
+    AdaptForceWeight(s.misfit_ratio, &state,
+                     [&](double lower) { return LowerForceWeightPays(lower, pairs, t_frame, &s); });
   }
   implausible_before = state.held_before || FractureLive(state) || fc.occluder.empty()
                            ? Vertices(0, 3)
@@ -521,15 +522,19 @@ void Tracker::Impl::Outputs(const PointIndex* cloud_index, const std::vector<Dat
   PairState();  // the data surface at the result: the confidence reads it
 }
 
-bool Tracker::Impl::LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs, FrameSummary* s) {
+bool Tracker::Impl::LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs,
+                                         Clock::time_point t_frame, FrameSummary* s) {
   if (misfit_reference_x.rows() != state.x.rows() || pairs.empty()) return true;
+  // Within solver.time_budget_s: a frame that used it up does not check, and keeps the weight.
+  const double budget = state.options.solver.time_budget_s;
+  if (budget > 0 && Seconds(t_frame) >= budget) return false;
   const Vertices result = state.x;
   const double scale = state.force_weight_scale;
   const double reference = frame_problem.problem().Evaluate(misfit_reference_x).data;
   state.force_weight_scale = lower_scale;
   frame_problem.SetEquilibrium(state, true, data_surface.get());
   const auto t0 = Clock::now();
-  const SolveReport report = backend->Solve(frame_problem.problem(), 0.0, &state.x);
+  const SolveReport report = backend->Solve(frame_problem.problem(), budget > 0 ? budget - Seconds(t_frame) : 0.0, &state.x);
   s->time.solve += Seconds(t0);
   // The frame keeps its result and the problem its weight: only the next frames' weight moves.
   state.x = result;

@@ -56,7 +56,8 @@ struct Tracker::Impl {
   // forces.adaptive_weight's check before a lower weight (kLowerWeightKeeps): the frame's last
   // solve again at `lower_scale`, from its result with its pairs; the frame's result and the
   // problem are left as they were.
-  bool LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs, FrameSummary* s);
+  bool LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs, Clock::time_point t_frame,
+                            FrameSummary* s);
   // Whether the frame has used solver.time_budget_s (then *s says so).
   bool TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const;
   // Whether outer iteration k holds its start against the last one's (Backtrack).
