@@ -1,6 +1,6 @@
 // The Tracker's state and parts behind its public face (femreg/tracker.h): the frame loop
 // lives in tracker.cc, the set-up calls (labels, effects, anchors, loads, force regions) in
-// tracker_setup.cc.
+// tracker_setup.cc, the forces after a frame in tracker_forces.cc.
 #ifndef FEMREG_REGISTRATION_TRACKER_IMPL_H_
 #define FEMREG_REGISTRATION_TRACKER_IMPL_H_
 
