@@ -1,6 +1,6 @@
 // The equilibrium penalties (energy/equilibrium.h): their gradients and curvatures against
 // central differences, the pushing-only cone (nothing more inside it, its side's curvature just
-// outside), and the pieces a step's model is re-solved across.
+// outside), the pieces a step's model is re-solved across, and the penalty as least squares.
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -73,6 +73,44 @@ TEST(EquilibriumPenalty, GradientAndCurvatureMatchCentralDifferencesAndCurvature
             }
             EXPECT_LT((c - c.transpose()).norm(), 1e-12 * (1.0 + c.norm()));
             EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().minCoeff(), -1e-12);
+          }
+        }
+      }
+    }
+  }
+}
+
+// The least-squares form (for the Ceres back end): 1/2 |r|^2 plus the sparse term is the
+// penalty, and dr/df matches the residuals' central differences.
+TEST(EquilibriumPenalty, ResidualsAreThePenaltyAsLeastSquares) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (bool pushing : {false, true}) {
+    for (double friction : {-1.0, 0.0, 0.6}) {
+      if (friction >= 0 && !pushing) continue;
+      for (double sparsity : {0.0, 0.3}) {
+        const energy::Equilibrium eq = Sites(pushing, friction, sparsity);
+        for (int trial = 0; trial < 200; ++trial) {
+          for (int v = 0; v < 3; ++v) {
+            const Eigen::Vector3d f(normal(rng), normal(rng), normal(rng));
+            Eigen::Matrix<double, 6, 1> r, rp, rm;
+            Eigen::Matrix<double, 6, 3> j, unused;
+            eq.Residuals(v, f, &r, &j);
+            const double s = eq.sparsity[static_cast<size_t>(v)];
+            const double floor = eq.sparsity_floor;
+            const double sparse = s * (std::sqrt(f.squaredNorm() + floor * floor) - floor);
+            EXPECT_NEAR(0.5 * r.squaredNorm() + sparse, eq.Penalty(v, f, nullptr, nullptr), 1e-12 * (1.0 + r.squaredNorm()))
+                << "vertex " << v << " pushing " << pushing << " friction " << friction;
+            const double h = 1e-6;
+            for (int k = 0; k < 3; ++k) {
+              Eigen::Vector3d fp = f, fm = f;
+              fp[k] += h;
+              fm[k] -= h;
+              eq.Residuals(v, fp, &rp, &unused);
+              eq.Residuals(v, fm, &rm, &unused);
+              EXPECT_LT((j.col(k) - (rp - rm) / (2 * h)).norm(), 1e-5 * (1.0 + j.norm()))
+                  << "vertex " << v << " pushing " << pushing << " friction " << friction << " f " << Format(f);
+            }
           }
         }
       }

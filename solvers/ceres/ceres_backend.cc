@@ -7,35 +7,39 @@
 #include <vector>
 
 #include "parallel/threads.h"
+#include "solvers/ceres/equilibrium_costs.h"
 
 namespace femreg {
 namespace ceres_backend {
 
 SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
-  // What only the fast back end solves.
-  if (problem.equilibrium() != nullptr) {
-    SolveReport report;
-    report.stop = StopReason::kFailure;
-    report.message =
-        "the Ceres back end does not solve equilibrium registration (registration.forces.estimate); use "
-        "solver.backend: fast";
-    return report;
+  // With an equilibrium the physics groups' energy is not minimized: its forces' penalty is
+  // (solvers/ceres/equilibrium_costs.h).
+  const energy::Equilibrium* equilibrium = problem.equilibrium();
+  const uint32_t minimized = equilibrium != nullptr ? energy::ObjectiveGroups() : ~0u;
+  std::unique_ptr<EquilibriumState> equilibrium_state;
+  if (equilibrium != nullptr) {
+    equilibrium_state = std::make_unique<EquilibriumState>(problem, x, ResolveThreadCount(options_.num_threads));
   }
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
+  problem_options.evaluation_callback = equilibrium_state.get();
   ceres::Problem ceres_problem(problem_options);
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   std::vector<std::unique_ptr<ceres::LossFunction>> losses;
   costs.reserve(static_cast<size_t>(problem.num_blocks()));
   double* const data = x->data();
+  double offset = 0.0;  // the minimized blocks' constant (the neo-Hookean element's)
   problem.ForEachSet([&](const auto& set) {
+    if (!energy::InGroups(minimized, set.group())) return;
     using T = typename std::decay_t<decltype(set.blocks())>::value_type;
     const energy::Loss& loss = set.loss();
     std::map<double, ceres::LossFunction*> loss_of_weight;  // one adapter per distinct w
     std::vector<double*> blocks(T::kVertices);
     for (const T& block : set.blocks()) {
+      offset += energy::OffsetValue(block, loss);
       ceres::LossFunction* loss_function = nullptr;
       if (loss.robust()) {
         auto it = loss_of_weight.find(block.weight);
@@ -52,7 +56,9 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
       ceres_problem.AddResidualBlock(costs.back().get(), loss_function, blocks);
     }
   });
-  if (const energy::NodalVolume* nodal = problem.nodal_volume()) {
+  if (equilibrium_state) AddEquilibriumCosts(equilibrium_state.get(), data, &ceres_problem, &costs, &losses);
+  const energy::NodalVolume* nodal = energy::InGroups(minimized, energy::TermGroup::kElastic) ? problem.nodal_volume() : nullptr;
+  if (nodal != nullptr) {
     std::vector<double*> star_blocks;
     for (int a = 0; a < nodal->num_vertices(); ++a) {
       auto cost = std::make_unique<NodalVolumeCost>(nodal->StarOf(a));
@@ -99,7 +105,6 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   // Ceres' relative decrease is over its cost, which carries the blocks' offsets (the
   // neo-Hookean element's constant): scaled so that it means the same decrease of the
   // energy (at its value at the start).
-  const double offset = problem.Offset();
   if (offset > 0) {
     const double energy = std::max(report.before.total(), 0.0);
     solver_options.function_tolerance *= energy / (energy + offset);

@@ -115,6 +115,41 @@ double Equilibrium::Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gr
   return value;
 }
 
+void Equilibrium::Residuals(int v, const Eigen::Vector3d& f, Eigen::Matrix<double, 6, 1>* r,
+                            Eigen::Matrix<double, 6, 3>* dr_df) const {
+  r->setZero();
+  dr_df->setZero();
+  const ForceSite where = site[static_cast<size_t>(v)];
+  if (where == ForceSite::kSupport) return;
+  const double beta = strong_weight[static_cast<size_t>(v)];
+  const double w = std::sqrt(where == ForceSite::kBalanced ? beta : force_weight[static_cast<size_t>(v)]);
+  r->head<3>() = w * f;
+  dr_df->topRows<3>() = w * Eigen::Matrix3d::Identity();
+  if (where != ForceSite::kFree || !pushing_only) return;
+  const Eigen::Vector3d& n = normal[static_cast<size_t>(v)];
+  const ConeExcess excess = OutsideCone(f, n, friction);
+  const double root_beta = std::sqrt(beta);
+  r->tail<3>() = root_beta * excess.outside;
+  switch (excess.region) {
+    case ConeExcess::kFace:
+      dr_df->bottomRows<3>() = root_beta * n * n.transpose();
+      break;
+    case ConeExcess::kApex:
+      dr_df->bottomRows<3>() = root_beta * Eigen::Matrix3d::Identity();
+      break;
+    case ConeExcess::kSide: {
+      // outside = (f . u) u, u = s n + c t_dir: d(u) = (c / t) b b^T df, and f . b = 0.
+      const double t = (f - f.dot(n) * n).norm();
+      const double c = 1.0 / std::sqrt(1.0 + friction * friction);
+      dr_df->bottomRows<3>() = root_beta * (excess.u * excess.u.transpose() +
+                                            (std::max(0.0, f.dot(excess.u)) * c / t) * excess.b * excess.b.transpose());
+      break;
+    }
+    case ConeExcess::kInside:
+      break;
+  }
+}
+
 int Equilibrium::PenaltyPiece(int v, const Eigen::Vector3d& f) const {
   if (!pushing_only || site[static_cast<size_t>(v)] != ForceSite::kFree) return 0;
   return static_cast<int>(OutsideCone(f, normal[static_cast<size_t>(v)], friction).region);

@@ -61,6 +61,12 @@ struct Equilibrium {
   // majorizer s / sqrt(|f|^2 + eps^2) I, the cone's along the distance's direction).
   double Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gradient,
                  Eigen::Matrix3d* curvature) const;
+  // The penalty as least squares, for a back end that takes residuals (Ceres): phi_v(f) =
+  // 1/2 |r|^2 + the sparse term, r = (sqrt(w) f, sqrt(beta) (f's part outside the cone)),
+  // w = alpha on a free vertex and beta on a balanced one, and dr/df exact (zero at a support
+  // and where f is inside the cone). The sparse term is s rho(|f|^2), rho(z) = sqrt(z + eps^2) - eps.
+  void Residuals(int v, const Eigen::Vector3d& f, Eigen::Matrix<double, 6, 1>* r,
+                 Eigen::Matrix<double, 6, 3>* dr_df) const;
   // Which piece of the pushing-only penalty holds at f on vertex v: 0 inside the cone (or no
   // cone), 1 beyond the half-space's face, 2 beyond the cone's side, 3 beyond its apex. Each
   // is smooth; the penalty has kinks only between them.

@@ -232,13 +232,6 @@ bool RegistrationOptions::IsValid(std::string* error) const {
         free_space.IsValid(error))) {
     return false;
   }
-  if (forces.estimate && solver.backend != SolverBackend::kFast) {
-    if (error) {
-      *error = "forces.estimate needs solver.backend: fast (the Ceres back end does not solve "
-               "equilibrium registration)";
-    }
-    return false;
-  }
   if (forces.estimate && regularizer == Regularizer::kNone) {
     if (error) *error = "forces.estimate needs an elastic regularizer (regularizer: none has no forces)";
     return false;
