@@ -2,7 +2,8 @@
 // Jacobian, sqrt(w) folded in when the set has no robust loss), the energy layer's robust
 // loss wrapped as a ceres::LossFunction, and Levenberg-Marquardt or dogleg with sparse normal
 // Cholesky (SuiteSparse CHOLMOD) or CGNR. Every vertex is a parameter block of 3. The
-// nodal volume, whose stencil is a vertex's star, has a cost of its own (NodalVolumeCost).
+// nodal volume, whose stencil is a vertex's star, has a cost of its own (NodalVolumeCost);
+// an equilibrium's penalty has its own (solvers/ceres/equilibrium_costs.h).
 #ifndef FEMREG_SOLVERS_CERES_CERES_BACKEND_H_
 #define FEMREG_SOLVERS_CERES_CERES_BACKEND_H_
 
