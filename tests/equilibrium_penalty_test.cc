@@ -32,8 +32,12 @@ energy::Equilibrium Sites(bool pushing_only, double friction, double sparsity) {
   return eq;
 }
 
-TEST(EquilibriumPenalty, GradientAndCurvatureMatchCentralDifferencesAndCurvatureIsPositive) {
-  std::mt19937 rng(5);
+// check(eq, v, f, sparsity, label) for 200 random forces f on each vertex v of every option
+// set: L2 alone, pushing only (a half-space, frictionless, friction 0.6), each with and
+// without the sparse term.
+template <class Check>
+void ForEachOptionsAndForce(unsigned seed, Check check) {
+  std::mt19937 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (bool pushing : {false, true}) {
     for (double friction : {-1.0, 0.0, 0.6}) {
@@ -44,35 +48,10 @@ TEST(EquilibriumPenalty, GradientAndCurvatureMatchCentralDifferencesAndCurvature
         for (int trial = 0; trial < 200; ++trial) {
           for (int v = 0; v < 3; ++v) {
             const Eigen::Vector3d f(normal(rng), normal(rng), normal(rng));
-            Eigen::Vector3d g;
-            Eigen::Matrix3d c;
-            const double value = eq.Penalty(v, f, &g, &c);
-            EXPECT_GE(value, 0.0);
-            const double h = 1e-6;
-            for (int k = 0; k < 3; ++k) {
-              Eigen::Vector3d fp = f, fm = f;
-              fp[k] += h;
-              fm[k] -= h;
-              const double slope = (eq.Penalty(v, fp, nullptr, nullptr) - eq.Penalty(v, fm, nullptr, nullptr)) / (2 * h);
-              EXPECT_NEAR(g[k], slope, 1e-5 * (1.0 + g.norm())) << "vertex " << v << " pushing " << pushing
-                                                                 << " friction " << friction;
-            }
-            // The cone's curvature is exact (the sparse term's is a majorizer): the gradient's
-            // central differences, away from the cone's edges (random f are, almost surely).
-            if (sparsity == 0.0) {
-              for (int k = 0; k < 3; ++k) {
-                Eigen::Vector3d fp = f, fm = f, gp, gm;
-                fp[k] += h;
-                fm[k] -= h;
-                eq.Penalty(v, fp, &gp, nullptr);
-                eq.Penalty(v, fm, &gm, nullptr);
-                EXPECT_LT((c.col(k) - (gp - gm) / (2 * h)).norm(), 1e-5 * (1.0 + c.norm()))
-                    << "vertex " << v << " pushing " << pushing << " friction " << friction << " f "
-                    << Format(f);
-              }
-            }
-            EXPECT_LT((c - c.transpose()).norm(), 1e-12 * (1.0 + c.norm()));
-            EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().minCoeff(), -1e-12);
+            const std::string label = "vertex " + std::to_string(v) + " pushing " + std::to_string(pushing) +
+                                      " friction " + std::to_string(friction) + " sparsity " + std::to_string(sparsity) +
+                                      " f " + Format(f);
+            check(eq, v, f, sparsity, label);
           }
         }
       }
@@ -80,42 +59,61 @@ TEST(EquilibriumPenalty, GradientAndCurvatureMatchCentralDifferencesAndCurvature
   }
 }
 
+TEST(EquilibriumPenalty, GradientAndCurvatureMatchCentralDifferencesAndCurvatureIsPositive) {
+  ForEachOptionsAndForce(5, [](const energy::Equilibrium& eq, int v, const Eigen::Vector3d& f, double sparsity,
+                               const std::string& label) {
+    Eigen::Vector3d g;
+    Eigen::Matrix3d c;
+    const double value = eq.Penalty(v, f, &g, &c);
+    EXPECT_GE(value, 0.0);
+    const double h = 1e-6;
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d fp = f, fm = f;
+      fp[k] += h;
+      fm[k] -= h;
+      const double slope = (eq.Penalty(v, fp, nullptr, nullptr) - eq.Penalty(v, fm, nullptr, nullptr)) / (2 * h);
+      EXPECT_NEAR(g[k], slope, 1e-5 * (1.0 + g.norm())) << label;
+    }
+    // The cone's curvature is exact (the sparse term's is a majorizer): the gradient's
+    // central differences, away from the cone's edges (random f are, almost surely).
+    if (sparsity == 0.0) {
+      for (int k = 0; k < 3; ++k) {
+        Eigen::Vector3d fp = f, fm = f, gp, gm;
+        fp[k] += h;
+        fm[k] -= h;
+        eq.Penalty(v, fp, &gp, nullptr);
+        eq.Penalty(v, fm, &gm, nullptr);
+        EXPECT_LT((c.col(k) - (gp - gm) / (2 * h)).norm(), 1e-5 * (1.0 + c.norm())) << label;
+      }
+    }
+    EXPECT_LT((c - c.transpose()).norm(), 1e-12 * (1.0 + c.norm()));
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().minCoeff(), -1e-12);
+  });
+}
+
 // The least-squares form (for the Ceres back end): 1/2 |r|^2 plus the sparse term is the
 // penalty, and dr/df matches the residuals' central differences.
 TEST(EquilibriumPenalty, ResidualsAreThePenaltyAsLeastSquares) {
-  std::mt19937 rng(7);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (bool pushing : {false, true}) {
-    for (double friction : {-1.0, 0.0, 0.6}) {
-      if (friction >= 0 && !pushing) continue;
-      for (double sparsity : {0.0, 0.3}) {
-        const energy::Equilibrium eq = Sites(pushing, friction, sparsity);
-        for (int trial = 0; trial < 200; ++trial) {
-          for (int v = 0; v < 3; ++v) {
-            const Eigen::Vector3d f(normal(rng), normal(rng), normal(rng));
-            Eigen::Matrix<double, 6, 1> r, rp, rm;
-            Eigen::Matrix<double, 6, 3> j, unused;
-            eq.Residuals(v, f, &r, &j);
-            const double s = eq.sparsity[static_cast<size_t>(v)];
-            const double floor = eq.sparsity_floor;
-            const double sparse = s * (std::sqrt(f.squaredNorm() + floor * floor) - floor);
-            EXPECT_NEAR(0.5 * r.squaredNorm() + sparse, eq.Penalty(v, f, nullptr, nullptr), 1e-12 * (1.0 + r.squaredNorm()))
-                << "vertex " << v << " pushing " << pushing << " friction " << friction;
-            const double h = 1e-6;
-            for (int k = 0; k < 3; ++k) {
-              Eigen::Vector3d fp = f, fm = f;
-              fp[k] += h;
-              fm[k] -= h;
-              eq.Residuals(v, fp, &rp, &unused);
-              eq.Residuals(v, fm, &rm, &unused);
-              EXPECT_LT((j.col(k) - (rp - rm) / (2 * h)).norm(), 1e-5 * (1.0 + j.norm()))
-                  << "vertex " << v << " pushing " << pushing << " friction " << friction << " f " << Format(f);
-            }
-          }
-        }
-      }
+  ForEachOptionsAndForce(7, [](const energy::Equilibrium& eq, int v, const Eigen::Vector3d& f, double /*sparsity*/,
+                               const std::string& label) {
+    Eigen::Matrix<double, 6, 1> r, rp, rm;
+    Eigen::Matrix<double, 6, 3> j, unused;
+    eq.Residuals(v, f, &r, &j);
+    const double s = eq.sparsity[static_cast<size_t>(v)];
+    const double floor = eq.sparsity_floor;
+    const double sparse = s * (std::sqrt(f.squaredNorm() + floor * floor) - floor);
+    EXPECT_NEAR(0.5 * r.squaredNorm() + sparse, eq.Penalty(v, f, nullptr, nullptr), 1e-12 * (1.0 + r.squaredNorm()))
+        << label;
+    const double h = 1e-6;
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d fp = f, fm = f;
+      fp[k] += h;
+      fm[k] -= h;
+      eq.Residuals(v, fp, &rp, &unused);
+      eq.Residuals(v, fm, &rm, &unused);
+      EXPECT_LT((j.col(k) - (rp - rm) / (2 * h)).norm(), 1e-5 * (1.0 + j.norm())) << label;
     }
-  }
+  });
 }
 
 TEST(EquilibriumPenalty, PushingOnlyCostsNothingMoreInsideTheConeAndTheSupportNothing) {

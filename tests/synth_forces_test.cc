@@ -19,30 +19,39 @@ namespace {
 
 using testing_util::TempDir;
 
+// The synth sequence of a scene's text, made in a temporary folder: its forces.csv in *forces
+// (with its force columns) and the report in *report.
+::testing::AssertionResult SynthForces(const std::string& text, std::vector<ForceFrame>* forces,
+                                       SynthReport* report = nullptr) {
+  Scene scene;
+  Status status = ParseScene(text, "synth.yaml", "", &scene);
+  if (!status.ok()) return ::testing::AssertionFailure() << status.message();
+  TempDir dir;
+  SynthReport local;
+  status = GenerateSynthSequence(scene, dir.path(), 0, report != nullptr ? report : &local);
+  if (!status.ok()) return ::testing::AssertionFailure() << status.message();
+  bool has_columns = false;
+  status = ReadForces(dir.path() + "/forces.csv", forces, &has_columns);
+  if (!status.ok()) return ::testing::AssertionFailure() << status.message();
+  if (!has_columns) return ::testing::AssertionFailure() << "forces.csv has no force columns";
+  return ::testing::AssertionSuccess();
+}
+
 // A force far below the forward solve's tolerance times the forces that act, but far above
 // what the solve left unbalanced, is a force: 1 mN sideways on the top of a block that weighs
 // 0.3 N, solved to a loose tolerance, is written as it acts.
 TEST(SynthSequenceTest, ASmallForceAboveTheSolvesLeftoverIsKept) {
-  Scene scene;
   // The block of the press scenes with its tool kept above it.
-  const Status parsed = ParseScene(
-      testing_util::BlockPressSynthScene(
-          "  frames: 1\n  ground_truth: {refinement: 2}\n", "{frame: 1}",
-          "anchors:\n"
-          "  - {name: table, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, hard: true}\n"
-          "gravity: [0, 0, -9.81]\n"
-          "forward: {tolerance: 1e-4}\n"
-          "loads:\n"
-          "  - {select: {box: {min: [-1, -1, 0.0199], max: [1, 1, 1]}}, force: [0.001, 0, 0]}\n"),
-      "small.yaml", "", &scene);
-  ASSERT_TRUE(parsed.ok()) << parsed.message();
-  TempDir dir;
-  SynthReport report;
-  const Status status = GenerateSynthSequence(scene, dir.path(), 0, &report);
-  ASSERT_TRUE(status.ok()) << status.message();
   std::vector<ForceFrame> forces;
-  bool has_columns = false;
-  ASSERT_TRUE(ReadForces(dir.path() + "/forces.csv", &forces, &has_columns).ok());
+  ASSERT_TRUE(SynthForces(testing_util::BlockPressSynthScene(
+                              "  frames: 1\n  ground_truth: {refinement: 2}\n", "{frame: 1}",
+                              "anchors:\n"
+                              "  - {name: table, select: {box: {min: [-1, -1, -1], max: [1, 1, 0.0001]}}, hard: true}\n"
+                              "gravity: [0, 0, -9.81]\n"
+                              "forward: {tolerance: 1e-4}\n"
+                              "loads:\n"
+                              "  - {select: {box: {min: [-1, -1, 0.0199], max: [1, 1, 1]}}, force: [0.001, 0, 0]}\n"),
+                          &forces));
   ASSERT_EQ(forces.size(), 1u);
   EXPECT_NEAR(forces[0].force.x(), 0.001, 1e-5);
   EXPECT_NEAR(forces[0].force.tail<2>().norm(), 0.0, 1e-5);  // the weight and the clamp's reaction
@@ -86,20 +95,11 @@ TEST(SynthSequenceTest, ForcesAreWhatTheAnchorsDoNotHold) {
   std::vector<double> pushes;
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    Scene scene;
-    const Status parsed =
-        ParseScene(testing_util::BlockPressSynthScene(synth, "{frame: 1, translation: [0, 0, -0.014]}", c.anchors),
-                   "press.yaml", "", &scene);
-    ASSERT_TRUE(parsed.ok()) << parsed.message();
-    TempDir dir;
     SynthReport report;
-    const Status status = GenerateSynthSequence(scene, dir.path(), 0, &report);
-    ASSERT_TRUE(status.ok()) << status.message();
-    EXPECT_GT(report.truth_vertices, report.tracked_vertices);
     std::vector<ForceFrame> forces;
-    bool has_columns = false;
-    ASSERT_TRUE(ReadForces(dir.path() + "/forces.csv", &forces, &has_columns).ok());
-    ASSERT_TRUE(has_columns);
+    ASSERT_TRUE(SynthForces(testing_util::BlockPressSynthScene(synth, "{frame: 1, translation: [0, 0, -0.014]}", c.anchors),
+                            &forces, &report));
+    EXPECT_GT(report.truth_vertices, report.tracked_vertices);
     ASSERT_EQ(forces.size(), 2u);
     EXPECT_LT(forces[0].force.norm(), 1e-9);  // the tool above the block
     if (c.pressed) {
@@ -139,18 +139,9 @@ TEST(SynthSequenceTest, AnAnchorBoxWithNoTruthVertexHoldsTheNearestOnes) {
         "anchors:\n" + clamp +
         (edge_anchored ? "  - {name: edge, select: {box: {min: [-1, -1, 0.0099], max: [0.0001, 0.0001, 0.0101]}}}\n"
                        : "");
-    Scene scene;
-    const Status parsed = ParseScene(
-        testing_util::BlockPressSynthScene(synth, "{frame: 1, translation: [0, 0, -0.014]}", load + anchors),
-        "edge.yaml", "", &scene);
-    ASSERT_TRUE(parsed.ok()) << parsed.message();
-    TempDir dir;
-    SynthReport report;
-    const Status status = GenerateSynthSequence(scene, dir.path(), 0, &report);
-    ASSERT_TRUE(status.ok()) << status.message();
     std::vector<ForceFrame> forces;
-    bool has_columns = false;
-    ASSERT_TRUE(ReadForces(dir.path() + "/forces.csv", &forces, &has_columns).ok());
+    ASSERT_TRUE(SynthForces(
+        testing_util::BlockPressSynthScene(synth, "{frame: 1, translation: [0, 0, -0.014]}", load + anchors), &forces));
     ASSERT_EQ(forces.size(), 2u);
     EXPECT_LT(forces[1].force.z(), -0.5);  // the tool's push either way
     sideways.push_back(forces[1].force.x());
