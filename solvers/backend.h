@@ -83,6 +83,13 @@ class Backend {
   // Minimizes problem from *x (#V by 3, updated in place; fixed vertices do not move).
   // time_limit_s <= 0: no limit. On failure *x is left at the last accepted iterate.
   virtual SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) = 0;
+  // As Solve, for a look-ahead whose result the caller throws away: what the back end
+  // carries from one solve to the next is left as it was, so that the next Solve does as it
+  // would have done without this one. (The fast back end's classic solve carries its factor
+  // on, as in Solve: only equilibrium problems are solved aside by the tracker.)
+  virtual SolveReport SolveAside(const energy::Problem& problem, double time_limit_s, Vertices* x) {
+    return Solve(problem, time_limit_s, x);
+  }
 };
 
 std::unique_ptr<Backend> MakeBackend(const BackendOptions& options);

@@ -215,7 +215,9 @@ TEST(EquilibriumSolve, BothBackEndsReachTheSameStationaryPointOfTheEnergy) {
       results.push_back(x);
     }
     // The same shape: within a thousandth of the data's 1 cm pull.
-    if (results.size() == 2) EXPECT_LT((results[0] - results[1]).rowwise().norm().maxCoeff(), 1e-5);
+    if (results.size() == 2) {
+      EXPECT_LT((results[0] - results[1]).rowwise().norm().maxCoeff(), 1e-5);
+    }
   }
 }
 

@@ -99,8 +99,10 @@ TEST(AdaptForceWeight, FramesWithoutAMeasuredRatioAreLeftOut) {
   EXPECT_FALSE(AdaptForceWeight(nan, &state));
   EXPECT_FALSE(AdaptForceWeight(std::numeric_limits<double>::infinity(), &state));
   EXPECT_TRUE(state.misfit_ratios.empty());
-  Feed(&state, {1.5, 0.0, 1.5, nan, 1.5});
-  EXPECT_LT(state.force_weight_scale, 1.0);
+  Feed(&state, {1.5, 0.0, 1.5, nan});
+  EXPECT_EQ(state.force_weight_scale, 1.0);  // two measured frames decide nothing
+  EXPECT_TRUE(AdaptForceWeight(1.5, &state));
+  EXPECT_NEAR(state.force_weight_scale, 1.0 / std::sqrt(10.0), 1e-12);
 }
 
 #ifdef FEMREG_CLI_PATH
@@ -108,6 +110,48 @@ double Mean(const std::vector<std::string>& cells) {
   double sum = 0.0;
   for (const std::string& c : cells) sum += std::stod(c);
   return cells.empty() ? 0.0 : sum / static_cast<double>(cells.size());
+}
+
+// The leading frames whose shape, energy and forces two runs' stats agree on (to their six
+// printed digits): where adapting the weight has not moved it yet, the check before a fall
+// (a solve aside) must leave the frame and the ones after it as they were.
+size_t AgreeingFrames(const std::string& a, const std::string& b) {
+  size_t agree = std::numeric_limits<size_t>::max();
+  for (const char* column : {"e_total", "e_equilibrium", "err_mean_mm", "force_x_N", "force_y_N", "force_z_N"}) {
+    const std::vector<std::string> x = testing_util::StatsColumn(a, column), y = testing_util::StatsColumn(b, column);
+    size_t i = 0;
+    while (i < x.size() && i < y.size()) {
+      const double u = std::stod(x[i]), v = std::stod(y[i]);
+      if (std::fabs(u - v) > 1e-5 * std::max(std::fabs(u), std::fabs(v)) + 1e-12) break;
+      ++i;
+    }
+    agree = std::min(agree, i);
+  }
+  return agree;
+}
+
+// The first frame whose last three measured misfit ratios have a median above `bound`: the
+// first check before a fall (frames with no ratio measured are not counted).
+size_t FirstCheck(const std::vector<std::string>& ratios, double bound) {
+  std::vector<double> window;
+  for (size_t i = 0; i < ratios.size(); ++i) {
+    const double r = std::stod(ratios[i]);
+    if (!(r > 0.0)) continue;
+    window.push_back(r);
+    if (window.size() > 3) window.erase(window.begin());
+    if (window.size() < 3) continue;
+    std::vector<double> sorted = window;
+    std::sort(sorted.begin(), sorted.end());
+    if (sorted[1] > bound) return i;
+  }
+  return ratios.size();
+}
+
+// The first frame solved at a lowered weight.
+size_t FirstLowered(const std::vector<std::string>& weights, double weight) {
+  size_t i = 0;
+  while (i < weights.size() && std::stod(weights[i]) == weight) ++i;
+  return i;
 }
 
 // block_press: a tool presses 12 mm into a block and hides its footprint; the default weight
@@ -140,12 +184,17 @@ TEST(AdaptiveForceWeight, LowersThePenaltyWhereTheForcesLeaveMisfitAndGetsThePus
     EXPECT_GT(highest_ratio, 1.2) << "the press leaves more misfit than the classic fit";
     if (adaptive) {
       EXPECT_LT(lowest, 0.5);
-      EXPECT_GE(lowest, kMinForceWeightScale);
       EXPECT_EQ(std::stod(weights.front()), 1.0);  // before the press
     } else {
       EXPECT_EQ(lowest, 1.0);
     }
   }
+  // The frames before the first at the lower weight, the checking one included, are the fixed
+  // weight's.
+  const size_t lowered = FirstLowered(testing_util::StatsColumn(tmp.path() + "/adaptive", "force_weight"), 1.0);
+  ASSERT_GT(lowered, 0u);
+  ASSERT_LT(lowered, truth.size());
+  EXPECT_GE(AgreeingFrames(tmp.path() + "/fixed", tmp.path() + "/adaptive"), lowered);
   std::printf("block_press: force error %.1f %% -> %.1f %%, mean vertex error %.3f -> %.3f mm\n",
               100 * force_error[0], 100 * force_error[1], vertex_error[0], vertex_error[1]);
   EXPECT_LT(force_error[1], force_error[0] - 0.05);
@@ -169,6 +218,13 @@ TEST(AdaptiveForceWeight, DoesNotLetTheForcesPullTheBodyIntoAnOccluder) {
     ASSERT_EQ(r.code, 0) << r.out;
     error[adaptive] = Mean(testing_util::StatsColumn(out, "err_mean_mm"));
   }
+  // The check leaves the frame it checks as it was: up to the first lowered frame, the fixed
+  // weight's frames.
+  const std::string adapted = tmp.path() + "/adaptive";
+  const size_t check = FirstCheck(testing_util::StatsColumn(adapted, "misfit_ratio"), 1.1);
+  const size_t lowered = FirstLowered(testing_util::StatsColumn(adapted, "force_weight"), 1.0);
+  ASSERT_LT(check, lowered);
+  EXPECT_GE(AgreeingFrames(tmp.path() + "/fixed", adapted), lowered);
   std::printf("hand_press: mean vertex error %.3f mm at weight 1, %.3f mm adapted (bound 1.1)\n", error[0], error[1]);
   EXPECT_LT(error[1], 1.08 * error[0]);
 }

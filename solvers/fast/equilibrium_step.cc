@@ -479,6 +479,15 @@ void EquilibriumSolver::set_threads(int threads) {
   impl_->projected.set_threads(threads);
 }
 
+SolveReport EquilibriumSolver::SolveAside(const energy::Problem& problem, double time_limit_s, Vertices* x) {
+  const bool shift_data = impl_->shift_data;
+  const uint64_t pattern_revision = impl_->pattern_revision;
+  SolveReport report = Solve(problem, time_limit_s, x);
+  // The same pattern (the next Solve would not measure K~'s factor again): its mode as before.
+  if (impl_->pattern_revision == pattern_revision) impl_->shift_data = shift_data;
+  return report;
+}
+
 SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
   const auto start = Clock::now();
   Impl& m = *impl_;

@@ -33,6 +33,8 @@ class EquilibriumSolver {
   ~EquilibriumSolver();
   // As Backend::Solve, for a problem with an equilibrium (problem.equilibrium() not null).
   SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x);
+  // As Solve, leaving the step mode it learns from solve to solve as it was (Backend::SolveAside).
+  SolveReport SolveAside(const energy::Problem& problem, double time_limit_s, Vertices* x);
   // The threads of the next solves (the results do not depend on them).
   void set_threads(int threads);
 

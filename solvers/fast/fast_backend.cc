@@ -332,6 +332,16 @@ Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx,
   return b;
 }
 
+SolveReport FastBackend::SolveAside(const energy::Problem& problem, double time_limit_s, Vertices* x) {
+  Impl& m = *impl_;
+  if (problem.equilibrium() == nullptr || !m.equilibrium || x->rows() != problem.num_vertices()) {
+    return Solve(problem, time_limit_s, x);
+  }
+  if (m.options.num_threads <= 0) m.SetThreads(ResolveThreadCount(0));
+  m.equilibrium->set_threads(m.threads);
+  return m.equilibrium->SolveAside(problem, time_limit_s, x);
+}
+
 SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) {
   const auto start = Clock::now();
   Impl& m = *impl_;

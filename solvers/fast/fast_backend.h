@@ -42,6 +42,7 @@ class FastBackend : public Backend {
   ~FastBackend() override;
   SolverBackend type() const override { return SolverBackend::kFast; }
   SolveReport Solve(const energy::Problem& problem, double time_limit_s, Vertices* x) override;
+  SolveReport SolveAside(const energy::Problem& problem, double time_limit_s, Vertices* x) override;
 
  private:
   struct Impl;

@@ -155,6 +155,12 @@ int Equilibrium::PenaltyPiece(int v, const Eigen::Vector3d& f) const {
   return static_cast<int>(OutsideCone(f, normal[static_cast<size_t>(v)], friction).region);
 }
 
+void Equilibrium::ScaleWeights(double factor) {
+  for (double& w : force_weight) w *= factor;
+  for (double& w : strong_weight) w *= factor;
+  for (double& w : sparsity) w *= factor;
+}
+
 bool Equilibrium::IsValid(int num_vertices) const {
   const size_t n = static_cast<size_t>(num_vertices);
   return site.size() == n && force_weight.size() == n && strong_weight.size() == n &&

@@ -71,6 +71,8 @@ struct Equilibrium {
   // cone), 1 beyond the half-space's face, 2 beyond the cone's side, 3 beyond its apex. Each
   // is smooth; the penalty has kinks only between them.
   int PenaltyPiece(int v, const Eigen::Vector3d& f) const;
+  // alpha, beta and s times `factor` on every vertex: the penalty of forces.weight times it.
+  void ScaleWeights(double factor);
   // The size of every per-vertex list is #V (normal too with pushing_only); the held turns'
   // vertices are within #V.
   bool IsValid(int num_vertices) const;

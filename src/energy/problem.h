@@ -90,6 +90,7 @@ class Problem {
   // minimized; its gradient's penalty is (EnergyTerms::equilibrium). Null: off.
   void SetEquilibrium(std::shared_ptr<const Equilibrium> equilibrium) { equilibrium_ = std::move(equilibrium); }
   const Equilibrium* equilibrium() const { return equilibrium_.get(); }
+  const std::shared_ptr<const Equilibrium>& shared_equilibrium() const { return equilibrium_; }
 
   // The nodal-volume energy of nearly incompressible neo-Hookean objects (energy/nodal_volume.h),
   // part of the elastic group beside its blocks: Evaluate, the assembler and ForceResidual add

@@ -5,6 +5,7 @@
 #define FEMREG_REGISTRATION_FRAME_PROBLEM_H_
 
 #include <cstdint>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -84,6 +85,10 @@ class FrameProblem {
   // (solver.hold_hidden_turns; `data`, may be null, as for HoldHiddenTurns) at state.x. Every
   // outer iteration, after SetLoads and SetContacts; off (no equilibrium) unless `on`.
   void SetEquilibrium(const TrackerState& state, bool on, DataSurface* data = nullptr);
+  // Puts back an equilibrium the problem had (problem().shared_equilibrium()), or another.
+  void SetEquilibrium(std::shared_ptr<const energy::Equilibrium> equilibrium) {
+    problem_.SetEquilibrium(std::move(equilibrium));
+  }
   // The external forces on the vertices at state.x (N, #V by 3): what the elastic forces,
   // gravity and the loads leave unbalanced, the contacts' forces and the estimated ones
   // (without forces.estimate: the data term's pull). Zero at clamps and anchors (their

@@ -323,8 +323,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
   warm_until = 0;
-  misfit_reference = 0.0;
-  misfit_reference_x.resize(0, 3);
+  ResetMisfitReference();
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;
   stepping_in = false;
@@ -397,6 +396,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       warm_triangles.clear();
       paired_vertices.clear();
       ++(large_motion ? s.large_motion_restarts : s.crushed_restarts);
+      ResetMisfitReference();
       if (!go_on) {  // a crushed frame that had stopped goes on
         s.termination = TerminationType::kNotRun;
         s.stopped_by.clear();
@@ -426,6 +426,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         // After a large motion's restart the frame's start is far: with the forces estimated,
         // one outer iteration without the equilibrium terms first again (WarmStart).
         if (warm_until > 0) warm_until = iteration_base;
+        ResetMisfitReference();
         iteration_limit = iteration_base + iteration_budget;
         rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
         merit = std::numeric_limits<double>::infinity();
@@ -476,6 +477,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     }
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
+  const double solve_before_probe = s.time.solve;  // the weight's probe is a solve, not an output
   if (options.forces.estimate && options.forces.adaptive_weight && !state.held_before) {
     AdaptForceWeight(s.misfit_ratio, &state,
                      [&](double lower) { return LowerForceWeightPays(lower, pairs, t_frame, &s); });
@@ -486,7 +488,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
   MeasureForces(&s);
-  s.time.outputs = Seconds(t_outputs);
+  s.time.outputs = Seconds(t_outputs) - (s.time.solve - solve_before_probe);
   s.time.total = Seconds(t_frame);
   ++state.frame;
   return Status::Ok();

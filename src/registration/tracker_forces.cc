@@ -1,10 +1,13 @@
 // The tracker's forces after a frame: the estimated external forces and their resultant, and
 // forces.adaptive_weight's check before the weight falls (docs/guide/forces.md#choosing-the-weight).
+#include <algorithm>
 #include <chrono>
+#include <memory>
 #include <vector>
 
 #include "femreg/forward.h"
 #include "parallel/stopwatch.h"
+#include "energy/equilibrium.h"
 #include "registration/force_weight.h"
 #include "registration/frame_problem.h"
 #include "registration/tracker_impl.h"
@@ -15,24 +18,33 @@ namespace femreg {
 
 bool Tracker::Impl::LowerForceWeightPays(double lower_scale, const std::vector<DataPair>& pairs,
                                          Clock::time_point t_frame, FrameSummary* s) {
-  if (misfit_reference_x.rows() != state.x.rows() || pairs.empty()) return true;
+  // A lower weight must pay: with no classic fit to compare (a restart dropped it, the mesh
+  // changed), no pairs, or a frame that ended without its equilibrium terms, it does not.
+  const std::shared_ptr<const energy::Equilibrium> solved = frame_problem.problem().shared_equilibrium();
+  if (misfit_reference_x.rows() != state.x.rows() || pairs.empty() || !solved) return false;
   // Within solver.time_budget_s: a frame that used it up does not check, and keeps the weight.
   const double budget = state.options.solver.time_budget_s;
   if (budget > 0 && Seconds(t_frame) >= budget) return false;
-  const Vertices result = state.x;
-  const double scale = state.force_weight_scale;
   const double reference = frame_problem.problem().Evaluate(misfit_reference_x).data;
-  state.force_weight_scale = lower_scale;
-  frame_problem.SetEquilibrium(state, true, data_surface.get());
+  // The frame's own terms with the lower penalty, solved aside: the frame keeps its result,
+  // the problem its terms and the back end what it carries on; only the weight may move.
+  auto probe = std::make_shared<energy::Equilibrium>(*solved);
+  probe->ScaleWeights(lower_scale / state.force_weight_scale);
+  frame_problem.SetEquilibrium(std::move(probe));
+  Vertices x = state.x;
   const auto t0 = Clock::now();
-  const SolveReport report = backend->Solve(frame_problem.problem(), budget > 0 ? budget - Seconds(t_frame) : 0.0, &state.x);
+  const double time_left = budget > 0 ? std::max(1e-3, budget - Seconds(t_frame)) : 0.0;
+  const SolveReport report = backend->SolveAside(frame_problem.problem(), time_left, &x);
   s->time.solve += Seconds(t0);
-  // The frame keeps its result and the problem its weight: only the next frames' weight moves.
-  state.x = result;
-  state.force_weight_scale = scale;
-  frame_problem.SetEquilibrium(state, true, data_surface.get());
+  frame_problem.SetEquilibrium(solved);
+  s->factorizations += report.factorizations + report.hierarchies;
+  s->linear_solves += report.linear_solves;
+  s->pcg_iterations += report.pcg_iterations;
   if (!report.success) return false;
-  return report.after.data - reference <= kLowerWeightKeeps * (report.before.data - reference);
+  // The misfit the forces leave beyond the classic fit's: none, nothing for a lower weight to explain.
+  const double excess = report.before.data - reference;
+  if (!(excess > 0.0)) return false;
+  return report.after.data - reference <= kLowerWeightKeeps * excess;
 }
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {

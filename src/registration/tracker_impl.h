@@ -127,6 +127,11 @@ struct Tracker::Impl {
   // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).
   double misfit_reference = 0.0;
   Vertices misfit_reference_x;  // that warm start's shape
+  // A frame's start, and a restart's: the misfit of another shape or pair set is no reference.
+  void ResetMisfitReference() {
+    misfit_reference = 0.0;
+    misfit_reference_x.resize(0, 3);
+  }
   // Frames held or lost since the last one solved: the next solved frame catches up with
   // their motion too, and has iteration_budget outer iterations from each start (a restart
   // counts again): solver.max_outer_iterations per frame it makes up for, up to
