@@ -1,5 +1,6 @@
 #include "solvers/fast/closing_contacts.h"
 
+#include <algorithm>
 #include <type_traits>
 
 #include "energy/contact.h"
@@ -17,15 +18,21 @@ struct IsContactPenalty<energy::ContactPenalty<N>> : std::true_type {};
 
 }  // namespace
 
-int ClosingContacts::Find(const energy::Problem& problem, const Vertices& x, const Eigen::VectorXd& dx) {
-  closing_.clear();
+int ClosingContacts::Find(const energy::Problem& problem, const Vertices& x, const Eigen::VectorXd& dx,
+                          bool add) {
+  if (!add) Clear();
+  const size_t before_count = closing_.size();
+  int set_index = -1;
   problem.ForEachSet([&](const auto& set) {
     using T = typename std::decay_t<decltype(set)>::Block;
+    ++set_index;
     if constexpr (IsContactPenalty<T>::value) {
       static_assert(T::kVertices <= 6, "a contact stencil has at most six vertices");
       // As the potential's assembly takes them: its groups, no robust loss.
       if (!energy::InGroups(energy::PhysicsGroups(), set.group()) || set.loss().robust()) return;
+      int block_index = -1;
       for (const T& b : set.blocks()) {
+        ++block_index;
         if (!(b.weight > 0.0)) continue;
         std::array<const double*, T::kVertices> at;
         for (int i = 0; i < T::kVertices; ++i) at[i] = x.row(b.vertices[i]).data();
@@ -35,6 +42,8 @@ int ClosingContacts::Find(const energy::Problem& problem, const Vertices& x, con
           after -= b.coefficients[i] * b.normal.dot(dx.segment<3>(3 * b.vertices[i]));
         }
         if (before > 0.0 || after <= 0.0) continue;
+        const std::pair<int, int> key(set_index, block_index);
+        if (add && std::find(keys_.begin(), keys_.end(), key) != keys_.end()) continue;
         Closing c;
         for (int i = 0; i < T::kVertices; ++i) {
           if (problem.is_fixed(b.vertices[i])) continue;
@@ -45,11 +54,14 @@ int ClosingContacts::Find(const energy::Problem& problem, const Vertices& x, con
         c.normal = b.normal;
         c.stiffness = b.weight;
         c.delta = before;
-        if (c.count > 0) closing_.push_back(c);
+        if (c.count > 0) {
+          closing_.push_back(c);
+          keys_.push_back(key);
+        }
       }
     }
   });
-  return static_cast<int>(closing_.size());
+  return static_cast<int>(closing_.size() - before_count);
 }
 
 void ClosingContacts::AddForce(Eigen::VectorXd* f) const {

@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <utility>
 #include <vector>
 
 #include "energy/problem.h"
@@ -22,8 +23,13 @@ class ClosingContacts {
  public:
   // The problem's contact penalties that are open at x (delta <= 0) and closed at x + dx.
   // Returns how many.
-  int Find(const energy::Problem& problem, const Vertices& x, const Eigen::VectorXd& dx);
-  void Clear() { closing_.clear(); }
+  // With `add`, those found before stay and only new ones are added (and counted).
+  int Find(const energy::Problem& problem, const Vertices& x, const Eigen::VectorXd& dx, bool add = false);
+  void Clear() {
+    closing_.clear();
+    keys_.clear();
+  }
+  bool empty() const { return closing_.empty(); }
   // f += their potential's gradient on the closed branch at x: k delta(x) d(delta)/dx.
   void AddForce(Eigen::VectorXd* f) const;
   // y += sum of k d(delta)/dx d(delta)/dx^T p: their share of K p.
@@ -38,6 +44,7 @@ class ClosingContacts {
     double stiffness = 0.0, delta = 0.0;  // k, and delta at x
   };
   std::vector<Closing> closing_;
+  std::vector<std::pair<int, int>> keys_;  // each one's penalty set (in ForEachSet's order) and block
 };
 
 }  // namespace fast_backend

@@ -57,6 +57,10 @@ constexpr double kGradientFloor = 1e-4;
 // iteration each. Not lower: hand_press's steps pass 30 now and then, and there the shifted
 // factor took more steps (docs/notes/2026-12-01-soft-modes.md).
 constexpr int kShiftAfterIterations = 60;
+// ResolveWithClosingContacts' re-solves of a step at most: one left hand_press's pushing-only
+// steps closing contacts the re-solved step did not model, each line search then cut short
+// (docs/notes/2026-12-03-closing-contacts-rounds.md).
+constexpr int kContactRounds = 3;
 // ResolveAcrossPenaltyKinks' re-solves of a step at most.
 constexpr int kPieceRounds = 3;
 
@@ -385,16 +389,23 @@ struct EquilibriumSolver::Impl {
 
   // Where *dx closes contacts that are open at x, solves the step again with them closed in
   // its model (solvers/fast/closing_contacts.h), and keeps that step if PCG converged and it
-  // goes downhill. The preconditioner stays x's (its factor and its coarse matrix): the change
-  // is a few rank-one terms. f, the penalties and G stay x's own.
+  // goes downhill; again with the contacts that step closes added, up to kContactRounds
+  // times (an active-set update of the step's piecewise-linear contact model). The
+  // preconditioner stays x's (its factor and its coarse matrix): the change is a few rank-one
+  // terms. f, the penalties and G stay x's own.
   void ResolveWithClosingContacts(const energy::Problem& problem, const Vertices& x, Eigen::VectorXd* dx,
                                   SolveReport* report) {
-    if (closing.Find(problem, x, *dx) == 0) return;
     const Eigen::VectorXd f_at_x = f;
-    closing.AddForce(&f);
-    Penalties(*problem.equilibrium());
-    Eigen::VectorXd resolved;
-    if (Pcg(-ModelGradient(), kMaxPcgIterations, &resolved, report) && resolved.dot(G) < 0.0) *dx = resolved;
+    for (int round = 0; round < kContactRounds; ++round) {
+      if (closing.Find(problem, x, *dx, /*add=*/round > 0) == 0) break;
+      f = f_at_x;
+      closing.AddForce(&f);
+      Penalties(*problem.equilibrium());
+      Eigen::VectorXd resolved;
+      if (!(Pcg(-ModelGradient(), kMaxPcgIterations, &resolved, report) && resolved.dot(G) < 0.0)) break;
+      *dx = resolved;
+    }
+    if (closing.empty()) return;
     f = f_at_x;
     Penalties(*problem.equilibrium());
     closing.Clear();
