@@ -417,11 +417,13 @@ struct EquilibriumSolver::Impl {
   // within the PCG iterations a factorization costs (past them a new step is cheaper), and
   // kept while PCG converges and the step goes downhill. Its model leaves out the contacts
   // the step closes (ResolveWithClosingContacts' model): with them hand_press, pushing only,
-  // erred the most of the versions tried (docs/notes/2026-12-02-penalty-kinks.md).
-  void ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
+  // erred the most of the versions tried (docs/notes/2026-12-02-penalty-kinks.md); Step
+  // solves for those its result closes afterwards. Whether it changed *dx.
+  bool ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
     const energy::Equilibrium& eq = *problem.equilibrium();
     int budget = std::min(factorization_iterations, kMaxPcgIterations);
-    if (!eq.pushing_only || budget <= 0) return;
+    if (!eq.pushing_only || budget <= 0) return false;
+    bool changed = false;
     PenaltyPieces pieces;
     pieces.Start(eq, f);
     bool remodelled = false;
@@ -436,8 +438,10 @@ struct EquilibriumSolver::Impl {
       budget -= report->pcg_iterations - before;
       if (!(converged && resolved.dot(G) < 0.0)) break;
       *dx = resolved;
+      changed = true;
     }
     if (remodelled) Penalties(eq);  // x's own model again
+    return changed;
   }
 
   // The step: a new factor of K~ at x, then PCG with it. A factor kept from an earlier step
@@ -459,7 +463,8 @@ struct EquilibriumSolver::Impl {
     // re-solve below is another system.)
     const int iterations = report->pcg_iterations - iterations_before;
     if (converged) ResolveWithClosingContacts(problem, x, dx, report);
-    if (converged) ResolveAcrossPenaltyKinks(problem, dx, report);
+    // The contacts the step across the kinks closes: its model had none of them.
+    if (converged && ResolveAcrossPenaltyKinks(problem, dx, report)) ResolveWithClosingContacts(problem, x, dx, report);
     shift_data = plain_values.empty() ? iterations > kShiftAfterIterations : iterations <= kShiftAfterIterations;
     if (converged) return true;
     // PCG's iterates lower the step's quadratic model from 0, so one that has not converged
