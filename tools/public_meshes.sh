@@ -23,6 +23,19 @@ fi
 MESHES=$(cd "$MESHES" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+# Registers $name's sequence into $work/$name/OUT (its log OUT.log) with the extra arguments;
+# says which variant failed, and how, if it did.
+register() {
+  local out=$1 what=$2
+  shift 2
+  if ! "$FEMREG" register --scene "$work/$name/seq/scene.yaml" --frames "$work/$name/seq/clouds" \
+      --ground-truth "$work/$name/seq/ground_truth" --out "$work/$name/$out" --no-progress "$@" \
+      > "$work/$name/$out.log" 2>&1; then
+    echo "public_meshes: femreg register$what failed on $scene:" >&2
+    tail -20 "$work/$name/$out.log" >&2
+    return 1
+  fi
+}
 for scene in tools/public_meshes/*.yaml; do
   name=$(basename "$scene" .yaml)
   mesh=$(sed -n 's/^ *mesh: *//p' "$scene" | head -1)
@@ -40,38 +53,15 @@ for scene in tools/public_meshes/*.yaml; do
     tail -20 "$work/$name/synth.log" >&2
     exit 1
   fi
-  if ! "$FEMREG" register --scene "$work/$name/seq/scene.yaml" --frames "$work/$name/seq/clouds" \
-      --ground-truth "$work/$name/seq/ground_truth" --out "$work/$name/out" --no-progress \
-      > "$work/$name/register.log" 2>&1; then
-    echo "public_meshes: femreg register failed on $scene:" >&2
-    tail -20 "$work/$name/register.log" >&2
-    exit 1
-  fi
-  tail -3 "$work/$name/register.log" | head -2 >&2
-  # The same with the data weight per unit area instead of per pair (docs/theory/data-weight.md).
-  if ! "$FEMREG" register --scene "$work/$name/seq/scene.yaml" --frames "$work/$name/seq/clouds" \
-      --ground-truth "$work/$name/seq/ground_truth" --out "$work/$name/out_area" --no-progress \
-      --set registration.weights.data_per_area=2e7 > "$work/$name/register_area.log" 2>&1; then
-    echo "public_meshes: femreg register (per-area weight) failed on $scene:" >&2
-    tail -20 "$work/$name/register_area.log" >&2
-    exit 1
-  fi
-  # The same on the Ceres back end (docs/notes/2026-12-04-ceres-and-tiny-elements.md).
-  if ! "$FEMREG" register --scene "$work/$name/seq/scene.yaml" --frames "$work/$name/seq/clouds" \
-      --ground-truth "$work/$name/seq/ground_truth" --out "$work/$name/out_ceres" --no-progress \
-      --set registration.solver.backend=ceres > "$work/$name/register_ceres.log" 2>&1; then
-    echo "public_meshes: femreg register (Ceres) failed on $scene:" >&2
-    tail -20 "$work/$name/register_ceres.log" >&2
-    exit 1
-  fi
-  # The same with the forces estimated (the physical mode, docs/theory/equilibrium.md).
-  if ! "$FEMREG" register --scene "$work/$name/seq/scene.yaml" --frames "$work/$name/seq/clouds" \
-      --ground-truth "$work/$name/seq/ground_truth" --out "$work/$name/out_forces" --no-progress \
-      --set registration.forces.estimate=true > "$work/$name/register_forces.log" 2>&1; then
-    echo "public_meshes: femreg register (forces estimated) failed on $scene:" >&2
-    tail -20 "$work/$name/register_forces.log" >&2
-    exit 1
-  fi
+  # The defaults; the data weight per unit area instead of per pair
+  # (docs/theory/data-weight.md); the Ceres back end
+  # (docs/notes/2026-12-04-ceres-and-tiny-elements.md); the forces estimated (the physical
+  # mode, docs/theory/equilibrium.md).
+  register out "" || exit 1
+  tail -3 "$work/$name/out.log" | head -2 >&2
+  register out_area " (per-area weight)" --set registration.weights.data_per_area=2e7 || exit 1
+  register out_ceres " (Ceres)" --set registration.solver.backend=ceres || exit 1
+  register out_forces " (forces estimated)" --set registration.forces.estimate=true || exit 1
 done
 python3 - "$work" tools/public_meshes/*.yaml > docs/public_meshes.md <<'PY'
 import csv, glob, json, os, statistics, sys
