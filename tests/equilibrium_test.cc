@@ -158,7 +158,8 @@ TEST(EquilibriumSolve, BothBackEndsReachTheSameStationaryPointOfTheEnergy) {
     bool pushing_only;
     double friction, sparsity;
   };
-  for (const Case& c : {Case{"L2 penalty", false, -1.0, 0.0}, Case{"pushing only, frictionless, sparse", true, 0.0, 1e-2},
+  for (const Case& c : {Case{"L2 penalty", false, -1.0, 0.0},
+                        Case{"pushing only, frictionless, sparse", true, 0.0, 1e-2},
                         Case{"pushing only, friction 0.5", true, 0.5, 0.0}}) {
     SCOPED_TRACE(c.name);
     BoxProblem box(1);

@@ -417,16 +417,16 @@ struct EquilibriumSolver::Impl {
   // Where *dx carries forces across the pushing-only penalty's kinks, solves the step again
   // with the penalty modelled around the predicted forces (solvers/fast/penalty_pieces.h), on
   // the same factor; repeated while the predicted pieces change, up to kPieceRounds times,
-  // within the PCG iterations a factorization costs (past them a new step is cheaper; at least
-  // kMinPieceIterations), and
-  // kept while PCG converges and the step goes downhill. Its model leaves out the contacts
-  // the step closes (ResolveWithClosingContacts' model): with them hand_press, pushing only,
-  // erred the most of the versions tried (docs/notes/2026-12-02-penalty-kinks.md); Step
-  // solves for those its result closes afterwards. Whether it changed *dx.
+  // within the PCG iterations a factorization costs (past them a new step is cheaper; at
+  // least kMinPieceIterations), and kept while PCG converges and the step goes downhill. Its
+  // model leaves out the contacts the step closes (ResolveWithClosingContacts' model): with
+  // them hand_press, pushing only, erred the most of the versions tried
+  // (docs/notes/2026-12-02-penalty-kinks.md); Step solves for those its result closes
+  // afterwards. Whether it changed *dx.
   bool ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
     const energy::Equilibrium& eq = *problem.equilibrium();
-    int budget = std::min(std::max(factorization_iterations, kMinPieceIterations), kMaxPcgIterations);
     if (!eq.pushing_only) return false;
+    int budget = std::min(std::max(factorization_iterations, kMinPieceIterations), kMaxPcgIterations);
     bool changed = false;
     PenaltyPieces pieces;
     pieces.Start(eq, f);
