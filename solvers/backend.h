@@ -71,6 +71,12 @@ struct SolveReport {
   // preconditioner is kAuto and the vertex graph's estimate of the fill does not settle it.
   int analyses = 0;
   // The problem's energy where the solve started and where it ended (*x on return).
+  // The solve refused most of its steps (Ceres: an element that a step would invert shrinks
+  // the trust region to nothing; the fast back end: no cut of its first step lowered the
+  // energy; docs/theory/stopping.md#stalled). The largest entry of the energy's gradient (N)
+  // where the solve started, and where it stopped when it refused most of its steps.
+  bool mostly_refused = false;
+  double largest_force_before = 0.0, largest_force_after = 0.0;
   EnergyTerms before, after;
   // Where the time went (s). Ceres: linear_solve_s includes its factorizations.
   double assemble_s = 0.0, factorize_s = 0.0, linear_solve_s = 0.0, evaluate_s = 0.0;

@@ -390,6 +390,7 @@ enum class TerminationType {
   kSolverFailure,      // Ceres failed; the previous shape was kept
   kInvalidInput,       // e.g. every cloud point was NaN
   kTooFewPoints,       // too few points to constrain the object: the prediction was kept
+  kStalled,            // a stop rule held, but the last solve could not move (its steps refused)
 };
 const char* ToString(TerminationType t);
 
@@ -404,6 +405,10 @@ struct OuterIteration {
   double rms_residual = 0.0;    // m, over kept pairs, after the solve
   double max_move = 0.0;        // m, the largest vertex move of the solve
   double time_s = 0.0;
+  // The solve refused most of its steps and left the largest force (the energy's gradient)
+  // above half of where the frame's first solve started (Ceres; docs/theory/stopping.md#stalled).
+  bool stalled = false;
+  double largest_force_before = 0.0;  // N, where the solve started (Ceres; else 0)
 };
 
 // Wall time per stage of one frame (s). prealign: solver.rigid_prealign and, on the first

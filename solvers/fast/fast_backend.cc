@@ -445,6 +445,11 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     report.assemble_s += Seconds(t0);
   }
   m.positions = nullptr;
+  report.largest_force_before = first_gradient;
+  if (report.stop == StopReason::kNoDecrease && report.iterations == 1) {  // x is where g was assembled
+    report.mostly_refused = true;
+    report.largest_force_after = g.lpNorm<Eigen::Infinity>();
+  }
   if (report.success) report.message = std::string("fast back end: ") + ToString(report.stop);
   if (!x->allFinite()) {
     report.success = false;

@@ -126,6 +126,8 @@ const char* ToString(TerminationType t) {
       return "invalid_input";
     case TerminationType::kTooFewPoints:
       return "too_few_points";
+    case TerminationType::kStalled:
+      return "stalled";
   }
   return "unknown";
 }

@@ -8,7 +8,7 @@ namespace femreg {
 bool FrameSummary::IsSolutionUsable() const {
   return termination == TerminationType::kConverged ||
          termination == TerminationType::kMaxIterations ||
-         termination == TerminationType::kTimeBudget;
+         termination == TerminationType::kTimeBudget || termination == TerminationType::kStalled;
 }
 
 std::string FrameSummary::BriefReport() const {

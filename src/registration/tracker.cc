@@ -442,6 +442,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.message = "no outer iteration ran";
   }
   if (s.termination == TerminationType::kNoCorrespondences) state.x = previous;
+  if (s.termination == TerminationType::kConverged && !s.iterations.empty() && s.iterations.back().stalled) {
+    s.termination = TerminationType::kStalled;  // docs/theory/stopping.md#stalled
+    s.message += "; but the last solve refused most of its steps and left the forces unbalanced: stalled";
+  }
   if (state.collision) MeasureContacts(&s);
   if (options.forces.estimate) {
     s.force_weight = options.forces.weight * state.force_weight_scale;

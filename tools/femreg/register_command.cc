@@ -460,7 +460,7 @@ int RunRegister(const RegisterArgs& args) {
               "mean %.1f ms (%.1f frames/s)\n",
               t.frames, files.size(), t.usable, t.median_ms, t.median_ms > 0 ? 1e3 / t.median_ms : 0.0,
               t.mean_ms, t.fps);
-  constexpr int kTerminations = static_cast<int>(TerminationType::kTooFewPoints) + 1;
+  constexpr int kTerminations = static_cast<int>(TerminationType::kStalled) + 1;
   int counts[kTerminations] = {0};
   for (const FrameRecord& r : rows) ++counts[static_cast<int>(r.summary.termination)];
   std::printf("Terminations:");
@@ -468,6 +468,11 @@ int RunRegister(const RegisterArgs& args) {
     if (counts[k]) std::printf(" %s %d", ToString(static_cast<TerminationType>(k)), counts[k]);
   }
   std::printf("\n");
+  if (const int stalled = counts[static_cast<int>(TerminationType::kStalled)]) {
+    std::printf("  %d stalled: their solves refused most steps, each of which would invert an element or raise "
+                "the energy (tiny or flat elements? docs/guide/troubleshooting.md)\n",
+                stalled);
+  }
   if (t.have_errors) {
     std::printf("Vertex error vs ground truth (mm): mean %.2f, max %.2f | seen: mean %.2f, max %.2f "
                 "| hidden: mean %.2f, max %.2f\n",
