@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "energy/barrier.h"
 #include "energy/term.h"
@@ -108,6 +109,36 @@ TEST(InversionBarrier, GrowsWithoutBoundTowardsFlatAndItsForceBalances) {
   }
   // (j - J)^2 log(j / J): from J = j/2 to J = 1e-9 it grows by 4 log(2e8) / log 2 ~ 110.
   EXPECT_GT(previous, 100.0 * at_tenth);
+}
+
+TEST(InversionBarrier, AStepIsCutInsideTheZoneNotAtTheWall) {
+  // A step that turns the element inside out (to -1 times its volume) and one that squeezes
+  // it to 0.6: the first is cut where the volume ratio is half the threshold (0.1), the second
+  // is not cut; from inside the zone (0.15), the cut keeps half of the volume (0.075).
+  std::mt19937 rng(17);
+  const ElementRest rest = testing_util::RandomRest(&rng, 0.3);
+  const Eigen::Matrix3d Q = testing_util::RandomRotation(&rng);
+  auto at = [&](double ratio) { return Deformed(rest, Q * Eigen::Vector3d(1.0, 1.0, ratio).asDiagonal()); };
+  std::vector<energy::TermSet<energy::InversionBarrier>> sets;
+  sets.emplace_back(energy::TermGroup::kElastic, energy::Loss());
+  sets.back().Add(energy::InversionBarrier({{0, 1, 2, 3}}, rest, 1.0, 0.2));
+  auto ratio_after = [&](double from, double to, double* t) {
+    const Vertices x = at(from);
+    const Vertices y = at(to);
+    Eigen::VectorXd dx(12);
+    for (int v = 0; v < 4; ++v) dx.segment<3>(3 * v) = (y.row(v) - x.row(v)).transpose();
+    *t = energy::UprightFraction(sets, x, dx, 1.0);
+    Vertices z = x;
+    for (int v = 0; v < 4; ++v) z.row(v) += *t * dx.segment<3>(3 * v).transpose();
+    const auto p = energy::StencilPositions(sets.back().blocks()[0], z);
+    return energy::VolumeRatio(rest, p.data());
+  };
+  double t = 0.0;
+  EXPECT_NEAR(ratio_after(1.0, -1.0, &t), 0.1, 1e-9);
+  EXPECT_NEAR(t, 0.45, 1e-9);  // the ratio is linear in t along this step: 1 - 2 t = 0.1
+  EXPECT_NEAR(ratio_after(1.0, 0.6, &t), 0.6, 1e-12);
+  EXPECT_EQ(t, 1.0);
+  EXPECT_NEAR(ratio_after(0.15, -0.5, &t), 0.075, 1e-9);
 }
 
 }  // namespace

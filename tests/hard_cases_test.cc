@@ -267,6 +267,34 @@ TEST_P(HardCases, NearlyFlatElements) {
   }
 }
 
+TEST_P(HardCases, TinyCornerCell) {
+  // The beam's last layer of cells along x, y and z 0.05 mm thick: at the free end a cell
+  // 0.05 mm across, needles along the three edges that meet there, slabs under three faces.
+  // The noise (0.2 mm) pulls their vertices apart or through each other, which would invert
+  // them. The fast back end's line search cuts such steps inside the barrier's zone; Ceres
+  // refuses them and its trust region shrinks to nothing: the frame must then say "stalled",
+  // not "converged" (docs/theory/stopping.md#stalled).
+  TetMesh mesh = Beam();
+  for (int v = 0; v < mesh.num_vertices(); ++v) {
+    if (mesh.rest(v, 0) > kLength - 1e-9) mesh.rest(v, 0) = 0.9 * kLength + 5e-5;
+    if (mesh.rest(v, 1) > kWidth - 1e-9) mesh.rest(v, 1) = 0.5 * kWidth + 5e-5;
+    if (mesh.rest(v, 2) > kWidth - 1e-9) mesh.rest(v, 2) = 0.5 * kWidth + 5e-5;
+  }
+  ASSERT_TRUE(FinalizeMesh(&mesh).ok());
+  Vertices truth;
+  const auto clouds = BendClouds(mesh, 0.02, &truth);
+  const Outcome o = RunCase(mesh, Foam(), Options(), clouds, truth);
+  Record("a cell 0.05 mm across at the free end", GetParam(), o);
+  EXPECT_TRUE(o.finite);
+  EXPECT_EQ(o.inverted, 0);
+  if (GetParam() == SolverBackend::kCeres) {
+    EXPECT_EQ(o.termination, TerminationType::kStalled) << o.message;
+  } else {
+    EXPECT_EQ(o.termination, TerminationType::kConverged) << o.message;
+    EXPECT_LT(o.mean_error, kFollowed) << o.message;
+  }
+}
+
 TEST_P(HardCases, BadClouds) {
   const TetMesh mesh = Beam();
   Vertices truth;

@@ -312,7 +312,7 @@ Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx,
   Backtracked b;
   const int n = static_cast<int>(x->rows());
   double alpha = 1.0;
-  for (int halving = 0; halving < halvings; ++halving, alpha *= 0.5) {
+  for (int halving = 0; halving < halvings; ++halving) {
     *trial = *x;
     for (int v = 0; v < n; ++v) trial->row(v) += alpha * dx.segment<3>(3 * v).transpose();
     const auto t0 = Clock::now();
@@ -323,6 +323,13 @@ Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx,
       b.accepted = true;
       break;
     }
+    // An element the step flattens: at most to where it keeps half its volume, inside the
+    // barrier's zone (docs/theory/inversion.md#why-no-step-crosses-it). Halving alone could take
+    // more tries than allowed where a tiny element is a thousandth of the step from its wall.
+    const double half = 0.5 * alpha;
+    alpha = std::isfinite(b.energy)
+                ? half
+                : std::min(half, energy::UprightFraction(problem.SetsOf<energy::InversionBarrier>(), *x, dx, alpha));
   }
   if (!b.accepted) return b;
   b.alpha = alpha;

@@ -120,5 +120,31 @@ bool InversionBarrier::SecondOrder(const double* const* x, double* energy, Eigen
   return true;
 }
 
+double UprightFraction(const std::vector<TermSet<InversionBarrier>>& sets, const Vertices& x,
+                       const Eigen::VectorXd& dx, double alpha) {
+  double t = alpha;
+  for (const TermSet<InversionBarrier>& set : sets) {
+    for (const InversionBarrier& b : set.blocks()) {
+      // The triple product det D_s along the step, at a fraction s of it.
+      auto triple = [&](double s) {
+        Eigen::Vector3d p[4];
+        for (int i = 0; i < 4; ++i) {
+          p[i] = x.row(b.vertices[i]).transpose() + s * dx.segment<3>(3 * b.vertices[i]);
+        }
+        return (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]));
+      };
+      const double target = 0.5 * std::min(b.wall, triple(0.0));
+      if (!(target > 0.0) || triple(t) > target) continue;
+      double lo = 0.0, hi = t;  // triple(lo) > target >= triple(hi)
+      for (int k = 0; k < 40; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (triple(mid) > target ? lo : hi) = mid;
+      }
+      t = lo;
+    }
+  }
+  return t;
+}
+
 }  // namespace energy
 }  // namespace femreg

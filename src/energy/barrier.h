@@ -11,8 +11,11 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <vector>
 
+#include "energy/term.h"
 #include "femreg/fem.h"
+#include "femreg/mesh.h"
 
 namespace femreg {
 namespace energy {
@@ -57,6 +60,14 @@ struct InversionBarrier {
 
 // The volume ratio det F of an element at positions x[0..3].
 double VolumeRatio(const ElementRest& rest, const double* const* x);
+
+// The largest fraction t <= alpha of the step dx (3 per vertex) from x after which, for all
+// t' in [0, t] as bisection finds it, every barrier element keeps at least half of its volume
+// at x and at least half of the barrier's threshold volume: a step cut to t lands inside the
+// barrier's zone, not at its wall, so that the next step has its curvature. alpha when no
+// element comes that close along alpha dx.
+double UprightFraction(const std::vector<TermSet<InversionBarrier>>& sets, const Vertices& x,
+                       const Eigen::VectorXd& dx, double alpha);
 
 }  // namespace energy
 }  // namespace femreg

@@ -61,6 +61,10 @@ class Problem {
   std::vector<TermSet<T>>& SetsOf() {
     return std::get<std::vector<TermSet<T>>>(sets_);
   }
+  template <class T>
+  const std::vector<TermSet<T>>& SetsOf() const {
+    return std::get<std::vector<TermSet<T>>>(sets_);
+  }
   // Removes every set of the group (the blocks that change per frame or per iteration).
   void Clear(TermGroup group);
 
