@@ -24,8 +24,9 @@ namespace fast_backend {
 // (docs/notes/2026-11-28-figures-from-code-comments.md).
 inline constexpr double kPcgTolerance = 1e-2;
 
-// Backtracking along dx from *x: alpha = 1, 1/2, ... (at most `halvings` tries) until the
-// problem's energy is finite and at most `energy`. Accepted: *x moved by alpha dx, and the
+// Backtracking along dx from *x: alpha = 1, 1/2, ... (at most `halvings` tries; after an
+// infinite energy, no further than energy::UprightFraction's cut) until the problem's energy
+// is finite and at most `energy`. Accepted: *x moved by alpha dx, and the
 // energy there, its terms and the largest vertex move returned. `trial`: scratch, kept by the
 // caller across steps. Both fast-back-end steps.
 struct Backtracked {
