@@ -70,13 +70,14 @@ struct SolveReport {
   // factorization), at most one per pattern: where the factor is used, or where the
   // preconditioner is kAuto and the vertex graph's estimate of the fill does not settle it.
   int analyses = 0;
-  // The problem's energy where the solve started and where it ended (*x on return).
   // The solve refused most of its steps (Ceres: an element that a step would invert shrinks
-  // the trust region to nothing; the fast back end: no cut of its first step lowered the
-  // energy; docs/theory/stopping.md#stalled). The largest entry of the energy's gradient (N)
-  // where the solve started, and where it stopped when it refused most of its steps.
+  // the trust region to nothing; the fast back end: its one step refused, or cut to less than
+  // the step tolerance; docs/theory/stopping.md#stalled). The largest entry of the energy's
+  // gradient (N) where the solve started, and where it stopped when it refused most of its
+  // steps. The fast back end's equilibrium solves (forces estimated) do not set them.
   bool mostly_refused = false;
   double largest_force_before = 0.0, largest_force_after = 0.0;
+  // The problem's energy where the solve started and where it ended (*x on return).
   EnergyTerms before, after;
   // Where the time went (s). Ceres: linear_solve_s includes its factorizations.
   double assemble_s = 0.0, factorize_s = 0.0, linear_solve_s = 0.0, evaluate_s = 0.0;

@@ -94,7 +94,7 @@ def labelled(rows, reference_median):
     limit = max(5.0, 3.0 * reference_median)
     out, held = [], 0
     for r in rows:
-        if r["termination"] not in ("converged", "max_iterations", "time_budget") or not r["err_mean_mm"]:
+        if r["termination"] not in ("converged", "max_iterations", "time_budget", "stalled") or not r["err_mean_mm"]:
             held += 1
             continue
         out.append((float(r["confidence"]), float(r["err_mean_mm"]) > limit))

@@ -391,7 +391,7 @@ enum class TerminationType {
   kInvalidInput,       // e.g. every cloud point was NaN
   kTooFewPoints,       // too few points to constrain the object: the prediction was kept
   kStalled,            // a stop rule held, but the last solve could not move (its steps refused)
-};
+};  // kStalled last: register's count of terminations runs up to it
 const char* ToString(TerminationType t);
 
 struct OuterIteration {
@@ -406,9 +406,8 @@ struct OuterIteration {
   double max_move = 0.0;        // m, the largest vertex move of the solve
   double time_s = 0.0;
   // The solve refused most of its steps and left the largest force (the energy's gradient)
-  // above half of where the frame's first solve started (Ceres; docs/theory/stopping.md#stalled).
+  // above half of where the frame's first solve started (docs/theory/stopping.md#stalled).
   bool stalled = false;
-  double largest_force_before = 0.0;  // N, where the solve started (Ceres; else 0)
 };
 
 // Wall time per stage of one frame (s). prealign: solver.rigid_prealign and, on the first

@@ -129,7 +129,7 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
   report.factorizations =
       options_.linear_solver == LinearSolver::kSparseNormalCholesky ? summary.num_linear_solves : 0;
   report.stop = report.success ? StopReason::kSolver : StopReason::kFailure;
-  if (report.success && report.iterations > 0) {
+  if (report.success && !summary.iterations.empty()) {
     report.mostly_refused = 2 * summary.num_unsuccessful_steps > report.iterations;
     report.largest_force_before = summary.iterations.front().gradient_max_norm;
     report.largest_force_after = summary.iterations.back().gradient_max_norm;

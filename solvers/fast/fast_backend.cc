@@ -384,6 +384,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
   report.success = true;
   report.stop = StopReason::kMaxIterations;
   Vertices trial;
+  double first_alpha = 1.0;
   for (int step = 0; step < m.options.max_iterations; ++step) {
     const double gradient = g.lpNorm<Eigen::Infinity>();
     if (gradient == 0.0 || (step > 0 && gradient <= 1e-9 * first_gradient)) {
@@ -416,6 +417,7 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
       break;
     }
     const double largest = b.largest_move, alpha = b.alpha;
+    if (report.iterations == 1) first_alpha = alpha;
     const double gain = energy - b.energy;
     const double decrease = gain / std::max(energy, 1e-300);
     energy = b.energy;
@@ -452,8 +454,11 @@ SolveReport FastBackend::Solve(const energy::Problem& problem, double time_limit
     report.assemble_s += Seconds(t0);
   }
   m.positions = nullptr;
+  // Its one step refused, or cut (an element in the way) to less than the step tolerance: g
+  // was assembled where the solve stopped, or a step shorter than that tolerance before.
   report.largest_force_before = first_gradient;
-  if (report.stop == StopReason::kNoDecrease && report.iterations == 1) {  // x is where g was assembled
+  if (report.iterations == 1 &&
+      (report.stop == StopReason::kNoDecrease || (report.stop == StopReason::kStep && first_alpha < 1.0))) {
     report.mostly_refused = true;
     report.largest_force_after = g.lpNorm<Eigen::Infinity>();
   }

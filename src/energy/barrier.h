@@ -61,11 +61,13 @@ struct InversionBarrier {
 // The volume ratio det F of an element at positions x[0..3].
 double VolumeRatio(const ElementRest& rest, const double* const* x);
 
-// The largest fraction t <= alpha of the step dx (3 per vertex) from x after which, for all
-// t' in [0, t] as bisection finds it, every barrier element keeps at least half of its volume
-// at x and at least half of the barrier's threshold volume: a step cut to t lands inside the
-// barrier's zone, not at its wall, so that the next step has its curvature. alpha when no
-// element comes that close along alpha dx.
+// A fraction t <= alpha of the step dx (3 per vertex) from x at which every barrier element
+// keeps at least half of its volume at x and at least half of the barrier's threshold volume:
+// a step cut to t lands inside the barrier's zone, not at its wall, so that the next step has
+// its curvature. alpha when no element is below that at alpha dx; else, for each such
+// element, a crossing bisection finds between 0 and the t so far. Elements are tested at the
+// ends only: one whose volume dips below and comes back within the step is not seen (the
+// line search's energy test is what stands against it).
 double UprightFraction(const std::vector<TermSet<InversionBarrier>>& sets, const Vertices& x,
                        const Eigen::VectorXd& dx, double alpha);
 

@@ -328,9 +328,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   s->linear_solves += report.linear_solves;
   s->pcg_iterations += report.pcg_iterations;
   row.inner_iterations = report.iterations;
-  row.largest_force_before = report.largest_force_before;
-  const double frame_force = s->iterations.empty() ? report.largest_force_before : s->iterations.front().largest_force_before;
-  row.stalled = report.mostly_refused && report.largest_force_after > 0.5 * frame_force;
+  // Against the first solve of the frame's energy (a warm start's is another).
+  if (!warm_start && !(stall_reference > 0.0)) stall_reference = report.largest_force_before;
+  row.stalled = !warm_start && report.mostly_refused && stall_reference > 0.0 &&
+                report.largest_force_after > 0.5 * stall_reference;
   if (!report.success) {
     s->termination = TerminationType::kSolverFailure;
     s->message = report.message + "; the shape before this iteration was kept";

@@ -323,7 +323,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
   warm_until = 0;
-  ResetMisfitReference();
+  ResetStartReferences();
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;
   stepping_in = false;
@@ -396,7 +396,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       warm_triangles.clear();
       paired_vertices.clear();
       ++(large_motion ? s.large_motion_restarts : s.crushed_restarts);
-      ResetMisfitReference();
+      ResetStartReferences();
       if (!go_on) {  // a crushed frame that had stopped goes on
         s.termination = TerminationType::kNotRun;
         s.stopped_by.clear();
@@ -426,7 +426,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
         // After a large motion's restart the frame's start is far: with the forces estimated,
         // one outer iteration without the equilibrium terms first again (WarmStart).
         if (warm_until > 0) warm_until = iteration_base;
-        ResetMisfitReference();
+        ResetStartReferences();
         iteration_limit = iteration_base + iteration_budget;
         rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
         merit = std::numeric_limits<double>::infinity();

@@ -127,10 +127,16 @@ struct Tracker::Impl {
   // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).
   double misfit_reference = 0.0;
   Vertices misfit_reference_x;  // that warm start's shape
-  // A frame's start, and a restart's: the misfit of another shape or pair set is no reference.
-  void ResetMisfitReference() {
+  // The largest force (gradient entry, N) where the frame's first solve started (0: none yet):
+  // a later solve that refused most of its steps and left more than half of it stalled
+  // (docs/theory/stopping.md#stalled).
+  double stall_reference = 0.0;
+  // A frame's start, and a restart's: the misfit and the forces of another shape or pair set
+  // are no reference.
+  void ResetStartReferences() {
     misfit_reference = 0.0;
     misfit_reference_x.resize(0, 3);
+    stall_reference = 0.0;
   }
   // Frames held or lost since the last one solved: the next solved frame catches up with
   // their motion too, and has iteration_budget outer iterations from each start (a restart
