@@ -125,13 +125,12 @@ double UprightFraction(const std::vector<TermSet<InversionBarrier>>& sets, const
   double t = alpha;
   for (const TermSet<InversionBarrier>& set : sets) {
     for (const InversionBarrier& b : set.blocks()) {
-      // The triple product det D_s along the step, at a fraction s of it.
+      // The triple product det D_s (six times the volume) along the step, at a fraction s of it.
       auto triple = [&](double s) {
-        Eigen::Vector3d p[4];
-        for (int i = 0; i < 4; ++i) {
-          p[i] = x.row(b.vertices[i]).transpose() + s * dx.segment<3>(3 * b.vertices[i]);
-        }
-        return (p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]));
+        auto at = [&](int i) -> Eigen::Vector3d {
+          return x.row(b.vertices[i]).transpose() + s * dx.segment<3>(3 * b.vertices[i]);
+        };
+        return 6.0 * SignedTetVolume(at(0), at(1), at(2), at(3));
       };
       const double target = 0.5 * std::min(b.wall, triple(0.0));
       if (!(target > 0.0) || triple(t) > target) continue;
