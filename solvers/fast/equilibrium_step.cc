@@ -351,16 +351,30 @@ struct EquilibriumSolver::Impl {
     modes.AddCoarse(r, z);
   }
 
-  // PCG on P_W (H + K Phi K) dx = b from dx = 0 (b and dx orthogonal to the held turns);
-  // false if it did not converge in max_iterations.
-  bool Pcg(const Eigen::VectorXd& b, int max_iterations, Eigen::VectorXd* dx, SolveReport* report) {
+  // PCG on P_W (H + K Phi K) dx = b from dx = 0, or from *start where that is nearer (b, dx
+  // and *start orthogonal to the held turns); false if it did not converge in max_iterations.
+  // From a start the target is relative to the start's residual: a re-solve's change is local,
+  // and within a share of |b| the start would come back unchanged
+  // (docs/notes/2026-12-04-warm-re-solves.md).
+  bool Pcg(const Eigen::VectorXd& b, int max_iterations, Eigen::VectorXd* dx, SolveReport* report,
+           const Eigen::VectorXd* start = nullptr) {
     const ScopedThreads one_thread(1);
     const auto t0 = Clock::now();
     const double b_norm = b.norm();
-    const double target = std::max(kPcgTolerance * b_norm, kGradientFloor * first_gradient_norm);
+    double target = std::max(kPcgTolerance * b_norm, kGradientFloor * first_gradient_norm);
     Eigen::VectorXd r = b, z, q;
     dx->setZero(b.size());
     if (b_norm == 0.0) return true;
+    if (start != nullptr && start->size() == b.size() && start->allFinite()) {
+      Product(*start, &q);
+      const Eigen::VectorXd r_start = b - q;
+      const double r_norm = r_start.norm();
+      if (r_norm < b_norm) {  // else from zero: the start is worse than nothing
+        *dx = *start;
+        r = r_start;
+        target = std::max(kPcgTolerance * r_norm, kGradientFloor * first_gradient_norm);
+      }
+    }
     if (r.norm() <= target) {
       report->linear_solve_s += Seconds(t0);
       return true;
@@ -405,7 +419,7 @@ struct EquilibriumSolver::Impl {
       closing.AddForce(&f);
       Penalties(*problem.equilibrium());
       Eigen::VectorXd resolved;
-      if (!(Pcg(-ModelGradient(), kMaxPcgIterations, &resolved, report) && resolved.dot(G) < 0.0)) break;
+      if (!(Pcg(-ModelGradient(), kMaxPcgIterations, &resolved, report, dx) && resolved.dot(G) < 0.0)) break;
       *dx = resolved;
     }
     if (closing.empty()) return;
@@ -438,7 +452,7 @@ struct EquilibriumSolver::Impl {
       remodelled = true;
       Eigen::VectorXd resolved;
       const int before = report->pcg_iterations;
-      const bool converged = Pcg(-ModelGradient(), budget, &resolved, report);
+      const bool converged = Pcg(-ModelGradient(), budget, &resolved, report, dx);
       budget -= report->pcg_iterations - before;
       if (!(converged && resolved.dot(G) < 0.0)) break;
       *dx = resolved;
