@@ -548,6 +548,8 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   report.after = report.before;
   double energy = report.before.total();
   m.first_gradient_norm = m.G.norm();
+  report.largest_force_before = m.G.lpNorm<Eigen::Infinity>();
+  int refused = 0;  // steps the line search refused, or cut below the step tolerance
   report.success = true;
   report.stop = StopReason::kMaxIterations;
   Eigen::VectorXd dx;
@@ -575,6 +577,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       break;
     }
     if (!b.accepted) {
+      ++refused;
       report.stop = StopReason::kNoDecrease;
       break;
     }
@@ -585,6 +588,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     const bool settled = !truncated && b.alpha == 1.0 && largest <= m.options.equilibrium_step_tolerance &&
                          decrease < kSmallStepDecrease;
     if (largest <= m.options.step_tolerance || largest == 0.0 || settled) {
+      if (b.alpha < 1.0) ++refused;
       report.stop = StopReason::kStep;
       break;
     }
@@ -600,6 +604,13 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     }
     if (step + 1 == m.options.max_iterations) break;
     m.Linearize(problem, *x, /*first=*/false, nullptr, &report);
+  }
+  // Most of its steps refused or cut to nothing, as for the classic solve's one step
+  // (docs/theory/stopping.md#stalled): G was linearized where the solve stopped, or a step
+  // shorter than the step tolerance before.
+  if (report.iterations > 0 && 2 * refused > report.iterations) {
+    report.mostly_refused = true;
+    report.largest_force_after = m.G.lpNorm<Eigen::Infinity>();
   }
   if (report.success) report.message = std::string("fast back end (equilibrium): ") + ToString(report.stop);
   if (!x->allFinite()) {
