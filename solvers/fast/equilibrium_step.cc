@@ -11,11 +11,11 @@
 
 #include "energy/assembler.h"
 #include "energy/equilibrium.h"
-#include "parallel/signals.h"
 #include "parallel/stopwatch.h"
 #include "parallel/threads.h"
 #include "solvers/fast/closing_contacts.h"
 #include "solvers/fast/data_shift.h"
+#include "solvers/fast/equilibrium_factor.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/fast_backend_internal.h"
 #include "solvers/fast/penalty_pieces.h"
@@ -29,9 +29,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr int kMaxPcgIterations = 200;
-// The shift of K~ = K + shift * mean(diag K): enough for a free body's rigid motions (K's null
-// space) to factorize; raised 100-fold while the factorization fails.
-constexpr double kFirstShift = 1e-8;
 // After this many Gauss-Newton steps of a solve (an outer iteration), a step that lowers the
 // energy by less than kLateTolerance ends it. Each step linearizes every element again and
 // makes a new factor, while the next outer iteration's pairs and hold of hidden turns move
@@ -79,22 +76,8 @@ struct EquilibriumSolver::Impl {
   energy::Assembler projected;
   uint64_t pattern_revision = 0;
 
-  // The preconditioner's factor of K~ (CHOLMOD's analysis; values in float here, CHOLMOD's
-  // double where float fails) and the per-vertex blocks Phi~^-1.
-  CholmodFactor factor;
-  SupernodalSolve<float> substitutions;
-  CholmodFactor ldlt;  // of an indefinite K (simplicial), where the own L S L^T fails
-  bool ldlt_analysed = false, use_ldlt = false;
-  // The own L S L^T of an indefinite K on the same analysis: in float, else in double; which
-  // one holds the factor (0: neither), and whether each must take the structure again.
-  SupernodalSolve<float> indefinite_single;
-  SupernodalSolve<double> indefinite_double;
-  int use_indefinite = 0;
-  bool indefinite_pending[2] = {false, false};
-  bool analysed = false, structure_pending = false, factor_single = false;
-  double factor_flops = 0.0;  // CHOLMOD's flop count of one factorization (Analyse)
-  // The PCG iterations that cost about as many flops as a factorization (Analyse).
-  int factorization_iterations = 0;
+  EquilibriumFactor factor;  // K~'s, the preconditioner's
+  // The per-vertex blocks Phi~^-1 of the preconditioner.
   std::vector<Eigen::Matrix3d> phi_inverse;
   double first_gradient_norm = 0.0;  // |G| at the solve's start (kGradientFloor)
   // Whether the next step's factor takes the data in (kShiftAfterIterations); kept from solve
@@ -105,162 +88,6 @@ struct EquilibriumSolver::Impl {
   Eigen::VectorXd g, f, phi_gradient, G;
   std::vector<Eigen::Matrix3d> phi;
   double equilibrium_energy = 0.0;
-
-  void Analyse(const Eigen::SparseMatrix<double>& K) {
-    if (analysed) return;
-    factor.setMode(Eigen::CholmodSupernodalLLt);
-    factor.cholmod().print = 0;  // a matrix that is not positive definite is an answer here
-    ConfigureAnalysis(&factor.cholmod());  // the classic solve's orderings and supernodes
-    {
-      const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
-      factor.analyzePattern(K);
-    }
-    factor_flops = factor.cholmod().fl;
-    // A PCG iteration: two solves (four sweeps over L, 2 nnz(L) flops each) and two products
-    // with K (2 nnz(K) each; H's is smaller, left out).
-    const double iteration_flops = 8.0 * factor.cholmod().lnz + 4.0 * static_cast<double>(K.nonZeros());
-    factorization_iterations = iteration_flops > 0 ? static_cast<int>(factor_flops / iteration_flops) : 0;
-    analysed = true;
-    structure_pending = true;
-    indefinite_pending[0] = indefinite_pending[1] = true;
-  }
-
-  // Factorizes K~ (K as linearized last at x). Where K is not positive definite (compressed
-  // or turning elements) K Phi K is still positive definite and K^-1 Phi^-1 K^-1 still its
-  // inverse: K is factorized as L S L^T without pivoting (the own supernodal code, in float,
-  // else in double; its positive definite supernodes by LAPACK's Cholesky, so that on a
-  // positive definite K it is the Cholesky factor at a Cholesky's cost), then CHOLMOD's
-  // simplicial L D L^T; if that fails too, its projection (energy/term.h, Curvature) with a
-  // shift. False if nothing factorizes.
-  bool Factorize(const energy::Problem& problem, const Vertices& x, SolveReport* report) {
-    use_ldlt = false;
-    use_indefinite = 0;
-    factor_single = false;
-    if (FactorizeIndefinite(report)) {
-      // A negative pivot above round-off is K's own. Without one, pivots at the floor are
-      // round-off on a positive definite K, where CHOLMOD's double-precision Cholesky is the
-      // better preconditioner.
-      const bool single = use_indefinite == 1;
-      const int negative = single ? indefinite_single.negative_pivots() : indefinite_double.negative_pivots();
-      const int perturbed = single ? indefinite_single.perturbed_pivots() : indefinite_double.perturbed_pivots();
-      if (negative > 0 || perturbed == 0) return true;
-      const int held = use_indefinite;
-      use_indefinite = 0;
-      if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
-      use_indefinite = held;
-      return true;
-    }
-    if (FactorizeOf(&physics, kFirstShift, kCholmodDouble, report)) return true;
-    const auto t0 = Clock::now();
-    if (!ldlt_analysed) {
-      ldlt.setMode(Eigen::CholmodLDLt);
-      ldlt.cholmod().print = 0;
-      const KeepSignalHandlers keep;  // METIS's signal() calls (parallel/signals.h)
-      ldlt.analyzePattern(physics.H());
-      ldlt_analysed = true;
-    }
-    {
-      const ScopedThreads one_thread(1);
-      WithThreadLimit(1, [&] { ldlt.factorize(physics.H()); });
-    }
-    ++report->factorizations;
-    report->factorize_s += Seconds(t0);
-    if (ldlt.info() == Eigen::Success) {
-      use_ldlt = true;
-      return true;
-    }
-    const auto t1 = Clock::now();
-    // The same blocks as `physics`: the same pattern, and the analysis holds for both.
-    projected.Prepare(problem, x);
-    Eigen::VectorXd unused;
-    projected.AssembleSecondOrder(problem, x, energy::Curvature::kProjected, true, &unused);
-    projected.Finish(problem, 0.0, &unused);
-    report->assemble_s += Seconds(t1);
-    return FactorizeOf(&projected, 1.0, kOwnFloat | kCholmodDouble, report);
-  }
-
-  // The own factorizations' team: up to `threads` by the factor's size. The tree's cut and the
-  // tiles depend on the factor alone, so every team gives the same factor.
-  int FactorTeam() const {
-    return PhaseThreads(threads, static_cast<long long>(factor_flops),
-                        static_cast<long long>(kFactorizationFlopsPerThread));
-  }
-
-  // K~ (K with FactorizeOf's first shift) as L S L^T in the own supernodal code, in float,
-  // else in double; false if neither (a pivot too small at its precision).
-  bool FactorizeIndefinite(SolveReport* report) {
-    const auto t0 = Clock::now();
-    Eigen::SparseMatrix<double>& K = physics.H();
-    Analyse(K);
-    const std::vector<int>& diagonal_at = physics.diagonal_at();
-    double mean = 0.0;
-    for (int at : diagonal_at) mean += std::abs(K.valuePtr()[at]);
-    mean /= std::max<size_t>(1, diagonal_at.size());
-    for (int at : diagonal_at) K.valuePtr()[at] += kFirstShift * mean;
-    {
-      const ScopedThreads one_thread(1);  // the BLAS; the groups on the factorization's own team
-      const int team = FactorTeam();
-      ++report->factorizations;
-      if (indefinite_single.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[0], team)) {
-        indefinite_pending[0] = false;
-        use_indefinite = 1;
-        indefinite_single.set_threads(threads);
-      } else {
-        ++report->factorizations;
-        if (indefinite_double.FactorizeIndefinite(*factor.raw(), K, indefinite_pending[1], team)) {
-          indefinite_pending[1] = false;
-          use_indefinite = 2;
-          indefinite_double.set_threads(threads);
-        }
-      }
-    }
-    for (int at : diagonal_at) K.valuePtr()[at] -= kFirstShift * mean;
-    report->factorize_s += Seconds(t0);
-    return use_indefinite != 0;
-  }
-
-  // The Cholesky factorizations FactorizeOf tries at each shift, in this order.
-  static constexpr int kOwnFloat = 1, kCholmodDouble = 2;
-
-  // Factorizes the matrix of `a` plus shifts from kFirstShift up to max_shift of its mean
-  // diagonal, with the `attempts` (kOwnFloat, kCholmodDouble); false if none is positive definite.
-  bool FactorizeOf(energy::Assembler* a, double max_shift, int attempts, SolveReport* report) {
-    const auto t0 = Clock::now();
-    Eigen::SparseMatrix<double>& K = a->H();
-    Analyse(K);
-    const std::vector<int>& diagonal_at = a->diagonal_at();
-    std::vector<double> diagonal(diagonal_at.size());
-    double mean = 0.0;
-    for (size_t c = 0; c < diagonal_at.size(); ++c) {
-      diagonal[c] = K.valuePtr()[diagonal_at[c]];
-      mean += std::abs(diagonal[c]);
-    }
-    mean /= std::max<size_t>(1, diagonal.size());
-    bool valid = false;
-    for (double shift = kFirstShift; shift <= max_shift && !valid; shift *= 100.0) {
-      for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c] + shift * mean;
-      factor_single = false;
-      if (attempts & kOwnFloat) {
-        ++report->factorizations;
-        const ScopedThreads one_thread(1);  // the BLAS; the factorization's own team
-        factor_single = substitutions.Factorize(*factor.raw(), K, structure_pending, FactorTeam());
-        substitutions.set_threads(threads);  // PCG's substitutions: the groups on the workers
-      }
-      if (factor_single) {
-        structure_pending = false;
-        valid = true;
-        break;
-      }
-      if (!(attempts & kCholmodDouble)) continue;
-      ++report->factorizations;
-      const ScopedThreads one_thread(1);
-      WithThreadLimit(1, [&] { factor.factorize(K); });
-      valid = factor.info() == Eigen::Success;
-    }
-    for (size_t c = 0; c < diagonal_at.size(); ++c) K.valuePtr()[diagonal_at[c]] = diagonal[c];
-    report->factorize_s += Seconds(t0);
-    return valid;
-  }
 
   // The penalties at f (set by Linearize): value, gradients, curvatures, and Phi~^-1.
   void Penalties(const energy::Equilibrium& eq) {
@@ -329,17 +156,7 @@ struct EquilibriumSolver::Impl {
     Eigen::VectorXd u, projected = r;
     modes.Project(&projected);
     auto solve = [&](const Eigen::VectorXd& b, Eigen::VectorXd* out) {
-      if (use_indefinite == 1) {
-        indefinite_single.Solve(b, out);
-      } else if (use_indefinite == 2) {
-        indefinite_double.Solve(b, out);
-      } else if (use_ldlt) {
-        *out = ldlt.solve(b);
-      } else if (factor_single) {
-        substitutions.Solve(b, out);
-      } else {
-        *out = factor.solve(b);
-      }
+      factor.Solve(b, out);
       ++report->linear_solves;
     };
     solve(projected, &u);
@@ -440,7 +257,7 @@ struct EquilibriumSolver::Impl {
   bool ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
     const energy::Equilibrium& eq = *problem.equilibrium();
     if (!eq.pushing_only) return false;
-    int budget = std::min(std::max(factorization_iterations, kMinPieceIterations), kMaxPcgIterations);
+    int budget = std::min(std::max(factor.factorization_iterations(), kMinPieceIterations), kMaxPcgIterations);
     bool changed = false;
     PenaltyPieces pieces;
     pieces.Start(eq, f);
@@ -471,7 +288,7 @@ struct EquilibriumSolver::Impl {
     *truncated = false;
     std::vector<double> plain_values;
     if (shift_data) plain_values = AddDataShift(problem, objective.H(), &physics.H());
-    const bool factored = Factorize(problem, x, report);
+    const bool factored = factor.Factorize(problem, x, &physics, &projected, threads, report);
     if (!plain_values.empty()) std::copy(plain_values.begin(), plain_values.end(), physics.H().valuePtr());
     if (!factored) return false;
     const int iterations_before = report->pcg_iterations;
@@ -538,8 +355,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   report.pattern_rebuilds += m.physics.Prepare(problem, *x);
   if (m.physics.pattern_revision() != m.pattern_revision) {
     m.pattern_revision = m.physics.pattern_revision();
-    m.analysed = false;
-    m.ldlt_analysed = false;
+    m.factor.Reset();
     m.shift_data = false;  // another mesh or set of terms: K~'s factor is measured again
     ++report.analyses;
   }
