@@ -71,10 +71,10 @@ struct SolveReport {
   // preconditioner is kAuto and the vertex graph's estimate of the fill does not settle it.
   int analyses = 0;
   // The solve refused most of its steps (Ceres: an element that a step would invert shrinks
-  // the trust region to nothing; the fast back end: its one step refused, or cut to less than
-  // the step tolerance; docs/theory/stopping.md#stalled). The largest entry of the energy's
-  // gradient (N) where the solve started, and where it stopped when it refused most of its
-  // steps. The fast back end's equilibrium solves (forces estimated) do not set them.
+  // the trust region to nothing; the fast back end, classic or equilibrium: its one step
+  // refused, or cut to less than the step tolerance; docs/theory/stopping.md#stalled). The
+  // largest entry of the energy's gradient (N; with the forces estimated, the equilibrium
+  // energy's) where the solve started, and where it stopped when it refused most of its steps.
   bool mostly_refused = false;
   double largest_force_before = 0.0, largest_force_after = 0.0;
   // The problem's energy where the solve started and where it ended (*x on return).

@@ -1,12 +1,14 @@
-// The equilibrium step's preconditioner factor (solvers/fast/equilibrium_step.h): K~ = K + a
-// small shift of the mean diagonal (a free body's rigid motions), K the potential's exact
+// The equilibrium step's preconditioner factor (solvers/fast/equilibrium_step.h): of K~ = K +
+// a small shift of the mean diagonal (a free body's rigid motions), K the potential's exact
 // Hessian as the step linearized it. Where K is not positive definite (compressed or turning
-// elements) K Phi K is still positive definite and K~^-1 Phi~^-1 K~^-1 still its inverse: K~
-// is factorized as L S L^T without pivoting (the own supernodal code on CHOLMOD's analysis,
-// in float, else in double; its positive definite supernodes by LAPACK's Cholesky, so that on
-// a positive definite K it is the Cholesky factor at a Cholesky's cost), then by CHOLMOD's
-// simplicial L D L^T; if that fails too, K's projection (energy/term.h, Curvature) with a
-// larger shift (docs/theory/equilibrium.md#solving-it).
+// elements) K Phi K is still positive definite and K^-1 Phi^-1 K^-1 its inverse. K~ is
+// factorized as L S L^T without pivoting (the own supernodal code on CHOLMOD's analysis, in
+// float, else in double; its positive definite supernodes by LAPACK's Cholesky, so that on a
+// positive definite K it is the Cholesky factor at a Cholesky's cost); where that shows no
+// negative pivot but some at its floor (round-off on a positive definite K), CHOLMOD's
+// Cholesky in double is tried first. If the L S L^T fails: CHOLMOD's Cholesky in double, then
+// its simplicial L D L^T of K itself, then K's projection (energy/term.h, Curvature) with a
+// shift raised until it factorizes (docs/theory/equilibrium.md#solving-it).
 #ifndef FEMREG_SOLVERS_FAST_EQUILIBRIUM_FACTOR_H_
 #define FEMREG_SOLVERS_FAST_EQUILIBRIUM_FACTOR_H_
 

@@ -180,18 +180,19 @@ struct EquilibriumSolver::Impl {
     const double b_norm = b.norm();
     double target = std::max(kPcgTolerance * b_norm, kGradientFloor * first_gradient_norm);
     Eigen::VectorXd r = b, z, q;
-    dx->setZero(b.size());
-    if (b_norm == 0.0) return true;
-    if (start != nullptr && start->size() == b.size() && start->allFinite()) {
+    Eigen::VectorXd from = Eigen::VectorXd::Zero(b.size());  // *start read before *dx is written
+    if (b_norm > 0.0 && start != nullptr && start->size() == b.size() && start->allFinite()) {
       Product(*start, &q);
       const Eigen::VectorXd r_start = b - q;
       const double r_norm = r_start.norm();
       if (r_norm < b_norm) {  // else from zero: the start is worse than nothing
-        *dx = *start;
+        from = *start;
         r = r_start;
         target = std::max(kPcgTolerance * r_norm, kGradientFloor * first_gradient_norm);
       }
     }
+    dx->swap(from);
+    if (b_norm == 0.0) return true;
     if (r.norm() <= target) {
       report->linear_solve_s += Seconds(t0);
       return true;
@@ -365,7 +366,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   double energy = report.before.total();
   m.first_gradient_norm = m.G.norm();
   report.largest_force_before = m.G.lpNorm<Eigen::Infinity>();
-  int refused = 0;  // steps the line search refused, or cut below the step tolerance
+  bool refused = false;  // the last step: refused by the line search, or cut below the step tolerance
   report.success = true;
   report.stop = StopReason::kMaxIterations;
   Eigen::VectorXd dx;
@@ -393,7 +394,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       break;
     }
     if (!b.accepted) {
-      ++refused;
+      refused = true;
       report.stop = StopReason::kNoDecrease;
       break;
     }
@@ -404,7 +405,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     const bool settled = !truncated && b.alpha == 1.0 && largest <= m.options.equilibrium_step_tolerance &&
                          decrease < kSmallStepDecrease;
     if (largest <= m.options.step_tolerance || largest == 0.0 || settled) {
-      if (b.alpha < 1.0) ++refused;
+      refused = b.alpha < 1.0;
       report.stop = StopReason::kStep;
       break;
     }
@@ -421,10 +422,10 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     if (step + 1 == m.options.max_iterations) break;
     m.Linearize(problem, *x, /*first=*/false, nullptr, &report);
   }
-  // Most of its steps refused or cut to nothing, as for the classic solve's one step
-  // (docs/theory/stopping.md#stalled): G was linearized where the solve stopped, or a step
-  // shorter than the step tolerance before.
-  if (report.iterations > 0 && 2 * refused > report.iterations) {
+  // Its one step refused or cut to nothing, as the classic solve's (a refused or cut step ends
+  // a solve; docs/theory/stopping.md#stalled): G was linearized where the solve stopped, or a
+  // step shorter than the step tolerance before.
+  if (report.iterations == 1 && refused) {
     report.mostly_refused = true;
     report.largest_force_after = m.G.lpNorm<Eigen::Infinity>();
   }
