@@ -180,18 +180,22 @@ struct EquilibriumSolver::Impl {
     const double b_norm = b.norm();
     double target = std::max(kPcgTolerance * b_norm, kGradientFloor * first_gradient_norm);
     Eigen::VectorXd r = b, z, q;
-    Eigen::VectorXd from = Eigen::VectorXd::Zero(b.size());  // *start read before *dx is written
+    bool warm = false;
     if (b_norm > 0.0 && start != nullptr && start->size() == b.size() && start->allFinite()) {
       Product(*start, &q);
-      const Eigen::VectorXd r_start = b - q;
-      const double r_norm = r_start.norm();
-      if (r_norm < b_norm) {  // else from zero: the start is worse than nothing
-        from = *start;
-        r = r_start;
+      q = b - q;  // the start's residual
+      const double r_norm = q.norm();
+      warm = r_norm < b_norm;  // else from zero: the start is worse than nothing
+      if (warm) {
+        r.swap(q);
         target = std::max(kPcgTolerance * r_norm, kGradientFloor * first_gradient_norm);
       }
     }
-    dx->swap(from);
+    if (warm) {
+      *dx = *start;  // (start may be dx itself)
+    } else {
+      dx->setZero(b.size());
+    }
     if (b_norm == 0.0) return true;
     if (r.norm() <= target) {
       report->linear_solve_s += Seconds(t0);
