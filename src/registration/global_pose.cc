@@ -46,6 +46,10 @@ constexpr int kProposals = 16;
 constexpr double kKeep = 0.8;  // the trimmed fit keeps the closest 80 % of the points
 constexpr int kMaxScoredPoints = 2000;
 constexpr int kIcpIterations = 50;
+// ICP stops once a step moves no point more than this share of the voxel, far below what the
+// tracker's own registration, which starts from the pose, resolves: from there on the trimmed
+// set's changes only make the pose jitter.
+constexpr double kSettledMove = 1e-3;
 // A global pose replaces the given one only if it explains the cloud this much better.
 constexpr double kWinRatio = 0.5;
 // Two poses whose rotations differ by more than this, with fits within this ratio, are an
@@ -170,8 +174,9 @@ PclCloud::Ptr CloudSamples(const Vertices& points, const Eigen::Vector3d* eye, d
 class Verifier {
  public:
   Verifier(const Vertices& y, const Triangles& tris, const Vertices& points,
-           const Eigen::Vector3d* eye, double penalty)
-      : y_(y), tris_(tris), index_(y_, tris_), has_eye_(eye != nullptr), penalty_(penalty) {
+           const Eigen::Vector3d* eye, double voxel)
+      : y_(y), tris_(tris), index_(y_, tris_), has_eye_(eye != nullptr), penalty_(2.0 * voxel),
+        settled_(kSettledMove * voxel) {
     if (has_eye_) eye_ = *eye;
     face_normals_.resize(tris.rows(), 3);
     for (Eigen::Index f = 0; f < tris.rows(); ++f) {
@@ -252,7 +257,11 @@ class Verifier {
                        : Eigen::Matrix3d::Identity();
       h->R = dR * h->R;
       h->t = dR * h->t + dt;
-      if (w.norm() < 1e-7 && dt.norm() < 1e-9) break;
+      // Settled: the step moved no mapped point more than settled_ (to first order). Past it
+      // the trimmed set's changes make the pose jitter for the remaining iterations.
+      double moved = 0.0;
+      for (const Eigen::Vector3d& p : a) moved = std::max(moved, (w.cross(p) + dt).squaredNorm());
+      if (std::sqrt(moved) <= settled_) break;
     }
     h->fit = Score(*h);
   }
@@ -312,6 +321,7 @@ class Verifier {
   bool has_eye_;
   Eigen::Vector3d eye_ = Eigen::Vector3d::Zero();
   double penalty_;
+  double settled_;  // an ICP step that moves no point more than this ends Refine
 };
 
 double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
@@ -474,7 +484,7 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   const Eigen::RowVector3d mean = y.colwise().mean();
   const double radius = std::sqrt((y.rowwise() - mean).rowwise().squaredNorm().mean());
   const double voxel = kVoxelPerRadius * radius;
-  Verifier verifier(y, tris, points, eye, 2.0 * voxel);
+  Verifier verifier(y, tris, points, eye, voxel);
   // The check counts the surface facing the eye too: a pose turned by a fraction of a radian
   // can leave a partial view within loss_scale of some part of a large body's surface.
   PclCloud::Ptr model = ModelSamples(y, tris, voxel);
