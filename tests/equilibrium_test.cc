@@ -249,6 +249,37 @@ TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
   EXPECT_LT((y - full).rowwise().norm().maxCoeff(), 4 * tolerance);
 }
 
+// A whole step whose model promised what the energy gave, within the solve's tolerance, ends
+// the solve: the next step would gain about that mismatch. On the pulled cantilever every
+// step lowers the energy by more than the tolerance, so the decrease alone stops later, and
+// the step model's gap stops it before that, at the energy of the solve to the end.
+TEST(EquilibriumSolve, EndsWhereTheStepModelPromisedWhatTheEnergyGave) {
+  BoxProblem box(1);
+  SetUpPulledCantilever(&box);
+  BackendOptions options = FastSolveToTheEnd();
+  Vertices full = box.mesh.rest;
+  const SolveReport exact = MakeBackend(options)->Solve(box.problem, 0.0, &full);
+  ASSERT_TRUE(exact.success) << exact.message;
+  const double tolerance = 1e-3;
+  options.relative_tolerance = tolerance;
+  Vertices x = box.mesh.rest;
+  const SolveReport early = MakeBackend(options)->Solve(box.problem, 0.0, &x);
+  ASSERT_TRUE(early.success) << early.message;
+  const double excess = (early.after.total() - exact.after.total()) / exact.after.total();
+  std::printf("steps: %d to the end, %d with the tolerance; energy %.3g above the end's\n", exact.iterations,
+              early.iterations, excess);
+  EXPECT_EQ(early.stop, StopReason::kEnergy) << early.message;
+  EXPECT_LT(early.iterations, exact.iterations);
+  // Its last step lowered the energy by more than the tolerance: the decrease alone would have
+  // taken another.
+  Vertices one_less = box.mesh.rest;
+  options.max_iterations = early.iterations - 1;
+  const SolveReport shorter = MakeBackend(options)->Solve(box.problem, 0.0, &one_less);
+  ASSERT_TRUE(shorter.success) << shorter.message;
+  EXPECT_GT(shorter.after.total() - early.after.total(), tolerance * shorter.after.total());
+  EXPECT_LT(excess, tolerance);
+}
+
 // The cantilever's pulled end meets a table 4 mm below it. The contacts' force is piecewise
 // linear in the positions, and a step's model without the contacts it closes overshoots them
 // and the line search cuts it short; with them closed in the model
