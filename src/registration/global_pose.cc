@@ -20,6 +20,7 @@
 
 #include "geometry/nearest.h"
 #include "parallel/pool.h"
+#include "registration/pose_verifier.h"
 
 namespace femreg {
 namespace {
@@ -43,13 +44,6 @@ constexpr double kSimilarity = 0.9;
 constexpr double kPairAngle = 15.0 * M_PI / 180.0;
 constexpr double kMinInlierFraction = 0.15;
 constexpr int kProposals = 16;
-constexpr double kKeep = 0.8;  // the trimmed fit keeps the closest 80 % of the points
-constexpr int kMaxScoredPoints = 2000;
-constexpr int kIcpIterations = 50;
-// ICP stops once a step moves no point more than this share of the voxel, far below what the
-// tracker's own registration, which starts from the pose, resolves: from there on the trimmed
-// set's changes only make the pose jitter.
-constexpr double kSettledMove = 1e-3;
 // A global pose replaces the given one only if it explains the cloud this much better.
 constexpr double kWinRatio = 0.5;
 // Two poses whose rotations differ by more than this, with fits within this ratio, are an
@@ -169,160 +163,6 @@ PclCloud::Ptr CloudSamples(const Vertices& points, const Eigen::Vector3d* eye, d
   }
   return out;
 }
-
-// Scores and refines hypotheses against the object's surface in its given pose.
-class Verifier {
- public:
-  Verifier(const Vertices& y, const Triangles& tris, const Vertices& points,
-           const Eigen::Vector3d* eye, double voxel)
-      : y_(y), tris_(tris), index_(y_, tris_), has_eye_(eye != nullptr), penalty_(2.0 * voxel),
-        settled_(kSettledMove * voxel) {
-    if (has_eye_) eye_ = *eye;
-    face_normals_.resize(tris.rows(), 3);
-    for (Eigen::Index f = 0; f < tris.rows(); ++f) {
-      const Eigen::Vector3d a = y.row(tris(f, 0)), b = y.row(tris(f, 1)), c = y.row(tris(f, 2));
-      face_normals_.row(f) = (b - a).cross(c - a).normalized().transpose();
-    }
-    const int stride = std::max<int>(1, static_cast<int>(points.rows()) / kMaxScoredPoints);
-    for (Eigen::Index i = 0; i < points.rows(); i += stride)
-      points_.push_back(points.row(i).transpose());
-    if (has_eye_) all_points_ = points;
-  }
-
-  // The trimmed mean distance of the cloud, mapped by h, to the surface (m).
-  double Fit(const PoseHypothesis& h) const {
-    std::vector<Eigen::Vector3d> a, b, n;
-    return Pairs(h, &a, &b, &n);
-  }
-
-  // With an eye: the surface samples (model, in the given pose) that free space is checked
-  // at.
-  void SetSurfaceSamples(const PclCloud& model) {
-    if (!has_eye_ || points_.empty()) return;
-    for (const pcl::PointNormal& q : model) {
-      samples_.emplace_back(q.x, q.y, q.z);
-      sample_normals_.emplace_back(q.normal_x, q.normal_y, q.normal_z);
-    }
-    // Every point, not the scored ones: the nearest of a thinned cloud's points is about its
-    // spacing away, which on a large object seen whole exceeds loss_scale by itself.
-    cloud_index_ = std::make_unique<PointIndex>(all_points_);
-  }
-
-  // Fit plus, with surface samples, the trimmed mean distance from the surface facing the eye
-  // to the cloud (the closest 70 %: self-occlusion hides some of it): a pose that puts the
-  // view on the wrong part of a smooth body explains the cloud, but not where nothing was seen.
-  double Score(const PoseHypothesis& h) const {
-    double score = Fit(h);
-    if (!cloud_index_) return score;
-    const Eigen::Vector3d eye = h.R * eye_ + h.t;
-    std::vector<double> d;
-    for (size_t i = 0; i < samples_.size(); ++i) {
-      const Eigen::Vector3d to_eye = eye - samples_[i];
-      if (sample_normals_[i].dot(to_eye) <= 0.2 * to_eye.norm()) continue;
-      double squared = 0.0;
-      cloud_index_->Nearest(h.R.transpose() * (samples_[i] - h.t), &squared);
-      d.push_back(std::sqrt(squared));
-    }
-    if (d.empty()) return score;
-    std::sort(d.begin(), d.end());
-    const size_t keep =
-        std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
-    double sum = 0.0;
-    for (size_t j = 0; j < keep; ++j) sum += d[j];
-    return score + sum / static_cast<double>(keep);
-  }
-
-  // Trimmed point-to-plane ICP from h (it slides along flat parts, where point-to-point
-  // crawls); h->fit set.
-  void Refine(PoseHypothesis* h) const {
-    for (int it = 0; it < kIcpIterations; ++it) {
-      std::vector<Eigen::Vector3d> a, b, n;
-      Pairs(*h, &a, &b, &n);
-      if (a.size() < 6) break;
-      // Linearized about the mapped points: (a + w x a + dt - b) . n = 0 in least squares.
-      Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
-      for (size_t i = 0; i < a.size(); ++i) {
-        Eigen::Matrix<double, 6, 1> J;
-        J << a[i].cross(n[i]), n[i];
-        JtJ += J * J.transpose();
-        Jtr += J * (b[i] - a[i]).dot(n[i]);
-      }
-      JtJ.diagonal().array() += 1e-12 * JtJ.trace() + 1e-30;
-      const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(Jtr);
-      if (!x.allFinite()) break;
-      const Eigen::Vector3d w = x.head<3>(), dt = x.tail<3>();
-      const Eigen::Matrix3d dR =
-          w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
-                       : Eigen::Matrix3d::Identity();
-      h->R = dR * h->R;
-      h->t = dR * h->t + dt;
-      // Settled: the step moved no mapped point more than settled_ (to first order). Past it
-      // the trimmed set's changes make the pose jitter for the remaining iterations.
-      double moved = 0.0;
-      for (const Eigen::Vector3d& p : a) moved = std::max(moved, (w.cross(p) + dt).squaredNorm());
-      if (std::sqrt(moved) <= settled_) break;
-    }
-    h->fit = Score(*h);
-  }
-
- private:
-  // The kept (trimmed) pairs: the mapped cloud points, their closest surface points and those
-  // points' triangle normals. A
-  // point whose closest surface point faces away from the eye counts at least `penalty_` away
-  // (a pose that explains a view by the far side of the object) and pairs with nothing.
-  double Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a,
-               std::vector<Eigen::Vector3d>* b, std::vector<Eigen::Vector3d>* n) const {
-    const Eigen::Vector3d eye = h.R * eye_ + h.t;
-    std::vector<std::pair<double, int>> dist;
-    std::vector<Eigen::Vector3d> mapped(points_.size()), closest(points_.size());
-    std::vector<int> triangle(points_.size(), -1);
-    std::vector<char> back(points_.size(), 0);
-    for (size_t i = 0; i < points_.size(); ++i) {
-      mapped[i] = h.R * points_[i] + h.t;
-      const SurfaceIndex::Hit hit = index_.Closest(mapped[i]);
-      if (hit.triangle < 0) continue;
-      double d = std::sqrt(hit.squared_distance);
-      closest[i] = hit.point;
-      triangle[i] = hit.triangle;
-      if (has_eye_) {
-        const Eigen::Vector3d to_eye = eye - hit.point;
-        if (face_normals_.row(hit.triangle).dot(to_eye) < -0.2 * to_eye.norm()) {
-          back[i] = 1;
-          d = std::max(d, penalty_);
-        }
-      }
-      dist.emplace_back(d, static_cast<int>(i));
-    }
-    if (dist.empty()) return std::numeric_limits<double>::infinity();
-    std::sort(dist.begin(), dist.end());
-    const size_t keep =
-        std::max<size_t>(1, static_cast<size_t>(kKeep * static_cast<double>(dist.size())));
-    double sum = 0.0;
-    for (size_t j = 0; j < keep; ++j) {
-      sum += dist[j].first;
-      const size_t i = static_cast<size_t>(dist[j].second);
-      if (back[i]) continue;
-      a->push_back(mapped[i]);
-      b->push_back(closest[i]);
-      n->push_back(face_normals_.row(triangle[i]).transpose());
-    }
-    return sum / static_cast<double>(keep);
-  }
-
-  const Vertices& y_;
-  const Triangles& tris_;
-  SurfaceIndex index_;
-  Eigen::MatrixXd face_normals_;
-  std::vector<Eigen::Vector3d> points_;  // the scored cloud (at most kMaxScoredPoints)
-  Vertices all_points_;                   // the whole cloud, with an eye
-  std::vector<Eigen::Vector3d> samples_, sample_normals_;
-  std::unique_ptr<PointIndex> cloud_index_;
-  bool has_eye_;
-  Eigen::Vector3d eye_ = Eigen::Vector3d::Zero();
-  double penalty_;
-  double settled_;  // an ICP step that moves no point more than this ends Refine
-};
 
 double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return Eigen::AngleAxisd(a * b.transpose()).angle();
@@ -484,7 +324,7 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   const Eigen::RowVector3d mean = y.colwise().mean();
   const double radius = std::sqrt((y.rowwise() - mean).rowwise().squaredNorm().mean());
   const double voxel = kVoxelPerRadius * radius;
-  Verifier verifier(y, tris, points, eye, voxel);
+  PoseVerifier verifier(y, tris, points, eye, voxel);
   // The check counts the surface facing the eye too: a pose turned by a fraction of a radian
   // can leave a partial view within loss_scale of some part of a large body's surface.
   PclCloud::Ptr model = ModelSamples(y, tris, voxel);
