@@ -218,16 +218,28 @@ TEST(EquilibriumSolve, BothBackEndsReachTheSameStationaryPointOfTheEnergy) {
   }
 }
 
+// The pulled cantilever and its solve to the end, which the stops below are held to.
+struct PulledCantilever {
+  BoxProblem box{1};
+  Vertices full;
+  SolveReport exact;
+  PulledCantilever() {
+    SetUpPulledCantilever(&box);
+    full = box.mesh.rest;
+    exact = MakeBackend(FastSolveToTheEnd())->Solve(box.problem, 0.0, &full);
+  }
+};
+
 // equilibrium_step_tolerance ends the solve after the first whole step that moves no vertex
 // more than it (and lowers the energy by less than 10 %): fewer steps, and a shape within a
 // few such moves of the full solve's.
 TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
-  BoxProblem box(1);
-  SetUpPulledCantilever(&box);
+  PulledCantilever c;
+  ASSERT_TRUE(c.exact.success) << c.exact.message;
+  BoxProblem& box = c.box;
+  const Vertices& full = c.full;
+  const SolveReport& exact = c.exact;
   BackendOptions options = FastSolveToTheEnd();
-  Vertices full = box.mesh.rest;
-  const SolveReport exact = MakeBackend(options)->Solve(box.problem, 0.0, &full);
-  ASSERT_TRUE(exact.success) << exact.message;
   const double tolerance = 2e-4;  // m: of the 1 cm pull
   options.equilibrium_step_tolerance = tolerance;
   Vertices x = box.mesh.rest;
@@ -254,12 +266,11 @@ TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
 // step lowers the energy by more than the tolerance, so the decrease alone stops later, and
 // the step model's gap stops it before that, at the energy of the solve to the end.
 TEST(EquilibriumSolve, EndsWhereTheStepModelPromisedWhatTheEnergyGave) {
-  BoxProblem box(1);
-  SetUpPulledCantilever(&box);
+  PulledCantilever c;
+  ASSERT_TRUE(c.exact.success) << c.exact.message;
+  BoxProblem& box = c.box;
+  const SolveReport& exact = c.exact;
   BackendOptions options = FastSolveToTheEnd();
-  Vertices full = box.mesh.rest;
-  const SolveReport exact = MakeBackend(options)->Solve(box.problem, 0.0, &full);
-  ASSERT_TRUE(exact.success) << exact.message;
   const double tolerance = 1e-3;
   options.relative_tolerance = tolerance;
   Vertices x = box.mesh.rest;
