@@ -286,8 +286,9 @@ TEST(EquilibriumSolve, EndsWhereTheStepModelPromisedWhatTheEnergyGave) {
   const SolveReport shorter = MakeBackend(options)->Solve(box.problem, 0.0, &one_less);
   ASSERT_TRUE(shorter.success) << shorter.message;
   const double last = (shorter.after.total() - early.after.total()) / shorter.after.total();
-  std::printf("steps: %d to the end, %d with the tolerance %.0e; the last one's decrease %.3g; energy %.3g"
-              " above the end's\n", exact.iterations, early.iterations, tolerance, last, excess);
+  std::printf("steps: %d to the end, %d with the tolerance %.0e; the last one's decrease %.3g;"
+              " energy %.3g above the end's\n",
+              exact.iterations, early.iterations, tolerance, last, excess);
   EXPECT_GT(last, tolerance);
   EXPECT_LT(excess, tolerance);
 }

@@ -1,5 +1,8 @@
 #include "registration/pose_verifier.h"
 
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -20,7 +23,11 @@ constexpr double kSettledMove = 1e-3;
 
 PoseVerifier::PoseVerifier(const Vertices& y, const Triangles& tris, const Vertices& points,
                            const Eigen::Vector3d* eye, double voxel)
-    : y_(y), tris_(tris), index_(y_, tris_), has_eye_(eye != nullptr), penalty_(2.0 * voxel),
+    : y_(y),
+      tris_(tris),
+      index_(y_, tris_),
+      has_eye_(eye != nullptr),
+      penalty_(2.0 * voxel),
       settled_(kSettledMove * voxel) {
   if (has_eye_) eye_ = *eye;
   face_normals_.resize(tris.rows(), 3);
@@ -64,8 +71,7 @@ double PoseVerifier::Score(const PoseHypothesis& h) const {
   }
   if (d.empty()) return score;
   std::sort(d.begin(), d.end());
-  const size_t keep =
-      std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
+  const size_t keep = std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
   double sum = 0.0;
   for (size_t j = 0; j < keep; ++j) sum += d[j];
   return score + sum / static_cast<double>(keep);
@@ -89,9 +95,9 @@ void PoseVerifier::Refine(PoseHypothesis* h) const {
     const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(Jtr);
     if (!x.allFinite()) break;
     const Eigen::Vector3d w = x.head<3>(), dt = x.tail<3>();
-    const Eigen::Matrix3d dR =
-        w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
-                     : Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d dR = w.norm() > 0
+                                   ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                                   : Eigen::Matrix3d::Identity();
     h->R = dR * h->R;
     h->t = dR * h->t + dt;
     // Settled: the step moved no mapped point more than settled_ (to first order). Past it
@@ -103,8 +109,8 @@ void PoseVerifier::Refine(PoseHypothesis* h) const {
   h->fit = Score(*h);
 }
 
-double PoseVerifier::Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a, std::vector<Eigen::Vector3d>* b,
-                           std::vector<Eigen::Vector3d>* n) const {
+double PoseVerifier::Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a,
+                           std::vector<Eigen::Vector3d>* b, std::vector<Eigen::Vector3d>* n) const {
   const Eigen::Vector3d eye = h.R * eye_ + h.t;
   std::vector<std::pair<double, int>> dist;
   std::vector<Eigen::Vector3d> mapped(points_.size()), closest(points_.size());

@@ -4,9 +4,6 @@
 #ifndef FEMREG_REGISTRATION_POSE_VERIFIER_H_
 #define FEMREG_REGISTRATION_POSE_VERIFIER_H_
 
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-
 #include <Eigen/Core>
 #include <memory>
 #include <vector>
@@ -14,6 +11,12 @@
 #include "femreg/mesh.h"
 #include "geometry/nearest.h"
 #include "registration/global_pose.h"
+
+namespace pcl {
+template <typename PointT>
+class PointCloud;
+struct PointNormal;
+}  // namespace pcl
 
 namespace femreg {
 
@@ -23,8 +26,8 @@ class PoseVerifier {
   // thousand of them scored); eye: the sensor's position, if known; voxel: the search's
   // sampling voxel (m), which scales the penalty of a point explained by the far side and
   // ICP's stop.
-  PoseVerifier(const Vertices& y, const Triangles& tris, const Vertices& points, const Eigen::Vector3d* eye,
-               double voxel);
+  PoseVerifier(const Vertices& y, const Triangles& tris, const Vertices& points,
+               const Eigen::Vector3d* eye, double voxel);
 
   // The trimmed mean distance of the cloud, mapped by h, to the surface (m).
   double Fit(const PoseHypothesis& h) const;
@@ -44,8 +47,8 @@ class PoseVerifier {
   // points' triangle normals. A point whose closest surface point faces away from the eye
   // counts at least `penalty_` away (a pose that explains a view by the far side of the
   // object) and pairs with nothing.
-  double Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a, std::vector<Eigen::Vector3d>* b,
-               std::vector<Eigen::Vector3d>* n) const;
+  double Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a,
+               std::vector<Eigen::Vector3d>* b, std::vector<Eigen::Vector3d>* n) const;
 
   const Vertices& y_;
   const Triangles& tris_;
