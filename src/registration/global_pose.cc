@@ -337,9 +337,7 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   // The given pose refined locally is a hypothesis like the global ones. Each is refined on its
   // own (the verifier only reads), so on several threads at once, with the same results.
   const int threads = state->options.solver.num_threads;
-  auto refine_all = [&](std::vector<PoseHypothesis>* batch) {
-    RunTasks(threads, static_cast<int>(batch->size()), [&](int i) { verifier.Refine(&(*batch)[static_cast<size_t>(i)]); });
-  };
+  auto refine_all = [&](std::vector<PoseHypothesis>* batch) { verifier.RefineAll(batch, threads); };
   PclCloud::Ptr cloud = CloudSamples(points, eye, voxel);
   Features::Ptr model_features, cloud_features;
   RunTasks(threads, 2, [&](int which) {  // two estimators of their own: side by side

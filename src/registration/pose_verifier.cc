@@ -9,6 +9,8 @@
 #include <limits>
 #include <utility>
 
+#include "parallel/pool.h"
+
 namespace femreg {
 
 namespace {
@@ -19,6 +21,11 @@ constexpr int kIcpIterations = 50;
 // tracker's own registration, which starts from the pose, resolves: from there on the trimmed
 // set's changes only make the pose jitter.
 constexpr double kSettledMove = 1e-3;
+// RefineAll refines in rounds of this many iterations, and after each drops the hypotheses
+// still moving whose fit is worse than kDropRatio times the best so far: a wrong pose's trimmed
+// pairs cycle to the cap, while a right one's fit is near the best.
+constexpr int kRoundIterations = 10;
+constexpr double kDropRatio = 3.0;
 }  // namespace
 
 PoseVerifier::PoseVerifier(const Vertices& y, const Triangles& tris, const Vertices& points,
@@ -77,11 +84,15 @@ double PoseVerifier::Score(const PoseHypothesis& h) const {
   return score + sum / static_cast<double>(keep);
 }
 
-void PoseVerifier::Refine(PoseHypothesis* h) const {
-  for (int it = 0; it < kIcpIterations; ++it) {
+bool PoseVerifier::Refine(PoseHypothesis* h, int max_iterations) const {
+  bool settled = false;
+  for (int it = 0; it < std::min(max_iterations, kIcpIterations); ++it) {
     std::vector<Eigen::Vector3d> a, b, n;
     Pairs(*h, &a, &b, &n);
-    if (a.size() < 6) break;
+    if (a.size() < 6) {
+      settled = true;  // nothing to refine with
+      break;
+    }
     // Linearized about the mapped points: (a + w x a + dt - b) . n = 0 in least squares.
     Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
@@ -93,7 +104,10 @@ void PoseVerifier::Refine(PoseHypothesis* h) const {
     }
     JtJ.diagonal().array() += 1e-12 * JtJ.trace() + 1e-30;
     const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(Jtr);
-    if (!x.allFinite()) break;
+    if (!x.allFinite()) {
+      settled = true;
+      break;
+    }
     const Eigen::Vector3d w = x.head<3>(), dt = x.tail<3>();
     const Eigen::Matrix3d dR = w.norm() > 0
                                    ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
@@ -104,9 +118,38 @@ void PoseVerifier::Refine(PoseHypothesis* h) const {
     // the trimmed set's changes make the pose jitter for the remaining iterations.
     double moved = 0.0;
     for (const Eigen::Vector3d& p : a) moved = std::max(moved, (w.cross(p) + dt).squaredNorm());
-    if (std::sqrt(moved) <= settled_) break;
+    if (std::sqrt(moved) <= settled_) {
+      settled = true;
+      break;
+    }
   }
   h->fit = Score(*h);
+  return settled;
+}
+
+void PoseVerifier::RefineAll(std::vector<PoseHypothesis>* batch, int threads) const {
+  const int n = static_cast<int>(batch->size());
+  std::vector<char> active(static_cast<size_t>(n), 1);
+  for (int done = 0; done < kIcpIterations; done += kRoundIterations) {
+    std::vector<int> live;
+    for (int i = 0; i < n; ++i) {
+      if (active[static_cast<size_t>(i)]) live.push_back(i);
+    }
+    if (live.empty()) break;
+    std::vector<char> ended(live.size(), 0);
+    const int round = std::min(kRoundIterations, kIcpIterations - done);
+    // Each on its own (the verifier only reads): the same results on any number of threads.
+    RunTasks(threads, static_cast<int>(live.size()), [&](int k) {
+      ended[static_cast<size_t>(k)] =
+          Refine(&(*batch)[static_cast<size_t>(live[static_cast<size_t>(k)])], round);
+    });
+    double best = std::numeric_limits<double>::infinity();
+    for (const PoseHypothesis& h : *batch) best = std::min(best, h.fit);
+    for (size_t k = 0; k < live.size(); ++k) {
+      const size_t i = static_cast<size_t>(live[k]);
+      if (ended[k] || (*batch)[i].fit > kDropRatio * best) active[i] = 0;
+    }
+  }
 }
 
 double PoseVerifier::Pairs(const PoseHypothesis& h, std::vector<Eigen::Vector3d>* a,

@@ -39,8 +39,12 @@ class PoseVerifier {
   // view on the wrong part of a smooth body explains the cloud, but not where nothing was seen.
   double Score(const PoseHypothesis& h) const;
   // Trimmed point-to-plane ICP from h (it slides along flat parts, where point-to-point
-  // crawls); h->fit set.
-  void Refine(PoseHypothesis* h) const;
+  // crawls), at most max_iterations; h->fit set. Whether it ended (settled, or nothing to
+  // refine with) before max_iterations.
+  bool Refine(PoseHypothesis* h, int max_iterations) const;
+  // Refines every hypothesis of *batch (on up to `threads`), in rounds; one still moving whose
+  // fit is far worse than the best so far is dropped after a round, with the fit it has.
+  void RefineAll(std::vector<PoseHypothesis>* batch, int threads) const;
 
  private:
   // The kept (trimmed) pairs: the mapped cloud points, their closest surface points and those
