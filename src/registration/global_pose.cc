@@ -334,10 +334,8 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   if (!(given_score > state->options.data.loss_scale)) return result;
   result.searched = true;
 
-  // The given pose refined locally is a hypothesis like the global ones. Each is refined on its
-  // own (the verifier only reads), so on several threads at once, with the same results.
+  // The given pose refined locally is a hypothesis like the global ones.
   const int threads = state->options.solver.num_threads;
-  auto refine_all = [&](std::vector<PoseHypothesis>* batch) { verifier.RefineAll(batch, threads); };
   PclCloud::Ptr cloud = CloudSamples(points, eye, voxel);
   Features::Ptr model_features, cloud_features;
   RunTasks(threads, 2, [&](int which) {  // two estimators of their own: side by side
@@ -349,7 +347,7 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   });
   std::vector<PoseHypothesis> hypotheses(1);
   for (const PoseHypothesis& h : Propose(*cloud, *cloud_features, model, model_features, voxel, threads)) hypotheses.push_back(h);
-  refine_all(&hypotheses);
+  verifier.RefineAll(&hypotheses, threads);
   auto by_fit = [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.fit < b.fit; };
   std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
   // A symmetric body's other poses are the best one turned by half a turn about one of its
@@ -368,7 +366,7 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
     h.R = half * first.R;
     h.t = half * (first.t - centre) + centre;
   }
-  refine_all(&turned);
+  verifier.RefineAll(&turned, threads, hypotheses.front().fit);
   hypotheses.insert(hypotheses.end(), turned.begin(), turned.end());
   std::stable_sort(hypotheses.begin(), hypotheses.end(), by_fit);
   const PoseHypothesis& best = hypotheses.front();

@@ -31,7 +31,8 @@ struct GlobalPoseResult {
   // explains the cloud about equally well.
   bool ambiguous = false;
   double given_fit = 0.0;                  // m, the given pose's PoseHypothesis::fit
-  std::vector<PoseHypothesis> hypotheses;  // refined, best first (searched only)
+  // Refined (or dropped mid-way, with the fit they had), best first (searched only).
+  std::vector<PoseHypothesis> hypotheses;
 };
 
 // The search for object `object` of *state against `points` (its cloud points, #P by 3, in

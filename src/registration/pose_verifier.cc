@@ -22,10 +22,12 @@ constexpr int kIcpIterations = 50;
 // set's changes only make the pose jitter.
 constexpr double kSettledMove = 1e-3;
 // RefineAll refines in rounds of this many iterations, and after each drops the hypotheses
-// still moving whose fit is worse than kDropRatio times the best so far: a wrong pose's trimmed
-// pairs cycle to the cap, while a right one's fit is near the best.
+// still moving whose fit is worse than kDropRatio times the best so far (or than kDropRatio
+// times kDropFloor voxels, where the cloud is so clean that the best is near zero): a wrong
+// pose's trimmed pairs cycle to the cap, while a right one's fit is near the best.
 constexpr int kRoundIterations = 10;
 constexpr double kDropRatio = 3.0;
+constexpr double kDropFloor = 0.1;
 }  // namespace
 
 PoseVerifier::PoseVerifier(const Vertices& y, const Triangles& tris, const Vertices& points,
@@ -35,7 +37,8 @@ PoseVerifier::PoseVerifier(const Vertices& y, const Triangles& tris, const Verti
       index_(y_, tris_),
       has_eye_(eye != nullptr),
       penalty_(2.0 * voxel),
-      settled_(kSettledMove * voxel) {
+      settled_(kSettledMove * voxel),
+      drop_floor_(kDropFloor * voxel) {
   if (has_eye_) eye_ = *eye;
   face_normals_.resize(tris.rows(), 3);
   for (Eigen::Index f = 0; f < tris.rows(); ++f) {
@@ -85,12 +88,12 @@ double PoseVerifier::Score(const PoseHypothesis& h) const {
 }
 
 bool PoseVerifier::Refine(PoseHypothesis* h, int max_iterations) const {
-  bool settled = false;
+  bool ended = false;
   for (int it = 0; it < std::min(max_iterations, kIcpIterations); ++it) {
     std::vector<Eigen::Vector3d> a, b, n;
     Pairs(*h, &a, &b, &n);
     if (a.size() < 6) {
-      settled = true;  // nothing to refine with
+      ended = true;  // nothing to refine with
       break;
     }
     // Linearized about the mapped points: (a + w x a + dt - b) . n = 0 in least squares.
@@ -105,7 +108,7 @@ bool PoseVerifier::Refine(PoseHypothesis* h, int max_iterations) const {
     JtJ.diagonal().array() += 1e-12 * JtJ.trace() + 1e-30;
     const Eigen::Matrix<double, 6, 1> x = JtJ.ldlt().solve(Jtr);
     if (!x.allFinite()) {
-      settled = true;
+      ended = true;
       break;
     }
     const Eigen::Vector3d w = x.head<3>(), dt = x.tail<3>();
@@ -119,15 +122,16 @@ bool PoseVerifier::Refine(PoseHypothesis* h, int max_iterations) const {
     double moved = 0.0;
     for (const Eigen::Vector3d& p : a) moved = std::max(moved, (w.cross(p) + dt).squaredNorm());
     if (std::sqrt(moved) <= settled_) {
-      settled = true;
+      ended = true;
       break;
     }
   }
   h->fit = Score(*h);
-  return settled;
+  return ended;
 }
 
-void PoseVerifier::RefineAll(std::vector<PoseHypothesis>* batch, int threads) const {
+void PoseVerifier::RefineAll(std::vector<PoseHypothesis>* batch, int threads,
+                             double best_seen) const {
   const int n = static_cast<int>(batch->size());
   std::vector<char> active(static_cast<size_t>(n), 1);
   for (int done = 0; done < kIcpIterations; done += kRoundIterations) {
@@ -143,8 +147,9 @@ void PoseVerifier::RefineAll(std::vector<PoseHypothesis>* batch, int threads) co
       ended[static_cast<size_t>(k)] =
           Refine(&(*batch)[static_cast<size_t>(live[static_cast<size_t>(k)])], round);
     });
-    double best = std::numeric_limits<double>::infinity();
+    double best = best_seen;
     for (const PoseHypothesis& h : *batch) best = std::min(best, h.fit);
+    best = std::max(best, drop_floor_);
     for (size_t k = 0; k < live.size(); ++k) {
       const size_t i = static_cast<size_t>(live[k]);
       if (ended[k] || (*batch)[i].fit > kDropRatio * best) active[i] = 0;

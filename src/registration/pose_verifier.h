@@ -5,6 +5,7 @@
 #define FEMREG_REGISTRATION_POSE_VERIFIER_H_
 
 #include <Eigen/Core>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -39,12 +40,14 @@ class PoseVerifier {
   // view on the wrong part of a smooth body explains the cloud, but not where nothing was seen.
   double Score(const PoseHypothesis& h) const;
   // Trimmed point-to-plane ICP from h (it slides along flat parts, where point-to-point
-  // crawls), at most max_iterations; h->fit set. Whether it ended (settled, or nothing to
-  // refine with) before max_iterations.
+  // crawls), at most max_iterations; h->fit set. True if it stopped on its own (settled, or
+  // nothing to refine with) within them.
   bool Refine(PoseHypothesis* h, int max_iterations) const;
   // Refines every hypothesis of *batch (on up to `threads`), in rounds; one still moving whose
-  // fit is far worse than the best so far is dropped after a round, with the fit it has.
-  void RefineAll(std::vector<PoseHypothesis>* batch, int threads) const;
+  // fit is far worse than the best so far (of the batch, and best_seen: an earlier batch's) is
+  // dropped after a round, with the fit it has. The same on any number of threads.
+  void RefineAll(std::vector<PoseHypothesis>* batch, int threads,
+                 double best_seen = std::numeric_limits<double>::infinity()) const;
 
  private:
   // The kept (trimmed) pairs: the mapped cloud points, their closest surface points and those
@@ -65,7 +68,8 @@ class PoseVerifier {
   bool has_eye_;
   Eigen::Vector3d eye_ = Eigen::Vector3d::Zero();
   double penalty_;
-  double settled_;  // an ICP step that moves no point more than this ends Refine
+  double settled_;     // an ICP step that moves no point more than this ends Refine
+  double drop_floor_;  // RefineAll's best fit at least this (m)
 };
 
 }  // namespace femreg
