@@ -156,12 +156,9 @@ struct EquilibriumSolver::Impl {
     modes.ProjectHeld(y);
   }
 
-  // The decrease the step model at x promises for dx: -(G^T dx + 1/2 dx^T M dx).
-  double ModelDecrease(const Eigen::VectorXd& dx) {
-    Eigen::VectorXd mdx;
-    Product(dx, &mdx);
-    return -(G.dot(dx) + 0.5 * dx.dot(mdx));
-  }
+  // The decrease the step model at x promises for its plain step dx, -(G^T dx + 1/2 dx^T M dx):
+  // with PCG from zero on M dx = -G, M dx = -G - r, so 1/2 dx^T (r - G) (as the classic solve).
+  double ModelDecrease(const Eigen::VectorXd& dx) const { return 0.5 * dx.dot(step_residual - G); }
 
   // What a next step on x's model could still gain from the step's PCG residual r: about
   // 1/2 r^T M^-1 r, with the preconditioner for M^-1.
