@@ -22,6 +22,8 @@ namespace fast_backend {
 
 namespace {
 
+using multigrid_internal::kParallelEntries;
+using multigrid_internal::kParallelVectorEntries;
 using multigrid_internal::kParallelNonzeros;
 using multigrid_internal::kParallelUnknowns;
 
@@ -246,7 +248,9 @@ bool Multigrid::SetFinest(const SparseMatrix& A) {
   }
   const double* from = A.valuePtr();
   float* to = A_f.valuePtr();
-  for (Eigen::Index p = 0; p < A.nonZeros(); ++p) to[p] = static_cast<float>(from[p]);
+  ParallelSpans(threads_, A.nonZeros(), kParallelEntries, [from, to](int64_t begin, int64_t end) {
+    for (int64_t p = begin; p < end; ++p) to[p] = static_cast<float>(from[p]);
+  });
   std::vector<double> unused;
   if (!InvertDiagonalBlocks(0, A, &unused)) {
     levels_.clear();
@@ -269,23 +273,39 @@ void Multigrid::Smooth(int level, bool zero_start) {
   const double delta = 0.5 * (upper - lower);
   const double sigma = theta / delta;
   double rho = 1.0 / sigma;
+  // The vector updates element by element, in spans on the team on the finer levels.
+  const int64_t n = L.b.size();
+  auto each = [&](auto&& update) {
+    ParallelSpans(threads_, n, kParallelVectorEntries, [&update](int64_t begin, int64_t end) {
+      for (int64_t i = begin; i < end; ++i) update(i);
+    });
+  };
+  L.r.resize(n);
+  double* r = L.r.data();
+  const double* b = L.b.data();
   if (zero_start) {
-    L.r = L.b;
+    each([&](int64_t i) { r[i] = b[i]; });
   } else {
     Product(level, L.x, &L.ad);
-    L.r = L.b - L.ad;
+    const double* ad = L.ad.data();
+    each([&](int64_t i) { r[i] = b[i] - ad[i]; });
   }
   Eigen::VectorXd& z = L.ad;  // reused: ad is free between products (no allocation per cycle)
   BlockJacobi(L, L.r, &L.d);
-  L.d /= theta;
+  double* d = L.d.data();
+  double* x = L.x.data();
+  each([&](int64_t i) { d[i] /= theta; });
   for (int k = 0; k < kChebyshevDegree; ++k) {
-    L.x += L.d;
+    each([&](int64_t i) { x[i] += d[i]; });
     if (k + 1 == kChebyshevDegree) break;
     Product(level, L.d, &z);
-    L.r -= z;
+    const double* zz = z.data();
+    each([&](int64_t i) { r[i] -= zz[i]; });
     BlockJacobi(L, L.r, &z);
     const double rho_next = 1.0 / (2.0 * sigma - rho);
-    L.d = (rho_next * rho) * L.d + (2.0 * rho_next / delta) * z;
+    const double keep = rho_next * rho, add = 2.0 * rho_next / delta;
+    zz = z.data();
+    each([&](int64_t i) { d[i] = keep * d[i] + add * zz[i]; });
     rho = rho_next;
   }
 }

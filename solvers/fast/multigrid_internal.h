@@ -13,6 +13,11 @@ namespace multigrid_internal {
 // Products and block Jacobi run in parallel from this many unknowns on: a V-cycle has ~15 of them,
 // each worth a team's start from here (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int kParallelUnknowns = 4096;
+// Element-wise passes go to the team from this many entries per thread on (the finest
+// matrix's values to float; the smoother's vector updates, a few times lighter each): below,
+// they wait less on memory than a team's start costs.
+constexpr int64_t kParallelEntries = int64_t{1} << 16;
+constexpr int64_t kParallelVectorEntries = int64_t{1} << 14;
 // ... or this many stored entries: a coarse level has few unknowns, but many entries per
 // column (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int64_t kParallelNonzeros = 65536;

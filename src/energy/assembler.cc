@@ -26,6 +26,22 @@ constexpr int kParallelWork = 131072;
 // corotational element's rotation derivative, a neo-Hookean element's full Hessian), so its
 // sets go to the team from this fraction of kParallelWork.
 constexpr int kSecondOrderWorkFactor = 8;
+// Fills and copies of H's values, passes over the whole matrix that wait on memory, go to the
+// team from this many entries per thread on.
+constexpr int64_t kParallelCopy = int64_t{1} << 17;
+// Finish's passes over the diagonal, scattered over H: from this many entries per thread on.
+constexpr int64_t kParallelDiagonal = int64_t{1} << 14;
+
+// to[0, n) = from[0, n) (from == nullptr: zeros), in spans on up to `threads` threads.
+void CopyValues(int threads, const double* from, int64_t n, double* to) {
+  ParallelSpans(threads, n, kParallelCopy, [from, to](int64_t begin, int64_t end) {
+    if (from == nullptr) {
+      std::fill(to + begin, to + end, 0.0);
+    } else {
+      std::copy(from + begin, from + end, to + begin);
+    }
+  });
+}
 
 }  // namespace
 
@@ -408,15 +424,17 @@ void Assembler::AssembleGaussNewton(const Problem& problem, const Vertices& x, b
   g->setZero(3 * num_vertices_);
   std::vector<double>* set_energy = first && energy != nullptr ? &set_energy_ : nullptr;
   if (set_energy != nullptr) set_energy->clear();
+  const int64_t nnz = H_.nonZeros();
   if (first) {
-    std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
+    CopyValues(threads_, nullptr, nnz, H_.valuePtr());
     Accumulate(problem, x, constant, always, gauss_newton, g, set_energy, kParallelWork);
-    constant_values_.assign(H_.valuePtr(), H_.valuePtr() + H_.nonZeros());
+    constant_values_.resize(static_cast<size_t>(nnz));
+    CopyValues(threads_, H_.valuePtr(), nnz, constant_values_.data());
   } else {
     // The constant sets' gradient is linearized element by element again, not formed as the
     // first one plus H_c (x - x_first): that sum cancels on nearly flat elements (a 1:1000
     // plate's stiffness against its small gradient; tests/hard_cases_test.cc).
-    std::copy(constant_values_.begin(), constant_values_.end(), H_.valuePtr());
+    CopyValues(threads_, constant_values_.data(), static_cast<int64_t>(constant_values_.size()), H_.valuePtr());
     Accumulate(problem, x, constant, [](const auto&) { return false; }, gauss_newton, g, nullptr, kParallelWork);
   }
   Accumulate(problem, x, varying, always, gauss_newton, g, set_energy, kParallelWork);
@@ -434,7 +452,7 @@ double Assembler::AssembleSecondOrder(const Problem& problem, const Vertices& x,
     return LinearizeSecondOrder(block, loss, x, curvature, out, with);
   };
   g->setZero(3 * num_vertices_);
-  if (with_hessian) std::fill(H_.valuePtr(), H_.valuePtr() + H_.nonZeros(), 0.0);
+  if (with_hessian) CopyValues(threads_, nullptr, H_.nonZeros(), H_.valuePtr());
   set_energy_.clear();
   Accumulate(problem, x, always, hessian, second_order, g, &set_energy_, kParallelWork / kSecondOrderWorkFactor);
   const double nodal = AddNodalVolume(problem, x, curvature, with_hessian, g);
@@ -490,9 +508,22 @@ void Assembler::Finish(const Problem& problem, double whisper, Eigen::VectorXd* 
     }
   }
   if (whisper > 0) {  // for degrees of freedom no term references
-    double max_diagonal = 0.0;
-    for (int at : diagonal_at_) max_diagonal = std::max(max_diagonal, H_.valuePtr()[at]);
-    for (int at : diagonal_at_) H_.valuePtr()[at] += whisper * max_diagonal;
+    // In spans on the team (scattered reads of a large H wait on memory); a maximum is the
+    // same in any order.
+    double* values = H_.valuePtr();
+    const int* at = diagonal_at_.data();
+    const int64_t n = static_cast<int64_t>(diagonal_at_.size());
+    std::vector<double> span_max(16, 0.0);  // per piece
+    ParallelSpans(threads_, n, kParallelDiagonal, [&](int64_t begin, int64_t end) {
+      double m = 0.0;
+      for (int64_t i = begin; i < end; ++i) m = std::max(m, values[at[i]]);
+      span_max[static_cast<size_t>(begin / SpanGrain(n))] = m;
+    });
+    const double max_diagonal = *std::max_element(span_max.begin(), span_max.end());
+    const double add = whisper * max_diagonal;
+    ParallelSpans(threads_, n, kParallelDiagonal, [&](int64_t begin, int64_t end) {
+      for (int64_t i = begin; i < end; ++i) values[at[i]] += add;
+    });
   }
 }
 

@@ -26,6 +26,10 @@ void RunTasks(int threads, int tasks, const std::function<void(int)>& body);
 void ParallelRanges(int threads, int64_t n, int64_t grain,
                     const std::function<void(int64_t, int64_t)>& body);
 
+// The pieces ParallelFor and ParallelSpans cut [0, n) into: at most 16, of this length (the last
+// one shorter). Piece k begins at k * SpanGrain(n).
+inline int64_t SpanGrain(int64_t n) { return (n + 15) / 16; }
+
 // f(i) for every i in [0, n): on PhaseThreads(threads, n, per_thread) threads (threads <= 0:
 // ResolveThreadCount(0)), in pieces of about n / 16 so that the caller can take over the part
 // of a worker that starts late. Serial where one thread is given or the loop is small.
@@ -36,9 +40,23 @@ void ParallelFor(int threads, int64_t n, int64_t per_thread, F&& f) {
     for (int64_t i = 0; i < n; ++i) f(i);
     return;
   }
-  ParallelRanges(team, n, (n + 15) / 16, [&f](int64_t begin, int64_t end) {
+  ParallelRanges(team, n, SpanGrain(n), [&f](int64_t begin, int64_t end) {
     for (int64_t i = begin; i < end; ++i) f(i);
   });
+}
+
+// body(begin, end) over [0, n) in spans: one call on the caller where PhaseThreads gives one
+// thread (fewer than 2 * per_thread elements), else the pieces of SpanGrain(n). For element-wise
+// work on long arrays (copies, fills, vector updates): no reduction, so the result is the
+// same on any thread count.
+template <class F>
+void ParallelSpans(int threads, int64_t n, int64_t per_thread, F&& body) {
+  const int team = PhaseThreads(ResolveThreadCount(threads), n, per_thread);
+  if (team <= 1) {
+    if (n > 0) body(int64_t{0}, n);
+    return;
+  }
+  ParallelRanges(team, n, SpanGrain(n), body);
 }
 
 }  // namespace femreg

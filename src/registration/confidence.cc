@@ -55,10 +55,16 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
 std::vector<double> VolumeRatios(const TrackerState& state) {
   std::vector<double> ratios;
   ratios.reserve(state.objects.size());
+  std::vector<double> element;  // per element, summed in element order as on one thread
   for (const ObjectState& o : state.objects) {
     double volume = 0.0, rest = 0.0;
-    for (int e = 0; e < o.model.num_elements(); ++e) {
-      volume += DeformationGradient(o, e).determinant() * o.model.rest(e).volume;
+    const int ne = o.model.num_elements();
+    element.resize(static_cast<size_t>(ne));
+    ParallelFor(state.options.solver.num_threads, ne, 4096, [&](int64_t e) {
+      element[static_cast<size_t>(e)] = DeformationGradient(o, static_cast<int>(e)).determinant();
+    });
+    for (int e = 0; e < ne; ++e) {
+      volume += element[static_cast<size_t>(e)] * o.model.rest(e).volume;
       rest += o.model.rest(e).volume;
     }
     ratios.push_back(rest > 0.0 ? volume / rest : 1.0);

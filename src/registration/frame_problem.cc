@@ -1,6 +1,7 @@
 #include "registration/frame_problem.h"
 
 #include <algorithm>
+#include <atomic>
 #include <map>
 #include <type_traits>
 #include <utility>
@@ -8,6 +9,7 @@
 #include "collision/contact_blocks.h"
 #include "energy/nodal_volume.h"
 #include "femreg/geometry.h"
+#include "parallel/pool.h"
 
 namespace femreg {
 
@@ -186,11 +188,13 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
 
 bool NoFlatElement(const TrackerState& state, const Vertices& x) {
   for (const ObjectState& o : state.objects) {
-    for (int e = 0; e < o.model.num_elements(); ++e) {
+    std::atomic<bool> flat(false);
+    ParallelFor(state.options.solver.num_threads, o.model.num_elements(), 4096, [&](int64_t e) {
       const double* p[4];
       for (int k = 0; k < 4; ++k) p[k] = x.data() + 3 * (o.model.tets()(e, k) + o.offset);
-      if (!(energy::VolumeRatio(o.model.rest(e), p) > 0.0)) return false;
-    }
+      if (!(energy::VolumeRatio(o.model.rest(static_cast<int>(e)), p) > 0.0)) flat = true;
+    });
+    if (flat) return false;
   }
   return true;
 }

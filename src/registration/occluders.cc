@@ -183,9 +183,13 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
       limit >= 1.0 ? stretch_bound : std::min(stretch_bound, 1.0 - (1.0 - limit) * (1.0 - limit));
   std::vector<char> strained(static_cast<size_t>(state.x.rows()), 0);
   bool any = false;
+  const int threads = state.options.solver.num_threads;
+  std::vector<char> over;  // per element: strained past the limit
   for (const ObjectState& o : state.objects) {
     const auto& tets = o.model.tets();
-    for (int e = 0; e < o.model.num_elements(); ++e) {
+    const int ne = o.model.num_elements();
+    over.assign(static_cast<size_t>(ne), 0);
+    ParallelFor(threads, ne, 2048, [&](int64_t e) {
       Eigen::Matrix3d Dm, Ds;
       const int a = o.offset + tets(e, 0);
       for (int k = 0; k < 3; ++k) {
@@ -194,12 +198,15 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
         Ds.col(k) = (state.x.row(b) - state.x.row(a)).transpose();
       }
       const double det = Dm.determinant();
-      if (!(std::abs(det) > 0.0)) continue;  // flat at the start: no strain to measure from
+      if (!(std::abs(det) > 0.0)) return;  // flat at the start: no strain to measure from
       const Eigen::Matrix3d F = Ds * Dm.inverse();
       // Upright with |F^T F - I| below `bound`: every principal stretch is within `limit` of 1.
       const double strain = (F.transpose() * F - Eigen::Matrix3d::Identity()).norm();
-      if (F.determinant() > 0.0 && strain < bound) continue;
-      if (!(StretchDeviation(F) > limit)) continue;
+      if (F.determinant() > 0.0 && strain < bound) return;
+      over[static_cast<size_t>(e)] = StretchDeviation(F) > limit ? 1 : 0;
+    });
+    for (int e = 0; e < ne; ++e) {
+      if (!over[static_cast<size_t>(e)]) continue;
       for (int k = 0; k < 4; ++k) strained[static_cast<size_t>(o.offset + tets(e, k))] = 1;
       any = true;
     }

@@ -103,17 +103,20 @@ double StiffRestartVolume(const RegistrationOptions& options) {
 
 double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to) {
   double smallest = 1.0;
+  std::vector<double> ratio;  // per tet (1: not measured); their minimum, in any order
   for (const ObjectState& o : state.objects) {
-    for (int t = 0; t < o.mesh.num_tets(); ++t) {
+    ratio.assign(static_cast<size_t>(o.mesh.num_tets()), 1.0);
+    ParallelFor(state.options.solver.num_threads, o.mesh.num_tets(), 4096, [&](int64_t t) {
       auto volume = [&](const Vertices& x, int offset) {
         auto at = [&](int k) { return Eigen::Vector3d(x.row(offset + o.mesh.tets(t, k))); };
         return SignedTetVolume(at(0), at(1), at(2), at(3));
       };
       const double before = volume(from, o.offset), rest = volume(o.mesh.rest, 0);
-      if (!(before > 0) || !(rest > 0)) continue;
+      if (!(before > 0) || !(rest > 0)) return;
       const double now = volume(to, o.offset);
-      smallest = std::min(smallest, std::max(now / before, now / rest));
-    }
+      ratio[static_cast<size_t>(t)] = std::max(now / before, now / rest);
+    });
+    for (double r : ratio) smallest = std::min(smallest, r);
   }
   return smallest;
 }
