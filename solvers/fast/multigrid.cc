@@ -273,39 +273,39 @@ void Multigrid::Smooth(int level, bool zero_start) {
   const double delta = 0.5 * (upper - lower);
   const double sigma = theta / delta;
   double rho = 1.0 / sigma;
-  // The vector updates element by element, in spans on the team on the finer levels.
-  const int64_t n = L.b.size();
-  auto each = [&](auto&& update) {
+  // The vector updates in spans on the team on the finer levels: each entry depends on its own
+  // index only, and each span is the Eigen expression the whole vector had, so every thread
+  // count gives the same bits.
+  const Eigen::Index n = L.b.size();
+  eigen_assert(L.x.size() == n);
+  auto spans = [&](auto&& update) {
     ParallelSpans(threads_, n, kParallelVectorEntries, [&update](int64_t begin, int64_t end) {
-      for (int64_t i = begin; i < end; ++i) update(i);
+      update(static_cast<Eigen::Index>(begin), static_cast<Eigen::Index>(end - begin));
     });
   };
   L.r.resize(n);
-  double* r = L.r.data();
-  const double* b = L.b.data();
   if (zero_start) {
-    each([&](int64_t i) { r[i] = b[i]; });
+    spans([&](Eigen::Index b, Eigen::Index m) { L.r.segment(b, m) = L.b.segment(b, m); });
   } else {
     Product(level, L.x, &L.ad);
-    const double* ad = L.ad.data();
-    each([&](int64_t i) { r[i] = b[i] - ad[i]; });
+    spans([&](Eigen::Index b, Eigen::Index m) {
+      L.r.segment(b, m) = L.b.segment(b, m) - L.ad.segment(b, m);
+    });
   }
   Eigen::VectorXd& z = L.ad;  // reused: ad is free between products (no allocation per cycle)
   BlockJacobi(L, L.r, &L.d);
-  double* d = L.d.data();
-  double* x = L.x.data();
-  each([&](int64_t i) { d[i] /= theta; });
+  spans([&](Eigen::Index b, Eigen::Index m) { L.d.segment(b, m) /= theta; });
   for (int k = 0; k < kChebyshevDegree; ++k) {
-    each([&](int64_t i) { x[i] += d[i]; });
+    spans([&](Eigen::Index b, Eigen::Index m) { L.x.segment(b, m) += L.d.segment(b, m); });
     if (k + 1 == kChebyshevDegree) break;
     Product(level, L.d, &z);
-    const double* zz = z.data();
-    each([&](int64_t i) { r[i] -= zz[i]; });
+    spans([&](Eigen::Index b, Eigen::Index m) { L.r.segment(b, m) -= z.segment(b, m); });
     BlockJacobi(L, L.r, &z);
     const double rho_next = 1.0 / (2.0 * sigma - rho);
-    const double keep = rho_next * rho, add = 2.0 * rho_next / delta;
-    zz = z.data();
-    each([&](int64_t i) { d[i] = keep * d[i] + add * zz[i]; });
+    spans([&](Eigen::Index b, Eigen::Index m) {
+      L.d.segment(b, m) =
+          (rho_next * rho) * L.d.segment(b, m) + (2.0 * rho_next / delta) * z.segment(b, m);
+    });
     rho = rho_next;
   }
 }

@@ -14,9 +14,10 @@ namespace multigrid_internal {
 // each worth a team's start from here (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int kParallelUnknowns = 4096;
 // Element-wise passes go to the team from this many entries per thread on (the finest
-// matrix's values to float; the smoother's vector updates, a few times lighter each): below,
-// they wait less on memory than a team's start costs.
-constexpr int64_t kParallelEntries = int64_t{1} << 16;
+// matrix's values to float; the smoother's vector updates, lighter each): below, the team's
+// start costs more than the pass waits on memory. The conversion only runs with the hierarchy,
+// from 5k vertices on.
+constexpr int64_t kParallelEntries = int64_t{1} << 18;
 constexpr int64_t kParallelVectorEntries = int64_t{1} << 14;
 // ... or this many stored entries: a coarse level has few unknowns, but many entries per
 // column (docs/notes/2026-11-28-figures-from-code-comments.md).

@@ -27,12 +27,14 @@ constexpr int kParallelWork = 131072;
 // sets go to the team from this fraction of kParallelWork.
 constexpr int kSecondOrderWorkFactor = 8;
 // Fills and copies of H's values, passes over the whole matrix that wait on memory, go to the
-// team from this many entries per thread on.
-constexpr int64_t kParallelCopy = int64_t{1} << 17;
+// team from this many entries per thread on (about 8k vertices): on a smaller mesh the sets
+// that follow are assembled serially and would fetch the half the other core wrote.
+constexpr int64_t kParallelCopy = int64_t{1} << 19;
 // Finish's passes over the diagonal, scattered over H: from this many entries per thread on.
 constexpr int64_t kParallelDiagonal = int64_t{1} << 14;
 
-// to[0, n) = from[0, n) (from == nullptr: zeros), in spans on up to `threads` threads.
+// to[0, n) = from[0, n) (from == nullptr: zeros), in spans on up to `threads` threads (entry
+// by entry: the same on any thread count).
 void CopyValues(int threads, const double* from, int64_t n, double* to) {
   ParallelSpans(threads, n, kParallelCopy, [from, to](int64_t begin, int64_t end) {
     if (from == nullptr) {
@@ -434,7 +436,8 @@ void Assembler::AssembleGaussNewton(const Problem& problem, const Vertices& x, b
     // The constant sets' gradient is linearized element by element again, not formed as the
     // first one plus H_c (x - x_first): that sum cancels on nearly flat elements (a 1:1000
     // plate's stiffness against its small gradient; tests/hard_cases_test.cc).
-    CopyValues(threads_, constant_values_.data(), static_cast<int64_t>(constant_values_.size()), H_.valuePtr());
+    const int64_t kept = static_cast<int64_t>(constant_values_.size());
+    CopyValues(threads_, constant_values_.data(), kept, H_.valuePtr());
     Accumulate(problem, x, constant, [](const auto&) { return false; }, gauss_newton, g, nullptr, kParallelWork);
   }
   Accumulate(problem, x, varying, always, gauss_newton, g, set_energy, kParallelWork);
@@ -509,15 +512,17 @@ void Assembler::Finish(const Problem& problem, double whisper, Eigen::VectorXd* 
   }
   if (whisper > 0) {  // for degrees of freedom no term references
     // In spans on the team (scattered reads of a large H wait on memory); a maximum is the
-    // same in any order.
+    // same in any order, so every thread count gives the same shift.
     double* values = H_.valuePtr();
     const int* at = diagonal_at_.data();
     const int64_t n = static_cast<int64_t>(diagonal_at_.size());
-    std::vector<double> span_max(16, 0.0);  // per piece
+    const int64_t grain = std::max<int64_t>(1, SpanGrain(n));
+    // Each piece's maximum (piece k begins at k * grain).
+    std::vector<double> span_max(static_cast<size_t>((n + grain - 1) / grain + 1), 0.0);
     ParallelSpans(threads_, n, kParallelDiagonal, [&](int64_t begin, int64_t end) {
       double m = 0.0;
       for (int64_t i = begin; i < end; ++i) m = std::max(m, values[at[i]]);
-      span_max[static_cast<size_t>(begin / SpanGrain(n))] = m;
+      span_max[static_cast<size_t>(begin / grain)] = m;
     });
     const double max_diagonal = *std::max_element(span_max.begin(), span_max.end());
     const double add = whisper * max_diagonal;

@@ -190,6 +190,7 @@ bool NoFlatElement(const TrackerState& state, const Vertices& x) {
   for (const ObjectState& o : state.objects) {
     std::atomic<bool> flat(false);
     ParallelFor(state.options.solver.num_threads, o.model.num_elements(), 4096, [&](int64_t e) {
+      if (flat) return;
       const double* p[4];
       for (int k = 0; k < 4; ++k) p[k] = x.data() + 3 * (o.model.tets()(e, k) + o.offset);
       if (!(energy::VolumeRatio(o.model.rest(static_cast<int>(e)), p) > 0.0)) flat = true;

@@ -222,7 +222,7 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   // Each point's closest triangle on the workers (the search is most of the cost); the marks
   // then in the points' order, as on one thread.
   std::vector<int> closest(static_cast<size_t>(n), -1);
-  ParallelFor(state.options.solver.num_threads, n, 2048, [&](int64_t i) {
+  ParallelFor(threads, n, 2048, [&](int64_t i) {
     if ((*marks)[static_cast<size_t>(i)]) return;
     closest[static_cast<size_t>(i)] = surface.Closest(points.row(i)).triangle;
   });
