@@ -102,7 +102,7 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
                     [pp](int row) { return pp + row; }, yy + 3 * b);
   };
   if (threads > 1 && blocks >= parallel_from) {
-    ParallelRanges(threads, blocks, (blocks + 15) / 16, [&](int64_t begin, int64_t end) {
+    ParallelRanges(threads, blocks, SpanGrain(blocks), [&](int64_t begin, int64_t end) {
       for (int64_t b = begin; b < end; ++b) column(static_cast<int>(b));
     });
   } else {

@@ -266,7 +266,7 @@ inline void AddProduct(const double* X, int m, int k, const double* Y, int n, do
 template <class Row>
 void ForRows(int rows, int width, int threads, const Row& row) {
   if (threads > 1 && rows >= 64) {
-    ParallelRanges(threads, rows, (rows + 15) / 16, [&](int64_t begin, int64_t end) {
+    ParallelRanges(threads, rows, SpanGrain(rows), [&](int64_t begin, int64_t end) {
       std::vector<int> scratch(static_cast<size_t>(width), -1);
       for (int64_t r = begin; r < end; ++r) row(static_cast<int>(r), &scratch);
     });
