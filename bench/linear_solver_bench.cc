@@ -11,6 +11,7 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
+#include <type_traits>
 #include <vector>
 
 #include "femreg/scene.h"
@@ -76,6 +77,7 @@ void Solve(benchmark::State& state) {
 
 // The back end's own substitutions with the supernodal factor (PCG's preconditioner), its
 // values in Scalar; on `threads` threads.
+// Range 2 (float only): 1 for the substitutions in float (set_single_work), 0 in double.
 template <class Scalar>
 void OwnSolve(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
@@ -84,6 +86,7 @@ void OwnSolve(benchmark::State& state) {
   llt.compute(H);
   femreg::fast_backend::SupernodalSolve<Scalar> solve;
   solve.Load(*llt.raw(), true, static_cast<int>(state.range(1)));
+  if constexpr (std::is_same<Scalar, float>::value) solve.set_single_work(state.range(2) != 0);
   const Eigen::VectorXd b = Eigen::VectorXd::Ones(H.rows());
   Eigen::VectorXd x;
   for (auto _ : state) {
@@ -227,7 +230,15 @@ void IndefiniteSizes(benchmark::internal::Benchmark* b) {
   b->ArgNames({"vertices", "threads", "shifted"})->Unit(benchmark::kMillisecond);
 }
 BENCHMARK_TEMPLATE(OwnFactorizeIndefinite, float)->Apply(IndefiniteSizes);
-BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(Sizes);
+void WorkSizes(benchmark::internal::Benchmark* b) {
+  for (int v : {1000, 4000, 16000, 64000}) {
+    for (int t : {1, 2}) {
+      for (int single : {0, 1}) b->Args({v, t, single});
+    }
+  }
+  b->ArgNames({"vertices", "threads", "single_work"})->Unit(benchmark::kMillisecond);
+}
+BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(WorkSizes);
 BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
 BENCHMARK(Product)->Apply(Sizes);
 BENCHMARK(BlockProduct)->Apply(Sizes);

@@ -13,7 +13,8 @@ using backend_testing::BeamsSystem;
 
 
 // PCG's preconditioner, the back end's own substitutions with CHOLMOD's supernodal factor,
-// solve the factorized system: in double to round-off, in float to float's precision, on
+// solve the factorized system: in double to round-off, in float (the factor's values, and
+// also the substitutions' work with set_single_work) to float's precision, on
 // 1, 2 and 3 threads (the elimination tree cut into groups of subtrees, the same cut on any
 // thread count), the same result, bit for bit, on every run and every thread count. The
 // matrix: two beams' stiffness (a forest of two trees) plus a diagonal.
@@ -30,7 +31,7 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
   for (int i = 0; i < offset; ++i) b[i] = u(rng);
   const Eigen::VectorXd expected = llt.solve(b);
   const double scale = expected.lpNorm<Eigen::Infinity>();
-  Eigen::VectorXd first_x, first_y;
+  Eigen::VectorXd first_x, first_y, first_w;
   for (int threads : {1, 2, 3}) {
     fast_backend::SupernodalSolve<double> exact;
     exact.set_cut_from(0);  // cut however small
@@ -49,12 +50,25 @@ TEST(FastBackend, OwnSubstitutionsSolveTheFactorizedSystem) {
     EXPECT_GT((y - expected).lpNorm<Eigen::Infinity>(), 0.0);  // float values, not a copy
     single.Solve(b, &again);
     EXPECT_EQ(y, again);
+    // The substitutions in float (set_single_work): float's precision still, other bits.
+    fast_backend::SupernodalSolve<float> single_work;
+    single_work.set_cut_from(0);
+    single_work.set_single_work(true);
+    ASSERT_TRUE(single_work.Load(*llt.raw(), true, threads));
+    Eigen::VectorXd w, w_again;
+    single_work.Solve(b, &w);
+    EXPECT_LE((w - expected).lpNorm<Eigen::Infinity>(), 1e-3 * scale) << threads << " threads";
+    EXPECT_NE(w, y);
+    single_work.Solve(b, &w_again);
+    EXPECT_EQ(w, w_again);
     if (threads == 1) {
       first_x = x;
       first_y = y;
+      first_w = w;
     } else {  // the same bits on every thread count
       EXPECT_EQ(x, first_x) << threads << " threads";
       EXPECT_EQ(y, first_y) << threads << " threads";
+      EXPECT_EQ(w, first_w) << threads << " threads";
     }
     // Uncut (the default below 100k entries of L): the serial order.
     fast_backend::SupernodalSolve<float> uncut;

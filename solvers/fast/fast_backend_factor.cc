@@ -149,6 +149,10 @@ bool FastBackend::Impl::Factorize(SolveReport* report) {
   } else {
     substitutions = SupernodalSolve<float>();
   }
+  // Substituted in float too: H's float factor already errs by H's condition number times
+  // float's round-off, which the temporal masses and the data bound; the float work adds as much
+  // (supernodal_solve.h). The equilibrium step's nearly singular K keeps double work.
+  substitutions.set_single_work(true);
   return factor_valid;
 }
 
@@ -166,6 +170,7 @@ bool FastBackend::Impl::FactorizeSingle(SolveReport* report) {
     factor_valid = factor.raw() != nullptr &&
                    substitutions.Factorize(*factor.raw(), H, structure_pending, team);
     substitutions.set_threads(threads);  // the substitutions' groups as before
+    substitutions.set_single_work(true);
   }
   if (factor_valid) structure_pending = false;
   report->factorize_s += Seconds(t0);

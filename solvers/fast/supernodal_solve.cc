@@ -152,12 +152,10 @@ bool SupernodalSolve<Scalar>::TakeStructure(const cholmod_factor& L) {
       }
     }
   }
-  int max_rows = 0;
-  for (int k = 0; k < nsuper; ++k) max_rows = std::max(max_rows, pi[k + 1] - pi[k]);
-  acc_.assign(groups_.size(), Eigen::VectorXd::Zero(n_));
-  z_.assign(groups_.size(), Eigen::VectorXd::Zero(max_rows));
-  b_.resize(n_);
-  y_.resize(n_);
+  max_rows_ = 0;
+  for (int k = 0; k < nsuper; ++k) max_rows_ = std::max(max_rows_, pi[k + 1] - pi[k]);
+  work_.Size(groups_.size(), n_, max_rows_);
+  single_ = Workspace<Scalar>();
   return true;
 }
 

@@ -96,6 +96,12 @@ class SupernodalSolve {
   int tiled_supernodes() const;
   // x = A^-1 b for the factorized A = P^T L L^T P. x may not alias b.
   void Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x);
+  // Solve's substitutions in the factor's own precision instead of double (a float factor):
+  // half the bytes to stream and nothing to convert, with float's round-off in x on top of
+  // the factor's. For a preconditioner of a well-conditioned matrix; a nearly singular one (a
+  // free body's rigid modes under a small shift) amplifies that round-off, and PCG with it
+  // takes more iterations or stalls, so the default is double.
+  void set_single_work(bool on) { single_work_ = on; }
   // The share of L's entries solved on one thread while the others wait: the top (1 when the
   // tree is not cut). The same on any thread count.
   double serial_fraction() const { return serial_fraction_; }
@@ -138,10 +144,30 @@ class SupernodalSolve {
   int TiledPhases(int s) const;
   int TiledTasks(int s, int phase) const;
   bool TiledTask(int s, int phase, int task, const double* a, int* map, Scalar* c);
-  void Forward(int s, const double* b, double* acc, double* y, double* z) const;
-  void Backward(int s, double* y, double* z) const;
+  // Work vectors of the substitutions, in double or (set_single_work) in the factor's
+  // precision: the permuted right-hand side and solution, per group an accumulator of forward
+  // updates (n) and a supernode's buffer (its rows).
+  template <class Work>
+  struct Workspace {
+    typedef Eigen::Matrix<Work, Eigen::Dynamic, 1> Vector;
+    Vector b, y;
+    std::vector<Vector> acc, z;
+    void Size(size_t groups, int n, int max_rows) {
+      acc.assign(groups, Vector::Zero(n));
+      z.assign(groups, Vector::Zero(max_rows));
+      b.resize(n);
+      y.resize(n);
+    }
+  };
+  template <class Work>
+  void Forward(int s, const Work* b, Work* acc, Work* y, Work* z) const;
+  template <class Work>
+  void Backward(int s, Work* y, Work* z) const;
   // Solve's top, after the groups' forward substitutions (y: the permuted solution so far).
-  void SolveTop(int num_groups, double* y);
+  template <class Work>
+  void SolveTop(int num_groups, Workspace<Work>* w);
+  template <class Work>
+  void SolveIn(const Eigen::VectorXd& b, Eigen::VectorXd* x, Workspace<Work>* w);
 
   // Tiles of 64 rows, and at most 8 tiles per supernode: the best of the sizes tried on box
   // meshes (bench/linear_solver_bench.cc) (docs/notes/2026-11-28-figures-from-code-comments.md).
@@ -187,10 +213,10 @@ class SupernodalSolve {
   std::vector<std::vector<int>> groups_;
   std::vector<int> top_;
   double serial_fraction_ = 0.0;
-  // Work vectors: the permuted right-hand side and solution, per thread an accumulator of
-  // forward updates (n) and a supernode's buffer (its rows).
-  Eigen::VectorXd b_, y_;
-  std::vector<Eigen::VectorXd> acc_, z_;
+  int max_rows_ = 0;  // a supernode's most rows
+  bool single_work_ = false;
+  Workspace<double> work_;
+  Workspace<Scalar> single_;  // sized at the first Solve that uses it
 };
 
 extern template class SupernodalSolve<float>;
