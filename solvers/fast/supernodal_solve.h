@@ -3,10 +3,11 @@
 //
 // Those substitutions read all of L once each and do two flops per entry: their time is the time to
 // stream L from memory (docs/notes/2026-11-28-figures-from-code-comments.md). So the values are
-// kept in `Scalar`, float in the back end: half the bytes. The vectors and every sum stay in
-// double; what changes is L itself, by a relative 6e-8 per entry, far less than the difference
-// between the kept factor and the matrix PCG solves (a factor of an earlier step's matrix), which
-// PCG corrects anyway.
+// kept in `Scalar`, float in the back end: half the bytes. By default the vectors and every sum
+// stay in double; what changes is L itself, by a relative 6e-8 per entry, far less than the
+// difference between the kept factor and the matrix PCG solves (a factor of an earlier step's
+// matrix), which PCG corrects anyway. With set_single_work they are in float too (the classic
+// step's PCG), where a cache-resident L made the conversions, not the memory, the limit.
 //
 // In parallel: the supernodal elimination tree is cut into disjoint subtrees, grouped into
 // kGroups sets, and a "top" of the supernodes above them. The cut depends on L alone (not

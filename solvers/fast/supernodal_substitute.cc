@@ -27,6 +27,8 @@ namespace {
 // forms).
 // The helpers take and give them through pointers and references: a vector passed by
 // value would have one calling convention in the AVX2 clone and another in the default one.
+// The kernels' five loads a row block stay written out: a helper filling an array of four
+// vectors made the float kernels slower (docs/notes/2026-12-04-float-substitutions.md).
 template <class Work>
 struct Lanes {
   static constexpr int kWidth = static_cast<int>(32 / sizeof(Work));
@@ -36,7 +38,11 @@ typedef Lanes<double>::Vector Double4;
 typedef float Float4 __attribute__((vector_size(16)));
 
 template <class Scalar, class Vector>
-inline void Load(const Scalar* p, Vector* v) { __builtin_memcpy(v, p, sizeof(*v)); }
+inline void Load(const Scalar* p, Vector* v) {
+  static_assert(std::is_same<std::remove_reference_t<decltype((*v)[0])>, Scalar>::value,
+                "a vector of another type than its entries: only float into double converts");
+  __builtin_memcpy(v, p, sizeof(*v));
+}
 inline void Load(const float* p, Double4* v) {
   Float4 f;
   __builtin_memcpy(&f, p, sizeof(f));
@@ -227,7 +233,7 @@ template <class Scalar>
 void SupernodalSolve<Scalar>::Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   if constexpr (std::is_same<Scalar, float>::value) {
     if (single_work_) {
-      if (single_.b.size() != n_) single_.Size(groups_.size(), n_, max_rows_);
+      if (single_.acc.empty()) single_.Size(groups_.size(), n_, max_rows_);  // reset by TakeStructure
       SolveIn(b, x, &single_);
       return;
     }
