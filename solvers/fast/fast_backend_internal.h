@@ -27,7 +27,8 @@ using Clock = std::chrono::steady_clock;
 // times faster than PCG's iterations do theirs (memory-bound substitutions and products), so the
 // factorization's flop count divided by an iteration's, over this, is the PCG iterations a
 // factorization costs; 3 did better per frame than 1 and 2
-// (docs/notes/2026-11-28-figures-from-code-comments.md).
+// (docs/notes/2026-11-28-figures-from-code-comments.md), and again than 2 once the substitutions
+// ran in float (docs/notes/2026-12-04-float-substitutions.md).
 constexpr double kSingleFactorizationSpeed = 3.0;
 
 // The own factorization's team: one thread per this many flops (CHOLMOD's count). Below it the
