@@ -27,8 +27,6 @@ namespace {
 // forms).
 // The helpers take and give them through pointers and references: a vector passed by
 // value would have one calling convention in the AVX2 clone and another in the default one.
-// The kernels' five loads a row block stay written out: a helper filling an array of four
-// vectors made the float kernels slower (docs/notes/2026-12-04-float-substitutions.md).
 template <class Work>
 struct Lanes {
   static constexpr int kWidth = static_cast<int>(32 / sizeof(Work));
@@ -50,6 +48,17 @@ inline void Load(const float* p, Double4* v) {
 }
 template <class Work, class Vector>
 inline void Store(Work* p, const Vector& v) { __builtin_memcpy(p, &v, sizeof(v)); }
+// Rows i.. of z and of the four columns c[0..3], a vector each, into separate vectors (an
+// array of four made the float kernels slower: docs/notes/2026-12-04-float-substitutions.md).
+template <class Scalar, class Work, class Vector>
+inline void LoadRows(const Scalar* const c[4], int i, const Work* z, Vector* zi, Vector* l0,
+                     Vector* l1, Vector* l2, Vector* l3) {
+  Load(z + i, zi);
+  Load(c[0] + i, l0);
+  Load(c[1] + i, l1);
+  Load(c[2] + i, l2);
+  Load(c[3] + i, l3);
+}
 // The lanes' sum, adjacent pairs first: ((v0 + v1) + (v2 + v3)) + ((v4 + v5) + (v6 + v7)).
 template <class Work, class Vector>
 inline Work Sum(const Vector& v) {
@@ -73,6 +82,7 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(
     const Scalar* c1 = c0 + nrow;
     const Scalar* c2 = c1 + nrow;
     const Scalar* c3 = c2 + nrow;
+    const Scalar* const columns[4] = {c0, c1, c2, c3};
     const Work z0 = z[j0] / c0[j0];
     const Work z1 = (z[j0 + 1] - c0[j0 + 1] * z0) / c1[j0 + 1];
     const Work z2 = (z[j0 + 2] - c0[j0 + 2] * z0 - c1[j0 + 2] * z1) / c2[j0 + 2];
@@ -84,11 +94,7 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void ForwardKernel(
     int i = j0 + 4;
     for (; i + kWidth <= nrow; i += kWidth) {
       Vector zi, l0, l1, l2, l3;
-      Load(z + i, &zi);
-      Load(c0 + i, &l0);
-      Load(c1 + i, &l1);
-      Load(c2 + i, &l2);
-      Load(c3 + i, &l3);
+      LoadRows(columns, i, z, &zi, &l0, &l1, &l2, &l3);
       Store(z + i, zi - ((l0 * z0 + l1 * z1) + (l2 * z2 + l3 * z3)));
     }
     for (; i < nrow; ++i) {
@@ -144,15 +150,12 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void BackwardKernel(
     const Scalar* c1 = c0 + nrow;
     const Scalar* c2 = c1 + nrow;
     const Scalar* c3 = c2 + nrow;
+    const Scalar* const columns[4] = {c0, c1, c2, c3};
     Vector a0 = {}, a1 = {}, a2 = {}, a3 = {};
     int i = j0 + 4;
     for (; i + kWidth <= nrow; i += kWidth) {
       Vector zi, l0, l1, l2, l3;
-      Load(z + i, &zi);
-      Load(c0 + i, &l0);
-      Load(c1 + i, &l1);
-      Load(c2 + i, &l2);
-      Load(c3 + i, &l3);
+      LoadRows(columns, i, z, &zi, &l0, &l1, &l2, &l3);
       a0 += l0 * zi;
       a1 += l1 * zi;
       a2 += l2 * zi;
