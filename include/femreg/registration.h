@@ -250,12 +250,12 @@ struct SolverOptions {
   double step_tolerance = 0.01;
   // ... or moved 99 % of each object's free vertices (those not held by a hard anchor) no
   // farther than this fraction of the coarser of the two resolutions, the mean surface edge
-  // length and the cloud's sampling distance (twice its median point spacing)
-  // (stopped_by "bulk_step"): the largest move alone never settles where a few vertices hop
-  // between nearly equal pairings (a sparse cloud on a fine mesh), and the outer iterations
-  // then go on creeping for no gain in the fit; nor does the fit resolve the shape finer
-  // than the cloud samples it (docs/theory/stopping.md, docs/notes/2026-11-28-bulk-step.md). 0 =
-  // off.
+  // length and the cloud's sampling distance (twice its median point spacing), and no
+  // farther than the fit's RMS residual (stopped_by "bulk_step"): the largest move alone
+  // never settles where a few vertices hop between nearly equal pairings (a sparse cloud on
+  // a fine mesh), and the outer iterations then go on creeping for no gain in the fit; nor
+  // does the fit resolve the shape finer than the cloud samples it, nor than it misses the
+  // cloud by (docs/theory/stopping.md, docs/notes/2026-11-28-bulk-step.md). 0 = off.
   double bulk_step_tolerance = 0.05;
   // A frame whose outer iterations before the pair set is held (data.hold_pairs_after) leave
   // an element with less than this fraction of the volume it had at the frame's start starts

@@ -420,7 +420,10 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // for the whole cloud: with several objects, the densest part of a labelled cloud sets it.
   const double bulk_reference = std::max(state.mean_edge_length, 2.0 * fc.spacing);
   const double bulk_limit = options.solver.bulk_step_tolerance * bulk_reference;
-  const bool settled = bulk_limit > 0 && bulk <= bulk_limit;
+  // A bulk move larger than what the fit still misses by is one the cloud resolves: the
+  // next outer iteration would change the fit (docs/theory/stopping.md).
+  const bool resolved = pairs->empty() || bulk <= row.rms_residual;
+  const bool settled = bulk_limit > 0 && bulk <= bulk_limit && resolved;
   if (k > iteration_base && !stepping_in && !contacts_pending &&
       (moved <= step_limit || settled || (tolerance > 0 && decrease < tolerance && !rise_goes_on))) {
     s->termination = TerminationType::kConverged;
@@ -434,7 +437,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       os << "99 % of each object's free vertices moved at most " << bulk * 1e3 << " mm <= "
          << options.solver.bulk_step_tolerance
          << (bulk_reference > state.mean_edge_length ? " x the cloud's sampling distance " : " x mean edge ")
-         << bulk_reference * 1e3 << " mm (the largest move " << moved * 1e3 << " mm)";
+         << bulk_reference * 1e3 << " mm and the fit's RMS residual " << row.rms_residual * 1e3
+         << " mm (the largest move " << moved * 1e3 << " mm)";
     } else if (decrease > -tolerance) {
       s->stopped_by = "energy";
       os << "relative energy change " << std::abs(decrease) << " < " << tolerance;
