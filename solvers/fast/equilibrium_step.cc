@@ -135,7 +135,7 @@ struct EquilibriumSolver::Impl {
   // holds closed: their stiffness in K's product), on the held turns' complement.
   Eigen::VectorXd ModelGradient() {
     Eigen::VectorXd gradient;
-    BlockProduct(physics.H(), phi_gradient, threads, &gradient);
+    BlockProduct(physics.H(), physics.block_rows(), phi_gradient, threads, &gradient);
     closing.AddProduct(phi_gradient, &gradient);
     gradient += g;
     modes.ProjectHeld(&gradient);
@@ -146,12 +146,12 @@ struct EquilibriumSolver::Impl {
   // matrix on their complement).
   void Product(const Eigen::VectorXd& p, Eigen::VectorXd* y) {
     Eigen::VectorXd kp, hp;
-    BlockProduct(physics.H(), p, threads, &kp);
+    BlockProduct(physics.H(), physics.block_rows(), p, threads, &kp);
     closing.AddProduct(p, &kp);
     for (size_t v = 0; v < phi.size(); ++v) kp.segment<3>(3 * v) = phi[v] * kp.segment<3>(3 * v).eval();
-    BlockProduct(physics.H(), kp, threads, y);
+    BlockProduct(physics.H(), physics.block_rows(), kp, threads, y);
     closing.AddProduct(kp, y);
-    BlockProduct(objective.H(), p, threads, &hp);
+    BlockProduct(objective.H(), objective.block_rows(), p, threads, &hp);
     *y += hp;
     modes.ProjectHeld(y);
   }
@@ -291,7 +291,7 @@ struct EquilibriumSolver::Impl {
     bool remodelled = false;
     for (int round = 0; round < kPieceRounds && budget > 0; ++round) {
       Eigen::VectorXd kdx;
-      BlockProduct(physics.H(), *dx, threads, &kdx);
+      BlockProduct(physics.H(), physics.block_rows(), *dx, threads, &kdx);
       if (pieces.Remodel(eq, f, kdx, &phi, &phi_gradient, &phi_inverse) == 0) break;
       remodelled = true;
       Eigen::VectorXd resolved;

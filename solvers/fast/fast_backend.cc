@@ -82,24 +82,22 @@ constexpr int kMultigridMaxIterations = 100;
 // count, not a timing: the same choices, and so the same result, on any machine.
 constexpr int kMultigridBuildIterations = 25;
 
-}  // namespace
-
 // H is symmetric, so y_c = H(:, c) . p: each entry a gather over its column, in parallel
 // without races and in the same order on any number of threads; a 3x3 block costs one row
-// index instead of nine.
-void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from) {
+// index instead of nine. row(b, begin, q): the row vertex of column block b's q-th block.
+template <class Row>
+void BlockProductOf(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
+                    Eigen::VectorXd* y, int parallel_from, Row row) {
   const int blocks = static_cast<int>(H.cols()) / 3;
   const int* outer = H.outerIndexPtr();
-  const int* inner = H.innerIndexPtr();
   const double* values = H.valuePtr();
   const double* pp = p.data();
   y->resize(p.size());
   double* yy = y->data();
   auto column = [&](int b) {
     const int begin = outer[3 * b];
-    BlockColumnSums(values + begin, outer[3 * b + 1] - begin, inner + begin,
-                    [pp](int row) { return pp + row; }, yy + 3 * b);
+    BlockColumnSums(values + begin, outer[3 * b + 1] - begin,
+                    [&](int q) { return pp + 3 * row(b, begin, q); }, yy + 3 * b);
   };
   if (threads > 1 && blocks >= parallel_from) {
     ParallelRanges(threads, blocks, SpanGrain(blocks), [&](int64_t begin, int64_t end) {
@@ -108,6 +106,23 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
   } else {
     for (int b = 0; b < blocks; ++b) column(b);
   }
+}
+
+}  // namespace
+
+void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
+                  Eigen::VectorXd* y, int parallel_from) {
+  const int* inner = H.innerIndexPtr();
+  BlockProductOf(H, p, threads, y, parallel_from,
+                 [inner](int, int begin, int q) { return inner[begin + 3 * q] / 3; });
+}
+
+void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& block_rows,
+                  const Eigen::VectorXd& p, int threads, Eigen::VectorXd* y, int parallel_from) {
+  eigen_assert(static_cast<Eigen::Index>(9 * block_rows.size()) == H.nonZeros());
+  const int* rows = block_rows.data();
+  BlockProductOf(H, p, threads, y, parallel_from,
+                 [rows](int, int begin, int q) { return rows[begin / 9 + q]; });
 }
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {
@@ -143,7 +158,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::Pcg(const Eigen::VectorXd& b, doub
   for (int k = 0; k < max_iterations; ++k) {
     // Between two substitutions on the same workers (they poll for the next job, parallel/pool.h):
     // a product from 1024 vertices on pays for them.
-    BlockProduct(H, p, threads, &q, kPcgProductParallelFrom);
+    BlockProduct(H, assembler.block_rows(), p, threads, &q, kPcgProductParallelFrom);
     const double pq = p.dot(q);
     // (rz <= 0: the preconditioner is not positive definite, e.g. a multigrid smoother
     // whose eigenvalue bound fell short.)

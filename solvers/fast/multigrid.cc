@@ -50,12 +50,14 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 // solves); what float sums cost is the V-cycle's symmetry beyond ~1e-8 relative
 // (tests/multigrid_test.cc), which PCG does not see at its tolerance; float sums made the product and
 // the V-cycle faster than double sums (docs/notes/2026-11-28-figures-from-code-comments.md).
-// Each column's sums run in a fixed order: the same result on any number of threads.
-void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorXd& v, int threads,
-                       int parallel_from, std::vector<float>* v4, Eigen::VectorXd* y) {
+// Each column's sums run in a fixed order: the same result on any number of threads. The
+// blocks' rows come from `block_rows` (BlockRowVertices of A): A's per-entry row indices
+// stay unread.
+void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<int>& block_rows,
+                       const Eigen::VectorXd& v, int threads, int parallel_from,
+                       std::vector<float>* v4, Eigen::VectorXd* y) {
   const int blocks = static_cast<int>(A.cols()) / 3;
   const int* outer = A.outerIndexPtr();
-  const int* inner = A.innerIndexPtr();
   const float* values = A.valuePtr();
   const double* vv = v.data();
   v4->resize(4 * static_cast<size_t>(blocks));
@@ -71,14 +73,14 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorX
     const int begin = outer[3 * b];
     const int stride = outer[3 * b + 1] - begin;
     const float* v0 = values + begin;
-    const int* rows = inner + begin;
 #ifdef __SSE__
     if (lanes) {
       const float* v1 = v0 + stride;
       const float* v2 = v1 + stride;
+      const int* at = block_rows.data() + begin / 9;
       __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps(), s2 = _mm_setzero_ps();
-      for (int k = 0; k < stride; k += 3) {
-        const __m128 pa = _mm_loadu_ps(p + (rows[k] / 3) * 4);
+      for (int k = 0, q = 0; k < stride; k += 3, ++q) {
+        const __m128 pa = _mm_loadu_ps(p + 4 * at[q]);
         s0 = _mm_add_ps(s0, _mm_mul_ps(_mm_loadu_ps(v0 + k), pa));
         s1 = _mm_add_ps(s1, _mm_mul_ps(_mm_loadu_ps(v1 + k), pa));
         s2 = _mm_add_ps(s2, _mm_mul_ps(_mm_loadu_ps(v2 + k), pa));
@@ -95,7 +97,8 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const Eigen::VectorX
 #endif
     (void)lanes;
     float sums[3];
-    BlockColumnSums(v0, stride, rows, [p](int row) { return p + (row / 3) * 4; }, sums);
+    const int* at = block_rows.data() + begin / 9;
+    BlockColumnSums(v0, stride, [p, at](int q) { return p + 4 * at[q]; }, sums);
     for (int j = 0; j < 3; ++j) yy[3 * b + j] = sums[j];
   };
   if (threads > 1 && blocks >= parallel_from) {
@@ -138,7 +141,7 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
 void Multigrid::Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) {
   Level& L = levels_[static_cast<size_t>(level)];
   if (level == 0) {
-    FloatBlockProduct(L.A_f, v, threads_, kParallelUnknowns / 3, &v4_, y);
+    FloatBlockProduct(L.A_f, L.block_rows, v, threads_, kParallelUnknowns / 3, &v4_, y);
   } else {
     L.A_b.Multiply(v, threads_, y);
   }

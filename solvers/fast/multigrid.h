@@ -126,14 +126,16 @@ class Multigrid {
   // to ~1e-8 relative rather than to double round-off: still positive definite, and far
   // inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g. AmgX's float
   // preconditioner for double solves, does the same). Level 0's system keeps the back
-  // end's layout (one row index per 3x3 vertex block: 5.3 bytes per entry); the coarse
-  // systems and the prolongators are stored as dense blocks between nodes (an aggregate's
-  // up to 6 unknowns, a vertex's 3), one row index per block: ~4.1 bytes per entry instead
-  // of 8 with an index per entry, and inner loops of fixed length.
+  // end's layout, its products reading one row vertex per 3x3 block (block_rows) and not
+  // the per-entry indices; the coarse systems and the prolongators are stored as dense
+  // blocks between nodes (an aggregate's up to 6 unknowns, a vertex's 3), one row index per
+  // block. Both stream 4.1-4.4 bytes per entry instead of 8 with an index per entry, with
+  // inner loops of fixed length.
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
     Eigen::SparseMatrix<float> A_f;  // level 0: the V-cycle's copy of the last system given
+    std::vector<int> block_rows;     // level 0: BlockRowVertices of A_f (fast_backend.h)
     NodeBlocks A_b;                  // below level 0: the V-cycle's system
     int nonzeros = 0;               // of A (level 0's too)
     std::vector<int> node_begin;    // the unknowns of node k: [node_begin[k], node_begin[k + 1])

@@ -57,6 +57,7 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   levels_.emplace_back();
   levels_[0].A_f = A0.cast<float>();
   levels_[0].A_f.makeCompressed();
+  levels_[0].block_rows = BlockRowVertices(levels_[0].A_f);
   levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
   for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
 

@@ -77,6 +77,9 @@ class Assembler {
   const Eigen::SparseMatrix<double>& H() const { return H_; }
   // Per column, where its diagonal entry sits in H's values.
   const std::vector<int>& diagonal_at() const { return diagonal_at_; }
+  // Per 3x3 block of H, column block by column block (vertex b's blocks from its first entry
+  // / 9 on): the block's row vertex. A product can read these instead of H's per-entry rows.
+  const std::vector<int>& block_rows() const { return block_rows_; }
   int num_vertices() const { return num_vertices_; }
 
   // Where the 3x3 block (a, b) of the system sits in the values of a column-major matrix
@@ -128,6 +131,7 @@ class Assembler {
   std::vector<std::pair<int, int>> extra_pairs_;  // a < b
   Eigen::SparseMatrix<double> H_;
   std::vector<int> diagonal_at_;
+  std::vector<int> block_rows_;
   // The thread that owns each vertex: a Morton curve through the positions when the pattern
   // was made, cut into `threads` runs of equal length. Meshes from mesh generators number
   // their vertices in no spatial order, and with a range of vertex numbers per thread most
