@@ -100,6 +100,7 @@ TEST(FastBackend, BlockProductIsTheMatrixProduct) {
     for (int i = 0; i < p.size(); ++i) p[i] = u(rng);
     const Eigen::VectorXd expected = H * p;
     // One row vertex per 3x3 block: the same sums, bit for bit.
+    ASSERT_TRUE(fast_backend::FullVertexBlocks(H));
     const std::vector<int> block_rows = fast_backend::BlockRowVertices(H);
     ASSERT_EQ(static_cast<Eigen::Index>(9 * block_rows.size()), H.nonZeros());
     for (int threads : {1, 2}) {
@@ -111,6 +112,12 @@ TEST(FastBackend, BlockProductIsTheMatrixProduct) {
       fast_backend::BlockProduct(H, block_rows, p, threads, &y_blocks);
       EXPECT_TRUE(y_blocks == y) << vertices << " vertices, " << threads << " threads";
     }
+    // An entry short of a full block is not that layout.
+    Eigen::SparseMatrix<double> partial = H;
+    partial.coeffRef(0, 0) = 0.0;
+    partial.prune([](Eigen::Index r, Eigen::Index c, double) { return !(r == 2 && c == 1); });
+    partial.makeCompressed();
+    EXPECT_FALSE(fast_backend::FullVertexBlocks(partial)) << vertices << " vertices";
   }
 }
 

@@ -182,6 +182,20 @@ void AddToDenseSum(const std::array<int, 4>& vertices, const Lin& lin, Eigen::Ve
   }
 }
 
+// The assembler's row vertex per 3x3 block, column block by column block, against H's pattern.
+void ExpectBlockRowsOf(const energy::Assembler& assembler) {
+  const Eigen::SparseMatrix<double>& H = assembler.H();
+  const std::vector<int>& block_rows = assembler.block_rows();
+  ASSERT_EQ(static_cast<Eigen::Index>(9 * block_rows.size()), H.nonZeros());
+  for (Eigen::Index b = 0; 3 * b < H.cols(); ++b) {
+    const int begin = H.outerIndexPtr()[3 * b];
+    for (int k = begin; k < H.outerIndexPtr()[3 * b + 1]; k += 3) {
+      ASSERT_EQ(block_rows[static_cast<size_t>(begin / 9 + (k - begin) / 3)],
+                H.innerIndexPtr()[k] / 3);
+    }
+  }
+}
+
 TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
   std::mt19937 rng(41);
   std::vector<std::unique_ptr<Sample<energy::ElasticElement>>> elements;
@@ -222,17 +236,13 @@ TEST(Assembler, SecondOrderSystemIsTheSumOfTheBlocks) {
     EXPECT_LT((g - gradient).norm(), 1e-12 * gradient.norm()) << threads;
     if (threads == 1) first = H;
     EXPECT_LT((H - first).norm(), 1e-14 * first.norm()) << "the same on any thread count";
-    // One row vertex per 3x3 block, column block by column block.
-    const std::vector<int>& block_rows = assembler.block_rows();
-    ASSERT_EQ(static_cast<Eigen::Index>(9 * block_rows.size()), H.nonZeros());
-    for (Eigen::Index b = 0; 3 * b < H.cols(); ++b) {
-      const int begin = H.outerIndexPtr()[3 * b];
-      for (int k = begin; k < H.outerIndexPtr()[3 * b + 1]; k += 3) {
-        ASSERT_EQ(block_rows[static_cast<size_t>(begin / 9 + (k - begin) / 3)], H.innerIndexPtr()[k] / 3);
-      }
-    }
+    ExpectBlockRowsOf(assembler);
     EXPECT_FALSE(assembler.AddBlock(0, 4, Eigen::Matrix3d::Identity()));  // two elements apart
     EXPECT_TRUE(assembler.AddBlock(0, 1, Eigen::Matrix3d::Identity()));
+    // Widened by a pair outside the pattern: built anew, and its block rows with it.
+    EXPECT_EQ(assembler.Prepare(problem, x, {{0, 4}}), 1);
+    ExpectBlockRowsOf(assembler);
+    EXPECT_TRUE(assembler.AddBlock(0, 4, Eigen::Matrix3d::Identity()));
   }
 }
 

@@ -404,6 +404,7 @@ struct OuterIteration {
   int contacts = 0;             // contact residuals added (collision on)
   double rms_residual = 0.0;    // m, over kept pairs, after the solve
   double max_move = 0.0;        // m, the largest vertex move of the solve
+  double bulk_move = 0.0;       // m, the move 99 % of each object's free vertices stay within
   double time_s = 0.0;
   // The solve refused most of its steps and left the largest force (the energy's gradient)
   // above half of where the frame's first solve started (docs/theory/stopping.md#stalled).

@@ -84,7 +84,8 @@ constexpr int kMultigridBuildIterations = 25;
 
 // H is symmetric, so y_c = H(:, c) . p: each entry a gather over its column, in parallel
 // without races and in the same order on any number of threads; a 3x3 block costs one row
-// index instead of nine. row(b, begin, q): the row vertex of column block b's q-th block.
+// index instead of nine. row(begin, q): the row vertex of the q-th block of the column block
+// whose entries start at `begin`.
 template <class Row>
 void BlockProductOf(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
                     Eigen::VectorXd* y, int parallel_from, Row row) {
@@ -97,7 +98,7 @@ void BlockProductOf(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd&
   auto column = [&](int b) {
     const int begin = outer[3 * b];
     BlockColumnSums(values + begin, outer[3 * b + 1] - begin,
-                    [&](int q) { return pp + 3 * row(b, begin, q); }, yy + 3 * b);
+                    [&](int q) { return pp + 3 * row(begin, q); }, yy + 3 * b);
   };
   if (threads > 1 && blocks >= parallel_from) {
     ParallelRanges(threads, blocks, SpanGrain(blocks), [&](int64_t begin, int64_t end) {
@@ -114,7 +115,7 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p
                   Eigen::VectorXd* y, int parallel_from) {
   const int* inner = H.innerIndexPtr();
   BlockProductOf(H, p, threads, y, parallel_from,
-                 [inner](int, int begin, int q) { return inner[begin + 3 * q] / 3; });
+                 [inner](int begin, int q) { return inner[begin + 3 * q] / 3; });
 }
 
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& block_rows,
@@ -122,7 +123,7 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& 
   eigen_assert(static_cast<Eigen::Index>(9 * block_rows.size()) == H.nonZeros());
   const int* rows = block_rows.data();
   BlockProductOf(H, p, threads, y, parallel_from,
-                 [rows](int, int begin, int q) { return rows[begin / 9 + q]; });
+                 [rows](int begin, int q) { return rows[begin / 9 + q]; });
 }
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {

@@ -36,6 +36,7 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   threads_ = std::max(1, threads);
   const int n0 = static_cast<int>(A0.cols());
   if (n0 == 0 || n0 != 3 * positions.rows() || A0.rows() != A0.cols()) return false;
+  if (!FullVertexBlocks(A0)) return false;  // the level-0 product reads a row per 3x3 block
 
   // The near null space at the finest level: the rigid motions of the positions, about
   // their centroid and in units of their extent (columns of one size).

@@ -357,6 +357,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   double moved = moves.size() > 0 ? moves.maxCoeff() : 0.0;
   double bulk = BulkMove(state, moves, frame_problem.problem().fixed());
   row.max_move = moved;
+  row.bulk_move = bulk;
   first_bulk_move = k == 0 ? bulk : first_bulk_move;
   row.rms_residual = RmsResidual(*pairs);
   row.time_s = Seconds(t_outer);
