@@ -14,6 +14,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "energy/assembler.h"
 #include "femreg/scene.h"
 #include "femreg/fem.h"
 #include "femreg/io.h"
@@ -161,7 +162,7 @@ void Product(benchmark::State& state) {
 // and the equilibrium step run it).
 void BlockProduct(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
-  const std::vector<int> block_rows = femreg::fast_backend::BlockRowVertices(H);
+  const std::vector<int> block_rows = femreg::energy::BlockRowVertices(H);
   const Eigen::VectorXd p = Eigen::VectorXd::Ones(H.rows());
   Eigen::VectorXd y(H.rows());
   const int threads = static_cast<int>(state.range(1));

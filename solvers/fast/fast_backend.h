@@ -55,54 +55,14 @@ class FastBackend : public Backend {
 // blocks (the three columns of a vertex share their row pattern), the back end's system;
 // in parallel on `threads` from `parallel_from` vertices on (below, PCG's product alone
 // does not pay for a team's start). Equal to Eigen's H * p up to round-off, the same on
-// any thread count. With `block_rows` (BlockRowVertices of H's pattern) it reads one row
-// index per 3x3 block instead of H's per-entry ones, which it then does not stream from
-// memory: the same sums, bit for bit.
+// any thread count. With `block_rows` (energy::BlockRowVertices of H's pattern) it reads
+// one row index per 3x3 block instead of H's per-entry ones, which it then does not stream
+// from memory: the same sums, bit for bit.
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
                   Eigen::VectorXd* y, int parallel_from = 8192);
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& block_rows,
                   const Eigen::VectorXd& p, int threads, Eigen::VectorXd* y,
                   int parallel_from = 8192);
-
-// Whether a compressed matrix has that layout: each vertex's three columns of one length, a
-// multiple of 3, with the same rows, and each block's three rows consecutive from a multiple
-// of 3.
-template <class Scalar>
-bool FullVertexBlocks(const Eigen::SparseMatrix<Scalar>& H) {
-  if (!H.isCompressed() || H.cols() % 3 != 0) return false;
-  const int* outer = H.outerIndexPtr();
-  const int* inner = H.innerIndexPtr();
-  for (Eigen::Index b = 0; 3 * b < H.cols(); ++b) {
-    const int begin = outer[3 * b], stride = outer[3 * b + 1] - begin;
-    if (stride % 3 != 0 || outer[3 * b + 2] - outer[3 * b + 1] != stride ||
-        outer[3 * b + 3] - outer[3 * b + 2] != stride) {
-      return false;
-    }
-    for (int k = 0; k < stride; ++k) {
-      const int row = inner[begin + k];
-      if (row != inner[begin + k - k % 3] + k % 3 || inner[begin + k - k % 3] % 3 != 0 ||
-          inner[begin + stride + k] != row || inner[begin + 2 * stride + k] != row) {
-        return false;
-      }
-    }
-  }
-  return true;
-}
-
-// Per 3x3 block of a matrix in that layout, column block by column block (column block b's
-// blocks from its first entry / 9 on): the block's row vertex.
-template <class Scalar>
-std::vector<int> BlockRowVertices(const Eigen::SparseMatrix<Scalar>& H) {
-  std::vector<int> rows(static_cast<size_t>(H.nonZeros() / 9));
-  const int* outer = H.outerIndexPtr();
-  const int* inner = H.innerIndexPtr();
-  for (Eigen::Index b = 0; 3 * b < H.cols(); ++b) {
-    for (int k = outer[3 * b]; k < outer[3 * b + 1]; k += 3) {
-      rows[static_cast<size_t>(outer[3 * b] / 9 + (k - outer[3 * b]) / 3)] = inner[k] / 3;
-    }
-  }
-  return rows;
-}
 
 // One vertex's three column sums in that layout, entry by entry: the column block's values
 // start at v0 (its three columns `stride` apart), and at(q) the address of the vector's three

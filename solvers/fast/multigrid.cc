@@ -51,8 +51,8 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 // (tests/multigrid_test.cc), which PCG does not see at its tolerance; float sums made the product and
 // the V-cycle faster than double sums (docs/notes/2026-11-28-figures-from-code-comments.md).
 // Each column's sums run in a fixed order: the same result on any number of threads. The
-// blocks' rows come from `block_rows` (BlockRowVertices of A): A's per-entry row indices
-// stay unread.
+// blocks' rows come from `block_rows` (energy::BlockRowVertices of A): A's per-entry row
+// indices stay unread.
 void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<int>& block_rows,
                        const Eigen::VectorXd& v, int threads, int parallel_from,
                        std::vector<float>* v4, Eigen::VectorXd* y) {

@@ -135,7 +135,7 @@ class Multigrid {
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
     Eigen::SparseMatrix<float> A_f;  // level 0: the V-cycle's copy of the last system given
-    std::vector<int> block_rows;     // level 0: BlockRowVertices of A_f (fast_backend.h)
+    std::vector<int> block_rows;     // level 0: energy::BlockRowVertices of A_f
     NodeBlocks A_b;                  // below level 0: the V-cycle's system
     int nonzeros = 0;               // of A (level 0's too)
     std::vector<int> node_begin;    // the unknowns of node k: [node_begin[k], node_begin[k + 1])

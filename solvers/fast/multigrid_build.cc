@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "energy/assembler.h"
 #include "solvers/fast/fast_backend.h"
 #include "solvers/fast/multigrid.h"
 
@@ -36,7 +37,8 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   threads_ = std::max(1, threads);
   const int n0 = static_cast<int>(A0.cols());
   if (n0 == 0 || n0 != 3 * positions.rows() || A0.rows() != A0.cols()) return false;
-  if (!FullVertexBlocks(A0)) return false;  // the level-0 product reads a row per 3x3 block
+  // The level-0 product reads one row per 3x3 block.
+  if (!energy::FullVertexBlocks(A0)) return false;
 
   // The near null space at the finest level: the rigid motions of the positions, about
   // their centroid and in units of their extent (columns of one size).
@@ -58,7 +60,7 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   levels_.emplace_back();
   levels_[0].A_f = A0.cast<float>();
   levels_[0].A_f.makeCompressed();
-  levels_[0].block_rows = BlockRowVertices(levels_[0].A_f);
+  levels_[0].block_rows = energy::BlockRowVertices(levels_[0].A_f);
   levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
   for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
 

@@ -95,11 +95,7 @@ void Assembler::BuildPattern() {
   int* outer_out = H_.outerIndexPtr();
   int* inner_out = H_.innerIndexPtr();
   int at = 0;
-  block_rows_.clear();
-  block_rows_.reserve(static_cast<size_t>(nnz / 9));
   for (int b = 0; b < num_vertices_; ++b) {
-    block_rows_.insert(block_rows_.end(), neighbours[static_cast<size_t>(b)].begin(),
-                       neighbours[static_cast<size_t>(b)].end());
     for (int j = 0; j < 3; ++j) {
       outer_out[3 * b + j] = at;
       for (int a : neighbours[static_cast<size_t>(b)]) {
@@ -117,6 +113,7 @@ void Assembler::BuildPattern() {
     diagonal_at_[static_cast<size_t>(c)] =
         static_cast<int>(std::lower_bound(inner + outer[c], inner + outer[c + 1], c) - inner);
   }
+  block_rows_ = BlockRowVertices(H_);
   pattern_revision_ = NextRevision();
   cache_.clear();
   stencil_slots_.clear();

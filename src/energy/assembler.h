@@ -33,6 +33,46 @@
 namespace femreg {
 namespace energy {
 
+// Whether a compressed matrix has the assembler's layout: each vertex's three columns of one
+// length, a multiple of 3, with the same rows, and each block's three rows consecutive from a
+// multiple of 3.
+template <class Scalar>
+bool FullVertexBlocks(const Eigen::SparseMatrix<Scalar>& H) {
+  if (!H.isCompressed() || H.cols() % 3 != 0) return false;
+  const int* outer = H.outerIndexPtr();
+  const int* inner = H.innerIndexPtr();
+  for (Eigen::Index b = 0; 3 * b < H.cols(); ++b) {
+    const int begin = outer[3 * b], stride = outer[3 * b + 1] - begin;
+    if (stride % 3 != 0 || outer[3 * b + 2] - outer[3 * b + 1] != stride ||
+        outer[3 * b + 3] - outer[3 * b + 2] != stride) {
+      return false;
+    }
+    for (int k = 0; k < stride; ++k) {
+      const int row = inner[begin + k];
+      if (row != inner[begin + k - k % 3] + k % 3 || inner[begin + k - k % 3] % 3 != 0 ||
+          inner[begin + stride + k] != row || inner[begin + 2 * stride + k] != row) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// Per 3x3 block of a matrix in that layout, column block by column block (column block b's
+// blocks from its first entry / 9 on): the block's row vertex (Assembler::block_rows).
+template <class Scalar>
+std::vector<int> BlockRowVertices(const Eigen::SparseMatrix<Scalar>& H) {
+  std::vector<int> rows(static_cast<size_t>(H.nonZeros() / 9));
+  const int* outer = H.outerIndexPtr();
+  const int* inner = H.innerIndexPtr();
+  for (Eigen::Index b = 0; 3 * b < H.cols(); ++b) {
+    for (int k = outer[3 * b]; k < outer[3 * b + 1]; k += 3) {
+      rows[static_cast<size_t>(outer[3 * b] / 9 + (k - outer[3 * b]) / 3)] = inner[k] / 3;
+    }
+  }
+  return rows;
+}
+
 class Assembler {
  public:
   explicit Assembler(int threads = 1) : threads_(threads) {}
