@@ -154,16 +154,16 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
       return;
     }
     case Regularizer::kMassSpring: {
-      // One spring per tet edge, k = sum_e E_e V_e / 6 / L^2 over the elements around it (a
-      // sixth of each element's volume, with its region's E), so that a uniform stretch of
-      // the mesh costs about as much as in the FEM model.
+      // One spring per tet edge, k = sum_e E_e V_e / L^2 over the elements around it, with
+      // each region's E (Van Gelder's stiffness): a uniform dilation then costs what it costs
+      // an element of Poisson's ratio 1/4, the only one a spring network can have.
       auto& set = problem_.AddSet<energy::EdgeSpring>(TermGroup::kElastic);
       auto* blocks = set.mutable_blocks();
       for (const ObjectState& o : state.objects) {
         std::map<std::pair<int, int>, double> edges;  // E V_edge
         for (int e = 0; e < o.model.num_elements(); ++e) {
           const int region = e < o.mesh.region.size() ? o.mesh.region(e) : 0;
-          const double share = o.material.ForRegion(region).youngs_modulus * o.model.rest(e).volume / 6.0;
+          const double share = o.material.ForRegion(region).youngs_modulus * o.model.rest(e).volume;
           for (int i = 0; i < 4; ++i) {
             for (int j = i + 1; j < 4; ++j) {
               int a = o.model.tets()(e, i), b = o.model.tets()(e, j);
