@@ -339,13 +339,18 @@ Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx,
       b.accepted = true;
       break;
     }
-    // An element the step flattens: at most to where it keeps half its volume, inside the
-    // barrier's zone (docs/theory/inversion.md#why-no-step-crosses-it). Halving alone could take
-    // more tries than allowed where a tiny element is a thousandth of the step from its wall.
+    // An element the step flattens: halving, unless the tries left would not come back within
+    // its wall; then the cut to where it keeps half its volume, inside the barrier's zone
+    // (docs/theory/inversion.md#why-no-step-crosses-it). Cutting every time stalled fine meshes
+    // deep in the zone (docs/notes/2026-12-04-barrier-cut-only-where-halving-fails.md).
     const double half = 0.5 * alpha;
-    alpha = std::isfinite(b.energy)
-                ? half
-                : std::min(half, energy::UprightFraction(problem.SetsOf<energy::InversionBarrier>(), *x, dx, alpha));
+    alpha = half;
+    const int left = halvings - halving - 1;
+    if (!std::isfinite(b.energy) && left > 0) {
+      const double last_try = std::ldexp(half, 1 - left);
+      const double upright = energy::UprightFraction(problem.SetsOf<energy::InversionBarrier>(), *x, dx, last_try);
+      if (upright < last_try) alpha = upright;
+    }
   }
   if (!b.accepted) return b;
   b.alpha = alpha;
