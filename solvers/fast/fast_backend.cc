@@ -328,6 +328,7 @@ Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx,
   Backtracked b;
   const int n = static_cast<int>(x->rows());
   double alpha = 1.0;
+  double checked_last_try = -1.0;  // the last try left whose cut was looked for
   for (int halving = 0; halving < halvings; ++halving) {
     *trial = *x;
     for (int v = 0; v < n; ++v) trial->row(v) += alpha * dx.segment<3>(3 * v).transpose();
@@ -339,17 +340,23 @@ Backtracked Backtrack(const energy::Problem& problem, const Eigen::VectorXd& dx,
       b.accepted = true;
       break;
     }
-    // An element the step flattens: halving, unless the tries left would not come back within
-    // its wall; then the cut to where it keeps half its volume, inside the barrier's zone
-    // (docs/theory/inversion.md#why-no-step-crosses-it). Cutting every time stalled fine meshes
-    // deep in the zone (docs/notes/2026-12-04-barrier-cut-only-where-halving-fails.md).
+    // An element the step flattens: halving, unless even the last try left would bring an
+    // element below half the barrier's threshold volume (or half its own inside the zone);
+    // then the cut to there (docs/theory/inversion.md#why-no-step-crosses-it). Cutting every
+    // time left elements deep in the zone and slowed fine meshes' later solves
+    // (docs/notes/2026-12-04-barrier-cut-only-where-halving-fails.md). While halving, the
+    // last try stays the same, and so does its answer: checked once.
     const double half = 0.5 * alpha;
     alpha = half;
     const int left = halvings - halving - 1;
     if (!std::isfinite(b.energy) && left > 0) {
       const double last_try = std::ldexp(half, 1 - left);
-      const double upright = energy::UprightFraction(problem.SetsOf<energy::InversionBarrier>(), *x, dx, last_try);
-      if (upright < last_try) alpha = upright;
+      if (last_try != checked_last_try) {
+        checked_last_try = last_try;
+        const double upright =
+            energy::UprightFraction(problem.SetsOf<energy::InversionBarrier>(), *x, dx, last_try);
+        if (upright < last_try) alpha = upright;
+      }
     }
   }
   if (!b.accepted) return b;

@@ -26,11 +26,11 @@ namespace fast_backend {
 inline constexpr double kPcgTolerance = 1e-2;
 
 // Backtracking along dx from *x: alpha = 1, 1/2, ... (at most `halvings` tries; after an
-// infinite energy, energy::UprightFraction's cut where the tries left would not reach it)
-// until the problem's energy
-// is finite and at most `energy`. Accepted: *x moved by alpha dx, and the
-// energy there, its terms and the largest vertex move returned. `trial`: scratch, kept by the
-// caller across steps. Both fast-back-end steps.
+// infinite energy, energy::UprightFraction's cut instead where even the last try left would
+// bring an element below its target) until the problem's energy is finite and at most
+// `energy`. Accepted: *x moved by alpha dx, and the energy there, its terms and the largest
+// vertex move returned. `trial`: scratch, kept by the caller across steps. Both
+// fast-back-end steps.
 struct Backtracked {
   bool accepted = false;
   double alpha = 0.0, energy = 0.0, largest_move = 0.0;

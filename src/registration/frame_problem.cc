@@ -156,7 +156,7 @@ void FrameProblem::BuildElastic(const TrackerState& state) {
     case Regularizer::kMassSpring: {
       // One spring per tet edge, k = sum_e E_e V_e / L^2 over the elements around it, with
       // each region's E (Van Gelder's stiffness): a uniform dilation then costs what it costs
-      // an element of Poisson's ratio 1/4, the only one a spring network can have.
+      // an element of Poisson's ratio 1/4, the one isotropic material central springs can match.
       auto& set = problem_.AddSet<energy::EdgeSpring>(TermGroup::kElastic);
       auto* blocks = set.mutable_blocks();
       for (const ObjectState& o : state.objects) {
