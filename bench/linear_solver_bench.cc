@@ -157,9 +157,8 @@ void Product(benchmark::State& state) {
   state.counters["dofs"] = static_cast<double>(H.rows());
 }
 
-// The fast back end's own product (PCG's), on the same matrix: one row index per 3x3 block,
-// read from H's per-entry indices (block_rows 0) or from a row vertex per block (1, as PCG
-// and the equilibrium step run it).
+// The fast back end's own product (PCG's and the equilibrium step's), on the same matrix:
+// one row vertex per 3x3 block.
 void BlockProduct(benchmark::State& state) {
   const Eigen::SparseMatrix<double> H = BoxSystem(static_cast<int>(state.range(0)));
   const std::vector<int> block_rows = femreg::energy::BlockRowVertices(H);
@@ -167,11 +166,7 @@ void BlockProduct(benchmark::State& state) {
   Eigen::VectorXd y(H.rows());
   const int threads = static_cast<int>(state.range(1));
   for (auto _ : state) {
-    if (state.range(2) != 0) {
-      femreg::fast_backend::BlockProduct(H, block_rows, p, threads, &y);
-    } else {
-      femreg::fast_backend::BlockProduct(H, p, threads, &y);
-    }
+    femreg::fast_backend::BlockProduct(H, block_rows, p, threads, &y);
     benchmark::DoNotOptimize(y.data());
   }
   state.counters["dofs"] = static_cast<double>(H.rows());
@@ -250,15 +245,7 @@ void WorkSizes(benchmark::internal::Benchmark* b) {
 BENCHMARK_TEMPLATE(OwnSolve, float)->Apply(WorkSizes);
 BENCHMARK_TEMPLATE(OwnSolve, double)->Apply(Sizes);
 BENCHMARK(Product)->Apply(Sizes);
-void BlockRowSizes(benchmark::internal::Benchmark* b) {
-  for (int v : {1000, 4000, 16000, 64000}) {
-    for (int t : {1, 2}) {
-      for (int rows : {0, 1}) b->Args({v, t, rows});
-    }
-  }
-  b->ArgNames({"vertices", "threads", "block_rows"})->Unit(benchmark::kMillisecond);
-}
-BENCHMARK(BlockProduct)->Apply(BlockRowSizes);
+BENCHMARK(BlockProduct)->Apply(Sizes);
 BENCHMARK(MultigridBuild)->Apply(Sizes);
 BENCHMARK(MultigridCycle)->Apply(Sizes);
 

@@ -82,23 +82,27 @@ constexpr int kMultigridMaxIterations = 100;
 // count, not a timing: the same choices, and so the same result, on any machine.
 constexpr int kMultigridBuildIterations = 25;
 
+}  // namespace
+
 // H is symmetric, so y_c = H(:, c) . p: each entry a gather over its column, in parallel
 // without races and in the same order on any number of threads; a 3x3 block costs one row
-// index instead of nine. row(begin, q): the row vertex of the q-th block of the column block
-// whose entries start at `begin`.
-template <class Row>
-void BlockProductOf(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                    Eigen::VectorXd* y, int parallel_from, Row row) {
+// vertex (block_rows) instead of nine row indices.
+void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& block_rows,
+                  const Eigen::VectorXd& p, int threads, Eigen::VectorXd* y, int parallel_from) {
+  eigen_assert(static_cast<Eigen::Index>(9 * block_rows.size()) == H.nonZeros());
   const int blocks = static_cast<int>(H.cols()) / 3;
   const int* outer = H.outerIndexPtr();
+  const int* rows = block_rows.data();
   const double* values = H.valuePtr();
   const double* pp = p.data();
   y->resize(p.size());
   double* yy = y->data();
   auto column = [&](int b) {
     const int begin = outer[3 * b];
-    BlockColumnSums(values + begin, outer[3 * b + 1] - begin,
-                    [&](int q) { return pp + 3 * row(begin, q); }, yy + 3 * b);
+    const int* at = rows + begin / 9;
+    BlockColumnSums(
+        values + begin, outer[3 * b + 1] - begin, [pp, at](int q) { return pp + 3 * at[q]; },
+        yy + 3 * b);
   };
   if (threads > 1 && blocks >= parallel_from) {
     ParallelRanges(threads, blocks, SpanGrain(blocks), [&](int64_t begin, int64_t end) {
@@ -107,23 +111,6 @@ void BlockProductOf(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd&
   } else {
     for (int b = 0; b < blocks; ++b) column(b);
   }
-}
-
-}  // namespace
-
-void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from) {
-  const int* inner = H.innerIndexPtr();
-  BlockProductOf(H, p, threads, y, parallel_from,
-                 [inner](int begin, int q) { return inner[begin + 3 * q] / 3; });
-}
-
-void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& block_rows,
-                  const Eigen::VectorXd& p, int threads, Eigen::VectorXd* y, int parallel_from) {
-  eigen_assert(static_cast<Eigen::Index>(9 * block_rows.size()) == H.nonZeros());
-  const int* rows = block_rows.data();
-  BlockProductOf(H, p, threads, y, parallel_from,
-                 [rows](int begin, int q) { return rows[begin / 9 + q]; });
 }
 
 FastBackend::FastBackend(const BackendOptions& options) : impl_(new Impl) {

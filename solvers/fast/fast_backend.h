@@ -56,11 +56,8 @@ class FastBackend : public Backend {
 // blocks (the three columns of a vertex share their row pattern), the back end's system;
 // in parallel on `threads` from `parallel_from` vertices on (below, PCG's product alone
 // does not pay for a team's start). Equal to Eigen's H * p up to round-off, the same on
-// any thread count. With `block_rows` (energy::BlockRowVertices of H's pattern) it reads
-// one row index per 3x3 block instead of H's per-entry ones, which it then does not stream
-// from memory: the same sums, bit for bit.
-void BlockProduct(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& p, int threads,
-                  Eigen::VectorXd* y, int parallel_from = 8192);
+// any thread count. The blocks' rows come from `block_rows` (energy::BlockRowVertices of
+// H's pattern, the assembler's block_rows()): H's per-entry row indices are not streamed.
 void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& block_rows,
                   const Eigen::VectorXd& p, int threads, Eigen::VectorXd* y,
                   int parallel_from = 8192);
