@@ -261,6 +261,27 @@ TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
   EXPECT_LT((y - full).rowwise().norm().maxCoeff(), 4 * tolerance);
 }
 
+// Equilibrium::max_steps caps a solve's steps on both back ends (the tracker's smooth start
+// before the pushing-only penalty takes two), and the solve still goes downhill.
+TEST(EquilibriumSolve, MakesAtMostTheProblemsMaxSteps) {
+  PulledCantilever c;
+  ASSERT_TRUE(c.exact.success) << c.exact.message;
+  ASSERT_GT(c.exact.iterations, 2);
+  auto eq = std::make_shared<energy::Equilibrium>(*c.box.problem.equilibrium());
+  eq->max_steps = 2;
+  c.box.problem.SetEquilibrium(eq);
+  for (const SolverBackend type : {SolverBackend::kCeres, SolverBackend::kFast}) {
+    SCOPED_TRACE(type == SolverBackend::kFast ? "fast" : "Ceres");
+    BackendOptions options = FastSolveToTheEnd();
+    options.type = type;
+    Vertices x = c.box.mesh.rest;
+    const SolveReport report = MakeBackend(options)->Solve(c.box.problem, 0.0, &x);
+    ASSERT_TRUE(report.success) << report.message;
+    EXPECT_LE(report.iterations, 2);
+    EXPECT_LT(report.after.total(), report.before.total());
+  }
+}
+
 // A whole step whose model promised what the energy gave, with what PCG left, within the
 // solve's tolerance ends the solve: the next step would gain about that. On the pulled
 // cantilever the last step taken lowers the energy by more than the tolerance, so the decrease

@@ -78,6 +78,9 @@ SolveReport CeresBackend::Solve(const energy::Problem& problem, double time_limi
 
   ceres::Solver::Options solver_options;
   solver_options.max_num_iterations = options_.max_iterations;
+  if (problem.equilibrium() != nullptr && problem.equilibrium()->max_steps > 0) {
+    solver_options.max_num_iterations = std::min(options_.max_iterations, problem.equilibrium()->max_steps);
+  }
   solver_options.function_tolerance = options_.relative_tolerance;
   solver_options.num_threads = ResolveThreadCount(options_.num_threads);
   solver_options.logging_type = ceres::SILENT;

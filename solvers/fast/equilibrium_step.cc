@@ -39,6 +39,9 @@ constexpr double kLateTolerance = 1e-2;
 // BackendOptions::equilibrium_step_tolerance and lowered the energy by less than this share
 // ends the solve: on a stiff body a short step can still balance much of the forces, and a cut
 // or truncated step is short for other reasons (docs/notes/2026-12-01-equilibrium-inexact-solves.md).
+// With forces.pushing_only so must a step below the step tolerance: under that penalty's
+// stiffness a move of a micrometre still halved the energy, and the frame was left at a shape
+// that pulls hold (docs/notes/2026-12-05-pushing-only-smooth-start.md).
 constexpr double kSmallStepDecrease = 0.1;
 // A step's PCG stops at kPcgTolerance of its own gradient or at this share of the solve's
 // first gradient, whichever is larger, and the solve stops once the gradient is below that
@@ -400,7 +403,8 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   report.stop = StopReason::kMaxIterations;
   Eigen::VectorXd dx;
   Vertices trial;
-  for (int step = 0; step < m.options.max_iterations; ++step) {
+  const int max_steps = eq->max_steps > 0 ? std::min(eq->max_steps, m.options.max_iterations) : m.options.max_iterations;
+  for (int step = 0; step < max_steps; ++step) {
     // (The floor also covers the earlier stop at 1e-9 of the first gradient's largest entry.)
     const double gradient = m.G.norm();
     if (gradient == 0.0 || (step > 0 && gradient <= kGradientFloor * m.first_gradient_norm)) {
@@ -434,7 +438,8 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     report.after = b.terms;
     const bool settled = !truncated && b.alpha == 1.0 && largest <= m.options.equilibrium_step_tolerance &&
                          decrease < kSmallStepDecrease;
-    if (largest <= m.options.step_tolerance || largest == 0.0 || settled) {
+    const bool tiny = largest <= m.options.step_tolerance && (!eq->pushing_only || decrease < kSmallStepDecrease);
+    if (tiny || largest == 0.0 || settled) {
       refused = b.alpha < 1.0;
       report.stop = StopReason::kStep;
       break;
@@ -461,7 +466,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       report.stop = StopReason::kTimeLimit;
       break;
     }
-    if (step + 1 == m.options.max_iterations) break;
+    if (step + 1 == max_steps) break;
     m.Linearize(problem, *x, /*first=*/false, nullptr, &report);
   }
   // Its one step refused or cut to nothing, as the classic solve's (a refused or cut step ends

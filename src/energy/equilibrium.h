@@ -56,6 +56,10 @@ struct Equilibrium {
     Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   };
   std::vector<HeldTurn> held_turns;
+  // A solve of this problem makes at most this many steps (0: the back end's own limit): a
+  // start that only has to bring the shape near (registration's smooth start before
+  // forces.pushing_only, docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+  int max_steps = 0;
 
   // phi_v(f), its gradient and a positive semi-definite curvature (the sparse term's
   // majorizer s / sqrt(|f|^2 + eps^2) I, the cone's along the distance's direction).

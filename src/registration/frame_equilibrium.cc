@@ -13,7 +13,14 @@ namespace femreg {
 
 using energy::TermGroup;
 
-void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurface* data) {
+namespace {
+// The smooth start's Gauss-Newton steps: it brings the shape near the pushing-only
+// equilibrium; one left hand_press's frames further, three or more cost the 3,375-vertex
+// organ a third more time (docs/notes/2026-12-05-pushing-only-smooth-start.md).
+constexpr int kSmoothStartSteps = 2;
+}  // namespace
+
+void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurface* data, bool pushing_only) {
   const ForceOptions& options = state.options.forces;
   if (!on) {
     problem_.SetEquilibrium(nullptr);
@@ -25,9 +32,11 @@ void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurfac
   eq->force_weight.assign(n, 0.0);
   eq->strong_weight.assign(n, 0.0);
   if (options.sparsity > 0) eq->sparsity.assign(n, 0.0);
-  eq->pushing_only = options.pushing_only;
+  eq->pushing_only = options.pushing_only && pushing_only;
+  // Without the pushing-only penalty that was asked for: the smooth start, two steps.
+  if (options.pushing_only && !pushing_only) eq->max_steps = kSmoothStartSteps;
   eq->friction = options.friction;
-  if (options.pushing_only) {
+  if (eq->pushing_only) {
     const Eigen::MatrixXd normals = state.VertexNormals();
     eq->normal.resize(n);
     for (int v = 0; v < n; ++v) eq->normal[v] = normals.row(v).transpose();

@@ -121,7 +121,7 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   // curvature grows with the residual), and those iterations bring the shape near
   // (docs/theory/equilibrium.md).
   const bool warm_start = WarmStart(k);
-  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start, data_surface.get());
+  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start, data_surface.get(), !SmoothStart(k));
   return true;
 }
 
@@ -144,6 +144,10 @@ double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
 
 bool Tracker::Impl::WarmStart(int k) const {
   return state.options.forces.estimate && k <= warm_until;
+}
+
+bool Tracker::Impl::SmoothStart(int k) const {
+  return state.options.forces.estimate && state.options.forces.pushing_only && (k == warm_until + 1 || k == smooth_after_split);
 }
 
 bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
@@ -294,6 +298,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   const bool warm_start = WarmStart(k);
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
+  // Its energy is not the next outer iteration's either: nothing to hold that one against.
+  const bool another_energy = warm_start || SmoothStart(k);
   // The classic fit's misfit (forces.adaptive_weight): its warm start's shape, with the pairs
   // found there.
   if (!warm_start && k > 0 && WarmStart(k - 1)) {
@@ -329,8 +335,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   s->pcg_iterations += report.pcg_iterations;
   row.inner_iterations = report.iterations;
   // Against the first solve of the frame's energy (a warm start's is another).
-  if (!warm_start && !(stall_reference > 0.0)) stall_reference = report.largest_force_before;
-  row.stalled = !warm_start && report.mostly_refused && stall_reference > 0.0 &&
+  if (!another_energy && !(stall_reference > 0.0)) stall_reference = report.largest_force_before;
+  row.stalled = !another_energy && report.mostly_refused && stall_reference > 0.0 &&
                 report.largest_force_after > 0.5 * stall_reference;
   if (!report.success) {
     s->termination = TerminationType::kSolverFailure;
@@ -344,7 +350,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   }
   CutReversal(k, comparable, before_solve, report.before.total(), &row, s);
   // The next outer iteration's energy, with what it finds, is held against this start's.
-  merit = warm_start ? std::numeric_limits<double>::infinity() : report.before.total();
+  merit = another_energy ? std::numeric_limits<double>::infinity() : report.before.total();
   merit_x = before_solve;
   const bool contacts_pending =
       state.collision && state.collision->augmented() &&
@@ -389,6 +395,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
       bulk = moved;
       // The next outer iteration forms a new pair set, held from the one after.
       rise_from = std::max(k + 2, std::max(1, options.data.hold_pairs_after));
+      smooth_after_split = k + 1;  // the pieces' pushing-only equilibrium is far: SmoothStart
     }
   }
 
@@ -399,7 +406,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // set is held (rise_from: pairs still join as the surface reaches the cloud), during a move
   // of more than kRiseMoveLimit mean edges, or by more than kRiseEnergyLimit of the previous
   // energy (see there).
-  if (warm_start) {  // another energy: nothing to compare with
+  if (another_energy) {  // nothing to compare with
     *previous_energy = std::numeric_limits<double>::infinity();
     return !TimeBudgetUsed(t_frame, s) && k + 1 < iteration_limit;
   }

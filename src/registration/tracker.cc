@@ -323,6 +323,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   double previous_energy = std::numeric_limits<double>::infinity();
   iteration_base = 0;
   warm_until = 0;
+  smooth_after_split = -1;
   ResetStartReferences();
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;

@@ -51,6 +51,13 @@ struct Tracker::Impl {
   // them, so that the force residual's Gauss-Newton starts near
   // (docs/theory/equilibrium.md#solving-it).
   bool WarmStart(int k) const;
+  // Whether outer iteration k, the first after a warm start or after a fracture split, solves
+  // the equilibrium without forces.pushing_only's penalty (two steps at most): from the warm
+  // start's shape, which the data pulled where they liked, that penalty's kinks and stiffness
+  // held Gauss-Newton back for many steps and left it at shapes that only pulling forces hold;
+  // from the unrestricted equilibrium only the pulls are left to undo
+  // (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+  bool SmoothStart(int k) const;
   // The pairs' RMS distance (m) at state.x (on the data surface where there is one).
   double RmsResidual(const std::vector<DataPair>& pairs);
   // forces.adaptive_weight's check before a lower weight (kLowerWeightKeeps): the frame's last
@@ -122,7 +129,8 @@ struct Tracker::Impl {
   // (docs/theory/stopping.md#large-motions).
   int iteration_base = 0;
   int iteration_limit = 0;
-  int warm_until = 0;  // WarmStart's last outer iteration
+  int warm_until = 0;            // WarmStart's last outer iteration
+  int smooth_after_split = -1;   // the outer iteration after a fracture split, or -1 (SmoothStart)
   // The RMS residual (m) at the end of the frame's last warm start, with the pairs found there
   // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).
   double misfit_reference = 0.0;
