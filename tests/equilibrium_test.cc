@@ -266,14 +266,18 @@ TEST(EquilibriumSolve, StopsAfterAStepBelowTheEquilibriumStepTolerance) {
 TEST(EquilibriumSolve, MakesAtMostTheProblemsMaxSteps) {
   PulledCantilever c;
   ASSERT_TRUE(c.exact.success) << c.exact.message;
-  ASSERT_GT(c.exact.iterations, 2);
-  auto eq = std::make_shared<energy::Equilibrium>(*c.box.problem.equilibrium());
+  const std::shared_ptr<const energy::Equilibrium> uncapped = c.box.problem.shared_equilibrium();
+  auto eq = std::make_shared<energy::Equilibrium>(*uncapped);
   eq->max_steps = 2;
-  c.box.problem.SetEquilibrium(eq);
   for (const SolverBackend type : {SolverBackend::kCeres, SolverBackend::kFast}) {
     SCOPED_TRACE(type == SolverBackend::kFast ? "fast" : "Ceres");
     BackendOptions options = FastSolveToTheEnd();
     options.type = type;
+    // Without the cap this back end takes more than two.
+    c.box.problem.SetEquilibrium(uncapped);
+    Vertices full = c.box.mesh.rest;
+    ASSERT_GT(MakeBackend(options)->Solve(c.box.problem, 0.0, &full).iterations, 2);
+    c.box.problem.SetEquilibrium(eq);
     Vertices x = c.box.mesh.rest;
     const SolveReport report = MakeBackend(options)->Solve(c.box.problem, 0.0, &x);
     ASSERT_TRUE(report.success) << report.message;

@@ -202,8 +202,9 @@ TEST(FractureTracking, BeamCutComesApartInTheTrueFrame) {
 // Estimating the forces, pushing only (no friction bound), on the fast back end. From the warm
 // start's shape (a classic fit, held by pulls that the pushing-only penalty prices at its
 // balance weight) the solves crept to the outer-iteration cap and beam_cut's pieces drifted
-// 9-14 mm; each frame now starts from the equilibrium without that penalty, and so does the
-// outer iteration after a split (without, beam_break's pieces flew apart in the break's frame) (docs/notes/2026-12-05-pushing-only-smooth-start.md).
+// 8-14 mm; each frame now starts from the equilibrium without that penalty, and so does the
+// outer iteration after a split (without, beam_break's pieces flew apart in the break's frame)
+// (docs/notes/2026-12-05-pushing-only-smooth-start.md).
 class PushingOnlySequence : public testing::TestWithParam<std::pair<const char*, int>> {};
 
 TEST_P(PushingOnlySequence, EachPieceIsTrackedWithinAMillimetreAndAHalf) {

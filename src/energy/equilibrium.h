@@ -56,7 +56,8 @@ struct Equilibrium {
     Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
   };
   std::vector<HeldTurn> held_turns;
-  // A solve of this problem makes at most this many steps (0: the back end's own limit): a
+  // A solve of this problem makes at most this many steps (the fast back end's Gauss-Newton
+  // steps, Ceres' iterations, its rejected ones included; 0: the back end's own limit): a
   // start that only has to bring the shape near (registration's smooth start before
   // forces.pushing_only, docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
   int max_steps = 0;

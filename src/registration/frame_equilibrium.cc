@@ -14,9 +14,9 @@ namespace femreg {
 using energy::TermGroup;
 
 namespace {
-// The smooth start's Gauss-Newton steps: it brings the shape near the pushing-only
-// equilibrium; one left hand_press's frames further, three or more cost the 3,375-vertex
-// organ a third more time (docs/notes/2026-12-05-pushing-only-smooth-start.md).
+// The smooth start's steps: it brings the shape near the pushing-only equilibrium. One cost
+// hand_press 1.2 times the time a frame, no cap (up to 10) the 3,375-vertex organ 1.3 times
+// (docs/notes/2026-12-05-pushing-only-smooth-start.md).
 constexpr int kSmoothStartSteps = 2;
 }  // namespace
 

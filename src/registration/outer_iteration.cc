@@ -147,7 +147,9 @@ bool Tracker::Impl::WarmStart(int k) const {
 }
 
 bool Tracker::Impl::SmoothStart(int k) const {
-  return state.options.forces.estimate && state.options.forces.pushing_only && (k == warm_until + 1 || k == smooth_after_split);
+  // Never a frame's last outer iteration: the frame's result is the pushing-only problem's.
+  return state.options.forces.estimate && state.options.forces.pushing_only && k + 1 < iteration_limit &&
+         (k == warm_until + 1 || k == smooth_after_split);
 }
 
 bool Tracker::Impl::Backtracks(int k, bool warm_start) const {
