@@ -146,6 +146,26 @@ void SetUpPulledCantilever(BoxProblem* box) {
   box->problem.SetEquilibrium(eq);
 }
 
+// Forces on the cantilever's top face only, pushing down (the rest balanced): the data pull
+// the end down (and sideways, which friction may take).
+void PushOnlyOnTheTopFace(BoxProblem* box, double friction, double sparsity) {
+  const int n = box->mesh.num_vertices();
+  auto eq = std::make_shared<energy::Equilibrium>(*box->problem.equilibrium());
+  eq->pushing_only = true;
+  eq->friction = friction;
+  eq->normal.assign(n, Eigen::Vector3d::UnitZ());
+  for (int v = 0; v < n; ++v) {
+    if (eq->site[v] == energy::ForceSite::kFree && box->mesh.rest(v, 2) < 0.1 - 1e-9) {
+      eq->site[v] = energy::ForceSite::kBalanced;
+    }
+  }
+  if (sparsity > 0) {
+    eq->sparsity.assign(n, sparsity);
+    eq->sparsity_floor = 1e-3;
+  }
+  box->problem.SetEquilibrium(eq);
+}
+
 // Both back ends stop where the energy is stationary: its gradient (central differences of
 // Problem::Evaluate) a small fraction of where it started; and at the same shape. With the L2
 // penalty alone, and pushing only on the top face (frictionless with the sparse term, and
@@ -165,24 +185,7 @@ TEST(EquilibriumSolve, BothBackEndsReachTheSameStationaryPointOfTheEnergy) {
     BoxProblem box(1);
     const int n = box.mesh.num_vertices();
     SetUpPulledCantilever(&box);
-    if (c.pushing_only) {
-      // Forces on the top face only (the rest balanced), pushing down: the data pull the end
-      // down (and sideways, which friction may take).
-      auto eq = std::make_shared<energy::Equilibrium>(*box.problem.equilibrium());
-      eq->pushing_only = true;
-      eq->friction = c.friction;
-      eq->normal.assign(n, Eigen::Vector3d::UnitZ());
-      for (int v = 0; v < n; ++v) {
-        if (eq->site[v] == energy::ForceSite::kFree && box.mesh.rest(v, 2) < 0.1 - 1e-9) {
-          eq->site[v] = energy::ForceSite::kBalanced;
-        }
-      }
-      if (c.sparsity > 0) {
-        eq->sparsity.assign(n, c.sparsity);
-        eq->sparsity_floor = 1e-3;
-      }
-      box.problem.SetEquilibrium(eq);
-    }
+    if (c.pushing_only) PushOnlyOnTheTopFace(&box, c.friction, c.sparsity);
     auto gradient = [&](const Vertices& x) {
       Eigen::VectorXd g(3 * n);
       const double h = 1e-7;
@@ -283,6 +286,50 @@ TEST(EquilibriumSolve, MakesAtMostTheProblemsMaxSteps) {
     ASSERT_TRUE(report.success) << report.message;
     EXPECT_LE(report.iterations, 2);
     EXPECT_LT(report.after.total(), report.before.total());
+  }
+}
+
+// A step that moves no vertex more than solver.step_tolerance ends the solve at once, but
+// pushing only, where the penalty's first steps move little while they still trade the pulls
+// it forbids for pushes, only once it lowers the energy by less than a tenth
+// (docs/notes/2026-12-05-pushing-only-smooth-start.md).
+TEST(EquilibriumSolve, PushingOnlyATinyStepEndsTheSolveOnceItGainsLittle) {
+  for (const bool pushing_only : {false, true}) {
+    SCOPED_TRACE(pushing_only ? "pushing only" : "L2 penalty");
+    BoxProblem box(1);
+    SetUpPulledCantilever(&box);
+    if (pushing_only) PushOnlyOnTheTopFace(&box, 0.0, 0.0);
+    BackendOptions options = FastSolveToTheEnd();
+    options.step_tolerance = 1.0;  // m: longer than any step here
+    Vertices x = box.mesh.rest;
+    const SolveReport report = MakeBackend(options)->Solve(box.problem, 0.0, &x);
+    ASSERT_TRUE(report.success) << report.message;
+    EXPECT_EQ(report.stop, StopReason::kStep) << report.message;
+    if (!pushing_only) {
+      EXPECT_EQ(report.iterations, 1);
+      continue;
+    }
+    ASSERT_GT(report.iterations, 1);
+    // Each step but the last gained at least a tenth of the energy before it; the last less.
+    std::vector<double> energies = {report.before.total()};
+    for (int steps = 1; steps <= report.iterations; ++steps) {
+      Vertices y = box.mesh.rest;
+      options.max_iterations = steps;
+      const SolveReport shorter = MakeBackend(options)->Solve(box.problem, 0.0, &y);
+      ASSERT_TRUE(shorter.success) << shorter.message;
+      energies.push_back(shorter.after.total());
+    }
+    EXPECT_NEAR(energies.back(), report.after.total(), 1e-12 * report.after.total());
+    for (int step = 1; step <= report.iterations; ++step) {
+      const double decrease = (energies[step - 1] - energies[step]) / energies[step - 1];
+      std::printf("step %d: the energy %.4g -> %.4g (%.1f %% lower)\n", step, energies[step - 1], energies[step],
+                  100 * decrease);
+      if (step < report.iterations) {
+        EXPECT_GE(decrease, 0.1) << "step " << step;
+      } else {
+        EXPECT_LT(decrease, 0.1);
+      }
+    }
   }
 }
 

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -477,6 +478,48 @@ TEST(OrganForces, ToolForceFromPartialViewsAndCloserWhenTheToolIsKnownFrictionle
     const double ratio = frictionless.forces[f].force.x() / truth[f].force.x();
     EXPECT_GT(ratio, 0.5);
     EXPECT_LT(ratio, 2.0);
+  }
+}
+
+// A pushing-only frame's first outer iterations solve without the pushing-only penalty (the
+// warm start, then the smooth start), never its last: capped at two outer iterations a frame,
+// the result is still the pushing-only problem's, and the forces push into the body (their
+// part along the outward normal, summed where it pulls, a small share of their size).
+TEST(OrganForces, PushingOnlyFramesEndOnThePushingOnlyProblem) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
+  scene.registration.forces.estimate = true;
+  scene.registration.forces.pushing_only = true;
+  scene.registration.forces.friction = 0.0;
+  scene.registration.solver.max_outer_iterations = 2;
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  const std::vector<PointCloud> clouds = OrganClouds();
+  ASSERT_GE(clouds.size(), 6u);
+  for (size_t f = 0; f < 6; ++f) {
+    SCOPED_TRACE("frame " + std::to_string(f));
+    FrameSummary s;
+    ASSERT_TRUE(tracker->Track(clouds[f], &s).ok());
+    ASSERT_TRUE(s.IsSolutionUsable()) << s.FullReport();
+    const Vertices& x = tracker->vertices(0);
+    const Vertices& force = tracker->external_forces(0);
+    ASSERT_EQ(force.rows(), x.rows());
+    Vertices normal = Vertices::Zero(x.rows(), 3);
+    for (int t = 0; t < tracker->mesh(0).surface.rows(); ++t) {
+      const auto tri = tracker->mesh(0).surface.row(t);
+      const Eigen::Vector3d a = x.row(tri[0]), b = x.row(tri[1]), c = x.row(tri[2]);
+      const Eigen::Vector3d area_normal = (b - a).cross(c - a);
+      for (int i = 0; i < 3; ++i) normal.row(tri[i]) += area_normal.transpose();
+    }
+    double pull = 0.0, size = 0.0;
+    for (int v = 0; v < x.rows(); ++v) {
+      const double along = normal.row(v).norm() > 0 ? force.row(v).dot(normal.row(v).normalized()) : 0.0;
+      pull += std::max(0.0, along);
+      size += force.row(v).norm();
+    }
+    std::printf("frame %zu: %.3g N pulling of %.3g N\n", f, pull, size);
+    ASSERT_GT(size, 0.0);
+    EXPECT_LT(pull, 0.05 * size);
   }
 }
 
