@@ -5,7 +5,6 @@
 // equilibrium_registration_test.cc).
 #include <gtest/gtest.h>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
@@ -18,19 +17,11 @@
 #include "energy/contact.h"
 #include "energy/equilibrium.h"
 #include "energy/problem.h"
-#include "femreg/forward.h"
-#include "femreg/ground_truth.h"
 #include "femreg/io.h"
-#include "femreg/point_cloud.h"
-#include "femreg/scene.h"
-#include "femreg/tracker.h"
-#include "femreg_test_config.h"
 #include "solvers/backend.h"
-#include "test_util.h"
 
 namespace femreg {
 namespace {
-
 
 // A 2 x 1 x 1 box of corotational elements, optionally under gravity on its lumped masses.
 struct BoxProblem {
