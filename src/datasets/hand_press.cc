@@ -29,6 +29,7 @@
 #include "parallel/threads.h"
 #include "registration/cloud_subset.h"
 #include "datasets/hand_press_internal.h"
+#include "datasets/truth_surface.h"
 
 namespace fs = std::filesystem;
 
@@ -314,16 +315,7 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
   Triangles palm_triangles, pad_triangles;
   kPalm.Surface(&palm_local, &palm_triangles);
   kPad.Surface(&pad_local, &pad_triangles);
-  // The ground truth surface compacted to its vertices (truth/*.vtu).
-  std::vector<int> compact(static_cast<size_t>(fine.num_vertices()), -1);
-  for (size_t i = 0; i < fine.surface_vertices.size(); ++i) {
-    compact[static_cast<size_t>(fine.surface_vertices[i])] = static_cast<int>(i);
-  }
-  Triangles surface_triangles(fine.num_surface_triangles(), 3);
-  for (int t = 0; t < fine.num_surface_triangles(); ++t) {
-    for (int k = 0; k < 3; ++k)
-      surface_triangles(t, k) = compact[static_cast<size_t>(fine.surface(t, k))];
-  }
+  const datasets_internal::TruthSurface truth_surface(fine);
 
   // Held from the start: the bottom vertices within 1 mm of the table, where the ball sinks
   // under its weight (at least three, so that the first solve is not singular).
@@ -534,14 +526,7 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
       status =
           WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / (name + ".csv")).string(), truth);
     }
-    if (status.ok()) {
-      Vertices points(static_cast<Eigen::Index>(fine.surface_vertices.size()), 3);
-      for (size_t i = 0; i < fine.surface_vertices.size(); ++i) {
-        points.row(static_cast<Eigen::Index>(i)) = fine.x.row(fine.surface_vertices[i]);
-      }
-      status = WriteVtuSurface((fs::path(dir) / "truth" / (name + ".vtu")).string(), points,
-                               surface_triangles);
-    }
+    if (status.ok()) status = truth_surface.Write((fs::path(dir) / "truth" / (name + ".vtu")).string(), fine);
     if (!status.ok()) return status;
     r.min_points = std::min(r.min_points, cloud.size());
     r.max_points = std::max(r.max_points, cloud.size());

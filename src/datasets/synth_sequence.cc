@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "datasets/scene_numbers.h"
+#include "datasets/truth_surface.h"
 #include "parallel/threads.h"
 #include "femreg/datasets.h"
 #include "femreg/eval.h"
@@ -330,23 +331,15 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
   const EmbeddedPoints surface_embedded =
       embedded_rest.rows() > 0 ? EmbedPoints(fine, embedded_rest, /*clamp=*/false) : EmbeddedPoints();
   const DepthSensor sensor(s.sensor);
-  Vertices table_points, surface_points, sphere, occluder_points;
-  Triangles table_triangles, surface_triangles, occluder_triangles;
+  Vertices table_points, sphere, occluder_points;
+  Triangles table_triangles, occluder_triangles;
   UnitSphere(&sphere, &occluder_triangles);
   // The timeline's third unless given, so a shorter run (--frames) keeps the same frames.
   const int leave_start = s.leave_start >= 0 ? s.leave_start : s.frames / 3;
   if (s.background) {
     Quad(s.background_point, s.background_normal, s.background_size, &table_points, &table_triangles);
   }
-  // The ground truth surface, compacted to the surface vertices.
-  std::vector<int> compact(static_cast<size_t>(fine.num_vertices()), -1);
-  for (size_t i = 0; i < fine.surface_vertices.size(); ++i) {
-    compact[static_cast<size_t>(fine.surface_vertices[i])] = static_cast<int>(i);
-  }
-  surface_triangles.resize(fine.num_surface_triangles(), 3);
-  for (int f = 0; f < fine.num_surface_triangles(); ++f) {
-    for (int k = 0; k < 3; ++k) surface_triangles(f, k) = compact[static_cast<size_t>(fine.surface(f, k))];
-  }
+  const datasets_internal::TruthSurface truth_surface(fine);
 
   std::error_code ec;
   for (const char* sub : {"clouds", "ground_truth", "truth"}) {
@@ -496,14 +489,7 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
       status = WriteGroundTruthFrame((fs::path(dir) / "ground_truth" / "surface" / (name + ".csv")).string(),
                                      surface_truth);
     }
-    if (status.ok()) {
-      surface_points.resize(static_cast<Eigen::Index>(fine.surface_vertices.size()), 3);
-      for (size_t i = 0; i < fine.surface_vertices.size(); ++i) {
-        surface_points.row(static_cast<Eigen::Index>(i)) = fine.x.row(fine.surface_vertices[i]);
-      }
-      status = WriteVtuSurface((fs::path(dir) / "truth" / (name + ".vtu")).string(), surface_points,
-                               surface_triangles);
-    }
+    if (status.ok()) status = truth_surface.Write((fs::path(dir) / "truth" / (name + ".vtu")).string(), fine);
     if (!status.ok()) return status;
     r.min_points = std::min(r.min_points, cloud.size());
     r.max_points = std::max(r.max_points, cloud.size());

@@ -153,6 +153,21 @@ void QuasiStaticSolver::Run() {
     }
 
     double step_length = 0.0;
+    // The residual at x: the elastic force held in elastic_gradient, the extra terms' added.
+    auto refresh_residual = [&] {
+      gradient = elastic_gradient;
+      Extra(x, &gradient);
+      residual = gradient - load;
+      residual_norm = FreeNorm(residual);
+    };
+    // Moves to the line search's trial point, taken at step length a.
+    auto take_trial = [&](double a) {
+      Accept(&trial, &x, &elastic_gradient);
+      elastic = trial.elastic;
+      potential = trial.potential;
+      refresh_residual();
+      step_length = a;
+    };
     watch.active = false;
     ForwardTangent step_tangent = options_.tangent;
     ForwardTermination step_result = ForwardTermination::kMaxIterations;
@@ -230,14 +245,7 @@ void QuasiStaticSolver::Run() {
           watch.full_step_potential = trial.potential;
         }
       }
-      Accept(&trial, &x, &elastic_gradient);
-      elastic = trial.elastic;
-      potential = trial.potential;
-      gradient = elastic_gradient;
-      Extra(x, &gradient);
-      residual = gradient - load;
-      residual_norm = FreeNorm(residual);
-      step_length = alpha;
+      take_trial(alpha);
 
       if (watch.active) {
         ++watch.steps;
@@ -261,21 +269,11 @@ void QuasiStaticSolver::Run() {
           alpha = start;
           if (!LineSearch(x, watch.step, watch.slope, potential, residual_norm, load,
                           /*may_relax=*/false, &alpha, &relaxed, &trial)) {
-            gradient = elastic_gradient;
-            Extra(x, &gradient);
-            residual = gradient - load;
-            residual_norm = FreeNorm(residual);
+            refresh_residual();
             step_result = ForwardTermination::kLineSearchFailed;
             break;
           }
-          Accept(&trial, &x, &elastic_gradient);
-          elastic = trial.elastic;
-          potential = trial.potential;
-          gradient = elastic_gradient;
-          Extra(x, &gradient);
-          residual = gradient - load;
-          residual_norm = FreeNorm(residual);
-          step_length = alpha;
+          take_trial(alpha);
         }
       }
     }
