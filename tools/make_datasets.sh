@@ -3,8 +3,8 @@
 # datasets/<name> for every dataset that has a synth.yaml, `femreg contact-data` for the
 # contact sequences, `femreg organ-data` for organ_patch, `femreg hand-press-data` for
 # hand_press and `femreg fracture-data` for beam_cut (beam_break and slab_tear when named;
-# or only those named). The output is deterministic: rerunning rewrites
-# the same bytes.
+# or only those named). The output is deterministic: rerunning on the same machine rewrites
+# the same bytes (another CPU's BLAS kernels may move the last digits).
 #   tools/make_datasets.sh                 # all
 #   tools/make_datasets.sh demo beam_bend  # some
 set -euo pipefail
