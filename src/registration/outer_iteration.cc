@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "parallel/threads.h"
 #include "registration/correspondences.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
@@ -133,6 +134,10 @@ bool Tracker::Impl::TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) c
   return true;
 }
 
+EnergyTerms Tracker::Impl::Energy(const Vertices& x) const {
+  return frame_problem.problem().Evaluate(x, ResolveThreadCount(state.options.solver.num_threads));
+}
+
 double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
   if (pairs.empty()) return 0.0;
   // The pairs index the surface they were found on: the data surface's vertices if there is one.
@@ -165,7 +170,7 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
   const RegistrationOptions& options = state.options;
   auto t0 = Clock::now();
   const double allowed = merit + options.solver.relative_energy_tolerance * std::abs(merit);
-  double at = frame_problem.problem().Evaluate(state.x).total();
+  double at = Energy(state.x).total();
   s->time.evaluation += Seconds(t0);
   s->time.solve += Seconds(t0);
   if (at <= allowed) return true;
@@ -176,7 +181,7 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
     UpdateElementRotations(s);
     if (!PrepareIteration(k, fc, previous, pairs, counts, row, s)) return false;
     t0 = Clock::now();
-    at = frame_problem.problem().Evaluate(state.x).total();
+    at = Energy(state.x).total();
     s->time.evaluation += Seconds(t0);
     s->time.solve += Seconds(t0);
     ++s->backtracks;
@@ -203,7 +208,7 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
       state.collision->Evaluate(state.contacts, CollisionPositions()).max_penetration > state.collision->tolerance()) {
     return go_on();
   }
-  s->final = frame_problem.problem().Evaluate(state.x);
+  s->final = Energy(state.x);
   s->termination = TerminationType::kConverged;
   s->stopped_by = "backtrack";
   std::ostringstream os;
@@ -234,7 +239,7 @@ bool Tracker::Impl::CutReversal(int k, bool comparable, const Vertices& before_s
   const double share = std::clamp(1.0 / (1.0 - along / last2), kShortestReversalCut, 1.0);
   state.x = before_solve + share * move;
   const auto t0 = Clock::now();
-  const EnergyTerms at = frame_problem.problem().Evaluate(state.x);
+  const EnergyTerms at = Energy(state.x);
   s->time.evaluation += Seconds(t0);
   s->time.solve += Seconds(t0);
   // Only a cut that keeps the solve's descent from its start (with its pairs, along the
@@ -348,7 +353,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   }
   row.after = report.after;
   if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
-    row.after = frame_problem.problem().Evaluate(state.x);  // docs/theory/stopping.md#hidden-turns
+    row.after = Energy(state.x);  // docs/theory/stopping.md#hidden-turns
   }
   CutReversal(k, comparable, before_solve, report.before.total(), &row, s);
   // The next outer iteration's energy, with what it finds, is held against this start's.

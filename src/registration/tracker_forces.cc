@@ -25,7 +25,7 @@ bool Tracker::Impl::LowerForceWeightPays(double lower_scale, const std::vector<D
   // Within solver.time_budget_s: a frame that used it up does not check, and keeps the weight.
   const double budget = state.options.solver.time_budget_s;
   if (budget > 0 && Seconds(t_frame) >= budget) return false;
-  const double reference = frame_problem.problem().Evaluate(misfit_reference_x).data;
+  const double reference = Energy(misfit_reference_x).data;
   // The frame's own terms with the lower penalty, solved aside: the frame keeps its result,
   // the problem its terms and the back end what it carries on; only the weight may move.
   auto probe = std::make_shared<energy::Equilibrium>(*solved);

@@ -58,6 +58,8 @@ struct Tracker::Impl {
   // from the unrestricted equilibrium only the pulls are left to undo
   // (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
   bool SmoothStart(int k) const;
+  // The frame problem's energy at x on the frame's threads (the sum does not depend on them).
+  EnergyTerms Energy(const Vertices& x) const;
   // The pairs' RMS distance (m) at state.x (on the data surface where there is one).
   double RmsResidual(const std::vector<DataPair>& pairs);
   // forces.adaptive_weight's check before a lower weight (kLowerWeightKeeps): the frame's last
