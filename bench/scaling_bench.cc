@@ -147,24 +147,21 @@ void Track(benchmark::State& state) {
         later_frames += 1;
       }
       error += (tracker->vertices(0) - c.truth[f]).rowwise().norm().mean();  // negligible beside a frame
-      // Later frames only: the first one also builds the pattern, analysis and hierarchy.
-      if (f > 0) {
-        later["correspondences"] += s.time.correspondences;
-        later["rotations"] += s.time.rotations;
-        later["assembly"] += s.time.assembly;
-        later["factorization"] += s.time.factorization;
-        later["linear_solve"] += s.time.linear_solve;
-        later["evaluation"] += s.time.evaluation;
-        later["outputs"] += s.time.outputs;
-        later["other"] += s.time.total - s.time.solve - s.time.correspondences - s.time.rotations - s.time.outputs;
+      // Every frame's phases, and the later frames' apart (the first one also builds the
+      // pattern, the analysis and the hierarchy); `other`: preprocessing, prealignment, collision.
+      for (auto* sums : {&phase, &later}) {
+        if (sums == &later && f == 0) continue;
+        (*sums)["correspondences"] += s.time.correspondences;
+        (*sums)["rotations"] += s.time.rotations;
+        (*sums)["solve"] += s.time.solve;
+        (*sums)["assembly"] += s.time.assembly;
+        (*sums)["factorization"] += s.time.factorization;
+        (*sums)["linear_solve"] += s.time.linear_solve;
+        (*sums)["evaluation"] += s.time.evaluation;
+        (*sums)["outputs"] += s.time.outputs;
+        (*sums)["preprocess"] += s.time.preprocess;
+        (*sums)["other"] += s.time.total - s.time.solve - s.time.correspondences - s.time.rotations - s.time.outputs;
       }
-      phase["correspondences"] += s.time.correspondences;
-      phase["rotations"] += s.time.rotations;
-      phase["solve"] += s.time.solve;
-      phase["preprocess"] += s.time.preprocess;
-      phase["assembly"] += s.time.assembly;
-      phase["factorization"] += s.time.factorization;
-      phase["linear_solve"] += s.time.linear_solve;
       counts["factorizations"] += s.factorizations;
       counts["pcg_iterations"] += s.pcg_iterations;
       counts["outer_iterations"] += s.outer_iterations;
