@@ -81,7 +81,7 @@ void BlockValues(const TermSet<T>& set, const Vertices& x, int threads, std::vec
       (*values)[static_cast<size_t>(b)] = BlockValue(blocks[static_cast<size_t>(b)], set.loss(), x);
     }
   };
-  const int team = PhaseThreads(threads, chunks, 2);  // 2 chunks a thread at least
+  const int team = PhaseThreads(ResolveThreadCount(threads), chunks, 2);  // 2 chunks a thread at least
   if (team > 1) {
     RunTasks(team, chunks, chunk);
   } else {

@@ -103,8 +103,8 @@ class Problem {
   const NodalVolume* nodal_volume() const { return nodal_volume_.get(); }
 
   // The energy at x by group, robust losses applied. Each set is summed in fixed chunks of
-  // blocks, the chunks on up to `threads` threads, their sums added in chunk order: the
-  // same additions in the same order on any thread count.
+  // blocks, the chunks on up to `threads` threads (<= 0: ResolveThreadCount(0), as ParallelFor),
+  // their sums added in chunk order: the same additions in the same order on any thread count.
   EnergyTerms Evaluate(const Vertices& x, int threads = 1) const;
   // A set's energy from its blocks' values (1/2 w rho - offset each, in block order, as a
   // linearization gives them), added as Evaluate adds them.

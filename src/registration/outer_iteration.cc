@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "parallel/threads.h"
 #include "registration/correspondences.h"
 #include "registration/fracture_step.h"
 #include "registration/frame_problem.h"
@@ -135,7 +134,7 @@ bool Tracker::Impl::TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) c
 }
 
 EnergyTerms Tracker::Impl::Energy(const Vertices& x) const {
-  return frame_problem.problem().Evaluate(x, ResolveThreadCount(state.options.solver.num_threads));
+  return frame_problem.problem().Evaluate(x, state.options.solver.num_threads);
 }
 
 double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
