@@ -206,6 +206,47 @@ TEST(EvalTest, ForceErrorsAndTheirMedians) {
   EXPECT_NEAR(m.error, 0.1, 1e-12);     // of 0.1, 0.1, 0.8, 0.05
   EXPECT_NEAR(m.torque_error, 0.0, 1e-12);
   EXPECT_TRUE(std::isnan(MedianForceErrors({}).relative));
+  // Neither side has the obstacles' push: no contact error.
+  EXPECT_TRUE(std::isnan(errors[0].contact_error));
+  EXPECT_TRUE(std::isnan(m.contact_error));
+}
+
+// The obstacles' push (contact_force_*_N) where both files have it: read when the three cells
+// hold numbers, compared frame by frame, its median over the frames that have it.
+TEST(EvalTest, ObstaclePushWhereBothFilesHaveIt) {
+  TempDir dir;
+  const std::string header =
+      "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,contact_force_x_N,"
+      "contact_force_y_N,contact_force_z_N\n";
+  std::vector<ForceFrame> truth, estimated;
+  bool has_columns = false;
+  ASSERT_TRUE(ReadForces(dir.Write("truth.csv", header + "0,0,0,1,0,0,0,0,0,1\n1,0,0,1,0,0,0,0,0,3\n"
+                                                         "2,0,0,1,0,0,0,0,0,2\n"),
+                         &truth, &has_columns)
+                  .ok());
+  ASSERT_EQ(truth.size(), 3u);
+  EXPECT_TRUE(truth[1].has_contact);
+  EXPECT_EQ(truth[1].contact, Eigen::Vector3d(0, 0, 3));
+  // Frame 1's push is left empty (as a row without the estimate's force cells would be).
+  ASSERT_TRUE(ReadForces(dir.Write("stats.csv", header + "0,0,0,1,0,0,0,0,0,0.75\n1,0,0,1,0,0,0,,,\n"
+                                                         "2,0,0,1,0,0,0,0.5,0,2\n"),
+                         &estimated, &has_columns)
+                  .ok());
+  ASSERT_EQ(estimated.size(), 3u);
+  EXPECT_FALSE(estimated[1].has_contact);
+  const std::vector<ForceError> errors = CompareForces(estimated, truth);
+  ASSERT_EQ(errors.size(), 3u);
+  EXPECT_NEAR(errors[0].contact_error, 0.25, 1e-12);
+  EXPECT_TRUE(std::isnan(errors[1].contact_error));
+  EXPECT_NEAR(errors[2].contact_error, 0.5, 1e-12);
+  EXPECT_NEAR(errors[2].true_contact, 2.0, 1e-12);
+  const ForceErrorMedians m = MedianForceErrors(errors);
+  EXPECT_NEAR(m.contact_error, 0.375, 1e-12);  // of 0.25 and 0.5
+  EXPECT_NEAR(m.true_contact, 1.5, 1e-12);     // of 1 and 2
+  const Status bad = ReadForces(dir.Write("bad.csv", header + "0,0,0,1,0,0,0,0,0,one\n"), &truth, &has_columns);
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find("bad.csv:2: contact_force_z_N is not a number ('one')"), std::string::npos)
+      << bad.message();
 }
 
 // A tracked beam split on its own nodes a cell before the ground truth's crack: the copies
@@ -479,6 +520,32 @@ TEST(EvalCliTest, ForceErrorsWhenTheDatasetHasForcesAndTheResultEstimates) {
   ASSERT_EQ(run.code, 0) << run.out;
   EXPECT_EQ(run.out.find("did not estimate"), std::string::npos) << run.out;
   fs::remove(result + "/summary.json");
+  EXPECT_EQ(run.out.find("obstacles' push"), std::string::npos) << run.out;  // not in the files
+
+  // With the obstacles' push in both files: its error per frame and its median.
+  {
+    std::ofstream(truth + "/forces.csv")
+        << "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,contact_force_x_N,"
+           "contact_force_y_N,contact_force_z_N\n0,0,0,-1,0,0,0,0,0,2\n1,0,0,-2,0,0,0,0,0,3\n";
+    std::ofstream(result + "/stats.csv")
+        << "frame,file,termination,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,"
+           "contact_force_x_N,contact_force_y_N,contact_force_z_N,message\n"
+           "0,frame_0000.pcd,CONVERGED,0,0,-1,0,0,0,0,0,1.5,\"converged\"\n"
+           "1,frame_0001.pcd,CONVERGED,0,0,-2,0,0,0,0,0,3.5,\"converged\"\n";
+    run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+    ASSERT_EQ(run.code, 0) << run.out;
+    EXPECT_NE(run.out.find("Median error of the obstacles' push (contact_force_*_N): 0.5000 N, the true push's "
+                           "median 2.5000 N"),
+              std::string::npos)
+        << run.out;
+    const std::vector<std::vector<std::string>> with = CsvCells(csv);
+    ASSERT_EQ(with.size(), 6u);
+    EXPECT_EQ(with[0].back(), "contact_force_error_N");
+    for (size_t r = 0; r < with.size(); ++r) ASSERT_EQ(with[r].size(), with[0].size()) << "row " << r;
+    EXPECT_NEAR(std::atof(with[1].back().c_str()), 0.5, 1e-6);
+    EXPECT_EQ(with[3].back(), "");  // frame 2: no truth
+    EXPECT_NEAR(std::atof(with[5].back().c_str()), 0.5, 1e-6);
+  }
 
   // A result without force columns, or a dataset without forces.csv: as before.
   std::ofstream(result + "/stats.csv")

@@ -25,11 +25,11 @@ constexpr double kGravity = 9.81;
 constexpr double kRadius = 0.05;  // m
 const char kForcesHeader[] =
     "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,table_force_N,"
-    "hand_force_x_N,hand_force_y_N,hand_force_z_N";
+    "hand_force_x_N,hand_force_y_N,hand_force_z_N,contact_force_x_N,contact_force_y_N,contact_force_z_N";
 
 struct ForceRow {
   int frame = 0;
-  Eigen::Vector3d force, torque, hand;
+  Eigen::Vector3d force, torque, hand, contact;
   double table = 0.0;
 };
 
@@ -42,7 +42,7 @@ std::vector<ForceRow> ReadForces(const std::string& path, std::string* header) {
     std::vector<double> v;
     std::stringstream ls(line);
     for (std::string cell; std::getline(ls, cell, ',');) v.push_back(std::atof(cell.c_str()));
-    if (v.size() != 11) {
+    if (v.size() != 14) {
       ADD_FAILURE() << path << ": a row of " << v.size() << " cells: " << line;
       continue;
     }
@@ -52,6 +52,7 @@ std::vector<ForceRow> ReadForces(const std::string& path, std::string* header) {
     r.torque = Eigen::Vector3d(v[4], v[5], v[6]);
     r.table = v[7];
     r.hand = Eigen::Vector3d(v[8], v[9], v[10]);
+    r.contact = Eigen::Vector3d(v[11], v[12], v[13]);
     rows.push_back(r);
   }
   return rows;
@@ -68,6 +69,10 @@ void ExpectBalanced(const ForceRow& r, double weight) {
   // The table's normal force is the resultant's z less the hand's, to the rounding of the
   // file's 7 significant digits.
   EXPECT_NEAR(r.table, r.force.z() - r.hand.z(), 1e-5 * std::max(1.0, std::abs(r.table)));
+  // The table's push (the obstacle's contact force) is the resultant less the hand's, its
+  // normal part the table's normal force.
+  EXPECT_LE((r.contact - (r.force - r.hand)).norm(), 1e-5 * std::max(1.0, r.force.norm()));
+  EXPECT_EQ(r.contact.z(), r.table);
 }
 
 // The first three frames (the ball at rest under its weight, the hand coming down) twice:

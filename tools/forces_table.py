@@ -8,7 +8,9 @@ Forces table, per dataset with a true force that is not zero on every frame, and
 where forces.sh ran them, NAME_pushing and NAME_adaptive): the mean vertex error of the seen and
 hidden vertices (summary.json), the median over the frames of the resultant-force error in
 newtons and in percent of the true force (the totals row of `femreg eval`'s eval.csv), the
-median time per frame and the frames that stopped on their tolerance.
+median error of the obstacles' push where the dataset has its truth (forces.csv's
+contact_force_*_N: hand_press's table), the median time per frame and the frames that stopped
+on their tolerance.
 
 --modes: per dataset run (OUT_DIR/NAME_classic and NAME_physical), the two modes side by
 side: seen / hidden mean vertex error, median time per frame, frames converged, and the
@@ -37,8 +39,10 @@ def row(out, name, mode):
         frames = list(csv.DictReader(f))
     converged = sum(1 for r in frames if r["termination"] == "converged")
     error = summary["vertex_error_mm"]
+    contact = total.get("contact_force_error_N", "")
     return (f"{float(error['seen_mean']):.2f} / {float(error['hidden_mean']):.2f}",
             f"{float(total['force_error_N']):.3f}", f"{float(total['force_error_pct']):.0f} %",
+            f"{float(contact):.3f}" if contact else "-",
             f"{float(summary['ms_per_frame_median']):.0f}", f"{converged} / {len(frames)}")
 
 
@@ -76,8 +80,8 @@ def main():
         modes(out)
         return
     print("<!-- written by tools/forces.sh; do not edit by hand -->")
-    print("| dataset | mode | seen / hidden mean error (mm) | force error, median (N) | the same, % of the true force | ms per frame (median, 1 thread) | frames converged |")
-    print("|---|---|---|---:|---:|---:|---:|")
+    print("| dataset | mode | seen / hidden mean error (mm) | force error, median (N) | the same, % of the true force | the obstacles' push: error, median (N) | ms per frame (median, 1 thread) | frames converged |")
+    print("|---|---|---|---:|---:|---:|---:|---:|")
     def has_force(name):
         path = os.path.join(out, f"{name}_physical", "eval.csv")
         if not os.path.exists(path):

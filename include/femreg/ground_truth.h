@@ -4,6 +4,7 @@
 #define FEMREG_GROUND_TRUTH_H_
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -43,8 +44,13 @@ struct ForceFrame {
   int frame = 0;
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
   Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+  // The part of `force` the scene's obstacles push with (a table's, a tool's given as an
+  // obstacle), in the columns of kContactForceColumns where the file has them.
+  bool has_contact = false;
+  Eigen::Vector3d contact = Eigen::Vector3d::Zero();
 };
-extern const char* const kForceColumns[6];  // force_x_N, ..., torque_z_Nm
+extern const char* const kForceColumns[6];         // force_x_N, ..., torque_z_Nm
+extern const char* const kContactForceColumns[3];  // contact_force_x_N, ..., contact_force_z_N
 
 // forces.csv: the header "frame,force_x_N,...,torque_z_Nm" and a row per frame.
 Status WriteForces(const std::string& path, const std::vector<ForceFrame>& frames);
@@ -52,7 +58,9 @@ Status WriteForces(const std::string& path, const std::vector<ForceFrame>& frame
 // stats.csv among its other columns and quoted text): a ForceFrame per row whose six cells
 // hold numbers; a row whose force cells are all empty (a frame without an estimate) is left
 // out. *has_columns tells whether the header has all seven; without them *frames is empty
-// and the status OK. A cell that is neither a number nor empty is an error naming it.
+// and the status OK. A cell that is neither a number nor empty is an error naming it. Where
+// the header also has kContactForceColumns, a row whose three cells hold numbers has
+// has_contact set.
 Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool* has_columns);
 
 // An estimate against the truth in one frame.
@@ -62,15 +70,20 @@ struct ForceError {
   double error = 0.0;         // |estimated - true| (N)
   double relative = 0.0;      // error / |true|; NaN when the true force is 0
   double torque_error = 0.0;  // |estimated - true torque| (N m)
+  // |estimated - true| of the obstacles' push, and |true| (N); NaN unless both frames have it.
+  double contact_error = std::numeric_limits<double>::quiet_NaN();
+  double true_contact = std::numeric_limits<double>::quiet_NaN();
 };
 // For every frame of `truth` that `estimated` has too (matched by frame number), in the
 // order of `truth`.
 std::vector<ForceError> CompareForces(const std::vector<ForceFrame>& estimated,
                                       const std::vector<ForceFrame>& truth);
 // Medians over the frames (of an even count, the mean of the middle two); relative leaves
-// out the frames without one. NaN where no frame is left.
+// out the frames without one, contact_error those without the obstacles' push. NaN where no
+// frame is left.
 struct ForceErrorMedians {
   double error = 0.0, relative = 0.0, torque_error = 0.0;
+  double contact_error = 0.0, true_contact = 0.0;
 };
 ForceErrorMedians MedianForceErrors(const std::vector<ForceError>& errors);
 

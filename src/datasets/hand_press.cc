@@ -333,7 +333,7 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
   r.min_points = 1 << 30;
   std::ostringstream forces;
   forces << "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,table_force_N,"
-            "hand_force_x_N,hand_force_y_N,hand_force_z_N\n";
+            "hand_force_x_N,hand_force_y_N,hand_force_z_N,contact_force_x_N,contact_force_y_N,contact_force_z_N\n";
   std::ostringstream log;
   log << "frame,substeps,active_set_rounds,newton_iterations,free_residual_N,table_vertices,palm_"
          "vertices,"
@@ -489,9 +489,11 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
     }
     {
       char line[512];
-      std::snprintf(line, sizeof(line), "%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e\n", f,
+      // The table is the tracking scene's obstacle: its push is the contact force femreg reports.
+      std::snprintf(line, sizeof(line), "%d,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e\n", f,
                     force.x(), force.y(), force.z(), torque.x(), torque.y(), torque.z(),
-                    table_force.z(), hand_force.x(), hand_force.y(), hand_force.z());
+                    table_force.z(), hand_force.x(), hand_force.y(), hand_force.z(), table_force.x(),
+                    table_force.y(), table_force.z());
       forces << line;
       std::snprintf(line, sizeof(line), "%d,%d,%d,%d,%.3e,%d,%d,%d,%d,%.3e,%.3e,%.4f,%d\n", f,
                     substeps, rounds, newton, free_residual, counts[kTable], counts[kPalmPart],

@@ -117,8 +117,10 @@ std::string Readme(const HandPressReport& r, const TetMesh& fine) {
      << "- `forces.csv`: per frame, the resultant of the external forces on the ball other "
         "than gravity (`force_x_N, force_y_N, force_z_N`: the table's and the hand's) and "
         "their torque about the ball's centre of mass (`torque_*_Nm`; the lumped-mass-weighted "
-        "mean of the vertex positions), the table's normal force `table_force_N`, and the "
-        "hand's force `hand_force_*_N` (palm and pads). In equilibrium the resultant is the "
+        "mean of the vertex positions), the table's normal force `table_force_N`, the "
+        "hand's force `hand_force_*_N` (palm and pads), and the table's push "
+        "`contact_force_*_N` (the scene's obstacle: `femreg eval` compares it with the "
+        "contact force in stats.csv). In equilibrium the resultant is the "
         "weight, "
      << Format("%.4f", r.mass_kg * kGravity)
      << " N upwards, and the torque is zero (gravity has none about the centre of mass); "

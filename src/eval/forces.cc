@@ -17,6 +17,7 @@ namespace femreg {
 
 const char* const kForceColumns[6] = {"force_x_N",   "force_y_N",   "force_z_N",
                                       "torque_x_Nm", "torque_y_Nm", "torque_z_Nm"};
+const char* const kContactForceColumns[3] = {"contact_force_x_N", "contact_force_y_N", "contact_force_z_N"};
 
 namespace {
 
@@ -104,7 +105,10 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
   }
   if (*std::min_element(columns, columns + 7) < 0) return Status::Ok();
   *has_columns = true;
-  const int needed = *std::max_element(columns, columns + 7) + 1;
+  int contact[3];
+  for (int k = 0; k < 3; ++k) contact[k] = at.count(kContactForceColumns[k]) ? at[kContactForceColumns[k]] : -1;
+  const bool with_contact = *std::min_element(contact, contact + 3) >= 0;
+  const int needed = std::max(*std::max_element(columns, columns + 7), with_contact ? *std::max_element(contact, contact + 3) : 0) + 1;
   for (int number = 2; std::getline(in, line); ++number) {
     if (Trim(line).empty()) continue;
     const std::vector<std::string> cells = SplitCsvLine(line);
@@ -131,6 +135,18 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
     f.frame = static_cast<int>(values[0]);
     f.force = Eigen::Vector3d(values[1], values[2], values[3]);
     f.torque = Eigen::Vector3d(values[4], values[5], values[6]);
+    if (with_contact) {
+      int filled = 0;
+      for (int k = 0; k < 3; ++k) {
+        const std::string cell = Trim(cells[contact[k]]);
+        if (cell.empty()) continue;
+        if (!ParseNumber(cell, &f.contact(k))) {
+          return Status::Error(where + kContactForceColumns[k] + " is not a number ('" + cell + "')");
+        }
+        ++filled;
+      }
+      f.has_contact = filled == 3;
+    }
     frames->push_back(f);
   }
   return Status::Ok();
@@ -151,6 +167,10 @@ std::vector<ForceError> CompareForces(const std::vector<ForceFrame>& estimated,
     e.relative =
         e.true_force > 0 ? e.error / e.true_force : std::numeric_limits<double>::quiet_NaN();
     e.torque_error = (it->second->torque - t.torque).norm();
+    if (t.has_contact && it->second->has_contact) {
+      e.contact_error = (it->second->contact - t.contact).norm();
+      e.true_contact = t.contact.norm();
+    }
     out.push_back(e);
   }
   return out;
@@ -170,6 +190,8 @@ ForceErrorMedians MedianForceErrors(const std::vector<ForceError>& errors) {
   m.error = median(&ForceError::error);
   m.relative = median(&ForceError::relative);
   m.torque_error = median(&ForceError::torque_error);
+  m.contact_error = median(&ForceError::contact_error);
+  m.true_contact = median(&ForceError::true_contact);
   return m;
 }
 

@@ -141,16 +141,25 @@ struct ForceReport {
   std::map<int, size_t> of_frame;  // frame -> its entry in errors
   std::string truth_path;
   int estimated = -1;  // summary.json's forces.estimate: 1, 0, or -1 (not said)
+  bool contact = false;  // some frame has the obstacles' push in both files
+
+  // eval.csv's contact-force cell: empty without one.
+  static std::string ContactCell(double error) {
+    if (std::isnan(error)) return ",";
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), ",%.6f", error);
+    return buf;
+  }
 
   // eval.csv's force cells of frame f: empty when that frame has no estimate.
   std::string Cells(int f) const {
     const auto it = of_frame.find(f);
-    if (it == of_frame.end()) return ",,,";
+    if (it == of_frame.end()) return contact ? ",,,," : ",,,";
     const ForceError& e = errors[it->second];
     char buf[160];
     std::snprintf(buf, sizeof(buf), "%.6f,%.6f,%s,%.6f", e.true_force, e.error,
                   Percent(e.relative, "%.3f").c_str(), e.torque_error);
-    return buf;
+    return std::string(buf) + (contact ? ContactCell(e.contact_error) : "");
   }
   // The totals row: medians over the frames.
   std::string MedianCells() const {
@@ -158,7 +167,7 @@ struct ForceReport {
     char buf[160];
     std::snprintf(buf, sizeof(buf), ",%.6f,%s,%.6f", m.error, Percent(m.relative, "%.3f").c_str(),
                   m.torque_error);
-    return buf;
+    return std::string(buf) + (contact ? ContactCell(m.contact_error) : "");
   }
   // A ratio as a percentage; empty when it is undefined (a true force of 0).
   static std::string Percent(double ratio, const char* format) {
@@ -189,6 +198,11 @@ struct ForceReport {
       std::printf(" (%d more with a true force of 0: no relative error)", undefined);
     }
     std::printf(".\n");
+    if (contact) {
+      std::printf("Median error of the obstacles' push (contact_force_*_N): %.4f N, the true push's median "
+                  "%.4f N.\n",
+                  m.contact_error, m.true_contact);
+    }
     if (estimated == 0) {
       std::printf("The run did not estimate the forces: these are its data term's pull and its contacts' "
                   "push (register with --set registration.forces.estimate=true for an estimate).\n");
@@ -233,6 +247,7 @@ Status CompareForceFiles(const std::string& result, const std::string& truth_dir
   report->errors = CompareForces(estimated, truth);
   for (size_t i = 0; i < report->errors.size(); ++i) report->of_frame[report->errors[i].frame] = i;
   report->compared = !report->errors.empty();
+  for (const ForceError& e : report->errors) report->contact = report->contact || !std::isnan(e.contact_error);
   if (!report->compared) {
     report->note = "Forces: no frame of " + stats_path.string() + " has an estimate that " +
                    truth_path.string() + " has the truth of.";
@@ -468,6 +483,7 @@ int RunEval(const std::string& result, const std::string& dataset, std::string c
          "all_rms_mm,all_p95_mm,all_max_mm,surface_mean_mm,surface_hausdorff_mm";
   if (any_embedded) out << ",err_surface_mean_mm,err_surface_p95_mm,err_surface_max_mm,err_surface_seen_mean_mm";
   if (forces.compared) out << ",force_true_N,force_error_N,force_error_pct,torque_error_Nm";
+  if (forces.contact) out << ",contact_force_error_N";
   out << "\n";
   std::vector<const EvalRow*> all_rows;
   for (const EvalRow& r : rows) all_rows.push_back(&r);
@@ -570,8 +586,9 @@ void AddEvalCommand(CLI::App* app) {
       ->check(CLI::ExistingDirectory);
   cmd->add_option("--csv", *csv,
                   "CSV file to write (default RESULT/eval.csv); with forces, the columns "
-                  "force_true_N, force_error_N, force_error_pct and torque_error_Nm, medians in "
-                  "the totals row");
+                  "force_true_N, force_error_N, force_error_pct and torque_error_Nm (and "
+                  "contact_force_error_N where forces.csv has the obstacles' push, "
+                  "contact_force_*_N), medians in the totals row");
   cmd->callback([=] { SetExitCode(RunEval(*result, *truth, *csv)); });
 }
 
