@@ -218,20 +218,20 @@ TEST(EvalTest, ObstaclePushWhereBothFilesHaveIt) {
   const std::string header =
       "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,contact_force_x_N,"
       "contact_force_y_N,contact_force_z_N\n";
-  std::vector<ForceFrame> truth, estimated;
   bool has_columns = false;
-  ASSERT_TRUE(ReadForces(dir.Write("truth.csv", header + "0,0,0,1,0,0,0,0,0,1\n1,0,0,1,0,0,0,0,0,3\n"
-                                                         "2,0,0,1,0,0,0,0,0,2\n"),
-                         &truth, &has_columns)
-                  .ok());
+  auto read = [&](const std::string& name, const std::string& rows) {
+    std::vector<ForceFrame> frames;
+    EXPECT_TRUE(ReadForces(dir.Write(name, header + rows), &frames, &has_columns).ok()) << name;
+    return frames;
+  };
+  const std::vector<ForceFrame> truth =
+      read("truth.csv", "0,0,0,1,0,0,0,0,0,1\n1,0,0,1,0,0,0,0,0,3\n2,0,0,1,0,0,0,0,0,2\n");
   ASSERT_EQ(truth.size(), 3u);
   EXPECT_TRUE(truth[1].has_contact);
   EXPECT_EQ(truth[1].contact, Eigen::Vector3d(0, 0, 3));
   // Frame 1's push is left empty (as a row without the estimate's force cells would be).
-  ASSERT_TRUE(ReadForces(dir.Write("stats.csv", header + "0,0,0,1,0,0,0,0,0,0.75\n1,0,0,1,0,0,0,,,\n"
-                                                         "2,0,0,1,0,0,0,0.5,0,2\n"),
-                         &estimated, &has_columns)
-                  .ok());
+  const std::vector<ForceFrame> estimated =
+      read("stats.csv", "0,0,0,1,0,0,0,0,0,0.75\n1,0,0,1,0,0,0,,,\n2,0,0,1,0,0,0,0.5,0,2\n");
   ASSERT_EQ(estimated.size(), 3u);
   EXPECT_FALSE(estimated[1].has_contact);
   const std::vector<ForceError> errors = CompareForces(estimated, truth);
@@ -243,7 +243,8 @@ TEST(EvalTest, ObstaclePushWhereBothFilesHaveIt) {
   const ForceErrorMedians m = MedianForceErrors(errors);
   EXPECT_NEAR(m.contact_error, 0.375, 1e-12);  // of 0.25 and 0.5
   EXPECT_NEAR(m.true_contact, 1.5, 1e-12);     // of 1 and 2
-  const Status bad = ReadForces(dir.Write("bad.csv", header + "0,0,0,1,0,0,0,0,0,one\n"), &truth, &has_columns);
+  std::vector<ForceFrame> back;
+  const Status bad = ReadForces(dir.Write("bad.csv", header + "0,0,0,1,0,0,0,0,0,one\n"), &back, &has_columns);
   EXPECT_FALSE(bad.ok());
   EXPECT_NE(bad.message().find("bad.csv:2: contact_force_z_N is not a number ('one')"), std::string::npos)
       << bad.message();
