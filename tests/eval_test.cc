@@ -248,6 +248,19 @@ TEST(EvalTest, ObstaclePushWhereBothFilesHaveIt) {
   EXPECT_FALSE(bad.ok());
   EXPECT_NE(bad.message().find("bad.csv:2: contact_force_z_N is not a number ('one')"), std::string::npos)
       << bad.message();
+  // Two of the three cells: a typo, not a frame without the push.
+  const Status part = ReadForces(dir.Write("part.csv", header + "0,0,0,1,0,0,0,0,,1\n"), &back, &has_columns);
+  EXPECT_FALSE(part.ok());
+  EXPECT_NE(part.message().find("part.csv:2: contact_force_y_N is empty"), std::string::npos) << part.message();
+  // Two of the three columns.
+  const Status columns = ReadForces(
+      dir.Write("columns.csv", "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,"
+                               "contact_force_x_N,contact_force_z_N\n0,0,0,1,0,0,0,0,1\n"),
+      &back, &has_columns);
+  EXPECT_FALSE(columns.ok());
+  EXPECT_NE(columns.message().find("columns.csv: the header has contact force columns but not contact_force_y_N"),
+            std::string::npos)
+      << columns.message();
 }
 
 // A tracked beam split on its own nodes a cell before the ground truth's crack: the copies
@@ -535,8 +548,8 @@ TEST(EvalCliTest, ForceErrorsWhenTheDatasetHasForcesAndTheResultEstimates) {
            "1,frame_0001.pcd,CONVERGED,0,0,-2,0,0,0,0,0,3.5,\"converged\"\n";
     run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
     ASSERT_EQ(run.code, 0) << run.out;
-    EXPECT_NE(run.out.find("Median error of the obstacles' push (contact_force_*_N): 0.5000 N, the true push's "
-                           "median 2.5000 N"),
+    EXPECT_NE(run.out.find("Median error of the obstacles' push (contact_force_*_N): 0.5000 N over 2 frames, the "
+                           "true push's median 2.5000 N"),
               std::string::npos)
         << run.out;
     const std::vector<std::vector<std::string>> with = CsvCells(csv);
@@ -546,6 +559,14 @@ TEST(EvalCliTest, ForceErrorsWhenTheDatasetHasForcesAndTheResultEstimates) {
     EXPECT_NEAR(std::atof(with[1].back().c_str()), 0.5, 1e-6);
     EXPECT_EQ(with[3].back(), "");  // frame 2: no truth
     EXPECT_NEAR(std::atof(with[5].back().c_str()), 0.5, 1e-6);
+    // A result written before stats.csv had the push: said, not compared.
+    std::ofstream(result + "/stats.csv")
+        << "frame,file,termination,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,message\n"
+           "0,frame_0000.pcd,CONVERGED,0,0,-1,0,0,0,\"converged\"\n";
+    run = testing_util::Femreg("eval " + result + " " + truth + " --csv " + csv);
+    ASSERT_EQ(run.code, 0) << run.out;
+    EXPECT_NE(run.out.find("has it in no frame it has the truth of"), std::string::npos) << run.out;
+    EXPECT_EQ(CsvCells(csv)[0].back(), "torque_error_Nm");
   }
 
   // A result without force columns, or a dataset without forces.csv: as before.

@@ -170,6 +170,7 @@ TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
   for (size_t i = 0; i < rows.size(); ++i) {
     EXPECT_LE((bundled_rows[i].force - rows[i].force).norm(), 1e-6 * weight);
     EXPECT_LE((bundled_rows[i].hand - rows[i].hand).norm(), 1e-6 * weight);
+    EXPECT_LE((bundled_rows[i].contact - rows[i].contact).norm(), 1e-6 * weight);
   }
 }
 

@@ -60,7 +60,8 @@ Status WriteForces(const std::string& path, const std::vector<ForceFrame>& frame
 // out. *has_columns tells whether the header has all seven; without them *frames is empty
 // and the status OK. A cell that is neither a number nor empty is an error naming it. Where
 // the header also has kContactForceColumns, a row whose three cells hold numbers has
-// has_contact set.
+// has_contact set (all three empty: not set; some of the three, in the header or a row, is
+// an error naming the missing one).
 Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool* has_columns);
 
 // An estimate against the truth in one frame.

@@ -108,6 +108,11 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
   int contact[3];
   for (int k = 0; k < 3; ++k) contact[k] = at.count(kContactForceColumns[k]) ? at[kContactForceColumns[k]] : -1;
   const bool with_contact = *std::min_element(contact, contact + 3) >= 0;
+  if (!with_contact && *std::max_element(contact, contact + 3) >= 0) {  // some, not all three
+    for (int k = 0; k < 3; ++k) {
+      if (contact[k] < 0) return Status::Error(path + ": the header has contact force columns but not " + kContactForceColumns[k]);
+    }
+  }
   const int needed = std::max(*std::max_element(columns, columns + 7), with_contact ? *std::max_element(contact, contact + 3) : 0) + 1;
   for (int number = 2; std::getline(in, line); ++number) {
     if (Trim(line).empty()) continue;
@@ -136,16 +141,22 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
     f.force = Eigen::Vector3d(values[1], values[2], values[3]);
     f.torque = Eigen::Vector3d(values[4], values[5], values[6]);
     if (with_contact) {
-      int filled = 0;
+      int filled = 0, empty_at = 0;
       for (int k = 0; k < 3; ++k) {
         const std::string cell = Trim(cells[contact[k]]);
-        if (cell.empty()) continue;
+        if (cell.empty()) {
+          empty_at = k;
+          continue;
+        }
         if (!ParseNumber(cell, &f.contact(k))) {
           return Status::Error(where + kContactForceColumns[k] + " is not a number ('" + cell + "')");
         }
         ++filled;
       }
+      // All three or none (a frame without the push).
+      if (filled != 0 && filled != 3) return Status::Error(where + kContactForceColumns[empty_at] + " is empty");
       f.has_contact = filled == 3;
+      if (!f.has_contact) f.contact.setZero();
     }
     frames->push_back(f);
   }

@@ -199,9 +199,11 @@ struct ForceReport {
     }
     std::printf(".\n");
     if (contact) {
-      std::printf("Median error of the obstacles' push (contact_force_*_N): %.4f N, the true push's median "
-                  "%.4f N.\n",
-                  m.contact_error, m.true_contact);
+      int with = 0;
+      for (const ForceError& e : errors) with += !std::isnan(e.contact_error);
+      std::printf("Median error of the obstacles' push (contact_force_*_N): %.4f N over %d frames, the true "
+                  "push's median %.4f N.\n",
+                  m.contact_error, with, m.true_contact);
     }
     if (estimated == 0) {
       std::printf("The run did not estimate the forces: these are its data term's pull and its contacts' "
@@ -251,6 +253,11 @@ Status CompareForceFiles(const std::string& result, const std::string& truth_dir
   if (!report->compared) {
     report->note = "Forces: no frame of " + stats_path.string() + " has an estimate that " +
                    truth_path.string() + " has the truth of.";
+  } else if (!report->contact &&
+             std::any_of(truth.begin(), truth.end(), [](const ForceFrame& f) { return f.has_contact; })) {
+    report->note = "Forces: " + truth_path.string() + " has the obstacles' push (contact_force_*_N), " +
+                   stats_path.string() + " has it in no frame it has the truth of (a result written " +
+                   "before stats.csv had those columns?): no obstacle-push error.";
   }
   return Status::Ok();
 }
@@ -572,7 +579,9 @@ void AddEvalCommand(CLI::App* app) {
       "surface distance (symmetric mean, Hausdorff). With the dataset's forces.csv and force "
       "columns in the result's stats.csv (force_x_N, ..., torque_z_Nm), also the error of the "
       "estimated resultant external force per frame (N, and % of the true force) and of its "
-      "torque (N m), and their medians over the frames. With embedded surfaces "
+      "torque (N m), and their medians over the frames; where both files also have the obstacles' "
+      "push (contact_force_x_N, ...: a table's, a tool's given as an obstacle), its error too. "
+      "With embedded surfaces "
       "(frames/<object>_surface_NNNN.vtp) and the dataset's ground_truth/surface/, also their "
       "vertices' errors (err_surface_mean_mm, _p95_mm, _max_mm, _seen_mean_mm, as femreg register's "
       "stats.csv); the vertex truth may then be another mesh's. Prints a table and writes a CSV.");
