@@ -98,15 +98,17 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
   const std::vector<std::string> header = SplitCsvLine(line);
   std::map<std::string, int> at;
   for (size_t i = 0; i < header.size(); ++i) at.emplace(Trim(header[i]), static_cast<int>(i));
+  auto column = [&at](const char* name) {
+    const auto it = at.find(name);
+    return it == at.end() ? -1 : it->second;
+  };
   int columns[7];
-  columns[0] = at.count("frame") ? at["frame"] : -1;
-  for (int k = 0; k < 6; ++k) {
-    columns[k + 1] = at.count(kForceColumns[k]) ? at[kForceColumns[k]] : -1;
-  }
+  columns[0] = column("frame");
+  for (int k = 0; k < 6; ++k) columns[k + 1] = column(kForceColumns[k]);
   if (*std::min_element(columns, columns + 7) < 0) return Status::Ok();
   *has_columns = true;
   int contact[3];
-  for (int k = 0; k < 3; ++k) contact[k] = at.count(kContactForceColumns[k]) ? at[kContactForceColumns[k]] : -1;
+  for (int k = 0; k < 3; ++k) contact[k] = column(kContactForceColumns[k]);
   const bool with_contact = *std::min_element(contact, contact + 3) >= 0;
   if (!with_contact && *std::max_element(contact, contact + 3) >= 0) {  // some, not all three
     for (int k = 0; k < 3; ++k) {
@@ -156,7 +158,6 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
       // All three or none (a frame without the push).
       if (filled != 0 && filled != 3) return Status::Error(where + kContactForceColumns[empty_at] + " is empty");
       f.has_contact = filled == 3;
-      if (!f.has_contact) f.contact.setZero();
     }
     frames->push_back(f);
   }
