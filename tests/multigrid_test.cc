@@ -3,6 +3,12 @@
 
 #include "backend_setup.h"
 
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "solvers/fast/multigrid_internal.h"
+
 namespace femreg {
 namespace {
 
@@ -132,6 +138,44 @@ TEST(Multigrid, AKeptHierarchySmoothsWithTheCurrentDiagonal) {
   const int iterations = MultigridPcgIterations(stiffer, &mg, b, &x);
   EXPECT_LT(iterations, 100);
   EXPECT_LE((stiffer * x - b).norm(), 1e-8 * b.norm());
+}
+
+// Level 0's values as the V-cycle reads them (multigrid_internal.h): rounded to bfloat16, to
+// nearest with ties to even, within 2^-8 of each value (relative); the float copy the same numbers; zeros,
+// signs, infinities and NaNs kept; the same on 2 threads (the spans do not change a value).
+TEST(Multigrid, Level0ValuesRoundToBfloat16) {
+  const double tie_even = 1.0 + std::ldexp(1.0, -8);              // halfway between 1 and 1 + 2^-7: down
+  const double tie_odd = 1.0 + 3.0 * std::ldexp(1.0, -8);         // halfway up to 1 + 2^-6: up
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> from = {0.0, -0.0, 1.0, -2.5, tie_even, tie_odd, 1e-30, 3e38, -inf,
+                              std::numeric_limits<double>::quiet_NaN()};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1e5, 1e5);
+  for (int i = 0; i < 300000; ++i) from.push_back(u(rng));
+  const int64_t n = static_cast<int64_t>(from.size());
+  std::vector<float> to(from.size()), to2(from.size());
+  std::vector<uint16_t> half(from.size()), half2(from.size());
+  fast_backend::multigrid_internal::RoundToBfloat16(from.data(), n, 1, to.data(), half.data());
+  fast_backend::multigrid_internal::RoundToBfloat16(from.data(), n, 2, to2.data(), half2.data());
+  EXPECT_EQ(half, half2);
+  for (int64_t i = 0; i < n; ++i) {
+    uint32_t bits;
+    std::memcpy(&bits, &to[i], sizeof bits);
+    ASSERT_EQ(bits >> 16, half[i]) << i;          // the float is the bfloat16, widened
+    ASSERT_EQ(bits & 0xffffu, 0u) << i;
+    if (std::isnan(from[i])) {
+      EXPECT_TRUE(std::isnan(to[i]));
+    } else if (std::isinf(from[i]) || from[i] == 0.0) {
+      EXPECT_EQ(to[i], static_cast<float>(from[i])) << i;
+      EXPECT_EQ(std::signbit(to[i]), std::signbit(from[i])) << i;
+    } else {
+      EXPECT_LE(std::abs(to[i] - from[i]), std::ldexp(std::abs(from[i]), -8)) << from[i];
+    }
+  }
+  EXPECT_EQ(to[4], 1.0f);                                          // ties to even: down to 1
+  EXPECT_EQ(to[5], static_cast<float>(1.0 + std::ldexp(1.0, -6)));  // ... and up to the even one
+  EXPECT_EQ(to[2], 1.0f);
+  EXPECT_EQ(to[3], -2.5f);
 }
 
 // The V-cycle's block storage: random sparse matrices with row and column nodes of 1 to 7

@@ -6,11 +6,12 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <type_traits>
 #include <vector>
 
-#ifdef __SSE__
-#include <xmmintrin.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
 #endif
 
 #include "parallel/pool.h"
@@ -39,12 +40,14 @@ constexpr int kPowerIterations = 15;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
-// Level 0's product y = A v in single precision: A's float copy (the back end's layout: both
-// triangles, full 3x3 vertex blocks whose three columns share their rows), v rounded once into
-// `v4` (4 floats per vertex, the 4th 0), and each column's sum in float. With SSE, a 3x3
-// block's column is one 4-lane multiply-add whose 4th lane reads the next stored entry (times
-// that 0; the lane is dropped from the sum, so even a non-finite entry there changes nothing);
-// the last vertex's third column, whose next entry is past the end, is summed entry by entry.
+// Level 0's product y = A v in single precision: A's values in bfloat16 (`half`; the back
+// end's layout: both triangles, full 3x3 vertex blocks whose three columns share their rows),
+// v rounded once into `v4` (4 floats per vertex, the 4th 0), and each column's sum in float.
+// With SSE2, a 3x3 block's column is four bfloat16 widened to floats and one 4-lane
+// multiply-add whose 4th lane reads the next stored entry (times that 0; the lane is dropped
+// from the sum, so even a non-finite entry there changes nothing); the last vertex, whose
+// third column's next entry is past the end, is summed entry by entry from A's float copy,
+// which holds the same numbers.
 // The V-cycle is an approximation of A^-1 to begin with, and PCG, in double with A itself,
 // corrects it (as mixed-precision AMG does, e.g. AmgX's float preconditioner for double
 // solves); what float sums cost is the V-cycle's symmetry beyond ~1e-8 relative
@@ -53,12 +56,13 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 // Each column's sums run in a fixed order: the same result on any number of threads. The
 // blocks' rows come from `block_rows` (energy::BlockRowVertices of A): A's per-entry row
 // indices stay unread.
-void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<int>& block_rows,
-                       const Eigen::VectorXd& v, int threads, int parallel_from,
-                       std::vector<float>* v4, Eigen::VectorXd* y) {
+void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<uint16_t>& half,
+                       const std::vector<int>& block_rows, const Eigen::VectorXd& v, int threads,
+                       int parallel_from, std::vector<float>* v4, Eigen::VectorXd* y) {
   const int blocks = static_cast<int>(A.cols()) / 3;
   const int* outer = A.outerIndexPtr();
   const float* values = A.valuePtr();
+  const uint16_t* halves = half.data();
   const double* vv = v.data();
   v4->resize(4 * static_cast<size_t>(blocks));
   float* p = v4->data();
@@ -73,17 +77,23 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<in
     const int begin = outer[3 * b];
     const int stride = outer[3 * b + 1] - begin;
     const float* v0 = values + begin;
-#ifdef __SSE__
+#ifdef __SSE2__
     if (lanes) {
-      const float* v1 = v0 + stride;
-      const float* v2 = v1 + stride;
+      // Four bfloat16 values as floats: each in the upper half of its 32-bit lane.
+      auto load = [](const uint16_t* h) {
+        const __m128i raw = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(h));
+        return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), raw));
+      };
+      const uint16_t* h0 = halves + begin;
+      const uint16_t* h1 = h0 + stride;
+      const uint16_t* h2 = h1 + stride;
       const int* at = block_rows.data() + begin / 9;
       __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps(), s2 = _mm_setzero_ps();
       for (int k = 0, q = 0; k < stride; k += 3, ++q) {
         const __m128 pa = _mm_loadu_ps(p + 4 * at[q]);
-        s0 = _mm_add_ps(s0, _mm_mul_ps(_mm_loadu_ps(v0 + k), pa));
-        s1 = _mm_add_ps(s1, _mm_mul_ps(_mm_loadu_ps(v1 + k), pa));
-        s2 = _mm_add_ps(s2, _mm_mul_ps(_mm_loadu_ps(v2 + k), pa));
+        s0 = _mm_add_ps(s0, _mm_mul_ps(load(h0 + k), pa));
+        s1 = _mm_add_ps(s1, _mm_mul_ps(load(h1 + k), pa));
+        s2 = _mm_add_ps(s2, _mm_mul_ps(load(h2 + k), pa));
       }
       alignas(16) float t[12];
       _mm_store_ps(t, s0);
@@ -96,6 +106,7 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<in
     }
 #endif
     (void)lanes;
+    (void)halves;
     float sums[3];
     const int* at = block_rows.data() + begin / 9;
     BlockColumnSums(v0, stride, [p, at](int q) { return p + 4 * at[q]; }, sums);
@@ -138,10 +149,32 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
 
 }  // namespace
 
+namespace multigrid_internal {
+
+void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint16_t* half) {
+  ParallelSpans(threads, n, kParallelEntries, [from, to, half](int64_t begin, int64_t end) {
+    for (int64_t p = begin; p < end; ++p) {
+      const float f = static_cast<float>(from[p]);
+      uint32_t bits;
+      std::memcpy(&bits, &f, sizeof bits);
+      if ((bits & 0x7f800000u) == 0x7f800000u) {
+        bits |= (bits & 0x007fffffu) != 0 ? 0x00400000u : 0u;  // a NaN stays one
+      } else {
+        bits += 0x7fffu + ((bits >> 16) & 1u);  // to nearest, ties to even
+      }
+      half[p] = static_cast<uint16_t>(bits >> 16);
+      bits &= 0xffff0000u;
+      std::memcpy(to + p, &bits, sizeof bits);
+    }
+  });
+}
+
+}  // namespace multigrid_internal
+
 void Multigrid::Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) {
   Level& L = levels_[static_cast<size_t>(level)];
   if (level == 0) {
-    FloatBlockProduct(L.A_f, L.block_rows, v, threads_, kParallelUnknowns / 3, &v4_, y);
+    FloatBlockProduct(L.A_f, L.A_h, L.block_rows, v, threads_, kParallelUnknowns / 3, &v4_, y);
   } else {
     L.A_b.Multiply(v, threads_, y);
   }
@@ -249,11 +282,9 @@ bool Multigrid::SetFinest(const SparseMatrix& A) {
       !std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1, A_f.outerIndexPtr())) {
     return false;
   }
-  const double* from = A.valuePtr();
-  float* to = A_f.valuePtr();
-  ParallelSpans(threads_, A.nonZeros(), kParallelEntries, [from, to](int64_t begin, int64_t end) {
-    for (int64_t p = begin; p < end; ++p) to[p] = static_cast<float>(from[p]);
-  });
+  std::vector<uint16_t>& A_h = levels_[0].A_h;
+  A_h.resize(static_cast<size_t>(A.nonZeros()));
+  multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, A_f.valuePtr(), A_h.data());
   std::vector<double> unused;
   if (!InvertDiagonalBlocks(0, A, &unused)) {
     levels_.clear();

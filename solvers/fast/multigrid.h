@@ -34,6 +34,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <cstdint>
 #include <vector>
 
 #include "femreg/mesh.h"
@@ -127,14 +128,16 @@ class Multigrid {
   // inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g. AmgX's float
   // preconditioner for double solves, does the same). Level 0's system keeps the back
   // end's layout, its products reading one row vertex per 3x3 block (block_rows) and not
-  // the per-entry indices; the coarse systems and the prolongators are stored as dense
-  // blocks between nodes (an aggregate's up to 6 unknowns, a vertex's 3), one row index per
-  // block. Both stream 4.1-4.4 bytes per entry instead of 8 with an index per entry, with
-  // inner loops of fixed length.
+  // the per-entry indices, its values rounded further to bfloat16 (A_h,
+  // multigrid_internal::RoundToBfloat16): about 2.4 bytes an entry. The coarse systems and
+  // the prolongators are stored as dense blocks between nodes (an aggregate's up to 6
+  // unknowns, a vertex's 3), one row index per block: 4.1-4.4 bytes an entry. Both instead of
+  // 8 with an index per entry, with inner loops of fixed length.
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
     Eigen::SparseMatrix<float> A_f;  // level 0: the V-cycle's copy of the last system given
+    std::vector<uint16_t> A_h;       // level 0: A_f's values as bfloat16 (RoundToBfloat16)
     std::vector<int> block_rows;     // level 0: energy::BlockRowVertices of A_f
     NodeBlocks A_b;                  // below level 0: the V-cycle's system
     int nonzeros = 0;               // of A (level 0's too)
