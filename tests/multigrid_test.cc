@@ -141,41 +141,58 @@ TEST(Multigrid, AKeptHierarchySmoothsWithTheCurrentDiagonal) {
 }
 
 // Level 0's values as the V-cycle reads them (multigrid_internal.h): rounded to bfloat16, to
-// nearest with ties to even, within 2^-8 of each value (relative); the float copy the same numbers; zeros,
-// signs, infinities and NaNs kept; the same on 2 threads (the spans do not change a value).
+// nearest with ties to even, within 2^-8 of each value (relative); the float copy the same
+// numbers; zeros, signs and infinities kept, float's largest rounded up to infinity, a
+// subnormal rounded like the others; the same on 2 threads (enough values for two spans).
 TEST(Multigrid, Level0ValuesRoundToBfloat16) {
-  const double tie_even = 1.0 + std::ldexp(1.0, -8);              // halfway between 1 and 1 + 2^-7: down
-  const double tie_odd = 1.0 + 3.0 * std::ldexp(1.0, -8);         // halfway up to 1 + 2^-6: up
+  auto from_bits = [](uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return static_cast<double>(f);
+  };
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<double> from = {0.0, -0.0, 1.0, -2.5, tie_even, tie_odd, 1e-30, 3e38, -inf,
-                              std::numeric_limits<double>::quiet_NaN()};
+  std::vector<double> from = {
+      0.0, -0.0, 1.0, -2.5,
+      1.0 + std::ldexp(1.0, -8),        // halfway between 1 and 1 + 2^-7: down, to the even 1
+      1.0 + 3.0 * std::ldexp(1.0, -8),  // halfway up to 1 + 2^-6: up, to the even one
+      from_bits(0x3fff8000u),           // halfway below 2, from an odd last bit: up across to 2
+      from_bits(0x7f7fffffu),           // float's largest: past bfloat16's, to infinity
+      std::ldexp(1.5, -133),            // a subnormal halfway: up to 2^-132
+      -inf, std::numeric_limits<double>::quiet_NaN()};
+  const size_t special = from.size();
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1e5, 1e5);
-  for (int i = 0; i < 300000; ++i) from.push_back(u(rng));
+  const int64_t spans = 2 * fast_backend::multigrid_internal::kParallelEntries + 1;
+  while (static_cast<int64_t>(from.size()) < spans) from.push_back(u(rng));
   const int64_t n = static_cast<int64_t>(from.size());
   std::vector<float> to(from.size()), to2(from.size());
   std::vector<uint16_t> half(from.size()), half2(from.size());
   fast_backend::multigrid_internal::RoundToBfloat16(from.data(), n, 1, to.data(), half.data());
   fast_backend::multigrid_internal::RoundToBfloat16(from.data(), n, 2, to2.data(), half2.data());
   EXPECT_EQ(half, half2);
+  EXPECT_EQ(0, std::memcmp(to.data(), to2.data(), to.size() * sizeof(float)));
   for (int64_t i = 0; i < n; ++i) {
     uint32_t bits;
     std::memcpy(&bits, &to[i], sizeof bits);
-    ASSERT_EQ(bits >> 16, half[i]) << i;          // the float is the bfloat16, widened
+    ASSERT_EQ(bits >> 16, half[i]) << i;  // the float is the bfloat16, widened
     ASSERT_EQ(bits & 0xffffu, 0u) << i;
-    if (std::isnan(from[i])) {
-      EXPECT_TRUE(std::isnan(to[i]));
-    } else if (std::isinf(from[i]) || from[i] == 0.0) {
-      EXPECT_EQ(to[i], static_cast<float>(from[i])) << i;
-      EXPECT_EQ(std::signbit(to[i]), std::signbit(from[i])) << i;
-    } else {
-      EXPECT_LE(std::abs(to[i] - from[i]), std::ldexp(std::abs(from[i]), -8)) << from[i];
+    if (static_cast<size_t>(i) >= special) {
+      ASSERT_LE(std::abs(to[i] - from[i]), std::ldexp(std::abs(from[i]), -8)) << from[i];
     }
   }
-  EXPECT_EQ(to[4], 1.0f);                                          // ties to even: down to 1
-  EXPECT_EQ(to[5], static_cast<float>(1.0 + std::ldexp(1.0, -6)));  // ... and up to the even one
+  EXPECT_EQ(to[0], 0.0f);
+  EXPECT_FALSE(std::signbit(to[0]));
+  EXPECT_EQ(to[1], 0.0f);
+  EXPECT_TRUE(std::signbit(to[1]));
   EXPECT_EQ(to[2], 1.0f);
   EXPECT_EQ(to[3], -2.5f);
+  EXPECT_EQ(to[4], 1.0f);
+  EXPECT_EQ(to[5], static_cast<float>(1.0 + std::ldexp(1.0, -6)));
+  EXPECT_EQ(to[6], 2.0f);
+  EXPECT_EQ(to[7], std::numeric_limits<float>::infinity());
+  EXPECT_EQ(to[8], static_cast<float>(std::ldexp(1.0, -132)));
+  EXPECT_EQ(to[9], -std::numeric_limits<float>::infinity());
+  EXPECT_TRUE(std::isnan(to[10]));
 }
 
 // The V-cycle's block storage: random sparse matrices with row and column nodes of 1 to 7

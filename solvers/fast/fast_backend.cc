@@ -219,7 +219,7 @@ FastBackend::Impl::Outcome FastBackend::Impl::SolveStepMultigrid(const Eigen::Ve
     return outcome;
   };
   const int fresh = std::max(multigrid_fresh_iterations, 0);
-  // The V-cycle's single-precision copy of this step's H, timed with the hierarchy.
+  // The V-cycle's reduced-precision copy of this step's H (bfloat16), timed with the hierarchy.
   auto set_finest = [&] {
     const auto t0 = Clock::now();
     const bool set = multigrid.SetFinest(H);

@@ -121,8 +121,8 @@ class Multigrid {
   // The V-cycle reads its matrices in single precision: its products stream them from
   // memory, and float halves the values' bytes. The vectors stay in double. A matrix
   // rounded to float is still symmetric: what changes is the operator itself, by a
-  // relative 6e-8 per entry, far less than what separates it from A^-1 (PCG in double
-  // solves with A itself). The products also sum in float (with SSE 4 lanes at a time;
+  // relative 6e-8 per entry (level 0's, in bfloat16 below, by up to 4e-3), far less than
+  // what separates it from A^-1 (PCG in double solves with A itself). The products also sum in float (with SSE 4 lanes at a time;
   // FloatBlockProduct and GatherNodeFloat in the .cc files), which leaves the V-cycle symmetric
   // to ~1e-8 relative rather than to double round-off: still positive definite, and far
   // inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g. AmgX's float

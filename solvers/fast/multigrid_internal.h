@@ -14,7 +14,7 @@ namespace multigrid_internal {
 // each worth a team's start from here (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int kParallelUnknowns = 4096;
 // Element-wise passes go to the team from this many entries per thread on (the finest
-// matrix's values to float; the smoother's vector updates, lighter each): below, the team's
+// matrix's values to bfloat16; the smoother's vector updates, lighter each): below, the team's
 // start costs more than the pass waits on memory. The conversion only runs with the hierarchy,
 // from 5k vertices on.
 constexpr int64_t kParallelEntries = int64_t{1} << 18;
@@ -23,9 +23,9 @@ constexpr int64_t kParallelVectorEntries = int64_t{1} << 14;
 // column (docs/notes/2026-11-28-figures-from-code-comments.md).
 constexpr int64_t kParallelNonzeros = 65536;
 
-// Level 0's values as the V-cycle reads them: from[0, n) rounded to bfloat16 (float's range,
-// 8 significant bits; to nearest, ties to even) into half, and the same numbers as floats
-// into to. The level-0 product then streams 2 bytes a value instead of 4: the V-cycle only
+// Level 0's values as the V-cycle reads them: from[0, n) rounded to float, then to bfloat16
+// (float's range, 8 significant bits; to nearest, ties to even) into half, and the same
+// numbers as floats into to. The level-0 product then streams 2 bytes a value instead of 4: the V-cycle only
 // approximates A^-1 (PCG, in double with A itself, corrects it), and at 8 bits it does so
 // about as well (docs/notes/2026-12-05-bfloat16-level-0.md).
 void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint16_t* half);
