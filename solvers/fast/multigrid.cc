@@ -284,7 +284,8 @@ bool Multigrid::SetFinest(const SparseMatrix& A) {
   }
   std::vector<uint16_t>& A_h = levels_[0].A_h;
   A_h.resize(static_cast<size_t>(A.nonZeros()));
-  multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, A_f.valuePtr(), A_h.data());
+  multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, A_f.valuePtr(),
+                                      A_h.data());
   std::vector<double> unused;
   if (!InvertDiagonalBlocks(0, A, &unused)) {
     levels_.clear();

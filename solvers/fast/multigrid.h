@@ -122,17 +122,17 @@ class Multigrid {
   // memory, and float halves the values' bytes. The vectors stay in double. A matrix
   // rounded to float is still symmetric: what changes is the operator itself, by a
   // relative 6e-8 per entry (level 0's, in bfloat16 below, by up to 4e-3), far less than
-  // what separates it from A^-1 (PCG in double solves with A itself). The products also sum in float (with SSE 4 lanes at a time;
-  // FloatBlockProduct and GatherNodeFloat in the .cc files), which leaves the V-cycle symmetric
-  // to ~1e-8 relative rather than to double round-off: still positive definite, and far
-  // inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g. AmgX's float
-  // preconditioner for double solves, does the same). Level 0's system keeps the back
-  // end's layout, its products reading one row vertex per 3x3 block (block_rows) and not
-  // the per-entry indices, its values rounded further to bfloat16 (A_h,
-  // multigrid_internal::RoundToBfloat16): about 2.4 bytes an entry. The coarse systems and
-  // the prolongators are stored as dense blocks between nodes (an aggregate's up to 6
-  // unknowns, a vertex's 3), one row index per block: 4.1-4.4 bytes an entry. Both instead of
-  // 8 with an index per entry, with inner loops of fixed length.
+  // what separates it from A^-1 (PCG in double solves with A itself). The products also sum
+  // in float (with SSE 4 lanes at a time; FloatBlockProduct and GatherNodeFloat in the .cc
+  // files), which leaves the V-cycle symmetric to ~1e-8 relative rather than to double
+  // round-off: still positive definite, and far inside what PCG tolerates at its 1e-2
+  // (mixed-precision AMG, e.g. AmgX's float preconditioner for double solves, does the
+  // same). Level 0's system keeps the back end's layout, its products reading one row
+  // vertex per 3x3 block (block_rows) and not the per-entry indices, its values rounded
+  // further to bfloat16 (A_h, multigrid_internal::RoundToBfloat16): about 2.4 bytes an
+  // entry. The coarse systems and the prolongators are stored as dense blocks between nodes
+  // (an aggregate's up to 6 unknowns, a vertex's 3), one row index per block: 4.1-4.4 bytes
+  // an entry. Both instead of 8 with an index per entry, with inner loops of fixed length.
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)

@@ -62,8 +62,8 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   levels_[0].A_f = A0.cast<float>();
   levels_[0].A_f.makeCompressed();
   levels_[0].A_h.resize(static_cast<size_t>(A0.nonZeros()));
-  multigrid_internal::RoundToBfloat16(A0.valuePtr(), A0.nonZeros(), threads_, levels_[0].A_f.valuePtr(),
-                                      levels_[0].A_h.data());
+  multigrid_internal::RoundToBfloat16(A0.valuePtr(), A0.nonZeros(), threads_,
+                                      levels_[0].A_f.valuePtr(), levels_[0].A_h.data());
   levels_[0].block_rows = energy::BlockRowVertices(levels_[0].A_f);
   levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
   for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
