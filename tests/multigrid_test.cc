@@ -12,6 +12,12 @@
 namespace femreg {
 namespace {
 
+// A value as the V-cycle stores it below level 0 (and reads level 0's): in bfloat16.
+double Bfloat16(double value) {
+  using fast_backend::multigrid_internal::FromBfloat16;
+  using fast_backend::multigrid_internal::ToBfloat16;
+  return FromBfloat16(ToBfloat16(value));
+}
 
 // A box's corotational stiffness (R = I) with full 3x3 vertex blocks, plus a diagonal of
 // `diagonal` x (1 .. 5); the vertices at x = 0 fixed as the back end fixes them (identity
@@ -197,8 +203,8 @@ TEST(Multigrid, Level0ValuesRoundToBfloat16) {
 
 // The V-cycle's block storage: random sparse matrices with row and column nodes of 1 to 7
 // unknowns (the uniform 3 and 6 of vertices and aggregates take their own loops, the rest
-// the general ones) multiply like Eigen's M^T x on their float-rounded values (to float's
-// precision: the fixed loops sum in float), and the same on 2 threads.
+// the general ones) multiply like Eigen's M^T x on their values rounded to bfloat16 (to
+// float's precision: the fixed loops sum in float), and the same on 2 threads.
 TEST(Multigrid, NodeBlocksMultiplyLikeTheSparseMatrix) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -232,7 +238,8 @@ TEST(Multigrid, NodeBlocksMultiplyLikeTheSparseMatrix) {
     blocks.Assign(M, shape.rows, shape.cols);
     Eigen::VectorXd x(rows);
     for (int i = 0; i < rows; ++i) x[i] = u(rng);
-    const Eigen::SparseMatrix<double> rounded = M.cast<float>().cast<double>();
+    Eigen::SparseMatrix<double> rounded = M;
+    for (int k = 0; k < rounded.nonZeros(); ++k) rounded.valuePtr()[k] = Bfloat16(rounded.valuePtr()[k]);
     const Eigen::VectorXd expected = rounded.transpose() * x;
     // Per entry, a sum of ~40 products of magnitude <= 1: in float, well within 1e-5.
     Eigen::VectorXd y1, y2;
@@ -358,7 +365,10 @@ TEST(Multigrid, GalerkinProductsMatchTheDenseOnes) {
   for (int i = 0; i < y.size(); ++i) y[i] = u(rng);
   p_blocks.Multiply(x, 1, &ptx);   // P^T x
   pt_blocks.Multiply(y, 1, &px);   // P y
-  const Eigen::VectorXd ptx_expected = P_expected.transpose() * x, px_expected = P_expected * y;
+  // Against P's values rounded to bfloat16, as the V-cycle stores them: the same numbers in P
+  // and P^T (the V-cycle stays symmetric).
+  const Eigen::MatrixXd P_rounded = P_expected.unaryExpr([](double v) { return Bfloat16(v); });
+  const Eigen::VectorXd ptx_expected = P_rounded.transpose() * x, px_expected = P_rounded * y;
   EXPECT_LE((ptx - ptx_expected).lpNorm<Eigen::Infinity>(), 1e-5 * ptx_expected.lpNorm<Eigen::Infinity>());
   EXPECT_LE((px - px_expected).lpNorm<Eigen::Infinity>(), 1e-5 * px_expected.lpNorm<Eigen::Infinity>());
   // A row node of T without A's diagonal block is refused.

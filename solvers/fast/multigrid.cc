@@ -154,17 +154,8 @@ namespace multigrid_internal {
 void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint16_t* half) {
   ParallelSpans(threads, n, kParallelEntries, [from, to, half](int64_t begin, int64_t end) {
     for (int64_t p = begin; p < end; ++p) {
-      const float f = static_cast<float>(from[p]);
-      uint32_t bits;
-      std::memcpy(&bits, &f, sizeof bits);
-      if ((bits & 0x7f800000u) == 0x7f800000u) {
-        bits |= (bits & 0x007fffffu) != 0 ? 0x00400000u : 0u;  // a NaN stays one
-      } else {
-        bits += 0x7fffu + ((bits >> 16) & 1u);  // to nearest, ties to even
-      }
-      half[p] = static_cast<uint16_t>(bits >> 16);
-      bits &= 0xffff0000u;
-      std::memcpy(to + p, &bits, sizeof bits);
+      half[p] = ToBfloat16(from[p]);
+      to[p] = FromBfloat16(half[p]);
     }
   });
 }

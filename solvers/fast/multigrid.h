@@ -93,7 +93,7 @@ class Multigrid {
     std::vector<int> row_count;    // per block: its row node's unknowns
     std::vector<int> value_at;     // per block: its row_count x (column node's size) values
     std::vector<int> rows_of;      // per column node: its blocks' row count if all share one, else 0
-    std::vector<float> values;
+    std::vector<uint16_t> values;  // bfloat16 (multigrid_internal::ToBfloat16)
     // From a column-major M with both partitions (the nodes' first unknowns, then the size).
     void Assign(const Eigen::SparseMatrix<double>& M, const std::vector<int>& row_nodes,
                 const std::vector<int>& col_nodes);
@@ -118,21 +118,23 @@ class Multigrid {
                        BlockRows* Pt, Eigen::SparseMatrix<double>* Ac);
 
  private:
-  // The V-cycle reads its matrices in single precision: its products stream them from
-  // memory, and float halves the values' bytes. The vectors stay in double. A matrix
-  // rounded to float is still symmetric: what changes is the operator itself, by a
-  // relative 6e-8 per entry (level 0's, in bfloat16 below, by up to 4e-3), far less than
-  // what separates it from A^-1 (PCG in double solves with A itself). The products also sum
-  // in float (with SSE 4 lanes at a time; FloatBlockProduct and GatherNodeFloat in the .cc
-  // files), which leaves the V-cycle symmetric to ~1e-8 relative rather than to double
-  // round-off: still positive definite, and far inside what PCG tolerates at its 1e-2
-  // (mixed-precision AMG, e.g. AmgX's float preconditioner for double solves, does the
-  // same). Level 0's system keeps the back end's layout, its products reading one row
-  // vertex per 3x3 block (block_rows) and not the per-entry indices, its values rounded
-  // further to bfloat16 (A_h, multigrid_internal::RoundToBfloat16): about 2.4 bytes an
-  // entry. The coarse systems and the prolongators are stored as dense blocks between nodes
-  // (an aggregate's up to 6 unknowns, a vertex's 3), one row index per block: 4.1-4.4 bytes
-  // an entry. Both instead of 8 with an index per entry, with inner loops of fixed length.
+  // The V-cycle reads its matrices in bfloat16 (float's range, 8 significant bits): its
+  // products stream them from memory, and 2 bytes a value are a quarter of double's. The
+  // vectors stay in double. A matrix whose values are rounded is still symmetric: what
+  // changes is the operator itself, by up to 4e-3 relative per entry, less than what
+  // separates it from A^-1 (PCG in double solves with A itself); P and P^T hold the same
+  // rounded numbers, so the V-cycle stays symmetric. The products sum in float (with SSE 4
+  // lanes at a time; FloatBlockProduct and GatherNodeFloat in the .cc files), which leaves
+  // the V-cycle symmetric to ~1e-8 relative rather than to double round-off: still positive
+  // definite, and far inside what PCG tolerates at its 1e-2 (mixed-precision AMG, e.g.
+  // AmgX's float preconditioner for double solves, does the same). Level 0's system keeps
+  // the back end's layout, its products reading one row vertex per 3x3 block (block_rows)
+  // and not the per-entry indices (A_h, multigrid_internal::RoundToBfloat16): about 2.4 bytes
+  // an entry. The coarse systems and the prolongators are stored as dense blocks between
+  // nodes (an aggregate's up to 6 unknowns, a vertex's 3), one row index per block: about
+  // 2.1-2.4 bytes an entry. Both instead of 12 with double values and an index per entry,
+  // with inner loops of fixed length (docs/notes/2026-12-05-bfloat16-level-0.md,
+  // docs/notes/2026-12-06-bfloat16-transfers.md).
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)

@@ -6,11 +6,12 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <type_traits>
 #include <vector>
 
-#ifdef __SSE__
-#include <xmmintrin.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
 #endif
 
 #include "parallel/pool.h"
@@ -23,53 +24,64 @@ namespace fast_backend {
 
 namespace {
 
+using multigrid_internal::FromBfloat16;
 using multigrid_internal::kParallelNonzeros;
 using multigrid_internal::kParallelUnknowns;
+using multigrid_internal::ToBfloat16;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
 // One column node's gather, any block shapes, in double: y_j = sum over its blocks B
-// (row_count x nc, column-major) of B(:, j) . x(rows of B).
-void GatherNode(const float* values, const int* value_at, const int* row_first, const int* row_count,
+// (row_count x nc, column-major, bfloat16) of B(:, j) . x(rows of B).
+void GatherNode(const uint16_t* values, const int* value_at, const int* row_first, const int* row_count,
                 int begin, int end, int nc, const double* x, double* y) {
   for (int j = 0; j < nc; ++j) {
     double s = 0.0;
     for (int k = begin; k < end; ++k) {
-      const float* B = values + value_at[k] + j * row_count[k];
+      const uint16_t* B = values + value_at[k] + j * row_count[k];
       const double* xr = x + row_first[k];
-      for (int i = 0; i < row_count[k]; ++i) s += static_cast<double>(B[i]) * xr[i];
+      for (int i = 0; i < row_count[k]; ++i) s += static_cast<double>(FromBfloat16(B[i])) * xr[i];
     }
     y[j] = s;
   }
 }
 
 // The shapes the hierarchy makes (R x C blocks, every block of the column node alike) in
-// single precision: x in float and the column's sum in float; with SSE, each block's column
-// one 4-lane multiply-add per 4 of its rows (6 rows: 4 + 2 lanes; 3 rows: 3 lanes, the 4th
-// reads the next stored value and is dropped), else entry by entry (see FloatBlockProduct:
-// ~1e-7 relative, as the values' own rounding). `values` holds 4 more floats than its
+// single precision: the values widened from bfloat16, x in float and the column's sum in
+// float; with SSE2, each block's column one 4-lane multiply-add per 4 of its rows (6 rows:
+// 4 + 2 lanes; 3 rows: 3 lanes, the 4th reads the next stored value and is dropped), else
+// entry by entry (see FloatBlockProduct: ~1e-7 relative). `values` holds 4 more than its
 // blocks (the last block's 4th lane). With FloatBlockProduct at level 0, float sums made a
 // whole V-cycle faster than double sums (docs/notes/2026-11-28-figures-from-code-comments.md).
 template <int R, int C>
-void GatherNodeFloat(const float* values, const int* value_at, const int* row_first, int begin, int end,
+void GatherNodeFloat(const uint16_t* values, const int* value_at, const int* row_first, int begin, int end,
                      const float* x, double* y) {
   static_assert((R == 3 || R == 6) && C >= 1 && C <= 6, "the shapes the hierarchy makes");
-#ifdef __SSE__
+#ifdef __SSE2__
+  // Four (two) bfloat16 values as floats: each in the upper half of its 32-bit lane.
+  auto load4 = [](const uint16_t* h) {
+    const __m128i raw = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(h));
+    return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), raw));
+  };
+  auto load2 = [](const uint16_t* h) {
+    int32_t two;
+    std::memcpy(&two, h, sizeof two);
+    return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), _mm_cvtsi32_si128(two)));
+  };
   __m128 acc[C];
   for (int j = 0; j < C; ++j) acc[j] = _mm_setzero_ps();
   for (int k = begin; k < end; ++k) {
-    const float* B = values + value_at[k];
+    const uint16_t* B = values + value_at[k];
     const float* xr = x + row_first[k];
     if constexpr (R == 6) {
       const __m128 lo = _mm_loadu_ps(xr);
       const __m128 hi = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(xr + 4));
       for (int j = 0; j < C; ++j) {
-        const __m128 b_hi = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(B + 6 * j + 4));
-        acc[j] = _mm_add_ps(acc[j], _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(B + 6 * j), lo), _mm_mul_ps(b_hi, hi)));
+        acc[j] = _mm_add_ps(acc[j], _mm_add_ps(_mm_mul_ps(load4(B + 6 * j), lo), _mm_mul_ps(load2(B + 6 * j + 4), hi)));
       }
     } else {
       const __m128 x3 = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(xr)),
                                       _mm_load_ss(xr + 2));
-      for (int j = 0; j < C; ++j) acc[j] = _mm_add_ps(acc[j], _mm_mul_ps(_mm_loadu_ps(B + 3 * j), x3));
+      for (int j = 0; j < C; ++j) acc[j] = _mm_add_ps(acc[j], _mm_mul_ps(load4(B + 3 * j), x3));
     }
   }
   for (int j = 0; j < C; ++j) {
@@ -80,10 +92,10 @@ void GatherNodeFloat(const float* values, const int* value_at, const int* row_fi
 #else
   float acc[C] = {};
   for (int k = begin; k < end; ++k) {
-    const float* B = values + value_at[k];
+    const uint16_t* B = values + value_at[k];
     const float* xr = x + row_first[k];
     for (int j = 0; j < C; ++j) {
-      for (int i = 0; i < R; ++i) acc[j] += B[j * R + i] * xr[i];
+      for (int i = 0; i < R; ++i) acc[j] += FromBfloat16(B[j * R + i]) * xr[i];
     }
   }
   for (int j = 0; j < C; ++j) y[j] = acc[j];
@@ -136,7 +148,7 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
       row_first.push_back(row_nodes[static_cast<size_t>(r)]);
       row_count.push_back(nr);
       value_at.push_back(static_cast<int>(values.size()));
-      values.resize(values.size() + static_cast<size_t>(nr) * static_cast<size_t>(nc), 0.0f);
+      values.resize(values.size() + static_cast<size_t>(nr) * static_cast<size_t>(nc), 0);
     }
     for (int j = c0; j < c0 + nc; ++j) {
       for (int p = outer[j]; p < column_end(j); ++p) {
@@ -144,7 +156,7 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
         const int r = node_of_row[static_cast<size_t>(i)];
         const int nr = row_nodes[static_cast<size_t>(r) + 1] - row_nodes[static_cast<size_t>(r)];
         values[static_cast<size_t>(block_of[static_cast<size_t>(r)] + (j - c0) * nr +
-                                   (i - row_nodes[static_cast<size_t>(r)]))] = static_cast<float>(v[p]);
+                                   (i - row_nodes[static_cast<size_t>(r)]))] = ToBfloat16(v[p]);
       }
     }
     for (int r : touched) block_of[static_cast<size_t>(r)] = -1;
@@ -155,7 +167,7 @@ void Multigrid::NodeBlocks::Assign(const SparseMatrix& M, const std::vector<int>
     rows_of.push_back(shared);
     block_begin.push_back(static_cast<int>(row_first.size()));
   }
-  values.resize(values.size() + 4, 0.0f);  // the last block's 4th lane (GatherNodeFloat)
+  values.resize(values.size() + 4, 0);  // the last block's 4th lane (GatherNodeFloat)
 }
 
 void Multigrid::NodeBlocks::AssignTransposed(const BlockRows& R, const std::vector<int>& row_nodes,
@@ -169,7 +181,7 @@ void Multigrid::NodeBlocks::AssignTransposed(const BlockRows& R, const std::vect
   row_first.assign(R.col.size(), 0);
   row_count.assign(R.col.size(), 0);
   value_at.assign(R.col.size(), 0);
-  values.assign(R.values.size() + 4, 0.0f);  // 4 more: the last block's 4th lane (GatherNodeFloat)
+  values.assign(R.values.size() + 4, 0);  // 4 more: the last block's 4th lane (GatherNodeFloat)
   for (int c = 0; c < num_col_nodes; ++c) {
     const int nc = R.row_size[static_cast<size_t>(c)];
     int shared = -1;
@@ -182,9 +194,9 @@ void Multigrid::NodeBlocks::AssignTransposed(const BlockRows& R, const std::vect
       value_at[k] = R.at[k];
       // M's block (nr x nc) is R's (nc x nr) transposed.
       const double* from = R.values.data() + R.at[k];
-      float* to = values.data() + R.at[k];
+      uint16_t* to = values.data() + R.at[k];
       for (int j = 0; j < nc; ++j) {
-        for (int i = 0; i < nr; ++i) to[i + nr * j] = static_cast<float>(from[j + nc * i]);
+        for (int i = 0; i < nr; ++i) to[i + nr * j] = ToBfloat16(from[j + nc * i]);
       }
       shared = shared == -1 || shared == nr ? nr : 0;
     }
@@ -201,7 +213,7 @@ void Multigrid::NodeBlocks::Multiply(const Eigen::VectorXd& x, int threads, Eige
   double* yy = y->data();
   x_float.resize(static_cast<size_t>(n));
   float* xf = x_float.data();
-  const float* v = values.data();
+  const uint16_t* v = values.data();
   const int* at = value_at.data();
   const int* first = row_first.data();
   const int* count = row_count.data();

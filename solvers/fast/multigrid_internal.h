@@ -5,6 +5,7 @@
 #define FEMREG_SOLVERS_FAST_MULTIGRID_INTERNAL_H_
 
 #include <cstdint>
+#include <cstring>
 
 namespace femreg {
 namespace fast_backend {
@@ -29,6 +30,25 @@ constexpr int64_t kParallelNonzeros = 65536;
 // the V-cycle only approximates A^-1 (PCG, in double with A itself, corrects it), and at 8
 // bits it does so about as well (docs/notes/2026-12-05-bfloat16-level-0.md).
 void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint16_t* half);
+
+// One value as RoundToBfloat16 rounds it, and back to float (exactly).
+inline uint16_t ToBfloat16(double value) {
+  const float f = static_cast<float>(value);
+  uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  if ((bits & 0x7f800000u) == 0x7f800000u) {
+    bits |= (bits & 0x007fffffu) != 0 ? 0x00400000u : 0u;  // a NaN stays one
+  } else {
+    bits += 0x7fffu + ((bits >> 16) & 1u);  // to nearest, ties to even
+  }
+  return static_cast<uint16_t>(bits >> 16);
+}
+inline float FromBfloat16(uint16_t half) {
+  const uint32_t bits = static_cast<uint32_t>(half) << 16;
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
 
 }  // namespace multigrid_internal
 }  // namespace fast_backend
