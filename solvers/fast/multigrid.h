@@ -132,7 +132,7 @@ class Multigrid {
   // and not the per-entry indices (A_h, multigrid_internal::RoundToBfloat16): about 2.4 bytes
   // an entry. The coarse systems and the prolongators are stored as dense blocks between
   // nodes (an aggregate's up to 6 unknowns, a vertex's 3), one row index per block: about
-  // 2.1-2.4 bytes an entry. Both instead of 12 with double values and an index per entry,
+  // 2.2-2.5 bytes an entry. Both instead of 12 with double values and an index per entry,
   // with inner loops of fixed length (docs/notes/2026-12-05-bfloat16-level-0.md,
   // docs/notes/2026-12-06-bfloat16-transfers.md).
 
