@@ -64,22 +64,27 @@ void BlockProduct(const Eigen::SparseMatrix<double>& H, const std::vector<int>& 
 
 // One vertex's three column sums in that layout, entry by entry: the column block's values
 // start at v0 (its three columns `stride` apart), and at(q) the address of the vector's three
-// entries for the column block's q-th 3x3 block's rows. (The product above in double; the
-// multigrid V-cycle's in float, where its SSE lanes stop.)
-template <class Value, class Sum, class At>
-void BlockColumnSums(const Value* v0, int stride, At at, Sum* s) {
+// entries for the column block's q-th 3x3 block's rows, each stored value read as value(v)
+// (a narrower storage widened). (The product above in double; the multigrid V-cycle's in
+// float from bfloat16, where its SSE lanes stop.)
+template <class Value, class At, class Sum, class Widen>
+void BlockColumnSums(const Value* v0, int stride, At at, Sum* s, Widen value) {
   const Value* v1 = v0 + stride;
   const Value* v2 = v1 + stride;
   Sum s0 = 0, s1 = 0, s2 = 0;
   for (int k = 0, q = 0; k < stride; k += 3, ++q) {
     const auto* pa = at(q);
-    s0 += v0[k] * pa[0] + v0[k + 1] * pa[1] + v0[k + 2] * pa[2];
-    s1 += v1[k] * pa[0] + v1[k + 1] * pa[1] + v1[k + 2] * pa[2];
-    s2 += v2[k] * pa[0] + v2[k + 1] * pa[1] + v2[k + 2] * pa[2];
+    s0 += value(v0[k]) * pa[0] + value(v0[k + 1]) * pa[1] + value(v0[k + 2]) * pa[2];
+    s1 += value(v1[k]) * pa[0] + value(v1[k + 1]) * pa[1] + value(v1[k + 2]) * pa[2];
+    s2 += value(v2[k]) * pa[0] + value(v2[k + 1]) * pa[1] + value(v2[k + 2]) * pa[2];
   }
   s[0] = s0;
   s[1] = s1;
   s[2] = s2;
+}
+template <class Value, class Sum, class At>
+void BlockColumnSums(const Value* v0, int stride, At at, Sum* s) {
+  BlockColumnSums(v0, stride, at, s, [](Value value) { return value; });
 }
 
 }  // namespace fast_backend

@@ -40,14 +40,14 @@ constexpr int kPowerIterations = 15;
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
-// Level 0's product y = A v in single precision: A's values in bfloat16 (`half`; the back
-// end's layout: both triangles, full 3x3 vertex blocks whose three columns share their rows),
+// Level 0's product y = A v in single precision: A's values in bfloat16 (`half`, its columns
+// from column_starts; the back end's layout: both triangles, full 3x3 vertex blocks whose three columns share their rows),
 // v rounded once into `v4` (4 floats per vertex, the 4th 0), and each column's sum in float.
 // With SSE2, a 3x3 block's column is four bfloat16 widened to floats and one 4-lane
 // multiply-add whose 4th lane reads the next stored entry (times that 0; the lane is dropped
 // from the sum, so even a non-finite entry there changes nothing); the last vertex, whose
-// third column's next entry is past the end, is summed entry by entry from A's float copy,
-// which holds the same numbers.
+// third column's next entry is past the end, is summed entry by entry (so is every vertex
+// without SSE2).
 // The V-cycle is an approximation of A^-1 to begin with, and PCG, in double with A itself,
 // corrects it (as mixed-precision AMG does, e.g. AmgX's float preconditioner for double
 // solves); what float sums cost is the V-cycle's symmetry beyond ~1e-8 relative
@@ -56,12 +56,11 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 // Each column's sums run in a fixed order: the same result on any number of threads. The
 // blocks' rows come from `block_rows` (energy::BlockRowVertices of A): A's per-entry row
 // indices stay unread.
-void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<uint16_t>& half,
+void FloatBlockProduct(const std::vector<int>& column_starts, const std::vector<uint16_t>& half,
                        const std::vector<int>& block_rows, const Eigen::VectorXd& v, int threads,
                        int parallel_from, std::vector<float>* v4, Eigen::VectorXd* y) {
-  const int blocks = static_cast<int>(A.cols()) / 3;
-  const int* outer = A.outerIndexPtr();
-  const float* values = A.valuePtr();
+  const int blocks = static_cast<int>(column_starts.size() - 1) / 3;
+  const int* outer = column_starts.data();
   const uint16_t* halves = half.data();
   const double* vv = v.data();
   v4->resize(4 * static_cast<size_t>(blocks));
@@ -76,7 +75,6 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<ui
   auto column = [&](int b, bool lanes) {
     const int begin = outer[3 * b];
     const int stride = outer[3 * b + 1] - begin;
-    const float* v0 = values + begin;
 #ifdef __SSE2__
     if (lanes) {
       // Four bfloat16 values as floats: each in the upper half of its 32-bit lane.
@@ -106,10 +104,11 @@ void FloatBlockProduct(const Eigen::SparseMatrix<float>& A, const std::vector<ui
     }
 #endif
     (void)lanes;
-    (void)halves;
     float sums[3];
     const int* at = block_rows.data() + begin / 9;
-    BlockColumnSums(v0, stride, [p, at](int q) { return p + 4 * at[q]; }, sums);
+    BlockColumnSums(
+        halves + begin, stride, [p, at](int q) { return p + 4 * at[q]; }, sums,
+        [](uint16_t h) { return multigrid_internal::FromBfloat16(h); });
     for (int j = 0; j < 3; ++j) yy[3 * b + j] = sums[j];
   };
   if (threads > 1 && blocks >= parallel_from) {
@@ -151,12 +150,9 @@ double LargestEigenvalue(int n, Product product, Jacobi jacobi) {
 
 namespace multigrid_internal {
 
-void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint16_t* half) {
-  ParallelSpans(threads, n, kParallelEntries, [from, to, half](int64_t begin, int64_t end) {
-    for (int64_t p = begin; p < end; ++p) {
-      half[p] = ToBfloat16(from[p]);
-      to[p] = FromBfloat16(half[p]);
-    }
+void RoundToBfloat16(const double* from, int64_t n, int threads, uint16_t* half) {
+  ParallelSpans(threads, n, kParallelEntries, [from, half](int64_t begin, int64_t end) {
+    for (int64_t p = begin; p < end; ++p) half[p] = ToBfloat16(from[p]);
   });
 }
 
@@ -165,7 +161,7 @@ void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint
 void Multigrid::Product(int level, const Eigen::VectorXd& v, Eigen::VectorXd* y) {
   Level& L = levels_[static_cast<size_t>(level)];
   if (level == 0) {
-    FloatBlockProduct(L.A_f, L.A_h, L.block_rows, v, threads_, kParallelUnknowns / 3, &v4_, y);
+    FloatBlockProduct(L.outer, L.A_h, L.block_rows, v, threads_, kParallelUnknowns / 3, &v4_, y);
   } else {
     L.A_b.Multiply(v, threads_, y);
   }
@@ -266,17 +262,16 @@ bool Multigrid::InvertDiagonalBlocks(int l, const SparseMatrix& A, std::vector<d
 
 bool Multigrid::SetFinest(const SparseMatrix& A) {
   if (levels_.empty()) return false;
-  Eigen::SparseMatrix<float>& A_f = levels_[0].A_f;
+  const std::vector<int>& outer = levels_[0].outer;
   // The pattern: its size and where each column starts (a pattern change also resets the
   // back end's hierarchy; this catches a caller that did not).
-  if (A.cols() != A_f.cols() || A.nonZeros() != A_f.nonZeros() || !A.isCompressed() ||
-      !std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1, A_f.outerIndexPtr())) {
+  if (static_cast<size_t>(A.cols()) + 1 != outer.size() || !A.isCompressed() ||
+      !std::equal(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1, outer.begin())) {
     return false;
   }
   std::vector<uint16_t>& A_h = levels_[0].A_h;
   A_h.resize(static_cast<size_t>(A.nonZeros()));
-  multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, A_f.valuePtr(),
-                                      A_h.data());
+  multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, A_h.data());
   std::vector<double> unused;
   if (!InvertDiagonalBlocks(0, A, &unused)) {
     levels_.clear();

@@ -138,9 +138,12 @@ class Multigrid {
 
   struct Level {
     Eigen::SparseMatrix<double> A;   // while building, below level 0 (level 0: the caller's)
-    Eigen::SparseMatrix<float> A_f;  // level 0: the V-cycle's copy of the last system given
-    std::vector<uint16_t> A_h;       // level 0: A_f's values as bfloat16 (RoundToBfloat16)
-    std::vector<int> block_rows;     // level 0: energy::BlockRowVertices of A_f
+    // Level 0: the V-cycle's copy of the last system given, its column starts (the back
+    // end's layout, compressed) and values in bfloat16 (RoundToBfloat16), its blocks' rows
+    // (energy::BlockRowVertices).
+    std::vector<int> outer;
+    std::vector<uint16_t> A_h;
+    std::vector<int> block_rows;
     NodeBlocks A_b;                  // below level 0: the V-cycle's system
     int nonzeros = 0;               // of A (level 0's too)
     std::vector<int> node_begin;    // the unknowns of node k: [node_begin[k], node_begin[k + 1])

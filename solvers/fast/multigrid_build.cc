@@ -59,12 +59,18 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   }
   levels_.reserve(kMaxLevels);
   levels_.emplace_back();
-  levels_[0].A_f = A0.cast<float>();
-  levels_[0].A_f.makeCompressed();
-  levels_[0].A_h.resize(static_cast<size_t>(A0.nonZeros()));
-  multigrid_internal::RoundToBfloat16(A0.valuePtr(), A0.nonZeros(), threads_,
-                                      levels_[0].A_f.valuePtr(), levels_[0].A_h.data());
-  levels_[0].block_rows = energy::BlockRowVertices(levels_[0].A_f);
+  {
+    SparseMatrix compressed;  // only if A0 is not: values and column starts side by side
+    if (!A0.isCompressed()) {
+      compressed = A0;
+      compressed.makeCompressed();
+    }
+    const SparseMatrix& A = A0.isCompressed() ? A0 : compressed;
+    levels_[0].outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
+    levels_[0].A_h.resize(static_cast<size_t>(A.nonZeros()));
+    multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, levels_[0].A_h.data());
+    levels_[0].block_rows = energy::BlockRowVertices(A);
+  }
   levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
   for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
 

@@ -25,11 +25,11 @@ constexpr int64_t kParallelVectorEntries = int64_t{1} << 14;
 constexpr int64_t kParallelNonzeros = 65536;
 
 // Level 0's values as the V-cycle reads them: from[0, n) rounded to float, then to bfloat16
-// (float's range, 8 significant bits; to nearest, ties to even) into half, and the same
-// numbers as floats into to. The level-0 product then streams 2 bytes a value instead of 4:
-// the V-cycle only approximates A^-1 (PCG, in double with A itself, corrects it), and at 8
-// bits it does so about as well (docs/notes/2026-12-05-bfloat16-level-0.md).
-void RoundToBfloat16(const double* from, int64_t n, int threads, float* to, uint16_t* half);
+// (float's range, 8 significant bits; to nearest, ties to even) into half (ToBfloat16 each).
+// The level-0 product then streams 2 bytes a value instead of 4: the V-cycle only
+// approximates A^-1 (PCG, in double with A itself, corrects it), and at 8 bits it does so
+// about as well (docs/notes/2026-12-05-bfloat16-level-0.md).
+void RoundToBfloat16(const double* from, int64_t n, int threads, uint16_t* half);
 
 // One value as RoundToBfloat16 rounds it, and back to float (exactly).
 inline uint16_t ToBfloat16(double value) {
