@@ -41,8 +41,9 @@ constexpr int kPowerIterations = 15;
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
 // Level 0's product y = A v in single precision: A's values in bfloat16 (`half`, its columns
-// from column_starts; the back end's layout: both triangles, full 3x3 vertex blocks whose three columns share their rows),
-// v rounded once into `v4` (4 floats per vertex, the 4th 0), and each column's sum in float.
+// from column_starts; the back end's layout: both triangles, full 3x3 vertex blocks whose
+// three columns share their rows), v rounded once into `v4` (4 floats per vertex, the 4th
+// 0), and each column's sum in float.
 // With SSE2, a 3x3 block's column is four bfloat16 widened to floats and one 4-lane
 // multiply-add whose 4th lane reads the next stored entry (times that 0; the lane is dropped
 // from the sum, so even a non-finite entry there changes nothing); the last vertex, whose
