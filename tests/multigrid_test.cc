@@ -122,6 +122,13 @@ TEST(Multigrid, AKeptHierarchySmoothsWithTheCurrentDiagonal) {
   const Eigen::SparseMatrix<double> H = BoxSystem(mesh, 1e-2);
   const int n = static_cast<int>(H.rows());
   fast_backend::Multigrid mg;
+  // An uncompressed system (gaps between its columns' values) is refused, as by SetFinest.
+  Eigen::SparseMatrix<double> uncompressed = H;
+  uncompressed.uncompress();
+  EXPECT_FALSE(mg.Build(uncompressed, mesh.rest, 1));
+  EXPECT_FALSE(mg.built());
+  ASSERT_TRUE(mg.Build(H, mesh.rest, 1));
+  EXPECT_FALSE(mg.SetFinest(uncompressed));
   ASSERT_TRUE(mg.Build(H, mesh.rest, 1));
   Eigen::SparseMatrix<double> stiffer = H;
   double largest = 0.0;

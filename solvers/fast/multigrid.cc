@@ -78,11 +78,6 @@ void FloatBlockProduct(const std::vector<int>& column_starts, const std::vector<
     const int stride = outer[3 * b + 1] - begin;
 #ifdef __SSE2__
     if (lanes) {
-      // Four bfloat16 values as floats: each in the upper half of its 32-bit lane.
-      auto load = [](const uint16_t* h) {
-        const __m128i raw = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(h));
-        return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), raw));
-      };
       const uint16_t* h0 = halves + begin;
       const uint16_t* h1 = h0 + stride;
       const uint16_t* h2 = h1 + stride;
@@ -90,9 +85,9 @@ void FloatBlockProduct(const std::vector<int>& column_starts, const std::vector<
       __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps(), s2 = _mm_setzero_ps();
       for (int k = 0, q = 0; k < stride; k += 3, ++q) {
         const __m128 pa = _mm_loadu_ps(p + 4 * at[q]);
-        s0 = _mm_add_ps(s0, _mm_mul_ps(load(h0 + k), pa));
-        s1 = _mm_add_ps(s1, _mm_mul_ps(load(h1 + k), pa));
-        s2 = _mm_add_ps(s2, _mm_mul_ps(load(h2 + k), pa));
+        s0 = _mm_add_ps(s0, _mm_mul_ps(multigrid_internal::LoadBfloat16x4(h0 + k), pa));
+        s1 = _mm_add_ps(s1, _mm_mul_ps(multigrid_internal::LoadBfloat16x4(h1 + k), pa));
+        s2 = _mm_add_ps(s2, _mm_mul_ps(multigrid_internal::LoadBfloat16x4(h2 + k), pa));
       }
       alignas(16) float t[12];
       _mm_store_ps(t, s0);

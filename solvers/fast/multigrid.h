@@ -44,10 +44,11 @@ namespace fast_backend {
 
 class Multigrid {
  public:
-  // Builds the hierarchy of A (3 #V by 3 #V, symmetric, both triangles stored, column-major,
-  // full 3x3 vertex blocks with sorted rows: the back end's system, whose products are
-  // BlockProduct's) with the rigid motions of `positions` (#V by 3) as its near null space. False (and
-  // nothing kept) if A has no unknowns or is not positive on its diagonal.
+  // Builds the hierarchy of A (3 #V by 3 #V, symmetric, both triangles stored, column-major
+  // and compressed, full 3x3 vertex blocks with sorted rows: the back end's system, whose
+  // products are BlockProduct's) with the rigid motions of `positions` (#V by 3) as its near
+  // null space. False (and nothing kept) if A has no unknowns, is not compressed or is not
+  // positive on its diagonal.
   bool Build(const Eigen::SparseMatrix<double>& A,
              const Vertices& positions, int threads);
   bool built() const { return !levels_.empty(); }

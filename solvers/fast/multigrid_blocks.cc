@@ -6,7 +6,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <type_traits>
 #include <vector>
 
@@ -57,16 +56,8 @@ void GatherNodeFloat(const uint16_t* values, const int* value_at, const int* row
                      const float* x, double* y) {
   static_assert((R == 3 || R == 6) && C >= 1 && C <= 6, "the shapes the hierarchy makes");
 #ifdef __SSE2__
-  // Four (two) bfloat16 values as floats: each in the upper half of its 32-bit lane.
-  auto load4 = [](const uint16_t* h) {
-    const __m128i raw = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(h));
-    return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), raw));
-  };
-  auto load2 = [](const uint16_t* h) {
-    int32_t two;
-    std::memcpy(&two, h, sizeof two);
-    return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), _mm_cvtsi32_si128(two)));
-  };
+  using multigrid_internal::LoadBfloat16x2;
+  using multigrid_internal::LoadBfloat16x4;
   __m128 acc[C];
   for (int j = 0; j < C; ++j) acc[j] = _mm_setzero_ps();
   for (int k = begin; k < end; ++k) {
@@ -76,12 +67,13 @@ void GatherNodeFloat(const uint16_t* values, const int* value_at, const int* row
       const __m128 lo = _mm_loadu_ps(xr);
       const __m128 hi = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(xr + 4));
       for (int j = 0; j < C; ++j) {
-        acc[j] = _mm_add_ps(acc[j], _mm_add_ps(_mm_mul_ps(load4(B + 6 * j), lo), _mm_mul_ps(load2(B + 6 * j + 4), hi)));
+        acc[j] = _mm_add_ps(acc[j], _mm_add_ps(_mm_mul_ps(LoadBfloat16x4(B + 6 * j), lo),
+                                                 _mm_mul_ps(LoadBfloat16x2(B + 6 * j + 4), hi)));
       }
     } else {
       const __m128 x3 = _mm_movelh_ps(_mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(xr)),
                                       _mm_load_ss(xr + 2));
-      for (int j = 0; j < C; ++j) acc[j] = _mm_add_ps(acc[j], _mm_mul_ps(load4(B + 3 * j), x3));
+      for (int j = 0; j < C; ++j) acc[j] = _mm_add_ps(acc[j], _mm_mul_ps(LoadBfloat16x4(B + 3 * j), x3));
     }
   }
   for (int j = 0; j < C; ++j) {

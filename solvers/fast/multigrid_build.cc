@@ -37,7 +37,8 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   coarse_inverse_.resize(0, 0);
   threads_ = std::max(1, threads);
   const int n0 = static_cast<int>(A0.cols());
-  if (n0 == 0 || n0 != 3 * positions.rows() || A0.rows() != A0.cols()) return false;
+  // Compressed, as SetFinest requires: its column starts bound the values here and below.
+  if (n0 == 0 || n0 != 3 * positions.rows() || A0.rows() != A0.cols() || !A0.isCompressed()) return false;
   // The level-0 product reads one row per 3x3 block.
   if (!energy::FullVertexBlocks(A0)) return false;
 
@@ -59,18 +60,10 @@ bool Multigrid::Build(const SparseMatrix& A0, const Vertices& positions, int thr
   }
   levels_.reserve(kMaxLevels);
   levels_.emplace_back();
-  {
-    SparseMatrix compressed;  // only if A0 is not: values and column starts side by side
-    if (!A0.isCompressed()) {
-      compressed = A0;
-      compressed.makeCompressed();
-    }
-    const SparseMatrix& A = A0.isCompressed() ? A0 : compressed;
-    levels_[0].outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
-    levels_[0].A_h.resize(static_cast<size_t>(A.nonZeros()));
-    multigrid_internal::RoundToBfloat16(A.valuePtr(), A.nonZeros(), threads_, levels_[0].A_h.data());
-    levels_[0].block_rows = energy::BlockRowVertices(A);
-  }
+  levels_[0].outer.assign(A0.outerIndexPtr(), A0.outerIndexPtr() + A0.cols() + 1);
+  levels_[0].A_h.resize(static_cast<size_t>(A0.nonZeros()));
+  multigrid_internal::RoundToBfloat16(A0.valuePtr(), A0.nonZeros(), threads_, levels_[0].A_h.data());
+  levels_[0].block_rows = energy::BlockRowVertices(A0);
   levels_[0].node_begin.resize(static_cast<size_t>(positions.rows()) + 1);
   for (size_t k = 0; k < levels_[0].node_begin.size(); ++k) levels_[0].node_begin[k] = 3 * static_cast<int>(k);
 

@@ -7,6 +7,10 @@
 #include <cstdint>
 #include <cstring>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace femreg {
 namespace fast_backend {
 namespace multigrid_internal {
@@ -49,6 +53,20 @@ inline float FromBfloat16(uint16_t half) {
   std::memcpy(&f, &bits, sizeof f);
   return f;
 }
+
+#ifdef __SSE2__
+// Four (two, the upper lanes 0) bfloat16 values at h as floats, FromBfloat16 lane by lane:
+// each value moves to the upper half of its 32-bit lane.
+inline __m128 LoadBfloat16x4(const uint16_t* h) {
+  const __m128i raw = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(h));
+  return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), raw));
+}
+inline __m128 LoadBfloat16x2(const uint16_t* h) {
+  int32_t two;
+  std::memcpy(&two, h, sizeof two);
+  return _mm_castsi128_ps(_mm_unpacklo_epi16(_mm_setzero_si128(), _mm_cvtsi32_si128(two)));
+}
+#endif
 
 }  // namespace multigrid_internal
 }  // namespace fast_backend
