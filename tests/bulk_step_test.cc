@@ -243,7 +243,9 @@ TEST(Tracker, TheBulkStepWaitsWhileTheBulkMovesMoreThanTheFitsResidual) {
       ASSERT_TRUE(ReadGroundTruthFrame(dir + "/ground_truth/" + name + ".csv", &truth).ok());
       std::vector<PieceTruthRow> sides;  // after the cut: each side's truth
       const std::string side = dir + "/ground_truth/" + name + "_pieces.csv";
-      if (std::ifstream(side).good()) ASSERT_TRUE(ReadPieceTruth(side, &sides).ok());
+      if (std::ifstream(side).good()) {
+        ASSERT_TRUE(ReadPieceTruth(side, &sides).ok());
+      }
       const PieceErrors errors = ComputePieceErrors(tracker->mesh(0), tracker->vertices(0),
                                                     tracker->original_vertices(0), truth, sides);
       seen += errors.all.seen.mean / kFrames;

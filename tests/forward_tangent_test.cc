@@ -144,6 +144,39 @@ TEST(CorotationalTangent, MatchesCentralDifferencesOfTheForce) {
   }
 }
 
+// The closed form (the twist through M = tr(S) I - S) is the eigendecomposition's tangent on
+// every state the tests above use, inverted ones included, and declines the degenerate ones.
+TEST(CorotationalTangent, BlocksInClosedFormAreTheEigendecompositions) {
+  std::mt19937 rng(18);
+  for (double nu : {0.3, 0.49}) {
+    const ElementRest rest = TangentTestRest(nu);
+    int taken = 0;
+    for (const auto& [name, F] : TangentStates(&rng)) {
+      const Vector12 x = PositionsWithGradient(rest, F, Eigen::Vector3d(0.3, -0.1, 0.2));
+      Eigen::Matrix3d R;
+      const Matrix12 tangent = CorotationalTangent(rest, x, TangentProjection::kNone, nullptr, &R);
+      Eigen::Matrix3d blocks[16];
+      if (!CorotationalTangentBlocks(rest, F, PolarRotation(F), blocks)) continue;
+      ++taken;
+      Matrix12 closed;
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) closed.block<3, 3>(3 * a, 3 * b) = blocks[4 * a + b];
+      EXPECT_LT((closed - tangent).cwiseAbs().maxCoeff(), 1e-9 * tangent.cwiseAbs().maxCoeff())
+          << name << ", nu " << nu << "\nF =\n" << F;
+      EXPECT_EQ(closed, closed.transpose()) << name;
+    }
+    EXPECT_GE(taken, 38) << "all but the states within 1e-4 of a collapse";
+  }
+  Eigen::Matrix3d line = Eigen::Matrix3d::Zero();
+  line(0, 0) = 1.2;
+  const ElementRest rest = TangentTestRest(0.3);
+  Eigen::Matrix3d blocks[16];
+  for (const Eigen::Matrix3d& F : {Eigen::Matrix3d(Eigen::Matrix3d::Zero()), line,
+                                   Eigen::Matrix3d(Eigen::Vector3d(1.0, 0.5, -0.5).asDiagonal())}) {
+    EXPECT_FALSE(CorotationalTangentBlocks(rest, F, PolarRotation(F), blocks)) << F;
+  }
+}
+
 TEST(CorotationalTangent, IsSymmetric) {
   std::mt19937 rng(15);
   const ElementRest rest = TangentTestRest(0.45);

@@ -264,6 +264,16 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
                              ElementTangentInfo* info = nullptr, Eigen::Matrix3d* rotation = nullptr,
                              const Eigen::Matrix3d* start = nullptr);
 
+// CorotationalTangent's exact tangent (TangentProjection::kNone) as its 16 3x3 blocks (block
+// (a, b) at blocks[4 a + b]), in closed form from F and its polar rotation R, without the
+// eigendecomposition: with c_a = R grad N_a and M = tr(S) I - S (S = R^T F), the warped
+// stiffness plus V [c_a]x^T (mu I + (lambda tr(S - I) - 2 mu) R M^-1 R^T) [c_b]x, since
+// dR = R [w]x with M w = axial(R^T dF - dF^T R). False, nothing written, where M is nearly
+// singular (pivots below 1e-4 of F's largest entry: an element near collapse), for
+// CorotationalTangent to decide.
+bool CorotationalTangentBlocks(const ElementRest& rest, const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
+                               Eigen::Matrix3d* blocks);
+
 // Energy 0.5 u^T K u and force f = -R K u (12) of an element in one pass (u = R^T x - X
 // formed once); same values as ElementEnergy and ElementForce.
 double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,

@@ -37,6 +37,18 @@ bool ElasticElement::SecondOrder(const double* const* x, double* energy, Eigen::
                                  Eigen::Matrix3d* hessian, TangentProjection projection) const {
   const Vector12 xe = StencilVector(x);
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  if (hessian != nullptr && corotational && projection == TangentProjection::kNone) {
+    // The exact tangent in closed form from Newton's polar rotation: no eigendecomposition, the
+    // blocks written where they go.
+    const Eigen::Matrix3d F = StencilF(x, rest->dm_inv);
+    R = rotation != nullptr ? PolarRotation(F, *rotation) : PolarRotation(F);
+    if (CorotationalTangentBlocks(*rest, F, R, hessian)) {
+      Vector12 force;
+      *energy = ElementEnergyAndForce(*rest, R, xe, &force);
+      ElementDerivatives(force, nullptr, gradient, nullptr);
+      return true;
+    }
+  }
   Matrix12 K;
   if (hessian != nullptr) {  // one decomposition for R and the tangent
     K = corotational ? CorotationalTangent(*rest, xe, projection, nullptr, &R, rotation)

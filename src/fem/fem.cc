@@ -429,9 +429,6 @@ void ElasticModel::AddStiffnessTriplets(std::vector<Eigen::Triplet<double>>* tri
   }
 }
 
-// ---------------------------------------------------------------------------------------
-// The consistent corotational tangent (see fem.h for the derivation).
-
 SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F) {
   SignedSvd out;
   if (!F.allFinite()) return out;
@@ -449,93 +446,6 @@ SignedSvd SignedSingularValueDecomposition(const Eigen::Matrix3d& F) {
     out.sigma(2) *= -1.0;
   }
   return out;
-}
-
-namespace {
-// The signed SVD from the polar rotation R of F (Newton's, from a close start): S = R^T F is
-// symmetric, its eigenvectors are V and U = R V. A 3x3 eigensolver in closed form costs about
-// a fifth of the SVD. Its eigenvalues come from a cubic's roots, which split a double root by
-// about sqrt(eps); the Rayleigh quotients v^T S v of its eigenvectors are accurate to
-// round-off (any vector of a double root's plane has that root's quotient). False where the
-// eigenvectors are not orthonormal to 1e-10, for the SVD to decide.
-bool SignedSvdFromPolar(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, SignedSvd* out) {
-  Eigen::Matrix3d S = R.transpose() * F;
-  S = (0.5 * (S + S.transpose())).eval();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-  eigen.computeDirect(S);
-  const Eigen::Vector3d& values = eigen.eigenvalues();
-  const Eigen::Matrix3d& vectors = eigen.eigenvectors();
-  if (!values.allFinite() || !vectors.allFinite() ||
-      !((vectors.transpose() * vectors - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= 1e-10)) {
-    return false;
-  }
-  Eigen::Vector3d quotients;
-  for (int k = 0; k < 3; ++k) quotients(k) = vectors.col(k).dot(S * vectors.col(k));
-  // |sigma| decreasing. R maximizes tr(R^T F), so a negative eigenvalue is the smallest in
-  // size, and lands in sigma(2) unless it ties with another (the tangent sums over unordered
-  // pairs: the order does not change it).
-  int order[3] = {0, 1, 2};
-  std::sort(order, order + 3, [&](int a, int b) { return std::abs(quotients(a)) > std::abs(quotients(b)); });
-  for (int k = 0; k < 3; ++k) {
-    out->sigma(k) = quotients(order[k]);
-    out->V.col(k) = vectors.col(order[k]);
-  }
-  if (out->V.determinant() < 0) out->V.col(2) *= -1.0;
-  out->U = R * out->V;
-  return true;
-}
-
-}  // namespace
-
-Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
-                             TangentProjection projection, ElementTangentInfo* info,
-                             Eigen::Matrix3d* rotation, const Eigen::Matrix3d* start) {
-  Eigen::Matrix<double, 3, 4> xm;
-  for (int k = 0; k < 4; ++k) xm.col(k) = x.segment<3>(3 * k);
-  const Eigen::Matrix3d F = DeformationGradient(xm, rest.dm_inv);
-  SignedSvd svd;
-  if (start == nullptr || !F.allFinite() || !SignedSvdFromPolar(F, PolarRotation(F, *start), &svd)) {
-    svd = SignedSingularValueDecomposition(F);
-  }
-  const Eigen::Matrix3d R = svd.U * svd.V.transpose();
-  if (rotation != nullptr) *rotation = R;
-  Matrix12 tangent = WarpedStiffness(rest, R);
-
-  // Lame parameters of the (isotropic) Hooke matrix, and tr(S - I).
-  const double mu = rest.mu;
-  const double lambda = rest.lambda;
-  const double trace = svd.sigma.sum() - 3.0;
-  // Shape-function gradients (columns): F = sum_k x_k grad N_k^T.
-  Eigen::Matrix<double, 3, 4> grad;
-  grad.rightCols<3>() = rest.dm_inv.transpose();
-  grad.col(0) = -grad.rightCols<3>().rowwise().sum();
-
-  ElementTangentInfo stats;
-  bool have_min = false;
-  static const int kPairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-  for (const auto& pair : kPairs) {
-    const int i = pair[0], j = pair[1];
-    const double sum = svd.sigma(i) + svd.sigma(j);
-    if (!(sum >= kMinTwistSingularSum)) {
-      ++stats.degenerate_modes;
-      continue;
-    }
-    double g = 2.0 * mu + 2.0 * (lambda * trace - 2.0 * mu) / sum;
-    stats.min_eigenvalue = have_min ? std::fmin(stats.min_eigenvalue, g) : g;
-    have_min = true;
-    if (g < 0.0) {
-      ++stats.negative_modes;
-      if (projection == TangentProjection::kPositiveSemiDefinite) continue;
-    }
-    const Eigen::Matrix3d T = (svd.U.col(i) * svd.V.col(j).transpose() -
-                               svd.U.col(j) * svd.V.col(i).transpose()) /
-                              std::sqrt(2.0);
-    Vector12 b;
-    for (int k = 0; k < 4; ++k) b.segment<3>(3 * k) = T * grad.col(k);
-    tangent.noalias() += (rest.volume * g) * b * b.transpose();
-  }
-  if (info != nullptr) *info = stats;
-  return tangent;
 }
 
 double ElementEnergyAndForce(const ElementRest& rest, const Eigen::Matrix3d& R,
