@@ -98,6 +98,34 @@ TEST(NeoHookean, IsLinearElasticityAtSmallStrain) {
               NeoHookeanDensity(F, kMu, kappa, nullptr), 1e-9 * kappa);
 }
 
+// The blocks in closed form (the determinant's second derivative as a cross product) are
+// B^T H B on every sample F, the flat and the inverted one included, with and without the
+// nodal volume's pressure.
+TEST(NeoHookean, TangentBlocksInClosedFormAreTheNineByNineProducts) {
+  Material material;
+  material.youngs_modulus = 5e5;
+  material.poisson_ratio = 0.45;
+  Eigen::Matrix<double, 3, 4> X;
+  X << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
+  X *= 0.02;
+  const ElementRest rest = BuildElementRest(X, material);
+  for (const Eigen::Matrix3d& F : SampleF()) {
+    Vector12 x;
+    for (int k = 0; k < 4; ++k) x.segment<3>(3 * k) = F * X.col(k);
+    for (bool nodal : {false, true}) {
+      const double kappa = NeoHookeanKappa(rest, nodal), pressure = nodal ? -2e4 : 0.0;
+      const Matrix12 K = NeoHookeanTangent(rest, kappa, pressure, x, TangentProjection::kNone);
+      Eigen::Matrix3d blocks[16];
+      NeoHookeanTangentBlocks(rest, kappa, pressure, F, blocks);
+      Matrix12 closed;
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) closed.block<3, 3>(3 * a, 3 * b) = blocks[4 * a + b];
+      EXPECT_LT((closed - K).cwiseAbs().maxCoeff(), 1e-12 * K.cwiseAbs().maxCoeff()) << "F =\n" << F;
+      EXPECT_EQ(closed, closed.transpose());
+    }
+  }
+}
+
 TEST(NeoHookean, ZeroAtRestAndUnderRotationAndPushesBackWhenInverted) {
   const double kappa = kLambda + kMu;
   const Eigen::Matrix3d R = Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, 2, -1).normalized()).toRotationMatrix();

@@ -268,9 +268,10 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
 // (a, b) at blocks[4 a + b]), in closed form from F and its polar rotation R, without the
 // eigendecomposition: with c_a = R grad N_a and M = tr(S) I - S (S = R^T F), the warped
 // stiffness plus V [c_a]x^T (mu I + (lambda tr(S - I) - 2 mu) R M^-1 R^T) [c_b]x, since
-// dR = R [w]x with M w = axial(R^T dF - dF^T R). False, nothing written, where M is nearly
-// singular (pivots below 1e-4 of F's largest entry: an element near collapse), for
-// CorotationalTangent to decide.
+// dR = R [w]x with M w = axial(R^T dF - dF^T R). False, nothing written, unless M is surely
+// well inside the positive definite cone (its pivots at least 1e-4 of F's largest entry, and
+// det M / tr(adj M), a lower bound of its smallest eigenvalue, at least kMinTwistSingularSum):
+// near a collapse CorotationalTangent decides, as it drops a twist mode there.
 bool CorotationalTangentBlocks(const ElementRest& rest, const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
                                Eigen::Matrix3d* blocks);
 
@@ -337,6 +338,12 @@ double NeoHookeanEnergyAndForce(const ElementRest& rest, double kappa, double pr
 Matrix12 NeoHookeanTangent(const ElementRest& rest, double kappa, double pressure,
                            const Vector12& x, TangentProjection projection,
                            ElementTangentInfo* info = nullptr);
+// NeoHookeanTangent without projection, as its 16 3x3 blocks (block (a, b) at blocks[4 a + b]):
+// V (mu (b_a . b_b) I + kappa q_a q_b^T - (kappa (J - 1) - mu + pressure) [F (b_a x b_b)]x),
+// q_a = cof(F) b_a: the determinant's second derivative contracted with two shape gradients is
+// a cross product, so no 9 by 9 Hessian is formed.
+void NeoHookeanTangentBlocks(const ElementRest& rest, double kappa, double pressure, const Eigen::Matrix3d& F,
+                             Eigen::Matrix3d* blocks);
 // dv_e/dx = V cof(F) b_i (12): the gradient of the element's current volume.
 Vector12 VolumeGradient(const ElementRest& rest, const Vector12& x);
 

@@ -71,6 +71,11 @@ bool NeoHookeanElement::SecondOrder(const double* const* x, double* energy, Eige
   const double kappa = NeoHookeanKappa(*rest, deviatoric);
   Vector12 force;
   *energy = NeoHookeanEnergyAndForce(*rest, kappa, 0.0, xe, &force) + 0.5 * Offset();
+  if (hessian != nullptr && projection == TangentProjection::kNone) {
+    NeoHookeanTangentBlocks(*rest, kappa, 0.0, StencilF(x, rest->dm_inv), hessian);
+    ElementDerivatives(force, nullptr, gradient, nullptr);
+    return true;
+  }
   Matrix12 K;
   if (hessian != nullptr) K = NeoHookeanTangent(*rest, kappa, 0.0, xe, projection);
   ElementDerivatives(force, hessian != nullptr ? &K : nullptr, gradient, hessian);

@@ -110,6 +110,11 @@ bool CorotationalTangentBlocks(const ElementRest& rest, const Eigen::Matrix3d& F
   if (!(min_pivot > 0.0) || !(m00 >= min_pivot) || !(c22 >= min_pivot * m00) || !(det >= min_pivot * c22)) {
     return false;
   }
+  // Pivots bound M's smallest eigenvalue only from above (an oblique axis of a nearly flat
+  // element passes them); det / (c00 + c11 + c22) bounds it from below: taken only where
+  // every sigma_i + sigma_j is at least kMinTwistSingularSum, where the eigendecomposition keeps
+  // all three twist modes.
+  if (!(det >= kMinTwistSingularSum * (c00 + c11 + c22))) return false;
   const double mu = rest.mu, lambda = rest.lambda, V = rest.volume;
   Eigen::Matrix3d adjugate;
   adjugate << c00, c10, c20, c10, c11, c21, c20, c21, c22;

@@ -140,6 +140,29 @@ Matrix12 NeoHookeanTangent(const ElementRest& rest, double kappa, double pressur
   return 0.5 * (K + K.transpose());
 }
 
+void NeoHookeanTangentBlocks(const ElementRest& rest, double kappa, double pressure, const Eigen::Matrix3d& F,
+                             Eigen::Matrix3d* blocks) {
+  const Eigen::Matrix<double, 3, 4> b = ShapeGradients(rest);
+  const double V = rest.volume, mu = rest.mu;
+  const double J = F.determinant();
+  // d2J[u b_a^T, w b_b^T] = (u x w) . F (b_a x b_b) = -u^T [F (b_a x b_b)]x w.
+  const double c = V * (kappa * (J - 1.0) - mu + pressure);
+  const Eigen::Matrix<double, 3, 4> q = Cofactor(F) * b;
+  for (int a = 0; a < 4; ++a) {
+    for (int d = a; d < 4; ++d) {
+      Eigen::Matrix3d& block = blocks[4 * a + d];
+      block.noalias() = (V * kappa) * q.col(a) * q.col(d).transpose();
+      block.diagonal().array() += V * mu * b.col(a).dot(b.col(d));
+      if (d == a) {  // b_a x b_a = 0; symmetric to the bit, as 0.5 (K + K^T) was
+        block = (0.5 * (block + block.transpose())).eval();
+        continue;
+      }
+      block -= c * Cross(F * b.col(a).cross(b.col(d)));
+      blocks[4 * d + a] = block.transpose();
+    }
+  }
+}
+
 Vector12 VolumeGradient(const ElementRest& rest, const Vector12& x) {
   const Eigen::Matrix<double, 3, 4> g = rest.volume * Cofactor(ElementF(rest, x)) * ShapeGradients(rest);
   Vector12 out;
