@@ -98,17 +98,26 @@ TEST(NeoHookean, IsLinearElasticityAtSmallStrain) {
               NeoHookeanDensity(F, kMu, kappa, nullptr), 1e-9 * kappa);
 }
 
+// The tangent tests' element: a 2 cm corner tetrahedron of a nearly incompressible material.
+Eigen::Matrix<double, 3, 4> CornerTetrahedron() {
+  Eigen::Matrix<double, 3, 4> X;
+  X << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
+  return 0.02 * X;
+}
+
+Material TangentTestMaterial() {
+  Material material;
+  material.youngs_modulus = 5e5;
+  material.poisson_ratio = 0.45;
+  return material;
+}
+
 // The blocks in closed form (the determinant's second derivative as a cross product) are
 // B^T H B on every sample F, the flat and the inverted one included, with and without the
 // nodal volume's pressure.
 TEST(NeoHookean, TangentBlocksInClosedFormAreTheNineByNineProducts) {
-  Material material;
-  material.youngs_modulus = 5e5;
-  material.poisson_ratio = 0.45;
-  Eigen::Matrix<double, 3, 4> X;
-  X << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
-  X *= 0.02;
-  const ElementRest rest = BuildElementRest(X, material);
+  const Eigen::Matrix<double, 3, 4> X = CornerTetrahedron();
+  const ElementRest rest = BuildElementRest(X, TangentTestMaterial());
   for (const Eigen::Matrix3d& F : SampleF()) {
     Vector12 x;
     for (int k = 0; k < 4; ++k) x.segment<3>(3 * k) = F * X.col(k);
@@ -146,13 +155,8 @@ TEST(NeoHookean, ZeroAtRestAndUnderRotationAndPushesBackWhenInverted) {
 }
 
 TEST(NeoHookean, ElementTangentMatchesCentralDifferencesOfTheForce) {
-  Material material;
-  material.youngs_modulus = 5e5;
-  material.poisson_ratio = 0.45;
-  Eigen::Matrix<double, 3, 4> X;
-  X << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
-  X *= 0.02;
-  const ElementRest rest = BuildElementRest(X, material);
+  const Eigen::Matrix<double, 3, 4> X = CornerTetrahedron();
+  const ElementRest rest = BuildElementRest(X, TangentTestMaterial());
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-0.006, 0.006);
   for (int trial = 0; trial < 10; ++trial) {
