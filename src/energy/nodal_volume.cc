@@ -171,7 +171,7 @@ void NodalVolume::AddHessian(const Vertices& x, Curvature curvature, Assembler* 
   std::vector<Vector12> volume_gradient;
   Pressures(x, &pressure, &volume_gradient);
   // Per element: p_e d2v_e/dx2 = V_e B^T (p_e H_J) B, the pressure times the Hessian of the
-  // element's volume (NeoHookeanTangent with mu = kappa = 0 is exactly that). Not in
+  // element's volume (the neo-Hookean tangent with mu = kappa = 0 is exactly that). Not in
   // Gauss-Newton's matrix.
   const int nt = static_cast<int>(tets_.rows());
   const TangentProjection projection = curvature == Curvature::kExact
@@ -180,7 +180,18 @@ void NodalVolume::AddHessian(const Vertices& x, Curvature curvature, Assembler* 
   for (int e = 0; curvature != Curvature::kGaussNewton && e < nt; ++e) {
     ElementRest rest = *rests_[e];
     rest.mu = 0.0;
-    const Matrix12 K = NeoHookeanTangent(rest, 0.0, pressure[e], ElementPositions(tets_, e, x), projection);
+    const Vector12 xe = ElementPositions(tets_, e, x);
+    if (projection == TangentProjection::kNone) {  // -V p [F (b_a x b_b)]x, block by block
+      const Eigen::Matrix3d F =
+          DeformationGradient(Eigen::Map<const Eigen::Matrix<double, 3, 4>>(xe.data()), rest.dm_inv);
+      Eigen::Matrix3d blocks[16];
+      NeoHookeanTangentBlocks(rest, 0.0, pressure[e], F, blocks);
+      for (int i = 0; i < 4; ++i) {
+        for (int j = i; j < 4; ++j) assembler->AddBlock(tets_(e, i), tets_(e, j), blocks[4 * i + j]);
+      }
+      continue;
+    }
+    const Matrix12 K = NeoHookeanTangent(rest, 0.0, pressure[e], xe, projection);
     for (int i = 0; i < 4; ++i) {
       for (int j = i; j < 4; ++j) assembler->AddBlock(tets_(e, i), tets_(e, j), K.block<3, 3>(3 * i, 3 * j));
     }
