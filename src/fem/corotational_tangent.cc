@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "femreg/fem.h"
+#include "fem/twist_matrix.h"
 
 namespace femreg {
 
@@ -97,32 +98,25 @@ Matrix12 CorotationalTangent(const ElementRest& rest, const Vector12& x,
 
 bool CorotationalTangentBlocks(const ElementRest& rest, const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
                                Eigen::Matrix3d* blocks) {
-  Eigen::Matrix3d S = R.transpose() * F;
-  S = (0.5 * (S + S.transpose())).eval();
-  const double trace = S.trace();
-  // M = tr(S) I - S through its leading minors and adjugate, as PolarRotation's Newton step.
-  const double m00 = trace - S(0, 0), m11 = trace - S(1, 1), m22 = trace - S(2, 2);
-  const double m10 = -S(1, 0), m20 = -S(2, 0), m21 = -S(2, 1);
-  const double c00 = m11 * m22 - m21 * m21, c11 = m00 * m22 - m20 * m20, c22 = m00 * m11 - m10 * m10;
-  const double c10 = m21 * m20 - m10 * m22, c20 = m10 * m21 - m11 * m20, c21 = m10 * m20 - m00 * m21;
-  const double det = m00 * c00 + m10 * c10 + m20 * c20;
+  // M = tr(S) I - S, S = sym(R^T F), through its adjugate, as PolarRotation's Newton step.
+  const Eigen::Matrix3d A = R.transpose() * F;
+  const double trace = A.trace();
+  const TwistMatrix m(A);
   const double min_pivot = 1e-4 * F.cwiseAbs().maxCoeff();
-  if (!(min_pivot > 0.0) || !(m00 >= min_pivot) || !(c22 >= min_pivot * m00) || !(det >= min_pivot * c22)) {
-    return false;
-  }
+  if (!(min_pivot > 0.0) || !m.PivotsAtLeast(min_pivot)) return false;
   // Pivots bound M's smallest eigenvalue only from above (an oblique axis of a nearly flat
-  // element passes them); det / (c00 + c11 + c22) bounds it from below: taken only where
-  // every sigma_i + sigma_j is at least kMinTwistSingularSum, where the eigendecomposition keeps
-  // all three twist modes.
-  if (!(det >= kMinTwistSingularSum * (c00 + c11 + c22))) return false;
+  // element passes them); det / tr(adj M) bounds it from below: taken only where every
+  // sigma_i + sigma_j is at least kMinTwistSingularSum, where the eigendecomposition keeps all
+  // three twist modes.
+  if (!(m.det >= kMinTwistSingularSum * (m.c00 + m.c11 + m.c22))) return false;
   const double mu = rest.mu, lambda = rest.lambda, V = rest.volume;
   Eigen::Matrix3d adjugate;
-  adjugate << c00, c10, c20, c10, c11, c21, c20, c21, c22;
+  adjugate << m.c00, m.c10, m.c20, m.c10, m.c11, m.c21, m.c20, m.c21, m.c22;
   // With Z = mu I + k R M^-1 R^T (k = lambda tr(S - I) - 2 mu) the twist adds
   // -V [c_a]x Z [c_b]x; its mu I part, mu ((c_a . c_b) I - c_b c_a^T), turns the warped
   // stiffness' mu c_b c_a^T into a second mu (c_a . c_b) I, which leaves
   //   V (lambda c_a c_b^T + 2 mu (c_a . c_b) I) - [c_a]x W [c_b]x,  W = V k R M^-1 R^T.
-  const Eigen::Matrix3d W = (V * (lambda * (trace - 3.0) - 2.0 * mu) / det) * (R * adjugate * R.transpose());
+  const Eigen::Matrix3d W = (V * (lambda * (trace - 3.0) - 2.0 * mu) / m.det) * (R * adjugate * R.transpose());
   Eigen::Matrix<double, 4, 3> b;
   b.bottomRows<3>() = rest.dm_inv;
   b.row(0) = -(rest.dm_inv.row(0) + rest.dm_inv.row(1) + rest.dm_inv.row(2));

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "fem/twist_matrix.h"
 #include "parallel/pool.h"
 
 namespace femreg {
@@ -206,17 +207,10 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& s
     // M = tr(A) I - sym(A) must be well inside the positive definite cone: its pivots (the
     // ratios of its leading principal minors), relative to F's size, say how far (an
     // inverted element near the tie, or a start past a saddle).
-    const double trace = A.trace();
-    const double m00 = trace - A(0, 0), m11 = trace - A(1, 1), m22 = trace - A(2, 2);
-    const double m10 = -0.5 * (A(1, 0) + A(0, 1)), m20 = -0.5 * (A(2, 0) + A(0, 2)),
-                 m21 = -0.5 * (A(2, 1) + A(1, 2));
-    // The adjugate's entries; the minors m00, c22 and det = m00 c00 + m10 c10 + m20 c20.
-    const double c00 = m11 * m22 - m21 * m21, c11 = m00 * m22 - m20 * m20, c22 = m00 * m11 - m10 * m10;
-    const double c10 = m21 * m20 - m10 * m22, c20 = m10 * m21 - m11 * m20, c21 = m10 * m20 - m00 * m21;
-    const double det = m00 * c00 + m10 * c10 + m20 * c20;
-    if (!(m00 >= min_pivot) || !(c22 >= min_pivot * m00) || !(det >= min_pivot * c22)) {
-      return PolarRotation(F);
-    }
+    const TwistMatrix m(A);
+    if (!m.PivotsAtLeast(min_pivot)) return PolarRotation(F);
+    const double c00 = m.c00, c11 = m.c11, c22 = m.c22, c10 = m.c10, c20 = m.c20, c21 = m.c21;
+    const double det = m.det;
     // w = M^-1 g = adj(M) g / det(M).
     const double inv_det = 1.0 / det;
     const double w0 = (c00 * g0 + c10 * g1 + c20 * g2) * inv_det;
