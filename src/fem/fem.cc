@@ -185,6 +185,10 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F) {
   return R;
 }
 
+// The warm-started polar rotation's accuracy (rad): far below what moves a force or an
+// energy, and one Newton step fewer than stopping on the step's own size.
+constexpr double kPolarTolerance = 1e-10;
+
 Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& start) {
   // Newton's method on SO(3) for the R that maximizes f(R) = tr(R^T F), R <- R exp([w]):
   // with A = R^T F, f(R exp([w])) = f(R) + g.w - 1/2 w^T M w + O(|w|^3), where
@@ -230,8 +234,11 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& s
           b * w2 * w0 - a * w1, b * w2 * w1 + a * w0, 1.0 + b * (w2 * w2 - angle2);
       R = (R * E).eval();
     }
-    // Quadratic convergence: the error after a step of size |w| is O(|w|^2).
-    if (angle2 <= 1e-18) {
+    // Quadratic convergence: the angle left after a step w is about |A| / (2 lambda_min(M))
+    // |w|^2, and det M / tr(adj M) <= lambda_min(M). Stop once that bound is below
+    // kPolarTolerance, not once the step itself is: that would take one more step
+    // (docs/notes/2026-12-06-polar-rotation-stop.md).
+    if (angle2 * scale * (c00 + c11 + c22) <= kPolarTolerance * det) {
       // One Newton-Schulz step restores orthonormality to round-off (the products above
       // drift by an ulp each, and warm starts chain them frame after frame).
       return R * (1.5 * Eigen::Matrix3d::Identity() - 0.5 * R.transpose() * R);
