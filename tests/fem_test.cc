@@ -297,7 +297,7 @@ TEST(PolarRotation, RecoversTheRotationOfRotationTimesStretch) {
 }
 
 // The warm-started Newton rotation is PolarRotation's (the SVD's) to round-off: on random F
-// of either sign of det, flat F (rank 2 and rank 1), inverted elements, from a close start,
+// of either sign of det, flat F (rank 2 and rank 1), inverted elements, from close starts,
 // the identity and a random one.
 TEST(PolarRotation, WarmStartedNewtonMatchesTheSvd) {
   std::mt19937 rng(11);
@@ -330,8 +330,11 @@ TEST(PolarRotation, WarmStartedNewtonMatchesTheSvd) {
   for (const auto& [name, F] : cases) {
     const Eigen::Matrix3d exact = PolarRotation(F);
     const double scale = std::max(1.0, F.norm());
+    // Close starts too: there the iteration stops after one or two steps, on its estimate of
+    // the angle left.
     for (const Eigen::Matrix3d& start :
-         {Eigen::Matrix3d(exact * small_rotation(0.05)), Eigen::Matrix3d(Eigen::Matrix3d::Identity()),
+         {Eigen::Matrix3d(exact * small_rotation(0.05)), Eigen::Matrix3d(exact * small_rotation(1e-3)),
+          Eigen::Matrix3d(exact * small_rotation(1e-6)), Eigen::Matrix3d(Eigen::Matrix3d::Identity()),
           RandomRotation(&rng)}) {
       const Eigen::Matrix3d R = PolarRotation(F, start);
       ExpectProperRotation(R);

@@ -185,8 +185,8 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F) {
   return R;
 }
 
-// The warm-started polar rotation's accuracy (rad): far below what moves a force or an
-// energy, and one Newton step fewer than stopping on the step's own size.
+// The warm-started polar rotation's Newton steps stop once the angle left is surely below this
+// (rad): far below what moves a force or an energy.
 constexpr double kPolarTolerance = 1e-10;
 
 Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& start) {
@@ -234,11 +234,13 @@ Eigen::Matrix3d PolarRotation(const Eigen::Matrix3d& F, const Eigen::Matrix3d& s
           b * w2 * w0 - a * w1, b * w2 * w1 + a * w0, 1.0 + b * (w2 * w2 - angle2);
       R = (R * E).eval();
     }
-    // Quadratic convergence: the angle left after a step w is about |A| / (2 lambda_min(M))
-    // |w|^2, and det M / tr(adj M) <= lambda_min(M). Stop once that bound is below
-    // kPolarTolerance, not once the step itself is: that would take one more step
+    // The steps converge cubically: the angle left after a step w is a fraction of
+    // |A| / lambda_min(M) |w|^3, so with |A| <= 3 max|F_ij| and lambda_min(M) >=
+    // det M / tr(adj M) it is below max|F_ij| tr(adj M) / det M |w|^3. Stop once that is below
+    // kPolarTolerance, not once the step itself is: that takes one or two more steps
     // (docs/notes/2026-12-06-polar-rotation-stop.md).
-    if (angle2 * scale * (c00 + c11 + c22) <= kPolarTolerance * det) {
+    const double ratio = scale * (c00 + c11 + c22) * inv_det;
+    if (angle2 * angle2 * angle2 * ratio * ratio <= kPolarTolerance * kPolarTolerance) {
       // One Newton-Schulz step restores orthonormality to round-off (the products above
       // drift by an ulp each, and warm starts chain them frame after frame).
       return R * (1.5 * Eigen::Matrix3d::Identity() - 0.5 * R.transpose() * R);
