@@ -347,6 +347,58 @@ TEST(SurfaceIndex, ClosestMatchesBruteForceOnAClosedSurface) {
     ASSERT_GE(hit.triangle, 0);
     EXPECT_NEAR(hit.squared_distance, brute, 1e-9) << "query " << p.transpose();
   }
+  // On and just off the surface, where the candidates' bounding spheres all reach the query
+  // and the closest triangle is found by its distance alone.
+  std::uniform_real_distribution<double> unit(0.0, 1.0), off(-1e-6, 1e-6);
+  for (int q = 0; q < 300; ++q) {
+    const int f = static_cast<int>(unit(rng) * static_cast<double>(T.rows())) % static_cast<int>(T.rows());
+    double s = unit(rng), t = unit(rng);
+    if (s + t > 1) s = 1 - s, t = 1 - t;
+    const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
+    const Eigen::Vector3d p = a + s * (b - a) + t * (c - a) + Eigen::Vector3d(off(rng), off(rng), off(rng));
+    const SurfaceIndex::Hit hit = index.Closest(p);
+    ASSERT_GE(hit.triangle, 0);
+    EXPECT_NEAR(hit.squared_distance, BruteForceSquaredDistance(p, pos, T), 1e-15) << "query " << p.transpose();
+  }
+}
+
+// An index kept while its surface moves (the tracker keeps one while no vertex has moved a
+// tenth of an edge; here more, so that the move matters): told the move, its walks still find
+// the closest point on the surface where it is now, although its triangles' bounding spheres
+// were made where it was.
+TEST(SurfaceIndex, KeptWhileTheSurfaceMovesItFindsTheClosestPointWhereItIsNow) {
+  Vertices pos;
+  Triangles T;
+  UvSphere(&pos, &T);
+  SurfaceIndex index(pos, T);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.5, 1.5), unit(0.0, 1.0);
+  std::vector<Eigen::Vector3d> queries;
+  std::vector<int> starts;
+  for (int q = 0; q < 300; ++q) {
+    // Near the surface, where a small move changes which triangle is closest.
+    const Eigen::Vector3d p = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * (0.97 + 0.06 * unit(rng));
+    queries.push_back(p);
+    starts.push_back(index.Closest(p).triangle);  // the spheres are made here
+  }
+  // Shifted by about an edge (~0.26), each vertex by up to a tenth of one more on its own.
+  double moved = 0.0;
+  for (int v = 0; v < pos.rows(); ++v) {
+    const Eigen::Vector3d d =
+        Eigen::Vector3d(0.2, 0.1, -0.15) + Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * 0.03 * unit(rng);
+    pos.row(v) += d.transpose();
+    moved = std::max(moved, d.norm());
+  }
+  index.SetMoved(moved);
+  int walked = 0;
+  for (size_t q = 0; q < queries.size(); ++q) {
+    const SurfaceIndex::Hit hit = index.ClosestFrom(queries[q], starts[q], 32);
+    walked += hit.triangle != starts[q];
+    ASSERT_GE(hit.triangle, 0);
+    EXPECT_NEAR(hit.squared_distance, BruteForceSquaredDistance(queries[q], pos, T), 1e-12)
+        << "query " << queries[q].transpose();
+  }
+  EXPECT_GT(walked, 200);  // most queries' closest triangle moved away
 }
 
 // A triangle touches vertex v's closed one-ring when a corner is v or shares a triangle with

@@ -14,6 +14,10 @@
 namespace femreg {
 
 namespace {
+// The relative slack of the triangles' bounding spheres and of the best hit's reach: far above
+// the round-off of a distance, far below any gap between two candidates that matters.
+constexpr double kSphereMargin = 1e-9;
+
 struct VerticesAdaptor {
   const Vertices* points;
   size_t kdtree_get_point_count() const { return static_cast<size_t>(points->rows()); }
@@ -174,6 +178,9 @@ struct SurfaceIndex::Tested {
   static constexpr int kMax = 128;
   int list[kMax];
   int count = 0;
+  // A bound on the distance of the best hit so far, a little above it: a triangle whose
+  // bounding sphere lies beyond it cannot be closer.
+  double reach = std::numeric_limits<double>::infinity();
   // True the first time f is offered (past kMax, every time: tested again, never skipped).
   bool Add(int f) {
     if (std::find(list, list + count, f) != list + count) return false;
@@ -182,11 +189,38 @@ struct SurfaceIndex::Tested {
   }
 };
 
-void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const {
+const std::vector<Eigen::Vector4d>& SurfaceIndex::Spheres() const {
+  std::call_once(spheres_once_, [this] {
+    spheres_moved_ = moved_;
+    spheres_.assign(static_cast<size_t>(triangles_.rows()), Eigen::Vector4d::Zero());
+    for (int v : surface_vertex_ids_) {
+      for (int j = rings_->offsets[static_cast<size_t>(v)]; j < rings_->offsets[static_cast<size_t>(v) + 1]; ++j) {
+        const int f = rings_->list[static_cast<size_t>(j)];
+        if (triangles_(f, 0) != v) continue;  // each triangle once, from its first corner
+        const Eigen::Vector3d a = positions_.row(triangles_(f, 0)), b = positions_.row(triangles_(f, 1)),
+                              c = positions_.row(triangles_(f, 2));
+        const Eigen::Vector3d centre = (a + b + c) / 3.0;
+        const double r = std::sqrt(std::max({(a - centre).squaredNorm(), (b - centre).squaredNorm(),
+                                             (c - centre).squaredNorm()}));
+        // Rounded up, so that the sphere holds the triangle as the closest-point test sees it.
+        spheres_[static_cast<size_t>(f)] << centre, r * (1.0 + kSphereMargin) + kSphereMargin * centre.norm();
+      }
+    }
+  });
+  return spheres_;
+}
+
+void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, const std::vector<Eigen::Vector4d>& spheres,
+                              Tested* tested, Hit* best) const {
   const std::vector<int>& offsets = rings_->offsets;
+  const double slack = SphereSlack();
   for (int j = offsets[static_cast<size_t>(v)]; j < offsets[static_cast<size_t>(v) + 1]; ++j) {
     const int f = rings_->list[static_cast<size_t>(j)];
     if (!tested->Add(f)) continue;
+    // Beyond the best hit's reach, which only shrinks: skipped for good, with the same hit.
+    const Eigen::Vector4d& sphere = spheres[static_cast<size_t>(f)];
+    const double far = tested->reach + sphere[3] + slack;
+    if ((query - sphere.head<3>()).squaredNorm() > far * far) continue;
     Eigen::Vector3d bary;
     const Eigen::Vector3d point =
         TriangleClosestPoint(query, positions_.row(triangles_(f, 0)), positions_.row(triangles_(f, 1)),
@@ -197,6 +231,7 @@ void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, Tested* teste
       best->barycentric = bary;
       best->point = point;
       best->squared_distance = dist2;
+      tested->reach = std::sqrt(dist2) * (1.0 + kSphereMargin);
     }
   }
 }
@@ -225,9 +260,10 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
   Hit best;
   best.squared_distance = std::numeric_limits<double>::infinity();
   Tested tested;
+  const std::vector<Eigen::Vector4d>& spheres = Spheres();
   int center = start;
   for (int ring = 0; ring < max_rings; ++ring) {
-    for (int k = 0; k < 3; ++k) TestAround(triangles_(center, k), query, &tested, &best);
+    for (int k = 0; k < 3; ++k) TestAround(triangles_(center, k), query, spheres, &tested, &best);
     if (best.triangle == center) return best;  // no triangle around it is closer
     center = best.triangle;
   }
@@ -244,7 +280,8 @@ SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
   const int n = Tree().KNearest(query, k, idx, d2);
   // The candidates' triangles, each once, in the order first met.
   Tested tested;
-  for (int i = 0; i < n; ++i) TestAround(surface_vertex_ids_[idx[i]], query, &tested, &best);
+  const std::vector<Eigen::Vector4d>& spheres = Spheres();
+  for (int i = 0; i < n; ++i) TestAround(surface_vertex_ids_[idx[i]], query, spheres, &tested, &best);
   return best;
 }
 

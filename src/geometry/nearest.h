@@ -96,13 +96,24 @@ class SurfaceIndex {
   // Whether `triangle` touches vertex v's closed one-ring: one of its corners is v or shares
   // a triangle with v. v must be a vertex of `positions` (false for one on no triangle).
   bool TouchesRing(int v, int triangle) const;
+  // The surface's vertices are now at most `distance` from where they were when the index was
+  // made (an index kept while the surface moves a little): the queries allow for it. Not
+  // while queries run.
+  void SetMoved(double distance) { moved_ = distance; }
   const SurfaceRings& rings() const { return *rings_; }
 
  private:
   struct Tested;
   void Build();
   // Tests the triangles around vertex v not yet in *tested; *best keeps the closest.
-  void TestAround(int v, const Eigen::Vector3d& query, Tested* tested, Hit* best) const;
+  void TestAround(int v, const Eigen::Vector3d& query, const std::vector<Eigen::Vector4d>& spheres,
+                  Tested* tested, Hit* best) const;
+  // Per triangle its bounding sphere (centre, radius; zero for a triangle not searched), made
+  // by the first query where the vertices were then (moved_ from where the index was made).
+  const std::vector<Eigen::Vector4d>& Spheres() const;
+  // The spheres' allowance for the vertices' moves: since the spheres were made, at most
+  // moved_ plus the move they were made at.
+  double SphereSlack() const { return moved_ + spheres_moved_; }
   const Vertices& positions_;
   const Triangles& triangles_;
   int candidate_vertices_;
@@ -115,6 +126,10 @@ class SurfaceIndex {
   mutable Vertices tree_points_;  // freed once the tree is built
   mutable std::once_flag tree_once_;
   mutable std::unique_ptr<PointIndex> index_;
+  mutable std::vector<Eigen::Vector4d> spheres_;
+  mutable std::once_flag spheres_once_;
+  double moved_ = 0.0;
+  mutable double spheres_moved_ = 0.0;
 };
 
 }  // namespace femreg
