@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <memory>
 #include <random>
@@ -250,6 +251,36 @@ TEST(TrackingLoss, JunkAroundARightFitKeepsTheResidualScore) {
   EXPECT_GT(s.confidence.confidence, 0.4 * s.confidence.fit * volume_score)
       << s.confidence.volume_change;
   EXPECT_FALSE(s.lost);
+}
+
+// The strain quantile the confidence reads, against sorting every element's stretch deviation:
+// elements near rest, stretched, sheared, turned, flat and inverted, at several shares.
+TEST(TrackingLoss, TheStrainQuantileIsTheSortedDeviationsOne) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Eigen::Matrix3d> F;
+  for (int e = 0; e < 3000; ++e) {
+    const int kind = e % 6;
+    const double size = kind == 0 ? 1e-4 : kind == 1 ? 1e-2 : kind == 2 ? 0.1 : 0.5;
+    Eigen::Matrix3d A;
+    for (int i = 0; i < 9; ++i) A(i / 3, i % 3) = size * u(rng);
+    Eigen::Matrix3d f = Eigen::Matrix3d::Identity() + A;
+    const Eigen::Quaterniond q(Eigen::Vector4d(u(rng), u(rng), u(rng), u(rng)).normalized());
+    f = q.toRotationMatrix() * f;  // turned: the deviation does not see it
+    if (kind == 4) f.col(2) = f.col(0) + f.col(1);  // flat
+    if (kind == 5 && e % 4 == 1) f.col(0) *= -1.0;  // inverted
+    F.push_back(f);
+  }
+  for (const double share : {0.0, 0.5, 0.95, 0.99, 1.0}) {
+    for (const int n : {1, 7, 100, 3000}) {
+      std::vector<double> all;
+      for (int e = 0; e < n; ++e) all.push_back(StretchDeviation(F[static_cast<size_t>(e)]));
+      std::sort(all.begin(), all.end());
+      const size_t at = std::min(static_cast<size_t>(n) - 1, static_cast<size_t>(share * n));
+      const double q = StretchDeviationQuantile(n, share, [&](int64_t e) { return F[static_cast<size_t>(e)]; }, 2);
+      EXPECT_EQ(q, all[at]) << "share " << share << ", " << n << " elements";
+    }
+  }
 }
 
 }  // namespace

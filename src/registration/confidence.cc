@@ -3,6 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <functional>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -26,6 +28,8 @@ constexpr double kVolumeRate = 0.3;
 // The model->cloud pairs may fall to this share of the trusted frames' before the frame is
 // doubted (a partial turn or a passing occluder takes less).
 constexpr double kPairsShare = 0.6;
+// The elements' strain the confidence reads: this quantile of their stretch deviations.
+constexpr double kStrainQuantile = 0.95;
 
 // The deformation gradient of object o's element e at its mesh.x.
 Eigen::Matrix3d DeformationGradient(const ObjectState& o, int e) {
@@ -50,6 +54,62 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
   eig.computeDirect(F.transpose() * F, Eigen::EigenvaluesOnly);
   const Eigen::Vector3d l = eig.eigenvalues().cwiseMax(0.0);
   return std::max(std::sqrt(l(2)) - 1.0, 1.0 - std::sqrt(l(0)));
+}
+
+namespace {
+// Widens the bounds below past the eigenvalues' round-off (a strain, dimensionless).
+constexpr double kBoundSlack = 1e-9;
+
+// lo <= StretchDeviation(F) <= hi without the eigenvalues of C = F^T F: its largest eigenvalue
+// lies between its largest diagonal entry and the highest reach of Gershgorin's discs, its
+// smallest between the lowest reach and the smallest diagonal entry.
+void StretchDeviationBounds(const Eigen::Matrix3d& F, double* lo, double* hi) {
+  if (!(F.determinant() > 0.0)) {
+    *lo = *hi = std::numeric_limits<double>::infinity();
+    return;
+  }
+  const Eigen::Matrix3d C = F.transpose() * F;
+  double top = 0.0, bottom = std::numeric_limits<double>::infinity();
+  double reach_top = 0.0, reach_bottom = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    const double radius = std::abs(C(i, (i + 1) % 3)) + std::abs(C(i, (i + 2) % 3));
+    top = std::max(top, C(i, i));
+    bottom = std::min(bottom, C(i, i));
+    reach_top = std::max(reach_top, C(i, i) + radius);
+    reach_bottom = std::min(reach_bottom, C(i, i) - radius);
+  }
+  *lo = std::max(std::sqrt(top) - 1.0, 1.0 - std::sqrt(std::max(bottom, 0.0))) - kBoundSlack;
+  *hi = std::max(std::sqrt(reach_top) - 1.0, 1.0 - std::sqrt(std::max(reach_bottom, 0.0))) + kBoundSlack;
+}
+}  // namespace
+
+double StretchDeviationQuantile(int64_t n, double share, const std::function<Eigen::Matrix3d(int64_t)>& F,
+                                int threads) {
+  if (n <= 0) return 0.0;
+  const size_t at = std::min(static_cast<size_t>(n) - 1, static_cast<size_t>(share * static_cast<double>(n)));
+  std::vector<double> lo(static_cast<size_t>(n)), hi(static_cast<size_t>(n));
+  // Each element on its own: the same on any thread count.
+  ParallelFor(threads, n, 2048, [&](int64_t e) {
+    StretchDeviationBounds(F(e), &lo[static_cast<size_t>(e)], &hi[static_cast<size_t>(e)]);
+  });
+  // The quantile is at least `floor`, the same rank among the lower bounds: an element whose
+  // upper bound is below it ranks below the quantile, whatever its value. The others are
+  // measured, and the quantile is their rank (at - below).
+  std::vector<double> sorted = lo;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(at), sorted.end());
+  const double floor = sorted[at];
+  std::vector<int64_t> measured;
+  for (int64_t e = 0; e < n; ++e) {
+    if (!(hi[static_cast<size_t>(e)] < floor)) measured.push_back(e);
+  }
+  const size_t below = static_cast<size_t>(n) - measured.size();
+  std::vector<double> deviation(measured.size());
+  ParallelFor(threads, static_cast<int64_t>(measured.size()), 2048, [&](int64_t i) {
+    deviation[static_cast<size_t>(i)] = StretchDeviation(F(measured[static_cast<size_t>(i)]));
+  });
+  const size_t rank = at - below;
+  std::nth_element(deviation.begin(), deviation.begin() + static_cast<std::ptrdiff_t>(rank), deviation.end());
+  return deviation[rank];
 }
 
 std::vector<double> VolumeRatios(const TrackerState& state) {
@@ -131,19 +191,18 @@ FrameConfidence MeasureConfidence(const TrackerState& state, const FrameCloud& f
   c.coverage = facing > 0 ? static_cast<double>(covered) / facing : 0.0;
 
   // Strain: the 95th percentile of the elements' stretch deviations.
-  std::vector<double> deviation;
+  std::vector<int64_t> first_element;  // per object, its first element's number over all objects
+  int64_t elements = 0;
   for (const ObjectState& o : state.objects) {
-    const size_t first = deviation.size();
-    const int ne = o.model.num_elements();
-    deviation.resize(first + static_cast<size_t>(ne));
-    ParallelFor(0, ne, 2048, [&](int64_t e) {
-      deviation[first + static_cast<size_t>(e)] = StretchDeviation(DeformationGradient(o, static_cast<int>(e)));
-    });
+    first_element.push_back(elements);
+    elements += o.model.num_elements();
   }
-  if (!deviation.empty()) {
-    const size_t at = std::min(deviation.size() - 1, static_cast<size_t>(0.95 * deviation.size()));
-    std::nth_element(deviation.begin(), deviation.begin() + static_cast<std::ptrdiff_t>(at), deviation.end());
-    c.strain = deviation[at];
+  if (elements > 0) {
+    c.strain = StretchDeviationQuantile(elements, kStrainQuantile, [&](int64_t e) {
+      const size_t o = static_cast<size_t>(std::upper_bound(first_element.begin(), first_element.end(), e) -
+                                           first_element.begin()) - 1;
+      return DeformationGradient(state.objects[o], static_cast<int>(e - first_element[o]));
+    }, state.options.solver.num_threads);
   }
   const bool first = state.coverage_reference <= 0.0;  // the first solved frame sets the levels
   const double coverage_score = first ? 1.0 : std::min(1.0, c.coverage / state.coverage_reference);

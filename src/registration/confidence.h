@@ -28,6 +28,8 @@
 #define FEMREG_REGISTRATION_CONFIDENCE_H_
 
 #include <Eigen/Core>
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "femreg/registration.h"
@@ -40,6 +42,11 @@ namespace femreg {
 // The largest principal stretch's distance from 1 of the deformation gradient F (infinite
 // when F is inverted or flat).
 double StretchDeviation(const Eigen::Matrix3d& F);
+// The value at rank min(n - 1, floor(share n)) of StretchDeviation(F(e)) over e = 0 .. n - 1 in
+// ascending order: the same number as sorting them all, with the eigenvalues found only for
+// the elements that bounds cannot place below it. On `threads` (0: all), the same on any count.
+double StretchDeviationQuantile(int64_t n, double share, const std::function<Eigen::Matrix3d(int64_t)>& F,
+                                int threads = 0);
 
 // The scores of state.x against the frame's cloud: `pairs` are the last outer iteration's
 // (their cloud->model pairs stand for the points they were made from), and state.residuals
