@@ -61,6 +61,15 @@ constexpr int kShiftAfterIterations = 60;
 // steps closing contacts the re-solved step did not model, each line search then cut short
 // (docs/notes/2026-12-03-closing-contacts-rounds.md).
 constexpr int kContactRounds = 3;
+// A pushing-only step whose line search cuts it below this share (seven halvings and more), or
+// refuses it, gains next to nothing: its model of the cone's pieces missed a curvature across
+// a kink. Such a step is solved again with the cone's curvature at its bound on every free
+// vertex, a model above the penalty on every piece, and the lower of the two is taken. Without
+// it a frame of tool_table stalled where the exact pieces' step was cut to 1/256 in every outer
+// iteration. Not at larger shares: far from the solution the forces' own curvature cuts steps
+// to 1/2-1/32, the exact step still gains, and the majorized one's short steps left a twisted
+// armadillo's frames far from their minimum (docs/notes/2026-12-06-pushing-only-majorized-step.md).
+constexpr double kMajorizeBelow = 1.0 / 64;
 // ResolveAcrossPenaltyKinks' re-solves of a step at most.
 constexpr int kPieceRounds = 3;
 // Their PCG iterations at least, however cheap the factor: without, a small mesh's steps
@@ -106,6 +115,44 @@ struct EquilibriumSolver::Impl {
       phi_gradient.segment<3>(3 * v) = gradient;
       phi_inverse[static_cast<size_t>(v)] = PenaltyBlockInverse(eq, v, c);
     }
+  }
+
+  // The pushing-only penalties' curvature raised to its bound on every free vertex: beta I for
+  // the cone's part, whose Hessian lies between 0 and beta I on every piece. A model that
+  // majorizes the penalty across its kinks.
+  void MajorizeCone(const energy::Equilibrium& eq) {
+    for (size_t v = 0; v < phi.size(); ++v) {
+      if (eq.site[v] != energy::ForceSite::kFree) continue;
+      Eigen::Matrix3d c = eq.force_weight[v] * Eigen::Matrix3d::Identity();
+      if (!eq.sparsity.empty() && eq.sparsity[v] > 0.0) {
+        const double root = std::sqrt(f.segment<3>(3 * v).squaredNorm() + eq.sparsity_floor * eq.sparsity_floor);
+        c.diagonal().array() += eq.sparsity[v] / root;
+      }
+      c.diagonal().array() += eq.strong_weight[v];
+      phi[v] = c;
+      phi_inverse[v] = PenaltyBlockInverse(eq, static_cast<int>(v), c);
+    }
+  }
+
+  // Where the line search cut the step to below kMajorizeBelow (or refused it): the step again
+  // from x_start on the majorized model (MajorizeCone, the same factor), kept where its line
+  // search ends lower; *b, *x and *dx are then its own. The penalties are x_start's again after.
+  void MajorizedStep(const energy::Problem& problem, double energy, const Vertices& x_start, Backtracked* b,
+                     Vertices* x, Eigen::VectorXd* dx, SolveReport* report) {
+    const energy::Equilibrium& eq = *problem.equilibrium();
+    MajorizeCone(eq);
+    Eigen::VectorXd dm;
+    if (Pcg(-G, kMaxPcgIterations, &dm, report) && dm.dot(G) < 0.0) {
+      Vertices moved = x_start, trial;
+      const Backtracked bm = Backtrack(problem, dm, energy, 10, threads, &trial, &moved, report);
+      if (bm.accepted && (!b->accepted || bm.energy < b->energy)) {
+        *b = bm;
+        x->swap(moved);
+        dx->swap(dm);
+        plain_step = false;
+      }
+    }
+    Penalties(eq);
   }
 
   // The last PCG's residual, and whether the last step is the plain PCG solution of x's step
@@ -402,7 +449,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
   report.success = true;
   report.stop = StopReason::kMaxIterations;
   Eigen::VectorXd dx;
-  Vertices trial;
+  Vertices trial, x_start;
   const int max_steps = eq->max_steps > 0 ? std::min(eq->max_steps, m.options.max_iterations) : m.options.max_iterations;
   for (int step = 0; step < max_steps; ++step) {
     // (The floor also covers the earlier stop at 1e-9 of the first gradient's largest entry.)
@@ -414,9 +461,13 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     bool truncated = false;
     const bool stepped = m.Step(problem, *x, &dx, &truncated, &report);
     Backtracked b;
+    if (eq->pushing_only) x_start = *x;
     if (stepped) {
       ++report.iterations;
       b = Backtrack(problem, dx, energy, 10, m.threads, &trial, x, &report);
+    }
+    if (stepped && eq->pushing_only && (!b.accepted || b.alpha < kMajorizeBelow)) {
+      m.MajorizedStep(problem, energy, x_start, &b, x, &dx, &report);
     }
     // A truncated step that the line search cannot use is the solver's failure, not a
     // stationary point.
