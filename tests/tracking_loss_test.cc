@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <random>
 #include <vector>
@@ -270,9 +271,31 @@ TEST(TrackingLoss, TheStrainQuantileIsTheSortedDeviationsOne) {
     if (kind == 4) f.col(2) = f.col(0) + f.col(1);  // flat
     if (kind == 5 && e % 4 == 1) f.col(0) *= -1.0;  // inverted
     F.push_back(f);
+    // Stretched along the axes, two stretches nearly equal, turned a little on the right (C
+    // near-diagonal with a near-repeated eigenvalue, where the eigenvalues' round-off is the
+    // largest).
+    const Eigen::Vector3d d(1.0 + 0.7 * u(rng), 1.0 + 0.7 * u(rng), 0.0);
+    const Eigen::Vector3d stretch(d(0), d(1), d(1) * (1.0 + 1e-9 * u(rng)));
+    const Eigen::Matrix3d turn =
+        Eigen::AngleAxisd(std::pow(10.0, -12.0 + 10.0 * (0.5 + 0.5 * u(rng))), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .toRotationMatrix();
+    F.push_back(Eigen::Matrix3d(stretch.asDiagonal()) * turn);
+  }
+  // A review's pair (an axial stretch with two equal ones, and one of the same deviation as
+  // the first's): the widened bounds of 1e-9 gave the first's value for the second's.
+  Eigen::Matrix3d near_repeated;
+  near_repeated << 1.6878387382149962, -6.0521750069886492e-12, -4.1866271750517815e-12,
+      1.3848829052711969e-12, 0.30554522421359948, -1.4888804587048999e-13, 6.8622152619185927e-13,
+      2.1284005559850309e-13, 0.30554522421307934;
+  const std::vector<Eigen::Matrix3d> pair = {near_repeated,
+                                             Eigen::Vector3d(1.694454778, 1.0, 1.0).asDiagonal().toDenseMatrix()};
+  {
+    std::vector<double> both = {StretchDeviation(pair[0]), StretchDeviation(pair[1])};
+    std::sort(both.begin(), both.end());
+    EXPECT_EQ(StretchDeviationQuantile(2, 0.5, [&](int64_t e) { return pair[static_cast<size_t>(e)]; }), both[1]);
   }
   for (const double share : {0.0, 0.5, 0.95, 0.99, 1.0}) {
-    for (const int n : {1, 7, 100, 3000}) {
+    for (const int n : {1, 7, 100, 6000}) {
       std::vector<double> all;
       for (int e = 0; e < n; ++e) all.push_back(StretchDeviation(F[static_cast<size_t>(e)]));
       std::sort(all.begin(), all.end());

@@ -137,11 +137,13 @@ struct EquilibriumSolver::Impl {
   // Where the line search cut the step to below kMajorizeBelow (or refused it): the step again
   // from x_start on the majorized model (MajorizeCone, the same factor), kept where its line
   // search ends lower; *b, *x and *dx are then its own. The penalties are x_start's again after.
-  void MajorizedStep(const energy::Problem& problem, double energy, const Vertices& x_start, Backtracked* b,
+  // Whether it was kept.
+  bool MajorizedStep(const energy::Problem& problem, double energy, const Vertices& x_start, Backtracked* b,
                      Vertices* x, Eigen::VectorXd* dx, SolveReport* report) {
     const energy::Equilibrium& eq = *problem.equilibrium();
     MajorizeCone(eq);
     Eigen::VectorXd dm;
+    bool kept = false;
     if (Pcg(-G, kMaxPcgIterations, &dm, report) && dm.dot(G) < 0.0) {
       Vertices moved = x_start, trial;
       const Backtracked bm = Backtrack(problem, dm, energy, 10, threads, &trial, &moved, report);
@@ -150,9 +152,11 @@ struct EquilibriumSolver::Impl {
         x->swap(moved);
         dx->swap(dm);
         plain_step = false;
+        kept = true;
       }
     }
     Penalties(eq);
+    return kept;
   }
 
   // The last PCG's residual, and whether the last step is the plain PCG solution of x's step
@@ -466,8 +470,14 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
       ++report.iterations;
       b = Backtrack(problem, dx, energy, 10, m.threads, &trial, x, &report);
     }
-    if (stepped && eq->pushing_only && (!b.accepted || b.alpha < kMajorizeBelow)) {
-      m.MajorizedStep(problem, energy, x_start, &b, x, &dx, &report);
+    // The majorized step stands in for a cut one: a solve whose last step it was, and short,
+    // counts as refused (the frame is stalled if its forces stay unbalanced), as the cut step
+    // would have.
+    bool majorized = false;
+    if (stepped && eq->pushing_only && (!b.accepted || b.alpha < kMajorizeBelow) &&
+        !(time_limit_s > 0 && Seconds(start) >= time_limit_s)) {
+      majorized = m.MajorizedStep(problem, energy, x_start, &b, x, &dx, &report);
+      if (majorized) truncated = false;  // its PCG converged
     }
     // A truncated step that the line search cannot use is the solver's failure, not a
     // stationary point.
@@ -491,7 +501,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
                          decrease < kSmallStepDecrease;
     const bool tiny = largest <= m.options.step_tolerance && (!eq->pushing_only || decrease < kSmallStepDecrease);
     if (tiny || largest == 0.0 || settled) {
-      refused = b.alpha < 1.0;
+      refused = b.alpha < 1.0 || majorized;
       report.stop = StopReason::kStep;
       break;
     }

@@ -57,8 +57,10 @@ double StretchDeviation(const Eigen::Matrix3d& F) {
 }
 
 namespace {
-// Widens the bounds below past the eigenvalues' round-off (a strain, dimensionless).
-constexpr double kBoundSlack = 1e-9;
+// Widens the bounds on C's extreme eigenvalues below by this share of its largest reach: past the
+// eigenvalues' round-off, which grows as the square root of the precision where two of them
+// nearly coincide (about 1e-8 of the spread, found by a review over 4M matrices).
+constexpr double kBoundSlack = 1e-6;
 
 // lo <= StretchDeviation(F) <= hi without the eigenvalues of C = F^T F: its largest eigenvalue
 // lies between its largest diagonal entry and the highest reach of Gershgorin's discs, its
@@ -78,8 +80,13 @@ void StretchDeviationBounds(const Eigen::Matrix3d& F, double* lo, double* hi) {
     reach_top = std::max(reach_top, C(i, i) + radius);
     reach_bottom = std::min(reach_bottom, C(i, i) - radius);
   }
-  *lo = std::max(std::sqrt(top) - 1.0, 1.0 - std::sqrt(std::max(bottom, 0.0))) - kBoundSlack;
-  *hi = std::max(std::sqrt(reach_top) - 1.0, 1.0 - std::sqrt(std::max(reach_bottom, 0.0))) + kBoundSlack;
+  const double slack = kBoundSlack * std::max(1.0, reach_top);
+  top -= slack;
+  bottom += slack;
+  reach_top += slack;
+  reach_bottom -= slack;
+  *lo = std::max(std::sqrt(std::max(top, 0.0)) - 1.0, 1.0 - std::sqrt(std::max(bottom, 0.0)));
+  *hi = std::max(std::sqrt(reach_top) - 1.0, 1.0 - std::sqrt(std::max(reach_bottom, 0.0)));
 }
 }  // namespace
 

@@ -143,18 +143,24 @@ const SurfaceIndex& ModelIndex::Get(const TrackerState& state, double tolerance)
   Rings(state);
   // The index reads the positions where they are: moved elsewhere, it is made again.
   bool rebuild = index_ == nullptr || x_data_ != state.x.data();
-  double moved2 = 0.0;
   if (!rebuild) {
     const double tol2 = tolerance * tolerance;
     for (int v : state.surface_vertices) {
-      moved2 = std::max(moved2, (state.x.row(v) - built_at_.row(v)).squaredNorm());
-      if (moved2 > tol2) {
+      if ((state.x.row(v) - built_at_.row(v)).squaredNorm() > tol2) {
         rebuild = true;
         break;
       }
     }
   }
-  if (!rebuild) index_->SetMoved(std::sqrt(moved2));
+  if (!rebuild) {
+    // The queries' allowance is the move of every vertex on the surface: an embedded surface's
+    // surface_vertices are a subsample of them.
+    double moved2 = 0.0;
+    for (int v = 0; v < rings_->num_vertices(); ++v) {
+      if (rings_->has(v)) moved2 = std::max(moved2, (state.x.row(v) - built_at_.row(v)).squaredNorm());
+    }
+    index_->SetMoved(std::sqrt(moved2));
+  }
   if (rebuild) {
     index_ = std::make_unique<SurfaceIndex>(state.x, state.surface, rings_);
     x_data_ = state.x.data();
