@@ -200,30 +200,6 @@ void CompareBundledForces(const std::string& bundled, const std::string& regener
   }
 }
 
-// The bundled contact sequences are what `femreg contact-data` writes today (one thread, as
-// tools/make_datasets.sh runs it), within tolerances that say what can vary from one CPU or
-// BLAS build to another:
-//
-// - What is integer by construction is compared exactly: the files and their rows, the
-//   vertex counts, and scene.yaml, README.md and tool.stl (written from constants).
-// - Ground-truth positions: the solve converges to a force imbalance below 1e-8 N (see
-//   truth_contacts.csv); with a stiffness of order E h = 3e4 Pa x 7.5 mm = 225 N/m for the
-//   softest block that alone is 1e-8 / 225 = 4e-11 m. What varies far more is which contact
-//   pairs are active: ContactPotential re-detects them when a vertex has moved more than half
-//   the margin, a floating-point comparison, and its header measures that two detection
-//   histories differ by up to 0.27 mm at the edge of the pressed face. Roundoff (OpenBLAS
-//   picks its kernels by CPU; CHOLMOD factorizes through it) can change that history, so a
-//   vertex may move by up to kMaxShift = 0.3 mm; only the vertices near that edge do, so the
-//   mean over all vertices stays below a tenth of it (the figures measured against the
-//   bundled files: docs/notes/2026-11-28-figures-from-code-comments.md).
-// - Visibility: a vertex is seen when it lies within 2 mm of the depth image; one within
-//   0.3 mm of that threshold may flip: at most 2 per frame.
-// - Clouds: as regen::CloudsAgree says (the camera sees the moved surface; a pixel that
-//   flips shifts the noise draws of the pixels after it).
-// - truth_contacts.csv: the same frames, terminations and (within 10%) contact counts; the
-//   deepest penetration within kMaxShift; the Newton iteration counts may differ.
-// - forces.csv (tool_table): as CompareBundledForces says, with the slab's E A / L and a tenth of
-//   kMaxShift, the bound on the mean shift.
 // tool_table with the forces estimated, pushing only and frictionless (as it was made): every
 // frame stops on a tolerance. Where the cone's pieces model a step badly (its line search cut to
 // a sliver), the majorized step goes on; without it one frame stalled.
@@ -248,6 +224,30 @@ TEST(CollisionSequences, ToolTablePushingOnlyConvergesEveryFrame) {
   }
 }
 
+// The bundled contact sequences are what `femreg contact-data` writes today (one thread, as
+// tools/make_datasets.sh runs it), within tolerances that say what can vary from one CPU or
+// BLAS build to another:
+//
+// - What is integer by construction is compared exactly: the files and their rows, the
+//   vertex counts, and scene.yaml, README.md and tool.stl (written from constants).
+// - Ground-truth positions: the solve converges to a force imbalance below 1e-8 N (see
+//   truth_contacts.csv); with a stiffness of order E h = 3e4 Pa x 7.5 mm = 225 N/m for the
+//   softest block that alone is 1e-8 / 225 = 4e-11 m. What varies far more is which contact
+//   pairs are active: ContactPotential re-detects them when a vertex has moved more than half
+//   the margin, a floating-point comparison, and its header measures that two detection
+//   histories differ by up to 0.27 mm at the edge of the pressed face. Roundoff (OpenBLAS
+//   picks its kernels by CPU; CHOLMOD factorizes through it) can change that history, so a
+//   vertex may move by up to kMaxShift = 0.3 mm; only the vertices near that edge do, so the
+//   mean over all vertices stays below a tenth of it (the figures measured against the
+//   bundled files: docs/notes/2026-11-28-figures-from-code-comments.md).
+// - Visibility: a vertex is seen when it lies within 2 mm of the depth image; one within
+//   0.3 mm of that threshold may flip: at most 2 per frame.
+// - Clouds: as regen::CloudsAgree says (the camera sees the moved surface; a pixel that
+//   flips shifts the noise draws of the pixels after it).
+// - truth_contacts.csv: the same frames, terminations and (within 10%) contact counts; the
+//   deepest penetration within kMaxShift; the Newton iteration counts may differ.
+// - forces.csv (tool_table): as CompareBundledForces says, with the slab's E A / L and a tenth of
+//   kMaxShift, the bound on the mean shift.
 TEST(CollisionSequences, BundledSequencesRegenerateWithinTolerance) {
   namespace fs = std::filesystem;
   const double kMaxShift = 3e-4;  // m

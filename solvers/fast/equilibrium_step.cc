@@ -117,20 +117,15 @@ struct EquilibriumSolver::Impl {
     }
   }
 
-  // The pushing-only penalties' curvature raised to its bound on every free vertex: beta I for
-  // the cone's part, whose Hessian lies between 0 and beta I on every piece. A model that
-  // majorizes the penalty across its kinks.
+  // The pushing-only penalties' curvature with the cone's part at its bound on every free
+  // vertex (Equilibrium::Penalty's cone_at_bound): a model that majorizes the penalty across
+  // its kinks.
   void MajorizeCone(const energy::Equilibrium& eq) {
     for (size_t v = 0; v < phi.size(); ++v) {
       if (eq.site[v] != energy::ForceSite::kFree) continue;
-      Eigen::Matrix3d c = eq.force_weight[v] * Eigen::Matrix3d::Identity();
-      if (!eq.sparsity.empty() && eq.sparsity[v] > 0.0) {
-        const double root = std::sqrt(f.segment<3>(3 * v).squaredNorm() + eq.sparsity_floor * eq.sparsity_floor);
-        c.diagonal().array() += eq.sparsity[v] / root;
-      }
-      c.diagonal().array() += eq.strong_weight[v];
-      phi[v] = c;
-      phi_inverse[v] = PenaltyBlockInverse(eq, static_cast<int>(v), c);
+      const int i = static_cast<int>(v);
+      eq.Penalty(i, f.segment<3>(3 * i), nullptr, &phi[v], /*cone_at_bound=*/true);
+      phi_inverse[v] = PenaltyBlockInverse(eq, i, phi[v]);
     }
   }
 

@@ -63,7 +63,7 @@ ConeExcess OutsideCone(const Eigen::Vector3d& f, const Eigen::Vector3d& n, doubl
 }  // namespace
 
 double Equilibrium::Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gradient,
-                            Eigen::Matrix3d* curvature) const {
+                            Eigen::Matrix3d* curvature, bool cone_at_bound) const {
   const ForceSite where = site[static_cast<size_t>(v)];
   if (where == ForceSite::kSupport) {
     if (gradient != nullptr) gradient->setZero();
@@ -90,10 +90,11 @@ double Equilibrium::Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gr
   if (pushing_only) {
     const ConeExcess excess = OutsideCone(f, normal[static_cast<size_t>(v)], friction);
     const double d2 = excess.outside.squaredNorm();
+    if (cone_at_bound && curvature != nullptr) curvature->diagonal().array() += beta;
     if (excess.region != ConeExcess::kInside && d2 > 0.0) {
       value += 0.5 * beta * d2;
       if (gradient != nullptr) *gradient += beta * excess.outside;
-      if (curvature != nullptr) {
+      if (curvature != nullptr && !cone_at_bound) {
         switch (excess.region) {
           case ConeExcess::kSide:
             *curvature += beta * (excess.u * excess.u.transpose() + excess.side * excess.b * excess.b.transpose());

@@ -63,9 +63,12 @@ struct Equilibrium {
   int max_steps = 0;
 
   // phi_v(f), its gradient and a positive semi-definite curvature (the sparse term's
-  // majorizer s / sqrt(|f|^2 + eps^2) I, the cone's along the distance's direction).
+  // majorizer s / sqrt(|f|^2 + eps^2) I, the cone's along the distance's direction). With
+  // cone_at_bound, the cone's curvature is beta I on a free vertex wherever f is: its bound on
+  // every piece (half a squared distance to a convex set has a 1-Lipschitz gradient), a
+  // majorizer across the kinks.
   double Penalty(int v, const Eigen::Vector3d& f, Eigen::Vector3d* gradient,
-                 Eigen::Matrix3d* curvature) const;
+                 Eigen::Matrix3d* curvature, bool cone_at_bound = false) const;
   // The penalty as least squares, for a back end that takes residuals (Ceres): phi_v(f) =
   // 1/2 |r|^2 + the sparse term, r = (sqrt(w) f, sqrt(beta) (f's part outside the cone)),
   // w = alpha on a free vertex and beta on a balanced one, and dr/df exact (zero at a support

@@ -193,18 +193,15 @@ const std::vector<Eigen::Vector4d>& SurfaceIndex::Spheres() const {
   std::call_once(spheres_once_, [this] {
     spheres_moved_ = moved_;
     spheres_.assign(static_cast<size_t>(triangles_.rows()), Eigen::Vector4d::Zero());
-    for (int v : surface_vertex_ids_) {
-      for (int j = rings_->offsets[static_cast<size_t>(v)]; j < rings_->offsets[static_cast<size_t>(v) + 1]; ++j) {
-        const int f = rings_->list[static_cast<size_t>(j)];
-        if (triangles_(f, 0) != v) continue;  // each triangle once, from its first corner
-        const Eigen::Vector3d a = positions_.row(triangles_(f, 0)), b = positions_.row(triangles_(f, 1)),
-                              c = positions_.row(triangles_(f, 2));
-        const Eigen::Vector3d centre = (a + b + c) / 3.0;
-        const double r = std::sqrt(std::max({(a - centre).squaredNorm(), (b - centre).squaredNorm(),
-                                             (c - centre).squaredNorm()}));
-        // Rounded up, so that the sphere holds the triangle as the closest-point test sees it.
-        spheres_[static_cast<size_t>(f)] << centre, r * (1.0 + kSphereMargin) + kSphereMargin * centre.norm();
-      }
+    for (int f = 0; f < triangles_.rows(); ++f) {
+      if (!keep_.empty() && !keep_[static_cast<size_t>(f)]) continue;
+      const Eigen::Vector3d a = positions_.row(triangles_(f, 0)), b = positions_.row(triangles_(f, 1)),
+                            c = positions_.row(triangles_(f, 2));
+      const Eigen::Vector3d centre = (a + b + c) / 3.0;
+      const double r = std::sqrt(std::max({(a - centre).squaredNorm(), (b - centre).squaredNorm(),
+                                           (c - centre).squaredNorm()}));
+      // Rounded up, so that the sphere holds the triangle as the closest-point test sees it.
+      spheres_[static_cast<size_t>(f)] << centre, r * (1.0 + kSphereMargin) + kSphereMargin * centre.norm();
     }
   });
   return spheres_;
