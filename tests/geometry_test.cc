@@ -401,6 +401,44 @@ TEST(SurfaceIndex, KeptWhileTheSurfaceMovesItFindsTheClosestPointWhereItIsNow) {
   EXPECT_GT(walked, 200);  // most queries' closest triangle moved away
 }
 
+// The nearest vertex's bounds hold the closest point's distance, with queries on, near and far
+// from the surface, before and after a kept index's surface moves by about an edge; and they
+// decide most far queries (the occluder passes skip the search there).
+TEST(SurfaceIndex, DistanceBoundsHoldTheClosestPointsDistance) {
+  Vertices pos;
+  Triangles T;
+  UvSphere(&pos, &T);
+  SurfaceIndex index(pos, T);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), radius(0.0, 3.0);
+  auto check = [&](const char* when, int min_decided) {
+    int decided = 0;
+    for (int q = 0; q < 400; ++q) {
+      const Eigen::Vector3d p = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * radius(rng);
+      double lower = -1.0, upper = -1.0;
+      index.DistanceBounds(p, &lower, &upper);
+      const double d = std::sqrt(BruteForceSquaredDistance(p, pos, T));
+      ASSERT_LE(lower, d * (1.0 + 1e-12)) << when << ", query " << p.transpose();
+      ASSERT_GE(upper, d * (1.0 - 1e-12)) << when << ", query " << p.transpose();
+      ASSERT_GE(lower, 0.0);
+      // The search's own distance is within them too (the passes compare it with the bounds).
+      const double found = std::sqrt(index.Closest(p).squared_distance);
+      ASSERT_LE(found, upper * (1.0 + 1e-12)) << when << ", query " << p.transpose();
+      decided += lower > 0.5;  // a query half a radius off the surface, at least, told so
+    }
+    EXPECT_GE(decided, min_decided) << when;
+  };
+  check("as made", 100);
+  double moved = 0.0;
+  for (int v = 0; v < pos.rows(); ++v) {
+    const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.1, 0.15) + 0.03 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    pos.row(v) += d.transpose();
+    moved = std::max(moved, d.norm());
+  }
+  index.SetMoved(moved);
+  check("moved", 10);  // the move widens the bounds: fewer decided
+}
+
 // A triangle touches vertex v's closed one-ring when a corner is v or shares a triangle with
 // v: every (vertex, triangle) pair of a closed surface against that definition.
 TEST(SurfaceIndex, TouchesRingIsSharingACornerWithTheOneRing) {

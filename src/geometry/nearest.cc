@@ -202,6 +202,7 @@ const std::vector<Eigen::Vector4d>& SurfaceIndex::Spheres() const {
                                            (c - centre).squaredNorm()}));
       // Rounded up, so that the sphere holds the triangle as the closest-point test sees it.
       spheres_[static_cast<size_t>(f)] << centre, r * (1.0 + kSphereMargin) + kSphereMargin * centre.norm();
+      largest_sphere_ = std::max(largest_sphere_, spheres_[static_cast<size_t>(f)][3]);
     }
   });
   return spheres_;
@@ -228,7 +229,7 @@ void SurfaceIndex::TestAround(int v, const Eigen::Vector3d& query, const std::ve
       best->barycentric = bary;
       best->point = point;
       best->squared_distance = dist2;
-      tested->reach = std::sqrt(dist2) * (1.0 + kSphereMargin);
+      tested->reach = std::min(tested->reach, std::sqrt(dist2) * (1.0 + kSphereMargin));
     }
   }
 }
@@ -258,6 +259,15 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
   best.squared_distance = std::numeric_limits<double>::infinity();
   Tested tested;
   const std::vector<Eigen::Vector4d>& spheres = Spheres();
+  // The start is among the triangles of its first ring: its distance bounds the best hit's
+  // from the outset, so that the ring's farther triangles are skipped (the same hit).
+  {
+    Eigen::Vector3d bary;
+    const Eigen::Vector3d point =
+        TriangleClosestPoint(query, positions_.row(triangles_(start, 0)), positions_.row(triangles_(start, 1)),
+                             positions_.row(triangles_(start, 2)), &bary);
+    tested.reach = std::sqrt((point - query).squaredNorm()) * (1.0 + kSphereMargin);
+  }
   int center = start;
   for (int ring = 0; ring < max_rings; ++ring) {
     for (int k = 0; k < 3; ++k) TestAround(triangles_(center, k), query, spheres, &tested, &best);
@@ -266,6 +276,19 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
   }
   if (settled != nullptr) *settled = false;
   return best;
+}
+
+void SurfaceIndex::DistanceBounds(const Eigen::Vector3d& query, double* lower, double* upper) const {
+  *lower = 0.0;
+  *upper = std::numeric_limits<double>::infinity();
+  int idx = -1;
+  double d2 = 0.0;
+  if (Tree().KNearest(query, 1, &idx, &d2) < 1) return;
+  // The tree holds the vertices where the index was made: each is now within moved_ of its
+  // place there, and every point of a triangle within its sphere's diameter of its corners.
+  Spheres();  // largest_sphere_ and the slack they were made at
+  *upper = (query - positions_.row(surface_vertex_ids_[static_cast<size_t>(idx)]).transpose()).norm();
+  *lower = std::max(0.0, std::sqrt(d2) - moved_ - 2.0 * (largest_sphere_ + SphereSlack()));
 }
 
 SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {

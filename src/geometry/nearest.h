@@ -87,6 +87,9 @@ class SurfaceIndex {
   // max_rings centres; *settled (if given) says whether it stayed before that (false: the
   // best found so far, which a closer triangle farther on may beat).
   Hit ClosestFrom(const Eigen::Vector3d& query, int start, int max_rings = 4, bool* settled = nullptr) const;
+  // Bounds on Closest(query)'s distance from the query's nearest surface vertex alone, no
+  // triangle tested: *upper, that vertex's distance; *lower, less a triangle's span.
+  void DistanceBounds(const Eigen::Vector3d& query, double* lower, double* upper) const;
   // ClosestFrom(query, start, max_rings), and Closest(query) where that walk has not settled.
   Hit ClosestSeeded(const Eigen::Vector3d& query, int start, int max_rings) const {
     bool settled = true;
@@ -127,6 +130,7 @@ class SurfaceIndex {
   mutable std::once_flag tree_once_;
   mutable std::unique_ptr<PointIndex> index_;
   mutable std::vector<Eigen::Vector4d> spheres_;
+  mutable double largest_sphere_ = 0.0;
   mutable std::once_flag spheres_once_;
   double moved_ = 0.0;
   mutable double spheres_moved_ = 0.0;

@@ -19,6 +19,7 @@ constexpr double kNear = 1e-4;          // m; the z-buffer's near plane
 constexpr int kMaxImageSide = 1024;     // pixels
 constexpr int kNeighbours = 12;         // the occluder grows through this many nearest points
 constexpr double kWholeView = 0.5;      // seeds beyond this share of the points on the model
+constexpr double kBoundMargin = 1e-9;   // relative: distance bounds against the closest point's round-off
 
 // Grows the marked points in `queue` (already set to `value` in *marks) through the cloud,
 // breadth first in the points' order (the same set for any thread count): each point's
@@ -49,7 +50,18 @@ struct OffModel {
   std::vector<signed char>* memo;
   bool operator()(int i) const {
     signed char& o = (*memo)[static_cast<size_t>(i)];
-    if (o < 0) o = surface->Closest(points->row(i)).squared_distance > grow2 ? 1 : 0;
+    if (o < 0) {
+      // The nearest vertex's bounds where they leave no doubt, else the closest point.
+      double lower = 0.0, upper = 0.0;
+      surface->DistanceBounds(points->row(i), &lower, &upper);
+      if (upper * upper <= grow2 * (1.0 - kBoundMargin)) {
+        o = 0;
+      } else if (lower * lower > grow2 * (1.0 + kBoundMargin)) {
+        o = 1;
+      } else {
+        o = surface->Closest(points->row(i)).squared_distance > grow2 ? 1 : 0;
+      }
+    }
     return o == 1;
   }
 };
@@ -117,9 +129,16 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     const bool hit = std::isfinite(model_z);
     if (hit) on_model.fetch_add(1, std::memory_order_relaxed);
     if (!(z < model_z - grow)) return;
-    double d = std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
-                                 : surface.Closest(points.row(i)))
-                             .squared_distance);
+    // Without seeds, the nearest vertex's bounds decide where they leave no doubt (the same
+    // marks); the seeds' walks are there to spare the k-d tree of every vertex.
+    double lower = 0.0, upper = std::numeric_limits<double>::infinity();
+    if (!seeded) surface.DistanceBounds(points.row(i), &lower, &upper);
+    if (upper <= grow * (1.0 - kBoundMargin)) return;
+    double d = lower > std::max(grow, margin) * (1.0 + kBoundMargin)
+                   ? lower
+                   : std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
+                                       : surface.Closest(points.row(i)))
+                                   .squared_distance);
     // A walk from the nearest subsample vertex can stop on a thin part's far side: its distance
     // exceeds the true one by at most the subsample's spacing (under a mesh edge), so a point
     // within that of the limit is searched in full.
@@ -163,7 +182,14 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
       counts.occluders += (*occluder)[i] != 0;
       continue;
     }
-    if (surface.Closest(points.row(static_cast<Eigen::Index>(i))).squared_distance <= grow * grow) {
+    // Decided by the nearest vertex where its bounds leave no doubt (a margin for the
+    // search's round-off), else by the closest point: the same marks.
+    const Eigen::Vector3d p = points.row(static_cast<Eigen::Index>(i));
+    double lower = 0.0, upper = 0.0;
+    surface.DistanceBounds(p, &lower, &upper);
+    bool reached = upper <= grow * (1.0 - kBoundMargin);
+    if (!reached && !(lower > grow * (1.0 + kBoundMargin))) reached = surface.Closest(p).squared_distance <= grow * grow;
+    if (reached) {
       (*occluder)[i] = 0;
     } else {
       ++counts.occluders;
@@ -219,11 +245,35 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   std::vector<signed char> memo(static_cast<size_t>(n), -1);
   const OffModel Off{&at_start, &points, grow * grow, &memo};
   std::vector<int> queue;
+  // A point's closest triangle touches a strained vertex only if that vertex is within the
+  // point's distance to the surface (at most its nearest vertex's) and a triangle's longest
+  // edge: the others skip the search, with the same marks.
+  std::vector<char> corner(static_cast<size_t>(state.x.rows()), 0);
+  std::vector<int> strained_corners;
+  double longest2 = 0.0;
+  for (int f = 0; f < state.surface.rows(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = state.surface(f, k), b = state.surface(f, (k + 1) % 3);
+      longest2 = std::max(longest2, (state.x.row(a) - state.x.row(b)).squaredNorm());
+      if (corner[static_cast<size_t>(a)] || !strained[static_cast<size_t>(a)]) continue;
+      corner[static_cast<size_t>(a)] = 1;
+      strained_corners.push_back(a);
+    }
+  }
+  Vertices strained_points(static_cast<Eigen::Index>(strained_corners.size()), 3);
+  for (size_t k = 0; k < strained_corners.size(); ++k) {
+    strained_points.row(static_cast<Eigen::Index>(k)) = state.x.row(strained_corners[k]);
+  }
+  const PointIndex strained_index(strained_points);
+  const double longest = std::sqrt(longest2);
   // Each point's closest triangle on the workers (the search is most of the cost); the marks
   // then in the points' order, as on one thread.
   std::vector<int> closest(static_cast<size_t>(n), -1);
   ParallelFor(threads, n, 2048, [&](int64_t i) {
-    if ((*marks)[static_cast<size_t>(i)]) return;
+    if ((*marks)[static_cast<size_t>(i)] || strained_corners.empty()) return;
+    double lower = 0.0, upper = 0.0;
+    surface.DistanceBounds(points.row(i), &lower, &upper);
+    if (!strained_index.AnyWithin(points.row(i), (upper + longest) * (1.0 + kBoundMargin))) return;
     closest[static_cast<size_t>(i)] = surface.Closest(points.row(i)).triangle;
   });
   for (int i = 0; i < n; ++i) {
