@@ -9,6 +9,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <string>
 #include <random>
 #include <set>
 #include <utility>
@@ -401,42 +402,74 @@ TEST(SurfaceIndex, KeptWhileTheSurfaceMovesItFindsTheClosestPointWhereItIsNow) {
   EXPECT_GT(walked, 200);  // most queries' closest triangle moved away
 }
 
-// The nearest vertex's bounds hold the closest point's distance, with queries on, near and far
-// from the surface, before and after a kept index's surface moves by about an edge; and they
-// decide most far queries (the occluder passes skip the search there).
+// The squared distance from p to the closest triangle f of T with keep[f] != 0 (infinity: none).
+double BruteForceKeptSquaredDistance(const Eigen::Vector3d& p, const Vertices& pos, const Triangles& T,
+                                     const std::vector<char>& keep) {
+  double brute = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < T.rows(); ++f) {
+    if (!keep[static_cast<size_t>(f)]) continue;
+    const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
+    brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
+  }
+  return brute;
+}
+
+// The distance bounds hold the closest point's distance, and Closest's own, with queries on,
+// near and far from the surface: on a whole surface and on a kept half of it (a facing
+// index), before and after a kept index's surface moves by about an edge, with its spheres
+// made before the move and after it. They decide most far queries (the occluder passes skip
+// the search there).
 TEST(SurfaceIndex, DistanceBoundsHoldTheClosestPointsDistance) {
-  Vertices pos;
+  Vertices rest;
   Triangles T;
-  UvSphere(&pos, &T);
-  SurfaceIndex index(pos, T);
+  UvSphere(&rest, &T);
+  std::vector<char> all(static_cast<size_t>(T.rows()), 1), half(static_cast<size_t>(T.rows()), 0);
+  for (int f = 0; f < T.rows(); ++f) half[static_cast<size_t>(f)] = rest(T(f, 0), 2) > 0.0;
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0), radius(0.0, 3.0);
-  auto check = [&](const char* when, int min_decided) {
-    int decided = 0;
-    for (int q = 0; q < 400; ++q) {
-      const Eigen::Vector3d p = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * radius(rng);
-      double lower = -1.0, upper = -1.0;
-      index.DistanceBounds(p, &lower, &upper);
-      const double d = std::sqrt(BruteForceSquaredDistance(p, pos, T));
-      ASSERT_LE(lower, d * (1.0 + 1e-12)) << when << ", query " << p.transpose();
-      ASSERT_GE(upper, d * (1.0 - 1e-12)) << when << ", query " << p.transpose();
-      ASSERT_GE(lower, 0.0);
-      // The search's own distance is within them too (the passes compare it with the bounds).
-      const double found = std::sqrt(index.Closest(p).squared_distance);
-      ASSERT_LE(found, upper * (1.0 + 1e-12)) << when << ", query " << p.transpose();
-      decided += lower > 0.5;  // a query half a radius off the surface, at least, told so
+  for (const bool halved : {false, true}) {
+    for (const bool spheres_after_move : {false, true}) {
+      Vertices pos = rest;
+      const std::vector<char>& keep = halved ? half : all;
+      SurfaceIndex index = halved ? SurfaceIndex(pos, T, half) : SurfaceIndex(pos, T);
+      auto check = [&](const std::string& when, int min_decided) {
+        int decided = 0;
+        for (int q = 0; q < 400; ++q) {
+          const Eigen::Vector3d p = q % 50 == 0 ? Eigen::Vector3d(pos.row(q % pos.rows()))  // on a vertex
+                                                : Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * radius(rng);
+          double lower = -1.0, upper = -1.0;
+          index.DistanceBounds(p, &lower, &upper);
+          const double d = std::sqrt(BruteForceKeptSquaredDistance(p, pos, T, keep));
+          const double found = std::sqrt(index.Closest(p).squared_distance);
+          ASSERT_GE(lower, 0.0);
+          ASSERT_LE(lower, d * (1.0 + 1e-12)) << when << ", query " << p.transpose();
+          ASSERT_LE(lower, found * (1.0 + 1e-12)) << when << ", query " << p.transpose();
+          // Closest's distance is within them too: the occluder passes compare it with them.
+          ASSERT_GE(upper, d * (1.0 - 1e-12)) << when << ", query " << p.transpose();
+          ASSERT_LE(found, upper * (1.0 + 1e-12)) << when << ", query " << p.transpose();
+          decided += lower > 0.5;  // half a radius off the surface at least, said without a search
+        }
+        EXPECT_GE(decided, min_decided) << when;
+      };
+      const std::string name = std::string(halved ? "half" : "whole") + (spheres_after_move ? ", spheres after" : "");
+      if (!spheres_after_move) check(name + ", as made", 100);
+      double moved = 0.0;
+      for (int v = 0; v < pos.rows(); ++v) {
+        const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.1, 0.15) + 0.03 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+        pos.row(v) += d.transpose();
+        moved = std::max(moved, d.norm());
+      }
+      index.SetMoved(moved);
+      check(name + ", moved", 40);  // the move widens the bounds: fewer decided
     }
-    EXPECT_GE(decided, min_decided) << when;
-  };
-  check("as made", 100);
-  double moved = 0.0;
-  for (int v = 0; v < pos.rows(); ++v) {
-    const Eigen::Vector3d d = Eigen::Vector3d(0.2, -0.1, 0.15) + 0.03 * Eigen::Vector3d(u(rng), u(rng), u(rng));
-    pos.row(v) += d.transpose();
-    moved = std::max(moved, d.norm());
   }
-  index.SetMoved(moved);
-  check("moved", 10);  // the move widens the bounds: fewer decided
+  // An index with no triangle: nothing known.
+  const std::vector<char> none(static_cast<size_t>(T.rows()), 0);
+  const SurfaceIndex empty(rest, T, none);
+  double lower = -1.0, upper = -1.0;
+  empty.DistanceBounds(Eigen::Vector3d(0.1, 0.2, 0.3), &lower, &upper);
+  EXPECT_EQ(lower, 0.0);
+  EXPECT_EQ(upper, std::numeric_limits<double>::infinity());
 }
 
 // A triangle touches vertex v's closed one-ring when a corner is v or shares a triangle with

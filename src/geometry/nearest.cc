@@ -189,6 +189,11 @@ struct SurfaceIndex::Tested {
   }
 };
 
+double SurfaceIndex::LargestSphere() const {
+  Spheres();  // makes largest_sphere_ once, on any thread
+  return largest_sphere_;
+}
+
 const std::vector<Eigen::Vector4d>& SurfaceIndex::Spheres() const {
   std::call_once(spheres_once_, [this] {
     spheres_moved_ = moved_;
@@ -260,7 +265,8 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
   Tested tested;
   const std::vector<Eigen::Vector4d>& spheres = Spheres();
   // The start is among the triangles of its first ring: its distance bounds the best hit's
-  // from the outset, so that the ring's farther triangles are skipped (the same hit).
+  // from the outset, so that the ring's farther triangles are skipped. It is measured again
+  // in its turn, so that ties are resolved in the rings' order as before (the same hit).
   {
     Eigen::Vector3d bary;
     const Eigen::Vector3d point =
@@ -281,14 +287,15 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
 void SurfaceIndex::DistanceBounds(const Eigen::Vector3d& query, double* lower, double* upper) const {
   *lower = 0.0;
   *upper = std::numeric_limits<double>::infinity();
-  int idx = -1;
-  double d2 = 0.0;
-  if (Tree().KNearest(query, 1, &idx, &d2) < 1) return;
-  // The tree holds the vertices where the index was made: each is now within moved_ of its
-  // place there, and every point of a triangle within its sphere's diameter of its corners.
-  Spheres();  // largest_sphere_ and the slack they were made at
-  *upper = (query - positions_.row(surface_vertex_ids_[static_cast<size_t>(idx)]).transpose()).norm();
-  *lower = std::max(0.0, std::sqrt(d2) - moved_ - 2.0 * (largest_sphere_ + SphereSlack()));
+  int idx[16];
+  double d2[16];
+  const int n = Tree().KNearest(query, std::min(candidate_vertices_, 16), idx, d2);
+  if (n < 1) return;
+  for (int i = 0; i < n; ++i) {
+    *upper = std::min(*upper, (query - positions_.row(surface_vertex_ids_[static_cast<size_t>(idx[i])]).transpose()).norm());
+  }
+  const double largest = LargestSphere();
+  *lower = std::max(0.0, std::sqrt(d2[0]) - moved_ - (largest + SphereSlack()));
 }
 
 SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {

@@ -87,8 +87,12 @@ class SurfaceIndex {
   // max_rings centres; *settled (if given) says whether it stayed before that (false: the
   // best found so far, which a closer triangle farther on may beat).
   Hit ClosestFrom(const Eigen::Vector3d& query, int start, int max_rings = 4, bool* settled = nullptr) const;
-  // Bounds on Closest(query)'s distance from the query's nearest surface vertex alone, no
-  // triangle tested: *upper, that vertex's distance; *lower, less a triangle's span.
+  // Bounds on the query's distance to the surface, and on Closest(query)'s, from Closest's own
+  // candidate vertices alone (no triangle tested): *upper, the nearest candidate's distance
+  // where it is now (Closest tests the triangles around every candidate); *lower, the nearest
+  // distance in the tree (where the vertices were when the index was made) less their move
+  // since and the largest triangle's bounding sphere (a point of a triangle has a corner
+  // within its sphere's radius).
   void DistanceBounds(const Eigen::Vector3d& query, double* lower, double* upper) const;
   // ClosestFrom(query, start, max_rings), and Closest(query) where that walk has not settled.
   Hit ClosestSeeded(const Eigen::Vector3d& query, int start, int max_rings) const {
@@ -117,6 +121,8 @@ class SurfaceIndex {
   // The spheres' allowance for the vertices' moves: since the spheres were made, at most
   // moved_ plus the move they were made at.
   double SphereSlack() const { return moved_ + spheres_moved_; }
+  // The largest of the spheres' radii (made with them).
+  double LargestSphere() const;
   const Vertices& positions_;
   const Triangles& triangles_;
   int candidate_vertices_;

@@ -21,6 +21,17 @@ constexpr int kNeighbours = 12;         // the occluder grows through this many 
 constexpr double kWholeView = 0.5;      // seeds beyond this share of the points on the model
 constexpr double kBoundMargin = 1e-9;   // relative: distance bounds against the closest point's round-off
 
+// Whether `query`, whose distance to a surface is within [lower, upper]
+// (SurfaceIndex::DistanceBounds), lies within `radius` of it for certain: 1 within, 0 beyond,
+// -1 undecided (the closest point to search). The margin allows for the search's round-off
+// against the radius and the coordinates.
+int Within(double lower, double upper, double radius, const Eigen::Vector3d& query) {
+  const double slack = kBoundMargin * (radius + query.norm());
+  if (upper <= radius - slack) return 1;
+  if (lower > radius + slack) return 0;
+  return -1;
+}
+
 // Grows the marked points in `queue` (already set to `value` in *marks) through the cloud,
 // breadth first in the points' order (the same set for any thread count): each point's
 // kNeighbours nearest within three spacings that are unmarked and off(k).
@@ -51,16 +62,12 @@ struct OffModel {
   bool operator()(int i) const {
     signed char& o = (*memo)[static_cast<size_t>(i)];
     if (o < 0) {
-      // The nearest vertex's bounds where they leave no doubt, else the closest point.
+      // The bounds where they leave no doubt, else the closest point.
       double lower = 0.0, upper = 0.0;
       surface->DistanceBounds(points->row(i), &lower, &upper);
-      if (upper * upper <= grow2 * (1.0 - kBoundMargin)) {
-        o = 0;
-      } else if (lower * lower > grow2 * (1.0 + kBoundMargin)) {
-        o = 1;
-      } else {
-        o = surface->Closest(points->row(i)).squared_distance > grow2 ? 1 : 0;
-      }
+      const int within = Within(lower, upper, std::sqrt(grow2), points->row(i));
+      o = within >= 0 ? static_cast<signed char>(1 - within)
+                      : (surface->Closest(points->row(i)).squared_distance > grow2 ? 1 : 0);
     }
     return o == 1;
   }
@@ -129,12 +136,13 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     const bool hit = std::isfinite(model_z);
     if (hit) on_model.fetch_add(1, std::memory_order_relaxed);
     if (!(z < model_z - grow)) return;
-    // Without seeds, the nearest vertex's bounds decide where they leave no doubt (the same
-    // marks); the seeds' walks are there to spare the k-d tree of every vertex.
+    // Without seeds, the bounds decide where they leave no doubt (the same marks). Not with
+    // them: a settled walk may stop farther than the bounds' upper end, and the marks go by
+    // the walk's distance (below); the walks also spare the k-d tree of every vertex.
     double lower = 0.0, upper = std::numeric_limits<double>::infinity();
     if (!seeded) surface.DistanceBounds(points.row(i), &lower, &upper);
-    if (upper <= grow * (1.0 - kBoundMargin)) return;
-    double d = lower > std::max(grow, margin) * (1.0 + kBoundMargin)
+    if (Within(lower, upper, grow, points.row(i)) == 1) return;
+    double d = Within(lower, upper, std::max(grow, margin), points.row(i)) == 0
                    ? lower
                    : std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
                                        : surface.Closest(points.row(i)))
@@ -182,14 +190,13 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
       counts.occluders += (*occluder)[i] != 0;
       continue;
     }
-    // Decided by the nearest vertex where its bounds leave no doubt (a margin for the
-    // search's round-off), else by the closest point: the same marks.
+    // Decided by the bounds where they leave no doubt, else by the closest point: the same
+    // marks.
     const Eigen::Vector3d p = points.row(static_cast<Eigen::Index>(i));
     double lower = 0.0, upper = 0.0;
     surface.DistanceBounds(p, &lower, &upper);
-    bool reached = upper <= grow * (1.0 - kBoundMargin);
-    if (!reached && !(lower > grow * (1.0 + kBoundMargin))) reached = surface.Closest(p).squared_distance <= grow * grow;
-    if (reached) {
+    const int within = Within(lower, upper, grow, p);
+    if (within == 1 || (within < 0 && surface.Closest(p).squared_distance <= grow * grow)) {
       (*occluder)[i] = 0;
     } else {
       ++counts.occluders;
@@ -273,7 +280,8 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     if ((*marks)[static_cast<size_t>(i)] || strained_corners.empty()) return;
     double lower = 0.0, upper = 0.0;
     surface.DistanceBounds(points.row(i), &lower, &upper);
-    if (!strained_index.AnyWithin(points.row(i), (upper + longest) * (1.0 + kBoundMargin))) return;
+    const double reach = upper + longest;
+    if (!strained_index.AnyWithin(points.row(i), reach + kBoundMargin * (reach + points.row(i).norm()))) return;
     closest[static_cast<size_t>(i)] = surface.Closest(points.row(i)).triangle;
   });
   for (int i = 0; i < n; ++i) {
