@@ -324,10 +324,13 @@ void UvSphere(Vertices* out_pos, Triangles* out_T) {
   *out_T = T;
 }
 
-// The squared distance from p to the closest of all triangles T over positions pos.
-double BruteForceSquaredDistance(const Eigen::Vector3d& p, const Vertices& pos, const Triangles& T) {
-  double brute = 1e30;
+// The squared distance from p to the closest triangle f of T over positions pos (those with
+// (*keep)[f] != 0 if given; infinity: none).
+double BruteForceSquaredDistance(const Eigen::Vector3d& p, const Vertices& pos, const Triangles& T,
+                                 const std::vector<char>* keep = nullptr) {
+  double brute = std::numeric_limits<double>::infinity();
   for (int f = 0; f < T.rows(); ++f) {
+    if (keep != nullptr && !(*keep)[static_cast<size_t>(f)]) continue;
     const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
     brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
   }
@@ -402,18 +405,6 @@ TEST(SurfaceIndex, KeptWhileTheSurfaceMovesItFindsTheClosestPointWhereItIsNow) {
   EXPECT_GT(walked, 200);  // most queries' closest triangle moved away
 }
 
-// The squared distance from p to the closest triangle f of T with keep[f] != 0 (infinity: none).
-double BruteForceKeptSquaredDistance(const Eigen::Vector3d& p, const Vertices& pos, const Triangles& T,
-                                     const std::vector<char>& keep) {
-  double brute = std::numeric_limits<double>::infinity();
-  for (int f = 0; f < T.rows(); ++f) {
-    if (!keep[static_cast<size_t>(f)]) continue;
-    const Eigen::Vector3d a = pos.row(T(f, 0)), b = pos.row(T(f, 1)), c = pos.row(T(f, 2));
-    brute = std::min(brute, (TriangleClosestPoint(p, a, b, c) - p).squaredNorm());
-  }
-  return brute;
-}
-
 // The distance bounds hold the closest point's distance, and Closest's own, with queries on,
 // near and far from the surface: on a whole surface and on a kept half of it (a facing
 // index), before and after a kept index's surface moves by about an edge, with its spheres
@@ -438,8 +429,8 @@ TEST(SurfaceIndex, DistanceBoundsHoldTheClosestPointsDistance) {
           const Eigen::Vector3d p = q % 50 == 0 ? Eigen::Vector3d(pos.row(q % pos.rows()))  // on a vertex
                                                 : Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * radius(rng);
           double lower = -1.0, upper = -1.0;
-          index.DistanceBounds(p, &lower, &upper);
-          const double d = std::sqrt(BruteForceKeptSquaredDistance(p, pos, T, keep));
+          index.DistanceBounds(p, index.Nearby(p), &lower, &upper);
+          const double d = std::sqrt(BruteForceSquaredDistance(p, pos, T, &keep));
           const double found = std::sqrt(index.Closest(p).squared_distance);
           ASSERT_GE(lower, 0.0);
           ASSERT_LE(lower, d * (1.0 + 1e-12)) << when << ", query " << p.transpose();
@@ -467,7 +458,7 @@ TEST(SurfaceIndex, DistanceBoundsHoldTheClosestPointsDistance) {
   const std::vector<char> none(static_cast<size_t>(T.rows()), 0);
   const SurfaceIndex empty(rest, T, none);
   double lower = -1.0, upper = -1.0;
-  empty.DistanceBounds(Eigen::Vector3d(0.1, 0.2, 0.3), &lower, &upper);
+  empty.DistanceBounds(Eigen::Vector3d(0.1, 0.2, 0.3), empty.Nearby(Eigen::Vector3d(0.1, 0.2, 0.3)), &lower, &upper);
   EXPECT_EQ(lower, 0.0);
   EXPECT_EQ(upper, std::numeric_limits<double>::infinity());
 }

@@ -284,31 +284,30 @@ SurfaceIndex::Hit SurfaceIndex::ClosestFrom(const Eigen::Vector3d& query, int st
   return best;
 }
 
-void SurfaceIndex::DistanceBounds(const Eigen::Vector3d& query, double* lower, double* upper) const {
-  *lower = 0.0;
-  *upper = std::numeric_limits<double>::infinity();
-  int idx[16];
-  double d2[16];
-  const int n = Tree().KNearest(query, std::min(candidate_vertices_, 16), idx, d2);
-  if (n < 1) return;
-  for (int i = 0; i < n; ++i) {
-    *upper = std::min(*upper, (query - positions_.row(surface_vertex_ids_[static_cast<size_t>(idx[i])]).transpose()).norm());
-  }
-  const double largest = LargestSphere();
-  *lower = std::max(0.0, std::sqrt(d2[0]) - moved_ - (largest + SphereSlack()));
+SurfaceIndex::Candidates SurfaceIndex::Nearby(const Eigen::Vector3d& query) const {
+  Candidates near;
+  near.count = Tree().KNearest(query, std::min(candidate_vertices_, 16), near.ids, near.squared_distances);
+  return near;
 }
 
-SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query) const {
+void SurfaceIndex::DistanceBounds(const Eigen::Vector3d& query, const Candidates& near, double* lower,
+                                  double* upper) const {
+  *lower = 0.0;
+  *upper = std::numeric_limits<double>::infinity();
+  if (near.count < 1) return;
+  for (int i = 0; i < near.count; ++i) {
+    *upper = std::min(*upper, (query - positions_.row(surface_vertex_ids_[static_cast<size_t>(near.ids[i])]).transpose()).norm());
+  }
+  *lower = std::max(0.0, std::sqrt(near.squared_distances[0]) - moved_ - (LargestSphere() + SphereSlack()));
+}
+
+SurfaceIndex::Hit SurfaceIndex::Closest(const Eigen::Vector3d& query, const Candidates& near) const {
   Hit best;
   best.squared_distance = std::numeric_limits<double>::infinity();
-  int idx[16];
-  double d2[16];
-  const int k = std::min(candidate_vertices_, 16);
-  const int n = Tree().KNearest(query, k, idx, d2);
   // The candidates' triangles, each once, in the order first met.
   Tested tested;
   const std::vector<Eigen::Vector4d>& spheres = Spheres();
-  for (int i = 0; i < n; ++i) TestAround(surface_vertex_ids_[idx[i]], query, spheres, &tested, &best);
+  for (int i = 0; i < near.count; ++i) TestAround(surface_vertex_ids_[near.ids[i]], query, spheres, &tested, &best);
   return best;
 }
 

@@ -78,7 +78,6 @@ class SurfaceIndex {
     Eigen::Vector3d point = Eigen::Vector3d::Zero();
     double squared_distance = 0.0;
   };
-  Hit Closest(const Eigen::Vector3d& query) const;
   // Warm-started from `start`, the triangle of an earlier hit of the same query (the last
   // outer iteration's): the closest point among the triangles around start's vertices,
   // walked on from the best of them until it stays (a few rings at most). The same as
@@ -87,13 +86,24 @@ class SurfaceIndex {
   // max_rings centres; *settled (if given) says whether it stayed before that (false: the
   // best found so far, which a closer triangle farther on may beat).
   Hit ClosestFrom(const Eigen::Vector3d& query, int start, int max_rings = 4, bool* settled = nullptr) const;
-  // Bounds on the query's distance to the surface, and on Closest(query)'s, from Closest's own
-  // candidate vertices alone (no triangle tested): *upper, the nearest candidate's distance
-  // where it is now (Closest tests the triangles around every candidate); *lower, the nearest
-  // distance in the tree (where the vertices were when the index was made) less their move
-  // since and the largest triangle's bounding sphere (a point of a triangle has a corner
-  // within its sphere's radius).
-  void DistanceBounds(const Eigen::Vector3d& query, double* lower, double* upper) const;
+  // Closest's candidates for a query: the surface vertices nearest to it in the k-d tree
+  // (where they were when the index was made), at most 16. Closest(query) searches the
+  // triangles around them; a caller that first bounds the distance (DistanceBounds) searches
+  // from the same candidates, without a second tree search.
+  struct Candidates {
+    int count = 0;
+    int ids[16];                   // in the tree, nearest first
+    double squared_distances[16];  // to the tree's positions
+  };
+  Candidates Nearby(const Eigen::Vector3d& query) const;
+  Hit Closest(const Eigen::Vector3d& query) const { return Closest(query, Nearby(query)); }
+  Hit Closest(const Eigen::Vector3d& query, const Candidates& near) const;
+  // Bounds on the query's distance to the surface, and on Closest(query)'s, from its
+  // candidates alone (no triangle tested): *upper, the nearest candidate's distance where it
+  // is now (Closest tests the triangles around every candidate); *lower, the nearest
+  // candidate's distance in the tree less the vertices' move since and the largest triangle's
+  // bounding sphere (a point of a triangle has a corner within its sphere's radius).
+  void DistanceBounds(const Eigen::Vector3d& query, const Candidates& near, double* lower, double* upper) const;
   // ClosestFrom(query, start, max_rings), and Closest(query) where that walk has not settled.
   Hit ClosestSeeded(const Eigen::Vector3d& query, int start, int max_rings) const {
     bool settled = true;

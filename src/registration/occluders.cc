@@ -63,11 +63,12 @@ struct OffModel {
     signed char& o = (*memo)[static_cast<size_t>(i)];
     if (o < 0) {
       // The bounds where they leave no doubt, else the closest point.
+      const Eigen::Vector3d p = points->row(i);
+      const SurfaceIndex::Candidates near = surface->Nearby(p);
       double lower = 0.0, upper = 0.0;
-      surface->DistanceBounds(points->row(i), &lower, &upper);
-      const int within = Within(lower, upper, std::sqrt(grow2), points->row(i));
-      o = within >= 0 ? static_cast<signed char>(1 - within)
-                      : (surface->Closest(points->row(i)).squared_distance > grow2 ? 1 : 0);
+      surface->DistanceBounds(p, near, &lower, &upper);
+      const int within = Within(lower, upper, std::sqrt(grow2), p);
+      o = within >= 0 ? static_cast<signed char>(1 - within) : (surface->Closest(p, near).squared_distance > grow2 ? 1 : 0);
     }
     return o == 1;
   }
@@ -139,13 +140,18 @@ OccluderCounts MarkOccluders(const TrackerState& state, const SurfaceIndex& surf
     // Without seeds, the bounds decide where they leave no doubt (the same marks). Not with
     // them: a settled walk may stop farther than the bounds' upper end, and the marks go by
     // the walk's distance (below); the walks also spare the k-d tree of every vertex.
+    const Eigen::Vector3d p = points.row(i);
+    SurfaceIndex::Candidates near;
     double lower = 0.0, upper = std::numeric_limits<double>::infinity();
-    if (!seeded) surface.DistanceBounds(points.row(i), &lower, &upper);
-    if (Within(lower, upper, grow, points.row(i)) == 1) return;
-    double d = Within(lower, upper, std::max(grow, margin), points.row(i)) == 0
+    if (!seeded) {
+      near = surface.Nearby(p);
+      surface.DistanceBounds(p, near, &lower, &upper);
+    }
+    if (Within(lower, upper, grow, p) == 1) return;
+    double d = Within(lower, upper, std::max(grow, margin), p) == 0
                    ? lower
-                   : std::sqrt((seeded ? surface.ClosestSeeded(points.row(i), seeds[static_cast<size_t>(i)], seed_rings)
-                                       : surface.Closest(points.row(i)))
+                   : std::sqrt((seeded ? surface.ClosestSeeded(p, seeds[static_cast<size_t>(i)], seed_rings)
+                                       : surface.Closest(p, near))
                                    .squared_distance);
     // A walk from the nearest subsample vertex can stop on a thin part's far side: its distance
     // exceeds the true one by at most the subsample's spacing (under a mesh edge), so a point
@@ -193,10 +199,11 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
     // Decided by the bounds where they leave no doubt, else by the closest point: the same
     // marks.
     const Eigen::Vector3d p = points.row(static_cast<Eigen::Index>(i));
+    const SurfaceIndex::Candidates near = surface.Nearby(p);
     double lower = 0.0, upper = 0.0;
-    surface.DistanceBounds(p, &lower, &upper);
+    surface.DistanceBounds(p, near, &lower, &upper);
     const int within = Within(lower, upper, grow, p);
-    if (within == 1 || (within < 0 && surface.Closest(p).squared_distance <= grow * grow)) {
+    if (within == 1 || (within < 0 && surface.Closest(p, near).squared_distance <= grow * grow)) {
       (*occluder)[i] = 0;
     } else {
       ++counts.occluders;
@@ -278,11 +285,13 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   std::vector<int> closest(static_cast<size_t>(n), -1);
   ParallelFor(threads, n, 2048, [&](int64_t i) {
     if ((*marks)[static_cast<size_t>(i)] || strained_corners.empty()) return;
+    const Eigen::Vector3d p = points.row(i);
+    const SurfaceIndex::Candidates near = surface.Nearby(p);
     double lower = 0.0, upper = 0.0;
-    surface.DistanceBounds(points.row(i), &lower, &upper);
+    surface.DistanceBounds(p, near, &lower, &upper);
     const double reach = upper + longest;
-    if (!strained_index.AnyWithin(points.row(i), reach + kBoundMargin * (reach + points.row(i).norm()))) return;
-    closest[static_cast<size_t>(i)] = surface.Closest(points.row(i)).triangle;
+    if (!strained_index.AnyWithin(p, reach + kBoundMargin * (reach + p.norm()))) return;
+    closest[static_cast<size_t>(i)] = surface.Closest(p, near).triangle;
   });
   for (int i = 0; i < n; ++i) {
     const int triangle = closest[static_cast<size_t>(i)];
