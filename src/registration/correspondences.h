@@ -79,6 +79,9 @@ struct FrameCloud {
   // The depth the sensor observed along its rays (registration.free_space): empty without a
   // view, or with free space off.
   ObservedDepth observed;
+  // The points preprocess.plane removed (the table): not data, but seen, so the space in
+  // front of them is free too.
+  Vertices plane_points;
   // The depth of the occluders' points (occluder == 1) along the camera's rays: empty without
   // them (BuildOccluderDepth).
   ObservedDepth occluder_depth;

@@ -280,7 +280,11 @@ void BuildObservedDepth(const TrackerState& state, FrameCloud* fc) {
   const RegistrationOptions& options = state.options;
   fc->observed.Clear();
   if (!options.free_space.enabled || fc->cloud.size() == 0) return;
-  const Vertices& points = fc->cloud.points;
+  Vertices points = fc->cloud.points;
+  if (fc->plane_points.rows() > 0) {
+    points.conservativeResize(points.rows() + fc->plane_points.rows(), 3);
+    points.bottomRows(fc->plane_points.rows()) = fc->plane_points;
+  }
   if (options.camera.enabled) {
     const Eigen::Vector3d axis = CameraRotation(options.camera).row(2).transpose();
     fc->observed.Build(points, true, options.camera.position, axis, fc->spacing);

@@ -165,10 +165,18 @@ void Tracker::Impl::PrepareCloud(const PointCloud& input, FrameCloud* fc, FrameS
   fc->cloud = input;
   const CameraOptions& camera = state.options.camera;
   const bool offset = pre.depth_offset && camera.enabled && pre.plane_distance > 0;
+  const bool keep_plane = state.options.free_space.enabled && pre.plane_distance > 0;
   RemovedPlane plane;
   PrepareCloudForTracking(state.options, &fc->cloud, &s->nonfinite_dropped, &s->flying_pixels,
-                          offset ? &plane : nullptr);
+                          offset || keep_plane ? &plane : nullptr);
   if (offset) s->depth_offset = depth_offset.Correct(camera, pre.plane_distance, plane, &fc->cloud);
+  fc->plane_points.resize(0, 3);
+  if (keep_plane && plane.points.rows() > 0) {
+    PointCloud table;
+    table.points = std::move(plane.points);
+    if (s->depth_offset != 0.0) ShiftDepth(camera, s->depth_offset, &table);
+    fc->plane_points = std::move(table.points);
+  }
   prepared_cloud = fc->cloud;
   // The cloud is thinned to the surface the data terms see (an embedded one's).
   const TrackerState& pair_state = PairState();
