@@ -140,6 +140,32 @@ TEST(MeshCliTest, MakesACageAroundTheSurface) {
   EXPECT_NE(err.find("--cage chooses the edge length"), std::string::npos) << err;
 }
 
+// Two cubes that cross each other: refused with the way round it, meshed with --wrap, the
+// wrap in the text and JSON reports.
+TEST(MeshCliTest, WrapsASurfaceTheChecksRefuse) {
+  TempDir dir;
+  const std::string crossing = dir.path() + "/crossing.obj";
+  WriteObj(crossing, Join(Cube(), Cube(Eigen::Vector3d(0.5, 0.25, 0.25))));
+  const std::string out_path = dir.path() + "/wrapped.vtu";
+  std::string out, err;
+  EXPECT_EQ(RunCli("mesh " + crossing + " --out " + out_path, &out, &err), 1);
+  EXPECT_NE(err.find("cross"), std::string::npos) << err;
+  EXPECT_NE(err.find("--wrap ALPHA"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out_path));
+  ASSERT_EQ(RunCli("mesh " + crossing + " --out " + out_path + " --wrap 0.1 --edge-length 0.2", &out, &err), 0)
+      << err;
+  EXPECT_NE(out.find("wrapped:   alpha 0.1, offset 0.003333"), std::string::npos) << out;
+  TetMesh mesh;
+  ASSERT_TRUE(ReadTetMesh(out_path, &mesh).ok());
+  EXPECT_NEAR(RestVolume(mesh), 1.71875, 0.06 * 1.71875);  // the union's volume
+  ASSERT_EQ(RunCli("mesh " + crossing + " --out " + out_path + " --wrap 0.1 --wrap-offset 0.01 --force --json",
+                   &out, &err),
+            0)
+      << err;
+  EXPECT_NE(out.find("\"wrapped\": {\"alpha\": 0.1, \"offset\": 0.01,"), std::string::npos) << out;
+  EXPECT_EQ(RunCli("mesh " + crossing + " --out " + out_path + " --wrap -1 --force", &out, &err), 2);
+}
+
 #endif  // FEMREG_CLI_PATH
 
 }  // namespace

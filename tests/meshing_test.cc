@@ -3,6 +3,10 @@
 
 #include "meshing_surfaces.h"
 
+#include <tuple>
+
+#include "femreg/geometry.h"
+
 namespace femreg {
 namespace {
 
@@ -29,6 +33,14 @@ TEST(MeshingOptionsTest, IsValidNamesTheField) {
   o.min_dihedral_deg = 30.0;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("min_dihedral_deg"), std::string::npos) << error;
+  o = MeshingOptions();
+  o.wrap = -1.0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("wrap"), std::string::npos) << error;
+  o = MeshingOptions();
+  o.wrap_offset = std::nan("");
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("wrap_offset"), std::string::npos) << error;
   o = MeshingOptions();
   o.max_tets = 0;
   EXPECT_FALSE(o.IsValid(&error));
@@ -320,6 +332,27 @@ TEST(MeshingTest, SelfIntersectionCheckAgreesWithTetGen) {
   EXPECT_GT(accepted, 0);
 }
 
+// The vertices of `points` outside `mesh` (in no element, up to round-off). EmbedPoints
+// without clamping looks among the nearest elements only; one it finds outside them all is
+// tested against every element.
+int Outside(const TetMesh& mesh, const Vertices& points) {
+  const EmbeddedPoints e = EmbedPoints(mesh, points, /*clamp=*/false);
+  int outside = 0;
+  for (size_t i = 0; i < e.barycentric.size(); ++i) {
+    if (e.barycentric[i].minCoeff() >= -1e-9) continue;
+    const Eigen::Vector3d p = points.row(static_cast<Eigen::Index>(i)).transpose();
+    bool inside = false;
+    for (int t = 0; t < mesh.num_tets() && !inside; ++t) {
+      Eigen::Matrix3d D;
+      for (int k = 0; k < 3; ++k) D.col(k) = (mesh.rest.row(mesh.tets(t, k + 1)) - mesh.rest.row(mesh.tets(t, 0))).transpose();
+      const Eigen::Vector3d l = D.inverse() * (p - mesh.rest.row(mesh.tets(t, 0)).transpose());
+      inside = l.minCoeff() >= -1e-9 && l.sum() <= 1.0 + 1e-9;
+    }
+    outside += !inside;
+  }
+  return outside;
+}
+
 TEST(MeshingTest, RealSurfaces) {
   // Public surfaces beside the repository when present (not part of it): the Bunny is
   // clean; the dragon has duplicated triangles; the smoothed liver folds through itself in
@@ -356,6 +389,85 @@ TEST(MeshingTest, RealSurfaces) {
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("7 pairs of triangles that cross"), std::string::npos)
       << status.message();
+
+  // Wrapped first, both are meshed: the liver (about 6 x 5 x 4) at alpha 0.2, the dragon
+  // (about 23 x 16 x 10) at alpha 1. As it is, the wrap holds every vertex of the input;
+  // remeshed to L, about the same volume.
+  for (const auto& [name, alpha, length] :
+       {std::tuple<const char*, double, double>{"liver-smooth.obj", 0.2, 0.3}, {"dragon.obj", 1.0, 0.6}}) {
+    ASSERT_TRUE(ReadSurface(dir + "/" + name, &s.V, &s.F).ok());
+    MeshingOptions wrap;
+    wrap.wrap = alpha;
+    status = TetrahedralizeSurface(s.V, s.F, wrap, &mesh, &report, name);
+    ASSERT_TRUE(status.ok()) << status.message();
+    ExpectValidMesh(mesh);
+    EXPECT_TRUE(report.wrapped);
+    EXPECT_EQ(Outside(mesh, s.V), 0) << name;
+    const double wrapped_volume = report.surface_volume;
+    wrap.edge_length = length;
+    status = TetrahedralizeSurface(s.V, s.F, wrap, &mesh, &report, name);
+    ASSERT_TRUE(status.ok()) << status.message();
+    ExpectValidMesh(mesh);
+    EXPECT_NEAR(RestVolume(mesh), wrapped_volume, 0.03 * wrapped_volume) << name;
+  }
+}
+
+// A broken surface is refused with the way round it, and --wrap meshes a closed surface
+// around it: two cubes that cross each other (their union's volume is 1.71875), and a box
+// with a face missing (closed over, the opening being narrower than alpha). Meshed as it is
+// (no edge length), the wrap holds every input vertex; remeshed, its chords may cut a
+// vertex off by up to about L^2 / (8 R).
+TEST(MeshingTest, WrapMeshesAClosedSurfaceAroundABrokenOne) {
+  const Surface crossing = Join(Cube(), Cube(Eigen::Vector3d(0.5, 0.25, 0.25)));
+  Surface open = Cube();
+  open.F.conservativeResize(open.F.rows() - 2, 3);  // one face of two triangles less
+  for (const Surface* broken : std::vector<const Surface*>{&crossing, &open}) {
+    const bool is_open = broken == &open;
+    MeshingOptions options;
+    TetMesh mesh;
+    MeshingReport report;
+    Status status = TetrahedralizeSurface(broken->V, broken->F, options, &mesh, &report, "broken.obj");
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("--wrap"), std::string::npos) << status.message();
+    EXPECT_FALSE(report.wrapped);
+
+    options.wrap = is_open ? 1.5 : 0.1;  // the open face is 1 across: a wider alpha closes it
+    status = TetrahedralizeSurface(broken->V, broken->F, options, &mesh, &report, "broken.obj");
+    ASSERT_TRUE(status.ok()) << status.message();
+    ExpectValidMesh(mesh);
+    EXPECT_TRUE(report.wrapped);
+    EXPECT_NEAR(report.wrap_offset, options.wrap / 30.0, 1e-15);
+    EXPECT_GT(report.wrapped_triangles, 0);
+    EXPECT_EQ(report.shells, 1);
+    // The wrap lies outside the input: every input vertex is in the mesh, which holds the
+    // solid and little more (the offset, and corners rounded at alpha).
+    EXPECT_EQ(Outside(mesh, broken->V), 0);
+    const double solid = is_open ? 1.0 : 1.71875;
+    EXPECT_GT(RestVolume(mesh), solid);
+    EXPECT_LT(RestVolume(mesh), (is_open ? 1.3 : 1.06) * solid);
+    options.edge_length = 0.2;  // remeshed: about the same solid
+    status = TetrahedralizeSurface(broken->V, broken->F, options, &mesh, &report, "broken.obj");
+    ASSERT_TRUE(status.ok()) << status.message();
+    ExpectValidMesh(mesh);
+    EXPECT_NEAR(RestVolume(mesh), report.surface_volume, 0.05 * report.surface_volume);
+  }
+
+  // A cage of the crossing cubes: the wrap made once, every input vertex inside.
+  MeshingOptions options;
+  options.wrap = 0.2;
+  TetMesh cage;
+  CageReport report;
+  Status status = MakeCage(crossing.V, crossing.F, 60, options, &cage, &report, "crossing.obj");
+  ASSERT_TRUE(status.ok()) << status.message();
+  ExpectValidMesh(cage);
+  EXPECT_TRUE(report.meshing.wrapped);
+  EXPECT_EQ(report.meshing.input_triangles, crossing.F.rows());
+  EXPECT_EQ(report.outside_vertices, 0);
+  EXPECT_EQ(Outside(cage, crossing.V), 0);
+  options.wrap = 0.0;
+  status = MakeCage(crossing.V, crossing.F, 60, options, &cage, &report, "crossing.obj");
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("--wrap"), std::string::npos) << status.message();
 }
 
 TEST(MeshingTest, TooFineATargetIsRefusedBeforeTetGenRuns) {

@@ -66,6 +66,14 @@ struct MeshingOptions {
   // triangle); off: every element is in region 0. Shells inside another shell's solid are
   // cavities either way (they are not meshed).
   bool region_per_shell = true;
+  // > 0: the surface is first replaced by its alpha wrap (CGAL's 3D Alpha Wrapping) at this
+  // alpha, then meshed as a clean one: a closed, 2-manifold surface without crossings around
+  // the input, whatever its holes, crossing or coinciding triangles and non-manifold edges (a
+  // scan's). Gaps, holes and openings narrower than about alpha are closed over, and details
+  // finer than it are smoothed away. 0: the surface as it is, refused if it is broken.
+  double wrap = 0.0;
+  // How far outside the input the wrap lies. 0: wrap / 30 (CGAL's own choice).
+  double wrap_offset = 0.0;
   // Look for triangles that cross or touch each other before calling TetGen (TetGen also
   // stops on one, but cannot say which). Off only to save time on a surface known clean.
   bool check_self_intersections = true;
@@ -83,6 +91,12 @@ struct MeshingReport {
   // The input as given.
   int input_vertices = 0;
   int input_triangles = 0;
+  // The alpha wrap that replaced the input (MeshingOptions::wrap), when it did.
+  bool wrapped = false;
+  double wrap_alpha = 0.0;
+  double wrap_offset = 0.0;
+  int wrapped_vertices = 0;
+  int wrapped_triangles = 0;
   // The cleaned surface.
   int merged_vertices = 0;  // vertices merged into another one within merge_distance
   int unused_vertices = 0;  // vertices no triangle uses (dropped)
@@ -125,6 +139,7 @@ struct MeshingReport {
   double small_dihedral_share = 0.0;
   double large_dihedral_share = 0.0;
   // Wall-clock seconds.
+  double wrap_seconds = 0.0;    // the alpha wrap
   double check_seconds = 0.0;   // reading excluded: merging, checks, shells
   double remesh_seconds = 0.0;  // remeshing and checking the remeshed surface
   double tetgen_seconds = 0.0;  // TetGen in its child process, the mesh sent back

@@ -1,6 +1,7 @@
 // femreg mesh --cage N: a coarse tetrahedral mesh of about N vertices around a fine surface.
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -9,6 +10,7 @@
 #include "femreg/geometry.h"
 #include "femreg/meshing.h"
 #include "geometry/nearest.h"
+#include "meshing/wrap_surface.h"
 
 namespace femreg {
 
@@ -61,27 +63,45 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
   CageReport& report = report_out != nullptr ? *report_out : local;
   report = CageReport();
   if (target_vertices < 8) return Status::Error(source + ": a cage needs a target of at least 8 vertices");
+  // A broken surface is wrapped once, here, and each pass meshes the wrap; the cage is still
+  // moved out until the input's own vertices are inside.
+  MeshingOptions base = options;
+  Vertices wrapped_vertices;
+  Triangles wrapped_triangles;
+  double wrap_offset = 0.0, wrap_seconds = 0.0;
+  if (options.wrap > 0.0) {
+    const auto wrap_start = std::chrono::steady_clock::now();
+    wrap_offset = options.wrap_offset > 0.0 ? options.wrap_offset : options.wrap / 30.0;
+    const Status status =
+        internal::WrapSurface(V, F, options.wrap, wrap_offset, source, &wrapped_vertices, &wrapped_triangles);
+    if (!status.ok()) return status;
+    wrap_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wrap_start).count();
+    base.wrap = 0.0;
+  }
+  const Vertices& surface_vertices = options.wrap > 0.0 ? wrapped_vertices : V;
+  const Triangles& surface_triangles = options.wrap > 0.0 ? wrapped_triangles : F;
   // The first pass' edge length from the solid's volume: a mesh of well-shaped elements of
   // edge L has about 1.5 Vol / L^3 interior vertices, and a coarse one as many again on its
   // surface.
-  MeshingOptions pass = options;
+  MeshingOptions pass = base;
   pass.remesh = true;
   pass.keep_surface = false;
   pass.edge_length = 0.0;
   {
     MeshingReport probe;
-    MeshingOptions check = options;
+    MeshingOptions check = base;
     // A tiny edge length against a bound of one element stops it after the checks, with
     // the volume measured.
     check.max_tets = 1;
-    check.edge_length = 1e-6 * ((V.colwise().maxCoeff() - V.colwise().minCoeff()).norm() + 1e-300);
+    check.edge_length =
+        1e-6 * ((surface_vertices.colwise().maxCoeff() - surface_vertices.colwise().minCoeff()).norm() + 1e-300);
     TetMesh unused;
-    TetrahedralizeSurface(V, F, check, &unused, &probe, source);
+    TetrahedralizeSurface(surface_vertices, surface_triangles, check, &unused, &probe, source);
     if (!(probe.surface_volume > 0.0)) {
       // The checks failed: run them again for their message.
-      MeshingOptions plain = options;
+      MeshingOptions plain = base;
       plain.remesh = false;
-      const Status status = TetrahedralizeSurface(V, F, plain, &unused, &probe, source);
+      const Status status = TetrahedralizeSurface(surface_vertices, surface_triangles, plain, &unused, &probe, source);
       return status.ok() ? Status::Error(source + ": the surface encloses no volume") : status;
     }
     pass.edge_length = std::cbrt(3.0 * probe.surface_volume / target_vertices);
@@ -89,8 +109,18 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
   for (int p = 0; p < kMaxPasses; ++p) {
     report.passes = p + 1;
     report.edge_length = pass.edge_length;
-    const Status status = TetrahedralizeSurface(V, F, pass, mesh, &report.meshing, source);
+    const Status status = TetrahedralizeSurface(surface_vertices, surface_triangles, pass, mesh, &report.meshing, source);
     if (!status.ok()) return status;
+    if (options.wrap > 0.0) {  // the report is of the input, wrapped
+      report.meshing.input_vertices = static_cast<int>(V.rows());
+      report.meshing.input_triangles = static_cast<int>(F.rows());
+      report.meshing.wrapped = true;
+      report.meshing.wrap_alpha = options.wrap;
+      report.meshing.wrap_offset = wrap_offset;
+      report.meshing.wrapped_vertices = static_cast<int>(wrapped_vertices.rows());
+      report.meshing.wrapped_triangles = static_cast<int>(wrapped_triangles.rows());
+      report.meshing.wrap_seconds = wrap_seconds;
+    }
     const double ratio = static_cast<double>(report.meshing.vertices) / target_vertices;
     if (std::abs(ratio - 1.0) <= kCountTolerance) break;
     // The count goes with L^-3 inside and L^-2 on the surface: a coarse cage is in between.

@@ -50,6 +50,12 @@ bool MeshingOptions::IsValid(std::string* error) const {
   if (remesh_iterations < 1 || remesh_iterations > 100) {
     return fail("remesh_iterations must be in [1, 100], got " + std::to_string(remesh_iterations));
   }
+  if (!(std::isfinite(wrap) && wrap >= 0.0)) {
+    return fail("wrap must be >= 0 (0: no wrap; else the alpha wrap's alpha), got " + Fmt(wrap));
+  }
+  if (!(std::isfinite(wrap_offset) && wrap_offset >= 0.0)) {
+    return fail("wrap_offset must be >= 0 (0: wrap / 30), got " + Fmt(wrap_offset));
+  }
   if (max_tets < 1) return fail("max_tets must be >= 1, got " + std::to_string(max_tets));
   if (!(std::isfinite(time_limit_seconds) && time_limit_seconds >= 0.0)) {
     return fail("time_limit_seconds must be >= 0 (0: no limit), got " + Fmt(time_limit_seconds));

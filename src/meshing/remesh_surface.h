@@ -1,6 +1,6 @@
 // Isotropic remeshing of a checked surface to a target edge length (CGAL's
-// Polygon_mesh_processing), private to src/meshing/. The only file that includes CGAL is
-// remesh_surface.cc, so that CGAL's templates are compiled once.
+// Polygon_mesh_processing), private to src/meshing/. Only remesh_surface.cc and
+// wrap_surface.cc include CGAL, so that its templates are compiled once.
 #ifndef FEMREG_MESHING_REMESH_SURFACE_H_
 #define FEMREG_MESHING_REMESH_SURFACE_H_
 

@@ -38,6 +38,7 @@
 #include "meshing/mesh_measures.h"
 #include "meshing/remesh_surface.h"
 #include "meshing/surface_check.h"
+#include "meshing/wrap_surface.h"
 #include "parallel/stopwatch.h"
 
 namespace femreg {
@@ -331,10 +332,31 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   std::string error;
   if (!options.IsValid(&error)) return Status::Error(source + ": meshing options: " + error);
 
+  // A broken surface (a scan's) is wrapped first where asked: the rest meshes the wrap.
+  Vertices wrapped_vertices;
+  Triangles wrapped_triangles;
+  if (options.wrap > 0.0) {
+    const Clock::time_point wrap_start = Clock::now();
+    report.wrap_alpha = options.wrap;
+    report.wrap_offset = options.wrap_offset > 0.0 ? options.wrap_offset : options.wrap / 30.0;
+    const Status wrapped = internal::WrapSurface(V, F, report.wrap_alpha, report.wrap_offset, source,
+                                                 &wrapped_vertices, &wrapped_triangles);
+    report.wrap_seconds = Seconds(wrap_start);
+    if (!wrapped.ok()) {
+      report.total_seconds = Seconds(start);
+      return wrapped;
+    }
+    report.wrapped = true;
+    report.wrapped_vertices = static_cast<int>(wrapped_vertices.rows());
+    report.wrapped_triangles = static_cast<int>(wrapped_triangles.rows());
+  }
+
   // Clean and check the surface.
+  const Clock::time_point check_start = Clock::now();
   internal::CheckedSurface surface;
-  Status status = internal::CheckSurface(V, F, options.merge_distance,
-                                         options.check_self_intersections, source, &surface);
+  Status status = internal::CheckSurface(report.wrapped ? wrapped_vertices : V, report.wrapped ? wrapped_triangles : F,
+                                         options.merge_distance, options.check_self_intersections, source,
+                                         &surface);
   report.merged_vertices = surface.merged_vertices;
   report.unused_vertices = surface.unused_vertices;
   report.merge_distance = surface.merge_distance;
@@ -342,10 +364,11 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   report.surface_area = surface.area;
   report.surface_mean_edge_length = surface.mean_edge_length;
   report.shells = static_cast<int>(surface.shells.size());
-  report.check_seconds = Seconds(start);
+  report.check_seconds = Seconds(check_start);
   if (!status.ok()) {
     report.total_seconds = Seconds(start);
-    return status;
+    if (report.wrapped) return status;
+    return Status::Error(status.message() + "\n" + internal::kWrapHint);
   }
   int cavity_count = 0;
   for (const internal::SurfaceShell& shell : surface.shells) {

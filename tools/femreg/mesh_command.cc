@@ -71,7 +71,14 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << "  \"input\": {\"vertices\": " << r.input_vertices
      << ", \"triangles\": " << r.input_triangles << ", \"scale\": " << JsonNumber(args.scale)
      << "},\n"
-     << "  \"cleaning\": {\"merged_vertices\": " << r.merged_vertices
+     << "  \"wrapped\": ";
+  if (r.wrapped) {
+    os << "{\"alpha\": " << JsonNumber(r.wrap_alpha) << ", \"offset\": " << JsonNumber(r.wrap_offset)
+       << ", \"vertices\": " << r.wrapped_vertices << ", \"triangles\": " << r.wrapped_triangles << "},\n";
+  } else {
+    os << "null,\n";
+  }
+  os << "  \"cleaning\": {\"merged_vertices\": " << r.merged_vertices
      << ", \"merge_distance\": " << JsonNumber(r.merge_distance)
      << ", \"unused_vertices\": " << r.unused_vertices << "},\n"
      << "  \"surface\": {\"vertices\": " << r.surface_vertices << ", \"shells\": " << r.shells
@@ -124,7 +131,7 @@ std::string JsonReport(const MeshArgs& args, const MeshingReport& r, const Timin
   os << "  \"tetgen_warnings\": " << JsonString(r.tetgen_warnings) << ",\n"
      << "  \"tetgen_log\": " << JsonString(r.tetgen_log) << ",\n"
      << "  \"seconds\": {\"read\": " << JsonNumber(t.read)
-     << ", \"checks\": " << JsonNumber(r.check_seconds)
+     << ", \"wrap\": " << JsonNumber(r.wrap_seconds) << ", \"checks\": " << JsonNumber(r.check_seconds)
      << ", \"remesh\": " << JsonNumber(r.remesh_seconds)
      << ", \"tetgen\": " << JsonNumber(r.tetgen_seconds)
      << ", \"finish\": " << JsonNumber(r.finish_seconds) << ", \"write\": " << JsonNumber(t.write)
@@ -138,8 +145,13 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
   os << "femreg mesh: " << args.surface << " -> " << args.out << "\n"
      << "input:     " << r.input_vertices << " vertices, " << r.input_triangles << " triangles";
   if (args.scale != 1.0) os << ", coordinates scaled by " << G(args.scale);
-  os << "\n"
-     << "cleaned:   " << r.merged_vertices << " duplicate vertices merged (closer than "
+  os << "\n";
+  if (r.wrapped) {
+    os << "wrapped:   alpha " << G(r.wrap_alpha) << ", offset " << G(r.wrap_offset) << ": "
+       << r.wrapped_vertices << " vertices, " << r.wrapped_triangles
+       << " triangles, closed around the input (meshed in its place)\n";
+  }
+  os << "cleaned:   " << r.merged_vertices << " duplicate vertices merged (closer than "
      << G(r.merge_distance) << "), " << r.unused_vertices
      << " unused dropped: " << r.surface_vertices << " vertices\n"
      << "surface:   " << r.shells << " closed shell" << (r.shells == 1 ? "" : "s") << " ("
@@ -178,7 +190,8 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
      << " deg, aspect ratio max " << G(q.max_aspect_ratio) << ", mean " << G(q.mean_aspect_ratio)
      << " (1 = regular); " << G(100.0 * r.small_dihedral_share) << "% of the tetrahedra below "
      << "10 deg, " << G(100.0 * r.large_dihedral_share) << "% above 170\n"
-     << "time:      " << G(t.total) << " s (read " << G(t.read) << ", checks " << G(r.check_seconds)
+     << "time:      " << G(t.total) << " s (read " << G(t.read)
+     << (r.wrapped ? ", wrap " + G(r.wrap_seconds) : std::string()) << ", checks " << G(r.check_seconds)
      << ", remesh " << G(r.remesh_seconds)
      << ", TetGen " << G(r.tetgen_seconds) << ", finish " << G(r.finish_seconds) << ", write "
      << G(t.write) << ")\n";
@@ -266,7 +279,9 @@ void AddMeshCommand(CLI::App* app) {
       "edges), edges in more than two triangles, vertices where sheets meet, inconsistently "
       "oriented neighbours, zero-area triangles, triangles that cross or touch, or a shell "
       "with no volume are refused with a message that says where. Several closed shells are "
-      "fine: disjoint ones become separate regions, nested ones cavities.");
+      "fine: disjoint ones become separate regions, nested ones cavities. A surface refused so "
+      "(a raw scan) can be wrapped first with --wrap ALPHA: a closed surface around it, "
+      "meshed in its place.");
   cmd->footer(
       "Units: whatever the surface file uses, times --scale (femreg works in metres: a scan "
       "in millimetres wants --scale 0.001). The lengths and volumes of the options are in those "
@@ -351,6 +366,17 @@ void AddMeshCommand(CLI::App* app) {
                   "Rounds of remeshing (split, collapse, flip, smooth)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
+  cmd->add_option("--wrap", args->options.wrap,
+                  "First replace the surface by its alpha wrap (CGAL's 3D Alpha Wrapping) at this "
+                  "alpha, in the scaled units: a closed, manifold surface without crossings around "
+                  "the input, for a scan or an export the checks refuse (holes, crossing or "
+                  "duplicated triangles, non-manifold edges). Gaps, holes and openings narrower "
+                  "than about ALPHA close, details finer than it are smoothed away: about the "
+                  "narrowest part to keep (default: no wrap)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--wrap-offset", args->options.wrap_offset,
+                  "How far outside the input the wrap lies, in the scaled units (default: ALPHA / 30)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--single-region", args->single_region,
                 "Put every element in region 0 (default: one region per closed shell)");
   cmd->add_option("--cage", args->cage,
