@@ -1,6 +1,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <limits>
+#include <vector>
 
 #include "femreg/geometry.h"
 #include "geometry/nearest.h"
@@ -32,6 +33,9 @@ EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points, bool cla
   constexpr int kCandidates = 32;
   int ids[kCandidates];
   double d2[kCandidates];
+  constexpr int kWideCandidates = 256;
+  std::vector<int> wide_ids(kWideCandidates);
+  std::vector<double> wide_d2(kWideCandidates);
   for (int i = 0; i < points.rows(); ++i) {
     const Eigen::Vector3d p = points.row(i);
     const int n = index.KNearest(p, kCandidates, ids, d2);
@@ -47,9 +51,15 @@ EmbeddedPoints EmbedPoints(const TetMesh& fine, const Vertices& points, bool cla
       }
     };
     for (int j = 0; j < n; ++j) consider(ids[j]);
-    // Not inside any nearby element: search them all (rare; points outside the mesh). An
-    // embedded surface has thousands of points just outside its cage, and for those the
-    // nearby elements hold the nearest one; only one far outside searches them all.
+    // Not inside any of them: a wider ring of candidates, since beside large or flat elements
+    // the one that holds p need not have one of the nearest centroids.
+    if (best_min < -1e-9 && n == kCandidates) {
+      const int wide = index.KNearest(p, kWideCandidates, wide_ids.data(), wide_d2.data());
+      for (int j = 0; j < wide; ++j) consider(wide_ids[static_cast<size_t>(j)]);
+    }
+    // Still not inside any: search them all (rare; points outside the mesh). An embedded
+    // surface has thousands of points just outside its cage, and for those the nearby
+    // elements hold the nearest one; only one far outside searches them all.
     if (best_min < (clamp ? -1e-9 : -1.0)) {
       for (int t = 0; t < fine.num_tets(); ++t) consider(t);
     }
