@@ -64,40 +64,6 @@ TEST(EmbeddedSurfaceTest, VerticesOutsideTheCageAreExtrapolatedNotClamped) {
   EXPECT_GE(clamped.barycentric[1].minCoeff(), 0.0);
 }
 
-// A point inside a large element whose centroid is far, among many small elements just
-// beyond its face whose centroids are nearer: the large element is found, not the nearest
-// small one with extrapolated coordinates (a cage of a scan has such large elements).
-TEST(EmbeddedSurfaceTest, APointInALargeElementIsFoundAmongNearerSmallOnes) {
-  TetMesh mesh;
-  std::vector<Eigen::Vector3d> v = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  std::vector<std::array<int, 4>> tets = {{0, 1, 2, 3}};
-  // 64 smaller elements just beyond the face x + y + z = 1, from (0.34, 0.34, 0.34) on: p is
-  // outside each by less than its size (barycentric coordinates above -1).
-  for (int i = 0; i < 64; ++i) {
-    const Eigen::Vector3d c = Eigen::Vector3d(0.34, 0.34, 0.34) + 0.025 * Eigen::Vector3d(i % 4, (i / 4) % 4, i / 16);
-    const int b = static_cast<int>(v.size());
-    v.push_back(c);
-    v.push_back(c + Eigen::Vector3d(0.02, 0, 0));
-    v.push_back(c + Eigen::Vector3d(0, 0.02, 0));
-    v.push_back(c + Eigen::Vector3d(0, 0, 0.02));
-    tets.push_back({b, b + 1, b + 2, b + 3});
-  }
-  mesh.rest.resize(static_cast<Eigen::Index>(v.size()), 3);
-  for (size_t i = 0; i < v.size(); ++i) mesh.rest.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
-  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
-  for (size_t t = 0; t < tets.size(); ++t) {
-    for (int k = 0; k < 4; ++k) mesh.tets(static_cast<Eigen::Index>(t), k) = tets[t][static_cast<size_t>(k)];
-  }
-  mesh.x = mesh.rest;
-  Vertices p(1, 3);
-  p << 0.33, 0.33, 0.33;  // inside the large element, 0.006 from its face
-  for (bool clamp : {false, true}) {
-    const EmbeddedPoints e = EmbedPoints(mesh, p, clamp);
-    EXPECT_EQ(e.element[0], 0) << "clamp " << clamp;
-    EXPECT_GE(e.barycentric[0].minCoeff(), 0.0) << "clamp " << clamp;
-  }
-}
-
 TEST(EmbeddedSurfaceTest, RefusesBadSurfaces) {
   const TetMesh cage = MakeBox(Eigen::Vector3d(0.1, 0.1, 0.1), 1, 1, 1);
   EmbeddedSurface surface;

@@ -339,10 +339,11 @@ int HeldInFrontOfARemovedPlane(bool plane_removed, double* apex) {
 TEST(FreeSpace, APlaneThePreprocessingRemovedWasSeen) {
   const double tolerance = FreeSpaceOptions().tolerance;
   double apex_kept = 0.0, apex_removed = 0.0;
+  // Held at the tolerance and the penalty's give (about 2.6 mm); left alone, 40 mm out.
   EXPECT_GT(HeldInFrontOfARemovedPlane(false, &apex_kept), 0);
-  EXPECT_LT(apex_kept, tolerance + 0.003);
+  EXPECT_LT(apex_kept, tolerance + 0.006);
   EXPECT_GT(HeldInFrontOfARemovedPlane(true, &apex_removed), 0);
-  EXPECT_LT(apex_removed, tolerance + 0.003);
+  EXPECT_LT(apex_removed, tolerance + 0.006);
 }
 
 #ifdef FEMREG_CLI_PATH

@@ -452,6 +452,30 @@ TEST(MeshingTest, WrapMeshesAClosedSurfaceAroundABrokenOne) {
     EXPECT_NEAR(RestVolume(mesh), report.surface_volume, 0.05 * report.surface_volume);
   }
 
+  // Nothing to wrap: flat triangles only, refused (CGAL skips them, and would fail on none);
+  // input that is not a surface at all is refused without the hint.
+  {
+    Vertices flat(4, 3);
+    flat << 0, 0, 0, 1, 0, 0, 2, 0, 0, 1, 1e-30, 0;
+    Triangles tri(2, 3);
+    tri << 0, 1, 2, 0, 0, 3;
+    MeshingOptions options;
+    options.wrap = 0.1;
+    TetMesh mesh;
+    Status status = TetrahedralizeSurface(flat, tri, options, &mesh, nullptr, "flat.obj");
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("flat"), std::string::npos) << status.message();
+    tri << 0, 1, 2, 0, 1, 7;
+    status = TetrahedralizeSurface(flat, tri, options, &mesh, nullptr, "flat.obj");
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("does not exist"), std::string::npos) << status.message();
+    options.wrap = 0.0;
+    status = TetrahedralizeSurface(Vertices::Zero(3, 3), Triangles(Eigen::RowVector3i(0, 1, 2)), options, &mesh,
+                                   nullptr, "point.obj");
+    ASSERT_FALSE(status.ok());
+    EXPECT_EQ(status.message().find("--wrap"), std::string::npos) << status.message();
+  }
+
   // A cage of the crossing cubes: the wrap made once, every input vertex inside.
   MeshingOptions options;
   options.wrap = 0.2;
@@ -468,6 +492,17 @@ TEST(MeshingTest, WrapMeshesAClosedSurfaceAroundABrokenOne) {
   status = MakeCage(crossing.V, crossing.F, 60, options, &cage, &report, "crossing.obj");
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("--wrap"), std::string::npos) << status.message();
+  EXPECT_FALSE(report.meshing.wrapped);
+  // A wrap the cage refuses (merged into nothing by a huge merge distance): the report keeps
+  // the wrap, and the message does not suggest wrapping it again.
+  options.wrap = 0.2;
+  options.merge_distance = 10.0;
+  status = MakeCage(crossing.V, crossing.F, 60, options, &cage, &report, "crossing.obj");
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().find("--wrap ALPHA (MeshingOptions::wrap)"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("wrapped at alpha 0.2"), std::string::npos) << status.message();
+  EXPECT_TRUE(report.meshing.wrapped);
+  EXPECT_EQ(report.meshing.input_triangles, crossing.F.rows());
 }
 
 TEST(MeshingTest, TooFineATargetIsRefusedBeforeTetGenRuns) {

@@ -1,8 +1,8 @@
 // femreg mesh --cage N: a coarse tetrahedral mesh of about N vertices around a fine surface.
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -68,16 +68,27 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
   MeshingOptions base = options;
   Vertices wrapped_vertices;
   Triangles wrapped_triangles;
-  double wrap_offset = 0.0, wrap_seconds = 0.0;
+  MeshingReport wrap;  // its wrap fields
+  wrap.input_vertices = static_cast<int>(V.rows());
+  wrap.input_triangles = static_cast<int>(F.rows());
+  // The report is of the input, wrapped, whether the passes succeed or not.
+  auto input_and_wrap = [&]() {
+    report.meshing.input_vertices = wrap.input_vertices;
+    report.meshing.input_triangles = wrap.input_triangles;
+    internal::CopyWrapReport(wrap, &report.meshing);
+  };
   if (options.wrap > 0.0) {
-    const auto wrap_start = std::chrono::steady_clock::now();
-    wrap_offset = options.wrap_offset > 0.0 ? options.wrap_offset : options.wrap / 30.0;
     const Status status =
-        internal::WrapSurface(V, F, options.wrap, wrap_offset, source, &wrapped_vertices, &wrapped_triangles);
+        internal::WrapForMeshing(V, F, options, source, &wrapped_vertices, &wrapped_triangles, &wrap);
+    input_and_wrap();
     if (!status.ok()) return status;
-    wrap_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wrap_start).count();
     base.wrap = 0.0;
   }
+  const bool hint = options.wrap == 0.0;  // a wrap's refusal does not suggest wrapping it
+  char alpha[32];
+  std::snprintf(alpha, sizeof(alpha), "%.6g", options.wrap);
+  // The passes' messages name the wrap's triangles, not the input's.
+  const std::string mesh_source = hint ? source : source + " wrapped at alpha " + alpha;
   const Vertices& surface_vertices = options.wrap > 0.0 ? wrapped_vertices : V;
   const Triangles& surface_triangles = options.wrap > 0.0 ? wrapped_triangles : F;
   // The first pass' edge length from the solid's volume: a mesh of well-shaped elements of
@@ -96,12 +107,15 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
     check.edge_length =
         1e-6 * ((surface_vertices.colwise().maxCoeff() - surface_vertices.colwise().minCoeff()).norm() + 1e-300);
     TetMesh unused;
-    TetrahedralizeSurface(surface_vertices, surface_triangles, check, &unused, &probe, source);
+    internal::Tetrahedralize(surface_vertices, surface_triangles, check, &unused, &probe, mesh_source, hint);
     if (!(probe.surface_volume > 0.0)) {
       // The checks failed: run them again for their message.
       MeshingOptions plain = base;
       plain.remesh = false;
-      const Status status = TetrahedralizeSurface(surface_vertices, surface_triangles, plain, &unused, &probe, source);
+      const Status status =
+          internal::Tetrahedralize(surface_vertices, surface_triangles, plain, &unused, &probe, mesh_source, hint);
+      report.meshing = probe;
+      input_and_wrap();
       return status.ok() ? Status::Error(source + ": the surface encloses no volume") : status;
     }
     pass.edge_length = std::cbrt(3.0 * probe.surface_volume / target_vertices);
@@ -109,17 +123,19 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
   for (int p = 0; p < kMaxPasses; ++p) {
     report.passes = p + 1;
     report.edge_length = pass.edge_length;
-    const Status status = TetrahedralizeSurface(surface_vertices, surface_triangles, pass, mesh, &report.meshing, source);
-    if (!status.ok()) return status;
-    if (options.wrap > 0.0) {  // the report is of the input, wrapped
-      report.meshing.input_vertices = static_cast<int>(V.rows());
-      report.meshing.input_triangles = static_cast<int>(F.rows());
-      report.meshing.wrapped = true;
-      report.meshing.wrap_alpha = options.wrap;
-      report.meshing.wrap_offset = wrap_offset;
-      report.meshing.wrapped_vertices = static_cast<int>(wrapped_vertices.rows());
-      report.meshing.wrapped_triangles = static_cast<int>(wrapped_triangles.rows());
-      report.meshing.wrap_seconds = wrap_seconds;
+    const Status status =
+        internal::Tetrahedralize(surface_vertices, surface_triangles, pass, mesh, &report.meshing, mesh_source, hint);
+    input_and_wrap();
+    if (!status.ok()) {
+      // The cage's edge length is its own choice: what the user can change is the detail.
+      if (!report.meshing.remeshed && report.meshing.surface_vertices > 0 && report.meshing.edge_length > 0) {
+        char length[32];
+        std::snprintf(length, sizeof(length), "%.3g", pass.edge_length);
+        return Status::Error(status.message() + "\n  for a cage of edge length " + length +
+                             ", parts thinner than that fold when remeshed: --wrap ALPHA with ALPHA near " +
+                             length + " smooths them first");
+      }
+      return status;
     }
     const double ratio = static_cast<double>(report.meshing.vertices) / target_vertices;
     if (std::abs(ratio - 1.0) <= kCountTolerance) break;

@@ -323,6 +323,13 @@ std::string TetGenFailure(int code) {
 
 Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const MeshingOptions& options,
                              TetMesh* mesh, MeshingReport* report_out, const std::string& source) {
+  return internal::Tetrahedralize(V, F, options, mesh, report_out, source, /*wrap_hint=*/true);
+}
+
+namespace internal {
+
+Status Tetrahedralize(const Vertices& V, const Triangles& F, const MeshingOptions& options, TetMesh* mesh,
+                      MeshingReport* report_out, const std::string& input_source, bool wrap_hint) {
   const Clock::time_point start = Clock::now();
   MeshingReport local_report;
   MeshingReport& report = report_out != nullptr ? *report_out : local_report;
@@ -330,26 +337,22 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   report.input_vertices = static_cast<int>(V.rows());
   report.input_triangles = static_cast<int>(F.rows());
   std::string error;
-  if (!options.IsValid(&error)) return Status::Error(source + ": meshing options: " + error);
+  if (!options.IsValid(&error)) return Status::Error(input_source + ": meshing options: " + error);
 
-  // A broken surface (a scan's) is wrapped first where asked: the rest meshes the wrap.
+  // A broken surface (a scan's) is wrapped first where asked: the rest meshes the wrap, and
+  // its messages name the wrap's triangles, not the input's.
   Vertices wrapped_vertices;
   Triangles wrapped_triangles;
   if (options.wrap > 0.0) {
-    const Clock::time_point wrap_start = Clock::now();
-    report.wrap_alpha = options.wrap;
-    report.wrap_offset = options.wrap_offset > 0.0 ? options.wrap_offset : options.wrap / 30.0;
-    const Status wrapped = internal::WrapSurface(V, F, report.wrap_alpha, report.wrap_offset, source,
-                                                 &wrapped_vertices, &wrapped_triangles);
-    report.wrap_seconds = Seconds(wrap_start);
+    const Status wrapped =
+        WrapForMeshing(V, F, options, input_source, &wrapped_vertices, &wrapped_triangles, &report);
     if (!wrapped.ok()) {
       report.total_seconds = Seconds(start);
       return wrapped;
     }
-    report.wrapped = true;
-    report.wrapped_vertices = static_cast<int>(wrapped_vertices.rows());
-    report.wrapped_triangles = static_cast<int>(wrapped_triangles.rows());
   }
+  const std::string source = report.wrapped ? input_source + " wrapped at alpha " + Fmt(report.wrap_alpha)
+                                            : input_source;
 
   // Clean and check the surface.
   const Clock::time_point check_start = Clock::now();
@@ -367,8 +370,7 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   report.check_seconds = Seconds(check_start);
   if (!status.ok()) {
     report.total_seconds = Seconds(start);
-    if (report.wrapped) return status;
-    return Status::Error(status.message() + "\n" + internal::kWrapHint);
+    return report.wrapped || !wrap_hint ? status : WithWrapHint(status);
   }
   int cavity_count = 0;
   for (const internal::SurfaceShell& shell : surface.shells) {
@@ -588,4 +590,5 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
   return Status::Ok();
 }
 
+}  // namespace internal
 }  // namespace femreg

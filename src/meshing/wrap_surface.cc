@@ -7,6 +7,7 @@
 #include <CGAL/alpha_wrap_3.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -34,6 +35,7 @@ Status WrapSurface(const Vertices& V, const Triangles& F, double alpha, double o
     return Status::Error(source + ": the wrap needs alpha and offset > 0, got " + Fmt(alpha) + " and " +
                          Fmt(offset));
   }
+  if (!V.allFinite()) return Status::Error(source + ": a vertex is not finite: nothing can be wrapped");
   std::vector<Point> points;
   points.reserve(static_cast<size_t>(V.rows()));
   for (Eigen::Index v = 0; v < V.rows(); ++v) points.emplace_back(V(v, 0), V(v, 1), V(v, 2));
@@ -42,10 +44,17 @@ Status WrapSurface(const Vertices& V, const Triangles& F, double alpha, double o
   for (Eigen::Index t = 0; t < F.rows(); ++t) {
     const std::array<size_t, 3> f = {static_cast<size_t>(F(t, 0)), static_cast<size_t>(F(t, 1)),
                                      static_cast<size_t>(F(t, 2))};
-    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) continue;  // a repeated corner: an edge, not a face
+    if (f[0] >= points.size() || f[1] >= points.size() || f[2] >= points.size()) {
+      return Status::Error(source + ": triangle " + std::to_string(t) + " refers to a vertex that does not exist");
+    }
+    // A flat triangle (corners repeated or on a line) wraps as nothing: CGAL skips it, and
+    // one with nothing else to wrap would fail.
+    if (CGAL::collinear(points[f[0]], points[f[1]], points[f[2]])) continue;
     faces.push_back(f);
   }
-  if (faces.empty()) return Status::Error(source + ": nothing to wrap (no triangle with three corners)");
+  if (faces.empty()) {
+    return Status::Error(source + ": nothing to wrap: every triangle is flat (its corners on a line or repeated)");
+  }
   Mesh wrap;
   try {
     CGAL::alpha_wrap_3(points, faces, alpha, offset, wrap);
@@ -78,6 +87,39 @@ Status WrapSurface(const Vertices& V, const Triangles& F, double alpha, double o
     ++t;
   }
   return Status::Ok();
+}
+
+Status WithWrapHint(const Status& refusal) {
+  if (refusal.ok() || refusal.message().find("does not bound a volume") == std::string::npos) return refusal;
+  return Status::Error(refusal.message() +
+                       "\n  a scan's or an export's surface can be wrapped first into a closed one around it: "
+                       "femreg mesh --wrap ALPHA (MeshingOptions::wrap), ALPHA about the narrowest gap or "
+                       "detail to keep (docs/guide/meshing.md#broken-surfaces)");
+}
+
+Status WrapForMeshing(const Vertices& V, const Triangles& F, const MeshingOptions& options,
+                      const std::string& source, Vertices* wrapped_vertices, Triangles* wrapped_triangles,
+                      MeshingReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  report->wrap_alpha = options.wrap;
+  report->wrap_offset = options.wrap_offset > 0.0 ? options.wrap_offset : options.wrap / 30.0;
+  const Status status =
+      WrapSurface(V, F, report->wrap_alpha, report->wrap_offset, source, wrapped_vertices, wrapped_triangles);
+  report->wrap_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!status.ok()) return status;
+  report->wrapped = true;
+  report->wrapped_vertices = static_cast<int>(wrapped_vertices->rows());
+  report->wrapped_triangles = static_cast<int>(wrapped_triangles->rows());
+  return Status::Ok();
+}
+
+void CopyWrapReport(const MeshingReport& from, MeshingReport* to) {
+  to->wrapped = from.wrapped;
+  to->wrap_alpha = from.wrap_alpha;
+  to->wrap_offset = from.wrap_offset;
+  to->wrapped_vertices = from.wrapped_vertices;
+  to->wrapped_triangles = from.wrapped_triangles;
+  to->wrap_seconds = from.wrap_seconds;
 }
 
 }  // namespace internal

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "femreg/mesh.h"
+#include "femreg/meshing.h"
 #include "femreg/status.h"
 
 namespace femreg {
@@ -17,11 +18,24 @@ namespace internal {
 // about `offset`. `alpha` sets the detail: gaps, holes and openings narrower than about alpha
 // are closed over, and so are the input's details finer than it. Both > 0 (same units as V).
 // Errors start with `source`.
-// What a refusal of a broken surface adds: the way round it.
-inline constexpr const char* kWrapHint =
-    "  a scan's or an export's surface can be wrapped first into a closed one around it: femreg mesh "
-    "--wrap ALPHA (MeshingOptions::wrap), ALPHA about the narrowest gap or detail to keep "
-    "(docs/guide/meshing.md#broken-surfaces)";
+// A refusal of a surface that does not bound a volume (not of unreadable input: no triangle,
+// a vertex not finite, a corner out of range, every vertex at one point) with the way round
+// it added: the wrap.
+Status WithWrapHint(const Status& refusal);
+
+// MeshingOptions' wrap of (V, F) for TetrahedralizeSurface and MakeCage: its offset wrap_offset,
+// or wrap / 30; timed; into *report's wrap fields. Input CGAL cannot take (corners out of
+// range, coordinates not finite) is refused first.
+Status WrapForMeshing(const Vertices& V, const Triangles& F, const MeshingOptions& options,
+                      const std::string& source, Vertices* wrapped_vertices, Triangles* wrapped_triangles,
+                      MeshingReport* report);
+// The wrap fields of `from` (wrapped ... wrap_seconds) into *to.
+void CopyWrapReport(const MeshingReport& from, MeshingReport* to);
+
+// TetrahedralizeSurface, and whether its refusals suggest the wrap (not where the input is a
+// wrap already).
+Status Tetrahedralize(const Vertices& V, const Triangles& F, const MeshingOptions& options, TetMesh* mesh,
+                      MeshingReport* report, const std::string& source, bool wrap_hint);
 
 Status WrapSurface(const Vertices& V, const Triangles& F, double alpha, double offset,
                    const std::string& source, Vertices* wrapped_vertices, Triangles* wrapped_triangles);

@@ -280,20 +280,18 @@ void BuildObservedDepth(const TrackerState& state, FrameCloud* fc) {
   const RegistrationOptions& options = state.options;
   fc->observed.Clear();
   if (!options.free_space.enabled || fc->cloud.size() == 0) return;
-  Vertices points = fc->cloud.points;
-  if (fc->plane_points.rows() > 0) {
-    points.conservativeResize(points.rows() + fc->plane_points.rows(), 3);
-    points.bottomRows(fc->plane_points.rows()) = fc->plane_points;
-  }
+  const Vertices& points = fc->cloud.points;
+  // The removed table widens the image; the pitch and the view's axis stay the data's.
+  const Vertices* table = fc->plane_points.rows() > 0 ? &fc->plane_points : nullptr;
   if (options.camera.enabled) {
     const Eigen::Vector3d axis = CameraRotation(options.camera).row(2).transpose();
-    fc->observed.Build(points, true, options.camera.position, axis, fc->spacing);
+    fc->observed.Build(points, true, options.camera.position, axis, fc->spacing, table);
   } else if (fc->view == FrameCloud::View::kViewpoint) {
     const Eigen::Vector3d centroid = points.colwise().mean().transpose();
     const Eigen::Vector3d axis = centroid - fc->eye;
-    if (axis.norm() > 0) fc->observed.Build(points, true, fc->eye, axis.normalized(), fc->spacing);
+    if (axis.norm() > 0) fc->observed.Build(points, true, fc->eye, axis.normalized(), fc->spacing, table);
   } else if (fc->view == FrameCloud::View::kDirection) {
-    fc->observed.Build(points, false, fc->eye, -fc->eye, fc->spacing);
+    fc->observed.Build(points, false, fc->eye, -fc->eye, fc->spacing, table);
   }
 }
 

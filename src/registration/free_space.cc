@@ -46,7 +46,7 @@ bool ObservedDepth::Project(const Eigen::Vector3d& p, double* u, double* v, doub
 }
 
 void ObservedDepth::Build(const Vertices& points, bool perspective, const Eigen::Vector3d& eye,
-                          const Eigen::Vector3d& axis, double spacing) {
+                          const Eigen::Vector3d& axis, double spacing, const Vertices* also) {
   Clear();
   perspective_ = perspective;
   eye_ = perspective ? eye : Eigen::Vector3d::Zero();
@@ -55,14 +55,16 @@ void ObservedDepth::Build(const Vertices& points, bool perspective, const Eigen:
   pitch_ = 1.0;
   const int n = static_cast<int>(points.rows());
   if (n == 0 || !(spacing > 0)) return;
+  const int n_also = also != nullptr ? static_cast<int>(also->rows()) : 0;
   std::vector<double> us, vs, ds;
-  us.reserve(static_cast<size_t>(n));
-  vs.reserve(static_cast<size_t>(n));
-  ds.reserve(static_cast<size_t>(n));
+  us.reserve(static_cast<size_t>(n + n_also));
+  vs.reserve(static_cast<size_t>(n + n_also));
+  ds.reserve(static_cast<size_t>(n + n_also));
   double lo_u = std::numeric_limits<double>::infinity(), hi_u = -lo_u, lo_v = lo_u, hi_v = -lo_u;
-  for (int i = 0; i < n; ++i) {
+  size_t own = 0;  // the first `own` projections are `points`'s
+  for (int i = 0; i < n + n_also; ++i) {
     double u = 0, v = 0, d = 0;
-    if (!Project(points.row(i), &u, &v, &d)) continue;
+    if (!Project(i < n ? points.row(i) : also->row(i - n), &u, &v, &d)) continue;
     lo_u = std::min(lo_u, u);
     hi_u = std::max(hi_u, u);
     lo_v = std::min(lo_v, v);
@@ -70,13 +72,14 @@ void ObservedDepth::Build(const Vertices& points, bool perspective, const Eigen:
     us.push_back(u);
     vs.push_back(v);
     ds.push_back(d);
+    if (i < n) ++own;
   }
-  if (ds.empty()) return;
+  if (own == 0) return;
   // The pitch: one point spacing at the points' median depth, so that neighbouring points
   // fall about a pixel apart and their splats close the gaps between them.
   double pitch = spacing;
   if (perspective) {
-    std::vector<double> sorted(ds);
+    std::vector<double> sorted(ds.begin(), ds.begin() + static_cast<std::ptrdiff_t>(own));
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
     pitch = spacing / std::max(sorted[sorted.size() / 2], kNear);
   }

@@ -25,8 +25,10 @@ class ObservedDepth {
   // its depth, the nearest depth winning: between sparse points, and across a depth
   // discontinuity, the depth that is kept is the one nearer to the sensor, so that the
   // space said to be free is never more than what was seen through.
+  // `also` (optional): more points seen (a table the preprocessing removed), written the same
+  // way and widening the image, while the pitch stays the one `points` set.
   void Build(const Vertices& points, bool perspective, const Eigen::Vector3d& eye,
-             const Eigen::Vector3d& axis, double spacing);
+             const Eigen::Vector3d& axis, double spacing, const Vertices* also = nullptr);
   void Clear() { depth_.clear(); width_ = height_ = 0; }
   bool empty() const { return depth_.empty(); }
   // For position p: the unit ray n from the sensor through p, a point e on the ray's line

@@ -366,7 +366,7 @@ void AddMeshCommand(CLI::App* app) {
                   "Rounds of remeshing (split, collapse, flip, smooth)")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
-  cmd->add_option("--wrap", args->options.wrap,
+  CLI::Option* wrap = cmd->add_option("--wrap", args->options.wrap,
                   "First replace the surface by its alpha wrap (CGAL's 3D Alpha Wrapping) at this "
                   "alpha, in the scaled units: a closed, manifold surface without crossings around "
                   "the input, for a scan or an export the checks refuse (holes, crossing or "
@@ -376,7 +376,8 @@ void AddMeshCommand(CLI::App* app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--wrap-offset", args->options.wrap_offset,
                   "How far outside the input the wrap lies, in the scaled units (default: ALPHA / 30)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->needs(wrap);
   cmd->add_flag("--single-region", args->single_region,
                 "Put every element in region 0 (default: one region per closed shell)");
   cmd->add_option("--cage", args->cage,
