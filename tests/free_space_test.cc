@@ -220,15 +220,18 @@ TetMesh DomeMesh(std::vector<int>* bottom) {
   return mesh;
 }
 
-Dome RegisterDome(bool free_space, SolverBackend backend, Input input) {
-  std::vector<int> bottom;
-  const TetMesh mesh = DomeMesh(&bottom);
+// The slab's material, and a camera 45 cm above its middle (one thread).
+ObjectMaterial DomeMaterial() {
   ObjectMaterial material;
   material.material.youngs_modulus = 2e5;
   material.material.poisson_ratio = 0.3;
   material.material.density = 1000;
+  return material;
+}
+
+RegistrationOptions DomeOptions() {
   RegistrationOptions options;
-  options.camera.enabled = input != Input::kNoCamera;
+  options.camera.enabled = true;
   options.camera.position = Eigen::Vector3d(kSize / 2, kSize / 2, 0.45);
   options.camera.target = Eigen::Vector3d(kSize / 2, kSize / 2, 0.0);
   options.camera.up = Eigen::Vector3d(0, 1, 0);
@@ -238,6 +241,15 @@ Dome RegisterDome(bool free_space, SolverBackend backend, Input input) {
   options.camera.cx = 79.5;
   options.camera.cy = 59.5;
   options.solver.num_threads = 1;
+  return options;
+}
+
+Dome RegisterDome(bool free_space, SolverBackend backend, Input input) {
+  std::vector<int> bottom;
+  const TetMesh mesh = DomeMesh(&bottom);
+  const ObjectMaterial material = DomeMaterial();
+  RegistrationOptions options = DomeOptions();
+  options.camera.enabled = input != Input::kNoCamera;
   options.solver.backend = backend;
   options.free_space.enabled = free_space;
   std::unique_ptr<Tracker> tracker;
@@ -290,21 +302,8 @@ TEST(FreeSpace, FromADepthImageAndWithoutACamera) {
 int HeldInFrontOfARemovedPlane(bool plane_removed, double* apex) {
   std::vector<int> bottom;
   const TetMesh mesh = DomeMesh(&bottom);
-  ObjectMaterial material;
-  material.material.youngs_modulus = 2e5;
-  material.material.poisson_ratio = 0.3;
-  material.material.density = 1000;
-  RegistrationOptions options;
-  options.camera.enabled = true;
-  options.camera.position = Eigen::Vector3d(kSize / 2, kSize / 2, 0.45);
-  options.camera.target = Eigen::Vector3d(kSize / 2, kSize / 2, 0.0);
-  options.camera.up = Eigen::Vector3d(0, 1, 0);
-  options.camera.fx = options.camera.fy = 150.0;
-  options.camera.width = 160;
-  options.camera.height = 120;
-  options.camera.cx = 79.5;
-  options.camera.cy = 59.5;
-  options.solver.num_threads = 1;
+  const ObjectMaterial material = DomeMaterial();
+  RegistrationOptions options = DomeOptions();
   if (plane_removed) options.preprocess.plane_distance = 0.002;
   std::unique_ptr<Tracker> tracker;
   EXPECT_TRUE(Tracker::Create({mesh}, {material}, options, &tracker).ok());

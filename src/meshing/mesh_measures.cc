@@ -11,13 +11,18 @@
 #include <vector>
 
 namespace femreg {
-namespace {
 
+namespace internal {
 std::string Fmt(double v) {
   char buf[32];
   std::snprintf(buf, sizeof(buf), "%.6g", v);
   return buf;
 }
+}  // namespace internal
+
+namespace {
+
+using internal::Fmt;
 
 }  // namespace
 

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "mesh/disjoint_sets.h"
+#include "meshing/mesh_measures.h"
 #include "parallel/stopwatch.h"
 
 namespace femreg {
@@ -29,11 +30,7 @@ using VertexIndex = Mesh::Vertex_index;
 using EdgeIndex = Mesh::Edge_index;
 namespace pmp = CGAL::Polygon_mesh_processing;
 
-std::string Fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+using internal::Fmt;
 
 }  // namespace
 

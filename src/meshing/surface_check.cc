@@ -14,6 +14,7 @@
 
 #include "femreg/geometry.h"  // AabbTree and the exact closest-point queries
 #include "mesh/disjoint_sets.h"
+#include "meshing/mesh_measures.h"
 
 namespace femreg {
 namespace internal {
@@ -30,11 +31,7 @@ constexpr double kDegenerateTolerance = 1e-10;
 // Examples listed per problem.
 constexpr int kMaxExamples = 5;
 
-std::string Fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+using internal::Fmt;
 
 std::string Pt(const Eigen::Vector3d& p) {
   return "(" + Fmt(p.x()) + ", " + Fmt(p.y()) + ", " + Fmt(p.z()) + ")";

@@ -46,11 +46,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string Fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+using internal::Fmt;
 
 // TetGen runs in a child process. TetGen 1.5.0 frees its memory twice when it gives up
 // (terminatetetgen frees it, then throws, and the unwinding destructor frees it again: a

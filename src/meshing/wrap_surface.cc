@@ -13,6 +13,8 @@
 #include <exception>
 #include <vector>
 
+#include "meshing/mesh_measures.h"
+
 namespace femreg {
 namespace internal {
 namespace {
@@ -21,11 +23,7 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 using Mesh = CGAL::Surface_mesh<Point>;
 
-std::string Fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
+using internal::Fmt;
 
 }  // namespace
 
