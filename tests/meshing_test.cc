@@ -398,12 +398,14 @@ TEST(MeshingTest, RealSurfaces) {
     ASSERT_TRUE(ReadSurface(dir + "/" + name, &s.V, &s.F).ok());
     MeshingOptions wrap;
     wrap.wrap = alpha;
+    wrap.keep_surface = true;  // the wrap as it is
     status = TetrahedralizeSurface(s.V, s.F, wrap, &mesh, &report, name);
     ASSERT_TRUE(status.ok()) << status.message();
     ExpectValidMesh(mesh);
     EXPECT_TRUE(report.wrapped);
     EXPECT_EQ(Outside(mesh, s.V), 0) << name;
     const double wrapped_volume = report.surface_volume;
+    wrap.keep_surface = false;
     wrap.edge_length = length;
     status = TetrahedralizeSurface(s.V, s.F, wrap, &mesh, &report, name);
     ASSERT_TRUE(status.ok()) << status.message();
@@ -415,8 +417,8 @@ TEST(MeshingTest, RealSurfaces) {
 // A broken surface is refused with the way round it, and --wrap meshes a closed surface
 // around it: two cubes that cross each other (their union's volume is 1.71875), and a box
 // with a face missing (closed over, the opening being narrower than alpha). Meshed as it is
-// (no edge length), the wrap holds every input vertex; remeshed, its chords may cut a
-// vertex off by up to about L^2 / (8 R).
+// (keep_surface), the wrap holds every input vertex; remeshed, its chords may cut a vertex
+// off by up to about L^2 / (8 R).
 TEST(MeshingTest, WrapMeshesAClosedSurfaceAroundABrokenOne) {
   const Surface crossing = Join(Cube(), Cube(Eigen::Vector3d(0.5, 0.25, 0.25)));
   Surface open = Cube();
@@ -432,6 +434,7 @@ TEST(MeshingTest, WrapMeshesAClosedSurfaceAroundABrokenOne) {
     EXPECT_FALSE(report.wrapped);
 
     options.wrap = is_open ? 1.5 : 0.1;  // the open face is 1 across: a wider alpha closes it
+    options.keep_surface = true;          // the wrap as it is
     status = TetrahedralizeSurface(broken->V, broken->F, options, &mesh, &report, "broken.obj");
     ASSERT_TRUE(status.ok()) << status.message();
     ExpectValidMesh(mesh);
@@ -445,11 +448,24 @@ TEST(MeshingTest, WrapMeshesAClosedSurfaceAroundABrokenOne) {
     const double solid = is_open ? 1.0 : 1.71875;
     EXPECT_GT(RestVolume(mesh), solid);
     EXPECT_LT(RestVolume(mesh), (is_open ? 1.3 : 1.06) * solid);
+    options.keep_surface = false;
     options.edge_length = 0.2;  // remeshed: about the same solid
     status = TetrahedralizeSurface(broken->V, broken->F, options, &mesh, &report, "broken.obj");
     ASSERT_TRUE(status.ok()) << status.message();
     ExpectValidMesh(mesh);
     EXPECT_NEAR(RestVolume(mesh), report.surface_volume, 0.05 * report.surface_volume);
+  }
+
+  // Without an edge length the wrap is meshed at its own detail: L = alpha.
+  {
+    MeshingOptions options;
+    options.wrap = 0.25;
+    TetMesh mesh;
+    MeshingReport report;
+    ASSERT_TRUE(TetrahedralizeSurface(crossing.V, crossing.F, options, &mesh, &report, "crossing.obj").ok());
+    EXPECT_EQ(report.edge_length, 0.25);
+    EXPECT_TRUE(report.remeshed);
+    EXPECT_NEAR(report.mean_edge_length, 0.25, 0.1);
   }
 
   // Nothing to wrap: flat triangles only, refused (CGAL skips them, and would fail on none);

@@ -70,7 +70,8 @@ struct MeshingOptions {
   // alpha, then meshed as a clean one: a closed, 2-manifold surface without crossings around
   // the input, whatever its holes, crossing or coinciding triangles and non-manifold edges (a
   // scan's). Gaps, holes and openings narrower than about alpha are closed over, and details
-  // finer than it are smoothed away. 0: the surface as it is, refused if it is broken.
+  // finer than it are smoothed away. Without an edge_length (and not keep_surface) the wrap
+  // is meshed at edge_length = wrap. 0: the surface as it is, refused if it is broken.
   double wrap = 0.0;
   // How far outside the input the wrap lies. 0: wrap / 30 (CGAL's own choice).
   double wrap_offset = 0.0;

@@ -324,9 +324,13 @@ Status TetrahedralizeSurface(const Vertices& V, const Triangles& F, const Meshin
 
 namespace internal {
 
-Status Tetrahedralize(const Vertices& V, const Triangles& F, const MeshingOptions& options, TetMesh* mesh,
+Status Tetrahedralize(const Vertices& V, const Triangles& F, const MeshingOptions& given, TetMesh* mesh,
                       MeshingReport* report_out, const std::string& input_source, bool wrap_hint) {
   const Clock::time_point start = Clock::now();
+  // A wrap without an edge length is meshed at its own detail, ALPHA: its triangles are far
+  // finer (about the offset) and would make a mesh of hundreds of thousands of elements.
+  MeshingOptions options = given;
+  if (given.wrap > 0.0 && given.edge_length == 0.0 && !given.keep_surface) options.edge_length = given.wrap;
   MeshingReport local_report;
   MeshingReport& report = report_out != nullptr ? *report_out : local_report;
   report = MeshingReport();

@@ -172,7 +172,10 @@ std::string TextReport(const MeshArgs& args, const MeshingReport& r, const Timin
     os << "\n";
   }
   os << "settings:  edge length " << G(r.edge_length)
-     << (args.options.edge_length > 0 ? "" : " (the surface's mean edge)") << ", max volume "
+     << (args.options.edge_length > 0 ? ""
+         : r.wrapped && !args.options.keep_surface ? " (ALPHA, the wrap's detail)"
+                                                   : " (the surface's mean edge)")
+     << ", max volume "
      << G(r.max_volume) << ", radius-edge ratio <= " << G(r.radius_edge_ratio);
   if (r.min_dihedral_deg > 0) os << ", dihedral >= " << G(r.min_dihedral_deg) << " deg";
   os << (args.options.keep_surface ? ", surface kept" : r.remeshed ? ", remeshed surface kept" : "")
@@ -372,7 +375,8 @@ void AddMeshCommand(CLI::App* app) {
                   "the input, for a scan or an export the checks refuse (holes, crossing or "
                   "duplicated triangles, non-manifold edges). Gaps, holes and openings narrower "
                   "than about ALPHA close, details finer than it are smoothed away: about the "
-                  "narrowest part to keep (default: no wrap)")
+                  "narrowest part to keep. Without --edge-length the wrap is meshed at L = ALPHA "
+                  "(default: no wrap)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--wrap-offset", args->options.wrap_offset,
                   "How far outside the input the wrap lies, in the scaled units (default: ALPHA / 30)")
