@@ -2,7 +2,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -10,6 +9,7 @@
 #include "femreg/geometry.h"
 #include "femreg/meshing.h"
 #include "geometry/nearest.h"
+#include "meshing/mesh_measures.h"
 #include "meshing/wrap_surface.h"
 
 namespace femreg {
@@ -85,10 +85,8 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
     base.wrap = 0.0;
   }
   const bool hint = options.wrap == 0.0;  // a wrap's refusal does not suggest wrapping it
-  char alpha[32];
-  std::snprintf(alpha, sizeof(alpha), "%.6g", options.wrap);
   // The passes' messages name the wrap's triangles, not the input's.
-  const std::string mesh_source = hint ? source : source + " wrapped at alpha " + alpha;
+  const std::string mesh_source = hint ? source : source + " wrapped at alpha " + internal::Fmt(options.wrap);
   const Vertices& surface_vertices = options.wrap > 0.0 ? wrapped_vertices : V;
   const Triangles& surface_triangles = options.wrap > 0.0 ? wrapped_triangles : F;
   // The first pass' edge length from the solid's volume: a mesh of well-shaped elements of
@@ -129,8 +127,7 @@ Status MakeCage(const Vertices& V, const Triangles& F, int target_vertices, cons
     if (!status.ok()) {
       // The cage's edge length is its own choice: what the user can change is the detail.
       if (!report.meshing.remeshed && report.meshing.surface_vertices > 0 && report.meshing.edge_length > 0) {
-        char length[32];
-        std::snprintf(length, sizeof(length), "%.3g", pass.edge_length);
+        const std::string length = internal::Fmt(pass.edge_length);
         return Status::Error(status.message() + "\n  for a cage of edge length " + length +
                              ", parts thinner than that fold when remeshed: --wrap ALPHA with ALPHA near " +
                              length + " smooths them first");

@@ -12,12 +12,6 @@
 namespace femreg {
 namespace internal {
 
-// The alpha wrap of the triangles (V, F), taken as a soup (holes, crossing, coinciding or
-// degenerate triangles and non-manifold edges are all fine): a closed, 2-manifold surface
-// without self-intersections, oriented outwards, that encloses the input at a distance of
-// about `offset`. `alpha` sets the detail: gaps, holes and openings narrower than about alpha
-// are closed over, and so are the input's details finer than it. Both > 0 (same units as V).
-// Errors start with `source`.
 // A refusal of a surface that does not bound a volume (not of unreadable input: no triangle,
 // a vertex not finite, a corner out of range, every vertex at one point) with the way round
 // it added: the wrap.
@@ -37,6 +31,12 @@ void CopyWrapReport(const MeshingReport& from, MeshingReport* to);
 Status Tetrahedralize(const Vertices& V, const Triangles& F, const MeshingOptions& options, TetMesh* mesh,
                       MeshingReport* report, const std::string& source, bool wrap_hint);
 
+// The alpha wrap of the triangles (V, F), taken as a soup (holes, crossing, coinciding or
+// degenerate triangles and non-manifold edges are all fine): a closed, 2-manifold surface
+// without self-intersections, oriented outwards, that encloses the input at a distance of
+// about `offset`. `alpha` sets the detail: gaps, holes and openings narrower than about alpha
+// are closed over, and so are the input's details finer than it. Both > 0 (same units as V).
+// Errors start with `source`.
 Status WrapSurface(const Vertices& V, const Triangles& F, double alpha, double offset,
                    const std::string& source, Vertices* wrapped_vertices, Triangles* wrapped_triangles);
 

@@ -236,10 +236,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     const bool dropped = s.cloud_points > 0;
     Hold(dropped ? TerminationType::kInvalidInput : TerminationType::kNoCorrespondences,
          dropped ? "every point of the cloud was dropped (" + std::to_string(s.nonfinite_dropped) +
-                       " non-finite, " + std::to_string(s.flying_pixels) + " flying pixels, " +
-                       std::to_string(fc.plane_points.rows()) +
-                       " on the plane preprocess.plane removed, the rest by the crop or the filters); the "
-                       "shape was held at the previous frame"
+                       " non-finite, " + std::to_string(s.flying_pixels) +
+                       " flying pixels, the rest by the preprocess: plane, crop or filters); the shape was "
+                       "held at the previous frame"
                  : "empty cloud; the shape was held at the previous frame",
          nullptr, t_frame, &s);
     return Status::Ok();
