@@ -11,7 +11,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential cmake ninja-build pkg-config git
   libeigen3-dev
   libceres-dev libgoogle-glog-dev libgflags-dev
   libsuitesparse-dev libopenblas-dev liblapack-dev

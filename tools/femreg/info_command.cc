@@ -129,8 +129,8 @@ void AddInfoCommand(CLI::App* app) {
   cmd->footer(
       "Formats (detected from the content, not the extension): Gmsh MSH 1/2.2/4.1 ASCII, "
       "TetGen .node/.ele (give either file or the base name), MEDIT .mesh, VTK legacy "
-      "ASCII unstructured grid, VTU. Only tetrahedra are kept; other cells and unused "
-      "vertices are dropped.\n"
+      "unstructured grid (ASCII or BINARY), VTU. Only tetrahedra are kept; other cells and "
+      "unused vertices are dropped.\n"
       "Exit code 0 on success, 1 when the mesh cannot be read (the reason goes to stderr), 2 for a wrong or missing argument.\n"
       "Example: femreg info liver.msh --json");
   cmd->add_option("mesh", options->mesh_path, "Tetrahedral mesh file")->required();
