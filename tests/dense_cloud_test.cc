@@ -148,15 +148,15 @@ TEST(CrushedFirstStep, AStiffRestartKeepsTheSoftBoxsCornerWhole) {
 TEST(CrushedFirstStep, TheRestartIsOnByDefaultWithTheForcesEstimated) {
   RegistrationOptions options;
   EXPECT_LT(options.solver.stiff_restart_volume, 0.0);
-  EXPECT_EQ(StiffRestartVolume(options), 0.0);
+  EXPECT_EQ(StiffRestartVolume(options, options.forces.estimate), 0.0);
   options.forces.estimate = true;
-  EXPECT_EQ(StiffRestartVolume(options), 0.1);
+  EXPECT_EQ(StiffRestartVolume(options, options.forces.estimate), 0.1);
   options.solver.stiff_restart_volume = 0.0;
-  EXPECT_EQ(StiffRestartVolume(options), 0.0);
+  EXPECT_EQ(StiffRestartVolume(options, options.forces.estimate), 0.0);
   options.solver.stiff_restart_volume = 0.75;
-  EXPECT_EQ(StiffRestartVolume(options), 0.75);
+  EXPECT_EQ(StiffRestartVolume(options, options.forces.estimate), 0.75);
   options.forces.estimate = false;
-  EXPECT_EQ(StiffRestartVolume(options), 0.75);
+  EXPECT_EQ(StiffRestartVolume(options, options.forces.estimate), 0.75);
   std::string error;
   options.solver.stiff_restart_volume = -1.0;
   EXPECT_TRUE(options.IsValid(&error)) << error;

@@ -17,6 +17,8 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
+#include "geometry/nearest.h"
+#include "registration/occluders.h"
 
 namespace fs = std::filesystem;
 
@@ -156,6 +158,80 @@ TEST(HandPress, WithoutTheBarrierElementsInvert) {
     s->registration.data.max_strain_step = 0.0;
   });
   EXPECT_GT(run.most_inverted, 0);
+}
+
+// forces.when_occluded's test: an occluder whose points reach the body's (within the three
+// spacings its growth looks) touches it; one that passes a few centimetres in front does not.
+TEST(Occluders, OnlyAnOccluderBesideTheBodysPointsTouchesIt) {
+  const double h = 0.002;  // the spacing
+  std::vector<Eigen::Vector3d> points;
+  std::vector<char> marks;
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 20; ++j) {  // the body: a patch at z = 0
+      points.emplace_back(i * h, j * h, 0.0);
+      marks.push_back(0);
+    }
+  }
+  auto blob = [&](double x, double z) {  // an occluder: a 5 x 5 patch at height z
+    for (int i = 0; i < 5; ++i) {
+      for (int j = 0; j < 5; ++j) {
+        points.emplace_back(x + i * h, 0.01 + j * h, z);
+        marks.push_back(1);
+      }
+    }
+  };
+  blob(0.012, 0.03);  // 3 cm in front
+  auto count = [&](int enough) {
+    Vertices cloud(static_cast<int>(points.size()), 3);
+    for (size_t k = 0; k < points.size(); ++k) cloud.row(static_cast<int>(k)) = points[k].transpose();
+    const PointIndex index(cloud);
+    return TouchingOccluderPoints(cloud, index, h, marks, enough);
+  };
+  EXPECT_EQ(count(1000), 0);
+  blob(0.041, 0.0);  // 1.5 h beside the patch's edge at x = 0.038, in its plane: a hand holding it
+  const int touching = count(1000);
+  EXPECT_GE(touching, 5);  // its first column, and its second (2.5 h off) where among its nearest
+  EXPECT_LE(touching, 10);
+  EXPECT_EQ(count(3), 3);     // stops at enough
+}
+
+// The hand holds the ball from frame 13 (its pads close on the sides): those frames are
+// registered with the forces estimated (forces.when_occluded, on by default), and the pads no
+// longer pull the sides out and roll the ball. Before, while the palm presses (frames 3-8) its
+// points stand clear of the ball's, and the frames stay classic.
+TEST(HandPress, FramesWhereTheHandHoldsTheBallAreRegisteredWithTheForcesEstimated) {
+  auto run = [](bool when_occluded, std::vector<int>* estimated) {
+    Scene scene;
+    EXPECT_TRUE(LoadScene(kHandPress + "/scene.yaml", &scene).ok());
+    scene.registration.solver.num_threads = 1;
+    scene.registration.forces.when_occluded = when_occluded;
+    std::unique_ptr<Tracker> tracker;
+    EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
+    double grasp_error = 0.0;
+    for (int f = 0; f <= 15; ++f) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "frame_%04d", f);
+      PointCloud cloud;
+      EXPECT_TRUE(ReadPointCloud(kHandPress + "/clouds/" + name + ".pcd", &cloud).ok());
+      GroundTruthFrame truth;
+      EXPECT_TRUE(ReadGroundTruthFrame(kHandPress + "/ground_truth/" + name + ".csv", &truth).ok());
+      FrameSummary s;
+      EXPECT_TRUE(tracker->Track(cloud, &s).ok());
+      if (s.forces_estimated) estimated->push_back(f);
+      if (f >= 13) grasp_error += ComputeVertexErrors(tracker->vertices(0), truth).all.mean / 3.0;
+    }
+    return grasp_error;
+  };
+  std::vector<int> estimated, none;
+  const double with = run(true, &estimated);
+  const double without = run(false, &none);
+  EXPECT_TRUE(none.empty());
+  ASSERT_FALSE(estimated.empty());
+  EXPECT_GE(estimated.front(), 12);  // not while the palm presses
+  EXPECT_GE(estimated.size(), 2u);
+  std::printf("grasp frames 13-15: mean vertex error %.2f mm with the forces estimated there, %.2f mm without\n",
+              with * 1e3, without * 1e3);
+  EXPECT_LT(with, 0.7 * without);
 }
 
 }  // namespace

@@ -315,6 +315,14 @@ struct SolverOptions {
 // fast back end solves it.
 struct ForceOptions {
   bool estimate = false;
+  // Without `estimate`: a frame whose cloud holds an occluder that touches the body's points
+  // (an occluder: points in front of the visible surface, found with a camera; a hand or a tool
+  // that the mask kept and that holds the body) is registered with the forces estimated, the
+  // others without (FrameSummary::forces_estimated). Where the hand holds the body, its points
+  // beside the silhouette look like the body's, and the classic energy pulls the surface into
+  // them; with the forces estimated that pull needs a force nobody applies there
+  // (docs/guide/forces.md#when-a-hand-holds-the-body).
+  bool when_occluded = true;
   // The penalty on the surface tractions, 1/2 weight * c * integral |t|^2 dA, with c the scale
   // at which a traction costs about as much as the data misfit it removes (the data stiffness
   // per area times (L / E)^2, L the body's size, E its Young's modulus): smaller lets larger
@@ -489,6 +497,7 @@ struct FrameSummary {
   // forces.adaptive_weight), and the cloud's RMS residual over the classic fit's that started
   // the frame (its warm start's shape, with the pairs found there; 0: not measured).
   double force_weight = 0.0, misfit_ratio = 0.0;
+  bool forces_estimated = false;  // this frame's mode (forces.estimate or forces.when_occluded)
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
   // Outer-iteration moves cut short because they reversed the last one (a two-cycle:

@@ -348,4 +348,23 @@ Vertices ImplausiblePoints(const TrackerState& state, const Vertices& points, co
   return out.topRows(kept);
 }
 
+int TouchingOccluderPoints(const Vertices& points, const PointIndex& cloud_index, double spacing,
+                           const std::vector<char>& occluder, int enough) {
+  const double radius2 = 9.0 * spacing * spacing;  // Grow's reach
+  int indices[kNeighbours];
+  double squared[kNeighbours];
+  int touching = 0;
+  for (int i = 0; i < static_cast<int>(occluder.size()) && touching < enough; ++i) {
+    if (!occluder[static_cast<size_t>(i)]) continue;
+    const int found = cloud_index.KNearest(points.row(i), kNeighbours, indices, squared);
+    for (int j = 0; j < found; ++j) {
+      if (squared[j] <= radius2 && !occluder[static_cast<size_t>(indices[j])]) {
+        ++touching;
+        break;
+      }
+    }
+  }
+  return touching;
+}
+
 }  // namespace femreg

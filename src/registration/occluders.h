@@ -61,6 +61,13 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
 int CarryImplausible(const TrackerState& state, const Vertices& before, const Vertices& points,
                      const PointIndex& cloud_index, double spacing, std::vector<char>* marks);
 
+// The occluder points (marked in `occluder`) that have an unmarked cloud point among their
+// nearest within three spacings, where the occluder's growth stopped at the model: an occluder
+// that touches the body's points, as a hand that holds it does, and not one that passes in front
+// of it. Counts up to `enough` and stops there.
+int TouchingOccluderPoints(const Vertices& points, const PointIndex& cloud_index, double spacing,
+                           const std::vector<char>& occluder, int enough);
+
 // The points of `points` marked implausible in `marks` (2 or 3), in their order, that are still
 // farther from the meshes' surface at state.x than data.max_strain_step mean edges: the frame
 // did not reach them, and only a strain beyond that could in the next. Marks nearer (a part

@@ -121,7 +121,7 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   // curvature grows with the residual), and those iterations bring the shape near
   // (docs/theory/equilibrium.md).
   const bool warm_start = WarmStart(k);
-  frame_problem.SetEquilibrium(state, options.forces.estimate && !warm_start, data_surface.get(), !SmoothStart(k));
+  frame_problem.SetEquilibrium(state, estimate_forces && !warm_start, data_surface.get(), !SmoothStart(k));
   return true;
 }
 
@@ -147,12 +147,12 @@ double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
 }
 
 bool Tracker::Impl::WarmStart(int k) const {
-  return state.options.forces.estimate && k <= warm_until;
+  return estimate_forces && k <= warm_until;
 }
 
 bool Tracker::Impl::SmoothStart(int k) const {
   // Never a frame's last outer iteration: the frame's result is the pushing-only problem's.
-  return state.options.forces.estimate && state.options.forces.pushing_only && k + 1 < iteration_limit &&
+  return estimate_forces && state.options.forces.pushing_only && k + 1 < iteration_limit &&
          (k == warm_until + 1 || k == smooth_after_split);
 }
 
@@ -360,7 +360,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   merit_x = before_solve;
   const bool contacts_pending =
       state.collision && state.collision->augmented() &&
-      UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!options.forces.estimate);
+      UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!estimate_forces);
   // New multipliers change the energy: the next start is not held against this one.
   if (contacts_pending) merit = std::numeric_limits<double>::infinity();
   // The largest vertex move of this outer iteration and the one 99 % of the free vertices

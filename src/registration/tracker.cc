@@ -44,6 +44,10 @@ using Clock = std::chrono::steady_clock;
 constexpr double kLargeMotionEdges = 3.0;
 // Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
 constexpr int kMaxImplausibleRestarts = 2;
+// forces.when_occluded: a frame is registered with the forces estimated where at least this
+// many occluder points touch the body's points (TouchingOccluderPoints): a hand or a tool in the
+// mask that holds the body, not one passing in front of it nor a few noisy points.
+constexpr int kTouchingOccluderPoints = 5;
 // Implausible points below this share of the cloud's weight (those marked since the frame
 // last started) strained a few elements (single points of a dense cloud at a fine mesh's
 // small elements), not the shape: the frame goes on from where it is without them. From it
@@ -312,6 +316,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.time.correspondences += Seconds(t0);
   s.visibility = fc.Describe();
   s.occluded_points = fc.occluders.occluders;
+  estimate_forces = options.forces.estimate;  // forces.when_occluded decides after the first outer iteration
   s.trim_distance = std::isfinite(fc.trim) ? fc.trim : 0.0;
   // The temporal springs hold to where the frame starts (the prediction, moved by the rigid
   // pre-alignment, so that inertia does not fight the rigid step) and the anchors.
@@ -363,6 +368,16 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
+    // forces.when_occluded: decided where the first outer iteration (the physical mode's warm
+    // start too) has brought the model to the cloud and released what it reached, so that a
+    // part that lagged behind a fast motion is not taken for a hand.
+    if (k == 1 && !options.forces.estimate && options.forces.when_occluded &&
+        options.regularizer != Regularizer::kNone && fc.occluders.occluders > 0) {
+      t0 = Clock::now();
+      estimate_forces = TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, fc.occluder,
+                                               kTouchingOccluderPoints) >= kTouchingOccluderPoints;
+      s.time.correspondences += Seconds(t0);
+    }
     const bool was_live = FractureLive(state);
     const bool go_on = OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s);
     if (FractureLive(state) && !was_live) {
@@ -379,7 +394,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     // also one that would have ended the frame as converged.
     const bool can_restart = options.regularizer != Regularizer::kNone && options.weights.elastic > 0 &&
                              !FractureLive(state);
-    const double restart_volume = StiffRestartVolume(options);
+    const double restart_volume = StiffRestartVolume(options, estimate_forces);
     const bool crushed = can_restart && restart_volume > 0 && iteration_base == 0 &&
                          k < std::max(1, options.data.hold_pairs_after) && iteration_budget > 1 &&
                          (go_on || s.termination == TerminationType::kConverged) &&
@@ -458,7 +473,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     s.message += "; but the last solve refused most of its steps and left the forces unbalanced: stalled";
   }
   if (state.collision) MeasureContacts(&s);
-  if (options.forces.estimate) {
+  s.forces_estimated = estimate_forces;
+  if (estimate_forces) {
     s.force_weight = options.forces.weight * state.force_weight_scale;
     if (misfit_reference > 0.0 && s.rms_residual > 0.0) s.misfit_ratio = s.rms_residual / misfit_reference;
   }
@@ -493,7 +509,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   const double solve_before_probe = s.time.solve;  // the weight's probe is a solve, not an output
-  if (options.forces.estimate && options.forces.adaptive_weight && !state.held_before) {
+  if (estimate_forces && options.forces.adaptive_weight && !state.held_before) {
     AdaptForceWeight(s.misfit_ratio, &state,
                      [&](double lower) { return LowerForceWeightPays(lower, pairs, t_frame, &s); });
   }

@@ -132,6 +132,8 @@ struct Tracker::Impl {
   int iteration_base = 0;
   int iteration_limit = 0;
   int warm_until = 0;            // WarmStart's last outer iteration
+  // This frame's mode: forces.estimate, or forces.when_occluded and an occluder in its cloud.
+  bool estimate_forces = false;
   int smooth_after_split = -1;   // the outer iteration after a fracture split, or -1 (SmoothStart)
   // The RMS residual (m) at the end of the frame's last warm start, with the pairs found there
   // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).

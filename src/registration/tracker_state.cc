@@ -95,10 +95,10 @@ double BulkMove(const TrackerState& state, const Eigen::VectorXd& moves, const s
   return bulk;
 }
 
-double StiffRestartVolume(const RegistrationOptions& options) {
+double StiffRestartVolume(const RegistrationOptions& options, bool estimating_forces) {
   const double v = options.solver.stiff_restart_volume;
   if (v >= 0) return v;
-  return options.forces.estimate ? 0.1 : 0.0;
+  return estimating_forces ? 0.1 : 0.0;
 }
 
 double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const Vertices& to) {

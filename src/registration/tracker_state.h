@@ -172,7 +172,7 @@ double CrushedVolumeRatio(const TrackerState& state, const Vertices& from, const
 // solver.stiff_restart_volume with its automatic value (< 0) resolved: 0.1 with the forces
 // estimated, where an equilibrium solve that starts from a crushed element stops against the
 // inversion barrier's force (docs/notes/2026-12-01-soft-modes.md); else 0 (off).
-double StiffRestartVolume(const RegistrationOptions& options);
+double StiffRestartVolume(const RegistrationOptions& options, bool estimating_forces);
 
 // Region id -> density of an object's materials (for ComputeLumpedMasses).
 std::vector<std::pair<int, double>> RegionDensities(const ObjectMaterial& material);
