@@ -377,6 +377,13 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       estimate_forces = TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, fc.occluder,
                                                kTouchingOccluderPoints) >= kTouchingOccluderPoints;
       s.time.correspondences += Seconds(t0);
+      if (estimate_forces) {
+        // As after the physical mode's warm start: another energy from here, and the stall
+        // test's reference is the first equilibrium solve's.
+        merit = std::numeric_limits<double>::infinity();
+        previous_energy = merit;
+        stall_reference = 0.0;
+      }
     }
     const bool was_live = FractureLive(state);
     const bool go_on = OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s);
