@@ -31,7 +31,8 @@ for name in "${names[@]}"; do
   [[ -n "${FRICTION[$name]:-}" ]] && modes+=(pushing)
   [[ -f "datasets/$name/forces.csv" ]] && modes+=(adaptive)
   for mode in "${modes[@]}"; do
-    flag=()
+    # classic: in every frame, also where a hand holds the body (forces.when_occluded)
+    flag=(--set registration.forces.when_occluded=false)
     [[ $mode != classic ]] && flag=(--set registration.forces.estimate=true)
     [[ $mode == adaptive ]] && flag+=(--set registration.forces.adaptive_weight=true)
     [[ $mode == pushing ]] && flag+=(--set registration.forces.pushing_only=true
