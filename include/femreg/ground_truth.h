@@ -48,6 +48,9 @@ struct ForceFrame {
   // obstacle), in the columns of kContactForceColumns where the file has them.
   bool has_contact = false;
   Eigen::Vector3d contact = Eigen::Vector3d::Zero();
+  // stats.csv's forces_estimated: 1 the frame estimated the forces, 0 it did not (its data
+  // term's pull), -1 not said (no such column: forces.csv, an older stats.csv).
+  int estimated = -1;
 };
 extern const char* const kForceColumns[6];         // force_x_N, ..., torque_z_Nm
 extern const char* const kContactForceColumns[3];  // contact_force_x_N, ..., contact_force_z_N

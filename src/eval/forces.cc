@@ -115,7 +115,9 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
       if (contact[k] < 0) return Status::Error(path + ": the header has contact force columns but not " + kContactForceColumns[k]);
     }
   }
-  const int needed = std::max(*std::max_element(columns, columns + 7), with_contact ? *std::max_element(contact, contact + 3) : 0) + 1;
+  const int estimated_at = column("forces_estimated");
+  const int needed = std::max({*std::max_element(columns, columns + 7),
+                               with_contact ? *std::max_element(contact, contact + 3) : 0, estimated_at}) + 1;
   for (int number = 2; std::getline(in, line); ++number) {
     if (Trim(line).empty()) continue;
     const std::vector<std::string> cells = SplitCsvLine(line);
@@ -158,6 +160,11 @@ Status ReadForces(const std::string& path, std::vector<ForceFrame>* frames, bool
       // All three or none (a frame without the push).
       if (filled != 0 && filled != 3) return Status::Error(where + kContactForceColumns[empty_at] + " is empty");
       f.has_contact = filled == 3;
+    }
+    if (estimated_at >= 0) {
+      const std::string cell = Trim(cells[estimated_at]);
+      if (cell != "0" && cell != "1") return Status::Error(where + "forces_estimated must be 0 or 1 ('" + cell + "')");
+      f.estimated = cell == "1" ? 1 : 0;
     }
     frames->push_back(f);
   }

@@ -317,6 +317,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.visibility = fc.Describe();
   s.occluded_points = fc.occluders.occluders;
   estimate_forces = options.forces.estimate;  // forces.when_occluded decides after the first outer iteration
+  // Not the last frame's equilibrium, if this frame's first outer iteration finds no pairs.
+  if (!estimate_forces) frame_problem.SetEquilibrium(state, false, nullptr, false);
   s.trim_distance = std::isfinite(fc.trim) ? fc.trim : 0.0;
   // The temporal springs hold to where the frame starts (the prediction, moved by the rigid
   // pre-alignment, so that inertia does not fight the rigid step) and the anchors.
@@ -368,13 +370,16 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
-    // forces.when_occluded: decided where the first outer iteration (the physical mode's warm
-    // start too) has brought the model to the cloud and released what it reached, so that a
-    // part that lagged behind a fast motion is not taken for a hand.
-    if (k == 1 && !options.forces.estimate && options.forces.when_occluded &&
+    // forces.when_occluded: decided once an outer iteration from the frame's start (or from a
+    // restart's, after its stiff stages: the physical mode's warm start too) has brought the
+    // model to the cloud, on the marks less the points it reached, so that a part that lagged
+    // behind a fast motion is not taken for a hand. Switched on only, never off, in a frame.
+    if (!estimate_forces && k == iteration_base + 1 && options.forces.when_occluded &&
         options.regularizer != Regularizer::kNone && fc.occluders.occluders > 0) {
       t0 = Clock::now();
-      estimate_forces = TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, fc.occluder,
+      std::vector<char> marks = fc.occluder;  // the frame's own are released on its schedule
+      ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &marks);
+      estimate_forces = TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, marks,
                                                kTouchingOccluderPoints) >= kTouchingOccluderPoints;
       s.time.correspondences += Seconds(t0);
       if (estimate_forces) {
@@ -516,6 +521,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   state.held_before = s.lost || !s.IsSolutionUsable();
   const double solve_before_probe = s.time.solve;  // the weight's probe is a solve, not an output
+  // forces.when_occluded: the weight adapts over consecutive frames with the forces estimated.
+  if (!estimate_forces) state.misfit_ratios.clear();
   if (estimate_forces && options.forces.adaptive_weight && !state.held_before) {
     AdaptForceWeight(s.misfit_ratio, &state,
                      [&](double lower) { return LowerForceWeightPays(lower, pairs, t_frame, &s); });

@@ -80,7 +80,17 @@ void ForceReport::Print() const {
                 "push's median %.4f N.\n",
                 m.contact_error, with, m.true_contact);
   }
-  if (estimated == 0) {
+  std::vector<ForceError> switched;
+  for (const ForceError& e : errors) {
+    if (std::binary_search(estimated_frames.begin(), estimated_frames.end(), e.frame)) switched.push_back(e);
+  }
+  if (estimated == 0 && !switched.empty()) {
+    const std::string pct = Percent(MedianForceErrors(switched).relative, "%.2f");
+    std::printf("The run estimated the forces in %zu of these %zu frames (forces.when_occluded: an occluder "
+                "touched the body); their median error: %s%% of the true force. The other frames' are their "
+                "data term's pull and their contacts' push.\n",
+                switched.size(), errors.size(), pct.empty() ? "-" : pct.c_str());
+  } else if (estimated == 0) {
     std::printf("The run did not estimate the forces: these are its data term's pull and its contacts' "
                 "push (register with --set registration.forces.estimate=true for an estimate).\n");
   }
@@ -118,6 +128,10 @@ Status CompareForceFiles(const std::string& result, const std::string& truth_dir
   const auto beyond = [&](const ForceFrame& f) { return f.frame >= static_cast<int>(num_frames); };
   truth.erase(std::remove_if(truth.begin(), truth.end(), beyond), truth.end());
   report->errors = CompareForces(estimated, truth);
+  for (const ForceFrame& f : estimated) {
+    if (f.estimated == 1) report->estimated_frames.push_back(f.frame);
+  }
+  std::sort(report->estimated_frames.begin(), report->estimated_frames.end());
   for (size_t i = 0; i < report->errors.size(); ++i) report->of_frame[report->errors[i].frame] = i;
   report->compared = !report->errors.empty();
   for (const ForceError& e : report->errors) report->contact = report->contact || !std::isnan(e.contact_error);

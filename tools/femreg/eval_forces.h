@@ -23,6 +23,9 @@ struct ForceReport {
   std::string truth_path;
   int estimated = -1;  // summary.json's forces.estimate: 1, 0, or -1 (not said)
   bool contact = false;  // some frame has the obstacles' push in both files
+  // The frames stats.csv says estimated the forces (forces_estimated 1): with estimate false,
+  // those forces.when_occluded switched.
+  std::vector<int> estimated_frames;
 
   // eval.csv's force cells of frame f: empty when that frame has no estimate.
   std::string Cells(int f) const;
