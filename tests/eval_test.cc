@@ -148,24 +148,6 @@ TEST(EvalTest, ForcesCsvAndStatsColumns) {
   EXPECT_EQ(back[0].torque, Eigen::Vector3d(0.5, 0.25, -1e-2));
   EXPECT_EQ(back[1].frame, 2);
   EXPECT_EQ(back[1].force, Eigen::Vector3d(4, 5, 6));
-  EXPECT_EQ(back[0].estimated, -1);  // no forces_estimated column
-
-  // forces.when_occluded: which frames estimated the forces.
-  ASSERT_TRUE(ReadForces(dir.Write("mixed.csv",
-                                   "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,"
-                                   "forces_estimated\n0,1,2,3,4,5,6,0\n1,1,2,3,4,5,6,1\n"),
-                         &back, &has_columns)
-                  .ok());
-  ASSERT_EQ(back.size(), 2u);
-  EXPECT_EQ(back[0].estimated, 0);
-  EXPECT_EQ(back[1].estimated, 1);
-  const Status flag = ReadForces(dir.Write("flag.csv",
-                                           "frame,force_x_N,force_y_N,force_z_N,torque_x_Nm,torque_y_Nm,"
-                                           "torque_z_Nm,forces_estimated\n0,1,2,3,4,5,6,yes\n"),
-                                 &back, &has_columns);
-  EXPECT_FALSE(flag.ok());
-  EXPECT_NE(flag.message().find("flag.csv:2: forces_estimated must be 0 or 1"), std::string::npos) << flag.message();
-
   ASSERT_TRUE(
       ReadForces(dir.Write("old.csv", "frame,file,message\n0,a.pcd,\"ok\"\n"), &back, &has_columns)
           .ok());

@@ -56,6 +56,14 @@ int InvertedElements(const TetMesh& mesh, const Vertices& x) {
   return inverted;
 }
 
+// hand_press's frame f: its cloud (the hand's points in it) and its ground truth.
+void ReadHandPressFrame(int f, PointCloud* cloud, GroundTruthFrame* truth) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "frame_%04d", f);
+  EXPECT_TRUE(ReadPointCloud(kHandPress + "/clouds/" + name + ".pcd", cloud).ok());
+  EXPECT_TRUE(ReadGroundTruthFrame(kHandPress + "/ground_truth/" + name + ".csv", truth).ok());
+}
+
 PressRun RunHandPress(void (*edit)(Scene*)) {
   PressRun run;
   Scene scene;
@@ -68,12 +76,9 @@ PressRun RunHandPress(void (*edit)(Scene*)) {
   EXPECT_TRUE(status.ok()) << status.message();
   if (!status.ok()) return run;
   for (int f = 0; f < kFrames; ++f) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "frame_%04d", f);
     PointCloud cloud;
-    EXPECT_TRUE(ReadPointCloud(kHandPress + "/clouds/" + name + ".pcd", &cloud).ok());
     GroundTruthFrame truth;
-    EXPECT_TRUE(ReadGroundTruthFrame(kHandPress + "/ground_truth/" + name + ".csv", &truth).ok());
+    ReadHandPressFrame(f, &cloud, &truth);
     FrameSummary s;
     EXPECT_TRUE(tracker->Track(cloud, &s).ok());
     const Vertices& x = tracker->vertices(0);
@@ -211,12 +216,9 @@ TEST(HandPress, FramesWhereTheHandHoldsTheBallAreRegisteredWithTheForcesEstimate
     EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
     double grasp_error = 0.0;
     for (int f = 0; f <= 15; ++f) {
-      char name[64];
-      std::snprintf(name, sizeof(name), "frame_%04d", f);
       PointCloud cloud;
-      EXPECT_TRUE(ReadPointCloud(kHandPress + "/clouds/" + name + ".pcd", &cloud).ok());
       GroundTruthFrame truth;
-      EXPECT_TRUE(ReadGroundTruthFrame(kHandPress + "/ground_truth/" + name + ".csv", &truth).ok());
+      ReadHandPressFrame(f, &cloud, &truth);
       FrameSummary s;
       EXPECT_TRUE(tracker->Track(cloud, &s).ok());
       if (s.forces_estimated) estimated->push_back(f);

@@ -48,6 +48,10 @@ constexpr int kBacktrackHalvings = 3;
 constexpr double kReversalCosine = -0.5;
 // The shortest share of a reversing move that CutReversal keeps.
 constexpr double kShortestReversalCut = 0.25;
+// forces.when_occluded: a frame is registered with the forces estimated where at least this
+// many occluder points touch the body's points (TouchingOccluderPoints): a hand or a tool in the
+// mask that holds the body, not one passing in front of it nor a few noisy points.
+constexpr int kTouchingOccluderPoints = 5;
 
 }  // namespace
 
@@ -123,6 +127,32 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   const bool warm_start = WarmStart(k);
   frame_problem.SetEquilibrium(state, estimate_forces && !warm_start, data_surface.get(), !SmoothStart(k));
   return true;
+}
+
+void Tracker::Impl::SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double* previous_energy,
+                                            FrameSummary* s) {
+  const RegistrationOptions& options = state.options;
+  // Decided once an outer iteration from the frame's start (or from a restart's, after its
+  // stiff stages: the physical mode's warm start too) has brought the model to the cloud, on
+  // the marks less the points it reached, so that a part that lagged behind a fast motion is
+  // not taken for a hand. Switched on only, never off, in a frame.
+  if (estimate_forces || k != iteration_base + 1 || !options.forces.when_occluded ||
+      options.regularizer == Regularizer::kNone || fc.occluders.occluders == 0) {
+    return;
+  }
+  const auto t0 = Clock::now();
+  std::vector<char> marks = fc.occluder;  // the frame's own are released on its schedule
+  ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &marks);
+  estimate_forces = TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, marks,
+                                           kTouchingOccluderPoints) >= kTouchingOccluderPoints;
+  s->time.correspondences += Seconds(t0);
+  if (estimate_forces) {
+    // As after the physical mode's warm start: another energy from here, and the stall test's
+    // reference is the first equilibrium solve's.
+    merit = std::numeric_limits<double>::infinity();
+    *previous_energy = merit;
+    stall_reference = 0.0;
+  }
 }
 
 bool Tracker::Impl::TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const {

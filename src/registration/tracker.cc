@@ -44,10 +44,6 @@ using Clock = std::chrono::steady_clock;
 constexpr double kLargeMotionEdges = 3.0;
 // Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
 constexpr int kMaxImplausibleRestarts = 2;
-// forces.when_occluded: a frame is registered with the forces estimated where at least this
-// many occluder points touch the body's points (TouchingOccluderPoints): a hand or a tool in the
-// mask that holds the body, not one passing in front of it nor a few noisy points.
-constexpr int kTouchingOccluderPoints = 5;
 // Implausible points below this share of the cloud's weight (those marked since the frame
 // last started) strained a few elements (single points of a dense cloud at a fine mesh's
 // small elements), not the shape: the frame goes on from where it is without them. From it
@@ -370,26 +366,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       s.time.correspondences += Seconds(t0);
       s.occluded_points = fc.occluders.occluders;
     }
-    // forces.when_occluded: decided once an outer iteration from the frame's start (or from a
-    // restart's, after its stiff stages: the physical mode's warm start too) has brought the
-    // model to the cloud, on the marks less the points it reached, so that a part that lagged
-    // behind a fast motion is not taken for a hand. Switched on only, never off, in a frame.
-    if (!estimate_forces && k == iteration_base + 1 && options.forces.when_occluded &&
-        options.regularizer != Regularizer::kNone && fc.occluders.occluders > 0) {
-      t0 = Clock::now();
-      std::vector<char> marks = fc.occluder;  // the frame's own are released on its schedule
-      ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &marks);
-      estimate_forces = TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, marks,
-                                               kTouchingOccluderPoints) >= kTouchingOccluderPoints;
-      s.time.correspondences += Seconds(t0);
-      if (estimate_forces) {
-        // As after the physical mode's warm start: another energy from here, and the stall
-        // test's reference is the first equilibrium solve's.
-        merit = std::numeric_limits<double>::infinity();
-        previous_energy = merit;
-        stall_reference = 0.0;
-      }
-    }
+    SwitchToForcesWhereHeld(k, fc, &previous_energy, &s);
     const bool was_live = FractureLive(state);
     const bool go_on = OuterIteration(k, fc, t_frame, &pairs, &previous_energy, &previous, &s);
     if (FractureLive(state) && !was_live) {

@@ -69,6 +69,9 @@ struct Tracker::Impl {
                             FrameSummary* s);
   // Whether the frame has used solver.time_budget_s (then *s says so).
   bool TimeBudgetUsed(Clock::time_point t_frame, FrameSummary* s) const;
+  // forces.when_occluded: after outer iteration k - 1, whether the frame goes on with the forces
+  // estimated (an occluder touches the body; docs/guide/forces.md#when-a-hand-holds-the-body).
+  void SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double* previous_energy, FrameSummary* s);
   // Whether outer iteration k holds its start against the last one's (Backtrack).
   bool Backtracks(int k, bool warm_start) const;
   // From the held pair set on, the energy at state.x with the rotations, pairs and contacts it
