@@ -315,11 +315,11 @@ struct SolverOptions {
 // fast back end solves it.
 struct ForceOptions {
   bool estimate = false;
-  // Without `estimate`: a frame whose cloud holds an occluder that touches the body's points
-  // after its first outer iteration (an occluder: points in front of the visible surface, found
-  // with a camera, or found implausible, data.max_strain_step; a hand or a tool that the mask
-  // kept and that holds the body) is registered with the forces estimated, the others without
-  // (FrameSummary::forces_estimated). Where the hand holds the body, its points
+  // Without `estimate`: a frame whose cloud holds an occluder (points in front of the visible
+  // surface, found with a camera: a hand or a tool that the mask kept) that touches the body's
+  // points after its first outer iteration, itself or through the points found implausible
+  // beside the body (data.max_strain_step), is registered with the forces estimated, the others
+  // without (FrameSummary::forces_estimated). Where the hand holds the body, its points
   // beside the silhouette look like the body's, and the classic energy pulls the surface into
   // them; with the forces estimated that pull needs a force nobody applies there
   // (docs/guide/forces.md#when-a-hand-holds-the-body).
