@@ -137,8 +137,9 @@ void Tracker::Impl::SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double*
   // the marks less the points it reached, so that a part that lagged behind a fast motion is
   // not taken for a hand. Switched on only, never off, in a frame.
   if (estimate_forces || k != iteration_base + 1 || !options.forces.when_occluded ||
-      options.regularizer == Regularizer::kNone || fc.occluders.occluders == 0) {
-    return;
+      options.regularizer == Regularizer::kNone || fc.occluders.occluders == 0 ||
+      std::find(fc.occluder.begin(), fc.occluder.end(), 1) == fc.occluder.end()) {
+    return;  // without an occluder proper, not even the release below: the frame stays as it was
   }
   const auto t0 = Clock::now();
   std::vector<char> marks = fc.occluder;  // the frame's own are released on its schedule
