@@ -18,6 +18,7 @@ namespace {
 constexpr double kNear = 1e-4;          // m; the z-buffer's near plane
 constexpr int kMaxImageSide = 1024;     // pixels
 constexpr int kNeighbours = 12;         // the occluder grows through this many nearest points
+constexpr double kReach = 3.0;          // ... within this many point spacings
 constexpr double kWholeView = 0.5;      // seeds beyond this share of the points on the model
 constexpr double kBoundMargin = 1e-9;   // relative: distance bounds against the closest point's round-off
 
@@ -38,7 +39,7 @@ int Within(double lower, double upper, double radius, const Eigen::Vector3d& que
 template <typename Off>
 void Grow(const Vertices& points, const PointIndex& cloud_index, double spacing, char value, Off off,
           std::vector<int>* queue, std::vector<char>* marks) {
-  const double radius2 = 9.0 * spacing * spacing;
+  const double radius2 = kReach * kReach * spacing * spacing;
   int indices[kNeighbours];
   double squared[kNeighbours];
   for (size_t head = 0; head < queue->size(); ++head) {
@@ -350,7 +351,7 @@ Vertices ImplausiblePoints(const TrackerState& state, const Vertices& points, co
 
 int TouchingOccluderPoints(const Vertices& points, const PointIndex& cloud_index, double spacing,
                            const std::vector<char>& occluder, int enough) {
-  const double radius2 = 9.0 * spacing * spacing;  // Grow's reach
+  const double radius2 = kReach * kReach * spacing * spacing;  // Grow's
   int indices[kNeighbours];
   double squared[kNeighbours];
   int touching = 0;
