@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 
+#include "femreg/fem.h"
 #include "femreg/ground_truth.h"
 #include "femreg/io.h"
 #include "femreg/point_cloud.h"
@@ -19,6 +21,7 @@
 #include "femreg_test_config.h"
 #include "geometry/nearest.h"
 #include "registration/occluders.h"
+#include "registration/tracker_state.h"
 
 namespace fs = std::filesystem;
 
@@ -266,6 +269,58 @@ TEST(Occluders, ABodysOwnLaggingPartDoesNotSwitchTheFrame) {
     }
     EXPECT_EQ(solved, 24);
   }
+}
+
+// Points found implausible (data.max_strain_step) are a hand's beside the body, not the body's
+// own part that moved faster than the frame's first solve followed. A 10 x 2 x 2 cm bar seen
+// from -y, its tip (x >= 9 cm) pulled 3 cm towards the sensor so that the cell before it is
+// sheared far past the limit. Where nothing of the cloud is left at the tip's place at the
+// frame's start while the rest of the bar's points are where it was, the points that pulled
+// the tip are the tip itself, and nothing is marked. They are marked where the body's own
+// points are still around the tip's place (a hand pulled it), where the whole bar left its
+// place (a hand carried it: an empty place tells nothing), seen from behind, and without a view.
+TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
+  TrackerState state;
+  state.objects.resize(1);
+  state.objects[0].mesh = MakeBox(Eigen::Vector3d(0.1, 0.02, 0.02), 10, 2, 2, Eigen::Vector3d(0, -0.01, -0.01));
+  state.objects[0].model.Build(state.objects[0].mesh, ElasticModelType::kCorotational, Material());
+  state.RebuildGlobalArrays();
+  const Vertices start = state.objects[0].mesh.rest;
+  const double h = 0.002;
+  std::vector<Eigen::Vector3d> points;
+  // Points on the face y, x in [x0, x1], kept 1 mm inside its edges: on an edge, a point's
+  // closest triangle would be a tie between faces.
+  auto face = [&](double x0, double x1, double y) {
+    for (double x = x0 + 0.001; x <= x1 - 0.001 + 1e-9; x += h) {
+      for (double z = -0.009; z <= 0.009 + 1e-9; z += h) points.emplace_back(x, y, z);
+    }
+  };
+  // The bar moved by `carried` towards the sensor, its tip 3 cm further; the cloud: the bar's
+  // visible face 1 cm short of the sheared cell, and the tip, where they are now.
+  auto pose = [&](double carried) {
+    state.x = start;
+    for (int v = 0; v < state.x.rows(); ++v) state.x(v, 1) -= carried + (state.x(v, 0) > 0.0899 ? 0.03 : 0.0);
+    points.clear();
+    face(0.0, 0.07, -0.01 - carried);
+    face(0.09, 0.1, -0.04 - carried);
+  };
+  const auto mark = [&](int view) {  // 0: none; -1, +1: the sensor on that side of y
+    Vertices cloud(static_cast<int>(points.size()), 3);
+    for (size_t k = 0; k < points.size(); ++k) cloud.row(static_cast<int>(k)) = points[k].transpose();
+    const PointIndex index(cloud);
+    std::vector<char> marks;
+    std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)> faces;
+    if (view != 0) faces = [view](const Eigen::Vector3d&, const Eigen::Vector3d& n) { return view * n.y() > 0.0; };
+    return MarkImplausible(state, start, cloud, index, h, faces, &marks);
+  };
+  pose(0.0);
+  EXPECT_EQ(mark(-1), 0) << "nothing of the cloud is where the tip was: the tip's own points";
+  EXPECT_GT(mark(0), 0) << "without a view, as before";
+  EXPECT_GT(mark(+1), 0) << "seen from behind, the tip's place says nothing";
+  face(0.07, 0.1, -0.01);  // the body's own points still at the tip's place: a hand pulled it
+  EXPECT_GT(mark(-1), 0);
+  pose(0.02);
+  EXPECT_GT(mark(-1), 0) << "the whole bar left its place: a hand carried it";
 }
 
 }  // namespace

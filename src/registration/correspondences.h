@@ -7,6 +7,7 @@
 #define FEMREG_REGISTRATION_CORRESPONDENCES_H_
 
 #include <Eigen/Core>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -105,6 +106,9 @@ struct FrameCloud {
         return n.dot(eye - p) > 0.0;
     }
   }
+  // Faces as a function (MarkImplausible's), or empty without a view: then no part of the
+  // surface can be said to have left what the sensor sees.
+  std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)> FacesFunction() const;
   std::string Describe() const;  // "camera", "viewpoint (x, y, z)", "direction (x, y, z)", "none"
 };
 

@@ -17,6 +17,11 @@
 
 namespace femreg {
 
+std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)> FrameCloud::FacesFunction() const {
+  if (view == View::kNone) return {};
+  return [this](const Eigen::Vector3d& p, const Eigen::Vector3d& n) { return Faces(p, n); };
+}
+
 std::string FrameCloud::Describe() const {
   char buf[128];
   switch (view) {

@@ -53,6 +53,43 @@ void Grow(const Vertices& points, const PointIndex& cloud_index, double spacing,
   }
 }
 
+// Clears the strained surface vertices that faced the sensor at `start` (`faces` is given
+// the vertex's area-weighted, unnormalized normal there) and have no cloud point within
+// `reach` of where they were, in an object most of whose surface facing the sensor still has
+// one: the rest of the body stayed, and nothing of the cloud is at that part's place, so the
+// points that pulled it are most likely the part itself, moved faster than the frame's first
+// solve followed, and not a hand beside it, which leaves the body's own points around. Where
+// most of the object left its place (a hand carried it), an empty place tells nothing.
+void LeaveCarriedOff(const TrackerState& state, const Vertices& start, const PointIndex& cloud_index, double reach,
+                     const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
+                     std::vector<char>* strained) {
+  std::vector<Eigen::Vector3d> normal(strained->size(), Eigen::Vector3d::Zero());
+  for (int f = 0; f < state.surface.rows(); ++f) {
+    const int a = state.surface(f, 0), b = state.surface(f, 1), c = state.surface(f, 2);
+    const Eigen::Vector3d n = (start.row(b) - start.row(a)).cross(start.row(c) - start.row(a)).transpose();
+    for (int k = 0; k < 3; ++k) normal[static_cast<size_t>(state.surface(f, k))] += n;
+  }
+  std::vector<int> empty;  // the object's strained vertices facing the sensor with an empty place
+  for (const ObjectState& o : state.objects) {
+    int facing = 0, covered = 0;
+    empty.clear();
+    for (int v = o.offset; v < o.offset + o.mesh.num_vertices(); ++v) {
+      const size_t i = static_cast<size_t>(v);
+      if (normal[i].squaredNorm() == 0.0) continue;  // inside
+      const Eigen::Vector3d p = start.row(v).transpose();
+      if (!faces(p, normal[i])) continue;
+      ++facing;
+      if (cloud_index.AnyWithin(p, reach)) {
+        ++covered;
+      } else if ((*strained)[i]) {
+        empty.push_back(v);
+      }
+    }
+    if (2 * covered < facing) continue;
+    for (int v : empty) (*strained)[static_cast<size_t>(v)] = 0;
+  }
+}
+
 // Whether cloud point i lies off the model: farther than sqrt(grow2) from `surface`. Each
 // point is asked once (memo: -1 not yet, 0 on, 1 off).
 struct OffModel {
@@ -214,7 +251,9 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 }
 
 int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
-                    const PointIndex& cloud_index, double spacing, std::vector<char>* marks) {
+                    const PointIndex& cloud_index, double spacing,
+                    const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
+                    std::vector<char>* marks) {
   const double limit = state.options.data.max_strain_step;
   const int n = static_cast<int>(points.rows());
   if (!(limit > 0) || n == 0 || start.rows() != state.x.rows() || state.surface.rows() == 0) return 0;
@@ -255,6 +294,10 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   if (!any) return 0;
   if (marks->size() != static_cast<size_t>(n)) marks->assign(static_cast<size_t>(n), 0);
   const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
+  if (faces) {
+    LeaveCarriedOff(state, start, cloud_index, grow, faces, &strained);
+    if (std::find(strained.begin(), strained.end(), 1) == strained.end()) return 0;
+  }
   // The meshes' own surfaces (an embedded surface's pairs act through the same elements).
   const SurfaceIndex surface(state.x, state.surface), at_start(start, state.surface);
   std::vector<signed char> memo(static_cast<size_t>(n), -1);

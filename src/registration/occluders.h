@@ -5,6 +5,7 @@
 #ifndef FEMREG_REGISTRATION_OCCLUDERS_H_
 #define FEMREG_REGISTRATION_OCCLUDERS_H_
 
+#include <functional>
 #include <vector>
 
 #include "geometry/nearest.h"
@@ -49,8 +50,16 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 // the loss scale, or two spacings, from its surface); the marks grow through the cloud (neighbours within
 // three spacings) over points off the model at `start`. Marked points get 2 in *marks
 // (#P; assigned zeros when empty), which ReleaseReached keeps. Returns how many were marked.
+// A strained surface vertex that faced the sensor at `start` (`faces`: position and outward,
+// unnormalized normal; empty without a view) with no cloud point within that distance of
+// where it was, in an object most of whose surface facing the sensor still has one there, no
+// longer counts as strained: what pulled it is most likely the body's own part that a fast
+// motion carried off while the rest stayed, not a hand beside it. A point is marked only if
+// its closest triangle touches a vertex that still counts.
 int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
-                    const PointIndex& cloud_index, double spacing, std::vector<char>* marks);
+                    const PointIndex& cloud_index, double spacing,
+                    const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
+                    std::vector<char>* marks);
 
 // The last frame's implausible points, at a frame's start: the hand that pulled them is
 // most likely still there, and a frame that lets it pull first must start again without it

@@ -420,8 +420,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
-      const int marked =
-          MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, &fc.occluder);
+      // Not on an embedded surface's cage: it stands off the data, and its empty places say nothing.
+      const int marked = MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing,
+                                         data_surface ? nullptr : fc.FacesFunction(), &fc.occluder);
       s.time.correspondences += Seconds(t0);
       if (marked > 0) {
         fc.occluders.occluders += marked;
