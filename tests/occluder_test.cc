@@ -277,8 +277,9 @@ TEST(Occluders, ABodysOwnLaggingPartDoesNotSwitchTheFrame) {
 // sheared far past the limit. Where nothing of the cloud is left at the tip's place at the
 // frame's start while the rest of the bar's points are where it was, the points that pulled
 // the tip are the tip itself, and nothing is marked. They are marked where the body's own
-// points are still around the tip's place (a hand pulled it), where the whole bar left its
-// place (a hand carried it: an empty place tells nothing), seen from behind, and without a view.
+// points are still around the tip's place (a hand pulled it), where the whole bar or most of
+// it left its place (a hand carried it: an empty place tells nothing), seen from behind (the
+// empty places face away), and without a view.
 TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
   TrackerState state;
   state.objects.resize(1);
@@ -296,12 +297,13 @@ TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
     }
   };
   // The bar moved by `carried` towards the sensor, its tip 3 cm further; the cloud: the bar's
-  // visible face 1 cm short of the sheared cell, and the tip, where they are now.
-  auto pose = [&](double carried) {
+  // visible face up to x = `seen` (1 cm short of the sheared cell), and the tip, where they are
+  // now. Of the 33 vertices facing the sensor, 3 per 1 cm of x, those up to `seen` have points.
+  auto pose = [&](double carried, double seen = 0.07) {
     state.x = start;
     for (int v = 0; v < state.x.rows(); ++v) state.x(v, 1) -= carried + (state.x(v, 0) > 0.0899 ? 0.03 : 0.0);
     points.clear();
-    face(0.0, 0.07, -0.01 - carried);
+    face(0.0, seen, -0.01 - carried);
     face(0.09, 0.1, -0.04 - carried);
   };
   const auto mark = [&](int view) {  // 0: none; -1, +1: the sensor on that side of y
@@ -316,11 +318,16 @@ TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
   pose(0.0);
   EXPECT_EQ(mark(-1), 0) << "nothing of the cloud is where the tip was: the tip's own points";
   EXPECT_GT(mark(0), 0) << "without a view, as before";
-  EXPECT_GT(mark(+1), 0) << "seen from behind, the tip's place says nothing";
-  face(0.07, 0.1, -0.01);  // the body's own points still at the tip's place: a hand pulled it
-  EXPECT_GT(mark(-1), 0);
+  face(0.0, 0.07, 0.01);  // the back face, at its place: the empty places there are of the back
+  EXPECT_GT(mark(+1), 0) << "seen from behind, the tip's front faces away and says nothing";
+  face(0.07, 0.1, -0.01);
+  EXPECT_GT(mark(-1), 0) << "the body's own points still at the tip's place: a hand pulled it";
   pose(0.02);
   EXPECT_GT(mark(-1), 0) << "the whole bar left its place: a hand carried it";
+  pose(0.0, 0.05);
+  EXPECT_EQ(mark(-1), 0) << "18 of 33 facing vertices still have points: the rest stayed";
+  pose(0.0, 0.03);
+  EXPECT_GT(mark(-1), 0) << "12 of 33: most of the bar left its place";
 }
 
 }  // namespace

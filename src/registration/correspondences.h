@@ -96,7 +96,8 @@ struct FrameCloud {
   }
 
   // Whether a surface point p with outward normal n faces the sensor.
-  bool Faces(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const {
+  bool Faces(const Eigen::Vector3d& p, const Eigen::Vector3d& n) const { return Faces(view, eye, p, n); }
+  static bool Faces(View view, const Eigen::Vector3d& eye, const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
     switch (view) {
       case View::kNone:
         return true;
@@ -106,8 +107,8 @@ struct FrameCloud {
         return n.dot(eye - p) > 0.0;
     }
   }
-  // Faces as a function (MarkImplausible's), or empty without a view: then no part of the
-  // surface can be said to have left what the sensor sees.
+  // Faces as a function (MarkImplausible's), holding a copy of the view; empty without one,
+  // where no vertex can be said to face the sensor.
   std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)> FacesFunction() const;
   std::string Describe() const;  // "camera", "viewpoint (x, y, z)", "direction (x, y, z)", "none"
 };

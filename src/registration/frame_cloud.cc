@@ -19,7 +19,7 @@ namespace femreg {
 
 std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)> FrameCloud::FacesFunction() const {
   if (view == View::kNone) return {};
-  return [this](const Eigen::Vector3d& p, const Eigen::Vector3d& n) { return Faces(p, n); };
+  return [v = view, e = eye](const Eigen::Vector3d& p, const Eigen::Vector3d& n) { return Faces(v, e, p, n); };
 }
 
 std::string FrameCloud::Describe() const {

@@ -55,11 +55,12 @@ void Grow(const Vertices& points, const PointIndex& cloud_index, double spacing,
 
 // Clears the strained surface vertices that faced the sensor at `start` (`faces` is given
 // the vertex's area-weighted, unnormalized normal there) and have no cloud point within
-// `reach` of where they were, in an object most of whose surface facing the sensor still has
-// one: the rest of the body stayed, and nothing of the cloud is at that part's place, so the
-// points that pulled it are most likely the part itself, moved faster than the frame's first
-// solve followed, and not a hand beside it, which leaves the body's own points around. Where
-// most of the object left its place (a hand carried it), an empty place tells nothing.
+// `reach` of where they were, in an object at least half of whose surface vertices facing the
+// sensor still have one: the rest of the body stayed, and nothing of the cloud is at that
+// part's place, so the points that pulled it are most likely the part itself, moved faster
+// than the frame's first outer iteration followed, and not a hand beside it, which leaves the
+// body's own points around. Where most of the object left its place (a hand carried it), an
+// empty place tells nothing. The coverage counts every cloud point (other objects', occluders').
 void LeaveCarriedOff(const TrackerState& state, const Vertices& start, const PointIndex& cloud_index, double reach,
                      const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
                      std::vector<char>* strained) {

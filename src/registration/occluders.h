@@ -52,10 +52,10 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 // (#P; assigned zeros when empty), which ReleaseReached keeps. Returns how many were marked.
 // A strained surface vertex that faced the sensor at `start` (`faces`: position and outward,
 // unnormalized normal; empty without a view) with no cloud point within that distance of
-// where it was, in an object most of whose surface facing the sensor still has one there, no
-// longer counts as strained: what pulled it is most likely the body's own part that a fast
-// motion carried off while the rest stayed, not a hand beside it. A point is marked only if
-// its closest triangle touches a vertex that still counts.
+// where it was, in an object at least half of whose surface vertices facing the sensor still
+// have one there, no longer counts as strained: what pulled it is most likely the body's own
+// part that a fast motion carried off while the rest stayed, not a hand beside it. A point is
+// marked only if its closest triangle touches a vertex that still counts.
 int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
                     const PointIndex& cloud_index, double spacing,
                     const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
