@@ -54,36 +54,37 @@ void Grow(const Vertices& points, const PointIndex& cloud_index, double spacing,
 }
 
 // Clears the strained surface vertices that faced the sensor at `start` (`faces` is given
-// the vertex's area-weighted, unnormalized normal there) and have no cloud point within
+// the vertex's unit normal there, rings: the surface's) and have no cloud point within
 // `reach` of where they were, in an object at least half of whose surface vertices facing the
 // sensor still have one: the rest of the body stayed, and nothing of the cloud is at that
 // part's place, so the points that pulled it are most likely the part itself, moved faster
 // than the frame's first outer iteration followed, and not a hand beside it, which leaves the
 // body's own points around. Where most of the object left its place (a hand carried it), an
 // empty place tells nothing. The coverage counts every cloud point (other objects', occluders').
-void LeaveCarriedOff(const TrackerState& state, const Vertices& start, const PointIndex& cloud_index, double reach,
+void LeaveCarriedOff(const TrackerState& state, const Vertices& start, const SurfaceRings& rings,
+                     const PointIndex& cloud_index, double reach,
                      const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
                      std::vector<char>* strained) {
-  std::vector<Eigen::Vector3d> normal(strained->size(), Eigen::Vector3d::Zero());
-  for (int f = 0; f < state.surface.rows(); ++f) {
-    const int a = state.surface(f, 0), b = state.surface(f, 1), c = state.surface(f, 2);
-    const Eigen::Vector3d n = (start.row(b) - start.row(a)).cross(start.row(c) - start.row(a)).transpose();
-    for (int k = 0; k < 3; ++k) normal[static_cast<size_t>(state.surface(f, k))] += n;
-  }
-  std::vector<int> empty;  // the object's strained vertices facing the sensor with an empty place
+  std::vector<int> vertices, empty;  // an object's surface vertices; those strained, facing, empty
   for (const ObjectState& o : state.objects) {
+    vertices.clear();
+    bool any = false;
+    for (int v : o.mesh.surface_vertices) {
+      vertices.push_back(o.offset + v);
+      any = any || (*strained)[static_cast<size_t>(o.offset + v)];
+    }
+    if (!any) continue;  // nothing of this object to clear: no queries for it
+    const Eigen::MatrixXd normal = VertexNormalsAt(start, state.surface, rings, vertices);
     int facing = 0, covered = 0;
     empty.clear();
-    for (int v = o.offset; v < o.offset + o.mesh.num_vertices(); ++v) {
-      const size_t i = static_cast<size_t>(v);
-      if (normal[i].squaredNorm() == 0.0) continue;  // inside
-      const Eigen::Vector3d p = start.row(v).transpose();
-      if (!faces(p, normal[i])) continue;
+    for (size_t k = 0; k < vertices.size(); ++k) {
+      const Eigen::Vector3d p = start.row(vertices[k]).transpose();
+      if (!faces(p, normal.row(static_cast<Eigen::Index>(k)).transpose())) continue;  // also off every triangle
       ++facing;
       if (cloud_index.AnyWithin(p, reach)) {
         ++covered;
-      } else if ((*strained)[i]) {
-        empty.push_back(v);
+      } else if ((*strained)[static_cast<size_t>(vertices[k])]) {
+        empty.push_back(vertices[k]);
       }
     }
     if (2 * covered < facing) continue;
@@ -295,12 +296,12 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   if (!any) return 0;
   if (marks->size() != static_cast<size_t>(n)) marks->assign(static_cast<size_t>(n), 0);
   const double grow = std::max(state.options.data.loss_scale, 2.0 * spacing);
-  if (faces) {
-    LeaveCarriedOff(state, start, cloud_index, grow, faces, &strained);
-    if (std::find(strained.begin(), strained.end(), 1) == strained.end()) return 0;
-  }
   // The meshes' own surfaces (an embedded surface's pairs act through the same elements).
   const SurfaceIndex surface(state.x, state.surface), at_start(start, state.surface);
+  if (faces) {
+    LeaveCarriedOff(state, start, at_start.rings(), cloud_index, grow, faces, &strained);
+    if (std::find(strained.begin(), strained.end(), 1) == strained.end()) return 0;
+  }
   std::vector<signed char> memo(static_cast<size_t>(n), -1);
   const OffModel Off{&at_start, &points, grow * grow, &memo};
   std::vector<int> queue;

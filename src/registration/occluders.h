@@ -50,8 +50,8 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 // the loss scale, or two spacings, from its surface); the marks grow through the cloud (neighbours within
 // three spacings) over points off the model at `start`. Marked points get 2 in *marks
 // (#P; assigned zeros when empty), which ReleaseReached keeps. Returns how many were marked.
-// A strained surface vertex that faced the sensor at `start` (`faces`: position and outward,
-// unnormalized normal; empty without a view) with no cloud point within that distance of
+// A strained surface vertex that faced the sensor at `start` (`faces`: position and outward
+// normal; empty without a view) with no cloud point within that distance of
 // where it was, in an object at least half of whose surface vertices facing the sensor still
 // have one there, no longer counts as strained: what pulled it is most likely the body's own
 // part that a fast motion carried off while the rest stayed, not a hand beside it. A point is
