@@ -343,6 +343,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   stepping_in = false;
   fc.facing_only = false;
   const Vertices start = state.x;
+  // MarkImplausible's view, once a frame; none on an embedded surface's cage: it stands off the
+  // data, and its empty places say nothing.
+  const auto faces = data_surface ? nullptr : fc.FacesFunction();
   // The weight of the points marked implausible when the frame last started (again): what is
   // marked since is held against kImplausibleRestartShare, in one go or a few at a time.
   double implausible_at_start = 0.0;
@@ -420,9 +423,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
                k + 1 < iteration_limit && options.data.max_strain_step > 0) {
       t0 = Clock::now();
-      // Not on an embedded surface's cage: it stands off the data, and its empty places say nothing.
-      const int marked = MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing,
-                                         data_surface ? nullptr : fc.FacesFunction(), &fc.occluder);
+      const int marked = MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, faces, &fc.occluder);
       s.time.correspondences += Seconds(t0);
       if (marked > 0) {
         fc.occluders.occluders += marked;
