@@ -330,5 +330,36 @@ TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
   EXPECT_GT(mark(-1), 0) << "12 of 33: most of the bar left its place";
 }
 
+// A sliver's strain is not evidence (data.max_strain_step): a good tetrahedron with a sliver
+// 0.1 mm thin under it, a few points 1 cm below. A move of the sliver's apex by 0.25 mm turns
+// it inside out (a strain without bound) while its edges change by far less than the cloud's
+// spacing: nothing is marked. The apex pulled 1 cm down to the points stretches its edges by
+// more than a spacing, and the points are marked.
+TEST(Occluders, ASliversStrainBelowTheSpacingMarksNothing) {
+  TrackerState state;
+  state.objects.resize(1);
+  TetMesh& mesh = state.objects[0].mesh;
+  mesh.rest.resize(5, 3);
+  mesh.rest << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0.003, 0.003, 0.01, 0.003, 0.003, -0.0001;
+  mesh.tets.resize(2, 4);
+  mesh.tets << 0, 1, 2, 3, 0, 2, 1, 4;
+  ASSERT_TRUE(FinalizeMesh(&mesh, "two tetrahedra").ok());
+  state.objects[0].model.Build(mesh, ElasticModelType::kCorotational, Material());
+  state.RebuildGlobalArrays();
+  const Vertices start = mesh.rest;
+  const double h = 0.002;
+  Vertices cloud(9, 3);
+  for (int k = 0; k < 9; ++k) cloud.row(k) << 0.001 + h * (k % 3), 0.001 + h * (k / 3), -0.01;
+  const PointIndex index(cloud);
+  const auto mark = [&](double apex_z) {
+    state.x = start;
+    state.x(4, 2) = apex_z;
+    std::vector<char> marks;
+    return MarkImplausible(state, start, cloud, index, h, {}, &marks);
+  };
+  EXPECT_EQ(mark(0.00015), 0) << "the sliver inverted by a move far below the spacing";
+  EXPECT_GT(mark(-0.0101), 0) << "the apex pulled to the points";
+}
+
 }  // namespace
 }  // namespace femreg

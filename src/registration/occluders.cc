@@ -285,7 +285,19 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
       // Upright with |F^T F - I| below `bound`: every principal stretch is within `limit` of 1.
       const double strain = (F.transpose() * F - Eigen::Matrix3d::Identity()).norm();
       if (F.determinant() > 0.0 && strain < bound) return;
-      over[static_cast<size_t>(e)] = StretchDeviation(F) > limit ? 1 : 0;
+      if (!(StretchDeviation(F) > limit)) return;
+      // A strain whose vertices moved against one another by less than a sample spacing is
+      // below what the cloud resolves; on a sliver (an edge a fraction of a spacing long, a
+      // height smaller still) such a move reads as a large strain.
+      double moved = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        for (int j = i + 1; j < 4; ++j) {
+          const int p = o.offset + tets(e, i), q = o.offset + tets(e, j);
+          moved = std::max(moved, std::abs((state.x.row(p) - state.x.row(q)).norm() -
+                                           (start.row(p) - start.row(q)).norm()));
+        }
+      }
+      over[static_cast<size_t>(e)] = moved > spacing ? 1 : 0;
     });
     for (int e = 0; e < ne; ++e) {
       if (!over[static_cast<size_t>(e)]) continue;
