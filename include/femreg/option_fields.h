@@ -97,9 +97,9 @@ struct OptionFields<PreprocessOptions> {
     v(&S::auto_voxel_min_ratio, FieldInfo("auto_voxel_min_ratio").AtLeast(0));
     v(&S::flying_pixels, FieldInfo("flying_pixels")
                              .AtLeast(0)
-                             .Note("(sigmas of the depth's second differences; 0 = off)")
+                             .Note("(sigmas of the depth's noise; 0 = off)")
                              .Doc("Flying pixels: points between surfaces that no surface around them predicts "
-                                  "within this many sigmas of the image's second differences of depth, with a "
+                                  "within this many sigmas of the depth's noise (from the image's second differences), with a "
                                   "camera (registration.preprocess.flying_pixels; 0 = off)"));
     v(&S::depth_offset, FieldInfo("depth_offset")
                             .Doc("Take off each frame's common depth offset (flicker), measured on the static "

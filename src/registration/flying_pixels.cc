@@ -110,10 +110,9 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
   if (step == 0) return 0;  // no image structure to judge by
   const auto z_of = [&](int j) { return depth[static_cast<size_t>(j)]; };
 
-  // The noise of a depth predicted from its neighbours, from the image itself: the spread of
-  // the second differences along rows and columns (sqrt(6) times the depth's own noise on a
-  // plane), over z^2 (a triangulating sensor's noise law). Edges are a minority of them; a
-  // quantile, not a mean, keeps them out.
+  // The depth's noise, from the image itself: the spread of the second differences along rows
+  // and columns (sqrt(6) times the depth's own noise on a plane), over z^2 (a triangulating
+  // sensor's noise law). Edges are a minority of them; a quantile, not a mean, keeps them out.
   std::vector<double> second;
   for (int i = 0; i < n; ++i) {
     const long p = pixel_of[static_cast<size_t>(i)];
@@ -125,11 +124,11 @@ int RemoveFlyingPixels(const CameraOptions& camera, double tolerance, PointCloud
       if (a >= 0 && b >= 0) second.push_back(std::abs(z_of(a) - 2.0 * z + z_of(b)) / (z * z));
     }
   }
-  double sigma_over_z2 = 0.0;  // of the second difference
+  double sigma_over_z2 = 0.0;  // of the depth
   if (!second.empty()) {
     const size_t q = std::min(second.size() - 1, static_cast<size_t>(kOneSigmaQuantile * second.size()));
     std::nth_element(second.begin(), second.begin() + static_cast<std::ptrdiff_t>(q), second.end());
-    sigma_over_z2 = second[q];
+    sigma_over_z2 = second[q] / std::sqrt(6.0);
   }
 
   static const std::vector<std::vector<Offset>> windows = Windows();

@@ -9,10 +9,10 @@ namespace femreg {
 
 // Removes the points of a depth image of `camera` that no surface around them supports. Each
 // point is projected to its pixel; the image may keep every k-th pixel (k <= 4, found from the
-// cloud). The spread sigma of the image's second differences of depth along rows and columns
-// (taken as c z^2; on a plane, sqrt(6) times the depth's noise: the noise of a depth predicted
-// by continuing its neighbours' slope) is estimated from the image, and the tolerance at depth
-// z is tolerance * sigma(z), never below one sample footprint (k z / fx). A point is judged only if it lies between
+// cloud). The depth's noise sigma (taken as c z^2) is estimated from the image: the spread of
+// its second differences of depth along rows and columns, which on a plane is sqrt(6) times
+// the depth's noise. The tolerance at depth z is tolerance * sigma(z), never below one sample
+// footprint (k z / fx). A point is judged only if it lies between
 // surfaces: one of its 8 neighbouring samples nearer and another farther than the tolerance, or,
 // beside a sample missing inside the image (a masked tool or hand), one farther.
 // It is kept if a surface around it predicts its depth within the tolerance: in two directions
