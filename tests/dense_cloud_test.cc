@@ -194,10 +194,12 @@ TEST(CrushedFirstStep, WithTheForcesEstimatedACrushedWarmStartStartsAgainByDefau
 }
 
 // Stray points above a box seen through 20k points (data.max_strain_step low, so that their pull
-// counts as implausible): one point (0.005 % of the cloud's weight) strains the elements under it, and
-// the frame goes on without it from where it is; a cluster of 2 % of the cloud (a hand's
-// finger) pulled the shape, and the frame starts again without it
-// (docs/notes/2026-12-02-fine-box-stalls.md).
+// counts as implausible): 18 points (0.09 % of the cloud's weight) strain the elements under
+// them, and the frame goes on without them from where it is; a cluster of 2 % of the cloud (a
+// hand's finger) pulled the shape, and the frame starts again without it
+// (docs/notes/2026-12-02-fine-box-stalls.md). The cloud's thinning leaves both clusters as the
+// same few points of different weights. (A single point's pull moves no edge by more than the
+// cloud's spacing, and marks nothing: docs/notes/2026-12-07-sliver-strains.md.)
 TEST(ImplausiblePoints, AFewOfADenseCloudsAreLeftOutWithoutARestart) {
   const TetMesh box = MakeBox(kBoxSize, 16, 8, 4);
   const Vertices truth = Bent(box, 0.004);
@@ -206,7 +208,7 @@ TEST(ImplausiblePoints, AFewOfADenseCloudsAreLeftOutWithoutARestart) {
   for (int run = 0; run < 2; ++run) {
     std::mt19937 rng(17);
     PointCloud cloud = testing_util::SampleSurfaceByArea(box, truth, 20000, 5e-4, &rng);
-    const int stray = run == 0 ? 1 : 400;
+    const int stray = run == 0 ? 18 : 400;
     std::uniform_real_distribution<double> u(-0.003, 0.003);
     const Eigen::Index n = cloud.points.rows();
     cloud.points.conservativeResize(n + stray, 3);
@@ -227,7 +229,7 @@ TEST(ImplausiblePoints, AFewOfADenseCloudsAreLeftOutWithoutARestart) {
   }
   EXPECT_GE(implausible[0], 1);
   EXPECT_EQ(restarts[0], 0);
-  EXPECT_GT(implausible[1], implausible[0]);
+  EXPECT_GE(implausible[1], 1);
   EXPECT_GE(restarts[1], 1);
   EXPECT_LT(error[0], 0.3e-3);
   EXPECT_LT(error[1], 0.3e-3);

@@ -331,10 +331,9 @@ TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
 }
 
 // A sliver's strain is not evidence (data.max_strain_step): a good tetrahedron with a sliver
-// 0.1 mm thin under it, a few points 1 cm below. A move of the sliver's apex by 0.25 mm turns
-// it inside out (a strain without bound) while its edges change by far less than the cloud's
-// spacing: nothing is marked. The apex pulled 1 cm down to the points stretches its edges by
-// more than a spacing, and the points are marked.
+// 0.1 mm thin under it, a few points 1 cm below, 2 mm apart. Moves of the sliver's apex that
+// turn it inside out or stretch it many times past the limit, while no edge changes by more
+// than the cloud's spacing, mark nothing; once an edge changes by more, the points are marked.
 TEST(Occluders, ASliversStrainBelowTheSpacingMarksNothing) {
   TrackerState state;
   state.objects.resize(1);
@@ -358,6 +357,10 @@ TEST(Occluders, ASliversStrainBelowTheSpacingMarksNothing) {
     return MarkImplausible(state, start, cloud, index, h, {}, &marks);
   };
   EXPECT_EQ(mark(0.00015), 0) << "the sliver inverted by a move far below the spacing";
+  EXPECT_EQ(mark(-0.0011), 0) << "upright, eleven times as thick: its edges change by 0.14 mm";
+  // The apex's edges are sqrt(18 + z^2) mm long (z in mm), 4.24 mm at rest.
+  EXPECT_EQ(mark(-0.0044), 0) << "its edges 1.87 mm longer, below the 2 mm spacing";
+  EXPECT_GT(mark(-0.0047), 0) << "its edges 2.09 mm longer, above it";
   EXPECT_GT(mark(-0.0101), 0) << "the apex pulled to the points";
 }
 

@@ -191,7 +191,7 @@ TEST(OptionFields, MessagesKeepTheirWording) {
   o = RegistrationOptions();
   o.preprocess.flying_pixels = -1;
   EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_EQ(error, "preprocess.flying_pixels must be >= 0 (sigmas of the depth's second differences; 0 = off) (got -1)");
+  EXPECT_EQ(error, "preprocess.flying_pixels must be >= 0 (sigmas of the depth's noise; 0 = off) (got -1)");
   o = RegistrationOptions();
   o.preprocess.outlier_neighbors = -1;  // a grouped field: its group in the name
   EXPECT_FALSE(o.IsValid(&error));

@@ -96,9 +96,9 @@ struct PreprocessOptions {
   double auto_voxel_min_ratio = 20.0;                   // >= 0
   // Flying pixels (docs/guide/depth-images.md#flying-pixels): with a camera
   // (registration.camera), the points of a depth image that lie between surfaces and that no
-  // surface around them predicts within this many standard deviations of the image's second
-  // differences of depth (the noise of a depth predicted from its neighbours; never below a
-  // sample footprint, z / fx) are removed, before everything below.
+  // surface around them predicts within this many standard deviations of the depth's noise
+  // (estimated from the image's second differences of depth; never below a sample footprint,
+  // z / fx) are removed, before everything below.
   // 0 = off. Clouds that are not one depth image of the camera are left as they are.
   double flying_pixels = 4.0;                           // >= 0
   int outlier_neighbors = 0;                            // statistical outlier removal; 0 = off
@@ -167,7 +167,8 @@ struct DataTermOptions {
   double occluder_margin = 0.02;  // m, > 0
   // Points the body cannot explain at a plausible strain: after an outer iteration, an
   // element stretched or compressed by more than this (the largest principal stretch's
-  // distance from 1) against the frame's start marks the cloud points that pull on it and
+  // distance from 1) against the frame's start, with an edge whose length changed by more
+  // than the cloud's point spacing, marks the cloud points that pull on it and
   // lay off the model at the frame's start (a hand's fingers beside the object); they pull
   // nothing for the rest of the frame, which starts again without them
   // (docs/guide/partial-views.md#implausible-points). Not once fracture is live. 0 = off.

@@ -286,9 +286,7 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
       const double strain = (F.transpose() * F - Eigen::Matrix3d::Identity()).norm();
       if (F.determinant() > 0.0 && strain < bound) return;
       if (!(StretchDeviation(F) > limit)) return;
-      // A strain whose vertices moved against one another by less than a sample spacing is
-      // below what the cloud resolves; on a sliver (an edge a fraction of a spacing long, a
-      // height smaller still) such a move reads as a large strain.
+      // A move below the cloud's spacing is not resolved by it, and on a sliver reads as a large strain.
       double moved = 0.0;
       for (int i = 0; i < 4; ++i) {
         for (int j = i + 1; j < 4; ++j) {

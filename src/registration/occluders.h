@@ -45,7 +45,8 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 
 // Points the body cannot explain at a plausible strain (data.max_strain_step > 0): the
 // elements stretched or compressed from `start` (the frame's start) to state.x by more than
-// data.max_strain_step mark the cloud points whose closest point on the meshes' surface at
+// data.max_strain_step, with an edge whose length changed by more than `spacing` (a sliver's
+// strain below that is not evidence), mark the cloud points whose closest point on the meshes' surface at
 // state.x is on a triangle touching them and that lay off the model at `start` (farther than
 // the loss scale, or two spacings, from its surface); the marks grow through the cloud (neighbours within
 // three spacings) over points off the model at `start`. Marked points get 2 in *marks
