@@ -273,7 +273,10 @@ TEST_P(HardCases, TinyCornerCell) {
   // The noise (0.2 mm) pulls their vertices apart or through each other, which would invert
   // them. The fast back end's line search cuts such steps inside the barrier's zone; Ceres
   // refuses them and its trust region shrinks to nothing: the frame must then say "stalled",
-  // not "converged" (docs/theory/stopping.md#stalled).
+  // not "converged" (docs/theory/stopping.md#stalled). The fast back end's later solves also
+  // end on cuts too short to move, and say so, since the strain test no longer takes the
+  // points at the cell for implausible (docs/notes/2026-12-07-sliver-strains.md); the shape
+  // must follow the bend all the same.
   TetMesh mesh = Beam();
   for (int v = 0; v < mesh.num_vertices(); ++v) {
     if (mesh.rest(v, 0) > kLength - 1e-9) mesh.rest(v, 0) = 0.9 * kLength + 5e-5;
@@ -290,7 +293,8 @@ TEST_P(HardCases, TinyCornerCell) {
   if (GetParam() == SolverBackend::kCeres) {
     EXPECT_EQ(o.termination, TerminationType::kStalled) << o.message;
   } else {
-    EXPECT_EQ(o.termination, TerminationType::kConverged) << o.message;
+    EXPECT_TRUE(o.termination == TerminationType::kConverged || o.termination == TerminationType::kStalled)
+        << o.message;
     EXPECT_LT(o.mean_error, kFollowed) << o.message;
   }
 }
