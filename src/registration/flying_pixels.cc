@@ -20,9 +20,9 @@ constexpr long kMaxPixelStep = 4;
 constexpr double kMinFootprints = 1.0;
 // A window's plane needs this many samples (of its 8 or 10).
 constexpr int kMinWindowSamples = 5;
-// A window's plane fits its samples within this share of the tolerance (RMS; noise alone
-// leaves about a third of the second difference's sigma): a plane tilted to take in a step
-// of mixed pixels does not.
+// A window's plane fits its samples within this share of the tolerance (RMS; at the default
+// tolerance one sigma of the depth, where a plane over 5-8 samples leaves sqrt((n-3)/n) of it
+// from noise alone): a plane tilted to take in a step of mixed pixels does not.
 constexpr double kWindowFit = 0.25;
 // Of the second differences along rows and columns, this share is within one standard
 // deviation of a Gaussian's; their noise is taken from that quantile.
