@@ -351,6 +351,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   double implausible_at_start = 0.0;
   int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
   int stiff_from = 1;    // the outer iteration of the first stiff stage
+  int redecide_until = options.data.hold_pairs_after;  // the occluders, before this outer iteration
   for (int k = 0; k < iteration_limit; ++k) {
     if (stepping_in) {
       const int stage = k - stiff_from;
@@ -360,8 +361,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       previous_energy = merit;
     }
     // Until the pair set is held, the occluders are decided again where the model now is: a
-    // part that lagged behind a fast motion and looked like one has caught up.
-    if (k > 0 && k < options.data.hold_pairs_after && !fc.occluder.empty()) {
+    // part that lagged behind a fast motion and looked like one has caught up. After a large
+    // motion's restart too, through its stiff stages: the far start it went back to marked them.
+    if (k > 0 && k < redecide_until && !fc.occluder.empty()) {
       t0 = Clock::now();
       fc.occluders.occluders =
           ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &fc.occluder).occluders;
@@ -411,6 +413,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       warm_until = iteration_base;
       iteration_limit = iteration_base + iteration_budget;
       rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
+      redecide_until = iteration_base + options.data.hold_pairs_after;
       warm_triangles.clear();
       paired_vertices.clear();
       ++(large_motion ? s.large_motion_restarts : s.crushed_restarts);
