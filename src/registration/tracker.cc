@@ -360,9 +360,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
       merit = std::numeric_limits<double>::infinity();  // another energy
       previous_energy = merit;
     }
-    // Until the pair set is held, the occluders are decided again where the model now is: a
-    // part that lagged behind a fast motion and looked like one has caught up. After a large
-    // motion's restart too, through its stiff stages: the far start it went back to marked them.
+    // Until the pair set is held (after a large motion's restart too: its far start marked them),
+    // the occluders are decided again where the model now is: a lagging part has caught up.
     if (k > 0 && k < redecide_until && !fc.occluder.empty()) {
       t0 = Clock::now();
       fc.occluders.occluders =
