@@ -1,8 +1,8 @@
 // The Tracker: one frame is a few outer iterations of (rotations, correspondences, contacts,
 // solve, fracture); see docs/theory/energy.md#one-frame. The parts live beside this file
 // (registration/tracker_state.h lists them); this file holds the outer loop and the API, and
-// outer_iteration.cc the set-up of an outer iteration and its backtracking, tracker_forces.cc the
-// forces after a frame.
+// outer_iteration.cc the set-up of an outer iteration and its backtracking, frame_restarts.cc
+// a frame's restarts, tracker_forces.cc the forces after a frame.
 #include "femreg/tracker.h"
 
 #include <algorithm>
@@ -39,35 +39,12 @@ using Clock = std::chrono::steady_clock;
 // that moved most) farther than this many mean edges.
 // The nearest-point pairs of a surface that far from its cloud mislead (back faces, a twist
 // by a symmetry of the cross-section), so the frame starts again with the elastic weight
-// scaled by each of kStiffScales for one outer iteration (the smooth part of the motion
-// first), then the ordinary schedule (docs/theory/stopping.md#large-motions).
+// scaled stage by stage for one outer iteration each (the smooth part of the motion first,
+// RestartStiff), then the ordinary schedule (docs/theory/stopping.md#large-motions).
 constexpr double kLargeMotionEdges = 3.0;
-// Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
-constexpr int kMaxImplausibleRestarts = 2;
-// Implausible points below this share of the cloud's weight (those marked since the frame
-// last started) strained a few elements (single points of a dense cloud at a fine mesh's
-// small elements), not the shape: the frame goes on from where it is without them. From it
-// on (a hand's fingers: 5-60 % of hand_press's points) it starts again
-// (docs/notes/2026-12-02-fine-box-stalls.md).
-constexpr double kImplausibleRestartShare = 0.001;
-constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
 // A frame after held or lost ones makes up for at most this many frames' motion in its
 // budget of outer iterations: the cost of one catch-up frame stays bounded.
 constexpr int kMaxCatchUpFrames = 4;
-
-// The weight of the cloud's points (SubsampleCloud's: what each stands for), and of those
-// marked implausible.
-double CloudWeight(const FrameCloud& fc) {
-  return fc.weights.size() == fc.cloud.points.rows() ? fc.weights.sum() : static_cast<double>(fc.cloud.points.rows());
-}
-double ImplausibleWeight(const FrameCloud& fc) {
-  const bool weighted = fc.weights.size() == fc.cloud.points.rows();
-  double sum = 0.0;
-  for (size_t i = 0; i < fc.occluder.size(); ++i) {
-    if (fc.occluder[i] == 2) sum += weighted ? fc.weights[static_cast<Eigen::Index>(i)] : 1.0;
-  }
-  return sum;
-}
 
 BackendOptions MakeBackendOptions(const SolverOptions& solver, double mean_edge_length) {
   BackendOptions b;
@@ -346,20 +323,12 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // MarkImplausible's view, once a frame; none on an embedded surface's cage: it stands off the
   // data, and its empty places say nothing.
   const auto faces = data_surface ? nullptr : fc.FacesFunction();
-  // The weight of the points marked implausible when the frame last started (again): what is
-  // marked since is held against kImplausibleRestartShare, in one go or a few at a time.
-  double implausible_at_start = 0.0;
-  int stiff_stages = 0;  // of kStiffScales, once a large motion is seen
-  int stiff_from = 1;    // the outer iteration of the first stiff stage
-  int redecide_until = options.data.hold_pairs_after;  // the occluders, before this outer iteration
+  implausible_at_start = 0.0;
+  stiff_stages = 0;
+  stiff_from = 1;
+  redecide_until = options.data.hold_pairs_after;
   for (int k = 0; k < iteration_limit; ++k) {
-    if (stepping_in) {
-      const int stage = k - stiff_from;
-      stepping_in = stage < stiff_stages;
-      frame_problem.SetElasticScale(state, stepping_in ? kStiffScales[stage] : 1.0);
-      merit = std::numeric_limits<double>::infinity();  // another energy
-      previous_energy = merit;
-    }
+    StepIn(k, &previous_energy);
     // Until the pair set is held (after a large motion's restart too: its far start marked them),
     // the occluders are decided again where the model now is: a lagging part has caught up.
     if (k > 0 && k < redecide_until && !fc.occluder.empty()) {
@@ -396,63 +365,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     const bool large_motion = can_restart && k == 0 && iteration_limit > 1 &&
                               (first_bulk_move > kLargeMotionEdges * state.mean_edge_length || missed_frames > 0);
     if (large_motion || crushed) {
-      // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
-      // the sensor (docs/theory/stopping.md#large-motions). A frame catching up after held or
-      // lost ones starts so too: its held shape is several frames' motion away, and its
-      // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
-      // So does a frame whose first solves crushed an element, where asked
-      // (solver.stiff_restart_volume): their pairs were wrong at that distance too. Only a
-      // large motion's restart drops the velocity (below): a crushed frame did not jump.
-      state.x = start;
-      stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
-      stepping_in = true;
-      fc.facing_only = true;
-      stiff_from = k + 1;
-      iteration_base = stiff_from + stiff_stages;
-      warm_until = iteration_base;
-      iteration_limit = iteration_base + iteration_budget;
-      rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
-      redecide_until = iteration_base + options.data.hold_pairs_after;
-      warm_triangles.clear();
-      paired_vertices.clear();
-      ++(large_motion ? s.large_motion_restarts : s.crushed_restarts);
-      ResetStartReferences();
-      if (!go_on) {  // a crushed frame that had stopped goes on
-        s.termination = TerminationType::kNotRun;
-        s.stopped_by.clear();
-        s.message.clear();
-      }
-    } else if (!stepping_in && !FractureLive(state) && s.implausible_restarts < kMaxImplausibleRestarts &&
-               k + 1 < iteration_limit && options.data.max_strain_step > 0) {
-      t0 = Clock::now();
-      const int marked = MarkImplausible(state, start, fc.cloud.points, *fc.index, fc.spacing, faces, &fc.occluder);
-      s.time.correspondences += Seconds(t0);
-      if (marked > 0) {
-        fc.occluders.occluders += marked;
-        s.occluded_points = fc.occluders.occluders;
-        s.implausible_points += marked;
-      }
-      if (marked > 0 && ImplausibleWeight(fc) - implausible_at_start < kImplausibleRestartShare * CloudWeight(fc)) {
-        // Another energy from here: not compared with the last.
-        merit = std::numeric_limits<double>::infinity();
-        previous_energy = merit;
-      } else if (marked > 0) {
-        // Back to the start without them: the shape they pulled into is no starting point.
-        state.x = start;
-        ++s.implausible_restarts;
-        implausible_at_start = ImplausibleWeight(fc);
-        iteration_base = k + 1;
-        // After a large motion's restart the frame's start is far: with the forces estimated,
-        // one outer iteration without the equilibrium terms first again (WarmStart).
-        if (warm_until > 0) warm_until = iteration_base;
-        ResetStartReferences();
-        iteration_limit = iteration_base + iteration_budget;
-        rise_from = iteration_base + std::max(1, options.data.hold_pairs_after);
-        merit = std::numeric_limits<double>::infinity();
-        previous_energy = merit;
-        warm_triangles.clear();
-        paired_vertices.clear();
-      }
+      RestartStiff(k, large_motion, go_on, start, &fc, &s);
+    } else {
+      MarkImplausibleOrRestart(k, start, faces, &fc, &previous_energy, &s);
     }
   }
   if (iteration_base > 0) frame_problem.SetElasticScale(state, 1.0);  // a frame stopped while stiff

@@ -5,6 +5,7 @@
 #define FEMREG_REGISTRATION_TRACKER_IMPL_H_
 
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -72,6 +73,17 @@ struct Tracker::Impl {
   // forces.when_occluded: after outer iteration k - 1, whether the frame goes on with the forces
   // estimated (an occluder touches the body; docs/guide/forces.md#when-a-hand-holds-the-body).
   void SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double* previous_energy, FrameSummary* s);
+  // A stiff start's stages (stepping_in): before outer iteration k, the elastic weight's scale.
+  void StepIn(int k, double* previous_energy);
+  // After outer iteration k, a large motion's restart (or a crushed element's): back to `start`,
+  // stiff, then softer stage by stage (docs/theory/stopping.md#large-motions).
+  void RestartStiff(int k, bool large_motion, bool go_on, const Vertices& start, FrameCloud* fc, FrameSummary* s);
+  // After outer iteration k (not stepping in): the cloud points that pulled elements past
+  // data.max_strain_step are marked (MarkImplausible, from `faces`' view); the frame goes on
+  // without them, or starts again from `start` when they are many.
+  void MarkImplausibleOrRestart(
+      int k, const Vertices& start, const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
+      FrameCloud* fc, double* previous_energy, FrameSummary* s);
   // Whether outer iteration k holds its start against the last one's (Backtrack).
   bool Backtracks(int k, bool warm_start) const;
   // From the held pair set on, the energy at state.x with the rotations, pairs and contacts it
@@ -160,6 +172,14 @@ struct Tracker::Impl {
   int missed_frames = 0;
   int iteration_budget = 0;
   bool stepping_in = false;
+  int stiff_stages = 0;  // of a stiff start (RestartStiff), 0 before one
+  int stiff_from = 1;    // the outer iteration of the first stiff stage
+  // The occluders are decided again before this outer iteration (ReleaseReached): until the
+  // pair set is held, counted again from a stiff start's end.
+  int redecide_until = 0;
+  // The weight of the points marked implausible when the frame last started (again): what is
+  // marked since is held against kImplausibleRestartShare, in one go or a few at a time.
+  double implausible_at_start = 0.0;
   double first_bulk_move = 0.0;  // m, of the frame's first outer iteration (BulkMove)
   // The last solved frame's implausible cloud points (CarryImplausible); none after a held or
   // lost frame, or with fracture live.

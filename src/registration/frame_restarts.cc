@@ -1,0 +1,123 @@
+// A frame's restarts: a large motion's or a crushed element's, stiff and stepping in
+// (docs/theory/stopping.md#large-motions), and one without the cloud points found
+// implausible (docs/guide/partial-views.md#implausible-points). The frame loop that calls them
+// is in tracker.cc.
+#include <algorithm>
+#include <chrono>
+#include <limits>
+
+#include "parallel/stopwatch.h"
+#include "registration/correspondences.h"
+#include "registration/fracture_step.h"
+#include "registration/occluders.h"
+#include "registration/tracker_impl.h"
+
+namespace femreg {
+
+namespace {
+
+// Restarts for implausible points per frame (data.max_strain_step): each removes what it found.
+constexpr int kMaxImplausibleRestarts = 2;
+// Implausible points below this share of the cloud's weight (those marked since the frame
+// last started) strained a few elements (single points of a dense cloud at a fine mesh's
+// small elements), not the shape: the frame goes on from where it is without them. From it
+// on (a hand's fingers: 5-60 % of hand_press's points) it starts again
+// (docs/notes/2026-12-02-fine-box-stalls.md).
+constexpr double kImplausibleRestartShare = 0.001;
+// The elastic weight's scales of a stiff start, one outer iteration each.
+constexpr double kStiffScales[] = {100.0, 30.0, 10.0, 3.0};
+
+// The weight of the cloud's points (SubsampleCloud's: what each stands for), and of those
+// marked implausible.
+double CloudWeight(const FrameCloud& fc) {
+  return fc.weights.size() == fc.cloud.points.rows() ? fc.weights.sum() : static_cast<double>(fc.cloud.points.rows());
+}
+double ImplausibleWeight(const FrameCloud& fc) {
+  const bool weighted = fc.weights.size() == fc.cloud.points.rows();
+  double sum = 0.0;
+  for (size_t i = 0; i < fc.occluder.size(); ++i) {
+    if (fc.occluder[i] == 2) sum += weighted ? fc.weights[static_cast<Eigen::Index>(i)] : 1.0;
+  }
+  return sum;
+}
+
+}  // namespace
+
+void Tracker::Impl::StepIn(int k, double* previous_energy) {
+  if (!stepping_in) return;
+  const int stage = k - stiff_from;
+  stepping_in = stage < stiff_stages;
+  frame_problem.SetElasticScale(state, stepping_in ? kStiffScales[stage] : 1.0);
+  merit = std::numeric_limits<double>::infinity();  // another energy
+  *previous_energy = merit;
+}
+
+void Tracker::Impl::RestartStiff(int k, bool large_motion, bool go_on, const Vertices& start, FrameCloud* fc,
+                                 FrameSummary* s) {
+  // Back to the start, stiff, then softer stage by stage, pairing only surface that faces
+  // the sensor (docs/theory/stopping.md#large-motions). A frame catching up after held or
+  // lost ones starts so too: its held shape is several frames' motion away, and its
+  // pairs can twist a symmetric cross-section into the wrong turn as a large motion's do.
+  // So does a frame whose first solves crushed an element, where asked
+  // (solver.stiff_restart_volume): their pairs were wrong at that distance too. Only a
+  // large motion's restart drops the velocity (Track, after the loop): a crushed frame did not jump.
+  state.x = start;
+  stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
+  stepping_in = true;
+  fc->facing_only = true;
+  stiff_from = k + 1;
+  iteration_base = stiff_from + stiff_stages;
+  warm_until = iteration_base;
+  iteration_limit = iteration_base + iteration_budget;
+  rise_from = iteration_base + std::max(1, state.options.data.hold_pairs_after);
+  redecide_until = iteration_base + state.options.data.hold_pairs_after;
+  warm_triangles.clear();
+  paired_vertices.clear();
+  ++(large_motion ? s->large_motion_restarts : s->crushed_restarts);
+  ResetStartReferences();
+  if (!go_on) {  // a crushed frame that had stopped goes on
+    s->termination = TerminationType::kNotRun;
+    s->stopped_by.clear();
+    s->message.clear();
+  }
+}
+
+void Tracker::Impl::MarkImplausibleOrRestart(
+    int k, const Vertices& start, const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
+    FrameCloud* fc, double* previous_energy, FrameSummary* s) {
+  if (stepping_in || FractureLive(state) || s->implausible_restarts >= kMaxImplausibleRestarts ||
+      k + 1 >= iteration_limit || !(state.options.data.max_strain_step > 0)) {
+    return;
+  }
+  const auto t0 = Clock::now();
+  const int marked = MarkImplausible(state, start, fc->cloud.points, *fc->index, fc->spacing, faces, &fc->occluder);
+  s->time.correspondences += Seconds(t0);
+  if (marked > 0) {
+    fc->occluders.occluders += marked;
+    s->occluded_points = fc->occluders.occluders;
+    s->implausible_points += marked;
+  }
+  if (marked > 0 && ImplausibleWeight(*fc) - implausible_at_start < kImplausibleRestartShare * CloudWeight(*fc)) {
+    // Another energy from here: not compared with the last.
+    merit = std::numeric_limits<double>::infinity();
+    *previous_energy = merit;
+  } else if (marked > 0) {
+    // Back to the start without them: the shape they pulled into is no starting point.
+    state.x = start;
+    ++s->implausible_restarts;
+    implausible_at_start = ImplausibleWeight(*fc);
+    iteration_base = k + 1;
+    // After a large motion's restart the frame's start is far: with the forces estimated,
+    // one outer iteration without the equilibrium terms first again (WarmStart).
+    if (warm_until > 0) warm_until = iteration_base;
+    ResetStartReferences();
+    iteration_limit = iteration_base + iteration_budget;
+    rise_from = iteration_base + std::max(1, state.options.data.hold_pairs_after);
+    merit = std::numeric_limits<double>::infinity();
+    *previous_energy = merit;
+    warm_triangles.clear();
+    paired_vertices.clear();
+  }
+}
+
+}  // namespace femreg
