@@ -70,7 +70,8 @@ void Tracker::Impl::RestartStiff(int k, bool large_motion, bool go_on, const Ver
   warm_until = iteration_base;
   iteration_limit = iteration_base + iteration_budget;
   rise_from = iteration_base + std::max(1, state.options.data.hold_pairs_after);
-  redecide_until = iteration_base + state.options.data.hold_pairs_after;
+  const int hold = state.options.data.hold_pairs_after;
+  if (hold > 0) redecide_until = iteration_base + hold;  // 0: never held, never decided again
   warm_triangles.clear();
   paired_vertices.clear();
   ++(large_motion ? s->large_motion_restarts : s->crushed_restarts);

@@ -329,8 +329,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   redecide_until = options.data.hold_pairs_after;
   for (int k = 0; k < iteration_limit; ++k) {
     StepIn(k, &previous_energy);
-    // Until the pair set is held (after a large motion's restart too: its far start marked them),
-    // the occluders are decided again where the model now is: a lagging part has caught up.
+    // Until the pair set is held (after a stiff restart too, whose start marked them), the
+    // occluders are decided again where the model now is: a lagging part has caught up.
     if (k > 0 && k < redecide_until && !fc.occluder.empty()) {
       t0 = Clock::now();
       fc.occluders.occluders =
