@@ -241,6 +241,46 @@ TEST(HandPress, FramesWhereTheHandHoldsTheBallAreRegisteredWithTheForcesEstimate
   EXPECT_LT(with, 0.7 * without);
 }
 
+// Frame 18: the hand holds the ball up by its sides, and the frame starts with none of the
+// hand's points in front of it, only the last frame's implausible points (the fingers'),
+// carried: they switch it to the forces estimated. There the forces push only
+// (forces.when_occluded_pushing_only): a hand cannot pull the surface out to its fingers.
+TEST(HandPress, WhereTheHandHoldsTheBallUpItsForcesPush) {
+  auto run = [](bool pushing_only, double* pull_share) {
+    Scene scene;
+    EXPECT_TRUE(LoadScene(kHandPress + "/scene.yaml", &scene).ok());
+    scene.registration.solver.num_threads = 1;
+    scene.registration.forces.when_occluded_pushing_only = pushing_only;
+    std::unique_ptr<Tracker> tracker;
+    EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
+    FrameSummary s;
+    for (int f = 0; f <= 18; ++f) {
+      PointCloud cloud;
+      GroundTruthFrame truth;
+      ReadHandPressFrame(f, &cloud, &truth);
+      EXPECT_TRUE(tracker->Track(cloud, &s).ok());
+    }
+    // The share of the forces' size that pulls outwards, along the ball's radius.
+    const Vertices& x = tracker->vertices(0);
+    const Vertices& forces = tracker->external_forces(0);
+    const Eigen::RowVector3d centre = x.colwise().mean();
+    double pull = 0.0, size = 0.0;
+    for (int v = 0; v < x.rows(); ++v) {
+      const Eigen::RowVector3d out = (x.row(v) - centre).normalized();
+      pull += std::max(0.0, forces.row(v).dot(out));
+      size += forces.row(v).norm();
+    }
+    *pull_share = size > 0 ? pull / size : 0.0;
+    return s.forces_estimated;
+  };
+  double pushing = 0.0, pulling = 0.0;
+  EXPECT_TRUE(run(true, &pushing));
+  EXPECT_TRUE(run(false, &pulling));
+  std::printf("frame 18: share of the forces pulling outwards %.3f pushing only, %.3f free\n", pushing, pulling);
+  EXPECT_LT(pushing, 0.1);
+  EXPECT_GT(pulling, 0.2);
+}
+
 // A part of the body that lagged behind a motion looks like an occluder beside it at the
 // frame's start; the switch is decided once an outer iteration has brought the model there and
 // released it, also after a restart (whose first iteration starts from the frame's start

@@ -165,6 +165,7 @@ struct OptionFields<ForceOptions> {
     using S = ForceOptions;
     v(&S::estimate, FieldInfo("estimate"));
     v(&S::when_occluded, FieldInfo("when_occluded"));
+    v(&S::when_occluded_pushing_only, FieldInfo("when_occluded_pushing_only"));
     v(&S::weight, FieldInfo("weight").Above(0));
     v(&S::adaptive_weight, FieldInfo("adaptive_weight"));
     v(&S::misfit_ratio, FieldInfo("misfit_ratio").Above(1));

@@ -319,12 +319,16 @@ struct ForceOptions {
   // Without `estimate`: a frame whose cloud holds an occluder (points in front of the visible
   // surface, found with a camera: a hand or a tool that the mask kept) that touches the body's
   // points after its first outer iteration, itself or through the points found implausible
-  // beside the body (data.max_strain_step), is registered with the forces estimated, the others
+  // beside the body (data.max_strain_step; also the last frame's, carried), is registered with the forces estimated, the others
   // without (FrameSummary::forces_estimated). Where the hand holds the body, its points
   // beside the silhouette look like the body's, and the classic energy pulls the surface into
   // them; with the forces estimated that pull needs a force nobody applies there
   // (docs/guide/forces.md#when-a-hand-holds-the-body).
   bool when_occluded = true;
+  // In the frames when_occluded registers with the forces estimated, the forces push only, as
+  // with pushing_only (friction as set there): what holds the body is a hand, which pushes and
+  // grips but cannot pull (docs/guide/forces.md#when-a-hand-holds-the-body).
+  bool when_occluded_pushing_only = true;
   // The penalty on the surface tractions, 1/2 weight * c * integral |t|^2 dA, with c the scale
   // at which a traction costs about as much as the data misfit it removes (the data stiffness
   // per area times (L / E)^2, L the body's size, E its Young's modulus): smaller lets larger

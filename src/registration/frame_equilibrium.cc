@@ -20,7 +20,8 @@ namespace {
 constexpr int kSmoothStartSteps = 2;
 }  // namespace
 
-void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurface* data, bool pushing_only) {
+void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurface* data, bool pushing_only,
+                                  bool smooth_start) {
   const ForceOptions& options = state.options.forces;
   if (!on) {
     problem_.SetEquilibrium(nullptr);
@@ -32,9 +33,9 @@ void FrameProblem::SetEquilibrium(const TrackerState& state, bool on, DataSurfac
   eq->force_weight.assign(n, 0.0);
   eq->strong_weight.assign(n, 0.0);
   if (options.sparsity > 0) eq->sparsity.assign(n, 0.0);
-  eq->pushing_only = options.pushing_only && pushing_only;
+  eq->pushing_only = pushing_only && !smooth_start;
   // Without the pushing-only penalty that was asked for: the smooth start, two steps.
-  if (options.pushing_only && !pushing_only) eq->max_steps = kSmoothStartSteps;
+  if (pushing_only && smooth_start) eq->max_steps = kSmoothStartSteps;
   eq->friction = options.friction;
   if (eq->pushing_only) {
     const Eigen::MatrixXd normals = state.VertexNormals();

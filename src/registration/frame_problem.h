@@ -83,9 +83,11 @@ class FrameProblem {
   // Equilibrium registration (registration.forces, energy/equilibrium.h): where forces may
   // act, their penalties, the surface's normals and the turns the step does not make
   // (solver.hold_hidden_turns; `data`, may be null, as for HoldHiddenTurns) at state.x. Every
-  // outer iteration, after SetLoads and SetContacts; off (no equilibrium) unless `on`; without
-  // forces.pushing_only's penalty unless `pushing_only`.
-  void SetEquilibrium(const TrackerState& state, bool on, DataSurface* data = nullptr, bool pushing_only = true);
+  // outer iteration, after SetLoads and SetContacts; off (no equilibrium) unless `on`.
+  // `pushing_only`: the frame's forces push only (forces.pushing_only, or a frame that
+  // forces.when_occluded switched), their penalty left out while `smooth_start`.
+  void SetEquilibrium(const TrackerState& state, bool on, DataSurface* data = nullptr, bool pushing_only = false,
+                      bool smooth_start = false);
   // Puts back an equilibrium the problem had (problem().shared_equilibrium()), or another.
   void SetEquilibrium(std::shared_ptr<const energy::Equilibrium> equilibrium) {
     problem_.SetEquilibrium(std::move(equilibrium));

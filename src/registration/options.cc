@@ -216,8 +216,10 @@ bool SolverOptions::IsValid(std::string* error) const {
 
 bool ForceOptions::IsValid(std::string* error) const {
   if (!CheckFieldRanges(*this, error)) return false;
-  if (friction >= 0 && !pushing_only) {
-    return Fail(error, "forces.friction", "bounds a pushing force's tangential part: set forces.pushing_only too",
+  if (friction >= 0 && !pushing_only && !(when_occluded && when_occluded_pushing_only)) {
+    return Fail(error, "forces.friction",
+                "bounds a pushing force's tangential part: set forces.pushing_only (or "
+                "forces.when_occluded and when_occluded_pushing_only) too",
                 friction);
   }
   return true;

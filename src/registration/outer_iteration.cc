@@ -125,9 +125,22 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   // curvature grows with the residual), and those iterations bring the shape near
   // (docs/theory/equilibrium.md).
   const bool warm_start = WarmStart(k);
-  frame_problem.SetEquilibrium(state, estimate_forces && !warm_start, data_surface.get(), !SmoothStart(k));
+  frame_problem.SetEquilibrium(state, estimate_forces && !warm_start, data_surface.get(), PushingOnly(), SmoothStart(k));
   return true;
 }
+
+namespace {
+
+// Whether the marks hold an occluder proper (in front of the visible surface, 1) or the last
+// frame's implausible points carried over (3: the hand that pulled them is most likely still
+// there, CarryImplausible). Points found implausible in this frame alone (2) are also a fast
+// motion's or a crushed element's, where the physical mode does no better
+// (tests/hard_cases_test.cc).
+bool HeldMarks(const std::vector<char>& marks) {
+  return std::any_of(marks.begin(), marks.end(), [](char m) { return m == 1 || m == 3; });
+}
+
+}  // namespace
 
 void Tracker::Impl::SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double* previous_energy,
                                             FrameSummary* s) {
@@ -138,16 +151,13 @@ void Tracker::Impl::SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double*
   // not taken for a hand. Switched on only, never off, in a frame.
   if (estimate_forces || k != iteration_base + 1 || !options.forces.when_occluded ||
       options.regularizer == Regularizer::kNone || fc.occluders.occluders == 0 ||
-      std::find(fc.occluder.begin(), fc.occluder.end(), 1) == fc.occluder.end()) {
+      !HeldMarks(fc.occluder)) {
     return;  // without an occluder proper, not even the release below: the frame stays as it was
   }
   const auto t0 = Clock::now();
   std::vector<char> marks = fc.occluder;  // the frame's own are released on its schedule
   ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &marks);
-  // An occluder proper (in front of the visible surface, 1) must be there: points found
-  // implausible alone (2, 3) are also a fast motion's or a crushed element's, where the
-  // physical mode does no better (tests/hard_cases_test.cc).
-  estimate_forces = std::find(marks.begin(), marks.end(), 1) != marks.end() &&
+  estimate_forces = HeldMarks(marks) &&
                     TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, marks,
                                            kTouchingOccluderPoints) >= kTouchingOccluderPoints;
   s->time.correspondences += Seconds(t0);
@@ -185,9 +195,14 @@ bool Tracker::Impl::WarmStart(int k) const {
   return estimate_forces && k <= warm_until;
 }
 
+bool Tracker::Impl::PushingOnly() const {
+  const ForceOptions& forces = state.options.forces;
+  return estimate_forces && (forces.pushing_only || (!forces.estimate && forces.when_occluded_pushing_only));
+}
+
 bool Tracker::Impl::SmoothStart(int k) const {
   // Never a frame's last outer iteration: the frame's result is the pushing-only problem's.
-  return estimate_forces && state.options.forces.pushing_only && k + 1 < iteration_limit &&
+  return PushingOnly() && k + 1 < iteration_limit &&
          (k == warm_until + 1 || k == smooth_after_split);
 }
 

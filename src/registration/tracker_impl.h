@@ -59,6 +59,9 @@ struct Tracker::Impl {
   // from the unrestricted equilibrium only the pulls are left to undo
   // (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
   bool SmoothStart(int k) const;
+  // Whether this frame's estimated forces push only: forces.pushing_only, or
+  // forces.when_occluded_pushing_only in a frame forces.when_occluded switched.
+  bool PushingOnly() const;
   // The frame problem's energy at x on the frame's threads (the sum does not depend on them).
   EnergyTerms Energy(const Vertices& x) const;
   // The pairs' RMS distance (m) at state.x (on the data surface where there is one).
