@@ -243,7 +243,7 @@ TEST(HandPress, FramesWhereTheHandHoldsTheBallAreRegisteredWithTheForcesEstimate
 
 // Frame 18: the hand holds the ball up by its sides, and the frame starts with none of the
 // hand's points in front of it, only the last frame's implausible points (the fingers'),
-// carried: they switch it to the forces estimated. There the forces push only
+// carried from frame 17, which was switched: they switch it to the forces estimated. There the forces push only
 // (forces.when_occluded_pushing_only): a hand cannot pull the surface out to its fingers.
 TEST(HandPress, WhereTheHandHoldsTheBallUpItsForcesPush) {
   auto run = [](bool pushing_only, double* pull_share) {

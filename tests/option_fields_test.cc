@@ -172,6 +172,19 @@ TEST(OptionFields, MessagesKeepTheirWording) {
   o.forces.friction = std::nan("");
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_EQ(error, "forces.friction must be finite (< 0: no bound) (got nan)");
+  // Friction bounds pushing forces: those of forces.pushing_only, or of the frames that
+  // forces.when_occluded switches (when_occluded_pushing_only), which forces.estimate leaves out.
+  o = RegistrationOptions();
+  o.forces.friction = 0.5;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
+  o.forces.when_occluded_pushing_only = false;
+  EXPECT_FALSE(o.IsValid(&error));
+  o.forces.when_occluded_pushing_only = true;
+  o.forces.estimate = true;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("set forces.pushing_only too"), std::string::npos) << error;
+  o.forces.pushing_only = true;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
   o = RegistrationOptions();
   o.free_space.weight = 0;
   EXPECT_FALSE(o.IsValid(&error));

@@ -319,8 +319,9 @@ struct ForceOptions {
   // Without `estimate`: a frame whose cloud holds an occluder (points in front of the visible
   // surface, found with a camera: a hand or a tool that the mask kept) that touches the body's
   // points after its first outer iteration, itself or through the points found implausible
-  // beside the body (data.max_strain_step; also the last frame's, carried), is registered with the forces estimated, the others
-  // without (FrameSummary::forces_estimated). Where the hand holds the body, its points
+  // beside the body (data.max_strain_step; also the last frame's, carried, after a frame so
+  // registered), is registered with the forces estimated, the others without
+  // (FrameSummary::forces_estimated). Where the hand holds the body, its points
   // beside the silhouette look like the body's, and the classic energy pulls the surface into
   // them; with the forces estimated that pull needs a force nobody applies there
   // (docs/guide/forces.md#when-a-hand-holds-the-body).

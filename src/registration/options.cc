@@ -216,10 +216,11 @@ bool SolverOptions::IsValid(std::string* error) const {
 
 bool ForceOptions::IsValid(std::string* error) const {
   if (!CheckFieldRanges(*this, error)) return false;
-  if (friction >= 0 && !pushing_only && !(when_occluded && when_occluded_pushing_only)) {
+  // Without estimate, the frames forces.when_occluded switches may push only: friction bounds those.
+  if (friction >= 0 && !pushing_only && !(!estimate && when_occluded && when_occluded_pushing_only)) {
     return Fail(error, "forces.friction",
-                "bounds a pushing force's tangential part: set forces.pushing_only (or "
-                "forces.when_occluded and when_occluded_pushing_only) too",
+                "bounds a pushing force's tangential part: set forces.pushing_only too (or, without "
+                "forces.estimate, forces.when_occluded and forces.when_occluded_pushing_only)",
                 friction);
   }
   return true;

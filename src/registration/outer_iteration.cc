@@ -131,13 +131,13 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
 
 namespace {
 
-// Whether the marks hold an occluder proper (in front of the visible surface, 1) or the last
-// frame's implausible points carried over (3: the hand that pulled them is most likely still
-// there, CarryImplausible). Points found implausible in this frame alone (2) are also a fast
-// motion's or a crushed element's, where the physical mode does no better
-// (tests/hard_cases_test.cc).
-bool HeldMarks(const std::vector<char>& marks) {
-  return std::any_of(marks.begin(), marks.end(), [](char m) { return m == 1 || m == 3; });
+// Whether the marks hold an occluder proper (in front of the visible surface, 1), or the last
+// frame's implausible points carried over (3, CarryImplausible) where that frame was switched
+// (`after_switch`): the hand that held the body then most likely still does. Points found
+// implausible alone are also a fast motion's or a crushed element's, where the physical mode
+// does no better (tests/hard_cases_test.cc).
+bool HeldMarks(const std::vector<char>& marks, bool after_switch) {
+  return std::any_of(marks.begin(), marks.end(), [&](char m) { return m == 1 || (after_switch && m == 3); });
 }
 
 }  // namespace
@@ -151,13 +151,13 @@ void Tracker::Impl::SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double*
   // not taken for a hand. Switched on only, never off, in a frame.
   if (estimate_forces || k != iteration_base + 1 || !options.forces.when_occluded ||
       options.regularizer == Regularizer::kNone || fc.occluders.occluders == 0 ||
-      !HeldMarks(fc.occluder)) {
-    return;  // without an occluder proper, not even the release below: the frame stays as it was
+      !HeldMarks(fc.occluder, switched_before)) {
+    return;  // without a hand's marks, not even the release below: the frame stays as it was
   }
   const auto t0 = Clock::now();
   std::vector<char> marks = fc.occluder;  // the frame's own are released on its schedule
   ReleaseReached(PairState(), Surface(), fc.cloud.points, fc.spacing, &marks);
-  estimate_forces = HeldMarks(marks) &&
+  estimate_forces = HeldMarks(marks, switched_before) &&
                     TouchingOccluderPoints(fc.cloud.points, *fc.index, fc.spacing, marks,
                                            kTouchingOccluderPoints) >= kTouchingOccluderPoints;
   s->time.correspondences += Seconds(t0);

@@ -181,6 +181,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   state.held_before = true;
   state.lost_before = s->lost;
   implausible_before.resize(0, 3);
+  switched_before = false;
   ++missed_frames;
   Outputs(index, {});
   s->time.total = Seconds(t_frame);
@@ -426,6 +427,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   implausible_before = state.held_before || FractureLive(state) || fc.occluder.empty()
                            ? Vertices(0, 3)
                            : ImplausiblePoints(state, fc.cloud.points, fc.occluder);
+  switched_before = estimate_forces && !options.forces.estimate && !state.held_before;
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
   MeasureForces(&s);

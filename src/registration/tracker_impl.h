@@ -152,6 +152,9 @@ struct Tracker::Impl {
   int warm_until = 0;            // WarmStart's last outer iteration
   // This frame's mode: forces.estimate, or forces.when_occluded and an occluder in its cloud.
   bool estimate_forces = false;
+  // The last frame was solved with the forces estimated by forces.when_occluded's switch
+  // (SwitchToForcesWhereHeld): its implausible points, carried, are a hand's.
+  bool switched_before = false;
   int smooth_after_split = -1;   // the outer iteration after a fracture split, or -1 (SmoothStart)
   // The RMS residual (m) at the end of the frame's last warm start, with the pairs found there
   // (0: none yet this frame): the classic fit's misfit (FrameSummary::misfit_ratio).
