@@ -67,8 +67,8 @@ void ReadHandPressFrame(int f, PointCloud* cloud, GroundTruthFrame* truth) {
   EXPECT_TRUE(ReadGroundTruthFrame(kHandPress + "/ground_truth/" + name + ".csv", truth).ok());
 }
 
-PressRun RunHandPress(void (*edit)(Scene*)) {
-  PressRun run;
+// A tracker on hand_press's scene, one thread, edited by `edit` (may be null); null on failure.
+std::unique_ptr<Tracker> HandPressTracker(const std::function<void(Scene*)>& edit) {
   Scene scene;
   Status status = LoadScene(kHandPress + "/scene.yaml", &scene);
   EXPECT_TRUE(status.ok()) << status.message();
@@ -77,7 +77,13 @@ PressRun RunHandPress(void (*edit)(Scene*)) {
   std::unique_ptr<Tracker> tracker;
   status = Tracker::Create(scene, &tracker);
   EXPECT_TRUE(status.ok()) << status.message();
-  if (!status.ok()) return run;
+  return tracker;
+}
+
+PressRun RunHandPress(void (*edit)(Scene*)) {
+  PressRun run;
+  const std::unique_ptr<Tracker> tracker = HandPressTracker(edit);
+  if (!tracker) return run;
   for (int f = 0; f < kFrames; ++f) {
     PointCloud cloud;
     GroundTruthFrame truth;
@@ -211,12 +217,8 @@ TEST(Occluders, OnlyAnOccluderBesideTheBodysPointsTouchesIt) {
 // points stand clear of the ball's, and the frames stay classic.
 TEST(HandPress, FramesWhereTheHandHoldsTheBallAreRegisteredWithTheForcesEstimated) {
   auto run = [](bool when_occluded, std::vector<int>* estimated) {
-    Scene scene;
-    EXPECT_TRUE(LoadScene(kHandPress + "/scene.yaml", &scene).ok());
-    scene.registration.solver.num_threads = 1;
-    scene.registration.forces.when_occluded = when_occluded;
-    std::unique_ptr<Tracker> tracker;
-    EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
+    const auto tracker =
+        HandPressTracker([&](Scene* scene) { scene->registration.forces.when_occluded = when_occluded; });
     double grasp_error = 0.0;
     for (int f = 0; f <= 15; ++f) {
       PointCloud cloud;
@@ -243,16 +245,13 @@ TEST(HandPress, FramesWhereTheHandHoldsTheBallAreRegisteredWithTheForcesEstimate
 
 // Frame 18: the hand holds the ball up by its sides, and the frame starts with none of the
 // hand's points in front of it, only the last frame's implausible points (the fingers'),
-// carried from frame 17, which was switched: they switch it to the forces estimated. There the forces push only
-// (forces.when_occluded_pushing_only): a hand cannot pull the surface out to its fingers.
+// carried from frame 17, which was switched: they switch it to the forces estimated. There
+// the forces push only (forces.when_occluded_pushing_only): a hand cannot pull the surface out
+// to its fingers.
 TEST(HandPress, WhereTheHandHoldsTheBallUpItsForcesPush) {
   auto run = [](bool pushing_only, double* pull_share) {
-    Scene scene;
-    EXPECT_TRUE(LoadScene(kHandPress + "/scene.yaml", &scene).ok());
-    scene.registration.solver.num_threads = 1;
-    scene.registration.forces.when_occluded_pushing_only = pushing_only;
-    std::unique_ptr<Tracker> tracker;
-    EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
+    const auto tracker =
+        HandPressTracker([&](Scene* scene) { scene->registration.forces.when_occluded_pushing_only = pushing_only; });
     FrameSummary s;
     for (int f = 0; f <= 18; ++f) {
       PointCloud cloud;

@@ -43,6 +43,16 @@ double ImplausibleWeight(const FrameCloud& fc) {
 
 }  // namespace
 
+void Tracker::Impl::StartAgain(const Vertices& start, int base) {
+  state.x = start;
+  iteration_base = base;
+  iteration_limit = base + iteration_budget;
+  rise_from = base + std::max(1, state.options.data.hold_pairs_after);
+  warm_triangles.clear();
+  paired_vertices.clear();
+  ResetStartReferences();
+}
+
 void Tracker::Impl::StepIn(int k, double* previous_energy) {
   if (!stepping_in) return;
   const int stage = k - stiff_from;
@@ -61,21 +71,15 @@ void Tracker::Impl::RestartStiff(int k, bool large_motion, bool go_on, const Ver
   // So does a frame whose first solves crushed an element, where asked
   // (solver.stiff_restart_volume): their pairs were wrong at that distance too. Only a
   // large motion's restart drops the velocity (Track, after the loop): a crushed frame did not jump.
-  state.x = start;
   stiff_stages = static_cast<int>(sizeof(kStiffScales) / sizeof(kStiffScales[0]));
   stepping_in = true;
   fc->facing_only = true;
   stiff_from = k + 1;
-  iteration_base = stiff_from + stiff_stages;
+  StartAgain(start, stiff_from + stiff_stages);
   warm_until = iteration_base;
-  iteration_limit = iteration_base + iteration_budget;
-  rise_from = iteration_base + std::max(1, state.options.data.hold_pairs_after);
   const int hold = state.options.data.hold_pairs_after;
   if (hold > 0) redecide_until = iteration_base + hold;  // 0: never held, never decided again
-  warm_triangles.clear();
-  paired_vertices.clear();
   ++(large_motion ? s->large_motion_restarts : s->crushed_restarts);
-  ResetStartReferences();
   if (!go_on) {  // a crushed frame that had stopped goes on
     s->termination = TerminationType::kNotRun;
     s->stopped_by.clear();
@@ -104,20 +108,14 @@ void Tracker::Impl::MarkImplausibleOrRestart(
     *previous_energy = merit;
   } else if (marked > 0) {
     // Back to the start without them: the shape they pulled into is no starting point.
-    state.x = start;
     ++s->implausible_restarts;
     implausible_at_start = ImplausibleWeight(*fc);
-    iteration_base = k + 1;
+    StartAgain(start, k + 1);
     // After a large motion's restart the frame's start is far: with the forces estimated,
     // one outer iteration without the equilibrium terms first again (WarmStart).
     if (warm_until > 0) warm_until = iteration_base;
-    ResetStartReferences();
-    iteration_limit = iteration_base + iteration_budget;
-    rise_from = iteration_base + std::max(1, state.options.data.hold_pairs_after);
     merit = std::numeric_limits<double>::infinity();
     *previous_energy = merit;
-    warm_triangles.clear();
-    paired_vertices.clear();
   }
 }
 

@@ -76,6 +76,9 @@ struct Tracker::Impl {
   // forces.when_occluded: after outer iteration k - 1, whether the frame goes on with the forces
   // estimated (an occluder touches the body; docs/guide/forces.md#when-a-hand-holds-the-body).
   void SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double* previous_energy, FrameSummary* s);
+  // Back to `start`, the ordinary schedule from outer iteration `base` (iteration_base, the
+  // cap, where an energy rise may stop it), no warm pairs, no misfit or stall reference.
+  void StartAgain(const Vertices& start, int base);
   // A stiff start's stages (stepping_in): before outer iteration k, the elastic weight's scale.
   void StepIn(int k, double* previous_energy);
   // After outer iteration k, a large motion's restart (or a crushed element's): back to `start`,

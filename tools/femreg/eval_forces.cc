@@ -87,7 +87,7 @@ void ForceReport::Print() const {
   if (estimated == 0 && !switched.empty()) {
     const std::string pct = Percent(MedianForceErrors(switched).relative, "%.2f");
     std::printf("The run estimated the forces in %zu of these %zu frames (forces.when_occluded: an occluder "
-                "touched the body; pushing only, with forces.when_occluded_pushing_only); their median error: %s%% of the true force. The other frames' are their "
+                "touched the body); their median error: %s%% of the true force. The other frames' are their "
                 "data term's pull and their contacts' push.\n",
                 switched.size(), errors.size(), pct.empty() ? "-" : pct.c_str());
   } else if (estimated == 0) {
