@@ -70,7 +70,11 @@ constexpr int kContactRounds = 3;
 // to 1/2-1/32, the exact step still gains, and the majorized one's short steps left a twisted
 // armadillo's frames far from their minimum (docs/notes/2026-12-06-pushing-only-majorized-step.md).
 constexpr double kMajorizeBelow = 1.0 / 64;
-// ResolveAcrossPenaltyKinks' re-solves of a step at most.
+// ResolveAcrossPenaltyKinks' re-solves of a step at most. The rounds settle where a round
+// changes at most half as many pieces as the one before (the organ's 395, 35, 1); where one
+// changes more, they do not (a free ball whose tangential forces are free: 233, 299, 85), and
+// the solve's later steps take none: there they took three quarters of the PCG iterations
+// and bought nothing (docs/notes/2026-12-07-what-the-pushing-hand-costs.md).
 constexpr int kPieceRounds = 3;
 // Their PCG iterations at least, however cheap the factor: without, a small mesh's steps
 // stalled at the friction cone's kinks (docs/notes/2026-12-04-pushing-only-on-public-meshes.md).
@@ -159,6 +163,9 @@ struct EquilibriumSolver::Impl {
   // energy gave, and the residual says what a next step on that model could still gain.
   Eigen::VectorXd last_residual, step_residual;
   bool plain_step = false;
+  // Whether the re-solves across the pushing-only penalty's kinks settled in this solve's
+  // steps so far (ResolveAcrossPenaltyKinks; kPieceRounds).
+  bool piece_rounds_settle = true;
 
   // The rigid modes and the held turns at x (solvers/fast/step_modes.h).
   StepModes modes;
@@ -325,23 +332,32 @@ struct EquilibriumSolver::Impl {
   // with the penalty modelled around the predicted forces (solvers/fast/penalty_pieces.h), on
   // the same factor; repeated while the predicted pieces change, up to kPieceRounds times,
   // within the PCG iterations a factorization costs (past them a new step is cheaper; at
-  // least kMinPieceIterations), and kept while PCG converges and the step goes downhill. Its
+  // least kMinPieceIterations), and kept while PCG converges and the step goes downhill. A
+  // round that changes more than half as many pieces as the one before ends them, and the
+  // solve's later steps make none (kPieceRounds). Its
   // model leaves out the contacts the step closes (ResolveWithClosingContacts' model): with
   // them hand_press, pushing only, erred the most of the versions tried
   // (docs/notes/2026-12-02-penalty-kinks.md); Step solves for those its result closes
   // afterwards. Whether it changed *dx.
   bool ResolveAcrossPenaltyKinks(const energy::Problem& problem, Eigen::VectorXd* dx, SolveReport* report) {
     const energy::Equilibrium& eq = *problem.equilibrium();
-    if (!eq.pushing_only) return false;
+    if (!eq.pushing_only || !piece_rounds_settle) return false;
     int budget = std::min(std::max(factor.factorization_iterations(), kMinPieceIterations), kMaxPcgIterations);
     bool changed = false;
     PenaltyPieces pieces;
     pieces.Start(eq, f);
     bool remodelled = false;
+    int last_changed = 0;
     for (int round = 0; round < kPieceRounds && budget > 0; ++round) {
       Eigen::VectorXd kdx;
       BlockProduct(physics.H(), physics.block_rows(), *dx, threads, &kdx);
-      if (pieces.Remodel(eq, f, kdx, &phi, &phi_gradient, &phi_inverse) == 0) break;
+      const int changed_pieces = pieces.Remodel(eq, f, kdx, &phi, &phi_gradient, &phi_inverse);
+      if (changed_pieces == 0) break;
+      if (round > 0 && 2 * changed_pieces > last_changed) {
+        piece_rounds_settle = false;
+        break;
+      }
+      last_changed = changed_pieces;
       remodelled = true;
       Eigen::VectorXd resolved;
       const int before = report->pcg_iterations;
@@ -439,6 +455,7 @@ SolveReport EquilibriumSolver::Solve(const energy::Problem& problem, double time
     ++report.analyses;
   }
   report.assemble_s += Seconds(t0);
+  m.piece_rounds_settle = true;
   m.Linearize(problem, *x, /*first=*/true, &report.before, &report);
   report.after = report.before;
   double energy = report.before.total();
