@@ -205,9 +205,9 @@ TEST(HandPressData, BundledForcesBalanceGravity) {
 // end: the steps that close contacts with the table are solved again until they close no new
 // one. With a single re-solve the line searches cut the steps to nothing while the ball was
 // set down, and the mean error was 2.87 mm (Ceres: 2.5). The bound on the PCG iterations over
-// the sequence lies between what the solves took starting with the pushing-only penalty
-// itself and what they take from the equilibrium without it first
-// (docs/notes/2026-12-05-pushing-only-smooth-start.md); a count, not a time.
+// the sequence (a count, not a time) lies between what the solves take since a solve whose
+// re-solves across the penalty's kinks do not settle drops them for its later steps (about
+// 3,000) and what they took before (about 4,600; docs/notes/2026-12-07-what-the-pushing-hand-costs.md).
 TEST(HandPressRegistration, PushingOnlyOnTheFastBackEndSetsTheBallDown) {
   const std::string data = std::string(FEMREG_DATASETS_DIR) + "/hand_press";
   TempDir tmp;
@@ -225,7 +225,7 @@ TEST(HandPressRegistration, PushingOnlyOnTheFastBackEndSetsTheBallDown) {
   int pcg = 0;
   for (const std::string& c : testing_util::StatsColumn(tmp.path() + "/out", "pcg_iterations")) pcg += std::stoi(c);
   std::printf("hand_press, pushing only: %d PCG iterations\n", pcg);
-  EXPECT_LT(pcg, 8000);
+  EXPECT_LT(pcg, 4000);
 }
 #endif
 
