@@ -207,7 +207,7 @@ TEST(HandPressData, BundledForcesBalanceGravity) {
 // set down, and the mean error was 2.87 mm (Ceres: 2.5). The bound on the PCG iterations over
 // the sequence (a count, not a time) lies between what the solves take since a solve whose
 // re-solves across the penalty's kinks do not settle drops them for its later steps (about
-// 3,000) and what they took before (about 4,600; docs/notes/2026-12-07-what-the-pushing-hand-costs.md).
+// 3,100) and what they took before (about 4,600; docs/notes/2026-12-07-what-the-pushing-hand-costs.md).
 TEST(HandPressRegistration, PushingOnlyOnTheFastBackEndSetsTheBallDown) {
   const std::string data = std::string(FEMREG_DATASETS_DIR) + "/hand_press";
   TempDir tmp;

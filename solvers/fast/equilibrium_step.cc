@@ -70,11 +70,10 @@ constexpr int kContactRounds = 3;
 // to 1/2-1/32, the exact step still gains, and the majorized one's short steps left a twisted
 // armadillo's frames far from their minimum (docs/notes/2026-12-06-pushing-only-majorized-step.md).
 constexpr double kMajorizeBelow = 1.0 / 64;
-// ResolveAcrossPenaltyKinks' re-solves of a step at most. The rounds settle where a round
-// changes at most half as many pieces as the one before (the organ's 395, 35, 1); where one
-// changes more, they do not (a free ball whose tangential forces are free: 233, 299, 85), and
-// the solve's later steps take none: there they took three quarters of the PCG iterations
-// and bought nothing (docs/notes/2026-12-07-what-the-pushing-hand-costs.md).
+// ResolveAcrossPenaltyKinks' re-solves of a step at most. A round that changes more than half
+// as many pieces as the one before shows that they do not settle (a free body whose
+// tangential forces nothing bounds), and the solve's later steps make none: there they cost
+// more PCG iterations than they saved (docs/notes/2026-12-07-what-the-pushing-hand-costs.md).
 constexpr int kPieceRounds = 3;
 // Their PCG iterations at least, however cheap the factor: without, a small mesh's steps
 // stalled at the friction cone's kinks (docs/notes/2026-12-04-pushing-only-on-public-meshes.md).
