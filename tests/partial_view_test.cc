@@ -468,8 +468,11 @@ TEST(OrganForces, ToolForceFromPartialViewsAndCloserWhenTheToolIsKnownFrictionle
   EXPECT_LT(frictionless.seen_mm, 0.36);
   EXPECT_LT(frictionless.hidden_mm, 0.40);
   EXPECT_LT(frictionless.hidden_mm, free_forces.hidden_mm - 0.05);
-  // A step re-solved where it crosses the cone's kinks: 12.7 steps a frame, 17.3 without.
-  EXPECT_LT(frictionless.steps, 15 * frictionless.frames);
+  // A step re-solved where it crosses the cone's kinks (17.3 steps a frame without), and the
+  // quiet frames of a clamped organ started from the last frame's equilibrium, without the warm
+  // and smooth starts: 5.7 steps a frame, 10.4 with them
+  // (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+  EXPECT_LT(frictionless.steps, 8 * frictionless.frames);
   // The normal of the top's slope gives the force the part along x that the views cannot:
   // the true force's, where the default estimate has a fifth of it.
   for (int f = 4; f < 12; ++f) {

@@ -1,7 +1,8 @@
 // A frame's restarts: a large motion's or a crushed element's, stiff and stepping in
 // (docs/theory/stopping.md#large-motions), and one without the cloud points found
-// implausible (docs/guide/partial-views.md#implausible-points). The frame loop that calls them
-// is in tracker.cc.
+// implausible (docs/guide/partial-views.md#implausible-points); and a pushing-only frame's
+// quiet start, without the warm start (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+// The frame loop that calls them is in tracker.cc.
 #include <algorithm>
 #include <chrono>
 #include <limits>
@@ -41,6 +42,20 @@ double ImplausibleWeight(const FrameCloud& fc) {
   return sum;
 }
 
+// QuietStart: the last frame moved its vertices by at most these many mean edges, on average
+// and at most (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+constexpr double kQuietMeanMove = 0.25;
+constexpr double kQuietLargestMove = 0.75;
+constexpr double kQuietMisfit = 1.25;
+// A frame's cost for QuietStart's choice: its factorizations and its PCG iterations at this many
+// a factorization (about what one costs in time on the organ and hand_press in the physical
+// mode), deterministic unlike a time. A quiet start that cost more than the last warm start
+// leaves kQuietBackoff frames to the warm start before QuietStart may choose again (against the
+// cheapest of the last three warm starts instead, the bundled clamped sequences made 29 more
+// factorizations in all: docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+constexpr double kPcgPerFactorization = 8.0;
+constexpr int kQuietBackoff = 3;
+
 }  // namespace
 
 void Tracker::Impl::StartAgain(const Vertices& start, int base) {
@@ -77,6 +92,7 @@ void Tracker::Impl::RestartStiff(int k, bool large_motion, bool go_on, const Ver
   stiff_from = k + 1;
   StartAgain(start, stiff_from + stiff_stages);
   warm_until = iteration_base;
+  quiet_start = false;
   const int hold = state.options.data.hold_pairs_after;
   if (hold > 0) redecide_until = iteration_base + hold;  // 0: never held, never decided again
   ++(large_motion ? s->large_motion_restarts : s->crushed_restarts);
@@ -117,6 +133,50 @@ void Tracker::Impl::MarkImplausibleOrRestart(
     merit = std::numeric_limits<double>::infinity();
     *previous_energy = merit;
   }
+}
+
+bool Tracker::Impl::QuietStart(const Vertices& previous, bool last_converged) const {
+  if (quiet_backoff > 0 || !estimate_forces || !PushingOnly() || state.frame == 0 || !last_converged ||
+      FractureLive(state) || previous.rows() != state.x_before.rows() || previous.rows() == 0 ||
+      !(state.mean_edge_length > 0)) {
+    return false;
+  }
+  // Every object clamped (hard anchors on three vertices or more): a free body's equilibrium is
+  // flat along the rigid motions that cheap forces explain, and the warm start's classic fit
+  // places it (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+  std::vector<size_t> clamped(state.objects.size(), 0);
+  for (const auto& [name, anchor] : state.anchors) {
+    if (anchor.hard && anchor.object >= 0 && anchor.object < static_cast<int>(clamped.size())) {
+      clamped[static_cast<size_t>(anchor.object)] += anchor.vertices.size();
+    }
+  }
+  for (size_t held : clamped) {
+    if (held < 3) return false;
+  }
+  // The last frame's motion, vertex by vertex, against the mean edge.
+  double sum = 0.0, largest = 0.0;
+  for (Eigen::Index v = 0; v < previous.rows(); ++v) {
+    const double d = (previous.row(v) - state.x_before.row(v)).norm();
+    sum += d;
+    largest = std::max(largest, d);
+  }
+  const double mean = sum / static_cast<double>(previous.rows());
+  return mean <= kQuietMeanMove * state.mean_edge_length && largest <= kQuietLargestMove * state.mean_edge_length;
+}
+
+void Tracker::Impl::CountQuietCost(bool quiet, const FrameSummary& s) {
+  if (quiet_backoff > 0) --quiet_backoff;
+  if (!estimate_forces || !PushingOnly()) return;
+  const double cost = s.factorizations + s.pcg_iterations / kPcgPerFactorization;
+  if (!quiet) {
+    last_warm_cost = cost;
+  } else if (last_warm_cost >= 0.0 && cost > last_warm_cost) {
+    quiet_backoff = kQuietBackoff;
+  }
+}
+
+bool Tracker::Impl::QuietPairs(const std::vector<DataPair>& pairs) {
+  return !pairs.empty() && last_frame_rms > 0.0 && RmsResidual(pairs) <= kQuietMisfit * last_frame_rms;
 }
 
 }  // namespace femreg

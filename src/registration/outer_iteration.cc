@@ -80,6 +80,7 @@ bool Tracker::Impl::PrepareIteration(int k, const FrameCloud& fc, const Vertices
   FindPairs(PairState(), fc, Surface(), options.solver.num_threads, pairs, &counts, &warm_triangles,
             &paired_vertices, hold > 0 && k - iteration_base >= hold);
   s->time.correspondences += Seconds(t0);
+  if (k == 0 && quiet_start) quiet_start = QuietPairs(*pairs);
   row.model_to_cloud = counts.model_to_cloud;
   row.cloud_to_model = counts.cloud_to_model;
   row.rejected = counts.rejected;
@@ -192,6 +193,7 @@ double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
 }
 
 bool Tracker::Impl::WarmStart(int k) const {
+  if (quiet_start && warm_until == 0) return false;
   return estimate_forces && k <= warm_until;
 }
 
@@ -202,6 +204,7 @@ bool Tracker::Impl::PushingOnly() const {
 
 bool Tracker::Impl::SmoothStart(int k) const {
   // Never a frame's last outer iteration: the frame's result is the pushing-only problem's.
+  if (quiet_start && warm_until == 0) return k == smooth_after_split && k + 1 < iteration_limit;
   return PushingOnly() && k + 1 < iteration_limit &&
          (k == warm_until + 1 || k == smooth_after_split);
 }
@@ -351,9 +354,9 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   femreg::OuterIteration row;
   row.iteration = k + 1;
   PairCounts counts;
-  const bool warm_start = WarmStart(k);
   UpdateElementRotations(s);
   if (!PrepareIteration(k, fc, *previous, pairs, &counts, &row, s)) return false;
+  const bool warm_start = WarmStart(k);  // after the first pairs: QuietPairs
   // Its energy is not the next outer iteration's either: nothing to hold that one against.
   const bool another_energy = warm_start || SmoothStart(k);
   // The classic fit's misfit (forces.adaptive_weight): its warm start's shape, with the pairs

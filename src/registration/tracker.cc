@@ -236,6 +236,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // Constant-velocity prediction from the last two results, without the turns the surface
   // does not show.
   Vertices previous = state.x;
+  // A held or lost frame (the returns before the outer iterations) did not converge.
+  const bool last_converged = last_frame_converged;
+  last_frame_converged = false;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
     const Vertices predicted = PredictMotion(state, data_surface.get());
     // Not through a flat element: the inversion barrier's energy is infinite there.
@@ -328,6 +331,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   stiff_stages = 0;
   stiff_from = 1;
   redecide_until = options.data.hold_pairs_after;
+  quiet_start = QuietStart(previous, last_converged);
   for (int k = 0; k < iteration_limit; ++k) {
     StepIn(k, &previous_energy);
     // Until the pair set is held (after a stiff restart too, whose start marked them), the
@@ -389,6 +393,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
+  last_frame_converged = s.termination == TerminationType::kConverged;
+  last_frame_rms = s.rms_residual;
+  CountQuietCost(quiet_start && warm_until == 0, s);
   state.x_before = previous;
   const auto t_outputs = Clock::now();
   Outputs(fc.index.get(), pairs);

@@ -52,6 +52,18 @@ struct Tracker::Impl {
   // them, so that the force residual's Gauss-Newton starts near
   // (docs/theory/equilibrium.md#solving-it).
   bool WarmStart(int k) const;
+  // Whether a frame with forces.pushing_only may start from the last frame's equilibrium,
+  // without the warm start and the smooth start: the last frame converged, nothing is breaking,
+  // and its vertices moved little from the frame before (`previous`: the last frame's result).
+  // The frame's first pairs then decide (QuietPairs). There the two starts' three solves cost
+  // more than they bring (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+  bool QuietStart(const Vertices& previous, bool last_converged) const;
+  // ... whose first pairs' RMS residual is at most kQuietMisfit times the last frame's final one:
+  // the cloud did not jump.
+  bool QuietPairs(const std::vector<DataPair>& pairs);
+  // After a frame: its cost (factorizations, and PCG iterations at kPcgPerFactorization
+  // a factorization); a quiet start that cost more than the last warm start backs off.
+  void CountQuietCost(bool quiet, const FrameSummary& s);
   // Whether outer iteration k, the first after a warm start or after a fracture split, solves
   // the equilibrium without forces.pushing_only's penalty (two steps at most): from the warm
   // start's shape, which the data pulled where they liked, that penalty's kinks and stiffness
@@ -153,6 +165,15 @@ struct Tracker::Impl {
   int iteration_base = 0;
   int iteration_limit = 0;
   int warm_until = 0;            // WarmStart's last outer iteration
+  // The frame starts from the last one's pushing-only equilibrium, without the warm start and
+  // the smooth start (QuietStart), until a restart.
+  bool quiet_start = false;
+  bool last_frame_converged = false;  // the last frame converged (QuietStart)
+  double last_frame_rms = 0.0;        // and its pairs' RMS residual (m)
+  // The cost (CountQuietCost) of the last frame that made the warm start (< 0: none yet), and
+  // the frames left before QuietStart may choose again after a quiet start cost more.
+  double last_warm_cost = -1.0;
+  int quiet_backoff = 0;
   // This frame's mode: forces.estimate, or forces.when_occluded and an occluder in its cloud.
   bool estimate_forces = false;
   // The last frame was solved with the forces estimated by forces.when_occluded's switch
