@@ -42,17 +42,18 @@ double ImplausibleWeight(const FrameCloud& fc) {
   return sum;
 }
 
-// QuietStart: the last frame moved its vertices by at most these many mean edges, on average
-// and at most (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+// QuietStart's limits (docs/notes/2026-12-07-quiet-pushing-only-starts.md): the last frame's
+// move in mean edges, on average and at most, within which its equilibrium is near enough to
+// start from (the beams' bending frames move more, and started so made more factorizations);
+// and the first pairs' RMS residual against the last frame's final one, above which the
+// cloud jumped and the warm start is needed.
 constexpr double kQuietMeanMove = 0.25;
 constexpr double kQuietLargestMove = 0.75;
 constexpr double kQuietMisfit = 1.25;
 // A frame's cost for QuietStart's choice: its factorizations and its PCG iterations at this many
-// a factorization (about what one costs in time on the organ and hand_press in the physical
-// mode), deterministic unlike a time. A quiet start that cost more than the last warm start
-// leaves kQuietBackoff frames to the warm start before QuietStart may choose again (against the
-// cheapest of the last three warm starts instead, the bundled clamped sequences made 29 more
-// factorizations in all: docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+// a factorization (about what one costs in time in the physical mode), counts rather than a time
+// so that the choice is the same on any machine. A quiet start that cost more than the last warm
+// start leaves kQuietBackoff frames to the warm start before QuietStart may choose again.
 constexpr double kPcgPerFactorization = 8.0;
 constexpr int kQuietBackoff = 3;
 
@@ -135,10 +136,9 @@ void Tracker::Impl::MarkImplausibleOrRestart(
   }
 }
 
-bool Tracker::Impl::QuietStart(const Vertices& previous, bool last_converged) const {
-  if (quiet_backoff > 0 || !estimate_forces || !PushingOnly() || state.frame == 0 || !last_converged ||
-      FractureLive(state) || previous.rows() != state.x_before.rows() || previous.rows() == 0 ||
-      !(state.mean_edge_length > 0)) {
+bool Tracker::Impl::QuietStart() const {
+  if (quiet_backoff > 0 || !estimate_forces || !PushingOnly() || state.options.forces.adaptive_weight ||
+      state.frame == 0 || FractureLive(state)) {
     return false;
   }
   // Every object clamped (hard anchors on three vertices or more): a free body's equilibrium is
@@ -153,10 +153,14 @@ bool Tracker::Impl::QuietStart(const Vertices& previous, bool last_converged) co
   for (size_t held : clamped) {
     if (held < 3) return false;
   }
-  // The last frame's motion, vertex by vertex, against the mean edge.
+  return true;
+}
+
+bool Tracker::Impl::MovedLittle(const Vertices& previous) const {
+  if (previous.rows() != state.x.rows() || previous.rows() == 0 || !(state.mean_edge_length > 0)) return false;
   double sum = 0.0, largest = 0.0;
   for (Eigen::Index v = 0; v < previous.rows(); ++v) {
-    const double d = (previous.row(v) - state.x_before.row(v)).norm();
+    const double d = (state.x.row(v) - previous.row(v)).norm();
     sum += d;
     largest = std::max(largest, d);
   }

@@ -193,7 +193,7 @@ double Tracker::Impl::RmsResidual(const std::vector<DataPair>& pairs) {
 }
 
 bool Tracker::Impl::WarmStart(int k) const {
-  if (quiet_start && warm_until == 0) return false;
+  if (quiet_start) return false;
   return estimate_forces && k <= warm_until;
 }
 
@@ -204,7 +204,7 @@ bool Tracker::Impl::PushingOnly() const {
 
 bool Tracker::Impl::SmoothStart(int k) const {
   // Never a frame's last outer iteration: the frame's result is the pushing-only problem's.
-  if (quiet_start && warm_until == 0) return k == smooth_after_split && k + 1 < iteration_limit;
+  if (quiet_start) return k == smooth_after_split && k + 1 < iteration_limit;
   return PushingOnly() && k + 1 < iteration_limit &&
          (k == warm_until + 1 || k == smooth_after_split);
 }

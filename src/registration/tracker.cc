@@ -198,6 +198,9 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   FrameSummary& s = *summary;
   s = FrameSummary();
   s.frame = state.frame;
+  // Only the frame right after a quiet one may start quietly: not after a held or invalid one.
+  const bool after_quiet = quiet_next;
+  quiet_next = false;
   s.backend = backend->type();
   s.cloud_points = input.size();
   prepared_cloud = PointCloud();  // this frame's, once prepared
@@ -236,9 +239,6 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   // Constant-velocity prediction from the last two results, without the turns the surface
   // does not show.
   Vertices previous = state.x;
-  // A held or lost frame (the returns before the outer iterations) did not converge.
-  const bool last_converged = last_frame_converged;
-  last_frame_converged = false;
   if (options.solver.predict_motion && state.frame >= 2 && state.x_before.rows() == state.x.rows()) {
     const Vertices predicted = PredictMotion(state, data_surface.get());
     // Not through a flat element: the inversion barrier's energy is infinite there.
@@ -331,7 +331,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   stiff_stages = 0;
   stiff_from = 1;
   redecide_until = options.data.hold_pairs_after;
-  quiet_start = QuietStart(previous, last_converged);
+  quiet_start = after_quiet && QuietStart();
   for (int k = 0; k < iteration_limit; ++k) {
     StepIn(k, &previous_energy);
     // Until the pair set is held (after a stiff restart too, whose start marked them), the
@@ -393,9 +393,8 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   }
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
-  last_frame_converged = s.termination == TerminationType::kConverged;
   last_frame_rms = s.rms_residual;
-  CountQuietCost(quiet_start && warm_until == 0, s);
+  CountQuietCost(quiet_start, s);
   state.x_before = previous;
   const auto t_outputs = Clock::now();
   Outputs(fc.index.get(), pairs);
@@ -415,6 +414,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     state.x_before = state.x;
     Outputs(fc.index.get(), {});
   } else if (!s.lost) {
+    // Converged without a restart, not catching up, nothing came apart, and it moved little.
+    quiet_next = s.termination == TerminationType::kConverged && s.large_motion_restarts == 0 &&
+                 s.crushed_restarts == 0 && s.implausible_restarts == 0 && !state.held_before &&
+                 !(state.fracture && state.fracture->frame_separated) && MovedLittle(previous);
     state.last_good = state.x;
     // The first frame after a held or lost one caught up with a motion it did not see, and a
     // large motion's frame jumped: neither is a velocity to carry on.

@@ -47,20 +47,24 @@ struct Tracker::Impl {
   bool PrepareIteration(int k, const FrameCloud& fc, const Vertices& previous, std::vector<DataPair>* pairs,
                         PairCounts* counts, femreg::OuterIteration* row, FrameSummary* s);
   // Whether outer iteration k solves the energy without the equilibrium terms though the
-  // forces are estimated (up to warm_until): the frame's first, and after a large motion's
-  // (or a crushed element's) restart its stiff stages and the first outer iteration after
-  // them, so that the force residual's Gauss-Newton starts near
+  // forces are estimated (up to warm_until): the frame's first (not in a QuietStart's frame),
+  // and after a large motion's (or a crushed element's) restart its stiff stages and the first
+  // outer iteration after them, so that the force residual's Gauss-Newton starts near
   // (docs/theory/equilibrium.md#solving-it).
   bool WarmStart(int k) const;
-  // Whether a frame with forces.pushing_only may start from the last frame's equilibrium,
-  // without the warm start and the smooth start: the last frame converged, nothing is breaking,
-  // and its vertices moved little from the frame before (`previous`: the last frame's result).
-  // The frame's first pairs then decide (QuietPairs). There the two starts' three solves cost
-  // more than they bring (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
-  bool QuietStart(const Vertices& previous, bool last_converged) const;
+  // Whether a frame with forces.pushing_only, right after a quiet one (quiet_next), solves the
+  // pushing-only problem from its first outer iteration, at its predicted start, without the
+  // warm start and the smooth start: every object is clamped, nothing is breaking, the weight
+  // does not adapt (its reference is the warm start's fit), and no back-off is running. The
+  // frame's first pairs then decide (QuietPairs). Near the last frame's equilibrium the two
+  // starts cost more than they bring (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+  bool QuietStart() const;
   // ... whose first pairs' RMS residual is at most kQuietMisfit times the last frame's final one:
   // the cloud did not jump.
   bool QuietPairs(const std::vector<DataPair>& pairs);
+  // Whether this frame moved its vertices from `previous` (its start before the prediction) by
+  // little: at most kQuietMeanMove mean edges on average and kQuietLargestMove at most.
+  bool MovedLittle(const Vertices& previous) const;
   // After a frame: its cost (factorizations, and PCG iterations at kPcgPerFactorization
   // a factorization); a quiet start that cost more than the last warm start backs off.
   void CountQuietCost(bool quiet, const FrameSummary& s);
@@ -165,11 +169,13 @@ struct Tracker::Impl {
   int iteration_base = 0;
   int iteration_limit = 0;
   int warm_until = 0;            // WarmStart's last outer iteration
-  // The frame starts from the last one's pushing-only equilibrium, without the warm start and
-  // the smooth start (QuietStart), until a restart.
+  // This frame solves the pushing-only problem from its first outer iteration (QuietStart),
+  // unless its first pairs or a stiff restart decide otherwise.
   bool quiet_start = false;
-  bool last_frame_converged = false;  // the last frame converged (QuietStart)
-  double last_frame_rms = 0.0;        // and its pairs' RMS residual (m)
+  // The last frame converged without a restart and moved little (MovedLittle), and its pairs'
+  // RMS residual (m).
+  bool quiet_next = false;
+  double last_frame_rms = 0.0;
   // The cost (CountQuietCost) of the last frame that made the warm start (< 0: none yet), and
   // the frames left before QuietStart may choose again after a quiet start cost more.
   double last_warm_cost = -1.0;
