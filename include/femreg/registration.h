@@ -505,6 +505,10 @@ struct FrameSummary {
   // the frame (its warm start's shape, with the pairs found there; 0: not measured).
   double force_weight = 0.0, misfit_ratio = 0.0;
   bool forces_estimated = false;  // this frame's mode (forces.estimate or forces.when_occluded)
+  // With forces.pushing_only: the frame solved the pushing-only problem from its first outer
+  // iteration, without the warm start and the smooth start
+  // (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+  bool quiet_start = false;
   int outer_iterations = 0, inner_iterations = 0;
   int backtracks = 0;  // outer-iteration moves halved because the energy rose (stopped_by)
   // Outer-iteration moves cut short because they reversed the last one (a two-cycle:

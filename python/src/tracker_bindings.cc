@@ -70,6 +70,7 @@ py::dict SummaryDict(const FrameSummary& s) {
   d["free_space_vertices"] = s.free_space_vertices;
   d["rms_residual"] = s.rms_residual;
   d["forces_estimated"] = s.forces_estimated;
+  d["quiet_start"] = s.quiet_start;
   d["force_weight"] = s.force_weight;
   d["misfit_ratio"] = s.misfit_ratio;
   d["initial_pose"] = s.initial_pose;

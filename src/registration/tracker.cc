@@ -394,6 +394,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.free_space_vertices = frame_problem.FreeSpaceHeld(state.x);
   if (s.stopped_by.empty()) s.stopped_by = ToString(s.termination);
   last_frame_rms = s.rms_residual;
+  s.quiet_start = quiet_start;
   CountQuietCost(quiet_start, s);
   state.x_before = previous;
   const auto t_outputs = Clock::now();

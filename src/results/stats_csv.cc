@@ -37,7 +37,7 @@ const char kStatsHeader[] =
     "object_contacts,obstacle_contacts,max_penetration_mm,min_gap_mm,t_collision_ms,stopped_by,"
     "factorizations,linear_solves,pcg_iterations,t_assembly_ms,t_factorization_ms,"
     "t_linear_solve_ms,t_evaluation_ms,t_fracture_ms,e_load,e_equilibrium,force_x_N,force_y_N,"
-    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,force_weight,misfit_ratio,forces_estimated,occluded_points,implausible_points,contact_force_x_N,"
+    "force_z_N,torque_x_Nm,torque_y_Nm,torque_z_Nm,force_weight,misfit_ratio,forces_estimated,quiet_start,occluded_points,implausible_points,contact_force_x_N,"
     "contact_force_y_N,contact_force_z_N,friction_force_x_N,friction_force_y_N,friction_force_z_N,"
     "confidence,confidence_fit,confidence_coverage,confidence_residual_mm,strain_p95,confidence_volume_change,lost,free_space_vertices,flying_pixels,depth_offset_mm,"
     "err_surface_mean_mm,err_surface_p95_mm,err_surface_max_mm,err_surface_seen_mean_mm,t_outputs_ms,message\n";
@@ -96,7 +96,8 @@ std::string StatsRow(size_t i, const FrameRecord& row) {
                 s.torque.z());
   os << buf;
   std::snprintf(buf, sizeof(buf), ",%.6g,%.4f", s.force_weight, s.misfit_ratio);
-  os << buf << "," << (s.forces_estimated ? 1 : 0) << "," << s.occluded_points << "," << s.implausible_points;
+  os << buf << "," << (s.forces_estimated ? 1 : 0) << "," << (s.quiet_start ? 1 : 0) << "," << s.occluded_points
+     << "," << s.implausible_points;
   // The obstacles' force on the objects, and its friction part (pairs' forces cancel).
   Eigen::Vector3d obstacle = Eigen::Vector3d::Zero(), friction = Eigen::Vector3d::Zero();
   for (const ContactForce& f : s.contact_forces) {

@@ -175,6 +175,7 @@ std::string SummaryJson(const RunInputs& run, const Scene& scene, const Tracker&
       json frame = {{"force_N", {number(s.force.x()), number(s.force.y()), number(s.force.z())}},
                     {"torque_Nm", {number(s.torque.x()), number(s.torque.y()), number(s.torque.z())}}};
       frame["estimated"] = s.forces_estimated;
+      frame["quiet_start"] = s.quiet_start;
       if (s.force_weight > 0.0) {  // estimated: the penalty's weight and the misfit it left
         frame["weight"] = number(s.force_weight);
         frame["misfit_ratio"] = number(s.misfit_ratio);
