@@ -40,18 +40,7 @@ struct FrameErrors {
 };
 
 // organ_patch's clouds, in frame order.
-std::vector<PointCloud> OrganClouds() {
-  std::vector<PointCloud> clouds;
-  for (int f = 0;; ++f) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "frame_%04d.pcd", f);
-    const std::string path = kOrgan + "/clouds/" + name;
-    if (!fs::exists(path)) break;
-    clouds.emplace_back();
-    EXPECT_TRUE(ReadPointCloud(path, &clouds.back()).ok()) << path;
-  }
-  return clouds;
-}
+std::vector<PointCloud> OrganClouds() { return testing_util::ReadDatasetClouds(kOrgan); }
 
 // Registers organ_patch with `scene`'s settings changed by `edit`; per-frame hidden errors.
 std::vector<FrameErrors> RunOrgan(void (*edit)(Scene*)) {

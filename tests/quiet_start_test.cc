@@ -6,7 +6,6 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,8 +15,7 @@
 #include "femreg/scene.h"
 #include "femreg/tracker.h"
 #include "femreg_test_config.h"
-
-namespace fs = std::filesystem;
+#include "test_util.h"
 
 namespace femreg {
 namespace {
@@ -25,18 +23,7 @@ namespace {
 const std::string kOrgan = std::string(FEMREG_DATASETS_DIR) + "/organ_patch";
 
 // organ_patch's clouds, in frame order.
-std::vector<PointCloud> OrganClouds() {
-  std::vector<PointCloud> clouds;
-  for (int f = 0;; ++f) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "frame_%04d.pcd", f);
-    const std::string path = kOrgan + "/clouds/" + name;
-    if (!fs::exists(path)) break;
-    clouds.emplace_back();
-    EXPECT_TRUE(ReadPointCloud(path, &clouds.back()).ok()) << path;
-  }
-  return clouds;
-}
+std::vector<PointCloud> OrganClouds() { return testing_util::ReadDatasetClouds(kOrgan); }
 
 // Per frame, whether organ_patch (pushing only, frictionless), with `scene`'s settings changed by
 // `edit`, solved the pushing-only problem from its first outer iteration (FrameSummary::quiet_start);

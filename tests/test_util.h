@@ -60,6 +60,20 @@ inline Status ReadDatasetFrame(const std::string& dir, int index, PointCloud* cl
   return status;
 }
 
+// A bundled sequence's clouds (clouds/frame_NNNN.pcd), in frame order, up to the first missing.
+inline std::vector<PointCloud> ReadDatasetClouds(const std::string& dir) {
+  std::vector<PointCloud> clouds;
+  for (int f = 0;; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d.pcd", f);
+    const std::string path = dir + "/clouds/" + name;
+    if (!std::filesystem::exists(path)) break;
+    clouds.emplace_back();
+    if (!ReadPointCloud(path, &clouds.back()).ok()) break;
+  }
+  return clouds;
+}
+
 // A file's whole contents ("" if it cannot be read).
 inline std::string Slurp(const std::string& path) {
   std::ifstream in(path);
