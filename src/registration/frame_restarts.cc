@@ -141,6 +141,9 @@ bool Tracker::Impl::QuietStart() const {
       state.frame == 0 || FractureLive(state)) {
     return false;
   }
+  // The fast back end's steps only: Ceres's trust region, without held turns, ended further from
+  // the truth from such a start (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+  if (backend->type() != SolverBackend::kFast) return false;
   // Every object clamped (hard anchors on three vertices or more): a free body's equilibrium is
   // flat along the rigid motions that cheap forces explain, and the warm start's classic fit
   // places it (docs/notes/2026-12-07-quiet-pushing-only-starts.md).

@@ -54,10 +54,11 @@ struct Tracker::Impl {
   bool WarmStart(int k) const;
   // Whether a frame with forces.pushing_only, right after a quiet one (quiet_next), solves the
   // pushing-only problem from its first outer iteration, at its predicted start, without the
-  // warm start and the smooth start: every object is clamped, nothing is breaking, the weight
-  // does not adapt (its reference is the warm start's fit), and no back-off is running. The
-  // frame's first pairs then decide (QuietPairs). Near the last frame's equilibrium the two
-  // starts cost more than they bring (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
+  // warm start and the smooth start, on the fast back end: every object is clamped, nothing is
+  // breaking, the weight does not adapt (its reference is the warm start's fit), and no back-off
+  // is running. The frame's first pairs then decide (QuietPairs). Near the last frame's
+  // equilibrium the two starts cost more than they bring
+  // (docs/theory/equilibrium.md#where-a-pushing-only-frame-starts).
   bool QuietStart() const;
   // ... whose first pairs' RMS residual is at most kQuietMisfit times the last frame's final one:
   // the cloud did not jump.
