@@ -144,31 +144,23 @@ bool Tracker::Impl::QuietStart() const {
   // The fast back end's steps only: Ceres's trust region, without held turns, ended further from
   // the truth from such a start (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
   if (backend->type() != SolverBackend::kFast) return false;
-  // Every object clamped (hard anchors on three vertices or more): a free body's equilibrium is
-  // flat along the rigid motions that cheap forces explain, and the warm start's classic fit
-  // places it (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
-  std::vector<size_t> clamped(state.objects.size(), 0);
-  for (const auto& [name, anchor] : state.anchors) {
-    if (anchor.hard && anchor.object >= 0 && anchor.object < static_cast<int>(clamped.size())) {
-      clamped[static_cast<size_t>(anchor.object)] += anchor.vertices.size();
-    }
-  }
-  for (size_t held : clamped) {
-    if (held < 3) return false;
+  // Every object clamped (three vertices or more fixed by hard anchors): a free body's
+  // equilibrium is flat along the rigid motions that cheap forces explain, and the warm start's
+  // classic fit places it (docs/notes/2026-12-07-quiet-pushing-only-starts.md).
+  const std::vector<char>& fixed = frame_problem.problem().fixed();
+  for (const ObjectState& o : state.objects) {
+    const auto first = fixed.begin() + std::min<size_t>(fixed.size(), static_cast<size_t>(o.offset));
+    const auto last = fixed.begin() + std::min<size_t>(fixed.size(), static_cast<size_t>(o.offset + o.mesh.num_vertices()));
+    if (std::count(first, last, 1) < 3) return false;
   }
   return true;
 }
 
 bool Tracker::Impl::MovedLittle(const Vertices& previous) const {
   if (previous.rows() != state.x.rows() || previous.rows() == 0 || !(state.mean_edge_length > 0)) return false;
-  double sum = 0.0, largest = 0.0;
-  for (Eigen::Index v = 0; v < previous.rows(); ++v) {
-    const double d = (state.x.row(v) - previous.row(v)).norm();
-    sum += d;
-    largest = std::max(largest, d);
-  }
-  const double mean = sum / static_cast<double>(previous.rows());
-  return mean <= kQuietMeanMove * state.mean_edge_length && largest <= kQuietLargestMove * state.mean_edge_length;
+  const Eigen::VectorXd moves = (state.x - previous).rowwise().norm();
+  return moves.mean() <= kQuietMeanMove * state.mean_edge_length &&
+         moves.maxCoeff() <= kQuietLargestMove * state.mean_edge_length;
 }
 
 void Tracker::Impl::CountQuietCost(bool quiet, const FrameSummary& s) {

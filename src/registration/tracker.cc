@@ -415,8 +415,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
     state.x_before = state.x;
     Outputs(fc.index.get(), {});
   } else if (!s.lost) {
-    // Converged without a restart, not catching up, nothing came apart, and it moved little.
-    quiet_next = s.termination == TerminationType::kConverged && s.large_motion_restarts == 0 &&
+    // Converged without a restart, not catching up, nothing came apart, and it moved little (only
+    // where the next frame could start quietly: forces.estimate with forces.pushing_only).
+    quiet_next = options.forces.estimate && options.forces.pushing_only &&
+                 s.termination == TerminationType::kConverged && s.large_motion_restarts == 0 &&
                  s.crushed_restarts == 0 && s.implausible_restarts == 0 && !state.held_before &&
                  !(state.fracture && state.fracture->frame_separated) && MovedLittle(previous);
     state.last_good = state.x;
