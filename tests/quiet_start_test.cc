@@ -25,11 +25,10 @@ const std::string kOrgan = std::string(FEMREG_DATASETS_DIR) + "/organ_patch";
 // organ_patch's clouds, in frame order.
 std::vector<PointCloud> OrganClouds() { return testing_util::ReadDatasetClouds(kOrgan); }
 
-// Per frame, whether organ_patch (pushing only, frictionless), with `scene`'s settings changed by
-// `edit`, solved the pushing-only problem from its first outer iteration (FrameSummary::quiet_start);
-// `shift` moves frame `shifted`'s cloud.
-std::vector<bool> OrganQuietStarts(void (*edit)(Scene*), int shifted = -1,
-                                   const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
+// organ_patch's frame summaries (pushing only, frictionless), with `scene`'s settings changed by
+// `edit`; `shift` moves frame `shifted`'s cloud.
+std::vector<FrameSummary> OrganFrames(void (*edit)(Scene*), int shifted = -1,
+                                      const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
   Scene scene;
   EXPECT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
   scene.registration.forces.estimate = true;
@@ -38,16 +37,29 @@ std::vector<bool> OrganQuietStarts(void (*edit)(Scene*), int shifted = -1,
   if (edit) edit(&scene);
   std::unique_ptr<Tracker> tracker;
   EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
-  std::vector<bool> quiet;
-  if (!tracker) return quiet;
+  std::vector<FrameSummary> frames;
+  if (!tracker) return frames;
   std::vector<PointCloud> clouds = OrganClouds();
   for (size_t f = 0; f < clouds.size(); ++f) {
     if (static_cast<int>(f) == shifted) clouds[f].points.rowwise() += shift.transpose();
     FrameSummary s;
     EXPECT_TRUE(tracker->Track(clouds[f], &s).ok());
-    quiet.push_back(s.quiet_start);
+    frames.push_back(s);
   }
+  return frames;
+}
+
+// Per frame, whether it solved the pushing-only problem from its first outer iteration
+// (FrameSummary::quiet_start).
+std::vector<bool> QuietStarts(const std::vector<FrameSummary>& frames) {
+  std::vector<bool> quiet;
+  for (const FrameSummary& s : frames) quiet.push_back(s.quiet_start);
   return quiet;
+}
+
+std::vector<bool> OrganQuietStarts(void (*edit)(Scene*), int shifted = -1,
+                                   const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
+  return QuietStarts(OrganFrames(edit, shifted, shift));
 }
 
 // A clamped organ pressed a little further each frame: after the first frame, its frames solve
@@ -55,7 +67,8 @@ std::vector<bool> OrganQuietStarts(void (*edit)(Scene*), int shifted = -1,
 // never the first, never with the adaptive weight (whose reference is the warm start's fit),
 // and not a frame whose cloud jumped.
 TEST(QuietStart, ClampedOrganFramesSolvePushingOnlyFromTheStart) {
-  const std::vector<bool> quiet = OrganQuietStarts(nullptr);
+  const std::vector<FrameSummary> frames = OrganFrames(nullptr);
+  const std::vector<bool> quiet = QuietStarts(frames);
   ASSERT_EQ(quiet.size(), 12u);
   EXPECT_FALSE(quiet[0]);
   EXPECT_GE(std::count(quiet.begin(), quiet.end(), true), 6);  // 8 of 12 when written
@@ -72,6 +85,35 @@ TEST(QuietStart, ClampedOrganFramesSolvePushingOnlyFromTheStart) {
   // Without the clamp the organ is a free body, which the warm start's classic fit places.
   const std::vector<bool> free_body = OrganQuietStarts([](Scene* s) { s->anchors.clear(); });
   EXPECT_EQ(std::count(free_body.begin(), free_body.end(), true), 0);
+}
+
+// A quiet start that cost more than the last warm start (its factorizations and its PCG iterations
+// at 8 a factorization, counts that do not depend on the machine) leaves the next three frames to
+// the warm start; then quiet starts come back.
+TEST(QuietStart, CostlyQuietStartBacksOffForThreeFrames) {
+  const std::vector<FrameSummary> frames = OrganFrames(nullptr);
+  ASSERT_EQ(frames.size(), 12u);
+  constexpr int kBackoff = 3;
+  double last_warm = -1.0;
+  int backoffs = 0, quiet_after_backoff = 0;
+  int backoff_end = -1;  // the last frame a back-off keeps from a quiet start
+  for (int f = 0; f < static_cast<int>(frames.size()); ++f) {
+    const FrameSummary& s = frames[static_cast<size_t>(f)];
+    if (f <= backoff_end) {
+      EXPECT_FALSE(s.quiet_start) << "frame " << f << " is within a back-off ending at frame " << backoff_end;
+    } else if (backoffs > 0 && s.quiet_start) {
+      ++quiet_after_backoff;
+    }
+    const double cost = s.factorizations + s.pcg_iterations / 8.0;
+    if (!s.quiet_start) {
+      last_warm = cost;
+    } else if (last_warm >= 0.0 && cost > last_warm) {
+      ++backoffs;
+      backoff_end = f + kBackoff;
+    }
+  }
+  EXPECT_GE(backoffs, 1);  // frame 1 when written
+  EXPECT_GE(quiet_after_backoff, 1);
 }
 
 }  // namespace
