@@ -312,8 +312,8 @@ struct SolverOptions {
 // Equilibrium registration (docs/theory/equilibrium.md): the shape is held in equilibrium
 // under its elastic forces, gravity and loads, its clamps and anchors, its contacts, and
 // external forces estimated every frame, which act only on the free surface (or a region of
-// it: Tracker::SetForceRegion) and are penalized; the data pull it only through them. The
-// fast back end solves it.
+// it: Tracker::SetForceRegion) and are penalized; the data pull it only through them. Both
+// back ends solve it.
 struct ForceOptions {
   bool estimate = false;
   // Without `estimate`: a frame whose cloud holds an occluder (points in front of the visible

@@ -197,8 +197,8 @@ struct MotionTrackSpec {
   bool has_centre = false;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // default: the selection's centroid
   std::vector<MotionKeyframe> keyframes;
-  // The robot knows this gripper: the tracking scene gets an anchor that follows the
-  // translations (rotation-free tracks only).
+  // The robot knows this gripper: the tracking scene gets an anchor that follows the track
+  // (a rotating track's anchor turns about its centre, which it must then give).
   Anchor anchor = Anchor::kNone;
 };
 const char* ToString(MotionTrackSpec::Anchor anchor);

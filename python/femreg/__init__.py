@@ -23,8 +23,10 @@ unless it is handed one of its objects).
 import os as _os
 
 # OpenMP's threads sleep between teams instead of spinning on cores other processes need,
-# unless the user chose a policy (read once, when OpenMP loads: docs/guide/busy-machines.md).
-_os.environ.setdefault("OMP_WAIT_POLICY", "passive")
+# unless the user chose a policy or a spin count, as the command does (read once, when OpenMP
+# loads: docs/guide/busy-machines.md).
+if "OMP_WAIT_POLICY" not in _os.environ and "GOMP_SPINCOUNT" not in _os.environ:
+    _os.environ["OMP_WAIT_POLICY"] = "passive"
 
 
 def _mapped_files():
