@@ -87,6 +87,27 @@ TEST(QuietStart, ClampedOrganFramesSolvePushingOnlyFromTheStart) {
   EXPECT_EQ(std::count(free_body.begin(), free_body.end(), true), 0);
 }
 
+// The caller's shape (Tracker::SetVertices) starts afresh: the frame after it takes the warm start.
+// Here the shape set is the one the last frame ended on, and the cloud that frame's again: its
+// first pairs fit as well as the last frame's, so only the reset tells.
+TEST(QuietStart, NotAfterSetVertices) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
+  scene.registration.forces.estimate = true;
+  scene.registration.forces.pushing_only = true;
+  scene.registration.forces.friction = 0.0;
+  const std::vector<PointCloud> clouds = OrganClouds();
+  ASSERT_EQ(clouds.size(), 12u);
+  std::unique_ptr<Tracker> tracker;
+  ASSERT_TRUE(Tracker::Create(scene, &tracker).ok());
+  FrameSummary s;
+  for (int f = 0; f < 6; ++f) ASSERT_TRUE(tracker->Track(clouds[static_cast<size_t>(f)], &s).ok());
+  ASSERT_TRUE(s.quiet_start);  // frame 5, as in ClampedOrganFramesSolvePushingOnlyFromTheStart
+  ASSERT_TRUE(tracker->SetVertices(0, Vertices(tracker->vertices(0))).ok());
+  ASSERT_TRUE(tracker->Track(clouds[5], &s).ok());
+  EXPECT_FALSE(s.quiet_start);
+}
+
 // A quiet start that cost more than the last warm start (its factorizations and its PCG iterations
 // at 8 a factorization, counts that do not depend on the machine) leaves the next three frames to
 // the warm start; then quiet starts come back.

@@ -260,7 +260,13 @@ bool Tracker::Impl::Backtrack(int k, const FrameCloud& fc, const Vertices& previ
       state.collision->Evaluate(state.contacts, CollisionPositions()).max_penetration > state.collision->tolerance()) {
     return go_on();
   }
+  // The frame's result is that start: its pairs and misfit (the next frame's quiet start and
+  // the misfit ratio read them), not those of the move it gave up.
   s->final = Energy(state.x);
+  s->model_to_cloud = counts->model_to_cloud;
+  s->cloud_to_model = counts->cloud_to_model;
+  s->rejected = counts->rejected;
+  s->rms_residual = RmsResidual(*pairs);
   s->termination = TerminationType::kConverged;
   s->stopped_by = "backtrack";
   std::ostringstream os;
@@ -360,8 +366,8 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // Its energy is not the next outer iteration's either: nothing to hold that one against.
   const bool another_energy = warm_start || SmoothStart(k);
   // The classic fit's misfit (forces.adaptive_weight): its warm start's shape, with the pairs
-  // found there.
-  if (!warm_start && k > 0 && WarmStart(k - 1)) {
+  // found there; none where a restart started the frame again after it (k - 1 was no fit).
+  if (!warm_start && k > iteration_base && WarmStart(k - 1)) {
     misfit_reference = RmsResidual(*pairs);
     misfit_reference_x = state.x;
   }

@@ -206,9 +206,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   prepared_cloud = PointCloud();  // this frame's, once prepared
   if (input.points.cols() != 3 ||
       (input.normals.rows() != 0 && input.normals.rows() != input.points.rows())) {
-    s.termination = TerminationType::kInvalidInput;
-    s.message = "the cloud's points must be #P by 3 and its normals empty or #P by 3";
-    ++state.frame;
+    // Held as a frame whose every point was dropped: the next frame catches up two frames' motion.
+    Hold(TerminationType::kInvalidInput,
+         "the cloud's points must be #P by 3 and its normals empty or #P by 3; the shape was held at the "
+         "previous frame",
+         nullptr, t_frame, &s);
     return Status::Ok();
   }
   FrameCloud fc;
@@ -520,7 +522,13 @@ Status Tracker::SetVertices(int object, const Vertices& x) {
   }
   state.x.middleRows(o.offset, x.rows()) = x;
   o.mesh.x = x;
+  // The caller's shape starts afresh: no velocity, no quiet start, no marks carried from the
+  // last frame's cloud, and a lost frame goes back to this shape.
   state.x_before.resize(0, 3);
+  state.last_good = state.x;
+  impl_->quiet_next = false;
+  impl_->implausible_before.resize(0, 3);
+  impl_->switched_before = false;
   return Status::Ok();
 }
 const RegistrationOptions& Tracker::options() const { return impl_->state.options; }
