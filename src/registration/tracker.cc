@@ -182,6 +182,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   state.lost_before = s->lost;
   implausible_before.resize(0, 3);
   switched_before = false;
+  for (Vertices& f : state.external_forces) f.setZero();  // as FrameSummary::force: none measured
   ++missed_frames;
   Outputs(index, {});
   s->time.total = Seconds(t_frame);
