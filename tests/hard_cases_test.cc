@@ -64,6 +64,7 @@ struct Outcome {
   double max_motion = 0.0;   // m, largest vertex displacement from rest
   double ms_per_frame = 0.0;
   int inverted = 0;  // elements with det F <= 0 at the end
+  double last_forces = 0.0;  // N, the norm of the last frame's per-vertex external forces
   bool finite = true;
   std::string message;
 };
@@ -103,6 +104,7 @@ Outcome RunCase(const TetMesh& mesh, const ObjectMaterial& material, Registratio
       1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / clouds.size();
   out.termination = s.termination;
   out.message = s.message;
+  out.last_forces = tracker->external_forces(0).norm();
   const Vertices& x = tracker->vertices(0);
   for (int t = 0; t < mesh.num_tets(); ++t) {
     if (SignedTetVolume(x.row(mesh.tets(t, 0)), x.row(mesh.tets(t, 1)), x.row(mesh.tets(t, 2)),
@@ -307,6 +309,7 @@ TEST_P(HardCases, BadClouds) {
     const char* name;
     PointCloud cloud;
     TerminationType expected;
+    bool held;  // the shape held at the last frame's, and no force measured
   };
   PointCloud nan;
   nan.points = Vertices::Constant(100, 3, std::numeric_limits<double>::quiet_NaN());
@@ -314,10 +317,13 @@ TEST_P(HardCases, BadClouds) {
   one.points = clouds.back().points.topRows(1);
   PointCloud far;
   far.points = Vertices::Constant(50, 3, 10.0);
-  for (const Bad& bad : {Bad{"empty cloud", PointCloud(), TerminationType::kNoCorrespondences},
-                         Bad{"all-NaN cloud", nan, TerminationType::kInvalidInput},
-                         Bad{"single point", one, TerminationType::kTooFewPoints},
-                         Bad{"cloud 10 m away", far, TerminationType::kNoCorrespondences}}) {
+  PointCloud mismatched = clouds.back();
+  mismatched.normals = Vertices::Constant(mismatched.size() / 2, 3, 1.0);
+  for (const Bad& bad : {Bad{"empty cloud", PointCloud(), TerminationType::kNoCorrespondences, true},
+                         Bad{"all-NaN cloud", nan, TerminationType::kInvalidInput, true},
+                         Bad{"normals not matching the points", mismatched, TerminationType::kInvalidInput, true},
+                         Bad{"single point", one, TerminationType::kTooFewPoints, true},
+                         Bad{"cloud 10 m away", far, TerminationType::kNoCorrespondences, false}}) {
     std::vector<PointCloud> seq = clouds;
     seq.push_back(bad.cloud);
     const Outcome o = RunCase(mesh, Foam(), Options(), seq, truth);
@@ -326,6 +332,9 @@ TEST_P(HardCases, BadClouds) {
     EXPECT_EQ(o.termination, bad.expected) << bad.name << ": " << o.message;
     // The shape stays where the data put it (held, or the prediction of a still object).
     EXPECT_LT(o.mean_error, kFollowed) << bad.name;
+    if (bad.held) {
+      EXPECT_EQ(o.last_forces, 0.0) << bad.name;
+    }
   }
 }
 

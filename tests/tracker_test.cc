@@ -391,28 +391,6 @@ TEST(Tracker, AllNaNCloudIsInvalidInputAndHoldsTheShape) {
   EXPECT_EQ((tracker->vertices(0) - tracker->mesh(0).rest).norm(), 0.0);
 }
 
-// Normals that do not match the points: invalid, and held like a frame whose every point was
-// dropped (the frame counts, the shape stays, no force is measured).
-TEST(Tracker, MalformedCloudIsInvalidInputAndHoldsTheShape) {
-  auto tracker = MakeTracker(Options());
-  const Sequence seq = MakeBendingSequence(1, 0.02, 3);
-  FrameSummary summary;
-  ASSERT_TRUE(tracker->Track(seq.clouds[0], &summary).ok());
-  ASSERT_GT(tracker->external_forces(0).norm(), 0.0);  // the data term's pull
-  const Vertices tracked = tracker->vertices(0);
-  PointCloud cloud;
-  cloud.points = Vertices::Constant(10, 3, 0.01);
-  cloud.normals = Vertices::Constant(5, 3, 1.0);
-  ASSERT_TRUE(tracker->Track(cloud, &summary).ok());
-  EXPECT_EQ(summary.termination, TerminationType::kInvalidInput);
-  EXPECT_NE(summary.message.find("held"), std::string::npos) << summary.message;
-  EXPECT_FALSE(summary.IsSolutionUsable());
-  EXPECT_EQ(tracker->frame(), 2);
-  EXPECT_EQ((tracker->vertices(0) - tracked).norm(), 0.0);
-  EXPECT_EQ(summary.force.norm(), 0.0);
-  EXPECT_EQ(tracker->external_forces(0).norm(), 0.0);
-}
-
 TEST(Tracker, CloudFarAwayGivesNoCorrespondences) {
   auto tracker = MakeTracker(Options());
   PointCloud cloud;
