@@ -25,15 +25,21 @@ const std::string kOrgan = std::string(FEMREG_DATASETS_DIR) + "/organ_patch";
 // organ_patch's clouds, in frame order.
 std::vector<PointCloud> OrganClouds() { return testing_util::ReadDatasetClouds(kOrgan); }
 
-// organ_patch's frame summaries (pushing only, frictionless), with `scene`'s settings changed by
-// `edit`; `shift` moves frame `shifted`'s cloud.
-std::vector<FrameSummary> OrganFrames(void (*edit)(Scene*), int shifted = -1,
-                                      const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
+// organ_patch's scene with its forces estimated, pushing only and frictionless.
+Scene PushingOnlyOrgan() {
   Scene scene;
   EXPECT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
   scene.registration.forces.estimate = true;
   scene.registration.forces.pushing_only = true;
   scene.registration.forces.friction = 0.0;
+  return scene;
+}
+
+// organ_patch's frame summaries (PushingOnlyOrgan), with the scene's settings changed by `edit`;
+// `shift` moves frame `shifted`'s cloud.
+std::vector<FrameSummary> OrganFrames(void (*edit)(Scene*), int shifted = -1,
+                                      const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
+  Scene scene = PushingOnlyOrgan();
   if (edit) edit(&scene);
   std::unique_ptr<Tracker> tracker;
   EXPECT_TRUE(Tracker::Create(scene, &tracker).ok());
@@ -91,11 +97,7 @@ TEST(QuietStart, ClampedOrganFramesSolvePushingOnlyFromTheStart) {
 // Here the shape set is the one the last frame ended on, and the cloud that frame's again: its
 // first pairs fit as well as the last frame's, so only the reset tells.
 TEST(QuietStart, NotAfterSetVertices) {
-  Scene scene;
-  ASSERT_TRUE(LoadScene(kOrgan + "/scene.yaml", &scene).ok());
-  scene.registration.forces.estimate = true;
-  scene.registration.forces.pushing_only = true;
-  scene.registration.forces.friction = 0.0;
+  const Scene scene = PushingOnlyOrgan();
   const std::vector<PointCloud> clouds = OrganClouds();
   ASSERT_EQ(clouds.size(), 12u);
   std::unique_ptr<Tracker> tracker;
