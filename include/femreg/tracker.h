@@ -60,8 +60,10 @@ class Tracker {
   // Whether each vertex had a data correspondence in the last frame (seen by the camera).
   const std::vector<char>& vertex_observed(int object) const;
   int frame() const;  // frames tracked so far
-  // Puts object i's vertices at x (#V by 3, finite), e.g. a pose from a detector, and forgets
-  // the motion so far (the next frame predicts no velocity).
+  // Puts object i's vertices at x (#V by 3, finite), e.g. a pose from a detector, and starts
+  // afresh from there: the next frame predicts no velocity, catches up no held frame, searches
+  // no pose after a lost one, starts no quiet pushing-only solve and carries no marks from the
+  // last cloud; a frame lost later goes back to x.
   Status SetVertices(int object, const Vertices& x);
 
   // Anchors: vertex sets with a per-frame target. Hard anchors fix the vertices at the

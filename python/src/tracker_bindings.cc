@@ -328,7 +328,8 @@ void BindTracker(py::module_& m) {
              Check(t.tracker().SetVertices(object, v));
            },
            py::arg("object"), py::arg("x"),
-           "Puts the object's vertices at x and forgets the motion so far.")
+           "Puts the object's vertices at x and starts afresh from there (no velocity, no catch-up or "
+           "pose search after a held or lost frame, nothing carried from the last cloud).")
       .def("add_anchor",
            [](PyTracker& t, const std::string& name, int object, const std::vector<int>& vertices,
               bool hard, double weight) {

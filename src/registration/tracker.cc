@@ -446,7 +446,11 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   switched_before = estimate_forces && !options.forces.estimate && !state.held_before;
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
-  MeasureForces(&s);
+  if (s.termination == TerminationType::kNoCorrespondences) {
+    for (Vertices& f : state.external_forces) f.setZero();  // held: none measured, as in Hold
+  } else {
+    MeasureForces(&s);
+  }
   s.time.outputs = Seconds(t_outputs) - (s.time.solve - solve_before_probe);
   s.time.total = Seconds(t_frame);
   ++state.frame;
@@ -523,10 +527,18 @@ Status Tracker::SetVertices(int object, const Vertices& x) {
   }
   state.x.middleRows(o.offset, x.rows()) = x;
   o.mesh.x = x;
-  // The caller's shape starts afresh: no velocity, no quiet start, no marks carried from the
-  // last frame's cloud, and a lost frame goes back to this shape.
+  // The caller's shape starts afresh: no velocity, no catch-up or search after a held or lost
+  // frame, no quiet start, no marks carried from the last frame's cloud, and a lost frame goes
+  // back to this shape.
   state.x_before.resize(0, 3);
-  state.last_good = state.x;
+  if (state.last_good.rows() == state.x.rows()) {
+    state.last_good.middleRows(o.offset, x.rows()) = x;
+  } else {
+    state.last_good = state.x;
+  }
+  state.held_before = false;
+  state.lost_before = false;
+  impl_->missed_frames = 0;
   impl_->quiet_next = false;
   impl_->implausible_before.resize(0, 3);
   impl_->switched_before = false;
