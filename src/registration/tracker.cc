@@ -182,7 +182,7 @@ void Tracker::Impl::Hold(TerminationType t, const std::string& message, const Po
   state.lost_before = s->lost;
   implausible_before.resize(0, 3);
   switched_before = false;
-  for (Vertices& f : state.external_forces) f.setZero();  // as FrameSummary::force: none measured
+  MeasureForces(s);  // none: the shape was held
   ++missed_frames;
   Outputs(index, {});
   s->time.total = Seconds(t_frame);
@@ -205,12 +205,10 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   s.backend = backend->type();
   s.cloud_points = input.size();
   prepared_cloud = PointCloud();  // this frame's, once prepared
-  if (input.points.cols() != 3 ||
-      (input.normals.rows() != 0 && input.normals.rows() != input.points.rows())) {
+  if (input.normals.rows() != 0 && input.normals.rows() != input.points.rows()) {
     // Held as a frame whose every point was dropped: the next frame catches up two frames' motion.
     Hold(TerminationType::kInvalidInput,
-         "the cloud's points must be #P by 3 and its normals empty or #P by 3; the shape was held at the "
-         "previous frame",
+         "the cloud's normals must be empty or one per point; the shape was held at the previous frame",
          nullptr, t_frame, &s);
     return Status::Ok();
   }
@@ -446,11 +444,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   switched_before = estimate_forces && !options.forces.estimate && !state.held_before;
   state.lost_before = s.lost;
   missed_frames = state.held_before ? missed_frames + 1 : 0;
-  if (s.termination == TerminationType::kNoCorrespondences) {
-    for (Vertices& f : state.external_forces) f.setZero();  // held: none measured, as in Hold
-  } else {
-    MeasureForces(&s);
-  }
+  MeasureForces(&s);
   s.time.outputs = Seconds(t_outputs) - (s.time.solve - solve_before_probe);
   s.time.total = Seconds(t_frame);
   ++state.frame;

@@ -48,6 +48,14 @@ bool Tracker::Impl::LowerForceWeightPays(double lower_scale, const std::vector<D
 }
 
 void Tracker::Impl::MeasureForces(FrameSummary* s) {
+  // A frame held at the last one's shape (no usable cloud, no pairs) measures none: its
+  // FrameSummary::force and torque stay zero, and so do the per-vertex forces.
+  const TerminationType t = s->termination;
+  if (t == TerminationType::kInvalidInput || t == TerminationType::kTooFewPoints ||
+      t == TerminationType::kNoCorrespondences) {
+    for (Vertices& f : state.external_forces) f.setZero();
+    return;
+  }
   const Vertices forces = frame_problem.ExternalForces(state);
   const ForceResultant resultant = ResultantAboutCentroid(forces, state.x, state.mass);
   s->force = resultant.force;
