@@ -48,6 +48,10 @@ constexpr int kBacktrackHalvings = 3;
 constexpr double kReversalCosine = -0.5;
 // The shortest share of a reversing move that CutReversal keeps.
 constexpr double kShortestReversalCut = 0.25;
+// With the forces estimated, a hidden-turn hold after a solve of the frame's own energy (not a warm
+// or smooth start's) that raises it by more than this share turns a body its contacts and its
+// balance see: the turn is not hidden, and is undone (docs/theory/stopping.md#hidden-turns).
+constexpr double kSeenTurnRise = 0.1;
 // forces.when_occluded: a frame is registered with the forces estimated where at least this
 // many occluder points touch the body's points (TouchingOccluderPoints): a hand or a tool in the
 // mask that holds the body, not one passing in front of it nor a few noisy points.
@@ -410,8 +414,16 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     return false;
   }
   row.after = report.after;
-  if (options.solver.hold_hidden_turns && HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
-    row.after = Energy(state.x);  // docs/theory/stopping.md#hidden-turns
+  if (options.solver.hold_hidden_turns) {
+    const bool balanced = estimate_forces && !another_energy;  // the energy the frame is judged by
+    const Vertices solved = balanced ? state.x : Vertices();
+    if (HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
+      row.after = Energy(state.x);  // docs/theory/stopping.md#hidden-turns
+      if (balanced && row.after.total() > (1.0 + kSeenTurnRise) * report.after.total()) {
+        state.x = solved;
+        row.after = report.after;
+      }
+    }
   }
   CutReversal(k, comparable, before_solve, report.before.total(), &row, s);
   // The next outer iteration's energy, with what it finds, is held against this start's.
