@@ -419,7 +419,7 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
     const Vertices solved = balanced ? state.x : Vertices();
     if (HoldHiddenTurns(state, before_solve, &state.x, data_surface.get())) {
       row.after = Energy(state.x);  // docs/theory/stopping.md#hidden-turns
-      if (balanced && row.after.total() > (1.0 + kSeenTurnRise) * report.after.total()) {
+      if (balanced && !(row.after.total() <= (1.0 + kSeenTurnRise) * report.after.total())) {
         state.x = solved;
         row.after = report.after;
       }
