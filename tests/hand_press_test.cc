@@ -174,6 +174,47 @@ TEST(HandPressData, FirstFramesAreDeterministicBalancedAndBundled) {
   }
 }
 
+// A variant (another noise draw, the camera at the side, a scene that gets the stiffness
+// wrong): the scene and README say so, the camera and the noise differ from the bundled
+// frame's, the ball's weight is balanced as before; options out of range are refused.
+TEST(HandPressData, VariantsSayWhatTheyVaryAndRefuseNonsense) {
+  TempDir a("femreg_hand_press_variant");
+  HandPressOptions options;
+  options.seed = 3;
+  options.camera_azimuth_deg = 90.0;
+  options.scene_youngs_modulus = 40000.0;
+  HandPressReport report;
+  const Status status = GenerateHandPressSequence(a.path(), 1, &report, nullptr, options);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const std::string scene = regen::ReadBytes(a.File("scene.yaml"));
+  EXPECT_NE(scene.find("position: [0.39, 0, 0.44]"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("youngs_modulus: 40000"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("hand-press-data --scene-youngs-modulus 40000 --camera-azimuth 90 --seed 3"),
+            std::string::npos)
+      << scene;
+  EXPECT_NE(regen::ReadBytes(a.File("README.md")).find("**A variant**"), std::string::npos);
+  const double weight = report.mass_kg * kGravity;
+  EXPECT_LE(report.max_force_imbalance_N, 1e-6 * weight);
+  // Seen from +x, the ball's points lie on that side of its centre.
+  PointCloud cloud, bundled;
+  ASSERT_TRUE(ReadPointCloud(a.File("clouds_without_hand/frame_0000.pcd"), &cloud).ok());
+  ASSERT_TRUE(ReadPointCloud(std::string(FEMREG_DATASETS_DIR) +
+                                 "/hand_press/clouds_without_hand/frame_0000.pcd",
+                             &bundled).ok());
+  ASSERT_GT(cloud.size(), 500);
+  EXPECT_GT(cloud.points.col(0).mean(), 0.02);
+  EXPECT_LT(std::abs(bundled.points.col(0).mean()), 0.005);  // the bundled camera: in front
+
+  HandPressOptions bad;
+  bad.press_scale = 2.0;
+  EXPECT_FALSE(GenerateHandPressSequence(a.path(), 1, nullptr, nullptr, bad).ok());
+  bad = HandPressOptions();
+  bad.youngs_modulus = -1.0;
+  const Status refused = GenerateHandPressSequence(a.path(), 1, nullptr, nullptr, bad);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("Young's modulus"), std::string::npos) << refused.message();
+}
+
 // The bundled sequence's forces: every frame balances gravity, the table only pushes, the
 // palm pushes down while it presses, the table carries nothing while the ball is lifted
 // (the grasp holds the weight) and nothing touches the ball once the hand has left.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The physical failure metrics of a hand_press registration (issue 38), per frame and in total.
 
-    python3 tools/hand_press_report.py OUT datasets/hand_press [--csv FILE] [--table-z 0]
+    python3 tools/hand_press_report.py OUT datasets/hand_press [--csv FILE] [--json FILE] [--table-z 0]
 
 OUT is a `femreg register` output folder (OUT/frames/<object>_NNNN.vtu, OUT/stats.csv), the
 dataset folder has ground_truth/frame_NNNN.csv (x,y,z,visible per tracked vertex). Per frame:
@@ -167,6 +167,7 @@ def main(argv=None):
     parser.add_argument("--object", default=None, help="object name (default: the only one)")
     parser.add_argument("--table-z", type=float, default=0.0, help="height of the table plane (m)")
     parser.add_argument("--csv", default=None, help="also write the per-frame rows here")
+    parser.add_argument("--json", default=None, help="also write the totals here (a JSON object)")
     parser.add_argument("--ball-band", type=float, default=3.0,
                         help="a cloud point within this many mm of the true surface is the ball's (default 3)")
     args = parser.parse_args(argv)
@@ -273,6 +274,26 @@ def main(argv=None):
     print(f"frames at the outer-iteration cap: {int(col('capped').sum())} of {n}, "
           f"without correspondences: {int(col('lost').sum())}")
     print(f"time: {np.nanmean(col('ms')):.1f} ms per frame (mean)")
+    if args.json:
+        import json
+        totals = {
+            "frames": n,
+            "seen_mm": float(np.nanmean(col("seen_mm"))),
+            "hidden_mm": float(np.nanmean(col("hidden_mm"))),
+            "shape_mm": float(np.nanmean(col("shape_mm"))),
+            "inverted_frames": int((inv > 0).sum()),
+            "max_base_gap_mm": float(col("base_gap_mm").max()),
+            "max_penetration_mm": float(col("penetration_mm").max()),
+            "max_rot_err_deg": float(col("rot_err_deg").max()) if "rot_err_deg" in rows[0] else None,
+            "ball_fit_median_mm": float(np.median(np.concatenate(ball_fits))) if ball_fits else None,
+            "ball_beyond_5mm_pct": float(100.0 * (np.concatenate(ball_fits) > 5.0).mean()) if ball_fits else None,
+            "capped_frames": int(col("capped").sum()),
+            "lost_frames": int(col("lost").sum()),
+            "median_ms": float(np.nanmedian(col("ms"))),
+            "mean_ms": float(np.nanmean(col("ms"))),
+        }
+        with open(args.json, "w") as f:
+            json.dump(totals, f, indent=1)
     if args.csv:
         with open(args.csv, "w", newline="") as f:
             w = csv.writer(f)

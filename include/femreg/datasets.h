@@ -9,6 +9,7 @@
 #ifndef FEMREG_DATASETS_H_
 #define FEMREG_DATASETS_H_
 
+#include <cstdint>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -169,6 +170,22 @@ struct HandPressReport {
   double max_lift_m = 0.0;              // the ball's bottom at its highest
 };
 
+// What can be varied in hand_press, to check that registration holds on data like it but not
+// the same (the defaults make the bundled sequence).
+struct HandPressOptions {
+  // The ball's Young's modulus in the ground truth (Pa).
+  double youngs_modulus = 2.0e4;
+  // The one the tracking scene says (Pa); 0: the truth's. A user rarely knows it exactly.
+  double scene_youngs_modulus = 0.0;
+  // The camera turned about the vertical through the ball's rest centre (degrees; 0: in
+  // front, -y; 90: at +x, the side the ball is carried to), at the same height and distance.
+  double camera_azimuth_deg = 0.0;
+  // The depth noise's draws; 0: the bundled sequence's.
+  uint64_t seed = 0;
+  // The palm's press, as a multiple of the bundled one (15 mm into the ball's top).
+  double press_scale = 1.0;
+};
+
 // "hand_press" (issue 38): a soft foam ball (radius 5 cm; E 20 kPa, nu 0.4, 80 kg/m^3)
 // resting on a table under gravity, pressed 15 mm from above by a rigid palm, grasped from
 // two sides, lifted 4 cm, tilted 0.3 rad, set down 2 cm aside, let go; 30 frames from one
@@ -186,7 +203,8 @@ struct HandPressReport {
 // Deterministic.
 Status GenerateHandPressSequence(const std::string& dir, int frames = 0,
                                  HandPressReport* report = nullptr,
-                                 void (*progress)(int done, int total) = nullptr);
+                                 void (*progress)(int done, int total) = nullptr,
+                                 const HandPressOptions& options = {});
 
 }  // namespace femreg
 

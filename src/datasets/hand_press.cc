@@ -204,15 +204,25 @@ const std::vector<HandKey>& Script() {
   return keys;
 }
 
+// Key i of the script with the palm's press (its descent past frame 3's touch, where it
+// holds the ball deepest) scaled by `press_scale`.
+HandKey ScriptKey(size_t i, double press_scale) {
+  HandKey key = Script()[i];
+  constexpr double kTouch = -0.015;  // frame 3's height: the palm's bottom at the ball's top
+  if (press_scale != 1.0 && key.translation.z() < kTouch)
+    key.translation.z() = kTouch + press_scale * (key.translation.z() - kTouch);
+  return key;
+}
+
 // The hand at time t (frames; fractions between them): keys interpolated linearly (the
 // rotations turn about one axis between keys, so their vectors interpolate exactly).
-HandKey HandAt(double t) {
+HandKey HandAt(double t, double press_scale) {
   const std::vector<HandKey>& keys = Script();
-  if (t <= keys.front().frame) return keys.front();
-  if (t >= keys.back().frame) return keys.back();
+  if (t <= keys.front().frame) return ScriptKey(0, press_scale);
+  if (t >= keys.back().frame) return ScriptKey(keys.size() - 1, press_scale);
   size_t i = 0;
   while (keys[i + 1].frame <= t) ++i;
-  const HandKey &a = keys[i], &b = keys[i + 1];
+  const HandKey a = ScriptKey(i, press_scale), b = ScriptKey(i + 1, press_scale);
   const double s = (t - a.frame) / (b.frame - a.frame);
   return {a.frame, (1 - s) * a.translation + s * b.translation,
           (1 - s) * a.rotation + s * b.rotation, (1 - s) * a.opening + s * b.opening,
@@ -272,7 +282,17 @@ std::string FrameName(int f) {
 }  // namespace
 
 Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressReport* report,
-                                 void (*progress)(int done, int total)) {
+                                 void (*progress)(int done, int total),
+                                 const HandPressOptions& options) {
+  if (!(options.youngs_modulus > 0) || !std::isfinite(options.youngs_modulus))
+    return Status::Error("hand_press: the Young's modulus must be positive");
+  if (!(options.scene_youngs_modulus >= 0) || !std::isfinite(options.scene_youngs_modulus))
+    return Status::Error("hand_press: the scene's Young's modulus must be positive, or 0 for the truth's");
+  if (!std::isfinite(options.camera_azimuth_deg))
+    return Status::Error("hand_press: the camera's azimuth must be finite");
+  if (!(options.press_scale >= 0 && options.press_scale <= 1.5))
+    return Status::Error("hand_press: the press scale must be within [0, 1.5] (beyond, the palm "
+                         "reaches the table through the ball)");
   const int num_frames = frames > 0 ? std::min(frames, kFrames) : kFrames;
   // One thread (OpenMP and BLAS): sums in one order, the same bytes on every run.
   const ScopedThreads one_thread(1);
@@ -288,7 +308,7 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
     mesh->rest.rowwise() += centre.transpose();
     mesh->x = mesh->rest;
   }
-  const Material material = Foam();
+  const Material material = Foam(options);
   ComputeLumpedMasses(&fine, material.density);
   const double mass = fine.mass.sum();
   const Eigen::Vector3d gravity(0, 0, -kGravity);
@@ -303,7 +323,7 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
   forward.absolute_tolerance = 1e-10;
 
   DepthSensorOptions sensor_options;
-  sensor_options.camera = Camera();
+  sensor_options.camera = Camera(options);
   const DepthSensor sensor(sensor_options);
   // The table occludes but returns no points: the segmentation mask keeps the ball and the
   // hand only.
@@ -428,13 +448,13 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
     }
   };
   for (int f = 0; f < num_frames; ++f) {
-    const std::vector<Eigen::Isometry3d> poses = PartPoses(HandAt(f));
+    const std::vector<Eigen::Isometry3d> poses = PartPoses(HandAt(f, options.press_scale));
     // From the previous frame in substeps that move no point of the hand more than kMaxStep:
     // a held vertex dragged far in one solve stretches its elements beyond what Newton
     // converges from.
     int substeps = 1;
     if (f > 0) {
-      const std::vector<Eigen::Isometry3d> before = PartPoses(HandAt(f - 1));
+      const std::vector<Eigen::Isometry3d> before = PartPoses(HandAt(f - 1, options.press_scale));
       double motion = 0.0;
       for (int s = kPalmPart; s < kNumSurfaces; ++s) {
         motion = std::max(
@@ -445,7 +465,10 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
     rounds = newton = 0;
     for (int k = 1; k <= substeps; ++k) {
       const Status status = settle(
-          f, k == substeps ? poses : PartPoses(HandAt(f - 1 + static_cast<double>(k) / substeps)),
+          f,
+          k == substeps
+              ? poses
+              : PartPoses(HandAt(f - 1 + static_cast<double>(k) / substeps, options.press_scale)),
           f == 0);
       if (!status.ok()) return status;
     }
@@ -512,8 +535,9 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
                           s == kPalmPart ? &palm_triangles : &pad_triangles, true});
     }
     const DepthImage image = sensor.Render(surfaces);
+    const uint64_t stream = 0x68616e64ull + options.seed * 0x9e3779b97f4a7c15ull;
     const PointCloud cloud =
-        sensor.Sample(image, surfaces, 0x68616e64ull * 1000003ull + static_cast<uint64_t>(f));
+        sensor.Sample(image, surfaces, stream * 1000003ull + static_cast<uint64_t>(f));
     GroundTruthFrame truth;
     truth.positions = InterpolateEmbedded(fine, fine.x, embedded);
     truth.visible = sensor.Visible(image, truth.positions, 2e-3);
@@ -547,9 +571,9 @@ Status GenerateHandPressSequence(const std::string& dir, int frames, HandPressRe
   if (status.ok())
     status = WriteFileAtomically((fs::path(dir) / "truth_solve.csv").string(), log.str());
   if (status.ok())
-    status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), TrackingScene());
+    status = WriteFileAtomically((fs::path(dir) / "scene.yaml").string(), TrackingScene(options));
   if (status.ok())
-    status = WriteFileAtomically((fs::path(dir) / "README.md").string(), Readme(r, fine));
+    status = WriteFileAtomically((fs::path(dir) / "README.md").string(), Readme(r, fine, options));
   if (!status.ok()) return status;
   if (report) *report = r;
   return Status::Ok();

@@ -1,5 +1,6 @@
 // The hand_press dataset's fixed parts (hand_press_internal.h): the ball's material, the
 // camera, and the files written beside the frames (the tracking scene, README.md).
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -9,18 +10,24 @@
 namespace femreg {
 namespace hand_press_internal {
 
-Material Foam() {
+Material Foam(const HandPressOptions& options) {
   Material m;
-  m.youngs_modulus = 2.0e4;
+  m.youngs_modulus = options.youngs_modulus;
   m.poisson_ratio = 0.4;
   m.density = 80.0;
   return m;
 }
 
-CameraOptions Camera() {
+CameraOptions Camera(const HandPressOptions& options) {
   CameraOptions c;
   c.enabled = true;
   c.position = Eigen::Vector3d(0.0, -0.39, 0.44);  // 45 deg above the table, in front (-y)
+  if (options.camera_azimuth_deg != 0.0) {
+    const double a = options.camera_azimuth_deg * M_PI / 180.0;
+    // To the micrometre, so that the scene file says 0 where the turn leaves round-off.
+    auto um = [](double v) { return std::round(v * 1e6) / 1e6 + 0.0; };
+    c.position = Eigen::Vector3d(um(0.39 * std::sin(a)), um(-0.39 * std::cos(a)), 0.44);
+  }
   c.target = Eigen::Vector3d(0.0, 0.0, kRadius);
   c.up = Eigen::Vector3d::UnitZ();
   c.width = 320;
@@ -37,23 +44,43 @@ std::string Format(const char* format, double a) {
   return buf;
 }
 
-std::string TrackingScene() {
-  const CameraOptions c = Camera();
+std::string VariantArguments(const HandPressOptions& options) {
+  const HandPressOptions bundled;
+  std::ostringstream os;
+  if (options.youngs_modulus != bundled.youngs_modulus)
+    os << " --youngs-modulus " << options.youngs_modulus;
+  if (options.scene_youngs_modulus != bundled.scene_youngs_modulus)
+    os << " --scene-youngs-modulus " << options.scene_youngs_modulus;
+  if (options.camera_azimuth_deg != bundled.camera_azimuth_deg)
+    os << " --camera-azimuth " << options.camera_azimuth_deg;
+  if (options.seed != bundled.seed) os << " --seed " << options.seed;
+  if (options.press_scale != bundled.press_scale) os << " --press-scale " << options.press_scale;
+  return os.str();
+}
+
+std::string TrackingScene(const HandPressOptions& options) {
+  const CameraOptions c = Camera(options);
+  const Material foam = Foam(options);
+  const double scene_e =
+      options.scene_youngs_modulus > 0 ? options.scene_youngs_modulus : foam.youngs_modulus;
   std::ostringstream os;
   os << "# hand_press: a foam ball on a table, pressed by a hand and handled (made by\n"
         "# `femreg hand-press-data`; README.md beside this file). Written as a new user would "
         "from\n"
         "# datasets/README.md: the ball, its material, the camera, the table and gravity; nothing\n"
-        "# about the hand, whose points are in the clouds. Run\n"
-        "#   femreg register --scene scene.yaml --frames clouds --ground-truth ground_truth --out "
+     << (VariantArguments(options).empty()
+             ? std::string("# about the hand, whose points are in the clouds. Run\n")
+             : "# about the hand, whose points are in the clouds. A variant of the bundled\n"
+               "# sequence (hand-press-data" + VariantArguments(options) + "). Run\n")
+     << "#   femreg register --scene scene.yaml --frames clouds --ground-truth ground_truth --out "
         "OUT\n"
         "objects:\n"
         "  - name: ball\n"
         "    generate: {shape: sphere, radius: "
      << kRadius << ", cells: " << kTrackedCells << "}\n"
      << "    pose: {translation: [0, 0, " << kRadius << "]}   # resting on the table\n"
-     << "    material: {youngs_modulus: " << Foam().youngs_modulus
-     << ", poisson_ratio: " << Foam().poisson_ratio << ", density: " << Foam().density
+     << "    material: {youngs_modulus: " << scene_e
+     << ", poisson_ratio: " << foam.poisson_ratio << ", density: " << foam.density
      << "}   # foam\n"
      << "gravity: [0, 0, -" << kGravity << "]\n"
      << "registration:\n"
@@ -70,14 +97,25 @@ std::string TrackingScene() {
   return os.str();
 }
 
-std::string Readme(const HandPressReport& r, const TetMesh& fine) {
+std::string Readme(const HandPressReport& r, const TetMesh& fine, const HandPressOptions& options) {
+  const Material foam = Foam(options);
   std::ostringstream md;
   md << "# hand_press: a foam ball pressed by a hand, then handled\n\n"
      << "Made by `femreg hand-press-data --out datasets/hand_press` (tools/make_datasets.sh; "
         "deterministic: the same command rewrites the same bytes). The data to develop "
         "issue 38 against: of the kind of a recording where femreg failed.\n\n"
-     << "A soft foam ball (radius " << kRadius * 1e3 << " mm; E = " << Foam().youngs_modulus
-     << " Pa, nu = " << Foam().poisson_ratio << ", " << Foam().density << " kg/m^3, "
+     << (VariantArguments(options).empty()
+             ? std::string()
+             : "**A variant** of the bundled sequence, made with `" + VariantArguments(options).substr(1) +
+                   "` (the tracking scene's Young's modulus: " +
+                   Format("%g", options.scene_youngs_modulus > 0 ? options.scene_youngs_modulus
+                                                                 : foam.youngs_modulus) +
+                   " Pa; the camera's azimuth: " + Format("%g", options.camera_azimuth_deg) +
+                   " deg from the front; the palm's press: " + Format("%g", options.press_scale) +
+                   " times the bundled one). The text below describes the bundled sequence's "
+                   "script; the figures are this variant's.\n\n")
+     << "A soft foam ball (radius " << kRadius * 1e3 << " mm; E = " << foam.youngs_modulus
+     << " Pa, nu = " << foam.poisson_ratio << ", " << foam.density << " kg/m^3, "
      << Format("%.1f", r.mass_kg * 1e3) << " g) rests on a table (the plane z = 0) under gravity. "
      << "A rigid hand (a rounded-box palm, 9 x 8 x 3 cm, and two rounded finger pads, "
         "2 x 5.2 x 3.6 cm) comes down from above, its palm tilted 0.1 rad towards the camera, "

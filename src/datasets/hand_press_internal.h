@@ -27,15 +27,18 @@ constexpr double kPull = 1e-7;
 constexpr int kMaxRounds = 40;      // active-set rounds per substep
 constexpr double kMaxStep = 0.002;  // m: the hand's largest motion in one substep
 
-Material Foam();
-CameraOptions Camera();
+Material Foam(const HandPressOptions& options);
+CameraOptions Camera(const HandPressOptions& options);
+// The generator's options that differ from the bundled sequence's, as hand-press-data's
+// arguments (" --seed 2 ..."; empty for the bundled sequence).
+std::string VariantArguments(const HandPressOptions& options);
 // `format` (printf, one double) applied to a.
 std::string Format(const char* format, double a);
 // The tracking scene, as a new user writes it from datasets/README.md: the ball, its
 // material, the camera, the table and gravity; nothing about the hand.
-std::string TrackingScene();
+std::string TrackingScene(const HandPressOptions& options);
 
-std::string Readme(const HandPressReport& r, const TetMesh& fine);
+std::string Readme(const HandPressReport& r, const TetMesh& fine, const HandPressOptions& options);
 
 }  // namespace hand_press_internal
 }  // namespace femreg

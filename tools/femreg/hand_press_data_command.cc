@@ -13,6 +13,7 @@ void AddHandPressDataCommand(CLI::App* app) {
   auto out = std::make_shared<std::string>();
   auto force = std::make_shared<bool>(false);
   auto frames = std::make_shared<int>(0);
+  auto options = std::make_shared<HandPressOptions>();
   CLI::App* cmd = app->add_subcommand(
       "hand-press-data",
       "Write the hand_press sequence: a foam ball on a table pressed by a hand whose points are "
@@ -26,12 +27,29 @@ void AddHandPressDataCommand(CLI::App* app) {
   cmd->add_option("--frames", *frames,
                   "Make only the first N frames of the 30 (the same files as a full run's)")
       ->check(CLI::Range(1, 30));
-  cmd->callback([out, force, frames] {
+  // Variants: data like the bundled sequence but not the same, to check that registration
+  // holds on them (tools/hand_press_variants.sh).
+  cmd->add_option("--youngs-modulus", options->youngs_modulus,
+                  "Variant: the ball's Young's modulus in the ground truth (Pa; the bundled "
+                  "sequence's: 20000)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--scene-youngs-modulus", options->scene_youngs_modulus,
+                  "Variant: the Young's modulus the tracking scene says (Pa; default: the truth's)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--camera-azimuth", options->camera_azimuth_deg,
+                  "Variant: the camera turned about the vertical through the ball (degrees; 0: "
+                  "in front, the bundled sequence's; 90: at +x, where the ball is carried to)");
+  cmd->add_option("--seed", options->seed, "Variant: the depth noise's draws (0: the bundled sequence's)");
+  cmd->add_option("--press-scale", options->press_scale,
+                  "Variant: the palm's press past the ball's top, as a multiple of the bundled "
+                  "one (1; up to 1.5)")
+      ->check(CLI::Range(0.0, 1.5));
+  cmd->callback([out, force, frames, options] {
     Status status = PrepareOutputDir(*out, *force, {"clouds", "clouds_without_hand", "ground_truth", "truth"});
     HandPressReport report;
     if (status.ok()) {
       StartGeneratorProgress("hand-press-data");
-      status = GenerateHandPressSequence(*out, *frames, &report, &GeneratorProgress);
+      status = GenerateHandPressSequence(*out, *frames, &report, &GeneratorProgress, *options);
       StopGeneratorProgress();
     }
     if (!status.ok()) {
