@@ -388,7 +388,12 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
       chosen = &h;
     }
   }
-  if (!(chosen->fit < kWinRatio * given_score)) {
+  // The given pose also stands where the cloud covers what the camera should see of the body
+  // better there than at the chosen pose, by the same ratio: the chosen one fits the cloud
+  // better only by explaining points that are not the body's. A hand in the mask can be most
+  // of the cloud, more than the trimmed fit leaves out.
+  const bool covered_better = verifier.Coverage(PoseHypothesis()) < kWinRatio * verifier.Coverage(*chosen);
+  if (!(chosen->fit < kWinRatio * given_score) || covered_better) {
     result.ambiguous = false;  // the given pose stands: which other pose fits does not matter
     return result;
   }

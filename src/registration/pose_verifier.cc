@@ -67,9 +67,8 @@ void PoseVerifier::SetSurfaceSamples(const pcl::PointCloud<pcl::PointNormal>& mo
   cloud_index_ = std::make_unique<PointIndex>(all_points_);
 }
 
-double PoseVerifier::Score(const PoseHypothesis& h) const {
-  double score = Fit(h);
-  if (!cloud_index_) return score;
+double PoseVerifier::Coverage(const PoseHypothesis& h) const {
+  if (!cloud_index_) return 0.0;
   const Eigen::Vector3d eye = h.R * eye_ + h.t;
   std::vector<double> d;
   for (size_t i = 0; i < samples_.size(); ++i) {
@@ -79,12 +78,12 @@ double PoseVerifier::Score(const PoseHypothesis& h) const {
     cloud_index_->Nearest(h.R.transpose() * (samples_[i] - h.t), &squared);
     d.push_back(std::sqrt(squared));
   }
-  if (d.empty()) return score;
+  if (d.empty()) return 0.0;
   std::sort(d.begin(), d.end());
   const size_t keep = std::max<size_t>(1, static_cast<size_t>(0.7 * static_cast<double>(d.size())));
   double sum = 0.0;
   for (size_t j = 0; j < keep; ++j) sum += d[j];
-  return score + sum / static_cast<double>(keep);
+  return sum / static_cast<double>(keep);
 }
 
 bool PoseVerifier::Refine(PoseHypothesis* h, int max_iterations) const {

@@ -35,10 +35,13 @@ class PoseVerifier {
   // With an eye: the surface samples (model, in the given pose) that free space is checked
   // at.
   void SetSurfaceSamples(const pcl::PointCloud<pcl::PointNormal>& model);
-  // Fit plus, with surface samples, the trimmed mean distance from the surface facing the eye
-  // to the cloud (the closest 70 %: self-occlusion hides some of it): a pose that puts the
-  // view on the wrong part of a smooth body explains the cloud, but not where nothing was seen.
-  double Score(const PoseHypothesis& h) const;
+  // With surface samples, the trimmed mean distance from the surface facing the eye to the
+  // cloud (the closest 70 %: self-occlusion hides some of it): how well the cloud covers what
+  // the camera should see of the body in pose h (m). 0 without samples.
+  double Coverage(const PoseHypothesis& h) const;
+  // Fit plus Coverage: a pose that puts the view on the wrong part of a smooth body explains
+  // the cloud, but not where nothing was seen.
+  double Score(const PoseHypothesis& h) const { return Fit(h) + Coverage(h); }
   // Trimmed point-to-plane ICP from h (it slides along flat parts, where point-to-point
   // crawls), at most max_iterations; h->fit set. True if it stopped on its own (settled, or
   // nothing to refine with) within them.
