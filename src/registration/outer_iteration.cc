@@ -429,8 +429,11 @@ bool Tracker::Impl::OuterIteration(int k, const FrameCloud& fc, Clock::time_poin
   // The next outer iteration's energy, with what it finds, is held against this start's.
   merit = another_energy ? std::numeric_limits<double>::infinity() : report.before.total();
   merit_x = before_solve;
+  // With the forces estimated, not after a warm or smooth start: their energy is not the one
+  // whose balance the contact forces enter, and a classic fit's data springs press the body into
+  // the table (docs/theory/contact.md#response).
   const bool contacts_pending =
-      state.collision && state.collision->augmented() &&
+      state.collision && state.collision->augmented() && !(estimate_forces && another_energy) &&
       UpdateContactMultipliers(&state, CollisionPositions(), /*update_within_tolerance=*/!estimate_forces);
   // New multipliers change the energy: the next start is not held against this one.
   if (contacts_pending) merit = std::numeric_limits<double>::infinity();
