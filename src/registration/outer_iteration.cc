@@ -169,6 +169,7 @@ void Tracker::Impl::SwitchToForcesWhereHeld(int k, const FrameCloud& fc, double*
   if (estimate_forces) {
     // As after the physical mode's warm start: another energy from here, and the stall test's
     // reference is the first equilibrium solve's.
+    state.contact_multipliers = multipliers_at_start;
     merit = std::numeric_limits<double>::infinity();
     *previous_energy = merit;
     stall_reference = 0.0;

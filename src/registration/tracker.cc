@@ -320,6 +320,7 @@ Status Tracker::Impl::Track(const PointCloud& input, FrameSummary* summary) {
   warm_until = 0;
   smooth_after_split = -1;
   ResetStartReferences();
+  multipliers_at_start = state.contact_multipliers;
   iteration_budget = options.solver.max_outer_iterations * (1 + std::min(missed_frames, kMaxCatchUpFrames - 1));
   iteration_limit = iteration_budget;
   stepping_in = false;

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -101,6 +102,10 @@ struct Tracker::Impl {
   // After outer iteration k, a large motion's restart (or a crushed element's): back to `start`,
   // stiff, then softer stage by stage (docs/theory/stopping.md#large-motions).
   void RestartStiff(int k, bool large_motion, bool go_on, const Vertices& start, FrameCloud* fc, FrameSummary* s);
+  // The contacts' multipliers at the frame's start: a frame that switches to the forces
+  // estimated (forces.when_occluded) takes them back, undoing its classic first outer
+  // iteration's update as a warm start's is not made (docs/theory/contact.md#response).
+  std::map<std::pair<int, int>, TrackerState::ContactMultiplier> multipliers_at_start;
   // After outer iteration k (not stepping in): the cloud points that pulled elements past
   // data.max_strain_step are marked (MarkImplausible, from `faces`' view); the frame goes on
   // without them, or starts again from `start` when they are many.
