@@ -392,7 +392,9 @@ GlobalPoseResult GlobalPose(const Vertices& points, const Eigen::Vector3d* eye, 
   // better there than at the chosen pose, by the same ratio: the chosen one fits the cloud
   // better only by explaining points that are not the body's. A hand in the mask can be most
   // of the cloud, more than the trimmed fit leaves out.
-  const bool covered_better = verifier.Coverage(PoseHypothesis()) < kWinRatio * verifier.Coverage(*chosen);
+  // (0: no eye, or nothing of the given pose's surface faces it; then the fit alone decides.)
+  const double given_coverage = verifier.Coverage(PoseHypothesis());
+  const bool covered_better = given_coverage > 0.0 && given_coverage < kWinRatio * verifier.Coverage(*chosen);
   if (!(chosen->fit < kWinRatio * given_score) || covered_better) {
     result.ambiguous = false;  // the given pose stands: which other pose fits does not matter
     return result;
