@@ -14,16 +14,19 @@
 # No softer ball: the generator's ground truth does not converge where the palm lets go of one
 # (14 and 10 kPa, docs/notes/2026-12-08-hand-press-varied.md).
 set -euo pipefail
+# The arguments from the caller's folder, then to the project's.
+BUILD=$(realpath -m "${1:-$(dirname "$0")/../build}")
+WORK=${2:+$(realpath -m "$2")}
 cd "$(dirname "$0")/.."
-BUILD=${1:-build}
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1} OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
 FEMREG=$BUILD/femreg
 PYTHON=${FEMREG_PYTHON:-/usr/bin/python3}
 if [[ ! -x $FEMREG ]]; then
   echo "hand_press_variants: $FEMREG not found; build first (bash tools/build.sh)" >&2
   exit 1
 fi
-if [[ -n ${2:-} ]]; then
-  work=$2
+if [[ -n $WORK ]]; then
+  work=$WORK
   mkdir -p "$work"
 else
   work=$(mktemp -d)
@@ -44,9 +47,12 @@ variants=(
   "deep_press|--press-scale 1.4|the palm presses 1.4 times as far"
 )
 
+# A kept folder is made again unless it was made with the same options (its .variant file).
 make_one() {
   local name=$1 options=$2
-  if [[ -f $work/$name/README.md ]]; then return 0; fi
+  if [[ -f $work/$name/README.md && -f $work/$name/.variant && $(cat "$work/$name/.variant") == "$options" ]]; then
+    return 0
+  fi
   # shellcheck disable=SC2086
   if ! "$FEMREG" hand-press-data --out "$work/$name" --force $options \
       > "$work/$name.gen.log" 2>&1; then
@@ -54,7 +60,10 @@ make_one() {
     tail -5 "$work/$name.gen.log" >&2
     return 1
   fi
+  printf '%s' "$options" > "$work/$name/.variant"
 }
+# On a failure, the other sequence still being made is stopped before the folder goes.
+stop_all() { for p in "${pids[@]}"; do kill "$p" 2> /dev/null || true; done; exit 1; }
 
 echo "== making the sequences (two at a time)" >&2
 pids=()
@@ -63,11 +72,11 @@ for v in "${variants[@]}"; do
   make_one "$name" "$options" &
   pids+=($!)
   if (( ${#pids[@]} == 2 )); then
-    wait "${pids[0]}" || exit 1
+    wait "${pids[0]}" || stop_all
     pids=("${pids[@]:1}")
   fi
 done
-for p in "${pids[@]}"; do wait "$p" || exit 1; done
+for p in "${pids[@]}"; do wait "$p" || stop_all; done
 
 for v in "${variants[@]}"; do
   IFS='|' read -r name _ _ <<< "$v"
@@ -77,7 +86,7 @@ for v in "${variants[@]}"; do
     echo "== $name, $mode" >&2
     if ! "$FEMREG" register --scene "$work/$name/scene.yaml" --frames "$work/$name/clouds" \
         --ground-truth "$work/$name/ground_truth" --out "$work/$name/out_$mode" --force --threads 1 \
-        --no-progress "${extra[@]}" > "$work/$name/out_$mode.log" 2>&1; then
+        --no-progress ${extra[@]+"${extra[@]}"} > "$work/$name/out_$mode.log" 2>&1; then
       echo "hand_press_variants: femreg register failed on $name ($mode):" >&2
       tail -20 "$work/$name/out_$mode.log" >&2
       exit 1
