@@ -102,8 +102,8 @@ std::string Readme(const HandPressReport& r, const TetMesh& fine, const HandPres
   std::ostringstream md;
   md << "# hand_press: a foam ball pressed by a hand, then handled\n\n"
      << "Made by `femreg hand-press-data --out datasets/hand_press` (tools/make_datasets.sh; "
-        "deterministic: the same command rewrites the same bytes). The data to develop "
-        "issue 38 against: of the kind of a recording where femreg failed.\n\n"
+        "deterministic: the same command rewrites the same bytes on the same machine). The "
+        "data to develop issue 38 against: of the kind of a recording where femreg failed.\n\n"
      << (VariantArguments(options).empty()
              ? std::string()
              : "**A variant** of the bundled sequence, made with `" + VariantArguments(options).substr(1) +

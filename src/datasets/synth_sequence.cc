@@ -513,7 +513,8 @@ Status GenerateSynthSequence(const Scene& scene, const std::string& dir, int fra
        << "does at best; they are not an accuracy estimate.\n\n";
   }
   md << "Made by `femreg synth " << s.source_name << " --out DIR` (seed " << s.seed << ", "
-     << num_frames << " frames; deterministic: the same command rewrites the same bytes).\n\n"
+     << num_frames
+     << " frames; deterministic: the same command rewrites the same bytes on the same machine).\n\n"
      << "- `scene.yaml`: the tracking scene: object `" << object.name << "`, "
      << coarse.num_vertices() << " vertices, " << coarse.num_tets() << " tetrahedra, E = "
      << object.material.youngs_modulus << " Pa, nu = " << object.material.poisson_ratio
