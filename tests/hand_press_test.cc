@@ -182,14 +182,15 @@ TEST(HandPressData, VariantsSayWhatTheyVaryAndRefuseNonsense) {
   HandPressOptions options;
   options.seed = 3;
   options.camera_azimuth_deg = 90.0;
-  options.scene_youngs_modulus = 40000.0;
+  options.scene_youngs_modulus = 12345.678;  // more digits than a stream's default six
   HandPressReport report;
   const Status status = GenerateHandPressSequence(a.path(), 1, &report, nullptr, options);
   ASSERT_TRUE(status.ok()) << status.message();
   const std::string scene = regen::ReadBytes(a.File("scene.yaml"));
   EXPECT_NE(scene.find("position: [0.39, 0, 0.44]"), std::string::npos) << scene;
-  EXPECT_NE(scene.find("youngs_modulus: 40000"), std::string::npos) << scene;
-  EXPECT_NE(scene.find("hand-press-data --scene-youngs-modulus 40000 --camera-azimuth 90 --seed 3"),
+  // Every digit, so that the printed options make the same variant again.
+  EXPECT_NE(scene.find("youngs_modulus: 12345.678,"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("hand-press-data --scene-youngs-modulus 12345.678 --camera-azimuth 90 --seed 3"),
             std::string::npos)
       << scene;
   EXPECT_NE(regen::ReadBytes(a.File("README.md")).find("**A variant**"), std::string::npos);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "datasets/hand_press_internal.h"
+#include "scene/scene_writer_internal.h"  // Number: the shortest decimal that reads back
 
 namespace femreg {
 namespace hand_press_internal {
@@ -45,16 +46,17 @@ std::string Format(const char* format, double a) {
 }
 
 std::string VariantArguments(const HandPressOptions& options) {
+  using internal::scene_writer::Number;  // the same variant again from the printed options
   const HandPressOptions bundled;
   std::ostringstream os;
   if (options.youngs_modulus != bundled.youngs_modulus)
-    os << " --youngs-modulus " << options.youngs_modulus;
+    os << " --youngs-modulus " << Number(options.youngs_modulus);
   if (options.scene_youngs_modulus != bundled.scene_youngs_modulus)
-    os << " --scene-youngs-modulus " << options.scene_youngs_modulus;
+    os << " --scene-youngs-modulus " << Number(options.scene_youngs_modulus);
   if (options.camera_azimuth_deg != bundled.camera_azimuth_deg)
-    os << " --camera-azimuth " << options.camera_azimuth_deg;
+    os << " --camera-azimuth " << Number(options.camera_azimuth_deg);
   if (options.seed != bundled.seed) os << " --seed " << options.seed;
-  if (options.press_scale != bundled.press_scale) os << " --press-scale " << options.press_scale;
+  if (options.press_scale != bundled.press_scale) os << " --press-scale " << Number(options.press_scale);
   return os.str();
 }
 
@@ -79,7 +81,7 @@ std::string TrackingScene(const HandPressOptions& options) {
         "    generate: {shape: sphere, radius: "
      << kRadius << ", cells: " << kTrackedCells << "}\n"
      << "    pose: {translation: [0, 0, " << kRadius << "]}   # resting on the table\n"
-     << "    material: {youngs_modulus: " << scene_e
+     << "    material: {youngs_modulus: " << internal::scene_writer::Number(scene_e)
      << ", poisson_ratio: " << foam.poisson_ratio << ", density: " << foam.density
      << "}   # foam\n"
      << "gravity: [0, 0, -" << kGravity << "]\n"
