@@ -92,13 +92,17 @@ void LeaveCarriedOff(const TrackerState& state, const Vertices& start, const Sur
   }
 }
 
-// Whether cloud point i lies off the model: farther than sqrt(grow2) from `surface`. Each
-// point is asked once (memo: -1 not yet, 0 on, 1 off).
+// Whether cloud point i lies off the model: farther than sqrt(grow2) from `surface`, and
+// where `normals` is given (the surface's vertex normals, a row per vertex, with its
+// `triangles`) also on the outer side of it. Each point is asked once (memo: -1 not yet,
+// 0 on, 1 off).
 struct OffModel {
   const SurfaceIndex* surface;
   const Vertices* points;
   double grow2;
   std::vector<signed char>* memo;
+  const Eigen::MatrixXd* normals = nullptr;
+  const Triangles* triangles = nullptr;
   bool operator()(int i) const {
     signed char& o = (*memo)[static_cast<size_t>(i)];
     if (o < 0) {
@@ -108,7 +112,18 @@ struct OffModel {
       double lower = 0.0, upper = 0.0;
       surface->DistanceBounds(p, near, &lower, &upper);
       const int within = Within(lower, upper, std::sqrt(grow2), p);
-      o = within >= 0 ? static_cast<signed char>(1 - within) : (surface->Closest(p, near).squared_distance > grow2 ? 1 : 0);
+      if (within == 1) {
+        o = 0;
+      } else if (normals == nullptr) {
+        o = within == 0 ? 1 : (surface->Closest(p, near).squared_distance > grow2 ? 1 : 0);
+      } else {
+        // The side from the normal interpolated at the closest point: a face's own normal
+        // would flip across a convex edge for a point beyond it.
+        const SurfaceIndex::Hit hit = surface->Closest(p, near);
+        Eigen::Vector3d n = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k) n += hit.barycentric[k] * normals->row((*triangles)(hit.triangle, k)).transpose();
+        o = hit.squared_distance > grow2 && (p - hit.point).dot(n) > 0.0 ? 1 : 0;
+      }
     }
     return o == 1;
   }
@@ -312,8 +327,15 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     LeaveCarriedOff(state, start, at_start.rings(), cloud_index, grow, faces, &strained);
     if (std::find(strained.begin(), strained.end(), 1) == strained.end()) return 0;
   }
-  std::vector<signed char> memo(static_cast<size_t>(n), -1);
+  std::vector<signed char> memo(static_cast<size_t>(n), -1), seed_memo(static_cast<size_t>(n), -1);
   const OffModel Off{&at_start, &points, grow * grow, &memo};
+  // A seed also lies outside the body at the start: nothing else can be inside it, and the
+  // body's own points are there where the start overshot a motion that stopped
+  // (docs/notes/2026-12-08-marks-from-the-side.md).
+  std::vector<int> surface_vertices(static_cast<size_t>(start.rows()));
+  for (int v = 0; v < static_cast<int>(start.rows()); ++v) surface_vertices[static_cast<size_t>(v)] = v;
+  const Eigen::MatrixXd start_normals = VertexNormalsAt(start, state.surface, at_start.rings(), surface_vertices);
+  const OffModel OutsideAtStart{&at_start, &points, grow * grow, &seed_memo, &start_normals, &state.surface};
   std::vector<int> queue;
   // A point's closest triangle touches a strained vertex only if that vertex is within the
   // point's distance to the surface (at most its nearest vertex's) and a triangle's longest
@@ -356,7 +378,7 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     for (int k = 0; k < 3; ++k) {
       touches |= strained[static_cast<size_t>(state.surface(triangle, k))] != 0;
     }
-    if (!touches || !Off(i)) continue;
+    if (!touches || !OutsideAtStart(i)) continue;
     (*marks)[static_cast<size_t>(i)] = 2;
     queue.push_back(i);
   }
