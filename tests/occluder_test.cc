@@ -341,6 +341,18 @@ TEST(Occluders, TheFrameBackFromAnAbsenceReleasesItsOwnPointsAsTheModelReachesTh
   EXPECT_LT(errors.seen.mean, 0.85e-3) << errors.all.mean;
 }
 
+// A tracker state of one bar along x, 10 cm long, `side` square, 10 x 2 x 2 cells, centred on
+// the x axis, at rest.
+TrackerState BarState(double side) {
+  TrackerState state;
+  state.objects.resize(1);
+  state.objects[0].mesh =
+      MakeBox(Eigen::Vector3d(0.1, side, side), 10, 2, 2, Eigen::Vector3d(0, -0.5 * side, -0.5 * side));
+  state.objects[0].model.Build(state.objects[0].mesh, ElasticModelType::kCorotational, Material());
+  state.RebuildGlobalArrays();
+  return state;
+}
+
 // Points found implausible (data.max_strain_step) are a hand's beside the body, not the body's
 // own part that moved faster than the frame's first solve followed. A 10 x 2 x 2 cm bar seen
 // from -y, its tip (x >= 9 cm) pulled 3 cm towards the sensor so that the cell before it is
@@ -351,11 +363,7 @@ TEST(Occluders, TheFrameBackFromAnAbsenceReleasesItsOwnPointsAsTheModelReachesTh
 // it left its place (a hand carried it: an empty place tells nothing), seen from behind (the
 // empty places face away), and without a view.
 TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
-  TrackerState state;
-  state.objects.resize(1);
-  state.objects[0].mesh = MakeBox(Eigen::Vector3d(0.1, 0.02, 0.02), 10, 2, 2, Eigen::Vector3d(0, -0.01, -0.01));
-  state.objects[0].model.Build(state.objects[0].mesh, ElasticModelType::kCorotational, Material());
-  state.RebuildGlobalArrays();
+  TrackerState state = BarState(0.02);
   const Vertices start = state.objects[0].mesh.rest;
   const double h = 0.002;
   std::vector<Eigen::Vector3d> points;
@@ -398,6 +406,38 @@ TEST(Occluders, ABodysOwnPartCarriedOffIsNotImplausible) {
   EXPECT_EQ(mark(-1), 0) << "18 of 33 facing vertices still have points: the rest stayed";
   pose(0.0, 0.03);
   EXPECT_GT(mark(-1), 0) << "12 of 33: most of the bar left its place";
+}
+
+// A seed of the implausible marks lies outside the body at the frame's start: a hand's points
+// cannot be inside the body's material, and the body's own points are there where the start
+// overshot a motion that stopped (docs/notes/2026-12-08-marks-from-the-side.md). A 10 x 4 x 4
+// cm bar whose tip's -y face is moved 2.5 cm, its first layer of cells stretched 2.25 times or
+// turned inside out, to points on the moved face 2 cm off the bar's surface at the start:
+// pulled out in front of the bar, they are marked; pushed in, inside the bar, they are not,
+// unless the side test is off (a cage around an embedded surface).
+TEST(Occluders, PointsInsideTheBodyAtTheStartAreNotImplausible) {
+  TrackerState state = BarState(0.04);
+  const Vertices start = state.objects[0].mesh.rest;
+  const double h = 0.002;
+  const auto mark = [&](double move, bool outside_only) {
+    state.x = start;
+    for (int v = 0; v < state.x.rows(); ++v) {
+      if (start(v, 0) > 0.0899 && start(v, 1) < -0.0199) state.x(v, 1) += move;
+    }
+    // On the moved face, 7-9 mm from the bar's end and 10 mm or more from its sides.
+    std::vector<Eigen::Vector3d> points;
+    for (double x : {0.091, 0.093}) {
+      for (double z = -0.01; z <= 0.01 + 1e-9; z += h) points.emplace_back(x, -0.02 + move, z);
+    }
+    Vertices cloud(static_cast<int>(points.size()), 3);
+    for (size_t k = 0; k < points.size(); ++k) cloud.row(static_cast<int>(k)) = points[k].transpose();
+    const PointIndex index(cloud);
+    std::vector<char> marks;
+    return MarkImplausible(state, start, cloud, index, h, {}, &marks, outside_only);
+  };
+  EXPECT_GT(mark(-0.025, true), 0) << "pulled out to points in front of the bar: a hand's";
+  EXPECT_EQ(mark(0.025, true), 0) << "pushed in to points inside the bar at the start: its own";
+  EXPECT_GT(mark(0.025, false), 0) << "the same without the side test";
 }
 
 // A sliver's strain is not evidence (data.max_strain_step): a good tetrahedron with a sliver

@@ -112,7 +112,9 @@ void Tracker::Impl::MarkImplausibleOrRestart(
     return;
   }
   const auto t0 = Clock::now();
-  const int marked = MarkImplausible(state, start, fc->cloud.points, *fc->index, fc->spacing, faces, &fc->occluder);
+  // A cage around an embedded surface holds more than the body: no side test there.
+  const int marked = MarkImplausible(state, start, fc->cloud.points, *fc->index, fc->spacing, faces, &fc->occluder,
+                                     data_surface == nullptr);
   s->time.correspondences += Seconds(t0);
   if (marked > 0) {
     fc->occluders.occluders += marked;

@@ -92,16 +92,56 @@ void LeaveCarriedOff(const TrackerState& state, const Vertices& start, const Sur
   }
 }
 
-// Whether cloud point i lies off the model: farther than sqrt(grow2) from `surface`, and
-// where `normals` is given (the surface's vertex normals, a row per vertex, with its
-// `triangles`) also on the outer side of it. Each point is asked once (memo: -1 not yet,
-// 0 on, 1 off).
+// The unit normal of triangle f at x.
+Eigen::Vector3d FaceNormal(const Vertices& x, const Triangles& tris, int f) {
+  const Eigen::Vector3d a = x.row(tris(f, 0)), b = x.row(tris(f, 1)), c = x.row(tris(f, 2));
+  return (b - a).cross(c - a).normalized();
+}
+
+// Whether p lies on the outer side of the surface (x, tris; rings its vertices' triangles) at
+// its closest point `hit`. The normal is the closest feature's (Baerentzen and Aanaes): the
+// face's inside a triangle, the sum of its two faces' on an edge, the angle-weighted sum at a
+// corner. On a closed surface turned outwards the side is then right at any distance, where a
+// face's or an interpolated vertex normal can point the wrong way beyond a sharp edge.
+bool Outside(const Eigen::Vector3d& p, const SurfaceIndex::Hit& hit, const Vertices& x, const Triangles& tris,
+             const SurfaceRings& rings) {
+  constexpr double kOnFeature = 1e-9;  // a barycentric coordinate this small: on the opposite edge
+  const int f = hit.triangle;
+  int corners[3], on = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (hit.barycentric[k] > kOnFeature) corners[on++] = tris(f, k);
+  }
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  if (on == 3 || on == 0) {
+    n = FaceNormal(x, tris, f);
+  } else {
+    const int v = corners[0];
+    for (int j = rings.offsets[static_cast<size_t>(v)]; j < rings.offsets[static_cast<size_t>(v) + 1]; ++j) {
+      const int g = rings.list[static_cast<size_t>(j)];
+      int at = 0;
+      while (at < 3 && tris(g, at) != v) ++at;
+      if (at == 3) continue;
+      if (on == 2) {  // the edge (v, corners[1]): its two faces
+        if (tris(g, (at + 1) % 3) == corners[1] || tris(g, (at + 2) % 3) == corners[1]) n += FaceNormal(x, tris, g);
+      } else {  // the corner v: each face by its angle there
+        const Eigen::Vector3d a = x.row(v), b = x.row(tris(g, (at + 1) % 3)), c = x.row(tris(g, (at + 2) % 3));
+        const double angle = std::atan2((b - a).cross(c - a).norm(), (b - a).dot(c - a));
+        n += angle * FaceNormal(x, tris, g);
+      }
+    }
+  }
+  return (p - hit.point).dot(n) > 0.0;
+}
+
+// Whether cloud point i lies off the model: farther than sqrt(grow2) from `surface`, and where
+// `positions` is given (the surface's, with its `triangles`) also on its outer side. Each
+// point is asked once (memo: -1 not yet, 0 on, 1 off).
 struct OffModel {
   const SurfaceIndex* surface;
   const Vertices* points;
   double grow2;
   std::vector<signed char>* memo;
-  const Eigen::MatrixXd* normals = nullptr;
+  const Vertices* positions = nullptr;
   const Triangles* triangles = nullptr;
   bool operator()(int i) const {
     signed char& o = (*memo)[static_cast<size_t>(i)];
@@ -114,15 +154,14 @@ struct OffModel {
       const int within = Within(lower, upper, std::sqrt(grow2), p);
       if (within == 1) {
         o = 0;
-      } else if (normals == nullptr) {
+      } else if (positions == nullptr) {
         o = within == 0 ? 1 : (surface->Closest(p, near).squared_distance > grow2 ? 1 : 0);
       } else {
-        // The side from the normal interpolated at the closest point: a face's own normal
-        // would flip across a convex edge for a point beyond it.
         const SurfaceIndex::Hit hit = surface->Closest(p, near);
-        Eigen::Vector3d n = Eigen::Vector3d::Zero();
-        for (int k = 0; k < 3; ++k) n += hit.barycentric[k] * normals->row((*triangles)(hit.triangle, k)).transpose();
-        o = hit.squared_distance > grow2 && (p - hit.point).dot(n) > 0.0 ? 1 : 0;
+        o = hit.triangle >= 0 && hit.squared_distance > grow2 &&
+                    Outside(p, hit, *positions, *triangles, surface->rings())
+                ? 1
+                : 0;
       }
     }
     return o == 1;
@@ -270,7 +309,7 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
                     const PointIndex& cloud_index, double spacing,
                     const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
-                    std::vector<char>* marks) {
+                    std::vector<char>* marks, bool outside_only) {
   const double limit = state.options.data.max_strain_step;
   const int n = static_cast<int>(points.rows());
   if (!(limit > 0) || n == 0 || start.rows() != state.x.rows() || state.surface.rows() == 0) return 0;
@@ -329,13 +368,10 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
   }
   std::vector<signed char> memo(static_cast<size_t>(n), -1), seed_memo(static_cast<size_t>(n), -1);
   const OffModel Off{&at_start, &points, grow * grow, &memo};
-  // A seed also lies outside the body at the start: nothing else can be inside it, and the
-  // body's own points are there where the start overshot a motion that stopped
-  // (docs/notes/2026-12-08-marks-from-the-side.md).
-  std::vector<int> surface_vertices(static_cast<size_t>(start.rows()));
-  for (int v = 0; v < static_cast<int>(start.rows()); ++v) surface_vertices[static_cast<size_t>(v)] = v;
-  const Eigen::MatrixXd start_normals = VertexNormalsAt(start, state.surface, at_start.rings(), surface_vertices);
-  const OffModel OutsideAtStart{&at_start, &points, grow * grow, &seed_memo, &start_normals, &state.surface};
+  // With outside_only, a seed also lies outside the body at the start: a hand's point cannot
+  // be inside the body's material, and the body's own points are there where the start
+  // overshot a motion that stopped (docs/notes/2026-12-08-marks-from-the-side.md).
+  const OffModel Seed{&at_start, &points, grow * grow, &seed_memo, outside_only ? &start : nullptr, &state.surface};
   std::vector<int> queue;
   // A point's closest triangle touches a strained vertex only if that vertex is within the
   // point's distance to the surface (at most its nearest vertex's) and a triangle's longest
@@ -378,7 +414,7 @@ int MarkImplausible(const TrackerState& state, const Vertices& start, const Vert
     for (int k = 0; k < 3; ++k) {
       touches |= strained[static_cast<size_t>(state.surface(triangle, k))] != 0;
     }
-    if (!touches || !OutsideAtStart(i)) continue;
+    if (!touches || !Seed(i)) continue;
     (*marks)[static_cast<size_t>(i)] = 2;
     queue.push_back(i);
   }

@@ -56,11 +56,15 @@ OccluderCounts ReleaseReached(const TrackerState& state, const SurfaceIndex& sur
 // where it was, in an object at least half of whose surface vertices facing the sensor still
 // have one there, no longer counts as strained: what pulled it is most likely the body's own
 // part that a fast motion carried off while the rest stayed, not a hand beside it. A point is
-// marked only if its closest triangle touches a vertex that still counts.
+// marked only if its closest triangle touches a vertex that still counts. With outside_only,
+// the points that seed the marks must also lie outside the body at `start` (on the outer side
+// of its surface): a hand's points cannot be inside the body's material, and the body's own
+// are where the start overshot a motion that stopped. Not for a coarse cage around an
+// embedded surface, whose inside holds more than the body.
 int MarkImplausible(const TrackerState& state, const Vertices& start, const Vertices& points,
                     const PointIndex& cloud_index, double spacing,
                     const std::function<bool(const Eigen::Vector3d&, const Eigen::Vector3d&)>& faces,
-                    std::vector<char>* marks);
+                    std::vector<char>* marks, bool outside_only = true);
 
 // The last frame's implausible points, at a frame's start: the hand that pulled them is
 // most likely still there, and a frame that lets it pull first must start again without it
